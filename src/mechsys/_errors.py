@@ -1,0 +1,60 @@
+"""Exception classes. Every error raised on bad input or failed solves is one of these."""
+
+from __future__ import annotations
+
+
+class MechError(Exception):
+    """Base class of every mechsys error."""
+
+
+class ModelError(MechError, ValueError):
+    """The model description is invalid (unknown body or point, bad dimension, duplicate name)."""
+
+
+class UnknownBodyError(ModelError, KeyError):
+    """A body was addressed by a name, number or handle that the model does not have."""
+
+    def __str__(self) -> str:  # KeyError quotes its message; we want it plain
+        return str(self.args[0]) if self.args else ""
+
+
+class UnknownPointError(ModelError, KeyError):
+    """A point was addressed by a name or number the body does not define."""
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else ""
+
+
+class UnknownConstraintError(ModelError, KeyError):
+    """A constraint was addressed by a name, number or handle the model does not have."""
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else ""
+
+
+class GeometryError(ModelError):
+    """A geometric argument is degenerate or has the wrong dimension (zero-length axis, ...)."""
+
+
+class ConstraintCountError(MechError):
+    """The model has the wrong number of degrees of freedom for the requested analysis."""
+
+
+class ConvergenceError(MechError):
+    """Newton's method did not converge. ``residuals`` and ``history`` say by how much."""
+
+    def __init__(self, message: str, *, time=None, residuals=None, history=None):
+        super().__init__(message)
+        self.time = time
+        self.residuals = residuals
+        self.history = history
+
+
+class SingularJacobianError(MechError):
+    """The constraint Jacobian is rank deficient: redundant constraints or a lock-up position."""
+
+    def __init__(self, message: str, *, time=None, dependent=None, rank=None):
+        super().__init__(message)
+        self.time = time
+        self.dependent = dependent or []
+        self.rank = rank

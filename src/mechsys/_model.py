@@ -1,0 +1,461 @@
+r"""The editable model: bodies, constraints, parameters, variables. No numerics here except
+through the compiled :class:`~mechsys.compile.System` it caches.
+
+``Model2D`` and ``Model3D`` differ only in their space object (see ``_space``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+import sympy as sp
+
+from ._bodies import Body
+from ._errors import (
+    ConstraintCountError,
+    ModelError,
+    UnknownBodyError,
+    UnknownConstraintError,
+)
+from ._geometry import Axis, Point, Vector, as_point, as_vector
+from ._outputs import OutputFunctions
+from ._space import PLANAR, SPATIAL, Space
+from ._symbols import T
+from .compile import System, make_layout, time_derivative
+from .constraints import Constraint, ConstraintBase, Variable
+from .solvers import ORDERS, PositionOptions, dependent_rows, sweep
+
+
+class DOF(int):
+    """Degrees of freedom of a model: an ``int`` (from the Jacobian rank at the current
+    guess) carrying a report.
+
+    Attributes: ``coordinates`` (n), ``equations`` (m), ``gruebler`` (n - m, the count),
+    ``rank`` (of Phi_q at the guess), ``redundant`` (constraints with dependent equations).
+    """
+
+    def __new__(cls, value, **info):
+        obj = super().__new__(cls, value)
+        obj.__dict__.update(info)
+        return obj
+
+    def __repr__(self) -> str:
+        lines = [
+            f"{int(self)} degree(s) of freedom",
+            f"  coordinates: {self.coordinates}, equations: {self.equations}",
+            f"  Gruebler count (coordinates - equations): {self.gruebler}",
+            f"  Jacobian rank at the current guess: {self.rank} -> {int(self)} DOF",
+        ]
+        if self.redundant:
+            lines.append("  redundant (dependent) constraints: "
+                         + ", ".join(c.label() for c in self.redundant))
+        return "\n".join(lines)
+
+    __str__ = __repr__
+
+
+class Model(OutputFunctions):
+    """An editable mechanism model. Use :class:`Model2D` or :class:`Model3D`."""
+
+    space: Space
+
+    def __init__(self, backend: str | None = None):
+        self._bodies: list[Body] = []
+        self._constraints: list[ConstraintBase] = []
+        self._params: dict[sp.Symbol, float] = {}
+        self._variables: list[Variable] = []
+        self._version = 0
+        self._system: System | None = None
+        self._guess_override: dict[sp.Symbol, float] = {}
+        self._backend = backend
+        self.last_solution = None
+        ground = Body(self.space, "ground", 1, is_ground=True)
+        ground.model = self
+        self._bodies.append(ground)
+
+    # -- bodies -------------------------------------------------------------------------
+    @property
+    def ground(self) -> Body:
+        """Ground, body number 1: fixed, coordinates none."""
+        return self._bodies[0]
+
+    @property
+    def bodies(self) -> list[Body]:
+        """All bodies, ground first."""
+        return list(self._bodies)
+
+    def add_body(self, name: str, points=None, guess=None, mass=0, centroid=None,
+                 inertia=None) -> Body:
+        """Add a body and return its handle.
+
+        ``points``: ``{name: local coords}`` (numbered 1.. in order) or a list of coords;
+        ``guess``: ``((x, y), angle)`` in 2D, ``((x, y, z), rotation)`` in 3D.
+        """
+        if not isinstance(name, str) or not name:
+            raise ModelError(f"body name must be a non-empty string, got {name!r}")
+        if any(b.name == name for b in self._bodies):
+            raise ModelError(f"a body named {name!r} already exists; body names must be unique")
+        b = Body(self.space, name, len(self._bodies) + 1, points=points, guess=guess, mass=mass,
+                 centroid=centroid, inertia=inertia)
+        b.model = self
+        self._bodies.append(b)
+        self._touch()
+        return b
+
+    def body(self, spec) -> Body:
+        """A body by handle, name or Mech number (ground is 1)."""
+        if isinstance(spec, Body):
+            if getattr(spec, "model", None) is not self:
+                raise UnknownBodyError(f"body {spec.name!r} belongs to another model")
+            return spec
+        if isinstance(spec, str):
+            for b in self._bodies:
+                if b.name == spec:
+                    return b
+            raise UnknownBodyError(
+                f"no body named {spec!r}; bodies are {[b.name for b in self._bodies]}")
+        if isinstance(spec, (int, np.integer)) and not isinstance(spec, bool):
+            if 1 <= spec <= len(self._bodies):
+                return self._bodies[spec - 1]
+            raise UnknownBodyError(
+                f"no body number {spec}; bodies are numbered 1..{len(self._bodies)} (1 = ground)")
+        raise UnknownBodyError(f"cannot address a body by {spec!r}; use a handle, name or number")
+
+    # -- parameters and variables --------------------------------------------------------
+    def parameter(self, name: str, value: float) -> sp.Symbol:
+        """Declare a parameter with a value; returns its symbol for use in expressions.
+        Changing values later (:meth:`set_parameters`) needs no recompilation."""
+        s = sp.Symbol(name, real=True)
+        if s in self._params:
+            raise ModelError(f"parameter {name!r} already exists; use set_parameters to change it")
+        if self._is_coordinate_name(name):
+            raise ModelError(f"parameter name {name!r} clashes with a coordinate or variable")
+        self._params[s] = float(value)
+        self._touch()
+        return s
+
+    def set_parameters(self, values: Mapping | None = None, **kw) -> None:
+        """Change parameter values: ``set_parameters(L=6)`` or ``set_parameters({L: 6})``."""
+        items = dict(values or {})
+        items.update(kw)
+        for k, v in items.items():
+            s = k if isinstance(k, sp.Symbol) else sp.Symbol(str(k), real=True)
+            if s not in self._params:
+                raise ModelError(f"unknown parameter {k!r}; parameters are "
+                                 f"{[p.name for p in self._params]}")
+            self._params[s] = float(v)
+
+    @property
+    def parameters(self) -> dict[str, float]:
+        return {s.name: v for s, v in self._params.items()}
+
+    def variable(self, name: str, guess: float = 0.0) -> sp.Symbol:
+        """Declare a new model variable (Mech's ``{s, guess}``) for use in constraints."""
+        for v in self._variables:
+            if v.symbol.name == name:
+                raise ModelError(f"variable {name!r} already exists")
+        if self._is_coordinate_name(name):
+            raise ModelError(f"variable name {name!r} clashes with a body coordinate")
+        v = Variable(name, guess)
+        self._variables.append(v)
+        self._touch()
+        return v.symbol
+
+    def _is_coordinate_name(self, name: str) -> bool:
+        return any(name == s.name for b in self._bodies for s in b.q) or any(
+            name == v.symbol.name for v in self._variables) or any(
+            name == p.name for p in self._params)
+
+    # -- constraints --------------------------------------------------------------------
+    def add(self, constraint: ConstraintBase, name: str | None = None) -> ConstraintBase:
+        """Add a constraint; returns it as the handle. Its Mech number is its position."""
+        if not isinstance(constraint, ConstraintBase):
+            raise ModelError(f"add() takes a constraint object, got {constraint!r}")
+        if constraint.model is not None:
+            raise ModelError(f"{constraint.label()} is already in a model; create a new one")
+        name = name or f"c{len(self._constraints) + 1}"
+        if any(c.name == name for c in self._constraints):
+            raise ModelError(f"a constraint named {name!r} already exists")
+        self._validate(constraint)
+        constraint.name = name
+        constraint.number = len(self._constraints) + 1
+        constraint.model = self
+        self._constraints.append(constraint)
+        for v in constraint.new_variables():
+            if all(v.symbol != w.symbol for w in self._variables):
+                self._variables.append(v)
+        self._touch()
+        return constraint
+
+    def _validate(self, c: ConstraintBase) -> None:
+        for b in c.bodies():
+            if getattr(b, "model", None) is not self:
+                raise ModelError(f"{c.label()} uses body {b.name!r} of another model")
+        c.equations(self.space)  # dimension and kind checks, with the culprit named
+
+    @property
+    def constraints(self) -> list[ConstraintBase]:
+        return list(self._constraints)
+
+    def constraint(self, spec) -> ConstraintBase:
+        """A constraint by handle, name or Mech number."""
+        if isinstance(spec, ConstraintBase):
+            if spec.model is not self:
+                raise UnknownConstraintError(f"{spec.label()} is not in this model")
+            return spec
+        if isinstance(spec, str):
+            for c in self._constraints:
+                if c.name == spec:
+                    return c
+            raise UnknownConstraintError(
+                f"no constraint named {spec!r}; constraints are {[c.name for c in self._constraints]}")
+        if isinstance(spec, (int, np.integer)) and not isinstance(spec, bool):
+            for c in self._constraints:
+                if c.number == spec:
+                    return c
+            raise UnknownConstraintError(
+                f"no constraint number {spec}; numbers are {[c.number for c in self._constraints]}")
+        raise UnknownConstraintError(f"cannot address a constraint by {spec!r}")
+
+    def remove(self, spec) -> ConstraintBase:
+        """Remove a constraint (by handle, name or number); later ones keep their numbers."""
+        c = self.constraint(spec)
+        self._constraints.remove(c)
+        c.model = None
+        self._touch()
+        return c
+
+    def replace(self, spec, new: ConstraintBase) -> ConstraintBase:
+        """Replace a constraint in place: the new one takes its name and number."""
+        old = self.constraint(spec)
+        if new.model is not None:
+            raise ModelError(f"{new.label()} is already in a model")
+        self._validate(new)
+        i = self._constraints.index(old)
+        new.name, new.number, new.model = old.name, old.number, self
+        old.model = None
+        self._constraints[i] = new
+        for v in new.new_variables():
+            if all(v.symbol != w.symbol for w in self._variables):
+                self._variables.append(v)
+        self._touch()
+        return new
+
+    # -- guesses ------------------------------------------------------------------------
+    def set_guess(self, state=None, **values) -> None:
+        """Set initial guesses: from a solved ``State``/``Solution`` (its last point), a
+        ``{coordinate: value}`` mapping, or keywords (``x2=1.0``, ``s=0.3``)."""
+        upd: dict = {}
+        if state is not None:
+            if isinstance(state, Mapping):
+                upd.update(state)
+            else:
+                q = np.atleast_2d(state.q)[-1]
+                names = state.system.layout.q_symbols
+                upd.update(dict(zip(names, q)))
+        upd.update(values)
+        layout_syms = self._coordinate_symbols()
+        for k, v in upd.items():
+            s = k if isinstance(k, sp.Symbol) else self._coordinate_by_name(str(k))
+            if s not in layout_syms:
+                raise ModelError(f"set_guess: {k!r} is not a coordinate or variable of this model")
+            self._guess_override[s] = float(v)
+
+    def _coordinate_by_name(self, name: str) -> sp.Symbol:
+        for b in self._bodies:
+            for c, s in zip(self.space.coordinate_names, b.q):
+                if name in (s.name, f"{b.name}.{c}"):
+                    return s
+        for v in self._variables:
+            if v.symbol.name == name:
+                return v.symbol
+        raise ModelError(f"no coordinate or variable named {name!r}")
+
+    def guess(self) -> np.ndarray:
+        """The current initial guess vector ``(n,)`` in layout order."""
+        vals = []
+        for b in self._bodies[1:]:
+            vals.extend(b.guess)
+        vals.extend(v.guess for v in self._variables)
+        syms = self._coordinate_symbols()
+        g = np.array(vals, dtype=float)
+        for i, s in enumerate(syms):
+            if s in self._guess_override:
+                g[i] = self._guess_override[s]
+        return g
+
+    # -- symbolic machinery -------------------------------------------------------------
+    def _touch(self) -> None:
+        self._version += 1
+        self._system = None
+
+    def _coordinate_symbols(self) -> list:
+        return [s for b in self._bodies for s in b.q] + [v.symbol for v in self._variables]
+
+    def _all_equations(self):
+        eqs, owners, index = [], [], []
+        for c in self._constraints:
+            for k, e in enumerate(c.equations(self.space)):
+                eqs.append(e)
+                owners.append(c)
+                index.append(k)
+        for b in self._bodies[1:]:
+            for k, e in enumerate(self.space.body_normalization(b.q[self.space.dim :])):
+                eqs.append(e)
+                owners.append(f"Euler-parameter normalization of body {b.name!r}")
+                index.append(k)
+        return eqs, owners, index
+
+    def _check_symbols(self, eqs, owners) -> None:
+        known = set(self._coordinate_symbols()) | set(self._params) | {T}
+        for e, o in zip(eqs, owners):
+            extra = e.free_symbols - known
+            if extra:
+                lab = o.label() if hasattr(o, "label") else str(o)
+                raise ModelError(
+                    f"{lab} uses unknown symbol(s) {sorted(map(str, extra))}: declare them with "
+                    "m.parameter(name, value) or m.variable(name, guess), or pass "
+                    "variables={sym: guess} to Constraint")
+
+    def compile(self) -> System:
+        """The compiled :class:`System` (cached until the model changes)."""
+        if self._system is None:
+            eqs, owners, index = self._all_equations()
+            self._check_symbols(eqs, owners)
+            layout = make_layout(self._bodies[1:], self._variables, list(self._params), owners, index)
+            self._system = System(self.space, layout, eqs, list(self._params.values()),
+                                  self.guess(), backend=self._backend, version=self._version)
+        return self._system
+
+    def _p(self) -> np.ndarray:
+        return np.array(list(self._params.values()), dtype=float)
+
+    def time_derivative(self, expr):
+        """Total time derivative of a SymPy expression (or matrix) of coordinates, velocities
+        and ``T``: ``f_q qd + f_qd qdd + f_t``."""
+        lay = make_layout(self._bodies[1:], self._variables, [], [], [])
+        if isinstance(expr, sp.MatrixBase):
+            return expr.applyfunc(lambda e: time_derivative(e, lay.q_symbols, lay.qd_symbols,
+                                                            lay.qdd_symbols))
+        return time_derivative(expr, lay.q_symbols, lay.qd_symbols, lay.qdd_symbols)
+
+    def velocity_symbols(self) -> dict:
+        """``{coordinate symbol: velocity symbol}``."""
+        lay = make_layout(self._bodies[1:], self._variables, [], [], [])
+        return dict(zip(lay.q_symbols, lay.qd_symbols))
+
+    def _omega(self, b: Body, local: bool):
+        if b.is_ground:
+            return sp.S.Zero if self.space.dim == 2 else sp.zeros(3, 1)
+        vs = self.velocity_symbols()
+        rot = b.q[self.space.dim :]
+        return self.space.omega(rot, [vs[s] for s in rot], local)
+
+    # -- outputs (symbolic) -------------------------------------------------------------
+    def _model(self):
+        return self
+
+    def _finish(self, expr):
+        return expr
+
+    def _point(self, obj) -> Point:
+        if isinstance(obj, Axis):
+            obj = obj.origin
+        p = as_point(obj)
+        p.check_dim(self.space.dim)
+        for b in p.bodies():
+            self.body(b)
+        return p
+
+    def _vector(self, obj) -> Vector:
+        v = as_vector(obj)
+        v.check_dim(self.space.dim)
+        return v
+
+    # -- analysis -----------------------------------------------------------------------
+    def dof(self) -> DOF:
+        """Degrees of freedom: the Gruebler count and the Jacobian rank at the current guess."""
+        system = self.compile()
+        J = system.jacobian(0.0, self.guess(), self._p())
+        rank, dep = dependent_rows(J) if system.m else (0, [])
+        owners = [o for o in system.layout.owners_of(dep) if isinstance(o, ConstraintBase)]
+        return DOF(system.n - rank, coordinates=system.n, equations=system.m,
+                   gruebler=system.n - system.m, rank=rank, redundant=owners)
+
+    def _require_square(self, system: System) -> None:
+        n, m = system.n, system.m
+        if m < n:
+            raise ConstraintCountError(
+                f"the model has {n - m} degree(s) of freedom ({n} coordinates, {m} equations); "
+                f"a kinematic solution needs 0. Add {n - m} driving constraint(s), e.g. "
+                "RotationLock1(crank, 2*pi*T), or drop constraints with m.free(...) for dynamics.")
+        if m > n:
+            J = system.jacobian(0.0, self.guess(), self._p())
+            _, dep = dependent_rows(J)
+            owners = system.layout.owners_of(dep)
+            names = ", ".join(o.label() if hasattr(o, "label") else str(o) for o in owners)
+            raise ConstraintCountError(
+                f"the model is overconstrained by {m - n} equation(s) ({n} coordinates, {m} "
+                f"equations). Constraints that look redundant at the current guess: {names or '?'}."
+                " Remove them or use constraints that remove fewer degrees of freedom.")
+
+    def solve(self, t=0.0, solution: str = "acceleration", guess=None,
+              options: PositionOptions | None = None):
+        """Kinematic solution at time(s) ``t`` (Mech's ``SolveMech``).
+
+        ``solution``: ``"location"``, ``"velocity"`` or ``"acceleration"`` (default).
+        ``guess``: starting coordinates (array (n,), a ``State``/``Solution`` or a mapping);
+        default the model's guesses. A sweep continues each point from the previous one.
+        Returns a :class:`~mechsys.Solution` and stores it as ``last_solution``.
+        """
+        from ._results import Solution
+
+        if solution not in ORDERS:
+            raise ModelError(f"solution must be one of {list(ORDERS)}, got {solution!r}")
+        system = self.compile()
+        self._require_square(system)
+        g = self._resolve_guess(system, guess)
+        scalar = np.ndim(t) == 0
+        res = sweep(system, np.atleast_1d(t), g, ORDERS[solution], options, self._p())
+        sol = Solution.from_sweep(self, system, res, self._p(), scalar=scalar)
+        self.last_solution = sol
+        return sol
+
+    def _resolve_guess(self, system, guess) -> np.ndarray:
+        if guess is None:
+            return self.guess()
+        if isinstance(guess, Mapping):
+            saved = dict(self._guess_override)
+            try:
+                self.set_guess(guess)
+                return self.guess()
+            finally:
+                self._guess_override = saved
+        if hasattr(guess, "q") and hasattr(guess, "system"):
+            return np.atleast_2d(guess.q)[-1].copy()
+        g = np.asarray(guess, dtype=float)
+        if g.shape != (system.n,):
+            raise ModelError(f"guess must have shape ({system.n},) (coordinates "
+                             f"{list(system.layout.q_names)}); got {g.shape}")
+        return g
+
+    def __repr__(self) -> str:
+        return (f"<{type(self).__name__}: {len(self._bodies) - 1} moving bodies, "
+                f"{len(self._constraints)} constraints>")
+
+
+class Model2D(Model):
+    """Planar model. Bodies have coordinates ``x, y, theta``."""
+
+    space = PLANAR
+
+
+class Model3D(Model):
+    """Spatial model. Bodies have coordinates ``x, y, z, e0, e1, e2, e3`` (Euler parameters,
+    normalised by one equation per body)."""
+
+    space = SPATIAL
+
+
+__all__ = ["DOF", "Model", "Model2D", "Model3D", "Constraint"]

@@ -1,0 +1,192 @@
+r"""Immutable results: :class:`State` (one time) and :class:`Solution` (arrays over time).
+
+Array shapes (``N`` times, ``n`` coordinates): ``t (N,)``, ``q, qd, qdd (N, n)``. Output
+functions evaluate the model's symbolic expressions over all ``N`` points in one compiled
+call: points give ``(N, dim)``, scalars ``(N,)``; a solution of a scalar time drops the
+leading axis.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import sympy as sp
+
+from ._errors import MechError
+from ._outputs import OutputFunctions
+
+
+@dataclass(frozen=True, eq=False)
+class Solution(OutputFunctions):
+    """Kinematic (or later dynamic) solution over ``N`` time points.
+
+    Attributes
+    ----------
+    t : (N,) times;  q, qd, qdd : (N, n) coordinates, velocities, accelerations (``None``
+    when that order was not solved);  p : (np,) parameter values used;
+    system : the compiled System;  model : the Model (for symbolic outputs);
+    iterations : (N,) Newton iterations per point;  evaluations : compiled-function calls;
+    success, status, message : outcome (a failed solve raises instead).
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray | None
+    qdd: np.ndarray | None
+    p: np.ndarray
+    system: object
+    model: object
+    iterations: np.ndarray
+    evaluations: int = 0
+    scalar: bool = False
+    success: bool = True
+    status: int = 0
+    message: str = "solved"
+    extra: dict = field(default_factory=dict)
+
+    @classmethod
+    def from_sweep(cls, model, system, res, p, scalar=False) -> Solution:
+        for a in (res.q, res.qd, res.qdd):
+            if a is not None:
+                a.setflags(write=False)
+        return cls(t=res.t, q=res.q, qd=res.qd, qdd=res.qdd, p=np.asarray(p), system=system,
+                   model=model, iterations=res.iterations, evaluations=res.evaluations,
+                   scalar=scalar)
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    @property
+    def names(self) -> tuple:
+        """Coordinate names ``"body.coord"`` in layout order."""
+        return self.system.layout.q_names
+
+    # -- named access ---------------------------------------------------------------------
+    def __getitem__(self, key):
+        """Coordinate history by name (``"crank.th"``, ``"th2"``) or symbol."""
+        return self.coordinate(key)
+
+    def coordinate(self, key, order: int = 0) -> np.ndarray:
+        """History of one coordinate (``order`` 0), its velocity (1) or acceleration (2)."""
+        j = self.system.layout.index(key)
+        arr = (self.q, self.qd, self.qdd)[order]
+        if arr is None:
+            raise MechError(self._missing(order))
+        out = arr[:, j]
+        return out[0] if self.scalar else out
+
+    def _missing(self, order: int) -> str:
+        what = ("location", "velocity", "acceleration")[order]
+        return (f"this solution has no {what} data; solve with solution={what!r} "
+                "(or 'acceleration' for all orders)")
+
+    # -- evaluation -----------------------------------------------------------------------
+    def _finish(self, expr):
+        return self.eval(expr)
+
+    def _model(self):
+        return self.model
+
+    def eval(self, expr):
+        """Evaluate any SymPy expression or matrix of ``T``, coordinates, velocities,
+        accelerations and parameters at every time point. Shape ``(N,) + expr.shape``
+        (``(N,)`` for a scalar, ``(N, k)`` for a column vector)."""
+        is_matrix = isinstance(expr, sp.MatrixBase)
+        m = sp.Matrix(expr) if is_matrix else sp.Matrix([sp.sympify(expr)])
+        lay = self.system.layout
+        free = set().union(*(e.free_symbols for e in m)) if len(m) else set()
+        for order, syms in ((1, lay.qd_symbols), (2, lay.qdd_symbols)):
+            if free & set(syms) and (self.qd, self.qdd)[order - 1] is None:
+                raise MechError(self._missing(order))
+        f = self.system.compile_expression(list(m))
+        N, n = len(self.t), lay.n
+        X = np.empty((N, 1 + 3 * n + len(self.p)))
+        X[:, 0] = self.t
+        X[:, 1 : 1 + n] = self.q
+        X[:, 1 + n : 1 + 2 * n] = 0.0 if self.qd is None else self.qd
+        X[:, 1 + 2 * n : 1 + 3 * n] = 0.0 if self.qdd is None else self.qdd
+        X[:, 1 + 3 * n :] = self.p
+        with np.errstate(divide="ignore", invalid="ignore"):
+            vals = f.batch(X)
+        if not is_matrix:
+            out = vals[:, 0]
+        elif m.shape[1] == 1:
+            out = vals
+        else:
+            out = vals.reshape((N,) + m.shape)
+        return out[0] if self.scalar else out
+
+    # -- states and interpolation ---------------------------------------------------------
+    def state(self, k: int = -1) -> State:
+        """The :class:`State` at index ``k``."""
+        return State(
+            t=float(self.t[k]), q=self.q[k].copy(),
+            qd=None if self.qd is None else self.qd[k].copy(),
+            qdd=None if self.qdd is None else self.qdd[k].copy(),
+            system=self.system)
+
+    def interpolate(self, t) -> Solution:
+        """Values at other times inside the solved range: cubic Hermite on positions with
+        the solved velocities (and on velocities with accelerations), linear otherwise."""
+        from scipy.interpolate import CubicHermiteSpline, interp1d
+
+        tt = np.atleast_1d(np.asarray(t, dtype=float))
+        if len(self.t) < 2:
+            raise MechError("interpolation needs a solution at two or more times")
+        if tt.min() < self.t.min() - 1e-12 or tt.max() > self.t.max() + 1e-12:
+            raise MechError(f"interpolation times must lie in [{self.t.min()}, {self.t.max()}]")
+
+        def interp(y, dy):
+            if dy is not None:
+                return CubicHermiteSpline(self.t, y, dy, axis=0)(tt)
+            return interp1d(self.t, y, axis=0)(tt)
+
+        q = interp(self.q, self.qd)
+        qd = None if self.qd is None else interp(self.qd, self.qdd)
+        qdd = None if self.qdd is None else interp1d(self.t, self.qdd, axis=0)(tt)
+        return Solution(t=tt, q=q, qd=qd, qdd=qdd, p=self.p, system=self.system,
+                        model=self.model, iterations=np.zeros(len(tt), dtype=int),
+                        scalar=np.ndim(t) == 0, message="interpolated")
+
+    def to_dataframe(self):
+        """A pandas DataFrame: ``t``, each coordinate, ``<name>_d`` and ``<name>_dd``.
+        Needs pandas (optional)."""
+        try:
+            import pandas as pd
+        except ImportError as exc:  # pragma: no cover
+            raise MechError("to_dataframe needs pandas: pip install pandas") from exc
+        data = {"t": self.t}
+        for j, name in enumerate(self.names):
+            data[name] = self.q[:, j]
+            if self.qd is not None:
+                data[name + "_d"] = self.qd[:, j]
+            if self.qdd is not None:
+                data[name + "_dd"] = self.qdd[:, j]
+        return pd.DataFrame(data)
+
+    def table(self) -> str:
+        """A plain-text table of all coordinates over time."""
+        cols = ["t", *self.names]
+        rows = [" ".join(f"{c:>14s}" for c in cols)]
+        for k in range(len(self.t)):
+            rows.append(" ".join(f"{v:14.6g}" for v in [self.t[k], *self.q[k]]))
+        return "\n".join(rows)
+
+    def __repr__(self) -> str:
+        orders = "location" + (", velocity" if self.qd is not None else "") + (
+            ", acceleration" if self.qdd is not None else "")
+        return (f"<Solution: {len(self.t)} time point(s) in [{self.t.min():g}, {self.t.max():g}], "
+                f"{self.system.n} coordinates, {orders}; Newton iterations "
+                f"{int(self.iterations.sum())}>")
+
+
+@dataclass(frozen=True, eq=False)
+class State:
+    """Coordinates (n,), velocities and accelerations at one time."""
+
+    t: float
+    q: np.ndarray
+    qd: np.ndarray | None
+    qdd: np.ndarray | None
+    system: object

@@ -1,0 +1,185 @@
+r"""Dimension strategy objects: the only place that knows whether a model is planar or spatial.
+
+A body's pose is a position ``r`` and a rotation matrix ``A``; a global point is
+``r + A s'`` in both dimensions, so constraints written with :class:`Space` helpers are
+written once.
+
+Planar body coordinates ``q_b = (x, y, theta)``::
+
+    A(theta) = [[cos th, -sin th], [sin th, cos th]]
+
+Spatial body coordinates ``q_b = (x, y, z, e0, e1, e2, e3)`` with Euler parameters
+``e0 = cos(phi/2)``, ``(e1, e2, e3) = sin(phi/2) u`` and the normalisation constraint
+``e0^2 + e1^2 + e2^2 + e3^2 - 1 = 0``::
+
+    A(e) = (2 e0^2 - 1) I + 2 (e e^T + e0 e~)
+"""
+
+from __future__ import annotations
+
+import sympy as sp
+
+
+class Space:
+    """Common interface of :class:`Planar` and :class:`Spatial`."""
+
+    dim: int
+    ncoord: int
+    name: str
+    coordinate_names: tuple[str, ...]
+
+    def rotation_matrix(self, rot) -> sp.Matrix:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def cross(self, a: sp.Matrix, b: sp.Matrix):  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def split(self, q: list) -> tuple[sp.Matrix, list]:
+        """Split body coordinates into position and rotation coordinates."""
+        return sp.Matrix(q[: self.dim]), list(q[self.dim :])
+
+    def body_normalization(self, rot) -> list:
+        """Extra equations a body's own coordinates must satisfy (none in 2D)."""
+        return []
+
+
+class Planar(Space):
+    """Planar (2D) bodies: ``x, y, theta``."""
+
+    dim = 2
+    ncoord = 3
+    name = "planar"
+    coordinate_names = ("x", "y", "th")
+
+    def rotation_matrix(self, rot) -> sp.Matrix:
+        (th,) = rot
+        c, s = sp.cos(th), sp.sin(th)
+        return sp.Matrix([[c, -s], [s, c]])
+
+    def cross(self, a, b):
+        """Scalar cross product ``a_x b_y - a_y b_x`` (the z component)."""
+        return a[0] * b[1] - a[1] * b[0]
+
+    def perpendiculars(self, u):
+        """Vectors spanning the complement of ``u`` (one in 2D): ``u`` turned by +90 deg."""
+        return [sp.Matrix([-u[1], u[0]])]
+
+    def zero_rotation(self):
+        return (0,)
+
+    def rotation_guess(self, rot, who: str) -> tuple:
+        """A planar rotation guess is the angle (radians)."""
+        try:
+            return (float(rot),)
+        except (TypeError, ValueError):
+            from ._errors import ModelError
+
+            raise ModelError(f"rotation guess of body {who!r} must be an angle; got {rot!r}") from None
+
+    def angle(self, rot):
+        return rot[0]
+
+    def omega(self, rot, rot_d, local: bool = False):
+        """Angular velocity (scalar) from ``theta_dot``: the same in global and local axes."""
+        return rot_d[0]
+
+
+class Spatial(Space):
+    """Spatial (3D) bodies: ``x, y, z, e0, e1, e2, e3`` (Euler parameters)."""
+
+    dim = 3
+    ncoord = 7
+    name = "spatial"
+    coordinate_names = ("x", "y", "z", "e0", "e1", "e2", "e3")
+
+    def rotation_matrix(self, rot) -> sp.Matrix:
+        e0, e1, e2, e3 = rot
+        return sp.Matrix(
+            [
+                [e0**2 + e1**2 - e2**2 - e3**2, 2 * (e1 * e2 - e0 * e3), 2 * (e1 * e3 + e0 * e2)],
+                [2 * (e1 * e2 + e0 * e3), e0**2 - e1**2 + e2**2 - e3**2, 2 * (e2 * e3 - e0 * e1)],
+                [2 * (e1 * e3 - e0 * e2), 2 * (e2 * e3 + e0 * e1), e0**2 - e1**2 - e2**2 + e3**2],
+            ]
+        )
+
+    def cross(self, a, b):
+        return sp.Matrix(a).cross(sp.Matrix(b))
+
+    def perpendiculars(self, u):
+        """Two vectors orthogonal to ``u`` and to each other (non-singular for every u).
+
+        Picks the coordinate axis least aligned with ``u`` numerically when ``u`` is constant,
+        else crosses with the x axis and the result, which callers use only on local (constant)
+        directions.
+        """
+        u = sp.Matrix(u)
+        try:
+            absu = [abs(float(c)) for c in u]
+            k = absu.index(min(absu))
+        except TypeError:
+            k = 0
+        ek = sp.zeros(3, 1)
+        ek[k] = 1
+        h = u.cross(ek)
+        f = u.cross(h)
+        return [sp.simplify(h), sp.simplify(f)]
+
+    def zero_rotation(self):
+        return (1, 0, 0, 0)
+
+    def rotation_guess(self, rot, who: str) -> tuple:
+        """Euler parameters from any Mech rotation format: ``(e0, e1, e2, e3)``, a virtual
+        rotation ``(vx, vy, vz)``, or ``(angle, (ux, uy, uz))``."""
+        import numpy as np
+
+        from ._errors import ModelError
+
+        try:
+            if len(rot) == 4:
+                e = np.array([float(v) for v in rot])
+            elif len(rot) == 3:
+                v = np.array([float(c) for c in rot])
+                phi = np.linalg.norm(v)
+                u = v / phi if phi > 0 else np.array([1.0, 0, 0])
+                e = np.r_[np.cos(phi / 2), np.sin(phi / 2) * u]
+            elif len(rot) == 2:
+                phi = float(rot[0])
+                u = np.array([float(c) for c in rot[1]])
+                u = u / np.linalg.norm(u)
+                e = np.r_[np.cos(phi / 2), np.sin(phi / 2) * u]
+            else:
+                raise ValueError
+        except (TypeError, ValueError, ZeroDivisionError):
+            raise ModelError(
+                f"rotation guess of body {who!r}: give Euler parameters (e0, e1, e2, e3), a "
+                f"virtual rotation (vx, vy, vz) or (angle, (ux, uy, uz)); got {rot!r}"
+            ) from None
+        n = np.linalg.norm(e)
+        if n == 0:
+            raise ModelError(f"rotation guess of body {who!r}: Euler parameters are all zero")
+        return tuple(e / n)
+
+    def omega(self, rot, rot_d, local: bool = False) -> sp.Matrix:
+        """Angular velocity (3,) from Euler-parameter rates::
+
+            omega  = 2 E(e) e_dot,  E = [-e, e~ + e0 I]   (global)
+            omega' = 2 G(e) e_dot,  G = [-e, -e~ + e0 I]  (body-local)
+        """
+        e0, e1, e2, e3 = rot
+        sign = -1 if local else 1
+        E = sp.Matrix(
+            [
+                [-e1, e0, -sign * e3, sign * e2],
+                [-e2, sign * e3, e0, -sign * e1],
+                [-e3, -sign * e2, sign * e1, e0],
+            ]
+        )
+        return 2 * E * sp.Matrix(rot_d)
+
+    def body_normalization(self, rot) -> list:
+        e0, e1, e2, e3 = rot
+        return [e0**2 + e1**2 + e2**2 + e3**2 - 1]
+
+
+PLANAR = Planar()
+SPATIAL = Spatial()

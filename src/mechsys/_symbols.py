@@ -1,0 +1,20 @@
+"""Time and naming of symbols. ``T`` is the time symbol used in drivers."""
+
+from __future__ import annotations
+
+import sympy as sp
+
+#: The time symbol. Use it in any scalar argument to make a driver, e.g. ``2*pi*T``.
+T = sp.Symbol("T", real=True)
+
+
+def coord_symbol(name: str) -> sp.Symbol:
+    return sp.Symbol(name, real=True)
+
+
+def velocity_symbol(name: str) -> sp.Symbol:
+    return sp.Symbol(name + "_d", real=True)
+
+
+def acceleration_symbol(name: str) -> sp.Symbol:
+    return sp.Symbol(name + "_dd", real=True)

@@ -1,0 +1,116 @@
+r"""Backends that turn a list of SymPy expressions into a fast numeric function.
+
+Every backend returns a :class:`Compiled` object: ``f(x)`` evaluates all expressions at one
+argument vector ``x`` (shape ``(nargs,)``) into shape ``(k,)``; ``f.batch(X)`` evaluates at
+many, ``X`` of shape ``(N, nargs)`` into ``(N, k)``.
+
+* ``"symengine"`` – SymEngine's ``Lambdify`` with common-subexpression elimination and the
+  LLVM backend when SymEngine was built with it (the ``fast`` extra). Preferred: see
+  ``docs/decisions/0002-numeric-backend.md`` for the measurement.
+* ``"sympy"`` – ``sympy.lambdify`` to NumPy with ``cse=True``; always available.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+
+import numpy as np
+import sympy as sp
+
+try:  # optional
+    import symengine as _se
+except ImportError:  # pragma: no cover - depends on environment
+    _se = None
+
+
+class Compiled:
+    """A compiled vector function of one flat argument vector."""
+
+    backend = "?"
+    nout: int
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def batch(self, X: np.ndarray) -> np.ndarray:
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        return np.array([self(x) for x in X]).reshape(len(X), self.nout)
+
+
+class _Empty(Compiled):
+    backend = "none"
+
+    def __init__(self):
+        self.nout = 0
+
+    def __call__(self, x):
+        return np.zeros(0)
+
+    def batch(self, X):
+        return np.zeros((len(np.atleast_2d(X)), 0))
+
+
+class _SympyCompiled(Compiled):
+    backend = "sympy"
+
+    def __init__(self, args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr]):
+        self.nout = len(exprs)
+        self._f = sp.lambdify([list(args)], list(exprs), modules="numpy", cse=True)
+
+    def __call__(self, x):
+        return np.array(self._f(x), dtype=float)
+
+    def batch(self, X):
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        cols = self._f(X.T)
+        out = np.empty((X.shape[0], self.nout))
+        for k, c in enumerate(cols):
+            out[:, k] = c
+        return out
+
+
+class _SymengineCompiled(Compiled):
+    backend = "symengine"
+
+    def __init__(self, args, exprs):
+        self.nout = len(exprs)
+        try:
+            self._f = _se.Lambdify(list(args), list(exprs), backend="llvm", cse=False)
+            self.backend = "symengine-llvm"
+        except (ValueError, TypeError, RuntimeError):  # built without LLVM
+            self._f = _se.Lambdify(list(args), list(exprs), cse=False)
+            self.backend = "symengine-lambda"
+
+    def __call__(self, x):
+        return self._f(np.asarray(x, dtype=float)).reshape(self.nout)
+
+    def batch(self, X):
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        return self._f(X).reshape(X.shape[0], self.nout)
+
+
+def available_backends() -> list[str]:
+    return (["symengine"] if _se is not None else []) + ["sympy"]
+
+
+def default_backend() -> str:
+    """``MECHSYS_BACKEND`` if set, else SymEngine when installed, else SymPy."""
+    env = os.environ.get("MECHSYS_BACKEND")
+    if env:
+        return env
+    return available_backends()[0]
+
+
+def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr], backend: str | None = None) -> Compiled:
+    """Compile ``exprs`` as a function of the flat argument list ``args``."""
+    if not exprs:
+        return _Empty()
+    backend = backend or default_backend()
+    if backend == "symengine":
+        if _se is None:
+            raise ImportError("the symengine backend needs `pip install mechsys[fast]`")
+        return _SymengineCompiled(args, exprs)
+    if backend == "sympy":
+        return _SympyCompiled(args, exprs)
+    raise ValueError(f"unknown backend {backend!r}; choose from {available_backends()}")

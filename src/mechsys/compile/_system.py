@@ -1,0 +1,248 @@
+r"""The compiled system: the model's equations in symbolic form and as numeric functions.
+
+Built once per model version by :meth:`Model.compile`; immutable afterwards.
+
+Symbolic content (``n`` coordinates ``q``, ``m`` equations)::
+
+    Phi(q, t, p)        (m,)      constraint equations
+    Phi_q               (m, n)    sparse: rows, cols, exprs (nnz,)
+    Phi_t               (m,)
+    gamma               (m,)      = -( (Phi_q qd)_q qd + 2 Phi_qt qd + Phi_tt )
+
+``gamma`` is derived per equation as ``-(v_q qd + v_t)`` with ``v = Phi_q qd + Phi_t``, which
+is the same expression. Numeric functions take one flat argument vector
+``x = [t, q (n), qd (n), p (np)]``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sps
+import sympy as sp
+
+from .._symbols import T, acceleration_symbol, velocity_symbol
+from ._backends import Compiled, compile_exprs, default_backend
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Index layout of the coordinates, equations and parameters.
+
+    q_symbols, qd_symbols, qdd_symbols : tuples (n,) of SymPy symbols
+    q_names   : tuple (n,) of ``"body.coord"`` or variable names
+    p_symbols : tuple (np,) of parameter symbols
+    eq_owner  : tuple (m,) of the constraint (or ``"normalization of body"`` label) per row
+    eq_index  : tuple (m,) of the row's index inside its constraint
+    """
+
+    q_symbols: tuple
+    qd_symbols: tuple
+    qdd_symbols: tuple
+    q_names: tuple
+    p_symbols: tuple
+    eq_owner: tuple
+    eq_index: tuple
+    body_slices: dict = field(default_factory=dict)
+
+    @property
+    def n(self) -> int:
+        return len(self.q_symbols)
+
+    @property
+    def m(self) -> int:
+        return len(self.eq_owner)
+
+    def index(self, key) -> int:
+        """Index of a coordinate given by symbol, symbol name or ``"body.coord"`` name."""
+        if isinstance(key, sp.Symbol):
+            for lst in (self.q_symbols,):
+                if key in lst:
+                    return lst.index(key)
+            key = key.name
+        names = [s.name for s in self.q_symbols]
+        if key in names:
+            return names.index(key)
+        if key in self.q_names:
+            return self.q_names.index(key)
+        from .._errors import ModelError
+
+        raise ModelError(f"no coordinate {key!r}; coordinates are {list(self.q_names)}")
+
+    def row_label(self, i: int) -> str:
+        owner = self.eq_owner[i]
+        lab = owner.label() if hasattr(owner, "label") else str(owner)
+        return f"{lab}, equation {self.eq_index[i] + 1}"
+
+    def owners_of(self, rows) -> list:
+        out = []
+        for i in rows:
+            o = self.eq_owner[i]
+            if o not in out:
+                out.append(o)
+        return out
+
+    def args(self) -> list:
+        return [T, *self.q_symbols, *self.qd_symbols, *self.p_symbols]
+
+
+def time_derivative(expr, q, qd, qdd=None):
+    """Total time derivative ``d/dt f(q, qd, t) = f_q qd + f_qd qdd + f_t`` of a SymPy
+    expression, with ``q``/``qd``/``qdd`` lists of corresponding symbols."""
+    expr = sp.sympify(expr)
+    free = expr.free_symbols
+    out = sp.diff(expr, T) if T in free else sp.S.Zero
+    for a, b in zip(q, qd):
+        if a in free:
+            out += sp.diff(expr, a) * b
+    if qdd is not None:
+        for a, b in zip(qd, qdd):
+            if a in free:
+                out += sp.diff(expr, a) * b
+    return out
+
+
+class System:
+    """Compiled, immutable system of a model.
+
+    Attributes: ``layout`` (:class:`Layout`), ``phi``, ``jac_rows``/``jac_cols``/``jac_exprs``,
+    ``phi_t``, ``gamma`` (SymPy), ``p_values`` (np,) and the compiled functions ``f_position``
+    -> ``[Phi (m), Phi_q values (nnz)]``, ``f_velocity`` -> ``[Phi_q values, Phi_t]``,
+    ``f_gamma`` -> ``gamma``; all of ``x = [t, q, qd, p]``.
+    """
+
+    def __init__(self, space, layout: Layout, phi, p_values, guess, backend: str | None = None,
+                 version: int = 0):
+        self.space = space
+        self.layout = layout
+        self.version = version
+        self.backend = backend or default_backend()
+        self.p_values = np.asarray(p_values, dtype=float)
+        self.guess = np.asarray(guess, dtype=float)
+        q, qd = layout.q_symbols, layout.qd_symbols
+        index = {s: j for j, s in enumerate(q)}
+        self.phi = list(phi)
+        rows, cols, jac = [], [], []
+        phi_t, gamma = [], []
+        for i, e in enumerate(self.phi):
+            free = e.free_symbols
+            mine = sorted((s for s in free if s in index), key=index.get)
+            v = sp.S.Zero
+            for s in mine:
+                d = sp.diff(e, s)
+                if d != 0:
+                    rows.append(i)
+                    cols.append(index[s])
+                    jac.append(d)
+                    v += d * qd[index[s]]
+            et = sp.diff(e, T) if T in free else sp.S.Zero
+            phi_t.append(et)
+            v += et
+            gamma.append(-time_derivative(v, q, qd))
+        self.jac_rows = np.array(rows, dtype=int)
+        self.jac_cols = np.array(cols, dtype=int)
+        self.jac_exprs = jac
+        self.phi_t = phi_t
+        self.gamma = gamma
+        args = layout.args()
+        self.f_position: Compiled = compile_exprs(args, self.phi + jac, self.backend)
+        self.f_velocity: Compiled = compile_exprs(args, jac + phi_t, self.backend)
+        self.f_gamma: Compiled = compile_exprs(args, gamma, self.backend)
+        self._eval_cache: dict = {}
+
+    # -- numeric helpers (x = [t, q, qd, p]) ------------------------------------------
+    @property
+    def n(self) -> int:
+        return self.layout.n
+
+    @property
+    def m(self) -> int:
+        return self.layout.m
+
+    @property
+    def nnz(self) -> int:
+        return len(self.jac_exprs)
+
+    def pack(self, t: float, q, qd=None, p=None) -> np.ndarray:
+        n = self.n
+        x = np.empty(1 + 2 * n + len(self.p_values))
+        x[0] = t
+        x[1 : 1 + n] = q
+        x[1 + n : 1 + 2 * n] = 0.0 if qd is None else qd
+        x[1 + 2 * n :] = self.p_values if p is None else p
+        return x
+
+    def assemble(self, vals: np.ndarray, sparse: bool = False):
+        """Jacobian ``(m, n)`` from its nonzero values (dense, or CSC when ``sparse``)."""
+        if sparse:
+            return sps.csc_matrix((vals, (self.jac_rows, self.jac_cols)), shape=(self.m, self.n))
+        J = np.zeros((self.m, self.n))
+        np.add.at(J, (self.jac_rows, self.jac_cols), vals)
+        return J
+
+    def residual(self, t: float, q, p=None) -> np.ndarray:
+        return self.f_position(self.pack(t, q, None, p))[: self.m]
+
+    def jacobian(self, t: float, q, p=None, sparse: bool = False):
+        vals = self.f_position(self.pack(t, q, None, p))[self.m :]
+        return self.assemble(vals, sparse)
+
+    def residual_and_jacobian(self, t, q, p=None, sparse=False):
+        out = self.f_position(self.pack(t, q, None, p))
+        return out[: self.m], self.assemble(out[self.m :], sparse)
+
+    def velocity_rhs(self, t, q, p=None, sparse=False):
+        """``(Phi_q, -Phi_t)`` at ``(t, q)``."""
+        out = self.f_velocity(self.pack(t, q, None, p))
+        return self.assemble(out[: self.nnz], sparse), -out[self.nnz :]
+
+    def gamma_values(self, t, q, qd, p=None) -> np.ndarray:
+        return self.f_gamma(self.pack(t, q, qd, p))
+
+    # -- evaluating arbitrary expressions ---------------------------------------------
+    def compile_expression(self, exprs) -> Compiled:
+        """Compile any expressions of ``T, q, qd, qdd, p`` (cached) as a function of
+        ``[t, q, qd, qdd, p]``."""
+        key = tuple(sp.sympify(e) for e in exprs)
+        f = self._eval_cache.get(key)
+        if f is None:
+            lay = self.layout
+            args = [T, *lay.q_symbols, *lay.qd_symbols, *lay.qdd_symbols, *lay.p_symbols]
+            allowed = set(args)
+            for e in key:
+                extra = e.free_symbols - allowed
+                if extra:
+                    from .._errors import ModelError
+
+                    raise ModelError(
+                        f"expression {e} has symbols {sorted(map(str, extra))} that are not "
+                        "coordinates, velocities, accelerations, parameters or T of this model"
+                    )
+            f = compile_exprs(args, list(key), self.backend)
+            self._eval_cache[key] = f
+        return f
+
+
+def make_layout(bodies, variables, parameters, eq_owner, eq_index) -> Layout:
+    q, names, slices = [], [], {}
+    for b in bodies:
+        start = len(q)
+        q.extend(b.q)
+        names.extend(f"{b.name}.{c}" for c in b.space.coordinate_names)
+        slices[b.name] = slice(start, len(q))
+    for v in variables:
+        q.append(v.symbol)
+        names.append(v.symbol.name)
+    qd = tuple(sp.Symbol(velocity_symbol(s.name).name, real=True) for s in q)
+    qdd = tuple(sp.Symbol(acceleration_symbol(s.name).name, real=True) for s in q)
+    return Layout(
+        q_symbols=tuple(q),
+        qd_symbols=qd,
+        qdd_symbols=qdd,
+        q_names=tuple(names),
+        p_symbols=tuple(parameters),
+        eq_owner=tuple(eq_owner),
+        eq_index=tuple(eq_index),
+        body_slices=slices,
+    )

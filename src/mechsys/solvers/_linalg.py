@@ -1,0 +1,84 @@
+r"""Linear algebra for the constraint Jacobian: factorisation with a conditioning check, and
+rank-revealing diagnosis of dependent equations.
+
+Small systems (``n <= SPARSE_THRESHOLD``) use dense LU with LAPACK's reciprocal condition
+estimate; larger ones sparse SuperLU. A matrix whose reciprocal condition number falls
+below ``RCOND_MIN`` is treated as singular and diagnosed with a pivoted QR of ``Phi_q^T``:
+its last ``m - rank`` pivots are the dependent equations.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sps
+import scipy.sparse.linalg as spla
+
+SPARSE_THRESHOLD = 150
+RCOND_MIN = 1e-13
+
+
+class Singular(Exception):
+    """Raised by :func:`factor` when the matrix is numerically singular."""
+
+
+class Factor:
+    """A factorised square matrix; ``solve(b)`` for one or several right-hand sides."""
+
+    def __init__(self, J):
+        self.sparse = sps.issparse(J)
+        if self.sparse:
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("error", sps.SparseEfficiencyWarning)
+                    self._lu = spla.splu(sps.csc_matrix(J))
+            except RuntimeError as exc:  # "Factor is exactly singular"
+                raise Singular(str(exc)) from None
+            d = np.abs(self._lu.U.diagonal())
+            if d.min() <= RCOND_MIN * d.max():
+                raise Singular("tiny pivot")
+        else:
+            J = np.asarray(J, dtype=float)
+            if J.shape[0] != J.shape[1]:
+                raise Singular("not square")
+            anorm = np.abs(J).sum(axis=0).max() if J.size else 0.0
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", sla.LinAlgWarning)
+                lu, piv, info = sla.lapack.dgetrf(J)
+            if info > 0 or anorm == 0:
+                raise Singular("exact zero pivot")
+            rcond, _ = sla.lapack.dgecon(lu, anorm, norm="1")
+            if rcond < RCOND_MIN:
+                raise Singular(f"reciprocal condition {rcond:.2e}")
+            self._lu, self._piv = lu, piv
+        self.rcond = None
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        if self.sparse:
+            return self._lu.solve(np.asarray(b, dtype=float))
+        x, info = sla.lapack.dgetrs(self._lu, self._piv, b)
+        return x
+
+
+def factor(J) -> Factor:
+    return Factor(J)
+
+
+def dependent_rows(J, tol: float | None = None) -> tuple[int, list[int]]:
+    """Rank of ``J`` and the rows (equations) that depend on the others.
+
+    Pivoted QR of ``J^T``: the columns of ``J^T`` (rows of ``J``) chosen last are the
+    dependent ones.
+    """
+    J = J.toarray() if sps.issparse(J) else np.asarray(J, dtype=float)
+    m, n = J.shape
+    if m == 0:
+        return 0, []
+    _, R, piv = sla.qr(J.T, pivoting=True, mode="economic")
+    d = np.abs(np.diag(R))
+    if tol is None:
+        tol = max(m, n) * np.finfo(float).eps * (d[0] if d.size else 0.0) * 1e3
+    rank = int((d > tol).sum())
+    return rank, sorted(int(i) for i in piv[rank:])
