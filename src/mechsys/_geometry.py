@@ -16,6 +16,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+import numpy as np
 import sympy as sp
 
 from ._errors import GeometryError, ModelError
@@ -25,6 +26,8 @@ if TYPE_CHECKING:  # pragma: no cover
 
 
 def _as_matrix(coords, what: str) -> sp.Matrix:
+    if isinstance(coords, np.ndarray):
+        coords = coords.tolist()
     if isinstance(coords, sp.MatrixBase):
         m = sp.Matrix(coords).reshape(len(coords), 1)
     elif isinstance(coords, Sequence) and not isinstance(coords, str):
@@ -40,11 +43,13 @@ def _as_matrix(coords, what: str) -> sp.Matrix:
 def _is_coords(obj) -> bool:
     if isinstance(obj, sp.MatrixBase):
         return True
+    if isinstance(obj, np.ndarray):
+        return obj.ndim == 1 and obj.size in (2, 3)
     return (
         isinstance(obj, Sequence)
         and not isinstance(obj, str)
         and len(obj) in (2, 3)
-        and all(isinstance(c, (int, float, sp.Expr)) for c in obj)
+        and all(isinstance(c, (int, float, np.number, sp.Expr)) for c in obj)
     )
 
 

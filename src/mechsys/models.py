@@ -52,7 +52,7 @@ def four_bar(ground: float = 4.0, crank: float = 1.0, coupler: float = 4.0, rock
     dx, dy = ax - ground, ay
     d = np.hypot(dx, dy)
     c = (rocker**2 + d**2 - coupler**2) / (2 * rocker * d)
-    phi = np.arctan2(dy, dx) + branch * np.arccos(np.clip(c, -1, 1))
+    phi = np.arctan2(dy, dx) - branch * np.arccos(np.clip(c, -1, 1))
     cr = m.add_body("crank", points={"tip": (crank, 0)}, guess=((0, 0), th0))
     ro = m.add_body("rocker", points={"tip": (rocker, 0)}, guess=((ground, 0), phi))
     m.add(Revolute2(g.point((0, 0)), cr.point(0)), name="crank pivot")

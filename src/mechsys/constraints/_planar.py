@@ -9,7 +9,7 @@ from __future__ import annotations
 import sympy as sp
 
 from .._errors import ModelError
-from .._geometry import Vector, as_axis, as_point, as_vector
+from .._geometry import as_axis, as_point, as_vector
 from . import _primitives as P
 from ._base import ConstraintBase, as_expr
 
@@ -331,5 +331,4 @@ __all__ = [
     "Orthogonal1",
     "Parallel1",
     "PointOnLine1",
-    "Vector",
 ]
