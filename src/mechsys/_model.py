@@ -25,6 +25,7 @@ from ._symbols import T
 from .compile import System, make_layout, time_derivative
 from .constraints import Constraint, ConstraintBase, Variable
 from .solvers import ORDERS, PositionOptions, dependent_rows, sweep
+from .solvers._linalg import involved_rows
 
 
 class DOF(int):
@@ -392,13 +393,19 @@ class Model(OutputFunctions):
                 "RotationLock1(crank, 2*pi*T), or drop constraints with m.free(...) for dynamics.")
         if m > n:
             J = system.jacobian(0.0, self.guess(), self._p())
-            _, dep = dependent_rows(J)
+            rank, dep = dependent_rows(J)
             owners = system.layout.owners_of(dep)
             names = ", ".join(o.label() if hasattr(o, "label") else str(o) for o in owners)
+            involved = system.layout.owners_of(involved_rows(J, rank))
+            also = ""
+            if len(involved) > len(owners):
+                also = (" They are redundant together with: " + ", ".join(
+                    o.label() if hasattr(o, "label") else str(o)
+                    for o in involved if o not in owners) + ".")
             raise ConstraintCountError(
                 f"the model is overconstrained by {m - n} equation(s) ({n} coordinates, {m} "
                 f"equations). Constraints that look redundant at the current guess: {names or '?'}."
-                " Remove them or use constraints that remove fewer degrees of freedom.")
+                f"{also} Remove them or use constraints that remove fewer degrees of freedom.")
 
     def solve(self, t=0.0, solution: str = "acceleration", guess=None,
               options: PositionOptions | None = None):

@@ -82,3 +82,16 @@ def dependent_rows(J, tol: float | None = None) -> tuple[int, list[int]]:
         tol = max(m, n) * np.finfo(float).eps * (d[0] if d.size else 0.0) * 1e3
     rank = int((d > tol).sum())
     return rank, sorted(int(i) for i in piv[rank:])
+
+
+def involved_rows(J, rank: int, tol: float = 1e-8) -> list[int]:
+    """Rows (equations) taking part in the linear dependency of ``J`` of the given rank:
+    those with a non-negligible weight in a basis of the left null space (``J^T y = 0``).
+    :func:`dependent_rows` picks *which* rows to drop; this says which rows are *involved*
+    (for example both of two constraints that fix the same coordinate)."""
+    J = J.toarray() if sps.issparse(J) else np.asarray(J, dtype=float)
+    if rank >= J.shape[0]:
+        return []
+    U, _, _ = sla.svd(J, full_matrices=True)
+    null = U[:, rank:]
+    return sorted(int(i) for i in np.nonzero(np.abs(null).max(axis=1) > tol)[0])

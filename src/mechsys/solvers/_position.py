@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._errors import ConvergenceError, SingularJacobianError
-from ._linalg import SPARSE_THRESHOLD, Singular, dependent_rows, factor
+from ._linalg import SPARSE_THRESHOLD, Singular, dependent_rows, factor, involved_rows
 
 
 @dataclass(frozen=True)
@@ -48,6 +48,11 @@ def describe_singular(system, J, t, q, what: str) -> SingularJacobianError:
     )
     if dep:
         msg += f"Dependent equations come from: {names}. "
+        involved = system.layout.owners_of(involved_rows(J, rank))
+        if len(involved) > len(owners):
+            msg += ("The dependency involves: "
+                    + ", ".join(o.label() if hasattr(o, "label") else str(o) for o in involved)
+                    + ". ")
     msg += (
         "Either these constraints are redundant (remove or relax one), or the mechanism is at "
         "a lock-up/toggle position where it cannot be driven as specified."
@@ -71,8 +76,14 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
     norm = np.abs(F).max() if F.size else 0.0
     history.append(norm)
     it = 0
+    # The scale is fixed before iterating (a diverging iterate must not loosen its own
+    # tolerance) and capped by the model's own guess (a wild sweep predictor must not either).
+    scale = np.abs(q).max(initial=0.0)
+    g0 = getattr(system, "guess", None)
+    if g0 is not None and np.size(g0) and np.abs(g0).max() > 0:
+        scale = min(scale, np.abs(g0).max())
+    tol = opt.ftol * (1.0 + scale)
     while True:
-        tol = opt.ftol * (1.0 + np.abs(q).max(initial=0.0))
         if not np.all(np.isfinite(F)):
             raise ConvergenceError(
                 f"position solve at t = {t:.6g}: constraint equations are not finite "
