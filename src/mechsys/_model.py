@@ -19,6 +19,7 @@ from ._errors import (
     UnknownConstraintError,
 )
 from ._geometry import Axis, Point, Vector, as_point, as_vector
+from ._load_outputs import LoadOutputs
 from ._outputs import OutputFunctions
 from ._space import PLANAR, SPATIAL, Space
 from ._symbols import T
@@ -56,7 +57,7 @@ class DOF(int):
     __str__ = __repr__
 
 
-class Model(OutputFunctions):
+class Model(OutputFunctions, LoadOutputs):
     """An editable mechanism model. Use :class:`Model2D` or :class:`Model3D`."""
 
     space: Space
@@ -66,6 +67,7 @@ class Model(OutputFunctions):
         self._constraints: list[ConstraintBase] = []
         self._params: dict[sp.Symbol, float] = {}
         self._variables: list[Variable] = []
+        self._loads: list = []
         self._version = 0
         self._system: System | None = None
         self._guess_override: dict[sp.Symbol, float] = {}
@@ -243,6 +245,52 @@ class Model(OutputFunctions):
         self._touch()
         return new
 
+    # -- loads --------------------------------------------------------------------------
+    def add_load(self, load, name: str | None = None):
+        """Add a load (``Force``, ``Moment``, ``Gravity``, ``Load``, ``Spring``, ``Damper``,
+        friction); returns it as the handle (Mech's ``SetLoads``)."""
+        from ._loads import LoadBase
+
+        loads = load if isinstance(load, (list, tuple)) else [load]
+        for ld in loads:
+            if not isinstance(ld, LoadBase):
+                raise ModelError(f"add_load() takes load objects, got {ld!r}")
+            if ld.model is not None:
+                raise ModelError(f"{ld.label()} is already in a model")
+            for b in ld.bodies():
+                if getattr(b, "model", None) is not self:
+                    raise ModelError(f"{ld.label()} uses body {getattr(b, 'name', b)!r} of "
+                                     "another model")
+            ld.name = name if (name and len(loads) == 1) else f"load{len(self._loads) + 1}"
+            ld.model = self
+            self._loads.append(ld)
+        self._touch()
+        return load
+
+    @property
+    def load_list(self) -> list:
+        """The loads of the model, in order."""
+        return list(self._loads)
+
+    def remove_load(self, load) -> None:
+        if load not in self._loads:
+            raise ModelError(f"{getattr(load, 'label', lambda: load)()} is not in this model")
+        self._loads.remove(load)
+        load.model = None
+        self._touch()
+
+    def clear_loads(self) -> None:
+        for ld in self._loads:
+            ld.model = None
+        self._loads.clear()
+        self._touch()
+
+    def multipliers(self, constraint) -> list:
+        """Lagrange multiplier symbols of a constraint (Mech's ``Generalized``)."""
+        c = self.constraint(constraint)
+        s = self.compile()
+        return [lam for lam, o in zip(s.lam_symbols, s.layout.eq_owner) if o is c]
+
     # -- guesses ------------------------------------------------------------------------
     def set_guess(self, state=None, **values) -> None:
         """Set initial guesses: from a solved ``State``/``Solution`` (its last point), a
@@ -326,7 +374,8 @@ class Model(OutputFunctions):
             self._check_symbols(eqs, owners)
             layout = make_layout(self._bodies[1:], self._variables, list(self._params), owners, index)
             self._system = System(self.space, layout, eqs, list(self._params.values()),
-                                  self.guess(), backend=self._backend, version=self._version)
+                                  self.guess(), backend=self._backend, version=self._version,
+                                  model=self, loads=list(self._loads))
         return self._system
 
     def _p(self) -> np.ndarray:
@@ -408,26 +457,53 @@ class Model(OutputFunctions):
                 f"{also} Remove them or use constraints that remove fewer degrees of freedom.")
 
     def solve(self, t=0.0, solution: str = "acceleration", guess=None,
-              options: PositionOptions | None = None):
+              options: PositionOptions | None = None, lambda_guess=None):
         """Kinematic solution at time(s) ``t`` (Mech's ``SolveMech``).
 
-        ``solution``: ``"location"``, ``"velocity"`` or ``"acceleration"`` (default).
+        ``solution``: ``"location"``, ``"velocity"`` or ``"acceleration"`` (default), or with
+        loads ``"static"`` (positions, then ``Phi_q^T lambda = Q`` with zero velocities),
+        ``"kinematic"`` (positions, velocities, velocity-dependent loads) or ``"dynamic"``
+        (inverse dynamics ``M qdd + Phi_q^T lambda = Q + Qv``). ``lambda_guess`` starts the
+        multiplier Newton when loads depend on reactions (friction).
         ``guess``: starting coordinates (array (n,), a ``State``/``Solution`` or a mapping);
         default the model's guesses. A sweep continues each point from the previous one.
         Returns a :class:`~mechsys.Solution` and stores it as ``last_solution``.
         """
         from ._results import Solution
 
-        if solution not in ORDERS:
-            raise ModelError(f"solution must be one of {list(ORDERS)}, got {solution!r}")
+        modes = {"static": 0, "kinematic": 1, "dynamic": 2}
+        if solution not in ORDERS and solution not in modes:
+            raise ModelError(f"solution must be one of {list(ORDERS) + list(modes)}, "
+                             f"got {solution!r}")
         system = self.compile()
         self._require_square(system)
         g = self._resolve_guess(system, guess)
         scalar = np.ndim(t) == 0
-        res = sweep(system, np.atleast_1d(t), g, ORDERS[solution], options, self._p())
-        sol = Solution.from_sweep(self, system, res, self._p(), scalar=scalar)
+        order = ORDERS.get(solution, modes.get(solution))
+        res = sweep(system, np.atleast_1d(t), g, order, options, self._p())
+        lam = None
+        if solution in modes:
+            lam = self._multipliers_over(system, res, solution, lambda_guess)
+        sol = Solution.from_sweep(self, system, res, self._p(), scalar=scalar, lam=lam,
+                                  mode=solution)
         self.last_solution = sol
         return sol
+
+    def _multipliers_over(self, system, res, mode, lambda_guess):
+        from .solvers import MultiplierOptions, solve_multipliers
+
+        dyn = system.dynamics
+        p = self._p()
+        N = len(res.t)
+        lam = np.empty((N, system.m))
+        guess = 1.0 if lambda_guess is None else lambda_guess
+        for k in range(N):
+            qd = None if res.qd is None else res.qd[k]
+            qdd = None if res.qdd is None else res.qdd[k]
+            opt = MultiplierOptions(lambda_guess=guess)
+            lam[k], _ = solve_multipliers(system, dyn, res.t[k], res.q[k], qd, qdd, p, mode, opt)
+            guess = lam[k]
+        return lam
 
     def _resolve_guess(self, system, guess) -> np.ndarray:
         if guess is None:

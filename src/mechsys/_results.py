@@ -14,11 +14,12 @@ import numpy as np
 import sympy as sp
 
 from ._errors import MechError
+from ._load_outputs import LoadOutputs
 from ._outputs import OutputFunctions
 
 
 @dataclass(frozen=True, eq=False)
-class Solution(OutputFunctions):
+class Solution(OutputFunctions, LoadOutputs):
     """Kinematic (or later dynamic) solution over ``N`` time points.
 
     Attributes
@@ -43,16 +44,19 @@ class Solution(OutputFunctions):
     success: bool = True
     status: int = 0
     message: str = "solved"
+    lam: np.ndarray | None = None
+    mode: str = "acceleration"
     extra: dict = field(default_factory=dict)
 
     @classmethod
-    def from_sweep(cls, model, system, res, p, scalar=False) -> Solution:
-        for a in (res.q, res.qd, res.qdd):
+    def from_sweep(cls, model, system, res, p, scalar=False, lam=None,
+                   mode="acceleration") -> Solution:
+        for a in (res.q, res.qd, res.qdd, lam):
             if a is not None:
                 a.setflags(write=False)
         return cls(t=res.t, q=res.q, qd=res.qd, qdd=res.qdd, p=np.asarray(p), system=system,
                    model=model, iterations=res.iterations, evaluations=res.evaluations,
-                   scalar=scalar)
+                   scalar=scalar, lam=lam, mode=mode)
 
     def __len__(self) -> int:
         return len(self.t)
@@ -99,14 +103,19 @@ class Solution(OutputFunctions):
         for order, syms in ((1, lay.qd_symbols), (2, lay.qdd_symbols)):
             if free & set(syms) and (self.qd, self.qdd)[order - 1] is None:
                 raise MechError(self._missing(order))
+        lam_syms = self.system.lam_symbols
+        if free & set(lam_syms) and self.lam is None:
+            raise MechError("this solution has no Lagrange multipliers (reactions); solve with "
+                            "solution='static', 'kinematic' or 'dynamic'")
         f = self.system.compile_expression(list(m))
-        N, n = len(self.t), lay.n
-        X = np.empty((N, 1 + 3 * n + len(self.p)))
+        N, n, mm = len(self.t), lay.n, len(lam_syms)
+        X = np.empty((N, 1 + 3 * n + mm + len(self.p)))
         X[:, 0] = self.t
         X[:, 1 : 1 + n] = self.q
         X[:, 1 + n : 1 + 2 * n] = 0.0 if self.qd is None else self.qd
         X[:, 1 + 2 * n : 1 + 3 * n] = 0.0 if self.qdd is None else self.qdd
-        X[:, 1 + 3 * n :] = self.p
+        X[:, 1 + 3 * n : 1 + 3 * n + mm] = 0.0 if self.lam is None else self.lam
+        X[:, 1 + 3 * n + mm :] = self.p
         with np.errstate(divide="ignore", invalid="ignore"):
             vals = f.batch(X)
         if not is_matrix:

@@ -83,6 +83,22 @@ class Planar(Space):
         """Angular velocity (scalar) from ``theta_dot``: the same in global and local axes."""
         return rot_d[0]
 
+    def inertia_matrix(self, inertia) -> sp.Matrix:
+        """Centroidal inertia as a 1x1 matrix from a scalar ``J``."""
+        return sp.Matrix([[sp.sympify(0 if inertia is None else inertia)]])
+
+    def as_rotation_vector(self, w) -> sp.Matrix:
+        """Angular quantities as a column (1 component in 2D)."""
+        return sp.Matrix([w])
+
+    def moment_about(self, arm, force):
+        """Moment of ``force`` with lever ``arm`` (scalar ``arm x force`` in 2D)."""
+        return self.cross(arm, force)
+
+    def wrench_from_generalized(self, G, rot):
+        """Force (2,) at the body origin and moment from a body's generalized force (3,)."""
+        return sp.Matrix(G[:2]), G[2]
+
 
 class Spatial(Space):
     """Spatial (3D) bodies: ``x, y, z, e0, e1, e2, e3`` (Euler parameters)."""
@@ -179,6 +195,40 @@ class Spatial(Space):
     def body_normalization(self, rot) -> list:
         e0, e1, e2, e3 = rot
         return [e0**2 + e1**2 + e2**2 + e3**2 - 1]
+
+    def inertia_matrix(self, inertia) -> sp.Matrix:
+        """Centroidal inertia matrix (3x3, body axes) from ``(Ixx, Iyy, Izz, Ixy, Iyz, Izx)``
+        (the matrix entries, products included with their sign as matrix elements) or a
+        3x3 matrix; ``None`` is zero."""
+        if inertia is None:
+            return sp.zeros(3, 3)
+        if isinstance(inertia, sp.MatrixBase) or (
+            hasattr(inertia, "__len__") and len(inertia) == 3
+        ):
+            J = sp.Matrix(inertia)
+            if J.shape != (3, 3):
+                raise ValueError("a 3D inertia matrix must be 3x3")
+            return J
+        vals = [sp.sympify(v) for v in inertia]
+        if len(vals) == 3:
+            vals = vals + [0, 0, 0]
+        if len(vals) != 6:
+            raise ValueError("3D inertia: give (Ixx, Iyy, Izz, Ixy, Iyz, Izx) or a 3x3 matrix")
+        xx, yy, zz, xy, yz, zx = vals
+        return sp.Matrix([[xx, xy, zx], [xy, yy, yz], [zx, yz, zz]])
+
+    def as_rotation_vector(self, w) -> sp.Matrix:
+        return sp.Matrix(w)
+
+    def moment_about(self, arm, force):
+        return sp.Matrix(arm).cross(sp.Matrix(force))
+
+    def wrench_from_generalized(self, G, rot):
+        """Force (3,) at the origin and global moment (3,) from a body's generalized force
+        ``(Q_r, Q_e)`` (7,): ``Q_e = 2 E^T M`` so ``M = E Q_e / 2`` (``E E^T = I``)."""
+        e0, e1, e2, e3 = rot
+        E = sp.Matrix([[-e1, e0, -e3, e2], [-e2, e3, e0, -e1], [-e3, -e2, e1, e0]])
+        return sp.Matrix(G[:3]), E * sp.Matrix(G[3:]) / 2
 
 
 PLANAR = Planar()

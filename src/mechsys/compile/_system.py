@@ -113,7 +113,7 @@ class System:
     """
 
     def __init__(self, space, layout: Layout, phi, p_values, guess, backend: str | None = None,
-                 version: int = 0):
+                 version: int = 0, model=None, loads=()):
         self.space = space
         self.layout = layout
         self.version = version
@@ -150,6 +150,23 @@ class System:
         self.f_velocity: Compiled = compile_exprs(args, jac + phi_t, self.backend)
         self.f_gamma: Compiled = compile_exprs(args, gamma, self.backend)
         self._eval_cache: dict = {}
+        self._model = model
+        self._loads = tuple(loads)
+        self._bodies = tuple(model.bodies[1:]) if model is not None else ()
+        self._dynamics = None
+        from ._dynamics import multiplier_symbols
+
+        self.lam_symbols = multiplier_symbols(layout)
+
+    @property
+    def dynamics(self):
+        """Mass matrix, applied and velocity-dependent forces (derived and compiled on first
+        use: kinematics-only work never pays for them)."""
+        if self._dynamics is None:
+            from ._dynamics import Dynamics
+
+            self._dynamics = Dynamics(self, self._model, self._bodies, self._loads)
+        return self._dynamics
 
     # -- numeric helpers (x = [t, q, qd, p]) ------------------------------------------
     @property
@@ -202,13 +219,14 @@ class System:
 
     # -- evaluating arbitrary expressions ---------------------------------------------
     def compile_expression(self, exprs) -> Compiled:
-        """Compile any expressions of ``T, q, qd, qdd, p`` (cached) as a function of
-        ``[t, q, qd, qdd, p]``."""
+        """Compile any expressions of ``T, q, qd, qdd, lambda, p`` (cached) as a function of
+        ``[t, q, qd, qdd, lambda, p]``."""
         key = tuple(sp.sympify(e) for e in exprs)
         f = self._eval_cache.get(key)
         if f is None:
             lay = self.layout
-            args = [T, *lay.q_symbols, *lay.qd_symbols, *lay.qdd_symbols, *lay.p_symbols]
+            args = [T, *lay.q_symbols, *lay.qd_symbols, *lay.qdd_symbols, *self.lam_symbols,
+                    *lay.p_symbols]
             allowed = set(args)
             for e in key:
                 extra = e.free_symbols - allowed
@@ -217,7 +235,8 @@ class System:
 
                     raise ModelError(
                         f"expression {e} has symbols {sorted(map(str, extra))} that are not "
-                        "coordinates, velocities, accelerations, parameters or T of this model"
+                        "coordinates, velocities, accelerations, multipliers, parameters or T "
+                        "of this model"
                     )
             f = compile_exprs(args, list(key), self.backend)
             self._eval_cache[key] = f

@@ -1,0 +1,253 @@
+r"""Applied loads and their generalized forces (by virtual work, derived once, symbolically).
+
+Every load reduces to *contributions*: a global force ``F`` at a body point ``P``, a moment
+``M`` on a body, or a magnitude applied directly to a coordinate. The generalized force on
+the coordinates is::
+
+    Q = sum (d v_P / d qd)^T F  +  sum (d omega_b / d qd)^T M  +  direct loads
+
+which is the virtual work ``dW = F . dr_P + M . dpi_b`` in any velocity representation.
+Magnitudes may be expressions of ``T``, parameters, coordinates, velocities and Lagrange
+multipliers (friction).
+
+Sign conventions (written once, followed everywhere; see ``docs/loads.md``):
+
+* equations of motion ``M qdd + Phi_q^T lambda = Q + Q_v`` (``Q_v`` the centrifugal and
+  gyroscopic terms), so the *reaction* on the coordinates is ``-Phi_q^T lambda``;
+* ``applied + reaction + dynamic = 0`` on every body, ``dynamic = Q_v - M qdd``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy as sp
+
+from ._errors import ModelError
+from ._geometry import Axis, Point, Vector, as_point, as_vector
+
+
+@dataclass
+class PointForce:
+    point: Point
+    force: sp.Matrix  # global
+
+
+@dataclass
+class BodyMoment:
+    body: object
+    moment: object  # scalar (2D) or global (3,) column (3D)
+
+
+@dataclass
+class DirectLoad:
+    symbol: sp.Symbol
+    magnitude: sp.Expr
+
+
+class LoadBase:
+    """A load: ``contributions(model)`` and, when conservative, ``potential(model)``."""
+
+    def __init__(self) -> None:
+        self.name: str | None = None
+        self.model = None
+
+    def contributions(self, model) -> list:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def potential(self, model):
+        """Potential energy (conservative loads) or ``None``."""
+        return None
+
+    def bodies(self) -> list:
+        return []
+
+    def label(self) -> str:
+        return f"load {self.name!r} ({type(self).__name__})" if self.name else type(self).__name__
+
+
+def _unit(d: sp.Matrix, cutoff=0):
+    n2 = (d.T * d)[0, 0]
+    if cutoff:
+        return d / sp.sqrt(n2 + sp.sympify(cutoff) ** 2)
+    return d / sp.sqrt(n2)
+
+
+class Force(LoadBase):
+    r"""A force at a point of a body.
+
+    ``Force(point, direction, magnitude)`` or ``Force(axis, magnitude=...)`` (Mech's
+    ``Force[bnum, axis, mag]``: the axis origin is the point of application, its direction
+    the line of action). ``direction`` is a :class:`Vector` (fixed in its body: a follower
+    force) or a global tuple::
+
+        F = magnitude * u / |u|          (magnitude="absolute", the default)
+        F = magnitude * u                (magnitude="relative")
+
+    ``cutoff`` > 0 uses ``u / sqrt(|u|^2 + cutoff^2)`` so the direction may shrink to zero
+    without a singularity. ``reaction=point2`` applies ``-F`` at ``point2`` of another body
+    (action and reaction).
+    """
+
+    def __init__(self, point, direction=None, magnitude=1, *, mode: str = "absolute",
+                 cutoff=0, reaction=None):
+        super().__init__()
+        if isinstance(point, Axis) and direction is None:
+            self.point, self.direction = point.origin, point.dir
+        else:
+            if direction is None:
+                raise ModelError("Force needs a direction (a vector, axis or tuple)")
+            self.point, self.direction = as_point(point), as_vector(direction)
+        if mode not in ("absolute", "relative"):
+            raise ModelError(f"Force mode must be 'absolute' or 'relative', got {mode!r}")
+        self.magnitude = sp.sympify(magnitude)
+        self.mode, self.cutoff = mode, cutoff
+        self.reaction = as_point(reaction) if reaction is not None else None
+
+    def bodies(self):
+        return self.point.bodies() + (self.reaction.bodies() if self.reaction else [])
+
+    def force_vector(self) -> sp.Matrix:
+        d = self.direction.direction()
+        u = d if self.mode == "relative" else _unit(d, self.cutoff)
+        return self.magnitude * u
+
+    def contributions(self, model):
+        F = self.force_vector()
+        out = [PointForce(self.point, F)]
+        if self.reaction is not None:
+            out.append(PointForce(self.reaction, -F))
+        return out
+
+
+class Moment(LoadBase):
+    r"""A moment on a body: ``Moment(body, magnitude)`` in 2D (counter-clockwise positive),
+    ``Moment(body, vector, magnitude)`` in 3D (``M = magnitude * u/|u|``).
+    ``reaction=body2`` applies the opposite moment to ``body2``."""
+
+    def __init__(self, body, a, b=None, *, reaction=None, mode: str = "absolute", cutoff=0):
+        super().__init__()
+        self.body = body
+        if b is None:
+            self.vector, self.magnitude = None, sp.sympify(a)
+        else:
+            self.vector, self.magnitude = as_vector(a), sp.sympify(b)
+        self.reaction = reaction
+        self.mode, self.cutoff = mode, cutoff
+
+    def bodies(self):
+        return [self.body] + ([self.reaction] if self.reaction is not None else [])
+
+    def moment_value(self, model):
+        if model.space.dim == 2:
+            if self.vector is not None:
+                raise ModelError("a planar Moment takes (body, magnitude), not a vector")
+            return self.magnitude
+        if self.vector is None:
+            raise ModelError("a 3D Moment needs a direction: Moment(body, vector, magnitude)")
+        d = self.vector.direction()
+        return self.magnitude * (d if self.mode == "relative" else _unit(d, self.cutoff))
+
+    def contributions(self, model):
+        M = self.moment_value(model)
+        out = [BodyMoment(model.body(self.body), M)]
+        if self.reaction is not None:
+            out.append(BodyMoment(model.body(self.reaction), -M))
+        return out
+
+
+class Gravity(LoadBase):
+    r"""Weight ``m g u/|u|`` at the centroid of each body (all, or ``bodies``).
+
+    ``Gravity(vector, g, bodies=None)``; potential energy ``-m g (u/|u|) . r_c``.
+    """
+
+    def __init__(self, vector=(0, -1), g=9.81, bodies=None):
+        super().__init__()
+        self.vector = as_vector(vector)
+        self.g = sp.sympify(g)
+        self.only = bodies
+
+    def _bodies(self, model):
+        bs = model.bodies[1:] if self.only is None else [model.body(b) for b in self.only]
+        return [b for b in bs if b.mass != 0]
+
+    def contributions(self, model):
+        u = _unit(self.vector.direction())
+        return [PointForce(Point(b, b.centroid, label="centroid"), b.mass * self.g * u)
+                for b in self._bodies(model)]
+
+    def potential(self, model):
+        u = _unit(self.vector.direction())
+        out = sp.S.Zero
+        for b in self._bodies(model):
+            rc = b.r + b.A * b.centroid
+            out += -b.mass * self.g * (u.T * rc)[0, 0]
+        return out
+
+
+class Load(LoadBase):
+    """A magnitude added directly to the generalized force of one coordinate or variable
+    (Mech's ``Load[sym, mag]``)."""
+
+    def __init__(self, symbol, magnitude):
+        super().__init__()
+        self.symbol = symbol
+        self.magnitude = sp.sympify(magnitude)
+
+    def contributions(self, model):
+        s = self.symbol if isinstance(self.symbol, sp.Symbol) else model._coordinate_by_name(str(self.symbol))
+        return [DirectLoad(s, self.magnitude)]
+
+
+class Spring(LoadBase):
+    r"""Spring between two points: tension ``k (L - L0)`` (or ``law(L)``) pulls them together.
+
+    ``Spring(point1, point2, stiffness, free_length=0, law=None)``; force on point 1
+    ``-tension (r_1 - r_2)/L``, opposite on point 2; potential ``k (L - L0)^2 / 2`` (linear).
+    """
+
+    def __init__(self, point1, point2, stiffness=0, free_length=0, law=None):
+        super().__init__()
+        self.p1, self.p2 = as_point(point1), as_point(point2)
+        self.k, self.L0, self.law = sp.sympify(stiffness), sp.sympify(free_length), law
+
+    def bodies(self):
+        return self.p1.bodies() + self.p2.bodies()
+
+    def length(self):
+        d = self.p1.location() - self.p2.location()
+        return sp.sqrt((d.T * d)[0, 0])
+
+    def tension(self, model):
+        L = self.length()
+        return sp.sympify(self.law(L)) if self.law is not None else self.k * (L - self.L0)
+
+    def contributions(self, model):
+        d = self.p1.location() - self.p2.location()
+        F = -self.tension(model) * d / self.length()
+        return [PointForce(self.p1, F), PointForce(self.p2, -F)]
+
+    def potential(self, model):
+        if self.law is not None:
+            return None
+        return self.k * (self.length() - self.L0) ** 2 / 2
+
+
+class Damper(Spring):
+    r"""Linear damper between two points: tension ``c dL/dt`` (or ``law(L, dL/dt)``)."""
+
+    def __init__(self, point1, point2, damping=0, law=None):
+        super().__init__(point1, point2)
+        self.c, self.dlaw = sp.sympify(damping), law
+
+    def tension(self, model):
+        L = self.length()
+        Ld = model.time_derivative(L)
+        return sp.sympify(self.dlaw(L, Ld)) if self.dlaw is not None else self.c * Ld
+
+    def potential(self, model):
+        return None
+
+
+__all__ = ["Damper", "Force", "Gravity", "Load", "LoadBase", "Moment", "Spring", "Vector"]
