@@ -27,7 +27,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/kinematic_sweep.py
 
 docs: $(STAMP)
-	$(PY) -m mechsys.docgen docs/constraints.md
+	$(PY) -m mechsys._docgen docs/constraints.md
 
 clean:
 	rm -rf $(VENV) out build *.egg-info src/*.egg-info
