@@ -24,7 +24,17 @@ from ._errors import (
     UnknownConstraintError,
     UnknownPointError,
 )
+from ._friction import JointFriction
 from ._geometry import Axis, Line, Point, Vector
+from ._inertia import (
+    CompositeInertia,
+    ParallelAxis,
+    PrincipalAxes,
+    composite_inertia,
+    parallel_axis,
+    principal_axes,
+)
+from ._loads import Damper, Force, Gravity, Load, LoadBase, Moment, Spring
 from ._model import DOF, Model, Model2D, Model3D
 from ._results import Solution, State
 from ._symbols import T
@@ -50,6 +60,20 @@ from .solvers import PositionOptions
 __version__ = "0.1.0"
 
 __all__ = [
+    "CompositeInertia",
+    "Damper",
+    "Force",
+    "Gravity",
+    "JointFriction",
+    "Load",
+    "LoadBase",
+    "Moment",
+    "ParallelAxis",
+    "PrincipalAxes",
+    "Spring",
+    "composite_inertia",
+    "parallel_axis",
+    "principal_axes",
     "DOF",
     "REGISTRY",
     "Axis",

@@ -75,5 +75,7 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
                 history=tuple(history)) from None
     raise ConvergenceError(
         f"{mode} load solve at t = {t:.6g} did not converge in {opt.max_iterations} iterations "
-        f"(residual {history[-1]:.3e}); give lambda_guess= closer to the expected multipliers "
+        f"(residual {history[-1]:.3e}). Loads depend on the reactions (friction): either the "
+        "mechanism self-locks here (no finite reaction can drive it with this friction), or "
+        "the start is poor: give lambda_guess= closer to the expected multipliers "
         "(Mech's LambdaGuess).", time=t, residuals=R, history=tuple(history))

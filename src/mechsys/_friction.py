@@ -1,0 +1,103 @@
+r"""Coulomb friction and viscous damping in joints, driven by the joint reaction.
+
+The reaction force a joint applies to its first body is, from the multipliers,
+``R = -(d Phi_c / d r_1)^T lambda_c``; its magnitude ``|R| = sqrt(R.R + eps_R^2)`` (``eps_R``
+tiny, keeps the Newton on the multipliers differentiable at zero load). The sign of the
+sliding or turning velocity is regularised: ``s(v) = v / sqrt(v.v + v_eps^2)``.
+
+* rotational joints (``Revolute2``, ``Spherical3``, ``Revolute5``): moment on body 1
+  ``-mu r |R| s(omega_1 - omega_2)`` (``r`` the pin radius), opposite on body 2;
+* translational joints (``Translate2``, ``Translate5``, ...): force on body 1 at the axis
+  origin ``-mu |R| s(v_rel . u) u`` (``u`` the unit slide direction, ``v_rel`` the
+  velocity of that point relative to body 2), opposite on body 2 (a force at its origin
+  plus the transfer moment).
+
+Plus ``viscous`` (``c``): ``-c omega_rel`` or ``-c v_rel`` added to the same load. The
+equations become nonlinear in the multipliers: statics and inverse dynamics then iterate
+(Newton, ``lambda_guess``).
+"""
+
+from __future__ import annotations
+
+import sympy as sp
+
+from ._errors import ModelError
+from ._loads import BodyMoment, LoadBase, PointForce
+
+_ROTATIONAL = {"Revolute2", "Spherical3", "Revolute5"}
+_TRANSLATIONAL = {"Translate2", "Translate5", "Cylindrical4"}
+
+
+class JointFriction(LoadBase):
+    """Coulomb (``mu``, and ``radius`` for rotational joints) plus viscous (``viscous``)
+    friction in a joint. ``kind`` is ``"rotational"`` or ``"translational"`` (default from
+    the constraint type)."""
+
+    def __init__(self, constraint, mu=0.0, radius=0.0, viscous=0.0, kind=None,
+                 v_eps=1e-3, eps_reaction=1e-9):
+        super().__init__()
+        self.constraint = constraint
+        self.mu, self.radius, self.viscous = (sp.sympify(x) for x in (mu, radius, viscous))
+        name = type(constraint).__name__
+        if kind is None:
+            kind = "rotational" if name in _ROTATIONAL else (
+                "translational" if name in _TRANSLATIONAL else None)
+        if kind not in ("rotational", "translational"):
+            raise ModelError(f"JointFriction: cannot tell whether {name} is a rotational or "
+                             "translational joint; pass kind='rotational' or 'translational'")
+        self.kind = kind
+        self.v_eps, self.eps_reaction = v_eps, eps_reaction
+
+    def bodies(self):
+        return self.constraint.bodies()
+
+    def _pair(self, model):
+        c = model.constraint(self.constraint)
+        bs = c.bodies()
+        if not bs:
+            raise ModelError(f"JointFriction on {c.label()}: it joins no bodies")
+        b1 = bs[0]
+        b2 = bs[1] if len(bs) > 1 else model.ground
+        return c, b1, b2
+
+    def reaction_force(self, model, c, b1, b2):
+        """Reaction force on the joint's first moving body (global), in multipliers."""
+        body = b1 if not b1.is_ground else b2
+        sign = 1 if body is b1 else -1
+        dim = model.space.dim
+        lam = sp.Matrix(model.multipliers(c))
+        eqs = sp.Matrix(c.equations(model.space))
+        R = -(eqs.jacobian(list(body.q[:dim])).T * lam)
+        return sign * R
+
+    def contributions(self, model):
+        c, b1, b2 = self._pair(model)
+        sp_ = model.space
+        R = self.reaction_force(model, c, b1, b2)
+        Rmag = sp.sqrt((R.T * R)[0, 0] + sp.sympify(self.eps_reaction) ** 2)
+        if self.kind == "rotational":
+            w = sp_.as_rotation_vector(model._omega(b1, False)) - sp_.as_rotation_vector(
+                model._omega(b2, False))
+            s = w / sp.sqrt((w.T * w)[0, 0] + self.v_eps**2)
+            M = -self.mu * self.radius * Rmag * s - self.viscous * w
+            Mv = M[0] if sp_.dim == 2 else M
+            return [BodyMoment(b1, Mv), BodyMoment(b2, -Mv)]
+        # translational: slide axis of the joint's first axis
+        ax = getattr(c, "a1", None)
+        if ax is None:
+            raise ModelError(f"JointFriction: {c.label()} has no slide axis")
+        u = ax.direction()
+        u = u / sp.sqrt((u.T * u)[0, 0])
+        P = ax.origin.location()
+        v1 = model.time_derivative(P)
+        # velocity of the material point of body 2 at P: r2' + A2' A2^T (P - r2)
+        A2d = model.time_derivative(b2.A)
+        v2 = model.time_derivative(b2.r) + A2d * b2.A.T * (P - b2.r)
+        vrel = ((v1 - v2).T * u)[0, 0]
+        f = -self.mu * Rmag * vrel / sp.sqrt(vrel**2 + self.v_eps**2) - self.viscous * vrel
+        F = f * u
+        out = [PointForce(ax.origin, F)]
+        if not b2.is_ground:
+            out.append(PointForce(b2.point(0), -F))
+            out.append(BodyMoment(b2, sp_.moment_about(P - b2.r, -F)))
+        return out

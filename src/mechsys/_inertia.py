@@ -1,0 +1,80 @@
+r"""Mass-property utilities (Mech's ``ParallelAxis``, ``PrincipalAxes``, composite bodies).
+
+Inertia is the matrix ``J = integral (|s|^2 I - s s^T) dm`` (scalar ``integral |s|^2 dm`` in
+2D), so products of inertia are the (signed) off-diagonal matrix elements.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def _as_matrix3(inertia) -> np.ndarray:
+    a = np.asarray(inertia, dtype=float)
+    if a.shape == (3, 3):
+        return a
+    if a.shape == (6,):
+        xx, yy, zz, xy, yz, zx = a
+        return np.array([[xx, xy, zx], [xy, yy, yz], [zx, yz, zz]])
+    if a.shape == (3,):
+        return np.diag(a)
+    raise ValueError("3D inertia: (Ixx, Iyy, Izz, Ixy, Iyz, Izx), principal (3,) or 3x3")
+
+
+def _as_list6(J: np.ndarray):
+    return (J[0, 0], J[1, 1], J[2, 2], J[0, 1], J[1, 2], J[2, 0])
+
+
+def parallel_axis(vector, mass: float, inertia, rotation=None):
+    r"""Inertia about another origin (parallel axis theorem).
+
+    ``inertia`` is centroidal; ``vector`` runs from the new origin to the centroid::
+
+        2D:  J_O = J_c + m |d|^2
+        3D:  J_O = R J_c R^T + m (|d|^2 I - d d^T)
+
+    ``rotation`` (3D, a 3x3 matrix) turns the centroidal frame into the new frame.
+    Negative ``mass`` goes the other way (non-centroidal to centroidal), as in Mech.
+    Returns a scalar (2D) or ``(Ixx, Iyy, Izz, Ixy, Iyz, Izx)`` (3D).
+
+    >>> parallel_axis((1.0, 0.0), 2.0, 0.5)
+    2.5
+    """
+    d = np.asarray(vector, dtype=float)
+    if d.shape == (2,):
+        return float(inertia) + mass * float(d @ d)
+    J = _as_matrix3(inertia)
+    if rotation is not None:
+        R = np.asarray(rotation, dtype=float)
+        J = R @ J @ R.T
+    return _as_list6(J + mass * (float(d @ d) * np.eye(3) - np.outer(d, d)))
+
+
+def principal_axes(inertia):
+    """Principal moments (ascending) and axes (columns of a rotation matrix, right-handed)."""
+    w, V = np.linalg.eigh(_as_matrix3(inertia))
+    if np.linalg.det(V) < 0:
+        V[:, 2] = -V[:, 2]
+    return w, V
+
+
+def composite_inertia(parts):
+    """Combine parts ``[(mass, centroid, inertia), ...]`` (each inertia centroidal, all in
+    one body frame) into ``(mass, centroid, inertia about the composite centroid)``."""
+    parts = list(parts)
+    M = sum(float(m) for m, _, _ in parts)
+    if M == 0:
+        raise ValueError("composite_inertia: total mass is zero")
+    c = sum(float(m) * np.asarray(r, dtype=float) for m, r, _ in parts) / M
+    if c.shape == (2,):
+        J = sum(parallel_axis(np.asarray(r) - c, m, I) for m, r, I in parts)
+        return M, tuple(c), J
+    J = np.zeros((3, 3))
+    for m, r, I in parts:
+        J += _as_matrix3(parallel_axis(np.asarray(r, dtype=float) - c, m, I))
+    return M, tuple(c), _as_list6(J)
+
+
+ParallelAxis = parallel_axis
+PrincipalAxes = principal_axes
+CompositeInertia = composite_inertia

@@ -1,0 +1,68 @@
+"""Coulomb friction driven by joint reactions, against hand calculations."""
+
+import numpy as np
+import pytest
+
+import mechsys as ms
+from mechsys import T
+
+
+def incline(alpha, mu, mass=2.0, g=9.81, v=1.0):
+    m = ms.Model2D()
+    blk = m.add_body("block", mass=mass, inertia=0.1, guess=((0.0, 0.0), alpha))
+    ca, sa = np.cos(alpha), np.sin(alpha)
+    slide = m.add(ms.Translate2(blk.axis((0, 0), (1, 0)), m.ground.axis((0, 0), (ca, sa))),
+                  name="slide")
+    m.add(ms.RelativeX1(blk.point(0), v * ca * T), name="push")
+    m.add_load(ms.Gravity((0, -1), g))
+    m.add_load(ms.JointFriction(slide, mu=mu, v_eps=1e-4))
+    return m
+
+
+@pytest.mark.parametrize("alpha,mu", [(0.3, 0.25), (0.6, 0.1), (0.2, 0.0)])
+def test_block_pushed_up_incline(alpha, mu):
+    mass, g = 2.0, 9.81
+    m = incline(alpha, mu, mass, g)
+    sol = m.solve(np.linspace(0.1, 1.0, 4), solution="dynamic")
+    F, _ = sol.reaction("push", "block")
+    # horizontal push Fx: along the incline Fx cos a = m g sin a + mu N,
+    # normal N = m g cos a + Fx sin a
+    ca, sa = np.cos(alpha), np.sin(alpha)
+    Fx = mass * g * (sa + mu * ca) / (ca - mu * sa)
+    np.testing.assert_allclose(F[:, 0], Fx, rtol=1e-6)
+    np.testing.assert_allclose(F[:, 1], 0, atol=1e-9)
+    # the slide's reaction (normal force) on the block
+    N = mass * g * ca + Fx * sa
+    Fs, _ = sol.reaction("slide", "block")
+    np.testing.assert_allclose(np.hypot(Fs[:, 0], Fs[:, 1]), N, rtol=1e-6)
+
+
+def test_pin_friction_torque():
+    mu, r, W, H = 0.2, 0.05, 300.0, 400.0
+    m = ms.Model2D()
+    wheel = m.add_body("wheel", mass=0.0)
+    pin = m.add(ms.Revolute2(m.ground.point((0, 0)), wheel.point(0)), name="pin")
+    m.add(ms.RotationLock1(wheel, 3.0 * T), name="motor")
+    m.add_load(ms.Force(wheel.point(0), (0, -1), W))
+    m.add_load(ms.Force(wheel.point(0), (1, 0), H))
+    m.add_load(ms.JointFriction(pin, mu=mu, radius=r, v_eps=1e-6))
+    sol = m.solve(np.linspace(0, 1, 5), solution="static")
+    _, torque = sol.reaction("motor", "wheel")
+    # static: velocities are zero, so the regularised sign is zero: no friction torque
+    np.testing.assert_allclose(torque, 0, atol=1e-9)
+    sol = m.solve(np.linspace(0, 1, 5), solution="kinematic")
+    _, torque = sol.reaction("motor", "wheel")
+    np.testing.assert_allclose(torque, mu * r * np.hypot(W, H), rtol=1e-9)
+    # reversing the motor reverses the friction torque
+    m.replace("motor", ms.RotationLock1(wheel, -3.0 * T))
+    sol = m.solve(np.linspace(0, 1, 5), solution="kinematic")
+    _, torque = sol.reaction("motor", "wheel")
+    np.testing.assert_allclose(torque, -mu * r * np.hypot(W, H), rtol=1e-9)
+
+
+def test_friction_too_large_reports_clearly():
+    # mu so large that the push can never move the block: cos a - mu sin a < 0
+    m = incline(0.6, 2.0)
+    with pytest.raises(ms.MechError) as exc:
+        m.solve(0.2, solution="dynamic")
+    assert "lambda" in str(exc.value).lower() or "friction" in str(exc.value).lower()
