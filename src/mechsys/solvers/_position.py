@@ -20,7 +20,7 @@ from ._linalg import SPARSE_THRESHOLD, Singular, dependent_rows, factor, involve
 class PositionOptions:
     """ftol: residual tolerance (scaled by 1 + max|q|); max_iterations; damping: line search."""
 
-    ftol: float = 1e-10
+    ftol: float = 1e-12
     max_iterations: int = 50
     damping: bool = True
 
