@@ -24,6 +24,7 @@ from ._errors import (
     UnknownConstraintError,
     UnknownPointError,
 )
+from ._free import FreeSystem
 from ._friction import JointFriction
 from ._geometry import Axis, Line, Point, Vector
 from ._inertia import (
@@ -60,6 +61,7 @@ from .solvers import PositionOptions
 __version__ = "0.1.0"
 
 __all__ = [
+    "FreeSystem",
     "CompositeInertia",
     "Damper",
     "Force",

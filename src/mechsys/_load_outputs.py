@@ -23,9 +23,22 @@ class LoadOutputs:
     """Mixin: subclasses provide ``_model()`` and ``_finish(expr)``."""
 
     # -- helpers --------------------------------------------------------------------------
+    def _sys(self):
+        """The compiled system these outputs refer to (a free system drops constraints)."""
+        sys_ = getattr(self, "system", None)
+        return sys_ if sys_ is not None else self._model().compile()
+
+    def _lams(self, c):
+        s = self._sys()
+        out = [lam for lam, o in zip(s.lam_symbols, s.layout.eq_owner) if o is c]
+        if not out:
+            raise ModelError(f"{c.label()} is not among the constraints of this system "
+                             "(was it dropped by free()?)")
+        return out
+
     def _body_rows(self, body):
         m = self._model()
-        s = m.compile()
+        s = self._sys()
         b = m.body(body)
         if b.is_ground:
             return s, b, slice(0, 0)
@@ -55,7 +68,7 @@ class LoadOutputs:
         """The Lagrange multipliers of a constraint (Mech's ``Generalized``): symbols on a
         model, values ``(N, k)`` on a solution."""
         m = self._model()
-        return self._finish(sp.Matrix(m.multipliers(constraint)))
+        return self._finish(sp.Matrix(self._lams(m.constraint(constraint))))
 
     def reaction(self, constraint, body, at=None, coordinates: str = "global"):
         """``(force, moment)`` that ``constraint`` applies *to* ``body``, the moment about
@@ -79,7 +92,7 @@ class LoadOutputs:
 
     def _reaction_expr(self, c, b, at, coordinates):
         m = self._model()
-        lam = sp.Matrix(m.multipliers(c))
+        lam = sp.Matrix(self._lams(c))
         eqs = sp.Matrix(c.equations(m.space))
         G = -(eqs.jacobian(list(b.q)).T * lam)
         return self._wrench(b, G, at, coordinates)
@@ -116,8 +129,7 @@ class LoadOutputs:
 
     def mass_matrix(self, body=None):
         """The mass matrix (of one body's coordinates, or all)."""
-        m = self._model()
-        s = m.compile()
+        s = self._sys()
         dyn = s.dynamics
         M = sp.zeros(s.n, s.n)
         for r, c, e in zip(dyn.M_rows, dyn.M_cols, dyn.M_exprs):
@@ -129,7 +141,7 @@ class LoadOutputs:
 
     def centrifugal(self, body=None):
         """Velocity-dependent inertial forces ``Qv`` (centrifugal, gyroscopic, Coriolis)."""
-        s = self._model().compile()
+        s = self._sys()
         Qv = sp.Matrix(s.dynamics.Qv)
         if body is not None:
             _, _, rows = self._body_rows(body)
@@ -140,14 +152,14 @@ class LoadOutputs:
     def body_energy(self, body=None):
         """Kinetic energy of a body (all bodies when omitted)."""
         m = self._model()
-        kin = m.compile().dynamics.kinetic
+        kin = self._sys().dynamics.kinetic
         if body is None:
             return self._finish(sum(kin.values(), sp.S.Zero))
         return self._finish(kin.get(m.body(body).name, sp.S.Zero))
 
     def potential_energy(self):
         """Potential energy of the conservative loads (gravity, linear springs)."""
-        pot = self._model().compile().dynamics.potential
+        pot = self._sys().dynamics.potential
         return self._finish(pot if pot is not None else sp.S.Zero)
 
     def power(self, constraint):
@@ -155,8 +167,8 @@ class LoadOutputs:
         ``-lambda_c^T (Phi_c)_q qd``."""
         m = self._model()
         c = m.constraint(constraint)
-        s = m.compile()
-        lam = sp.Matrix(m.multipliers(c))
+        s = self._sys()
+        lam = sp.Matrix(self._lams(c))
         eqs = sp.Matrix(c.equations(m.space))
         q, qd = list(s.layout.q_symbols), sp.Matrix(s.layout.qd_symbols)
         return self._finish(-(lam.T * eqs.jacobian(q) * qd)[0, 0])

@@ -505,6 +505,15 @@ class Model(OutputFunctions, LoadOutputs):
             guess = lam[k]
         return lam
 
+    def free(self, drop=(), solution: str = "dynamic", initial_guess=None,
+             initial_condition=None):
+        """Drop constraints and build the free system (Mech's ``SetFree``): equilibrium
+        configuration (``solution="static"``), equilibrium velocity (``"kinematic"``) or free
+        acceleration and motion (``"dynamic"``). Returns a :class:`FreeSystem`."""
+        from ._free import FreeSystem
+
+        return FreeSystem(self, drop, solution, initial_guess, initial_condition)
+
     def _resolve_guess(self, system, guess) -> np.ndarray:
         if guess is None:
             return self.guess()

@@ -1,0 +1,82 @@
+r"""Symbolic residuals and Jacobians of the equilibrium problems of a free system.
+
+Static equilibrium, unknowns ``x = (q, lambda)``::
+
+    R = [ Phi(q, t) ;  Phi_q^T lambda - Q(t, q, 0, lambda) ]
+
+Velocity equilibrium at fixed ``q``, unknowns ``x = (qd, lambda)``::
+
+    R = [ Phi_q qd + Phi_t ;  Phi_q^T lambda - Q(t, q, qd, lambda) ]
+
+Jacobians are derived symbolically (sparse) and compiled once, on first use.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+
+from .._symbols import T
+from ._backends import compile_exprs
+
+
+class _Residual:
+    def __init__(self, system, R, unknowns, args):
+        self.system = system
+        index = {s: i for i, s in enumerate(unknowns)}
+        rows, cols, vals = [], [], []
+        for i, e in enumerate(R):
+            for s in e.free_symbols:
+                j = index.get(s)
+                if j is not None:
+                    d = sp.diff(e, s)
+                    if d != 0:
+                        rows.append(i)
+                        cols.append(j)
+                        vals.append(d)
+        self.rows, self.cols = np.array(rows, dtype=int), np.array(cols, dtype=int)
+        self.size = len(R)
+        self.nR = len(R)
+        self.f = compile_exprs(args, list(R) + vals, system.backend)
+
+    def _eval(self, x):
+        out = self.f(x)
+        K = np.zeros((self.size, self.size))
+        np.add.at(K, (self.rows, self.cols), out[self.nR :])
+        return out[: self.nR], K
+
+
+class StaticEquilibrium(_Residual):
+    def __init__(self, system):
+        lay, dyn = system.layout, system.dynamics
+        n = lay.n
+        zero = dict.fromkeys(lay.qd_symbols, 0)
+        R = list(system.phi)
+        G = [sp.S.Zero] * n
+        for i, j, e in zip(system.jac_rows, system.jac_cols, system.jac_exprs):
+            G[j] += e * system.lam_symbols[i]
+        R += [G[j] - dyn.Q[j].subs(zero) for j in range(n)]
+        args = [T, *lay.q_symbols, *system.lam_symbols, *lay.p_symbols]
+        super().__init__(system, R, list(lay.q_symbols) + list(system.lam_symbols), args)
+
+    def evaluate(self, t, q, lam, p):
+        return self._eval(np.concatenate(([t], q, lam, p)))
+
+
+class VelocityEquilibrium(_Residual):
+    def __init__(self, system):
+        lay, dyn = system.layout, system.dynamics
+        n = lay.n
+        R = [sp.S.Zero] * system.m
+        for i, j, e in zip(system.jac_rows, system.jac_cols, system.jac_exprs):
+            R[i] += e * lay.qd_symbols[j]
+        R = [r + pt for r, pt in zip(R, system.phi_t)]
+        G = [sp.S.Zero] * n
+        for i, j, e in zip(system.jac_rows, system.jac_cols, system.jac_exprs):
+            G[j] += e * system.lam_symbols[i]
+        R += [G[j] - dyn.Q[j] for j in range(n)]
+        args = [T, *lay.q_symbols, *lay.qd_symbols, *system.lam_symbols, *lay.p_symbols]
+        super().__init__(system, R, list(lay.qd_symbols) + list(system.lam_symbols), args)
+
+    def evaluate(self, t, q, qd, lam, p):
+        return self._eval(np.concatenate(([t], q, qd, lam, p)))

@@ -1,0 +1,168 @@
+r"""Underconstrained (free) systems: free acceleration, equilibrium configuration and
+equilibrium velocity. Pure numerics on a System and its Dynamics.
+
+Free acceleration (``m < n`` equations), the augmented system::
+
+    [ M      Phi_q^T ] [ qdd    ]   [ Q(t, q, qd, lambda) + Qv(q, qd) ]
+    [ Phi_q  0       ] [ lambda ] = [ gamma(t, q, qd)                 ]
+
+linear unless ``Q`` depends on ``lambda`` (friction): then Newton on ``(qdd, lambda)`` with
+the Jacobian ``[[M, Phi_q^T - dQ/dlambda], [Phi_q, 0]]``.
+
+Equilibrium configuration (static loads), unknowns ``(q, lambda)``::
+
+    Phi(q, t) = 0,    Phi_q^T lambda - Q(t, q, 0, lambda) = 0
+
+Equilibrium velocity (velocity-dependent loads, inertial terms excluded), unknowns
+``(qd, lambda)`` at fixed ``q``::
+
+    Phi_q qd + Phi_t = 0,    Phi_q^T lambda - Q(t, q, qd, lambda) = 0
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sps
+
+from .._errors import ConvergenceError
+from ._linalg import SPARSE_THRESHOLD, Singular, factor
+from ._position import describe_singular
+
+
+def _augmented(M, J, D=None):
+    n, m = M.shape[0], J.shape[0]
+    JT = J.T if D is None else J.T - D
+    if n + m > SPARSE_THRESHOLD:
+        return sps.bmat([[sps.csc_matrix(M), sps.csc_matrix(JT)],
+                         [sps.csc_matrix(J), None]], format="csc")
+    K = np.zeros((n + m, n + m))
+    K[:n, :n] = M
+    K[:n, n:] = JT
+    K[n:, :n] = J
+    return K
+
+
+def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterations=30):
+    """``(qdd (n,), lambda (m,), iterations)`` of a free system at ``(t, q, qd)``."""
+    dyn = system.dynamics
+    n, m = system.n, system.m
+    J = system.jacobian(t, q, p)
+    g = system.gamma_values(t, q, qd, p)
+    lam = np.ones(m) if lam_guess is None else np.array(lam_guess, dtype=float)
+    Mm, Q, Qv = dyn.terms(t, q, qd, lam, p)
+    if not dyn.depends_on_lambda:
+        try:
+            x = factor(_augmented(Mm, J)).solve(np.concatenate((Q + Qv, g)))
+        except Singular:
+            raise _singular_free(system, J, t, q) from None
+        return x[:n], x[n:], 0
+    qdd = np.zeros(n)
+    for it in range(1, max_iterations + 1):
+        r1 = Mm @ qdd + J.T @ lam - Q - Qv
+        r2 = J @ qdd - g
+        err = max(np.abs(r1).max(initial=0), np.abs(r2).max(initial=0))
+        if err <= tol * (1 + np.abs(Q).max(initial=0)) and it > 1:
+            return qdd, lam, it - 1
+        D = dyn.dQ_dlam(t, q, qd, lam, p)
+        try:
+            dx = factor(_augmented(Mm, J, D)).solve(-np.concatenate((r1, r2)))
+        except Singular:
+            raise _singular_free(system, J, t, q) from None
+        qdd, lam = qdd + dx[:n], lam + dx[n:]
+        Mm, Q, Qv = dyn.terms(t, q, qd, lam, p)
+    raise ConvergenceError(
+        f"free acceleration at t = {t:.6g}: the multiplier-dependent loads (friction) did not "
+        f"converge in {max_iterations} iterations (residual {err:.3e}); try lambda_guess=.",
+        time=t)
+
+
+def _singular_free(system, J, t, q):
+    err = describe_singular(system, J, t, q, "free acceleration")
+    msg = (str(err) + " If the constraints are independent, the mass matrix may be singular on "
+           "the free motions: a massless body (or zero inertia) whose motion no constraint "
+           "determines. Give it mass/inertia or constrain it.")
+    err.args = (msg,)
+    return err
+
+
+def project(system, t, q, qd, p, tol=1e-12, max_iterations=8):
+    """Project ``(q, qd)`` onto the constraints: minimum-norm corrections
+    ``dq = -J^T (J J^T)^-1 Phi`` (iterated) and ``dqd = -J^T (J J^T)^-1 (J qd + Phi_t)``."""
+    q = np.array(q, dtype=float)
+    sparse = system.n > SPARSE_THRESHOLD
+    for _ in range(max_iterations):
+        F, J = system.residual_and_jacobian(t, q, p, sparse)
+        if np.abs(F).max(initial=0.0) <= tol:
+            break
+        JJt = J @ J.T
+        q -= J.T @ factor(JJt).solve(F)
+    J, rhs = system.velocity_rhs(t, q, p, sparse)
+    JJt = J @ J.T
+    qd = qd - J.T @ factor(JJt).solve(J @ qd - rhs)
+    return q, qd
+
+
+def equilibrium_configuration(eq, system, t, q0, lam0, p, tol=1e-10, max_iterations=50):
+    """Newton on ``(q, lambda)`` for the static equilibrium (``eq`` the compiled residual
+    ``R(q, lambda)`` and its Jacobian, from ``compile._free``). Returns ``(q, lam, its)``."""
+    n = system.n
+    x = np.concatenate((q0, lam0))
+    history = []
+    for it in range(max_iterations + 1):
+        R, K = eq.evaluate(t, x[:n], x[n:], p)
+        err = np.abs(R).max(initial=0.0)
+        history.append(err)
+        if err <= tol * (1 + np.abs(x).max()):
+            return x[:n], x[n:], it
+        try:
+            dx = factor(K).solve(-R)
+        except Singular:
+            raise ConvergenceError(
+                f"equilibrium at t = {t:.6g}: the equilibrium Jacobian is singular (residual "
+                f"{err:.3e}); the loads may not fix the free coordinates (a neutral direction, "
+                "e.g. no load along a free motion) or the guess is at a maximum of potential.",
+                time=t, history=tuple(history)) from None
+        a = 1.0
+        while a > 1e-3:
+            xn = x + a * dx
+            Rn, _ = eq.evaluate(t, xn[:n], xn[n:], p)
+            if np.abs(Rn).max(initial=0.0) < (1 - 1e-4 * a) * err:
+                break
+            a *= 0.5
+        x = xn
+    raise ConvergenceError(
+        f"equilibrium at t = {t:.6g} did not converge in {max_iterations} iterations "
+        f"(residual {history[-1]:.3e}); start from a better initial_guess (e.g. the previous "
+        "equilibrium).", time=t, history=tuple(history))
+
+
+def equilibrium_velocity(eqv, system, t, q, qd0, lam0, p, tol=1e-10, max_iterations=50):
+    """Newton on ``(qd, lambda)`` for the velocity equilibrium at fixed ``q``."""
+    n = system.n
+    x = np.concatenate((qd0, lam0))
+    history = []
+    for it in range(max_iterations + 1):
+        R, K = eqv.evaluate(t, q, x[:n], x[n:], p)
+        err = np.abs(R).max(initial=0.0)
+        history.append(err)
+        if err <= tol * (1 + np.abs(x).max()):
+            return x[:n], x[n:], it
+        try:
+            dx = factor(K).solve(-R)
+        except Singular:
+            raise ConvergenceError(
+                f"equilibrium velocity at t = {t:.6g}: singular Jacobian (residual {err:.3e}); "
+                "the velocity-dependent loads may not determine the free velocities.",
+                time=t, history=tuple(history)) from None
+        a = 1.0
+        while a > 1e-3:
+            xn = x + a * dx
+            Rn, _ = eqv.evaluate(t, q, xn[:n], xn[n:], p)
+            if np.abs(Rn).max(initial=0.0) < (1 - 1e-4 * a) * err:
+                break
+            a *= 0.5
+        x = xn
+    raise ConvergenceError(
+        f"equilibrium velocity at t = {t:.6g} did not converge in {max_iterations} iterations "
+        f"(residual {history[-1]:.3e}); give a closer initial velocity guess.", time=t,
+        history=tuple(history))
