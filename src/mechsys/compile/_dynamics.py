@@ -155,6 +155,7 @@ class Dynamics:
                     f"{sorted(map(str, extra))}; loads may use T, coordinates, velocities, "
                     "parameters and constraint multipliers")
         self.f_terms = compile_exprs(args, list(vals) + list(self.Q) + self.Qv, system.backend)
+        self._kernel = None
         if self.depends_on_lambda:
             dr, dc, dv = [], [], []
             for i, e in enumerate(self.Q):
@@ -165,6 +166,12 @@ class Dynamics:
                         dv.append(sp.diff(e, lj))
             self.dQ_rows, self.dQ_cols = np.array(dr, dtype=int), np.array(dc, dtype=int)
             self.f_dQ_dlam = compile_exprs(args, dv, system.backend)
+
+    def free_kernel(self, sparse: bool = False) -> FreeKernel:
+        """The compiled augmented system of free motion (built once, cached)."""
+        if self._kernel is None or self._kernel.sparse != sparse:
+            self._kernel = FreeKernel(self.system, sparse)
+        return self._kernel
 
     def args(self) -> list:
         lay = self.system.layout
@@ -192,3 +199,50 @@ class Dynamics:
     def mass_matrix_sparse(self, vals):
         n = self.system.n
         return sps.csc_matrix((vals, (self.M_rows, self.M_cols)), shape=(n, n))
+
+
+class FreeKernel:
+    r"""The augmented system of free motion in one compiled call::
+
+        K = [[M, Phi_q^T], [Phi_q, 0]]   (n + m, n + m),   rhs = [Q + Qv ; gamma]
+
+    Values are scattered into ``K`` through precomputed flat indices (dense) or a fixed CSC
+    pattern (sparse, ``n + m`` above the sparse threshold): no symbolic or Python-level
+    assembly work per evaluation beyond one compiled call.
+    """
+
+    def __init__(self, system, sparse: bool):
+        dyn = system.dynamics
+        n, m = system.n, system.m
+        N = n + m
+        self.n, self.m, self.N, self.sparse = n, m, N, sparse
+        self.dyn = dyn
+        exprs = list(dyn.M_exprs) + list(system.jac_exprs)
+        exprs += [a + b for a, b in zip(dyn.Q, dyn.Qv)] + list(system.gamma)
+        self.k_M, self.k_J = len(dyn.M_exprs), len(system.jac_exprs)
+        self.f = compile_exprs(dyn.args(), exprs, system.backend)
+        rows = np.concatenate((dyn.M_rows, system.jac_cols, n + system.jac_rows))
+        cols = np.concatenate((dyn.M_cols, n + system.jac_rows, system.jac_cols))
+        self._map = np.concatenate((np.arange(self.k_M), self.k_M + np.arange(self.k_J),
+                                    self.k_M + np.arange(self.k_J)))
+        if sparse:
+            order = np.lexsort((rows, cols))        # CSC: by column, then row
+            self._perm = self._map[order]
+            self._indices = rows[order]
+            counts = np.bincount(cols, minlength=N)
+            self._indptr = np.concatenate(([0], np.cumsum(counts)))
+        else:
+            self._flat = rows * N + cols
+
+    def __call__(self, t, q, qd, lam, p):
+        out = self.f(np.concatenate(([t], q, qd, lam, p)))
+        kk = self.k_M + self.k_J
+        vals = out[:kk]
+        rhs = out[kk:]
+        if self.sparse:
+            K = sps.csc_matrix((vals[self._perm], self._indices, self._indptr),
+                               shape=(self.N, self.N))
+        else:
+            K = np.zeros((self.N, self.N))
+            K.flat[self._flat] = vals[self._map]
+        return K, rhs

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sps
+from scipy.linalg.lapack import dgesv as _dgesv
 
 from .._errors import ConvergenceError
 from ._linalg import SPARSE_THRESHOLD, Singular, factor
@@ -46,16 +47,18 @@ def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterat
     """``(qdd (n,), lambda (m,), iterations)`` of a free system at ``(t, q, qd)``."""
     dyn = system.dynamics
     n, m = system.n, system.m
+    if not dyn.depends_on_lambda:
+        kern = dyn.free_kernel(n + m > SPARSE_THRESHOLD)
+        K, rhs = kern(t, q, qd, _ZERO_LAM.get(m) if m in _ZERO_LAM else _zeros(m), p)
+        try:
+            x = _solve_fast(K, rhs)
+        except Singular:
+            raise _singular_free(system, system.jacobian(t, q, p), t, q) from None
+        return x[:n], x[n:], 0
     J = system.jacobian(t, q, p)
     g = system.gamma_values(t, q, qd, p)
     lam = np.ones(m) if lam_guess is None else np.array(lam_guess, dtype=float)
     Mm, Q, Qv = dyn.terms(t, q, qd, lam, p)
-    if not dyn.depends_on_lambda:
-        try:
-            x = factor(_augmented(Mm, J)).solve(np.concatenate((Q + Qv, g)))
-        except Singular:
-            raise _singular_free(system, J, t, q) from None
-        return x[:n], x[n:], 0
     qdd = np.zeros(n)
     for it in range(1, max_iterations + 1):
         r1 = Mm @ qdd + J.T @ lam - Q - Qv
@@ -74,6 +77,28 @@ def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterat
         f"free acceleration at t = {t:.6g}: the multiplier-dependent loads (friction) did not "
         f"converge in {max_iterations} iterations (residual {err:.3e}); try lambda_guess=.",
         time=t)
+
+
+_ZERO_LAM: dict = {}
+
+
+def _zeros(m):
+    _ZERO_LAM[m] = np.zeros(m)
+    return _ZERO_LAM[m]
+
+
+def _solve_fast(K, rhs):
+    """Solve the augmented system; LAPACK gesv for dense (a singular matrix raises), SuperLU
+    for sparse. A non-finite answer is treated as singular."""
+    if sps.issparse(K):
+        return factor(K).solve(rhs)
+    _, _, x, info = _dgesv(K, rhs)
+    if info != 0:
+        raise Singular("singular augmented matrix")
+    big = np.abs(x).max(initial=0.0)
+    if not big < 1e15 * (1.0 + np.abs(rhs).max(initial=0.0)):   # also catches NaN
+        raise Singular("ill-conditioned augmented matrix")
+    return x
 
 
 def _singular_free(system, J, t, q):
