@@ -15,7 +15,8 @@ class Constraint(ConstraintBase):
     variables. Removes ``len(equations) - len(variables)`` DOF.
 
     ``Constraint(equations, variables={s: guess})``; an equation may be an expression (``= 0``)
-    or a SymPy ``Eq``. Example, a point on the parabola ``y = x^2`` with its x as new variable::
+    or a SymPy ``Eq``. ``Constraint([], {s: guess})`` only introduces ``s`` (Mech's
+    ``Constraint[cnum, {}, {s, guess}]``): it *adds* one degree of freedom. Example, a point on the parabola ``y = x^2`` with its x as new variable::
 
         s = sp.Symbol("s")
         p = body.point("pin")
@@ -35,8 +36,6 @@ class Constraint(ConstraintBase):
             if isinstance(e, sp.Equality):
                 e = e.lhs - e.rhs
             eqs.append(e)
-        if not eqs:
-            raise ModelError("Constraint needs at least one equation")
         self._equations = eqs
         self._vars: list[Variable] = []
         if variables:
@@ -45,6 +44,8 @@ class Constraint(ConstraintBase):
             ]
             for sym, guess in items:
                 self._vars.append(sym if isinstance(sym, Variable) else Variable(sym, guess))
+        if not eqs and not self._vars:
+            raise ModelError("Constraint needs at least one equation or one new variable")
 
     def new_variables(self):
         return list(self._vars)
