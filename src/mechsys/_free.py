@@ -114,10 +114,15 @@ class FreeSystem:
             return q, qd, p
         if not isinstance(cond, Mapping):
             raise ModelError("initial_condition must be a Solution, State or a mapping of "
-                             "coordinate / velocity ('<name>_d') / parameter values")
+                             "coordinate / velocity ('<name>_d') / parameter values, or "
+                             "('omega'|'omega_local', body): angular velocity")
         lay = self.system.layout
         pnames = [s.name for s in lay.p_symbols]
+        angular = []
         for k, v in cond.items():
+            if isinstance(k, tuple) and len(k) == 2 and k[0] in ("omega", "omega_local"):
+                angular.append((k[0], k[1], v))
+                continue
             name = k.name if hasattr(k, "name") else str(k)
             if name in pnames:
                 p[pnames.index(name)] = float(v)
@@ -128,7 +133,24 @@ class FreeSystem:
             except ModelError:
                 raise ModelError(f"initial_condition: {name!r} is not a coordinate, velocity "
                                  "('<coordinate>_d') or parameter of this model") from None
+        for kind, body, w in angular:
+            self._set_angular_velocity(q, qd, body, w, local=(kind == "omega_local"))
         return q, qd, p
+
+    def _set_angular_velocity(self, q, qd, body, w, local):
+        """Euler-parameter rates from an angular velocity: ``e_dot = E^T w / 2`` (global) or
+        ``G^T w' / 2`` (local). Key: ``("omega", body)`` or ``("omega_local", body)``."""
+        b = self.model.body(body)
+        sl = self.system.layout.body_slices[b.name]
+        if self.model.space.dim == 2:
+            qd[sl][2] = float(w)
+            return
+        e0, e1, e2, e3 = q[sl][3:]
+        s = -1.0 if local else 1.0
+        E = np.array([[-e1, e0, -s * e3, s * e2], [-e2, s * e3, e0, -s * e1],
+                      [-e3, -s * e2, s * e1, e0]])
+        idx = np.arange(sl.start, sl.stop)[3:]
+        qd[idx] = 0.5 * E.T @ np.asarray(w, dtype=float)
 
     def _start(self, initial_condition):
         if initial_condition is None:

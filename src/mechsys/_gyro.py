@@ -1,0 +1,71 @@
+r"""Gyroscopic moments of an axially symmetric rotor without a spinning body (Mech's
+``GyroMoment`` and ``GyroFilter``, manual 10.3.5 and 10.4.6).
+
+A rotor of spin inertia ``I_s`` spinning at ``w_s`` about the body-fixed unit axis ``a`` of
+a carrier body (angular velocity ``w``) adds the angular momentum ``h = I_s w_s a``. Its rate
+of change, applied to the carrier as a moment, is::
+
+    M = -I_s w_s (w x a) - I_s (d w_s / dt) a
+
+so the carrier can hold the rotor's transverse inertia while the fast spin never has to be
+integrated. Valid only for a body rotating about a principal axis with equal transverse
+moments (an axially symmetric rotor spinning about its axis).
+
+``GyroFilter(inertia, axis)`` removes the spin-axis moment from an inertia tensor,
+``J - (a^T J a) a a^T``, so that a rotor's inertia can be lumped into its carrier (the
+free spin carries no axial torque); pair it with a ``GyroMoment`` whose ``omega`` is the
+rotor's absolute axial spin.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+
+from ._errors import ModelError
+from ._geometry import Vector, as_vector
+from ._loads import BodyMoment, LoadBase
+
+
+class GyroMoment(LoadBase):
+    """``GyroMoment(body, axis, omega, inertia=I_s)``: the gyroscopic moment of a rotor
+    spinning at ``omega`` (an expression; may depend on ``T``) about ``axis`` (a vector fixed
+    in ``body``, or local components) with spin inertia ``inertia``."""
+
+    def __init__(self, body, axis, omega, inertia):
+        super().__init__()
+        self.body = body
+        self.axis = axis if isinstance(axis, Vector) else None
+        self._axis_local = None if self.axis is not None else axis
+        self.omega = sp.sympify(omega)
+        self.inertia = sp.sympify(inertia)
+
+    def bodies(self):
+        return [self.body]
+
+    def contributions(self, model):
+        if model.space.dim != 3:
+            raise ModelError("GyroMoment is a spatial load (Model3D)")
+        b = model.body(self.body)
+        v = self.axis if self.axis is not None else b.vector(tuple(self._axis_local))
+        d = as_vector(v).direction()
+        a = d / sp.sqrt((d.T * d)[0, 0])
+        w = model._omega(b, False)
+        M = -self.inertia * self.omega * w.cross(a)
+        wd = model.time_derivative(self.omega)
+        if wd != 0:
+            M = M - self.inertia * wd * a
+        return [BodyMoment(b, M)]
+
+
+def gyro_filter(inertia, axis):
+    """Inertia ``(Ixx, Iyy, Izz, Ixy, Iyz, Izx)`` with the moment about ``axis`` removed."""
+    from ._inertia import _as_list6, _as_matrix3
+
+    J = _as_matrix3(inertia)
+    a = np.asarray(axis, dtype=float)
+    a = a / np.linalg.norm(a)
+    return _as_list6(J - float(a @ J @ a) * np.outer(a, a))
+
+
+GyroFilter = gyro_filter
