@@ -78,3 +78,18 @@ def test_rst_literal_blocks_become_fenced_code():
     """)
     assert md == "Title `x`.\n\n`F(a, b)`:\n\n```text\na - b = 0\n```\n\nAfter `Point`.\n"
 
+
+
+def test_relative_links_resolve():
+    """Links between the Markdown pages point at files that exist."""
+    pages = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
+    broken = []
+    for page in pages:
+        text = page.read_text(encoding="utf-8")
+        for target in re.findall(r"\]\(([^)\s]+)\)", text):
+            if re.match(r"[a-z]+:", target) or target.startswith("#"):
+                continue
+            path = target.split("#", 1)[0]
+            if not (page.parent / path).exists():
+                broken.append(f"{page.relative_to(ROOT)} -> {target}")
+    assert not broken, f"broken links: {broken}"
