@@ -233,3 +233,12 @@ __all__ = [
     "Vector",
     "__version__",
 ]
+
+
+def __getattr__(name):
+    """Lazy subpackages: ``mechsys.draw`` (and matplotlib) load on first use only."""
+    if name == "draw":
+        import importlib
+
+        return importlib.import_module(".draw", __name__)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
