@@ -129,7 +129,7 @@ class Model(OutputFunctions, LoadOutputs):
     def parameter(self, name: str, value: float) -> sp.Symbol:
         """Declare a parameter with a value; returns its symbol for use in expressions.
         Changing values later (:meth:`set_parameters`) needs no recompilation."""
-        s = sp.Symbol(name, real=True)
+        s = sp.Symbol(name)
         if s in self._params:
             raise ModelError(f"parameter {name!r} already exists; use set_parameters to change it")
         if self._is_coordinate_name(name):
@@ -143,7 +143,7 @@ class Model(OutputFunctions, LoadOutputs):
         items = dict(values or {})
         items.update(kw)
         for k, v in items.items():
-            s = k if isinstance(k, sp.Symbol) else sp.Symbol(str(k), real=True)
+            s = k if isinstance(k, sp.Symbol) else sp.Symbol(str(k))
             if s not in self._params:
                 raise ModelError(f"unknown parameter {k!r}; parameters are "
                                  f"{[p.name for p in self._params]}")

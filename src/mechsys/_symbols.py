@@ -5,16 +5,16 @@ from __future__ import annotations
 import sympy as sp
 
 #: The time symbol. Use it in any scalar argument to make a driver, e.g. ``2*pi*T``.
-T = sp.Symbol("T", real=True)
+T = sp.Symbol("T")
 
 
 def coord_symbol(name: str) -> sp.Symbol:
-    return sp.Symbol(name, real=True)
+    return sp.Symbol(name)
 
 
 def velocity_symbol(name: str) -> sp.Symbol:
-    return sp.Symbol(name + "_d", real=True)
+    return sp.Symbol(name + "_d")
 
 
 def acceleration_symbol(name: str) -> sp.Symbol:
-    return sp.Symbol(name + "_dd", real=True)
+    return sp.Symbol(name + "_dd")

@@ -26,6 +26,7 @@ import sympy as sp
 
 from .._symbols import T
 from ._backends import compile_exprs
+from ._derive import hessian_terms
 from ._system import time_derivative
 
 
@@ -36,10 +37,10 @@ def multiplier_symbols(layout) -> tuple:
     for owner, k in zip(layout.eq_owner, layout.eq_index):
         num = getattr(owner, "number", None)
         if num is not None:
-            out.append(sp.Symbol(f"lam{num}_{k + 1}", real=True))
+            out.append(sp.Symbol(f"lam{num}_{k + 1}"))
         else:
             body = str(owner).split("'")[1] if "'" in str(owner) else str(len(out))
-            out.append(sp.Symbol(f"lamN_{body}", real=True))
+            out.append(sp.Symbol(f"lamN_{body}"))
     return tuple(out)
 
 
@@ -55,7 +56,7 @@ def body_kinetic_energy(space, body, qd_of) -> sp.Expr:
     J = space.inertia_matrix(body.inertia)
     trans = body.mass * (vc.T * vc)[0, 0] / 2
     rot = (w.T * J * w)[0, 0] / 2
-    return sp.expand(trans + rot) if body.mass != 0 or any(J) else sp.S.Zero
+    return (trans + rot) if body.mass != 0 or any(J) else sp.S.Zero
 
 
 def generalized_forces(model, loads, layout) -> list:
@@ -122,20 +123,18 @@ class Dynamics:
                 continue
             q = list(b.q)
             qd = [qd_of[s] for s in q]
-            p = [sp.diff(Tb, v) for v in qd]
+            Mb, Qvb = hessian_terms(Tb, q, qd)
             for i, si in enumerate(q):
-                for j, vj in enumerate(qd):
-                    e = sp.diff(p[i], vj)
-                    if e != 0:
+                for j in range(len(q)):
+                    if Mb[i][j] != 0:
                         rows.append(index[si])
                         cols.append(index[q[j]])
-                        vals.append(e)
-                dpdq = sum((sp.diff(p[i], sj) * vj for sj, vj in zip(q, qd)), sp.S.Zero)
-                Qv[index[si]] += sp.diff(Tb, si) - dpdq
+                        vals.append(Mb[i][j])
+                Qv[index[si]] += Qvb[i]
         self.M_rows = np.array(rows, dtype=int)
         self.M_cols = np.array(cols, dtype=int)
         self.M_exprs = vals
-        self.Qv = [sp.expand(e) for e in Qv]
+        self.Qv = list(Qv)
         self.Q = generalized_forces(model, loads, lay)
         pots = [ld.potential(model) for ld in loads]
         self.potential = sum((p for p in pots if p is not None), sp.S.Zero) if any(

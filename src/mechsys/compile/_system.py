@@ -121,34 +121,21 @@ class System:
         self.p_values = np.asarray(p_values, dtype=float)
         self.guess = np.asarray(guess, dtype=float)
         q, qd = layout.q_symbols, layout.qd_symbols
-        index = {s: j for j, s in enumerate(q)}
         self.phi = list(phi)
-        rows, cols, jac = [], [], []
-        phi_t, gamma = [], []
-        for i, e in enumerate(self.phi):
-            free = e.free_symbols
-            mine = sorted((s for s in free if s in index), key=index.get)
-            v = sp.S.Zero
-            for s in mine:
-                d = sp.diff(e, s)
-                if d != 0:
-                    rows.append(i)
-                    cols.append(index[s])
-                    jac.append(d)
-                    v += d * qd[index[s]]
-            et = sp.diff(e, T) if T in free else sp.S.Zero
-            phi_t.append(et)
-            v += et
-            gamma.append(-time_derivative(v, q, qd))
+        from ._derive import derive_kinematics
+
+        rows, cols, jac, phi_t, gamma, native = derive_kinematics(self.phi, q, qd, T)
         self.jac_rows = np.array(rows, dtype=int)
         self.jac_cols = np.array(cols, dtype=int)
         self.jac_exprs = jac
         self.phi_t = phi_t
         self.gamma = gamma
         args = layout.args()
-        self.f_position: Compiled = compile_exprs(args, self.phi + jac, self.backend)
-        self.f_velocity: Compiled = compile_exprs(args, jac + phi_t, self.backend)
-        self.f_gamma: Compiled = compile_exprs(args, gamma, self.backend)
+        src = native if (native is not None and self.backend == "symengine") else {
+            "phi": self.phi, "jac": jac, "phi_t": phi_t, "gamma": gamma}
+        self.f_position: Compiled = compile_exprs(args, src["phi"] + src["jac"], self.backend)
+        self.f_velocity: Compiled = compile_exprs(args, src["jac"] + src["phi_t"], self.backend)
+        self.f_gamma: Compiled = compile_exprs(args, src["gamma"], self.backend)
         self._eval_cache: dict = {}
         self._model = model
         self._loads = tuple(loads)
@@ -253,8 +240,8 @@ def make_layout(bodies, variables, parameters, eq_owner, eq_index) -> Layout:
     for v in variables:
         q.append(v.symbol)
         names.append(v.symbol.name)
-    qd = tuple(sp.Symbol(velocity_symbol(s.name).name, real=True) for s in q)
-    qdd = tuple(sp.Symbol(acceleration_symbol(s.name).name, real=True) for s in q)
+    qd = tuple(sp.Symbol(velocity_symbol(s.name).name) for s in q)
+    qdd = tuple(sp.Symbol(acceleration_symbol(s.name).name) for s in q)
     return Layout(
         q_symbols=tuple(q),
         qd_symbols=qd,

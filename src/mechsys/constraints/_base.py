@@ -26,7 +26,7 @@ class Variable:
     """A variable introduced into the model (Mech's ``{sym, guess}``)."""
 
     def __init__(self, symbol: sp.Symbol | str, guess: float = 0.0):
-        self.symbol = sp.Symbol(symbol, real=True) if isinstance(symbol, str) else symbol
+        self.symbol = sp.Symbol(symbol) if isinstance(symbol, str) else symbol
         self.guess = float(guess)
 
     def __repr__(self) -> str:
