@@ -42,6 +42,10 @@ def _lift(a: np.ndarray) -> np.ndarray:
     return np.concatenate([a, pad], axis=-1)
 
 
+def _round(c):
+    return [round(float(v), 4) for v in c]
+
+
 def _rgba(c, alpha=1.0):
     from matplotlib.colors import to_rgba
 
@@ -91,9 +95,9 @@ def viewer_data(fr: Frames, title: str = "mechsys", rate: float = 1.0,
             d["fcount"] = _b64([len(f) for f in faces], "<i4")
             fc, ec, lw = poly_colors(it)
             d["fill"] = fc != "none"
-            d["color"] = list(fc) if d["fill"] else list(ec)
+            d["color"] = _round(fc if d["fill"] else ec)
             explicit = st.get("edgecolor") is not None or dim == 2
-            d["edge"] = list(ec) if (d["fill"] and explicit and ec != "none") else None
+            d["edge"] = _round(ec) if (d["fill"] and explicit and ec != "none") else None
             d["lw"] = round(lw * PT, 3)
         else:
             alpha = float(st.get("alpha", 1.0))

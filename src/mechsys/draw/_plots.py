@@ -50,9 +50,10 @@ def _values(sol, spec, label: str) -> list[tuple[str, np.ndarray]]:
         v = np.asarray(spec(sol), dtype=float)
     else:
         v = np.asarray(spec, dtype=float)
-    v = v.reshape(N, -1) if v.size != N else v.reshape(N, 1)
-    if v.shape[0] != N:
-        raise ModelError(f"output {label!r} has {v.shape[0]} values for {N} time points")
+    if v.ndim == 0 or v.shape[0] != N:
+        n = v.shape[0] if v.ndim else 1
+        raise ModelError(f"output {label!r} has {n} values for {N} time points")
+    v = v.reshape(N, -1)
     if v.shape[1] == 1:
         return [(label, v[:, 0])]
     names = _COMPONENTS if v.shape[1] <= 3 else [str(i) for i in range(v.shape[1])]

@@ -5,8 +5,8 @@ vertices; others: stored per frame), projected (perspective or orthographic came
 turntable orbit about the scene's "up" axis: z for spatial models, y for planar ones), and
 all faces, line segments and markers are sorted far-to-near (planar models: by layer,
 then depth) and painted. Faces get flat two-sided Lambert shading from a light near the
-viewer. After every paint the canvas carries ``data-probe``: the projected centre of
-every face item, so automated tests can check where bodies land on screen.
+viewer. After every paint the canvas carries ``data-probe``: the projected centre and
+extent of every face item, so automated tests can check where bodies land on screen.
 """
 
 VIEWER_CSS = """
@@ -275,9 +275,15 @@ function probe() {
   for (var n = 0; n < items.length; n++) {
     var it = items[n];
     if (it.kind !== "mesh" && it.kind !== "polygon") continue;
-    var sx = 0, sy = 0, c = 0;
-    for (var i = 0; i < it.nv; i++) if (fin(it.s, i)) { sx += it.s[3 * i]; sy += it.s[3 * i + 1]; c++; }
-    if (c) out.push({n: n, kind: it.kind, layer: it.layer, body: it.body, x: sx / c, y: sy / c});
+    var sx = 0, sy = 0, c = 0, x0 = Infinity, x1 = -Infinity, y0 = Infinity, y1 = -Infinity;
+    for (var i = 0; i < it.nv; i++) {
+      if (!fin(it.s, i)) continue;
+      var x = it.s[3 * i], y = it.s[3 * i + 1];
+      sx += x; sy += y; c++;
+      x0 = Math.min(x0, x); x1 = Math.max(x1, x); y0 = Math.min(y0, y); y1 = Math.max(y1, y);
+    }
+    if (c) out.push({n: n, kind: it.kind, layer: it.layer, body: it.body, x: sx / c, y: sy / c,
+      w: x1 - x0, h: y1 - y0});
   }
   canvas.setAttribute("data-probe", JSON.stringify({width: W, height: H, items: out}));
   canvas.setAttribute("data-ready", "1");
