@@ -27,6 +27,7 @@ from ._errors import (
 from ._free import FreeSystem
 from ._friction import JointFriction
 from ._gyro import GyroFilter, GyroMoment, gyro_filter
+from ._path import PathSystem
 from ._geometry import Axis, Line, Plane, Point, Vector, reference_direction
 from ._inertia import (
     CompositeInertia,
@@ -119,6 +120,7 @@ from .solvers import PositionOptions
 __version__ = "0.1.0"
 
 __all__ = [
+    "PathSystem",
     "GyroFilter",
     "GyroMoment",
     "gyro_filter",

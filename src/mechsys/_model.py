@@ -514,6 +514,14 @@ class Model(OutputFunctions, LoadOutputs):
 
         return FreeSystem(self, drop, solution, initial_guess, initial_condition)
 
+    def path(self, replace, initial_condition=None):
+        """Replace dummy constraints by velocity constraints (Mech's ``SetPath``):
+        ``replace={dummy: velocity_constraint}``. Returns a :class:`PathSystem` whose
+        ``simulate`` integrates the nonholonomic motion (``SolvePath``)."""
+        from ._path import PathSystem
+
+        return PathSystem(self, replace, initial_condition)
+
     def _resolve_guess(self, system, guess) -> np.ndarray:
         if guess is None:
             return self.guess()
