@@ -20,7 +20,7 @@ from ._errors import (
 )
 from ._geometry import Axis, Point, Vector, as_point, as_vector
 from ._load_outputs import LoadOutputs
-from ._outputs import OutputFunctions
+from ._outputs import OutputFunctions, VelocityViews
 from ._space import PLANAR, SPATIAL, Space
 from ._symbols import T
 from .compile import System, make_layout, time_derivative
@@ -57,7 +57,7 @@ class DOF(int):
     __str__ = __repr__
 
 
-class Model(OutputFunctions, LoadOutputs):
+class Model(OutputFunctions, LoadOutputs, VelocityViews):
     """An editable mechanism model. Use :class:`Model2D` or :class:`Model3D`."""
 
     space: Space
@@ -553,9 +553,24 @@ class Model2D(Model):
 
 class Model3D(Model):
     """Spatial model. Bodies have coordinates ``x, y, z, e0, e1, e2, e3`` (Euler parameters,
-    normalised by one equation per body)."""
+    normalised by one equation per body).
+
+    ``velocity="euler" | "angular"`` and ``coordinates="global" | "local"`` (Mech's
+    ``SetSymbols[Method -> ..., Coordinates -> ...]``) set the default representation of
+    ``velocities``/``accelerations`` views and the default axes of ``omega``/``alpha``; the
+    equations are always solved with Euler-parameter rates (decision 0006).
+    """
 
     space = SPATIAL
+
+    def __init__(self, backend: str | None = None, velocity: str = "euler",
+                 coordinates: str = "global"):
+        if velocity not in ("euler", "angular"):
+            raise ModelError(f"velocity must be 'euler' or 'angular', got {velocity!r}")
+        if coordinates not in ("global", "local"):
+            raise ModelError(f"coordinates must be 'global' or 'local', got {coordinates!r}")
+        self.velocity, self.coordinates = velocity, coordinates
+        super().__init__(backend)
 
 
 __all__ = ["DOF", "Model", "Model2D", "Model3D", "Constraint"]

@@ -59,19 +59,21 @@ class OutputFunctions:
             raise ModelError("angle(body) is planar; in 3D use euler_parameters or rotation")
         return self._finish(sp.S.Zero if b.is_ground else b.q[2])
 
-    def omega(self, body, coordinates: str = "global"):
+    def omega(self, body, coordinates: str | None = None):
         """Angular velocity: scalar in 2D, ``(3,)`` in 3D (global or ``"local"`` axes)."""
         m = self._model()
         b = m.body(body)
+        coordinates = coordinates or getattr(m, "coordinates", "global")
         return self._finish(m._omega(b, coordinates == "local"))
 
-    def alpha(self, body, coordinates: str = "global"):
+    def alpha(self, body, coordinates: str | None = None):
         """Angular acceleration: scalar in 2D, ``(3,)`` in 3D. In 3D the local value is the
         local-axis components of the global angular acceleration."""
         m = self._model()
         b = m.body(body)
         w = m._omega(b, False)
         a = m.time_derivative(w)
+        coordinates = coordinates or getattr(m, "coordinates", "global")
         if coordinates == "local" and m.space.dim == 3:
             a = b.A.T * a
         return self._finish(a)
@@ -136,3 +138,52 @@ def vector_of(obj) -> Vector:
     if isinstance(obj, Point):
         raise ModelError(f"expected a vector, got a point {obj!r}; use body.vector(...)")
     return as_vector(obj)
+
+
+class VelocityViews:
+    """Velocities and accelerations of bodies in a chosen representation (Mech's
+    ``SetSymbols[Method -> Euler | Angular, Coordinates -> Global | Local]``).
+
+    mechsys integrates and solves with Euler-parameter rates (one formulation, compiled
+    once; see ``docs/decisions/0006-velocity-representation.md``); these views give the
+    same solution in the other representations:
+
+    * ``"euler"``: the coordinate rates ``(x', y', z', e0', e1', e2', e3')`` (2D: ``x', y', th'``);
+    * ``"angular"``: ``(x', y', z', w_x, w_y, w_z)`` with ``w`` the angular velocity in global
+      or body-local axes (2D: identical to ``"euler"``).
+    """
+
+    def velocities(self, body=None, representation: str | None = None,
+                   coordinates: str | None = None):
+        """Velocity coordinates of one body (or all moving bodies, concatenated)."""
+        return self._views(body, representation, coordinates, 1)
+
+    def accelerations(self, body=None, representation: str | None = None,
+                      coordinates: str | None = None):
+        """Acceleration coordinates of one body (or all moving bodies, concatenated)."""
+        return self._views(body, representation, coordinates, 2)
+
+    def _views(self, body, representation, coordinates, order):
+        m = self._model()
+        rep = representation or getattr(m, "velocity", "euler")
+        coords = coordinates or getattr(m, "coordinates", "global")
+        if rep not in ("euler", "angular"):
+            raise ModelError(f"representation must be 'euler' or 'angular', got {rep!r}")
+        bodies = [m.body(body)] if body is not None else m.bodies[1:]
+        parts = []
+        for b in bodies:
+            if rep == "euler" or m.space.dim == 2:
+                syms = list(b.q)
+                for _ in range(order):
+                    syms = [m.time_derivative(s) for s in syms]
+                parts.append(sp.Matrix(syms))
+            else:
+                lin = m.time_derivative(b.r)
+                ang = m._omega(b, False)
+                if order == 2:
+                    lin = m.time_derivative(lin)
+                    ang = m.time_derivative(ang)
+                if coords == "local":
+                    ang = b.A.T * ang
+                parts.append(sp.Matrix.vstack(lin, ang))
+        return self._finish(sp.Matrix.vstack(*parts))

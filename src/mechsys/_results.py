@@ -15,11 +15,11 @@ import sympy as sp
 
 from ._errors import MechError
 from ._load_outputs import LoadOutputs
-from ._outputs import OutputFunctions
+from ._outputs import OutputFunctions, VelocityViews
 
 
 @dataclass(frozen=True, eq=False)
-class Solution(OutputFunctions, LoadOutputs):
+class Solution(OutputFunctions, LoadOutputs, VelocityViews):
     """Kinematic (or later dynamic) solution over ``N`` time points.
 
     Attributes
