@@ -16,9 +16,7 @@ def driven_crank(damping=0.0):
     m = models.slider_crank(crank=R, rod=L, drive=drive)
     for name, mass, c, J in (("crank", M1, (R / 2, 0), J1), ("rod", M2, (L / 2, 0), J2),
                              ("piston", M3, (0, 0), 0.0)):
-        b = m.body(name)
-        b.mass, b.centroid, b.inertia = sp.sympify(mass), sp.Matrix(c), J
-    m._touch()
+        m.set_mass_properties(name, mass=mass, centroid=c, inertia=J)
     m.add_load(ms.Gravity((0, -1), G))
     if damping:
         m.add_load(ms.Damper(m.body("piston").point(0), (20.0, 0.0), damping))

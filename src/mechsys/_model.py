@@ -106,6 +106,25 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         self._touch()
         return b
 
+    def set_mass_properties(self, body, mass=None, centroid=None, inertia=None) -> None:
+        """Change a body's mass, centroid (local) or inertia (about the centroid, body axes)
+        after it was added (Mech's ``SetBodies[Body[b, Mass -> ...]]``)."""
+        from ._geometry import _as_matrix
+
+        b = self.body(body)
+        if b.is_ground:
+            raise ModelError("ground has no mass properties")
+        if mass is not None:
+            b.mass = sp.sympify(mass)
+        if centroid is not None:
+            c = _as_matrix(centroid, f"centroid of body {b.name!r}")
+            if len(c) != self.space.dim:
+                raise ModelError(f"centroid of body {b.name!r} needs {self.space.dim} coordinates")
+            b.centroid = c
+        if inertia is not None:
+            b.inertia = inertia
+        self._touch()
+
     def body(self, spec) -> Body:
         """A body by handle, name or Mech number (ground is 1)."""
         if isinstance(spec, Body):
