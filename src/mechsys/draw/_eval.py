@@ -46,6 +46,8 @@ class Item:
     rigid  : ``(pose, local (V, dim))`` when every vertex is fixed in one body; lets the HTML
              viewer ship local meshes plus body poses instead of vertices per frame.
     layer  : drawing order (higher on top; 2D depth order, 3D tie-break).
+    fit    : whether the picture's bounds must hold all its vertices (instant centres only
+             count when they lie within one picture size of the rest).
     """
 
     kind: str
@@ -57,6 +59,7 @@ class Item:
     upto: np.ndarray | None = None
     rigid: tuple | None = None
     layer: int = 2
+    fit: bool = True  # False: far points do not enlarge the picture (instant centres)
 
     def at(self, k: int) -> np.ndarray:
         """Vertices ``(V, dim)`` at frame ``k`` (trails cut to their length)."""

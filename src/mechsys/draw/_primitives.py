@@ -573,7 +573,7 @@ class InstantCenter(Primitive):
             c = np.asarray(ic.value, dtype=float).reshape(-1, 1, 2)
             color = body_color(b)
             items = [self._item("points", c, {"color": color, "marker": "o", "markersize": 9,
-                                              "faces": False}, L_LABEL)]
+                                              "faces": False}, L_LABEL, fit=False)]
             if rays is not None:
                 P = rays.xyz
                 segs = []
@@ -581,7 +581,7 @@ class InstantCenter(Primitive):
                     segs += [c[:, 0], P[:, j], np.full_like(c[:, 0], np.nan)]
                 items.append(self._item("line", np.stack(segs, axis=1),
                                         {"color": color, "linestyle": ":", "linewidth": 1.0},
-                                        L_GUIDE))
+                                        L_GUIDE, fit=False))
             return items
 
         return finish

@@ -243,6 +243,8 @@ def _bounds(items: list[Item], dim: int, size: float) -> np.ndarray:
     lo = np.full(dim, np.inf)
     hi = np.full(dim, -np.inf)
     for it in items:
+        if not it.fit:
+            continue
         a = it.xyz.reshape(-1, dim)
         a = a[np.all(np.isfinite(a), axis=1)]
         if a.size:
@@ -250,6 +252,14 @@ def _bounds(items: list[Item], dim: int, size: float) -> np.ndarray:
             hi = np.maximum(hi, a.max(axis=0))
     if not np.all(np.isfinite(lo)):
         lo, hi = -np.full(dim, size / 2), np.full(dim, size / 2)
+    for it in items:  # far points (instant centres near infinity) stay off the picture
+        if it.fit:
+            continue
+        a = it.xyz.reshape(-1, dim)
+        near = np.all(np.isfinite(a), axis=1) & np.all((a > lo - size) & (a < hi + size), axis=1)
+        if near.any():
+            lo = np.minimum(lo, a[near].min(axis=0))
+            hi = np.maximum(hi, a[near].max(axis=0))
     return np.array([lo, hi])
 
 

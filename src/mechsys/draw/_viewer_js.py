@@ -190,8 +190,14 @@ function collect(k, list, texts) {
       var last = it.closed ? nv : nv - 1;
       for (i = 0; i < last; i++) {
         j = (i + 1) % nv;
-        if (fin(s, i) && fin(s, j)) {
-          list.push({d: (s[3 * i + 2] + s[3 * j + 2]) / 2, layer: it.layer, t: 1, it: it, i: i, j: j});
+        if (!(fin(s, i) && fin(s, j))) continue;
+        // long segments are cut into pieces sorted on their own (better painter's order)
+        var len = Math.hypot(s[3 * j] - s[3 * i], s[3 * j + 1] - s[3 * i + 1]);
+        var pieces = D.dim === 3 ? Math.min(24, Math.max(1, Math.ceil(len / 25))) : 1;
+        for (var q = 0; q < pieces; q++) {
+          var u0 = q / pieces, u1 = (q + 1) / pieces, um = (u0 + u1) / 2;
+          list.push({d: s[3 * i + 2] * (1 - um) + s[3 * j + 2] * um, layer: it.layer, t: 1, it: it,
+            i: i, j: j, u0: u0, u1: u1});
         }
       }
     } else if (it.kind === "points") {
@@ -224,8 +230,9 @@ function paint(p) {
       }
     } else { ctx.strokeStyle = it.css; ctx.lineWidth = it.lw; ctx.stroke(); }
   } else if (p.t === 1) {
+    var xi = s[3 * p.i], yi = s[3 * p.i + 1], dx = s[3 * p.j] - xi, dy = s[3 * p.j + 1] - yi;
     ctx.beginPath();
-    ctx.moveTo(s[3 * p.i], s[3 * p.i + 1]); ctx.lineTo(s[3 * p.j], s[3 * p.j + 1]);
+    ctx.moveTo(xi + p.u0 * dx, yi + p.u0 * dy); ctx.lineTo(xi + p.u1 * dx, yi + p.u1 * dy);
     ctx.setLineDash(it.dash || []);
     ctx.strokeStyle = it.css; ctx.lineWidth = it.lw; ctx.lineCap = "round"; ctx.stroke();
   } else {
