@@ -119,7 +119,9 @@ class Body:
             direction = (1,) + (0,) * (self.space.dim - 1)
         d = direction if isinstance(direction, Vector) else self.vector(direction)
         ref = None
-        if reference is not None:
+        if isinstance(reference, str) and reference in ("default", "minimal"):  # a rule (3D)
+            ref = reference
+        elif reference is not None:
             ref = reference if isinstance(reference, Vector) else self.vector(reference)
         try:
             return Axis(self.point(origin), d, ref)

@@ -102,9 +102,19 @@ class Vector(Geometry):
     another (``Vector(p_from, p_to)``), or any global expression (``Vector(None, expr)``)."""
 
     def __init__(self, a, b=None):
+        self.endpoints = None
         if isinstance(a, Point) and b is not None:
+            b = as_point(b)
+            self.endpoints = (a, b)
+            if a.body is b.body and len(a.local) == len(b.local):
+                # both points on one body: a body-fixed direction, so that its normals are
+                # body-fixed too (regular equations for every orientation)
+                self.body = a.body
+                self.points = None
+                self.local = b.local - a.local
+                return
             self.body = None
-            self.points = (a, as_point(b))
+            self.points = (a, b)
             self.local = None
         else:
             self.body = a
@@ -139,6 +149,12 @@ class Vector(Geometry):
         return self.body.A * self.local
 
     def check_nonzero(self, what: str) -> None:
+        if self.endpoints is not None and self.points is None:
+            a = self.endpoints[0]
+            if all(c.is_number and c == 0 for c in self.local):
+                raise GeometryError(f"{what}: its two points coincide on {a._owner()}; "
+                                    "give two distinct points")
+            return
         if self.points is not None:
             a, b = self.points
             if a.body is b.body and all(sp.simplify(x - y) == 0 for x, y in zip(a.local, b.local)):
@@ -150,17 +166,110 @@ class Vector(Geometry):
                                 "give a non-zero direction vector")
 
     def __repr__(self) -> str:
-        if self.points is not None:
-            return f"Vector({self.points[0]!r} -> {self.points[1]!r})"
+        ends = self.points if self.points is not None else self.endpoints
+        if ends is not None:
+            return f"Vector({ends[0]!r} -> {ends[1]!r})"
         return f"Vector({self._owner()}, {tuple(self.local)})"
 
 
-class Axis(Geometry):
-    """An origin point and a direction (and in 3D an optional rotational reference direction)."""
+class GlobalVector(Vector):
+    """A direction given by a global expression of the coordinates of ``bodies`` (e.g. the
+    normal of a plane through points of several bodies)."""
 
-    def __init__(self, origin: Point, direction: Vector, reference: Vector | None = None):
+    def __init__(self, expr, bodies):
+        super().__init__(None, expr)
+        self._bodies = [b for b in bodies if b is not None]
+
+    def bodies(self) -> list:
+        return list(self._bodies)
+
+    def is_local_constant(self) -> bool:
+        return False
+
+    def __repr__(self) -> str:
+        return f"GlobalVector({tuple(self.local)})"
+
+
+REFERENCE_RULES = ("default", "minimal")
+
+
+def reference_direction(direction, rule: str = "default"):
+    r"""The rotational reference direction of an axis that was given none: a unit vector
+    perpendicular to ``direction`` (Mech's ``ReferenceDirection``).
+
+    With ``u`` the unit direction, the reference is the image of +X under the smallest
+    rotation that takes the Z axis of a frame onto ``u``:
+
+    * ``"default"`` (non-singular for every direction): the frame is the global one when
+      ``u_z >= 0`` and the one turned half a revolution about X (Z -> -Z) when ``u_z < 0``::
+
+          s = +1 if u_z >= 0 else -1
+          ref = (1 - u_x^2 / (1 + |u_z|),  -u_x u_y / (1 + |u_z|),  -s u_x)
+
+      so +Z gets +X, -Z gets +X, and the rule is continuous within each hemisphere (it jumps
+      only across ``u_z = 0``, like Mech's ``Step``-function rule).
+    * ``"minimal"`` (Mech's ``$MechUseMinimalRotation``): always from +Z,
+      ``ref = (1 - u_x^2/(1 + u_z), -u_x u_y/(1 + u_z), -u_x)``; simpler, but singular at
+      ``u = -Z``.
+
+    Numeric input gives a NumPy array; SymPy input a SymPy column (a ``Piecewise`` for the
+    default rule).
+    """
+    if rule not in REFERENCE_RULES:
+        raise GeometryError(f"reference rule must be one of {REFERENCE_RULES}, got {rule!r}")
+    vals = list(direction)
+    symbolic = any(isinstance(c, sp.Basic) and not c.is_number for c in vals)
+    if not symbolic:
+        u = np.array([float(c) for c in vals])
+        n = np.linalg.norm(u)
+        if n == 0:
+            raise GeometryError("reference direction of a zero-length axis direction")
+        ux, uy, uz = u / n
+        if rule == "minimal":
+            if 1 + uz < 1e-12:
+                raise GeometryError(
+                    "the minimal-rotation reference rule is singular for an axis along -Z; "
+                    "use the default rule or give a reference direction")
+            return np.array([1 - ux * ux / (1 + uz), -ux * uy / (1 + uz), -ux])
+        s = 1.0 if uz >= 0 else -1.0
+        a = 1 + abs(uz)
+        return np.array([1 - ux * ux / a, -ux * uy / a, -s * ux])
+    u = sp.Matrix(vals)
+    ux, uy, uz = u / sp.sqrt(u.dot(u))
+    up = [1 - ux**2 / (1 + uz), -ux * uy / (1 + uz), -ux]
+    if rule == "minimal":
+        return sp.Matrix(up)
+    down = [1 - ux**2 / (1 - uz), -ux * uy / (1 - uz), ux]
+    return sp.Matrix([sp.Piecewise((a, uz >= 0), (b, True)) for a, b in zip(up, down, strict=True)])
+
+
+def _local_numeric(m):
+    try:
+        return np.array([float(c) for c in m])
+    except TypeError:
+        return None
+
+
+class Axis(Geometry):
+    """An origin point and a direction, and in 3D a rotational reference direction.
+
+    ``Axis(origin, direction, reference=None)``: ``reference`` is a vector (only its part
+    perpendicular to ``direction`` matters) or the name of a rule, ``"default"`` or
+    ``"minimal"`` (see :func:`reference_direction`), used when none is given. The rule is
+    applied to the direction in the coordinates of the body that carries it, so the
+    reference is fixed in that body.
+    """
+
+    def __init__(self, origin: Point, direction: Vector, reference=None):
         self.origin = as_point(origin)
         self.dir = as_vector(direction)
+        self.reference_rule = "default"
+        if isinstance(reference, str):
+            if reference not in REFERENCE_RULES:
+                raise GeometryError(f"Axis reference must be a vector or one of "
+                                    f"{REFERENCE_RULES}; got {reference!r}")
+            self.reference_rule = reference
+            reference = None
         self.reference = as_vector(reference) if reference is not None else None
         self.body = self.origin.body
         self.dir.check_nonzero("Axis")
@@ -183,12 +292,49 @@ class Axis(Geometry):
     def direction(self) -> sp.Matrix:
         return self.dir.direction()
 
+    def reference_vector(self) -> Vector:
+        """The unit reference direction, perpendicular to the axis direction (3D).
+
+        Body-fixed (``A g'``) whenever the direction is fixed in a body: an explicit reference
+        fixed in the same body is orthonormalised in local coordinates, else the rule is
+        applied to the local direction. Otherwise a global expression.
+        """
+        d, r = self.dir, self.reference
+        if len(d.direction()) != 3:
+            raise GeometryError("reference directions exist for 3D axes only")
+        if d.points is None and not isinstance(d, GlobalVector):
+            if r is None:
+                g = reference_direction(d.local, self.reference_rule)
+                return Vector(d.body, tuple(g))
+            if r.points is None and not isinstance(r, GlobalVector) and r.body is d.body:
+                u, g = _local_numeric(d.local), _local_numeric(r.local)
+                if u is not None and g is not None:
+                    g = g - (g @ u) / (u @ u) * u
+                    n = np.linalg.norm(g)
+                    if n < 1e-12 * max(1.0, np.linalg.norm(_local_numeric(r.local))):
+                        raise GeometryError(
+                            f"axis on {self._owner()}: the reference direction {tuple(r.local)} "
+                            f"is parallel to the axis direction {tuple(d.local)}; give a "
+                            "reference perpendicular to the axis")
+                    return Vector(d.body, tuple(g / n))
+                u, g = d.local, r.local
+                g = g - (g.dot(u) / u.dot(u)) * u
+                return Vector(d.body, tuple(g / sp.sqrt(g.dot(g))))
+        u = d.direction()
+        if r is None:
+            g = reference_direction(u, self.reference_rule)
+            return GlobalVector(g, self.bodies())
+        g = r.direction()
+        g = g - (g.dot(u) / u.dot(u)) * u
+        return GlobalVector(g / sp.sqrt(g.dot(g)), self.bodies())
+
     def __repr__(self) -> str:
         return f"Axis({self.origin!r}, {self.dir!r})"
 
 
 class Line(Axis):
-    """An axis given by two points: origin ``point1``, direction ``point2 - point1``."""
+    """An axis given by two points: origin ``point1``, direction ``point2 - point1``. Its
+    reference direction follows the default rule (it cannot be given)."""
 
     def __init__(self, point1, point2):
         p1, p2 = as_point(point1), as_point(point2)
@@ -197,6 +343,50 @@ class Line(Axis):
 
     def __repr__(self) -> str:
         return f"Line({self.points[0]!r}, {self.points[1]!r})"
+
+
+class Plane(Axis):
+    r"""A plane through three points (3D): origin ``point1``, normal
+    ``(r_2 - r_1) x (r_3 - r_1)`` and reference direction from ``point1`` to ``point2``.
+
+    ``Plane(point1, point2, point3)`` or ``Plane(body, p1, p2, p3)`` (point names, numbers
+    or local coordinates of ``body``). Used where a vector is expected it gives its normal;
+    where an axis is expected, origin, normal and reference.
+    """
+
+    def __init__(self, *args):
+        from ._bodies import Body
+
+        if len(args) == 4 and isinstance(args[0], Body):
+            body = args[0]
+            pts = [body.point(p) for p in args[1:]]
+        elif len(args) == 3:
+            pts = [as_point(p) for p in args]
+        else:
+            raise ModelError("Plane takes three points, or a body and three of its points")
+        for p in pts:
+            p.check_dim(3)
+        p1, p2, p3 = pts
+        owners = {id(p.body) for p in pts}
+        if len(owners) == 1:
+            a, b = p2.local - p1.local, p3.local - p1.local
+            n = a.cross(b)
+            if all(c.is_number for c in n) and all(abs(float(c)) < 1e-14 for c in n):
+                raise GeometryError(
+                    f"Plane on {p1._owner()}: its three points are collinear; give three points "
+                    "that span a plane")
+            normal = Vector(p1.body, n)
+            ref = Vector(p1.body, a)
+        else:
+            r1 = p1.location()
+            n = (p2.location() - r1).cross(p3.location() - r1)
+            normal = GlobalVector(n, [p.body for p in pts])
+            ref = Vector(p1, p2)
+        super().__init__(p1, normal, ref)
+        self.points = (p1, p2, p3)
+
+    def __repr__(self) -> str:
+        return f"Plane({self.points[0]!r}, {self.points[1]!r}, {self.points[2]!r})"
 
 
 def as_point(obj) -> Point:

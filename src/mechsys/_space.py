@@ -109,14 +109,9 @@ class Spatial(Space):
     coordinate_names = ("x", "y", "z", "e0", "e1", "e2", "e3")
 
     def rotation_matrix(self, rot) -> sp.Matrix:
-        e0, e1, e2, e3 = rot
-        return sp.Matrix(
-            [
-                [e0**2 + e1**2 - e2**2 - e3**2, 2 * (e1 * e2 - e0 * e3), 2 * (e1 * e3 + e0 * e2)],
-                [2 * (e1 * e2 + e0 * e3), e0**2 - e1**2 + e2**2 - e3**2, 2 * (e2 * e3 - e0 * e1)],
-                [2 * (e1 * e3 - e0 * e2), 2 * (e2 * e3 + e0 * e1), e0**2 - e1**2 - e2**2 + e3**2],
-            ]
-        )
+        from ._rotations import matrix_elements
+
+        return sp.Matrix(matrix_elements(rot))
 
     def cross(self, a, b):
         return sp.Matrix(a).cross(sp.Matrix(b))
@@ -144,31 +139,23 @@ class Spatial(Space):
         return (1, 0, 0, 0)
 
     def rotation_guess(self, rot, who: str) -> tuple:
-        """Euler parameters from any Mech rotation format: ``(e0, e1, e2, e3)``, a virtual
-        rotation ``(vx, vy, vz)``, or ``(angle, (ux, uy, uz))``."""
+        """Euler parameters (normalised) from any Mech rotation format: ``(e0, e1, e2, e3)``,
+        a virtual rotation ``(vx, vy, vz)``, ``(angle, (ux, uy, uz))``, a 3 x 3 NumPy rotation
+        matrix, or a list of these applied in succession (see :mod:`mechsys._rotations`)."""
         import numpy as np
 
-        from ._errors import ModelError
+        from ._errors import MechError, ModelError
+        from ._rotations import euler_parameters
 
         try:
-            if len(rot) == 4:
-                e = np.array([float(v) for v in rot])
-            elif len(rot) == 3:
-                v = np.array([float(c) for c in rot])
-                phi = np.linalg.norm(v)
-                u = v / phi if phi > 0 else np.array([1.0, 0, 0])
-                e = np.r_[np.cos(phi / 2), np.sin(phi / 2) * u]
-            elif len(rot) == 2:
-                phi = float(rot[0])
-                u = np.array([float(c) for c in rot[1]])
-                u = u / np.linalg.norm(u)
-                e = np.r_[np.cos(phi / 2), np.sin(phi / 2) * u]
-            else:
+            e = np.asarray(euler_parameters(rot), dtype=float).ravel()
+            if e.shape != (4,):
                 raise ValueError
-        except (TypeError, ValueError, ZeroDivisionError):
+        except (MechError, TypeError, ValueError, ZeroDivisionError):
             raise ModelError(
                 f"rotation guess of body {who!r}: give Euler parameters (e0, e1, e2, e3), a "
-                f"virtual rotation (vx, vy, vz) or (angle, (ux, uy, uz)); got {rot!r}"
+                "virtual rotation (vx, vy, vz), (angle, (ux, uy, uz)), a 3 x 3 numpy rotation "
+                f"matrix or a list of these (successive rotations); got {rot!r}"
             ) from None
         n = np.linalg.norm(e)
         if n == 0:

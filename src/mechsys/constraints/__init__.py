@@ -3,8 +3,8 @@
 from ._base import ConstraintBase, Variable
 from ._general import Constraint
 from ._planar import (
-    Orthogonal1,
     OriginLock2,
+    Orthogonal1,
     Parallel1,
     PointOnLine1,
     RelativeAngle1,
@@ -16,6 +16,32 @@ from ._planar import (
     Translate2,
 )
 from ._registry import REGISTRY, constraint_types, register
+from ._spatial import (
+    SPATIAL_TYPES,
+    ConstantVelocity4,
+    Cylindrical4,
+    LineOnCylinder3,
+    LineToCircle1,
+    LineToLine1,
+    LineToPlane2,
+    OriginLock3,
+    OrthoRevolute4,
+    Parallel2,
+    ParaRevolute4,
+    Planar3,
+    PlaneToCircle1,
+    PlaneToPlane3,
+    PointAtIntersection3,
+    PointOnCircle2,
+    PointOnLine2,
+    PointOnPlane1,
+    RelativeZ1,
+    Revolute5,
+    RotationLock3,
+    Spherical3,
+    Translate5,
+    Universal4,
+)
 
 for _cls in (
     Revolute2,
@@ -30,10 +56,34 @@ for _cls in (
     Parallel1,
     PointOnLine1,
     Constraint,
+    *SPATIAL_TYPES,
 ):
     register(_cls)
 
 __all__ = [
+    "ConstantVelocity4",
+    "Cylindrical4",
+    "LineOnCylinder3",
+    "LineToCircle1",
+    "LineToLine1",
+    "LineToPlane2",
+    "OriginLock3",
+    "OrthoRevolute4",
+    "Parallel2",
+    "ParaRevolute4",
+    "Planar3",
+    "PlaneToCircle1",
+    "PlaneToPlane3",
+    "PointAtIntersection3",
+    "PointOnCircle2",
+    "PointOnLine2",
+    "PointOnPlane1",
+    "RelativeZ1",
+    "Revolute5",
+    "RotationLock3",
+    "Spherical3",
+    "Translate5",
+    "Universal4",
     "REGISTRY",
     "Constraint",
     "ConstraintBase",

@@ -11,6 +11,7 @@ import sympy as sp
 from .._errors import ModelError
 from .._geometry import as_axis, as_point, as_vector
 from . import _primitives as P
+from ._angles import RelativeAngle1, RotationLock1
 from ._base import ConstraintBase, as_expr
 
 
@@ -100,37 +101,7 @@ class OriginLock2(ConstraintBase):
         return P.coincident(self.p1, self.p2, off)
 
 
-class RotationLock1(ConstraintBase):
-    r"""Fix a body's angle, or the angle of ``body1`` relative to ``body2``. Removes 1 DOF (2D).
-
-    ``RotationLock1(body, angle)`` or ``RotationLock1(body1, body2, angle)``; ``angle`` may be
-    an expression of ``T`` (a rotational driver)::
-
-        theta_1 - theta_2 - angle = 0
-    """
-
-    mech_name = "RotationLock1"
-    dof_removed = 1
-    spaces = ("planar",)
-
-    def __init__(self, body1, body2_or_angle, angle=None):
-        super().__init__()
-        self.b1 = _body_of(body1, "RotationLock1 body1")
-        if angle is None:
-            self.b2, self.angle = None, as_expr(body2_or_angle, "RotationLock1 angle")
-        else:
-            self.b2 = _body_of(body2_or_angle, "RotationLock1 body2")
-            self.angle = as_expr(angle, "RotationLock1 angle")
-
-    def geometry(self):
-        return [self.b1.point(0)] + ([self.b2.point(0)] if self.b2 is not None else [])
-
-    def _build(self, space):
-        th1 = space.angle(self.b1.q[space.dim :]) if not self.b1.is_ground else 0
-        th2 = 0
-        if self.b2 is not None and not self.b2.is_ground:
-            th2 = space.angle(self.b2.q[space.dim :])
-        return [th1 - th2 - self.angle]
+# RotationLock1 and RelativeAngle1 are written once for 2D and 3D in ``_angles``.
 
 
 class _RelativeCoordinate(ConstraintBase):
@@ -215,35 +186,6 @@ class RelativeDistance1(ConstraintBase):
 
     def _build(self, space):
         return [P.distance_squared(self.p1, self.p2, self.dist)]
-
-
-class RelativeAngle1(ConstraintBase):
-    r"""The counter-clockwise angle from ``vector2`` to ``vector1`` is ``angle``. Removes 1 DOF (2D).
-
-    ``RelativeAngle1(vector1, vector2, angle)`` (axes or lines give their directions); with
-    ``R(a)`` the planar rotation by ``a``::
-
-        (R(angle) u_2) x u_1 = 0
-
-    The cross form is regular at the solution for every angle; like ``Parallel1`` it also
-    admits ``angle + pi``, so start from a guess near the intended branch.
-    """
-
-    mech_name = "RelativeAngle1"
-    dof_removed = 1
-    spaces = ("planar",)
-
-    def __init__(self, vector1, vector2, angle):
-        super().__init__()
-        self.v1, self.v2 = as_vector(vector1), as_vector(vector2)
-        self.angle = as_expr(angle, "RelativeAngle1 angle")
-
-    def geometry(self):
-        return [self.v1, self.v2]
-
-    def _build(self, space):
-        rot = space.rotation_matrix((self.angle,))
-        return [space.cross(rot * self.v2.direction(), self.v1.direction())]
 
 
 class Orthogonal1(ConstraintBase):

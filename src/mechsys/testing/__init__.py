@@ -5,7 +5,10 @@
 Register cases for a new constraint type with the ``@case("Name")`` decorator.
 """
 
-from . import _cases_planar  # noqa: F401  (registers cases)
+from . import (
+    _cases_planar,  # noqa: F401  (registers cases)
+    _cases_spatial,  # noqa: F401  (registers cases)
+)
 from ._checks import (
     CASES,
     Case,

@@ -1,0 +1,204 @@
+r"""Angle constraints written once for 2D and 3D: ``RotationLock1`` and ``RelativeAngle1``,
+and the shared equation builders for angles about an axis.
+
+An axis carries a right-handed *angle frame* ``(g, k)``: unit vectors spanning the plane
+in which angles about it are measured, ``k`` being ``g`` turned +90 degrees about the
+axis. In 2D ``g`` is the unit axis direction and ``k`` its left normal; in 3D ``g`` is the
+unit reference direction (perpendicular to the direction ``u``) and ``k = u^ x g``. Both
+are fixed in the axis' body when the axis is. The counter-clockwise angle from ``g`` to
+the projection of a vector ``f`` is ``a`` when::
+
+    cos(a) (k . f) - sin(a) (g . f) = 0
+
+which is regular at the solution for every ``a`` (it also holds at ``a + pi``; the guess
+picks the branch, as for ``Parallel1``).
+"""
+
+from __future__ import annotations
+
+import sympy as sp
+
+from .._errors import ModelError
+from .._geometry import Axis, GlobalVector, Vector, as_axis, as_vector
+from . import _primitives as P
+from ._base import ConstraintBase, as_expr
+
+
+def vector_norm(v: Vector) -> sp.Expr:
+    """``|u|``: a constant for a vector fixed in a body (rigid bodies keep lengths), else the
+    square root of the global expression."""
+    if v.points is None and not isinstance(v, GlobalVector):
+        return sp.sqrt(v.local.dot(v.local))
+    d = v.direction()
+    return sp.sqrt(d.dot(d))
+
+
+def angle_frame(space, axis: Axis) -> tuple[sp.Matrix, sp.Matrix]:
+    """Global unit vectors ``(g, k)`` of the axis' angle frame (see the module doc)."""
+    d = axis.dir
+    n = vector_norm(d)
+    if space.dim == 2:
+        return d.direction() / n, P.normals(space, d)[0] / n
+    gv = axis.reference_vector()
+    if d.points is None and not isinstance(d, GlobalVector) and gv.points is None \
+            and not isinstance(gv, GlobalVector) and gv.body is d.body:
+        k_local = (d.local / n).cross(gv.local)
+        k = k_local if d.body is None else d.body.A * k_local
+        return gv.direction(), k
+    u = d.direction() / n
+    g = gv.direction()
+    return g, u.cross(g)
+
+
+def angle_equation(frame, f: sp.Matrix, angle) -> sp.Expr:
+    """``cos(a) (k . f) - sin(a) (g . f)``: the angle from ``g`` to ``f`` about the axis is
+    ``a``."""
+    g, k = frame
+    a = sp.sympify(angle)
+    return sp.cos(a) * k.dot(f) - sp.sin(a) * g.dot(f)
+
+
+def _body_of(obj):
+    from .._bodies import Body
+
+    return obj if isinstance(obj, Body) else None
+
+
+def _ground_copy(axis: Axis) -> Axis:
+    """The axis with the same local geometry, on ground (the axis' rest position)."""
+    d = axis.dir
+    if d.points is not None or isinstance(d, GlobalVector) or axis.origin.body is not d.body:
+        raise ModelError("RotationLock1(axis, angle): the axis must be fixed in one body to "
+                         "measure its rotation from rest; give the second axis explicitly")
+    ref = axis.reference
+    if ref is not None:
+        if ref.points is not None or isinstance(ref, GlobalVector) or ref.body is not d.body:
+            raise ModelError("RotationLock1(axis, angle): the reference direction must be fixed "
+                             "in the axis' body; give the second axis explicitly")
+        ref = Vector(None, ref.local)
+    return Axis(axis.origin.local, Vector(None, d.local), ref if ref is not None
+                else axis.reference_rule)
+
+
+class RotationLock1(ConstraintBase):
+    r"""Lock one rotation angle. Removes 1 DOF (2D/3D).
+
+    Body form (2D, Mech's): ``RotationLock1(body, angle)`` or
+    ``RotationLock1(body1, body2, angle)`` -- the angle of ``body1`` is ``angle`` more than
+    that of ``body2`` (ground if omitted)::
+
+        theta_1 - theta_2 - angle = 0
+
+    Axis form (2D and 3D): ``RotationLock1(axis1, axis2, angle)`` -- the counter-clockwise
+    angle (right-hand sense about the direction ``u_2`` of ``axis2``) from the reference
+    direction ``g_2`` of ``axis2`` to the reference direction ``g_1`` of ``axis1``, projected
+    on the plane normal to ``u_2``, is ``angle``; with ``k_2 = u_2^ x g_2`` (see
+    :func:`~mechsys.reference_direction` for references not given explicitly)::
+
+        cos(angle) (k_2 . g_1) - sin(angle) (g_2 . g_1) = 0
+
+    (in 2D ``g_i`` are the unit axis directions and ``k_2`` the left normal of ``u_2``).
+    ``RotationLock1(axis, angle)`` measures from the same axis on ground at rest. ``angle``
+    may be an expression of ``T`` (a rotational driver). The equation is regular for every
+    angle; it also holds at ``angle + pi``, so start from a guess near the intended branch.
+    In 3D a body's whole orientation is locked with ``RotationLock3``.
+    """
+
+    mech_name = "RotationLock1"
+    dof_removed = 1
+
+    def __init__(self, first, second=None, angle=None):
+        super().__init__()
+        self.b1 = self.b2 = self.axis1 = self.axis2 = None
+        if second is None and angle is None:
+            raise ModelError("RotationLock1 needs an angle: RotationLock1(body, angle), "
+                             "RotationLock1(body1, body2, angle) or "
+                             "RotationLock1(axis1, axis2, angle)")
+        if _body_of(first) is not None:
+            self.b1 = first
+            if angle is None:
+                self.angle = as_expr(second, "RotationLock1 angle")
+            else:
+                if _body_of(second) is None:
+                    raise ModelError(f"RotationLock1 body2: expected a body, got {second!r}")
+                self.b2 = second
+                self.angle = as_expr(angle, "RotationLock1 angle")
+            return
+        try:
+            self.axis1 = as_axis(first)
+        except ModelError:
+            raise ModelError(f"RotationLock1: the first argument must be a body or an axis, got "
+                             f"{first!r}") from None
+        if angle is None:
+            self.axis2 = _ground_copy(self.axis1)
+            self.angle = as_expr(second, "RotationLock1 angle")
+        else:
+            self.axis2 = as_axis(second)
+            self.angle = as_expr(angle, "RotationLock1 angle")
+
+    def geometry(self):
+        if self.b1 is not None:
+            return [self.b1.point(0)] + ([self.b2.point(0)] if self.b2 is not None else [])
+        return [self.axis1, self.axis2]
+
+    def _build(self, space):
+        if self.b1 is not None:
+            if space.dim != 2:
+                raise ModelError(
+                    "in 3D, RotationLock1 takes axes: RotationLock1(axis1, axis2, angle) locks the "
+                    "rotation about axis2; RotationLock3(body, ...) locks a whole orientation")
+            th1 = space.angle(self.b1.q[space.dim:]) if not self.b1.is_ground else 0
+            th2 = 0
+            if self.b2 is not None and not self.b2.is_ground:
+                th2 = space.angle(self.b2.q[space.dim:])
+            return [th1 - th2 - self.angle]
+        g1 = angle_frame(space, self.axis1)[0]
+        return [angle_equation(angle_frame(space, self.axis2), g1, self.angle)]
+
+
+class RelativeAngle1(ConstraintBase):
+    r"""The angle between two vectors. Removes 1 DOF (2D/3D).
+
+    ``RelativeAngle1(vector1, vector2, angle)`` (axes, lines and planes give their
+    directions).
+
+    2D (signed, Mech's): the counter-clockwise angle from ``vector2`` to ``vector1`` is
+    ``angle``; with ``n_2`` the left normal of ``u_2``::
+
+        cos(angle) (n_2 . u_1) - sin(angle) (u_2 . u_1) = 0
+
+    (regular for every angle; also admits ``angle + pi``, so start near the intended
+    branch).
+
+    3D (unsigned, Mech's): the included angle between the vectors is ``|angle|``::
+
+        u_1 . u_2 - |u_1| |u_2| cos(angle) = 0
+
+    singular at 0 and pi (the vectors are then parallel): use ``Parallel2`` there.
+    """
+
+    mech_name = "RelativeAngle1"
+    dof_removed = 1
+
+    def __init__(self, vector1, vector2, angle):
+        super().__init__()
+        self.v1, self.v2 = as_vector(vector1), as_vector(vector2)
+        self.angle = as_expr(angle, "RelativeAngle1 angle")
+
+    def geometry(self):
+        return [self.v1, self.v2]
+
+    def _build(self, space):
+        u1, u2 = self.v1.direction(), self.v2.direction()
+        if space.dim == 2:
+            return [angle_equation((u2, P.normals(space, self.v2)[0]), u1, self.angle)]
+        if self.angle.is_number:
+            c = float(sp.cos(self.angle))
+            if abs(abs(c) - 1) < 1e-12:
+                raise ModelError(
+                    f"{self.label()}: in 3D an included angle of 0 or pi is singular; use "
+                    "Parallel2 to make the vectors parallel")
+        return [u1.dot(u2) - vector_norm(self.v1) * vector_norm(self.v2) * sp.cos(self.angle)]
+
+
+__all__ = ["RelativeAngle1", "RotationLock1", "angle_equation", "angle_frame", "vector_norm"]
