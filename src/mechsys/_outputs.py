@@ -79,13 +79,23 @@ class OutputFunctions:
         return self._finish(a)
 
     def instant_center(self, body):
-        """Planar instant centre ``(2,)`` of ``body`` (infinite when it does not rotate)."""
+        """Planar instant centre ``(2,)`` of ``body`` (infinite when it does not rotate).
+
+        In 3D a body has an instant screw axis instead: returns ``(point, direction)``, the
+        point of the axis nearest the body origin ``r_O`` and the axis direction ``omega``
+        (global)::
+
+            r_S = r_O + (omega x v_O) / (omega . omega)
+
+        Every point on the axis has the same velocity, ``omega`` times the slip along it
+        (infinite / undefined while the body only translates).
+        """
         m = self._model()
         b = m.body(body)
-        if m.space.dim != 2:
-            raise ModelError("instant_center is planar here; the spatial screw axis comes with Model3D")
         v = m.time_derivative(b.r)
         w = m._omega(b, False)
+        if m.space.dim == 3:
+            return self._finish(b.r + w.cross(v) / w.dot(w)), self._finish(w)
         return self._finish(b.r + sp.Matrix([-v[1], v[0]]) / w)
 
     # -- vectors --------------------------------------------------------------------------

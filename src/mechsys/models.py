@@ -85,3 +85,89 @@ def four_bar_chain(n_loops: int, speed: float = 1.0) -> Model2D:
         m.add(Revolute2(cp.point("end"), cranks[k + 1].point("tip")), name=f"right{k}")
     m.add(RotationLock1(cranks[0], th0 + 0.3 * sp.sin(speed * T)), name="drive")
     return m
+
+
+# -- spatial ---------------------------------------------------------------------------------
+
+
+def slider_crank_3d(crank: float = 2.0, rod: float = 6.0, offset: float = 0.0,
+                    height: float = 0.0, speed: float = 2 * np.pi, drive=None):
+    """The spatial slider-crank of Mech's section 1.3, built from 3D joints.
+
+    The crank turns about the global Z axis at the origin (``Revolute5``), driven at
+    ``speed`` rad/s (``RotationLock1`` about that axis from global X; or any expression
+    ``drive`` of ``T``); the connecting rod hangs on the crank pin by a ball joint
+    (``Spherical3``) and on the piston by a universal joint (``Universal4``: rod pin along
+    its local Y, piston pin along its local Z), which stops the rod spinning about its own
+    axis; the piston slides without turning along the line through ``(0, offset, height)``
+    parallel to X (``Translate5``). With ``height = 0`` every point moves in the XY plane
+    exactly as in the planar :func:`slider_crank` with the same arguments.
+
+    Bodies: ``crank`` (point ``pin``), ``rod`` (points ``a``, ``b``), ``piston``; constraints
+    named as in the planar model: ``crank pin``, ``crank-rod``, ``wrist pin``, ``slider``,
+    ``drive``.
+    """
+    from ._model import Model3D
+    from .constraints import Revolute5, Spherical3, Translate5, Universal4
+
+    m = Model3D()
+    g = m.ground
+    z = (0, 0, 1)
+    cr = m.add_body("crank", points={"pin": (crank, 0, 0)}, guess=((0, 0, 0), (1, 0, 0, 0)))
+    reach = np.sqrt(rod**2 - offset**2 - height**2)
+    d = np.array([reach - crank, offset, height])
+    d /= np.linalg.norm(d)
+    y = np.cross([0.0, 0.0, 1.0], d)
+    y /= np.linalg.norm(y)
+    R = np.column_stack([d, y, np.cross(d, y)])       # rod x along the rod, y horizontal
+    rd = m.add_body("rod", points={"a": (0, 0, 0), "b": (rod, 0, 0)}, guess=((crank, 0, 0), R))
+    pi = m.add_body("piston", guess=((crank + reach, offset, height), (1, 0, 0, 0)))
+    m.add(Revolute5(cr.axis(0, z), g.axis((0, 0, 0), z)), name="crank pin")
+    m.add(Spherical3(cr.point("pin"), rd.point("a")), name="crank-rod")
+    m.add(Universal4(rd.axis("b", (0, 1, 0)), pi.axis(0, z)), name="wrist pin")
+    m.add(Translate5(pi.axis(0, (1, 0, 0)), g.axis((0, offset, height), (1, 0, 0))),
+          name="slider")
+    m.add(RotationLock1(cr.axis(0, z), g.axis((0, 0, 0), z), drive if drive is not None
+                        else speed * T), name="drive")
+    return m
+
+
+def cardan_joint(bend: float = 0.5, speed: float = 2 * np.pi, joint: str = "universal",
+                 drive=None):
+    """Two shafts joined by a Cardan (Hooke) joint, or a constant-velocity joint.
+
+    The input shaft turns about the global X axis (``Revolute5``), driven at ``speed``
+    (``RotationLock1``: its yoke pin, local Y, makes the angle ``speed T`` -- or ``drive`` --
+    with the global Y axis, so the angle is measured from the plane of the two shafts). The
+    output shaft's axis (local X) stays along ``(cos bend, sin bend, 0)`` (``Parallel2``)
+    and the joint centre is at the origin. ``joint="universal"``: ``Universal4`` between the
+    input yoke pin (local Y of ``input``) and the output yoke pin (local Z of ``output``);
+    ``joint="cv"``: ``ConstantVelocity4`` between the shaft axes (reference directions the
+    local Y axes), so the output turns at exactly the input speed.
+
+    Bodies ``input``, ``output``; constraints ``bearing``, ``output axis``, ``joint``,
+    ``drive``. For the universal joint the output speed is
+    ``w2 / w1 = cos(bend) / (1 - sin(bend)^2 cos(th1)^2)`` with ``th1`` the drive angle.
+    """
+    from ._model import Model3D
+    from .constraints import ConstantVelocity4, Parallel2, Revolute5, Universal4
+
+    if joint not in ("universal", "cv"):
+        from ._errors import ModelError
+
+        raise ModelError(f"cardan_joint: joint must be 'universal' or 'cv', got {joint!r}")
+    m = Model3D()
+    g = m.ground
+    x, y = (1, 0, 0), (0, 1, 0)
+    a2 = (float(np.cos(bend)), float(np.sin(bend)), 0.0)
+    s1 = m.add_body("input", guess=((0, 0, 0), (1, 0, 0, 0)))
+    s2 = m.add_body("output", guess=((0, 0, 0), (bend, (0, 0, 1))))
+    m.add(Revolute5(s1.axis(0, x), g.axis((0, 0, 0), x)), name="bearing")
+    m.add(Parallel2(s2.vector(x), g.vector(a2)), name="output axis")
+    if joint == "universal":
+        m.add(Universal4(s1.axis(0, y), s2.axis(0, (0, 0, 1))), name="joint")
+    else:
+        m.add(ConstantVelocity4(s1.axis(0, x, y), s2.axis(0, x, y)), name="joint")
+    m.add(RotationLock1(s1.axis(0, x, y), g.axis((0, 0, 0), x, y),
+                        drive if drive is not None else speed * T), name="drive")
+    return m
