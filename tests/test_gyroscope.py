@@ -1,16 +1,12 @@
 """Gyroscope (examples/gyroscope.py) against Euler's equations and the precession formula;
 the three rotor models (spinning rotor, GyroMoment, GyroFilter) against each other."""
 
-import importlib.util
-import pathlib
-
 import numpy as np
 import pytest
 
-EX = pathlib.Path(__file__).resolve().parents[1] / "examples" / "gyroscope.py"
-spec = importlib.util.spec_from_file_location("gyroscope", EX)
-gyro = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(gyro)
+from conftest import load_example
+
+gyro = load_example("gyroscope")
 
 
 def test_base_free_accelerates_about_z():

@@ -1,23 +1,11 @@
 """Nonholonomic paths: the caster and the knife edge against closed forms; errors."""
 
-import importlib.util
-import pathlib
-
 import numpy as np
 import pytest
 
 import mechsys as ms
+from conftest import load_example as load
 from mechsys import T
-
-EX = pathlib.Path(__file__).resolve().parents[1] / "examples"
-
-
-def load(name):
-    spec = importlib.util.spec_from_file_location(name, EX / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
 
 caster = load("caster")
 knife = load("knife_edge")

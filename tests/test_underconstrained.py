@@ -1,22 +1,11 @@
 """The manual's chapter-10 examples (examples/*.py), checked independently."""
 
-import importlib.util
-import pathlib
-
 import numpy as np
 import pytest
 import sympy as sp
 from scipy.optimize import minimize
 
-EX = pathlib.Path(__file__).resolve().parents[1] / "examples"
-
-
-def load(name):
-    spec = importlib.util.spec_from_file_location(name, EX / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
+from conftest import load_example as load
 
 rope = load("pendulum_on_rope")
 

@@ -21,7 +21,6 @@ import numpy as np
 
 from ._errors import MechError, ModelError
 from ._results import Solution, State
-from .compile import System, make_layout
 from .solvers._free import (
     equilibrium_configuration,
     equilibrium_velocity,
@@ -49,17 +48,7 @@ class FreeSystem:
         drop = drop if isinstance(drop, (list, tuple)) else [drop]
         self.dropped = [model.constraint(c) for c in drop]
         self.kind = solution
-        eqs, owners, index = model._all_equations()
-        keep = [i for i, o in enumerate(owners) if o not in self.dropped]
-        eqs = [eqs[i] for i in keep]
-        owners = [owners[i] for i in keep]
-        index = [index[i] for i in keep]
-        model._check_symbols(eqs, owners)
-        layout = make_layout(model.bodies[1:], model._variables, list(model._params), owners,
-                             index)
-        self.system = System(model.space, layout, eqs, list(model._params.values()),
-                             model.guess(), backend=model._backend, version=model._version,
-                             model=model, loads=list(model._loads))
+        self.system = model._system_without(self.dropped)
         if self.system.m > self.system.n:
             raise ModelError(f"free system is still overconstrained ({self.system.m} equations,"
                              f" {self.system.n} coordinates)")

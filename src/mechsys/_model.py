@@ -386,6 +386,20 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
                     "m.parameter(name, value) or m.variable(name, guess), or pass "
                     "variables={sym: guess} to Constraint")
 
+    def _system_without(self, removed, loads=None) -> System:
+        """A System of this model's equations minus those of ``removed`` constraints (free
+        and path systems); same coordinates, parameters and (by default) loads."""
+        eqs, owners, index = self._all_equations()
+        keep = [i for i, o in enumerate(owners) if o not in removed]
+        eqs = [eqs[i] for i in keep]
+        owners = [owners[i] for i in keep]
+        index = [index[i] for i in keep]
+        self._check_symbols(eqs, owners)
+        layout = make_layout(self._bodies[1:], self._variables, list(self._params), owners, index)
+        return System(self.space, layout, eqs, list(self._params.values()), self.guess(),
+                      backend=self._backend, version=self._version, model=self,
+                      loads=list(self._loads) if loads is None else loads)
+
     def compile(self) -> System:
         """The compiled :class:`System` (cached until the model changes)."""
         if self._system is None:

@@ -26,7 +26,7 @@ import sympy as sp
 from ._errors import MechError, ModelError, SingularJacobianError
 from ._results import Solution
 from ._symbols import T
-from .compile import System, compile_exprs, make_layout
+from .compile import compile_exprs
 from .constraints import ConstraintBase
 from .solvers._integrators import integrate_adams, integrate_rk
 from .solvers._linalg import SPARSE_THRESHOLD, Singular, dependent_rows, factor, involved_rows
@@ -56,17 +56,8 @@ class PathSystem:
             vc.name = vc.name or f"velocity constraint replacing {d.name!r}"
             vc.number = vc.number if vc.number is not None else d.number
             self.replaced[d] = vc
-        eqs, owners, index = model._all_equations()
-        keep = [i for i, o in enumerate(owners) if o not in self.replaced]
-        heqs = [eqs[i] for i in keep]
-        howners = [owners[i] for i in keep]
-        hindex = [index[i] for i in keep]
-        model._check_symbols(heqs, howners)
-        layout = make_layout(model.bodies[1:], model._variables, list(model._params), howners,
-                             hindex)
-        self.system = System(model.space, layout, heqs, list(model._params.values()),
-                             model.guess(), backend=model._backend, version=model._version,
-                             model=model, loads=[])
+        self.system = model._system_without(list(self.replaced), loads=[])
+        layout = self.system.layout
         lay = layout
         self.velocity_constraints = list(self.replaced.values())
         psi, owners_psi = [], []
@@ -182,7 +173,6 @@ class PathSystem:
         """Integrate the path (Mech's ``SolvePath``); options as ``FreeSystem.simulate``.
         The solution's ``extra["drift"]`` holds the largest holonomic residual met."""
         s = self.system
-        n = s.n
         q0 = self._q0.copy() if initial_condition is None else self._condition(initial_condition)
         tt = np.atleast_1d(np.asarray(t, dtype=float))
         t0, t1 = float(tt[0]), float(tt[-1])

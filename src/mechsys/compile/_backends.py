@@ -102,7 +102,8 @@ def default_backend() -> str:
     return available_backends()[0]
 
 
-def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr], backend: str | None = None) -> Compiled:
+def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
+                  backend: str | None = None) -> Compiled:
     """Compile ``exprs`` as a function of the flat argument list ``args``."""
     if not exprs:
         return _Empty()

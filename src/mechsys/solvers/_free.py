@@ -127,67 +127,52 @@ def project(system, t, q, qd, p, tol=1e-12, max_iterations=8):
     return q, qd
 
 
-def equilibrium_configuration(eq, system, t, q0, lam0, p, tol=1e-10, max_iterations=50):
-    """Newton on ``(q, lambda)`` for the static equilibrium (``eq`` the compiled residual
-    ``R(q, lambda)`` and its Jacobian, from ``compile._free``). Returns ``(q, lam, its)``."""
-    n = system.n
-    x = np.concatenate((q0, lam0))
+def _damped_newton(evaluate, x, n, t, what, hint, tol=1e-10, max_iterations=50):
+    """Newton with Armijo backtracking on ``R(x) = 0``; ``evaluate(x) -> (R, K)``."""
     history = []
     for it in range(max_iterations + 1):
-        R, K = eq.evaluate(t, x[:n], x[n:], p)
+        R, K = evaluate(x)
         err = np.abs(R).max(initial=0.0)
         history.append(err)
         if err <= tol * (1 + np.abs(x).max()):
-            return x[:n], x[n:], it
+            return x, it
         try:
             dx = factor(K).solve(-R)
         except Singular:
             raise ConvergenceError(
-                f"equilibrium at t = {t:.6g}: the equilibrium Jacobian is singular (residual "
-                f"{err:.3e}); the loads may not fix the free coordinates (a neutral direction, "
-                "e.g. no load along a free motion) or the guess is at a maximum of potential.",
+                f"{what} at t = {t:.6g}: singular Jacobian (residual {err:.3e}); {hint}",
                 time=t, history=tuple(history)) from None
         a = 1.0
         while a > 1e-3:
             xn = x + a * dx
-            Rn, _ = eq.evaluate(t, xn[:n], xn[n:], p)
+            Rn, _ = evaluate(xn)
             if np.abs(Rn).max(initial=0.0) < (1 - 1e-4 * a) * err:
                 break
             a *= 0.5
         x = xn
     raise ConvergenceError(
-        f"equilibrium at t = {t:.6g} did not converge in {max_iterations} iterations "
-        f"(residual {history[-1]:.3e}); start from a better initial_guess (e.g. the previous "
-        "equilibrium).", time=t, history=tuple(history))
+        f"{what} at t = {t:.6g} did not converge in {max_iterations} iterations "
+        f"(residual {history[-1]:.3e}); start from a better guess (e.g. the previous solution).",
+        time=t, history=tuple(history))
+
+
+def equilibrium_configuration(eq, system, t, q0, lam0, p, tol=1e-10, max_iterations=50):
+    """Newton on ``(q, lambda)`` for the static equilibrium (``eq`` the compiled residual
+    ``R(q, lambda)`` and its Jacobian, from ``compile._free``). Returns ``(q, lam, its)``."""
+    n = system.n
+    x, its = _damped_newton(
+        lambda x: eq.evaluate(t, x[:n], x[n:], p), np.concatenate((q0, lam0)), n, t,
+        "equilibrium", "the loads may not fix the free coordinates (a neutral direction, e.g. "
+        "no load along a free motion) or the guess is at a maximum of potential.", tol,
+        max_iterations)
+    return x[:n], x[n:], its
 
 
 def equilibrium_velocity(eqv, system, t, q, qd0, lam0, p, tol=1e-10, max_iterations=50):
     """Newton on ``(qd, lambda)`` for the velocity equilibrium at fixed ``q``."""
     n = system.n
-    x = np.concatenate((qd0, lam0))
-    history = []
-    for it in range(max_iterations + 1):
-        R, K = eqv.evaluate(t, q, x[:n], x[n:], p)
-        err = np.abs(R).max(initial=0.0)
-        history.append(err)
-        if err <= tol * (1 + np.abs(x).max()):
-            return x[:n], x[n:], it
-        try:
-            dx = factor(K).solve(-R)
-        except Singular:
-            raise ConvergenceError(
-                f"equilibrium velocity at t = {t:.6g}: singular Jacobian (residual {err:.3e}); "
-                "the velocity-dependent loads may not determine the free velocities.",
-                time=t, history=tuple(history)) from None
-        a = 1.0
-        while a > 1e-3:
-            xn = x + a * dx
-            Rn, _ = eqv.evaluate(t, q, xn[:n], xn[n:], p)
-            if np.abs(Rn).max(initial=0.0) < (1 - 1e-4 * a) * err:
-                break
-            a *= 0.5
-        x = xn
-    raise ConvergenceError(
-        f"equilibrium velocity at t = {t:.6g} did not converge in {max_iterations} iterations "
-        f"(residual {history[-1]:.3e}); give a closer initial velocity guess.", time=t,
-        history=tuple(history))
+    x, its = _damped_newton(
+        lambda x: eqv.evaluate(t, q, x[:n], x[n:], p), np.concatenate((qd0, lam0)), n, t,
+        "equilibrium velocity", "the velocity-dependent loads may not determine the free "
+        "velocities.", tol, max_iterations)
+    return x[:n], x[n:], its
