@@ -63,7 +63,8 @@ def _scene(obj, graphics, default):
 
 def snapshot(solution, graphics=None, index=0, t=None, default="auto", **kw):
     """A matplotlib figure of one configuration (frame ``index`` or time ``t``) of a
-    solution; a Model is drawn at its initial guess. ``graphics``: extra primitives."""
+    solution; a Model is drawn at its last solution (at its initial guess before any solve).
+    ``graphics``: extra primitives."""
     scene, sol = _scene(solution, graphics, default)
     return scene.snapshot(sol, index=index, t=t, **kw)
 

@@ -2,8 +2,8 @@ r"""The default picture of a model: drawn from its bodies' points and its joints
 
 A first model with no graphics given still shows something sensible:
 
-* every moving body is drawn through its *attachment points* (its origin, its named points
-  and every point a constraint uses on it): two points give a bar, three or more a plate
+* every moving body is drawn through its *attachment points* (its origin, its named points,
+  its centroid and every point a constraint uses on it): two points give a bar, three or more a plate
   (their convex hull, outlined by bars), collinear points a chain of bars; a body with one
   point is a disc (2D) or a ball (3D), or a slider block when it slides;
 * pin-type joints (``Revolute*``, ``Spherical*``, ``Universal*``, ``Cylindrical*``,
@@ -113,7 +113,11 @@ class Skeleton(Primitive):
                 if pts and axes:
                     onlines.append((pts[0], axes[0]))
         for b in model.bodies[1:]:
-            for loc in b.points.values():
+            extra = list(b.points.values())
+            centroid = getattr(b, "centroid", None)
+            if centroid is not None and len(centroid) == dim:
+                extra.append(centroid)  # a pendulum's rod reaches its centre of mass
+            for loc in extra:
                 v = ev.numeric_local(loc)
                 if v is not None:
                     attach[id(b)][1].append(v)
