@@ -62,15 +62,15 @@ def demo(out: Path) -> int:
     written.append(gif)
     print(f"wrote {gif} (animation, {_gif_frames(gif)} frames)")
 
-    m3, note = _spatial_model()
+    # the spatial slider-crank of Mech's section 1.3, its slider line lifted out of the
+    # crank's plane; drawn from its joints, with the path of the rod's midpoint
+    m3 = models.slider_crank_3d(crank=2.0, rod=6.0, height=1.5)
     sol3 = m3.solve(np.linspace(0.0, 1.0, 121))
-    html = draw.viewer(sol3, out / "slider_crank_3d.html", graphics=_spatial_graphics(m3),
-                       default="auto" if note is None else False,
+    html = draw.viewer(sol3, out / "slider_crank_3d.html", default=True,
+                       graphics=[draw.LocusPlot(m3.body("rod").point((3.0, 0.0, 0.0)))],
                        title="mechsys: spatial slider-crank")
     written.append(html)
     print(f"wrote {html} (interactive 3D viewer; open it in any browser)")
-    if note:
-        print(note)
     print("demo outputs: " + ", ".join(str(p) for p in written))
     return 0
 
@@ -80,68 +80,6 @@ def _gif_frames(path: Path) -> int:
 
     with Image.open(path) as im:
         return int(getattr(im, "n_frames", 1))
-
-
-def _spatial_model():
-    """``models.slider_crank_3d()`` when it exists; else a spatial slider-crank written with
-    general ``Constraint`` equations (and a note saying so)."""
-    from . import models
-
-    factory = getattr(models, "slider_crank_3d", None)
-    if factory is not None:
-        return factory(), None
-    return _slider_crank_3d_equations(), (
-        "note: models.slider_crank_3d() is not available yet; the 3D demo uses a spatial "
-        "slider-crank written with general Constraint equations")
-
-
-def _slider_crank_3d_equations(r: float = 2.0, L: float = 6.0, h: float = 1.5,
-                               speed: float = 2 * np.pi):
-    """Crank turning about the global z axis; a rod with ball joints at both ends (its
-    spin about its own axis fixed by keeping its local y axis horizontal); a piston sliding
-    along the line ``y = 0, z = h`` without turning."""
-    import sympy as sp
-
-    from . import Constraint, Model3D, T
-
-    m = Model3D()
-    xr = float(np.sqrt(L**2 - h**2))
-    cr = m.add_body("crank", points={"pin": (r, 0, 0)})
-    rd = m.add_body("rod", points={"a": (0, 0, 0), "b": (L, 0, 0)},
-                    guess=((r, 0, 0), (-float(np.arctan2(h, xr)), (0, 1, 0))))
-    pi = m.add_body("piston", guess=((r + xr, 0, h), (1, 0, 0, 0)))
-    th = speed * T
-    e0, e1, e2, e3 = cr.q[3:]
-    m.add(Constraint([*cr.r, e1, e2, e3 * sp.cos(th / 2) - e0 * sp.sin(th / 2)]), name="drive")
-    m.add(Constraint(list(m.location(cr.point("pin")) - m.location(rd.point("a")))),
-          name="crank ball")
-    m.add(Constraint(list(m.location(rd.point("b")) - m.location(pi.point(0)))),
-          name="wrist ball")
-    m.add(Constraint([(rd.A * sp.Matrix([0, 1, 0]))[2]]), name="rod spin")
-    m.add(Constraint([pi.r[1], pi.r[2] - h, *pi.q[4:]]), name="slider")
-    return m
-
-
-def _spatial_graphics(m):
-    """Solid graphics for the equation-built spatial slider-crank (none for a factory
-    model: its joints draw it)."""
-    from . import draw
-
-    if getattr(__import__("mechsys.models").models, "slider_crank_3d", None) is not None:
-        return [draw.LocusPlot(m.body("rod").point((3, 0, 0)))]
-    joint = "#333333"
-    return [
-        draw.Cylinder("ground", (0, 0, -1.6), (0, 0, -0.8), 0.35, color="#8c8c8c"),
-        draw.Cylinder("crank", (0, 0, -0.8), (0, 0, 0.15), 0.2),
-        draw.Bar("crank", (0, "pin"), width=0.35, thickness=0.2),
-        draw.Sphere("crank", "pin", 0.24, color=joint),
-        draw.Cylinder("rod", "a", "b", 0.13),
-        draw.Sphere("rod", "b", 0.22, color=joint),
-        draw.Box("piston", (-0.7, -0.45, -0.45), (0.7, 0.45, 0.45)),
-        draw.Cylinder("ground", (3.2, 0, 1.5), (9.5, 0, 1.5), 0.08, color="#8c8c8c"),
-        draw.LocusPlot(m.body("rod").point((3, 0, 0))),
-        draw.LocalAxes("crank", size=1.0),
-    ]
 
 
 def main(argv: list[str] | None = None) -> int:
