@@ -288,13 +288,13 @@ for _kind, _k in ((C.RelativeX1, 0), (C.RelativeY1, 1), (C.RelativeZ1, 2)):
 
 @case("RelativeDistance1")
 def _reldist3(rng):
-    s1, s2 = rng.uniform(-1, 1, 3), rng.uniform(-1, 1, 3)
-    m, b1, b2 = _two({"p": s1}, {"p": s2})
-    L = 1.5 + 0.5 * T
-    c = m.add(C.RelativeDistance1(b1.point("p"), b2.point("p"), L))
-    r2, R2, R1 = rng.uniform(-2, 2, 3), _rand_R(rng), _rand_R(rng)
-    p1 = r2 + R2 @ s2 + (1.5 + 0.5 * 0.3) * _rand_unit(rng)
-    return Case(m, c, pose_vector(m, {b1: _pose(p1 - R1 @ s1, R1), b2: _pose(r2, R2)}))
+    s1, q = rng.uniform(-1, 1, 3), rng.uniform(-1, 1, 3)
+    m = Model3D()
+    b1 = m.add_body("b1", points={"p": s1})
+    c = m.add(C.RelativeDistance1(b1.point("p"), tuple(q), 1.5 + 0.5 * T))
+    R1 = _rand_R(rng)
+    p1 = q + (1.5 + 0.5 * 0.3) * _rand_unit(rng)
+    return Case(m, c, pose_vector(m, {b1: _pose(p1 - R1 @ s1, R1)}))
 
 
 @case("Orthogonal1")
@@ -412,33 +412,35 @@ def _poc2_body_axis(rng):
 
 @case("PointAtIntersection3")
 def _pai3(rng):
+    # a ground line through the point where it crosses a Plane on body 3
     s1 = rng.uniform(-1, 1, 3)
     pts = {"a": (0.1, 0.2, 0.3), "b": (1.0, 0.2, 0.5), "c": (0.2, 1.1, -0.1)}
-    m = Model3D()
-    b1, b2, b3 = m.add_body("b1", points={"p": s1}), m.add_body("b2"), m.add_body("b3", points=pts)
-    line = b2.axis(tuple(rng.uniform(-1, 1, 3)), (0, 0, 1))
-    c = m.add(C.PointAtIntersection3(b1.point("p"), line, Plane(b3, "a", "b", "c")))
     r3, R3 = rng.uniform(-1, 1, 3), _rand_R(rng)
     A, B, Cc = (r3 + R3 @ np.array(pts[k]) for k in "abc")
     n = np.cross(B - A, Cc - A)
     p = A + 0.3 * (B - A) + 0.5 * (Cc - A)            # the intersection point, in the plane
-    u = _unit(n + 0.8 * _perp(n, rng))               # line direction, not in the plane
-    pose2 = _place_axis(line, p - 0.9 * u, u, None, rng)
-    return Case(m, c, pose_vector(m, {b1: _put_point(b1, s1, p, rng), b2: pose2,
-                                      b3: _pose(r3, R3)}))
+    u = n + 0.8 * np.linalg.norm(n) * _perp(n, rng)  # line direction, not in the plane
+    m = Model3D()
+    b1, b3 = m.add_body("b1", points={"p": s1}), m.add_body("b3", points=pts)
+    line = m.ground.axis(tuple(p - 0.9 * u), tuple(u))
+    c = m.add(C.PointAtIntersection3(b1.point("p"), line, Plane(b3, "a", "b", "c")))
+    return Case(m, c, pose_vector(m, {b1: _put_point(b1, s1, p, rng), b3: _pose(r3, R3)}))
 
 
 # -- joints between axes ---------------------------------------------------------------------
 
 _axes_case(C.Revolute5, lambda rng, o2, u2, g2: (o2, u2, None))
 _axes_case(C.Cylindrical4, lambda rng, o2, u2, g2: (o2 + rng.uniform(-2, 2) * u2, u2, None))
-_axes_case(C.Translate5, lambda rng, o2, u2, g2: (o2 + rng.uniform(-2, 2) * u2, u2, g2))
+_axes_case(C.Translate5, lambda rng, o2, u2, g2: (o2 + rng.uniform(-2, 2) * u2, u2, g2),
+           variants=(True,))
 _axes_case(C.Translate5, lambda rng, o2, u2, g2: (o2 - 0.7 * u2, u2, g2), refs=True,
            variants=(False,))
 _axes_case(C.Universal4, lambda rng, o2, u2, g2: (o2, _perp(u2, rng), None))
-_axes_case(C.ParaRevolute4, lambda rng, o2, u2, g2: (o2 + 0.6 * _perp(u2, rng), u2, None), (0.6,))
+_axes_case(C.ParaRevolute4, lambda rng, o2, u2, g2: (o2 + 0.6 * _perp(u2, rng), u2, None), (0.6,),
+           variants=(True,))
 _axes_case(C.LineOnCylinder3,
-           lambda rng, o2, u2, g2: (o2 + 0.4 * u2 + 0.7 * _perp(u2, rng), -u2, None), (0.7,))
+           lambda rng, o2, u2, g2: (o2 + 0.4 * u2 + 0.7 * _perp(u2, rng), -u2, None), (0.7,),
+           variants=(True,))
 
 
 def _ortho_place(dist):
@@ -449,7 +451,7 @@ def _ortho_place(dist):
     return place
 
 
-_axes_case(C.OrthoRevolute4, _ortho_place(0.0))
+_axes_case(C.OrthoRevolute4, _ortho_place(0.0), variants=(False,))
 _axes_case(C.OrthoRevolute4, _ortho_place(0.45), (0.45,), variants=(True,))
 
 
@@ -474,7 +476,7 @@ def _line_to_circle(rng, o2, u2, g2):
     return rim - 0.8 * u1, u1, None
 
 
-_axes_case(C.LineToCircle1, _line_to_circle, (0.9,))
+_axes_case(C.LineToCircle1, _line_to_circle, (0.9,), variants=(True,))
 
 
 def _line_to_line(dist):
@@ -486,7 +488,7 @@ def _line_to_line(dist):
     return place
 
 
-_axes_case(C.LineToLine1, _line_to_line(0.0))
+_axes_case(C.LineToLine1, _line_to_line(0.0), variants=(False,))
 _axes_case(C.LineToLine1, _line_to_line(0.55), (0.55,), variants=(True,))
 
 
@@ -497,7 +499,7 @@ def _in_plane(dist):
     return place
 
 
-_axes_case(C.LineToPlane2, _in_plane(0.0))
+_axes_case(C.LineToPlane2, _in_plane(0.0), variants=(True,))
 _axes_case(C.LineToPlane2, _in_plane(0.35), (0.35,), variants=(False,))
 
 
@@ -508,8 +510,8 @@ def _plane_parallel(dist):
     return place
 
 
-_axes_case(C.PlaneToPlane3, _plane_parallel(0.0))
-_axes_case(C.PlaneToPlane3, _plane_parallel(-0.4), (-0.4,), variants=(True,))
+_axes_case(C.PlaneToPlane3, _plane_parallel(0.0), variants=(True,))
+_axes_case(C.PlaneToPlane3, _plane_parallel(-0.4), (-0.4,), variants=(False,))
 _axes_case(C.Planar3, _plane_parallel(0.0), variants=(False,))
 
 
