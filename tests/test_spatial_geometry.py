@@ -209,5 +209,18 @@ def test_spatial_input_errors_name_the_culprit_and_the_fix():
         ms.Model2D().add(ms.Spherical3((0, 0), (1, 0)))
     with pytest.raises(ms.GeometryError, match="this model is 2D"):
         ms.Model2D().add_body("c").vector((1, 0, 0))
-    with pytest.raises(ms.ModelError, match="RotationLock3 body2: expected a body or None"):
-        ms.RotationLock3(b, (0.3, (0, 0, 1)))
+    with pytest.raises(ms.ModelError, match="RotationLock3 body1: expected a body"):
+        ms.RotationLock3((0.3, (0, 0, 1)), b)
+    with pytest.raises(ms.ModelError, match="cannot read"):
+        ms.RotationLock3(b, None, (0.3, 1))
+
+
+def test_rotation_lock3_with_ground_omitted():
+    m = ms.Model3D()
+    b = m.add_body("b", guess=((0, 0, 0), (0.5, (0, 0, 1))))
+    m.add(ms.RotationLock3(b, (0.3 * T, (0, 0, 1)), (0.2, (1, 0, 0))))
+    m.add(ms.OriginLock3(b))
+    sol = m.solve(1.0)
+    e = [sol[f"b.e{k}"] for k in range(4)]
+    R = ms.rotation_matrix([(0.3, (0, 0, 1)), (0.2, (1, 0, 0))])
+    np.testing.assert_allclose(ms.rotation_matrix(e), R, atol=1e-12)

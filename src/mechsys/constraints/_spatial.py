@@ -105,7 +105,8 @@ class RotationLock3(ConstraintBase):
     a rotation. Removes 3 DOF (3D).
 
     ``RotationLock3(body1)``, ``RotationLock3(body1, body2)``,
-    ``RotationLock3(body1, body2, rot1, rot2, ...)`` (``body2=None`` for ground). Each
+    ``RotationLock3(body1, body2, rot1, rot2, ...)``, ``RotationLock3(body1, rot1, ...)``
+    (``body2`` omitted or ``None``: ground). Each
     ``rot`` is ``(angle, (x, y, z))``, Euler parameters or a virtual rotation; angles may be
     expressions of ``T``. As in Mech, ``rot1``'s axis is in ``body2``'s coordinates,
     ``rot2``'s in those coordinates turned by ``rot1``, and so on: ``A_1 = A_2 R_1 R_2 ...``.
@@ -132,9 +133,9 @@ class RotationLock3(ConstraintBase):
 
         if not isinstance(body1, Body):
             raise ModelError(f"RotationLock3 body1: expected a body, got {body1!r}")
-        if body2 is not None and not isinstance(body2, Body):
-            raise ModelError(f"RotationLock3 body2: expected a body or None (ground), got "
-                             f"{body2!r}; rotations come after the second body")
+        if body2 is not None and not isinstance(body2, Body):  # body2 omitted: ground
+            rotations = (body2, *rotations)
+            body2 = None
         self.b1, self.b2 = body1, body2
         q = [sp.S.One, sp.S.Zero, sp.S.Zero, sp.S.Zero]
         for rot in rotations:
