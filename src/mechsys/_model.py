@@ -264,6 +264,13 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         self._touch()
         return new
 
+    def add_graphics(self, *primitives) -> None:
+        """Attach graphics primitives (``mechsys.draw.Bar``, ``Arrow``, ...) used by every
+        picture of this model (same as ``mechsys.draw.attach``)."""
+        from . import draw
+
+        draw.attach(self, *primitives)
+
     # -- loads --------------------------------------------------------------------------
     def add_load(self, load, name: str | None = None):
         """Add a load (``Force``, ``Moment``, ``Gravity``, ``Load``, ``Spring``, ``Damper``,

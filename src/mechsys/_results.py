@@ -158,6 +158,12 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews):
                         model=self.model, iterations=np.zeros(len(tt), dtype=int),
                         scalar=np.ndim(t) == 0, message="interpolated")
 
+    def plot(self, outputs, **kw):
+        """Time histories of outputs (see :func:`mechsys.draw.plot`)."""
+        from . import draw
+
+        return draw.plot(self, outputs, **kw)
+
     def to_dataframe(self):
         """A pandas DataFrame: ``t``, each coordinate, ``<name>_d`` and ``<name>_dd``.
         Needs pandas (optional)."""

@@ -50,6 +50,8 @@ def demo(out: Path) -> int:
     written = [path]
     print(f"wrote {path}")
 
+    written.append(_loads_demo(out))
+
     from . import draw
 
     rod = m.body("rod")
@@ -73,6 +75,46 @@ def demo(out: Path) -> int:
     print(f"wrote {html} (interactive 3D viewer; open it in any browser)")
     print("demo outputs: " + ", ".join(str(p) for p in written))
     return 0
+
+
+def _loads_demo(out: Path) -> Path:
+    """Inverse dynamics of the slider-crank with masses, gravity and a gas force on the
+    piston: the driving torque and the wrist-pin reaction over one revolution."""
+    import matplotlib.pyplot as plt
+    import sympy as sp
+
+    from . import models
+    from ._symbols import T
+
+    # a periodic pressure pulse just after top dead centre
+    gas = -400 * sp.exp((sp.cos(2 * sp.pi * T - 0.4) - 1) / 0.05)
+    m = models.slider_crank_dynamic(piston_force=gas)
+    t = np.linspace(0.0, 1.0, 181)
+    sol = m.solve(t, solution="dynamic")
+    torque = sol.reaction("drive", "crank")[1]
+    pin, _ = sol.reaction("wrist pin", "piston")
+    print("inverse dynamics (masses 1.5 / 2 / 3 kg, gravity, gas force on the piston):")
+    print(f"{'crank [deg]':>12} {'torque [N m]':>14} {'|wrist pin| [N]':>16}")
+    for k in range(0, len(t), 30):
+        print(f"{np.degrees(2 * np.pi * t[k]):12.1f} {torque[k]:14.3f} {np.hypot(*pin[k]):16.3f}")
+    fig, axes = plt.subplots(2, 1, figsize=(7, 5.5), sharex=True)
+    deg = np.degrees(2 * np.pi * t)
+    axes[0].plot(deg, torque)
+    axes[0].set_ylabel("driving torque [N m]")
+    axes[1].plot(deg, pin[:, 0], label="x")
+    axes[1].plot(deg, pin[:, 1], label="y")
+    axes[1].set_ylabel("wrist pin on piston [N]")
+    axes[1].legend()
+    axes[1].set_xlabel("crank angle [deg]")
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+    fig.suptitle("Slider-crank: driving torque and a joint reaction")
+    fig.tight_layout()
+    path = out / "slider_crank_loads.png"
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    print(f"wrote {path}")
+    return path
 
 
 def _gif_frames(path: Path) -> int:

@@ -34,6 +34,26 @@ def slider_crank(crank: float = 2.0, rod: float = 6.0, offset: float = 0.0,
     return m
 
 
+def slider_crank_dynamic(crank: float = 2.0, rod: float = 6.0, speed: float = 2 * np.pi,
+                         masses=(1.5, 2.0, 3.0), inertias=(0.4, 5.0, 0.0), g: float = 9.81,
+                         piston_force=0.0) -> Model2D:
+    """:func:`slider_crank` with mass properties (uniform links: centroids at mid-length;
+    ``inertias`` about the centroids), gravity ``g`` along -Y and a force ``piston_force``
+    (an expression of ``T`` allowed) along +X on the piston, for statics and inverse
+    dynamics (``solve(..., solution="dynamic")``)."""
+    from ._loads import Force, Gravity
+
+    m = slider_crank(crank=crank, rod=rod, speed=speed)
+    for name, mass, c, J in zip(("crank", "rod", "piston"), masses,
+                                ((crank / 2, 0), (rod / 2, 0), (0, 0)), inertias):
+        m.set_mass_properties(name, mass=mass, centroid=c, inertia=J)
+    if g:
+        m.add_load(Gravity((0, -1), g))
+    if piston_force != 0:
+        m.add_load(Force(m.body("piston").point(0), (1, 0), piston_force), name="gas force")
+    return m
+
+
 def four_bar(ground: float = 4.0, crank: float = 1.0, coupler: float = 4.0, rocker: float = 3.0,
              speed: float = 1.0, branch: int = 1, crank_angle=None) -> Model2D:
     """A planar four-bar linkage driven at its crank.

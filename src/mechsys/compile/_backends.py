@@ -78,9 +78,12 @@ class _SymengineCompiled(Compiled):
         try:
             self._f = _se.Lambdify(list(args), list(exprs), backend="llvm", cse=False)
             self.backend = "symengine-llvm"
-        except (ValueError, TypeError, RuntimeError):  # built without LLVM
+        except (ValueError, TypeError, RuntimeError):  # built without LLVM, or unsupported
             self._f = _se.Lambdify(list(args), list(exprs), cse=False)
             self.backend = "symengine-lambda"
+        # the lambda backend may accept what it cannot evaluate: probe once
+        probe = self._f(np.zeros(len(args)))
+        del probe
 
     def __call__(self, x):
         return self._f(np.asarray(x, dtype=float)).reshape(self.nout)
@@ -111,7 +114,17 @@ def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
     if backend == "symengine":
         if _se is None:
             raise ImportError("the symengine backend needs `pip install mechsys[fast]`")
-        return _SymengineCompiled(args, exprs)
+        from ._derive import symengine_safe
+
+        sympy_exprs = [e for e in exprs if isinstance(e, sp.Basic)]
+        if sympy_exprs and not symengine_safe(sympy_exprs):
+            # SymEngine 0.15 crashes on some functions (Mod): keep them with SymPy
+            return _SympyCompiled(args, [sp.sympify(e) for e in exprs])
+        try:
+            return _SymengineCompiled(args, exprs)
+        except (RuntimeError, TypeError, ValueError, NotImplementedError):
+            # a function SymEngine cannot compile (e.g. Mod, Piecewise): SymPy can
+            return _SympyCompiled(args, [sp.sympify(e) for e in exprs])
     if backend == "sympy":
         return _SympyCompiled(args, exprs)
     raise ValueError(f"unknown backend {backend!r}; choose from {available_backends()}")

@@ -24,6 +24,49 @@ except ImportError:  # pragma: no cover
     se = None
 
 
+_SAFE = (sp.sin, sp.cos, sp.tan, sp.exp, sp.log, sp.asin, sp.acos, sp.atan, sp.sinh, sp.cosh,
+         sp.tanh, sp.atan2)
+
+
+def symengine_safe(exprs) -> bool:
+    """Whether SymEngine may differentiate these expressions: only elementary functions
+    (SymEngine 0.15 crashes differentiating ``Mod``; ``Piecewise``, ``floor``, ``sign``...
+    stay with SymPy)."""
+    if se is None:
+        return False
+    for e in exprs:
+        e = sp.sympify(e)
+        if e.has(sp.Mod, sp.Piecewise, sp.floor, sp.ceiling, sp.sign, sp.Abs, sp.Heaviside,
+                 sp.Max, sp.Min, sp.DiracDelta):
+            return False
+        for f in e.atoms(sp.Function):
+            if not isinstance(f, _SAFE):
+                return False
+    return True
+
+
+def _rewrite_steps(e):
+    """``Mod(a, b) -> a - b floor(a/b)`` so SymPy can differentiate it."""
+    return e.replace(lambda x: isinstance(x, sp.Mod), lambda x: x.args[0] - x.args[1] * sp.floor(
+        x.args[0] / x.args[1]))
+
+
+def _drop_step_derivatives(e):
+    """Derivatives of piecewise-constant functions (floor, ceiling, sign) vanish almost
+    everywhere; SymPy leaves them unevaluated (``Subs(Derivative(floor(x), x), ...)``,
+    ``DiracDelta``): set them to zero so the expression can be compiled."""
+    if not e.has(sp.Derivative, sp.Subs, sp.DiracDelta):
+        return e
+    return e.replace(
+        lambda x: (isinstance(x, (sp.Derivative, sp.Subs))
+                   and x.has(sp.floor, sp.ceiling, sp.sign)) or isinstance(x, sp.DiracDelta),
+        lambda x: sp.S.Zero)
+
+
+def _diff(e, s):
+    return _drop_step_derivatives(sp.diff(e, s))
+
+
 def _to_sympy(x):
     return sp.sympify(x) if se is not None and isinstance(x, se.Basic) else x
 
@@ -36,26 +79,27 @@ def derive_kinematics(phi, q, qd, T):
     """
     index = {s: j for j, s in enumerate(q)}
     rows, cols = [], []
-    if se is None:
+    if not symengine_safe(phi):
         jac, phi_t, gamma = [], [], []
         for i, e in enumerate(phi):
+            e = _rewrite_steps(e)
             free = e.free_symbols
             v = sp.S.Zero
             for s in sorted((s for s in free if s in index), key=index.get):
-                d = sp.diff(e, s)
+                d = _diff(e, s)
                 if d != 0:
                     rows.append(i)
                     cols.append(index[s])
                     jac.append(d)
                     v += d * qd[index[s]]
-            et = sp.diff(e, T) if T in free else sp.S.Zero
+            et = _diff(e, T) if T in free else sp.S.Zero
             phi_t.append(et)
             v += et
             fv = v.free_symbols
-            gm = sp.diff(v, T) if T in fv else sp.S.Zero
+            gm = _diff(v, T) if T in fv else sp.S.Zero
             for a, b in zip(q, qd):
                 if a in fv:
-                    gm += sp.diff(v, a) * b
+                    gm += _diff(v, a) * b
             gamma.append(-gm)
         return rows, cols, jac, phi_t, gamma, None
     qs = [se.sympify(s) for s in q]
@@ -96,7 +140,7 @@ def hessian_terms(T_expr, q, qd):
         M_ij = d^2 T / d qd_i d qd_j,   Qv_i = dT/dq_i - sum_j d^2 T / d qd_i d q_j qd_j
     """
     n = len(q)
-    if se is None:
+    if not symengine_safe([T_expr]):
         p = [sp.diff(T_expr, v) for v in qd]
         M = [[sp.diff(p[i], qd[j]) for j in range(n)] for i in range(n)]
         Qv = [sp.diff(T_expr, q[i]) - sum((sp.diff(p[i], sj) * vj for sj, vj in zip(q, qd)),

@@ -89,17 +89,22 @@ class Layout:
 
 def time_derivative(expr, q, qd, qdd=None):
     """Total time derivative ``d/dt f(q, qd, t) = f_q qd + f_qd qdd + f_t`` of a SymPy
-    expression, with ``q``/``qd``/``qdd`` lists of corresponding symbols."""
+    expression, with ``q``/``qd``/``qdd`` lists of corresponding symbols. Piecewise-constant
+    parts (``Mod``'s jumps, ``floor``) differentiate to zero."""
+    from ._derive import _diff, _rewrite_steps
+
     expr = sp.sympify(expr)
+    if expr.has(sp.Mod):
+        expr = _rewrite_steps(expr)
     free = expr.free_symbols
-    out = sp.diff(expr, T) if T in free else sp.S.Zero
+    out = _diff(expr, T) if T in free else sp.S.Zero
     for a, b in zip(q, qd):
         if a in free:
-            out += sp.diff(expr, a) * b
+            out += _diff(expr, a) * b
     if qdd is not None:
         for a, b in zip(qd, qdd):
             if a in free:
-                out += sp.diff(expr, a) * b
+                out += _diff(expr, a) * b
     return out
 
 

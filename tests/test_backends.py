@@ -1,0 +1,44 @@
+"""Numeric backends agree, and functions SymEngine cannot compile fall back to SymPy."""
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import mechsys as ms
+from mechsys import T, models
+from mechsys.compile import available_backends, compile_exprs
+
+
+def test_backends_agree_on_a_model():
+    m = models.four_bar()
+    s = m.compile()
+    lay = s.layout
+    exprs = s.phi + s.jac_exprs + s.gamma
+    rng = np.random.default_rng(2)
+    x = s.pack(0.3, rng.standard_normal(s.n), rng.standard_normal(s.n))
+    vals = {b: compile_exprs(lay.args(), exprs, b)(x) for b in available_backends()}
+    ref = vals["sympy"]
+    for v in vals.values():
+        np.testing.assert_allclose(v, ref, rtol=1e-13, atol=1e-13)
+
+
+def test_unsupported_function_falls_back_to_sympy():
+    x = sp.Symbol("x")
+    f = compile_exprs([T, x], [sp.Mod(T, 1) * x, sp.Piecewise((1, x > 0), (0, True))])
+    np.testing.assert_allclose(f(np.array([2.5, 3.0])), [1.5, 1.0])
+    np.testing.assert_allclose(f.batch(np.array([[2.5, 3.0], [0.2, -1.0]])), [[1.5, 1.0], [-0.2, 0.0]])
+
+
+def test_periodic_driver_with_mod_solves():
+    # a saw-tooth crank driver: theta = 2 pi (T mod 1)
+    m = models.slider_crank(drive=2 * sp.pi * sp.Mod(T, 1))
+    sol = m.solve([0.25, 1.25])
+    np.testing.assert_allclose(sol["piston.x"][0], sol["piston.x"][1], atol=1e-12)
+    assert isinstance(m, ms.Model2D)
+
+
+@pytest.mark.skipif("symengine" not in available_backends(), reason="symengine not installed")
+def test_default_backend_is_symengine_llvm():
+    x = sp.Symbol("x")
+    f = compile_exprs([x], [sp.sin(x)])
+    assert f.backend.startswith("symengine")
