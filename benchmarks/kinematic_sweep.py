@@ -7,22 +7,31 @@ N = 1, 10, 100. Each sweep solves position, velocity and acceleration at every p
 
 Run: ``.venv/bin/python benchmarks/kinematic_sweep.py`` (what ``make bench`` runs) prints the
 tables; ``--write docs/performance.md`` also writes them into that page; ``--quick`` uses
-fewer points and N = 1, 10 only (a smoke run). Timings are wall-clock on whatever machine runs
-it: run it on a quiet machine.
+fewer points and N = 1, 10 only (a smoke run).
+
+Times are CPU time of this process (``time.process_time``), with BLAS limited to one thread:
+on a machine shared with other jobs that is far more repeatable than wall-clock time, and on
+an idle machine the two agree for this single-threaded work.
 """
 
 from __future__ import annotations
 
-import argparse
-import datetime as _dt
 import os
-import platform
-import sys
-import time
-import timeit
-from pathlib import Path
 
-import numpy as np
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")  # before NumPy loads: single-threaded, like the solver
+
+import argparse  # noqa: E402
+import datetime as _dt  # noqa: E402
+import platform  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+import timeit  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+clock = time.process_time
 
 BACKENDS = ("symengine", "sympy")
 
@@ -48,14 +57,14 @@ def sweep_case(case: str, n_loops: int | None, points: int, backend: str,
     os.environ["MECHSYS_BACKEND"] = backend
     try:
         m = _model(case, n_loops)
-        t0 = time.perf_counter()
+        t0 = clock()
         system = m.compile()
-        t1 = time.perf_counter()
+        t1 = clock()
         best = np.inf
         for _ in range(repeat):
-            s0 = time.perf_counter()
+            s0 = clock()
             sol = m.solve(_times(case, points))
-            best = min(best, time.perf_counter() - s0)
+            best = min(best, clock() - s0)
     finally:
         os.environ.pop("MECHSYS_BACKEND", None)
     t2 = t1 + best
@@ -84,12 +93,12 @@ def eval_case(case: str, n_loops: int | None, backend: str) -> dict:
     sol = m.solve(0.3)
     st = sol.state()
     exprs = list(system.phi) + list(system.jac_exprs) + list(system.gamma)
-    t0 = time.perf_counter()
+    t0 = clock()
     f = compile_exprs(system.layout.args(), exprs, backend)
-    compile_s = time.perf_counter() - t0
+    compile_s = clock() - t0
     x = system.pack(st.t, st.q, st.qd)
     f(x)
-    timer = timeit.Timer(lambda: f(x))
+    timer = timeit.Timer(lambda: f(x), timer=clock)
     number, _ = timer.autorange()
     per_call = min(timer.repeat(repeat=5, number=number)) / number
     return {
@@ -165,7 +174,8 @@ PAGE = """\
 <!-- Written by `python benchmarks/kinematic_sweep.py --write docs/performance.md`; rerun it
 rather than editing the tables. -->
 
-Measured on: {machine}.
+Measured on: {machine}. Times are CPU time of the benchmark process (the machine is shared;
+see the script's docstring).
 
 Command: `{command}`.
 
@@ -203,8 +213,9 @@ of that function (no symbolic derivation).
   more slowly than `n` over the sizes measured (exponents above). There the evaluation cost
   shows: SymPy's per-call time grows linearly with the number of outputs, SymEngine's LLVM
   code hardly at all.
-* Compiling is dominated by the symbolic derivation for large models; it happens once per
-  model change (`m.compile()` is cached), and changing parameter values does not recompile.
+* Compiling happens once per model change (`m.compile()` is cached), and changing parameter
+  values does not recompile. For large models most of it is the numeric compile of the
+  solver's three functions rather than the symbolic derivation.
 """
 
 
