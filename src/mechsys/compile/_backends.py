@@ -4,9 +4,11 @@ Every backend returns a :class:`Compiled` object: ``f(x)`` evaluates all express
 argument vector ``x`` (shape ``(nargs,)``) into shape ``(k,)``; ``f.batch(X)`` evaluates at
 many, ``X`` of shape ``(N, nargs)`` into ``(N, k)``.
 
-* ``"symengine"`` – SymEngine's ``Lambdify`` with common-subexpression elimination and the
-  LLVM backend when SymEngine was built with it (the ``fast`` extra). Preferred: see
-  ``docs/decisions/0002-numeric-backend.md`` for the measurement.
+* ``"symengine"`` – SymEngine's ``Lambdify`` with the LLVM backend when SymEngine was built
+  with it (the ``fast`` extra), *without* its common-subexpression elimination (SymEngine
+  0.15's ``cse=True`` returns wrong values; LLVM's optimiser removes repeated work anyway).
+  Preferred: see ``docs/decisions/0002-numeric-backend.md`` for the measurement.
+  Expressions SymEngine cannot compile (``Mod``, ``Piecewise``...) go to SymPy instead.
 * ``"sympy"`` – ``sympy.lambdify`` to NumPy with ``cse=True``; always available.
 """
 

@@ -67,6 +67,10 @@ def _diff(e, s):
     return _drop_step_derivatives(sp.diff(e, s))
 
 
+def to_sympy_list(xs) -> list:
+    return [_to_sympy(x) for x in xs]
+
+
 def _to_sympy(x):
     return sp.sympify(x) if se is not None and isinstance(x, se.Basic) else x
 
@@ -74,8 +78,10 @@ def _to_sympy(x):
 def derive_kinematics(phi, q, qd, T):
     """``(rows, cols, jac, phi_t, gamma, native)`` for equations ``phi``.
 
-    ``jac``, ``phi_t``, ``gamma`` are SymPy lists; ``native`` is ``None`` or a dict of the
-    same as SymEngine expressions (keys ``"phi", "jac", "phi_t", "gamma"``).
+    Without SymEngine, ``jac``, ``phi_t``, ``gamma`` are SymPy lists and ``native`` is
+    ``None``; with it they are ``None`` and ``native`` holds them as SymEngine expressions
+    (keys ``"phi", "jac", "phi_t", "gamma"``), converted to SymPy only when asked
+    (:func:`to_sympy_list`).
     """
     index = {s: j for j, s in enumerate(q)}
     rows, cols = [], []
@@ -129,9 +135,8 @@ def derive_kinematics(phi, q, qd, T):
                 gm += v.diff(a) * b
         n_gm.append(-gm)
     native = {"phi": n_phi, "jac": n_jac, "phi_t": n_pt, "gamma": n_gm}
-    conv = [_to_sympy(x) for x in (n_jac + n_pt + n_gm)]
-    a, b = len(n_jac), len(n_jac) + len(n_pt)
-    return rows, cols, conv[:a], conv[a:b], conv[b:], native
+    # SymPy versions are made lazily (System): 3D gammas can be megabytes of text
+    return rows, cols, None, None, None, native
 
 
 def hessian_terms(T_expr, q, qd):

@@ -216,9 +216,11 @@ class FreeKernel:
         N = n + m
         self.n, self.m, self.N, self.sparse = n, m, N, sparse
         self.dyn = dyn
-        exprs = list(dyn.M_exprs) + list(system.jac_exprs)
-        exprs += [a + b for a, b in zip(dyn.Q, dyn.Qv)] + list(system.gamma)
-        self.k_M, self.k_J = len(dyn.M_exprs), len(system.jac_exprs)
+        jac = system.kinematic_exprs("jac", for_compile=True)
+        gamma = system.kinematic_exprs("gamma", for_compile=True)
+        exprs = list(dyn.M_exprs) + list(jac)
+        exprs += [a + b for a, b in zip(dyn.Q, dyn.Qv)] + list(gamma)
+        self.k_M, self.k_J = len(dyn.M_exprs), len(jac)
         self.f = compile_exprs(dyn.args(), exprs, system.backend)
         rows = np.concatenate((dyn.M_rows, system.jac_cols, n + system.jac_rows))
         cols = np.concatenate((dyn.M_cols, n + system.jac_rows, system.jac_cols))

@@ -132,12 +132,11 @@ class System:
         rows, cols, jac, phi_t, gamma, native = derive_kinematics(self.phi, q, qd, T)
         self.jac_rows = np.array(rows, dtype=int)
         self.jac_cols = np.array(cols, dtype=int)
-        self.jac_exprs = jac
-        self.phi_t = phi_t
-        self.gamma = gamma
+        self._native = native
+        self._sympy = {} if native is not None else {"jac": jac, "phi_t": phi_t, "gamma": gamma}
         args = layout.args()
-        src = native if (native is not None and self.backend == "symengine") else {
-            "phi": self.phi, "jac": jac, "phi_t": phi_t, "gamma": gamma}
+        src = {k: self.kinematic_exprs(k, for_compile=True) for k in ("jac", "phi_t", "gamma")}
+        src["phi"] = native["phi"] if (native is not None and self.backend == "symengine") else self.phi
         self.f_position: Compiled = compile_exprs(args, src["phi"] + src["jac"], self.backend)
         self.f_velocity: Compiled = compile_exprs(args, src["jac"] + src["phi_t"], self.backend)
         self.f_gamma: Compiled = compile_exprs(args, src["gamma"], self.backend)
@@ -149,6 +148,30 @@ class System:
         from ._dynamics import multiplier_symbols
 
         self.lam_symbols = multiplier_symbols(layout)
+
+    def kinematic_exprs(self, key: str, for_compile: bool = False) -> list:
+        """``"jac"`` (nonzero Jacobian entries), ``"phi_t"`` or ``"gamma"``: SymPy lists (made
+        on first use), or, ``for_compile`` with the SymEngine backend, SymEngine lists."""
+        if self._native is not None and for_compile and self.backend == "symengine":
+            return self._native[key]
+        if key not in self._sympy:
+            from ._derive import to_sympy_list
+
+            self._sympy[key] = to_sympy_list(self._native[key])
+        return self._sympy[key]
+
+    @property
+    def jac_exprs(self) -> list:
+        """Nonzero entries of ``Phi_q`` (SymPy), at ``(jac_rows, jac_cols)``."""
+        return self.kinematic_exprs("jac")
+
+    @property
+    def phi_t(self) -> list:
+        return self.kinematic_exprs("phi_t")
+
+    @property
+    def gamma(self) -> list:
+        return self.kinematic_exprs("gamma")
 
     @property
     def dynamics(self):
@@ -171,7 +194,7 @@ class System:
 
     @property
     def nnz(self) -> int:
-        return len(self.jac_exprs)
+        return len(self.jac_rows)
 
     def pack(self, t: float, q, qd=None, p=None) -> np.ndarray:
         n = self.n
