@@ -232,6 +232,8 @@ class FreeSystem:
             res = integrate_adams(rhs, proj, t0, t1, y0, fit_degree, max_error, mode,
                                   step_size, constraint_correction)
             times, Y = res.t, res.y
+            if t_eval is not None and t1 < t0:      # backwards: interpolate on rising times
+                times, Y = times[::-1], Y[::-1]
         else:
             raise MechError(f"unknown method {method!r}; choose from {RK_METHODS + ADAMS_METHODS}")
         QDD = np.empty((len(times), n))

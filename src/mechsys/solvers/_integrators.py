@@ -61,8 +61,9 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
     ev_t, ev_y = [], []
     te = None if t_eval is None else np.asarray(t_eval, dtype=float)
     ie = 0
+    d = 1.0 if t1 >= t0 else -1.0          # direction: t_eval is ordered along it
     if te is not None:
-        while ie < len(te) and te[ie] <= t0:
+        while ie < len(te) and (te[ie] - t0) * d <= 0:
             ev_t.append(te[ie])
             ev_y.append(solver.y.copy())
             ie += 1
@@ -70,9 +71,9 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
         msg = solver.step()
         if solver.status == "failed":
             raise MechError(f"integration failed at t = {solver.t:.6g}: {msg}")
-        if te is not None and ie < len(te) and te[ie] <= solver.t:
+        if te is not None and ie < len(te) and (te[ie] - solver.t) * d <= 0:
             dense = solver.dense_output()
-            while ie < len(te) and te[ie] <= solver.t:
+            while ie < len(te) and (te[ie] - solver.t) * d <= 0:
                 yi = dense(te[ie])
                 ev_t.append(te[ie])
                 ev_y.append(project(te[ie], yi) if correction else yi)
@@ -81,6 +82,7 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
         if correction:
             yp = project(solver.t, solver.y)
             # the stepper keeps the derivative at its current state (FSAL): refresh it
+            # (solver.fun counts this evaluation in solver.nfev)
             solver.y = yp
             solver.f = solver.fun(solver.t, yp)
             extra += 1
@@ -90,19 +92,32 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
     diag = {"step_size": np.array(hs), "step_times": np.array(ts)}
     if te is not None:
         diag["t_eval"] = (np.array(ev_t), np.array(ev_y))
-    return IntegrationResult(np.array(ts), np.array(ys), solver.nfev + extra, len(ts) - 1, 0,
+    diag["projections"] = extra
+    return IntegrationResult(np.array(ts), np.array(ys), solver.nfev, len(ts) - 1, 0,
                              "finished", diag)
 
 
 def _adams_weights(times, t_from, h):
     """Weights w_i with  int_{t_from}^{t_from+h} P(s) ds = sum w_i f_i  for the polynomial
-    P interpolating values at ``times`` (scaled by h for conditioning)."""
-    k = len(times)
-    x = (np.asarray(times) - t_from) / h
-    V = np.vander(x, k, increasing=True)             # P(s) = sum c_j ((s - t_from)/h)^j
-    integ = h / np.arange(1, k + 1)                   # int_0^1 u^j du * h
-    # c = V^-1 f  ->  integral = integ . V^-1 f  ->  weights = V^-T integ
-    return np.linalg.solve(V.T, integ)
+    P interpolating values at ``times`` (scaled by h for conditioning).
+
+    The weights are ``h`` times those of the scaled nodes ``x = (times - t_from) / h``, which
+    repeat while the step is constant (e.g. -3, -2, -1, 0): cached on ``x`` rounded to 1e-9
+    (exact for the rounded nodes; a node moved by 1e-9 h changes the step by ~1e-9 h^2 f',
+    far below any error budget, and constants stay exact)."""
+    key = tuple(round((ti - t_from) / h, 9) for ti in times)
+    w = _WEIGHTS.get(key)
+    if w is None:
+        k = len(key)
+        V = np.vander(np.array(key), k, increasing=True)   # P = sum c_j ((s - t_from)/h)^j
+        # c = V^-1 f  ->  integral = (1/(j+1)) . V^-1 f  ->  weights = V^-T (1/(j+1))
+        w = np.linalg.solve(V.T, 1.0 / np.arange(1, k + 1))
+        if len(_WEIGHTS) < 4096:
+            _WEIGHTS[key] = w
+    return h * w
+
+
+_WEIGHTS: dict = {}
 
 
 def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4,

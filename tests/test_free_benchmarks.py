@@ -1,0 +1,90 @@
+"""Regressions found while benchmarking free motion (benchmarks/free_motion.py,
+benchmarks/energy_drift.py): evaluation counts, backward integration with output times,
+cached Adams weights, and the documented default of ``simulate``."""
+
+import inspect
+
+import numpy as np
+import pytest
+
+import mechsys as ms
+from mechsys._free import FreeSystem
+from mechsys.solvers._integrators import _adams_weights, integrate_adams, integrate_rk
+
+
+def _oscillator():
+    calls = []
+
+    def fun(t, y):
+        calls.append(t)
+        return np.array([y[1], -y[0]])
+
+    return fun, calls
+
+
+@pytest.mark.parametrize("correction", [True, False])
+@pytest.mark.parametrize("method", ["dop853", "rk45"])
+def test_rk_evaluations_count_each_derivative_call_once(method, correction):
+    # the refresh after a projection goes through solver.fun, which SciPy already counts
+    fun, calls = _oscillator()
+    res = integrate_rk(fun, lambda t, y: y, 0.0, 3.0, [1.0, 0.0], method, 1e-8, 1e-10,
+                       correction=correction)
+    assert res.evaluations == len(calls)
+    assert res.diagnostics["projections"] == (res.steps if correction else 0)
+    assert abs(res.y[-1, 0] - np.cos(3.0)) < 1e-6
+
+
+def test_adams_evaluations_count_each_derivative_call_once():
+    fun, calls = _oscillator()
+    res = integrate_adams(fun, lambda t, y: y, 0.0, 3.0, [1.0, 0.0], "cubic", 1e-8,
+                          correction=True)
+    assert res.evaluations == len(calls)
+
+
+def test_adams_weights_are_the_classical_coefficients_and_scale_with_h():
+    # Adams-Bashforth 4 (nodes t-3h .. t) and Adams-Moulton 4 (t-2h .. t+h)
+    for h in (1.0, 1e-3, 0.37):
+        t = 5.0
+        ab = _adams_weights([t - 3 * h, t - 2 * h, t - h, t], t, h)
+        np.testing.assert_allclose(ab, h * np.array([-9, 37, -59, 55]) / 24, rtol=1e-12)
+        am = _adams_weights([t - 2 * h, t - h, t, t + h], t, h)
+        np.testing.assert_allclose(am, h * np.array([1, -5, 19, 9]) / 24, rtol=1e-12)
+    # irregular nodes (after a halving): integrates a cubic exactly
+    nodes, t, h = [0.0, 0.5, 0.75, 1.0], 1.0, 0.25
+    w = _adams_weights(nodes, t, h)
+    f = lambda s: 1 + s - 2 * s**2 + 3 * s**3                        # noqa: E731
+    exact = (lambda s: s + s**2 / 2 - 2 * s**3 / 3 + 3 * s**4 / 4)   # noqa: E731
+    assert abs(w @ f(np.array(nodes)) - (exact(t + h) - exact(t))) < 1e-14
+
+
+def _pendulum():
+    m = ms.Model2D()
+    b = m.add_body("bar", mass=1.0, centroid=(1.0, 0), inertia=0.0, guess=((0, 0), 0.0))
+    m.add(ms.Revolute2(m.ground.point((0, 0)), b.point(0)), name="pivot")
+    m.add(ms.RotationLock1(b, 0.0), name="hold")
+    m.add_load(ms.Gravity((0, -1), 9.81))
+    m.solve(0.0)
+    return m.free(drop=["hold"])
+
+
+@pytest.mark.parametrize("method,opts", [("dop853", {"rtol": 1e-10, "atol": 1e-12}),
+                                         ("rk45", {"rtol": 1e-9, "atol": 1e-11}),
+                                         ("adams", {"max_error": 1e-9, "fit_degree": "quartic"})])
+def test_backward_integration_with_output_times(method, opts):
+    # released from rest, the motion is time-symmetric: theta(-t) = theta(t). Backward output
+    # times used to return the initial state at every time (RK) or fail (Adams).
+    free = _pendulum()
+    t = np.linspace(0.0, 0.6, 7)
+    fwd = free.simulate(t, method=method, **opts)
+    bwd = free.simulate(-t, method=method, **opts)
+    np.testing.assert_allclose(bwd.t, -t)
+    assert np.ptp(bwd["bar.th"]) > 0.5
+    np.testing.assert_allclose(bwd["bar.th"], fwd["bar.th"], atol=1e-6)
+
+
+def test_simulate_default_is_projected_dop853():
+    # decision 0005: the default is DOP853, rtol 1e-8, atol 1e-10, projection on
+    sig = inspect.signature(FreeSystem.simulate)
+    d = {k: v.default for k, v in sig.parameters.items()}
+    assert d["method"] == "dop853" and d["constraint_correction"] is True
+    assert d["rtol"] == 1e-8 and d["atol"] == 1e-10
