@@ -19,6 +19,7 @@ from ._errors import (
     GeometryError,
     MechError,
     ModelError,
+    NearSingularWarning,
     SingularJacobianError,
     UnknownBodyError,
     UnknownConstraintError,
@@ -120,6 +121,7 @@ from .solvers import PositionOptions
 __version__ = "0.1.0"
 
 __all__ = [
+    "NearSingularWarning",
     "PathSystem",
     "GyroFilter",
     "GyroMoment",

@@ -58,3 +58,8 @@ class SingularJacobianError(MechError):
         self.time = time
         self.dependent = dependent or []
         self.rank = rank
+
+
+class NearSingularWarning(UserWarning):
+    """The constraint Jacobian is nearly singular (close to a lock-up or toggle position):
+    velocities and accelerations there are large and sensitive."""

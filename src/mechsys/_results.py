@@ -54,9 +54,10 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews):
         for a in (res.q, res.qd, res.qdd, lam):
             if a is not None:
                 a.setflags(write=False)
+        extra = {} if getattr(res, "rcond", None) is None else {"rcond": res.rcond}
         return cls(t=res.t, q=res.q, qd=res.qd, qdd=res.qdd, p=np.asarray(p), system=system,
                    model=model, iterations=res.iterations, evaluations=res.evaluations,
-                   scalar=scalar, lam=lam, mode=mode)
+                   scalar=scalar, lam=lam, mode=mode, extra=extra)
 
     def __len__(self) -> int:
         return len(self.t)

@@ -11,11 +11,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._errors import SingularJacobianError
+from .._errors import ConvergenceError, SingularJacobianError
 from ._linalg import SPARSE_THRESHOLD, Singular, factor
 from ._position import PositionOptions, describe_singular, solve_position
 
 ORDERS = {"location": 0, "velocity": 1, "acceleration": 2}
+
+#: below this reciprocal condition number of Phi_q a sweep warns (near a toggle position)
+RCOND_WARN = 1e-6
 
 
 def solve_velocity(system, t: float, q, p=None) -> np.ndarray:
@@ -50,6 +53,7 @@ class SweepResult:
     iterations: np.ndarray
     evaluations: int
     order: int
+    rcond: np.ndarray | None = None
 
 
 def sweep(system, times, guess, order: int = 2, options: PositionOptions | None = None,
@@ -63,6 +67,7 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
     QD = np.empty((N, n)) if order >= 1 else None
     QDD = np.empty((N, n)) if order >= 2 else None
     its = np.zeros(N, dtype=int)
+    rconds = np.full(N, np.nan) if order >= 1 else None
     evals = 0
     q_prev = np.asarray(guess, dtype=float)
     qd_prev = qdd_prev = None
@@ -74,7 +79,14 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
             g = q_prev + qd_prev * dt
             if qdd_prev is not None:
                 g = g + 0.5 * qdd_prev * dt * dt
-        res = solve_position(system, t, g, options, p)
+        try:
+            res = solve_position(system, t, g, options, p)
+        except (ConvergenceError, SingularJacobianError):
+            if g is q_prev:
+                raise
+            # the Taylor predictor can throw the guess far away where velocities are huge
+            # (near a toggle): start again from the previous position
+            res = solve_position(system, t, q_prev, options, p)
         q = res.q
         its[k] = res.iterations
         evals += res.evaluations
@@ -90,6 +102,7 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
                     dependent=err.dependent, rank=err.rank) from None
             qd = fac.solve(rhs)
             QD[k] = qd
+            rconds[k] = fac.rcond
             evals += 1
             if order >= 2:
                 qdd = fac.solve(system.gamma_values(t, q, qd, p))
@@ -100,4 +113,15 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
         else:
             qd = qdd = None
         q_prev, qd_prev, qdd_prev, t_prev = q, qd, qdd, t
-    return SweepResult(times, Q, QD, QDD, its, evals, order)
+    if rconds is not None and np.nanmin(rconds, initial=1.0) < RCOND_WARN:
+        import warnings
+
+        from .._errors import NearSingularWarning
+
+        bad = times[rconds < RCOND_WARN]
+        warnings.warn(NearSingularWarning(
+            f"the constraint Jacobian is nearly singular at {len(bad)} time point(s), first at "
+            f"t = {bad[0]:.6g} (reciprocal condition {np.nanmin(rconds):.1e}): the mechanism is "
+            "close to a lock-up or toggle position; velocities and accelerations there are large "
+            "and sensitive. Solution.extra['rcond'] has the value at every point."), stacklevel=3)
+    return SweepResult(times, Q, QD, QDD, its, evals, order, rconds)

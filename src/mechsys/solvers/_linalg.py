@@ -39,6 +39,8 @@ class Factor:
             d = np.abs(self._lu.U.diagonal())
             if d.min() <= RCOND_MIN * d.max():
                 raise Singular("tiny pivot")
+            # pivot ratio: a cheap (optimistic) stand-in for the reciprocal condition number
+            rcond = float(d.min() / d.max()) if d.size else 1.0
         else:
             J = np.asarray(J, dtype=float)
             if J.shape[0] != J.shape[1]:
@@ -53,7 +55,8 @@ class Factor:
             if rcond < RCOND_MIN:
                 raise Singular(f"reciprocal condition {rcond:.2e}")
             self._lu, self._piv = lu, piv
-        self.rcond = None
+        #: estimate of the reciprocal condition number (1-norm; pivot ratio when sparse)
+        self.rcond = float(rcond)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         if self.sparse:
