@@ -66,3 +66,24 @@ def test_friction_too_large_reports_clearly():
     with pytest.raises(ms.MechError) as exc:
         m.solve(0.2, solution="dynamic")
     assert "lambda" in str(exc.value).lower() or "friction" in str(exc.value).lower()
+
+
+def test_spherical_joint_friction_3d():
+    """A ball joint carrying a vertical load W while the body spins about Z at w: the spin
+    driver must supply mu r W against friction (no other moment about Z)."""
+    import sympy as sp
+
+    mu, r, W = 0.3, 0.02, 500.0
+    m = ms.Model3D()
+    b = m.add_body("ball", guess=((0, 0, 0), (1, 0, 0, 0)))
+    x, y, z, e0, e1, e2, e3 = b.q
+    ball = m.add(ms.Spherical3(b.point(0), m.ground.point((0, 0, 0))), name="ball")
+    m.add(ms.Constraint([e1, e2]), name="upright")
+    m.add(ms.Constraint([e3 - sp.sin(2.0 * T / 2)]), name="spin")
+    m.add_load(ms.Force(b.point(0), (0, 0, -1), W))
+    m.add_load(ms.JointFriction(ball, mu=mu, radius=r, v_eps=1e-6))
+    sol = m.solve(np.linspace(0.1, 1.0, 4), solution="kinematic")
+    _, Mspin = sol.reaction("spin", "ball", at=(0, 0, 0))
+    np.testing.assert_allclose(Mspin[:, 2], mu * r * W, rtol=1e-8)
+    F, _ = sol.reaction("ball", "ball")
+    np.testing.assert_allclose(F, np.tile([0, 0, W], (4, 1)), atol=1e-8)
