@@ -24,6 +24,8 @@ or attach them to the model once: ``ms.draw.attach(m, ms.draw.Bar(...))``.
 
 from __future__ import annotations
 
+import numpy as np
+
 from ._animate import Animation, ffmpeg_available
 from ._default import Skeleton
 from ._eval import STYLE_KEYS, Item
@@ -75,6 +77,18 @@ def overlay(solution, graphics=None, frames=6, default="auto", **kw):
     return scene.overlay(sol, frames=frames, **kw)
 
 
+def ReactionArrow(constraint, body, point=None, scale="auto", **style) -> Arrow:
+    """An arrow of the force that ``constraint`` applies to ``body`` (from a static,
+    kinematic or dynamic solution), drawn ending at ``point`` (default the body origin)
+    so it pushes on it. ``scale="auto"`` sizes the largest to a quarter of the picture."""
+
+    def force(sol):
+        return np.asarray(sol.reaction(constraint, body)[0])
+
+    return Arrow(point if point is not None else body.point(0), force, scale=scale,
+                 anchor="head", **style)
+
+
 def animate(solution, path=None, graphics=None, default="auto", **kw):
     """Animate a solution: an :class:`Animation`, or with ``path`` (``.gif``, ``.mp4``,
     ``.html``) the written file. See :meth:`Scene.animate` for timing options."""
@@ -90,6 +104,7 @@ def viewer(solution, path=None, graphics=None, default="auto", **kw):
 
 
 __all__ = [
+    "ReactionArrow",
     "STYLE_KEYS",
     "Animation",
     "Arrow",
