@@ -27,9 +27,8 @@ from ._errors import (
 )
 from ._free import FreeSystem
 from ._friction import JointFriction
-from ._gyro import GyroFilter, GyroMoment, gyro_filter
-from ._path import PathSystem
 from ._geometry import Axis, Line, Plane, Point, Vector, reference_direction
+from ._gyro import GyroFilter, GyroMoment, gyro_filter
 from ._inertia import (
     CompositeInertia,
     ParallelAxis,
@@ -40,6 +39,7 @@ from ._inertia import (
 )
 from ._loads import Damper, Force, Gravity, Load, LoadBase, Moment, Spring
 from ._model import DOF, Model, Model2D, Model3D
+from ._path import PathSystem
 from ._results import Solution, State
 from ._rotations import (
     CylindricalToXYZ,

@@ -16,7 +16,9 @@ class Constraint(ConstraintBase):
 
     ``Constraint(equations, variables={s: guess})``; an equation may be an expression (``= 0``)
     or a SymPy ``Eq``. ``Constraint([], {s: guess})`` only introduces ``s`` (Mech's
-    ``Constraint[cnum, {}, {s, guess}]``): it *adds* one degree of freedom. Example, a point on the parabola ``y = x^2`` with its x as new variable::
+    ``Constraint[cnum, {}, {s, guess}]``): it *adds* one degree of freedom.
+
+    Example, a point on the parabola ``y = x^2`` with its x as new variable::
 
         s = sp.Symbol("s")
         p = body.point("pin")
