@@ -34,6 +34,17 @@ def test_rk_evaluations_count_each_derivative_call_once(method, correction):
     assert abs(res.y[-1, 0] - np.cos(3.0)) < 1e-6
 
 
+@pytest.mark.parametrize("method,stages", [("dop853", 12), ("rk45", 6)])
+def test_rk_reports_rejected_steps(method, stages):
+    # a far too large first step must be rejected (it was always reported as 0); each attempt
+    # costs `stages` evaluations, plus the initial one and one refresh per projection
+    fun, calls = _oscillator()
+    res = integrate_rk(fun, lambda t, y: y, 0.0, 3.0, [1.0, 0.0], method, 1e-10, 1e-12,
+                       first_step=2.5)
+    assert res.rejected >= 1
+    assert res.evaluations == 1 + stages * (res.steps + res.rejected) + res.steps
+
+
 def test_adams_evaluations_count_each_derivative_call_once():
     fun, calls = _oscillator()
     res = integrate_adams(fun, lambda t, y: y, 0.0, 3.0, [1.0, 0.0], "cubic", 1e-8,

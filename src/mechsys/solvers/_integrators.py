@@ -67,10 +67,14 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
             ev_t.append(te[ie])
             ev_y.append(solver.y.copy())
             ie += 1
+    rejected = 0
     while solver.status == "running":
+        before = solver.nfev
         msg = solver.step()
         if solver.status == "failed":
             raise MechError(f"integration failed at t = {solver.t:.6g}: {msg}")
+        # every attempt costs n_stages evaluations (FSAL); more than one attempt: rejections
+        rejected += max((solver.nfev - before) // solver.n_stages - 1, 0)
         if te is not None and ie < len(te) and (te[ie] - solver.t) * d <= 0:
             dense = solver.dense_output()
             while ie < len(te) and (te[ie] - solver.t) * d <= 0:
@@ -93,7 +97,7 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
     if te is not None:
         diag["t_eval"] = (np.array(ev_t), np.array(ev_y))
     diag["projections"] = extra
-    return IntegrationResult(np.array(ts), np.array(ys), solver.nfev, len(ts) - 1, 0,
+    return IntegrationResult(np.array(ts), np.array(ys), solver.nfev, len(ts) - 1, rejected,
                              "finished", diag)
 
 
