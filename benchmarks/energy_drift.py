@@ -15,7 +15,7 @@ in percent of the largest kinetic energy over the run. For the pendulum it is al
 relative to the total energy |E(0)| (gravity potential with the datum at the rope's
 anchors, y = 0), since the manual does not say which it used; the largest deviation
 max |E - E(0)| is listed too. CPU time: ``time.process_time`` of one ``free.simulate`` call
-(best of three), compilation excluded.
+(best of five), compilation excluded.
 
 Run: ``.venv/bin/python benchmarks/energy_drift.py`` prints the tables;
 ``--write docs/free_motion.md`` replaces the section between the markers
@@ -185,7 +185,7 @@ def tables(pend, gy, loops) -> str:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--write", metavar="PATH", help="update the marked section of this page")
-    ap.add_argument("--repeat", type=int, default=3, help="repeats per run (best of)")
+    ap.add_argument("--repeat", type=int, default=5, help="repeats per run (best of)")
     args = ap.parse_args(argv)
     print("pendulum on a rope, 4.5 s", flush=True)
     pend = pendulum(args.repeat)

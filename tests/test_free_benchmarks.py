@@ -3,6 +3,8 @@ benchmarks/energy_drift.py): evaluation counts, backward integration with output
 cached Adams weights, and the documented default of ``simulate``."""
 
 import inspect
+import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -99,3 +101,16 @@ def test_simulate_default_is_projected_dop853():
     d = {k: v.default for k, v in sig.parameters.items()}
     assert d["method"] == "dop853" and d["constraint_correction"] is True
     assert d["rtol"] == 1e-8 and d["atol"] == 1e-10
+
+
+def test_free_motion_page_code_runs():
+    # the ```python blocks of docs/free_motion.md, in order, in one namespace
+    text = (Path(__file__).resolve().parents[1] / "docs" / "free_motion.md").read_text()
+    blocks = re.findall(r"^```python[ \t]*\n(.*?)^```[ \t]*$", text, re.M | re.S)
+    assert len(blocks) >= 3
+    ns: dict = {}
+    for code in blocks:
+        exec(compile(code, "docs/free_motion.md", "exec"), ns)  # noqa: S102
+    assert abs(np.tan(ns["eq"]["bar.th"]) - (1 - 9.81 / 40)) < 1e-9
+    assert np.ptp(ns["E"]) < 1e-6
+    assert ns["mech"].extra["method"] == "adams"
