@@ -23,7 +23,22 @@ def _body_of(obj, what: str):
     raise ModelError(f"{what}: expected a body (from model.add_body or model.ground), got {obj!r}")
 
 
-class Revolute2(ConstraintBase):
+class Coincident(ConstraintBase):
+    """Two points coincide (``r_1 - r_2 = 0``): the shared body of ``Revolute2`` (2D) and
+    ``Spherical3`` (3D)."""
+
+    def __init__(self, point1, point2):
+        super().__init__()
+        self.p1, self.p2 = as_point(point1), as_point(point2)
+
+    def geometry(self):
+        return [self.p1, self.p2]
+
+    def _build(self, space):
+        return P.coincident(self.p1, self.p2)
+
+
+class Revolute2(Coincident):
     r"""Pin joint: two points coincide. Removes 2 DOF (2D).
 
     ``Revolute2(point1, point2)``::
@@ -35,16 +50,6 @@ class Revolute2(ConstraintBase):
     mech_name = "Revolute2"
     dof_removed = 2
     spaces = ("planar",)
-
-    def __init__(self, point1, point2):
-        super().__init__()
-        self.p1, self.p2 = as_point(point1), as_point(point2)
-
-    def geometry(self):
-        return [self.p1, self.p2]
-
-    def _build(self, space):
-        return P.coincident(self.p1, self.p2)
 
 
 class Translate2(ConstraintBase):

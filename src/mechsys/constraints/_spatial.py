@@ -24,7 +24,7 @@ from .._rotations import quaternion_inverse, quaternion_product
 from . import _primitives as P
 from ._angles import angle_equation, angle_frame, vector_norm
 from ._base import ConstraintBase, as_expr
-from ._planar import OriginLock2, _RelativeCoordinate
+from ._planar import Coincident, OriginLock2, _RelativeCoordinate
 
 
 def _nonzero(value, what: str, use: str) -> sp.Expr:
@@ -53,7 +53,7 @@ class _TwoAxes(ConstraintBase):
 # -- points and bodies -----------------------------------------------------------------------
 
 
-class Spherical3(ConstraintBase):
+class Spherical3(Coincident):
     r"""Ball joint: two points coincide. Removes 3 DOF (3D).
 
     ``Spherical3(point1, point2)``::
@@ -66,16 +66,6 @@ class Spherical3(ConstraintBase):
     mech_name = "Spherical3"
     dof_removed = 3
     spaces = ("spatial",)
-
-    def __init__(self, point1, point2):
-        super().__init__()
-        self.p1, self.p2 = as_point(point1), as_point(point2)
-
-    def geometry(self):
-        return [self.p1, self.p2]
-
-    def _build(self, space):
-        return P.coincident(self.p1, self.p2)
 
 
 class OriginLock3(OriginLock2):
