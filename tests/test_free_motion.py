@@ -168,3 +168,29 @@ def test_spherical_pendulum_conserves_energy_and_vertical_momentum():
     H = 2.0 * np.cross(rc, vc) + np.einsum("nij,jk,nlk,nl->ni", A, Jc, A, w)
     assert np.ptp(H[:, 2]) < 1e-7 * np.abs(H).max()
     assert np.ptp(H[:, 0]) > 1e-2            # the other components do change
+
+
+def test_acceleration_dependent_load_acts_as_added_mass():
+    """A load -m_a a_P at the bob (added mass, depending on accelerations) makes the free
+    pendulum move like one of mass m + m_a under the weight of m alone."""
+    L, m0, ma, g = 1.2, 2.0, 0.5, 9.81
+    m = ms.Model2D()
+    b = m.add_body("bar", mass=m0, centroid=(L, 0), inertia=0.0, guess=((0, 0), -0.3))
+    m.add(ms.Revolute2(m.ground.point((0, 0)), b.point(0)), name="pivot")
+    m.add(ms.RotationLock1(b, -0.3), name="hold")
+    m.add_load(ms.Gravity((0, -1), g))
+    acc = m.acceleration(b.point((L, 0)))
+    m.add_load(ms.Force(b.point((L, 0)), -ma * acc, mode="relative"))
+    m.solve(0.0)
+    free = m.free(drop=["hold"])
+    assert free.system.dynamics.depends_on_qdd and free.linear
+    for th, w in ((-0.3, 0.0), (0.4, 1.5), (-2.0, -0.7)):
+        s = free.solve(0.0, initial_condition={"bar.th": th, "bar.x": 0, "bar.y": 0,
+                                               "bar.th_d": w})
+        expected = -m0 * g * L * np.cos(th) / ((m0 + ma) * L**2)
+        assert s.coordinate("bar.th", 2) == pytest.approx(expected, rel=1e-10)
+    sol = free.simulate((0.0, 1.0), rtol=1e-10, atol=1e-12)
+    # energy of the equivalent system (kinetic of m + m_a, potential of m) is conserved
+    th, w = sol["bar.th"], sol.coordinate("bar.th", 1)
+    E = 0.5 * (m0 + ma) * (L * w) ** 2 + m0 * g * L * np.sin(th)
+    assert np.ptp(E) < 1e-8

@@ -66,6 +66,8 @@ class FreeSystem:
         dyn = self.system.dynamics
         if dyn.depends_on_lambda:
             return False
+        if self.kind == "dynamic" and dyn.depends_on_qdd and not dyn.linear_in_qdd:
+            return False
         if self.kind == "kinematic":
             qd = set(self.system.layout.qd_symbols)
             return all(not (e.free_symbols & qd) or e.as_poly(*(e.free_symbols & qd)).is_linear

@@ -142,6 +142,13 @@ class Dynamics:
         lamset = set(self.lam)
         self.depends_on_lambda = any(e.free_symbols & lamset for e in self.Q)
         self.depends_on_qd = any(e.free_symbols & set(lay.qd_symbols) for e in self.Q)
+        qddset = set(lay.qdd_symbols)
+        #: loads that depend on accelerations (added mass, inertial couplings): free
+        #: accelerations are then found by Newton on (qdd, lambda)
+        self.depends_on_qdd = any(e.free_symbols & qddset for e in self.Q)
+        self.linear_in_qdd = all(
+            sp.diff(e, a, b) == 0 for e in self.Q if e.free_symbols & qddset
+            for a in (e.free_symbols & qddset) for b in (e.free_symbols & qddset))
         args = self.args()
         allowed = set(args)
         for i, e in enumerate(self.Q):
@@ -152,19 +159,26 @@ class Dynamics:
                 raise ModelError(
                     f"the applied force on coordinate {lay.q_names[i]} uses unknown symbol(s) "
                     f"{sorted(map(str, extra))}; loads may use T, coordinates, velocities, "
-                    "parameters and constraint multipliers")
+                    "accelerations, parameters and constraint multipliers")
         self.f_terms = compile_exprs(args, list(vals) + list(self.Q) + self.Qv, system.backend)
         self._kernel = None
         if self.depends_on_lambda:
-            dr, dc, dv = [], [], []
-            for i, e in enumerate(self.Q):
-                for j, lj in enumerate(self.lam):
-                    if lj in e.free_symbols:
-                        dr.append(i)
-                        dc.append(j)
-                        dv.append(sp.diff(e, lj))
-            self.dQ_rows, self.dQ_cols = np.array(dr, dtype=int), np.array(dc, dtype=int)
-            self.f_dQ_dlam = compile_exprs(args, dv, system.backend)
+            self.dQ_rows, self.dQ_cols, self.f_dQ_dlam = self._sparse_derivative(self.lam, args)
+        if self.depends_on_qdd:
+            self.dA_rows, self.dA_cols, self.f_dQ_dqdd = self._sparse_derivative(
+                lay.qdd_symbols, args)
+
+    def _sparse_derivative(self, wrt, args):
+        """Rows, columns and compiled values of the nonzero ``dQ_i / d wrt_j``."""
+        dr, dc, dv = [], [], []
+        for i, e in enumerate(self.Q):
+            for j, w in enumerate(wrt):
+                if w in e.free_symbols:
+                    dr.append(i)
+                    dc.append(j)
+                    dv.append(sp.diff(e, w))
+        return (np.array(dr, dtype=int), np.array(dc, dtype=int),
+                compile_exprs(args, dv, self.system.backend))
 
     def free_kernel(self, sparse: bool = False) -> FreeKernel:
         """The compiled augmented system of free motion (built once, cached)."""
@@ -174,25 +188,36 @@ class Dynamics:
 
     def args(self) -> list:
         lay = self.system.layout
-        return [T, *lay.q_symbols, *lay.qd_symbols, *self.lam, *lay.p_symbols]
+        return [T, *lay.q_symbols, *lay.qd_symbols, *self.lam, *lay.p_symbols, *lay.qdd_symbols]
 
-    def pack(self, t, q, qd, lam, p) -> np.ndarray:
-        return np.concatenate(([t], q, qd, lam, p))
-
-    def terms(self, t, q, qd, lam, p):
-        """``(M (n, n) dense, Q (n,), Qv (n,))`` at one state."""
+    def pack(self, t, q, qd, lam, p, qdd=None) -> np.ndarray:
         n = self.system.n
-        out = self.f_terms(self.pack(t, q, qd, lam, p))
+        return np.concatenate(([t], q, qd, lam, p, np.zeros(n) if qdd is None else qdd))
+
+    def terms(self, t, q, qd, lam, p, qdd=None):
+        """``(M (n, n) dense, Q (n,), Qv (n,))`` at one state (``qdd`` only matters for
+        acceleration-dependent loads)."""
+        n = self.system.n
+        out = self.f_terms(self.pack(t, q, qd, lam, p, qdd))
         k = len(self.M_exprs)
         M = np.zeros((n, n))
         np.add.at(M, (self.M_rows, self.M_cols), out[:k])
         return M, out[k : k + n], out[k + n :]
 
-    def dQ_dlam(self, t, q, qd, lam, p) -> np.ndarray:
+    def dQ_dlam(self, t, q, qd, lam, p, qdd=None) -> np.ndarray:
         n, m = self.system.n, self.system.m
         D = np.zeros((n, m))
         if self.depends_on_lambda:
-            np.add.at(D, (self.dQ_rows, self.dQ_cols), self.f_dQ_dlam(self.pack(t, q, qd, lam, p)))
+            np.add.at(D, (self.dQ_rows, self.dQ_cols),
+                      self.f_dQ_dlam(self.pack(t, q, qd, lam, p, qdd)))
+        return D
+
+    def dQ_dqdd(self, t, q, qd, lam, p, qdd=None) -> np.ndarray:
+        n = self.system.n
+        D = np.zeros((n, n))
+        if self.depends_on_qdd:
+            np.add.at(D, (self.dA_rows, self.dA_cols),
+                      self.f_dQ_dqdd(self.pack(t, q, qd, lam, p, qdd)))
         return D
 
     def mass_matrix_sparse(self, vals):
@@ -221,6 +246,7 @@ class FreeKernel:
         exprs = list(dyn.M_exprs) + list(jac)
         exprs += [a + b for a, b in zip(dyn.Q, dyn.Qv)] + list(gamma)
         self.k_M, self.k_J = len(dyn.M_exprs), len(jac)
+        self._zeros = np.zeros(n)
         self.f = compile_exprs(dyn.args(), exprs, system.backend)
         rows = np.concatenate((dyn.M_rows, system.jac_cols, n + system.jac_rows))
         cols = np.concatenate((dyn.M_cols, n + system.jac_rows, system.jac_cols))
@@ -236,7 +262,7 @@ class FreeKernel:
             self._flat = rows * N + cols
 
     def __call__(self, t, q, qd, lam, p):
-        out = self.f(np.concatenate(([t], q, qd, lam, p)))
+        out = self.f(np.concatenate(([t], q, qd, lam, p, self._zeros)))
         kk = self.k_M + self.k_J
         vals = out[:kk]
         rhs = out[kk:]

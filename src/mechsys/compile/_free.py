@@ -50,7 +50,7 @@ class StaticEquilibrium(_Residual):
     def __init__(self, system):
         lay, dyn = system.layout, system.dynamics
         n = lay.n
-        zero = dict.fromkeys(lay.qd_symbols, 0)
+        zero = dict.fromkeys(lay.qd_symbols + lay.qdd_symbols, 0)
         R = list(system.phi)
         G = [sp.S.Zero] * n
         for i, j, e in zip(system.jac_rows, system.jac_cols, system.jac_exprs):
@@ -74,7 +74,8 @@ class VelocityEquilibrium(_Residual):
         G = [sp.S.Zero] * n
         for i, j, e in zip(system.jac_rows, system.jac_cols, system.jac_exprs):
             G[j] += e * system.lam_symbols[i]
-        R += [G[j] - dyn.Q[j] for j in range(n)]
+        at_rest = dict.fromkeys(lay.qdd_symbols, 0)      # an equilibrium does not accelerate
+        R += [G[j] - dyn.Q[j].subs(at_rest) for j in range(n)]
         args = [T, *lay.q_symbols, *lay.qd_symbols, *system.lam_symbols, *lay.p_symbols]
         super().__init__(system, R, list(lay.qd_symbols) + list(system.lam_symbols), args)
 

@@ -47,7 +47,7 @@ def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterat
     """``(qdd (n,), lambda (m,), iterations)`` of a free system at ``(t, q, qd)``."""
     dyn = system.dynamics
     n, m = system.n, system.m
-    if not dyn.depends_on_lambda:
+    if not (dyn.depends_on_lambda or dyn.depends_on_qdd):
         kern = dyn.free_kernel(n + m > SPARSE_THRESHOLD)
         K, rhs = kern(t, q, qd, _ZERO_LAM.get(m) if m in _ZERO_LAM else _zeros(m), p)
         try:
@@ -58,24 +58,26 @@ def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterat
     J = system.jacobian(t, q, p)
     g = system.gamma_values(t, q, qd, p)
     lam = np.ones(m) if lam_guess is None else np.array(lam_guess, dtype=float)
-    Mm, Q, Qv = dyn.terms(t, q, qd, lam, p)
     qdd = np.zeros(n)
+    Mm, Q, Qv = dyn.terms(t, q, qd, lam, p, qdd)
     for it in range(1, max_iterations + 1):
         r1 = Mm @ qdd + J.T @ lam - Q - Qv
         r2 = J @ qdd - g
         err = max(np.abs(r1).max(initial=0), np.abs(r2).max(initial=0))
         if err <= tol * (1 + np.abs(Q).max(initial=0)) and it > 1:
             return qdd, lam, it - 1
-        D = dyn.dQ_dlam(t, q, qd, lam, p)
+        D = dyn.dQ_dlam(t, q, qd, lam, p, qdd)
+        Meff = Mm - dyn.dQ_dqdd(t, q, qd, lam, p, qdd)
         try:
-            dx = factor(_augmented(Mm, J, D)).solve(-np.concatenate((r1, r2)))
+            dx = factor(_augmented(Meff, J, D)).solve(-np.concatenate((r1, r2)))
         except Singular:
             raise _singular_free(system, J, t, q) from None
         qdd, lam = qdd + dx[:n], lam + dx[n:]
-        Mm, Q, Qv = dyn.terms(t, q, qd, lam, p)
+        Mm, Q, Qv = dyn.terms(t, q, qd, lam, p, qdd)
     raise ConvergenceError(
-        f"free acceleration at t = {t:.6g}: the multiplier-dependent loads (friction) did not "
-        f"converge in {max_iterations} iterations (residual {err:.3e}); try lambda_guess=.",
+        f"free acceleration at t = {t:.6g}: the loads that depend on multipliers (friction) or "
+        f"accelerations did not converge in {max_iterations} iterations (residual {err:.3e}); "
+        "try lambda_guess=.",
         time=t)
 
 

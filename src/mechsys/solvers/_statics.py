@@ -48,8 +48,10 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
     except Singular:
         raise describe_singular(system, J, t, q, f"{mode} load solve") from None
 
+    qdd_eff = qdd if mode == "dynamic" else None
+
     def rhs(lam):
-        M, Q, Qv = dyn.terms(t, q, qd_eff, lam, p)
+        M, Q, Qv = dyn.terms(t, q, qd_eff, lam, p, qdd_eff)
         if mode == "dynamic":
             return Q + Qv - M @ qdd
         return Q
@@ -64,7 +66,7 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
         history.append(err)
         if err <= opt.tol * (1 + np.abs(b).max()):
             return lam, it - 1
-        K = J.T - dyn.dQ_dlam(t, q, qd_eff, lam, p)
+        K = J.T - dyn.dQ_dlam(t, q, qd_eff, lam, p, qdd_eff)
         try:
             lam = lam - factor(K).solve(R)
         except Singular:
