@@ -35,14 +35,13 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")  # before NumPy loads: CPU time of one thread, repeatable
 
 import argparse  # noqa: E402
-import datetime as _dt  # noqa: E402
-import platform  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
+from _machine import machine  # noqa: E402  (sibling module: run as a script)
 
 G = 9.81
 
@@ -390,30 +389,6 @@ def chain_case(n_links, t_end, quick, repeat):
 # ---------------------------------------------------------------------------------------
 # report
 # ---------------------------------------------------------------------------------------
-def _env() -> str:
-    import numpy
-    import scipy
-    import sympy
-
-    try:
-        import symengine
-
-        se = f", SymEngine {symengine.__version__}"
-    except ImportError:
-        se = ""
-    cpu = platform.processor() or platform.machine()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return (f"{_dt.date.today().isoformat()}; {cpu}, {os.cpu_count()} cores (shared with other "
-            f"jobs); Python {platform.python_version()}, NumPy {numpy.__version__}, SciPy "
-            f"{scipy.__version__}, SymPy {sympy.__version__}{se}")
-
-
 def _grid_table(rows, with_gap=False):
     head = "| setting | projection | CPU [s] | steps | evaluations | rejected | error |"
     sep = "| --- | --- | ---: | ---: | ---: | ---: | ---: |"
@@ -484,7 +459,7 @@ def report(res, quick) -> str:
     L = ["# Free-motion performance", "",
          "<!-- Written by `python benchmarks/free_motion.py --write docs/performance-free.md`;",
          "rerun it rather than editing the tables. -->", "",
-         f"Measured on: {_env()}.", "",
+         f"Measured on: {machine()}.", "",
          f"Command: `python benchmarks/free_motion.py{' --quick' if quick else ''} --write "
          "docs/performance-free.md`.", "",
          "CPU time is `time.process_time` of one `free.simulate((0, t_end), ...)` call, the best "

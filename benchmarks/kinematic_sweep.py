@@ -22,14 +22,13 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")  # before NumPy loads: single-threaded, like the solver
 
 import argparse  # noqa: E402
-import datetime as _dt  # noqa: E402
-import platform  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
 import timeit  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
+from _machine import machine  # noqa: E402  (sibling module: run as a script)
 
 clock = time.process_time
 
@@ -141,31 +140,6 @@ def eval_table(rows: list[dict]) -> str:
         lines.append(f"| {r['case']} | {r['n']} | {r['outputs']} | {r['backend']} | "
                      f"{r['compile_s']:.2f} | {r['call_us']:.1f} |")
     return "\n".join(lines)
-
-
-def machine() -> str:
-    import numpy
-    import scipy
-    import sympy
-
-    try:
-        import symengine
-
-        se = symengine.__version__
-    except ImportError:  # pragma: no cover
-        se = "not installed"
-    cpu = platform.processor() or platform.machine()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return (f"{_dt.date.today().isoformat()}; {cpu}, {os.cpu_count()} cores "
-            f"(shared with other jobs); {platform.system()} {platform.release()}; "
-            f"Python {platform.python_version()}, NumPy {numpy.__version__}, "
-            f"SciPy {scipy.__version__}, SymPy {sympy.__version__}, SymEngine {se}")
 
 
 PAGE = """\

@@ -27,11 +27,9 @@ from .solvers._free import (
     free_acceleration,
     project,
 )
-from .solvers._integrators import integrate_adams, integrate_rk
+from .solvers._integrators import integrate
 
 KINDS = ("static", "kinematic", "dynamic")
-RK_METHODS = ("dop853", "rk45")
-ADAMS_METHODS = ("adams", "automatic", "predictor", "corrector")
 
 
 class FreeSystem:
@@ -217,27 +215,9 @@ class FreeSystem:
             qq, vv = project(s, tt, y[:n], y[n:], p)
             return np.concatenate((qq, vv))
 
-        tt = np.atleast_1d(np.asarray(t, dtype=float))
-        t0, t1 = float(tt[0]), float(tt[-1])
-        t_eval = tt if len(tt) > 2 or (len(tt) == 2 and not isinstance(t, tuple)) else None
-        y0 = np.concatenate((q0, qd0))
-        m = method.lower()
-        if m in RK_METHODS:
-            res = integrate_rk(rhs, proj, t0, t1, y0, m, rtol, atol, max_step,
-                               correction=constraint_correction, t_eval=t_eval)
-            if t_eval is not None:
-                times, Y = res.diagnostics["t_eval"]
-            else:
-                times, Y = res.t, res.y
-        elif m in ADAMS_METHODS:
-            mode = "automatic" if m == "adams" else m
-            res = integrate_adams(rhs, proj, t0, t1, y0, fit_degree, max_error, mode,
-                                  step_size, constraint_correction)
-            times, Y = res.t, res.y
-            if t_eval is not None and t1 < t0:      # backwards: interpolate on rising times
-                times, Y = times[::-1], Y[::-1]
-        else:
-            raise MechError(f"unknown method {method!r}; choose from {RK_METHODS + ADAMS_METHODS}")
+        times, Y, res, m = integrate(
+            rhs, proj, t, np.concatenate((q0, qd0)), method, rtol, atol, max_step, fit_degree,
+            max_error, step_size, constraint_correction)
         QDD = np.empty((len(times), n))
         LAM = np.empty((len(times), s.m))
         for k, (tk, yk) in enumerate(zip(times, Y)):
@@ -246,20 +226,6 @@ class FreeSystem:
                  "method": m}
         if diagnostics:
             extra["diagnostics"] = res.diagnostics
-        sol = self._result(times, Y[:, :n], Y[:, n:], QDD, LAM, p, np.zeros(len(times)),
-                           extra=extra)
-        if t_eval is not None and m in ADAMS_METHODS:
-            sol = _resample(sol, t_eval, self, p)
-        return sol
+        return self._result(times, Y[:, :n], Y[:, n:], QDD, LAM, p, np.zeros(len(times)),
+                            extra=extra)
 
-
-def _resample(sol, t_eval, free, p):
-    """Hermite-interpolate an Adams solution onto ``t_eval`` and recompute qdd and lambda."""
-    r = sol.interpolate(t_eval)
-    s = free.system
-    n = s.n
-    QDD = np.empty((len(t_eval), n))
-    LAM = np.empty((len(t_eval), s.m))
-    for k, tk in enumerate(t_eval):
-        QDD[k], LAM[k], _ = free_acceleration(s, tk, r.q[k], r.qd[k], p)
-    return free._result(t_eval, r.q, r.qd, QDD, LAM, p, np.zeros(len(t_eval)), extra=sol.extra)

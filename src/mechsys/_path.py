@@ -28,11 +28,9 @@ from ._results import Solution
 from ._symbols import T
 from .compile import compile_exprs
 from .constraints import ConstraintBase
-from .solvers._integrators import integrate_adams, integrate_rk
-from .solvers._linalg import SPARSE_THRESHOLD, Singular, dependent_rows, factor, involved_rows
-
-RK_METHODS = ("dop853", "rk45")
-ADAMS_METHODS = ("adams", "automatic", "predictor", "corrector")
+from .solvers._free import project_positions
+from .solvers._integrators import integrate
+from .solvers._linalg import Singular, dependent_rows, factor, involved_rows
 
 
 class PathSystem:
@@ -174,9 +172,7 @@ class PathSystem:
         The solution's ``extra["drift"]`` holds the largest holonomic residual met."""
         s = self.system
         q0 = self._q0.copy() if initial_condition is None else self._condition(initial_condition)
-        tt = np.atleast_1d(np.asarray(t, dtype=float))
-        t0, t1 = float(tt[0]), float(tt[-1])
-        q0 = self._project(t0, q0)
+        q0 = self._project(float(np.atleast_1d(t)[0]), q0)
         last = [None]
 
         def rhs(tk, y):
@@ -187,45 +183,16 @@ class PathSystem:
         def proj(tk, y):
             return self._project(tk, y)
 
-        t_eval = tt if len(tt) > 2 or (len(tt) == 2 and not isinstance(t, tuple)) else None
-        m = method.lower()
-        if m in RK_METHODS:
-            res = integrate_rk(rhs, proj, t0, t1, q0, m, rtol, atol, max_step,
-                               correction=constraint_correction, t_eval=t_eval)
-            times, Q = res.diagnostics["t_eval"] if t_eval is not None else (res.t, res.y)
-        elif m in ADAMS_METHODS:
-            mode = "automatic" if m == "adams" else m
-            res = integrate_adams(rhs, proj, t0, t1, q0, fit_degree, max_error, mode, step_size,
-                                  constraint_correction)
-            times, Q = res.t, res.y
-        else:
-            raise MechError(f"unknown method {method!r}; choose from {RK_METHODS + ADAMS_METHODS}")
+        times, Q, res, m = integrate(rhs, proj, t, q0, method, rtol, atol, max_step, fit_degree,
+                                     max_error, step_size, constraint_correction)
         QD = np.array([self.velocities(tk, qk) for tk, qk in zip(times, Q)])
         QDD = np.array([self.accelerations(tk, qk, vk) for tk, qk, vk in zip(times, Q, QD)])
         drift = max(np.abs(s.residual(tk, qk, self._p)).max(initial=0.0) for tk, qk in zip(times, Q))
         extra = {"evaluations": res.evaluations, "steps": res.steps, "method": m, "drift": drift}
         if diagnostics:
             extra["diagnostics"] = res.diagnostics
-        sol = Solution(t=np.asarray(times, dtype=float), q=np.asarray(Q), qd=QD, qdd=QDD,
-                       p=self._p, system=s, model=self.model,
-                       iterations=np.zeros(len(times), dtype=int), mode="path", extra=extra)
-        if t_eval is not None and m in ADAMS_METHODS:
-            r = sol.interpolate(t_eval)
-            QD = np.array([self.velocities(tk, qk) for tk, qk in zip(r.t, r.q)])
-            QDD = np.array([self.accelerations(tk, qk, vk) for tk, qk, vk in zip(r.t, r.q, QD)])
-            sol = Solution(t=r.t, q=r.q, qd=QD, qdd=QDD, p=self._p, system=s, model=self.model,
-                           iterations=np.zeros(len(r.t), dtype=int), mode="path", extra=extra)
-        return sol
+        return Solution(t=times, q=Q, qd=QD, qdd=QDD, p=self._p, system=s, model=self.model,
+                        iterations=np.zeros(len(times), dtype=int), mode="path", extra=extra)
 
-    def _project(self, t, q, tol=1e-12, max_iterations=8):
-        s = self.system
-        q = np.array(q, dtype=float)
-        if s.m == 0:
-            return q
-        sparse = s.n > SPARSE_THRESHOLD
-        for _ in range(max_iterations):
-            F, J = s.residual_and_jacobian(t, q, self._p, sparse)
-            if np.abs(F).max(initial=0.0) <= tol:
-                break
-            q -= J.T @ factor(J @ J.T).solve(F)
-        return q
+    def _project(self, t, q):
+        return project_positions(self.system, t, q, self._p)

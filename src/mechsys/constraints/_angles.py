@@ -19,9 +19,9 @@ from __future__ import annotations
 import sympy as sp
 
 from .._errors import ModelError
-from .._geometry import Axis, GlobalVector, Vector, as_axis, as_vector
+from .._geometry import Axis, GlobalVector, Vector, as_axis
 from . import _primitives as P
-from ._base import ConstraintBase, as_expr
+from ._base import ConstraintBase, TwoVectors, as_expr
 
 
 def vector_norm(v: Vector) -> sp.Expr:
@@ -156,7 +156,7 @@ class RotationLock1(ConstraintBase):
         return [angle_equation(angle_frame(space, self.axis2), g1, self.angle)]
 
 
-class RelativeAngle1(ConstraintBase):
+class RelativeAngle1(TwoVectors):
     r"""The angle between two vectors. Removes 1 DOF (2D/3D).
 
     ``RelativeAngle1(vector1, vector2, angle)`` (axes, lines and planes give their
@@ -181,12 +181,8 @@ class RelativeAngle1(ConstraintBase):
     dof_removed = 1
 
     def __init__(self, vector1, vector2, angle):
-        super().__init__()
-        self.v1, self.v2 = as_vector(vector1), as_vector(vector2)
+        super().__init__(vector1, vector2)
         self.angle = as_expr(angle, "RelativeAngle1 angle")
-
-    def geometry(self):
-        return [self.v1, self.v2]
 
     def _build(self, space):
         u1, u2 = self.v1.direction(), self.v2.direction()

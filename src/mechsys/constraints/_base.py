@@ -19,7 +19,7 @@ from typing import ClassVar
 import sympy as sp
 
 from .._errors import GeometryError, ModelError
-from .._geometry import Geometry
+from .._geometry import Geometry, as_vector
 
 
 class Variable:
@@ -100,3 +100,15 @@ def as_expr(value, what: str) -> sp.Expr:
         return sp.sympify(value)
     except (sp.SympifyError, TypeError) as exc:
         raise GeometryError(f"{what}: {value!r} is not a number or expression") from exc
+
+
+class TwoVectors(ConstraintBase):
+    """Base of constraints between ``vector1`` and ``vector2`` (axes and lines give their
+    directions, tuples are global)."""
+
+    def __init__(self, vector1, vector2):
+        super().__init__()
+        self.v1, self.v2 = as_vector(vector1), as_vector(vector2)
+
+    def geometry(self):
+        return [self.v1, self.v2]

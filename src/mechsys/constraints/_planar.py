@@ -12,7 +12,7 @@ from .._errors import ModelError
 from .._geometry import as_axis, as_point, as_vector
 from . import _primitives as P
 from ._angles import RelativeAngle1, RotationLock1
-from ._base import ConstraintBase, as_expr
+from ._base import ConstraintBase, TwoVectors, as_expr
 
 
 def _body_of(obj, what: str):
@@ -193,7 +193,7 @@ class RelativeDistance1(ConstraintBase):
         return [P.distance_squared(self.p1, self.p2, self.dist)]
 
 
-class Orthogonal1(ConstraintBase):
+class Orthogonal1(TwoVectors):
     r"""Two vectors are orthogonal. Removes 1 DOF (2D/3D).
 
     ``Orthogonal1(vector1, vector2)``::
@@ -204,18 +204,11 @@ class Orthogonal1(ConstraintBase):
     mech_name = "Orthogonal1"
     dof_removed = 1
 
-    def __init__(self, vector1, vector2):
-        super().__init__()
-        self.v1, self.v2 = as_vector(vector1), as_vector(vector2)
-
-    def geometry(self):
-        return [self.v1, self.v2]
-
     def _build(self, space):
         return [P.dot(self.v1, self.v2)]
 
 
-class Parallel1(ConstraintBase):
+class Parallel1(TwoVectors):
     r"""Two vectors are parallel (or anti-parallel). Removes 1 DOF (2D).
 
     ``Parallel1(vector1, vector2)``::
@@ -226,13 +219,6 @@ class Parallel1(ConstraintBase):
     mech_name = "Parallel1"
     dof_removed = 1
     spaces = ("planar",)
-
-    def __init__(self, vector1, vector2):
-        super().__init__()
-        self.v1, self.v2 = as_vector(vector1), as_vector(vector2)
-
-    def geometry(self):
-        return [self.v1, self.v2]
 
     def _build(self, space):
         return P.parallel(space, self.v1, self.v2)

@@ -18,13 +18,13 @@ from __future__ import annotations
 import sympy as sp
 
 from .._errors import ModelError
-from .._geometry import as_axis, as_point, as_vector
+from .._geometry import as_axis, as_point
 from .._rotations import _parse as _rotation_spec
 from .._rotations import quaternion_inverse, quaternion_product
 from . import _primitives as P
 from ._angles import angle_equation, angle_frame, vector_norm
 from ._base import ConstraintBase, as_expr
-from ._planar import Coincident, OriginLock2, _RelativeCoordinate
+from ._planar import Coincident, OriginLock2, Parallel1, _RelativeCoordinate
 
 
 def _nonzero(value, what: str, use: str) -> sp.Expr:
@@ -161,7 +161,7 @@ class RelativeZ1(_RelativeCoordinate):
     spaces = ("spatial",)
 
 
-class Parallel2(ConstraintBase):
+class Parallel2(Parallel1):
     r"""Two vectors are parallel (or anti-parallel). Removes 2 DOF (3D).
 
     ``Parallel2(vector1, vector2)``; ``h_2, f_2`` normals of ``vector2``::
@@ -173,16 +173,6 @@ class Parallel2(ConstraintBase):
     mech_name = "Parallel2"
     dof_removed = 2
     spaces = ("spatial",)
-
-    def __init__(self, vector1, vector2):
-        super().__init__()
-        self.v1, self.v2 = as_vector(vector1), as_vector(vector2)
-
-    def geometry(self):
-        return [self.v1, self.v2]
-
-    def _build(self, space):
-        return P.parallel(space, self.v1, self.v2)
 
 
 # -- points on lines, planes and circles -----------------------------------------------------

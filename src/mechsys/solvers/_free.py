@@ -112,17 +112,26 @@ def _singular_free(system, J, t, q):
     return err
 
 
-def project(system, t, q, qd, p, tol=1e-12, max_iterations=8):
-    """Project ``(q, qd)`` onto the constraints: minimum-norm corrections
-    ``dq = -J^T (J J^T)^-1 Phi`` (iterated) and ``dqd = -J^T (J J^T)^-1 (J qd + Phi_t)``."""
+def project_positions(system, t, q, p, tol=1e-12, max_iterations=8):
+    """Minimum-norm correction of ``q`` onto ``Phi(q, t) = 0``: ``dq = -J^T (J J^T)^-1 Phi``,
+    iterated."""
     q = np.array(q, dtype=float)
+    if system.m == 0:
+        return q
     sparse = system.n > SPARSE_THRESHOLD
     for _ in range(max_iterations):
         F, J = system.residual_and_jacobian(t, q, p, sparse)
         if np.abs(F).max(initial=0.0) <= tol:
             break
-        JJt = J @ J.T
-        q -= J.T @ factor(JJt).solve(F)
+        q -= J.T @ factor(J @ J.T).solve(F)
+    return q
+
+
+def project(system, t, q, qd, p, tol=1e-12, max_iterations=8):
+    """Project ``(q, qd)`` onto the constraints: positions by :func:`project_positions`,
+    then ``dqd = -J^T (J J^T)^-1 (J qd + Phi_t)``."""
+    q = project_positions(system, t, q, p, tol, max_iterations)
+    sparse = system.n > SPARSE_THRESHOLD
     J, rhs = system.velocity_rhs(t, q, p, sparse)
     JJt = J @ J.T
     qd = qd - J.T @ factor(JJt).solve(J @ qd - rhs)

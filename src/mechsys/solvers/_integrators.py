@@ -195,3 +195,39 @@ def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4
             recent.clear()
     return IntegrationResult(np.array(ts), np.array(ys), nfev, len(ts) - 1, rejected, "finished",
                              {"step_size": np.array(steps_h), "max_error": np.array(steps_e)})
+
+
+RK_METHODS = ("dop853", "rk45")
+ADAMS_METHODS = ("adams", "automatic", "predictor", "corrector")
+
+
+def integrate(fun, project, t, y0, method="dop853", rtol=1e-8, atol=1e-10, max_step=np.inf,
+              fit_degree="cubic", max_error=1e-4, step_size=None, correction=True):
+    """Integrate ``y' = fun(t, y)`` with the named method (the dispatch shared by free and
+    path systems). ``t``: a tuple ``(t0, t1)`` returns every accepted step; an array returns
+    those times (RK dense output, or cubic Hermite with ``fun`` at the Adams steps).
+    Returns ``(times, Y, result, method)``."""
+    tt = np.atleast_1d(np.asarray(t, dtype=float))
+    t0, t1 = float(tt[0]), float(tt[-1])
+    t_eval = tt if len(tt) > 2 or (len(tt) == 2 and not isinstance(t, tuple)) else None
+    m = method.lower()
+    if m in RK_METHODS:
+        res = integrate_rk(fun, project, t0, t1, y0, m, rtol, atol, max_step,
+                           correction=correction, t_eval=t_eval)
+        times, Y = res.diagnostics["t_eval"] if t_eval is not None else (res.t, res.y)
+    elif m in ADAMS_METHODS:
+        mode = "automatic" if m == "adams" else m
+        res = integrate_adams(fun, project, t0, t1, y0, fit_degree, max_error, mode, step_size,
+                              correction)
+        times, Y = res.t, res.y
+        if t_eval is not None:
+            from scipy.interpolate import CubicHermiteSpline
+
+            if t1 < t0:                      # backwards: interpolate on rising times
+                times, Y = times[::-1], Y[::-1]
+            F = np.array([fun(tk, yk) for tk, yk in zip(times, Y)])
+            Y = CubicHermiteSpline(times, Y, F, axis=0)(t_eval)
+            times = t_eval
+    else:
+        raise MechError(f"unknown method {method!r}; choose from {RK_METHODS + ADAMS_METHODS}")
+    return np.asarray(times, dtype=float), np.asarray(Y), res, m
