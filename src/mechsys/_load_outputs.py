@@ -108,12 +108,12 @@ class LoadOutputs:
         if type == "applied":
             G = sp.Matrix(dyn.Q[rows])
         elif type == "reaction":
+            # -(Phi_q^T lambda) on the body's columns, from the system's Jacobian entries
             G = sp.zeros(rows.stop - rows.start, 1)
             lam = s.lam_symbols
-            for i, e in enumerate(s.phi):
-                for j, qj in enumerate(lay.q_symbols[rows]):
-                    if qj in e.free_symbols:
-                        G[j] -= sp.diff(e, qj) * lam[i]
+            for i, j, e in zip(s.jac_rows, s.jac_cols, s.jac_exprs):
+                if rows.start <= j < rows.stop:
+                    G[j - rows.start] -= e * lam[i]
         elif type == "dynamic":
             G = sp.Matrix(dyn.Qv[rows])
             qdd = lay.qdd_symbols
