@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import mechsys as ms
-from mechsys._free import FreeSystem
+from mechsys.analyses._free import FreeSystem
 from mechsys.solvers._integrators import _adams_weights, integrate_adams, integrate_rk
 
 

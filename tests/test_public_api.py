@@ -33,7 +33,8 @@ REQUIRED_TOP_LEVEL = {
 }
 
 #: Public subpackages and modules; every other module is private (``_name.py``).
-PUBLIC_MODULES = {"constraints", "compile", "solvers", "testing", "draw", "models", "cli"}
+PUBLIC_MODULES = {"constraints", "compile", "solvers", "testing", "draw", "models", "cli", "model",
+                  "geometry", "loads", "analyses", "results"}
 
 REQUIRED_IN_MODULE = {
     "mechsys.constraints": {"REGISTRY", "ConstraintBase", "Constraint", "Variable", "register",

@@ -7,7 +7,7 @@ import sympy as sp
 
 import mechsys as ms
 from mechsys import T
-from mechsys._rotations import matrix_elements
+from mechsys.geometry._rotations import matrix_elements
 
 
 def rodrigues(angle, axis):

@@ -12,7 +12,6 @@ Quick start::
     sol = m.solve(t=np.linspace(0, 1, 101))
 """
 
-from ._bodies import Body
 from ._errors import (
     ConstraintCountError,
     ConvergenceError,
@@ -25,57 +24,9 @@ from ._errors import (
     UnknownConstraintError,
     UnknownPointError,
 )
-from ._free import FreeSystem
-from ._friction import JointFriction
-from ._geometry import Axis, Line, Plane, Point, Vector, reference_direction
-from ._gyro import GyroFilter, GyroMoment, gyro_filter
-from ._inertia import (
-    CompositeInertia,
-    ParallelAxis,
-    PrincipalAxes,
-    composite_inertia,
-    parallel_axis,
-    principal_axes,
-)
-from ._loads import Damper, Force, Gravity, Load, LoadBase, Moment, Spring
-from ._model import DOF, Model, Model2D, Model3D
-from ._path import PathSystem
-from ._results import Solution, State
-from ._rotations import (
-    CylindricalToXYZ,
-    Direction,
-    Distance,
-    EulerInverse,
-    EulerMultiply,
-    EulerParameters,
-    IntersectionPoint,
-    Magnitude,
-    ProjectedAngle,
-    Rotation,
-    RotationMatrix,
-    SphericalToXYZ,
-    Unit,
-    VirtualRotation,
-    XYZToCylindrical,
-    XYZToSpherical,
-    cylindrical_to_xyz,
-    direction,
-    distance,
-    euler_parameters,
-    intersection_point,
-    magnitude,
-    projected_angle,
-    quaternion_inverse,
-    quaternion_product,
-    rotation,
-    rotation_matrix,
-    spherical_to_xyz,
-    unit,
-    virtual_rotation,
-    xyz_to_cylindrical,
-    xyz_to_spherical,
-)
 from ._symbols import T
+from .analyses._free import FreeSystem
+from .analyses._path import PathSystem
 from .constraints import (
     REGISTRY,
     ConstantVelocity4,
@@ -116,6 +67,55 @@ from .constraints import (
     Universal4,
     Variable,
 )
+from .geometry._bodies import Body
+from .geometry._inertia import (
+    CompositeInertia,
+    ParallelAxis,
+    PrincipalAxes,
+    composite_inertia,
+    parallel_axis,
+    principal_axes,
+)
+from .geometry._points import Axis, Line, Plane, Point, Vector, reference_direction
+from .geometry._rotations import (
+    CylindricalToXYZ,
+    Direction,
+    Distance,
+    EulerInverse,
+    EulerMultiply,
+    EulerParameters,
+    IntersectionPoint,
+    Magnitude,
+    ProjectedAngle,
+    Rotation,
+    RotationMatrix,
+    SphericalToXYZ,
+    Unit,
+    VirtualRotation,
+    XYZToCylindrical,
+    XYZToSpherical,
+    cylindrical_to_xyz,
+    direction,
+    distance,
+    euler_parameters,
+    intersection_point,
+    magnitude,
+    projected_angle,
+    quaternion_inverse,
+    quaternion_product,
+    rotation,
+    rotation_matrix,
+    spherical_to_xyz,
+    unit,
+    virtual_rotation,
+    xyz_to_cylindrical,
+    xyz_to_spherical,
+)
+from .loads._friction import JointFriction
+from .loads._gyro import GyroFilter, GyroMoment, gyro_filter
+from .loads._loads import Damper, Force, Gravity, Load, LoadBase, Moment, Spring
+from .model import DOF, Model, Model2D, Model3D
+from .results._solution import Solution, State
 from .solvers import PositionOptions
 
 __version__ = "0.1.0"

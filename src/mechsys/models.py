@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from ._model import Model2D
 from ._symbols import T
 from .constraints import RelativeDistance1, Revolute2, RotationLock1, Translate2
+from .model import Model2D
 
 
 def slider_crank(crank: float = 2.0, rod: float = 6.0, offset: float = 0.0,
@@ -41,7 +41,7 @@ def slider_crank_dynamic(crank: float = 2.0, rod: float = 6.0, speed: float = 2 
     ``inertias`` about the centroids), gravity ``g`` along -Y and a force ``piston_force``
     (an expression of ``T`` allowed) along +X on the piston, for statics and inverse
     dynamics (``solve(..., solution="dynamic")``)."""
-    from ._loads import Force, Gravity
+    from .loads._loads import Force, Gravity
 
     m = slider_crank(crank=crank, rod=rod, speed=speed)
     for name, mass, c, J in zip(("crank", "rod", "piston"), masses,
@@ -127,8 +127,8 @@ def slider_crank_3d(crank: float = 2.0, rod: float = 6.0, offset: float = 0.0,
     named as in the planar model: ``crank pin``, ``crank-rod``, ``wrist pin``, ``slider``,
     ``drive``.
     """
-    from ._model import Model3D
     from .constraints import Revolute5, Spherical3, Translate5, Universal4
+    from .model import Model3D
 
     m = Model3D()
     g = m.ground
@@ -169,8 +169,8 @@ def cardan_joint(bend: float = 0.5, speed: float = 2 * np.pi, joint: str = "univ
     ``drive``. For the universal joint the output speed is
     ``w2 / w1 = cos(bend) / (1 - sin(bend)^2 cos(th1)^2)`` with ``th1`` the drive angle.
     """
-    from ._model import Model3D
     from .constraints import ConstantVelocity4, Parallel2, Revolute5, Universal4
+    from .model import Model3D
 
     if joint not in ("universal", "cv"):
         from ._errors import ModelError

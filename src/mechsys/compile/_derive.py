@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import sympy as sp
 
+from .._symbols import T
+
 try:  # optional
     import symengine as se
 except ImportError:  # pragma: no cover
@@ -163,3 +165,22 @@ def hessian_terms(T_expr, q, qd):
             acc -= p[i].diff(sj) * vj
         Qv.append(_to_sympy(se.expand(acc)))
     return M, Qv
+
+
+def time_derivative(expr, q, qd, qdd=None):
+    """Total time derivative ``d/dt f(q, qd, t) = f_q qd + f_qd qdd + f_t`` of a SymPy
+    expression, with ``q``/``qd``/``qdd`` lists of corresponding symbols. Piecewise-constant
+    parts (``Mod``'s jumps, ``floor``) differentiate to zero."""
+    expr = sp.sympify(expr)
+    if expr.has(sp.Mod):
+        expr = _rewrite_steps(expr)
+    free = expr.free_symbols
+    out = _diff(expr, T) if T in free else sp.S.Zero
+    for a, b in zip(q, qd):
+        if a in free:
+            out += _diff(expr, a) * b
+    if qdd is not None:
+        for a, b in zip(qd, qdd):
+            if a in free:
+                out += _diff(expr, a) * b
+    return out

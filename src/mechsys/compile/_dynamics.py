@@ -26,8 +26,7 @@ import sympy as sp
 
 from .._symbols import T
 from ._backends import compile_exprs
-from ._derive import hessian_terms
-from ._system import time_derivative
+from ._derive import hessian_terms, time_derivative
 
 
 def multiplier_symbols(layout) -> tuple:
@@ -61,7 +60,7 @@ def body_kinetic_energy(space, body, qd_of) -> sp.Expr:
 
 def generalized_forces(model, loads, layout) -> list:
     """Applied generalized forces ``Q`` (n,) of ``loads`` by virtual work."""
-    from .._loads import BodyMoment, DirectLoad, PointForce
+    from ..loads._loads import BodyMoment, DirectLoad, PointForce
 
     n = layout.n
     qd_of = dict(zip(layout.q_symbols, layout.qd_symbols))

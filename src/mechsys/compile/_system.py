@@ -24,6 +24,7 @@ import sympy as sp
 
 from .._symbols import T, acceleration_symbol, velocity_symbol
 from ._backends import Compiled, compile_exprs, default_backend
+from ._dynamics import Dynamics, multiplier_symbols
 
 
 @dataclass(frozen=True)
@@ -87,27 +88,6 @@ class Layout:
         return [T, *self.q_symbols, *self.qd_symbols, *self.p_symbols]
 
 
-def time_derivative(expr, q, qd, qdd=None):
-    """Total time derivative ``d/dt f(q, qd, t) = f_q qd + f_qd qdd + f_t`` of a SymPy
-    expression, with ``q``/``qd``/``qdd`` lists of corresponding symbols. Piecewise-constant
-    parts (``Mod``'s jumps, ``floor``) differentiate to zero."""
-    from ._derive import _diff, _rewrite_steps
-
-    expr = sp.sympify(expr)
-    if expr.has(sp.Mod):
-        expr = _rewrite_steps(expr)
-    free = expr.free_symbols
-    out = _diff(expr, T) if T in free else sp.S.Zero
-    for a, b in zip(q, qd):
-        if a in free:
-            out += _diff(expr, a) * b
-    if qdd is not None:
-        for a, b in zip(qd, qdd):
-            if a in free:
-                out += _diff(expr, a) * b
-    return out
-
-
 class System:
     """Compiled, immutable system of a model.
 
@@ -145,7 +125,6 @@ class System:
         self._loads = tuple(loads)
         self._bodies = tuple(model.bodies[1:]) if model is not None else ()
         self._dynamics = None
-        from ._dynamics import multiplier_symbols
 
         self.lam_symbols = multiplier_symbols(layout)
 
@@ -178,7 +157,6 @@ class System:
         """Mass matrix, applied and velocity-dependent forces (derived and compiled on first
         use: kinematics-only work never pays for them)."""
         if self._dynamics is None:
-            from ._dynamics import Dynamics
 
             self._dynamics = Dynamics(self, self._model, self._bodies, self._loads)
         return self._dynamics

@@ -19,7 +19,7 @@ from __future__ import annotations
 import sympy as sp
 
 from .._errors import ModelError
-from .._geometry import Axis, GlobalVector, Vector, as_axis
+from ..geometry._points import Axis, GlobalVector, Vector, as_axis
 from . import _primitives as P
 from ._base import ConstraintBase, TwoVectors, as_expr
 
@@ -59,7 +59,7 @@ def angle_equation(frame, f: sp.Matrix, angle) -> sp.Expr:
 
 
 def _body_of(obj):
-    from .._bodies import Body
+    from ..geometry._bodies import Body
 
     return obj if isinstance(obj, Body) else None
 

@@ -19,7 +19,7 @@ from typing import ClassVar
 import sympy as sp
 
 from .._errors import GeometryError, ModelError
-from .._geometry import Geometry, as_vector
+from ..geometry._points import Geometry, as_vector
 
 
 class Variable:

@@ -9,14 +9,14 @@ from __future__ import annotations
 import sympy as sp
 
 from .._errors import ModelError
-from .._geometry import as_axis, as_point, as_vector
+from ..geometry._points import as_axis, as_point, as_vector
 from . import _primitives as P
 from ._angles import RelativeAngle1, RotationLock1
 from ._base import ConstraintBase, TwoVectors, as_expr
 
 
 def _body_of(obj, what: str):
-    from .._bodies import Body
+    from ..geometry._bodies import Body
 
     if isinstance(obj, Body):
         return obj
@@ -133,8 +133,8 @@ class _RelativeCoordinate(ConstraintBase):
 
 
 def _looks_like_point(obj) -> bool:
-    from .._bodies import Body
-    from .._geometry import Axis, Point
+    from ..geometry._bodies import Body
+    from ..geometry._points import Axis, Point
 
     return isinstance(obj, (Point, Axis, Body, tuple, list, sp.MatrixBase))
 

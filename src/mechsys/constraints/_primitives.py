@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .._geometry import Axis, Point, Vector
+from ..geometry._points import Axis, Point, Vector
 
 
 def coincident(p1: Point, p2: Point, offset=None) -> list[sp.Expr]:

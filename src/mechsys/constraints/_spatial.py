@@ -18,9 +18,9 @@ from __future__ import annotations
 import sympy as sp
 
 from .._errors import ModelError
-from .._geometry import as_axis, as_point
-from .._rotations import _parse as _rotation_spec
-from .._rotations import quaternion_inverse, quaternion_product
+from ..geometry._points import as_axis, as_point
+from ..geometry._rotations import _parse as _rotation_spec
+from ..geometry._rotations import quaternion_inverse, quaternion_product
 from . import _primitives as P
 from ._angles import angle_equation, angle_frame, vector_norm
 from ._base import ConstraintBase, as_expr
@@ -119,7 +119,7 @@ class RotationLock3(ConstraintBase):
 
     def __init__(self, body1, body2=None, *rotations):
         super().__init__()
-        from .._bodies import Body
+        from ..geometry._bodies import Body
 
         if not isinstance(body1, Body):
             raise ModelError(f"RotationLock3 body1: expected a body, got {body1!r}")

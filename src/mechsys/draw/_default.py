@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._geometry import Axis, Line, Point, Vector
+from ..geometry._points import Axis, Line, Point, Vector
 from . import _shapes as sh
 from ._eval import Evaluator, Item
 from ._primitives import (

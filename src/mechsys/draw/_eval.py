@@ -25,7 +25,7 @@ import numpy as np
 import sympy as sp
 
 from .._errors import GeometryError, ModelError
-from .._geometry import Point
+from ..geometry._points import Point
 
 
 # ----------------------------------------------------------------------------------------
@@ -288,7 +288,7 @@ def resolve_body(model, spec):
 def resolve_points(model, body, specs, who: str) -> list[Point]:
     """Points from specs: on ``body`` (names, numbers, local coords) or, with no body, Point
     objects / global coordinate tuples (ground)."""
-    from .._geometry import as_point
+    from ..geometry._points import as_point
 
     if isinstance(specs, (str, int, Point)) or _is_coord(specs):
         specs = [specs]
@@ -345,7 +345,7 @@ def as_solution(obj):
             return dataclasses.replace(obj, scalar=False)
         return obj
     if hasattr(obj, "compile") and hasattr(obj, "guess"):
-        from .._results import Solution
+        from ..results._solution import Solution
 
         system = obj.compile()
         g = np.asarray(obj.guess(), dtype=float)[None, :]

@@ -46,7 +46,7 @@ import numpy as np
 import sympy as sp
 
 from .._errors import GeometryError, ModelError
-from .._geometry import Axis, Point, Vector, as_point
+from ..geometry._points import Axis, Point, Vector, as_point
 from . import _shapes as sh
 from ._eval import Evaluator, Item, check_style, resolve_points
 
@@ -143,7 +143,7 @@ def _local_vector(ev: Evaluator, body, v, who: str) -> np.ndarray:
 
 def _split_body_points(body_or_points, points):
     """``(body, points)`` from Mech's two forms ``F(body, pts)`` and ``F([point1, ...])``."""
-    from .._bodies import Body
+    from ..geometry._bodies import Body
 
     if points is None:
         if isinstance(body_or_points, (Body, str, int)) and not isinstance(body_or_points, bool):
@@ -722,7 +722,7 @@ class Extrude(Primitive):
     def __init__(self, body_or_points, points, vector=None, dist=1.0, magnitude="absolute",
                  closed=False, **style):
         super().__init__(**style)
-        from .._bodies import Body
+        from ..geometry._bodies import Body
 
         if vector is None or not isinstance(body_or_points, (Body, str, int)):
             # global form: Extrude(points, vector, dist)

@@ -6,9 +6,9 @@ import numpy as np
 import sympy as sp
 
 from .. import constraints as C
-from .._geometry import Vector
-from .._model import Model2D
 from .._symbols import T
+from ..geometry._points import Vector
+from ..model import Model2D
 from ._checks import Case, case, pose_vector
 
 

@@ -13,10 +13,10 @@ import numpy as np
 import sympy as sp
 
 from .. import constraints as C
-from .._geometry import Plane, Vector
-from .._model import Model3D
-from .._rotations import euler_parameters, rotation_matrix
 from .._symbols import T
+from ..geometry._points import Plane, Vector
+from ..geometry._rotations import euler_parameters, rotation_matrix
+from ..model import Model3D
 from ._checks import Case, case, pose_vector
 
 # -- small numeric helpers -------------------------------------------------------------------

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import sympy as sp
 
-from ._errors import MechError
+from .._errors import MechError
 from ._load_outputs import LoadOutputs
 from ._outputs import OutputFunctions, VelocityViews
 
@@ -161,7 +161,7 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews):
 
     def plot(self, outputs, **kw):
         """Time histories of outputs (see :func:`mechsys.draw.plot`)."""
-        from . import draw
+        from .. import draw
 
         return draw.plot(self, outputs, **kw)
 

@@ -23,14 +23,14 @@ from collections.abc import Mapping
 import numpy as np
 import sympy as sp
 
-from ._errors import MechError, ModelError, SingularJacobianError
-from ._results import Solution
-from ._symbols import T
-from .compile import compile_exprs
-from .constraints import ConstraintBase
-from .solvers._free import project_positions
-from .solvers._integrators import integrate
-from .solvers._linalg import Singular, dependent_rows, factor, involved_rows
+from .._errors import MechError, ModelError, SingularJacobianError
+from .._symbols import T
+from ..compile import compile_exprs
+from ..constraints import ConstraintBase
+from ..results._solution import Solution
+from ..solvers._free import project_positions
+from ..solvers._integrators import integrate
+from ..solvers._linalg import Singular, dependent_rows, factor, involved_rows
 
 
 class PathSystem:

@@ -19,15 +19,15 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ._errors import MechError, ModelError
-from ._results import Solution, State
-from .solvers._free import (
+from .._errors import MechError, ModelError
+from ..results._solution import Solution, State
+from ..solvers._free import (
     equilibrium_configuration,
     equilibrium_velocity,
     free_acceleration,
     project,
 )
-from .solvers._integrators import integrate
+from ..solvers._integrators import integrate
 
 KINDS = ("static", "kinematic", "dynamic")
 
@@ -167,14 +167,14 @@ class FreeSystem:
             np.asarray(lambda_guess, dtype=float), (s.m,)).copy()
         if self.kind == "static":
             if self._eq is None:
-                from .compile._free import StaticEquilibrium
+                from ..compile._free import StaticEquilibrium
 
                 self._eq = StaticEquilibrium(s)
             q, lam, its = equilibrium_configuration(self._eq, s, t, q, lam0, p)
             return self._result([t], q, np.zeros_like(q), None, lam, p, [its], scalar=True)
         if self.kind == "kinematic":
             if self._eqv is None:
-                from .compile._free import VelocityEquilibrium
+                from ..compile._free import VelocityEquilibrium
 
                 self._eqv = VelocityEquilibrium(s)
             qd, lam, its = equilibrium_velocity(self._eqv, s, t, q, qd, lam0, p)

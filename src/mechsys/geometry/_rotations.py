@@ -8,7 +8,7 @@ Euler parameters ``e = (e0, e1, e2, e3)`` of a rotation by ``phi`` about the uni
 
     e0 = cos(phi / 2),   (e1, e2, e3) = sin(phi / 2) u
 
-and its matrix (the one bodies use, see :mod:`mechsys._space`)::
+and its matrix (the one bodies use, see :mod:`mechsys.geometry._space`)::
 
     A(e) = (e0^2 - e.e) I + 2 e e^T + 2 e0 e~        (e = (e1, e2, e3))
 
@@ -37,7 +37,8 @@ from collections.abc import Sequence
 import numpy as np
 import sympy as sp
 
-from ._errors import GeometryError, ModelError
+from .._errors import GeometryError, ModelError
+from ._points import Axis, BodyRef, Point, Vector, as_axis, as_point, as_vector
 
 # ---------------------------------------------------------------------------------------
 # numeric / symbolic helpers
@@ -84,7 +85,6 @@ def _is_scalar(x) -> bool:
 
 def _geometry_direction(obj):
     """Global direction of a mechsys vector-like object, else ``None``."""
-    from ._geometry import Axis, Vector
 
     if isinstance(obj, (Vector, Axis)):
         return list(obj.direction())
@@ -222,9 +222,8 @@ def _from_matrix(R) -> list:
 
 def _parse(rot, assume_unit: bool = False) -> list:
     """Euler parameters (a list of 4 floats or SymPy expressions) of any rotation format."""
-    from ._bodies import Body
 
-    if isinstance(rot, Body):
+    if isinstance(rot, BodyRef):
         return [sp.S.One, sp.S.Zero, sp.S.Zero, sp.S.Zero] if rot.is_ground else list(
             rot.q[rot.space.dim:])
     if isinstance(rot, np.ndarray) and rot.ndim == 2:
@@ -285,9 +284,8 @@ def rotation_matrix(rot):
     From Euler parameters the matrix is ``A(e)`` above; numeric parameters are normalised
     first so that a slightly drifted set still gives an orthogonal matrix.
     """
-    from ._bodies import Body
 
-    if isinstance(rot, Body):
+    if isinstance(rot, BodyRef):
         return rot.A
     e = _parse(rot)
     symbolic = _is_symbolic(e)
@@ -355,7 +353,6 @@ def projected_angle(vector1, vector2, vector3=None):
     (a uniform scale does not change the angle). Numeric arrays broadcast over leading
     axes (shape ``(..., 3)``); mechsys vectors give a SymPy expression.
     """
-    from ._geometry import Axis, Vector
 
     if vector3 is None:
         if not isinstance(vector2, Axis):
@@ -365,7 +362,6 @@ def projected_angle(vector1, vector2, vector3=None):
         vector2 = vector2.reference_vector()
     objs = (vector1, vector2, vector3)
     if any(isinstance(v, (Vector, Axis)) for v in objs):
-        from ._geometry import as_vector
 
         v1, v2, v3 = (as_vector(v).direction() for v in objs)
         n = v3 / sp.sqrt(v3.dot(v3))
@@ -391,7 +387,6 @@ def intersection_point(axis1, axis2):
     coordinates (evaluate with ``sol.eval``); numeric when both axes are on ground.
     Raises :class:`GeometryError` when the axis is parallel to the plane (numerically).
     """
-    from ._geometry import as_axis
 
     a1, a2 = as_axis(axis1), as_axis(axis2)
     r1, u1 = a1.location(), a1.direction()
@@ -496,7 +491,6 @@ def spherical_to_xyz(point, coordinates: str = "XYZ"):
 
 
 def _as_direction(v):
-    from ._geometry import Axis, Vector, as_vector
 
     if isinstance(v, (Vector, Axis)):
         return as_vector(v).direction(), True
@@ -531,10 +525,8 @@ def unit(vector):
 
 def distance(point1, point2):
     """Distance between two points (mechsys points: symbolic; coordinate arrays: numeric)."""
-    from ._geometry import Point
 
     if isinstance(point1, Point) or isinstance(point2, Point):
-        from ._geometry import as_point
 
         d = as_point(point1).location() - as_point(point2).location()
         return sp.sqrt(d.dot(d))

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from ._errors import ModelError
+from .._errors import ModelError
 from ._loads import BodyMoment, LoadBase, PointForce
 
 _ROTATIONAL = {"Revolute2", "Spherical3", "Revolute5"}

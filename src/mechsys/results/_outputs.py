@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import sympy as sp
 
-from ._errors import ModelError
-from ._geometry import Axis, Point, Vector, as_point, as_vector
+from .._errors import ModelError
+from ..geometry._points import Axis, Point, Vector, as_point, as_vector
 
 
 class OutputFunctions:

@@ -22,8 +22,8 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from ._errors import ModelError
-from ._geometry import Vector, as_vector
+from .._errors import ModelError
+from ..geometry._points import Vector, as_vector
 from ._loads import BodyMoment, LoadBase
 
 
@@ -60,7 +60,7 @@ class GyroMoment(LoadBase):
 
 def gyro_filter(inertia, axis):
     """Inertia ``(Ixx, Iyy, Izz, Ixy, Iyz, Izx)`` with the moment about ``axis`` removed."""
-    from ._inertia import _as_list6, _as_matrix3
+    from ..geometry._inertia import _as_list6, _as_matrix3
 
     J = _as_matrix3(inertia)
     a = np.asarray(axis, dtype=float)

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from ._errors import ModelError
+from .._errors import ModelError
 
 
 class LoadOutputs:

@@ -11,20 +11,20 @@ from collections.abc import Mapping
 import numpy as np
 import sympy as sp
 
-from ._bodies import Body
 from ._errors import (
     ConstraintCountError,
     ModelError,
     UnknownBodyError,
     UnknownConstraintError,
 )
-from ._geometry import Axis, Point, Vector, as_point, as_vector
-from ._load_outputs import LoadOutputs
-from ._outputs import OutputFunctions, VelocityViews
-from ._space import PLANAR, SPATIAL, Space
 from ._symbols import T
 from .compile import System, make_layout, time_derivative
 from .constraints import Constraint, ConstraintBase, Variable
+from .geometry._bodies import Body
+from .geometry._points import Axis, Point, Vector, as_point, as_vector
+from .geometry._space import PLANAR, SPATIAL, Space
+from .results._load_outputs import LoadOutputs
+from .results._outputs import OutputFunctions, VelocityViews
 from .solvers import ORDERS, PositionOptions, dependent_rows, sweep
 from .solvers._linalg import involved_rows
 
@@ -109,7 +109,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
     def set_mass_properties(self, body, mass=None, centroid=None, inertia=None) -> None:
         """Change a body's mass, centroid (local) or inertia (about the centroid, body axes)
         after it was added (Mech's ``SetBodies[Body[b, Mass -> ...]]``)."""
-        from ._geometry import _as_matrix
+        from .geometry._points import _as_matrix
 
         b = self.body(body)
         if b.is_ground:
@@ -275,7 +275,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
     def add_load(self, load, name: str | None = None):
         """Add a load (``Force``, ``Moment``, ``Gravity``, ``Load``, ``Spring``, ``Damper``,
         friction); returns it as the handle (Mech's ``SetLoads``)."""
-        from ._loads import LoadBase
+        from .loads._loads import LoadBase
 
         loads = load if isinstance(load, (list, tuple)) else [load]
         for ld in loads:
@@ -509,7 +509,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         default the model's guesses. A sweep continues each point from the previous one.
         Returns a :class:`~mechsys.Solution` and stores it as ``last_solution``.
         """
-        from ._results import Solution
+        from .results._solution import Solution
 
         modes = {"static": 0, "kinematic": 1, "dynamic": 2}
         if solution not in ORDERS and solution not in modes:
@@ -550,7 +550,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         """Drop constraints and build the free system (Mech's ``SetFree``): equilibrium
         configuration (``solution="static"``), equilibrium velocity (``"kinematic"``) or free
         acceleration and motion (``"dynamic"``). Returns a :class:`FreeSystem`."""
-        from ._free import FreeSystem
+        from .analyses._free import FreeSystem
 
         return FreeSystem(self, drop, solution, initial_guess, initial_condition)
 
@@ -558,7 +558,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         """Replace dummy constraints by velocity constraints (Mech's ``SetPath``):
         ``replace={dummy: velocity_constraint}``. Returns a :class:`PathSystem` whose
         ``simulate`` integrates the nonholonomic motion (``SolvePath``)."""
-        from ._path import PathSystem
+        from .analyses._path import PathSystem
 
         return PathSystem(self, replace, initial_condition)
 

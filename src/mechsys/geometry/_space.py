@@ -19,6 +19,9 @@ from __future__ import annotations
 
 import sympy as sp
 
+from .._errors import MechError, ModelError
+from ._rotations import euler_parameters, matrix_elements
+
 
 class Space:
     """Common interface of :class:`Planar` and :class:`Spatial`."""
@@ -72,7 +75,6 @@ class Planar(Space):
         try:
             return (float(rot),)
         except (TypeError, ValueError):
-            from ._errors import ModelError
 
             raise ModelError(f"rotation guess of body {who!r} must be an angle; got {rot!r}") from None
 
@@ -109,7 +111,6 @@ class Spatial(Space):
     coordinate_names = ("x", "y", "z", "e0", "e1", "e2", "e3")
 
     def rotation_matrix(self, rot) -> sp.Matrix:
-        from ._rotations import matrix_elements
 
         return sp.Matrix(matrix_elements(rot))
 
@@ -141,11 +142,8 @@ class Spatial(Space):
     def rotation_guess(self, rot, who: str) -> tuple:
         """Euler parameters (normalised) from any Mech rotation format: ``(e0, e1, e2, e3)``,
         a virtual rotation ``(vx, vy, vz)``, ``(angle, (ux, uy, uz))``, a 3 x 3 NumPy rotation
-        matrix, or a list of these applied in succession (see :mod:`mechsys._rotations`)."""
+        matrix, or a list of these applied in succession (see :mod:`mechsys.geometry._rotations`)."""
         import numpy as np
-
-        from ._errors import MechError, ModelError
-        from ._rotations import euler_parameters
 
         try:
             e = np.asarray(euler_parameters(rot), dtype=float).ravel()

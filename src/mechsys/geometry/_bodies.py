@@ -7,13 +7,13 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import sympy as sp
 
-from ._errors import GeometryError, ModelError, UnknownPointError
-from ._geometry import Axis, Line, Point, Vector, _as_matrix
+from .._errors import GeometryError, ModelError, UnknownPointError
+from .._symbols import coord_symbol
+from ._points import Axis, BodyRef, Line, Point, Vector, _as_matrix
 from ._space import Space
-from ._symbols import coord_symbol
 
 
-class Body:
+class Body(BodyRef):
     """A rigid body of a model. Create with ``model.add_body``; ground is ``model.ground``.
 
     Attributes

@@ -23,8 +23,8 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from ._errors import ModelError
-from ._geometry import Axis, Point, Vector, as_point, as_vector
+from .._errors import ModelError
+from ..geometry._points import Axis, Point, Vector, as_point, as_vector
 
 
 @dataclass

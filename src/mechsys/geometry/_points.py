@@ -14,15 +14,24 @@ vector is expected, a vector in ground (global) coordinates.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
 
 import numpy as np
 import sympy as sp
 
-from ._errors import GeometryError, ModelError
+from .._errors import GeometryError, ModelError
 
-if TYPE_CHECKING:  # pragma: no cover
-    from ._bodies import Body
+
+class BodyRef:
+    """What points, vectors and rotations need to know of a body.
+
+    :class:`~mechsys.Body` derives from it; the geometry below bodies tests
+    ``isinstance(x, BodyRef)`` so that it never imports the body module (imports run down).
+    """
+
+    __slots__ = ()
+
+    def point(self, spec) -> Point:  # pragma: no cover - Body implements it
+        raise NotImplementedError
 
 
 def _as_matrix(coords, what: str) -> sp.Matrix:
@@ -56,7 +65,7 @@ def _is_coords(obj) -> bool:
 class Geometry:
     """Base of geometric objects; ``body`` is ``None`` for ground (global) objects."""
 
-    body: Body | None
+    body: BodyRef | None
 
     def bodies(self) -> list:
         return [self.body] if self.body is not None else []
@@ -71,7 +80,7 @@ class Geometry:
 class Point(Geometry):
     """A point fixed in a body, with local coordinates ``s'``: global ``r + A s'``."""
 
-    def __init__(self, body: Body | None, local, label: str | None = None):
+    def __init__(self, body: BodyRef | None, local, label: str | None = None):
         self.body = body
         self.local = _as_matrix(local, "Point")
         self.label = label
@@ -355,9 +364,8 @@ class Plane(Axis):
     """
 
     def __init__(self, *args):
-        from ._bodies import Body
 
-        if len(args) == 4 and isinstance(args[0], Body):
+        if len(args) == 4 and isinstance(args[0], BodyRef):
             body = args[0]
             pts = [body.point(p) for p in args[1:]]
         elif len(args) == 3:
@@ -391,13 +399,12 @@ class Plane(Axis):
 
 def as_point(obj) -> Point:
     """Coerce: a :class:`Point`; an axis (its origin); a body (its origin); coordinates (ground)."""
-    from ._bodies import Body
 
     if isinstance(obj, Point):
         return obj
     if isinstance(obj, Axis):
         return obj.origin
-    if isinstance(obj, Body):
+    if isinstance(obj, BodyRef):
         return obj.point(0)
     if _is_coords(obj):
         return Point(None, obj)

@@ -1,0 +1,10 @@
+"""Analyses: systems derived from a model for one kind of question.
+
+``FreeSystem`` (Mech's SetFree/SolveFree, chapter 10) and ``PathSystem`` (SetPath/SolvePath,
+10.5). Each reads the model's parameters when it solves or simulates, not when it is built.
+"""
+
+from ._free import FreeSystem
+from ._path import PathSystem
+
+__all__ = ["FreeSystem", "PathSystem"]
