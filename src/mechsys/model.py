@@ -467,7 +467,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
     def dof(self) -> DOF:
         """Degrees of freedom: the Gruebler count and the Jacobian rank at the current guess."""
         system = self.compile()
-        J = system.jacobian(0.0, self.guess(), self._p())
+        J = system.jacobian_once(0.0, self.guess(), self._p())
         rank, dep = dependent_rows(J) if system.m else (0, [])
         owners = [o for o in system.layout.owners_of(dep) if isinstance(o, ConstraintBase)]
         return DOF(system.n - rank, coordinates=system.n, equations=system.m,

@@ -20,13 +20,20 @@ Numeric functions take ``x = [t, q (n), qd (n), lambda (m), p]``.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import scipy.sparse as sps
 import sympy as sp
 
 from .._symbols import T
 from ._backends import compile_exprs
-from ._derive import hessian_terms, time_derivative
+from ._derive import hessian_terms, time_derivative, to_sympy_list
+
+try:  # optional
+    import symengine as se
+except ImportError:  # pragma: no cover
+    se = None
 
 
 def multiplier_symbols(layout) -> tuple:
@@ -47,15 +54,79 @@ def body_kinetic_energy(space, body, qd_of) -> sp.Expr:
     """``T_b`` as an expression of the body's coordinates and velocities."""
     if body.is_ground:
         return sp.S.Zero
-    q = list(body.q)
-    qd = [qd_of[s] for s in q]
-    rc = body.r + body.A * body.centroid
-    vc = rc.applyfunc(lambda e: time_derivative(e, q, qd))
-    w = space.as_rotation_vector(space.omega(q[space.dim :], qd[space.dim :], local=True))
+    q = tuple(body.q)
+    return body_terms(space, q, tuple(qd_of[s] for s in q), *_mass_key(space, body))[0]
+
+
+def _mass_key(space, body) -> tuple:
+    """Hashable mass properties of a body: ``(m, centroid (dim,), inertia entries)`` with the
+    inertia as ``J`` (2D) or its symmetric part ``(Jxx, Jyy, Jzz, Jxy, Jyz, Jzx)`` (3D): only
+    the symmetric part enters ``w^T J w``."""
     J = space.inertia_matrix(body.inertia)
-    trans = body.mass * (vc.T * vc)[0, 0] / 2
-    rot = (w.T * J * w)[0, 0] / 2
-    return (trans + rot) if body.mass != 0 or any(J) else sp.S.Zero
+    if space.dim == 2:
+        jkey = (J[0, 0],)
+    else:
+        jkey = (J[0, 0], J[1, 1], J[2, 2], (J[0, 1] + J[1, 0]) / 2, (J[1, 2] + J[2, 1]) / 2,
+                (J[2, 0] + J[0, 2]) / 2)
+    return sp.sympify(body.mass), tuple(body.centroid), jkey
+
+
+@functools.lru_cache(maxsize=4)
+def _body_template(space) -> tuple:
+    """Kinetic energy, mass matrix and velocity forces of one body with *symbolic* mass
+    properties and generic coordinates, derived once per space::
+
+        T = m/2 |d/dt (r + A c')|^2 + 1/2 w'^T J w',
+        M_ij = d^2 T / d qd_i d qd_j,   Qv_i = dT/dq_i - sum_j d^2 T / d qd_i d q_j qd_j
+
+    Each body then only substitutes its own symbols and values (``body_terms``): a 256-link
+    chain derives this once instead of 256 times. Expressions are SymEngine's when it is
+    installed (substitution there is ~50 times faster than SymPy's), else SymPy's.
+    """
+    dim = space.dim
+    nq = dim + (1 if dim == 2 else 4)
+    q = sp.symbols(f"_q0:{nq}")
+    qd = sp.symbols(f"_qd0:{nq}")
+    m = sp.Symbol("_m")
+    c = sp.Matrix(sp.symbols(f"_c0:{dim}"))
+    if dim == 2:
+        jsyms = (sp.Symbol("_J"),)
+        J = sp.Matrix([[jsyms[0]]])
+    else:
+        jsyms = sp.symbols("_Jxx _Jyy _Jzz _Jxy _Jyz _Jzx")
+        xx, yy, zz, xy, yz, zx = jsyms
+        J = sp.Matrix([[xx, xy, zx], [xy, yy, yz], [zx, yz, zz]])
+    rot, rot_d = list(q[dim:]), list(qd[dim:])
+    rc = sp.Matrix(q[:dim]) + space.rotation_matrix(rot) * c
+    vc = rc.applyfunc(lambda e: time_derivative(e, q, qd))
+    w = space.as_rotation_vector(space.omega(rot, rot_d, local=True))
+    T = m * (vc.T * vc)[0, 0] / 2 + (w.T * J * w)[0, 0] / 2
+    M, Qv = hessian_terms(T, list(q), list(qd))
+    syms = (q, qd, m, tuple(c), jsyms)
+    if se is not None:
+        return syms, se.sympify(T), [[se.sympify(e) for e in row] for row in M], [
+            se.sympify(e) for e in Qv]
+    return syms, T, M, Qv
+
+
+@functools.lru_cache(maxsize=4096)
+def body_terms(space, q: tuple, qd: tuple, mass, centroid: tuple, inertia: tuple) -> tuple:
+    """``(T_b, M_b (nq x nq nested lists), Qv_b (nq,))`` of one body, SymEngine expressions
+    when SymEngine is installed (else SymPy). Memoized: the systems derived from one model
+    (the full model, its free and path systems, a re-compile after a constraint edit)
+    share them."""
+    (gq, gqd, gm, gc, gJ), T, M, Qv = _body_template(space)
+    if mass == 0 and all(j == 0 for j in inertia):
+        z = sp.S.Zero
+        return z, [[z] * len(q) for _ in q], [z] * len(q)
+    pairs = [*zip(gq, q), *zip(gqd, qd), (gm, mass), *zip(gc, centroid), *zip(gJ, inertia)]
+    if se is not None:
+        sub = {se.sympify(k): se.sympify(v) for k, v in pairs}
+        rep = lambda e: se.expand(e.xreplace(sub))
+    else:
+        sub = dict(pairs)
+        rep = lambda e: sp.expand(e.xreplace(sub))
+    return rep(T), [[rep(e) for e in row] for row in M], [rep(e) for e in Qv]
 
 
 def generalized_forces(model, loads, layout) -> list:
@@ -77,12 +148,12 @@ def generalized_forces(model, loads, layout) -> list:
                 body = c.point.body
                 if body is None or body.is_ground:
                     continue
-                v = c.point.location().applyfunc(
-                    lambda e, b=body: time_derivative(e, b.q, [qd_of[s] for s in b.q]))
-                F = sp.Matrix(c.force)
+                # virtual work: d(velocity)/d(qd_s) = d(location)/d(q_s) for a body point
+                r = list(c.point.location())
+                F = list(c.force)
                 for s in body.q:
-                    Jcol = v.diff(qd_of[s])
-                    Q[index[s]] += (Jcol.T * F)[0, 0]
+                    # scalar diffs: Matrix.diff goes through SymPy's array derivatives (slow)
+                    Q[index[s]] += sp.Add(*(ri.diff(s) * fi for ri, fi in zip(r, F)))
             elif isinstance(c, BodyMoment):
                 body = c.body
                 if body.is_ground:
@@ -114,15 +185,14 @@ class Dynamics:
         qd_of = dict(zip(lay.q_symbols, lay.qd_symbols))
         index = {s: i for i, s in enumerate(lay.q_symbols)}
         rows, cols, vals, Qv = [], [], [], [sp.S.Zero] * lay.n
-        self.kinetic = {}
+        kinetic = {}
         for b in bodies:
-            Tb = body_kinetic_energy(model.space, b, qd_of)
-            self.kinetic[b.name] = Tb
+            q = list(b.q)
+            Tb, Mb, Qvb = body_terms(model.space, tuple(q), tuple(qd_of[s] for s in q),
+                                     *_mass_key(model.space, b))
+            kinetic[b.name] = Tb
             if Tb == 0:
                 continue
-            q = list(b.q)
-            qd = [qd_of[s] for s in q]
-            Mb, Qvb = hessian_terms(Tb, q, qd)
             for i, si in enumerate(q):
                 for j in range(len(q)):
                     if Mb[i][j] != 0:
@@ -132,12 +202,11 @@ class Dynamics:
                 Qv[index[si]] += Qvb[i]
         self.M_rows = np.array(rows, dtype=int)
         self.M_cols = np.array(cols, dtype=int)
-        self.M_exprs = vals
-        self.Qv = list(Qv)
+        # native (SymEngine) expressions feed the compiler; SymPy copies are made on first use
+        self._native = {"M": vals, "Qv": Qv, "kinetic": kinetic}
+        self._sympy: dict = {}
         self.Q = generalized_forces(model, loads, lay)
-        pots = [ld.potential(model) for ld in loads]
-        self.potential = sum((p for p in pots if p is not None), sp.S.Zero) if any(
-            p is not None for p in pots) else None
+        self._potential = (model, tuple(loads))
         lamset = set(self.lam)
         self.depends_on_lambda = any(e.free_symbols & lamset for e in self.Q)
         self.depends_on_qd = any(e.free_symbols & set(lay.qd_symbols) for e in self.Q)
@@ -159,13 +228,68 @@ class Dynamics:
                     f"the applied force on coordinate {lay.q_names[i]} uses unknown symbol(s) "
                     f"{sorted(map(str, extra))}; loads may use T, coordinates, velocities, "
                     "accelerations, parameters and constraint multipliers")
-        self.f_terms = compile_exprs(args, list(vals) + list(self.Q) + self.Qv, system.backend)
+        self._f_terms = None
         self._kernel = None
         if self.depends_on_lambda:
             self.dQ_rows, self.dQ_cols, self.f_dQ_dlam = self._sparse_derivative(self.lam, args)
         if self.depends_on_qdd:
             self.dA_rows, self.dA_cols, self.f_dQ_dqdd = self._sparse_derivative(
                 lay.qdd_symbols, args)
+
+    @property
+    def potential(self):
+        """Total potential energy of the conservative loads (gravity, linear springs), or
+        None when there are none (made on first use)."""
+        if isinstance(self._potential, tuple):
+            model, loads = self._potential
+            pots = [p for p in (ld.potential(model) for ld in loads) if p is not None]
+            self._potential = sp.Add(*pots) if pots else None
+        return self._potential
+
+    def _sympy_copy(self, key):
+        if key not in self._sympy:
+            nat = self._native[key]
+            if isinstance(nat, dict):
+                self._sympy[key] = {k: sp.sympify(v) for k, v in nat.items()}
+            else:
+                self._sympy[key] = to_sympy_list(nat)
+        return self._sympy[key]
+
+    @property
+    def M_exprs(self) -> list:
+        """Nonzero mass-matrix entries (SymPy) at ``(M_rows, M_cols)``."""
+        return self._sympy_copy("M")
+
+    @property
+    def Qv(self) -> list:
+        """Velocity-dependent generalized forces (n,), SymPy."""
+        return self._sympy_copy("Qv")
+
+    @property
+    def kinetic(self) -> dict:
+        """``{body name: kinetic energy}`` (SymPy)."""
+        return self._sympy_copy("kinetic")
+
+    def for_compile(self, key: str) -> list:
+        """``"M"``, ``"Qv"`` or ``"Q+Qv"`` as the compiler wants them: native SymEngine
+        expressions with the SymEngine backend, SymPy otherwise."""
+        if self.system.backend == "symengine" and se is not None:
+            if key == "Q+Qv":
+                return [se.sympify(a) + b for a, b in zip(self.Q, self._native["Qv"])]
+            return list(self._native[key])
+        if key == "Q+Qv":
+            return [a + b for a, b in zip(self.Q, self.Qv)]
+        return list(self._sympy_copy(key))
+
+    @property
+    def f_terms(self):
+        """Compiled ``x -> [M values, Q, Qv]`` (on first use: free motion does not need it)."""
+        if self._f_terms is None:
+            Q = [se.sympify(e) for e in self.Q] if (
+                self.system.backend == "symengine" and se is not None) else list(self.Q)
+            self._f_terms = compile_exprs(self.args(), self.for_compile("M") + Q
+                                          + self.for_compile("Qv"), self.system.backend)
+        return self._f_terms
 
     def _sparse_derivative(self, wrt, args):
         """Rows, columns and compiled values of the nonzero ``dQ_i / d wrt_j``."""
@@ -198,7 +322,7 @@ class Dynamics:
         acceleration-dependent loads)."""
         n = self.system.n
         out = self.f_terms(self.pack(t, q, qd, lam, p, qdd))
-        k = len(self.M_exprs)
+        k = len(self.M_rows)
         M = np.zeros((n, n))
         np.add.at(M, (self.M_rows, self.M_cols), out[:k])
         return M, out[k : k + n], out[k + n :]
@@ -242,9 +366,8 @@ class FreeKernel:
         self.dyn = dyn
         jac = system.kinematic_exprs("jac", for_compile=True)
         gamma = system.kinematic_exprs("gamma", for_compile=True)
-        exprs = list(dyn.M_exprs) + list(jac)
-        exprs += [a + b for a, b in zip(dyn.Q, dyn.Qv)] + list(gamma)
-        self.k_M, self.k_J = len(dyn.M_exprs), len(jac)
+        exprs = dyn.for_compile("M") + list(jac) + dyn.for_compile("Q+Qv") + list(gamma)
+        self.k_M, self.k_J = len(dyn.M_rows), len(jac)
         self._zeros = np.zeros(n)
         self.f = compile_exprs(dyn.args(), exprs, system.backend)
         rows = np.concatenate((dyn.M_rows, system.jac_cols, n + system.jac_rows))

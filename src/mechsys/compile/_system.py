@@ -114,12 +114,7 @@ class System:
         self.jac_cols = np.array(cols, dtype=int)
         self._native = native
         self._sympy = {} if native is not None else {"jac": jac, "phi_t": phi_t, "gamma": gamma}
-        args = layout.args()
-        src = {k: self.kinematic_exprs(k, for_compile=True) for k in ("jac", "phi_t", "gamma")}
-        src["phi"] = native["phi"] if (native is not None and self.backend == "symengine") else self.phi
-        self.f_position: Compiled = compile_exprs(args, src["phi"] + src["jac"], self.backend)
-        self.f_velocity: Compiled = compile_exprs(args, src["jac"] + src["phi_t"], self.backend)
-        self.f_gamma: Compiled = compile_exprs(args, src["gamma"], self.backend)
+        self._kernels: dict = {}
         self._eval_cache: dict = {}
         self._model = model
         self._loads = tuple(loads)
@@ -138,6 +133,36 @@ class System:
 
             self._sympy[key] = to_sympy_list(self._native[key])
         return self._sympy[key]
+
+    def _kernel(self, name: str, keys: tuple) -> Compiled:
+        """Compile one kinematic kernel on first use (``m.dof()`` needs only the Jacobian, a
+        position-only sweep no ``gamma``): the LLVM compile is most of a large model's cost."""
+        k = self._kernels.get(name)
+        if k is None:
+            parts = []
+            for key in keys:
+                if key == "phi":
+                    native = self._native is not None and self.backend == "symengine"
+                    parts += self._native["phi"] if native else self.phi
+                else:
+                    parts += self.kinematic_exprs(key, for_compile=True)
+            k = self._kernels[name] = compile_exprs(self.layout.args(), parts, self.backend)
+        return k
+
+    @property
+    def f_position(self) -> Compiled:
+        """``x -> [Phi (m), Phi_q values (nnz)]``."""
+        return self._kernel("position", ("phi", "jac"))
+
+    @property
+    def f_velocity(self) -> Compiled:
+        """``x -> [Phi_q values (nnz), Phi_t (m)]``."""
+        return self._kernel("velocity", ("jac", "phi_t"))
+
+    @property
+    def f_gamma(self) -> Compiled:
+        """``x -> gamma (m)``."""
+        return self._kernel("gamma", ("gamma",))
 
     @property
     def jac_exprs(self) -> list:
@@ -193,6 +218,18 @@ class System:
 
     def residual(self, t: float, q, p=None) -> np.ndarray:
         return self.f_position(self.pack(t, q, None, p))[: self.m]
+
+    def jacobian_once(self, t: float, q, p=None) -> np.ndarray:
+        """Dense ``Phi_q`` for a one-off evaluation (``m.dof()``): uses the compiled position
+        kernel when it exists, else a quickly compiled, unoptimised Jacobian-only kernel."""
+        if "position" in self._kernels:
+            return self.jacobian(t, q, p)
+        k = self._kernels.get("jac_once")
+        if k is None:
+            k = self._kernels["jac_once"] = compile_exprs(
+                self.layout.args(), self.kinematic_exprs("jac", for_compile=True), self.backend,
+                once=True)
+        return self.assemble(k(self.pack(t, q, None, p)))
 
     def jacobian(self, t: float, q, p=None, sparse: bool = False):
         vals = self.f_position(self.pack(t, q, None, p))[self.m :]

@@ -179,11 +179,11 @@ class Gravity(LoadBase):
 
     def potential(self, model):
         u = _unit(self.vector.direction())
-        out = sp.S.Zero
+        terms = []
         for b in self._bodies(model):
             rc = b.r + b.A * b.centroid
-            out += -b.mass * self.g * (u.T * rc)[0, 0]
-        return out
+            terms.append(-b.mass * self.g * (u.T * rc)[0, 0])
+        return sp.Add(*terms)  # one Add: summing one by one re-flattens (N^2 for N bodies)
 
 
 class Load(LoadBase):
