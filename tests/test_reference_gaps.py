@@ -302,6 +302,17 @@ def test_static_balance_is_one_line():
     assert np.abs(sol.loads(ms.All)).max() > 10
 
 
+def test_balance_on_a_free_equilibrium_uses_the_free_systems_rows():
+    m = models.slider_crank_dynamic(piston_force=-50.0)
+    eq = m.free(drop=["drive"], solution="static").solve(0.0)
+    J, lam = eq.jacobian(ms.All, ms.All), eq.generalized(ms.All)
+    assert J.shape == (8, 9) and lam.shape == (8,)      # the driver's row is dropped
+    assert np.allclose(J.T @ lam, eq.loads(ms.All), atol=1e-9)
+    # symbolically on the model: the reaction is -Phi_q^T lambda, row for row
+    assert sp.simplify(m.jacobian(ms.All, ms.All).T * m.generalized(ms.All)
+                       + m.loads(ms.All, "reaction")) == sp.zeros(9, 1)
+
+
 def test_dynamic_balance_is_one_line_over_a_sweep():
     m = _dynamic_slider_crank()
     sol = m.solve(np.linspace(0, 1, 9), solution="dynamic")
