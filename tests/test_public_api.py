@@ -30,6 +30,8 @@ REQUIRED_TOP_LEVEL = {
     "SingularJacobianError",
     # loads (design: Force, Moment, Gravity, Load)
     "Force", "Moment", "Gravity", "Load",
+    # Mech's All / Rest selections of output functions (issue 10, section 5)
+    "All", "Rest",
 }
 
 #: Public subpackages and modules; every other module is private (``_name.py``).
@@ -54,7 +56,7 @@ REQUIRED_MEMBERS = {
               "remove", "replace", "parameter", "set_parameters", "parameters", "variable",
               "set_guess", "guess", "compile", "dof", "solve", "location", "velocity",
               "acceleration", "omega", "alpha", "angle", "instant_center", "jacobian",
-              "time_derivative"},
+              "time_derivative", "generalized", "loads"},
     "Body": {"point", "vector", "axis", "line"},
     "Solution": {"location", "velocity", "acceleration", "omega", "alpha", "angle",
                  "instant_center", "eval", "interpolate", "to_dataframe", "state",

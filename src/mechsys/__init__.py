@@ -115,12 +115,15 @@ from .loads._friction import JointFriction
 from .loads._gyro import GyroFilter, GyroMoment, gyro_filter
 from .loads._loads import Damper, Force, Gravity, Load, LoadBase, Moment, Spring
 from .model import DOF, Model, Model2D, Model3D
+from .results._outputs import All, Rest
 from .results._solution import Solution, State
 from .solvers import PositionOptions
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "All",
+    "Rest",
     "NearSingularWarning",
     "PathSystem",
     "GyroFilter",

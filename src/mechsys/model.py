@@ -23,7 +23,7 @@ from .constraints import Constraint, ConstraintBase, Variable
 from .geometry._bodies import Body
 from .geometry._points import Axis, Point, Vector, as_point, as_vector
 from .geometry._space import PLANAR, SPATIAL, Space
-from .results._load_outputs import LoadOutputs
+from .results._load_outputs import LoadOutputs, lambda_guess_vector
 from .results._outputs import OutputFunctions, VelocityViews
 from .solvers import ORDERS, PositionOptions, dependent_rows, sweep
 from .solvers._linalg import involved_rows
@@ -504,7 +504,9 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         loads ``"static"`` (positions, then ``Phi_q^T lambda = Q`` with zero velocities),
         ``"kinematic"`` (positions, velocities, velocity-dependent loads) or ``"dynamic"``
         (inverse dynamics ``M qdd + Phi_q^T lambda = Q + Qv``). ``lambda_guess`` starts the
-        multiplier Newton when loads depend on reactions (friction).
+        multiplier Newton when loads depend on reactions (friction): a number, ``m`` numbers
+        or a mapping ``{constraint or multiplier symbol: value(s)}`` (Mech's ``LambdaGuess``;
+        see :func:`~mechsys.results._load_outputs.lambda_guess_vector`).
         ``guess``: starting coordinates (array (n,), a ``State``/``Solution`` or a mapping);
         default the model's guesses. A sweep continues each point from the previous one.
         Returns a :class:`~mechsys.Solution` and stores it as ``last_solution``.
@@ -536,7 +538,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         p = self._p()
         N = len(res.t)
         lam = np.empty((N, system.m))
-        guess = 1.0 if lambda_guess is None else lambda_guess
+        guess = lambda_guess_vector(system, self, lambda_guess)
         for k in range(N):
             qd = None if res.qd is None else res.qd[k]
             qdd = None if res.qdd is None else res.qdd[k]

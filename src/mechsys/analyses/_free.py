@@ -20,6 +20,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from .._errors import MechError, ModelError
+from ..results._load_outputs import lambda_guess_vector
 from ..results._solution import Solution, State
 from ..solvers._free import (
     equilibrium_configuration,
@@ -163,8 +164,7 @@ class FreeSystem:
         (by ``kind``). Returns a one-point :class:`Solution` (``q, qd, qdd, lam``)."""
         q, qd, p = self._start(initial_condition)
         s = self.system
-        lam0 = np.ones(s.m) if lambda_guess is None else np.broadcast_to(
-            np.asarray(lambda_guess, dtype=float), (s.m,)).copy()
+        lam0 = lambda_guess_vector(s, self.model, lambda_guess)
         if self.kind == "static":
             if self._eq is None:
                 from ..compile._free import StaticEquilibrium

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._rotations import rotation_matrix
+
 
 def _as_matrix3(inertia) -> np.ndarray:
     a = np.asarray(inertia, dtype=float)
@@ -25,6 +27,13 @@ def _as_list6(J: np.ndarray):
     return (J[0, 0], J[1, 1], J[2, 2], J[0, 1], J[1, 2], J[2, 0])
 
 
+def _rotation_matrix(rotation) -> np.ndarray:
+    """3x3 matrix of a rotation given as a matrix or in any of Mech's rotation formats."""
+    if np.asarray(rotation, dtype=object).shape == (3, 3):
+        return np.asarray(rotation, dtype=float)
+    return np.asarray(rotation_matrix(rotation), dtype=float)
+
+
 def parallel_axis(vector, mass: float, inertia, rotation=None):
     r"""Inertia about another origin (parallel axis theorem).
 
@@ -33,8 +42,14 @@ def parallel_axis(vector, mass: float, inertia, rotation=None):
         2D:  J_O = J_c + m |d|^2
         3D:  J_O = R J_c R^T + m (|d|^2 I - d d^T)
 
-    ``rotation`` (3D, a 3x3 matrix) turns the centroidal frame into the new frame.
-    Negative ``mass`` goes the other way (non-centroidal to centroidal), as in Mech.
+    ``rotation`` (3D) is the rotation of the centroidal frame relative to the new frame,
+    ``R`` its matrix (columns: the centroidal axes in new-frame components). As in Mech it
+    may be given as ``(angle, (x, y, z))``, a virtual rotation vector ``(vx, vy, vz)``
+    (axis times angle), Euler parameters ``(e0, e1, e2, e3)``, or a 3x3 rotation matrix
+    (here a nested 3x3 list is a matrix, not a sequence of rotations).
+    Negative ``mass`` goes the other way (non-centroidal to centroidal), as in Mech: then
+    ``vector`` runs from the centroid to the other origin and ``rotation`` is that of the
+    other frame, both in centroidal axes.
     Returns a scalar (2D) or ``(Ixx, Iyy, Izz, Ixy, Iyz, Izx)`` (3D).
 
     >>> parallel_axis((1.0, 0.0), 2.0, 0.5)
@@ -45,7 +60,7 @@ def parallel_axis(vector, mass: float, inertia, rotation=None):
         return float(inertia) + mass * float(d @ d)
     J = _as_matrix3(inertia)
     if rotation is not None:
-        R = np.asarray(rotation, dtype=float)
+        R = _rotation_matrix(rotation)
         J = R @ J @ R.T
     return _as_list6(J + mass * (float(d @ d) * np.eye(3) - np.outer(d, d)))
 

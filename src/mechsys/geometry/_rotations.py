@@ -376,7 +376,7 @@ def projected_angle(vector1, vector2, vector3=None):
     return np.arctan2(y, x)
 
 
-def intersection_point(axis1, axis2):
+def intersection_point(axis1, axis2, offset=None):
     """Point where ``axis1`` meets the plane through the origin of ``axis2`` normal to its
     direction (3D; ``axis2`` is typically a :class:`~mechsys.Plane`), or where two lines
     meet (2D: the "plane" of ``axis2`` is the line itself)::
@@ -386,11 +386,23 @@ def intersection_point(axis1, axis2):
     with ``n_2`` the plane normal (3D) or the normal of line 2 (2D). Symbolic in the body
     coordinates (evaluate with ``sol.eval``); numeric when both axes are on ground.
     Raises :class:`GeometryError` when the axis is parallel to the plane (numerically).
+
+    2D only, ``offset`` (Mech's ``IntersectionPoint[axis1, axis2, offset]``): the point
+    ``offset`` units to the left of both axes, e.g. the centre of a fillet of radius
+    ``offset`` between them -- the intersection of the two lines each moved by ``offset``
+    along its left normal ``perp(u)/|u|``, ``perp(u) = (-u_y, u_x)`` (negative: to the right).
     """
 
     a1, a2 = as_axis(axis1), as_axis(axis2)
     r1, u1 = a1.location(), a1.direction()
     r2, u2 = a2.location(), a2.direction()
+    if offset is not None:
+        if len(u2) != 2:
+            raise GeometryError("intersection_point: the offset form is planar (2D axes); "
+                                "in 3D give two arguments")
+        off = sp.sympify(offset)
+        r1 = r1 + off * sp.Matrix([-u1[1], u1[0]]) / sp.sqrt(u1.dot(u1))
+        r2 = r2 + off * sp.Matrix([-u2[1], u2[0]]) / sp.sqrt(u2.dot(u2))
     if len(u2) == 2:
         n2 = sp.Matrix([-u2[1], u2[0]])
     elif len(u2) == 3:

@@ -17,6 +17,8 @@ Spatial body coordinates ``q_b = (x, y, z, e0, e1, e2, e3)`` with Euler paramete
 
 from __future__ import annotations
 
+import math
+
 import sympy as sp
 
 from .._errors import MechError, ModelError
@@ -71,12 +73,26 @@ class Planar(Space):
         return (0,)
 
     def rotation_guess(self, rot, who: str) -> tuple:
-        """A planar rotation guess is the angle (radians)."""
+        """A planar rotation guess is the angle (radians), or Mech's degenerate Euler
+        parameters ``(ei, ej) = (cos th, sin th)`` (any positive scale), converted at once
+        to ``th = atan2(ej, ei)``."""
+        if isinstance(rot, (tuple, list)) and len(rot) == 2:
+            try:
+                ei, ej = (float(v) for v in rot)
+            except (TypeError, ValueError):
+                raise ModelError(f"rotation guess of body {who!r}: degenerate Euler parameters "
+                                 f"(ei, ej) must be numbers; got {rot!r}") from None
+            if ei == 0.0 and ej == 0.0 or not (math.isfinite(ei) and math.isfinite(ej)):
+                raise ModelError(f"rotation guess of body {who!r}: degenerate Euler parameters "
+                                 f"(ei, ej) = {rot!r} do not define an angle; give "
+                                 "(cos th, sin th) or the angle th")
+            return (math.atan2(ej, ei),)
         try:
             return (float(rot),)
         except (TypeError, ValueError):
 
-            raise ModelError(f"rotation guess of body {who!r} must be an angle; got {rot!r}") from None
+            raise ModelError(f"rotation guess of body {who!r} must be an angle or degenerate "
+                             f"Euler parameters (ei, ej); got {rot!r}") from None
 
     def angle(self, rot):
         return rot[0]

@@ -28,17 +28,22 @@ from ._loads import BodyMoment, LoadBase
 
 
 class GyroMoment(LoadBase):
-    """``GyroMoment(body, axis, omega, inertia=I_s)``: the gyroscopic moment of a rotor
+    """``GyroMoment(body, axis, omega, inertia=None)``: the gyroscopic moment of a rotor
     spinning at ``omega`` (an expression; may depend on ``T``) about ``axis`` (a vector fixed
-    in ``body``, or local components) with spin inertia ``inertia``."""
+    in ``body``, or local components) with spin inertia ``inertia``.
 
-    def __init__(self, body, axis, omega, inertia):
+    Without ``inertia`` the spin inertia is taken from the body, as Mech does when its
+    ``Inertia`` option is not given: the moment of the body's centroidal inertia tensor
+    ``J`` (body axes) about the unit spin axis ``a``, ``I_s = a^T J a`` (``a`` in body axes;
+    for an axis not fixed in the body, ``a^T A J A^T a`` with global ``a``)."""
+
+    def __init__(self, body, axis, omega, inertia=None):
         super().__init__()
         self.body = body
         self.axis = axis if isinstance(axis, Vector) else None
         self._axis_local = None if self.axis is not None else axis
         self.omega = sp.sympify(omega)
-        self.inertia = sp.sympify(inertia)
+        self.inertia = None if inertia is None else sp.sympify(inertia)
 
     def bodies(self):
         return [self.body]
@@ -50,12 +55,29 @@ class GyroMoment(LoadBase):
         v = self.axis if self.axis is not None else b.vector(tuple(self._axis_local))
         d = as_vector(v).direction()
         a = d / sp.sqrt((d.T * d)[0, 0])
+        Is = self.inertia if self.inertia is not None else self.spin_inertia(model)
         w = model._omega(b, False)
-        M = -self.inertia * self.omega * w.cross(a)
+        M = -Is * self.omega * w.cross(a)
         wd = model.time_derivative(self.omega)
         if wd != 0:
-            M = M - self.inertia * wd * a
+            M = M - Is * wd * a
         return [BodyMoment(b, M)]
+
+    def spin_inertia(self, model):
+        """The spin inertia used: ``inertia`` when given, else ``a^T J a`` from the body."""
+        if self.inertia is not None:
+            return self.inertia
+        b = model.body(self.body)
+        J = model.space.inertia_matrix(b.inertia)
+        v = self.axis
+        if v is None or (v.points is None and v.body is not None and model.body(v.body) is b):
+            # a body-fixed axis: its local components give a constant spin inertia
+            loc = sp.Matrix(list(self._axis_local if v is None else v.local))
+            a = loc / sp.sqrt((loc.T * loc)[0, 0])
+            return (a.T * J * a)[0, 0]
+        d = as_vector(v).direction()
+        a = d / sp.sqrt((d.T * d)[0, 0])
+        return (a.T * b.A * J * b.A.T * a)[0, 0]
 
 
 def gyro_filter(inertia, axis):

@@ -157,32 +157,46 @@ class Moment(LoadBase):
 
 
 class Gravity(LoadBase):
-    r"""Weight ``m g u/|u|`` at the centroid of each body (all, or ``bodies``).
+    r"""Weight at the centroid of each body (all, or ``bodies``).
 
-    ``Gravity(vector, g, bodies=None)``; potential energy ``-m g (u/|u|) . r_c``.
+    ``Gravity(vector, g, bodies=None, mode="absolute")``::
+
+        F = m g u/|u|        (mode="absolute", the default: the force is m g)
+        F = m g u            (mode="relative", Mech's Magnitude -> Relative: the force
+                              is m g |u|, so ``u`` carries the field strength too)
+
+    Potential energy ``-(F . r_c)`` summed over the bodies.
     """
 
-    def __init__(self, vector=(0, -1), g=9.81, bodies=None):
+    def __init__(self, vector=(0, -1), g=9.81, bodies=None, *, mode: str = "absolute"):
         super().__init__()
         self.vector = as_vector(vector)
         self.g = sp.sympify(g)
         self.only = bodies
+        if mode not in ("absolute", "relative"):
+            raise ModelError(f"Gravity mode must be 'absolute' or 'relative', got {mode!r}")
+        self.mode = mode
 
     def _bodies(self, model):
         bs = model.bodies[1:] if self.only is None else [model.body(b) for b in self.only]
         return [b for b in bs if b.mass != 0]
 
+    def _field(self) -> sp.Matrix:
+        """Acceleration of gravity ``g u/|u|`` (absolute) or ``g u`` (relative)."""
+        d = self.vector.direction()
+        return self.g * (d if self.mode == "relative" else _unit(d))
+
     def contributions(self, model):
-        u = _unit(self.vector.direction())
-        return [PointForce(Point(b, b.centroid, label="centroid"), b.mass * self.g * u)
+        gv = self._field()
+        return [PointForce(Point(b, b.centroid, label="centroid"), b.mass * gv)
                 for b in self._bodies(model)]
 
     def potential(self, model):
-        u = _unit(self.vector.direction())
+        gv = self._field()
         terms = []
         for b in self._bodies(model):
             rc = b.r + b.A * b.centroid
-            terms.append(-b.mass * self.g * (u.T * rc)[0, 0])
+            terms.append(-b.mass * (gv.T * rc)[0, 0])
         return sp.Add(*terms)  # one Add: summing one by one re-flattens (N^2 for N bodies)
 
 

@@ -10,13 +10,24 @@ Sign conventions (also in ``docs/loads.md``)::
 
 A generalized load on a body converts to a force at the body origin ``O`` and a moment
 (2D scalar, 3D global vector); moved to a point ``P``: ``M_P = M_O + (r_O - r_P) x F``.
+
+Mech's selection forms (``All``, ``Rest``, lists; see :mod:`._outputs`) make the static
+balance one line, ``Phi_q^T lambda = Q``::
+
+    sol.jacobian(All, All).T @ sol.generalized(All) == sol.loads(All)
+
+(with inverse dynamics ``== sol.loads(All) + sol.loads(All, "dynamic")``).
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
+import numpy as np
 import sympy as sp
 
 from .._errors import ModelError
+from ._outputs import All, Rest, is_selection, selected_coordinates
 
 
 class LoadOutputs:
@@ -37,8 +48,17 @@ class LoadOutputs:
         return out
 
     def _body_rows(self, body):
+        """``(system, body or None, slice)``: the rows of a body, or of ``All``, ``Rest`` or
+        one coordinate symbol (then no body)."""
         m = self._model()
         s = self._sys()
+        if body is All:
+            return s, None, slice(0, s.n)
+        if body is Rest:
+            return s, None, slice(s.n - len(m._variables), s.n)
+        if isinstance(body, sp.Symbol):
+            j = self._indices(body)[0]
+            return s, None, slice(j, j + 1)
         b = m.body(body)
         if b.is_ground:
             return s, b, slice(0, 0)
@@ -63,11 +83,35 @@ class LoadOutputs:
     def _finish_pair(self, F, M):
         return self._finish(F), self._finish(M)
 
+    def _indices(self, spec) -> list:
+        """Layout indices of the coordinates of a selection (or a body)."""
+        m = self._model()
+        q = list(self._sys().layout.q_symbols)
+        syms = selected_coordinates(m, spec) if is_selection(spec) else list(m.body(spec).q)
+        try:
+            return [q.index(x) for x in syms]
+        except ValueError:  # pragma: no cover - the layout holds every coordinate
+            raise ModelError(f"{spec!r} has coordinates outside this system") from None
+
+    @staticmethod
+    def _concat(parts):
+        """Stack finished column results: SymPy columns, or arrays along the last axis."""
+        if isinstance(parts[0], sp.MatrixBase):
+            return sp.Matrix.vstack(*parts)
+        return np.concatenate(parts, axis=-1)
+
     # -- multipliers and reactions ----------------------------------------------------------
     def generalized(self, constraint):
         """The Lagrange multipliers of a constraint (Mech's ``Generalized``): symbols on a
-        model, values ``(N, k)`` on a solution."""
+        model, values ``(N, k)`` on a solution. ``All`` gives every multiplier of the system
+        (Euler normalisations included, in equation order: the rows of
+        ``jacobian(All, ...)``); a list of constraints their multipliers concatenated."""
         m = self._model()
+        if constraint is All:
+            return self._finish(sp.Matrix(self._sys().lam_symbols))
+        if isinstance(constraint, list):
+            return self._finish(sp.Matrix([lam for c in constraint
+                                           for lam in self._lams(m.constraint(c))]))
         return self._finish(sp.Matrix(self._lams(m.constraint(constraint))))
 
     def reaction(self, constraint, body, at=None, coordinates: str = "global"):
@@ -101,8 +145,21 @@ class LoadOutputs:
     def loads(self, body, type: str = "applied", coordinates: str | None = None):
         """Total load on a body (Mech's ``Loads``): ``type`` ``"applied"``, ``"reaction"``
         or ``"dynamic"``. Generalized on the body's coordinates by default; with
-        ``coordinates="global"|"local"`` a ``(force, moment)`` pair at the body origin."""
+        ``coordinates="global"|"local"`` a ``(force, moment)`` pair at the body origin.
+
+        Mech's other forms (generalized only): ``All`` the whole load vector, ``Rest`` the
+        model variables' part, a coordinate symbol its element, a list of bodies and
+        symbols the parts concatenated."""
+        if is_selection(body) and coordinates is not None:
+            raise ModelError(f"loads({body!r}, coordinates={coordinates!r}): a force and moment "
+                             "belong to one body; give a single body, or coordinates=None")
+        if isinstance(body, list):
+            if not body:
+                raise ModelError("loads([]): the list of bodies and coordinates is empty")
+            return self._concat([self.loads(x, type) for x in body])
         s, b, rows = self._body_rows(body)
+        if rows.start == rows.stop and b is None:  # Rest without model variables
+            return self._finish(sp.zeros(0, 1))
         dyn = s.dynamics
         lay = s.layout
         if type == "applied":
@@ -128,24 +185,25 @@ class LoadOutputs:
         return self._finish_pair(F, M)
 
     def mass_matrix(self, body=None):
-        """The mass matrix (of one body's coordinates, or all)."""
+        """The mass matrix (of one body's coordinates, or all; or of a selection: ``All``,
+        ``Rest``, a list of bodies and coordinate symbols)."""
         s = self._sys()
         dyn = s.dynamics
         M = sp.zeros(s.n, s.n)
         for r, c, e in zip(dyn.M_rows, dyn.M_cols, dyn.M_exprs):
             M[r, c] += e
         if body is not None:
-            _, _, rows = self._body_rows(body)
-            M = M[rows, rows]
+            idx = self._indices(body)
+            M = M.extract(idx, idx)
         return self._finish(M)
 
     def centrifugal(self, body=None):
-        """Velocity-dependent inertial forces ``Qv`` (centrifugal, gyroscopic, Coriolis)."""
+        """Velocity-dependent inertial forces ``Qv`` (centrifugal, gyroscopic, Coriolis), of
+        all coordinates, one body or a selection."""
         s = self._sys()
         Qv = sp.Matrix(s.dynamics.Qv)
         if body is not None:
-            _, _, rows = self._body_rows(body)
-            Qv = Qv[rows, :]
+            Qv = Qv.extract(self._indices(body), [0])
         return self._finish(Qv)
 
     # -- energies and power ---------------------------------------------------------------------
@@ -172,3 +230,49 @@ class LoadOutputs:
         eqs = sp.Matrix(c.equations(m.space))
         q, qd = list(s.layout.q_symbols), sp.Matrix(s.layout.qd_symbols)
         return self._finish(-(lam.T * eqs.jacobian(q) * qd)[0, 0])
+
+
+def lambda_guess_vector(system, model, spec) -> np.ndarray:
+    """Starting multipliers ``(m,)`` from any of Mech's ``LambdaGuess`` forms.
+
+    ``None`` -> all ones (Mech's default); a number -> that value for all; a sequence of
+    ``m`` numbers -> all values (order of ``generalized(All)``); a mapping -> the given
+    entries, the others one: keys are multiplier symbols (``{lam2_1: 5.0}``) or constraints
+    (handle, name or number) with a number (for all their multipliers) or one value each
+    (``{"drive": -40.0}``). A partial dictionary is Mech's ``LambdaGuess -> {rules}``.
+    """
+    m = system.m
+    if spec is None:
+        return np.ones(m)
+    if isinstance(spec, Mapping):
+        lam = np.ones(m)
+        syms = list(system.lam_symbols)
+        for key, val in spec.items():
+            if isinstance(key, sp.Symbol):
+                if key not in syms:
+                    raise ModelError(f"lambda_guess: {key} is not a multiplier of this system; "
+                                     f"they are {[str(x) for x in syms]}")
+                rows = [syms.index(key)]
+            else:
+                c = model.constraint(key)
+                rows = [i for i, o in enumerate(system.layout.eq_owner) if o is c]
+                if not rows:
+                    raise ModelError(f"lambda_guess: {c.label()} is not among the constraints "
+                                     "of this system (was it dropped by free()?)")
+            vals = np.asarray(val, dtype=float).ravel()
+            if vals.size not in (1, len(rows)) or not np.all(np.isfinite(vals)):
+                raise ModelError(f"lambda_guess[{key!r}]: give one finite number or "
+                                 f"{len(rows)} (one per multiplier), got {val!r}")
+            lam[rows] = vals
+        return lam
+    try:
+        vals = np.asarray(spec, dtype=float)
+    except (TypeError, ValueError):
+        raise ModelError(f"lambda_guess must be a number, {m} numbers or a mapping "
+                         f"{{multiplier or constraint: value}}, got {spec!r}") from None
+    if vals.ndim == 0:
+        vals = np.full(m, float(vals))
+    if vals.shape != (m,) or not np.all(np.isfinite(vals)):
+        raise ModelError(f"lambda_guess must be a number or {m} finite numbers (one per "
+                         f"multiplier, as generalized(All)), got shape {vals.shape}")
+    return vals.copy()

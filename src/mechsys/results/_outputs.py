@@ -10,14 +10,65 @@ Planar instant centre of a body with origin velocity ``v_O`` and angular velocit
     r_IC = r_O + perp(v_O) / w,    perp(v) = (-v_y, v_x)
 
 (infinite when ``w = 0``: the body translates).
+
+Selections (Mech's ``All`` / ``Rest`` / lists, for ``location``, ``jacobian`` and the load
+outputs): ``All`` every coordinate (and model variable) in layout order, ``Rest`` the model
+variables only (Mech: the extra variables of cam and user constraints), a coordinate symbol
+one coordinate, a list the concatenation of its items (bodies, symbols).
 """
 
 from __future__ import annotations
 
+import numpy as np
 import sympy as sp
 
 from .._errors import ModelError
 from ..geometry._points import Axis, Point, Vector, as_point, as_vector
+
+
+class Selector:
+    """Mech's ``All`` and ``Rest`` as arguments of output functions (``ms.All``, ``ms.Rest``)."""
+
+    __slots__ = ("name",)
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+    def __repr__(self) -> str:
+        return f"mechsys.{self.name}"
+
+
+All = Selector("All")
+Rest = Selector("Rest")
+
+
+def is_selection(spec) -> bool:
+    """True for the multi-coordinate forms: ``All``, ``Rest``, a coordinate symbol or a list."""
+    return isinstance(spec, (Selector, sp.Symbol, list))
+
+
+def _is_number(x) -> bool:
+    return isinstance(x, (int, float, np.number, sp.Number)) and not isinstance(x, bool)
+
+
+def selected_coordinates(m, spec) -> list:
+    """Coordinate symbols (layout order within each item) of a selection on model ``m``."""
+    if spec is All:
+        return m._coordinate_symbols()
+    if spec is Rest:
+        return [v.symbol for v in m._variables]
+    if isinstance(spec, sp.Symbol):
+        if spec not in m._coordinate_symbols():
+            raise ModelError(f"{spec} is not a coordinate or variable of this model")
+        return [spec]
+    if isinstance(spec, list):
+        out = []
+        for item in spec:
+            if isinstance(item, (Selector, list)):
+                raise ModelError(f"a selection list holds bodies and coordinate symbols, got {item!r}")
+            out.extend(selected_coordinates(m, item))
+        return out
+    return list(m.body(spec).q)
 
 
 class OutputFunctions:
@@ -31,8 +82,21 @@ class OutputFunctions:
 
     # -- points ---------------------------------------------------------------------------
     def location(self, point):
-        """Global location ``(dim,)`` of a point (an axis gives its origin)."""
-        return self._finish(self._model()._point(point).location())
+        """Global location ``(dim,)`` of a point (an axis gives its origin; a body handle
+        its origin, as a point).
+
+        Mech's ``Location[bnum]`` form: a *list* of bodies (``[body]`` for one), ``All`` or
+        ``Rest`` gives the coordinates themselves (``(x, y, th)`` per planar body,
+        ``(x, y, z, e0, e1, e2, e3)`` per spatial body, then variables), concatenated. Name
+        the bodies (handles or names) in that list: a list of numbers is a global point.
+        """
+        m = self._model()
+        # a list of numbers stays a global point (as before); a list naming bodies selects
+        numeric_list = isinstance(point, list) and any(_is_number(x) for x in point)
+        if is_selection(point) and not numeric_list:
+            syms = selected_coordinates(m, point)
+            return self._finish(sp.Matrix(len(syms), 1, syms))
+        return self._finish(m._point(point).location())
 
     def velocity(self, point):
         """Global velocity ``(dim,)`` of a point fixed in its body."""
@@ -78,25 +142,34 @@ class OutputFunctions:
             a = b.A.T * a
         return self._finish(a)
 
-    def instant_center(self, body):
+    def instant_center(self, body, coordinates: str = "global"):
         """Planar instant centre ``(2,)`` of ``body`` (infinite when it does not rotate).
 
         In 3D a body has an instant screw axis instead: returns ``(point, direction)``, the
-        point of the axis nearest the body origin ``r_O`` and the axis direction ``omega``
-        (global)::
+        point of the axis nearest the body origin ``r_O`` and the axis direction ``omega``::
 
             r_S = r_O + (omega x v_O) / (omega . omega)
 
         Every point on the axis has the same velocity, ``omega`` times the slip along it
         (infinite / undefined while the body only translates).
+
+        ``coordinates="local"`` (Mech's ``Coordinates -> Local``) gives the point in the
+        body's own frame, ``A^T (r_IC - r_O)`` (and in 3D the direction in body axes,
+        ``A^T omega``); the default ``"global"`` as in Mech.
         """
         m = self._model()
         b = m.body(body)
+        if coordinates not in ("global", "local"):
+            raise ModelError(f"coordinates must be 'global' or 'local', got {coordinates!r}")
         v = m.time_derivative(b.r)
         w = m._omega(b, False)
         if m.space.dim == 3:
-            return self._finish(b.r + w.cross(v) / w.dot(w)), self._finish(w)
-        return self._finish(b.r + sp.Matrix([-v[1], v[0]]) / w)
+            arm = w.cross(v) / w.dot(w)
+            if coordinates == "local":
+                return self._finish(b.A.T * arm), self._finish(b.A.T * w)
+            return self._finish(b.r + arm), self._finish(w)
+        arm = sp.Matrix([-v[1], v[0]]) / w
+        return self._finish(b.A.T * arm if coordinates == "local" else b.r + arm)
 
     # -- vectors --------------------------------------------------------------------------
     def direction(self, vector):
@@ -130,12 +203,36 @@ class OutputFunctions:
 
     def jacobian(self, constraint=None, body=None):
         """``d Phi_c / d q_b``: of one constraint's equations with respect to one body's
-        coordinates (all equations or all coordinates when omitted)."""
+        coordinates (all equations or all coordinates when omitted).
+
+        Mech's forms: ``constraint`` may be ``All`` (every equation of the system, Euler
+        normalisations included, in the order of ``generalized(All)``) or a list of
+        constraints (rows stacked); ``body`` any selection (``All``, ``Rest``, a list of
+        bodies or coordinate symbols). So the static balance is ``J.T @ lam == Q``::
+
+            sol.jacobian(ms.All, ms.All).T @ sol.generalized(ms.All) == sol.loads(ms.All)
+        """
         m = self._model()
-        eqs = sp.Matrix(m._all_equations()[0] if constraint is None
-                        else m.constraint(constraint).equations(m.space))
-        syms = m._coordinate_symbols() if body is None else list(m.body(body).q)
+        eqs = sp.Matrix(self._equation_rows(constraint))
+        syms = (m._coordinate_symbols() if body is None
+                else selected_coordinates(m, body) if is_selection(body) else list(m.body(body).q))
         return self._finish(eqs.jacobian(syms) if syms else sp.zeros(len(eqs), 0))
+
+    def _equation_rows(self, constraint) -> list:
+        """Equations of a constraint selection; on a solution, those of its own system (a
+        free system has fewer), so rows match the multipliers ``generalized`` returns."""
+        m = self._model()
+        sys_ = getattr(self, "system", None)
+        eqs, owners = (list(sys_.phi), list(sys_.layout.eq_owner)) if sys_ is not None else \
+            m._all_equations()[:2]
+        if constraint is None or constraint is All:
+            return eqs
+        if isinstance(constraint, list):
+            return [e for c in constraint for e in self._equation_rows(c)]
+        c = m.constraint(constraint)
+        rows = [e for e, o in zip(eqs, owners) if o is c]
+        # a constraint dropped by free() still has equations (evaluated at the free motion)
+        return rows if rows else list(c.equations(m.space))
 
 
 def point_of(obj) -> Point:
