@@ -23,26 +23,12 @@ from _machine import machine  # noqa: E402  (sibling module: run as a script)
 clock = time.process_time
 
 
-def chain(n):
-    import mechsys as ms
-
-    m = ms.Model2D()
-    prev = None
-    for k in range(n):
-        b = m.add_body(f"l{k}", points={"tip": (1, 0)}, mass=1.0, centroid=(0.5, 0),
-                       inertia=1 / 12, guess=((float(k), 0.0), 0.0))
-        joint = m.ground.point((0, 0)) if prev is None else prev.point("tip")
-        m.add(ms.Revolute2(joint, b.point(0)), name=f"j{k}")
-        m.add(ms.RotationLock1(b, 0.0), name=f"lock{k}")
-        prev = b
-    m.add_load(ms.Gravity((0, -1), 9.81))
-    return m
-
-
 def steps(n: int) -> dict:
+    from mechsys import models
+
     out = {}
     t = clock()
-    m = chain(n)
+    m = models.pendulum_chain(n)
     out["build"], t = clock() - t, clock()
     m.dof()
     out["dof()"], t = clock() - t, clock()

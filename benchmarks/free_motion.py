@@ -66,18 +66,9 @@ def chain(n_links: int):
     """``n_links`` uniform rods (1 m, 1 kg, 1/12), pinned end to end, the first to the
     ground at the origin, all horizontal along +X. Bodies ``l0 ... l{N-1}``; constraints
     ``lock{k}`` fix the link angles for assembly and are dropped."""
-    import mechsys as ms
+    from mechsys import models
 
-    m = ms.Model2D()
-    prev = None
-    for k in range(n_links):
-        b = m.add_body(f"l{k}", points={"tip": (1, 0)}, mass=1.0, centroid=(0.5, 0),
-                       inertia=1 / 12, guess=((float(k), 0.0), 0.0))
-        joint = m.ground.point((0, 0)) if prev is None else prev.point("tip")
-        m.add(ms.Revolute2(joint, b.point(0)), name=f"j{k}")
-        m.add(ms.RotationLock1(b, 0.0), name=f"lock{k}")
-        prev = b
-    m.add_load(ms.Gravity((0, -1), G))
+    m = models.pendulum_chain(n_links, G)
     m.solve(0.0)
     return m, [f"lock{k}" for k in range(n_links)]
 

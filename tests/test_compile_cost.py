@@ -8,21 +8,12 @@ import numpy as np
 import sympy as sp
 
 import mechsys as ms
+from mechsys import models
 from mechsys.compile._dynamics import body_terms
 
 
 def chain(n):
-    m = ms.Model2D()
-    prev = None
-    for k in range(n):
-        b = m.add_body(f"l{k}", points={"tip": (1, 0)}, mass=1.0, centroid=(0.5, 0),
-                       inertia=1 / 12, guess=((float(k), 0.0), 0.0))
-        joint = m.ground.point((0, 0)) if prev is None else prev.point("tip")
-        m.add(ms.Revolute2(joint, b.point(0)), name=f"j{k}")
-        m.add(ms.RotationLock1(b, 0.0), name=f"lock{k}")
-        prev = b
-    m.add_load(ms.Gravity((0, -1), 9.81))
-    return m
+    return models.pendulum_chain(n)
 
 
 def test_dof_compiles_only_a_quick_jacobian():

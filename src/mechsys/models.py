@@ -107,6 +107,30 @@ def four_bar_chain(n_loops: int, speed: float = 1.0) -> Model2D:
     return m
 
 
+def pendulum_chain(n_links: int, g: float = 9.81) -> Model2D:
+    """``n_links`` uniform rods (length 1, mass 1, centroidal inertia 1/12) pinned end to end,
+    the first to the ground at the origin, all horizontal along +x, under gravity ``g``
+    along -y. Bodies ``l0 ... l{N-1}``, joints ``j{k}``; the constraints ``lock{k}`` hold the
+    link angles at zero for assembly and are the ones to drop for free motion::
+
+        m = models.pendulum_chain(4)
+        free = m.free(drop=[f"lock{k}" for k in range(4)])
+    """
+    from .loads import Gravity
+
+    m = Model2D()
+    prev = None
+    for k in range(n_links):
+        b = m.add_body(f"l{k}", points={"tip": (1, 0)}, mass=1.0, centroid=(0.5, 0),
+                       inertia=1 / 12, guess=((float(k), 0.0), 0.0))
+        joint = m.ground.point((0, 0)) if prev is None else prev.point("tip")
+        m.add(Revolute2(joint, b.point(0)), name=f"j{k}")
+        m.add(RotationLock1(b, 0.0), name=f"lock{k}")
+        prev = b
+    m.add_load(Gravity((0, -1), g))
+    return m
+
+
 # -- spatial ---------------------------------------------------------------------------------
 
 
