@@ -62,6 +62,18 @@ class LoadBase:
     def bodies(self) -> list:
         return []
 
+    def geometry(self) -> list:
+        """Points and vectors of the load (checked against the model's dimension)."""
+        return []
+
+    def check(self, model) -> None:
+        """Checks when the load is added to ``model``: the dimension of its geometry."""
+        for g in self.geometry():
+            try:
+                g.check_dim(model.space.dim)
+            except ModelError as exc:
+                raise type(exc)(f"{self.label()}: {exc}") from None
+
     def label(self) -> str:
         return f"load {self.name!r} ({type(self).__name__})" if self.name else type(self).__name__
 
@@ -103,9 +115,14 @@ class Force(LoadBase):
         self.magnitude = sp.sympify(magnitude)
         self.mode, self.cutoff = mode, cutoff
         self.reaction = as_point(reaction) if reaction is not None else None
+        if mode == "absolute" and not cutoff:  # u/|u| of a zero vector is 0/0
+            self.direction.check_nonzero("Force direction")
 
     def bodies(self):
         return self.point.bodies() + (self.reaction.bodies() if self.reaction else [])
+
+    def geometry(self):
+        return [self.point, self.direction] + ([self.reaction] if self.reaction else [])
 
     def force_vector(self) -> sp.Matrix:
         d = self.direction.direction()
@@ -134,9 +151,18 @@ class Moment(LoadBase):
             self.vector, self.magnitude = as_vector(a), sp.sympify(b)
         self.reaction = reaction
         self.mode, self.cutoff = mode, cutoff
+        if self.vector is not None and mode == "absolute" and not cutoff:
+            self.vector.check_nonzero("Moment direction")
 
     def bodies(self):
         return [self.body] + ([self.reaction] if self.reaction is not None else [])
+
+    def geometry(self):
+        return [self.vector] if self.vector is not None else []
+
+    def check(self, model) -> None:
+        self.moment_value(model)  # a vector in 2D, none in 3D: say so now
+        super().check(model)
 
     def moment_value(self, model):
         if model.space.dim == 2:
@@ -165,8 +191,17 @@ class Gravity(LoadBase):
     def __init__(self, vector=(0, -1), g=9.81, bodies=None):
         super().__init__()
         self.vector = as_vector(vector)
+        self.vector.check_nonzero("Gravity direction")
         self.g = sp.sympify(g)
         self.only = bodies
+
+    def geometry(self):
+        return [self.vector]
+
+    def check(self, model) -> None:
+        super().check(model)
+        for b in self.only or []:
+            model.body(b)
 
     def _bodies(self, model):
         bs = model.bodies[1:] if self.only is None else [model.body(b) for b in self.only]
@@ -214,6 +249,9 @@ class Spring(LoadBase):
 
     def bodies(self):
         return self.p1.bodies() + self.p2.bodies()
+
+    def geometry(self):
+        return [self.p1, self.p2]
 
     def length(self):
         d = self.p1.location() - self.p2.location()
