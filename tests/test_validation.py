@@ -299,3 +299,40 @@ def test_missing_order_message_says_what_to_solve():
     with pytest.raises(ms.MechError, match="no velocity data; solve with solution='velocity' "
                                            "or 'acceleration'$"):
         sol.coordinate("rod.th", order=1)
+
+
+# -- a stranger's inputs -----------------------------------------------------------------------------
+
+
+def test_non_finite_geometry_guesses_and_load_magnitudes_are_rejected():
+    m = ms.Model2D()
+    with pytest.raises(ms.GeometryError, match=r"point 'tip' of body 'rod': coordinates \(nan, 0\)"):
+        m.add_body("rod", points={"tip": (np.nan, 0)})
+    with pytest.raises(ms.ModelError, match="guess of body 'rod' must be finite"):
+        m.add_body("rod", guess=((np.inf, 0), 0))
+    with pytest.raises(ms.GeometryError, match="centroid of body 'rod' has 3 coordinates"):
+        m.add_body("rod", mass=1.0, centroid=(0, 0, 1))
+    rod = m.add_body("rod", points={"tip": (1, 0)}, mass=1.0)
+    with pytest.raises(ms.GeometryError, match="must be finite"):
+        rod.point((0, np.inf))
+    with pytest.raises(ms.ModelError, match="Gravity g must be a finite real number"):
+        ms.Gravity((0, -1), np.nan)
+    with pytest.raises(ms.ModelError, match="Force magnitude must be a finite real number"):
+        ms.Force(rod.point("tip"), (0, 1), float("inf"))
+    with pytest.raises(ms.ModelError, match="Spring stiffness must be a finite real number"):
+        ms.Spring(rod.point("tip"), (0, 0), [1, 2])
+    with pytest.raises(ms.ModelError, match="no coordinate or variable named 'x9'"):
+        m.add_load(ms.Load("x9", 1.0))
+    assert m.load_list == []
+
+
+def test_gravity_on_one_body_given_by_name():
+    m = ms.Model2D()
+    a = m.add_body("a", mass=1.0)
+    m.add_body("b", mass=2.0)
+    m.add(ms.OriginLock2(a))
+    g = ms.Gravity((0, -1), 10.0, bodies="a")     # a name, not a list of one-letter names
+    m.add_load(g)
+    assert g.only == ["a"]
+    with pytest.raises(ms.UnknownBodyError, match="no body named 'rodd'"):
+        m.add_load(ms.Gravity((0, -1), 10.0, bodies=["rodd"]))

@@ -57,7 +57,12 @@ class Body(BodyRef):
             self.A = space.rotation_matrix(rot)
         self.guess = self._parse_guess(guess)
         self.mass = mass
-        self.centroid = _as_matrix(centroid, "centroid") if centroid is not None else sp.zeros(space.dim, 1)
+        self.centroid = sp.zeros(space.dim, 1)
+        if centroid is not None:
+            self.centroid = _as_matrix(centroid, f"centroid of body {name!r}")
+            if len(self.centroid) != space.dim:
+                raise GeometryError(f"centroid of body {name!r} has {len(self.centroid)} "
+                                    f"coordinates; this model is {space.dim}D")
         self.inertia = inertia
 
     # -- mass properties (checked whenever they are set) ----------------------------------
@@ -184,7 +189,10 @@ class Body(BodyRef):
                 f"this model is {dim}D"
             )
         rot = self.space.rotation_guess(rot, self.name)
-        return np.array(pos + list(rot), dtype=float)
+        g = np.array(pos + list(rot), dtype=float)
+        if not np.isfinite(g).all():
+            raise ModelError(f"guess of body {self.name!r} must be finite numbers; got {guess!r}")
+        return g
 
     def __repr__(self) -> str:
         return f"<Body {self.number} {self.name!r}>"

@@ -46,6 +46,10 @@ def _as_matrix(coords, what: str) -> sp.Matrix:
             raise GeometryError(f"{what}: coordinates {coords!r} are not numbers or expressions") from exc
     else:
         raise GeometryError(f"{what}: expected a coordinate tuple, got {coords!r}")
+    for c in m:
+        if not isinstance(c, sp.Expr) or (c.is_number and not (c.is_real and c.is_finite)):
+            raise GeometryError(f"{what}: coordinates {coords!r} must be finite real numbers "
+                                "or expressions")
     return m
 
 

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import sympy as sp
 
 from .._errors import ModelError
-from ..geometry._points import Axis, Point, Vector, as_point, as_vector
+from ..geometry._points import Axis, BodyRef, Point, Vector, as_point, as_vector
 
 
 @dataclass
@@ -78,6 +78,17 @@ class LoadBase:
         return f"load {self.name!r} ({type(self).__name__})" if self.name else type(self).__name__
 
 
+def _magnitude(value, what: str) -> sp.Expr:
+    """A load magnitude: an expression, finite and real when it is a number."""
+    try:
+        v = sp.sympify(value)
+    except (sp.SympifyError, TypeError):
+        v = None
+    if not isinstance(v, sp.Expr) or (v.is_number and not (v.is_real and v.is_finite)):
+        raise ModelError(f"{what} must be a finite real number or an expression, got {value!r}")
+    return v
+
+
 def _unit(d: sp.Matrix, cutoff=0):
     n2 = (d.T * d)[0, 0]
     if cutoff:
@@ -112,7 +123,7 @@ class Force(LoadBase):
             self.point, self.direction = as_point(point), as_vector(direction)
         if mode not in ("absolute", "relative"):
             raise ModelError(f"Force mode must be 'absolute' or 'relative', got {mode!r}")
-        self.magnitude = sp.sympify(magnitude)
+        self.magnitude = _magnitude(magnitude, "Force magnitude")
         self.mode, self.cutoff = mode, cutoff
         self.reaction = as_point(reaction) if reaction is not None else None
         if mode == "absolute" and not cutoff:  # u/|u| of a zero vector is 0/0
@@ -146,9 +157,9 @@ class Moment(LoadBase):
         super().__init__()
         self.body = body
         if b is None:
-            self.vector, self.magnitude = None, sp.sympify(a)
+            self.vector, self.magnitude = None, _magnitude(a, "Moment magnitude")
         else:
-            self.vector, self.magnitude = as_vector(a), sp.sympify(b)
+            self.vector, self.magnitude = as_vector(a), _magnitude(b, "Moment magnitude")
         self.reaction = reaction
         self.mode, self.cutoff = mode, cutoff
         if self.vector is not None and mode == "absolute" and not cutoff:
@@ -192,8 +203,9 @@ class Gravity(LoadBase):
         super().__init__()
         self.vector = as_vector(vector)
         self.vector.check_nonzero("Gravity direction")
-        self.g = sp.sympify(g)
-        self.only = bodies
+        self.g = _magnitude(g, "Gravity g")
+        # one body (a handle or name) or a list of them
+        self.only = [bodies] if isinstance(bodies, (str, int, BodyRef)) else bodies
 
     def geometry(self):
         return [self.vector]
@@ -228,7 +240,11 @@ class Load(LoadBase):
     def __init__(self, symbol, magnitude):
         super().__init__()
         self.symbol = symbol
-        self.magnitude = sp.sympify(magnitude)
+        self.magnitude = _magnitude(magnitude, "Load magnitude")
+
+    def check(self, model) -> None:
+        if not isinstance(self.symbol, sp.Symbol):
+            model._coordinate_by_name(str(self.symbol))  # unknown names fail now, not at compile
 
     def contributions(self, model):
         s = self.symbol if isinstance(self.symbol, sp.Symbol) else model._coordinate_by_name(str(self.symbol))
@@ -245,7 +261,8 @@ class Spring(LoadBase):
     def __init__(self, point1, point2, stiffness=0, free_length=0, law=None):
         super().__init__()
         self.p1, self.p2 = as_point(point1), as_point(point2)
-        self.k, self.L0, self.law = sp.sympify(stiffness), sp.sympify(free_length), law
+        self.k = _magnitude(stiffness, "Spring stiffness")
+        self.L0, self.law = _magnitude(free_length, "Spring free_length"), law
 
     def bodies(self):
         return self.p1.bodies() + self.p2.bodies()
@@ -277,7 +294,7 @@ class Damper(Spring):
 
     def __init__(self, point1, point2, damping=0, law=None):
         super().__init__(point1, point2)
-        self.c, self.dlaw = sp.sympify(damping), law
+        self.c, self.dlaw = _magnitude(damping, "Damper damping"), law
 
     def tension(self, model):
         L = self.length()
