@@ -103,7 +103,10 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews):
                     "(free(solution='dynamic')) has all orders")
         if self.mode == "path":
             return f"this path solution has no {what} data"
-        how = "solution='acceleration'" if order == 2 else "solution='velocity' or 'acceleration'"
+        if order == 2:  # with multipliers (loads) inverse dynamics, else plain kinematics
+            how = "solution='dynamic'" if self.mode == "kinematic" else "solution='acceleration'"
+        else:
+            how = "solution='velocity' or 'acceleration'"
         return f"this {self.mode} solution has no {what} data; solve with {how}"
 
     # -- evaluation -----------------------------------------------------------------------
