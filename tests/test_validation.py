@@ -336,3 +336,12 @@ def test_gravity_on_one_body_given_by_name():
     assert g.only == ["a"]
     with pytest.raises(ms.UnknownBodyError, match="no body named 'rodd'"):
         m.add_load(ms.Gravity((0, -1), 10.0, bodies=["rodd"]))
+
+
+def test_variable_guess_must_be_a_finite_number():
+    m = ms.Model2D()
+    with pytest.raises(ms.ModelError, match="guess of variable 's' must be finite"):
+        m.variable("s", np.nan)
+    with pytest.raises(ms.ModelError, match="guess of variable 's' must be a number"):
+        ms.Constraint([], {sp.Symbol("s"): "half"})
+    assert m.variable("s", 0.5) == sp.Symbol("s")

@@ -119,7 +119,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
                 if sym in taken:  # a symbol declared before the naming rules saw it
                     raise ModelError(f"body {name!r} (number {number}) would get the symbol "
                                      f"{sym!r}, which is already a parameter or variable")
-        b = Body(self.space, name, len(self._bodies) + 1, points=points, guess=guess, mass=mass,
+        b = Body(self.space, name, number, points=points, guess=guess, mass=mass,
                  centroid=centroid, inertia=inertia)
         b.model = self
         self._bodies.append(b)

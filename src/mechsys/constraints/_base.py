@@ -14,6 +14,7 @@ Subclasses set:
 
 from __future__ import annotations
 
+import math
 from typing import ClassVar
 
 import sympy as sp
@@ -27,7 +28,15 @@ class Variable:
 
     def __init__(self, symbol: sp.Symbol | str, guess: float = 0.0):
         self.symbol = sp.Symbol(symbol) if isinstance(symbol, str) else symbol
-        self.guess = float(guess)
+        if not isinstance(self.symbol, sp.Symbol):
+            raise ModelError(f"a variable is a name or a SymPy symbol, got {symbol!r}")
+        try:
+            self.guess = float(guess)
+        except (TypeError, ValueError):
+            raise ModelError(f"guess of variable {self.symbol.name!r} must be a number, "
+                             f"got {guess!r}") from None
+        if not math.isfinite(self.guess):
+            raise ModelError(f"guess of variable {self.symbol.name!r} must be finite, got {guess!r}")
 
     def __repr__(self) -> str:
         return f"Variable({self.symbol}, guess={self.guess})"
