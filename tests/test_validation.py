@@ -92,6 +92,9 @@ def test_variable_colliding_with_coordinates_or_parameters_is_rejected():
     th5 = sp.Symbol("th5")
     with pytest.raises(ms.ModelError, match="'th5' is reserved: .*coordinate th"):
         m.add(ms.Constraint([b.q[0] - th5], {th5: 0.0}))
+    c_d = sp.Symbol("c_d")
+    with pytest.raises(ms.ModelError, match="'c_d' is reserved: it is a parameter of the model"):
+        m.add(ms.Constraint([b.q[0] - c_d], {c_d: 0.0}))
     assert m.constraints == []
 
 
