@@ -6,6 +6,8 @@ through the compiled :class:`~mechsys.compile.System` it caches.
 
 from __future__ import annotations
 
+import math
+import re
 from collections.abc import Mapping
 
 import numpy as np
@@ -27,6 +29,17 @@ from .results._load_outputs import LoadOutputs, lambda_guess_vector
 from .results._outputs import OutputFunctions, VelocityViews
 from .solvers import ORDERS, PositionOptions, dependent_rows, sweep
 from .solvers._linalg import involved_rows
+
+
+def _parameter_value(name: str, value) -> float:
+    """A parameter value as a finite float, or a ModelError naming the parameter."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ModelError(f"parameter {name!r} needs a number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise ModelError(f"parameter {name!r} must be finite, got {v}")
+    return v
 
 
 class DOF(int):
@@ -99,7 +112,14 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
             raise ModelError(f"body name must be a non-empty string, got {name!r}")
         if any(b.name == name for b in self._bodies):
             raise ModelError(f"a body named {name!r} already exists; body names must be unique")
-        b = Body(self.space, name, len(self._bodies) + 1, points=points, guess=guess, mass=mass,
+        number = len(self._bodies) + 1
+        taken = {s.name for s in self._params} | {v.symbol.name for v in self._variables}
+        for c in self.space.coordinate_names:
+            for sym in (f"{c}{number}", f"{c}{number}_d", f"{c}{number}_dd"):
+                if sym in taken:  # a symbol declared before the naming rules saw it
+                    raise ModelError(f"body {name!r} (number {number}) would get the symbol "
+                                     f"{sym!r}, which is already a parameter or variable")
+        b = Body(self.space, name, number, points=points, guess=guess, mass=mass,
                  centroid=centroid, inertia=inertia)
         b.model = self
         self._bodies.append(b)
@@ -114,15 +134,20 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         b = self.body(body)
         if b.is_ground:
             raise ModelError("ground has no mass properties")
-        if mass is not None:
-            b.mass = sp.sympify(mass)
-        if centroid is not None:
-            c = _as_matrix(centroid, f"centroid of body {b.name!r}")
-            if len(c) != self.space.dim:
-                raise ModelError(f"centroid of body {b.name!r} needs {self.space.dim} coordinates")
-            b.centroid = c
-        if inertia is not None:
-            b.inertia = inertia
+        old = (b.mass, b.centroid, b.inertia)
+        try:  # the Body setters check each value; one bad value changes nothing
+            if mass is not None:
+                b.mass = mass
+            if centroid is not None:
+                c = _as_matrix(centroid, f"centroid of body {b.name!r}")
+                if len(c) != self.space.dim:
+                    raise ModelError(f"centroid of body {b.name!r} needs {self.space.dim} coordinates")
+                b.centroid = c
+            if inertia is not None:
+                b.inertia = inertia
+        except ModelError:
+            b.mass, b.centroid, b.inertia = old
+            raise
         self._touch()
 
     def body(self, spec) -> Body:
@@ -147,13 +172,21 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
     # -- parameters and variables --------------------------------------------------------
     def parameter(self, name: str, value: float) -> sp.Symbol:
         """Declare a parameter with a value; returns its symbol for use in expressions.
-        Changing values later (:meth:`set_parameters`) needs no recompilation."""
+        Changing values later (:meth:`set_parameters`) needs no recompilation.
+
+        The name must not be one the model uses for something else: the time ``T``, a body
+        coordinate present or future (``x2``, ``th3``, ``e04`` ...), a velocity or
+        acceleration symbol (``<coordinate or variable>_d``, ``_dd``), a multiplier
+        (``lam<c>_<k>``, ``lamN_<body>``), a variable or another parameter."""
+        if not isinstance(name, str) or not name:
+            raise ModelError(f"parameter name must be a non-empty string, got {name!r}")
         s = sp.Symbol(name)
         if s in self._params:
             raise ModelError(f"parameter {name!r} already exists; use set_parameters to change it")
-        if self._is_coordinate_name(name):
-            raise ModelError(f"parameter name {name!r} clashes with a coordinate or variable")
-        self._params[s] = float(value)
+        why = self._name_conflict(name)
+        if why:
+            raise ModelError(f"parameter name {name!r} is reserved: {why}; choose another name")
+        self._params[s] = _parameter_value(name, value)
         self._touch()
         return s
 
@@ -161,12 +194,14 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         """Change parameter values: ``set_parameters(L=6)`` or ``set_parameters({L: 6})``."""
         items = dict(values or {})
         items.update(kw)
+        new = {}
         for k, v in items.items():
             s = k if isinstance(k, sp.Symbol) else sp.Symbol(str(k))
             if s not in self._params:
                 raise ModelError(f"unknown parameter {k!r}; parameters are "
                                  f"{[p.name for p in self._params]}")
-            self._params[s] = float(v)
+            new[s] = _parameter_value(s.name, v)
+        self._params.update(new)  # all or nothing: one bad value changes none
 
     @property
     def parameters(self) -> dict[str, float]:
@@ -174,20 +209,62 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
 
     def variable(self, name: str, guess: float = 0.0) -> sp.Symbol:
         """Declare a new model variable (Mech's ``{s, guess}``) for use in constraints."""
+        if not isinstance(name, str) or not name:
+            raise ModelError(f"variable name must be a non-empty string, got {name!r}")
         for v in self._variables:
             if v.symbol.name == name:
                 raise ModelError(f"variable {name!r} already exists")
-        if self._is_coordinate_name(name):
-            raise ModelError(f"variable name {name!r} clashes with a body coordinate")
+        self._check_new_variable(name)
         v = Variable(name, guess)
         self._variables.append(v)
         self._touch()
         return v.symbol
 
-    def _is_coordinate_name(self, name: str) -> bool:
-        return any(name == s.name for b in self._bodies for s in b.q) or any(
-            name == v.symbol.name for v in self._variables) or any(
-            name == p.name for p in self._params)
+    def _name_conflict(self, name: str) -> str | None:
+        """Why ``name`` cannot be a parameter or a new variable (``None`` if it can): the
+        symbols the model makes itself (time, coordinates of bodies present or future, their
+        velocities and accelerations, multipliers) and the names already taken."""
+        if name == T.name:
+            return "it is the time symbol T"
+        for suffix, what in (("_dd", "acceleration"), ("_d", "velocity")):
+            if name.endswith(suffix):
+                base = name[: -len(suffix)]
+                if self._coordinate_owner(base) or any(v.symbol.name == base for v in self._variables):
+                    return f"it is the {what} symbol of {base!r}"
+                break
+        owner = self._coordinate_owner(name)
+        if owner:
+            return owner
+        if re.fullmatch(r"lam\d+_\d+|lamN_.*", name):
+            return "it is the name pattern of the Lagrange multipliers (lam<constraint>_<k>, lamN_<body>)"
+        if any(v.symbol.name == name for v in self._variables):
+            return "it is a variable of the model"
+        if any(p.name == name for p in self._params):
+            return "it is a parameter of the model"
+        return None
+
+    def _coordinate_owner(self, name: str) -> str | None:
+        """``"it is coordinate th of body 2 ..."`` when ``name`` has the form of a body
+        coordinate symbol (``<coordinate name><body number>``, numbers from 2), else None."""
+        for c in self.space.coordinate_names:
+            rest = name[len(c):]
+            if name.startswith(c) and rest.isdigit() and rest[0] != "0" and int(rest) >= 2:
+                n = int(rest)
+                who = (f"body {self._bodies[n - 1].name!r}" if n <= len(self._bodies)
+                       else "the body that will be added as number " + rest)
+                return f"it is the symbol of coordinate {c} of {who}"
+        return None
+
+    def _check_new_variable(self, name: str) -> None:
+        """A new variable's symbol must be free, and its velocity and acceleration symbols
+        (``name_d``, ``name_dd``) must not be parameters."""
+        why = self._name_conflict(name)
+        if why:
+            raise ModelError(f"variable name {name!r} is reserved: {why}; choose another name")
+        for derived in (name + "_d", name + "_dd"):
+            if sp.Symbol(derived) in self._params:
+                raise ModelError(f"variable {name!r} collides with parameter {derived!r}, which "
+                                 "would be its velocity/acceleration symbol; rename one of them")
 
     # -- constraints --------------------------------------------------------------------
     def add(self, constraint: ConstraintBase, name: str | None = None) -> ConstraintBase:
@@ -214,6 +291,12 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         for b in c.bodies():
             if getattr(b, "model", None) is not self:
                 raise ModelError(f"{c.label()} uses body {b.name!r} of another model")
+        for v in c.new_variables():
+            if all(v.symbol != w.symbol for w in self._variables):
+                try:
+                    self._check_new_variable(v.symbol.name)
+                except ModelError as exc:
+                    raise ModelError(f"{c.label()}: {exc}") from None
         c.equations(self.space)  # dimension and kind checks, with the culprit named
 
     @property
@@ -284,9 +367,11 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
             if ld.model is not None:
                 raise ModelError(f"{ld.label()} is already in a model")
             for b in ld.bodies():
-                if getattr(b, "model", None) is not self:
-                    raise ModelError(f"{ld.label()} uses body {getattr(b, 'name', b)!r} of "
-                                     "another model")
+                if not isinstance(b, Body):  # a name or number (Moment("rod", ...))
+                    self.body(b)
+                elif b.model is not self:
+                    raise ModelError(f"{ld.label()} uses body {b.name!r} of another model")
+            ld.check(self)
             ld.name = name if (name and len(loads) == 1) else f"load{len(self._loads) + 1}"
             ld.model = self
             self._loads.append(ld)
@@ -320,22 +405,46 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
     # -- guesses ------------------------------------------------------------------------
     def set_guess(self, state=None, **values) -> None:
         """Set initial guesses: from a solved ``State``/``Solution`` (its last point), a
-        ``{coordinate: value}`` mapping, or keywords (``x2=1.0``, ``s=0.3``)."""
+        ``{coordinate: value}`` mapping, a full coordinate vector (1-D, length ``n``, in the
+        order of ``m.guess()``), or keywords (``x2=1.0``, ``s=0.3``)."""
         upd: dict = {}
+        layout_syms = self._coordinate_symbols()
         if state is not None:
             if isinstance(state, Mapping):
                 upd.update(state)
-            else:
+            elif hasattr(state, "q") and hasattr(state, "system"):
                 q = np.atleast_2d(state.q)[-1]
                 names = state.system.layout.q_symbols
                 upd.update(dict(zip(names, q)))
+            else:
+                upd.update(zip(layout_syms, self._guess_vector(state, layout_syms)))
         upd.update(values)
-        layout_syms = self._coordinate_symbols()
+        new = {}
         for k, v in upd.items():
             s = k if isinstance(k, sp.Symbol) else self._coordinate_by_name(str(k))
             if s not in layout_syms:
                 raise ModelError(f"set_guess: {k!r} is not a coordinate or variable of this model")
-            self._guess_override[s] = float(v)
+            try:
+                new[s] = float(v)
+            except (TypeError, ValueError):
+                raise ModelError(f"set_guess: the guess of {s.name!r} must be a number, "
+                                 f"got {v!r}") from None
+            if not np.isfinite(new[s]):
+                raise ModelError(f"set_guess: the guess of {s.name!r} must be finite, got {v!r}")
+        self._guess_override.update(new)
+
+    def _guess_vector(self, state, syms) -> np.ndarray:
+        """A full coordinate vector for ``set_guess``: 1-D, one value per coordinate."""
+        try:
+            g = np.asarray(state, dtype=float)
+        except (TypeError, ValueError):
+            raise ModelError(f"set_guess takes a State/Solution, a mapping or a 1-D array of "
+                             f"{len(syms)} numbers; got {state!r}") from None
+        if g.shape != (len(syms),):
+            raise ModelError(
+                f"set_guess: an array guess must have shape ({len(syms)},), one value per "
+                f"coordinate in the order {[s.name for s in syms]}; got shape {g.shape}")
+        return g
 
     def _coordinate_by_name(self, name: str) -> sp.Symbol:
         for b in self._bodies:

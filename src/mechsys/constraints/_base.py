@@ -14,12 +14,13 @@ Subclasses set:
 
 from __future__ import annotations
 
+import math
 from typing import ClassVar
 
 import sympy as sp
 
 from .._errors import GeometryError, ModelError
-from ..geometry._points import Geometry, as_vector
+from ..geometry._points import Axis, Geometry, Point, Vector, as_vector
 
 
 class Variable:
@@ -27,7 +28,15 @@ class Variable:
 
     def __init__(self, symbol: sp.Symbol | str, guess: float = 0.0):
         self.symbol = sp.Symbol(symbol) if isinstance(symbol, str) else symbol
-        self.guess = float(guess)
+        if not isinstance(self.symbol, sp.Symbol):
+            raise ModelError(f"a variable is a name or a SymPy symbol, got {symbol!r}")
+        try:
+            self.guess = float(guess)
+        except (TypeError, ValueError):
+            raise ModelError(f"guess of variable {self.symbol.name!r} must be a number, "
+                             f"got {guess!r}") from None
+        if not math.isfinite(self.guess):
+            raise ModelError(f"guess of variable {self.symbol.name!r} must be finite, got {guess!r}")
 
     def __repr__(self) -> str:
         return f"Variable({self.symbol}, guess={self.guess})"
@@ -55,6 +64,14 @@ class ConstraintBase:
     def new_variables(self) -> list[Variable]:
         return []
 
+    def sides(self) -> tuple[list[Geometry], list[Geometry]] | None:
+        """The two things a two-body constraint joins, whose bodies must differ; ``None``
+        for constraints on one thing (drivers such as ``RotationLock1(body, angle)``,
+        ``RelativeX1(point, x)``). Default: the two geometric arguments when there are
+        exactly two; constraints with extra arguments (offsets, a third axis) override."""
+        g = self.geometry()
+        return ([g[0]], [g[1]]) if len(g) == 2 else None
+
     def _build(self, space) -> list[sp.Expr]:  # pragma: no cover - interface
         raise NotImplementedError
 
@@ -70,9 +87,31 @@ class ConstraintBase:
                 )
             for g in self.geometry():
                 g.check_dim(space.dim)
+            self._check_sides()
             eqs = [sp.sympify(e) for e in self._build(space)]
             self._cache[key] = eqs
         return self._cache[key]
+
+    def _check_sides(self) -> None:
+        """Both sides on one rigid body (or both on ground) with constant local geometry give
+        equations that are constant in the coordinates: redundant, or impossible. Geometry
+        with symbols (time, variables, parameters) and constraints that add variables are
+        left alone: they may still mean something."""
+        sides = self.sides()
+        if sides is None or self.new_variables():
+            return
+        owners = []
+        for side in sides:
+            if any(_local_symbols(g) for g in side):
+                return
+            owners.append({b for g in side for b in g.bodies() if not getattr(b, "is_ground", False)})
+        if owners[0] != owners[1] or len(owners[0]) > 1:
+            return
+        where = f"body {next(iter(owners[0])).name!r}" if owners[0] else "ground"
+        raise GeometryError(
+            f"{self.label()}: {_describe(sides[0])} and {_describe(sides[1])} are both on {where}, "
+            "so its equations do not depend on the coordinates (redundant or impossible); "
+            "join geometry of two different bodies (ground is m.ground)")
 
     def bodies(self) -> list:
         seen = []
@@ -95,6 +134,24 @@ class ConstraintBase:
         return f"<{self.label()}>"
 
 
+def _local_symbols(g) -> set:
+    """Free symbols of the local coordinates a geometric object is built from."""
+    if isinstance(g, Axis):
+        out = _local_symbols(g.origin) | _local_symbols(g.dir)
+        return out | (_local_symbols(g.reference) if g.reference is not None else set())
+    if isinstance(g, Vector) and g.local is None:
+        return set().union(*(_local_symbols(p) for p in g.points))
+    local = getattr(g, "local", None)
+    return set(local.free_symbols) if local is not None else set()
+
+
+def _describe(side) -> str:
+    g = side[0]
+    if isinstance(g, Point):
+        return f"point {g.label!r}" if g.label else f"point {tuple(g.local)}"
+    return f"{type(g).__name__.lower()} {g!r}"
+
+
 def as_expr(value, what: str) -> sp.Expr:
     try:
         return sp.sympify(value)
@@ -109,6 +166,8 @@ class TwoVectors(ConstraintBase):
     def __init__(self, vector1, vector2):
         super().__init__()
         self.v1, self.v2 = as_vector(vector1), as_vector(vector2)
+        for k, v in ((1, self.v1), (2, self.v2)):
+            v.check_nonzero(f"{type(self).__name__} vector{k}")
 
     def geometry(self):
         return [self.v1, self.v2]

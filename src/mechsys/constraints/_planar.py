@@ -101,6 +101,9 @@ class OriginLock2(ConstraintBase):
     def geometry(self):
         return [self.p1, self.p2] + ([self.offset] if self.offset is not None else [])
 
+    def sides(self):
+        return [self.p1], [self.p2]
+
     def _build(self, space):
         off = self.offset.direction() if self.offset is not None else None
         return P.coincident(self.p1, self.p2, off)

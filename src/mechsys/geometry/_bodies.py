@@ -56,9 +56,40 @@ class Body(BodyRef):
             self.rot = rot
             self.A = space.rotation_matrix(rot)
         self.guess = self._parse_guess(guess)
-        self.mass = sp.sympify(mass)
-        self.centroid = _as_matrix(centroid, "centroid") if centroid is not None else sp.zeros(space.dim, 1)
+        self.mass = mass
+        self.centroid = sp.zeros(space.dim, 1)
+        if centroid is not None:
+            self.centroid = _as_matrix(centroid, f"centroid of body {name!r}")
+            if len(self.centroid) != space.dim:
+                raise GeometryError(f"centroid of body {name!r} has {len(self.centroid)} "
+                                    f"coordinates; this model is {space.dim}D")
         self.inertia = inertia
+
+    # -- mass properties (checked whenever they are set) ----------------------------------
+    @property
+    def mass(self) -> sp.Expr:
+        """Mass: a number >= 0 (0 is a massless link) or an expression of parameters."""
+        return self._mass
+
+    @mass.setter
+    def mass(self, value) -> None:
+        m = _scalar(value, f"mass of body {self.name!r}")
+        if m.is_number and float(m) < 0:
+            raise ModelError(f"mass of body {self.name!r} is negative ({m}); a mass must be >= 0 "
+                             "(0 for a massless link)")
+        self._mass = m
+
+    @property
+    def inertia(self):
+        """Inertia about the centroid as given: a scalar ``J`` in 2D; in 3D
+        ``(Ixx, Iyy, Izz, Ixy, Iyz, Izx)``, principal ``(Ixx, Iyy, Izz)`` or a 3x3 matrix."""
+        return self._inertia
+
+    @inertia.setter
+    def inertia(self, value) -> None:
+        if value is not None:
+            _check_inertia(self.space, value, f"inertia of body {self.name!r}")
+        self._inertia = value
 
     # -- points ---------------------------------------------------------------------------
     def _add_point(self, key: str, coords) -> None:
@@ -105,6 +136,11 @@ class Body(BodyRef):
     def vector(self, spec, to=None) -> Vector:
         """A vector fixed in this body: local components, or from the origin to a named point,
         or ``vector(p1, to=p2)`` from point ``p1`` to point ``p2`` of this body."""
+        v = self._vector(spec, to)
+        v.check_nonzero("vector")
+        return v
+
+    def _vector(self, spec, to=None) -> Vector:
         if to is not None:
             return Vector(self.point(spec), self.point(to))
         if isinstance(spec, (str, int)) and not isinstance(spec, bool):
@@ -117,13 +153,13 @@ class Body(BodyRef):
         """An axis through a point of this body along a local direction (default local x)."""
         if direction is None:
             direction = (1,) + (0,) * (self.space.dim - 1)
-        d = direction if isinstance(direction, Vector) else self.vector(direction)
-        ref = None
-        if isinstance(reference, str) and reference in ("default", "minimal"):  # a rule (3D)
-            ref = reference
-        elif reference is not None:
-            ref = reference if isinstance(reference, Vector) else self.vector(reference)
         try:
+            d = direction if isinstance(direction, Vector) else self._vector(direction)
+            ref = None
+            if isinstance(reference, str) and reference in ("default", "minimal"):  # a rule (3D)
+                ref = reference
+            elif reference is not None:
+                ref = reference if isinstance(reference, Vector) else self.vector(reference)
             return Axis(self.point(origin), d, ref)
         except GeometryError as exc:
             raise GeometryError(f"axis on body {self.name!r}: {exc}") from None
@@ -153,10 +189,68 @@ class Body(BodyRef):
                 f"this model is {dim}D"
             )
         rot = self.space.rotation_guess(rot, self.name)
-        return np.array(pos + list(rot), dtype=float)
+        g = np.array(pos + list(rot), dtype=float)
+        if not np.isfinite(g).all():
+            raise ModelError(f"guess of body {self.name!r} must be finite numbers; got {guess!r}")
+        return g
 
     def __repr__(self) -> str:
         return f"<Body {self.number} {self.name!r}>"
+
+
+def _scalar(value, what: str) -> sp.Expr:
+    """A real scalar mass property: finite if numeric (parameter expressions pass)."""
+    if isinstance(value, (str, bytes)):
+        raise ModelError(f"{what} must be a number or an expression of parameters, got the "
+                         f"string {value!r} (use the symbol m.parameter(...) returns)")
+    try:
+        v = sp.sympify(value, strict=True)
+    except (sp.SympifyError, TypeError, ValueError):
+        v = None
+    if not isinstance(v, sp.Expr):
+        raise ModelError(f"{what} must be a number or an expression of parameters, got {value!r}")
+    if v.is_number and not (v.is_real and v.is_finite):
+        raise ModelError(f"{what} must be a finite real number, got {value!r}")
+    return v
+
+
+def _check_inertia(space: Space, value, what: str) -> None:
+    r"""Reject inertia no rigid body has: negative, not symmetric, not positive semidefinite
+    or (3D) principal moments that break the triangle inequality ``I_k <= I_i + I_j``
+    (``I_x + I_y - I_z = 2 integral z^2 dm >= 0``). Symbolic entries are not checked."""
+    if space.dim == 2:
+        J = _scalar(value, what + " (a planar inertia is one number J about the centroid)")
+        if J.is_number and float(J) < 0:
+            raise ModelError(f"{what} is negative ({J}); it must be >= 0")
+        return
+    if isinstance(value, (str, bytes)):
+        raise ModelError(f"{what} must be numbers or expressions, got the string {value!r}")
+    try:
+        J = space.inertia_matrix(value)
+    except (ValueError, TypeError, sp.SympifyError):
+        raise ModelError(f"{what}: give (Ixx, Iyy, Izz, Ixy, Iyz, Izx), principal moments "
+                         f"(Ixx, Iyy, Izz) or a 3x3 matrix; got {value!r}") from None
+    for e in J:
+        _scalar(e, what)
+    if not all(e.is_number for e in J):
+        return
+    a = np.array(J.tolist(), dtype=float)
+    scale = max(np.abs(a).max(), np.finfo(float).tiny)
+    tol = 1e-9 * scale
+    if np.abs(a - a.T).max() > tol:
+        raise ModelError(f"{what} is not symmetric: {a.tolist()}; an inertia tensor has equal "
+                         "products of inertia on both sides of the diagonal")
+    if (np.diag(a) < -tol).any():
+        raise ModelError(f"{what} has a negative moment of inertia on its diagonal "
+                         f"{np.diag(a).tolist()}; moments must be >= 0")
+    w = np.linalg.eigvalsh(a)  # ascending principal moments
+    if w[0] < -tol:
+        raise ModelError(f"{what} is not positive semidefinite (principal moments "
+                         f"{w.tolist()}); check the signs of the products of inertia")
+    if w[2] > w[0] + w[1] + tol:
+        raise ModelError(f"{what}: the principal moments {w.tolist()} violate the triangle "
+                         "inequality (each must be <= the sum of the other two), so no rigid "
+                         "body has them")
 
 
 def _normalize_points(points):

@@ -46,6 +46,10 @@ def _as_matrix(coords, what: str) -> sp.Matrix:
             raise GeometryError(f"{what}: coordinates {coords!r} are not numbers or expressions") from exc
     else:
         raise GeometryError(f"{what}: expected a coordinate tuple, got {coords!r}")
+    for c in m:
+        if not isinstance(c, sp.Expr) or (c.is_number and not (c.is_real and c.is_finite)):
+            raise GeometryError(f"{what}: coordinates {coords!r} must be finite real numbers "
+                                "or expressions")
     return m
 
 
@@ -158,21 +162,21 @@ class Vector(Geometry):
         return self.body.A * self.local
 
     def check_nonzero(self, what: str) -> None:
-        if self.endpoints is not None and self.points is None:
-            a = self.endpoints[0]
-            if all(c.is_number and c == 0 for c in self.local):
-                raise GeometryError(f"{what}: its two points coincide on {a._owner()}; "
+        """Raise when the direction is zero whatever the coordinates: a zero local vector or
+        two coincident points of one body. (``is_zero``, not ``== 0``: a SymPy ``Float``
+        zero is not ``== 0``.)"""
+        ends = self.endpoints if self.endpoints is not None else self.points
+        if ends is not None:
+            a, b = ends
+            if a.body is b.body and len(a.local) == len(b.local) and all(
+                    sp.simplify(x - y).is_zero for x, y in zip(a.local, b.local)):
+                names = f"{a.label or tuple(a.local)!r} and {b.label or tuple(b.local)!r}"
+                raise GeometryError(f"{what}: its two points coincide on {a._owner()} ({names}); "
                                     "give two distinct points")
             return
-        if self.points is not None:
-            a, b = self.points
-            if a.body is b.body and all(sp.simplify(x - y) == 0 for x, y in zip(a.local, b.local)):
-                raise GeometryError(f"{what}: its two points coincide on {a._owner()}; "
-                                    "give two distinct points")
-            return
-        if all(c.is_number for c in self.local) and all(c == 0 for c in self.local):
-            raise GeometryError(f"{what}: zero-length direction on {self._owner()}; "
-                                "give a non-zero direction vector")
+        if all(c.is_zero for c in self.local):
+            raise GeometryError(f"{what}: zero-length direction on {self._owner()} (components "
+                                f"{tuple(self.local)}); give a non-zero direction vector")
 
     def __repr__(self) -> str:
         ends = self.points if self.points is not None else self.endpoints

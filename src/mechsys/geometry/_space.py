@@ -199,12 +199,13 @@ class Spatial(Space):
 
     def inertia_matrix(self, inertia) -> sp.Matrix:
         """Centroidal inertia matrix (3x3, body axes) from ``(Ixx, Iyy, Izz, Ixy, Iyz, Izx)``
-        (the matrix entries, products included with their sign as matrix elements) or a
-        3x3 matrix; ``None`` is zero."""
+        (the matrix entries, products included with their sign as matrix elements), principal
+        moments ``(Ixx, Iyy, Izz)`` or a 3x3 matrix; ``None`` is zero."""
         if inertia is None:
             return sp.zeros(3, 3)
         if isinstance(inertia, sp.MatrixBase) or (
             hasattr(inertia, "__len__") and len(inertia) == 3
+            and all(hasattr(row, "__len__") for row in inertia)
         ):
             J = sp.Matrix(inertia)
             if J.shape != (3, 3):

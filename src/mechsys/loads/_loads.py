@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import sympy as sp
 
 from .._errors import ModelError
-from ..geometry._points import Axis, Point, Vector, as_point, as_vector
+from ..geometry._points import Axis, BodyRef, Point, Vector, as_point, as_vector
 
 
 @dataclass
@@ -62,8 +62,31 @@ class LoadBase:
     def bodies(self) -> list:
         return []
 
+    def geometry(self) -> list:
+        """Points and vectors of the load (checked against the model's dimension)."""
+        return []
+
+    def check(self, model) -> None:
+        """Checks when the load is added to ``model``: the dimension of its geometry."""
+        for g in self.geometry():
+            try:
+                g.check_dim(model.space.dim)
+            except ModelError as exc:
+                raise type(exc)(f"{self.label()}: {exc}") from None
+
     def label(self) -> str:
         return f"load {self.name!r} ({type(self).__name__})" if self.name else type(self).__name__
+
+
+def _magnitude(value, what: str) -> sp.Expr:
+    """A load magnitude: an expression, finite and real when it is a number."""
+    try:
+        v = sp.sympify(value)
+    except (sp.SympifyError, TypeError):
+        v = None
+    if not isinstance(v, sp.Expr) or (v.is_number and not (v.is_real and v.is_finite)):
+        raise ModelError(f"{what} must be a finite real number or an expression, got {value!r}")
+    return v
 
 
 def _unit(d: sp.Matrix, cutoff=0):
@@ -100,12 +123,17 @@ class Force(LoadBase):
             self.point, self.direction = as_point(point), as_vector(direction)
         if mode not in ("absolute", "relative"):
             raise ModelError(f"Force mode must be 'absolute' or 'relative', got {mode!r}")
-        self.magnitude = sp.sympify(magnitude)
+        self.magnitude = _magnitude(magnitude, "Force magnitude")
         self.mode, self.cutoff = mode, cutoff
         self.reaction = as_point(reaction) if reaction is not None else None
+        if mode == "absolute" and not cutoff:  # u/|u| of a zero vector is 0/0
+            self.direction.check_nonzero("Force direction")
 
     def bodies(self):
         return self.point.bodies() + (self.reaction.bodies() if self.reaction else [])
+
+    def geometry(self):
+        return [self.point, self.direction] + ([self.reaction] if self.reaction else [])
 
     def force_vector(self) -> sp.Matrix:
         d = self.direction.direction()
@@ -129,14 +157,23 @@ class Moment(LoadBase):
         super().__init__()
         self.body = body
         if b is None:
-            self.vector, self.magnitude = None, sp.sympify(a)
+            self.vector, self.magnitude = None, _magnitude(a, "Moment magnitude")
         else:
-            self.vector, self.magnitude = as_vector(a), sp.sympify(b)
+            self.vector, self.magnitude = as_vector(a), _magnitude(b, "Moment magnitude")
         self.reaction = reaction
         self.mode, self.cutoff = mode, cutoff
+        if self.vector is not None and mode == "absolute" and not cutoff:
+            self.vector.check_nonzero("Moment direction")
 
     def bodies(self):
         return [self.body] + ([self.reaction] if self.reaction is not None else [])
+
+    def geometry(self):
+        return [self.vector] if self.vector is not None else []
+
+    def check(self, model) -> None:
+        self.moment_value(model)  # a vector in 2D, none in 3D: say so now
+        super().check(model)
 
     def moment_value(self, model):
         if model.space.dim == 2:
@@ -171,11 +208,21 @@ class Gravity(LoadBase):
     def __init__(self, vector=(0, -1), g=9.81, bodies=None, *, mode: str = "absolute"):
         super().__init__()
         self.vector = as_vector(vector)
-        self.g = sp.sympify(g)
-        self.only = bodies
+        self.vector.check_nonzero("Gravity direction")
+        self.g = _magnitude(g, "Gravity g")
+        # one body (a handle or name) or a list of them
+        self.only = [bodies] if isinstance(bodies, (str, int, BodyRef)) else bodies
         if mode not in ("absolute", "relative"):
             raise ModelError(f"Gravity mode must be 'absolute' or 'relative', got {mode!r}")
         self.mode = mode
+
+    def geometry(self):
+        return [self.vector]
+
+    def check(self, model) -> None:
+        super().check(model)
+        for b in self.only or []:
+            model.body(b)
 
     def _bodies(self, model):
         bs = model.bodies[1:] if self.only is None else [model.body(b) for b in self.only]
@@ -207,7 +254,11 @@ class Load(LoadBase):
     def __init__(self, symbol, magnitude):
         super().__init__()
         self.symbol = symbol
-        self.magnitude = sp.sympify(magnitude)
+        self.magnitude = _magnitude(magnitude, "Load magnitude")
+
+    def check(self, model) -> None:
+        if not isinstance(self.symbol, sp.Symbol):
+            model._coordinate_by_name(str(self.symbol))  # unknown names fail now, not at compile
 
     def contributions(self, model):
         s = self.symbol if isinstance(self.symbol, sp.Symbol) else model._coordinate_by_name(str(self.symbol))
@@ -224,10 +275,14 @@ class Spring(LoadBase):
     def __init__(self, point1, point2, stiffness=0, free_length=0, law=None):
         super().__init__()
         self.p1, self.p2 = as_point(point1), as_point(point2)
-        self.k, self.L0, self.law = sp.sympify(stiffness), sp.sympify(free_length), law
+        self.k = _magnitude(stiffness, "Spring stiffness")
+        self.L0, self.law = _magnitude(free_length, "Spring free_length"), law
 
     def bodies(self):
         return self.p1.bodies() + self.p2.bodies()
+
+    def geometry(self):
+        return [self.p1, self.p2]
 
     def length(self):
         d = self.p1.location() - self.p2.location()
@@ -253,7 +308,7 @@ class Damper(Spring):
 
     def __init__(self, point1, point2, damping=0, law=None):
         super().__init__(point1, point2)
-        self.c, self.dlaw = sp.sympify(damping), law
+        self.c, self.dlaw = _magnitude(damping, "Damper damping"), law
 
     def tension(self, model):
         L = self.length()

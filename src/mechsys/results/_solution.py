@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import sympy as sp
 
-from .._errors import MechError
+from .._errors import MechError, ModelError
 from ._load_outputs import LoadOutputs
 from ._outputs import OutputFunctions, VelocityViews
 
@@ -74,17 +74,40 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews):
 
     def coordinate(self, key, order: int = 0) -> np.ndarray:
         """History of one coordinate (``order`` 0), its velocity (1) or acceleration (2)."""
+        if order not in (0, 1, 2):
+            raise ModelError(f"order must be 0 (coordinate), 1 (velocity) or 2 (acceleration), "
+                             f"got {order!r}")
         j = self.system.layout.index(key)
+        out = self._order(order)[:, j]
+        return out[0] if self.scalar else out
+
+    @property
+    def _at_rest(self) -> bool:
+        """A static solution (equilibrium): velocities and accelerations are zero by
+        definition, not missing."""
+        return self.mode in ("static", "free-static")
+
+    def _order(self, order: int) -> np.ndarray:
+        """Coordinates (0), velocities (1) or accelerations (2), ``(N, n)``."""
         arr = (self.q, self.qd, self.qdd)[order]
         if arr is None:
-            raise MechError(self._missing(order))
-        out = arr[:, j]
-        return out[0] if self.scalar else out
+            if not self._at_rest:
+                raise MechError(self._missing(order))
+            arr = np.zeros_like(self.q)
+        return arr
 
     def _missing(self, order: int) -> str:
         what = ("location", "velocity", "acceleration")[order]
-        return (f"this solution has no {what} data; solve with solution={what!r} "
-                "(or 'acceleration' for all orders)")
+        if self.mode.startswith("free-"):
+            return (f"this {self.mode} solution has no {what} data; free motion "
+                    "(free(solution='dynamic')) has all orders")
+        if self.mode == "path":
+            return f"this path solution has no {what} data"
+        if order == 2:  # with multipliers (loads) inverse dynamics, else plain kinematics
+            how = "solution='dynamic'" if self.mode == "kinematic" else "solution='acceleration'"
+        else:
+            how = "solution='velocity' or 'acceleration'"
+        return f"this {self.mode} solution has no {what} data; solve with {how}"
 
     # -- evaluation -----------------------------------------------------------------------
     def _finish(self, expr):
@@ -101,9 +124,9 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews):
         m = sp.Matrix(expr) if is_matrix else sp.Matrix([sp.sympify(expr)])
         lay = self.system.layout
         free = set().union(*(e.free_symbols for e in m)) if len(m) else set()
-        for order, syms in ((1, lay.qd_symbols), (2, lay.qdd_symbols)):
-            if free & set(syms) and (self.qd, self.qdd)[order - 1] is None:
-                raise MechError(self._missing(order))
+        for order, syms in ((2, lay.qdd_symbols), (1, lay.qd_symbols)):  # the highest first
+            if free & set(syms):
+                self._order(order)  # raises when this order is missing
         lam_syms = self.system.lam_symbols
         if free & set(lam_syms) and self.lam is None:
             raise MechError("this solution has no Lagrange multipliers (reactions); solve with "
@@ -129,7 +152,14 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews):
 
     # -- states and interpolation ---------------------------------------------------------
     def state(self, k: int = -1) -> State:
-        """The :class:`State` at index ``k``."""
+        """The :class:`State` at index ``k`` (negative counts from the end)."""
+        N = len(self.t)
+        if isinstance(k, bool) or not isinstance(k, (int, np.integer)):
+            raise ModelError(f"state index must be an integer, got {k!r}")
+        if not -N <= k < N:
+            rng = f"0..{N - 1} (or -{N}..-1 from the end)" if N else "none: the solution is empty"
+            raise ModelError(f"state index {k} is out of range; this solution has {N} time "
+                             f"point(s), valid indices {rng}")
         return State(
             t=float(self.t[k]), q=self.q[k].copy(),
             qd=None if self.qd is None else self.qd[k].copy(),
@@ -192,9 +222,11 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews):
     def __repr__(self) -> str:
         orders = "location" + (", velocity" if self.qd is not None else "") + (
             ", acceleration" if self.qdd is not None else "")
-        return (f"<Solution: {len(self.t)} time point(s) in [{self.t.min():g}, {self.t.max():g}], "
-                f"{self.system.n} coordinates, {orders}; Newton iterations "
-                f"{int(self.iterations.sum())}>")
+        span = f" in [{np.min(self.t):g}, {np.max(self.t):g}]" if len(self.t) else ""
+        its = int(np.sum(self.iterations)) if self.iterations is not None else 0
+        n = getattr(self.system, "n", "?")
+        return (f"<Solution: {len(self.t)} time point(s){span}, {n} coordinates, {orders}; "
+                f"Newton iterations {its}>")
 
 
 @dataclass(frozen=True, eq=False)
