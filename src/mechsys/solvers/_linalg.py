@@ -98,3 +98,134 @@ def involved_rows(J, rank: int, tol: float = 1e-8) -> list[int]:
     U, _, _ = sla.svd(J, full_matrices=True)
     null = U[:, rank:]
     return sorted(int(i) for i in np.nonzero(np.abs(null).max(axis=1) > tol)[0])
+
+
+class Scaling:
+    r"""The unit-free form of the constraint equations used by every kinematic decision.
+
+    A change of the unit of length multiplies the position coordinates and every length of a
+    model by one factor; the angles (and Euler parameters) do not change. Tolerances and
+    conditioning measured on the raw Jacobian then depend on the unit. The solvers therefore
+    decide on
+
+    .. math::  \hat\Phi = R^{-1} \Phi, \qquad \hat\Phi_{\hat q} = R^{-1} \Phi_q D
+
+    with ``D = diag(c)``: ``c_j = L`` for the position coordinates of the bodies and 1 for
+    angles, Euler parameters and model variables (whose dimension mechsys cannot know), so
+    that ``q = D q_hat`` measures positions in units of ``L``; and ``R = diag(r)`` with
+    ``r_i = max_j |(Phi_q D)_ij|``, the size of row ``i`` in those units (1 for an empty row),
+    which makes each equation dimensionless whatever its own dimension (length, length^2,
+    angle, none). ``|Phi_i| / r_i`` is then, to first order, how far (in units of ``L``, or
+    radians) the coordinates are from satisfying equation ``i``.
+
+    ``L``, the characteristic length, is the largest lever arm of the constraint equations at
+    a reference configuration: for each equation and body the ratio of the largest
+    rotational to the largest translational Jacobian entry (for a point of a body the
+    distance of the point from the body origin, for a distance or a point-on-line equation a
+    distance of the geometry). It falls back to the largest position coordinate, then to 1
+    (a model without lengths). ``L`` scales exactly with the unit, so the scaled Jacobian,
+    its condition number and its rank are unit-invariant. ``offset`` is the largest position
+    coordinate divided by ``L`` (a mechanism far from the origin): the convergence test
+    allows for the rounding of the coordinates with it.
+    """
+
+    def __init__(self, length: float, columns: np.ndarray, offset: float = 1.0):
+        self.length = float(length)
+        self.columns = columns
+        self.offset = float(offset)
+
+    @classmethod
+    def of(cls, system, q, J) -> Scaling:
+        """The scaling of ``system`` at the reference configuration ``q`` with Jacobian ``J``."""
+        n = system.n
+        trans, body = _column_kinds(system)
+        q = np.asarray(q, dtype=float)
+        big = float(np.abs(q[trans]).max(initial=0.0)) if n else 0.0
+        if not np.isfinite(big):
+            big = 0.0
+        arm = _lever_arm(J, trans, body)
+        L = arm if arm > 0 else (big if big > 0 else 1.0)
+        columns = np.where(trans, L, 1.0)
+        return cls(L, columns, big / L)
+
+    def rows(self, J) -> np.ndarray:
+        """Row scales ``r`` (m,) of the Jacobian ``J``."""
+        if sps.issparse(J):
+            r = abs(J @ sps.diags(self.columns)).max(axis=1).toarray().ravel()
+        else:
+            r = (np.abs(J) * self.columns).max(axis=1, initial=0.0)
+        return np.where((r > 0) & np.isfinite(r), r, 1.0)
+
+    def scaled(self, J, r: np.ndarray | None = None):
+        """``R^-1 J D`` (dense or sparse like ``J``)."""
+        r = self.rows(J) if r is None else r
+        if sps.issparse(J):
+            return sps.csc_matrix(sps.diags(1.0 / r) @ J @ sps.diags(self.columns))
+        return np.asarray(J, dtype=float) * (self.columns / r[:, None])
+
+    def factor(self, J, r: np.ndarray | None = None) -> ScaledFactor:
+        """Factorise the scaled Jacobian; its ``solve(b)`` solves ``J x = b``."""
+        r = self.rows(J) if r is None else r
+        return ScaledFactor(Factor(self.scaled(J, r)), r, self.columns)
+
+    def dependent_rows(self, J) -> tuple[int, list[int]]:
+        """:func:`dependent_rows` of the scaled Jacobian (unit-invariant rank)."""
+        return dependent_rows(self.scaled(J))
+
+    def involved_rows(self, J, rank: int) -> list[int]:
+        """:func:`involved_rows` of the scaled Jacobian."""
+        return involved_rows(self.scaled(J), rank)
+
+
+class ScaledFactor:
+    """A :class:`Factor` of ``R^-1 J D``; ``solve(b)`` returns ``x`` with ``J x = b``."""
+
+    def __init__(self, fac: Factor, rows: np.ndarray, columns: np.ndarray):
+        self._fac, self._rows, self._columns = fac, rows, columns
+        #: reciprocal condition number of the scaled matrix (unit-invariant)
+        self.rcond = fac.rcond
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        return self._columns * self._fac.solve(np.asarray(b, dtype=float) / self._rows)
+
+
+def _column_kinds(system) -> tuple[np.ndarray, np.ndarray]:
+    """Per coordinate: is it a body position coordinate; which body (-1: a variable)."""
+    n, dim = system.n, system.space.dim
+    trans = np.zeros(n, dtype=bool)
+    body = np.full(n, -1)
+    for k, sl in enumerate(system.layout.body_slices.values()):
+        body[sl] = k
+        trans[sl.start : sl.start + dim] = True
+    return trans, body
+
+
+def _lever_arm(J, trans: np.ndarray, body: np.ndarray) -> float:
+    """Largest ratio, over equations and bodies, of the largest rotational to the largest
+    translational Jacobian entry (a length: see :class:`Scaling`)."""
+    if sps.issparse(J):
+        c = sps.coo_matrix(J)
+        i, j, v = c.row, c.col, np.abs(c.data)
+    else:
+        J = np.asarray(J, dtype=float)
+        i, j = np.nonzero(J)
+        v = np.abs(J[i, j])
+    keep = (body[j] >= 0) & np.isfinite(v)
+    i, j, v = i[keep], j[keep], v[keep]
+    if not v.size:
+        return 0.0
+    nb = int(body.max()) + 1
+    key = i * nb + body[j]
+    size = (int(i.max()) + 1) * nb
+    tmax = np.zeros(size)
+    rmax = np.zeros(size)
+    np.maximum.at(tmax, key[trans[j]], v[trans[j]])
+    np.maximum.at(rmax, key[~trans[j]], v[~trans[j]])
+    ok = (tmax > 0) & (rmax > 0)
+    return float((rmax[ok] / tmax[ok]).max()) if ok.any() else 0.0
+
+
+def rotation_columns(system) -> np.ndarray:
+    """Mask (n,) of the bodies' rotational coordinates (angles, Euler parameters)."""
+    trans, body = _column_kinds(system)
+    return (body >= 0) & ~trans
