@@ -7,11 +7,11 @@ import warnings
 import numpy as np
 import pytest
 import sympy as sp
-from test_slider_crank import closed_form
 
 import mechsys as ms
 from mechsys import models
 from mechsys.solvers import solve_position
+from test_slider_crank import closed_form
 
 SCALES = [1e-6, 1e-3, 1.0, 1e3, 1e6]
 

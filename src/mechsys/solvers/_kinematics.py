@@ -192,10 +192,11 @@ def _solve_point(system, t, g, q_prev, options, p, sc, rot):
     if jump > ROTATION_JUMP:
         i = int(np.argmax(np.where(rot, np.abs(res.q - q_prev), -1.0)))
         raise ConvergenceError(
-            f"kinematic sweep at t = {t:.6g}: a rotational coordinate ({system.layout.q_names[i]}) "
-            f"jumped by {jump:.3g} rad from the previous point, so the sweep lost its assembly branch (near a lock-up or "
-            "toggle position, or too coarse sampling). Sample more finely, or stop the sweep "
-            "before this time.", time=t, residuals=system.residual(t, res.q, p),
+            f"kinematic sweep at t = {t:.6g}: a rotational coordinate "
+            f"({system.layout.q_names[i]}) jumped by {jump:.3g} rad from the previous point, so "
+            "the sweep lost its assembly branch (near a lock-up or toggle position, or too "
+            "coarse sampling). Sample more finely, or stop the sweep before this time.",
+            time=t, residuals=system.residual(t, res.q, p),
             history=res.history)
     return res
 
