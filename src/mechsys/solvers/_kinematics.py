@@ -110,7 +110,7 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
     evals = 0
     if sc is None and N:
         sc, evals = _scaling(system, times[0], q0, p, sparse), 1
-    rot = rotation_columns(system)
+    rot = np.flatnonzero(rotation_columns(system))  # indices of angles / Euler parameters
     for k, t in enumerate(times):
         g = q0 if k == 0 else _predict(Q, QD, QDD, rconds, times, k, rot)
         res = _solve_point(system, t, g, Q[k - 1] if k else None, options, p, sc, rot)
@@ -121,7 +121,8 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
         if order >= 1:
             J, rhs = system.velocity_rhs(t, q, p, sparse)
             try:
-                fac = sc.factor(J)
+                # the position solve's row scales (from the predictor's Jacobian) serve here too
+                fac = sc.factor(J, res.rows)
             except Singular:
                 err = describe_singular(system, J, t, q, "velocity solve", sc)
                 raise SingularJacobianError(
@@ -163,14 +164,14 @@ def _predict(Q, QD, QDD, rconds, times, k: int, rot) -> np.ndarray:
         # the sweep starts at a near-toggle point: qd points along the branch (the near-null
         # direction of Phi_q) but its size is meaningless, so take a bounded first-order step
         step = QD[k - 1] * dt
-        big = np.abs(step)[rot].max(initial=0.0)
+        big = np.abs(step[rot]).max(initial=0.0)
         return q + (step * (ROTATION_START / big) if big > ROTATION_START else step)
     g = q + QD[k - 1] * dt
     if QDD is not None:
         g = g + 0.5 * QDD[k - 1] * dt * dt
-    if secant is not None and rot.any():
-        step = np.abs(g - q)[rot].max()
-        if step > ROTATION_SLACK + 4 * np.abs(secant - q)[rot].max():
+    if secant is not None and rot.size:
+        qr = q[rot]
+        if np.abs(g[rot] - qr).max() > ROTATION_SLACK + 4 * np.abs(secant[rot] - qr).max():
             return secant
     return g
 
@@ -190,7 +191,7 @@ def _solve_point(system, t, g, q_prev, options, p, sc, rot):
     res = solve_position(system, t, q_prev, options, p, sc)
     jump = _jump(res.q, q_prev, rot)
     if jump > ROTATION_JUMP:
-        i = int(np.argmax(np.where(rot, np.abs(res.q - q_prev), -1.0)))
+        i = rot[np.argmax(np.abs(res.q[rot] - q_prev[rot]))]
         raise ConvergenceError(
             f"kinematic sweep at t = {t:.6g}: a rotational coordinate "
             f"({system.layout.q_names[i]}) jumped by {jump:.3g} rad from the previous point, so "
@@ -202,4 +203,4 @@ def _solve_point(system, t, g, q_prev, options, p, sc, rot):
 
 
 def _jump(q, ref, rot) -> float:
-    return float(np.abs(q - ref)[rot].max()) if rot.any() else 0.0
+    return float(np.abs(q[rot] - ref[rot]).max()) if rot.size else 0.0

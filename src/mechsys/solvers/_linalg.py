@@ -33,7 +33,7 @@ class Factor:
             try:
                 with warnings.catch_warnings():
                     warnings.simplefilter("error", sps.SparseEfficiencyWarning)
-                    self._lu = spla.splu(sps.csc_matrix(J))
+                    self._lu = spla.splu(_csc(J))
             except RuntimeError as exc:  # "Factor is exactly singular"
                 raise Singular(str(exc)) from None
             d = np.abs(self._lu.U.diagonal())
@@ -151,17 +151,27 @@ class Scaling:
     def rows(self, J) -> np.ndarray:
         """Row scales ``r`` (m,) of the Jacobian ``J``."""
         if sps.issparse(J):
-            r = abs(J @ sps.diags(self.columns)).max(axis=1).toarray().ravel()
+            # on the CSC arrays: building scipy matrices costs more than the arithmetic
+            J = _csc(J)
+            r = np.zeros(J.shape[0])
+            np.maximum.at(r, J.indices, np.abs(J.data) * self._nz_columns(J))
         else:
             r = (np.abs(J) * self.columns).max(axis=1, initial=0.0)
-        return np.where((r > 0) & np.isfinite(r), r, 1.0)
+        r[~(r > 0)] = 1.0  # an empty (or NaN) row: nothing to measure it by
+        return r
 
     def scaled(self, J, r: np.ndarray | None = None):
         """``R^-1 J D`` (dense or sparse like ``J``)."""
         r = self.rows(J) if r is None else r
         if sps.issparse(J):
-            return sps.csc_matrix(sps.diags(1.0 / r) @ J @ sps.diags(self.columns))
+            Js = _csc(J).copy()
+            Js.data *= self._nz_columns(Js) / r[Js.indices]
+            return Js
         return np.asarray(J, dtype=float) * (self.columns / r[:, None])
+
+    def _nz_columns(self, J) -> np.ndarray:
+        """Column scale of every stored entry of the CSC matrix ``J``."""
+        return np.repeat(self.columns, np.diff(J.indptr))
 
     def factor(self, J, r: np.ndarray | None = None) -> ScaledFactor:
         """Factorise the scaled Jacobian; its ``solve(b)`` solves ``J x = b``."""
@@ -187,6 +197,10 @@ class ScaledFactor:
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         return self._columns * self._fac.solve(np.asarray(b, dtype=float) / self._rows)
+
+
+def _csc(J):
+    return J if J.format == "csc" else sps.csc_matrix(J)
 
 
 def _column_kinds(system) -> tuple[np.ndarray, np.ndarray]:

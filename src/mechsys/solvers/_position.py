@@ -53,6 +53,9 @@ class PositionOptions:
             raise ModelError(f"PositionOptions: damping must be True or False, got {self.damping!r}")
 
 
+_DEFAULT = PositionOptions()
+
+
 @dataclass(frozen=True)
 class PositionResult:
     q: np.ndarray
@@ -63,6 +66,8 @@ class PositionResult:
     evaluations: int
     residual: float
     history: tuple
+    #: row scales r (m,) of the unit-free equations used by this solve
+    rows: np.ndarray | None = None
 
 
 def _label(owner) -> str:
@@ -134,7 +139,7 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
     Raises :class:`ConvergenceError` (with per-equation residuals and the iteration history)
     or :class:`SingularJacobianError` (naming dependent constraints).
     """
-    opt = options or PositionOptions()
+    opt = options or _DEFAULT
     sparse = system.n > SPARSE_THRESHOLD
     q = np.array(guess, dtype=float)
     F, J = system.residual_and_jacobian(t, q, p, sparse)
@@ -161,7 +166,7 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
                 "(a coordinate left the domain of an expression)", time=t,
                 residuals=_residual_table(system, F), history=tuple(history))
         if norm <= tol and it > 0:
-            return PositionResult(q, True, 0, "converged", it, evals, norm, tuple(history))
+            return PositionResult(q, True, 0, "converged", it, evals, norm, tuple(history), rows)
         if it >= opt.max_iterations:
             break
         try:
