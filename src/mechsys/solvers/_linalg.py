@@ -46,9 +46,7 @@ class Factor:
             if J.shape[0] != J.shape[1]:
                 raise Singular("not square")
             anorm = np.abs(J).sum(axis=0).max() if J.size else 0.0
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", sla.LinAlgWarning)
-                lu, piv, info = sla.lapack.dgetrf(J)
+            lu, piv, info = sla.lapack.dgetrf(J)  # the raw LAPACK call never warns
             if info > 0 or anorm == 0:
                 raise Singular("exact zero pivot")
             rcond, _ = sla.lapack.dgecon(lu, anorm, norm="1")
@@ -156,7 +154,7 @@ class Scaling:
             r = np.zeros(J.shape[0])
             np.maximum.at(r, J.indices, np.abs(J.data) * self._nz_columns(J))
         else:
-            r = (np.abs(J) * self.columns).max(axis=1, initial=0.0)
+            r = np.abs(J * self.columns).max(axis=1) if J.size else np.zeros(J.shape[0])
         r[~(r > 0)] = 1.0  # an empty (or NaN) row: nothing to measure it by
         return r
 
@@ -167,7 +165,7 @@ class Scaling:
             Js = _csc(J).copy()
             Js.data *= self._nz_columns(Js) / r[Js.indices]
             return Js
-        return np.asarray(J, dtype=float) * (self.columns / r[:, None])
+        return (np.asarray(J, dtype=float) * self.columns) * (1.0 / r)[:, None]
 
     def _nz_columns(self, J) -> np.ndarray:
         """Column scale of every stored entry of the CSC matrix ``J``."""
