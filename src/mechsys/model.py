@@ -535,19 +535,16 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
             g = self.guess()
             J = system.jacobian(0.0, g, self._p())
             d = dependency(system, J, Scaling.of(system, g, J))
-            msg = f"the model is overconstrained by {m - n} equation(s) ({n} coordinates, {m} equations)."
-            if d.deficiency:
-                msg += (f" Jacobian at the current guess {d.text} The cure is to remove or relax "
-                        f"{d.deficiency} equation(s) in total, not whole joints: replace one or "
-                        "more of the constraints involved by constraints that impose fewer "
-                        "equations (for example a joint that leaves one more rotation or "
-                        "translation free), or drop equations with a general Constraint.")
-                if m - d.rank > d.deficiency or d.rank < n:
-                    msg += (f" Even then the {n} coordinates would face {m - d.deficiency} "
-                            "equations: check the guess and the constraints.")
-            else:
-                msg += (f" All {m} equations are independent at the current guess: remove {m - n} "
-                        "of them (constraints that remove fewer degrees of freedom).")
+            # rank <= n < m: at least m - n equations depend on the others
+            msg = (f"the model is overconstrained by {m - n} equation(s) ({n} coordinates, {m} "
+                   f"equations). Jacobian at the current guess {d.text} The cure is to remove or "
+                   f"relax {d.deficiency} equation(s) in total, not whole joints: replace one or "
+                   "more of the constraints involved by constraints that impose fewer equations "
+                   "(for example a joint that leaves one more rotation or translation free), or "
+                   "drop equations with a general Constraint.")
+            if d.rank < n:
+                msg += (f" Even then {n - d.rank} degree(s) of freedom would remain at this guess: "
+                        "add drivers, or check the guess.")
             raise ConstraintCountError(msg)
 
     @staticmethod
