@@ -119,3 +119,26 @@ def test_position_solve_scaled_tolerance(s):
     x, _, _ = closed_form(2.0 * s, 6.0 * s, 0.0, 2 * np.pi, 0.3 / (2 * np.pi))
     assert res.success and res.residual < 3e-12
     assert abs(res.q[system.layout.index("piston.x")] - x) / s < 1e-12
+
+
+def test_sparse_path_agrees_with_dense(monkeypatch):
+    """Above SPARSE_THRESHOLD coordinates the scaled Jacobian is factorised by SuperLU (the
+    scaled values are swapped into the caller's matrix for the factorisation only)."""
+    from mechsys.solvers import _kinematics, _linalg, _position
+
+    m = models.four_bar_chain(25)                           # 153 coordinates: sparse
+    t = np.linspace(0, 1, 11)
+    sparse = m.solve(t)
+    assert m.compile().n > _linalg.SPARSE_THRESHOLD
+    system = m.compile()
+    J = system.jacobian(0.3, sparse.q[3], m._p(), sparse=True)
+    before = J.toarray()
+    sc = _linalg.Scaling.of(system, sparse.q[3], J)
+    x = sc.factor(J).solve(np.ones(system.n))
+    np.testing.assert_array_equal(J.toarray(), before)       # J is left as it was
+    np.testing.assert_allclose(before @ x, 1.0, atol=1e-9)
+    for mod in (_kinematics, _position):
+        monkeypatch.setattr(mod, "SPARSE_THRESHOLD", 10**6)
+    dense = m.solve(t)
+    np.testing.assert_allclose(sparse.q, dense.q, atol=1e-10)
+    np.testing.assert_allclose(sparse.qdd, dense.qdd, atol=1e-7)
