@@ -16,6 +16,7 @@ import sympy as sp
 from ._errors import (
     ConstraintCountError,
     ModelError,
+    SingularJacobianError,
     UnknownBodyError,
     UnknownConstraintError,
 )
@@ -27,8 +28,9 @@ from .geometry._points import Axis, Point, Vector, as_point, as_vector
 from .geometry._space import PLANAR, SPATIAL, Space
 from .results._load_outputs import LoadOutputs, lambda_guess_vector
 from .results._outputs import OutputFunctions, VelocityViews
-from .solvers import ORDERS, PositionOptions, dependent_rows, sweep
-from .solvers._linalg import involved_rows
+from .solvers import ORDERS, PositionOptions, sweep
+from .solvers._linalg import Scaling
+from .solvers._position import dependency
 
 
 def _parameter_value(name: str, value) -> float:
@@ -60,11 +62,14 @@ class DOF(int):
             f"{int(self)} degree(s) of freedom",
             f"  coordinates: {self.coordinates}, equations: {self.equations}",
             f"  Gruebler count (coordinates - equations): {self.gruebler}",
-            f"  Jacobian rank at the current guess: {self.rank} -> {int(self)} DOF",
+            f"  Jacobian rank {'near' if getattr(self, 'singular_guess', '') else 'at'} the "
+            f"current guess: {self.rank} -> {int(self)} DOF",
         ]
         if self.redundant:
             lines.append("  redundant (dependent) constraints: "
                          + ", ".join(c.label() for c in self.redundant))
+        if getattr(self, "singular_guess", ""):
+            lines.append("  " + self.singular_guess)
         return "\n".join(lines)
 
     __str__ = __repr__
@@ -574,13 +579,59 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
 
     # -- analysis -----------------------------------------------------------------------
     def dof(self) -> DOF:
-        """Degrees of freedom: the Gruebler count and the Jacobian rank at the current guess."""
+        """Degrees of freedom: the Gruebler count and the Jacobian rank at the current guess
+        (on the unit-free scaled Jacobian, so the report does not depend on the unit of
+        length). When the guess is a singular configuration only because bodies were left at
+        the default guess, the rank is taken at a nearby configuration and ``singular_guess``
+        says which bodies need guesses."""
         system = self.compile()
-        J = system.jacobian_once(0.0, self.guess(), self._p())
-        rank, dep = dependent_rows(J) if system.m else (0, [])
-        owners = [o for o in system.layout.owners_of(dep) if isinstance(o, ConstraintBase)]
+        g, p = self.guess(), self._p()
+        J = system.jacobian_once(0.0, g, p)
+        d = dependency(system, J, Scaling.of(system, g, J))
+        rank, redundant, note = d.rank, d.owners, ""
+        if d.deficiency:
+            better = self._singular_guess(system, 0.0, g, d.rank)
+            if better is not None:
+                rank, note = better
+                redundant = []
+        owners = [o for o in redundant if isinstance(o, ConstraintBase)]
         return DOF(system.n - rank, coordinates=system.n, equations=system.m,
-                   gruebler=system.n - system.m, rank=rank, redundant=owners)
+                   gruebler=system.n - system.m, rank=rank, redundant=owners,
+                   singular_guess=note)
+
+    def _singular_guess(self, system, t, g, rank):
+        """``(rank, message)`` when the Jacobian, rank deficient (``rank``) at the guess
+        ``g`` which does not assemble the mechanism, has a higher rank once the bodies left
+        at the default guess (origin, no rotation) are moved a little: the guess, not the
+        constraints, is singular. ``None`` otherwise: no such bodies, an assembled guess (a
+        genuine lock-up there) or no better rank (a redundancy)."""
+        dim = self.space.dim
+        F, J = system.residual_and_jacobian(t, g, self._p())
+        sc = Scaling.of(system, g, J)
+        if np.abs(F / sc.rows(J)).max(initial=0.0) < 1e-6:
+            return None
+        default = np.array([0.0] * dim + list(self.space.zero_rotation()), dtype=float)
+        lay = system.layout
+        idle = [b for b in self._bodies[1:] if np.array_equal(g[lay.body_slices[b.name]], default)]
+        if not idle:
+            return None
+        rng = np.random.default_rng(12345)  # deterministic: the same report every call
+        qp = np.array(g, dtype=float)
+        for b in idle:
+            sl = lay.body_slices[b.name]
+            step = np.where(np.arange(sl.stop - sl.start) < dim, 0.3 * sc.length, 0.7)
+            qp[sl] += step * rng.standard_normal(sl.stop - sl.start)
+        Jp = system.jacobian(t, qp, self._p())
+        rp = dependency(system, Jp, Scaling.of(system, qp, Jp)).rank
+        if rp <= rank:
+            return None
+        names = ", ".join(repr(b.name) for b in idle)
+        return rp, (
+            f"the initial guesses put the mechanism in a singular configuration (Jacobian rank "
+            f"{rank} there, {rp} at a nearby configuration), so the constraints are not "
+            f"necessarily redundant: give guesses for bodies {names} (still at the default guess, "
+            "the origin without rotation) near an assembled position, with add_body(..., "
+            "guess=...), m.set_guess(...) or solve(..., guess=...).")
 
     def _require_square(self, system: System) -> None:
         n, m = system.n, system.m
@@ -590,20 +641,41 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
                 f"a kinematic solution needs 0. Add {n - m} driving constraint(s), e.g. "
                 "RotationLock1(crank, 2*pi*T), or drop constraints with m.free(...) for dynamics.")
         if m > n:
-            J = system.jacobian(0.0, self.guess(), self._p())
-            rank, dep = dependent_rows(J)
-            owners = system.layout.owners_of(dep)
-            names = ", ".join(o.label() if hasattr(o, "label") else str(o) for o in owners)
-            involved = system.layout.owners_of(involved_rows(J, rank))
-            also = ""
-            if len(involved) > len(owners):
-                also = (" They are redundant together with: " + ", ".join(
-                    o.label() if hasattr(o, "label") else str(o)
-                    for o in involved if o not in owners) + ".")
-            raise ConstraintCountError(
-                f"the model is overconstrained by {m - n} equation(s) ({n} coordinates, {m} "
-                f"equations). Constraints that look redundant at the current guess: {names or '?'}."
-                f"{also} Remove them or use constraints that remove fewer degrees of freedom.")
+            g = self.guess()
+            J = system.jacobian(0.0, g, self._p())
+            d = dependency(system, J, Scaling.of(system, g, J))
+            # rank <= n < m: at least m - n equations depend on the others
+            msg = (f"the model is overconstrained by {m - n} equation(s) ({n} coordinates, {m} "
+                   f"equations). Jacobian at the current guess {d.text} The cure is to remove or "
+                   f"relax {d.deficiency} equation(s) in total, not whole joints: replace one or "
+                   "more of the constraints involved by constraints that impose fewer equations "
+                   "(for example a joint that leaves one more rotation or translation free), or "
+                   "drop equations with a general Constraint.")
+            if d.rank < n:
+                msg += (f" Even then {n - d.rank} degree(s) of freedom would remain at this guess: "
+                        "add drivers, or check the guess.")
+            raise ConstraintCountError(msg)
+
+    @staticmethod
+    def _check_times(t) -> np.ndarray:
+        """``t`` as a 1-D float array, or a :class:`ModelError` saying what is wrong with it."""
+        what = "solve: t must be a finite time or a 1-D sequence of finite times"
+        if t is None:
+            raise ModelError(f"{what}, got None")
+        try:
+            arr = np.asarray(t, dtype=float)
+        except (TypeError, ValueError):
+            raise ModelError(f"{what}, got {t!r}") from None
+        if arr.ndim > 1:
+            raise ModelError(f"{what}, got an array of shape {arr.shape}; flatten it or pass "
+                             "one sequence of times")
+        arr = np.atleast_1d(arr)
+        if arr.size == 0:
+            raise ModelError(f"{what}, got an empty sequence; give at least one time")
+        bad = np.flatnonzero(~np.isfinite(arr))
+        if bad.size:
+            raise ModelError(f"{what}, got {arr[bad[0]]} at index {bad[0]}")
+        return arr
 
     def solve(self, t=0.0, solution: str = "acceleration", guess=None,
               options: PositionOptions | None = None, lambda_guess=None):
@@ -626,12 +698,34 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         if solution not in ORDERS and solution not in modes:
             raise ModelError(f"solution must be one of {list(ORDERS) + list(modes)}, "
                              f"got {solution!r}")
+        times = self._check_times(t)
+        if isinstance(options, Mapping):
+            fields = set(PositionOptions.__dataclass_fields__)
+            unknown = sorted(map(str, set(options) - fields))
+            if unknown:
+                raise ModelError(f"options: unknown field(s) {unknown}; PositionOptions has "
+                                 f"{sorted(fields)}")
+            options = PositionOptions(**options)
+        if options is not None and not isinstance(options, PositionOptions):
+            raise ModelError(f"options must be a PositionOptions(ftol=..., max_iterations=..., "
+                             f"damping=...) or a mapping of its fields, got {options!r}")
         system = self.compile()
         self._require_square(system)
         g = self._resolve_guess(system, guess)
         scalar = np.ndim(t) == 0
         order = ORDERS.get(solution, modes.get(solution))
-        res = sweep(system, np.atleast_1d(t), g, order, options, self._p())
+        try:
+            res = sweep(system, times, g, order, options, self._p())
+        except SingularJacobianError as err:
+            # a singular first point may be the guess's fault, not the constraints'
+            J = system.jacobian(times[0], g, self._p())
+            d = dependency(system, J, Scaling.of(system, g, J))
+            better = self._singular_guess(system, times[0], g, d.rank) if (
+                err.time == times[0] and d.deficiency) else None
+            if better is None:
+                raise
+            raise SingularJacobianError(f"position solve at t = {times[0]:.6g}: {better[1]}",
+                                        time=err.time, dependent=[], rank=err.rank) from None
         lam = None
         if solution in modes:
             lam = self._multipliers_over(system, res, solution, lambda_guess)

@@ -1,8 +1,29 @@
 r"""Velocity, acceleration and kinematic sweeps of a fully constrained system.
 
-Velocity ``Phi_q qd = -Phi_t``; acceleration ``Phi_q qdd = gamma``. A sweep over times
-``t_0 < t_1 < ...`` solves each position by Newton from a Taylor predictor of the previous
-point (``q + qd dt + qdd dt^2 / 2``, as far as solved), so it follows one assembly branch.
+Velocity ``Phi_q qd = -Phi_t``; acceleration ``Phi_q qdd = gamma``, both solved on the
+unit-free scaled Jacobian (:class:`~mechsys.solvers._linalg.Scaling`), whose reciprocal
+condition number ``rcond`` is the unit-invariant measure of closeness to a lock-up.
+
+A sweep over times ``t_0 < t_1 < ...`` solves each position by Newton from a predictor of the
+previous point, so it follows one assembly branch:
+
+* the Taylor predictor ``q + qd dt + qdd dt^2 / 2`` (as far as solved) when the previous
+  point is well conditioned (``rcond >= RCOND_WARN``);
+* the secant ``q_k + (q_k - q_{k-1}) dt_k / dt_{k-1}`` when it is not (and in location-only
+  sweeps, which have no ``qd``): at and next to a
+  toggle (lock-up) position ``qd`` and ``qdd`` are undefined or meaningless, and the secant
+  continues the branch through the singular point with continuous angles (for a slider-crank
+  driven at the piston through a dead centre: the crank keeps turning the same way);
+* right after a first point that is nearly singular (no secant yet), the first-order step
+  ``qd dt`` shortened to turn at most ``ROTATION_START``: its direction, not its size, is
+  meaningful there;
+* the secant also replaces a Taylor prediction that moves a rotational coordinate by far
+  more than the previous step did (``> ROTATION_SLACK + 4 |secant step|``).
+
+A point whose solved rotational coordinates lie more than ``ROTATION_JUMP`` (a quarter turn)
+from the prediction is solved again from the previous point; if it still jumps, the sweep
+stops with a :class:`ConvergenceError` naming the time: it never returns a jump by whole
+turns. Points below ``RCOND_WARN`` raise one :class:`NearSingularWarning` naming the first.
 """
 
 from __future__ import annotations
@@ -12,33 +33,48 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._errors import ConvergenceError, SingularJacobianError
-from ._linalg import SPARSE_THRESHOLD, Singular, factor
+from ._linalg import SPARSE_THRESHOLD, Scaling, Singular, rotation_columns
 from ._position import PositionOptions, describe_singular, solve_position
 
 ORDERS = {"location": 0, "velocity": 1, "acceleration": 2}
 
-#: below this reciprocal condition number of Phi_q a sweep warns (near a toggle position)
+#: below this reciprocal condition number of the scaled Phi_q a sweep warns (near a toggle
+#: position) and does not trust qd, qdd in its predictor
 RCOND_WARN = 1e-6
+#: largest distance (rad) of a solved rotational coordinate from its prediction
+ROTATION_JUMP = np.pi / 2
+#: largest rotation (rad) of the first predictor step when the sweep starts near a toggle
+ROTATION_START = np.pi / 8
+#: a Taylor prediction may turn this much (rad) more than 4 x the secant step
+ROTATION_SLACK = 0.25
 
 
-def solve_velocity(system, t: float, q, p=None) -> np.ndarray:
+def _scaling(system, t, q, p, sparse) -> Scaling:
+    return Scaling.of(system, q, system.jacobian(t, q, p, sparse))
+
+
+def solve_velocity(system, t: float, q, p=None, scaling: Scaling | None = None) -> np.ndarray:
     """Velocities ``qd`` (n,) from ``Phi_q qd = -Phi_t`` at ``(t, q)``."""
-    J, rhs = system.velocity_rhs(t, q, p, system.n > SPARSE_THRESHOLD)
+    sparse = system.n > SPARSE_THRESHOLD
+    J, rhs = system.velocity_rhs(t, q, p, sparse)
+    sc = scaling or Scaling.of(system, q, J)
     try:
-        return factor(J).solve(rhs)
+        return sc.factor(J).solve(rhs)
     except Singular:
-        raise describe_singular(system, J, t, q, "velocity solve") from None
+        raise describe_singular(system, J, t, q, "velocity solve", sc) from None
 
 
-def solve_acceleration(system, t: float, q, qd, p=None, J=None) -> np.ndarray:
+def solve_acceleration(system, t: float, q, qd, p=None, J=None,
+                       scaling: Scaling | None = None) -> np.ndarray:
     """Accelerations ``qdd`` (n,) from ``Phi_q qdd = gamma`` at ``(t, q, qd)``."""
     if J is None:
         J = system.jacobian(t, q, p, system.n > SPARSE_THRESHOLD)
+    sc = scaling or Scaling.of(system, q, J)
     g = system.gamma_values(t, q, qd, p)
     try:
-        return factor(J).solve(g)
+        return sc.factor(J).solve(g)
     except Singular:
-        raise describe_singular(system, J, t, q, "acceleration solve") from None
+        raise describe_singular(system, J, t, q, "acceleration solve", sc) from None
 
 
 @dataclass(frozen=True)
@@ -57,9 +93,10 @@ class SweepResult:
 
 
 def sweep(system, times, guess, order: int = 2, options: PositionOptions | None = None,
-          p=None) -> SweepResult:
+          p=None, scaling: Scaling | None = None) -> SweepResult:
     """Kinematic solution at each of ``times`` (1D, any order; continuation follows the
-    given order). ``order`` 0 = location, 1 = + velocity, 2 = + acceleration."""
+    given order). ``order`` 0 = location, 1 = + velocity, 2 = + acceleration. ``scaling``
+    defaults to the one of ``guess`` at the first time."""
     times = np.atleast_1d(np.asarray(times, dtype=float))
     n, N = system.n, len(times)
     sparse = n > SPARSE_THRESHOLD
@@ -68,25 +105,15 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
     QDD = np.empty((N, n)) if order >= 2 else None
     its = np.zeros(N, dtype=int)
     rconds = np.full(N, np.nan) if order >= 1 else None
+    q0 = np.asarray(guess, dtype=float)
+    sc = scaling
     evals = 0
-    q_prev = np.asarray(guess, dtype=float)
-    qd_prev = qdd_prev = None
-    t_prev = None
+    if sc is None and N:
+        sc, evals = _scaling(system, times[0], q0, p, sparse), 1
+    rot = np.flatnonzero(rotation_columns(system))  # indices of angles / Euler parameters
     for k, t in enumerate(times):
-        g = q_prev
-        if t_prev is not None and qd_prev is not None:
-            dt = t - t_prev
-            g = q_prev + qd_prev * dt
-            if qdd_prev is not None:
-                g = g + 0.5 * qdd_prev * dt * dt
-        try:
-            res = solve_position(system, t, g, options, p)
-        except (ConvergenceError, SingularJacobianError):
-            if g is q_prev:
-                raise
-            # the Taylor predictor can throw the guess far away where velocities are huge
-            # (near a toggle): start again from the previous position
-            res = solve_position(system, t, q_prev, options, p)
+        g = q0 if k == 0 else _predict(Q, QD, QDD, rconds, times, k, rot)
+        res = _solve_point(system, t, g, Q[k - 1] if k else None, options, p, sc, rot)
         q = res.q
         its[k] = res.iterations
         evals += res.evaluations
@@ -94,9 +121,10 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
         if order >= 1:
             J, rhs = system.velocity_rhs(t, q, p, sparse)
             try:
-                fac = factor(J)
+                # the position solve's row scales (from the predictor's Jacobian) serve here too
+                fac = sc.factor(J, res.rows)
             except Singular:
-                err = describe_singular(system, J, t, q, "velocity solve")
+                err = describe_singular(system, J, t, q, "velocity solve", sc)
                 raise SingularJacobianError(
                     f"{err} Sweep stopped at point {k} of {N}.", time=t,
                     dependent=err.dependent, rank=err.rank) from None
@@ -105,14 +133,8 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
             rconds[k] = fac.rcond
             evals += 1
             if order >= 2:
-                qdd = fac.solve(system.gamma_values(t, q, qd, p))
-                QDD[k] = qdd
+                QDD[k] = fac.solve(system.gamma_values(t, q, qd, p))
                 evals += 1
-            else:
-                qdd = None
-        else:
-            qd = qdd = None
-        q_prev, qd_prev, qdd_prev, t_prev = q, qd, qdd, t
     if rconds is not None and np.nanmin(rconds, initial=1.0) < RCOND_WARN:
         import warnings
 
@@ -123,5 +145,62 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
             f"the constraint Jacobian is nearly singular at {len(bad)} time point(s), first at "
             f"t = {bad[0]:.6g} (reciprocal condition {np.nanmin(rconds):.1e}): the mechanism is "
             "close to a lock-up or toggle position; velocities and accelerations there are large "
-            "and sensitive. Solution.extra['rcond'] has the value at every point."), stacklevel=3)
+            "and sensitive, and the sweep continued through it on the branch its previous "
+            "points followed. Solution.extra['rcond'] has the value at every point."),
+            stacklevel=3)
     return SweepResult(times, Q, QD, QDD, its, evals, order, rconds)
+
+
+def _predict(Q, QD, QDD, rconds, times, k: int, rot) -> np.ndarray:
+    """Starting point of point ``k`` from the points before it (see the module docstring)."""
+    q, dt = Q[k - 1], times[k] - times[k - 1]
+    secant = None
+    if k >= 2:
+        dt0 = times[k - 1] - times[k - 2]
+        secant = q + (q - Q[k - 2]) * (dt / dt0) if dt0 != 0 else q
+    if QD is None or (rconds[k - 1] < RCOND_WARN and secant is not None):
+        return q if secant is None else secant
+    if rconds[k - 1] < RCOND_WARN:
+        # the sweep starts at a near-toggle point: qd points along the branch (the near-null
+        # direction of Phi_q) but its size is meaningless, so take a bounded first-order step
+        step = QD[k - 1] * dt
+        big = np.abs(step[rot]).max(initial=0.0)
+        return q + (step * (ROTATION_START / big) if big > ROTATION_START else step)
+    g = q + QD[k - 1] * dt
+    if QDD is not None:
+        g = g + 0.5 * QDD[k - 1] * dt * dt
+    if secant is not None and rot.size:
+        qr = q[rot]
+        if np.abs(g[rot] - qr).max() > ROTATION_SLACK + 4 * np.abs(secant[rot] - qr).max():
+            return secant
+    return g
+
+
+def _solve_point(system, t, g, q_prev, options, p, sc, rot):
+    """Newton from the prediction ``g``; again from ``q_prev`` when that fails or when the
+    result jumps (a rotational coordinate further than ``ROTATION_JUMP`` from ``g``)."""
+    try:
+        res = solve_position(system, t, g, options, p, sc)
+        if q_prev is None or _jump(res.q, g, rot) <= ROTATION_JUMP:
+            return res
+    except (ConvergenceError, SingularJacobianError):
+        if q_prev is None or np.array_equal(g, q_prev):
+            raise
+    # the predictor can throw the guess far away where velocities are huge (near a
+    # toggle): start again from the previous position
+    res = solve_position(system, t, q_prev, options, p, sc)
+    jump = _jump(res.q, q_prev, rot)
+    if jump > ROTATION_JUMP:
+        i = rot[np.argmax(np.abs(res.q[rot] - q_prev[rot]))]
+        raise ConvergenceError(
+            f"kinematic sweep at t = {t:.6g}: a rotational coordinate "
+            f"({system.layout.q_names[i]}) jumped by {jump:.3g} rad from the previous point, so "
+            "the sweep lost its assembly branch (near a lock-up or toggle position, or too "
+            "coarse sampling). Sample more finely, or stop the sweep before this time.",
+            time=t, residuals=system.residual(t, res.q, p),
+            history=res.history)
+    return res
+
+
+def _jump(q, ref, rot) -> float:
+    return float(np.abs(q[rot] - ref[rot]).max()) if rot.size else 0.0

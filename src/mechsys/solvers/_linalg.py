@@ -33,7 +33,7 @@ class Factor:
             try:
                 with warnings.catch_warnings():
                     warnings.simplefilter("error", sps.SparseEfficiencyWarning)
-                    self._lu = spla.splu(sps.csc_matrix(J))
+                    self._lu = spla.splu(_csc(J))
             except RuntimeError as exc:  # "Factor is exactly singular"
                 raise Singular(str(exc)) from None
             d = np.abs(self._lu.U.diagonal())
@@ -46,9 +46,7 @@ class Factor:
             if J.shape[0] != J.shape[1]:
                 raise Singular("not square")
             anorm = np.abs(J).sum(axis=0).max() if J.size else 0.0
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", sla.LinAlgWarning)
-                lu, piv, info = sla.lapack.dgetrf(J)
+            lu, piv, info = sla.lapack.dgetrf(J)  # the raw LAPACK call never warns
             if info > 0 or anorm == 0:
                 raise Singular("exact zero pivot")
             rcond, _ = sla.lapack.dgecon(lu, anorm, norm="1")
@@ -98,3 +96,159 @@ def involved_rows(J, rank: int, tol: float = 1e-8) -> list[int]:
     U, _, _ = sla.svd(J, full_matrices=True)
     null = U[:, rank:]
     return sorted(int(i) for i in np.nonzero(np.abs(null).max(axis=1) > tol)[0])
+
+
+class Scaling:
+    r"""The unit-free form of the constraint equations used by every kinematic decision.
+
+    A change of the unit of length multiplies the position coordinates and every length of a
+    model by one factor; the angles (and Euler parameters) do not change. Tolerances and
+    conditioning measured on the raw Jacobian then depend on the unit. The solvers therefore
+    decide on
+
+    .. math::  \hat\Phi = R^{-1} \Phi, \qquad \hat\Phi_{\hat q} = R^{-1} \Phi_q D
+
+    with ``D = diag(c)``: ``c_j = L`` for the position coordinates of the bodies and 1 for
+    angles, Euler parameters and model variables (whose dimension mechsys cannot know), so
+    that ``q = D q_hat`` measures positions in units of ``L``; and ``R = diag(r)`` with
+    ``r_i = max_j |(Phi_q D)_ij|``, the size of row ``i`` in those units (1 for an empty row),
+    which makes each equation dimensionless whatever its own dimension (length, length^2,
+    angle, none). ``|Phi_i| / r_i`` is then, to first order, how far (in units of ``L``, or
+    radians) the coordinates are from satisfying equation ``i``.
+
+    ``L``, the characteristic length, is the largest lever arm of the constraint equations at
+    a reference configuration: for each equation and body the ratio of the largest
+    rotational to the largest translational Jacobian entry (for a point of a body the
+    distance of the point from the body origin, for a distance or a point-on-line equation a
+    distance of the geometry). It falls back to the largest position coordinate, then to 1
+    (a model without lengths). ``L`` scales exactly with the unit, so the scaled Jacobian,
+    its condition number and its rank are unit-invariant. ``offset`` is the largest position
+    coordinate divided by ``L`` (a mechanism far from the origin): the convergence test
+    allows for the rounding of the coordinates with it.
+    """
+
+    def __init__(self, length: float, columns: np.ndarray, offset: float = 1.0):
+        self.length = float(length)
+        self.columns = columns
+        self.offset = float(offset)
+
+    @classmethod
+    def of(cls, system, q, J) -> Scaling:
+        """The scaling of ``system`` at the reference configuration ``q`` with Jacobian ``J``."""
+        n = system.n
+        trans, body = _column_kinds(system)
+        q = np.asarray(q, dtype=float)
+        big = float(np.abs(q[trans]).max(initial=0.0)) if n else 0.0
+        if not np.isfinite(big):
+            big = 0.0
+        arm = _lever_arm(J, trans, body)
+        L = arm if arm > 0 else (big if big > 0 else 1.0)
+        columns = np.where(trans, L, 1.0)
+        return cls(L, columns, big / L)
+
+    def rows(self, J) -> np.ndarray:
+        """Row scales ``r`` (m,) of the Jacobian ``J``."""
+        if sps.issparse(J):
+            # on the CSC arrays: building scipy matrices costs more than the arithmetic
+            J = _csc(J)
+            r = np.zeros(J.shape[0])
+            np.maximum.at(r, J.indices, np.abs(J.data) * self._nz_columns(J))
+        else:
+            r = np.abs(J * self.columns).max(axis=1) if J.size else np.zeros(J.shape[0])
+        r[~(r > 0)] = 1.0  # an empty (or NaN) row: nothing to measure it by
+        return r
+
+    def scaled(self, J, r: np.ndarray | None = None):
+        """``R^-1 J D`` (dense or sparse like ``J``)."""
+        r = self.rows(J) if r is None else r
+        if sps.issparse(J):
+            Js = _csc(J).copy()
+            Js.data *= self._nz_columns(Js) / r[Js.indices]
+            return Js
+        return (np.asarray(J, dtype=float) * self.columns) * (1.0 / r)[:, None]
+
+    def _nz_columns(self, J) -> np.ndarray:
+        """Column scale of every stored entry of the CSC matrix ``J``."""
+        return np.repeat(self.columns, np.diff(J.indptr))
+
+    def factor(self, J, r: np.ndarray | None = None) -> ScaledFactor:
+        """Factorise the scaled Jacobian; its ``solve(b)`` solves ``J x = b``."""
+        r = self.rows(J) if r is None else r
+        if sps.issparse(J) and J.format == "csc":
+            # swap the scaled values in for the factorisation only: no new scipy matrix
+            # (whose construction costs more than the arithmetic); J is unchanged afterwards
+            raw = J.data
+            J.data = raw * (self._nz_columns(J) / r[J.indices])
+            try:
+                fac = Factor(J)
+            finally:
+                J.data = raw
+        else:
+            fac = Factor(self.scaled(J, r))
+        return ScaledFactor(fac, r, self.columns)
+
+    def dependent_rows(self, J) -> tuple[int, list[int]]:
+        """:func:`dependent_rows` of the scaled Jacobian (unit-invariant rank)."""
+        return dependent_rows(self.scaled(J))
+
+    def involved_rows(self, J, rank: int) -> list[int]:
+        """:func:`involved_rows` of the scaled Jacobian."""
+        return involved_rows(self.scaled(J), rank)
+
+
+class ScaledFactor:
+    """A :class:`Factor` of ``R^-1 J D``; ``solve(b)`` returns ``x`` with ``J x = b``."""
+
+    def __init__(self, fac: Factor, rows: np.ndarray, columns: np.ndarray):
+        self._fac, self._rows, self._columns = fac, rows, columns
+        #: reciprocal condition number of the scaled matrix (unit-invariant)
+        self.rcond = fac.rcond
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        return self._columns * self._fac.solve(np.asarray(b, dtype=float) / self._rows)
+
+
+def _csc(J):
+    return J if J.format == "csc" else sps.csc_matrix(J)
+
+
+def _column_kinds(system) -> tuple[np.ndarray, np.ndarray]:
+    """Per coordinate: is it a body position coordinate; which body (-1: a variable)."""
+    n, dim = system.n, system.space.dim
+    trans = np.zeros(n, dtype=bool)
+    body = np.full(n, -1)
+    for k, sl in enumerate(system.layout.body_slices.values()):
+        body[sl] = k
+        trans[sl.start : sl.start + dim] = True
+    return trans, body
+
+
+def _lever_arm(J, trans: np.ndarray, body: np.ndarray) -> float:
+    """Largest ratio, over equations and bodies, of the largest rotational to the largest
+    translational Jacobian entry (a length: see :class:`Scaling`)."""
+    if sps.issparse(J):
+        c = sps.coo_matrix(J)
+        i, j, v = c.row, c.col, np.abs(c.data)
+    else:
+        J = np.asarray(J, dtype=float)
+        i, j = np.nonzero(J)
+        v = np.abs(J[i, j])
+    keep = (body[j] >= 0) & np.isfinite(v)
+    i, j, v = i[keep], j[keep], v[keep]
+    if not v.size:
+        return 0.0
+    nb = int(body.max()) + 1
+    key = i * nb + body[j]
+    size = (int(i.max()) + 1) * nb
+    tmax = np.zeros(size)
+    rmax = np.zeros(size)
+    np.maximum.at(tmax, key[trans[j]], v[trans[j]])
+    np.maximum.at(rmax, key[~trans[j]], v[~trans[j]])
+    ok = (tmax > 0) & (rmax > 0)
+    return float((rmax[ok] / tmax[ok]).max()) if ok.any() else 0.0
+
+
+def rotation_columns(system) -> np.ndarray:
+    """Mask (n,) of the bodies' rotational coordinates (angles, Euler parameters)."""
+    trans, body = _column_kinds(system)
+    return (body >= 0) & ~trans

@@ -1,28 +1,59 @@
 r"""Position analysis: damped Newton on ``Phi(q, t) = 0``.
 
 Each iteration solves ``Phi_q dq = -Phi`` and takes the longest step ``a dq``
-(``a = 1, 1/2, 1/4 ...``) that reduces ``||Phi||`` (Armijo test), which keeps poor guesses
-from diverging. Converged when ``||Phi||_inf <= ftol * (1 + max|q|)`` (lengths scale the
-distance equations) after at least one update.
+(``a = 1, 1/2, 1/4 ...``) that reduces the scaled residual (Armijo test), which keeps poor
+guesses from diverging. All decisions are taken on the unit-free equations of
+:class:`~mechsys.solvers._linalg.Scaling` (``Phi_hat = R^-1 Phi``, coordinates in units of
+the characteristic length ``L``), so they do not depend on the unit of length: converged when
+
+.. math::  \max_i |\Phi_i| / r_i \le \mathrm{ftol}\,(1 + \max|x| / L)
+
+after at least one update, with ``r_i`` the size of row ``i`` of ``Phi_q D`` and ``max|x|``
+the largest position coordinate of the reference configuration (the rounding of coordinates
+far from the origin). ``ftol`` is thus a relative position error (positions in units of
+``L``) or an angle error in radians; the singularity test uses the condition number of the
+scaled Jacobian.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from .._errors import ConvergenceError, SingularJacobianError
-from ._linalg import SPARSE_THRESHOLD, Singular, dependent_rows, factor, involved_rows
+from .._errors import ConvergenceError, ModelError, SingularJacobianError
+from ._linalg import SPARSE_THRESHOLD, Scaling, Singular
 
 
 @dataclass(frozen=True)
 class PositionOptions:
-    """ftol: residual tolerance (scaled by 1 + max|q|); max_iterations; damping: line search."""
+    """Options of the position Newton solver.
+
+    ftol: tolerance of the scaled residual (relative position error in units of the model's
+    characteristic length, or radians; see :mod:`mechsys.solvers._position`), positive and
+    finite; max_iterations: positive int; damping: bool, halve steps that do not reduce the
+    residual.
+    """
 
     ftol: float = 1e-12
     max_iterations: int = 50
     damping: bool = True
+
+    def __post_init__(self):
+        f = self.ftol
+        if isinstance(f, bool) or not isinstance(f, (int, float, np.integer, np.floating)) \
+                or not math.isfinite(f) or f <= 0:
+            raise ModelError(f"PositionOptions: ftol must be a positive finite number, got {f!r}")
+        k = self.max_iterations
+        if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
+            raise ModelError("PositionOptions: max_iterations must be a positive integer, "
+                             f"got {k!r}")
+        if not isinstance(self.damping, (bool, np.bool_)):
+            raise ModelError(f"PositionOptions: damping must be True or False, got {self.damping!r}")
+
+
+_DEFAULT = PositionOptions()
 
 
 @dataclass(frozen=True)
@@ -35,54 +66,99 @@ class PositionResult:
     evaluations: int
     residual: float
     history: tuple
+    #: row scales r (m,) of the unit-free equations used by this solve
+    rows: np.ndarray | None = None
 
 
-def describe_singular(system, J, t, q, what: str) -> SingularJacobianError:
-    rank, dep = dependent_rows(J)
-    owners = system.layout.owners_of(dep)
-    names = ", ".join(o.label() if hasattr(o, "label") else str(o) for o in owners)
-    where = f" at t = {t:.6g}" if t is not None else ""
-    msg = (
-        f"{what}: the constraint Jacobian is singular{where} (rank {rank} of {system.m} equations, "
-        f"{system.n} coordinates). "
-    )
+def _label(owner) -> str:
+    return owner.label() if hasattr(owner, "label") else str(owner)
+
+
+@dataclass(frozen=True)
+class Dependency:
+    """Rank diagnosis of a constraint Jacobian (on its unit-free scaled form).
+
+    rank; deficiency: the fewest equations that must go (``min(m, n) - rank`` for a square
+    or tall Jacobian); rows: the dependent equations (pivoted QR picks which); owners: their
+    constraints; involved: every constraint taking part in the dependency; text: the rank
+    and the dependent equations by constraint and equation number.
+    """
+
+    rank: int
+    deficiency: int
+    rows: tuple
+    owners: list
+    involved: list
+    text: str
+
+
+def dependency(system, J, scaling: Scaling | None = None, q=None) -> Dependency:
+    """Which equations of ``J`` (at ``q``) depend on the others (unit-invariant)."""
+    sc = scaling or Scaling.of(system, system.guess if q is None else q, J)
+    m = J.shape[0]
+    rank, dep = sc.dependent_rows(J) if m else (0, [])
+    lay = system.layout
+    owners = lay.owners_of(dep)
+    involved = lay.owners_of(sc.involved_rows(J, rank)) if dep else []
+    parts = []
+    for o in owners:
+        eqs = [lay.eq_index[i] + 1 for i in dep if lay.eq_owner[i] is o]
+        which = "equation" + ("s " if len(eqs) > 1 else " ") + ", ".join(map(str, eqs))
+        parts.append(f"{which} of {_label(o)}")
+    text = f"(rank {rank} of {m} equations, {system.n} coordinates)."
     if dep:
-        msg += f"Dependent equations come from: {names}. "
-        involved = system.layout.owners_of(involved_rows(J, rank))
+        text += f" {len(dep)} dependent equation(s): {'; '.join(parts)}."
         if len(involved) > len(owners):
-            msg += ("The dependency involves: "
-                    + ", ".join(o.label() if hasattr(o, "label") else str(o) for o in involved)
-                    + ". ")
+            text += " The dependency involves: " + ", ".join(_label(o) for o in involved) + "."
+    return Dependency(rank, len(dep), tuple(dep), owners, involved, text)
+
+
+def describe_singular(system, J, t, q, what: str,
+                      scaling: Scaling | None = None) -> SingularJacobianError:
+    """A :class:`SingularJacobianError` naming the dependent equations of ``J`` at ``(t, q)``."""
+    d = dependency(system, J, scaling, q)
+    where = f" at t = {t:.6g}" if t is not None else ""
+    msg = f"{what}: the constraint Jacobian is singular{where} {d.text}"
     msg += (
-        "Either these constraints are redundant (remove or relax one), or the mechanism is at "
-        "a lock-up/toggle position where it cannot be driven as specified."
+        " Either these constraints are redundant (remove or relax as many equations as are "
+        "dependent), or the mechanism is at a lock-up/toggle position where it cannot be "
+        "driven as specified."
     )
-    return SingularJacobianError(msg, time=t, dependent=owners, rank=rank)
+    return SingularJacobianError(msg, time=t, dependent=d.owners, rank=d.rank)
 
 
 def solve_position(system, t: float, guess, options: PositionOptions | None = None,
-                   p=None) -> PositionResult:
+                   p=None, scaling: Scaling | None = None) -> PositionResult:
     """Solve ``Phi(q, t) = 0`` for ``q`` by damped Newton from ``guess`` (shape ``(n,)``).
+
+    ``scaling`` (a :class:`~mechsys.solvers._linalg.Scaling`) fixes the unit-free form of
+    the equations; by default it is taken at the system's own guess (so a wild starting
+    guess cannot loosen the tolerance). ``PositionResult.residual`` and ``history`` are
+    the scaled residual ``max |Phi_i| / r_i``.
 
     Raises :class:`ConvergenceError` (with per-equation residuals and the iteration history)
     or :class:`SingularJacobianError` (naming dependent constraints).
     """
-    opt = options or PositionOptions()
+    opt = options or _DEFAULT
     sparse = system.n > SPARSE_THRESHOLD
     q = np.array(guess, dtype=float)
     F, J = system.residual_and_jacobian(t, q, p, sparse)
     evals = 1
+    if scaling is None:
+        g0 = getattr(system, "guess", None)
+        if g0 is not None and np.shape(g0) == q.shape and np.all(np.isfinite(g0)):
+            scaling = Scaling.of(system, g0, system.jacobian(t, g0, p, sparse))
+            evals += 1
+        else:
+            scaling = Scaling.of(system, q, J)
+    # the row scales are fixed before iterating: the line search and the convergence test
+    # compare residuals in one metric, and a diverging iterate cannot loosen its own test
+    rows = scaling.rows(J)
+    tol = opt.ftol * (1.0 + scaling.offset)
     history = []
-    norm = np.abs(F).max() if F.size else 0.0
+    norm = np.abs(F / rows).max() if F.size else 0.0
     history.append(norm)
     it = 0
-    # The scale is fixed before iterating (a diverging iterate must not loosen its own
-    # tolerance) and capped by the model's own guess (a wild sweep predictor must not either).
-    scale = np.abs(q).max(initial=0.0)
-    g0 = getattr(system, "guess", None)
-    if g0 is not None and np.size(g0) and np.abs(g0).max() > 0:
-        scale = min(scale, np.abs(g0).max())
-    tol = opt.ftol * (1.0 + scale)
     while True:
         if not np.all(np.isfinite(F)):
             raise ConvergenceError(
@@ -90,19 +166,19 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
                 "(a coordinate left the domain of an expression)", time=t,
                 residuals=_residual_table(system, F), history=tuple(history))
         if norm <= tol and it > 0:
-            return PositionResult(q, True, 0, "converged", it, evals, norm, tuple(history))
+            return PositionResult(q, True, 0, "converged", it, evals, norm, tuple(history), rows)
         if it >= opt.max_iterations:
             break
         try:
-            dq = -factor(J).solve(F)
+            dq = -scaling.factor(J, rows).solve(F)
         except Singular:
-            raise describe_singular(system, J, t, q, "position solve") from None
+            raise describe_singular(system, J, t, q, "position solve", scaling) from None
         a = 1.0
         while True:
             qn = q + a * dq
             Fn, Jn = system.residual_and_jacobian(t, qn, p, sparse)
             evals += 1
-            nn = np.abs(Fn).max() if Fn.size else 0.0
+            nn = np.abs(Fn / rows).max() if Fn.size else 0.0
             if not opt.damping or nn <= (1 - 1e-4 * a) * norm or a < 1e-3 or norm <= tol:
                 break
             a *= 0.5
@@ -111,12 +187,14 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
         history.append(norm)
     raise ConvergenceError(
         f"position solve at t = {t:.6g} did not converge in {opt.max_iterations} iterations "
-        f"(max residual {norm:.3e}). Largest residuals:\n{_residual_table(system, F)}\n"
+        f"(max residual {np.abs(F).max():.3e}, scaled {norm:.3e} > {tol:.1e}). Largest "
+        f"residuals:\n{_residual_table(system, F, rows)}\n"
         "Give a better initial guess (add_body(..., guess=...) or guess=), or check that the "
         "mechanism can assemble at this time.",
         time=t, residuals=F.copy(), history=tuple(history))
 
 
-def _residual_table(system, F, k: int = 8) -> str:
-    order = np.argsort(-np.abs(F))[:k]
+def _residual_table(system, F, rows=None, k: int = 8) -> str:
+    """The ``k`` largest residuals (largest scaled ones first when ``rows`` are given)."""
+    order = np.argsort(-np.abs(F if rows is None else F / rows))[:k]
     return "\n".join(f"  {system.layout.row_label(i)}: {F[i]:+.3e}" for i in order)

@@ -1,0 +1,144 @@
+"""The same mechanism in any unit of length, from 1e-6 to 1e6: same relative accuracy of
+positions, velocities and accelerations, the same conditioning and DOF/redundancy report, and
+no near-singular warning where the mechanism is healthy (issue 10, section 1)."""
+
+import warnings
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import mechsys as ms
+from mechsys import models
+from mechsys.solvers import solve_position
+from test_slider_crank import closed_form
+
+SCALES = [1e-6, 1e-3, 1.0, 1e3, 1e6]
+
+
+def _solve_quietly(m, t):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ms.NearSingularWarning)
+        return m.solve(t)
+
+
+@pytest.mark.parametrize("s", SCALES)
+def test_slider_crank_relative_accuracy_at_every_scale(s):
+    r, L, w = 2.0 * s, 6.0 * s, 2 * np.pi
+    m = models.slider_crank(crank=r, rod=L, speed=w)
+    t = np.linspace(0, 1, 37)
+    sol = _solve_quietly(m, t)
+    p = m.body("piston").point(0)
+    x, v, a = closed_form(r, L, 0.0, w, t)
+    # errors relative to the size of the mechanism (1e-7 at s = 1e-6 before scaling)
+    assert np.abs(sol.location(p)[:, 0] - x).max() / s < 1e-12
+    assert np.abs(sol.velocity(p)[:, 0] - v).max() / (w * s) < 1e-11
+    assert np.abs(sol.acceleration(p)[:, 0] - a).max() / (w**2 * s) < 1e-10
+    np.testing.assert_allclose(sol.angle("crank"), w * t, rtol=0, atol=1e-12)
+    # healthy everywhere: the scaled condition number does not depend on the unit
+    assert np.all(sol.extra["rcond"] > 1e-2)
+
+
+def test_slider_crank_diagnosis_is_unit_invariant():
+    rconds, its = [], []
+    for s in SCALES:
+        m = models.slider_crank(crank=2.0 * s, rod=6.0 * s)
+        sol = _solve_quietly(m, np.linspace(0, 1, 19))
+        rconds.append(sol.extra["rcond"])
+        its.append(sol.iterations)
+        dof = m.dof()
+        assert (int(dof), dof.rank, dof.gruebler, dof.redundant) == (0, 9, 0, [])
+    for rc, it in zip(rconds[1:], its[1:]):
+        np.testing.assert_allclose(rc, rconds[0], rtol=1e-6)
+        np.testing.assert_array_equal(it, its[0])
+
+
+def _four_bar_rocker():
+    """Rocker angle of :func:`models.four_bar` (branch +1) as a function of T (crank angle T),
+    with its first two derivatives, from the closed-form circle intersection."""
+    T, a, b, c, d = sp.symbols("T a b c d", positive=True)
+    ax, ay = a * sp.cos(T), a * sp.sin(T)
+    dx, dy = ax - d, ay
+    dist = sp.sqrt(dx**2 + dy**2)
+    phi = sp.atan2(dy, dx) - sp.acos((c**2 + dist**2 - b**2) / (2 * c * dist))
+    return [sp.lambdify((T, a, b, c, d), e) for e in (phi, phi.diff(T), phi.diff(T, 2))]
+
+
+ROCKER = _four_bar_rocker()
+
+
+@pytest.mark.parametrize("s", SCALES)
+def test_four_bar_relative_accuracy_at_every_scale(s):
+    a, b, c, d = 1.0 * s, 4.0 * s, 3.0 * s, 4.0 * s
+    m = models.four_bar(ground=d, crank=a, coupler=b, rocker=c, speed=1.0, branch=1)
+    t = np.linspace(0, 2 * np.pi, 61)
+    sol = _solve_quietly(m, t)
+    th, om, al = (f(t, a, b, c, d) for f in ROCKER)
+    wrap = np.angle(np.exp(1j * (sol.angle("rocker") - th)))
+    assert np.abs(wrap).max() < 1e-11
+    assert np.abs(sol.omega("rocker") - om).max() < 1e-10
+    assert np.abs(sol.alpha("rocker") - al).max() < 1e-9
+    tip = sol.location(m.body("rocker").point("tip"))
+    np.testing.assert_allclose(np.hypot(tip[:, 0] - d, tip[:, 1]) / s, 3.0, rtol=0, atol=1e-12)
+    dof = m.dof()
+    assert (int(dof), dof.rank, dof.redundant) == (0, 6, [])
+
+
+@pytest.mark.parametrize("s", SCALES)
+def test_redundant_slider_crank_is_reported_at_every_scale(s):
+    """The piston's y fixed twice (slider and an extra RelativeY1): reported redundant in
+    every unit, by dof() and by solve()."""
+    m = models.slider_crank(crank=2.0 * s, rod=6.0 * s)
+    m.add(ms.RelativeY1(m.body("piston").point(0), 0), name="extra")
+    dof = m.dof()
+    assert int(dof) == 0 and dof.gruebler == -1 and dof.rank == 9
+    assert [c.name for c in dof.redundant] in (["slider"], ["extra"])
+    with pytest.raises(ms.ConstraintCountError,
+                       match=r"overconstrained by 1 .* 1 dependent equation\(s\).*remove or relax 1 "
+                             r"equation\(s\) in total") as err:
+        m.solve(0.1)
+    assert "'extra'" in str(err.value) and "'slider'" in str(err.value)
+    # square but redundant: without the driver the model has m == n and rank n - 1
+    m.remove("drive")
+    dof = m.dof()
+    assert int(dof) == 1 and dof.gruebler == 0
+    assert [c.name for c in dof.redundant] in (["slider"], ["extra"])
+    with pytest.raises(ms.SingularJacobianError, match=r"singular at t = 0\.1 \(rank 8 of 9"):
+        m.solve(0.1)
+
+
+@pytest.mark.parametrize("s", [1e-6, 1e6])
+def test_position_solve_scaled_tolerance(s):
+    """At 1e-6 the old absolute test accepted 1e-7 relative errors; at 1e6 the unscaled
+    Jacobian looked singular. The scaled residual is reached to ftol at both."""
+    m = models.slider_crank(crank=2.0 * s, rod=6.0 * s)
+    system = m.compile()
+    g = m.guess()
+    g[system.layout.index("crank.th")] = 0.3         # a real Newton solve from the guess
+    res = solve_position(system, 0.3 / (2 * np.pi), g, p=m._p())
+    x, _, _ = closed_form(2.0 * s, 6.0 * s, 0.0, 2 * np.pi, 0.3 / (2 * np.pi))
+    assert res.success and res.residual < 3e-12
+    assert abs(res.q[system.layout.index("piston.x")] - x) / s < 1e-12
+
+
+def test_sparse_path_agrees_with_dense(monkeypatch):
+    """Above SPARSE_THRESHOLD coordinates the scaled Jacobian is factorised by SuperLU (the
+    scaled values are swapped into the caller's matrix for the factorisation only)."""
+    from mechsys.solvers import _kinematics, _linalg, _position
+
+    m = models.four_bar_chain(25)                           # 153 coordinates: sparse
+    t = np.linspace(0, 1, 11)
+    sparse = m.solve(t)
+    assert m.compile().n > _linalg.SPARSE_THRESHOLD
+    system = m.compile()
+    J = system.jacobian(0.3, sparse.q[3], m._p(), sparse=True)
+    before = J.toarray()
+    sc = _linalg.Scaling.of(system, sparse.q[3], J)
+    x = sc.factor(J).solve(np.ones(system.n))
+    np.testing.assert_array_equal(J.toarray(), before)       # J is left as it was
+    np.testing.assert_allclose(before @ x, 1.0, atol=1e-9)
+    for mod in (_kinematics, _position):
+        monkeypatch.setattr(mod, "SPARSE_THRESHOLD", 10**6)
+    dense = m.solve(t)
+    np.testing.assert_allclose(sparse.q, dense.q, atol=1e-10)
+    np.testing.assert_allclose(sparse.qdd, dense.qdd, atol=1e-7)
