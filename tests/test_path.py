@@ -81,3 +81,29 @@ def test_wrong_number_of_velocity_equations():
     v = m.velocity(b.point(0))
     with pytest.raises(ms.ModelError, match="velocity equations"):
         m.path(replace={"dummy": ms.Constraint([v[0] - 1, v[1]])})
+
+
+def test_set_parameters_after_path_changes_the_motion():
+    # path systems used to freeze the parameters at m.path()
+    m = ms.Model2D()
+    c = m.add_body("caster", points={"wheel": (caster.TRAIL, 0.0)}, guess=((0, 0), caster.TH0))
+    v = m.parameter("v", 1.0)
+    m.add(ms.Revolute2(c.point(0), m.ground.point((-v * T, 0))), name="pivot")
+    m.add(ms.RotationLock1(c, caster.TH0), name="dummy")
+    m.solve(0.0)
+    path = m.path(replace={"dummy": ms.Orthogonal1(m.velocity(c.point("wheel")),
+                                                   c.vector((0, 1)))})
+    t = np.linspace(0, 1.5, 7)
+
+    def closed(speed):
+        return 2 * np.arctan(np.tan(caster.TH0 / 2) * np.exp(-speed * t / caster.TRAIL))
+
+    sol = path.simulate(t, rtol=1e-11, atol=1e-12)
+    np.testing.assert_allclose(sol["caster.th"], closed(1.0), atol=1e-8)
+    m.set_parameters(v=2.0)
+    sol = path.simulate(t, rtol=1e-11, atol=1e-12)
+    np.testing.assert_allclose(sol["caster.th"], closed(2.0), atol=1e-8)
+    np.testing.assert_allclose(sol.location(c.point(0))[:, 0], -2.0 * t, atol=1e-10)
+    sol = path.simulate(t, initial_condition={"v": 0.5}, rtol=1e-11, atol=1e-12)
+    np.testing.assert_allclose(sol["caster.th"], closed(0.5), atol=1e-8)
+    np.testing.assert_allclose(path.velocities(0.0, sol.q[0]), sol.qd[0] * 4, atol=1e-12)

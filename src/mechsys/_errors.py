@@ -60,6 +60,16 @@ class SingularJacobianError(MechError):
         self.rank = rank
 
 
+class SingularMassError(SingularJacobianError):
+    """Free motion: the mass matrix is singular on the motions the constraints leave free (a
+    body without mass or inertia whose motion no constraint determines). ``bodies`` names
+    them. A :class:`SingularJacobianError`, since the augmented matrix is what is singular."""
+
+    def __init__(self, message: str, *, time=None, rank=None, bodies=None):
+        super().__init__(message, time=time, rank=rank)
+        self.bodies = bodies or []
+
+
 class NearSingularWarning(UserWarning):
     """The constraint Jacobian is nearly singular (close to a lock-up or toggle position):
     velocities and accelerations there are large and sensitive."""

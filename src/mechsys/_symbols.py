@@ -1,20 +1,50 @@
-"""Time and naming of symbols. ``T`` is the time symbol used in drivers."""
+"""Time and naming of symbols. ``T`` is the time symbol used in drivers.
+
+Time, coordinates, velocities and accelerations are *real* symbols, so that SymPy can
+differentiate ``Abs``, ``sign`` or ``sqrt(x**2)`` of them (``d|x|/dx = sign(x)``; for a
+complex symbol the derivative stays unevaluated and cannot be compiled). SymEngine drops
+assumptions when its expressions come back to SymPy: :func:`restore_assumptions` maps the
+plain symbols of these names back to the real ones.
+"""
 
 from __future__ import annotations
 
 import sympy as sp
 
 #: The time symbol. Use it in any scalar argument to make a driver, e.g. ``2*pi*T``.
-T = sp.Symbol("T")
+T = sp.Symbol("T", real=True)
+
+# name -> real symbol, for every time/coordinate/velocity/acceleration symbol made here
+_REAL: dict[str, sp.Symbol] = {"T": T}
+
+
+def _real(name: str) -> sp.Symbol:
+    s = _REAL.get(name)
+    if s is None:
+        s = _REAL[name] = sp.Symbol(name, real=True)
+    return s
 
 
 def coord_symbol(name: str) -> sp.Symbol:
-    return sp.Symbol(name)
+    return _real(name)
 
 
 def velocity_symbol(name: str) -> sp.Symbol:
-    return sp.Symbol(name + "_d")
+    return _real(name + "_d")
 
 
 def acceleration_symbol(name: str) -> sp.Symbol:
-    return sp.Symbol(name + "_dd")
+    return _real(name + "_dd")
+
+
+def restore_assumptions(expr):
+    """``expr`` with every assumption-free symbol named like a time, coordinate, velocity or
+    acceleration symbol replaced by that (real) symbol: undoes SymEngine's round trip."""
+    if not isinstance(expr, sp.Basic):
+        return expr
+    back = {}
+    for s in expr.free_symbols:
+        r = _REAL.get(s.name)
+        if r is not None and s is not r and s != r:
+            back[s] = r
+    return expr.xreplace(back) if back else expr

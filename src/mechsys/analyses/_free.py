@@ -11,11 +11,18 @@ constrained, assembled model and builds the equations of the freed system once:
 
 One FreeSystem serves many states through ``initial_condition=`` (a ``Solution``/``State``
 or a mapping of coordinate, ``<coordinate>_d`` velocity and parameter values).
+
+Parameters are read from the model each time ``solve``/``simulate`` runs (Mech's
+``SolveFree`` reads ``InitialCondition``, then ``Parameters[]``, then the FreeSystem's own
+start): ``m.set_parameters`` after ``m.free()`` takes effect, and parameter values given in
+``initial_condition`` override the model's for that call (given to ``free()``, for every
+call of this FreeSystem).
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
+from numbers import Integral, Real
 
 import numpy as np
 
@@ -28,9 +35,42 @@ from ..solvers._free import (
     free_acceleration,
     project,
 )
-from ..solvers._integrators import integrate
+from ..solvers._integrators import (
+    ATOL,
+    FIT_DEGREE,
+    MAX_ERROR,
+    MAX_STEP,
+    RTOL,
+    integrate,
+    integration_options,
+    output_times,
+)
 
 KINDS = ("static", "kinematic", "dynamic")
+
+
+def newton_options(tolerance, max_iterations, what: str) -> dict:
+    """Checked Newton options (Mech's ``SolveFree`` tolerance and iteration limit) as keyword
+    arguments for the solvers; ``None`` keeps the solver's default."""
+    out = {}
+    if tolerance is not None:
+        if isinstance(tolerance, bool) or not isinstance(tolerance, Real) or not (
+                0 < tolerance < 1):
+            raise ModelError(f"{what}: tolerance must be a number in (0, 1), got {tolerance!r}")
+        out["tol"] = float(tolerance)
+    if max_iterations is not None:
+        if isinstance(max_iterations, bool) or not isinstance(max_iterations, Integral) or \
+                max_iterations < 1:
+            raise ModelError(f"{what}: max_iterations must be a positive integer, got "
+                             f"{max_iterations!r}")
+        out["max_iterations"] = int(max_iterations)
+    return out
+
+
+def _reject_unknown(what: str, unknown: dict, known) -> None:
+    if unknown:
+        raise ModelError(f"{what}: unknown option(s) {sorted(unknown)}; the options are "
+                         f"{', '.join(known)}")
 
 
 class FreeSystem:
@@ -48,16 +88,26 @@ class FreeSystem:
         self.dropped = [model.constraint(c) for c in drop]
         self.kind = solution
         self.system = model._system_without(self.dropped)
+        if self.system.n == 0:
+            raise ModelError("free(): the model has no moving bodies (or variables); add bodies "
+                             "before freeing constraints")
         if self.system.m > self.system.n:
             raise ModelError(f"free system is still overconstrained ({self.system.m} equations,"
                              f" {self.system.n} coordinates)")
+        if solution == "static" and not model.load_list:
+            raise ModelError(
+                "free(solution='static'): the model has no loads, so every configuration the "
+                "kept constraints allow is an equilibrium; add the loads (m.add_load) that "
+                "determine it")
         self.dof = self.system.n - self.system.m
         self._eq = self._eqv = None
-        base = initial_guess if initial_guess is not None else model.last_solution
-        self._q0, self._qd0, self._lam0 = self._state_from(base)
-        self._p0 = model._p()
+        # parameter values given here: {index in layout.p_symbols: value}, kept for every call
+        self._p_given: dict[int, float] = {}
+        self._q0, self._qd0 = self._state_from(
+            initial_guess if initial_guess is not None else model.last_solution)
         if initial_condition is not None:
-            self._q0, self._qd0, self._p0 = self._apply_condition(initial_condition)
+            self._q0, self._qd0, self._p_given = self._apply_condition(
+                initial_condition, self._q0, self._qd0)
 
     # -- properties ------------------------------------------------------------------------
     @property
@@ -68,9 +118,11 @@ class FreeSystem:
         if self.kind == "dynamic" and dyn.depends_on_qdd and not dyn.linear_in_qdd:
             return False
         if self.kind == "kinematic":
+            # linear in the velocities: no first derivative depends on a velocity (works for
+            # any expression, e.g. Abs, tanh, sqrt, not only polynomials)
             qd = set(self.system.layout.qd_symbols)
-            return all(not (e.free_symbols & qd) or e.as_poly(*(e.free_symbols & qd)).is_linear
-                       for e in dyn.Q)
+            return not any(e.diff(v).free_symbols & qd
+                           for e in dyn.Q for v in e.free_symbols & qd)
         return True
 
     def __repr__(self) -> str:
@@ -79,53 +131,82 @@ class FreeSystem:
                 f"{'linear' if self.linear else 'nonlinear'}>")
 
     # -- initial conditions -----------------------------------------------------------------
+    def _params(self, given=None) -> np.ndarray:
+        """Parameter values now: the model's (by symbol, so parameters declared after
+        ``free()`` do not shift them), then this FreeSystem's, then the call's overrides."""
+        values = self.model._params
+        p = np.array([values[s] for s in self.system.layout.p_symbols], dtype=float)
+        for over in (self._p_given, given or {}):
+            for i, v in over.items():
+                p[i] = v
+        return p
+
     def _state_from(self, base):
+        """Start ``(q, qd)`` from a Solution/State, a mapping (on top of the model's last
+        solution or guesses) or ``None`` (the model's guesses, zero velocities)."""
         n = self.system.n
         if base is None:
-            return self.model.guess(), np.zeros(n), None
+            return self.model.guess(), np.zeros(n)
         if isinstance(base, (Solution, State)):
-            q = np.atleast_2d(base.q)[-1].copy()
-            qd = np.zeros(n) if base.qd is None else np.atleast_2d(base.qd)[-1].copy()
-            lam = None
-            return q, qd, lam
+            return self._from_solution(base, np.zeros(n), "initial_guess")
         if isinstance(base, Mapping):
-            q, qd, _ = self._apply_condition(base)
-            return q, qd, None
+            q, qd = self._state_from(self.model.last_solution)
+            q, qd, given = self._apply_condition(base, q, qd)
+            if given:
+                raise ModelError(f"initial_guess: parameter values {sorted(given)} belong in "
+                                 "initial_condition= (or m.set_parameters)")
+            return q, qd
         raise ModelError(f"initial_guess must be a Solution, State or mapping, got {base!r}")
 
-    def _apply_condition(self, cond, q=None, qd=None, p=None):
-        q = self._q0.copy() if q is None else q.copy()
-        qd = self._qd0.copy() if qd is None else qd.copy()
-        p = self._p0.copy() if p is None else p.copy()
+    def _from_solution(self, sol, qd, what):
+        n = self.system.n
+        q = np.atleast_2d(sol.q)[-1].copy()
+        if q.shape != (n,):
+            raise ModelError(f"{what}: the solution has {q.size} coordinates, this free system "
+                             f"{n}; it belongs to another model (or the model changed)")
+        if sol.qd is not None:
+            qd = np.atleast_2d(sol.qd)[-1].copy()
+        return q, qd
+
+    def _apply_condition(self, cond, q, qd):
+        """``(q, qd, {parameter index: value})`` with ``cond`` applied on top of ``q, qd``."""
+        q, qd = q.copy(), qd.copy()
         if isinstance(cond, (Solution, State)):
-            q = np.atleast_2d(cond.q)[-1].copy()
-            if cond.qd is not None:
-                qd = np.atleast_2d(cond.qd)[-1].copy()
-            return q, qd, p
+            q, qd = self._from_solution(cond, qd, "initial_condition")
+            return q, qd, {}
         if not isinstance(cond, Mapping):
             raise ModelError("initial_condition must be a Solution, State or a mapping of "
                              "coordinate / velocity ('<name>_d') / parameter values, or "
                              "('omega'|'omega_local', body): angular velocity")
         lay = self.system.layout
         pnames = [s.name for s in lay.p_symbols]
+        given = {}
         angular = []
         for k, v in cond.items():
             if isinstance(k, tuple) and len(k) == 2 and k[0] in ("omega", "omega_local"):
                 angular.append((k[0], k[1], v))
                 continue
             name = k.name if hasattr(k, "name") else str(k)
+            try:
+                value = float(v)
+            except (TypeError, ValueError):
+                raise ModelError(f"initial_condition: the value of {name!r} must be a number, "
+                                 f"got {v!r}") from None
+            if not np.isfinite(value):
+                raise ModelError(f"initial_condition: the value of {name!r} is {value}; give "
+                                 "a finite number")
             if name in pnames:
-                p[pnames.index(name)] = float(v)
+                given[pnames.index(name)] = value
                 continue
             target, key = (qd, name[:-2]) if name.endswith("_d") else (q, name)
             try:
-                target[lay.index(key)] = float(v)
+                target[lay.index(key)] = value
             except ModelError:
                 raise ModelError(f"initial_condition: {name!r} is not a coordinate, velocity "
                                  "('<coordinate>_d') or parameter of this model") from None
         for kind, body, w in angular:
             self._set_angular_velocity(q, qd, body, w, local=(kind == "omega_local"))
-        return q, qd, p
+        return q, qd, given
 
     def _set_angular_velocity(self, q, qd, body, w, local):
         """Euler-parameter rates from an angular velocity: ``e_dot = E^T w / 2`` (global) or
@@ -143,9 +224,12 @@ class FreeSystem:
         qd[idx] = 0.5 * E.T @ np.asarray(w, dtype=float)
 
     def _start(self, initial_condition):
+        """``(q, qd, p)`` of a call: the FreeSystem's start, ``initial_condition`` on top, and
+        the parameters as they are now."""
         if initial_condition is None:
-            return self._q0.copy(), self._qd0.copy(), self._p0.copy()
-        return self._apply_condition(initial_condition)
+            return self._q0.copy(), self._qd0.copy(), self._params()
+        q, qd, given = self._apply_condition(initial_condition, self._q0, self._qd0)
+        return q, qd, self._params(given)
 
     def _result(self, t, Q, QD, QDD, LAM, p, its, extra=None, scalar=False):
         N = len(t)
@@ -158,10 +242,34 @@ class FreeSystem:
                        mode=f"free-{self.kind}", extra=extra or {})
         return sol
 
+    def _newton(self, tolerance, max_iterations, what):
+        """Newton options; for the free acceleration only where Newton runs (loads depending
+        on multipliers or accelerations): elsewhere they would be ignored, so they raise."""
+        kw = newton_options(tolerance, max_iterations, what)
+        dyn = self.system.dynamics if kw and self.kind == "dynamic" else None
+        if dyn is not None and not (dyn.depends_on_lambda or dyn.depends_on_qdd):
+            raise ModelError(
+                f"{what}: tolerance and max_iterations control the Newton iteration, which this "
+                "free acceleration does not use (no loads depend on multipliers or "
+                "accelerations, so it is one linear solve); leave them out")
+        return kw
+
     # -- single-state analyses ---------------------------------------------------------------
-    def solve(self, t: float = 0.0, initial_condition=None, lambda_guess=None) -> Solution:
+    def solve(self, t: float = 0.0, initial_condition=None, lambda_guess=None,
+              tolerance: float | None = None, max_iterations: int | None = None) -> Solution:
         """Equilibrium configuration, equilibrium velocity or free acceleration at ``t``
-        (by ``kind``). Returns a one-point :class:`Solution` (``q, qd, qdd, lam``)."""
+        (by ``kind``). Returns a one-point :class:`Solution` (``q, qd, qdd, lam``).
+
+        ``tolerance`` (default 1e-10, on the residual relative to ``1 + max|x|``) and
+        ``max_iterations`` (default 50; 30 for the free acceleration) control the Newton
+        iteration of the equilibria and of a free acceleration whose loads depend on the
+        multipliers (friction) or accelerations (Mech's ``SolveFree`` Newton options); a
+        linear free acceleration takes no Newton options. ``lambda_guess`` starts the
+        multipliers (default 1, as Mech)."""
+        if isinstance(t, bool) or not isinstance(t, Real) or not np.isfinite(t):
+            raise ModelError(f"solve(t): t must be a finite number, got {t!r}")
+        t = float(t)
+        kw = self._newton(tolerance, max_iterations, "FreeSystem.solve")
         q, qd, p = self._start(initial_condition)
         s = self.system
         lam0 = lambda_guess_vector(s, self.model, lambda_guess)
@@ -170,43 +278,69 @@ class FreeSystem:
                 from ..compile._free import StaticEquilibrium
 
                 self._eq = StaticEquilibrium(s)
-            q, lam, its = equilibrium_configuration(self._eq, s, t, q, lam0, p)
+            q, lam, its = equilibrium_configuration(self._eq, s, t, q, lam0, p, **kw)
             return self._result([t], q, np.zeros_like(q), None, lam, p, [its], scalar=True)
         if self.kind == "kinematic":
             if self._eqv is None:
                 from ..compile._free import VelocityEquilibrium
 
+                qd_syms = set(s.layout.qd_symbols)
+                if not any(e.free_symbols & qd_syms for e in s.dynamics.Q):
+                    raise ModelError(
+                        "free(solution='kinematic'): no load depends on the velocities, so no "
+                        "velocity is an equilibrium (or every one is); add velocity-dependent "
+                        "loads (dampers, speed-dependent moments). Inertial (centrifugal) terms "
+                        "do not count, as in Mech")
                 self._eqv = VelocityEquilibrium(s)
-            qd, lam, its = equilibrium_velocity(self._eqv, s, t, q, qd, lam0, p)
+            qd, lam, its = equilibrium_velocity(self._eqv, s, t, q, qd, lam0, p, **kw)
             return self._result([t], q, qd, None, lam, p, [its], scalar=True)
         qdd, lam, its = free_acceleration(s, t, q, qd, p, lam0 if lambda_guess is not None
-                                          else None)
+                                          else None, **kw)
         return self._result([t], q, qd, qdd, lam, p, [its], scalar=True)
 
     # -- motion synthesis --------------------------------------------------------------------
-    def simulate(self, t, initial_condition=None, method: str = "dop853", rtol: float = 1e-8,
-                 atol: float = 1e-10, max_step: float = np.inf, fit_degree="cubic",
-                 max_error=1e-4, step_size=None, constraint_correction: bool = True,
-                 diagnostics: bool = False) -> Solution:
+    def simulate(self, t, initial_condition=None, method: str = "dop853", rtol: float = RTOL,
+                 atol: float = ATOL, max_step: float = MAX_STEP, fit_degree=FIT_DEGREE,
+                 max_error=MAX_ERROR, step_size=None, constraint_correction: bool = True,
+                 diagnostics: bool = False, tolerance: float | None = None,
+                 max_iterations: int | None = None, **unknown) -> Solution:
         """Integrate the free motion (Mech's ``SolveFree[fs, {t0, t1}]``).
 
-        ``t``: ``(t0, t1)`` returns every accepted step; an array returns those times
-        (dense output). ``method``: ``"dop853"`` (default) or ``"rk45"`` with ``rtol``/``atol``;
+        ``t``: ``(t0, t1)`` returns every accepted step; an array of strictly increasing (or,
+        backwards, decreasing) finite times returns those times (dense output). Unsorted
+        times, a single number or non-finite times raise :class:`ModelError` (for one instant
+        use :meth:`solve`).
+
+        ``method``: ``"dop853"`` (default) or ``"rk45"`` with ``rtol``/``atol``/``max_step``;
         ``"adams"`` (= ``"automatic"``), ``"predictor"`` or ``"corrector"`` for Mech's
-        multistep integrator with ``fit_degree`` and ``max_error``. The initial state is
-        projected onto the constraints first. See ``solvers/_integrators.py``.
+        multistep integrator with ``fit_degree``, ``max_error`` and ``step_size``.
+        ``max_error`` (Mech's accuracy option) works with every method: for the Runge-Kutta
+        methods it sets ``rtol = atol = max_error``, so the local error of each coordinate
+        and velocity per step stays below about ``max_error (1 + |y|)``; for Adams it is the
+        step threshold ``a`` (or ``(a, b, c)``). An option that does not apply to the chosen
+        method, or an unknown one, raises :class:`ModelError`. ``tolerance``/
+        ``max_iterations``: Newton options of the free acceleration (as :meth:`solve`).
+        The initial state is projected onto the constraints first. See
+        ``solvers/_integrators.py``.
         """
+        _reject_unknown("FreeSystem.simulate", unknown, (
+            "initial_condition", "method", "rtol", "atol", "max_step", "fit_degree", "max_error",
+            "step_size", "constraint_correction", "diagnostics", "tolerance", "max_iterations"))
         if self.kind != "dynamic":
             raise MechError("simulate() integrates the free motion: build the FreeSystem with "
                             "solution='dynamic'")
+        opt = integration_options(method, rtol, atol, max_step, fit_degree, max_error,
+                                  step_size, constraint_correction)
+        t0 = output_times(t)[0]
+        kw = self._newton(tolerance, max_iterations, "FreeSystem.simulate")
         s = self.system
         n = s.n
         q0, qd0, p = self._start(initial_condition)
-        q0, qd0 = project(s, float(np.atleast_1d(t)[0]), q0, qd0, p)
+        q0, qd0 = project(s, t0, q0, qd0, p)
         lam_box = [None]
 
         def rhs(tt, y):
-            qdd, lam, _ = free_acceleration(s, tt, y[:n], y[n:], p, lam_box[0])
+            qdd, lam, _ = free_acceleration(s, tt, y[:n], y[n:], p, lam_box[0], **kw)
             if s.dynamics.depends_on_lambda:
                 lam_box[0] = lam
             return np.concatenate((y[n:], qdd))
@@ -215,17 +349,18 @@ class FreeSystem:
             qq, vv = project(s, tt, y[:n], y[n:], p)
             return np.concatenate((qq, vv))
 
-        times, Y, res, m = integrate(
-            rhs, proj, t, np.concatenate((q0, qd0)), method, rtol, atol, max_step, fit_degree,
-            max_error, step_size, constraint_correction)
+        times, Y, res, m = integrate(rhs, proj, t, np.concatenate((q0, qd0)), opt)
         QDD = np.empty((len(times), n))
         LAM = np.empty((len(times), s.m))
         for k, (tk, yk) in enumerate(zip(times, Y)):
-            QDD[k], LAM[k], _ = free_acceleration(s, tk, yk[:n], yk[n:], p)
+            QDD[k], LAM[k], _ = free_acceleration(s, tk, yk[:n], yk[n:], p, **kw)
         extra = {"evaluations": res.evaluations, "steps": res.steps, "rejected": res.rejected,
                  "method": m}
+        if opt.runge_kutta:
+            extra["rtol"], extra["atol"] = opt.rtol, opt.atol
+        else:
+            extra["max_error"] = opt.max_error
         if diagnostics:
             extra["diagnostics"] = res.diagnostics
         return self._result(times, Y[:, :n], Y[:, n:], QDD, LAM, p, np.zeros(len(times)),
                             extra=extra)
-

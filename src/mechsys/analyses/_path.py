@@ -14,11 +14,15 @@ with the same integrators as free motion; ``constraint_correction`` projects ``q
 the holonomic constraints after each step. Accelerations come from the time derivative::
 
     Phi_q qdd = gamma,      psi_qd qdd = -(psi_q qd + psi_t)
+
+Parameters are read from the model when ``simulate`` runs (``m.set_parameters`` after
+``m.path()`` takes effect); parameter values in ``initial_condition`` override them.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
+from numbers import Real
 
 import numpy as np
 import sympy as sp
@@ -27,10 +31,20 @@ from .._errors import MechError, ModelError, SingularJacobianError
 from .._symbols import T
 from ..compile import compile_exprs
 from ..constraints import ConstraintBase
-from ..results._solution import Solution
+from ..results._solution import Solution, State
 from ..solvers._free import project_positions
-from ..solvers._integrators import integrate
+from ..solvers._integrators import (
+    ATOL,
+    FIT_DEGREE,
+    MAX_ERROR,
+    MAX_STEP,
+    RTOL,
+    integrate,
+    integration_options,
+    output_times,
+)
 from ..solvers._linalg import Singular, dependent_rows, factor, involved_rows
+from ._free import _reject_unknown
 
 
 class PathSystem:
@@ -89,42 +103,83 @@ class PathSystem:
         args = lay.args()
         self._f = compile_exprs(args, list(psi) + list(self.psi_qd) + rest, self.system.backend)
         self._k = len(psi)
+        self._p_given: dict[int, float] = {}
         self._q0 = model.guess()
-        self._p = model._p()
         base = model.last_solution
         if base is not None:
-            self._q0 = np.atleast_2d(base.q)[-1].copy()
+            self._q0 = self._coordinates(base, "the model's last solution")
         if initial_condition is not None:
-            self._q0 = self._condition(initial_condition)
+            self._q0, self._p_given = self._condition(initial_condition)
 
     def __repr__(self) -> str:
         names = ", ".join(d.name for d in self.replaced)
         return (f"<PathSystem: replaced {names}; {len(self.psi)} velocity equation(s); "
                 f"{'linear' if self.linear else 'nonlinear'} in the velocities>")
 
-    def _condition(self, cond):
-        q = self._q0.copy()
-        if hasattr(cond, "q"):
-            return np.atleast_2d(cond.q)[-1].copy()
-        lay = self.system.layout
-        for k, v in cond.items():
-            q[lay.index(k.name if hasattr(k, "name") else str(k))] = float(v)
+    @property
+    def _p(self) -> np.ndarray:
+        """Parameter values now: the model's (by symbol), then this PathSystem's own."""
+        return self._params()
+
+    def _params(self, given=None) -> np.ndarray:
+        values = self.model._params
+        p = np.array([values[s] for s in self.system.layout.p_symbols], dtype=float)
+        for over in (self._p_given, given or {}):
+            for i, v in over.items():
+                p[i] = v
+        return p
+
+    def _coordinates(self, sol, what):
+        q = np.atleast_2d(sol.q)[-1].copy()
+        if q.shape != (self.system.n,):
+            raise ModelError(f"{what} has {q.size} coordinates, this path system "
+                             f"{self.system.n}; it belongs to another model (or the model changed)")
         return q
 
+    def _condition(self, cond):
+        """``(q, {parameter index: value})`` from a Solution/State or a mapping of coordinate
+        and parameter values on top of the PathSystem's start."""
+        if isinstance(cond, (Solution, State)):
+            return self._coordinates(cond, "initial_condition"), {}
+        if not isinstance(cond, Mapping):
+            raise ModelError("initial_condition must be a Solution, State or a mapping of "
+                             "coordinate and parameter values")
+        q = self._q0.copy()
+        lay = self.system.layout
+        pnames = [s.name for s in lay.p_symbols]
+        given = {}
+        for k, v in cond.items():
+            name = k.name if hasattr(k, "name") else str(k)
+            if isinstance(v, bool) or not isinstance(v, Real) or not np.isfinite(v):
+                raise ModelError(f"initial_condition: the value of {name!r} must be a finite "
+                                 f"number, got {v!r}")
+            if name in pnames:
+                given[pnames.index(name)] = float(v)
+                continue
+            try:
+                q[lay.index(name)] = float(v)
+            except ModelError:
+                raise ModelError(f"initial_condition: {name!r} is not a coordinate or parameter "
+                                 "of this model (velocities of a path follow from its "
+                                 "constraints)") from None
+        return q, given
+
     # -- the velocity solve -----------------------------------------------------------------
-    def _psi(self, t, q, qd):
-        out = self._f(self.system.pack(t, q, qd, self._p))
+    def _psi(self, t, q, qd, p):
+        out = self._f(self.system.pack(t, q, qd, p))
         k, n = self._k, self.system.n
         return out[:k], out[k : k + k * n].reshape(k, n), out[k + k * n :]
 
-    def velocities(self, t, q, qd_guess=None, tol=1e-12, max_iterations=20):
-        """Velocities ``qd`` (n,) at ``(t, q)`` from the holonomic and velocity constraints."""
+    def velocities(self, t, q, qd_guess=None, tol=1e-12, max_iterations=20, p=None):
+        """Velocities ``qd`` (n,) at ``(t, q)`` from the holonomic and velocity constraints
+        (parameters ``p``: default the model's current values)."""
         s = self.system
         n = s.n
-        J, rhs = s.velocity_rhs(t, q, self._p)
+        p = self._p if p is None else p
+        J, rhs = s.velocity_rhs(t, q, p)
         qd = np.zeros(n) if qd_guess is None else np.array(qd_guess, dtype=float)
         for _ in range(max_iterations):
-            psi, B, _ = self._psi(t, q, qd)
+            psi, B, _ = self._psi(t, q, qd, p)
             R = np.concatenate((J @ qd - rhs, psi))
             if np.abs(R).max(initial=0.0) <= tol * (1 + np.abs(qd).max(initial=0.0)):
                 return qd
@@ -134,7 +189,6 @@ class PathSystem:
             except Singular:
                 raise self._singular(K, t) from None
             if self.linear:
-                psi, B, _ = self._psi(t, q, qd)
                 return qd
         raise MechError(f"path: the velocity constraints did not converge at t = {t:.6g}")
 
@@ -153,46 +207,58 @@ class PathSystem:
             "repeats a holonomic one (or another velocity constraint) cannot fix the velocities.",
             time=t, rank=rank)
 
-    def accelerations(self, t, q, qd):
+    def accelerations(self, t, q, qd, p=None):
+        """Accelerations ``qdd`` (n,) at ``(t, q, qd)`` (parameters as :meth:`velocities`)."""
         s = self.system
-        J = s.jacobian(t, q, self._p)
-        g = s.gamma_values(t, q, qd, self._p)
-        _, B, rest = self._psi(t, q, qd)
+        p = self._p if p is None else p
+        J = s.jacobian(t, q, p)
+        g = s.gamma_values(t, q, qd, p)
+        _, B, rest = self._psi(t, q, qd, p)
         try:
             return factor(np.vstack((J, B))).solve(np.concatenate((g, -rest)))
         except Singular:
             raise self._singular(np.vstack((J, B)), t) from None
 
     # -- integration -------------------------------------------------------------------------
-    def simulate(self, t, initial_condition=None, method: str = "dop853", rtol: float = 1e-8,
-                 atol: float = 1e-10, max_step: float = np.inf, fit_degree="cubic",
-                 max_error=1e-4, step_size=None, constraint_correction: bool = True,
-                 diagnostics: bool = False) -> Solution:
-        """Integrate the path (Mech's ``SolvePath``); options as ``FreeSystem.simulate``.
-        The solution's ``extra["drift"]`` holds the largest holonomic residual met."""
+    def simulate(self, t, initial_condition=None, method: str = "dop853", rtol: float = RTOL,
+                 atol: float = ATOL, max_step: float = MAX_STEP, fit_degree=FIT_DEGREE,
+                 max_error=MAX_ERROR, step_size=None, constraint_correction: bool = True,
+                 diagnostics: bool = False, **unknown) -> Solution:
+        """Integrate the path (Mech's ``SolvePath``); times and options as
+        ``FreeSystem.simulate`` (checked the same way: unsorted or non-finite times, options
+        that do not apply to ``method`` and unknown options raise :class:`ModelError`;
+        ``max_error`` works with every method). Parameters are the model's at the call,
+        overridden by those in ``initial_condition``. The solution's ``extra["drift"]`` holds
+        the largest holonomic residual met."""
+        _reject_unknown("PathSystem.simulate", unknown, (
+            "initial_condition", "method", "rtol", "atol", "max_step", "fit_degree", "max_error",
+            "step_size", "constraint_correction", "diagnostics"))
+        opt = integration_options(method, rtol, atol, max_step, fit_degree, max_error,
+                                  step_size, constraint_correction)
+        t0 = output_times(t)[0]
         s = self.system
-        q0 = self._q0.copy() if initial_condition is None else self._condition(initial_condition)
-        q0 = self._project(float(np.atleast_1d(t)[0]), q0)
+        if initial_condition is None:
+            q0, p = self._q0.copy(), self._params()
+        else:
+            q0, given = self._condition(initial_condition)
+            p = self._params(given)
+        q0 = project_positions(s, t0, q0, p)
         last = [None]
 
         def rhs(tk, y):
-            qd = self.velocities(tk, y, last[0])
+            qd = self.velocities(tk, y, last[0], p=p)
             last[0] = qd
             return qd
 
         def proj(tk, y):
-            return self._project(tk, y)
+            return project_positions(s, tk, y, p)
 
-        times, Q, res, m = integrate(rhs, proj, t, q0, method, rtol, atol, max_step, fit_degree,
-                                     max_error, step_size, constraint_correction)
-        QD = np.array([self.velocities(tk, qk) for tk, qk in zip(times, Q)])
-        QDD = np.array([self.accelerations(tk, qk, vk) for tk, qk, vk in zip(times, Q, QD)])
-        drift = max(np.abs(s.residual(tk, qk, self._p)).max(initial=0.0) for tk, qk in zip(times, Q))
+        times, Q, res, m = integrate(rhs, proj, t, q0, opt)
+        QD = np.array([self.velocities(tk, qk, p=p) for tk, qk in zip(times, Q)])
+        QDD = np.array([self.accelerations(tk, qk, vk, p) for tk, qk, vk in zip(times, Q, QD)])
+        drift = max(np.abs(s.residual(tk, qk, p)).max(initial=0.0) for tk, qk in zip(times, Q))
         extra = {"evaluations": res.evaluations, "steps": res.steps, "method": m, "drift": drift}
         if diagnostics:
             extra["diagnostics"] = res.diagnostics
-        return Solution(t=times, q=Q, qd=QD, qdd=QDD, p=self._p, system=s, model=self.model,
+        return Solution(t=times, q=Q, qd=QD, qdd=QDD, p=p, system=s, model=self.model,
                         iterations=np.zeros(len(times), dtype=int), mode="path", extra=extra)
-
-    def _project(self, t, q):
-        return project_positions(self.system, t, q, self._p)

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .._symbols import T
+from .._symbols import T, restore_assumptions
 
 try:  # optional
     import symengine as se
@@ -74,7 +74,9 @@ def to_sympy_list(xs) -> list:
 
 
 def _to_sympy(x):
-    return sp.sympify(x) if se is not None and isinstance(x, se.Basic) else x
+    if se is not None and isinstance(x, se.Basic):
+        return restore_assumptions(sp.sympify(x))      # SymEngine drops "real"
+    return x
 
 
 def derive_kinematics(phi, q, qd, T):

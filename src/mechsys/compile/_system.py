@@ -283,8 +283,8 @@ def make_layout(bodies, variables, parameters, eq_owner, eq_index) -> Layout:
     for v in variables:
         q.append(v.symbol)
         names.append(v.symbol.name)
-    qd = tuple(sp.Symbol(velocity_symbol(s.name).name) for s in q)
-    qdd = tuple(sp.Symbol(acceleration_symbol(s.name).name) for s in q)
+    qd = tuple(velocity_symbol(s.name) for s in q)
+    qdd = tuple(acceleration_symbol(s.name) for s in q)
     return Layout(
         q_symbols=tuple(q),
         qd_symbols=qd,

@@ -25,8 +25,8 @@ import numpy as np
 import scipy.sparse as sps
 from scipy.linalg.lapack import dgesv as _dgesv
 
-from .._errors import ConvergenceError
-from ._linalg import SPARSE_THRESHOLD, Singular, factor
+from .._errors import ConvergenceError, SingularJacobianError, SingularMassError
+from ._linalg import SPARSE_THRESHOLD, Singular, dependent_rows, factor
 from ._position import describe_singular
 
 
@@ -53,7 +53,7 @@ def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterat
         try:
             x = _solve_fast(K, rhs)
         except Singular:
-            raise _singular_free(system, system.jacobian(t, q, p), t, q) from None
+            raise _singular_free(system, t, q, qd, p) from None
         return x[:n], x[n:], 0
     J = system.jacobian(t, q, p)
     g = system.gamma_values(t, q, qd, p)
@@ -71,7 +71,7 @@ def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterat
         try:
             dx = factor(_augmented(Meff, J, D)).solve(-np.concatenate((r1, r2)))
         except Singular:
-            raise _singular_free(system, J, t, q) from None
+            raise _singular_free(system, t, q, qd, p) from None
         qdd, lam = qdd + dx[:n], lam + dx[n:]
         Mm, Q, Qv = dyn.terms(t, q, qd, lam, p, qdd)
     raise ConvergenceError(
@@ -91,9 +91,13 @@ def _zeros(m):
 
 def _solve_fast(K, rhs):
     """Solve the augmented system; LAPACK gesv for dense (a singular matrix raises), SuperLU
-    for sparse. A non-finite answer is treated as singular."""
+    for sparse. A non-finite answer is treated as singular. (``K`` is never empty: a free
+    system has coordinates, so gesv is never called with an illegal size, which would print
+    to stderr.)"""
     if sps.issparse(K):
         return factor(K).solve(rhs)
+    if not np.all(np.isfinite(K)):
+        raise Singular("non-finite augmented matrix")
     _, _, x, info = _dgesv(K, rhs)
     if info != 0:
         raise Singular("singular augmented matrix")
@@ -103,18 +107,87 @@ def _solve_fast(K, rhs):
     return x
 
 
-def _singular_free(system, J, t, q):
-    err = describe_singular(system, J, t, q, "free acceleration")
-    msg = (str(err) + " If the constraints are independent, the mass matrix may be singular on "
-           "the free motions: a massless body (or zero inertia) whose motion no constraint "
-           "determines. Give it mass/inertia or constrain it.")
-    err.args = (msg,)
-    return err
+def _singular_free(system, t, q, qd, p, what="free acceleration"):
+    r"""The error for a singular augmented matrix ``[[M, J^T], [J, 0]]``. It is singular iff
+    ``J`` loses rank (redundant constraints, lock-up: :func:`describe_singular`) or ``M`` is
+    singular on the null space of ``J`` (the free motions): ``N^T M N v = 0`` for a basis
+    ``N`` of ``ker J``. The motions ``N v`` then move no mass; the bodies whose coordinates
+    they move are named, with what they lack (mass: translational diagonal of ``M`` zero;
+    inertia: rotational diagonal zero)."""
+    n, m = system.n, system.m
+    J = system.jacobian(t, q, p) if m else np.zeros((0, n))
+    J = J.toarray() if sps.issparse(J) else np.asarray(J, dtype=float)
+    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd)) and np.all(np.isfinite(J))):
+        return SingularJacobianError(
+            f"{what} at t = {t:.6g}: the state or the constraint Jacobian is not finite (a "
+            "parameter or initial condition is NaN/inf, or the motion blew up before this "
+            "time)", time=t)
+    if m:
+        rank, _ = dependent_rows(J)
+        if rank < m:
+            return describe_singular(system, J, t, q, what)
+        _, _, vt = np.linalg.svd(J)
+        N = vt[m:].T
+    else:
+        N = np.eye(n)
+    M = system.dynamics.terms(t, q, qd, np.zeros(m), p, np.zeros(n))[0]
+    Mr = N.T @ M @ N
+    w, V = np.linalg.eigh(0.5 * (Mr + Mr.T))
+    scale = max(np.abs(M).max(initial=0.0), 1e-300)
+    D = N @ V[:, w <= 1e-12 * scale]
+    lay = system.layout
+    names, bodies = [], []
+    if D.size:
+        moving = np.abs(D).max(axis=1) > 1e-8 * np.abs(D).max()
+        dim = system.space.dim
+        diag = np.abs(np.diag(M)) <= 1e-12 * scale
+        for body, sl in lay.body_slices.items():
+            idx = np.arange(sl.start, sl.stop)
+            if not moving[idx].any():
+                continue
+            lacks = [w for w, part in (("mass", idx[:dim]), ("inertia", idx[dim:]))
+                     if diag[part].all() and moving[part].any()]
+            coords = ", ".join(lay.q_names[i] for i in idx if moving[i])
+            bodies.append(body)
+            names.append(f"body {body!r} ({_mass_properties(system, body)}its free "
+                         f"coordinates {coords} carry no {' or '.join(lacks) or 'mass'})")
+        in_bodies = {i for sl in lay.body_slices.values() for i in range(sl.start, sl.stop)}
+        names += [f"variable {lay.q_names[i]!r}" for i in range(n)
+                  if moving[i] and i not in in_bodies]
+    if not names:
+        return SingularJacobianError(
+            f"{what} at t = {t:.6g}: the augmented matrix [M J^T; J 0] is numerically singular "
+            "although the constraints are independent and the mass matrix is regular on the free "
+            "motions; check for huge or tiny masses, inertias or lengths", time=t, rank=m)
+    return SingularMassError(
+        f"{what} at t = {t:.6g}: the mass matrix is singular on the motions the kept "
+        f"constraints leave free, so these motions move no mass and their accelerations are "
+        f"undetermined: {'; '.join(names)}. Give the body mass and inertia "
+        "(add_body(..., mass=, inertia=) or set_mass_properties) or constrain that motion.",
+        time=t, rank=m, bodies=bodies)
+
+
+def _mass_properties(system, body) -> str:
+    """``"mass 0, inertia 0; "`` as the body was given (empty if the model is unknown)."""
+    try:
+        b = system._model.body(body)
+    except Exception:  # noqa: BLE001 - a description only; never hide the real error
+        return ""
+    def fmt(v):
+        try:
+            return f"{float(v):g}"
+        except (TypeError, ValueError):
+            return str(v)
+
+    inertia = 0 if b.inertia is None else b.inertia
+    inertia = fmt(inertia) if np.ndim(inertia) == 0 else str(tuple(fmt(v) for v in inertia))
+    return f"mass {fmt(b.mass)}, inertia {inertia}; "
 
 
 def project_positions(system, t, q, p, tol=1e-12, max_iterations=8):
     """Minimum-norm correction of ``q`` onto ``Phi(q, t) = 0``: ``dq = -J^T (J J^T)^-1 Phi``,
-    iterated."""
+    iterated. A singular ``J J^T`` (dependent constraints, lock-up) raises
+    :class:`SingularJacobianError` naming the constraints."""
     q = np.array(q, dtype=float)
     if system.m == 0:
         return q
@@ -123,18 +196,26 @@ def project_positions(system, t, q, p, tol=1e-12, max_iterations=8):
         F, J = system.residual_and_jacobian(t, q, p, sparse)
         if np.abs(F).max(initial=0.0) <= tol:
             break
-        q -= J.T @ factor(J @ J.T).solve(F)
+        q -= J.T @ _factor_JJt(system, J, t, q).solve(F)
     return q
+
+
+def _factor_JJt(system, J, t, q):
+    try:
+        return factor(J @ J.T)
+    except Singular:
+        raise describe_singular(system, J, t, q, "projection onto the constraints") from None
 
 
 def project(system, t, q, qd, p, tol=1e-12, max_iterations=8):
     """Project ``(q, qd)`` onto the constraints: positions by :func:`project_positions`,
     then ``dqd = -J^T (J J^T)^-1 (J qd + Phi_t)``."""
     q = project_positions(system, t, q, p, tol, max_iterations)
+    if system.m == 0:
+        return q, np.array(qd, dtype=float)
     sparse = system.n > SPARSE_THRESHOLD
     J, rhs = system.velocity_rhs(t, q, p, sparse)
-    JJt = J @ J.T
-    qd = qd - J.T @ factor(JJt).solve(J @ qd - rhs)
+    qd = qd - J.T @ _factor_JJt(system, J, t, q).solve(J @ qd - rhs)
     return q, qd
 
 

@@ -20,16 +20,25 @@ Two families, selected by ``method``:
 
   ``method_adams`` ``"predictor"`` never corrects, ``"corrector"`` always does; a constant
   ``step_size`` turns the adaptation off. ``constraint_correction`` projects after each step.
+
+Options are checked up front by :func:`integration_options` (one place for free and path
+systems): every option must apply to the chosen method, and ``max_error`` (Mech's accuracy
+option) is honoured by every method. With the Runge-Kutta methods it becomes
+``rtol = atol = max_error``: SciPy accepts a step when the (RMS) estimate of its local error
+``e_i`` satisfies ``e_i <= atol + rtol |y_i| = max_error (1 + |y_i|)``, the same absolute
+per-step budget as Adams' ``a`` for variables of order one (Mech's assumption) and relative
+for large ones.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from numbers import Integral, Real
 
 import numpy as np
 from scipy.integrate import DOP853, RK45
 
-from .._errors import MechError
+from .._errors import MechError, ModelError
 
 FIT_DEGREES = {"linear": 1, "quadratic": 2, "cubic": 3, "quartic": 4}
 
@@ -199,26 +208,179 @@ def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4
 
 RK_METHODS = ("dop853", "rk45")
 ADAMS_METHODS = ("adams", "automatic", "predictor", "corrector")
+_RTOL_MIN = 100 * np.finfo(float).eps         # SciPy raises smaller rtol to this silently
 
 
-def integrate(fun, project, t, y0, method="dop853", rtol=1e-8, atol=1e-10, max_step=np.inf,
-              fit_degree="cubic", max_error=1e-4, step_size=None, correction=True):
-    """Integrate ``y' = fun(t, y)`` with the named method (the dispatch shared by free and
-    path systems). ``t``: a tuple ``(t0, t1)`` returns every accepted step; an array returns
-    those times (RK dense output, or cubic Hermite with ``fun`` at the Adams steps).
-    Returns ``(times, Y, result, method)``."""
-    tt = np.atleast_1d(np.asarray(t, dtype=float))
-    t0, t1 = float(tt[0]), float(tt[-1])
-    t_eval = tt if len(tt) > 2 or (len(tt) == 2 and not isinstance(t, tuple)) else None
+class _Default(float):
+    """A default option value: equal to the number (signatures and docs show it), but
+    recognisable by identity, so that an option the caller did not give is told from one
+    given with the same value."""
+
+
+class _DefaultStr(str):
+    """A default string option, recognisable by identity (see :class:`_Default`)."""
+
+
+RTOL, ATOL, MAX_STEP, MAX_ERROR = _Default(1e-8), _Default(1e-10), _Default(np.inf), _Default(1e-4)
+FIT_DEGREE = _DefaultStr("cubic")
+
+
+def _given(value, default) -> bool:
+    return value is not default and value is not None
+
+
+@dataclass(frozen=True)
+class IntegrationOptions:
+    """Checked integration options. ``method`` is ``"dop853"``, ``"rk45"``, or an Adams mode
+    (``"automatic"``, ``"predictor"``, ``"corrector"``; ``name`` keeps the caller's spelling);
+    ``rtol``/``atol``/``max_step`` for Runge-Kutta; ``degree``/``max_error`` ``(a, b, c)``/
+    ``step_size`` for Adams; ``correction`` the projection after each step."""
+
+    name: str
+    method: str
+    rtol: float = 1e-8
+    atol: float = 1e-10
+    max_step: float = np.inf
+    degree: int = 3
+    max_error: tuple = (1e-4, 1e-5, 1e-6)
+    step_size: float | None = None
+    correction: bool = True
+
+    @property
+    def runge_kutta(self) -> bool:
+        return self.method in RK_METHODS
+
+
+def _positive(name, value, allow_inf=False) -> float:
+    if isinstance(value, bool) or not isinstance(value, Real):
+        raise ModelError(f"{name} must be a positive number, got {value!r}")
+    v = float(value)
+    if not (v > 0 and (np.isfinite(v) or (allow_inf and v == np.inf))):
+        raise ModelError(f"{name} must be a positive{'' if allow_inf else ', finite'} number, "
+                         f"got {value!r}")
+    return v
+
+
+def _max_error(value, runge_kutta: bool) -> tuple:
+    if np.ndim(value) == 0:
+        a = _positive("max_error", value)
+        return a, a / 10, a / 100
+    if runge_kutta:
+        raise ModelError("max_error=(a, b, c) sets the Adams integrator's step thresholds; with "
+                         "a Runge-Kutta method give one number (the per-step error budget)")
+    vals = list(value) if isinstance(value, (list, tuple, np.ndarray)) else []
+    if len(vals) != 3:
+        raise ModelError(f"max_error must be a number or (a, b, c), got {value!r}")
+    a, b, c = (_positive(f"max_error[{k}]", v) for k, v in enumerate(vals))
+    if not c <= b <= a:
+        raise ModelError(f"max_error=(a, b, c) needs c <= b <= a (halve above a, correct above "
+                         f"b, double below c), got {tuple(vals)}")
+    return a, b, c
+
+
+def integration_options(method="dop853", rtol=RTOL, atol=ATOL, max_step=MAX_STEP,
+                        fit_degree=FIT_DEGREE, max_error=MAX_ERROR, step_size=None,
+                        constraint_correction=True) -> IntegrationOptions:
+    """Check the options of ``simulate`` against ``method`` and resolve them.
+
+    Raises :class:`ModelError` for an unknown method, a value out of range, or an option
+    that the method does not use (``fit_degree``/``step_size`` with Runge-Kutta;
+    ``rtol``/``atol``/``max_step`` with Adams; ``max_error`` together with ``rtol``/``atol``).
+    ``max_error`` with Runge-Kutta gives ``rtol = atol = max_error`` (module doc)."""
+    if not isinstance(method, str) or method.lower() not in RK_METHODS + ADAMS_METHODS:
+        raise ModelError(f"unknown method {method!r}; choose from {RK_METHODS + ADAMS_METHODS}")
     m = method.lower()
+    if not isinstance(constraint_correction, (bool, np.bool_)):
+        raise ModelError(f"constraint_correction must be True or False, got "
+                         f"{constraint_correction!r}")
     if m in RK_METHODS:
-        res = integrate_rk(fun, project, t0, t1, y0, m, rtol, atol, max_step,
-                           correction=correction, t_eval=t_eval)
+        wrong = [k for k, v, d in (("fit_degree", fit_degree, FIT_DEGREE),
+                                   ("step_size", step_size, None)) if _given(v, d)]
+        if wrong:
+            raise ModelError(f"{' and '.join(wrong)} apply only to the Adams integrator "
+                             f"(method='adams'); method={method!r} takes rtol, atol, max_step "
+                             "or max_error")
+        if _given(max_error, MAX_ERROR):
+            both = [k for k, v, d in (("rtol", rtol, RTOL), ("atol", atol, ATOL)) if _given(v, d)]
+            if both:
+                raise ModelError(f"give either max_error or {' and '.join(both)}: with method="
+                                 f"{method!r} max_error sets rtol = atol = max_error")
+            rtol = atol = _max_error(max_error, True)[0]
+        rtol, atol = _positive("rtol", rtol), _positive("atol", atol)
+        if rtol < _RTOL_MIN:
+            raise ModelError(f"rtol={rtol:g} is below what double precision can meet "
+                             f"({_RTOL_MIN:.1e}); use a larger rtol")
+        return IntegrationOptions(method, m, rtol=rtol, atol=atol,
+                                  max_step=_positive("max_step", max_step, allow_inf=True),
+                                  correction=bool(constraint_correction))
+    wrong = [k for k, v, d in (("rtol", rtol, RTOL), ("atol", atol, ATOL),
+                               ("max_step", max_step, MAX_STEP)) if _given(v, d)]
+    if wrong:
+        raise ModelError(f"{' and '.join(wrong)} apply only to the Runge-Kutta methods "
+                         f"('dop853', 'rk45'); the Adams integrator takes max_error, fit_degree "
+                         "and step_size")
+    if isinstance(fit_degree, str) and fit_degree.lower() in FIT_DEGREES:
+        degree = FIT_DEGREES[fit_degree.lower()]
+    elif isinstance(fit_degree, Integral) and not isinstance(fit_degree, bool) and \
+            1 <= fit_degree <= 4:
+        degree = int(fit_degree)
+    else:
+        raise ModelError(f"fit_degree must be one of {list(FIT_DEGREES)} (or 1..4), got "
+                         f"{fit_degree!r}")
+    if step_size is not None:
+        if isinstance(step_size, Real) and not isinstance(step_size, bool) and step_size <= 0:
+            raise ModelError(f"step_size must be positive (the direction of integration comes "
+                             f"from the times), got {step_size!r}")
+        step_size = _positive("step_size", step_size)
+    return IntegrationOptions(method, "automatic" if m == "adams" else m, degree=degree,
+                              max_error=_max_error(max_error, False), step_size=step_size,
+                              correction=bool(constraint_correction))
+
+
+def output_times(t) -> tuple[float, float, np.ndarray | None]:
+    """``(t0, t1, t_eval)`` from ``simulate``'s ``t``: a tuple ``(t0, t1)`` (every accepted
+    step, ``t_eval`` None) or an array of at least two output times. Times must be finite,
+    and output times strictly monotonic (increasing, or decreasing to integrate backwards):
+    unsorted times are rejected rather than sorted, so that ``sol.t`` is exactly ``t``."""
+    if np.ndim(t) == 0:
+        raise ModelError(f"simulate(t={t!r}): give the interval (t0, t1) or an array of output "
+                         "times; for the state at one time use solve(t)")
+    try:
+        tt = np.asarray(t, dtype=float)
+    except (TypeError, ValueError):
+        raise ModelError(f"simulate: the times must be numbers, got {t!r}") from None
+    if tt.ndim != 1 or tt.size < 2:
+        raise ModelError(f"simulate: give (t0, t1) or a 1-D array of at least two times, got "
+                         f"shape {tt.shape}")
+    if not np.all(np.isfinite(tt)):
+        raise ModelError(f"simulate: the times must be finite, got {tt[~np.isfinite(tt)][:3]}")
+    d = np.diff(tt)
+    if isinstance(t, tuple) and len(tt) == 2:
+        if d[0] == 0:
+            raise ModelError(f"simulate: t0 and t1 are equal ({tt[0]:g}); nothing to integrate")
+        return float(tt[0]), float(tt[1]), None
+    if not (np.all(d > 0) or np.all(d < 0)):
+        k = int(np.nonzero(d * np.sign(d[0] or 1.0) <= 0)[0][0]) if d[0] != 0 else 0
+        raise ModelError(
+            f"simulate: the output times must be strictly monotonic (increasing, or decreasing "
+            f"to integrate backwards); t[{k}] = {tt[k]:g}, t[{k + 1}] = {tt[k + 1]:g}. "
+            "Sort them (np.sort) or integrate each direction separately")
+    return float(tt[0]), float(tt[-1]), tt
+
+
+def integrate(fun, project, t, y0, opt: IntegrationOptions):
+    """Integrate ``y' = fun(t, y)`` with checked options ``opt`` (the dispatch shared by free
+    and path systems). ``t``: a tuple ``(t0, t1)`` returns every accepted step; an array
+    returns those times (RK dense output, or cubic Hermite with ``fun`` at the Adams steps).
+    Returns ``(times, Y, result, method)``."""
+    t0, t1, t_eval = output_times(t)
+    if opt.runge_kutta:
+        res = integrate_rk(fun, project, t0, t1, y0, opt.method, opt.rtol, opt.atol,
+                           opt.max_step, correction=opt.correction, t_eval=t_eval)
         times, Y = res.diagnostics["t_eval"] if t_eval is not None else (res.t, res.y)
-    elif m in ADAMS_METHODS:
-        mode = "automatic" if m == "adams" else m
-        res = integrate_adams(fun, project, t0, t1, y0, fit_degree, max_error, mode, step_size,
-                              correction)
+    else:
+        res = integrate_adams(fun, project, t0, t1, y0, opt.degree, opt.max_error, opt.method,
+                              opt.step_size, opt.correction)
         times, Y = res.t, res.y
         if t_eval is not None:
             from scipy.interpolate import CubicHermiteSpline
@@ -228,6 +390,4 @@ def integrate(fun, project, t, y0, method="dop853", rtol=1e-8, atol=1e-10, max_s
             F = np.array([fun(tk, yk) for tk, yk in zip(times, Y)])
             Y = CubicHermiteSpline(times, Y, F, axis=0)(t_eval)
             times = t_eval
-    else:
-        raise MechError(f"unknown method {method!r}; choose from {RK_METHODS + ADAMS_METHODS}")
-    return np.asarray(times, dtype=float), np.asarray(Y), res, m
+    return np.asarray(times, dtype=float), np.asarray(Y), res, opt.name.lower()

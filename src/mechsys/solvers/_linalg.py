@@ -45,6 +45,9 @@ class Factor:
             J = np.asarray(J, dtype=float)
             if J.shape[0] != J.shape[1]:
                 raise Singular("not square")
+            if J.shape[0] == 0:          # nothing to solve; LAPACK would print "illegal value"
+                self._lu, self._piv, self.rcond = None, None, 1.0
+                return
             anorm = np.abs(J).sum(axis=0).max() if J.size else 0.0
             lu, piv, info = sla.lapack.dgetrf(J)  # the raw LAPACK call never warns
             if info > 0 or anorm == 0:
@@ -59,6 +62,8 @@ class Factor:
     def solve(self, b: np.ndarray) -> np.ndarray:
         if self.sparse:
             return self._lu.solve(np.asarray(b, dtype=float))
+        if self._lu is None:
+            return np.zeros_like(np.asarray(b, dtype=float))
         x, info = sla.lapack.dgetrs(self._lu, self._piv, b)
         return x
 

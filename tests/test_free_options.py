@@ -1,0 +1,245 @@
+"""simulate()'s times and options (free and path systems): checked up front, max_error
+honoured by every integrator, options that do not apply raise; Newton options of free solves."""
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import mechsys as ms
+from conftest import load_example as load
+
+caster = load("caster")
+
+
+def pendulum(L=1.0, g=9.81, angle0=0.0):
+    m = ms.Model2D()
+    b = m.add_body("bar", mass=1.0, centroid=(L, 0), inertia=0.0, guess=((0, 0), angle0))
+    m.add(ms.Revolute2(m.ground.point((0, 0)), b.point(0)), name="pivot")
+    m.add(ms.RotationLock1(b, angle0), name="hold")
+    m.add_load(ms.Gravity((0, -1), g))
+    m.solve(0.0)
+    return m, m.free(drop=["hold"])
+
+
+@pytest.fixture(scope="module")
+def free():
+    return pendulum()[1]
+
+
+@pytest.fixture(scope="module")
+def path():
+    return caster.build()[1]
+
+
+# -- times -------------------------------------------------------------------------------------
+@pytest.mark.parametrize("which", ["free", "path"])
+def test_unsorted_output_times_are_rejected(which, free, path):
+    # used to integrate to each time in turn from wherever the stepper was: 2e-3 rad wrong
+    system = free if which == "free" else path
+    with pytest.raises(ms.ModelError, match=r"strictly monotonic .* t\[1\] = 0.5, t\[2\] = 0.2"):
+        system.simulate([0.0, 0.5, 0.2, 1.0])
+    with pytest.raises(ms.ModelError, match="strictly monotonic"):
+        system.simulate([0.0, 0.5, 0.5, 1.0])          # a repeated time too
+
+
+def test_sorted_and_backward_output_times_still_work(free):
+    fwd = free.simulate([0.0, 0.2, 0.5], rtol=1e-11, atol=1e-12)
+    np.testing.assert_array_equal(fwd.t, [0.0, 0.2, 0.5])
+    bwd = free.simulate([0.0, -0.2, -0.5], rtol=1e-11, atol=1e-12)
+    np.testing.assert_allclose(bwd["bar.th"], fwd["bar.th"], atol=1e-9)   # time-symmetric
+
+
+@pytest.mark.parametrize("which", ["free", "path"])
+@pytest.mark.parametrize("t", [(0.0, np.inf), (0.0, np.nan), [0.0, np.nan, 1.0], (-np.inf, 0.0)])
+def test_non_finite_times_are_rejected(which, t, free, path):
+    # (0, inf) used to hang; a NaN end time reported "singular at t = nan"
+    system = free if which == "free" else path
+    with pytest.raises(ms.ModelError, match="times must be finite"):
+        system.simulate(t)
+
+
+@pytest.mark.parametrize("which", ["free", "path"])
+def test_scalar_time_is_rejected(which, free, path):
+    # simulate(1.0) used to "integrate" from 1 to 1 and return two copies of the start
+    system = free if which == "free" else path
+    with pytest.raises(ms.ModelError, match=r"\(t0, t1\) or an array .* use solve\(t\)"):
+        system.simulate(1.0)
+
+
+@pytest.mark.parametrize("t,msg", [(np.zeros((2, 2)), "1-D array"), ([], "1-D array"),
+                                   ([1.0], "1-D array"), ((1.0, 1.0), "t0 and t1 are equal"),
+                                   (("a", "b"), "must be numbers")])
+def test_malformed_times_are_rejected(t, msg, free):
+    with pytest.raises(ms.ModelError, match=msg):
+        free.simulate(t)
+
+
+# -- max_error with every method ----------------------------------------------------------------
+@pytest.mark.parametrize("method", ["dop853", "rk45"])
+def test_max_error_sets_the_runge_kutta_tolerances(method, free):
+    # max_error used to be ignored silently unless method="adams"
+    coarse = free.simulate((0.0, 1.0), method=method, max_error=1e-3)
+    assert coarse.extra["rtol"] == coarse.extra["atol"] == 1e-3
+    same = free.simulate((0.0, 1.0), method=method, rtol=1e-3, atol=1e-3)
+    np.testing.assert_array_equal(coarse.q, same.q)
+    fine = free.simulate((0.0, 1.0), method=method, max_error=1e-9)
+    assert fine.extra["steps"] > 2 * coarse.extra["steps"]
+    default = free.simulate((0.0, 1.0), method=method)
+    assert (default.extra["rtol"], default.extra["atol"]) == (1e-8, 1e-10)
+
+
+def test_max_error_controls_the_accuracy_of_dop853():
+    # pendulum released horizontally: the time to reach the bottom is a quarter of the
+    # elliptic-integral period, T0 K(sin 45 deg) 2 / pi = T0 * 1.1803405990160962 / 4
+    _, free = pendulum()
+    T0 = 2 * np.pi / np.sqrt(9.81)
+    t = np.linspace(0.0, 0.25 * 1.1803405990160962 * T0, 3)
+    errors = {e: abs(free.simulate(t, max_error=e)["bar.th"][-1] + np.pi / 2)
+              for e in (1e-3, 1e-6, 1e-10)}
+    assert errors[1e-10] < 1e-8 < errors[1e-3]
+    assert errors[1e-10] < errors[1e-6] < errors[1e-3]
+
+
+def test_max_error_with_path_systems(path):
+    t = np.linspace(0, 3.0, 7)
+    tight = path.simulate(t, max_error=1e-11)
+    np.testing.assert_allclose(tight["caster.th"], caster.closed_form(t), atol=1e-8)
+    loose = path.simulate(t, max_error=1e-2)
+    assert np.abs(loose["caster.th"] - caster.closed_form(t)).max() > 1e-7
+    assert loose.extra["steps"] < tight.extra["steps"]
+
+
+# -- options that do not apply, unknown options, bad values -------------------------------------
+@pytest.mark.parametrize("which", ["free", "path"])
+@pytest.mark.parametrize("kw,msg", [
+    ({"fit_degree": "quartic"}, "fit_degree apply only to the Adams"),
+    ({"fit_degree": "cubic"}, "fit_degree apply only to the Adams"),    # even the default value
+    ({"step_size": 0.01}, "step_size apply only to the Adams"),
+    ({"max_error": 1e-6, "rtol": 1e-6}, "either max_error or rtol"),
+    ({"max_error": 1e-6, "atol": 1e-9}, "either max_error or atol"),
+    ({"max_error": (1e-4, 1e-5, 1e-6)}, r"max_error=\(a, b, c\) sets the Adams"),
+    ({"method": "adams", "rtol": 1e-6}, "rtol apply only to the Runge-Kutta"),
+    ({"method": "adams", "atol": 1e-6, "max_step": 0.1}, "atol and max_step apply only"),
+    ({"method": "euler"}, "unknown method 'euler'"),
+    ({"options": {"ftol": 1e-8}}, r"unknown option\(s\) \['options'\]"),
+    ({"tol": 1e-8}, r"unknown option\(s\) \['tol'\]"),
+])
+def test_options_that_do_not_apply_raise(which, kw, msg, free, path):
+    system = free if which == "free" else path
+    with pytest.raises(ms.ModelError, match=msg):
+        system.simulate((0.0, 0.1), **kw)
+
+
+@pytest.mark.parametrize("kw,msg", [
+    ({"method": "adams", "fit_degree": "sextic"}, "fit_degree must be one of"),
+    ({"method": "adams", "fit_degree": 5}, "fit_degree must be one of"),
+    ({"max_step": 0}, "max_step must be a positive number"),
+    ({"max_step": -1.0}, "max_step must be a positive number"),
+    ({"rtol": 0}, "rtol must be a positive"),
+    ({"rtol": 1e-20}, "below what double precision can meet"),
+    ({"atol": -1e-9}, "atol must be a positive"),
+    ({"rtol": np.nan}, "rtol must be a positive"),
+    ({"max_error": 0.0}, "max_error must be a positive"),
+    ({"method": "adams", "max_error": (1e-4, 1e-3, 1e-6)}, "c <= b <= a"),
+    ({"method": "adams", "max_error": (1e-4, 1e-5)}, r"a number or \(a, b, c\)"),
+    ({"method": "adams", "step_size": -0.01}, "step_size must be positive"),
+    ({"method": "adams", "step_size": 0}, "step_size must be positive"),
+    ({"constraint_correction": "yes"}, "constraint_correction must be True or False"),
+])
+def test_bad_option_values_raise_model_errors(kw, msg, free):
+    # fit_degree="sextic" was a KeyError, max_step=0 a SciPy ValueError, a negative Adams
+    # step_size was replaced silently, rtol=0 reported "singular at t = nan"
+    with pytest.raises(ms.ModelError, match=msg):
+        free.simulate((0.0, 0.1), **kw)
+
+
+def test_adams_constant_step_size_is_used(free):
+    sol = free.simulate((0.0, 0.5), method="adams", step_size=0.01, diagnostics=True)
+    np.testing.assert_allclose(sol.extra["diagnostics"]["step_size"], 0.01)
+    assert sol.extra["steps"] == 50
+    back = free.simulate((0.0, -0.5), method="adams", step_size=0.01, diagnostics=True)
+    np.testing.assert_allclose(back.extra["diagnostics"]["step_size"], -0.01)
+
+
+# -- Newton options of free solves --------------------------------------------------------------
+def spring_bar():
+    st = ms.Model2D()
+    bar = st.add_body("bar", points={"tip": (1, 0)}, mass=1.0, centroid=(0.5, 0),
+                      inertia=1 / 12)
+    st.add(ms.Revolute2(st.ground.point((0, 0)), bar.point(0)), name="pivot")
+    st.add(ms.RotationLock1(bar, 0.0), name="hold")
+    st.add_load(ms.Gravity((0, -1), 9.81))
+    st.add_load(ms.Spring(bar.point("tip"), st.ground.point((1, 1)), stiffness=20.0,
+                          free_length=0.0))
+    st.solve(0.0)
+    return st
+
+
+def test_newton_options_of_the_equilibrium_are_used():
+    st = spring_bar()
+    eq = st.free(drop=["hold"], solution="static")
+    exact = np.arctan(1 - 9.81 / 40)
+    ref = eq.solve()
+    assert ref["bar.th"] == pytest.approx(exact, abs=1e-12)
+    loose = eq.solve(tolerance=1e-2)
+    assert loose.iterations[0] < ref.iterations[0]
+    assert abs(ref["bar.th"] - exact) < abs(loose["bar.th"] - exact) < 0.05
+    with pytest.raises(ms.ConvergenceError, match="did not converge in 1 iterations"):
+        eq.solve(max_iterations=1)
+    assert eq.solve(max_iterations=ref.iterations[0]).iterations[0] == ref.iterations[0]
+
+
+def test_newton_options_of_the_equilibrium_velocity_are_used():
+    # a quadratic drag moment 4 |w| w against a unit moment: w = 1/2
+    m = ms.Model2D()
+    b = m.add_body("bar", mass=1.0, centroid=(0.5, 0), inertia=0.1)
+    m.add(ms.Revolute2(m.ground.point((0, 0)), b.point(0)), name="pivot")
+    m.add(ms.RotationLock1(b, 0.0), name="hold")
+    w = m.velocity_symbols()[b.q[2]]
+    m.add_load(ms.Moment(b, 1 - 4 * sp.Abs(w) * w))
+    m.solve(0.0)
+    free = m.free(drop=["hold"], solution="kinematic")
+    start = {"bar.th_d": 2.0}
+    ref = free.solve(0.0, initial_condition=start)
+    assert ref.coordinate("bar.th", 1) == pytest.approx(0.5, abs=1e-12)
+    with pytest.raises(ms.ConvergenceError, match="did not converge in 1 iterations"):
+        free.solve(0.0, initial_condition=start, max_iterations=1)
+    loose = free.solve(0.0, initial_condition=start, tolerance=1e-2)
+    assert loose.iterations[0] < ref.iterations[0]
+    assert 1e-12 < abs(loose.coordinate("bar.th", 1) - 0.5) < 0.01
+
+
+def test_newton_options_of_a_nonlinear_free_acceleration_are_used():
+    # an acceleration-dependent load (added mass) makes the free acceleration a Newton solve
+    m = ms.Model2D()
+    b = m.add_body("bar", mass=2.0, centroid=(1.2, 0), inertia=0.0, guess=((0, 0), -0.3))
+    m.add(ms.Revolute2(m.ground.point((0, 0)), b.point(0)), name="pivot")
+    m.add(ms.RotationLock1(b, -0.3), name="hold")
+    m.add_load(ms.Gravity((0, -1), 9.81))
+    m.add_load(ms.Force(b.point((1.2, 0)), -0.5 * m.acceleration(b.point((1.2, 0))),
+                        mode="relative"))
+    m.solve(0.0)
+    free = m.free(drop=["hold"])
+    assert free.solve(0.0, max_iterations=2).iterations[0] == 1
+    with pytest.raises(ms.ConvergenceError, match="in 1 iterations"):
+        free.solve(0.0, max_iterations=1)
+    with pytest.raises(ms.ConvergenceError, match="in 1 iterations"):
+        free.simulate((0.0, 0.1), max_iterations=1)
+
+
+@pytest.mark.parametrize("kw,msg", [({"tolerance": 0.0}, "tolerance must be a number in"),
+                                    ({"tolerance": 2.0}, "tolerance must be a number in"),
+                                    ({"max_iterations": 0}, "max_iterations must be a positive"),
+                                    ({"max_iterations": 2.5}, "max_iterations must be a positive")])
+def test_bad_newton_options_raise(kw, msg):
+    eq = spring_bar().free(drop=["hold"], solution="static")
+    with pytest.raises(ms.ModelError, match=msg):
+        eq.solve(**kw)
+
+
+def test_newton_options_on_a_linear_free_acceleration_raise(free):
+    # one linear solve: the options would be ignored, so they are refused
+    with pytest.raises(ms.ModelError, match="does not use"):
+        free.solve(0.0, tolerance=1e-6)
+    with pytest.raises(ms.ModelError, match="does not use"):
+        free.simulate((0.0, 0.1), max_iterations=5)
