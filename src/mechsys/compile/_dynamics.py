@@ -184,7 +184,10 @@ class Dynamics:
         self.lam = multiplier_symbols(lay)
         qd_of = dict(zip(lay.q_symbols, lay.qd_symbols))
         index = {s: i for i, s in enumerate(lay.q_symbols)}
-        rows, cols, vals, Qv = [], [], [], [sp.S.Zero] * lay.n
+        # accumulate natively: a SymPy zero plus a SymEngine term would turn SymPy and lose
+        # the real assumptions of the symbols
+        zero = se.Integer(0) if se is not None else sp.S.Zero
+        rows, cols, vals, Qv = [], [], [], [zero] * lay.n
         kinetic = {}
         for b in bodies:
             q = list(b.q)
@@ -250,7 +253,7 @@ class Dynamics:
         if key not in self._sympy:
             nat = self._native[key]
             if isinstance(nat, dict):
-                self._sympy[key] = {k: sp.sympify(v) for k, v in nat.items()}
+                self._sympy[key] = dict(zip(nat, to_sympy_list(nat.values())))
             else:
                 self._sympy[key] = to_sympy_list(nat)
         return self._sympy[key]
