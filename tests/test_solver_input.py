@@ -39,3 +39,11 @@ def test_solve_rejects_bad_times(t, what):
     """Before: solve(None) reported 'a coordinate left the domain of an expression'."""
     with pytest.raises(ms.ModelError, match=rf"solve: t must be a finite time .*{what}"):
         models.slider_crank().solve(t)
+
+
+def test_solving_an_empty_model_says_there_is_nothing_to_solve():
+    """Before: an empty Solution of 0 coordinates came back (and LAPACK printed errors)."""
+    with pytest.raises(ms.ModelError, match="no moving bodies"):
+        ms.Model2D().solve(0.0)
+    with pytest.raises(ms.ModelError, match="no moving bodies"):
+        ms.Model3D().solve([0.0, 1.0])

@@ -710,6 +710,9 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
             raise ModelError(f"options must be a PositionOptions(ftol=..., max_iterations=..., "
                              f"damping=...) or a mapping of its fields, got {options!r}")
         system = self.compile()
+        if system.n == 0:
+            raise ModelError("solve: the model has no moving bodies (or variables), so there is "
+                             "nothing to solve; add bodies with m.add_body(...) first")
         self._require_square(system)
         g = self._resolve_guess(system, guess)
         scalar = np.ndim(t) == 0
