@@ -307,7 +307,9 @@ def test_balance_on_a_free_equilibrium_uses_the_free_systems_rows():
     eq = m.free(drop=["drive"], solution="static").solve(0.0)
     J, lam = eq.jacobian(ms.All, ms.All), eq.generalized(ms.All)
     assert J.shape == (8, 9) and lam.shape == (8,)      # the driver's row is dropped
-    assert np.allclose(J.T @ lam, eq.loads(ms.All), atol=1e-9)
+    # the equilibrium's tolerance is relative to the loads (unit-free Newton): 1e-12 of them
+    loads = eq.loads(ms.All)
+    assert np.allclose(J.T @ lam, loads, rtol=0, atol=1e-10 * np.abs(loads).max())
     # symbolically on the model: the reaction is -Phi_q^T lambda, row for row
     assert sp.simplify(m.jacobian(ms.All, ms.All).T * m.generalized(ms.All)
                        + m.loads(ms.All, "reaction")) == sp.zeros(9, 1)

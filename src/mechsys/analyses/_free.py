@@ -34,6 +34,7 @@ from ..solvers._free import (
     equilibrium_velocity,
     free_acceleration,
     project,
+    scaling_at,
 )
 from ..solvers._integrators import (
     ATOL,
@@ -260,7 +261,10 @@ class FreeSystem:
         """Equilibrium configuration, equilibrium velocity or free acceleration at ``t``
         (by ``kind``). Returns a one-point :class:`Solution` (``q, qd, qdd, lam``).
 
-        ``tolerance`` (default 1e-10, on the residual relative to ``1 + max|x|``) and
+        ``tolerance`` (equilibria: default 1e-12 on the unit-free residual — positions in
+        units of the characteristic length, multipliers in units of the loads, each equation
+        divided by its scale — relative to ``1 + max|q / L|``; free acceleration: 1e-10
+        relative to the loads) and
         ``max_iterations`` (default 50; 30 for the free acceleration) control the Newton
         iteration of the equilibria and of a free acceleration whose loads depend on the
         multipliers (friction) or accelerations (Mech's ``SolveFree`` Newton options); a
@@ -336,7 +340,8 @@ class FreeSystem:
         s = self.system
         n = s.n
         q0, qd0, p = self._start(initial_condition)
-        q0, qd0 = project(s, t0, q0, qd0, p)
+        sc = scaling_at(s, t0, q0, p)          # units of the coordinates, once per run
+        q0, qd0 = project(s, t0, q0, qd0, p, scaling=sc)
         lam_box = [None]
 
         def rhs(tt, y):
@@ -346,16 +351,17 @@ class FreeSystem:
             return np.concatenate((y[n:], qdd))
 
         def proj(tt, y):
-            qq, vv = project(s, tt, y[:n], y[n:], p)
+            qq, vv = project(s, tt, y[:n], y[n:], p, scaling=sc)
             return np.concatenate((qq, vv))
 
-        times, Y, res, m = integrate(rhs, proj, t, np.concatenate((q0, qd0)), opt)
+        times, Y, res, m = integrate(rhs, proj, t, np.concatenate((q0, qd0)), opt,
+                                     scale=np.concatenate((sc.columns, sc.columns)))
         QDD = np.empty((len(times), n))
         LAM = np.empty((len(times), s.m))
         for k, (tk, yk) in enumerate(zip(times, Y)):
             QDD[k], LAM[k], _ = free_acceleration(s, tk, yk[:n], yk[n:], p, **kw)
         extra = {"evaluations": res.evaluations, "steps": res.steps, "rejected": res.rejected,
-                 "method": m}
+                 "method": m, "length_scale": sc.length}
         if opt.runge_kutta:
             extra["rtol"], extra["atol"] = opt.rtol, opt.atol
         else:

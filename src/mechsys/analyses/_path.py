@@ -32,7 +32,7 @@ from .._symbols import T
 from ..compile import compile_exprs
 from ..constraints import ConstraintBase
 from ..results._solution import Solution, State
-from ..solvers._free import project_positions
+from ..solvers._free import project_positions, scaling_at
 from ..solvers._integrators import (
     ATOL,
     FIT_DEGREE,
@@ -43,7 +43,7 @@ from ..solvers._integrators import (
     integration_options,
     output_times,
 )
-from ..solvers._linalg import Singular, dependent_rows, factor, involved_rows
+from ..solvers._linalg import Scaling, Singular, dependent_rows, factor, involved_rows
 from ._free import _reject_unknown
 
 
@@ -170,18 +170,26 @@ class PathSystem:
         k, n = self._k, self.system.n
         return out[:k], out[k : k + k * n].reshape(k, n), out[k + k * n :]
 
-    def velocities(self, t, q, qd_guess=None, tol=1e-12, max_iterations=20, p=None):
+    def velocities(self, t, q, qd_guess=None, tol=1e-12, max_iterations=20, p=None,
+                   scaling=None):
         """Velocities ``qd`` (n,) at ``(t, q)`` from the holonomic and velocity constraints
-        (parameters ``p``: default the model's current values)."""
+        (parameters ``p``: default the model's current values). Converged when every
+        equation's residual, divided by its row scale in the unit-free coordinates of
+        ``scaling`` (:class:`~mechsys.solvers.Scaling`, default: at ``q``), is at most
+        ``tol (1 + max |qd_j| / c_j)``: the same relative accuracy in any unit of length."""
         s = self.system
         n = s.n
         p = self._p if p is None else p
         J, rhs = s.velocity_rhs(t, q, p)
+        if scaling is None:
+            scaling = Scaling.of(s, q, J)
         qd = np.zeros(n) if qd_guess is None else np.array(qd_guess, dtype=float)
         for _ in range(max_iterations):
             psi, B, _ = self._psi(t, q, qd, p)
             R = np.concatenate((J @ qd - rhs, psi))
-            if np.abs(R).max(initial=0.0) <= tol * (1 + np.abs(qd).max(initial=0.0)):
+            r = scaling.rows(np.vstack((J, B)))
+            if np.abs(R / r).max(initial=0.0) <= tol * (
+                    1 + np.abs(qd / scaling.columns).max(initial=0.0)):
                 return qd
             K = np.vstack((J, B))
             try:
@@ -242,22 +250,24 @@ class PathSystem:
         else:
             q0, given = self._condition(initial_condition)
             p = self._params(given)
-        q0 = project_positions(s, t0, q0, p)
+        sc = scaling_at(s, t0, q0, p)          # units of the coordinates, once per run
+        q0 = project_positions(s, t0, q0, p, scaling=sc)
         last = [None]
 
         def rhs(tk, y):
-            qd = self.velocities(tk, y, last[0], p=p)
+            qd = self.velocities(tk, y, last[0], p=p, scaling=sc)
             last[0] = qd
             return qd
 
         def proj(tk, y):
-            return project_positions(s, tk, y, p)
+            return project_positions(s, tk, y, p, scaling=sc)
 
-        times, Q, res, m = integrate(rhs, proj, t, q0, opt)
-        QD = np.array([self.velocities(tk, qk, p=p) for tk, qk in zip(times, Q)])
+        times, Q, res, m = integrate(rhs, proj, t, q0, opt, scale=sc.columns)
+        QD = np.array([self.velocities(tk, qk, p=p, scaling=sc) for tk, qk in zip(times, Q)])
         QDD = np.array([self.accelerations(tk, qk, vk, p) for tk, qk, vk in zip(times, Q, QD)])
         drift = max(np.abs(s.residual(tk, qk, p)).max(initial=0.0) for tk, qk in zip(times, Q))
-        extra = {"evaluations": res.evaluations, "steps": res.steps, "method": m, "drift": drift}
+        extra = {"evaluations": res.evaluations, "steps": res.steps, "method": m, "drift": drift,
+                 "length_scale": sc.length}
         if diagnostics:
             extra["diagnostics"] = res.diagnostics
         return Solution(t=times, q=Q, qd=QD, qdd=QDD, p=p, system=s, model=self.model,

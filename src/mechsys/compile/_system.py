@@ -150,6 +150,21 @@ class System:
         return k
 
     @property
+    def length_hint(self) -> float:
+        """The largest numeric local coordinate of the bodies' points and centroids (0 when
+        none): a length of the model's geometry, for the unit-free scaling of the solvers when
+        the constraint equations show no lever arm (:class:`mechsys.solvers.Scaling`)."""
+        if not hasattr(self, "_length_hint"):
+            big = 0.0
+            for b in self._bodies:
+                for coords in [*b.points.values(), b.centroid]:
+                    for c in coords:
+                        if getattr(c, "is_number", False) and c.is_real:
+                            big = max(big, abs(float(c)))
+            self._length_hint = big
+        return self._length_hint
+
+    @property
     def f_position(self) -> Compiled:
         """``x -> [Phi (m), Phi_q values (nnz)]``."""
         return self._kernel("position", ("phi", "jac"))

@@ -26,7 +26,7 @@ import scipy.sparse as sps
 from scipy.linalg.lapack import dgesv as _dgesv
 
 from .._errors import ConvergenceError, SingularJacobianError, SingularMassError
-from ._linalg import SPARSE_THRESHOLD, Singular, dependent_rows, factor
+from ._linalg import SPARSE_THRESHOLD, Scaling, Singular, dependent_rows, factor
 from ._position import describe_singular
 
 
@@ -184,87 +184,149 @@ def _mass_properties(system, body) -> str:
     return f"mass {fmt(b.mass)}, inertia {inertia}; "
 
 
-def project_positions(system, t, q, p, tol=1e-12, max_iterations=8):
-    """Minimum-norm correction of ``q`` onto ``Phi(q, t) = 0``: ``dq = -J^T (J J^T)^-1 Phi``,
-    iterated. A singular ``J J^T`` (dependent constraints, lock-up) raises
+def scaling_at(system, t, q, p) -> Scaling:
+    """The unit-free scaling (:class:`Scaling`) of ``system`` at ``(t, q)``: characteristic
+    length and column units, computed once per simulation."""
+    q = np.asarray(q, dtype=float)
+    J = system.jacobian(t, q, p) if system.m else np.zeros((0, system.n))
+    return Scaling.of(system, q, J)
+
+
+def project_positions(system, t, q, p, tol=1e-12, max_iterations=8, scaling=None):
+    r"""Minimum-norm correction of ``q`` onto ``Phi(q, t) = 0``, iterated, in the unit-free
+    coordinates of ``scaling`` (positions in units of the characteristic length ``L``,
+    angles in radians; each equation divided by its row scale ``r``)::
+
+        J^ = R^-1 J D,   dq = -D J^T (J^ J^T)^-1 R^-1 Phi
+
+    Converged when ``max_i |Phi_i| / r_i <= tol (1 + offset)``: the same relative accuracy
+    in any unit of length. A singular ``J^ J^^T`` (dependent constraints, lock-up) raises
     :class:`SingularJacobianError` naming the constraints."""
     q = np.array(q, dtype=float)
     if system.m == 0:
         return q
     sparse = system.n > SPARSE_THRESHOLD
-    for _ in range(max_iterations):
+    for k in range(max_iterations):
         F, J = system.residual_and_jacobian(t, q, p, sparse)
-        if np.abs(F).max(initial=0.0) <= tol:
+        if scaling is None and k == 0:
+            scaling = Scaling.of(system, q, J.toarray() if sparse else J)
+        r = scaling.rows(J)
+        Fs = F / r
+        if np.abs(Fs).max(initial=0.0) <= tol * (1.0 + scaling.offset):
             break
-        q -= J.T @ _factor_JJt(system, J, t, q).solve(F)
+        q -= _min_norm(system, J, r, scaling, Fs, t, q)
     return q
 
 
-def _factor_JJt(system, J, t, q):
+def _min_norm(system, J, r, scaling, b, t, q):
+    """``D J^T (J^ J^T)^-1 b`` with ``J^ = R^-1 J D``: the smallest correction (in scaled
+    coordinates) that changes the scaled residual by ``b``."""
+    Js = scaling.scaled(J, r)
     try:
-        return factor(J @ J.T)
+        y = factor(Js @ Js.T).solve(b)
     except Singular:
-        raise describe_singular(system, J, t, q, "projection onto the constraints") from None
+        raise describe_singular(system, J, t, q, "projection onto the constraints",
+                                scaling=scaling) from None
+    return scaling.columns * (Js.T @ y)
 
 
-def project(system, t, q, qd, p, tol=1e-12, max_iterations=8):
+def project(system, t, q, qd, p, tol=1e-12, max_iterations=8, scaling=None):
     """Project ``(q, qd)`` onto the constraints: positions by :func:`project_positions`,
-    then ``dqd = -J^T (J J^T)^-1 (J qd + Phi_t)``."""
-    q = project_positions(system, t, q, p, tol, max_iterations)
+    then the smallest velocity change (scaled as there) with ``J qd = -Phi_t``."""
+    q = project_positions(system, t, q, p, tol, max_iterations, scaling)
     if system.m == 0:
         return q, np.array(qd, dtype=float)
     sparse = system.n > SPARSE_THRESHOLD
     J, rhs = system.velocity_rhs(t, q, p, sparse)
-    qd = qd - J.T @ _factor_JJt(system, J, t, q).solve(J @ qd - rhs)
+    if scaling is None:
+        scaling = Scaling.of(system, q, J.toarray() if sparse else J)
+    r = scaling.rows(J)
+    qd = qd - _min_norm(system, J, r, scaling, (J @ qd - rhs) / r, t, q)
     return q, qd
 
 
-def _damped_newton(evaluate, x, n, t, what, hint, tol=1e-10, max_iterations=50):
-    """Newton with Armijo backtracking on ``R(x) = 0``; ``evaluate(x) -> (R, K)``."""
+def _damped_newton(evaluate, x, n, t, what, hint, tol=1e-12, max_iterations=50,
+                   col=None, row=None):
+    """Newton with Armijo backtracking on ``R(x) = 0``; ``evaluate(x) -> (R, K)``.
+
+    ``col``/``row``: units of the unknowns and of the equations. Newton works on
+    ``x^ = x / col``, ``R^ = R / row``, ``K^ = K col / row`` and converges when
+    ``max |R^| <= tol (1 + max_{j < n} |x^_j|)`` (the first ``n`` unknowns are the coordinates
+    or velocities): the same decision in any unit of length."""
+    col = np.ones(len(x)) if col is None else col
     history = []
     for it in range(max_iterations + 1):
         R, K = evaluate(x)
-        err = np.abs(R).max(initial=0.0)
+        if row is None:
+            row = np.ones(len(R))
+        Rs = R / row
+        err = np.abs(Rs).max(initial=0.0)
         history.append(err)
-        if err <= tol * (1 + np.abs(x).max()):
+        # rounding grows with the coordinates (far from the origin), not with the multipliers
+        if err <= tol * (1 + np.abs(x[:n] / col[:n]).max(initial=0.0)):
             return x, it
         try:
-            dx = factor(K).solve(-R)
+            dx = col * factor(K * col / row[:, None]).solve(-Rs)
         except Singular:
             raise ConvergenceError(
-                f"{what} at t = {t:.6g}: singular Jacobian (residual {err:.3e}); {hint}",
+                f"{what} at t = {t:.6g}: singular Jacobian (scaled residual {err:.3e}); {hint}",
                 time=t, history=tuple(history)) from None
         a = 1.0
         while a > 1e-3:
             xn = x + a * dx
             Rn, _ = evaluate(xn)
-            if np.abs(Rn).max(initial=0.0) < (1 - 1e-4 * a) * err:
+            if np.abs(Rn / row).max(initial=0.0) < (1 - 1e-4 * a) * err:
                 break
             a *= 0.5
         x = xn
     raise ConvergenceError(
         f"{what} at t = {t:.6g} did not converge in {max_iterations} iterations "
-        f"(residual {history[-1]:.3e}); start from a better guess (e.g. the previous solution).",
-        time=t, history=tuple(history))
+        f"(scaled residual {history[-1]:.3e}); start from a better guess (e.g. the previous "
+        "solution).", time=t, history=tuple(history))
 
 
-def equilibrium_configuration(eq, system, t, q0, lam0, p, tol=1e-10, max_iterations=50):
+def _equilibrium_units(system, t, q, p, evaluate_without_multipliers):
+    r"""Units of ``x = [v (n), lambda (m)]`` and ``R = [Phi-like rows (m), J^T lambda - Q
+    (n)]`` for the equilibria. With the solver's :class:`Scaling` (columns ``c``, row scales
+    ``r``) and a characteristic virtual work ``E = max_j |Q_j c_j|`` (the loads at the
+    start; 1 without loads)::
+
+        x units: [c, E / r],   R units: [r, E / c]
+
+    so that positions are in units of ``L``, multipliers in units of the loads, and every
+    equation is dimensionless."""
+    sc = scaling_at(system, t, q, p)
+    J = system.jacobian(t, q, p) if system.m else np.zeros((0, system.n))
+    r = sc.rows(J) if system.m else np.zeros(0)
+    R0 = evaluate_without_multipliers()
+    E = float(np.abs(R0[system.m :] * sc.columns).max(initial=0.0))
+    E = E if E > 0 and np.isfinite(E) else 1.0
+    return np.concatenate((sc.columns, E / r)), np.concatenate((r, E / sc.columns))
+
+
+def equilibrium_configuration(eq, system, t, q0, lam0, p, tol=1e-12, max_iterations=50):
     """Newton on ``(q, lambda)`` for the static equilibrium (``eq`` the compiled residual
-    ``R(q, lambda)`` and its Jacobian, from ``compile._free``). Returns ``(q, lam, its)``."""
-    n = system.n
+    ``R(q, lambda)`` and its Jacobian, from ``compile._free``), in the unit-free variables of
+    :func:`_equilibrium_units`. Returns ``(q, lam, its)``."""
+    n, m = system.n, system.m
+    col, row = _equilibrium_units(system, t, q0, p,
+                                  lambda: eq.evaluate(t, q0, np.zeros(m), p)[0])
     x, its = _damped_newton(
         lambda x: eq.evaluate(t, x[:n], x[n:], p), np.concatenate((q0, lam0)), n, t,
         "equilibrium", "the loads may not fix the free coordinates (a neutral direction, e.g. "
         "no load along a free motion) or the guess is at a maximum of potential.", tol,
-        max_iterations)
+        max_iterations, col, row)
     return x[:n], x[n:], its
 
 
-def equilibrium_velocity(eqv, system, t, q, qd0, lam0, p, tol=1e-10, max_iterations=50):
-    """Newton on ``(qd, lambda)`` for the velocity equilibrium at fixed ``q``."""
-    n = system.n
+def equilibrium_velocity(eqv, system, t, q, qd0, lam0, p, tol=1e-12, max_iterations=50):
+    """Newton on ``(qd, lambda)`` for the velocity equilibrium at fixed ``q`` (unit-free as
+    :func:`equilibrium_configuration`)."""
+    n, m = system.n, system.m
+    col, row = _equilibrium_units(system, t, q, p,
+                                  lambda: eqv.evaluate(t, q, qd0, np.zeros(m), p)[0])
     x, its = _damped_newton(
         lambda x: eqv.evaluate(t, q, x[:n], x[n:], p), np.concatenate((qd0, lam0)), n, t,
         "equilibrium velocity", "the velocity-dependent loads may not determine the free "
-        "velocities.", tol, max_iterations)
+        "velocities.", tol, max_iterations, col, row)
     return x[:n], x[n:], its

@@ -59,10 +59,14 @@ class IntegrationResult:
 
 def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-10,
                  max_step=np.inf, first_step=None, correction=True,
-                 t_eval=None) -> IntegrationResult:
+                 t_eval=None, scale=None) -> IntegrationResult:
     """Explicit Runge-Kutta with projection after each accepted step. With ``t_eval``
-    the states at those times come from each step's dense output (then projected)."""
+    the states at those times come from each step's dense output (then projected).
+    ``scale`` (len(y0),): the unit of each component; the absolute tolerance of component
+    ``i`` is ``atol * scale[i]``."""
     cls = {"dop853": DOP853, "rk45": RK45}[method]
+    if scale is not None:
+        atol = atol * np.asarray(scale, dtype=float)
     solver = cls(fun, t0, np.array(y0, dtype=float), t1, rtol=rtol, atol=atol,
                  max_step=max_step, first_step=first_step)
     ts, ys, hs = [t0], [solver.y.copy()], []
@@ -135,8 +139,11 @@ _WEIGHTS: dict = {}
 
 def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4,
                     method="automatic", step_size=None, correction=False,
-                    first_step=None, max_steps=2_000_000) -> IntegrationResult:
-    """Mech's adaptive Adams-Bashforth / Adams-Moulton integrator (see module doc)."""
+                    first_step=None, max_steps=2_000_000, scale=None) -> IntegrationResult:
+    """Mech's adaptive Adams-Bashforth / Adams-Moulton integrator (see module doc).
+    ``scale`` (len(y0),): the unit of each component; the error estimate is
+    ``max_i |y_corr_i - y_pred_i| / scale_i``."""
+    inv_scale = 1.0 if scale is None else 1.0 / np.asarray(scale, dtype=float)
     k = FIT_DEGREES[fit_degree] if isinstance(fit_degree, str) else int(fit_degree)
     if not 1 <= k <= 4:
         raise MechError("fit_degree must be Linear/Quadratic/Cubic/Quartic (1..4)")
@@ -173,7 +180,7 @@ def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4
         cf = hist_f[-deg:] + [f_pred] if deg > 0 else [f, f_pred]
         wc = _adams_weights(ct, t, h_try)
         y_corr = y + sum(wi * fi for wi, fi in zip(wc, cf))
-        err = float(np.abs(y_corr - y_pred).max())
+        err = float((np.abs(y_corr - y_pred) * inv_scale).max())
         if step_size is None and err > a and abs(h_try) > 1e-14 * max(1.0, abs(t)):
             h = h_try / 2
             rejected += 1
@@ -368,19 +375,22 @@ def output_times(t) -> tuple[float, float, np.ndarray | None]:
     return float(tt[0]), float(tt[-1]), tt
 
 
-def integrate(fun, project, t, y0, opt: IntegrationOptions):
+def integrate(fun, project, t, y0, opt: IntegrationOptions, scale=None):
     """Integrate ``y' = fun(t, y)`` with checked options ``opt`` (the dispatch shared by free
     and path systems). ``t``: a tuple ``(t0, t1)`` returns every accepted step; an array
     returns those times (RK dense output, or cubic Hermite with ``fun`` at the Adams steps).
-    Returns ``(times, Y, result, method)``."""
+    ``scale`` (len(y0),): the unit of each component (the characteristic length for position
+    coordinates and their rates, 1 for angles), so that absolute tolerances and
+    ``max_error`` mean the same in any unit of length. Returns ``(times, Y, result,
+    method)``."""
     t0, t1, t_eval = output_times(t)
     if opt.runge_kutta:
         res = integrate_rk(fun, project, t0, t1, y0, opt.method, opt.rtol, opt.atol,
-                           opt.max_step, correction=opt.correction, t_eval=t_eval)
+                           opt.max_step, correction=opt.correction, t_eval=t_eval, scale=scale)
         times, Y = res.diagnostics["t_eval"] if t_eval is not None else (res.t, res.y)
     else:
         res = integrate_adams(fun, project, t0, t1, y0, opt.degree, opt.max_error, opt.method,
-                              opt.step_size, opt.correction)
+                              opt.step_size, opt.correction, scale=scale)
         times, Y = res.t, res.y
         if t_eval is not None:
             from scipy.interpolate import CubicHermiteSpline

@@ -125,11 +125,12 @@ class Scaling:
     a reference configuration: for each equation and body the ratio of the largest
     rotational to the largest translational Jacobian entry (for a point of a body the
     distance of the point from the body origin, for a distance or a point-on-line equation a
-    distance of the geometry). It falls back to the largest position coordinate, then to 1
-    (a model without lengths). ``L`` scales exactly with the unit, so the scaled Jacobian,
-    its condition number and its rank are unit-invariant. ``offset`` is the largest position
-    coordinate divided by ``L`` (a mechanism far from the origin): the convergence test
-    allows for the rounding of the coordinates with it.
+    distance of the geometry). It falls back to the system's ``length_hint`` (the largest
+    local coordinate of the bodies' points and centroids), then to the largest position
+    coordinate, then to 1 (a model without lengths). ``L`` scales exactly with the unit, so
+    the scaled Jacobian, its condition number and its rank are unit-invariant. ``offset`` is
+    the largest position coordinate divided by ``L`` (a mechanism far from the origin): the
+    convergence test allows for the rounding of the coordinates with it.
     """
 
     def __init__(self, length: float, columns: np.ndarray, offset: float = 1.0):
@@ -147,7 +148,8 @@ class Scaling:
         if not np.isfinite(big):
             big = 0.0
         arm = _lever_arm(J, trans, body)
-        L = arm if arm > 0 else (big if big > 0 else 1.0)
+        hint = float(getattr(system, "length_hint", 0.0) or 0.0)
+        L = arm if arm > 0 else (hint if hint > 0 else (big if big > 0 else 1.0))
         columns = np.where(trans, L, 1.0)
         return cls(L, columns, big / L)
 
