@@ -505,6 +505,79 @@ class LocalAxes(Primitive):
         return finish
 
 
+class CamPlot(Edge):
+    """A cam profile drawn in global coordinates (Mech's ``CamPlot``): the locus of a body
+    point whose local coordinates are expressions of a profile parameter, sampled over
+    ``(alpha, lo, hi)`` and carried by the body as it moves::
+
+        r = 1 + 0.3 * sp.cos(a)
+        profile = cam.point((r * sp.cos(a), r * sp.sin(a)))
+        CamPlot(profile, (a, 0, 2 * sp.pi))
+
+    In 3D a profile is a surface of two parameters: give one range per parameter
+    (``CamPlot(p, (u, 0, 1), (v, 0, 1))``), drawn as its parameter lines. Parameters of the
+    model take the solution's values. ``closed`` defaults to whether the two ends meet.
+    """
+
+    def __init__(self, locus_point, *ranges, samples: int = 181, closed: bool | None = None,
+                 **style):
+        Primitive.__init__(self, **style)
+        if not isinstance(locus_point, Point) or locus_point.body is None:
+            raise ModelError("CamPlot: give the cam's locus point, a point of the cam body "
+                             "whose coordinates depend on the profile parameter, e.g. "
+                             "cam.point((r(a) cos(a), r(a) sin(a)))")
+        if not ranges or any(not (isinstance(r, (tuple, list)) and len(r) == 3)
+                             for r in ranges):
+            raise ModelError("CamPlot: give each profile parameter's range as (symbol, low, "
+                             "high)")
+        if len(ranges) > 2:
+            raise ModelError("CamPlot: a profile has one (curve) or two (surface) parameters")
+        for sym, lo, hi in ranges:
+            if not isinstance(sym, sp.Symbol) or sym not in locus_point.local.free_symbols:
+                raise ModelError(f"CamPlot: the locus point {locus_point!r} does not depend "
+                                 f"on {sym!r}; a profile must be a function of its parameter")
+            if not (sp.sympify(hi) - sp.sympify(lo)).is_positive:
+                raise ModelError(f"CamPlot: the range of {sym} must have low < high, got "
+                                 f"({lo}, {hi})")
+        if isinstance(samples, bool) or not isinstance(samples, int) or samples < 3:
+            raise ModelError(f"CamPlot: samples must be an integer >= 3, got {samples!r}")
+        self.locus, self.ranges, self.samples = locus_point, list(ranges), samples
+        self._closed = closed
+        self.body, self.points, self.closed = locus_point.body, [], False
+
+    def _request(self, ev):
+        expr = self.locus.local.xreplace(ev._psubs)
+        syms = [r[0] for r in self.ranges]
+        extra = expr.free_symbols - set(syms)
+        if extra:
+            raise ModelError(f"CamPlot: the profile uses {sorted(map(str, extra))}, which are "
+                             "neither its parameters nor model parameters")
+        f = sp.lambdify(syms, list(expr), "numpy")
+        grids = [np.linspace(float(lo), float(hi), self.samples) for _, lo, hi in self.ranges]
+        if len(grids) == 1:
+            pts = np.array(np.broadcast_arrays(*f(grids[0])), dtype=float).T
+            lines = [pts]
+        else:
+            # a surface: parameter lines of each family
+            lines = []
+            for k in range(0, self.samples, max(self.samples // 12, 1)):
+                lines.append(np.array(np.broadcast_arrays(*f(grids[0], grids[1][k])),
+                                      dtype=float).T)
+                lines.append(np.array(np.broadcast_arrays(*f(grids[0][k], grids[1])),
+                                      dtype=float).T)
+        finishers = []
+        for line in lines:
+            if not np.all(np.isfinite(line)):
+                raise ModelError("CamPlot: the profile is not finite over the given range")
+            ends_meet = np.linalg.norm(line[0] - line[-1]) <= 1e-9 * max(
+                np.abs(line).max(initial=0.0), 1e-300)
+            part = Edge(self.body, [tuple(p) for p in line],
+                        closed=ends_meet if self._closed is None else self._closed,
+                        **self.style)
+            finishers.append(part._request(ev))
+        return lambda: [item for fin in finishers for item in fin()]
+
+
 class _Styled(Primitive):
     """A primitive-like holder of a modified style (for sub-items)."""
 

@@ -1,0 +1,75 @@
+"""CamPlot (Mech 6.1.1): a cam profile drawn in global coordinates, carried by its body."""
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import mechsys as ms
+from mechsys import T
+from mechsys import draw as d
+
+
+def disk_cam():
+    m = ms.Model2D()
+    e = m.parameter("e", 0.3)
+    cam = m.add_body("cam")
+    m.add(ms.Revolute2(m.ground.point((0, 0)), cam.point(0)))
+    m.add(ms.RotationLock1(cam, 2 * sp.pi * T), name="drive")
+    a = sp.Symbol("a")
+    r = 1 + e * sp.cos(a)
+    return m, cam, a, cam.point((r * sp.cos(a), r * sp.sin(a))), e
+
+
+def test_profile_points_lie_on_the_rotated_profile():
+    m, cam, a, profile, _ = disk_cam()
+    sol = m.solve(np.linspace(0, 0.25, 3))
+    fr = d.Scene(m, [d.CamPlot(profile, (a, 0, 2 * sp.pi), samples=73)]).evaluate(sol)
+    (item,) = fr.items
+    assert item.closed                                   # 0 .. 2 pi: the ends meet
+    xyz = np.broadcast_to(item.xyz, (len(sol.t),) + item.xyz.shape[1:])
+    aa = np.linspace(0, 2 * np.pi, 73)
+    for k, th in enumerate(2 * np.pi * sol.t):
+        rr = 1 + 0.3 * np.cos(aa)                        # the model's parameter value
+        ref = np.c_[rr * np.cos(aa + th), rr * np.sin(aa + th)]
+        np.testing.assert_allclose(xyz[k], ref, atol=1e-12)
+
+
+def test_profile_uses_the_solutions_parameter_values():
+    m, cam, a, profile, e = disk_cam()
+    m.set_parameters(e=0.1)
+    sol = m.solve(0.0)
+    (item,) = d.Scene(m, [d.CamPlot(profile, (a, 0, np.pi))]).evaluate(sol).items
+    assert not item.closed                               # half a profile stays open
+    r = np.hypot(*np.asarray(item.xyz).reshape(-1, 2).T)
+    assert np.isclose(r.max(), 1.1) and np.isclose(r.min(), 0.9)
+
+
+def test_spatial_surface_is_drawn_by_parameter_lines():
+    m = ms.Model3D()
+    cam = m.add_body("cam")
+    m.add(ms.Spherical3(m.ground.point((0, 0, 0)), cam.point(0)))
+    m.add(ms.RotationLock3(cam, (1, 0, 0, 0)))
+    u, v = sp.symbols("u v")
+    surf = cam.point((u, v, 0.2 * u**2))
+    sol = m.solve(0.0)
+    items = d.Scene(m, [d.CamPlot(surf, (u, -1, 1), (v, -1, 1), samples=13)]).evaluate(sol).items
+    assert len(items) == 26
+    for it in items:
+        p = np.asarray(it.xyz).reshape(-1, 3)
+        np.testing.assert_allclose(p[:, 2], 0.2 * p[:, 0] ** 2, atol=1e-12)
+
+
+def test_camplot_errors_name_the_problem():
+    m, cam, a, profile, _ = disk_cam()
+    with pytest.raises(ms.ModelError, match="does not depend"):
+        d.CamPlot(cam.point((1, 0)), (a, 0, 1))
+    with pytest.raises(ms.ModelError, match="low < high"):
+        d.CamPlot(profile, (a, 1, 0))
+    with pytest.raises(ms.ModelError, match=r"\(symbol, low, high\)"):
+        d.CamPlot(profile, a)
+    with pytest.raises(ms.ModelError, match="locus point"):
+        d.CamPlot((1, 0), (a, 0, 1))
+    b = sp.Symbol("b")
+    sol = m.solve(0.0)
+    with pytest.raises(ms.ModelError, match="neither its parameters"):
+        d.Scene(m, [d.CamPlot(cam.point((a * b, a)), (a, 0, 1))]).evaluate(sol)
