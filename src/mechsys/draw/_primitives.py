@@ -377,6 +377,61 @@ class Wheel(Primitive):
         return finish
 
 
+class PitchCircle(Primitive):
+    """A gear drawn as its pitch circle on a body, with a tooth mark (a radial tick at the
+    local direction ``mark``) so that its rotation shows; ``teeth`` adds a tick per tooth.
+    In 3D the circle lies in the plane normal to the local ``axis``."""
+
+    def __init__(self, body, center=0, radius=1.0, axis=(0, 0, 1), mark=None, teeth=None,
+                 **style):
+        super().__init__(**style)
+        self.body, self.center, self.axis, self.mark = body, center, axis, mark
+        try:
+            self.radius = float(radius)
+        except (TypeError, ValueError):
+            raise ModelError(f"PitchCircle: radius must be a number, got {radius!r}") from None
+        if not (self.radius > 0 and np.isfinite(self.radius)):
+            raise GeometryError(f"PitchCircle: radius must be positive, got {radius!r}")
+        if teeth is not None and (isinstance(teeth, bool) or not isinstance(teeth, int)
+                                  or teeth < 3):
+            raise ModelError(f"PitchCircle: teeth must be an integer >= 3, got {teeth!r}")
+        self.teeth = teeth
+
+    def _request(self, ev):
+        b = _body(ev, self.body)
+        c = _locals_on(ev, b, [self.center], "PitchCircle")[0]
+        pose = ev.pose(b)
+        r = self.radius
+        if ev.dim == 2:
+            u, v = np.array([1.0, 0.0]), np.array([0.0, 1.0])
+        else:
+            w = _local_vector(ev, b, self.axis, "PitchCircle axis")
+            u, v, w = sh.perpendicular_frame(w)
+        if self.mark is not None:
+            m = _local_vector(ev, b, self.mark, "PitchCircle mark")
+            m = m - (m @ w) * w if ev.dim == 3 else m
+            if np.linalg.norm(m) < 1e-12:
+                raise GeometryError("PitchCircle: the tooth mark must not be along the axis")
+            u = m / np.linalg.norm(m)
+            v = np.cross(w, u) if ev.dim == 3 else np.array([-u[1], u[0]])
+
+        def finish():
+            color = _dark(body_color(b))
+            a = np.linspace(0, 2 * np.pi, 97)
+            rim = c + r * (np.cos(a)[:, None] * u + np.sin(a)[:, None] * v)
+            ticks = [c, c + 1.12 * r * u, [np.nan] * ev.dim]
+            for ang in (np.linspace(0, 2 * np.pi, self.teeth, endpoint=False)
+                        if self.teeth else []):
+                d = np.cos(ang) * u + np.sin(ang) * v
+                ticks += [c + 0.94 * r * d, c + 1.06 * r * d, [np.nan] * ev.dim]
+            return [self._rigid("line", pose, rim, {"color": color, "linewidth": 1.2,
+                                                    "linestyle": "--"}, L_PLATE_EDGE),
+                    self._rigid("line", pose, np.array(ticks, dtype=float),
+                                {"color": color, "linewidth": 2.0}, L_PLATE_EDGE)]
+
+        return finish
+
+
 class Arrow(Primitive):
     """An arrow at ``point`` along ``vector``.
 

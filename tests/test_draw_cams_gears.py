@@ -1,4 +1,4 @@
-"""CamPlot (Mech 6.1.1): a cam profile drawn in global coordinates, carried by its body."""
+"""CamPlot (Mech 6.1.1) and PitchCircle: cam profiles and gears in pictures."""
 
 import numpy as np
 import pytest
@@ -73,3 +73,33 @@ def test_camplot_errors_name_the_problem():
     sol = m.solve(0.0)
     with pytest.raises(ms.ModelError, match="neither its parameters"):
         d.Scene(m, [d.CamPlot(cam.point((a * b, a)), (a, 0, 1))]).evaluate(sol)
+
+
+def test_pitch_circle_turns_with_its_gear():
+    m, cam, a, profile, _ = disk_cam()
+    sol = m.solve(np.linspace(0, 0.25, 3))
+    rim, ticks = d.Scene(m, [d.PitchCircle(cam, 0, 2.0, teeth=12)]).evaluate(sol).items
+    rim_xyz = np.broadcast_to(rim.xyz, (3,) + rim.xyz.shape[1:])
+    np.testing.assert_allclose(np.hypot(*rim_xyz[1].T), 2.0, atol=1e-12)
+    tip = np.broadcast_to(ticks.xyz, (3,) + ticks.xyz.shape[1:])[:, 1]
+    th = 2 * np.pi * sol.t
+    np.testing.assert_allclose(tip, 2.24 * np.c_[np.cos(th), np.sin(th)], atol=1e-12)
+    assert np.isnan(ticks.xyz[0]).any() and ticks.xyz.shape[-2] == 3 * 13
+    with pytest.raises(ms.GeometryError, match="radius must be positive"):
+        d.PitchCircle(cam, 0, 0.0)
+    with pytest.raises(ms.ModelError, match="teeth"):
+        d.PitchCircle(cam, 0, 1.0, teeth=2)
+
+
+def test_pitch_circle_in_3d_lies_normal_to_its_axis():
+    m = ms.Model3D()
+    g = m.add_body("gear")
+    m.add(ms.Spherical3(m.ground.point((0, 0, 0)), g.point(0)))
+    m.add(ms.RotationLock3(g, (1, 0, 0, 0)))
+    sol = m.solve(0.0)
+    rim, ticks = d.Scene(m, [d.PitchCircle(g, (0, 0, 1), 0.5, axis=(1, 0, 0),
+                                           mark=(0, 1, 0))]).evaluate(sol).items
+    p = np.asarray(rim.xyz).reshape(-1, 3)
+    np.testing.assert_allclose(p[:, 0], 0, atol=1e-12)
+    np.testing.assert_allclose(np.hypot(p[:, 1], p[:, 2] - 1), 0.5, atol=1e-12)
+    np.testing.assert_allclose(np.asarray(ticks.xyz).reshape(-1, 3)[1], [0, 0.56, 1], atol=1e-12)
