@@ -25,7 +25,7 @@ import math
 
 import sympy as sp
 
-from .._errors import ModelError
+from .._errors import GeometryError, ModelError
 from ..geometry._points import Axis, GlobalVector, as_axis, as_point
 from . import _primitives as P
 from ._angles import angle_equation, angle_frame, vector_norm
@@ -34,7 +34,7 @@ from ._base import ConstraintBase, Variable, as_expr
 
 def _nonzero(value, what: str, hint: str = "") -> sp.Expr:
     v = as_expr(value, what)
-    if v.is_number and (v == 0 or not v.is_finite or not v.is_real):
+    if v.is_number and (v.is_zero or not v.is_finite or not v.is_real):
         raise ModelError(f"{what} = {value!r}: must be a nonzero finite number{hint}")
     return v
 
@@ -151,7 +151,7 @@ class _TwoWheels(_Gear):
             self.dist = _nonzero(vals[4], f"{kind} dist", " (the centre distance)")
         self.C = as_expr(vals[-1], f"{kind} C")
         rho = self.rad1 + self._sign * self.rad2
-        if rho.is_number and rho == 0:
+        if rho.is_number and rho.is_zero:
             if self._sign < 0:
                 raise ModelError(f"{kind}: rad1 = rad2 = {self.rad1}: the pulleys turn together; "
                                  "use RotationLock1(body1, body2, angle) (Mech's advice)")
@@ -276,8 +276,7 @@ class _PlanarRack(_Gear):
         vals = _arity(args, kind, ["point", "rad", "axis", "C"])
         self.p = as_point(vals[0])
         self.rad = _nonzero(vals[1], f"{kind} rad", " (the pinion's pitch radius)")
-        self.axis = as_axis(vals[2])
-        self.axis.dir.check_nonzero(f"{kind} axis")
+        (self.axis,) = _axes(kind, vals[2])
         self.C = as_expr(vals[3], f"{kind} C")
         self._init_variable(spec)
 
@@ -350,9 +349,18 @@ class RackAndPinion2(_PlanarRack):
 # -- 3D ---------------------------------------------------------------------------------------
 
 
-def _check_axes(kind: str, *axes: Axis) -> None:
-    for k, a in enumerate(axes, 1):
-        a.dir.check_nonzero(f"{kind} axis{k}")
+def _axes(kind: str, *objs) -> list[Axis]:
+    """The axes, a zero-length direction reported with the constraint's name."""
+    out = []
+    for k, obj in enumerate(objs, 1):
+        what = f"{kind} axis{k}" if len(objs) > 1 else f"{kind} axis"
+        try:
+            a = as_axis(obj)
+        except GeometryError as exc:
+            raise GeometryError(f"{what}: {exc}") from None
+        a.dir.check_nonzero(what)
+        out.append(a)
+    return out
 
 
 class _ParallelGears(_Gear):
@@ -364,11 +372,10 @@ class _ParallelGears(_Gear):
         kind = type(self).__name__
         args, spec = _split_variable(args, kind, 2)
         vals = _arity(args, kind, ["axis1", "rad1", "axis2", "rad2", "C"])
-        self.a1, self.a2 = as_axis(vals[0]), as_axis(vals[2])
-        _check_axes(kind, self.a1, self.a2)
+        self.a1, self.a2 = _axes(kind, vals[0], vals[2])
         self.rad1 = _nonzero(vals[1], f"{kind} rad1")
         self.rad2 = _nonzero(vals[3], f"{kind} rad2")
-        if (self.rad1 + self.rad2).is_number and self.rad1 + self.rad2 == 0:
+        if (self.rad1 + self.rad2).is_zero:
             raise ModelError(f"{kind}: rad1 + rad2 = 0 puts both axes on one line; the radii "
                              "of an internal pair differ")
         self.C = as_expr(vals[4], f"{kind} C")
@@ -484,8 +491,7 @@ class OrthogonalGears5(_Gear):
         if len(args) == 5:
             args = (*args[:4], 0, args[4])
         vals = _arity(args, kind, ["axis1", "teeth1", "axis2", "teeth2", "dist", "C"])
-        self.a1, self.a2 = as_axis(vals[0]), as_axis(vals[2])
-        _check_axes(kind, self.a1, self.a2)
+        self.a1, self.a2 = _axes(kind, vals[0], vals[2])
         self.teeth1 = _nonzero(vals[1], f"{kind} teeth1", " (negate it to reverse the sense)")
         self.teeth2 = _nonzero(vals[3], f"{kind} teeth2", " (negate it to reverse the sense)")
         self.dist = as_expr(vals[4], f"{kind} dist")
@@ -538,8 +544,7 @@ class LeadScrew5(_Gear):
         kind = "LeadScrew5"
         args, spec = _split_variable(args, kind, 1)
         vals = _arity(args, kind, ["axis1", "axis2", "pitch", "C"])
-        self.a1, self.a2 = as_axis(vals[0]), as_axis(vals[1])
-        _check_axes(kind, self.a1, self.a2)
+        self.a1, self.a2 = _axes(kind, vals[0], vals[1])
         self.pitch = _nonzero(vals[2], f"{kind} pitch",
                               " (zero pitch is a Cylindrical4 plus a rotation lock)")
         self.C = as_expr(vals[3], f"{kind} C")
@@ -573,8 +578,7 @@ class _SpatialRack(_Gear):
         kind = type(self).__name__
         args, spec = _split_variable(args, kind, 2)
         vals = _arity(args, kind, ["axis1", "rad", "axis2", "C"])
-        self.a1, self.a2 = as_axis(vals[0]), as_axis(vals[2])
-        _check_axes(kind, self.a1, self.a2)
+        self.a1, self.a2 = _axes(kind, vals[0], vals[2])
         self.rad = _nonzero(vals[1], f"{kind} rad", " (the pinion's pitch radius)")
         self.C = as_expr(vals[3], f"{kind} C")
         self._init_variable(spec)
