@@ -312,3 +312,17 @@ def test_rack_and_pinion_in_space_travel():
     # pinion at k2 = z x x = +y side of the rack; g2 . (r1 - r2) = -x_rack = C - r alpha
     np.testing.assert_allclose(sol.location(rack.point(0)),
                                np.column_stack([r * W * TIMES, -r + 0 * TIMES, 0 * TIMES]), atol=1e-12)
+
+
+def test_variable_keyword_equals_mech_position():
+    m = ms.Model2D()
+    a, b = m.add_body("a"), m.add_body("b")
+    c1 = ms.TwoGears2(a.point(0), 1, ("s", 0.4), b.point(0), 2, 0)
+    c2 = ms.TwoGears2(a.point(0), 1, b.point(0), 2, 0, variable=("s", 0.4))
+    assert (c1.alpha, c1.variable().guess) == (c2.alpha, c2.variable().guess) == (sp.Symbol("s"), 0.4)
+    with pytest.raises(ModelError, match="given twice"):
+        ms.TwoGears2(a.point(0), 1, ("s", 0.4), b.point(0), 2, 0, variable=("t", 0))
+    import inspect
+
+    assert list(inspect.signature(ms.TwoPulleys2.__init__).parameters)[1:] == [
+        "point1", "rad1", "point2", "rad2", "dist", "C", "variable"]

@@ -21,6 +21,7 @@ left-hand screw. Zero radii, tooth counts and pitches are rejected.
 
 from __future__ import annotations
 
+import inspect
 import math
 
 import sympy as sp
@@ -39,11 +40,38 @@ def _nonzero(value, what: str, hint: str = "") -> sp.Expr:
     return v
 
 
-def _split_variable(args: tuple, kind: str, where: int) -> tuple[tuple, tuple | None]:
-    """Remove Mech's optional ``{sym, guess}`` at position ``where`` of ``args``."""
+def _split_variable(args: tuple, kind: str, where: int, variable=None) -> tuple[tuple, tuple | None]:
+    """Remove Mech's optional ``{sym, guess}`` at position ``where`` of ``args`` (or take the
+    ``variable=`` keyword)."""
     if len(args) > where and _is_variable_spec(args[where]):
+        if variable is not None:
+            raise ModelError(f"{kind}: the variable is given twice, positionally and as variable=")
         return args[:where] + args[where + 1:], args[where]
-    return args, None
+    if variable is not None and not _is_variable_spec(variable):
+        raise ModelError(f"{kind} variable: expected (symbol, guess), got {variable!r}")
+    return args, variable
+
+
+def _signature(*names: str, optional: tuple = ()):
+    """Give a class built on ``__init__(*args, variable=None)`` its documented signature:
+    Mech's arguments, then ``variable=(sym, guess)`` (which may also stand at Mech's
+    position)."""
+    kind = inspect.Parameter.POSITIONAL_OR_KEYWORD
+    params = [inspect.Parameter("self", kind)] + [inspect.Parameter(n, kind) for n in names]
+    params += [inspect.Parameter(n, kind, default=d) for n, d in optional]
+    params.append(inspect.Parameter("variable", inspect.Parameter.KEYWORD_ONLY, default=None))
+
+    def deco(cls):
+        base = cls.__init__
+
+        def __init__(self, *args, variable=None):
+            base(self, *args, variable=variable)
+
+        __init__.__signature__ = inspect.Signature(params)
+        cls.__init__ = __init__
+        return cls
+
+    return deco
 
 
 def _is_variable_spec(obj) -> bool:
@@ -138,10 +166,10 @@ class _TwoWheels(_Gear):
     _with_distance = False
     _with_dist_arg = False
 
-    def __init__(self, *args):
+    def __init__(self, *args, variable=None):
         super().__init__()
         kind = type(self).__name__
-        args, spec = _split_variable(args, kind, 2)
+        args, spec = _split_variable(args, kind, 2, variable)
         names = ["point1", "rad1", "point2", "rad2"] + (["dist"] if self._with_dist_arg else []) + ["C"]
         vals = _arity(args, kind, names)
         self.p1, self.p2 = as_point(vals[0]), as_point(vals[2])
@@ -181,6 +209,7 @@ class _TwoWheels(_Gear):
         return [mesh, d[0] * sp.sin(th) - d[1] * sp.cos(th)]
 
 
+@_signature("point1", "rad1", "point2", "rad2", "C")
 class TwoGears1(_TwoWheels):
     r"""Two meshing gears (external, or internal with a negative radius) whose centres other
     constraints place. Removes 1 DOF (2D).
@@ -202,6 +231,7 @@ class TwoGears1(_TwoWheels):
     dof_removed = 1
 
 
+@_signature("point1", "rad1", "point2", "rad2", "C")
 class TwoGears2(_TwoWheels):
     r"""Two meshing gears: centres ``rad1 + rad2`` apart and the rotations related. Removes
     2 DOF (2D).
@@ -223,6 +253,7 @@ class TwoGears2(_TwoWheels):
     _with_distance = True
 
 
+@_signature("point1", "rad1", "point2", "rad2", "dist", "C")
 class TwoPulleys1(_TwoWheels):
     r"""Chain and sprockets, or belt and pulleys, with centres placed by other constraints.
     Removes 1 DOF (2D).
@@ -244,6 +275,7 @@ class TwoPulleys1(_TwoWheels):
     _with_dist_arg = True
 
 
+@_signature("point1", "rad1", "point2", "rad2", "dist", "C")
 class TwoPulleys2(_TwoWheels):
     r"""Chain and sprockets, or belt and pulleys, ``dist`` apart. Removes 2 DOF (2D).
 
@@ -269,10 +301,10 @@ class _PlanarRack(_Gear):
     _always_variable = False
     _with_distance = False
 
-    def __init__(self, *args):
+    def __init__(self, *args, variable=None):
         super().__init__()
         kind = type(self).__name__
-        args, spec = _split_variable(args, kind, 2)
+        args, spec = _split_variable(args, kind, 2, variable)
         vals = _arity(args, kind, ["point", "rad", "axis", "C"])
         self.p = as_point(vals[0])
         self.rad = _nonzero(vals[1], f"{kind} rad", " (the pinion's pitch radius)")
@@ -304,6 +336,7 @@ class _PlanarRack(_Gear):
         return eqs + [s - self.C + self.rad * alpha, angle_equation(frame, x1, alpha)]
 
 
+@_signature("point", "rad", "axis", "C")
 class RackAndPinion1(_PlanarRack):
     r"""Rack and pinion whose distance other constraints fix. Removes 1 DOF (2D).
 
@@ -328,6 +361,7 @@ class RackAndPinion1(_PlanarRack):
     dof_removed = 1
 
 
+@_signature("point", "rad", "axis", "C")
 class RackAndPinion2(_PlanarRack):
     r"""Rack and pinion: the pinion centre ``rad`` to the left of the rack, rolling on it.
     Removes 2 DOF (2D).
@@ -367,10 +401,10 @@ class _ParallelGears(_Gear):
     spaces = ("spatial",)
     _adjacent = True
 
-    def __init__(self, *args):
+    def __init__(self, *args, variable=None):
         super().__init__()
         kind = type(self).__name__
-        args, spec = _split_variable(args, kind, 2)
+        args, spec = _split_variable(args, kind, 2, variable)
         vals = _arity(args, kind, ["axis1", "rad1", "axis2", "rad2", "C"])
         self.a1, self.a2 = _axes(kind, vals[0], vals[2])
         self.rad1 = _nonzero(vals[1], f"{kind} rad1")
@@ -415,6 +449,7 @@ def _plain_frame(axis: Axis):
     return g, u.cross(g)
 
 
+@_signature("axis1", "rad1", "axis2", "rad2", "C")
 class ParallelGears5(_ParallelGears):
     r"""Spur (or helical, or internal) gears on parallel axes ``rad1 + rad2`` apart, the
     heads of the axes side by side. Removes 5 DOF (3D).
@@ -440,6 +475,7 @@ class ParallelGears5(_ParallelGears):
     dof_removed = 5
 
 
+@_signature("axis1", "rad1", "axis2", "rad2", "C")
 class ParallelGears4(_ParallelGears):
     r""":class:`ParallelGears5` without the adjacency equation: the gear of ``axis2`` may
     slide along its axis (a wide pinion). Removes 4 DOF (3D).
@@ -461,6 +497,7 @@ class ParallelGears4(_ParallelGears):
     _adjacent = False
 
 
+@_signature("axis1", "teeth1", "axis2", "teeth2", "dist_or_C", optional=(("C", None),))
 class OrthogonalGears5(_Gear):
     r"""Gears on perpendicular axes: a bevel set (origins coincident) or, with ``dist``, a
     worm or spiral-bevel (hypoid) set with offset axes. Removes 5 DOF (3D).
@@ -484,10 +521,10 @@ class OrthogonalGears5(_Gear):
     dof_removed = 5
     spaces = ("spatial",)
 
-    def __init__(self, *args):
+    def __init__(self, *args, variable=None):
         super().__init__()
         kind = "OrthogonalGears5"
-        args, spec = _split_variable(args, kind, 2)
+        args, spec = _split_variable(args, kind, 2, variable)
         if len(args) == 5:
             args = (*args[:4], 0, args[4])
         vals = _arity(args, kind, ["axis1", "teeth1", "axis2", "teeth2", "dist", "C"])
@@ -517,6 +554,7 @@ class OrthogonalGears5(_Gear):
                 angle_equation(angle_frame(space, self.a2), u1, -e2)]
 
 
+@_signature("axis1", "axis2", "pitch", "C")
 class LeadScrew5(_Gear):
     r"""Lead screw: ``axis1`` (the screw) colinear with ``axis2`` (the nut), the axial
     travel tied to the relative spin by the pitch. Removes 5 DOF (3D).
@@ -539,10 +577,10 @@ class LeadScrew5(_Gear):
     dof_removed = 5
     spaces = ("spatial",)
 
-    def __init__(self, *args):
+    def __init__(self, *args, variable=None):
         super().__init__()
         kind = "LeadScrew5"
-        args, spec = _split_variable(args, kind, 1)
+        args, spec = _split_variable(args, kind, 1, variable)
         vals = _arity(args, kind, ["axis1", "axis2", "pitch", "C"])
         self.a1, self.a2 = _axes(kind, vals[0], vals[1])
         self.pitch = _nonzero(vals[2], f"{kind} pitch",
@@ -573,10 +611,10 @@ class _SpatialRack(_Gear):
     spaces = ("spatial",)
     _adjacent = True
 
-    def __init__(self, *args):
+    def __init__(self, *args, variable=None):
         super().__init__()
         kind = type(self).__name__
-        args, spec = _split_variable(args, kind, 2)
+        args, spec = _split_variable(args, kind, 2, variable)
         vals = _arity(args, kind, ["axis1", "rad", "axis2", "C"])
         self.a1, self.a2 = _axes(kind, vals[0], vals[2])
         self.rad = _nonzero(vals[1], f"{kind} rad", " (the pinion's pitch radius)")
@@ -602,6 +640,7 @@ class _SpatialRack(_Gear):
                 + [g2.dot(d) - self.C + self.rad * a, angle_equation((g2, k2), g1, a)])
 
 
+@_signature("axis1", "rad", "axis2", "C")
 class RackAndPinion5(_SpatialRack):
     r"""Rack and pinion in 3D. Removes 5 DOF.
 
@@ -625,6 +664,7 @@ class RackAndPinion5(_SpatialRack):
     dof_removed = 5
 
 
+@_signature("axis1", "rad", "axis2", "C")
 class RackAndPinion4(_SpatialRack):
     r""":class:`RackAndPinion5` without the adjacency equation: the pinion may slide along its
     axis. Removes 4 DOF (3D).
