@@ -326,3 +326,30 @@ def test_variable_keyword_equals_mech_position():
 
     assert list(inspect.signature(ms.TwoPulleys2.__init__).parameters)[1:] == [
         "point1", "rad1", "point2", "rad2", "dist", "C", "variable"]
+
+
+def test_inverse_dynamics_drive_torque_is_reflected_inertia_times_acceleration():
+    r1, r2, J1, J2, acc = 0.5, 1.5, 0.2, 0.9, 3.0
+    m = ms.Model2D()
+    g1 = _pinned(m, "g1", (0.0, 0.0), mass=1.0, inertia=J1)
+    g2 = _pinned(m, "g2", (r1 + r2, 0.0), mass=1.0, inertia=J2)
+    m.add(ms.TwoGears1(g1.point(0), r1, g2.point(0), r2, 0.0), name="mesh")
+    m.add(ms.RotationLock1(g1, 0.5 * acc * T**2), name="drive")
+    t = np.array([0.0, 0.4, 1.1])
+    sol = m.solve(t, solution="dynamic")
+    _, tau = sol.reaction("drive", "g1")
+    np.testing.assert_allclose(np.ravel(tau), (J1 + J2 * (r1 / r2) ** 2) * acc, rtol=1e-10)
+    # the tooth force accelerates gear 2: F r2 = J2 * acc * r1 / r2
+    f2, _ = sol.reaction("mesh", "g2", at=m.ground.point((r1, 0.0)))
+    np.testing.assert_allclose(np.abs(np.asarray(f2)[:, 1]), J2 * acc * r1 / r2 / r2, rtol=1e-10)
+
+
+def test_two_default_variables_on_the_same_bodies_are_refused():
+    # a planet meshing with two gears fixed to ground would share "Theta_planet_ground":
+    # silently one variable for two centre lines; Model.add refuses, naming the constraint
+    m = ms.Model2D()
+    p = _pinned(m, "planet", (0.0, 0.0))
+    m.add(ms.TwoGears1(p.point(0), 1.0, m.ground.point((2.0, 0.0)), 1.0, 0.0), name="mesh A")
+    with pytest.raises(ModelError, match=r"mesh B.*Theta_planet_ground.*\(sym, guess\)"):
+        m.add(ms.TwoGears1(p.point(0), 1.0, m.ground.point((0.0, 3.0)), 2.0, 0.0), name="mesh B")
+    m.add(ms.TwoGears1(p.point(0), 1.0, ("phi_b", 1.5), m.ground.point((0.0, 3.0)), 2.0, 0.0))

@@ -4,10 +4,10 @@ sets, lead screws. Only the nominal rotary motion is modelled, not tooth-to-toot
 Each constraint relates two rotation angles through a *phase constant* ``C`` fixed at
 assembly (Mech's convention, quoted in each docstring) and introduces, where Mech does, a
 new variable -- the angle that tracks the relative spin -- given as a ``(sym, guess)`` tuple
-at Mech's position in the argument list (Mech's ``{sym, guess}``). When it is omitted a
-variable named after the two bodies is created (``Theta_gear1_gear2``), its guess computed
-from the bodies' guesses; give ``(sym, guess)`` explicitly when two constraints join the
-same pair of bodies.
+at Mech's position in the argument list (Mech's ``{sym, guess}``) or as ``variable=(sym,
+guess)``. When it is omitted a variable named after the bodies is created
+(``Theta_gear1_gear2``, ``Theta_gear_ground``), its guess computed from the bodies' guesses;
+``Model.add`` refuses a second such default on the same bodies: give that one explicitly.
 
 Angles about an axis use the axis' *angle frame* ``(g, k)`` (see ``_angles``):
 ``ang(g -> f) = a`` is written ``cos(a) (k . f) - sin(a) (g . f) = 0``, regular for every
@@ -132,11 +132,11 @@ class _Gear(ConstraintBase):
             elif spec is not None:
                 self._var = Variable(*spec)
             elif self._always_variable:
-                names = [b.name for b in self.bodies() if not getattr(b, "is_ground", False)]
-                name = "_".join(["Theta"] + names)
+                name = "_".join(["Theta"] + [b.name for b in self.bodies()])
                 expr = self._guess_expr()
                 guess = _guess_value(expr, self.bodies()) if expr is not None else None
                 self._var = Variable(name, guess or 0.0)
+                self._var.auto_named = True     # Model.add refuses to merge it with another
         return self._var
 
     def new_variables(self):
