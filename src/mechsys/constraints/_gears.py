@@ -81,11 +81,10 @@ def _is_variable_spec(obj) -> bool:
             and not isinstance(obj[1], (tuple, list)))
 
 
-def _arity(args, kind: str, names: list[str], optional: int = 0):
-    n = len(args)
-    if not len(names) - optional <= n <= len(names):
-        raise ModelError(f"{kind} takes ({', '.join(names)}); got {n} arguments")
-    return list(args) + [None] * (len(names) - n)
+def _arity(args, kind: str, names: list[str]) -> list:
+    if len(args) != len(names):
+        raise ModelError(f"{kind} takes ({', '.join(names)}); got {len(args)} arguments")
+    return list(args)
 
 
 def _body_angle(space, body) -> sp.Expr:
