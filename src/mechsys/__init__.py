@@ -251,3 +251,23 @@ def __getattr__(name):
 
         return importlib.import_module(".draw", __name__)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+# -- gear constraints (Mech 6.2) --
+from .constraints import (  # noqa: E402
+    LeadScrew5,
+    OrthogonalGears5,
+    ParallelGears4,
+    ParallelGears5,
+    RackAndPinion1,
+    RackAndPinion2,
+    RackAndPinion4,
+    RackAndPinion5,
+    TwoGears1,
+    TwoGears2,
+    TwoPulleys1,
+    TwoPulleys2,
+)
+
+__all__ += ["LeadScrew5", "OrthogonalGears5", "ParallelGears4", "ParallelGears5", "RackAndPinion1",
+            "RackAndPinion2", "RackAndPinion4", "RackAndPinion5", "TwoGears1", "TwoGears2",
+            "TwoPulleys1", "TwoPulleys2"]

@@ -281,6 +281,13 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         name = name or f"c{len(self._constraints) + 1}"
         if any(c.name == name for c in self._constraints):
             raise ModelError(f"a constraint named {name!r} already exists")
+        for v in constraint.new_variables():
+            # a default-named variable (gears) must not silently merge with another's
+            if getattr(v, "auto_named", False) and any(v.symbol == w.symbol for w in self._variables):
+                raise ModelError(f"constraint {name!r} ({type(constraint).__name__}): its default "
+                                 f"variable {v.symbol.name!r} is "
+                                 "already in the model (two such constraints join the same bodies); "
+                                 "give its variable explicitly as (sym, guess)")
         self._validate(constraint)
         constraint.name = name
         constraint.number = len(self._constraints) + 1

@@ -102,3 +102,26 @@ __all__ = [
     "constraint_types",
     "register",
 ]
+
+# -- gear constraints (Mech 6.2) --
+from ._gears import (  # noqa: E402
+    GEAR_TYPES,
+    LeadScrew5,
+    OrthogonalGears5,
+    ParallelGears4,
+    ParallelGears5,
+    RackAndPinion1,
+    RackAndPinion2,
+    RackAndPinion4,
+    RackAndPinion5,
+    TwoGears1,
+    TwoGears2,
+    TwoPulleys1,
+    TwoPulleys2,
+)
+
+for _cls in GEAR_TYPES:
+    register(_cls)
+__all__ += ["LeadScrew5", "OrthogonalGears5", "ParallelGears4", "ParallelGears5", "RackAndPinion1",
+            "RackAndPinion2", "RackAndPinion4", "RackAndPinion5", "TwoGears1", "TwoGears2",
+            "TwoPulleys1", "TwoPulleys2"]
