@@ -353,3 +353,23 @@ def test_two_default_variables_on_the_same_bodies_are_refused():
     with pytest.raises(ModelError, match=r"mesh B.*Theta_planet_ground.*\(sym, guess\)"):
         m.add(ms.TwoGears1(p.point(0), 1.0, m.ground.point((0.0, 3.0)), 2.0, 0.0), name="mesh B")
     m.add(ms.TwoGears1(p.point(0), 1.0, ("phi_b", 1.5), m.ground.point((0.0, 3.0)), 2.0, 0.0))
+
+
+def test_pulleys_in_space_turn_the_same_way_at_r1_over_r2():
+    r1, r2, dist, Cc = 1.0, 2.5, 4.0, 0.2
+    m = ms.Model3D()
+    p1 = _revolute_3d(m, "p1", (0, 0, 1))
+    p2 = m.add_body("p2", guess=((dist, 0, 0), (1, 0, 0, 0)))
+    c = m.add(ms.TwoPulleys5(p1.axis(0, (0, 0, 1)), r1, p2.axis(0, (0, 0, 1)), r2, dist, Cc))
+    m.add(ms.RelativeY1(p2.point(0), 0.0))
+    m.add(ms.RotationLock1(p1.axis(0, (0, 0, 1)), m.ground.axis((0, 0, 0), (0, 0, 1)), W * T))
+    assert m.dof() == 0
+    sol = m.solve(TIMES)
+    np.testing.assert_allclose(sol.location(p2.point(0))[:, 0], dist, atol=1e-12)
+    np.testing.assert_allclose(sol.omega(p2)[:, 2], W * r1 / r2, atol=1e-12)
+    # C = r1 e1 - r2 e2 with e_i measured from the centre line (+x)
+    x2 = sol.location(p2.point((1, 0, 0))) - sol.location(p2.point(0))
+    e2 = np.arctan2(x2[:, 1], x2[:, 0])
+    np.testing.assert_allclose(r1 * sol.coordinate(c.alpha.name) - r2 * e2, Cc, atol=1e-10)
+    with pytest.raises(ms.ModelError, match="TwoPulleys5 dist"):
+        ms.TwoPulleys5(p1.axis(0, (0, 0, 1)), r1, p2.axis(0, (0, 0, 1)), r2, 0.0, Cc)

@@ -266,8 +266,10 @@ from .constraints import (  # noqa: E402
     TwoGears2,
     TwoPulleys1,
     TwoPulleys2,
+    TwoPulleys4,
+    TwoPulleys5,
 )
 
 __all__ += ["LeadScrew5", "OrthogonalGears5", "ParallelGears4", "ParallelGears5", "RackAndPinion1",
             "RackAndPinion2", "RackAndPinion4", "RackAndPinion5", "TwoGears1", "TwoGears2",
-            "TwoPulleys1", "TwoPulleys2"]
+            "TwoPulleys1", "TwoPulleys2", "TwoPulleys4", "TwoPulleys5"]

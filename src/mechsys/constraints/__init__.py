@@ -118,10 +118,12 @@ from ._gears import (  # noqa: E402
     TwoGears2,
     TwoPulleys1,
     TwoPulleys2,
+    TwoPulleys4,
+    TwoPulleys5,
 )
 
 for _cls in GEAR_TYPES:
     register(_cls)
 __all__ += ["LeadScrew5", "OrthogonalGears5", "ParallelGears4", "ParallelGears5", "RackAndPinion1",
             "RackAndPinion2", "RackAndPinion4", "RackAndPinion5", "TwoGears1", "TwoGears2",
-            "TwoPulleys1", "TwoPulleys2"]
+            "TwoPulleys1", "TwoPulleys2", "TwoPulleys4", "TwoPulleys5"]

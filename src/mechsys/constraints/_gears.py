@@ -397,22 +397,34 @@ def _axes(kind: str, *objs) -> list[Axis]:
 
 
 class _ParallelGears(_Gear):
+    """Gears (``_sign = +1``: ``C = rad1 e1 + rad2 e2``, centres ``rad1 + rad2`` apart) or
+    belts and chains (``-1``: ``C = rad1 e1 - rad2 e2``, centres ``dist`` apart) on parallel
+    axes; ``_adjacent``: the heads of the axes side by side."""
+
     spaces = ("spatial",)
     _adjacent = True
+    _sign = 1
 
     def __init__(self, *args, variable=None):
         super().__init__()
         kind = type(self).__name__
         args, spec = _split_variable(args, kind, 2, variable)
-        vals = _arity(args, kind, ["axis1", "rad1", "axis2", "rad2", "C"])
+        pulleys = self._sign < 0
+        names = ["axis1", "rad1", "axis2", "rad2"] + (["dist"] if pulleys else []) + ["C"]
+        vals = _arity(args, kind, names)
         self.a1, self.a2 = _axes(kind, vals[0], vals[2])
         self.rad1 = _nonzero(vals[1], f"{kind} rad1")
         self.rad2 = _nonzero(vals[3], f"{kind} rad2")
-        if (self.rad1 + self.rad2).is_zero:
+        if pulleys:
+            self.dist = _nonzero(vals[4], f"{kind} dist", " (the centre distance)")
+        elif (self.rad1 + self.rad2).is_zero:
             raise ModelError(f"{kind}: rad1 + rad2 = 0 puts both axes on one line; the radii "
                              "of an internal pair differ")
-        self.C = as_expr(vals[4], f"{kind} C")
+        self.C = as_expr(vals[-1], f"{kind} C")
         self._init_variable(spec)
+
+    def _centre_distance(self):
+        return self.dist if self._sign < 0 else self.rad1 + self.rad2
 
     def geometry(self):
         return [self.a1, self.a2]
@@ -428,14 +440,15 @@ class _ParallelGears(_Gear):
     def _build(self, space):
         d = self._d()
         a = self.alpha
-        e2 = (self.C - self.rad1 * a) / self.rad2
+        e2 = (self.C - self.rad1 * a) / (self._sign * self.rad2)
         u1h = self.a1.direction() / vector_norm(self.a1.dir)
+        rho = self._centre_distance()
         if self._adjacent:
-            dist = [d.dot(d) - (self.rad1 + self.rad2) ** 2]
+            dist = [d.dot(d) - rho**2]
             adj = [u1h.dot(d)]
         else:
             dp = d - u1h * u1h.dot(d)
-            dist, adj = [dp.dot(dp) - (self.rad1 + self.rad2) ** 2], []
+            dist, adj = [dp.dot(dp) - rho**2], []
         return (P.parallel(space, self.a1.dir, self.a2.dir) + adj + dist
                 + [angle_equation(angle_frame(space, self.a1), d, -a),
                    angle_equation(angle_frame(space, self.a2), d, -e2)])
@@ -493,6 +506,49 @@ class ParallelGears4(_ParallelGears):
 
     mech_name = "ParallelGears4"
     dof_removed = 4
+    _adjacent = False
+
+
+@_signature("axis1", "rad1", "axis2", "rad2", "dist", "C")
+class TwoPulleys5(_ParallelGears):
+    r"""Belt and pulleys, or chain and sprockets, on parallel axes ``dist`` apart, the heads
+    of the axes side by side. Removes 5 DOF (3D).
+
+    ``TwoPulleys5(axis1, rad1[, (alpha, guess)], axis2, rad2, dist, C)``; ``alpha`` as in
+    :class:`ParallelGears5`; ``C = rad1 e1 - rad2 e2`` (Mech's convention), so ``e_2 = (rad1
+    alpha - C) / rad2`` and both pulleys turn the same way::
+
+        h_2 . u_1 = 0
+        f_2 . u_1 = 0
+        u_1^ . d = 0
+        d . d - dist^2 = 0
+        cos(alpha) (k_1 . d) + sin(alpha) (g_1 . d) = 0
+        cos(e_2) (k_2 . d) + sin(e_2) (g_2 . d) = 0
+    """
+
+    mech_name = "TwoPulleys5"
+    dof_removed = 5
+    _sign = -1
+
+
+@_signature("axis1", "rad1", "axis2", "rad2", "dist", "C")
+class TwoPulleys4(_ParallelGears):
+    r""":class:`TwoPulleys5` without the adjacency equation: the pulleys may slide along
+    their axes relative to each other. Removes 4 DOF (3D).
+
+    ``TwoPulleys4(axis1, rad1[, (alpha, guess)], axis2, rad2, dist, C)``; with ``d_p`` the
+    part of ``d`` across the axes::
+
+        h_2 . u_1 = 0
+        f_2 . u_1 = 0
+        d_p . d_p - dist^2 = 0
+        cos(alpha) (k_1 . d) + sin(alpha) (g_1 . d) = 0
+        cos(e_2) (k_2 . d) + sin(e_2) (g_2 . d) = 0
+    """
+
+    mech_name = "TwoPulleys4"
+    dof_removed = 4
+    _sign = -1
     _adjacent = False
 
 
@@ -691,6 +747,8 @@ GEAR_TYPES = (
     TwoPulleys2,
     ParallelGears4,
     ParallelGears5,
+    TwoPulleys4,
+    TwoPulleys5,
     OrthogonalGears5,
     LeadScrew5,
     RackAndPinion4,

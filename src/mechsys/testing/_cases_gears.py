@@ -152,10 +152,14 @@ def _turn(g, u, a):
     return np.cos(a) * g + np.sin(a) * np.cross(u, g)
 
 
-def _parallel_gears(rng, kind, r1, r2, Cc, *, adjacent=True, refs=False, explicit=False):
+def _parallel_gears(rng, kind, r1, r2, Cc, *, adjacent=True, refs=False, explicit=False,
+                    dist=None):
+    """Gears (``dist=None``: centres ``|r1 + r2|`` apart, ``C = r1 e1 + r2 e2``) or pulleys
+    (centres ``dist`` apart, ``C = r1 e1 - r2 e2``)."""
     m, b1, b2, a1, a2 = _body_axes(rng, refs)
     var = [("al_c", 0.2)] if explicit else []
-    c = m.add(kind(a1, r1, *var, a2, r2, Cc))
+    extra = () if dist is None else (dist,)
+    c = m.add(kind(a1, r1, *var, a2, r2, *extra, Cc))
     R1 = _rand_R(rng)
     O1 = rng.uniform(-1, 1, 3)
     o1l, u1l, g1l = _axis_local(a1)
@@ -164,9 +168,9 @@ def _parallel_gears(rng, kind, r1, r2, Cc, *, adjacent=True, refs=False, explici
     o1 = O1 + R1 @ o1l
     w = _perp(u, rng)                                     # direction of d across the axes
     slide = 0.0 if adjacent else rng.uniform(-1, 1)
-    o2 = o1 + abs(r1 + r2) * w + slide * u
+    o2 = o1 + (abs(r1 + r2) if dist is None else dist) * w + slide * u
     e1 = np.arctan2(np.cross(w, g1) @ u, w @ g1)          # angle from d to g1 about u
-    e2 = (Cc - r1 * e1) / r2
+    e2 = (Cc - r1 * e1) / r2 if dist is None else (r1 * e1 - Cc) / r2
     q = pose_vector(m, {b1: _pose3(O1, R1), b2: _place_axis(a2, o2, u, _turn(w, u, e2), rng),
                         c.alpha: e1})
     return Case(m, c, q)
@@ -185,6 +189,22 @@ def _pg5_internal(rng):
 @case("ParallelGears4")
 def _pg4(rng):
     return _parallel_gears(rng, C.ParallelGears4, 0.6, 1.4, 0.5, adjacent=False)
+
+
+@case("TwoPulleys5")
+def _tp5(rng):
+    return _parallel_gears(rng, C.TwoPulleys5, 0.6, 1.4, 0.5, dist=2.7)
+
+
+@case("TwoPulleys5")
+def _tp5_equal(rng):
+    return _parallel_gears(rng, C.TwoPulleys5, 0.8, 0.8, -0.2, dist=1.9, refs=True,
+                           explicit=True)
+
+
+@case("TwoPulleys4")
+def _tp4(rng):
+    return _parallel_gears(rng, C.TwoPulleys4, 0.6, 1.4, 0.5, adjacent=False, dist=2.7)
 
 
 def _orthogonal(rng, t1, t2, Cc, dist=None, explicit=False):
