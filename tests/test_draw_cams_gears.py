@@ -103,3 +103,41 @@ def test_pitch_circle_in_3d_lies_normal_to_its_axis():
     np.testing.assert_allclose(p[:, 0], 0, atol=1e-12)
     np.testing.assert_allclose(np.hypot(p[:, 1], p[:, 2] - 1), 0.5, atol=1e-12)
     np.testing.assert_allclose(np.asarray(ticks.xyz).reshape(-1, 3)[1], [0, 0.56, 1], atol=1e-12)
+
+
+def _dashed_circles(items, dim):
+    out = []
+    for it in items:
+        if it.kind == "line" and it.style.get("linestyle") == "--":
+            out.append(np.asarray(it.xyz).reshape(-1, dim))
+    return out
+
+
+def test_default_drawing_shows_the_pitch_circles_of_a_gear_pair():
+    m = ms.Model2D()
+    g1 = m.add_body("g1", guess=((0, 0), 0))
+    g2 = m.add_body("g2", guess=((3, 0), 0))
+    m.add(ms.Revolute2(m.ground.point((0, 0)), g1.point(0)))
+    m.add(ms.Revolute2(m.ground.point((3, 0)), g2.point(0)))
+    m.add(ms.TwoGears1(g1.point(0), 1.0, g2.point(0), 2.0, 0.0))
+    m.add(ms.RotationLock1(g1, T), name="drive")
+    sol = m.solve(0.5)
+    circles = _dashed_circles(d.Scene(m).evaluate(sol).items, 2)
+    radii = sorted(float(np.hypot(*(c - c.mean(axis=0)).T).mean()) for c in circles)
+    np.testing.assert_allclose(radii, [1.0, 2.0], rtol=1e-3)
+
+
+def test_default_drawing_of_spatial_gears_lies_normal_to_their_axes():
+    m = ms.Model3D()
+    g1 = m.add_body("g1", guess=((0, 0, 0), (1, 0, 0, 0)))
+    g2 = m.add_body("g2", guess=((3, 0, 0), (1, 0, 0, 0)))
+    m.add(ms.Revolute5(m.ground.axis((0, 0, 0), (0, 0, 1)), g1.axis(0, (0, 0, 1))))
+    m.add(ms.TwoPulleys5(g1.axis(0, (0, 0, 1)), 1.0, g2.axis(0, (0, 0, 1)), 0.5, 3.0, 0.0))
+    m.add(ms.RelativeY1(g2.point(0), 0.0))
+    m.add(ms.RotationLock1(g1.axis(0, (0, 0, 1)), m.ground.axis((0, 0, 0), (0, 0, 1)), T),
+          name="drive")
+    sol = m.solve(0.2)
+    circles = _dashed_circles(d.Scene(m).evaluate(sol).items, 3)
+    assert len(circles) == 2
+    for c in circles:
+        np.testing.assert_allclose(c[:, 2], 0.0, atol=1e-12)

@@ -148,6 +148,11 @@ class _Gear(ConstraintBase):
         v = self.variable()
         return v.symbol if v is not None else None
 
+    def pitch_circles(self) -> list[tuple]:
+        """``[(centre point or axis, pitch radius), ...]`` of the wheels this constraint
+        meshes (used by pictures: ``mechsys.draw`` draws them as pitch circles)."""
+        return []
+
 
 # -- 2D ---------------------------------------------------------------------------------------
 
@@ -188,6 +193,9 @@ class _TwoWheels(_Gear):
 
     def geometry(self):
         return [self.p1, self.p2]
+
+    def pitch_circles(self):
+        return [(self.p1, self.rad1), (self.p2, self.rad2)]
 
     def _d(self):
         return self.p2.location() - self.p1.location()
@@ -314,6 +322,9 @@ class _PlanarRack(_Gear):
     def geometry(self):
         return [self.p, self.axis]
 
+    def pitch_circles(self):
+        return [(self.p, self.rad)]
+
     def _rack_angle(self, space):
         """Angle of the rack's direction: its body angle plus the local direction's."""
         d = self.axis.dir
@@ -428,6 +439,9 @@ class _ParallelGears(_Gear):
 
     def geometry(self):
         return [self.a1, self.a2]
+
+    def pitch_circles(self):
+        return [(self.a1, self.rad1), (self.a2, self.rad2)]
 
     def _d(self):
         return self.a2.location() - self.a1.location()
@@ -645,6 +659,9 @@ class LeadScrew5(_Gear):
 
     def geometry(self):
         return [self.a1, self.a2]
+
+    def pitch_circles(self):
+        return [(self.a1, self.rad)]
 
     def _guess_expr(self):
         g2, k2 = _plain_frame(self.a2)

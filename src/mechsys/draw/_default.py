@@ -18,6 +18,7 @@ A first model with no graphics given still shows something sensible:
 from __future__ import annotations
 
 import numpy as np
+import sympy as sp
 
 from ..geometry._points import Axis, Line, Point, Vector
 from . import _shapes as sh
@@ -31,6 +32,7 @@ from ._primitives import (
     L_JOINT,
     L_PLATE_EDGE,
     GroundPivot,
+    PitchCircle,
     Primitive,
     body_color,
 )
@@ -139,6 +141,9 @@ class Skeleton(Primitive):
                 finishers += [self._pin(ev, [p1]), self._pin(ev, [p2])]
         for p, axis in onlines:
             finishers.append(self._online(ev, p, axis))
+        for c in model.constraints:
+            for centre, radius in getattr(c, "pitch_circles", lambda: [])():
+                finishers += self._gear(ev, centre, radius)
         if self.joints:
             for pts in pins:
                 finishers.append(self._pin(ev, pts))
@@ -161,6 +166,27 @@ class Skeleton(Primitive):
         return finish
 
     # -- parts ----------------------------------------------------------------------------
+    def _gear(self, ev, centre, radius) -> list:
+        """A gear wheel of a gear constraint: its pitch circle with a tooth mark (skipped when
+        the radius or centre is not a number at the drawn parameters)."""
+        try:
+            r = abs(float(sp.sympify(radius).xreplace(ev._psubs)))
+        except (TypeError, ValueError):
+            return []
+        if isinstance(centre, Axis):
+            p, axis = centre.origin, getattr(centre.dir, "local", None)
+            if axis is None or getattr(centre.dir, "body", None) is not p.body:
+                return []
+            axis = ev.numeric_local(axis)
+        else:
+            p, axis = centre, None
+        loc = ev.numeric_local(p.local)
+        if loc is None or not r > 0 or (axis is None and ev.dim == 3):
+            return []
+        body = p.body if p.body is not None else ev.model.ground
+        kw = {} if axis is None else {"axis": tuple(axis)}
+        return [PitchCircle(body, tuple(loc), r, **kw)._prepare(ev)]
+
     def _w(self, ev) -> float:
         return float(self.width) if self.width is not None else 0.035 * ev.size
 
