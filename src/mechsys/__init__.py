@@ -251,3 +251,10 @@ def __getattr__(name):
 
         return importlib.import_module(".draw", __name__)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+# multistage mechanisms (Mech chapter 5, issue 14)
+from .analyses._multistage import FindSwitchTime, FindTime, find_switch_time, find_time  # noqa: E402
+from .constraints._switches import StageSwitch, TimeSwitch  # noqa: E402
+
+__all__ += ["FindSwitchTime", "FindTime", "StageSwitch", "TimeSwitch", "find_switch_time",
+            "find_time"]

@@ -23,6 +23,7 @@ from ._errors import (
 from ._symbols import T
 from .compile import System, make_layout, time_derivative
 from .constraints import Constraint, ConstraintBase, Variable
+from .constraints._switches import StageSwitch
 from .geometry._bodies import Body
 from .geometry._points import Axis, Point, Vector, as_point, as_vector
 from .geometry._space import PLANAR, SPATIAL, Space
@@ -281,6 +282,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         name = name or f"c{len(self._constraints) + 1}"
         if any(c.name == name for c in self._constraints):
             raise ModelError(f"a constraint named {name!r} already exists")
+        if isinstance(constraint, StageSwitch):
+            constraint.check_stages(self.space, name)
         self._validate(constraint)
         constraint.name = name
         constraint.number = len(self._constraints) + 1
@@ -522,7 +525,12 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
                       loads=list(self._loads) if loads is None else loads)
 
     def compile(self) -> System:
-        """The compiled :class:`System` (cached until the model changes)."""
+        """The compiled :class:`System` (cached until the model changes). With switches
+        (StageSwitch, TimeSwitch) it is the system of every switch's first stage."""
+        if self._system is None and self._switches():
+            from .analyses._multistage import stage_system
+
+            self._system = stage_system(self, None)
         if self._system is None:
             eqs, owners, index = self._all_equations()
             self._check_symbols(eqs, owners)
@@ -533,7 +541,14 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         return self._system
 
     def _p(self) -> np.ndarray:
-        return np.array(list(self._params.values()), dtype=float)
+        # after the parameters: the values variables of switches are held at (their guesses)
+        held = [self._guess_override.get(v.symbol, v.guess)
+                for sw in self._switches() for v in sw.new_variables()]
+        return np.array(list(self._params.values()) + held, dtype=float)
+
+    def _switches(self) -> list:
+        """The StageSwitch/TimeSwitch constraints of the model (multistage, Mech ch. 5)."""
+        return [c for c in self._constraints if isinstance(c, StageSwitch)]
 
     def time_derivative(self, expr):
         """Total time derivative of a SymPy expression (or matrix) of coordinates, velocities
@@ -717,6 +732,11 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         g = self._resolve_guess(system, guess)
         scalar = np.ndim(t) == 0
         order = ORDERS.get(solution, modes.get(solution))
+        if self._switches():  # stages chosen point by point (analyses/_multistage.py)
+            from .analyses._multistage import solve_stages
+
+            self.last_solution = solve_stages(self, times, g, solution, options, scalar)
+            return self.last_solution
         try:
             res = sweep(system, times, g, order, options, self._p())
         except SingularJacobianError as err:
