@@ -273,17 +273,30 @@ def _root(values, solve, t_range, samples, what) -> float:
     return float(brentq(at, ts[i], ts[i + 1], xtol=tol, rtol=4 * np.finfo(float).eps))
 
 
-def _location_solver(model, guess, forced=None):
-    """``solve(times, guess)`` -> location Solution, without touching ``last_solution``."""
+def _location_solver(model, guess, forced=None, solution="location"):
+    """``solve(times, guess)`` -> Solution (location, or ``solution``), without touching
+    ``last_solution``."""
     from ..results._solution import Solution
 
-    g0 = model._resolve_guess(model.compile(), guess)
+    def start(ts, g):
+        if g is not None:
+            return g
+        if guess is not None:
+            return model._resolve_guess(model.compile(), guess)
+        # as Mech, start from the last solution (its point nearest the first time), which
+        # keeps the assembly branch the user swept; else the model's guesses
+        last = model.last_solution
+        if last is not None and np.shape(last.q)[-1] == model.compile().n:
+            tt, qq = np.atleast_1d(last.t), np.atleast_2d(last.q)
+            return qq[int(np.argmin(np.abs(tt - ts[0])))].copy()
+        return model.guess()
+
     if model._switches():
-        return lambda ts, g: solve_stages(model, ts, g0 if g is None else g, "location", None,
-                                          False, forced)
+        return lambda ts, g: solve_stages(model, ts, start(ts, g), solution, None, False, forced)
     system, p = model.compile(), model._p()
-    return lambda ts, g: Solution.from_sweep(model, system, sweep(system, ts, g0 if g is None
-                                                                  else g, 0, None, p), p)
+    order = ORDERS[solution]
+    return lambda ts, g: Solution.from_sweep(
+        model, system, sweep(system, ts, start(ts, g), order, None, p), p)
 
 
 def find_time(model, condition, t_range=None, samples: int = 64, guess=None) -> float:
@@ -292,7 +305,9 @@ def find_time(model, condition, t_range=None, samples: int = 64, guess=None) -> 
     (meaning ``f = 0``) of ``T``, coordinates and parameters, e.g. ``sp.Eq(x4, 5)`` (a
     coordinate reaches a value) or ``m.location(p)[0] - 3`` (a point reaches a position).
 
-    The sweep over ``samples`` equally spaced times of ``t_range`` (default: the span of
+    ``guess``: coordinates to start the sweep from (default: the last solution's point
+    nearest the range's start, else the model's guesses). The sweep over ``samples`` equally
+    spaced times of ``t_range`` (default: the span of
     the last solution) brackets the first sign change of ``f``; Brent's method on position
     solves refines it to ``1e-13`` relative. No sign change raises a
     :class:`ConvergenceError` giving the range searched. Stages change as in ``solve``."""
@@ -318,7 +333,7 @@ def find_time(model, condition, t_range=None, samples: int = 64, guess=None) -> 
 
 
 def find_switch_time(model, switch, n: int, t_range=None, required_equations=("all", "sum"),
-                     samples: int = 64, guess=None) -> float:
+                     samples: int = 64, guess=None, tangent: bool = False) -> float:
     r"""The time at which the stages on either side of switch time ``n`` (1-based, as Mech:
     between stage ``n`` and stage ``n + 1``) of ``switch`` both hold (Mech's
     ``FindSwitchTime``).
@@ -332,6 +347,12 @@ def find_switch_time(model, switch, n: int, t_range=None, required_equations=("a
     relative. This is Mech's condition (the augmented system with ``T`` unknown) solved as a
     scalar root; no sign change raises a :class:`ConvergenceError` with the range searched.
     Works for a ``TimeSwitch`` (whose given times are then guesses) and a ``StageSwitch``.
+
+    ``tangent=True``: the stages *touch* without crossing (``g`` has a double zero, as where
+    a Geneva pin enters its slot tangentially): the time is the zero of ``dg/dt`` along the
+    solution, accepted only if ``|g|`` there is below ``1e-8`` times the model's length
+    (else a :class:`ConvergenceError`). (Mech's ``TangentConstraint`` option plays this role;
+    its exact form was not available to us, so this option has its own name.)
     """
     what = "FindSwitchTime"
     j = _switch_index(model, switch)
@@ -363,8 +384,20 @@ def find_switch_time(model, switch, n: int, t_range=None, required_equations=("a
         raise MechError(f"{what}: the selected row holds a variable of the switch; select a row "
                         "of the stage's own constraints")
     rng = _range(model, t_range, what)
-    return _root(lambda s: np.atleast_1d(s.eval(g)), _location_solver(model, guess, {j: k_all}),
-                 rng, samples, what)
+    if not tangent:
+        return _root(lambda s: np.atleast_1d(s.eval(g)),
+                     _location_solver(model, guess, {j: k_all}), rng, samples, what)
+    gd = model.time_derivative(g)
+    ts = _root(lambda s: np.atleast_1d(s.eval(gd)),
+               _location_solver(model, guess, {j: k_all}, "velocity"), rng, samples, what)
+    gap = float(_location_solver(model, guess, {j: k_all})([ts], None).eval(g)[0])
+    length = max(model.compile().length_hint, 1e-300)
+    if abs(gap) > 1e-8 * length:
+        raise ConvergenceError(
+            f"{what}: with tangent=True, dg/dt is zero at t = {ts:.6g} but the stages do not "
+            f"touch there (selected equation {gap:.3g}, model length {length:.3g}); the stages "
+            "cross instead (use tangent=False) or do not meet in the range searched", time=ts)
+    return ts
 
 
 def switch_times(model, switch) -> list[float]:
