@@ -259,3 +259,51 @@ def test_multistage_statics_not_supported_yet():
     m, s = _jog_stage()
     with pytest.raises(ms.ModelError, match=r"switches is not supported yet"):
         m.solve(0.0, solution="static")
+
+
+def test_stage_chosen_by_a_parameter_without_recompiling():
+    # Mech 5.1.1's "whichtrack": the pin in one of two tracks, y = 0 or y = x / 2
+    m = ms.Model2D()
+    which = m.parameter("whichtrack", 1)
+    s = _slider(m)
+    pin = s.point("pin")
+    m.add(ms.StageSwitch((sp.Eq(which, 1), ms.RelativeY1(pin, 0)),
+                         (sp.Eq(which, 2), ms.PointOnLine1(pin, m.ground.axis((0, 0), (2, 1))))),
+          name="track")
+    t = np.linspace(0, 4, 5)
+    np.testing.assert_allclose(m.solve(t)["slider.y"], 0.0, atol=1e-14)
+    system = m.compile()
+    m.set_parameters(whichtrack=2)
+    sol = m.solve(t)
+    assert m.compile() is system
+    np.testing.assert_array_equal(sol.stage("track"), 2)
+    np.testing.assert_allclose(sol["slider.y"], V * t / 2, atol=1e-14)
+    m.set_parameters(whichtrack=3)
+    with pytest.raises(ms.ModelError, match=r"switch 'track'.*no test is true"):
+        m.solve(t)
+
+
+def test_switch_in_a_3d_model():
+    m = ms.Model3D()
+    b = m.add_body("slider", points={"pin": (0, 0, 0)}, guess=((0, 0, 0), (1, 0, 0, 0)))
+    pin = b.point("pin")
+    m.add(ms.RotationLock3(b), name="no rotation")
+    m.add(ms.RelativeX1(pin, V * T), name="drive")
+    m.add(ms.RelativeZ1(pin, 0), name="plane")
+    m.add(ms.StageSwitch((b.q[0] < XJ, ms.RelativeY1(pin, 0)),
+                         (True, ms.RelativeY1(pin, (V * T - XJ) * sp.tan(sp.pi / 6)))), name="jog")
+    t = np.linspace(0, 8, 17)
+    sol = m.solve(t)
+    x = V * t
+    np.testing.assert_allclose(sol["slider.y"], np.where(x < XJ, 0, (x - XJ) * np.tan(BETA)),
+                               atol=1e-13)
+    np.testing.assert_array_equal(sol.stage(), np.where(x < XJ, 1, 2))
+    assert ms.FindSwitchTime(m, "jog", 1, t_range=(1, 6)) == pytest.approx(XJ / V, abs=1e-12)
+
+
+def test_replace_by_a_switch_checks_its_stages():
+    m, s = _jog_stage()
+    bad = ms.StageSwitch((True, ms.RelativeY1(s.point("pin"), 0)),
+                         (True, ms.Revolute2(s.point("pin"), m.ground.point((0, 0)))))
+    with pytest.raises(ms.ModelError, match=r"StageSwitch 'jog'.*different numbers of degrees"):
+        m.replace("jog", bad)

@@ -344,6 +344,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         old = self.constraint(spec)
         if new.model is not None:
             raise ModelError(f"{new.label()} is already in a model")
+        if isinstance(new, StageSwitch):
+            new.check_stages(self.space, old.name)
         self._validate(new)
         i = self._constraints.index(old)
         new.name, new.number, new.model = old.name, old.number, self

@@ -178,7 +178,9 @@ def _sweep_stages(model, times, guess, order, options, forced):
     for sw in switches:
         sw.check_times(params)
     base = stage_system(model, None)
-    tests = _Tests(model, base)
+    tests = _cache(model).get("tests")
+    if tests is None:  # compiled once per model version (FindTime solves many single points)
+        tests = _cache(model)["tests"] = _Tests(model, base)
     held = _HeldValues(model, base, guess)
     N, n = len(times), base.n
     Q = np.empty((N, n))
