@@ -307,3 +307,10 @@ def test_replace_by_a_switch_checks_its_stages():
                          (True, ms.Revolute2(s.point("pin"), m.ground.point((0, 0)))))
     with pytest.raises(ms.ModelError, match=r"StageSwitch 'jog'.*different numbers of degrees"):
         m.replace("jog", bad)
+
+
+def test_free_motion_with_a_switch_is_refused_not_wrong():
+    m, s = _jog_stage()
+    with pytest.raises(ms.ModelError,
+                       match=r"free and path motion .* switches \('jog'\) is not supported yet"):
+        m.free(drop=["drive"])

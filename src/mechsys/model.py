@@ -515,6 +515,12 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
     def _system_without(self, removed, loads=None) -> System:
         """A System of this model's equations minus those of ``removed`` constraints (free
         and path systems); same coordinates, parameters and (by default) loads."""
+        if self._switches():
+            raise ModelError(
+                f"free and path motion of a model with stage or time switches "
+                f"({', '.join(repr(c.name) for c in self._switches())}) is not supported yet (issue "
+                "14: switch events in free motion are a later step); replace each switch by the "
+                "constraint of the stage you need (m.replace(name, constraint))")
         eqs, owners, index = self._all_equations()
         keep = [i for i, o in enumerate(owners) if o not in removed]
         eqs = [eqs[i] for i in keep]
