@@ -314,3 +314,20 @@ def test_free_motion_with_a_switch_is_refused_not_wrong():
     with pytest.raises(ms.ModelError,
                        match=r"free and path motion .* switches \('jog'\) is not supported yet"):
         m.free(drop=["drive"])
+
+
+def test_stage_without_solution_past_its_end_hands_over_to_the_next():
+    # the pin on the unit circle (upper half) while x < 1, then on the line y = 0; past x = 1
+    # the circle has no point at all, so the sweep must not insist on it
+    m = ms.Model2D()
+    s = m.add_body("slider", points={"pin": (0, 0)}, guess=((-0.9, 0.4), 0))
+    pin = s.point("pin")
+    m.add(ms.RelativeX1(pin, T - 1), name="drive")
+    m.add(ms.RotationLock1(s, 0), name="no rotation")
+    m.add(ms.StageSwitch((s.q[0] < 1, ms.RelativeDistance1(pin, m.ground.point((0, 0)), 1)),
+                         (True, ms.RelativeY1(pin, 0))), name="track")
+    t = np.linspace(0.1, 2.9, 15)
+    sol = m.solve(t)
+    x = t - 1
+    np.testing.assert_array_equal(sol.stage(), np.where(x < 1, 1, 2))
+    np.testing.assert_allclose(sol["slider.y"], np.sqrt(np.clip(1 - x**2, 0, None)), atol=1e-12)

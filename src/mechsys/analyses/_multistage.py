@@ -12,7 +12,9 @@ velocities and outputs are comparable across stages.
 (the kinematic sweep's predictor), solve the positions in the current combination, evaluate
 every switch's tests at the solved ``(T, q, p)``; if they choose another stage, solve again in
 that combination from the same prediction, until the tests confirm the stage the point was
-solved in. A stage is therefore recorded only where its own test holds at its own solution.
+solved in. A stage is therefore recorded only where its own test holds at its own solution. When
+the current combination has no solution at a point (a stage past its end), the combination
+the tests choose at the predicted point is tried instead.
 Tests that keep choosing each other (A's solution says B, B's says A) raise a
 :class:`ModelError` naming the switch. Velocities and accelerations are those of the stage in
 effect (one-sided at a switch point). Positions are continuous across a switch exactly when
@@ -27,7 +29,7 @@ import numpy as np
 import sympy as sp
 from scipy.optimize import brentq
 
-from .._errors import ConvergenceError, MechError, ModelError
+from .._errors import ConvergenceError, MechError, ModelError, SingularJacobianError
 from .._symbols import T
 from ..compile import System, make_layout
 from ..constraints._switches import StageSwitch, TimeSwitch
@@ -203,7 +205,17 @@ def _sweep_stages(model, times, guess, order, options, forced):
             sc = scalings.get(current)
             if sc is None:
                 sc = scalings[current] = Scaling.of(system, pred, system.jacobian(t, pred, p))
-            pos = _solve_point(system, t, pred, Q[k - 1] if k else None, options, p, sc, rot)
+            try:
+                pos = _solve_point(system, t, pred, Q[k - 1] if k else None, options, p, sc, rot)
+            except (ConvergenceError, SingularJacobianError):
+                # the stage may have no solution past its end (a track that stops): if the
+                # tests at the prediction choose another stage, try that one
+                new = tests.stages(t, pred, p, forced)
+                if new == current or new in tried:
+                    raise
+                tried.append(new)
+                current = new
+                continue
             new = tests.stages(t, pos.q, p, forced)
             if new == current:
                 break
