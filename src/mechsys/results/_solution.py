@@ -28,7 +28,9 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews):
     when that order was not solved);  p : (np,) parameter values used;
     system : the compiled System;  model : the Model (for symbolic outputs);
     iterations : (N,) Newton iterations per point;  evaluations : compiled-function calls;
-    success, status, message : outcome (a failed solve raises instead).
+    success, status, message : outcome (a failed solve raises instead);
+    extra : more per-point data, e.g. ``"rcond"``, and with switches ``"stages"``
+    (``{switch name: (N,) stage numbers}``, read with :meth:`stage`).
     """
 
     t: np.ndarray
