@@ -34,6 +34,10 @@ REQUIRED_TOP_LEVEL = {
     "All", "Rest",
 }
 
+#: Multistage mechanisms (issue 14, Mech chapter 5).
+REQUIRED_TOP_LEVEL |= {"StageSwitch", "TimeSwitch", "FindSwitchTime", "FindTime", "find_switch_time",
+                       "find_time"}
+
 #: Public subpackages and modules; every other module is private (``_name.py``).
 PUBLIC_MODULES = {"constraints", "compile", "solvers", "testing", "draw", "models", "cli", "model",
                   "geometry", "loads", "analyses", "results"}

@@ -273,3 +273,10 @@ from .constraints import (  # noqa: E402
 __all__ += ["LeadScrew5", "OrthogonalGears5", "ParallelGears4", "ParallelGears5", "RackAndPinion1",
             "RackAndPinion2", "RackAndPinion4", "RackAndPinion5", "TwoGears1", "TwoGears2",
             "TwoPulleys1", "TwoPulleys2", "TwoPulleys4", "TwoPulleys5"]
+
+# multistage mechanisms (Mech chapter 5, issue 14)
+from .analyses._multistage import FindSwitchTime, FindTime, find_switch_time, find_time  # noqa: E402
+from .constraints._switches import StageSwitch, TimeSwitch  # noqa: E402
+
+__all__ += ["FindSwitchTime", "FindTime", "StageSwitch", "TimeSwitch", "find_switch_time",
+            "find_time"]

@@ -23,6 +23,7 @@ from ._errors import (
 from ._symbols import T
 from .compile import System, make_layout, time_derivative
 from .constraints import Constraint, ConstraintBase, Variable
+from .constraints._switches import StageSwitch
 from .geometry._bodies import Body
 from .geometry._points import Axis, Point, Vector, as_point, as_vector
 from .geometry._space import PLANAR, SPATIAL, Space
@@ -288,6 +289,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
                                  f"variable {v.symbol.name!r} is "
                                  "already in the model (two such constraints join the same bodies); "
                                  "give its variable explicitly as (sym, guess)")
+        if isinstance(constraint, StageSwitch):
+            constraint.check_stages(self.space, name)
         self._validate(constraint)
         constraint.name = name
         constraint.number = len(self._constraints) + 1
@@ -348,6 +351,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         old = self.constraint(spec)
         if new.model is not None:
             raise ModelError(f"{new.label()} is already in a model")
+        if isinstance(new, StageSwitch):
+            new.check_stages(self.space, old.name)
         self._validate(new)
         i = self._constraints.index(old)
         new.name, new.number, new.model = old.name, old.number, self
@@ -517,6 +522,12 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
     def _system_without(self, removed, loads=None) -> System:
         """A System of this model's equations minus those of ``removed`` constraints (free
         and path systems); same coordinates, parameters and (by default) loads."""
+        if self._switches():
+            raise ModelError(
+                f"free and path motion of a model with stage or time switches "
+                f"({', '.join(repr(c.name) for c in self._switches())}) is not supported yet (issue "
+                "14: switch events in free motion are a later step); replace each switch by the "
+                "constraint of the stage you need (m.replace(name, constraint))")
         eqs, owners, index = self._all_equations()
         keep = [i for i, o in enumerate(owners) if o not in removed]
         eqs = [eqs[i] for i in keep]
@@ -529,7 +540,12 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
                       loads=list(self._loads) if loads is None else loads)
 
     def compile(self) -> System:
-        """The compiled :class:`System` (cached until the model changes)."""
+        """The compiled :class:`System` (cached until the model changes). With switches
+        (StageSwitch, TimeSwitch) it is the system of every switch's first stage."""
+        if self._system is None and self._switches():
+            from .analyses._multistage import stage_system
+
+            self._system = stage_system(self, None)
         if self._system is None:
             eqs, owners, index = self._all_equations()
             self._check_symbols(eqs, owners)
@@ -540,7 +556,14 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         return self._system
 
     def _p(self) -> np.ndarray:
-        return np.array(list(self._params.values()), dtype=float)
+        # after the parameters: the values variables of switches are held at (their guesses)
+        held = [self._guess_override.get(v.symbol, v.guess)
+                for sw in self._switches() for v in sw.new_variables()]
+        return np.array(list(self._params.values()) + held, dtype=float)
+
+    def _switches(self) -> list:
+        """The StageSwitch/TimeSwitch constraints of the model (multistage, Mech ch. 5)."""
+        return [c for c in self._constraints if isinstance(c, StageSwitch)]
 
     def time_derivative(self, expr):
         """Total time derivative of a SymPy expression (or matrix) of coordinates, velocities
@@ -724,6 +747,11 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         g = self._resolve_guess(system, guess)
         scalar = np.ndim(t) == 0
         order = ORDERS.get(solution, modes.get(solution))
+        if self._switches():  # stages chosen point by point (analyses/_multistage.py)
+            from .analyses._multistage import solve_stages
+
+            self.last_solution = solve_stages(self, times, g, solution, options, scalar)
+            return self.last_solution
         try:
             res = sweep(system, times, g, order, options, self._p())
         except SingularJacobianError as err:

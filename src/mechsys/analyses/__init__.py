@@ -5,6 +5,7 @@
 """
 
 from ._free import FreeSystem
+from ._multistage import FindSwitchTime, FindTime, find_switch_time, find_time
 from ._path import PathSystem
 
-__all__ = ["FreeSystem", "PathSystem"]
+__all__ = ["FindSwitchTime", "FindTime", "FreeSystem", "PathSystem", "find_switch_time", "find_time"]

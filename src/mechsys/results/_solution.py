@@ -28,7 +28,9 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews):
     when that order was not solved);  p : (np,) parameter values used;
     system : the compiled System;  model : the Model (for symbolic outputs);
     iterations : (N,) Newton iterations per point;  evaluations : compiled-function calls;
-    success, status, message : outcome (a failed solve raises instead).
+    success, status, message : outcome (a failed solve raises instead);
+    extra : more per-point data, e.g. ``"rcond"``, and with switches ``"stages"``
+    (``{switch name: (N,) stage numbers}``, read with :meth:`stage`).
     """
 
     t: np.ndarray
@@ -66,6 +68,26 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews):
     def names(self) -> tuple:
         """Coordinate names ``"body.coord"`` in layout order."""
         return self.system.layout.q_names
+
+    def stage(self, switch=None) -> np.ndarray:
+        """The stage (numbered from 1, as the switch lists them) of a ``StageSwitch`` or
+        ``TimeSwitch`` in effect at every point: ``(N,)`` ints (an int for a scalar time).
+        ``switch``: handle or name; may be omitted when the model has exactly one switch."""
+        stages = self.extra.get("stages")
+        if not stages:
+            raise ModelError("this solution has no stages: the model has no StageSwitch or "
+                             "TimeSwitch")
+        if switch is None:
+            if len(stages) > 1:
+                raise ModelError(f"the model has {len(stages)} switches {sorted(stages)}; name one")
+            name = next(iter(stages))
+        else:
+            name = getattr(switch, "name", switch)
+            if name not in stages:
+                raise ModelError(f"no switch {switch!r} in this solution; switches are "
+                                 f"{sorted(stages)}")
+        out = stages[name]
+        return int(out[0]) if self.scalar else out
 
     # -- named access ---------------------------------------------------------------------
     def __getitem__(self, key):
