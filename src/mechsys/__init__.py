@@ -244,6 +244,22 @@ __all__ = [
 ]
 
 
+# cam constraints (Mech manual 6.1)
+from .constraints import (  # noqa: E402
+    CamToCam1,
+    CamToCircle1,
+    CamToLine1,
+    CamToPlane1,
+    CamToPoint1,
+    CamToSphere1,
+    CurveToCam1,
+    CurveToPoint2,
+)
+
+__all__ += ["CamToCam1", "CamToCircle1", "CamToLine1", "CamToPlane1", "CamToPoint1",
+            "CamToSphere1", "CurveToCam1", "CurveToPoint2"]
+
+
 def __getattr__(name):
     """Lazy subpackages: ``mechsys.draw`` (and matplotlib) load on first use only."""
     if name == "draw":

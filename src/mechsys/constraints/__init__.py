@@ -102,3 +102,22 @@ __all__ = [
     "constraint_types",
     "register",
 ]
+
+# cam constraints (Mech manual 6.1)
+from ._cams import (  # noqa: E402
+    CAM_TYPES,
+    CamToCam1,
+    CamToCircle1,
+    CamToLine1,
+    CamToPlane1,
+    CamToPoint1,
+    CamToSphere1,
+    CurveToCam1,
+    CurveToPoint2,
+)
+
+for _cls in CAM_TYPES:
+    register(_cls)
+
+__all__ += ["CamToCam1", "CamToCircle1", "CamToLine1", "CamToPlane1", "CamToPoint1",
+            "CamToSphere1", "CurveToCam1", "CurveToPoint2"]
