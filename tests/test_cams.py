@@ -143,20 +143,36 @@ def test_3d_spherical_follower_on_a_drum(kind):
     np.testing.assert_allclose(sol.location(fol.point(0))[:, 0], x_exact, atol=1e-12)
 
 
-@pytest.mark.parametrize("kind", ["CamToPlane1", "CurveToCam1"])
+@pytest.mark.parametrize("kind", ["CamToPlane1", "CurveToCam1", "CurveToPlane1"])
 def test_3d_flat_follower_on_an_eccentric_drum(kind):
     m, cam, fol = _cam_3d((RD + ED, 0, 0))
     if kind == "CamToPlane1":  # an eccentric ball (a drum would touch along a line) against
         # the follower's face, the plane x = 0 of its body
         ball = (ED + RD * sp.cos(a) * sp.cos(b), RD * sp.sin(a) * sp.cos(b), RD * sp.sin(b))
         m.add(ms.CamToPlane1(cam.point(ball), (a, 0.0), (b, 0.1), fol.axis(0, (1, 0, 0))))
-    else:  # the drum's rim (a circle at z = 0.1) against the face as a surface (0, g, d)
+    elif kind == "CurveToCam1":  # the drum's rim (a circle at z = 0.1) against the face as a
+        # surface (0, g, d)
         rim = (ED + RD * sp.cos(a), RD * sp.sin(a), 0.1)
         m.add(ms.CurveToCam1(cam.point(rim), (a, 0.0), fol.point((0, g, d)), (g, 0.0), (d, 0.1)))
+    else:  # the rim against the face as a plane
+        rim = (ED + RD * sp.cos(a), RD * sp.sin(a), 0.1)
+        m.add(ms.CurveToPlane1(cam.point(rim), (a, 0.0), fol.axis(0, (1, 0, 0))))
     sol = m.solve(TH, solution="acceleration")
     np.testing.assert_allclose(sol.location(fol.point(0))[:, 0], RD + ED * np.cos(TH), atol=1e-12)
     np.testing.assert_allclose(sol.velocity(fol.point(0))[:, 0], -ED * np.sin(TH), atol=1e-12)
     np.testing.assert_allclose(sol.acceleration(fol.point(0))[:, 0], -ED * np.cos(TH), atol=1e-12)
+
+
+def test_3d_rim_against_a_roller_with_a_parallel_axis():
+    # CurveToCylinder1: the rim of the eccentric drum (a circle in z = 0) against a roller
+    # of radius rho whose axis is parallel to Z through the follower's origin
+    rho = 0.3
+    m, cam, fol = _cam_3d((RD + ED + rho, 0, 0))
+    rim = (ED + RD * sp.cos(a), RD * sp.sin(a), 0)
+    m.add(ms.CurveToCylinder1(cam.point(rim), (a, 0.0), fol.axis(0, Z), rho))
+    sol = m.solve(TH, solution="velocity")
+    x_exact = ED * np.cos(TH) + np.sqrt((RD + rho) ** 2 - (ED * np.sin(TH)) ** 2)
+    np.testing.assert_allclose(sol.location(fol.point(0))[:, 0], x_exact, atol=1e-12)
 
 
 def test_3d_point_in_a_helical_slot_moves_by_the_lead():
@@ -194,6 +210,13 @@ def test_zero_radius_is_refused(kind):
     cam = m.add_body("cam")
     with pytest.raises(ms.GeometryError, match=rf"{kind}: radius must be a nonzero"):
         getattr(ms, kind)(cam.point((sp.cos(a), sp.sin(a))), (a, 0.0), (0, 0), 0)
+
+
+def test_cylinder_radius_must_be_positive():
+    m = ms.Model3D()
+    cam = m.add_body("cam")
+    with pytest.raises(ms.GeometryError, match=r"CurveToCylinder1: the cylinder's radius must be positive"):
+        ms.CurveToCylinder1(cam.point((sp.cos(a), sp.sin(a), 0)), (a, 0.0), m.ground.axis(0, Z), -1.0)
 
 
 def test_wrong_number_of_parameters_for_the_model_is_named():

@@ -253,11 +253,13 @@ from .constraints import (  # noqa: E402
     CamToPoint1,
     CamToSphere1,
     CurveToCam1,
+    CurveToCylinder1,
+    CurveToPlane1,
     CurveToPoint2,
 )
 
 __all__ += ["CamToCam1", "CamToCircle1", "CamToLine1", "CamToPlane1", "CamToPoint1",
-            "CamToSphere1", "CurveToCam1", "CurveToPoint2"]
+            "CamToSphere1", "CurveToCam1", "CurveToCylinder1", "CurveToPlane1", "CurveToPoint2"]
 
 
 def __getattr__(name):

@@ -23,6 +23,7 @@ import sympy as sp
 from .._errors import GeometryError, ModelError
 from ..geometry._points import Point, as_axis, as_point
 from . import _primitives as P
+from ._angles import vector_norm
 from ._base import ConstraintBase, Variable, as_expr
 
 
@@ -313,6 +314,63 @@ class CamToPlane1(_CamToFlat):
     spaces = ("spatial",)
 
 
+class CurveToPlane1(_CamToFlat):
+    r"""A space curve tangent to a plane. Removes 1 DOF (3D).
+
+    ``CurveToPlane1(locuspoint, (a, guess), axis)``; the plane is normal to ``axis`` (origin
+    ``r_o``, direction ``u``) through its origin::
+
+        u . (r_c - r_o) = 0       (contact point in the plane)
+        u . t = 0                 (curve tangent to the plane)
+    """
+
+    mech_name = "CurveToPlane1"
+    dof_removed = 1
+    spaces = ("spatial",)
+    _shape = (1,)
+
+
+class CurveToCylinder1(_Cam):
+    r"""A space curve tangent to a cylinder of radius ``radius`` about ``axis``. Removes 1
+    DOF (3D).
+
+    ``CurveToCylinder1(locuspoint, (a, guess), axis, radius)``; with ``d = r_c - r_o`` and
+    ``w = d - (d . u) u / (u . u)`` its part normal to the axis (the cylinder's normal at
+    the contact)::
+
+        w . w - radius^2 = 0      (contact point on the cylinder)
+        w . t = 0                 (curve tangent to it)
+    """
+
+    mech_name = "CurveToCylinder1"
+    dof_removed = 1
+    spaces = ("spatial",)
+    _shape = (1,)
+    _n_follower_args = 2
+
+    def _follower(self, rest):
+        if len(rest) != 2:
+            raise ModelError(f"{self.mech_name}: expected (locuspoint, (sym, guess), axis, radius), "
+                             f"got {len(rest)} argument(s) after the parameter")
+        self.axis = as_axis(rest[0])
+        self.radius = _radius(rest[1], self.mech_name)
+        if self.radius.is_number and self.radius < 0:
+            raise GeometryError(f"{self.mech_name}: the cylinder's radius must be positive, "
+                                f"got {rest[1]!r}")
+
+    def geometry(self):
+        return super().geometry() + [self.axis]
+
+    def _build(self, space):
+        self._check_shape(space)
+        prof = self.profiles[0]
+        u = self.axis.direction()
+        d = prof.location() - self.axis.location()
+        w = d - u * (u.dot(d) / vector_norm(self.axis.dir) ** 2)
+        (t,) = prof.tangents()
+        return [w.dot(w) - self.radius**2, w.dot(t)]
+
+
 class CamToCam1(_Cam):
     r"""Two cam profiles work against each other (tangent contact). Removes 1 DOF (2D/3D).
 
@@ -355,7 +413,7 @@ class CurveToCam1(_Cam):
         return contact(space, *self.profiles, normal_of=self.profiles[1])
 
 
-CAM_TYPES = (CamToPoint1, CamToCircle1, CamToLine1, CamToCam1,
-             CamToSphere1, CamToPlane1, CurveToPoint2, CurveToCam1)
+CAM_TYPES = (CamToPoint1, CamToCircle1, CamToLine1, CamToCam1, CamToSphere1, CamToPlane1,
+             CurveToPoint2, CurveToPlane1, CurveToCylinder1, CurveToCam1)
 
 __all__ = [c.__name__ for c in CAM_TYPES] + ["CAM_TYPES", "Profile", "contact"]

@@ -214,3 +214,29 @@ def _curve_cam(rng):
     R2 = _map(n2, _perp(n2, rng), _perp(t1, rng), rng.standard_normal(3))
     r2 = c - R2 @ s2
     return Case(m, con, pose_vector(m, {cam: _pose(r1, R1), fol: _pose(r2, R2), A_: a0, G_: g0, D_: d0}))
+
+
+@case("CurveToPlane1")
+def _curve_plane(rng):
+    o2, u2 = rng.uniform(-1, 1, 3), rng.uniform(-1, 1, 3)
+    m, cam, fol, (r1, R1), (a0,), c, (t1,) = _cam3(rng, surface=False)
+    con = m.add(C.CurveToPlane1(cam.point(HELIX), (A_, a0), fol.axis(tuple(o2), tuple(u2))))
+    n = _perp(t1, rng)  # the plane's normal: any direction orthogonal to the tangent
+    R2 = _map(u2, _perp(u2, rng), n, _perp(n, rng))
+    origin = c + rng.uniform(-1, 1) * _unit(t1) + rng.uniform(-1, 1) * np.cross(n, _unit(t1))
+    r2 = origin - R2 @ o2
+    return Case(m, con, pose_vector(m, {cam: _pose(r1, R1), fol: _pose(r2, R2), A_: a0}))
+
+
+@case("CurveToCylinder1")
+def _curve_cylinder(rng):
+    o2, u2 = rng.uniform(-1, 1, 3), rng.uniform(-1, 1, 3)
+    m, cam, fol, (r1, R1), (a0,), c, (t1,) = _cam3(rng, surface=False)
+    rad = rng.uniform(0.3, 1.0)
+    con = m.add(C.CurveToCylinder1(cam.point(HELIX), (A_, a0), fol.axis(tuple(o2), tuple(u2)), rad))
+    radial = _perp(t1, rng)  # the cylinder's normal at the contact, orthogonal to the tangent
+    w = _perp(radial, rng)  # its axis, orthogonal to that normal
+    R2 = _map(u2, _perp(u2, rng), w, _perp(w, rng))
+    origin = c - rad * radial + rng.uniform(-1, 1) * w
+    r2 = origin - R2 @ o2
+    return Case(m, con, pose_vector(m, {cam: _pose(r1, R1), fol: _pose(r2, R2), A_: a0}))
