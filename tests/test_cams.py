@@ -250,3 +250,77 @@ def test_follower_that_would_leave_the_profile_names_the_constraint_and_how_far(
     msg = str(err.value)
     assert "constraint 'cam' (CamToPoint1, number 5), equation" in msg
     assert "did not converge" in msg and "max residual" in msg
+
+
+# -- outputs: pressure angle and radius of curvature ------------------------------------------
+
+
+def _roller_on_eccentric_circle(Rc=2.0, e=0.6, rho=0.5):
+    m, cam, fol = _cam_2d(T, (0, np.sqrt((Rc + rho) ** 2 - e**2)))
+    c = m.add(ms.CamToCircle1(cam.point((e + Rc * sp.cos(a), Rc * sp.sin(a))), (a, np.pi / 2),
+                              fol.point(0), -rho), name="roller")
+    return m, fol, c
+
+
+def test_pressure_angle_of_a_roller_on_an_eccentric_circle():
+    Rc, e, rho = 2.0, 0.6, 0.5
+    m, fol, c = _roller_on_eccentric_circle(Rc, e, rho)
+    th = np.linspace(0, 2 * np.pi, 37)
+    sol = m.solve(th, solution="velocity")
+    # the force acts along the line of centres: sin(phi) = e |cos th| / (Rc + rho)
+    exact = np.arcsin(e * np.abs(np.cos(th)) / (Rc + rho))
+    np.testing.assert_allclose(ms.pressure_angle(sol, "roller", direction=(0, 1)), exact, atol=1e-12)
+    # by default the direction is the roller centre's velocity (undefined where it stops)
+    moving = np.abs(np.cos(th)) > 1e-3
+    phi = ms.pressure_angle(sol, c)
+    np.testing.assert_allclose(phi[moving], exact[moving], atol=1e-9)
+    # the model gives the symbolic expression
+    assert isinstance(ms.pressure_angle(m, c, (0, 1)), sp.Expr)
+
+
+def test_flat_faced_follower_has_zero_pressure_angle_and_needs_a_direction():
+    R, e = 2.0, 0.5
+    m, cam, fol = _cam_2d(T, (0, R - e))
+    c = m.add(ms.CamToLine1(cam.point((R * sp.cos(a), -e + R * sp.sin(a))), (a, np.pi / 2),
+                            fol.axis((0, 0), (1, 0))))
+    sol = m.solve(np.linspace(0, 6, 7))
+    np.testing.assert_allclose(ms.pressure_angle(sol, c, fol.vector((0, 1))), 0, atol=1e-12)
+    with pytest.raises(ms.MechError, match=r"CamToLine1.*give the follower's direction of motion"):
+        ms.pressure_angle(sol, c)
+
+
+def test_profile_radius_of_curvature_ellipse_circle_and_helix():
+    A, B = 2.0, 1.2
+    m = ms.Model2D()
+    cam = m.add_body("cam", guess=((0, 0), 0))
+    fol = m.add_body("follower", guess=((A, 0), 0))
+    m.add(ms.OriginLock2(cam))
+    m.add(ms.RotationLock1(cam, -T))
+    m.add(ms.Translate2(m.ground.axis((0, 0), (1, 0)), fol.axis((0, 0), (1, 0))))
+    c = m.add(ms.CamToPoint1(cam.point((A * sp.cos(a), B * sp.sin(a))), (a, 0.0), fol.point(0)))
+    sol = m.solve(np.linspace(0, 3, 13))
+    al = sol.coordinate(a)
+    exact = (A**2 * np.sin(al) ** 2 + B**2 * np.cos(al) ** 2) ** 1.5 / (A * B)
+    np.testing.assert_allclose(ms.profile_radius(sol, c), exact, rtol=1e-12)
+    np.testing.assert_allclose(exact[0], B**2 / A)  # the vertex on the major axis
+
+    m2, fol2, c2 = _roller_on_eccentric_circle(Rc=2.0)
+    np.testing.assert_allclose(ms.profile_radius(m2.solve([0.0, 1.0]), c2), 2.0, rtol=1e-12)
+
+    R, p = 1.5, 0.4  # a helix: rho = (R^2 + p^2) / R
+    m3 = ms.Model3D()
+    cam3 = m3.add_body("cam")
+    c3 = ms.CurveToPoint2(cam3.point((R * sp.cos(a), R * sp.sin(a), p * a)), (a, 0.0), (0, 0, 0))
+    m3.add(c3)
+    rho = ms.profile_radius(m3, c3)  # symbolic in the parameter, constant along a helix
+    np.testing.assert_allclose(float(sp.simplify(rho)), (R**2 + p**2) / R, rtol=1e-12)
+
+
+def test_profile_radius_of_a_surface_is_refused():
+    m = ms.Model3D()
+    cam = m.add_body("cam")
+    c = m.add(ms.CamToPoint1(cam.point((a, b, a * b)), (a, 0.0), (b, 0.0), (0, 0, 0)))
+    with pytest.raises(ms.MechError, match=r"CamToPoint1.*surface, which has two principal"):
+        ms.profile_radius(m, c)
+    with pytest.raises(ms.MechError, match="not a cam constraint"):
+        ms.profile_radius(m, m.add(ms.RotationLock3(cam)))

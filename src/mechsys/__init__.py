@@ -256,10 +256,13 @@ from .constraints import (  # noqa: E402
     CurveToCylinder1,
     CurveToPlane1,
     CurveToPoint2,
+    pressure_angle,
+    profile_radius,
 )
 
 __all__ += ["CamToCam1", "CamToCircle1", "CamToLine1", "CamToPlane1", "CamToPoint1",
-            "CamToSphere1", "CurveToCam1", "CurveToCylinder1", "CurveToPlane1", "CurveToPoint2"]
+            "CamToSphere1", "CurveToCam1", "CurveToCylinder1", "CurveToPlane1", "CurveToPoint2",
+            "pressure_angle", "profile_radius"]
 
 
 def __getattr__(name):

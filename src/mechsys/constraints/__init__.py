@@ -116,10 +116,13 @@ from ._cams import (  # noqa: E402
     CurveToCylinder1,
     CurveToPlane1,
     CurveToPoint2,
+    pressure_angle,
+    profile_radius,
 )
 
 for _cls in CAM_TYPES:
     register(_cls)
 
 __all__ += ["CamToCam1", "CamToCircle1", "CamToLine1", "CamToPlane1", "CamToPoint1",
-            "CamToSphere1", "CurveToCam1", "CurveToCylinder1", "CurveToPlane1", "CurveToPoint2"]
+            "CamToSphere1", "CurveToCam1", "CurveToCylinder1", "CurveToPlane1", "CurveToPoint2",
+            "pressure_angle", "profile_radius"]

@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .._errors import GeometryError, ModelError
-from ..geometry._points import Point, as_axis, as_point
+from .._errors import GeometryError, MechError, ModelError
+from ..geometry._points import Point, as_axis, as_point, as_vector
 from . import _primitives as P
 from ._angles import vector_norm
 from ._base import ConstraintBase, Variable, as_expr
@@ -146,6 +146,15 @@ class _Cam(ConstraintBase):
 
     def new_variables(self):
         return [v for p in self.profiles for v in p.params]
+
+    def contact_normal(self, space) -> sp.Matrix:
+        """The common normal at the contact (global, not unit): the first profile's normal
+        by default."""
+        prof = self.profiles[0]
+        if len(prof.params) != space.dim - 1:
+            raise MechError(f"{self.label()}: the contact normal of a space curve is not unique "
+                            "(any direction in its normal plane)")
+        return prof.normal(space)
 
     def geometry(self):
         return [p.point for p in self.profiles]
@@ -272,13 +281,15 @@ class _CamToFlat(_Cam):
     def geometry(self):
         return super().geometry() + [self.axis]
 
+    def contact_normal(self, space):
+        if space.dim == 2:  # the line's normal, fixed in its body
+            return P.normals(space, self.axis.dir)[0]
+        return self.axis.direction()  # the plane's normal is the axis direction
+
     def _build(self, space):
         self._check_shape(space)
         prof = self.profiles[0]
-        if space.dim == 2:  # the line's normal, fixed in its body
-            m = P.normals(space, self.axis.dir)[0]
-        else:  # the plane's normal is the axis direction
-            m = self.axis.direction()
+        m = self.contact_normal(space)
         d = prof.location() - self.axis.location()
         return [m.dot(d)] + [m.dot(t) for t in prof.tangents()]
 
@@ -361,13 +372,16 @@ class CurveToCylinder1(_Cam):
     def geometry(self):
         return super().geometry() + [self.axis]
 
+    def contact_normal(self, space):
+        """``w``: the part of ``r_c - r_o`` normal to the cylinder's axis."""
+        u = self.axis.direction()
+        d = self.profiles[0].location() - self.axis.location()
+        return d - u * (u.dot(d) / vector_norm(self.axis.dir) ** 2)
+
     def _build(self, space):
         self._check_shape(space)
-        prof = self.profiles[0]
-        u = self.axis.direction()
-        d = prof.location() - self.axis.location()
-        w = d - u * (u.dot(d) / vector_norm(self.axis.dir) ** 2)
-        (t,) = prof.tangents()
+        w = self.contact_normal(space)
+        (t,) = self.profiles[0].tangents()
         return [w.dot(w) - self.radius**2, w.dot(t)]
 
 
@@ -408,12 +422,94 @@ class CurveToCam1(_Cam):
     spaces = ("spatial",)
     _shape = (1, 2)
 
+    def contact_normal(self, space):
+        return self.profiles[1].normal(space)  # the surface's
+
     def _build(self, space):
         self._check_shape(space)
         return contact(space, *self.profiles, normal_of=self.profiles[1])
 
 
+# -- outputs a cam designer reads ---------------------------------------------------------------
+
+
+def _cam_of(result, constraint) -> _Cam:
+    model = result._model()
+    c = model.constraint(constraint)
+    if not isinstance(c, _Cam):
+        raise MechError(f"{c.label()} is not a cam constraint")
+    return c
+
+
+def pressure_angle(result, constraint, direction=None):
+    r"""Pressure angle at the contact of a cam constraint: the angle between the common
+    normal ``n`` (the direction of the contact force without friction) and the direction
+    ``v`` in which the follower moves::
+
+        phi = atan2(|n x v|, |n . v|)        in [0, pi/2]
+
+    ``result`` is a :class:`~mechsys.Solution` (an array over its times) or the model (a
+    SymPy expression in its coordinates, velocities and the cam parameters). ``constraint`` a cam constraint (handle, name or number).
+    ``direction``: the follower's direction of motion as a vector (a tuple is global, a
+    body vector turns with its body), e.g. the slide of a translating follower; by default
+    the velocity of the follower's point (the roller's or ball's centre), which needs a
+    solution with velocities and is undefined (``nan``) where that point is at rest. The
+    common normal is the profile's normal (``CamToPoint1``, ``CamToCircle1``,
+    ``CamToSphere1``, the first profile of ``CamToCam1``, the surface of ``CurveToCam1``),
+    the line's or plane's normal (``CamToLine1``, ``CamToPlane1``, ``CurveToPlane1``) or the
+    cylinder's (``CurveToCylinder1``); ``CurveToPoint2`` has none.
+    """
+    c = _cam_of(result, constraint)
+    model = result._model()
+    space = model.space
+    n = c.contact_normal(space)
+    if direction is not None:
+        v = as_vector(direction)
+        v.check_dim(space.dim)
+        v = v.direction()
+    elif hasattr(c, "p"):
+        v = model.time_derivative(c.p.location())
+    else:
+        raise MechError(f"{c.label()}: give the follower's direction of motion (direction=...); "
+                        "this constraint has no follower point whose velocity would give it")
+    cross = space.cross(n, v)
+    sin = sp.sqrt(cross.dot(cross)) if isinstance(cross, sp.MatrixBase) else sp.Abs(cross)
+    return result._finish(sp.atan2(sin, sp.Abs(n.dot(v))))
+
+
+def profile_radius(result, constraint, profile: int = 1):
+    r"""Radius of curvature of a cam profile at the contact (a 2D profile or a 3D space
+    curve; ``profile`` 1 or 2 picks the profile of ``CamToCam1``/``CurveToCam1``). With
+    ``s'(a)`` the profile's local coordinates (rotation keeps curvature)::
+
+        2D:  rho = |s'_a|^3 / (s'_a x s'_aa)       signed: > 0 where the profile turns left
+                                                   (its centre of curvature on the left, the
+                                                   side of a positive CamToCircle1 radius)
+        3D:  rho = |s'_a|^3 / |s'_a x s'_aa|       (a space curve)
+
+    Infinite where the profile is straight. A surface has two principal curvatures, not one
+    radius: a :class:`~mechsys.MechError`. Returns what ``result`` gives (see
+    :func:`pressure_angle`).
+    """
+    c = _cam_of(result, constraint)
+    if profile not in range(1, len(c.profiles) + 1):
+        raise MechError(f"{c.label()} has {len(c.profiles)} profile(s); profile={profile!r}")
+    prof = c.profiles[profile - 1]
+    if len(prof.params) != 1:
+        raise MechError(f"{c.label()}: profile {profile} is a surface, which has two principal "
+                        "radii of curvature, not one")
+    sym = prof.params[0].symbol
+    t = prof.point.local.diff(sym)
+    tt = t.diff(sym)
+    speed3 = sp.sqrt(t.dot(t)) ** 3
+    if len(t) == 2:
+        return result._finish(speed3 / (t[0] * tt[1] - t[1] * tt[0]))
+    k = t.cross(tt)
+    return result._finish(speed3 / sp.sqrt(k.dot(k)))
+
+
 CAM_TYPES = (CamToPoint1, CamToCircle1, CamToLine1, CamToCam1, CamToSphere1, CamToPlane1,
              CurveToPoint2, CurveToPlane1, CurveToCylinder1, CurveToCam1)
 
-__all__ = [c.__name__ for c in CAM_TYPES] + ["CAM_TYPES", "Profile", "contact"]
+__all__ = [c.__name__ for c in CAM_TYPES] + ["CAM_TYPES", "Profile", "contact", "pressure_angle",
+                                             "profile_radius"]
