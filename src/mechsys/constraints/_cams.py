@@ -449,7 +449,8 @@ def pressure_angle(result, constraint, direction=None):
         phi = atan2(|n x v|, |n . v|)        in [0, pi/2]
 
     ``result`` is a :class:`~mechsys.Solution` (an array over its times) or the model (a
-    SymPy expression in its coordinates, velocities and the cam parameters). ``constraint`` a cam constraint (handle, name or number).
+    SymPy expression in its coordinates, velocities and the cam parameters).
+    ``constraint``: a cam constraint (handle, name or number).
     ``direction``: the follower's direction of motion as a vector (a tuple is global, a
     body vector turns with its body), e.g. the slide of a translating follower; by default
     the velocity of the follower's point (the roller's or ball's centre), which needs a
