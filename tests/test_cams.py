@@ -212,11 +212,12 @@ def test_zero_radius_is_refused(kind):
         getattr(ms, kind)(cam.point((sp.cos(a), sp.sin(a))), (a, 0.0), (0, 0), 0)
 
 
-def test_cylinder_radius_must_be_positive():
+@pytest.mark.parametrize("radius", [-1.0, 0])
+def test_cylinder_radius_must_be_positive(radius):
     m = ms.Model3D()
     cam = m.add_body("cam")
     with pytest.raises(ms.GeometryError, match=r"CurveToCylinder1: the cylinder's radius must be positive"):
-        ms.CurveToCylinder1(cam.point((sp.cos(a), sp.sin(a), 0)), (a, 0.0), m.ground.axis(0, Z), -1.0)
+        ms.CurveToCylinder1(cam.point((sp.cos(a), sp.sin(a), 0)), (a, 0.0), m.ground.axis(0, Z), radius)
 
 
 def test_wrong_number_of_parameters_for_the_model_is_named():
@@ -324,3 +325,16 @@ def test_profile_radius_of_a_surface_is_refused():
         ms.profile_radius(m, c)
     with pytest.raises(ms.MechError, match="not a cam constraint"):
         ms.profile_radius(m, m.add(ms.RotationLock3(cam)))
+
+
+def test_bad_parameter_pairs_are_named():
+    m = ms.Model2D()
+    cam = m.add_body("cam")
+    circle = cam.point((sp.cos(a), sp.sin(a)))
+    with pytest.raises(ms.ModelError, match=r"CamToPoint1: a cam parameter is a \(symbol, guess\) pair"):
+        ms.CamToPoint1(circle, (1.0, 0.3), (0, 0))
+    with pytest.raises(ms.ModelError, match=r"CamToCam1: each profile parameter needs its own symbol"):
+        ms.CamToCam1(circle, (a, 0.0), cam.point((2 * sp.cos(a), sp.sin(a))), (a, 1.0))
+    # the radius forgotten: not read as a profile without parameters and a symbolic point
+    with pytest.raises(ms.ModelError, match=r"CamToCircle1: expected CamToCircle1\(.*point, radius\), got 3"):
+        ms.CamToCircle1(circle, (a, 0.0), (0, 0))

@@ -92,11 +92,18 @@ def _variable(pair, who: str) -> Variable:
     raise ModelError(f"{who}: expected a cam parameter as a (symbol, guess) pair, got {pair!r}")
 
 
-def _radius(value, who: str) -> sp.Expr:
+def _radius(value, who: str, signed: bool = True) -> sp.Expr:
+    """A follower's radius: nonzero, its sign picking the side (``signed``), or positive."""
     r = as_expr(value, f"{who} radius")
-    if r.is_number and (not r.is_real or r == 0):
+    if not isinstance(r, sp.Expr):
+        raise GeometryError(f"{who}: radius must be a number or expression, got {value!r}")
+    if not r.is_number:
+        return r
+    if signed and (not r.is_real or r == 0):
         raise GeometryError(f"{who}: radius must be a nonzero real number (its sign picks the side "
                             f"of the profile), got {value!r}; for a point follower use CamToPoint1")
+    if not signed and not (r.is_real and r > 0):
+        raise GeometryError(f"{who}: the cylinder's radius must be positive, got {value!r}")
     return r
 
 
@@ -120,6 +127,8 @@ class _Cam(ConstraintBase):
             # a surface takes two (sym, guess) pairs in 3D; a plain tuple of two symbols-or-
             # numbers after them is the follower, so count what the signature leaves over
             want = shape if shape is not None else self._count_pairs(rest, k)
+            if want < 1:
+                raise ModelError(f"{who}: expected {who}{self._call}, got {len(args)} argument(s)")
             for _ in range(want):
                 if not rest:
                     raise ModelError(f"{who}: missing a (symbol, guess) pair for profile {k + 1}")
@@ -139,10 +148,18 @@ class _Cam(ConstraintBase):
         return max(len(rest) - fixed, 0) // (1 + sum(1 for s in later if s is None))
 
     _n_follower_args = 0
+    #: the call, for messages
+    _call = "(locuspoint1, (sym, guess)..., locuspoint2, (sym, guess)...)"
 
     def _follower(self, rest: list) -> None:
         if rest:
-            raise ModelError(f"{self.mech_name}: unexpected arguments {rest!r}")
+            raise ModelError(f"{self.mech_name}: expected {self.mech_name}{self._call}; "
+                             f"unexpected arguments {rest!r}")
+
+    def _follower_count(self, rest: list) -> None:
+        if len(rest) != self._n_follower_args:
+            raise ModelError(f"{self.mech_name}: expected {self.mech_name}{self._call}, got "
+                             f"{len(rest)} argument(s) after the parameters")
 
     def new_variables(self):
         return [v for p in self.profiles for v in p.params]
@@ -191,10 +208,10 @@ class CamToPoint1(_Cam):
     dof_removed = 1
     _n_follower_args = 1
 
+    _call = "(locuspoint, (sym, guess)..., point)"
+
     def _follower(self, rest):
-        if len(rest) != 1:
-            raise ModelError(f"{self.mech_name}: expected (locuspoint, (sym, guess)..., point), "
-                             f"got {len(rest)} argument(s) after the parameters")
+        self._follower_count(rest)
         self.p = as_point(rest[0])
 
     def geometry(self):
@@ -235,10 +252,10 @@ class CamToCircle1(_Cam):
     spaces = ("planar",)
     _n_follower_args = 2
 
+    _call = "(locuspoint, (sym, guess)..., point, radius)"
+
     def _follower(self, rest):
-        if len(rest) != 2:
-            raise ModelError(f"{self.mech_name}: expected (locuspoint, (sym, guess)..., point, "
-                             f"radius), got {len(rest)} argument(s) after the parameters")
+        self._follower_count(rest)
         self.p = as_point(rest[0])
         self.radius = _radius(rest[1], self.mech_name)
 
@@ -271,11 +288,10 @@ class _CamToFlat(_Cam):
 
     _n_follower_args = 1
 
+    _call = "(locuspoint, (sym, guess)..., line or plane)"
+
     def _follower(self, rest):
-        if len(rest) != 1:
-            raise ModelError(f"{self.mech_name}: expected (locuspoint, (sym, guess)..., "
-                             f"{'line' if self.spaces == ('planar',) else 'plane'}), "
-                             f"got {len(rest)} argument(s) after the parameters")
+        self._follower_count(rest)
         self.axis = as_axis(rest[0])
 
     def geometry(self):
@@ -359,15 +375,12 @@ class CurveToCylinder1(_Cam):
     _shape = (1,)
     _n_follower_args = 2
 
+    _call = "(locuspoint, (sym, guess), axis, radius)"
+
     def _follower(self, rest):
-        if len(rest) != 2:
-            raise ModelError(f"{self.mech_name}: expected (locuspoint, (sym, guess), axis, radius), "
-                             f"got {len(rest)} argument(s) after the parameter")
+        self._follower_count(rest)
         self.axis = as_axis(rest[0])
-        self.radius = _radius(rest[1], self.mech_name)
-        if self.radius.is_number and self.radius < 0:
-            raise GeometryError(f"{self.mech_name}: the cylinder's radius must be positive, "
-                                f"got {rest[1]!r}")
+        self.radius = _radius(rest[1], self.mech_name, signed=False)
 
     def geometry(self):
         return super().geometry() + [self.axis]
@@ -421,6 +434,7 @@ class CurveToCam1(_Cam):
     dof_removed = 1
     spaces = ("spatial",)
     _shape = (1, 2)
+    _call = "(locuspoint1, (sym, guess), locuspoint2, (sym, guess), (sym, guess))"
 
     def contact_normal(self, space):
         return self.profiles[1].normal(space)  # the surface's
