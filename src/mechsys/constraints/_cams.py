@@ -14,6 +14,11 @@ which ``a_1`` turns to ``a_2`` counterclockwise). Normals are built in local coo
 and turned by ``A`` (rotations keep lengths and cross products), so ``|n|`` depends on the
 parameters only. ``r_p`` a global point, ``u`` the direction of a line or the normal of a
 plane, ``r_o`` its origin.
+
+Outputs: the follower's lift, velocity and acceleration are those of its points; the
+contact point is ``solution.location(locuspoint)`` (at the solved parameter, which is
+``solution.coordinate(sym)``); :func:`pressure_angle` and :func:`profile_radius` give the
+pressure angle and the profile's radius of curvature at the contact. Guide: docs/cams.md.
 """
 
 from __future__ import annotations
