@@ -147,3 +147,17 @@ def test_version_matches_metadata():
         assert mechsys.__version__ == version("mechsys")
     except PackageNotFoundError:  # running from a source tree without installing
         pytest.skip("mechsys is not installed")
+
+
+#: The cam constraints and outputs of issue 13 (Mech manual 6.1).
+REQUIRED_CAMS = {"CamToPoint1", "CamToCircle1", "CamToLine1", "CamToCam1", "CamToSphere1", "CamToPlane1",
+                 "CurveToPoint2", "CurveToPlane1", "CurveToCylinder1", "CurveToCam1", "pressure_angle",
+                 "profile_radius"}
+
+
+def test_cam_names_exported():
+    import mechsys.constraints as C
+
+    assert REQUIRED_CAMS <= set(mechsys.__all__)
+    assert REQUIRED_CAMS <= set(C.__all__)
+    assert {n for n in REQUIRED_CAMS if n[0].isupper()} <= set(C.REGISTRY)

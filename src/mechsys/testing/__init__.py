@@ -6,6 +6,7 @@ Register cases for a new constraint type with the ``@case("Name")`` decorator.
 """
 
 from . import (
+    _cases_cams,  # noqa: F401  (registers cases)
     _cases_gears,  # noqa: F401  (registers cases)
     _cases_planar,  # noqa: F401  (registers cases)
     _cases_spatial,  # noqa: F401  (registers cases)
