@@ -338,3 +338,20 @@ def test_bad_parameter_pairs_are_named():
     # the radius forgotten: not read as a profile without parameters and a symbolic point
     with pytest.raises(ms.ModelError, match=r"CamToCircle1: expected CamToCircle1\(.*point, radius\), got 3"):
         ms.CamToCircle1(circle, (a, 0.0), (0, 0))
+
+
+def test_static_cam_contact_force_is_along_the_common_normal():
+    """A flat follower pressed down by W on an eccentric cam: the contact force is W along the
+    face's normal through the contact point, and the cam's driving torque is W e sin(th),
+    which is virtual work: W d(lift)/d(th)."""
+    R, e, W = 2.0, 0.5, 3.0
+    m, cam, fol = _cam_2d(T, (0, R - e))
+    locus = cam.point((R * sp.cos(a), -e + R * sp.sin(a)))
+    m.add(ms.CamToLine1(locus, (a, np.pi / 2), fol.axis((0, 0), (1, 0))), name="cam")
+    m.add_load(ms.Force(fol.point(0), (0, -1), W))
+    th = np.linspace(0, 2 * np.pi, 13)
+    st = m.solve(th, solution="static")
+    F, M = st.reaction("cam", fol, at=locus)
+    np.testing.assert_allclose(F, np.c_[0 * th, W + 0 * th], atol=1e-10)
+    np.testing.assert_allclose(M, 0, atol=1e-10)        # no couple about the contact point
+    np.testing.assert_allclose(st.reaction("drive", cam)[1], W * e * np.sin(th), atol=1e-10)
