@@ -69,6 +69,7 @@ from .constraints import (
     Variable,
 )
 from .geometry._bodies import Body
+from .geometry._curves import Involute, SplineFit, SplineFunction
 from .geometry._inertia import (
     CompositeInertia,
     ParallelAxis,
@@ -241,6 +242,9 @@ __all__ = [
     "Variable",
     "Vector",
     "__version__",
+    "Involute",
+    "SplineFit",
+    "SplineFunction",
 ]
 
 

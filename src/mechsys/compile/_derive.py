@@ -28,23 +28,48 @@ except ImportError:  # pragma: no cover
 
 _SAFE = (sp.sin, sp.cos, sp.tan, sp.exp, sp.log, sp.asin, sp.acos, sp.atan, sp.sinh, sp.cosh,
          sp.tanh, sp.atan2)
+_SAFE_ALL = (*_SAFE, sp.Piecewise, sp.floor)
 
 
 def symengine_safe(exprs) -> bool:
-    """Whether SymEngine may differentiate these expressions: only elementary functions
-    (SymEngine 0.15 crashes differentiating ``Mod``; ``Piecewise``, ``floor``, ``sign``...
-    stay with SymPy)."""
+    """Whether SymEngine may differentiate these expressions: elementary functions, plus
+    ``Piecewise`` and ``floor`` (splines, periodic curves: SymEngine 0.15 differentiates a
+    ``Piecewise`` piece by piece and LLVM compiles both; ``floor``'s derivative is dropped by
+    :func:`_se_diff`). SymEngine 0.15 crashes differentiating ``Mod``; ``ceiling``, ``sign``,
+    ``Abs``... stay with SymPy."""
     if se is None:
         return False
     for e in exprs:
         e = sp.sympify(e)
-        if e.has(sp.Mod, sp.Piecewise, sp.floor, sp.ceiling, sp.sign, sp.Abs, sp.Heaviside,
-                 sp.Max, sp.Min, sp.DiracDelta):
+        if e.has(sp.Mod, sp.ceiling, sp.sign, sp.Abs, sp.Heaviside, sp.Max, sp.Min,
+                 sp.DiracDelta):
             return False
         for f in e.atoms(sp.Function):
-            if not isinstance(f, _SAFE):
+            if not isinstance(f, _SAFE_ALL):
                 return False
     return True
+
+
+def _se_diff(E, s, steps: bool):
+    """SymEngine ``dE/ds``; with ``steps`` (``E`` has ``floor``) the unevaluated
+    ``Derivative(floor(x), x)`` SymEngine leaves is set to zero, its value almost everywhere
+    (as :func:`_drop_step_derivatives` does for SymPy)."""
+    d = E.diff(s)
+    if steps:
+        # chain rule on floor(g(x)): Subs(Derivative(floor(xi), xi), xi, g) g'; on floor(x):
+        # Derivative(floor(x), x). Replace the Subs whole (zeroing only the Derivative inside
+        # it leaves an uncompilable Subs(0, ...)).
+        for kind in (se.Subs, se.Derivative):
+            ds = [a for a in d.atoms(kind) if _is_floor_derivative(a)]
+            if ds:
+                d = d.xreplace({a: se.Integer(0) for a in ds})
+    return d
+
+
+def _is_floor_derivative(a) -> bool:
+    if isinstance(a, se.Subs):
+        a = a.args[0]
+    return isinstance(a, se.Derivative) and isinstance(a.args[0], se.floor)
 
 
 def _rewrite_steps(e):
@@ -59,6 +84,11 @@ def _drop_step_derivatives(e):
     ``DiracDelta``): set them to zero so the expression can be compiled."""
     if not e.has(sp.Derivative, sp.Subs, sp.DiracDelta):
         return e
+    # the chain rule on floor(g(x)) gives Subs(Derivative(floor(xi), xi), xi, g) g': drop the
+    # Subs whole first (``replace`` works bottom-up and would leave an uncompilable Subs(0, ..))
+    subs = [x for x in e.atoms(sp.Subs) if x.has(sp.floor, sp.ceiling, sp.sign)]
+    if subs:
+        e = e.xreplace({x: sp.S.Zero for x in subs})
     return e.replace(
         lambda x: (isinstance(x, (sp.Derivative, sp.Subs))
                    and x.has(sp.floor, sp.ceiling, sp.sign)) or isinstance(x, sp.DiracDelta),
@@ -119,24 +149,25 @@ def derive_kinematics(phi, q, qd, T):
     n_phi, n_jac, n_pt, n_gm = [], [], [], []
     for i, e in enumerate(phi):
         E = se.sympify(e)
+        steps = sp.sympify(e).has(sp.floor)
         n_phi.append(E)
         free = E.free_symbols
         v = se.Integer(0)
         for s in sorted((s for s in free if s in sidx), key=sidx.get):
-            d = E.diff(s)
+            d = _se_diff(E, s, steps)
             if d != 0:
                 rows.append(i)
                 cols.append(sidx[s])
                 n_jac.append(d)
                 v += d * qds[sidx[s]]
-        et = E.diff(Ts) if Ts in free else se.Integer(0)
+        et = _se_diff(E, Ts, steps) if Ts in free else se.Integer(0)
         n_pt.append(et)
         v += et
         fv = v.free_symbols
-        gm = v.diff(Ts) if Ts in fv else se.Integer(0)
+        gm = _se_diff(v, Ts, steps) if Ts in fv else se.Integer(0)
         for a, b in zip(qs, qds):
             if a in fv:
-                gm += v.diff(a) * b
+                gm += _se_diff(v, a, steps) * b
         n_gm.append(-gm)
     native = {"phi": n_phi, "jac": n_jac, "phi_t": n_pt, "gamma": n_gm}
     # SymPy versions are made lazily (System): 3D gammas can be megabytes of text
@@ -158,13 +189,14 @@ def hessian_terms(T_expr, q, qd):
     Ts = se.sympify(T_expr)
     qs = [se.sympify(s) for s in q]
     qds = [se.sympify(s) for s in qd]
-    p = [Ts.diff(v) for v in qds]
-    M = [[_to_sympy(p[i].diff(qds[j])) for j in range(n)] for i in range(n)]
+    steps = sp.sympify(T_expr).has(sp.floor)
+    p = [_se_diff(Ts, v, steps) for v in qds]
+    M = [[_to_sympy(_se_diff(p[i], qds[j], steps)) for j in range(n)] for i in range(n)]
     Qv = []
     for i in range(n):
-        acc = Ts.diff(qs[i])
+        acc = _se_diff(Ts, qs[i], steps)
         for sj, vj in zip(qs, qds):
-            acc -= p[i].diff(sj) * vj
+            acc -= _se_diff(p[i], sj, steps) * vj
         Qv.append(_to_sympy(se.expand(acc)))
     return M, Qv
 
