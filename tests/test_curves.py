@@ -318,3 +318,28 @@ def test_saw_tooth_driver_of_a_scaled_time_solves():
     sol = m.solve([0.1, 0.6])
     np.testing.assert_allclose(sol["piston.x"][0], sol["piston.x"][1], atol=1e-12)
     np.testing.assert_allclose(sol.coordinate("crank.th", 1), [4 * np.pi, 4 * np.pi], atol=1e-12)
+
+
+# -- compiling Piecewise profiles ---------------------------------------------------------------
+
+def test_repeated_piecewise_compiles_once_and_agrees_with_sympy():
+    from mechsys.compile import _backends
+
+    if "symengine" not in _backends.available_backends():
+        pytest.skip("symengine not installed")
+    x, q = sp.symbols("x q")
+    r = ms.SplineFit(np.array([1.0, 2.0, 0.5, 1.5, 1.0]), "closed")(x)
+    exprs = [r * sp.cos(q), r * sp.sin(q) + r**2, q * r, q + 1,
+             sp.Piecewise((q, x > 1), (-q, True))]
+    pieces, reduced = _backends._split_piecewise([_backends._se.sympify(e) for e in exprs])
+    # r (three times), r**2 (SymPy folds the power into the pieces) and the small one
+    assert len(pieces) == 3
+    assert not any(isinstance(e, _backends._se.Piecewise) for e in reduced)
+    f = compile_exprs([x, q], exprs)
+    g = compile_exprs([x, q], exprs, backend="sympy")
+    X = np.array([[0.3, 0.4], [2.5, -1.0], [7.1, 2.0], [-3.3, 0.1]])
+    np.testing.assert_allclose(f.batch(X), g.batch(X), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(f(X[1]), g(X[1]), rtol=1e-12, atol=1e-12)
+    assert f.backend.startswith("symengine")
+    once = compile_exprs([x, q], exprs, once=True)
+    np.testing.assert_allclose(once.batch(X), g.batch(X), rtol=1e-12, atol=1e-12)
