@@ -34,9 +34,9 @@ _SAFE_ALL = (*_SAFE, sp.Piecewise, sp.floor)
 def symengine_safe(exprs) -> bool:
     """Whether SymEngine may differentiate these expressions: elementary functions, plus
     ``Piecewise`` and ``floor`` (splines, periodic curves: SymEngine 0.15 differentiates a
-    ``Piecewise`` piece by piece and LLVM compiles both; ``floor``'s derivative is dropped by
-    :func:`_se_diff`). SymEngine 0.15 crashes differentiating ``Mod``; ``ceiling``, ``sign``,
-    ``Abs``... stay with SymPy."""
+    ``Piecewise`` piece by piece and LLVM compiles both; :func:`_freeze_steps` keeps
+    ``floor`` out of the derivatives). SymEngine 0.15 crashes differentiating ``Mod``;
+    ``ceiling``, ``sign``, ``Abs``... stay with SymPy."""
     if se is None:
         return False
     for e in exprs:
@@ -50,26 +50,23 @@ def symengine_safe(exprs) -> bool:
     return True
 
 
-def _se_diff(E, s, steps: bool):
-    """SymEngine ``dE/ds``; with ``steps`` (``E`` has ``floor``) the unevaluated
-    ``Derivative(floor(x), x)`` SymEngine leaves is set to zero, its value almost everywhere
-    (as :func:`_drop_step_derivatives` does for SymPy)."""
-    d = E.diff(s)
-    if steps:
-        # chain rule on floor(g(x)): Subs(Derivative(floor(xi), xi), xi, g) g'; on floor(x):
-        # Derivative(floor(x), x). Replace the Subs whole (zeroing only the Derivative inside
-        # it leaves an uncompilable Subs(0, ...)).
-        for kind in (se.Subs, se.Derivative):
-            ds = [a for a in d.atoms(kind) if _is_floor_derivative(a)]
-            if ds:
-                d = d.xreplace({a: se.Integer(0) for a in ds})
-    return d
+def _freeze_steps(e):
+    """``(E, thaw)``: SymEngine ``E`` of the SymPy ``e`` with each ``floor(g)`` replaced by a
+    new symbol, and the map back. Differentiating ``E`` then gives ``floor``'s derivative
+    its value almost everywhere, zero (as :func:`_drop_step_derivatives` does for SymPy);
+    SymEngine would leave an uncompilable ``Derivative(floor(x), x)``. Cheaper than removing
+    that from every derivative (a traversal of each: seconds for a spline cam's ``gamma``)."""
+    E = se.sympify(e)
+    floors = e.atoms(sp.floor)
+    if not floors:
+        return E, {}
+    frozen = {se.sympify(f): se.Symbol(f"_mechsys_floor_{k}")
+              for k, f in enumerate(sorted(floors, key=sp.default_sort_key))}
+    return E.xreplace(frozen), {s: f for f, s in frozen.items()}
 
 
-def _is_floor_derivative(a) -> bool:
-    if isinstance(a, se.Subs):
-        a = a.args[0]
-    return isinstance(a, se.Derivative) and isinstance(a.args[0], se.floor)
+def _thaw(x, thaw):
+    return x.xreplace(thaw) if thaw else x
 
 
 def _rewrite_steps(e):
@@ -148,27 +145,26 @@ def derive_kinematics(phi, q, qd, T):
     sidx = {s: j for j, s in enumerate(qs)}
     n_phi, n_jac, n_pt, n_gm = [], [], [], []
     for i, e in enumerate(phi):
-        E = se.sympify(e)
-        steps = sp.sympify(e).has(sp.floor)
-        n_phi.append(E)
+        E, thaw = _freeze_steps(sp.sympify(e))
+        n_phi.append(_thaw(E, thaw))
         free = E.free_symbols
         v = se.Integer(0)
         for s in sorted((s for s in free if s in sidx), key=sidx.get):
-            d = _se_diff(E, s, steps)
+            d = E.diff(s)
             if d != 0:
                 rows.append(i)
                 cols.append(sidx[s])
-                n_jac.append(d)
+                n_jac.append(_thaw(d, thaw))
                 v += d * qds[sidx[s]]
-        et = _se_diff(E, Ts, steps) if Ts in free else se.Integer(0)
-        n_pt.append(et)
+        et = E.diff(Ts) if Ts in free else se.Integer(0)
+        n_pt.append(_thaw(et, thaw))
         v += et
         fv = v.free_symbols
-        gm = _se_diff(v, Ts, steps) if Ts in fv else se.Integer(0)
+        gm = v.diff(Ts) if Ts in fv else se.Integer(0)
         for a, b in zip(qs, qds):
             if a in fv:
-                gm += _se_diff(v, a, steps) * b
-        n_gm.append(-gm)
+                gm += v.diff(a) * b
+        n_gm.append(_thaw(-gm, thaw))
     native = {"phi": n_phi, "jac": n_jac, "phi_t": n_pt, "gamma": n_gm}
     # SymPy versions are made lazily (System): 3D gammas can be megabytes of text
     return rows, cols, None, None, None, native
@@ -186,18 +182,17 @@ def hessian_terms(T_expr, q, qd):
         Qv = [sp.diff(T_expr, q[i]) - sum((sp.diff(p[i], sj) * vj for sj, vj in zip(q, qd)),
                                           sp.S.Zero) for i in range(n)]
         return M, Qv
-    Ts = se.sympify(T_expr)
+    Ts, thaw = _freeze_steps(sp.sympify(T_expr))
     qs = [se.sympify(s) for s in q]
     qds = [se.sympify(s) for s in qd]
-    steps = sp.sympify(T_expr).has(sp.floor)
-    p = [_se_diff(Ts, v, steps) for v in qds]
-    M = [[_to_sympy(_se_diff(p[i], qds[j], steps)) for j in range(n)] for i in range(n)]
+    p = [Ts.diff(v) for v in qds]
+    M = [[_to_sympy(_thaw(p[i].diff(qds[j]), thaw)) for j in range(n)] for i in range(n)]
     Qv = []
     for i in range(n):
-        acc = _se_diff(Ts, qs[i], steps)
+        acc = Ts.diff(qs[i])
         for sj, vj in zip(qs, qds):
-            acc -= _se_diff(p[i], sj, steps) * vj
-        Qv.append(_to_sympy(se.expand(acc)))
+            acc -= p[i].diff(sj) * vj
+        Qv.append(_to_sympy(_thaw(se.expand(acc), thaw)))
     return M, Qv
 
 
