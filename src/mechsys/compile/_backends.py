@@ -118,7 +118,9 @@ class _SymengineCompiled(Compiled):
         self._pre = None
         if pieces:
             self._pre, _ = _lambdify(args, list(pieces.values()), opt_level)
+            self._nargs = len(args)
             args = [*args, *pieces]
+            self._buf = np.empty(len(args))     # [x, Piecewise values]: one call each
         self._f, self.backend = _lambdify(args, exprs, opt_level)
         # the lambda backend may accept what it cannot evaluate: probe once
         probe = self(np.zeros(len(args) - len(pieces)))
@@ -127,7 +129,10 @@ class _SymengineCompiled(Compiled):
     def __call__(self, x):
         x = np.asarray(x, dtype=float)
         if self._pre is not None:
-            x = np.concatenate([x, np.atleast_1d(self._pre(x)).ravel()])
+            buf = self._buf
+            buf[:self._nargs] = x
+            buf[self._nargs:] = self._pre(x)
+            x = buf
         return self._f(x).reshape(self.nout)
 
     def batch(self, X):
