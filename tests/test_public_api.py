@@ -32,6 +32,8 @@ REQUIRED_TOP_LEVEL = {
     "Force", "Moment", "Gravity", "Load",
     # Mech's All / Rest selections of output functions (issue 10, section 5)
     "All", "Rest",
+    # curves for cam and gear profiles (issue 13, manual chapter 6)
+    "SplineFit", "SplineFunction", "Involute",
 }
 
 #: Multistage mechanisms (issue 14, Mech chapter 5).

@@ -96,6 +96,7 @@ from .constraints import (
     profile_radius,
 )
 from .geometry._bodies import Body
+from .geometry._curves import Involute, SplineFit, SplineFunction
 from .geometry._inertia import (
     CompositeInertia,
     ParallelAxis,
@@ -187,6 +188,7 @@ __all__ = [
     "GyroFilter",
     "GyroMoment",
     "IntersectionPoint",
+    "Involute",
     "JointFriction",
     "LeadScrew5",
     "Line",
@@ -251,6 +253,8 @@ __all__ = [
     "Solution",
     "Spherical3",
     "SphericalToXYZ",
+    "SplineFit",
+    "SplineFunction",
     "Spring",
     "StageSwitch",
     "State",

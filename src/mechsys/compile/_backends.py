@@ -8,7 +8,8 @@ many, ``X`` of shape ``(N, nargs)`` into ``(N, k)``.
   with it (the ``fast`` extra), *without* its common-subexpression elimination (SymEngine
   0.15's ``cse=True`` returns wrong values; LLVM's optimiser removes repeated work anyway).
   Preferred: see ``docs/decisions/0002-numeric-backend.md`` for the measurement.
-  Expressions SymEngine cannot compile (``Mod``, ``Piecewise``...) go to SymPy instead.
+  ``Piecewise`` (spline profiles) compiles in two stages, see :func:`_split_piecewise`.
+  Expressions SymEngine cannot compile (``Mod``, ``Abs``...) go to SymPy instead.
 * ``"sympy"`` – ``sympy.lambdify`` to NumPy with ``cse=True``; always available.
 """
 
@@ -72,27 +73,72 @@ class _SympyCompiled(Compiled):
         return out
 
 
+def _split_piecewise(exprs):
+    """``(pieces, reduced)``: the distinct outermost ``Piecewise`` of SymEngine ``exprs`` and
+    ``exprs`` with each replaced by a new symbol (``{symbol: piecewise}``, insertion order).
+
+    A spline profile's ``Piecewise`` (``geometry/_curves.py``) recurs tens of times in a
+    Jacobian and ``gamma``; without CSE (``docs/decisions/0002``) LLVM would compile every
+    copy: 60 s instead of 2 s for a 361-knot cam (``docs/decisions/0008-curves.md``)."""
+    found: dict = {}
+    seen: set = set()
+    stack = list(exprs)
+    while stack:
+        e = stack.pop()
+        if e in seen:
+            continue
+        seen.add(e)
+        if isinstance(e, _se.Piecewise):
+            found.setdefault(e, _se.Symbol(f"_mechsys_piecewise_{len(found)}"))
+        else:
+            stack.extend(e.args)
+    if not found:
+        return {}, list(exprs)
+    return {v: k for k, v in found.items()}, [e.xreplace(found) for e in exprs]
+
+
+def _lambdify(args, exprs, opt_level):
+    try:
+        return _se.Lambdify(list(args), list(exprs), backend="llvm", cse=False,
+                            opt_level=opt_level), "symengine-llvm"
+    except (ValueError, TypeError, RuntimeError):  # built without LLVM, or unsupported
+        return _se.Lambdify(list(args), list(exprs), cse=False), "symengine-lambda"
+
+
 class _SymengineCompiled(Compiled):
+    """SymEngine ``Lambdify``; expressions with ``Piecewise`` in two stages: the distinct
+    ``Piecewise`` first (``_pre``), then the rest with their values as extra arguments."""
+
     backend = "symengine"
 
     def __init__(self, args, exprs, opt_level: int = 3):
         self.nout = len(exprs)
-        try:
-            self._f = _se.Lambdify(list(args), list(exprs), backend="llvm", cse=False,
-                                   opt_level=opt_level)
-            self.backend = "symengine-llvm"
-        except (ValueError, TypeError, RuntimeError):  # built without LLVM, or unsupported
-            self._f = _se.Lambdify(list(args), list(exprs), cse=False)
-            self.backend = "symengine-lambda"
+        exprs = [_se.sympify(e) for e in exprs]
+        pieces, exprs = _split_piecewise(exprs)
+        self._pre = None
+        if pieces:
+            self._pre, _ = _lambdify(args, list(pieces.values()), opt_level)
+            self._nargs = len(args)
+            args = [*args, *pieces]
+            self._buf = np.empty(len(args))     # [x, Piecewise values]: one call each
+        self._f, self.backend = _lambdify(args, exprs, opt_level)
         # the lambda backend may accept what it cannot evaluate: probe once
-        probe = self._f(np.zeros(len(args)))
+        probe = self(np.zeros(len(args) - len(pieces)))
         del probe
 
     def __call__(self, x):
-        return self._f(np.asarray(x, dtype=float)).reshape(self.nout)
+        x = np.asarray(x, dtype=float)
+        if self._pre is not None:
+            buf = self._buf
+            buf[:self._nargs] = x
+            buf[self._nargs:] = self._pre(x)
+            x = buf
+        return self._f(x).reshape(self.nout)
 
     def batch(self, X):
         X = np.atleast_2d(np.asarray(X, dtype=float))
+        if self._pre is not None:
+            X = np.hstack([X, self._pre(X).reshape(X.shape[0], -1)])
         return self._f(X).reshape(X.shape[0], self.nout)
 
 
@@ -130,7 +176,7 @@ def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
         try:
             return _SymengineCompiled(args, exprs, opt_level=0 if once else 3)
         except (RuntimeError, TypeError, ValueError, NotImplementedError):
-            # a function SymEngine cannot compile (e.g. Mod, Piecewise): SymPy can
+            # a function SymEngine cannot compile (e.g. Mod, Abs): SymPy can
             return _SympyCompiled(args, [sp.sympify(e) for e in exprs])
     if backend == "sympy":
         return _SympyCompiled(args, exprs)

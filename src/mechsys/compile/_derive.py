@@ -28,23 +28,45 @@ except ImportError:  # pragma: no cover
 
 _SAFE = (sp.sin, sp.cos, sp.tan, sp.exp, sp.log, sp.asin, sp.acos, sp.atan, sp.sinh, sp.cosh,
          sp.tanh, sp.atan2)
+_SAFE_ALL = (*_SAFE, sp.Piecewise, sp.floor)
 
 
 def symengine_safe(exprs) -> bool:
-    """Whether SymEngine may differentiate these expressions: only elementary functions
-    (SymEngine 0.15 crashes differentiating ``Mod``; ``Piecewise``, ``floor``, ``sign``...
-    stay with SymPy)."""
+    """Whether SymEngine may differentiate these expressions: elementary functions, plus
+    ``Piecewise`` and ``floor`` (splines, periodic curves: SymEngine 0.15 differentiates a
+    ``Piecewise`` piece by piece and LLVM compiles both; :func:`_freeze_steps` keeps
+    ``floor`` out of the derivatives). SymEngine 0.15 crashes differentiating ``Mod``;
+    ``ceiling``, ``sign``, ``Abs``... stay with SymPy."""
     if se is None:
         return False
     for e in exprs:
         e = sp.sympify(e)
-        if e.has(sp.Mod, sp.Piecewise, sp.floor, sp.ceiling, sp.sign, sp.Abs, sp.Heaviside,
-                 sp.Max, sp.Min, sp.DiracDelta):
+        if e.has(sp.Mod, sp.ceiling, sp.sign, sp.Abs, sp.Heaviside, sp.Max, sp.Min,
+                 sp.DiracDelta):
             return False
         for f in e.atoms(sp.Function):
-            if not isinstance(f, _SAFE):
+            if not isinstance(f, _SAFE_ALL):
                 return False
     return True
+
+
+def _freeze_steps(e):
+    """``(E, thaw)``: SymEngine ``E`` of the SymPy ``e`` with each ``floor(g)`` replaced by a
+    new symbol, and the map back. Differentiating ``E`` then gives ``floor``'s derivative
+    its value almost everywhere, zero (as :func:`_drop_step_derivatives` does for SymPy);
+    SymEngine would leave an uncompilable ``Derivative(floor(x), x)``. Cheaper than removing
+    that from every derivative (a traversal of each: seconds for a spline cam's ``gamma``)."""
+    E = se.sympify(e)
+    floors = e.atoms(sp.floor)
+    if not floors:
+        return E, {}
+    frozen = {se.sympify(f): se.Symbol(f"_mechsys_floor_{k}")
+              for k, f in enumerate(sorted(floors, key=sp.default_sort_key))}
+    return E.xreplace(frozen), {s: f for f, s in frozen.items()}
+
+
+def _thaw(x, thaw):
+    return x.xreplace(thaw) if thaw else x
 
 
 def _rewrite_steps(e):
@@ -59,6 +81,11 @@ def _drop_step_derivatives(e):
     ``DiracDelta``): set them to zero so the expression can be compiled."""
     if not e.has(sp.Derivative, sp.Subs, sp.DiracDelta):
         return e
+    # the chain rule on floor(g(x)) gives Subs(Derivative(floor(xi), xi), xi, g) g': drop the
+    # Subs whole first (``replace`` works bottom-up and would leave an uncompilable Subs(0, ..))
+    subs = [x for x in e.atoms(sp.Subs) if x.has(sp.floor, sp.ceiling, sp.sign)]
+    if subs:
+        e = e.xreplace({x: sp.S.Zero for x in subs})
     return e.replace(
         lambda x: (isinstance(x, (sp.Derivative, sp.Subs))
                    and x.has(sp.floor, sp.ceiling, sp.sign)) or isinstance(x, sp.DiracDelta),
@@ -118,8 +145,8 @@ def derive_kinematics(phi, q, qd, T):
     sidx = {s: j for j, s in enumerate(qs)}
     n_phi, n_jac, n_pt, n_gm = [], [], [], []
     for i, e in enumerate(phi):
-        E = se.sympify(e)
-        n_phi.append(E)
+        E, thaw = _freeze_steps(sp.sympify(e))
+        n_phi.append(_thaw(E, thaw))
         free = E.free_symbols
         v = se.Integer(0)
         for s in sorted((s for s in free if s in sidx), key=sidx.get):
@@ -127,17 +154,17 @@ def derive_kinematics(phi, q, qd, T):
             if d != 0:
                 rows.append(i)
                 cols.append(sidx[s])
-                n_jac.append(d)
+                n_jac.append(_thaw(d, thaw))
                 v += d * qds[sidx[s]]
         et = E.diff(Ts) if Ts in free else se.Integer(0)
-        n_pt.append(et)
+        n_pt.append(_thaw(et, thaw))
         v += et
         fv = v.free_symbols
         gm = v.diff(Ts) if Ts in fv else se.Integer(0)
         for a, b in zip(qs, qds):
             if a in fv:
                 gm += v.diff(a) * b
-        n_gm.append(-gm)
+        n_gm.append(_thaw(-gm, thaw))
     native = {"phi": n_phi, "jac": n_jac, "phi_t": n_pt, "gamma": n_gm}
     # SymPy versions are made lazily (System): 3D gammas can be megabytes of text
     return rows, cols, None, None, None, native
@@ -155,17 +182,17 @@ def hessian_terms(T_expr, q, qd):
         Qv = [sp.diff(T_expr, q[i]) - sum((sp.diff(p[i], sj) * vj for sj, vj in zip(q, qd)),
                                           sp.S.Zero) for i in range(n)]
         return M, Qv
-    Ts = se.sympify(T_expr)
+    Ts, thaw = _freeze_steps(sp.sympify(T_expr))
     qs = [se.sympify(s) for s in q]
     qds = [se.sympify(s) for s in qd]
     p = [Ts.diff(v) for v in qds]
-    M = [[_to_sympy(p[i].diff(qds[j])) for j in range(n)] for i in range(n)]
+    M = [[_to_sympy(_thaw(p[i].diff(qds[j]), thaw)) for j in range(n)] for i in range(n)]
     Qv = []
     for i in range(n):
         acc = Ts.diff(qs[i])
         for sj, vj in zip(qs, qds):
             acc -= p[i].diff(sj) * vj
-        Qv.append(_to_sympy(se.expand(acc)))
+        Qv.append(_to_sympy(_thaw(se.expand(acc), thaw)))
     return M, Qv
 
 

@@ -6,6 +6,7 @@ loads, compile, results or analyses.
 """
 
 from ._bodies import Body
+from ._curves import Involute, SplineFit, SplineFunction
 from ._inertia import composite_inertia, parallel_axis, principal_axes
 from ._points import (
     Axis,
@@ -27,4 +28,5 @@ __all__ = [
     "Axis", "Body", "BodyRef", "Geometry", "GlobalVector", "Line", "PLANAR", "Plane", "Planar",
     "Point", "SPATIAL", "Space", "Spatial", "Vector", "as_axis", "as_point", "as_vector",
     "composite_inertia", "parallel_axis", "principal_axes", "reference_direction",
+    "Involute", "SplineFit", "SplineFunction",
 ]
