@@ -154,10 +154,30 @@ class _Gear(ConstraintBase):
         return []
 
 
+class _WheelPair(_Gear):
+    """Two wheels (centre points in 2D, axes in 3D) of pitch radii ``rad1``, ``rad2``;
+    subclasses give ``_wheels() -> (wheel1, wheel2)``."""
+
+    def _wheels(self):  # pragma: no cover - every subclass defines it
+        raise NotImplementedError
+
+    def geometry(self):
+        return list(self._wheels())
+
+    def pitch_circles(self):
+        w1, w2 = self._wheels()
+        return [(w1, self.rad1), (w2, self.rad2)]
+
+    def _d(self):
+        """``d = r_2 - r_1``, from the first wheel's centre to the second's."""
+        w1, w2 = self._wheels()
+        return w2.location() - w1.location()
+
+
 # -- 2D ---------------------------------------------------------------------------------------
 
 
-class _TwoWheels(_Gear):
+class _TwoWheels(_WheelPair):
     """Planar gears and pulleys: ``point1, rad1[, (sym, guess)], point2, rad2[, dist], C``.
 
     The variable is the direction angle ``Theta`` of ``d = r_2 - r_1`` (the line of
@@ -191,14 +211,8 @@ class _TwoWheels(_Gear):
                              "the radii of an internal pair differ")
         self._init_variable(spec)
 
-    def geometry(self):
-        return [self.p1, self.p2]
-
-    def pitch_circles(self):
-        return [(self.p1, self.rad1), (self.p2, self.rad2)]
-
-    def _d(self):
-        return self.p2.location() - self.p1.location()
+    def _wheels(self):
+        return self.p1, self.p2
 
     def _guess_expr(self):
         d = self._d()
@@ -407,7 +421,7 @@ def _axes(kind: str, *objs) -> list[Axis]:
     return out
 
 
-class _ParallelGears(_Gear):
+class _ParallelGears(_WheelPair):
     """Gears (``_sign = +1``: ``C = rad1 e1 + rad2 e2``, centres ``rad1 + rad2`` apart) or
     belts and chains (``-1``: ``C = rad1 e1 - rad2 e2``, centres ``dist`` apart) on parallel
     axes; ``_adjacent``: the heads of the axes side by side."""
@@ -437,14 +451,8 @@ class _ParallelGears(_Gear):
     def _centre_distance(self):
         return self.dist if self._sign < 0 else self.rad1 + self.rad2
 
-    def geometry(self):
-        return [self.a1, self.a2]
-
-    def pitch_circles(self):
-        return [(self.a1, self.rad1), (self.a2, self.rad2)]
-
-    def _d(self):
-        return self.a2.location() - self.a1.location()
+    def _wheels(self):
+        return self.a1, self.a2
 
     def _guess_expr(self):
         g1, k1 = _plain_frame(self.a1)
