@@ -138,7 +138,7 @@ def errors(knots: int, points: int = 721) -> dict[str, float]:
             "pressure angle": float(np.abs(phi - pressure_angle_exact(th)).max())}
 
 
-def plot(path: str, knots: int = 73) -> None:
+def plot(path: str, knots: int = 49) -> None:
     """Lift, velocity, acceleration and pressure angle vs cam angle to ``path``, and a
     snapshot of the cam (``ms.draw.CamPlot``) and roller at 40 degrees beside it
     (``<path stem>_snapshot.png``)."""
@@ -169,7 +169,7 @@ def plot(path: str, knots: int = 73) -> None:
     plt.close(snap)
 
 
-def main(path: str | None = None, knot_counts=(25, 49, 73)) -> dict[int, dict[str, float]]:
+def main(path: str | None = None, knot_counts=(25, 49)) -> dict[int, dict[str, float]]:
     table = {n: errors(n, 361) for n in knot_counts}
     print(f"cycloidal rise {H} over {np.degrees(BETA1):.0f} deg, dwell {np.degrees(DWELL1):.0f}, "
           f"return over {np.degrees(BETA3):.0f}; Rb = {RB}, roller {RR}, offset {E}")

@@ -64,30 +64,30 @@ def test_law_derivatives_match_numerical_differences():
     assert s.max() == pytest.approx(cs.H) and s.min() == 0.0
 
 
-def test_spline_cam_reproduces_the_law_at_73_knots():
-    e = cs.errors(73, 361)
-    assert e["lift"] < 1e-5                  # measured 4.7e-6 H
-    assert e["velocity"] < 4e-4              # 1.8e-4
-    assert e["acceleration"] < 3e-2          # 1.5e-2 (peak of the law: 2 pi H / beta^2 = 1.43)
-    assert e["pressure angle"] < 1e-4        # 5.2e-5 rad, against the closed form above
+def test_spline_cam_reproduces_the_law_at_49_knots():
+    # 49 knots (7.5 degrees apart) keep the test cheap: a spline cam of many knots takes
+    # seconds to compile (the table above)
+    e = cs.errors(49, 361)
+    assert e["lift"] < 4e-5                  # measured 1.9e-5 H
+    assert e["velocity"] < 8e-4              # 4.1e-4
+    assert e["acceleration"] < 5e-2          # 2.6e-2 (peak of the law: 2 pi H / beta^2 = 1.43)
+    assert e["pressure angle"] < 2.5e-4      # 1.1e-4 rad, against the closed form above
 
 
 def test_contact_parameter_is_the_cam_angle():
     # the profile's knot k is touched at cam angle knot k: the contact parameter follows theta
-    th, *_, sol, (_, _, _, _, _) = cs.sweep(73, 361)
+    th, *_, sol, (_, _, _, _, _) = cs.sweep(49, 361)
     np.testing.assert_allclose(sol.coordinate(cs.A), th, atol=1e-4)
 
 
 def test_error_falls_with_the_number_of_knots():
-    e25, e49, e73 = (cs.errors(n, 361) for n in (25, 49, 73))
+    e25, e49 = (cs.errors(n, 361) for n in (25, 49))
     order = {k: np.log(e25[k] / e49[k]) / np.log(2) for k in e25}
     # observed orders (h halves from 25 to 49 knots): lift 3.9, velocity 3.0, acceleration
-    # 2.0 (tending to 3, 2, 1 as the knots grow, see the module docstring)
+    # 2.0 (tending to 3, 2, 1 as the knots grow: the table in the module docstring)
     assert 3.0 < order["lift"] < 4.5
     assert order["velocity"] > 1.8
     assert order["acceleration"] > 0.9
-    for k in e25:                            # and monotonic
-        assert e25[k] > e49[k] > e73[k]
 
 
 def test_example_main_prints_the_table_and_plots(tmp_path, capsys):
