@@ -28,7 +28,9 @@ The profile's parametrisation by ``theta`` has a second derivative that jumps at
 transitions (it contains the jerk ``s'''``, which jumps for a cycloidal law): so the spline
 error does not fall as ``O(h^4)``, the order of a smooth curve, but as about ``h^3`` for the
 lift, ``h^2`` for the velocity and ``h`` for the acceleration (measured; see
-docs/cams.md, "Cam synthesis").
+docs/cams.md, "Cam synthesis"). The spline misses the profile by ``O(h^2)``, mostly along its
+tangent; through the pitch curve (only its third derivative jumps) it would converge as
+``h^4``.
 
 Run: ``python examples/cam_synthesis.py [plot.png]``
 """

@@ -151,3 +151,28 @@ def test_free_motion_of_a_cam_conserves_energy():
     w, vy = sol.coordinate("cam.th", 1)[0], sol.velocity(fol.point(0))[0, 1]
     assert E[0] == pytest.approx(0.5 * J * w**2 + 0.5 * mf * vy**2 + mf * 9.81 * y[0], rel=1e-9)
     assert np.ptp(E) < 1e-6 * abs(E[0])
+
+
+def test_order_is_limited_by_the_profile_parametrisation():
+    # why not h^4: the spline through the profile points P(theta) misses the curve by O(h^2)
+    # (its P'' jumps, along the tangent), while the same spline through the pitch curve
+    # p(theta) = R(-theta) (e, d0 + s) (only p''' jumps) misses it by O(h^4). Measured:
+    # profile 2.5e-4 -> 6.4e-5 (order 1.98), pitch curve 2.4e-5 -> 1.5e-6 (order 4.03).
+    def pitch(th):
+        s = cs.law(th)[0]
+        return np.stack([np.sin(th) * (cs.D0 + s), np.cos(th) * (cs.D0 + s)], axis=-1)
+
+    u = np.linspace(0, 2 * np.pi, 20001)
+
+    def miss(curve, n):
+        kn = np.linspace(0, 2 * np.pi, n)
+        pts = curve(kn)
+        pts[-1] = pts[0]
+        spl = ms.SplineFit(pts, "closed", knots=kn)
+        return np.abs(spl(u) - curve(u)).max()   # spl(u): (len(u), 2)
+
+    assert cs.E == 0.0                       # pitch() above is the radial case
+    order_profile = np.log2(miss(cs.profile_points, 49) / miss(cs.profile_points, 97))
+    order_pitch = np.log2(miss(pitch, 49) / miss(pitch, 97))
+    assert 1.8 < order_profile < 2.2
+    assert 3.8 < order_pitch < 4.3
