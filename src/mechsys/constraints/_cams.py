@@ -32,6 +32,15 @@ from ._angles import vector_norm
 from ._base import ConstraintBase, Variable, as_expr
 
 
+def _d(e, sym):
+    """``de/dsym``, with the derivatives of step functions set to zero: a periodic spline
+    profile reduces its parameter by ``floor``, which SymPy would leave as an uncompilable
+    ``Subs(Derivative(floor(x), x), ...)``."""
+    from ..compile._derive import _drop_step_derivatives
+
+    return e.applyfunc(lambda c: _drop_step_derivatives(sp.diff(c, sym)))
+
+
 class Profile:
     """A profile: a locus point and its parameters (one for a curve, two for a surface)."""
 
@@ -55,7 +64,7 @@ class Profile:
         return self.point.location()
 
     def local_tangents(self) -> list[sp.Matrix]:
-        return [self.point.local.diff(v.symbol) for v in self.params]
+        return [_d(self.point.local, v.symbol) for v in self.params]
 
     def tangents(self) -> list[sp.Matrix]:
         """Global tangents ``t_k = A ds'/da_k``."""
@@ -519,8 +528,8 @@ def profile_radius(result, constraint, profile: int = 1):
         raise MechError(f"{c.label()}: profile {profile} is a surface, which has two principal "
                         "radii of curvature, not one")
     sym = prof.params[0].symbol
-    t = prof.point.local.diff(sym)
-    tt = t.diff(sym)
+    t = _d(prof.point.local, sym)
+    tt = _d(t, sym)
     speed3 = sp.sqrt(t.dot(t)) ** 3
     if len(t) == 2:
         return result._finish(speed3 / (t[0] * tt[1] - t[1] * tt[0]))
