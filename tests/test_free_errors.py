@@ -181,3 +181,38 @@ def test_equilibrium_velocity_without_velocity_loads_raises():
     free = pendulum().free(drop=["hold"], solution="kinematic")
     with pytest.raises(ms.ModelError, match="no load depends on the velocities"):
         free.solve(0.0)
+
+
+def test_free_acceleration_is_taken_at_a_consistent_state_keeping_the_given_velocity():
+    """Before: free.solve(initial_condition={"a.th_d": 2}) on a double pendulum left b's
+    velocities at zero, a state the elbow forbids, and took the free acceleration there (a
+    silent wrong answer). Now the start is projected onto the constraints keeping the given
+    value: a.th_d stays 2 and b's coordinates follow (simulate does the same)."""
+    from mechsys import models
+
+    m = models.pendulum_chain(2)          # uniform rods of length 1, pinned end to end
+    m.solve(0.0)
+    free = m.free(drop=["lock0", "lock1"])
+    sol = free.solve(0.0, initial_condition={"l0.th_d": 2.0})
+    J, rhs = free.system.velocity_rhs(0.0, sol.q[0], sol.p)
+    np.testing.assert_allclose(J @ sol.qd[0] - rhs, 0, atol=1e-12)
+    assert float(sol.omega(m.body("l0"))) == 2.0                  # held exactly
+    # the elbow moves with link 0's tip, (0, 2) for the horizontal link
+    np.testing.assert_allclose(sol.velocity(m.body("l1").point(0)), [0, 2.0], atol=1e-12)
+    # the minimum change gives link 1 no rotation of its own (its rate was not given)
+    assert abs(float(sol.omega(m.body("l1")))) < 1e-12
+    # and simulate starts from the same state
+    run = free.simulate([0.0, 0.01], initial_condition={"l0.th_d": 2.0})
+    np.testing.assert_allclose(run.qd[0], sol.qd[0], atol=1e-12)
+
+
+def test_given_velocities_the_constraints_forbid_are_named():
+    from mechsys import models
+
+    m = models.pendulum_chain(1)          # a rod pinned at its origin: x, y cannot move
+    m.solve(0.0)
+    free = m.free(drop=["lock0"])
+    with pytest.raises(ms.ModelError, match=r"velocities \['l0.x_d', 'l0.th_d'\] are not allowed"):
+        free.solve(0.0, initial_condition={"l0.th_d": 2.0, "l0.x_d": 0.5})
+    with pytest.raises(ms.ModelError, match=r"positions \['l0.x'\] are not allowed"):
+        free.simulate((0, 0.1), initial_condition={"l0.x": 0.3})

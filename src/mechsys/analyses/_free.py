@@ -30,10 +30,12 @@ from .._errors import MechError, ModelError
 from ..results._load_outputs import lambda_guess_vector
 from ..results._solution import Solution, State
 from ..solvers._free import (
+    ConsistencyError,
     equilibrium_configuration,
     equilibrium_velocity,
     free_acceleration,
     project,
+    project_holding,
     scaling_at,
 )
 from ..solvers._integrators import (
@@ -106,9 +108,10 @@ class FreeSystem:
         self._p_given: dict[int, float] = {}
         self._q0, self._qd0 = self._state_from(
             initial_guess if initial_guess is not None else model.last_solution)
+        self._held0: dict = {"q": set(), "qd": set()}
         if initial_condition is not None:
             self._q0, self._qd0, self._p_given = self._apply_condition(
-                initial_condition, self._q0, self._qd0)
+                initial_condition, self._q0, self._qd0, self._held0)
 
     # -- properties ------------------------------------------------------------------------
     @property
@@ -169,9 +172,12 @@ class FreeSystem:
             qd = np.atleast_2d(sol.qd)[-1].copy()
         return q, qd
 
-    def _apply_condition(self, cond, q, qd):
-        """``(q, qd, {parameter index: value})`` with ``cond`` applied on top of ``q, qd``."""
+    def _apply_condition(self, cond, q, qd, held=None):
+        """``(q, qd, {parameter index: value})`` with ``cond`` applied on top of ``q, qd``;
+        ``held`` (a dict of two sets ``"q"``, ``"qd"``), when given, collects the indices of
+        the coordinates and velocities the mapping sets: the start projection keeps them."""
         q, qd = q.copy(), qd.copy()
+        held = {"q": set(), "qd": set()} if held is None else held
         if isinstance(cond, (Solution, State)):
             q, qd = self._from_solution(cond, qd, "initial_condition")
             return q, qd, {}
@@ -201,12 +207,16 @@ class FreeSystem:
                 continue
             target, key = (qd, name[:-2]) if name.endswith("_d") else (q, name)
             try:
-                target[lay.index(key)] = value
+                i = lay.index(key)
+                target[i] = value
+                held["qd" if target is qd else "q"].add(i)
             except ModelError:
                 raise ModelError(f"initial_condition: {name!r} is not a coordinate, velocity "
                                  "('<coordinate>_d') or parameter of this model") from None
         for kind, body, w in angular:
             self._set_angular_velocity(q, qd, body, w, local=(kind == "omega_local"))
+            sl = lay.body_slices[self.model.body(body).name]
+            held["qd"].update(range(sl.start + self.model.space.dim, sl.stop))
         return q, qd, given
 
     def _set_angular_velocity(self, q, qd, body, w, local):
@@ -227,10 +237,27 @@ class FreeSystem:
     def _start(self, initial_condition):
         """``(q, qd, p)`` of a call: the FreeSystem's start, ``initial_condition`` on top, and
         the parameters as they are now."""
+        held = {k: set(v) for k, v in self._held0.items()}
         if initial_condition is None:
-            return self._q0.copy(), self._qd0.copy(), self._params()
-        q, qd, given = self._apply_condition(initial_condition, self._q0, self._qd0)
-        return q, qd, self._params(given)
+            return self._q0.copy(), self._qd0.copy(), self._params(), held
+        q, qd, given = self._apply_condition(initial_condition, self._q0, self._qd0, held)
+        return q, qd, self._params(given), held
+
+    def _project_start(self, t, q, qd, p, held, scaling):
+        """The start state on the constraints, keeping the values the user gave (the rest
+        changes least); values the constraints do not allow are a ModelError naming them."""
+        try:
+            return project_holding(self.system, t, q, qd, p, scaling, sorted(held["q"]),
+                                   sorted(held["qd"]))
+        except ConsistencyError as exc:
+            names = self.system.layout.q_names
+            given = ([names[i] for i in sorted(held["q"])] if exc.held == "positions"
+                     else [names[i] + "_d" for i in sorted(held["qd"])])
+            raise ModelError(
+                f"initial_condition: the given {exc.held} {given} are not allowed by the kept "
+                f"constraints (scaled residual {exc.residual:.2e} left when they are held); "
+                "give fewer of them (the others follow) or values that satisfy the "
+                "constraints") from None
 
     def _result(self, t, Q, QD, QDD, LAM, p, its, extra=None, scalar=False):
         N = len(t)
@@ -274,7 +301,7 @@ class FreeSystem:
             raise ModelError(f"solve(t): t must be a finite number, got {t!r}")
         t = float(t)
         kw = self._newton(tolerance, max_iterations, "FreeSystem.solve")
-        q, qd, p = self._start(initial_condition)
+        q, qd, p, held = self._start(initial_condition)
         s = self.system
         lam0 = lambda_guess_vector(s, self.model, lambda_guess)
         if self.kind == "static":
@@ -298,6 +325,10 @@ class FreeSystem:
                 self._eqv = VelocityEquilibrium(s)
             qd, lam, its = equilibrium_velocity(self._eqv, s, t, q, qd, lam0, p, **kw)
             return self._result([t], q, qd, None, lam, p, [its], scalar=True)
+        # a free acceleration is only meaningful at a state the kept constraints allow: an
+        # initial condition that is not (say only a crank speed) is projected onto them first,
+        # as simulate() does (smallest change in the unit-free coordinates)
+        q, qd = self._project_start(t, q, qd, p, held, scaling_at(s, t, q, p))
         qdd, lam, its = free_acceleration(s, t, q, qd, p, lam0 if lambda_guess is not None
                                           else None, **kw)
         return self._result([t], q, qd, qdd, lam, p, [its], scalar=True)
@@ -339,9 +370,9 @@ class FreeSystem:
         kw = self._newton(tolerance, max_iterations, "FreeSystem.simulate")
         s = self.system
         n = s.n
-        q0, qd0, p = self._start(initial_condition)
+        q0, qd0, p, held = self._start(initial_condition)
         sc = scaling_at(s, t0, q0, p)          # units of the coordinates, once per run
-        q0, qd0 = project(s, t0, q0, qd0, p, scaling=sc)
+        q0, qd0 = self._project_start(t0, q0, qd0, p, held, sc)
         lam_box = [None]
 
         def rhs(tt, y):

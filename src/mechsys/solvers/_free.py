@@ -245,6 +245,56 @@ def project(system, t, q, qd, p, tol=1e-12, max_iterations=8, scaling=None):
     return q, qd
 
 
+def project_holding(system, t, q, qd, p, scaling, hold_q=(), hold_qd=(), tol=1e-12,
+                    max_iterations=8):
+    """:func:`project`, keeping the coordinates ``hold_q`` and velocities ``hold_qd`` (index
+    lists: the values a user gave in an initial condition) as they are: the others take the
+    smallest change (unit-free, least squares) that satisfies the constraints. Given values
+    that the constraints do not allow raise :class:`ConsistencyError` (``.held``: which of
+    ``q``/``qd`` could not be met; ``.residual``: the scaled residual left)."""
+    hold_q, hold_qd = list(hold_q), list(hold_qd)
+    if not hold_q and not hold_qd:
+        return project(system, t, q, qd, p, tol, max_iterations, scaling)
+    q, qd = np.array(q, dtype=float), np.array(qd, dtype=float)
+    if system.m == 0:
+        return q, qd
+
+    def step(J, b, hold):
+        """Least-squares, minimum-norm scaled correction with the held columns fixed."""
+        r = scaling.rows(J)
+        Js = np.asarray(scaling.scaled(J.toarray() if sps.issparse(J) else J, r))
+        Js[:, hold] = 0.0
+        dx = np.linalg.lstsq(Js, -b / r, rcond=1e-12)[0]
+        return scaling.columns * dx, r
+
+    for _ in range(max_iterations):
+        F, J = system.residual_and_jacobian(t, q, p)
+        r = scaling.rows(J)
+        if np.abs(F / r).max(initial=0.0) <= tol * (1.0 + scaling.offset):
+            break
+        q += step(J, F, hold_q)[0]
+    F, J = system.residual_and_jacobian(t, q, p)
+    left = np.abs(F / scaling.rows(J)).max(initial=0.0)
+    if left > 1e-8 * (1.0 + scaling.offset):
+        raise ConsistencyError("positions", left)
+    J, rhs = system.velocity_rhs(t, q, p)
+    dqd, r = step(J, J @ qd - rhs, hold_qd)
+    qd += dqd
+    left = np.abs((J @ qd - rhs) / r).max(initial=0.0)
+    if left > 1e-8 * (1.0 + np.abs(qd / scaling.columns).max(initial=0.0)):
+        raise ConsistencyError("velocities", left)
+    return q, qd
+
+
+class ConsistencyError(Exception):
+    """Internal: given initial values the constraints do not allow (the analysis names
+    them in a ModelError)."""
+
+    def __init__(self, held: str, residual: float):
+        super().__init__(held)
+        self.held, self.residual = held, residual
+
+
 def _damped_newton(evaluate, x, n, t, what, hint, tol=1e-12, max_iterations=50,
                    col=None, row=None):
     """Newton with Armijo backtracking on ``R(x) = 0``; ``evaluate(x) -> (R, K)``.
