@@ -42,3 +42,30 @@ def test_default_backend_is_symengine_llvm():
     x = sp.Symbol("x")
     f = compile_exprs([x], [sp.sin(x)])
     assert f.backend.startswith("symengine")
+
+
+def test_fast_entry_point_agrees_with_the_checked_call_and_returns_fresh_arrays():
+    """The compiled kernels use SymEngine's unchecked ``unsafe_real`` (0.8 us instead of 4 us
+    a call); the checks it skips are made by mechsys: a wrong length raises, each call
+    returns a new array (a caller keeping the last result must not see it overwritten), and
+    the values equal the checked call's, also for two-stage Piecewise kernels."""
+    import numpy as np
+    import pytest
+    import sympy as sp
+
+    from mechsys.compile import compile_exprs
+
+    x, y = sp.symbols("x y")
+    pw = sp.Piecewise((x**2, x < 0.5), (1 - x, True))
+    for exprs in ([sp.sin(x) * y, x + y, y**2], [pw * y, pw + y, sp.cos(pw)]):
+        f = compile_exprs([x, y], exprs, "symengine")
+        a, b = np.array([0.3, 2.0]), np.array([0.7, -1.0])
+        fa = f(a)
+        fb = f(b)
+        np.testing.assert_allclose(fa, f._slow(a), rtol=1e-15)
+        np.testing.assert_allclose(fb, f._slow(b), rtol=1e-15)
+        assert not np.shares_memory(fa, fb)
+        ref = [float(e.subs({x: 0.3, y: 2.0})) for e in exprs]
+        np.testing.assert_allclose(fa, ref, rtol=1e-14)
+        with pytest.raises(ValueError, match="called with shape"):
+            f(np.zeros(3))
