@@ -141,3 +141,31 @@ def test_default_drawing_of_spatial_gears_lies_normal_to_their_axes():
     assert len(circles) == 2
     for c in circles:
         np.testing.assert_allclose(c[:, 2], 0.0, atol=1e-12)
+
+
+def test_default_drawing_of_every_gear_example():
+    """Every gear type's default picture builds (LeadScrew5 and OrthogonalGears5 have no
+    pitch radius to draw; racks draw their pinion)."""
+    import runpy
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1] / "examples"
+    for name in ("gear_screw_jack.py", "gear_planetary.py"):
+        ns = runpy.run_path(str(root / name))
+        m = next(v for v in ns.values() if isinstance(v, ms.Model))
+        d.Scene(m).evaluate(m.last_solution)
+    r = 0.6
+    m = ms.Model3D()
+    pinion = m.add_body("pinion")
+    rack = m.add_body("rack", guess=((0, -r, 0), (1, 0, 0, 0)))
+    m.add(ms.Revolute5(m.ground.axis((0, 0, 0), (0, 0, 1)), pinion.axis(0, (0, 0, 1))))
+    m.add(ms.RackAndPinion5(pinion.axis(0, (0, 0, 1), (1, 0, 0)), r, ("a", 0.0),
+                            rack.axis(0, (0, 0, 1), (1, 0, 0)), 0.0))
+    m.add(ms.RotationLock1(rack.axis(0, (0, 0, 1), (1, 0, 0)),
+                           m.ground.axis((0, 0, 0), (0, 0, 1), (1, 0, 0)), 0.0))
+    m.add(ms.RotationLock1(pinion.axis(0, (0, 0, 1)), m.ground.axis((0, 0, 0), (0, 0, 1)), T))
+    sol = m.solve(0.3)
+    circles = _dashed_circles(d.Scene(m).evaluate(sol).items, 3)
+    assert len(circles) == 1
+    # the pinion's pitch circle: about its axis (z) through the origin
+    np.testing.assert_allclose(np.linalg.norm(circles[0], axis=1), r, atol=1e-12)

@@ -668,9 +668,6 @@ class LeadScrew5(_Gear):
     def geometry(self):
         return [self.a1, self.a2]
 
-    def pitch_circles(self):
-        return [(self.a1, self.rad)]
-
     def _guess_expr(self):
         g2, k2 = _plain_frame(self.a2)
         g1 = self.a1.reference_vector().direction()
@@ -703,6 +700,9 @@ class _SpatialRack(_Gear):
 
     def geometry(self):
         return [self.a1, self.a2]
+
+    def pitch_circles(self):
+        return [(self.a1, self.rad)]
 
     def _guess_expr(self):
         g2, k2 = _plain_frame(self.a2)
