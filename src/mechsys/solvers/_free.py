@@ -345,8 +345,8 @@ def _equilibrium_units(system, t, q, p, evaluate_without_multipliers):
 
     so that positions are in units of ``L``, multipliers in units of the loads, and every
     equation is dimensionless."""
-    sc = scaling_at(system, t, q, p)
     J = system.jacobian(t, q, p) if system.m else np.zeros((0, system.n))
+    sc = Scaling.of(system, np.asarray(q, dtype=float), J)
     r = sc.rows(J) if system.m else np.zeros(0)
     R0 = evaluate_without_multipliers()
     E = float(np.abs(R0[system.m :] * sc.columns).max(initial=0.0))
