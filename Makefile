@@ -24,7 +24,9 @@ lint: $(STAMP)
 	$(VENV)/bin/ruff check src tests examples benchmarks
 
 bench: $(STAMP)
-	$(PY) benchmarks/kinematic_sweep.py
+	$(PY) -m pip install --quiet -e ".[bench]"
+	$(PY) benchmarks/kinematic_sweep.py --write docs/performance.md
+	$(PY) benchmarks/peers/run.py --write docs/performance.md
 
 docs: $(STAMP)
 	$(PY) -m mechsys._docgen docs/constraints.md

@@ -240,7 +240,12 @@ def main(argv: list[str] | None = None) -> int:
             sys.argv[1:] if argv is None else argv)
         page = PAGE.format(machine=machine(), command=cmd.strip(), sweeps=sweep_table(sweeps),
                            evals=eval_table(evals), growth=growth)
-        Path(args.write).write_text(page, encoding="utf-8")
+        out = Path(args.write)
+        old = out.read_text(encoding="utf-8") if out.exists() else ""
+        begin, end = "<!-- peers:begin -->", "<!-- peers:end -->"
+        if begin in old and end in old:   # keep the peers' tables (benchmarks/peers/run.py)
+            page += "\n" + begin + old.split(begin, 1)[1].split(end, 1)[0] + end + "\n"
+        out.write_text(page, encoding="utf-8")
         print(f"wrote {args.write}")
     return 0
 
