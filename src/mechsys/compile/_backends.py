@@ -147,6 +147,20 @@ class _SymengineCompiled(Compiled):
         self._f.unsafe_real(x, out)
         return out
 
+    def c_function(self):
+        """``(address, context)`` of the kernel's C entry point
+        ``void f(double *out, const double *x, void *context)`` (the LLVM backend, no
+        ``Piecewise`` stage), for compiled loops (``solvers/_jit.py``); None otherwise. Valid
+        while this object lives."""
+        if self._pre is not None or self.backend != "symengine-llvm":
+            return None
+        import ctypes
+
+        if not hasattr(self, "_cfun"):
+            self._cfun = self._f.as_ctypes()     # keeps the pointers' owners alive
+        fn, ctx = self._cfun
+        return ctypes.cast(fn, ctypes.c_void_p).value, ctx.value or 0
+
     def _slow(self, x):
         if self._pre is not None:
             buf = self._buf

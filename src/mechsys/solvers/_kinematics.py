@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._errors import ConvergenceError, SingularJacobianError
+from . import _jit
 from ._linalg import SPARSE_THRESHOLD, Scaling, Singular, rotation_columns
 from ._position import PositionOptions, describe_singular, solve_position
 
@@ -111,7 +112,15 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
     if sc is None and N:
         sc, evals = _scaling(system, times[0], q0, p, sparse), 1
     rot = np.flatnonzero(rotation_columns(system))  # indices of angles / Euler parameters
-    for k, t in enumerate(times):
+    k0 = 0
+    pointers = _jit.plan(system, N, order) if N else None
+    if pointers is not None:
+        # the regular points in compiled code; the first one needing care is left to the loop below
+        k0, done = _jit.run(system, pointers, times, q0, p, order, options or PositionOptions(), sc,
+                            rot, Q, QD, QDD, its, rconds)
+        evals += done
+    for k in range(k0, N):
+        t = times[k]
         g = q0 if k == 0 else _predict(Q, QD, QDD, rconds, times, k, rot)
         res = _solve_point(system, t, g, Q[k - 1] if k else None, options, p, sc, rot)
         q = res.q

@@ -1,0 +1,141 @@
+r"""The kinematic sweep compiled with Numba: the loop of :func:`~mechsys.solvers.sweep` with no
+Python between the compiled equations.
+
+Per point, exactly the arithmetic of the Python path (:mod:`mechsys.solvers._kinematics`,
+:mod:`mechsys.solvers._position`, :class:`~mechsys.solvers._linalg.Scaling`): the predictor,
+the damped Newton iteration on the unit-free equations ``R^-1 Phi_q D``, the velocity
+``Phi_q qd = -Phi_t`` and acceleration ``Phi_q qdd = gamma`` solves. The constraint
+kernels are SymEngine's LLVM functions, called through their C entry points
+(``void f(double *out, const double *in, void *ctx)``); the factorisations are LAPACK's
+``dgetrf``/``dgecon``/``dgetrs`` (SciPy's own, through ``scipy.linalg.cython_lapack``), the
+same routines the Python path calls, so both paths give the same numbers.
+
+The compiled loop handles the regular points. At the first point that needs the Python
+path's care (Newton not converging, a singular or nearly singular Jacobian, a branch jump)
+it stops and returns that point's index; the Python loop takes over from there with its
+whole logic (retries, toggle handling, diagnostics). Results never depend on which path ran.
+
+When it runs (``MECHSYS_JIT``): ``0`` never, ``1`` whenever possible, unset (``auto``) when
+the sweep has at least :data:`AUTO_POINTS` points or the compiled loop has already run in
+this process: loading Numba and the cached machine code costs about 0.7 s CPU once per
+process, which a short sweep would not recover. Possible means: Numba installed (the
+``fast`` extra), the SymEngine LLVM backend without ``Piecewise`` (spline) kernels, as many
+equations as coordinates, and a dense system (``n <= SPARSE_THRESHOLD``).
+
+Measured (slider-crank, 1000 points with velocities and accelerations): see
+``docs/performance.md`` and ``docs/decisions/0010-compiled-sweep.md``.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+
+import numpy as np
+
+from ._linalg import RCOND_MIN, SPARSE_THRESHOLD
+
+#: ``auto``: the compiled loop is used for sweeps of at least this many points (or once it
+#: has been loaded in this process)
+AUTO_POINTS = 1000
+
+_state: dict = {"loaded": False, "loop": None, "lapack": None, "failed": None}
+
+
+def mode() -> str:
+    """``"off"``, ``"on"`` or ``"auto"`` from ``MECHSYS_JIT``."""
+    v = os.environ.get("MECHSYS_JIT", "").strip().lower()
+    if v in ("0", "off", "false", "no"):
+        return "off"
+    if v in ("1", "on", "true", "yes"):
+        return "on"
+    return "auto"
+
+
+def available() -> bool:
+    """Numba can be imported."""
+    if _state["failed"] is None:
+        try:
+            import llvmlite  # noqa: F401
+            import numba  # noqa: F401
+
+            _state["failed"] = False
+        except ImportError:
+            _state["failed"] = True
+    return not _state["failed"]
+
+
+def _pointer(kernel):
+    """``(address, context)`` of a compiled kernel's C entry point, or None."""
+    get = getattr(kernel, "c_function", None)
+    return get() if get is not None else None
+
+
+def plan(system, points: int, order: int):
+    """The kernels' C entry points when the compiled loop should run this sweep, else None."""
+    m = mode()
+    if m == "off" or system.n == 0 or system.m != system.n or system.n > SPARSE_THRESHOLD:
+        return None
+    if m == "auto" and not _state["loaded"] and points < AUTO_POINTS:
+        return None
+    if not available():
+        return None
+    kernels = [system.f_position]
+    if order >= 1:
+        kernels.append(system.f_velocity)
+    if order >= 2:
+        kernels.append(system.f_gamma)
+    ptrs = [_pointer(k) for k in kernels]
+    if any(p is None for p in ptrs):
+        return None
+    while len(ptrs) < 3:
+        ptrs.append((0, 0))
+    return np.array([a for pair in ptrs for a in pair], dtype=np.int64)
+
+
+def _capsule_address(capsule) -> int:
+    api = ctypes.pythonapi
+    api.PyCapsule_GetName.restype = ctypes.c_char_p
+    api.PyCapsule_GetName.argtypes = [ctypes.py_object]
+    api.PyCapsule_GetPointer.restype = ctypes.c_void_p
+    api.PyCapsule_GetPointer.argtypes = [ctypes.py_object, ctypes.c_char_p]
+    return api.PyCapsule_GetPointer(capsule, api.PyCapsule_GetName(capsule))
+
+
+def _lapack() -> np.ndarray:
+    if _state["lapack"] is None:
+        from scipy.linalg import cython_lapack
+
+        caps = cython_lapack.__pyx_capi__
+        _state["lapack"] = np.array([_capsule_address(caps[f]) for f in ("dgetrf", "dgecon", "dgetrs")],
+                                    dtype=np.int64)
+    return _state["lapack"]
+
+
+def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD, its, rconds):
+    """Fill ``Q``, ``QD``, ``QDD``, ``its``, ``rconds`` from point 0 on; return ``(k, evals)``:
+    the first point left to the Python loop (``len(times)`` when all are done) and the number
+    of kernel calls made."""
+    if _state["loop"] is None:
+        from ._jit_loop import sweep_dense
+
+        _state["loop"] = sweep_dense
+    loop = _state["loop"]
+    _state["loaded"] = True
+    n = system.n
+    dummy = np.zeros((1, n))
+    qd_out = QD if QD is not None else dummy
+    qdd_out = QDD if QDD is not None else dummy
+    rc = rconds if rconds is not None else np.full(len(times), np.nan)
+    tol = options.ftol * (1.0 + scaling.offset)
+    k, evals = loop(pointers, _lapack(), np.ascontiguousarray(times, dtype=float),
+                    np.ascontiguousarray(q0, dtype=float),
+                    np.ascontiguousarray(system.p_values if p is None else p, dtype=float),
+                    system.jac_rows.astype(np.int64), system.jac_cols.astype(np.int64),
+                    np.ascontiguousarray(scaling.columns, dtype=float), float(tol),
+                    int(options.max_iterations), bool(options.damping), int(order),
+                    rot.astype(np.int64), Q, qd_out, qdd_out, its, rc)
+    return int(k), int(evals)
+
+
+__all__ = ["AUTO_POINTS", "RCOND_MIN", "available", "mode", "plan", "run"]

@@ -1,0 +1,307 @@
+"""Numba code of the compiled kinematic sweep (imported only when it runs: see ``_jit.py``).
+
+Every function mirrors one piece of the Python path, in the same order of floating-point
+operations, so that both give the same numbers:
+
+* ``_eval``          ``System.f_position`` / ``f_velocity`` / ``f_gamma`` at ``[t, q, qd, p]``
+* ``_assemble``      ``System.assemble`` (dense ``Phi_q`` from its nonzero values)
+* ``_rows``          ``Scaling.rows``
+* ``_factor``        ``Scaling.factor`` -> ``Factor`` (LAPACK dgetrf + dgecon on ``R^-1 J D``)
+* ``_solve``         ``ScaledFactor.solve``
+* ``_newton``        ``solve_position`` with a given scaling
+* ``_predict``       ``_kinematics._predict``
+
+The matrices handed to LAPACK are stored transposed in C order, which is column-major
+(Fortran) order of the matrix itself.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+from llvmlite import ir
+from numba import types
+from numba.core import cgutils
+from numba.extending import intrinsic
+
+from ._kinematics import RCOND_WARN, ROTATION_JUMP, ROTATION_SLACK, ROTATION_START
+from ._linalg import RCOND_MIN
+
+
+@intrinsic
+def _ccall(typingctx, addr, args):
+    """Call ``void f(void *, ...)`` at ``addr``: each array of the tuple ``args`` passes its
+    data pointer, each integer passes as a pointer value (a context)."""
+    sig = types.void(addr, args)
+
+    def codegen(context, builder, signature, llargs):
+        vp = ir.IntType(8).as_pointer()
+        tup_ty = signature.args[1]
+        vals = cgutils.unpack_tuple(builder, llargs[1], len(tup_ty))
+        ptrs = []
+        for ty, val in zip(tup_ty, vals):
+            if isinstance(ty, types.Array):
+                ptrs.append(builder.bitcast(context.make_array(ty)(context, builder, val).data, vp))
+            else:
+                ptrs.append(builder.inttoptr(val, vp))
+        fn = builder.inttoptr(llargs[0], ir.FunctionType(ir.VoidType(), [vp] * len(ptrs)).as_pointer())
+        builder.call(fn, ptrs)
+        return context.get_dummy_value()
+
+    return sig, codegen
+
+
+@nb.njit(cache=True)
+def _eval(addr, ctx, x, out):
+    _ccall(addr, (out, x, ctx))
+
+
+@nb.njit(cache=True)
+def _assemble(vals, off, jr, jc, J):
+    J[:, :] = 0.0
+    for k in range(jr.size):
+        J[jr[k], jc[k]] += vals[off + k]
+
+
+@nb.njit(cache=True)
+def _rows(J, columns, r):
+    n = J.shape[0]
+    for i in range(n):
+        big = 0.0
+        for j in range(J.shape[1]):
+            v = abs(J[i, j] * columns[j])
+            if v > big:
+                big = v
+        r[i] = big if big > 0 else 1.0
+
+
+@nb.njit(cache=True)
+def _factor(lapack, J, r, columns, B, ipiv, ibuf, cbuf, dbuf, work, iwork):
+    """LU of ``R^-1 J D`` into ``B`` (transposed storage); returns its reciprocal condition
+    number, or -1 when singular (the Python path's ``Singular``)."""
+    n = J.shape[0]
+    for i in range(n):
+        inv = 1.0 / r[i]
+        for j in range(n):
+            B[j, i] = (J[i, j] * columns[j]) * inv
+    anorm = 0.0
+    for j in range(n):
+        s = 0.0
+        for i in range(n):
+            s += abs(B[j, i])
+        if s > anorm:
+            anorm = s
+    ibuf[0] = n          # m, n, lda
+    ibuf[1] = n
+    ibuf[2] = n
+    ibuf[3] = 0          # info
+    _ccall(lapack[0], (ibuf[0:1], ibuf[1:2], B, ibuf[2:3], ipiv, ibuf[3:4]))
+    if ibuf[3] > 0 or anorm == 0:
+        return -1.0
+    cbuf[0] = 49         # '1': one-norm
+    dbuf[0] = anorm
+    dbuf[1] = 0.0
+    _ccall(lapack[1], (cbuf[0:1], ibuf[1:2], B, ibuf[2:3], dbuf[0:1], dbuf[1:2], work, iwork,
+                       ibuf[3:4]))
+    rcond = dbuf[1]
+    if rcond < RCOND_MIN:
+        return -1.0
+    return rcond
+
+
+@nb.njit(cache=True)
+def _solve(lapack, B, ipiv, r, columns, b, out, ibuf, cbuf):
+    n = r.size
+    for i in range(n):
+        out[i] = b[i] / r[i]
+    cbuf[1] = 78         # 'N': no transpose
+    ibuf[4] = 1          # nrhs
+    _ccall(lapack[2], (cbuf[1:2], ibuf[1:2], ibuf[4:5], B, ibuf[2:3], ipiv, out, ibuf[2:3],
+                       ibuf[3:4]))
+    for i in range(n):
+        out[i] = columns[i] * out[i]
+
+
+@nb.njit(cache=True)
+def _scaled_norm(F, r, m):
+    norm = 0.0
+    for i in range(m):
+        v = abs(F[i] / r[i])
+        if v > norm:
+            norm = v
+    return norm
+
+
+@nb.njit(cache=True)
+def _jump(q, ref, rot):
+    big = 0.0
+    for j in rot:
+        v = abs(q[j] - ref[j])
+        if v > big:
+            big = v
+    return big
+
+
+@nb.njit(cache=True)
+def _predict(Q, QD, QDD, rconds, times, k, rot, order, g):
+    n = Q.shape[1]
+    dt = times[k] - times[k - 1]
+    have_secant = k >= 2
+    sec = np.empty(n)
+    if have_secant:
+        dt0 = times[k - 1] - times[k - 2]
+        for j in range(n):
+            sec[j] = Q[k - 1, j] + (Q[k - 1, j] - Q[k - 2, j]) * (dt / dt0) if dt0 != 0 else Q[k - 1, j]
+    if order == 0 or (rconds[k - 1] < RCOND_WARN and have_secant):
+        for j in range(n):
+            g[j] = sec[j] if have_secant else Q[k - 1, j]
+        return
+    if rconds[k - 1] < RCOND_WARN:
+        big = 0.0
+        for j in rot:
+            v = abs(QD[k - 1, j] * dt)
+            if v > big:
+                big = v
+        f = ROTATION_START / big if big > ROTATION_START else 1.0
+        for j in range(n):
+            step = QD[k - 1, j] * dt
+            g[j] = Q[k - 1, j] + (step * f if big > ROTATION_START else step)
+        return
+    for j in range(n):
+        g[j] = Q[k - 1, j] + QD[k - 1, j] * dt
+    if order >= 2:
+        for j in range(n):
+            g[j] = g[j] + 0.5 * QDD[k - 1, j] * dt * dt
+    if have_secant and rot.size:
+        a = 0.0
+        b = 0.0
+        for j in rot:
+            a = max(a, abs(g[j] - Q[k - 1, j]))
+            b = max(b, abs(sec[j] - Q[k - 1, j]))
+        if a > ROTATION_SLACK + 4 * b:
+            for j in range(n):
+                g[j] = sec[j]
+
+
+@nb.njit(cache=True)
+def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping, order, rot,
+                Q, QD, QDD, its, rconds):
+    """The sweep's regular points (see the module docstring); returns ``(k, evaluations)``
+    with ``k`` the first point left to the Python loop."""
+    n = q0.size
+    m = n
+    nnz = jr.size
+    npar = p.size
+    N = times.size
+    x = np.zeros(1 + 2 * n + npar)
+    for j in range(npar):
+        x[1 + 2 * n + j] = p[j]
+    out_pos = np.empty(m + nnz)
+    out_vel = np.empty(nnz + m)
+    out_gam = np.empty(m)
+    J = np.empty((m, n))
+    B = np.empty((n, n))
+    ipiv = np.empty(n, dtype=np.int32)
+    ibuf = np.zeros(5, dtype=np.int32)
+    cbuf = np.zeros(2, dtype=np.uint8)
+    dbuf = np.zeros(2)
+    work = np.empty(4 * n)
+    iwork = np.empty(n, dtype=np.int32)
+    r = np.empty(m)
+    F = np.empty(m)
+    q = np.empty(n)
+    g = np.empty(n)
+    dq = np.empty(n)
+    qn = np.empty(n)
+    rhs = np.empty(m)
+    evals = 0
+    for k in range(N):
+        t = times[k]
+        x[0] = t
+        if k == 0:
+            for j in range(n):
+                g[j] = q0[j]
+        else:
+            _predict(Q, QD, QDD, rconds, times, k, rot, order, g)
+        # -- Newton (solve_position) from g --
+        for j in range(n):
+            q[j] = g[j]
+            x[1 + j] = q[j]
+            x[1 + n + j] = 0.0
+        _eval(ptrs[0], ptrs[1], x, out_pos)
+        e = 1
+        for i in range(m):
+            F[i] = out_pos[i]
+        _assemble(out_pos, m, jr, jc, J)
+        _rows(J, columns, r)
+        norm = _scaled_norm(F, r, m)
+        it = 0
+        ok = False
+        while True:
+            finite = True
+            for i in range(m):
+                if not np.isfinite(F[i]):
+                    finite = False
+            if not finite:
+                break
+            if norm <= tol and it > 0:
+                ok = True
+                break
+            if it >= maxit:
+                break
+            if _factor(lapack, J, r, columns, B, ipiv, ibuf, cbuf, dbuf, work, iwork) < 0:
+                break
+            _solve(lapack, B, ipiv, r, columns, F, dq, ibuf, cbuf)
+            for j in range(n):
+                dq[j] = -dq[j]
+            a = 1.0
+            while True:
+                for j in range(n):
+                    qn[j] = q[j] + a * dq[j]
+                    x[1 + j] = qn[j]
+                _eval(ptrs[0], ptrs[1], x, out_pos)
+                e += 1
+                nn = 0.0
+                for i in range(m):
+                    v = abs(out_pos[i] / r[i])
+                    if v > nn:
+                        nn = v
+                if not damping or nn <= (1 - 1e-4 * a) * norm or a < 1e-3 or norm <= tol:
+                    break
+                a *= 0.5
+            for j in range(n):
+                q[j] = qn[j]
+            for i in range(m):
+                F[i] = out_pos[i]
+            _assemble(out_pos, m, jr, jc, J)
+            norm = nn
+            it += 1
+        if not ok:
+            return k, evals
+        if k > 0 and _jump(q, g, rot) > ROTATION_JUMP:
+            return k, evals
+        # -- velocity and acceleration with the Newton's row scales --
+        if order >= 1:
+            for j in range(n):
+                x[1 + j] = q[j]
+            _eval(ptrs[2], ptrs[3], x, out_vel)
+            _assemble(out_vel, 0, jr, jc, J)
+            rc = _factor(lapack, J, r, columns, B, ipiv, ibuf, cbuf, dbuf, work, iwork)
+            if rc < 0:
+                return k, evals
+            for i in range(m):
+                rhs[i] = -out_vel[nnz + i]
+            _solve(lapack, B, ipiv, r, columns, rhs, QD[k], ibuf, cbuf)
+            rconds[k] = rc
+            e += 1
+            if order >= 2:
+                for j in range(n):
+                    x[1 + n + j] = QD[k, j]
+                _eval(ptrs[4], ptrs[5], x, out_gam)
+                _solve(lapack, B, ipiv, r, columns, out_gam, QDD[k], ibuf, cbuf)
+                e += 1
+        for j in range(n):
+            Q[k, j] = q[j]
+        its[k] = it
+        evals += e
+    return N, evals
