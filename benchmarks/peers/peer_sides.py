@@ -88,7 +88,7 @@ def mechsys_cases(problems: set[str], sizes) -> list[Case]:
             continue
         free, comp = F.compiled(F.chain, n)
         names = [f"l{k}.th" for k in range(n)]
-        for method, opts in (dop(1e-7), dop(1e-8), dop(1e-8, False)):
+        for method, opts in (dop(1e-5), dop(1e-6), dop(1e-7), dop(1e-8, False)):
             c = _mechsys_case(f"B{n}", free, P.T_CHAIN, names, method, opts, _label(method, opts),
                               gap=False)
             c.extra["compile"] = comp["compile"]

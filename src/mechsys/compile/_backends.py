@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 import sympy as sp
@@ -98,11 +99,133 @@ def _split_piecewise(exprs):
 
 
 def _lambdify(args, exprs, opt_level):
+    path = _cache_path(args, exprs, opt_level)
+    if path is not None:
+        f = _cache_load(path)
+        if f is not None:
+            return f, "symengine-llvm"
     try:
-        return _se.Lambdify(list(args), list(exprs), backend="llvm", cse=False,
-                            opt_level=opt_level), "symengine-llvm"
+        f = _se.Lambdify(list(args), list(exprs), backend="llvm", cse=False, opt_level=opt_level)
     except (ValueError, TypeError, RuntimeError):  # built without LLVM, or unsupported
         return _se.Lambdify(list(args), list(exprs), cse=False), "symengine-lambda"
+    if path is not None:
+        _cache_store(path, f)
+    return f, "symengine-llvm"
+
+
+# -- on-disk cache of compiled kernels ------------------------------------------------------
+#: bump when the layout of cached kernels changes
+_CACHE_FORMAT = 1
+
+
+def cache_dir() -> Path | None:
+    """Where compiled LLVM kernels are kept between runs, or None when caching is off.
+
+    ``MECHSYS_CACHE``: ``0``/``off`` disables the cache, a path chooses the directory;
+    default ``$XDG_CACHE_HOME/mechsys/kernels`` (``~/.cache/mechsys/kernels``). A kernel is
+    stored under a hash of its argument list, its expressions, the optimisation level, the
+    SymEngine version and this machine's CPU (LLVM compiles for the host CPU), so a second
+    run of the same script compiles nothing, and any change of the model's equations makes a
+    new entry. The files are pickles of SymEngine's ``Lambdify`` (machine code): the
+    directory must be writable by you alone, like the rest of your home directory.
+    """
+    env = os.environ.get("MECHSYS_CACHE", "").strip()
+    if env.lower() in ("0", "off", "false", "no"):
+        return None
+    if env and env.lower() not in ("1", "on", "true", "yes"):
+        return Path(env).expanduser()
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "mechsys" / "kernels"
+
+
+def _host() -> str:
+    import platform
+
+    cpu = platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith(("model name", "flags")):
+                cpu += "|" + line
+    except OSError:
+        pass
+    return cpu
+
+
+def _cache_path(args, exprs, opt_level) -> Path | None:
+    d = cache_dir()
+    if d is None:
+        return None
+    import hashlib
+
+    h = hashlib.sha256()
+    for part in (str(_CACHE_FORMAT), _se.__version__, str(opt_level), _host(),
+                 repr([str(a) for a in args]), _fingerprint(exprs)):
+        h.update(part.encode())
+        h.update(b"\0")
+    return d / f"{h.hexdigest()}.pkl"
+
+
+def _fingerprint(exprs) -> str:
+    """An exact hash of SymEngine expressions. Their printed form is not enough: it rounds
+    floating-point numbers to 15 digits, so two models differing in the 16th digit of a
+    length would share a kernel. Each node is hashed from its type, its exact data (the
+    hexadecimal form of a double) and its children's hashes (shared subexpressions once)."""
+    import hashlib
+
+    memo: dict = {}
+
+    def node(e) -> str:
+        r = memo.get(e)
+        if r is not None:
+            return r
+        args = e.args
+        if isinstance(e, _se.RealDouble):
+            data = "f:" + float(e).hex()
+        elif args:
+            name = type(e).__name__
+            if isinstance(e, _se.FunctionSymbol):
+                name += ":" + e.get_name()
+            data = name + "(" + ",".join(node(a) for a in args) + ")"
+        else:
+            data = type(e).__name__ + ":" + str(e)
+        r = hashlib.blake2b(data.encode(), digest_size=16).hexdigest() if len(data) > 32 else data
+        memo[e] = r
+        return r
+
+    return hashlib.sha256("|".join(node(e) for e in exprs).encode()).hexdigest()
+
+
+def _cache_load(path: Path):
+    import pickle
+
+    try:
+        with open(path, "rb") as fh:
+            return pickle.load(fh)
+    except FileNotFoundError:
+        return None
+    except Exception:  # a truncated or foreign file: compile again and replace it
+        try:
+            path.unlink()
+        except OSError:
+            pass
+        return None
+
+
+def _cache_store(path: Path, f) -> None:
+    import pickle
+    import tempfile
+
+    tmp = None
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=path.parent, suffix=".tmp", delete=False) as fh:
+            tmp = fh.name
+            pickle.dump(f, fh)
+        os.replace(tmp, path)     # atomic: a parallel run never reads half a file
+    except (OSError, pickle.PicklingError, TypeError):
+        # an unwritable cache costs compile time, nothing else
+        if tmp is not None and os.path.exists(tmp):
+            os.unlink(tmp)
 
 
 class _SymengineCompiled(Compiled):
