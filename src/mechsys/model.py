@@ -805,6 +805,18 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
 
         return PathSystem(self, replace, initial_condition)
 
+    def lock(self, at=0.0, solution: str = "location", guess=None):
+        """Freeze the mechanism at one configuration (Mech's ``LockMech``): ``at`` is a time
+        (solved now), a one-point :class:`~mechsys.Solution` or a ``State``; ``solution``
+        the highest order kept (``"location"``, ``"velocity"``, ``"acceleration"``).
+        Returns a :class:`~mechsys.analyses.LockedModel` whose ``solve("static" | "kinematic"
+        | "dynamic", parameters={...})`` gives reactions for new load or inertia parameters
+        without solving the positions again (and refuses parameters that move the
+        mechanism)."""
+        from .analyses._lock import LockedModel
+
+        return LockedModel(self, at, solution, guess)
+
     def _resolve_guess(self, system, guess) -> np.ndarray:
         if guess is None:
             return self.guess()

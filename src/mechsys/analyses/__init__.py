@@ -1,11 +1,13 @@
 """Analyses: systems derived from a model for one kind of question.
 
 ``FreeSystem`` (Mech's SetFree/SolveFree, chapter 10) and ``PathSystem`` (SetPath/SolvePath,
-10.5). Each reads the model's parameters when it solves or simulates, not when it is built.
+10.5); ``LockedModel`` (LockMech, 12.5). Each reads the model's parameters when it solves or simulates, not when it is built.
 """
 
 from ._free import FreeSystem
+from ._lock import LockedModel
 from ._multistage import FindSwitchTime, FindTime, find_switch_time, find_time
 from ._path import PathSystem
 
-__all__ = ["FindSwitchTime", "FindTime", "FreeSystem", "PathSystem", "find_switch_time", "find_time"]
+__all__ = ["FindSwitchTime", "FindTime", "FreeSystem", "LockedModel", "PathSystem", "find_switch_time",
+           "find_time"]
