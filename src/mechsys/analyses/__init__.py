@@ -1,7 +1,8 @@
 """Analyses: systems derived from a model for one kind of question.
 
 ``FreeSystem`` (Mech's SetFree/SolveFree, chapter 10) and ``PathSystem`` (SetPath/SolvePath,
-10.5); ``LockedModel`` (LockMech, 12.5). Each reads the model's parameters when it solves or simulates, not when it is built.
+10.5); ``LockedModel`` (LockMech, 12.5). Each reads the model's parameters when it solves or
+simulates, not when it is built.
 """
 
 from ._free import FreeSystem
