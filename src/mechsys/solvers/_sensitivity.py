@@ -30,7 +30,7 @@ index-1 (acceleration level) form that the free-motion integrator solves.
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg as sla
+from scipy.linalg.lapack import dgesv as _dgesv
 
 from .._errors import SingularJacobianError
 from ._linalg import Scaling, Singular, factor
@@ -160,18 +160,17 @@ def free_tangent(tan: Tangent, t, q, qd, qdd, lam, p, sq, sqd):
         J = system.jacobian(t, q, p)
         A[:n, n:] = J.T - dyn.dQ_dlam(t, q, qd, lam, p, qdd)
         A[n:, :n] = J
-    try:
-        lu = sla.lu_factor(A, check_finite=True)
-        if not np.all(np.isfinite(lu[0])) or np.abs(np.diag(lu[0])).min(initial=1.0) == 0.0:
-            raise ValueError
-    except ValueError:
+    rhs = -np.concatenate((r1, r2), axis=1).T            # (n + m, k)
+    # LAPACK gesv directly, as the free-motion solver does (scipy's lu_solve wrapper costs
+    # milliseconds a call here)
+    _, _, x, info = _dgesv(A, np.ascontiguousarray(rhs))
+    big = np.abs(x).max(initial=0.0)
+    if info != 0 or not big < 1e15 * (1.0 + np.abs(rhs).max(initial=0.0)):
         raise SingularJacobianError(
             f"free-motion sensitivity at t = {t:.6g}: the augmented matrix [[M, Phi_q^T], "
             "[Phi_q, 0]] is singular (a lock-up, redundant kept constraints or a massless "
             "free motion); the trajectory's sensitivity is not defined there", time=t,
-            dependent=[], rank=None) from None
-    rhs = -np.concatenate((r1, r2), axis=1).T            # (n + m, k)
-    x = sla.lu_solve(lu, rhs)
+            dependent=[], rank=None)
     return x[:n].T, x[n:].T
 
 
