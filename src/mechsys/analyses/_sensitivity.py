@@ -106,7 +106,8 @@ class SensitivitySystem:
         if unused:
             raise ModelError(
                 f"sensitivity: parameter(s) {unused} are not used by the model's constraints, "
-                "loads or mass properties, so nothing depends on them; use them in the model "
+                "loads, mass properties or body points, so nothing depends on them; use them in "
+                "the model "
                 "or leave them out of m.sensitivity([...])")
         tan = Tangent(kern)
         self._tangents[key] = (system, tan)

@@ -50,6 +50,8 @@ class TangentKernels:
         self.dirs = [sp.Symbol(f"_sens_d{j}") for j in range(3 * n + m + k)]
         self.wrt = [*lay.q_symbols, *lay.qd_symbols, *lay.qdd_symbols, *lam, *self.params]
         self._kernels: dict = {}
+        #: compiled output derivatives (:class:`ExpressionTangent`), by expression tuple
+        self.expression_cache: dict = {}
         # SymEngine differentiates ~100x faster; floors and the functions it cannot
         # differentiate stay with SymPy (as compile/_derive.py decides for the Jacobian)
         self._native = (se is not None and system.backend == "symengine"
@@ -124,8 +126,9 @@ class TangentKernels:
 
     def uses(self) -> dict:
         """``{parameter: where}`` for the selected parameters that appear in the constraint
-        equations (``"constraints"``) or, failing that, in the loads or mass properties
-        (``"loads"``); parameters used nowhere are absent."""
+        equations (``"constraints"``), else in the loads or mass properties (``"loads"``),
+        else in the bodies' points (``"points"``: outputs such as a coupler point's location
+        depend on them); parameters used nowhere are absent."""
         s = self.system
         found = {}
         phi_syms = set().union(*(sp.sympify(e).free_symbols for e in s.phi)) if s.phi else set()
@@ -141,6 +144,14 @@ class TangentKernels:
             for p in rest:
                 if p in syms:
                     found[p] = "loads"
+        rest = [p for p in self.params if p not in found]
+        for b in s._bodies if rest else ():
+            # a point of a body that no constraint uses (a coupler point): outputs depend on it
+            for coords in [*b.points.values(), b.centroid]:
+                syms = set().union(*(sp.sympify(c).free_symbols for c in coords))
+                for p in rest:
+                    if p in syms:
+                        found.setdefault(p, "points")
         return found
 
 

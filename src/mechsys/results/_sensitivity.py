@@ -48,7 +48,6 @@ class Sensitivity:
     dqdd: np.ndarray | None
     dlam: np.ndarray | None
     tangent: object = field(repr=False, default=None)
-    _cache: dict = field(default_factory=dict, repr=False)
 
     @property
     def t(self) -> np.ndarray:
@@ -79,11 +78,14 @@ class Sensitivity:
         """``(N, k, len(exprs))``: the directional derivative of flat expressions."""
         sol = self.solution
         key = tuple(sp.sympify(e) for e in exprs)
-        f = self._cache.get(key)
+        # cached on the compiled kernels: every solution of one SensitivitySystem (an
+        # optimiser's evaluations) reuses the compiled derivative of an output
+        cache = self.tangent.kernels.expression_cache
+        f = cache.get(key)
         if f is None:
             from ..compile._sensitivity import ExpressionTangent
 
-            f = self._cache[key] = ExpressionTangent(self.tangent.kernels, key).f
+            f = cache[key] = ExpressionTangent(self.tangent.kernels, key).f
         lay = sol.system.layout
         free = set().union(*(e.free_symbols for e in key)) if key else set()
         for order, syms in ((2, lay.qdd_symbols), (1, lay.qd_symbols)):
