@@ -126,13 +126,19 @@ class SensitivitySystem:
                                lambda_guess=lambda_guess)
         return self.of(sol)
 
-    def of(self, solution) -> Sensitivity:
+    def of(self, solution=None) -> Sensitivity:
         """Differentiate a kinematic, static, kinematic-load or inverse-dynamic
         :class:`~mechsys.Solution` (or :class:`~mechsys.State`) of this model with respect to
-        the parameters, at its own parameter values."""
+        the parameters, at its own parameter values. Without an argument, the model's last
+        solution (Mech's default ``InitialCondition -> Automatic``: ``LastSolve[]``)."""
         from ..solvers._sensitivity import kinematic_sensitivities
 
         sol = solution
+        if sol is None:
+            sol = self.model.last_solution
+            if sol is None:
+                raise ModelError("sensitivity.of(): the model has not been solved yet; give a "
+                                 "solution, or use .solve(t)")
         if isinstance(sol, State):
             sol = Solution(t=np.array([sol.t]), q=sol.q[None], qd=None if sol.qd is None
                            else sol.qd[None], qdd=None if sol.qdd is None else sol.qdd[None],
