@@ -9,10 +9,10 @@ import mechsys as ms
 from mechsys import T
 
 
-def slider_crank(r=2.0, L=6.0, mp=3.0, force=150.0, phase=0.0, loads=False):
+def slider_crank(r=2.0, L=6.0, mp=3.0, force=150.0, phase=0.0, loads=False, backend=None):
     """Crank radius ``r``, rod length ``L`` as parameters; with ``loads``, masses, gravity
     and a force on the piston (piston mass ``mp`` a parameter)."""
-    m = ms.Model2D()
+    m = ms.Model2D(backend=backend)
     r_, L_ = m.parameter("r", r), m.parameter("L", L)
     mp_ = m.parameter("mp", mp)
     mass = {} if not loads else {"mass": 1.0, "inertia": 0.5, "centroid": (r_ / 2, 0)}
@@ -31,10 +31,12 @@ def slider_crank(r=2.0, L=6.0, mp=3.0, force=150.0, phase=0.0, loads=False):
     return m
 
 
-def test_slider_crank_piston_sensitivities_match_closed_form():
+@pytest.mark.parametrize("backend", ["default", "sympy"])
+def test_slider_crank_piston_sensitivities_match_closed_form(backend):
     """x = r cos th + sqrt(L^2 - r^2 sin^2 th), th = 2 pi t: d/dL and d/dr of x, x_d, x_dd
-    (derivatives of the closed form taken by SymPy in the test) to 1e-9 relative."""
-    m = slider_crank()
+    (derivatives of the closed form taken by SymPy in the test) to 1e-9 relative, with the
+    kernels derived by SymEngine (default when installed) and by SymPy."""
+    m = slider_crank(backend=None if backend == "default" else backend)
     t = np.linspace(0, 1, 13)
     sens = m.sensitivity(["L", "r"]).solve(t)
     ts, rs, Ls = sp.symbols("t r L")
@@ -92,6 +94,34 @@ def test_reaction_sensitivities_match_finite_differences(mode):
         np.testing.assert_array_equal(sens["L"].qd, 0.0)
 
 
+def test_friction_and_damper_sensitivities_match_finite_differences():
+    """Loads that depend on the reactions (Coulomb friction in the slider: the multiplier
+    equations are nonlinear, (Phi_q^T - Q_lambda) dlambda/dp = ...) and on velocities (a
+    damper), kinematic-load solution: sensitivities to the friction coefficient, the damping
+    and the rod length vs central differences."""
+    def build(**values):
+        m = slider_crank(loads=True, phase=0.3)
+        mu, c = m.parameter("mu", 0.2), m.parameter("c", 5.0)
+        m.add_load(ms.JointFriction(m.constraint("slider"), mu=mu))
+        m.add_load(ms.Damper(m.body("piston").point(0), (20, 0), c))
+        m.set_parameters(values)
+        return m
+
+    def outputs(s):
+        return np.column_stack((s.reaction("drive", "crank")[1], s.reaction("slider", "piston")[0]))
+
+    t = np.array([0.05, 0.2, 0.4])
+    base = build()
+    sens = base.sensitivity(["mu", "c", "L"]).solve(t, solution="kinematic")
+    for name in ("mu", "c", "L"):
+        v = base.parameters[name]
+        h = 1e-6 * v
+        fd = (outputs(build(**{name: v + h}).solve(t, solution="kinematic"))
+              - outputs(build(**{name: v - h}).solve(t, solution="kinematic"))) / (2 * h)
+        got = outputs(sens[name])
+        assert np.abs(got - fd).max() < 1e-7 * max(np.abs(fd).max(), 1.0), name
+
+
 def test_sensitivity_of_a_given_state_and_unit_independence():
     """``of(State)`` differentiates one configuration; in millimetres the sensitivity of a
     length to a length is unchanged and the angle's is divided by 1000."""
@@ -108,6 +138,8 @@ def test_sensitivity_of_a_given_state_and_unit_independence():
 
 def test_bad_input_is_a_clear_error():
     m = slider_crank()
+    with pytest.raises(ms.ModelError, match="not been solved yet"):
+        m.sensitivity(["L"]).of()
     m.parameter("unused", 1.0)
     with pytest.raises(ms.ModelError, match="'unused'.*not used by the model"):
         m.sensitivity(["L", "unused"]).solve(0.1)
@@ -116,6 +148,7 @@ def test_bad_input_is_a_clear_error():
     with pytest.raises(ms.ModelError, match="at least one parameter"):
         m.sensitivity([])
     sens = m.sensitivity(["L"]).solve(0.1, solution="location")
+    assert m.sensitivity(["L"]).of().solution is m.last_solution     # Mech's LastSolve default
     with pytest.raises(ms.ModelError, match="no sensitivity to 'r'"):
         sens["r"]
     with pytest.raises(ms.MechError, match="velocities"):
