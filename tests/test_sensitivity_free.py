@@ -2,13 +2,14 @@
 integrated with the motion) vs central finite differences of tight simulations."""
 
 import numpy as np
+import pytest
 
 import mechsys as ms
 
 TIGHT = {"rtol": 1e-12, "atol": 1e-14}
 
 
-def pendulum(L=1.5):
+def pendulum(L=1.5, g=9.81):
     """A point mass on a massless rod of length ``L`` (a parameter of the pivot point, so the
     start position itself depends on it), released from -1 rad."""
     m = ms.Model2D()
@@ -16,7 +17,7 @@ def pendulum(L=1.5):
     bob = m.add_body("bob", points={"pivot": (-Ls, 0)}, mass=1.0, inertia=0.0, guess=((L, 0), 0))
     m.add(ms.Revolute2(m.ground.point((0, 0)), bob.point("pivot")), name="pin")
     m.add(ms.RotationLock1(bob, -1.0), name="hold")
-    m.add_load(ms.Gravity((0, -1), 9.81))
+    m.add_load(ms.Gravity((0, -1), g))
     m.solve(0.0, solution="location")
     return m
 
@@ -82,3 +83,36 @@ def test_double_pendulum_final_state_sensitivity():
         fd = central(double_pendulum, name, value, 1e-5, run)
         got = np.concatenate((sens[name].q[-1], sens[name].qd[-1]))
         assert np.abs(got - fd).max() < 1e-6 * np.abs(fd).max(), (name, got, fd)
+
+
+def test_free_sensitivity_does_not_depend_on_the_unit_of_length():
+    """The same pendulum in millimetres: d(angle)/dL is 1000 times smaller, d(x)/dL the same,
+    with the same integration steps (the tolerances of the sensitivities scale with it)."""
+    ic = {"bob.th": -1.0, "bob.th_d": 0.0}
+    t = np.linspace(0, 1.0, 3)
+    out = []
+    for L, g in ((1.5, 9.81), (1500.0, 9810.0)):
+        m = pendulum(L, g)
+        out.append(m.sensitivity("L", free=m.free(drop=["hold"])).simulate(t, initial_condition=ic))
+    m_, mm = out
+    np.testing.assert_allclose(mm["L"].coordinate("bob.th") * 1000, m_["L"].coordinate("bob.th"),
+                               rtol=1e-7, atol=1e-9)
+    np.testing.assert_allclose(mm["L"].coordinate("bob.x"), m_["L"].coordinate("bob.x"),
+                               rtol=1e-7, atol=1e-9)
+    assert mm.solution.extra["steps"] == m_.solution.extra["steps"]
+
+
+def test_free_sensitivity_bad_input():
+    m = pendulum()
+    with pytest.raises(ms.ModelError, match="solution='dynamic'"):
+        m.sensitivity("L", free=m.free(drop=["hold"], solution="static"))
+    with pytest.raises(ms.ModelError, match="FreeSystem of this model"):
+        m.sensitivity("L", free=pendulum().free(drop=["hold"]))
+    sens = m.sensitivity("L", free=m.free(drop=["hold"]))
+    with pytest.raises(ms.ModelError, match="simulate"):
+        sens.solve(0.0)
+    with pytest.raises(ms.ModelError, match="unknown option"):
+        sens.simulate((0, 1), rtool=1e-9)
+    sol = m.free(drop=["hold"]).simulate((0, 0.1))
+    with pytest.raises(ms.ModelError, match="free-dynamic solution"):
+        m.sensitivity("L").of(sol)
