@@ -59,9 +59,14 @@ class SensitivitySystem:
     like :meth:`Model.solve` and returns a :class:`~mechsys.Sensitivity`; ``of(solution)``
     differentiates a given solution; with ``free=`` (a dynamic :class:`FreeSystem`),
     ``simulate(t, initial_condition=..., ...)`` integrates the free motion with its
-    sensitivities. Every parameter must appear in the constraints, loads or mass properties
-    (else :class:`ModelError`); a singular Jacobian raises :class:`SingularJacobianError`
-    naming the time."""
+    sensitivities. Every parameter must appear in the constraints, loads, mass properties or
+    body points (else :class:`ModelError`); a singular Jacobian raises
+    :class:`SingularJacobianError` naming the time.
+
+    >>> sens = m.sensitivity(["L", "r"])                        # doctest: +SKIP
+    >>> s = sens.solve(np.linspace(0, 1, 11))                   # solve, then differentiate
+    >>> s["L"].location(piston.point(0))                        # d(location)/dL, (11, 2)
+    """
 
     def __init__(self, model, parameters, free=None):
         self.model = model
