@@ -40,6 +40,9 @@ REQUIRED_TOP_LEVEL = {
 REQUIRED_TOP_LEVEL |= {"StageSwitch", "TimeSwitch", "FindSwitchTime", "FindTime", "find_switch_time",
                        "find_time"}
 
+#: Sensitivity to parameters (issue 15, Mech 9.5): m.sensitivity(...) and its results.
+REQUIRED_TOP_LEVEL |= {"Sensitivity", "SensitivitySystem", "ParameterSensitivity"}
+
 #: Public subpackages and modules; every other module is private (``_name.py``).
 PUBLIC_MODULES = {"constraints", "compile", "solvers", "testing", "draw", "models", "cli", "model",
                   "geometry", "loads", "analyses", "results"}

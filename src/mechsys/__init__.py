@@ -27,6 +27,7 @@ from ._errors import (
 )
 from ._symbols import T
 from .analyses import FindSwitchTime, FindTime, FreeSystem, PathSystem, find_switch_time, find_time
+from .analyses._sensitivity import SensitivitySystem
 from .constraints import (
     REGISTRY,
     CamToCam1,
@@ -145,6 +146,7 @@ from .loads._gyro import GyroFilter, GyroMoment, gyro_filter
 from .loads._loads import Damper, Force, Gravity, Load, LoadBase, Moment, Spring
 from .model import DOF, Model, Model2D, Model3D
 from .results._outputs import All, Rest
+from .results._sensitivity import ParameterSensitivity, Sensitivity
 from .results._solution import Solution, State
 from .solvers import PositionOptions
 
@@ -217,6 +219,7 @@ __all__ = [
     "ParallelAxis",
     "ParallelGears4",
     "ParallelGears5",
+    "ParameterSensitivity",
     "PathSystem",
     "Planar3",
     "Plane",
@@ -248,6 +251,8 @@ __all__ = [
     "RotationLock1",
     "RotationLock3",
     "RotationMatrix",
+    "Sensitivity",
+    "SensitivitySystem",
     "SingularJacobianError",
     "SingularMassError",
     "Solution",

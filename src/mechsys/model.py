@@ -817,6 +817,17 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
 
         return LockedModel(self, at, solution, guess)
 
+    def sensitivity(self, parameters, free=None):
+        """Sensitivity to parameters (Mech's ``SetSensitivity``): ``m.sensitivity(["L", "r"])``
+        returns a :class:`SensitivitySystem` whose ``solve(t, solution=...)`` (Mech's
+        ``SolveSensitivity``) or ``of(solution)`` gives exact derivatives of coordinates,
+        velocities, accelerations, multipliers and any output; with ``free=m.free(...)``,
+        ``simulate(t, ...)`` integrates free motion with its sensitivities. See
+        docs/sensitivity.md."""
+        from .analyses._sensitivity import SensitivitySystem
+
+        return SensitivitySystem(self, parameters, free)
+
     def _resolve_guess(self, system, guess) -> np.ndarray:
         if guess is None:
             return self.guess()

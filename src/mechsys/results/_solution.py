@@ -172,6 +172,12 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews):
             out = vals.reshape((N,) + m.shape)
         return out[0] if self.scalar else out
 
+    def sensitivity(self, parameters):
+        """Exact derivatives of this solution with respect to ``parameters`` (names or
+        symbols): ``self.model.sensitivity(parameters).of(self)``, a
+        :class:`~mechsys.Sensitivity` (see docs/sensitivity.md)."""
+        return self.model.sensitivity(parameters).of(self)
+
     # -- states and interpolation ---------------------------------------------------------
     def state(self, k: int = -1) -> State:
         """The :class:`State` at index ``k`` (negative counts from the end)."""
