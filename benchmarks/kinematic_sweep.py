@@ -20,6 +20,8 @@ import os
 
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")  # before NumPy loads: single-threaded, like the solver
+# compile times are measured cold: no kernels from the on-disk cache of an earlier run
+os.environ.setdefault("MECHSYS_CACHE", "0")
 
 import argparse  # noqa: E402
 import sys  # noqa: E402
@@ -50,10 +52,12 @@ def _times(case: str, points: int) -> np.ndarray:
 
 
 def sweep_case(case: str, n_loops: int | None, points: int, backend: str,
-               repeat: int = 3) -> dict:
+               repeat: int = 3, loop: str = "python") -> dict:
     """Build, compile (symbolic derivation + numeric compile) and sweep one model; the sweep
-    time is the best of ``repeat`` runs (the compiled system is reused)."""
+    time is the best of ``repeat`` runs (the compiled system is reused). ``loop``: the
+    Python sweep loop or the compiled one (``MECHSYS_JIT``, solvers/_jit.py)."""
     os.environ["MECHSYS_BACKEND"] = backend
+    os.environ["MECHSYS_JIT"] = "1" if loop == "compiled" else "0"
     try:
         m = _model(case, n_loops)
         t0 = clock()
@@ -62,16 +66,19 @@ def sweep_case(case: str, n_loops: int | None, points: int, backend: str,
         _ = (system.f_position, system.f_velocity, system.f_gamma)
         t1 = clock()
         best = np.inf
+        m.solve(_times(case, 3))     # loads the compiled loop once per process (not timed)
         for _ in range(repeat):
             s0 = clock()
             sol = m.solve(_times(case, points))
             best = min(best, clock() - s0)
     finally:
         os.environ.pop("MECHSYS_BACKEND", None)
+        os.environ.pop("MECHSYS_JIT", None)
     t2 = t1 + best
     return {
         "case": case if n_loops is None else f"four_bar_chain({n_loops})",
         "backend": system.f_position.backend,
+        "loop": loop,
         "n": system.n,
         "m": system.m,
         "nnz": system.nnz,
@@ -112,9 +119,15 @@ def eval_case(case: str, n_loops: int | None, backend: str) -> dict:
     }
 
 
+def _jit_available() -> bool:
+    from mechsys.solvers import _jit
+
+    return _jit.available()
+
+
 def _growth(rows: list[dict], key: str) -> str:
     """Exponent k of cost ~ n^k between consecutive chain sizes."""
-    chain = [r for r in rows if r["case"].startswith("four_bar_chain")]
+    chain = [r for r in rows if r["case"].startswith("four_bar_chain") and r.get("loop") == "python"]
     out = []
     for a, b in zip(chain, chain[1:], strict=False):
         if a["backend"] != b["backend"]:
@@ -125,11 +138,11 @@ def _growth(rows: list[dict], key: str) -> str:
 
 
 def sweep_table(rows: list[dict]) -> str:
-    head = ("| model | backend | coordinates | points | compile [s] | per point [µs] "
+    head = ("| model | backend | loop | coordinates | points | compile [s] | per point [µs] "
             "| Newton iterations / point | function calls / point |")
-    lines = [head, "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    lines = [head, "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for r in rows:
-        lines.append(f"| {r['case']} | {r['backend']} | {r['n']} | {r['points']} | "
+        lines.append(f"| {r['case']} | {r['backend']} | {r['loop']} | {r['n']} | {r['points']} | "
                      f"{r['compile_s']:.2f} | {r['per_point_us']:.0f} | {r['iterations']:.2f} | "
                      f"{r['evaluations']:.2f} |")
     return "\n".join(lines)
@@ -179,6 +192,11 @@ of that function (no symbolic derivation).
 
 ## Reading the numbers
 
+* "loop": the sweep's loop in Python, or compiled (Numba calling the compiled equations and
+  LAPACK directly, [decision 0013](decisions/0013-compiled-sweep.md); bit-identical results).
+  The compiled loop runs by default for sweeps of 1000 points or more (`MECHSYS_JIT`, see the
+  [guide](guide.md#compiled-sweeps-and-the-kernel-cache)); sparse models (over 150
+  coordinates) always use the Python loop.
 * A sweep needs about one Newton iteration per point: the predictor
   `q + qd dt + qdd dt^2/2` from the previous point lands close to the solution. Each point
   then costs four calls of compiled functions (residual and Jacobian twice, velocity, gamma).
@@ -213,10 +231,15 @@ def main(argv: list[str] | None = None) -> int:
     for backend in backends:
         runs = [("slider-crank", None, sc_points)] + [("chain", k, chain_points)
                                                       for k in chain_sizes]
-        for case, n_loops, points in runs:
-            r = sweep_case(case, n_loops, points, backend)
+        loops = ["python"]
+        if backend == "symengine" and _jit_available():
+            loops.append("compiled")
+        for (case, n_loops, points), loop in ((c, lp) for c in runs for lp in loops):
+            if loop == "compiled" and n_loops is not None and n_loops > 20:
+                continue      # sparse systems (n > 150) stay on the Python loop
+            r = sweep_case(case, n_loops, points, backend, loop=loop)
             sweeps.append(r)
-            print(f"sweep {r['case']:<20} {r['backend']:<16} n={r['n']:<4} compile "
+            print(f"sweep {r['case']:<20} {r['backend']:<16} {loop:<8} n={r['n']:<4} compile "
                   f"{r['compile_s']:6.2f} s  {r['per_point_us']:7.0f} µs/point  "
                   f"{r['iterations']:.2f} it/point", flush=True)
     for case, n_loops in [("slider-crank", None)] + [("chain", k) for k in chain_sizes]:
