@@ -115,6 +115,8 @@ def _solve(lapack, B, ipiv, r, columns, b, out, ibuf, cbuf):
     for i in range(n):
         out[i] = b[i] / r[i]
     cbuf[1] = 78         # 'N': no transpose
+    ibuf[1] = n          # n, lda = ldb (set here too: a solve never relies on an earlier factor call)
+    ibuf[2] = n
     ibuf[4] = 1          # nrhs
     _ccall(lapack[2], (cbuf[1:2], ibuf[1:2], ibuf[4:5], B, ibuf[2:3], ipiv, out, ibuf[2:3],
                        ibuf[3:4]))
