@@ -40,6 +40,9 @@ REQUIRED_TOP_LEVEL = {
 REQUIRED_TOP_LEVEL |= {"StageSwitch", "TimeSwitch", "FindSwitchTime", "FindTime", "find_switch_time",
                        "find_time"}
 
+#: Coupled models and parameter sweeps (issue 15, Mech chapter 9).
+REQUIRED_TOP_LEVEL |= {"Configuration", "CoupleSystem", "CoupleSolution", "Free", "sweep"}
+
 #: Public subpackages and modules; every other module is private (``_name.py``).
 PUBLIC_MODULES = {"constraints", "compile", "solvers", "testing", "draw", "models", "cli", "model",
                   "geometry", "loads", "analyses", "results"}
