@@ -111,6 +111,11 @@ def test_velocity_couple_matches_closed_form():
     assert res.configurations[0].omega(rocker) == pytest.approx(w_target, abs=1e-12)
     assert res.configurations[0].angle(rocker) == pytest.approx(
         freudenstein_th4(th2, B, c_exact), abs=1e-11)
+    # the same condition through |omega| (Abs: derived by SymPy, not SymEngine) agrees
+    cm_abs = m.couple(unknowns=["c"], conditions=sp.Eq(sp.Abs(m.omega(rocker)), w_target), t=th2)
+    assert cm._native_derivation == (ms.compile.available_backends()[0] == "symengine")
+    assert not cm_abs._native_derivation
+    assert cm_abs.solve()["c"] == pytest.approx(c_exact, rel=1e-10)
 
 
 def test_acceleration_couple_matches_differentiated_closed_form():
@@ -250,3 +255,24 @@ def test_bad_input_is_a_clear_error():
                   t=0.8)
     with pytest.raises((ms.ConvergenceError, ms.SingularJacobianError)):
         cm.solve(options={"max_iterations": 15})
+
+
+def test_spatial_couple_matches_closed_form():
+    """Spatial slider-crank (Euler parameters): the rod length that puts the piston at x = 7
+    at crank angle 2 pi 0.1 is sqrt((x - r cos th)^2 + (r sin th)^2)."""
+    z, r = (0, 0, 1), 2.0
+    m = ms.Model3D()
+    L = m.parameter("L", 6.0)
+    crank = m.add_body("crank", points={"pin": (r, 0, 0)})
+    rod = m.add_body("rod", points={"a": (0, 0, 0), "b": (L, 0, 0)},
+                     guess=((r, 0, 0), (1, 0, 0, 0)))
+    piston = m.add_body("piston", guess=((r + 6, 0, 0), (1, 0, 0, 0)))
+    m.add(ms.Revolute5(crank.axis(0, z), m.ground.axis((0, 0, 0), z)))
+    m.add(ms.Spherical3(crank.point("pin"), rod.point("a")))
+    m.add(ms.Universal4(rod.axis("b", (0, 1, 0)), piston.axis(0, z)))
+    m.add(ms.Translate5(piston.axis(0, (1, 0, 0)), m.ground.axis((0, 0, 0), (1, 0, 0))))
+    m.add(ms.RotationLock1(crank.axis(0, z), m.ground.axis((0, 0, 0), z), 2 * sp.pi * T))
+    res = m.couple(unknowns=["L"], conditions=sp.Eq(m.location(piston.point(0))[0], 7.0),
+                   t=0.1).solve()
+    th = 2 * np.pi * 0.1
+    assert res["L"] == pytest.approx(np.hypot(7.0 - r * np.cos(th), r * np.sin(th)), rel=1e-12)

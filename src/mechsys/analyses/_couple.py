@@ -58,6 +58,11 @@ import numpy as np
 import scipy.sparse as sps
 import sympy as sp
 
+try:  # optional: native derivation (the ``fast`` extra)
+    import symengine as se
+except ImportError:  # pragma: no cover - depends on environment
+    se = None
+
 from .._errors import (
     ConstraintCountError,
     ConvergenceError,
@@ -66,6 +71,8 @@ from .._errors import (
     SingularJacobianError,
 )
 from .._symbols import T
+from ..compile._backends import compile_exprs
+from ..compile._derive import _diff, _rewrite_steps, symengine_safe, to_sympy_list
 from ..results._solution import Solution, State
 from ..solvers._kinematics import solve_acceleration, solve_velocity
 from ..solvers._linalg import SPARSE_THRESHOLD, Scaling, Singular, dependent_rows, factor
@@ -370,60 +377,82 @@ class CoupleSystem:
     # -- derivation and compilation -----------------------------------------------------------
     def _build(self):
         """Derive the equations of one configuration and their Jacobian once; compile the
-        model block (shared by every configuration) and each configuration's conditions."""
+        model block (shared by every configuration) and each configuration's conditions.
+        With SymEngine the derivation starts from the System's native expressions and
+        differentiates natively (SymPy's ``diff`` of a 3D ``gamma`` takes seconds)."""
         s = self.system
         lay = s.layout
         n, m, o = s.n, s.m, self._order
-        q, qd, qdd, lam = lay.q_symbols, lay.qd_symbols, lay.qdd_symbols, s.lam_symbols
-        J = sp.zeros(m, n)
-        for i, j, e in zip(s.jac_rows, s.jac_cols, s.jac_exprs):
-            J[i, j] += e
-        rows = list(s.phi)
+        dyn = s.dynamics if self._loads else None
+        conds = [e for c in self._conds for e in c]
+        native = (s._native is not None and symengine_safe(conds + (list(dyn.Q) if dyn else []))
+                  and not any(sp.sympify(e).has(sp.floor) for e in s.phi))
+        if native:
+            S = se.sympify
+            zero = se.Integer(0)
+            phi, jac, phi_t, gamma = (s._native[k] for k in ("phi", "jac", "phi_t", "gamma"))
+        else:
+            S = sp.sympify
+            zero = sp.S.Zero
+            phi, jac, phi_t, gamma = [_rewrite_steps(e) for e in s.phi], s.jac_exprs, s.phi_t, s.gamma
+        q, qd, qdd = ([S(x) for x in xs] for xs in (lay.q_symbols, lay.qd_symbols, lay.qdd_symbols))
+        lam = [S(x) for x in s.lam_symbols]
+        J = [[zero] * n for _ in range(m)]
+        for i, j, e in zip(s.jac_rows, s.jac_cols, jac):
+            J[i][j] = J[i][j] + e
+
+        def dot(row, x):
+            return sum((a * b for a, b in zip(row, x) if a != 0), zero)
+
+        rows = list(phi)
         if o >= 1:
-            rows += [sum((J[i, j] * qd[j] for j in range(n) if J[i, j] != 0), sp.S.Zero)
-                     + s.phi_t[i] for i in range(m)]
+            rows += [dot(J[i], qd) + phi_t[i] for i in range(m)]
         if o >= 2:
-            rows += [sum((J[i, j] * qdd[j] for j in range(n) if J[i, j] != 0), sp.S.Zero)
-                     - s.gamma[i] for i in range(m)]
-        if self._loads:
-            dyn = s.dynamics
-            rhs = [sp.sympify(e) for e in dyn.Q]
+            rows += [dot(J[i], qdd) - gamma[i] for i in range(m)]
+        if dyn is not None:
+            rhs = [S(e) for e in dyn.Q]
             if o == 2:
-                M = sp.zeros(n, n)
-                for i, j, e in zip(dyn.M_rows, dyn.M_cols, dyn.M_exprs):
-                    M[i, j] += e
-                rhs = [rhs[j] + dyn.Qv[j] - sum((M[j, k] * qdd[k] for k in range(n)
-                                                 if M[j, k] != 0), sp.S.Zero) for j in range(n)]
+                M = [[zero] * n for _ in range(n)]
+                Mvals = dyn._native["M"] if native else dyn.M_exprs
+                Qv = dyn._native["Qv"] if native else dyn.Qv
+                for i, j, e in zip(dyn.M_rows, dyn.M_cols, Mvals):
+                    M[i][j] = M[i][j] + S(e)
+                rhs = [rhs[j] + S(Qv[j]) - dot(M[j], qdd) for j in range(n)]
             elif o == 0:
-                zero = dict.fromkeys(qd, 0)
-                rhs = [e.subs(zero) for e in rhs]
-            rows += [sum((J[i, j] * lam[i] for i in range(m) if J[i, j] != 0), sp.S.Zero)
-                     - rhs[j] for j in range(n)]
+                zero_qd = {x: zero for x in qd}
+                rhs = [e.xreplace(zero_qd) if native else e.subs(zero_qd) for e in rhs]
+            rows += [dot([J[i][j] for i in range(m)], lam) - rhs[j] for j in range(n)]
         # block columns: q, qd, qdd, lambda; then the unknown parameters, then T
-        cols = list(q) + (list(qd) if o >= 1 else []) + (list(qdd) if o >= 2 else [])
-        if self._loads:
-            cols += list(lam)
+        cols = q + (qd if o >= 1 else []) + (qdd if o >= 2 else []) + (lam if dyn else [])
         self._nb = len(cols)
-        cols += list(self._unknowns) + [T]
-        self._cols = cols
+        cols += [S(u) for u in self._unknowns] + [S(T)]
+        self._native_derivation = native
         self._model_rows = len(rows)
-        self._f_model, self._model_jac = self._compile(rows, cols)
-        self._f_cond = [self._compile(c, cols) for c in self._conds]
+        self._f_model, self._model_jac = self._compile(rows, cols, native)
+        self._f_cond = [self._compile([S(e) for e in c], cols, native) for c in self._conds]
         self._u_index = [list(lay.p_symbols).index(u) for u in self._unknowns]
         self._u_off = self._layout()[1]
 
-    def _compile(self, exprs, cols):
-        """``(f, (rows, cols))``: ``f(x) = [exprs, nonzero d expr_i / d cols_j]``."""
+    def _compile(self, exprs, cols, native):
+        """``(f, (rows, cols))``: ``f(x) = [exprs, nonzero d expr_i / d cols_j]`` with
+        ``x = [t, q, qd, qdd, lambda, p]``."""
         index = {c: j for j, c in enumerate(cols)}
         r, c, d = [], [], []
         for i, e in enumerate(exprs):
             for w in sorted(e.free_symbols & index.keys(), key=lambda w: index[w]):
-                de = sp.diff(e, w)
+                de = e.diff(w) if native else _diff(e, w)
                 if de != 0:
                     r.append(i)
                     c.append(index[w])
                     d.append(de)
-        f = self.system.compile_expression(list(exprs) + d)
+        s = self.system
+        lay = s.layout
+        args = [T, *lay.q_symbols, *lay.qd_symbols, *lay.qdd_symbols, *s.lam_symbols,
+                *lay.p_symbols]
+        out = list(exprs) + d
+        if native and s.backend != "symengine":
+            out = to_sympy_list(out)
+        f = compile_exprs(args, out, s.backend)
         return f, (np.array(r, dtype=int), np.array(c, dtype=int))
 
     # -- the stacked system ------------------------------------------------------------------
