@@ -166,6 +166,20 @@ def test_resolve_at_new_time_and_from_previous_result():
         cm.solve(t=[0.8, 0.9])
 
 
+def test_conditions_may_take_up_the_model_freedom():
+    """Without its driver the four-bar has one DOF; a condition on the crank angle takes it
+    up (as the driver did), so two conditions fix the rocker length."""
+    m, crank, coupler, rocker = four_bar()
+    m.remove("drive")
+    res = m.couple(unknowns=["c"], conditions=[sp.Eq(m.angle(crank), 0.8),
+                                               sp.Eq(m.angle(rocker), 1.7)]).solve()
+    driven, *_ = four_bar()
+    ref = driven.couple(unknowns=["c"], conditions=sp.Eq(driven.angle("rocker"), 1.7), t=0.8)
+    assert res["c"] == pytest.approx(ref.solve()["c"], rel=1e-12)
+    with pytest.raises(ms.ConstraintCountError, match=r"plus the 1 freedom\(s\) the model leaves"):
+        m.couple(unknowns=["c"], conditions=[sp.Eq(m.angle(rocker), 1.7)])
+
+
 def test_couple_is_unit_free():
     """The same four-bar in metres and in millimetres: the same answer (scaled) in the same
     number of iterations."""

@@ -342,7 +342,9 @@ class CoupleSystem:
                     f"{K * (per_u - per_e)} unknown(s) net over {K} configuration(s) at this "
                     "solution level")
         msg += (f": {unknowns} unknowns against {equations} equations in all. Give as many "
-                "conditions as unknown parameters and free times: ")
+                "conditions as unknown parameters and free times"
+                + (f" plus the {K * (per_u - per_e)} freedom(s) the model leaves" if n != m
+                   else "") + ": ")
         diff = unknowns - equations
         msg += (f"add {diff} condition(s) or drop {diff} unknown(s)" if diff > 0
                 else f"drop {-diff} condition(s) or add {-diff} unknown(s)")
