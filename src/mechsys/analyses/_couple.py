@@ -50,6 +50,7 @@ depend on the unit of length.
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from numbers import Real
@@ -77,6 +78,9 @@ from ..results._solution import Solution, State
 from ..solvers._kinematics import solve_acceleration, solve_velocity
 from ..solvers._linalg import SPARSE_THRESHOLD, Scaling, Singular, dependent_rows, factor
 from ..solvers._position import PositionOptions, solve_position
+
+#: compiled kernels of couples, per System (dropped with it)
+_KERNELS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 #: solution level -> (derivative order, with load equations)
 LEVELS = {"location": (0, False), "velocity": (1, False), "acceleration": (2, False),
@@ -452,9 +456,15 @@ class CoupleSystem:
         args = [T, *lay.q_symbols, *lay.qd_symbols, *lay.qdd_symbols, *s.lam_symbols,
                 *lay.p_symbols]
         out = list(exprs) + d
-        if native and s.backend != "symengine":
-            out = to_sympy_list(out)
-        f = compile_exprs(args, out, s.backend)
+        # couples rebuilt with the same equations (a sweep builds one per point) reuse the
+        # compiled kernel of the model's System
+        cache = _KERNELS.setdefault(s, {})
+        key = (native, tuple(out))
+        f = cache.get(key)
+        if f is None:
+            if native and s.backend != "symengine":
+                out = to_sympy_list(out)
+            f = cache[key] = compile_exprs(args, out, s.backend)
         return f, (np.array(r, dtype=int), np.array(c, dtype=int))
 
     # -- the stacked system ------------------------------------------------------------------
