@@ -30,7 +30,7 @@ parameters ``u``, shared by every configuration. The stacked system ``F(z) = 0``
 velocity level, with accelerations the acceleration level, with multipliers (reactions) the
 load equations (static, kinematic with velocities, dynamic with accelerations). Inertial
 loads are included only with ``solution="dynamic"`` (Mech 9.4.3). A ``solution`` lower than
-the conditions need raises (Mech would raise it silently).
+the conditions need raises (Mech raises the level silently).
 
 **Numerics.** The model part of one configuration (its equations and their exact Jacobian
 with respect to the block's unknowns, the unknown parameters and time) is derived and

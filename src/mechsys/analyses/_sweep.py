@@ -201,13 +201,17 @@ def _run_chunk(payload: bytes, names, points, on_error):
     return key[1:], built, _run_points(model, analysis, outputs, names, points, on_error)
 
 
-def _as_model(model_or_builder):
-    from ..model import Model
+def _is_model(obj) -> bool:
+    """A Model2D/Model3D (by its interface: analyses do not import ``model``, which imports
+    them)."""
+    return all(hasattr(obj, a) for a in ("set_parameters", "compile", "solve", "_params"))
 
-    if isinstance(model_or_builder, Model):
+
+def _as_model(model_or_builder):
+    if _is_model(model_or_builder):
         return model_or_builder
     model = model_or_builder()
-    if not isinstance(model, Model):
+    if not _is_model(model):
         raise ModelError(f"sweep: the builder {model_or_builder!r} must return a Model2D or "
                          f"Model3D, got {model!r}")
     return model
@@ -273,9 +277,7 @@ def sweep(model, params, analysis="acceleration", outputs=None, *, t=0.0, grid: 
     if outputs is not None and not isinstance(outputs, Mapping):
         raise ModelError("sweep: outputs must be a mapping {column name: callable or SymPy "
                          f"expression}}, got {outputs!r}")
-    from ..model import Model
-
-    if not isinstance(model, Model) and not callable(model):
+    if not _is_model(model) and not callable(model):
         raise ModelError(f"sweep: give a Model or a builder function returning one, got {model!r}")
     names, pts = _expand(params, grid) if isinstance(params, Mapping) else _points(params)
     if not pts:
