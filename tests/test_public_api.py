@@ -43,6 +43,9 @@ REQUIRED_TOP_LEVEL |= {"StageSwitch", "TimeSwitch", "FindSwitchTime", "FindTime"
 #: Sensitivity to parameters (issue 15, Mech 9.5): m.sensitivity(...) and its results.
 REQUIRED_TOP_LEVEL |= {"Sensitivity", "SensitivitySystem", "ParameterSensitivity"}
 
+#: Coupled models and parameter sweeps (issue 15, Mech chapter 9).
+REQUIRED_TOP_LEVEL |= {"Configuration", "CoupleSystem", "CoupleSolution", "Free", "sweep"}
+
 #: Public subpackages and modules; every other module is private (``_name.py``).
 PUBLIC_MODULES = {"constraints", "compile", "solvers", "testing", "draw", "models", "cli", "model",
                   "geometry", "loads", "analyses", "results"}

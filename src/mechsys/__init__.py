@@ -26,7 +26,19 @@ from ._errors import (
     UnknownPointError,
 )
 from ._symbols import T
-from .analyses import FindSwitchTime, FindTime, FreeSystem, PathSystem, find_switch_time, find_time
+from .analyses import (
+    Configuration,
+    CoupleSolution,
+    CoupleSystem,
+    FindSwitchTime,
+    FindTime,
+    Free,
+    FreeSystem,
+    PathSystem,
+    find_switch_time,
+    find_time,
+    sweep,
+)
 from .analyses._sensitivity import SensitivitySystem
 from .constraints import (
     REGISTRY,
@@ -163,11 +175,14 @@ __all__ = [
     "CamToPoint1",
     "CamToSphere1",
     "CompositeInertia",
+    "Configuration",
     "ConstantVelocity4",
     "Constraint",
     "ConstraintBase",
     "ConstraintCountError",
     "ConvergenceError",
+    "CoupleSolution",
+    "CoupleSystem",
     "CurveToCam1",
     "CurveToCylinder1",
     "CurveToPlane1",
@@ -184,6 +199,7 @@ __all__ = [
     "FindSwitchTime",
     "FindTime",
     "Force",
+    "Free",
     "FreeSystem",
     "GeometryError",
     "Gravity",
@@ -305,6 +321,7 @@ __all__ = [
     "rotation",
     "rotation_matrix",
     "spherical_to_xyz",
+    "sweep",
     "unit",
     "virtual_rotation",
     "xyz_to_cylindrical",

@@ -797,6 +797,18 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
 
         return FreeSystem(self, drop, solution, initial_guess, initial_condition)
 
+    def couple(self, unknowns, conditions=None, t=None, guess=None, configurations=None,
+               solution: str | None = None):
+        """Make parameters unknowns fixed by conditions (Mech's ``SetCouple``): one
+        configuration (``conditions=``, ``t=``, ``guess=``) or several
+        (``configurations=[ms.Configuration(conditions, t=..., guess=...), ...]``) solved
+        together; ``t=ms.Free`` makes a configuration's time an unknown. Returns a
+        :class:`~mechsys.CoupleSystem` whose ``solve()`` is Mech's ``SolveCouple``
+        (``docs/couples.md``)."""
+        from .analyses._couple import CoupleSystem
+
+        return CoupleSystem(self, unknowns, conditions, t, guess, configurations, solution)
+
     def path(self, replace, initial_condition=None):
         """Replace dummy constraints by velocity constraints (Mech's ``SetPath``):
         ``replace={dummy: velocity_constraint}``. Returns a :class:`PathSystem` whose

@@ -12,7 +12,8 @@ class Progress:
     ``enabled=None`` turns it on only for long jobs (``total >= 60``) on a terminal.
     """
 
-    def __init__(self, total: int, label: str = "", enabled=None, stream=None, width: int = 30):
+    def __init__(self, total: int, label: str = "", enabled=None, stream=None, width: int = 30,
+                 unit: str = "frames"):
         self.stream = stream if stream is not None else sys.stderr
         if enabled is None:
             isatty = getattr(self.stream, "isatty", lambda: False)
@@ -21,6 +22,7 @@ class Progress:
         self.total, self.label, self.width = max(int(total), 1), label, width
         self.start = time.monotonic()
         self._last = -1
+        self.unit = unit
 
     def update(self, done: int) -> None:
         if not self.enabled:
@@ -31,7 +33,7 @@ class Progress:
         self._last = filled
         bar = "#" * filled + "." * (self.width - filled)
         el = time.monotonic() - self.start
-        self.stream.write(f"\r{self.label} [{bar}] {done}/{self.total} frames {el:5.1f} s")
+        self.stream.write(f"\r{self.label} [{bar}] {done}/{self.total} {self.unit} {el:5.1f} s")
         self.stream.flush()
 
     def close(self) -> None:
