@@ -73,3 +73,18 @@ class SingularMassError(SingularJacobianError):
 class NearSingularWarning(UserWarning):
     """The constraint Jacobian is nearly singular (close to a lock-up or toggle position):
     velocities and accelerations there are large and sensitive."""
+
+
+def parameter_value(name: str, value) -> float:
+    """A parameter value as a finite float, or a :class:`ModelError` naming the parameter
+    (shared by ``Model.parameter``/``set_parameters`` and the analyses that take parameter
+    values)."""
+    import math
+
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ModelError(f"parameter {name!r} needs a number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise ModelError(f"parameter {name!r} must be finite, got {v}")
+    return v

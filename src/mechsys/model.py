@@ -6,7 +6,6 @@ through the compiled :class:`~mechsys.compile.System` it caches.
 
 from __future__ import annotations
 
-import math
 import re
 from collections.abc import Mapping
 
@@ -19,6 +18,7 @@ from ._errors import (
     SingularJacobianError,
     UnknownBodyError,
     UnknownConstraintError,
+    parameter_value,
 )
 from ._symbols import T
 from .compile import System, make_layout, time_derivative
@@ -33,16 +33,7 @@ from .solvers import ORDERS, PositionOptions, sweep
 from .solvers._linalg import Scaling
 from .solvers._position import dependency
 
-
-def _parameter_value(name: str, value) -> float:
-    """A parameter value as a finite float, or a ModelError naming the parameter."""
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ModelError(f"parameter {name!r} needs a number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise ModelError(f"parameter {name!r} must be finite, got {v}")
-    return v
+_parameter_value = parameter_value   # the validation lives with the errors it raises
 
 
 class DOF(int):

@@ -36,7 +36,7 @@ from collections.abc import Mapping
 import numpy as np
 import sympy as sp
 
-from .._errors import ModelError
+from .._errors import ModelError, parameter_value
 
 #: largest scaled violation of a locked order by new parameter values (the position
 #: solve converges to 1e-12; a geometry change of a part in 1e9 is a real change)
@@ -134,8 +134,6 @@ class LockedModel:
         if not isinstance(parameters, Mapping):
             raise ModelError(f"locked solve: parameters must be a mapping {{name: value}}, got "
                              f"{parameters!r}")
-        from ..model import _parameter_value
-
         names = list(self._model._params)
         changed = []
         for key, value in parameters.items():
@@ -143,7 +141,7 @@ class LockedModel:
             if s not in names:
                 raise ModelError(f"locked solve: unknown parameter {key!r}; parameters are "
                                  f"{[x.name for x in names]}")
-            v = _parameter_value(s.name, value)
+            v = parameter_value(s.name, value)
             i = names.index(s)
             if v != p[i]:
                 changed.append(s.name)
