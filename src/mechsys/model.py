@@ -729,6 +729,10 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
             raise ModelError(f"solution must be one of {list(ORDERS) + list(modes)}, "
                              f"got {solution!r}")
         times = self._check_times(t)
+        if self._loads:  # TimeSwitch loads with parameter times: increasing (issue 14)
+            from .loads._switched import check_switched_loads
+
+            check_switched_loads(self)
         if isinstance(options, Mapping):
             fields = set(PositionOptions.__dataclass_fields__)
             unknown = sorted(map(str, set(options) - fields))
