@@ -255,12 +255,6 @@ def test_inconsistent_tests_name_the_switch():
         m.solve(0.0)
 
 
-def test_multistage_statics_not_supported_yet():
-    m, s = _jog_stage()
-    with pytest.raises(ms.ModelError, match=r"switches is not supported yet"):
-        m.solve(0.0, solution="static")
-
-
 def test_stage_chosen_by_a_parameter_without_recompiling():
     # Mech 5.1.1's "whichtrack": the pin in one of two tracks, y = 0 or y = x / 2
     m = ms.Model2D()

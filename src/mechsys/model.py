@@ -754,7 +754,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         if self._switches():  # stages chosen point by point (analyses/_multistage.py)
             from .analyses._multistage import solve_stages
 
-            self.last_solution = solve_stages(self, times, g, solution, options, scalar)
+            self.last_solution = solve_stages(self, times, g, solution, options, scalar,
+                                              lambda_guess=lambda_guess)
             return self.last_solution
         try:
             res = sweep(system, times, g, order, options, self._p())

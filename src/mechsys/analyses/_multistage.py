@@ -37,6 +37,9 @@ from ..solvers import ORDERS, PositionOptions, sweep
 from ..solvers._kinematics import SweepResult, _predict, _solve_point
 from ..solvers._linalg import Scaling, rotation_columns
 
+#: the solutions with multipliers (Model.solve's load modes) and their kinematic order
+MODES = {"static": 0, "kinematic": 1, "dynamic": 2}
+
 #: a point may change its stage combination at most this many times before the tests are
 #: declared inconsistent (each change must lead to a combination not tried yet anyway)
 MAX_STAGE_CHANGES = 8
@@ -156,22 +159,48 @@ def _switch_index(model, switch) -> int:
 
 
 def solve_stages(model, times, guess, solution: str, options: PositionOptions | None,
-                 scalar: bool, forced: Mapping | None = None):
+                 scalar: bool, forced: Mapping | None = None, lambda_guess=None):
     """``Model.solve`` of a model with switches (see the module docstring). ``forced``:
-    ``{switch index: stage index}`` fixes stages regardless of their tests (FindSwitchTime)."""
+    ``{switch index: stage index}`` fixes stages regardless of their tests (FindSwitchTime).
+    With ``solution`` ``"static"``, ``"kinematic"`` or ``"dynamic"`` the multipliers of each
+    point are those of the stage combination in effect there (its Jacobian rows)."""
     from ..results._solution import Solution
 
-    if solution not in ORDERS:
-        raise ModelError(f"solution={solution!r} with stage or time switches is not supported yet "
-                         "(multistage loads and dynamics, Mech 7.4, are a later step); solve with "
-                         f"solution in {list(ORDERS)}")
-    res, stages = _sweep_stages(model, np.atleast_1d(times), guess, ORDERS[solution], options,
-                                forced or {})
+    order = ORDERS.get(solution, MODES.get(solution))
+    if order is None:
+        raise ModelError(f"solution must be one of {list(ORDERS) + list(MODES)}, got {solution!r}")
+    res, stages = _sweep_stages(model, np.atleast_1d(times), guess, order, options, forced or {})
+    lam = None
+    if solution in MODES:
+        lam = _multipliers_by_stage(model, res, stages, solution, lambda_guess)
     base = stage_system(model, None)
-    sol = Solution.from_sweep(model, base, res, model._p(), scalar=scalar, mode=solution)
+    sol = Solution.from_sweep(model, base, res, model._p(), scalar=scalar, lam=lam, mode=solution)
     sw = model._switches()
     sol.extra["stages"] = {s.name: stages[:, j] + 1 for j, s in enumerate(sw)}
     return sol
+
+
+def _multipliers_by_stage(model, res, stages, mode, lambda_guess):
+    """Multipliers ``(N, m)`` point by point, each with the system of its stage combination
+    (every combination has ``m`` rows: see :meth:`StageSwitch.stage_equations`)."""
+    from ..results._load_outputs import lambda_guess_vector
+    from ..solvers import MultiplierOptions, solve_multipliers
+
+    held = _HeldValues(model, stage_system(model, None), res.q[0])
+    lam = None
+    for k in range(len(res.t)):
+        system = stage_system(model, tuple(stages[k]))
+        if lam is None:
+            lam = np.empty((len(res.t), system.m))
+            guess = lambda_guess_vector(system, model, lambda_guess)
+        held.update(res.q[k], tuple(stages[k]))
+        qd = None if res.qd is None else res.qd[k]
+        qdd = None if res.qdd is None else res.qdd[k]
+        opt = MultiplierOptions(lambda_guess=guess)
+        lam[k], _ = solve_multipliers(system, system.dynamics, res.t[k], res.q[k], qd, qdd,
+                                      held.p, mode, opt)
+        guess = lam[k]
+    return lam
 
 
 def _sweep_stages(model, times, guess, order, options, forced):
@@ -237,6 +266,45 @@ def _sweep_stages(model, times, guess, order, options, forced):
             QDD[k] = one.qdd[0]
         held.update(Q[k], current)
     return SweepResult(times, Q, QD, QDD, its, evals, order, rconds), stages
+
+
+# -- outputs of a multistage solution ------------------------------------------------------
+def stagewise(sol, output):
+    """``output(s)`` of a multistage solution, each point with the rows of the stage in effect
+    there: ``output`` runs once per stage combination present, on a copy of ``sol`` whose system
+    is that combination's and whose switches show that stage's equations; the results are
+    combined point by point (arrays along the first axis, tuples element by element)."""
+    import dataclasses
+
+    model = sol.model
+    switches = model._switches()
+    combos = np.stack([np.asarray(np.atleast_1d(sol.extra["stages"][sw.name])) - 1
+                       for sw in switches], axis=1)
+    keys = sorted({tuple(int(x) for x in c) for c in combos})
+    extra = {k: v for k, v in sol.extra.items() if k != "stages"}
+    out = None
+    try:
+        for key in keys:
+            for sw, k in zip(switches, key):
+                sw._view = k
+            part = dataclasses.replace(sol, system=stage_system(model, key), extra=extra,
+                                       scalar=False)
+            val = output(part)
+            mask = np.all(combos == np.array(key), axis=1)
+            if out is None:
+                out = (tuple(np.array(v, dtype=float) for v in val) if isinstance(val, tuple)
+                       else np.array(val, dtype=float))
+            if isinstance(val, tuple):
+                for o, v in zip(out, val):
+                    o[mask] = np.asarray(v)[mask]
+            else:
+                out[mask] = np.asarray(val)[mask]
+    finally:
+        for sw in switches:
+            sw._view = None
+    if sol.scalar:
+        return tuple(o[0] for o in out) if isinstance(out, tuple) else out[0]
+    return out
 
 
 # -- finding times ------------------------------------------------------------------------

@@ -122,6 +122,16 @@ class StageSwitch(ConstraintBase):
         """Stage 1's rows with ``v_held`` placeholders (the model's default stage)."""
         return self.stage_equations(space, 0)
 
+    #: the stage whose rows :meth:`equations` shows (``None``: stage 1); set only while the
+    #: outputs of a multistage solution are evaluated stage by stage (``_multistage.stagewise``)
+    _view: int | None = None
+
+    def equations(self, space) -> list[sp.Expr]:
+        """The rows of stage 1, or of the stage being evaluated (see ``_view``)."""
+        if self._view:
+            return self.stage_equations(space, self._view)
+        return super().equations(space)
+
     # -- stages ---------------------------------------------------------------------------
     def held_symbol(self, var: sp.Symbol) -> sp.Symbol:
         """The hidden parameter a stage that does not use ``var`` holds it at."""

@@ -120,6 +120,10 @@ class LoadOutputs:
 
         On ground, the reaction is the opposite of that on the constraint's other body
         (the constraint must join ground to exactly one body)."""
+        if _staged(self):  # a multistage solution: each point with its stage's rows
+            from ..analyses._multistage import stagewise
+
+            return stagewise(self, lambda s: s.reaction(constraint, body, at, coordinates))
         m = self._model()
         c = m.constraint(constraint)
         b = m.body(body)
@@ -150,6 +154,10 @@ class LoadOutputs:
         Mech's other forms (generalized only): ``All`` the whole load vector, ``Rest`` the
         model variables' part, a coordinate symbol its element, a list of bodies and
         symbols the parts concatenated."""
+        if type == "reaction" and _staged(self):  # each point with its stage's rows
+            from ..analyses._multistage import stagewise
+
+            return stagewise(self, lambda s: s.loads(body, type, coordinates))
         if is_selection(body) and coordinates is not None:
             raise ModelError(f"loads({body!r}, coordinates={coordinates!r}): a force and moment "
                              "belong to one body; give a single body, or coordinates=None")
@@ -223,6 +231,10 @@ class LoadOutputs:
     def power(self, constraint):
         """Power a constraint delivers to the mechanism (a driver's power):
         ``-lambda_c^T (Phi_c)_q qd``."""
+        if _staged(self):  # a multistage solution: each point with its stage's rows
+            from ..analyses._multistage import stagewise
+
+            return stagewise(self, lambda s: s.power(constraint))
         m = self._model()
         c = m.constraint(constraint)
         s = self._sys()
@@ -230,6 +242,12 @@ class LoadOutputs:
         eqs = sp.Matrix(c.equations(m.space))
         q, qd = list(s.layout.q_symbols), sp.Matrix(s.layout.qd_symbols)
         return self._finish(-(lam.T * eqs.jacobian(q) * qd)[0, 0])
+
+
+def _staged(out) -> bool:
+    """A Solution of a model with stage switches (its switch rows differ by point)."""
+    extra = getattr(out, "extra", None)
+    return bool(isinstance(extra, dict) and extra.get("stages"))
 
 
 def lambda_guess_vector(system, model, spec) -> np.ndarray:

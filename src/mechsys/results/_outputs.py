@@ -212,6 +212,11 @@ class OutputFunctions:
 
             sol.jacobian(ms.All, ms.All).T @ sol.generalized(ms.All) == sol.loads(ms.All)
         """
+        extra = getattr(self, "extra", None)
+        if isinstance(extra, dict) and extra.get("stages"):  # multistage: each point's rows
+            from ..analyses._multistage import stagewise
+
+            return stagewise(self, lambda s: s.jacobian(constraint, body))
         m = self._model()
         eqs = sp.Matrix(self._equation_rows(constraint))
         syms = (m._coordinate_symbols() if body is None
