@@ -523,11 +523,16 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         """A System of this model's equations minus those of ``removed`` constraints (free
         and path systems); same coordinates, parameters and (by default) loads."""
         if self._switches():
+            if loads is None:  # free motion: the first stages (analyses/_free_switch.py)
+                from .analyses._multistage import stage_system
+
+                return stage_system(self, None, tuple(removed))
             raise ModelError(
-                f"free and path motion of a model with stage or time switches "
-                f"({', '.join(repr(c.name) for c in self._switches())}) is not supported yet (issue "
-                "14: switch events in free motion are a later step); replace each switch by the "
-                "constraint of the stage you need (m.replace(name, constraint))")
+                f"path motion of a model with stage or time switches "
+                f"({', '.join(repr(c.name) for c in self._switches())}) is not supported; "
+                "replace each switch by the constraint of the stage you need "
+                "(m.replace(name, constraint)), or use free motion (m.free), which passes "
+                "through stage changes")
         eqs, owners, index = self._all_equations()
         keep = [i for i, o in enumerate(owners) if o not in removed]
         eqs = [eqs[i] for i in keep]
@@ -800,6 +805,10 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         acceleration and motion (``"dynamic"``). Returns a :class:`FreeSystem`."""
         from .analyses._free import FreeSystem
 
+        if self._switches() or any(getattr(ld, "tests", None) for ld in self._loads):
+            from .analyses._free_switch import SwitchedFreeSystem  # events (issue 14)
+
+            return SwitchedFreeSystem(self, drop, solution, initial_guess, initial_condition)
         return FreeSystem(self, drop, solution, initial_guess, initial_condition)
 
     def path(self, replace, initial_condition=None):

@@ -52,22 +52,35 @@ def _cache(model) -> dict:
     return c[1]
 
 
-def stage_system(model, stages) -> System:
+def stage_system(model, stages, dropped=()) -> System:
     """The System of the stage combination ``stages`` (0-based stage index per switch, in
-    model order; ``None``: every switch at its first stage), compiled once per model version."""
+    model order; ``None``: every switch at its first stage), compiled once per model version.
+
+    ``dropped`` (free motion): constraints whose rows are left out, and ``(switch, stage)``
+    pairs (0-based stage): in that stage the switch contributes only the rows holding its
+    variables (``v - v_held``), so the motion it constrained elsewhere is free there."""
     switches = model._switches()
     stages = tuple(stages) if stages is not None else (0,) * len(switches)
+    plain = [c for c in dropped if not isinstance(c, tuple)]
+    staged = {(id(c[0]), c[1]) for c in dropped if isinstance(c, tuple)}
+    key = (stages, tuple(sorted(map(id, plain))), tuple(sorted(staged)))
+    if not dropped:
+        key = stages
     cache = _cache(model)
-    if stages in cache:
-        return cache[stages]
+    if key in cache:
+        return cache[key]
     chosen = dict(zip(map(id, switches), zip(switches, stages)))
     eqs0, owners0, index0 = model._all_equations()
     eqs, owners, index, done = [], [], [], set()
     for e, o, i in zip(eqs0, owners0, index0):
+        if any(o is c for c in plain):
+            continue
         if id(o) in chosen:
             if id(o) not in done:
                 done.add(id(o))
-                rows = o.stage_equations(model.space, chosen[id(o)][1])
+                k = chosen[id(o)][1]
+                rows = (o.stage_equations(model.space, k) if (id(o), k) not in staged
+                        else [v.symbol - o.held_symbol(v.symbol) for v in o.new_variables()])
                 eqs += rows
                 owners += [o] * len(rows)
                 index += list(range(len(rows)))
@@ -81,7 +94,7 @@ def stage_system(model, stages) -> System:
                          index)
     system = System(model.space, layout, eqs, model._p(), model.guess(), backend=model._backend,
                     version=model._version, model=model, loads=list(model._loads))
-    cache[stages] = system
+    cache[key] = system
     return system
 
 
