@@ -368,7 +368,8 @@ class SwitchedFreeSystem(FreeSystem):
             QDD[k] = qdd
             if ck not in rows:
                 rows[ck] = _row_map(S, stage_system(model, ck))
-            LAM[k, rows[ck]] = lam
+            src, dst = rows[ck]
+            LAM[k, dst] = lam[src]
         switches = model._switches()
         C = np.array(out_c, dtype=int).reshape(N, len(switches))
         extra = {"events": log, "evaluations": evals, "steps": steps, "method": opt.method,
@@ -381,22 +382,24 @@ class SwitchedFreeSystem(FreeSystem):
                         lam=LAM, mode="free-dynamic", extra=extra)
 
 
-def _row_map(free, full) -> list[int]:
-    """Index in ``full``'s rows of each row of ``free`` (same owner, same equation)."""
+def _row_map(free, full) -> tuple[list[int], list[int]]:
+    """``(rows of free, rows of full)``: the rows of ``free`` that ``full`` has too (same owner,
+    same equation). A row holding a variable of a dropped stage (``v - v_held``) has no place
+    in the full stage (which uses the variable): its multiplier is not a reaction and is left
+    out."""
     def key(o):
         return o if isinstance(o, str) else id(o)
 
     where = {}
     for i, (o, e) in enumerate(zip(full.layout.eq_owner, full.phi)):
         where.setdefault((key(o), sp.srepr(e)), i)
-    out = []
-    for o, e in zip(free.layout.eq_owner, free.phi):
+    src, dst = [], []
+    for k, (o, e) in enumerate(zip(free.layout.eq_owner, free.phi)):
         i = where.get((key(o), sp.srepr(e)))
-        if i is None:   # a held row of a dropped stage: any row of the switch's own
-            raise ModelError(f"free motion: row {e} of {getattr(o, 'label', lambda: o)()} has no "
-                             "place among the rows of the full stage; drop the whole switch instead")
-        out.append(i)
-    return out
+        if i is not None:
+            src.append(k)
+            dst.append(i)
+    return src, dst
 
 
 __all__ = ["SwitchedFreeSystem"]
