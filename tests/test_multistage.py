@@ -303,11 +303,12 @@ def test_replace_by_a_switch_checks_its_stages():
         m.replace("jog", bad)
 
 
-def test_free_motion_with_a_switch_is_refused_not_wrong():
+def test_path_motion_with_a_switch_is_refused_not_wrong():
     m, s = _jog_stage()
     with pytest.raises(ms.ModelError,
-                       match=r"free and path motion .* switches \('jog'\) is not supported yet"):
-        m.free(drop=["drive"])
+                       match=r"path motion of a model with stage or time switches \('jog'\) is not "
+                             r"supported"):
+        m._system_without([m.constraint("drive")], loads=[])
 
 
 def test_stage_without_solution_past_its_end_hands_over_to_the_next():

@@ -237,10 +237,10 @@ class SwitchedFreeSystem(FreeSystem):
                 if crossed:
                     hit = min((self._bracket(events, dense, p, i, t_old, solver.t, g_ref[i])
                                for i in crossed), key=lambda h: h[1] * d)
-                    t_end = hit[1]
+                    t_end = hit[2]      # output times up to the old side of the event
                 if t_eval is not None:
-                    while ie < len(t_eval) and ((t_eval[ie] - t_end) * d < 0 or (
-                            hit is None and t_eval[ie] == t_end)):
+                    while ie < len(t_eval) and ((t_eval[ie] - t_end) * d < 0 or
+                                                t_eval[ie] == t_end):
                         yi = dense(t_eval[ie])
                         out_t.append(float(t_eval[ie]))
                         out_y.append(np.concatenate(project(S, t_eval[ie], yi[:n], yi[n:], p,
@@ -286,8 +286,9 @@ class SwitchedFreeSystem(FreeSystem):
 
     @staticmethod
     def _bracket(events, dense, p, i, ta, tb, s0):
-        """``(i, t)``: the first zero of event ``i`` in ``[ta, tb]`` by bisection on the dense
-        output to a few ulps; ``t`` on the far side (where the sign is no longer ``s0``)."""
+        """``(i, b, a)``: the first zero of event ``i`` in ``[ta, tb]`` by bisection on the
+        dense output to a few ulps; ``b`` on the far side (the sign is no longer ``s0``), ``a``
+        the last time on the near side."""
         a, b = ta, tb
         for _ in range(200):
             if abs(b - a) <= 4 * np.finfo(float).eps * max(abs(a), abs(b), 1e-300):
@@ -297,7 +298,7 @@ class SwitchedFreeSystem(FreeSystem):
                 a = c
             else:
                 b = c
-        return i, b
+        return i, b, a
 
     def _switch(self, old, new, te, ye, p, sc, policy, first_speed):
         """Positions and velocities in the new stage by the velocity policy; the event log."""
