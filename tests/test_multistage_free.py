@@ -148,3 +148,17 @@ def test_free_motion_with_switches_bad_options_are_named():
         fs.simulate((0.0, 1.0), at_switch="project", max_events=0)
     with pytest.raises(ms.ConvergenceError, match=r"more than max_events = 1 events"):
         fs.simulate((0.0, 1.2), at_switch=("restitution", 0.5), max_events=1, **TOL)
+
+
+def test_free_acceleration_at_one_state_uses_the_stage_in_effect():
+    m, fs = _free()
+    # released at the horizontal: alpha = m g c / I_O (stage 1 dropped: the rod is free)
+    one = fs.solve(0.0)
+    assert one.stage("latch") == 1
+    assert one.qdd[0, 2] == pytest.approx(-lp.MASS * 9.81 * lp.C / lp.I_O, rel=1e-12)
+    # at rest on the latch: no acceleration, the latch holds the moment m g c cos(beta)
+    latched = fs.solve(0.0, initial_condition={"rod.th": -lp.BETA - 1e-9})
+    assert latched.stage("latch") == 2
+    np.testing.assert_allclose(latched.qdd, 0.0, atol=1e-12)
+    assert latched.reaction("latch", "rod")[1] == pytest.approx(
+        lp.MASS * 9.81 * lp.C * np.cos(lp.BETA), rel=1e-8)   # the given angle is held

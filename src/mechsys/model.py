@@ -805,7 +805,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         acceleration and motion (``"dynamic"``). Returns a :class:`FreeSystem`."""
         from .analyses._free import FreeSystem
 
-        if self._switches() or any(getattr(ld, "tests", None) for ld in self._loads):
+        if self._switches() or (solution == "dynamic" and
+                                any(getattr(ld, "tests", None) for ld in self._loads)):
             from .analyses._free_switch import SwitchedFreeSystem  # events (issue 14)
 
             return SwitchedFreeSystem(self, drop, solution, initial_guess, initial_condition)

@@ -54,6 +54,7 @@ from scipy.integrate import DOP853, RK45
 from .._errors import ConvergenceError, MechError, ModelError
 from .._symbols import T
 from ..constraints._switches import StageSwitch
+from ..results._load_outputs import lambda_guess_vector
 from ..results._solution import Solution
 from ..solvers._free import free_acceleration, project, project_positions, scaling_at
 from ..solvers._integrators import ATOL, MAX_ERROR, MAX_STEP, RTOL, integration_options, output_times
@@ -163,6 +164,23 @@ class SwitchedFreeSystem(FreeSystem):
             for i, v in over.items():
                 p[i] = v
         return p
+
+    def solve(self, t: float = 0.0, initial_condition=None, lambda_guess=None,
+              tolerance: float | None = None, max_iterations: int | None = None) -> Solution:
+        """The free acceleration at one state, in the stage its tests choose there (a
+        one-point :class:`Solution` with ``stage``, multipliers in the full stage's rows)."""
+        if isinstance(t, bool) or not isinstance(t, Real) or not np.isfinite(t):
+            raise ModelError(f"solve(t): t must be a finite number, got {t!r}")
+        t = float(t)
+        kw = self._newton(tolerance, max_iterations, "FreeSystem.solve")
+        if lambda_guess is not None:
+            kw["lam_guess"] = lambda_guess_vector(self.system, self.model, lambda_guess)
+        q, qd, p, held = self._start(initial_condition)
+        combo = _Tests(self.model, stage_system(self.model, None)).stages(t, q, p, {})
+        self.system = self._free_system(combo)
+        sc = scaling_at(self.system, t, q, p)
+        q, qd = self._project_start(t, q, qd, p, held, sc)
+        return self._assemble([t], [np.concatenate((q, qd))], [combo], p, kw, {}, sc, scalar=True)
 
     def simulate(self, t, initial_condition=None, at_switch=None, method: str = "dop853",
                  rtol: float = RTOL, atol: float = ATOL, max_step: float = MAX_STEP,
@@ -282,7 +300,9 @@ class SwitchedFreeSystem(FreeSystem):
                 out_t.append(float(te))
                 out_y.append(y.copy())
                 out_c.append(combo)
-        return self._assemble(out_t, out_y, out_c, p, kw, log, evals, steps, opt, sc)
+        info = {"events": log, "evaluations": evals, "steps": steps, "method": opt.method,
+                "rtol": opt.rtol, "atol": opt.atol}
+        return self._assemble(out_t, out_y, out_c, p, kw, info, sc)
 
     @staticmethod
     def _bracket(events, dense, p, i, ta, tb, s0):
@@ -353,7 +373,7 @@ class SwitchedFreeSystem(FreeSystem):
         entry.update(kinetic_energy_after=ke1, energy_lost=ke0 - ke1, stage_after=[k + 1 for k in target])
         return target, np.concatenate((q, qd_new)), entry
 
-    def _assemble(self, out_t, out_y, out_c, p, kw, log, evals, steps, opt, sc) -> Solution:
+    def _assemble(self, out_t, out_y, out_c, p, kw, info, sc, scalar=False) -> Solution:
         """The Solution: accelerations and multipliers per point in its stage's free system,
         the multipliers placed in the rows of the full stage system (dropped rows zero)."""
         model = self.model
@@ -373,14 +393,13 @@ class SwitchedFreeSystem(FreeSystem):
             LAM[k, dst] = lam[src]
         switches = model._switches()
         C = np.array(out_c, dtype=int).reshape(N, len(switches))
-        extra = {"events": log, "evaluations": evals, "steps": steps, "method": opt.method,
-                 "rtol": opt.rtol, "atol": opt.atol, "length_scale": sc.length}
+        extra = {**info, "length_scale": sc.length}
         if switches:
             extra["stages"] = {sw.name: C[:, j] + 1 for j, sw in enumerate(switches)}
         self.system = self._free_system(out_c[-1])
         return Solution(t=np.asarray(out_t, dtype=float), q=Y[:, :n].copy(), qd=Y[:, n:].copy(),
                         qdd=QDD, p=p, system=base, model=model, iterations=np.zeros(N, dtype=int),
-                        lam=LAM, mode="free-dynamic", extra=extra)
+                        lam=LAM, mode="free-dynamic", extra=extra, scalar=scalar)
 
 
 def _row_map(free, full) -> tuple[list[int], list[int]]:
