@@ -117,3 +117,33 @@ def test_inverse_dynamics_with_a_stage_switch_drive_power():
     sol = m.solve(t, solution="dynamic")
     np.testing.assert_allclose(sol.power("drive"), np.where(V * t >= XJ, W * V * np.tan(BETA), 0),
                                atol=1e-12)
+
+
+def test_switched_loads_and_stage_switch_in_a_3d_model():
+    # 3D: the slider on the X axis (then, as a stage, on a 30 degree ramp in the XZ plane),
+    # a weight along -Z switched on at t = 1 by a TimeSwitch of loads
+    m = ms.Model3D()
+    b = m.add_body("slider", points={"pin": (0, 0, 0)}, guess=((0, 0, 0), (1, 0, 0, 0)),
+                   mass=1.0, inertia=(1, 1, 1))
+    pin = b.point("pin")
+    m.add(ms.RotationLock3(b), name="no rotation")
+    m.add(ms.RelativeX1(pin, V * T), name="drive")
+    m.add(ms.RelativeY1(pin, 0), name="plane")
+    m.add(ms.StageSwitch((b.q[0] < XJ, ms.RelativeZ1(pin, 0)),
+                         (True, ms.RelativeZ1(pin, (V * T - XJ) * sp.tan(BETA)))), name="jog")
+    m.add_load(ms.TimeSwitch(1.0, ms.Force(pin, (0, 0, -1), W)))
+    t = np.array([0.5, 2.0, 6.0])
+    sol = m.solve(t, solution="static")
+    np.testing.assert_array_equal(sol.stage("jog"), [1, 1, 2])
+    # the Z driver (either stage) carries the weight once it is on; nothing pushes along X
+    F, _ = sol.reaction("jog", "slider")
+    np.testing.assert_allclose(F[:, 2], [0, W, W], atol=1e-12)
+    np.testing.assert_allclose(sol.reaction("drive", "slider")[0][:, 0], 0, atol=1e-12)
+    # free motion (drive dropped): the weight switches on at t = 1 as an event; on the flat
+    # stage it presses on the track only, the slider keeps its speed V
+    m.solve(0.0, solution="velocity")
+    free = m.free(drop=["drive"]).simulate(np.linspace(0, 3, 7), rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(free["slider.x"], V * np.linspace(0, 3, 7), atol=1e-10)
+    assert [round(e["t"], 12) for e in free.extra["events"]] == [1.0]
+    Fz = free.reaction("jog", "slider")[0][:, 2]
+    np.testing.assert_allclose(Fz, np.where(np.linspace(0, 3, 7) >= 1, W, 0), atol=1e-9)
