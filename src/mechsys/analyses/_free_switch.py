@@ -60,7 +60,7 @@ from ..solvers._free import free_acceleration, project, project_positions, scali
 from ..solvers._integrators import ATOL, MAX_ERROR, MAX_STEP, RTOL, integration_options, output_times
 from ..solvers._linalg import factor
 from ._free import FreeSystem, _reject_unknown
-from ._multistage import _HeldValues, _Tests, stage_system
+from ._multistage import _HeldValues, _Tests, lambdify_exact, stage_system
 
 #: velocities are compatible with a stage when its scaled velocity residual is below this
 COMPATIBLE = 1e-6
@@ -107,7 +107,7 @@ class _Events:
             seen.add(g)
             exprs.append(g)
         self.exprs = exprs
-        self.f = sp.lambdify(args, exprs, modules="numpy") if exprs else None
+        self.f = lambdify_exact(args, exprs) if exprs else None
 
     def __call__(self, t, y, p) -> np.ndarray:
         if self.f is None:

@@ -28,6 +28,7 @@ from collections.abc import Mapping
 import numpy as np
 import sympy as sp
 from scipy.optimize import brentq
+from sympy.printing.numpy import NumPyPrinter
 
 from .._errors import ConvergenceError, MechError, ModelError, SingularJacobianError
 from .._symbols import T
@@ -98,6 +99,22 @@ def stage_system(model, stages, dropped=()) -> System:
     return system
 
 
+class _ExactFloats(NumPyPrinter):
+    """NumPy printer that writes floats with all their digits (SymPy's default writes 15
+    significant digits, which moves a test's threshold such as ``-pi/3`` by ~1e-15: a
+    configuration exactly on a stage's boundary would choose the other stage)."""
+
+    def _print_Float(self, expr):
+        return repr(float(expr))
+
+
+def lambdify_exact(args, expr):
+    """``sympy.lambdify`` to NumPy with floats printed exactly (:class:`_ExactFloats`)."""
+    return sp.lambdify(args, expr, modules="numpy", printer=_ExactFloats(
+        {"fully_qualified_modules": False, "inline": True, "allow_unknown_functions": True,
+         "user_functions": {}}))
+
+
 class _Tests:
     """The switches' tests compiled once per solve as numeric functions of ``(T, q, p)``."""
 
@@ -116,7 +133,7 @@ class _Tests:
                         f"{sw.label()}: the test of stage {k + 1} ({test}) uses "
                         f"{sorted(map(str, extra))}, which are not T, coordinates or parameters "
                         "of the model; declare parameters with m.parameter(name, value)")
-                fs.append(sp.lambdify(args, test, modules="numpy"))
+                fs.append(lambdify_exact(args, test))
             self.funcs.append(fs)
 
     def stage_of(self, j: int, t: float, q, p) -> int:
