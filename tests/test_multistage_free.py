@@ -94,6 +94,19 @@ def test_restitution_rebounds_off_the_stop():
     i = np.flatnonzero(sol.t > first["t"])[0]
     thd = sol.coordinate("rod.th", 1)
     assert thd[i] > 0                           # moving back up after the impact
+    # the rebounds settle: each keeps e^2 of the kinetic energy until the approach speed is
+    # 1e-6 of the first (energy 1e-12), then the rod latches; it then rests on the stop, having
+    # lost exactly the kinetic energy of the first impact, m g c sin(beta)
+    sol = fs.simulate((0.0, 2.0), at_switch=("restitution", e), **TOL)
+    evs = sol.extra["events"]
+    assert [ev["policy"] for ev in evs] == ["restitution e=0.5"] * (len(evs) - 1) + ["project"]
+    ratios = [ev["kinetic_energy_after"] / ev["kinetic_energy_before"] for ev in evs[:-1]]
+    np.testing.assert_allclose(ratios, e**2, rtol=1e-6)
+    assert evs[-1]["kinetic_energy_before"] <= 1e-12 * evs[0]["kinetic_energy_before"] / e**2
+    assert sum(ev["energy_lost"] for ev in evs) == pytest.approx(
+        lp.MASS * 9.81 * lp.C * np.sin(lp.BETA), rel=1e-8)
+    assert sol.stage("latch")[-1] == 2
+    np.testing.assert_allclose(sol.qd[-1], 0.0, atol=1e-12)
 
 
 def test_time_switch_load_in_free_motion_is_an_event():

@@ -14,7 +14,11 @@ nothing, e.g. a pendulum that swings freely (stage 1 dropped) until it latches (
 Runge-Kutta step the signs of all ``g`` are compared with the previous ones; where one
 changed, its first zero in the step is located by bisection on the step's dense output down
 to a few ulps in time, so the event time has the integrator's accuracy (the dense output's
-error). The integration stops there, the tests are evaluated just past the zero, and
+error). A ``g`` within rounding of zero (``16 eps (|lhs| + |rhs|)``) has no sign: a
+configuration held on a boundary (a latched stop) makes no events, and the event is where
+``g`` is first strictly on the far side. After an event the event's relation is expected on
+the far side, or back on the near side after a rebound, so a crossing within the first step
+after the restart is not missed. The integration stops there, the tests are evaluated just past the zero, and
 
 * a switched load only changes its force: the integration restarts at the event;
 * a constraint stage change restarts in the new stage's free system, with positions
@@ -95,7 +99,7 @@ class _Events:
         rels = [r for sw in model._switches() for t in sw.tests
                 for r in t.atoms(sp.core.relational.Relational)]
         rels += [r for ld in model._loads if hasattr(ld, "relations") for r in ld.relations()]
-        exprs, seen = [], set()
+        exprs, sides, seen = [], [], set()
         for r in rels:
             g = sp.sympify(r.lhs - r.rhs)
             if g.is_number or g in seen:
@@ -106,13 +110,20 @@ class _Events:
                                  "not T, coordinates, velocities or parameters of the model")
             seen.add(g)
             exprs.append(g)
+            sides += [sp.sympify(r.lhs), sp.sympify(r.rhs)]
         self.exprs = exprs
-        self.f = lambdify_exact(args, exprs) if exprs else None
+        self.f = lambdify_exact(args, sides) if exprs else None
 
     def __call__(self, t, y, p) -> np.ndarray:
+        """The signs of the ``g``, zero within rounding of the boundary
+        (``|g| <= 16 eps (|lhs| + |rhs|)``): a configuration held on a boundary (a latched
+        stop) must not produce events from the last bits of its coordinates."""
         if self.f is None:
             return np.zeros(0)
-        return np.array(self.f(t, *y, *p), dtype=float).reshape(-1)
+        v = np.array(self.f(t, *y, *p), dtype=float).reshape(-1, 2)
+        g = v[:, 0] - v[:, 1]
+        band = 16 * np.finfo(float).eps * (np.abs(v[:, 0]) + np.abs(v[:, 1]))
+        return np.where(np.abs(g) > band, np.sign(g), 0.0)
 
 
 class SwitchedFreeSystem(FreeSystem):
@@ -226,7 +237,7 @@ class SwitchedFreeSystem(FreeSystem):
         out_t, out_y, out_c = [t0], [y.copy()], [combo]
         ie = 1 if t_eval is not None else 0
         log, first_speed = [], {}
-        fresh: set = set()
+        fresh: dict = {}
         t_now, evals, steps = t0, 0, 0
         while (t1 - t_now) * d > 0:
             S = self._free_system(combo)
@@ -237,9 +248,9 @@ class SwitchedFreeSystem(FreeSystem):
 
             solver = cls(rhs, t_now, y, t1, rtol=opt.rtol, atol=opt.atol * scale,
                          max_step=opt.max_step)
-            g_ref = np.sign(events(t_now, y, p))
-            for i in fresh:            # the event just handled: its sign is set by the motion
-                g_ref[i] = 0.0
+            g_ref = events(t_now, y, p)
+            for i, side in fresh.items():   # the event just handled: the side the motion takes
+                g_ref[i] = side
             hit = None
             while solver.status == "running":
                 t_old = solver.t
@@ -248,8 +259,8 @@ class SwitchedFreeSystem(FreeSystem):
                     raise MechError(f"integration failed at t = {solver.t:.6g}: {msg}")
                 steps += 1
                 dense = solver.dense_output()
-                g_new = np.sign(events(solver.t, solver.y, p))
-                crossed = [i for i in range(len(g_new)) if g_ref[i] != 0 and g_new[i] != g_ref[i]]
+                g_new = events(solver.t, solver.y, p)
+                crossed = [i for i in range(len(g_new)) if g_ref[i] != 0 and g_new[i] == -g_ref[i]]
                 g_ref = np.where(g_ref == 0, g_new, g_ref)
                 t_end = solver.t
                 if crossed:
@@ -257,8 +268,12 @@ class SwitchedFreeSystem(FreeSystem):
                                for i in crossed), key=lambda h: h[1] * d)
                     t_end = hit[2]      # output times up to the old side of the event
                 if t_eval is not None:
-                    while ie < len(t_eval) and ((t_eval[ie] - t_end) * d < 0 or
-                                                t_eval[ie] == t_end):
+                    # before an event only the times strictly on its near side; a time on
+                    # the boundary belongs to the new stage (a TimeSwitch's later stage at t_j)
+                    while ie < len(t_eval) and (
+                            ((t_eval[ie] - t_end) * d <= 0) if hit is None else (
+                                (t_eval[ie] - t_end) * d <= 0 and
+                                events(t_eval[ie], dense(t_eval[ie]), p)[hit[0]] == hit[3])):
                         yi = dense(t_eval[ie])
                         out_t.append(float(t_eval[ie]))
                         out_y.append(np.concatenate(project(S, t_eval[ie], yi[:n], yi[n:], p,
@@ -287,14 +302,18 @@ class SwitchedFreeSystem(FreeSystem):
             i_ev, te = hit[0], hit[1]
             ye = dense(te)
             new = tests.stages(te, ye[:n], p, {})
-            fresh = {i_ev}
+            s0 = hit[3]
+            fresh = {i_ev: -s0}         # the motion goes on to the far side ...
             if new == combo:
                 y = np.concatenate(project(S, te, ye[:n], ye[n:], p, scaling=sc))
                 log.append({"t": te, "kind": "load", "event": str(events.exprs[i_ev])})
             else:
                 held.update(ye[:n], combo)
+                before = combo
                 combo, y, entry = self._switch(combo, new, te, ye, p, sc, policy, first_speed)
                 log.append(entry)
+                if combo == before:     # ... unless it rebounded off the new stage
+                    fresh = {i_ev: s0}
             t_now = te
             if t_eval is None:
                 out_t.append(float(te))
@@ -306,19 +325,19 @@ class SwitchedFreeSystem(FreeSystem):
 
     @staticmethod
     def _bracket(events, dense, p, i, ta, tb, s0):
-        """``(i, b, a)``: the first zero of event ``i`` in ``[ta, tb]`` by bisection on the
-        dense output to a few ulps; ``b`` on the far side (the sign is no longer ``s0``), ``a``
-        the last time on the near side."""
+        """``(i, b, a, s0)``: the first crossing of event ``i`` in ``[ta, tb]`` by bisection on
+        the dense output to a few ulps: ``b`` the first time strictly on the far side (sign
+        ``-s0`` beyond the rounding band), ``a`` the last time before it."""
         a, b = ta, tb
         for _ in range(200):
             if abs(b - a) <= 4 * np.finfo(float).eps * max(abs(a), abs(b), 1e-300):
                 break
             c = 0.5 * (a + b)
-            if np.sign(events(c, dense(c), p)[i]) == s0:
-                a = c
-            else:
+            if events(c, dense(c), p)[i] == -s0:
                 b = c
-        return i, b, a
+            else:
+                a = c
+        return i, b, a, s0
 
     def _switch(self, old, new, te, ye, p, sc, policy, first_speed):
         """Positions and velocities in the new stage by the velocity policy; the event log."""
