@@ -64,6 +64,8 @@ def test_switched_load_bad_input_names_the_switch():
         ms.TimeSwitch(ms.Force(pin, (1, 0), 1.0), 2.0, ms.Force(pin, (1, 0), 2.0), 1.0)
     with pytest.raises(ms.ModelError, match=r"load set is a load or a list of loads"):
         ms.StageSwitch((True, ms.Force(pin, (1, 0), 1.0)), (True, ms.RelativeY1(pin, 0)))
+    with pytest.raises(ms.ModelError, match=r"TimeSwitch of loads.*add it with m\.add_load"):
+        m.add(ms.TimeSwitch(ms.Force(pin, (1, 0), 1.0), 1.0, ms.Force(pin, (1, 0), 2.0)))
     # parameter times are checked at solve time, with the parameters then
     t1 = m.parameter("t1", 1.0)
     ld = m.add_load(ms.TimeSwitch(ms.Force(pin, (1, 0), 1.0), t1, ms.Force(pin, (1, 0), 2.0), 2.0))

@@ -136,6 +136,10 @@ class SwitchedLoad(LoadBase):
                                          f"{type(c).__name__} that cannot be switched")
         return out
 
+    def __repr__(self) -> str:
+        n = sum(len(s) for s in self.sets)
+        return f"<{self.label()}: {len(self.sets)} set(s), {n} load(s); add it with m.add_load>"
+
     def relations(self) -> list:
         """The relations of the tests (their ``lhs - rhs`` are the events of free motion)."""
         return [r for t in self.tests for r in t.atoms(sp.core.relational.Relational)]
