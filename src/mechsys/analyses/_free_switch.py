@@ -40,11 +40,12 @@ after the restart is not missed. The integration stops there, the tests are eval
     switch (the rebounds of a body settling on a stop come ever faster) the stage is taken
     with ``"project"``. ``e = 0`` is ``"project"``.
 
-Each event is reported in ``sol.extra["events"]`` (time, kind, switch, stages, kinetic
-energy before and after, energy lost). The solution has every stage's free-system
-multipliers mapped into the rows of the full stage system (a dropped constraint carries no
-force: its multipliers are zero), so ``sol.reaction`` and ``sol.stage`` work as for a
-kinematic sweep.
+Each event is reported in ``sol.extra["events"]``: time, kind (``"stage"``; ``"load"`` when
+only a switched load changed; ``"relation"`` when a relation crossed without changing any
+stage), switch, stages, policy, kinetic energy before and after, energy lost, impulse. The
+solution has every stage's free-system multipliers mapped into the rows of the full stage
+system (a dropped constraint carries no force: its multipliers are zero), so
+``sol.reaction`` and ``sol.stage`` work as for a kinematic sweep.
 """
 
 from __future__ import annotations
@@ -96,12 +97,16 @@ class _Events:
     def __init__(self, model, system):
         lay = system.layout
         args = [T, *lay.q_symbols, *lay.qd_symbols, *lay.p_symbols]
-        rels = [r for sw in model._switches() for t in sw.tests
+        rels = [(r, False) for sw in model._switches() for t in sw.tests
                 for r in t.atoms(sp.core.relational.Relational)]
-        rels += [r for ld in model._loads if hasattr(ld, "relations") for r in ld.relations()]
+        rels += [(r, True) for ld in model._loads if hasattr(ld, "relations")
+                 for r in ld.relations()]
         exprs, sides, seen = [], [], set()
-        for r in rels:
+        self.of_load = set()      # the g of relations of switched loads
+        for r, of_load in rels:
             g = sp.sympify(r.lhs - r.rhs)
+            if not g.is_number and of_load:
+                self.of_load.add(g)
             if g.is_number or g in seen:
                 continue
             extra = g.free_symbols - set(args)
@@ -306,7 +311,9 @@ class SwitchedFreeSystem(FreeSystem):
             fresh = {i_ev: -s0}         # the motion goes on to the far side ...
             if new == combo:
                 y = np.concatenate(project(S, te, ye[:n], ye[n:], p, scaling=sc))
-                log.append({"t": te, "kind": "load", "event": str(events.exprs[i_ev])})
+                g = events.exprs[i_ev]
+                log.append({"t": te, "kind": "load" if g in events.of_load else "relation",
+                            "event": str(g)})
             else:
                 held.update(ye[:n], combo)
                 before = combo
@@ -319,6 +326,11 @@ class SwitchedFreeSystem(FreeSystem):
                 out_t.append(float(te))
                 out_y.append(y.copy())
                 out_c.append(combo)
+        while t_eval is not None and ie < len(t_eval):   # an event exactly at the end time
+            out_t.append(float(t_eval[ie]))
+            out_y.append(y.copy())
+            out_c.append(combo)
+            ie += 1
         info = {"events": log, "evaluations": evals, "steps": steps, "method": opt.method,
                 "rtol": opt.rtol, "atol": opt.atol}
         return self._assemble(out_t, out_y, out_c, p, kw, info, sc)
