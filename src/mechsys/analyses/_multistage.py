@@ -32,7 +32,8 @@ from sympy.printing.numpy import NumPyPrinter
 
 from .._errors import ConvergenceError, MechError, ModelError, SingularJacobianError
 from .._symbols import T
-from ..compile import System, make_layout
+from ..compile import System
+from ..compile._stages import _cache, stage_system
 from ..constraints._switches import StageSwitch, TimeSwitch
 from ..solvers import ORDERS, PositionOptions, sweep
 from ..solvers._kinematics import SweepResult, _predict, _solve_point
@@ -44,59 +45,6 @@ MODES = {"static": 0, "kinematic": 1, "dynamic": 2}
 #: a point may change its stage combination at most this many times before the tests are
 #: declared inconsistent (each change must lead to a combination not tried yet anyway)
 MAX_STAGE_CHANGES = 8
-
-
-def _cache(model) -> dict:
-    c = model.__dict__.get("_stage_cache")
-    if c is None or c[0] != model._version:
-        c = model.__dict__["_stage_cache"] = (model._version, {})
-    return c[1]
-
-
-def stage_system(model, stages, dropped=()) -> System:
-    """The System of the stage combination ``stages`` (0-based stage index per switch, in
-    model order; ``None``: every switch at its first stage), compiled once per model version.
-
-    ``dropped`` (free motion): constraints whose rows are left out, and ``(switch, stage)``
-    pairs (0-based stage): in that stage the switch contributes only the rows holding its
-    variables (``v - v_held``), so the motion it constrained elsewhere is free there."""
-    switches = model._switches()
-    stages = tuple(stages) if stages is not None else (0,) * len(switches)
-    plain = [c for c in dropped if not isinstance(c, tuple)]
-    staged = {(id(c[0]), c[1]) for c in dropped if isinstance(c, tuple)}
-    key = (stages, tuple(sorted(map(id, plain))), tuple(sorted(staged)))
-    if not dropped:
-        key = stages
-    cache = _cache(model)
-    if key in cache:
-        return cache[key]
-    chosen = dict(zip(map(id, switches), zip(switches, stages)))
-    eqs0, owners0, index0 = model._all_equations()
-    eqs, owners, index, done = [], [], [], set()
-    for e, o, i in zip(eqs0, owners0, index0):
-        if any(o is c for c in plain):
-            continue
-        if id(o) in chosen:
-            if id(o) not in done:
-                done.add(id(o))
-                k = chosen[id(o)][1]
-                rows = (o.stage_equations(model.space, k) if (id(o), k) not in staged
-                        else [v.symbol - o.held_symbol(v.symbol) for v in o.new_variables()])
-                eqs += rows
-                owners += [o] * len(rows)
-                index += list(range(len(rows)))
-            continue
-        eqs.append(e)
-        owners.append(o)
-        index.append(i)
-    held = [s for sw in switches for s in sw.held_symbols()]
-    model._check_symbols([e for e in eqs if not e.free_symbols & set(held)], owners)
-    layout = make_layout(model._bodies[1:], model._variables, list(model._params) + held, owners,
-                         index)
-    system = System(model.space, layout, eqs, model._p(), model.guess(), backend=model._backend,
-                    version=model._version, model=model, loads=list(model._loads))
-    cache[key] = system
-    return system
 
 
 class _ExactFloats(NumPyPrinter):
@@ -296,45 +244,6 @@ def _sweep_stages(model, times, guess, order, options, forced):
             QDD[k] = one.qdd[0]
         held.update(Q[k], current)
     return SweepResult(times, Q, QD, QDD, its, evals, order, rconds), stages
-
-
-# -- outputs of a multistage solution ------------------------------------------------------
-def stagewise(sol, output):
-    """``output(s)`` of a multistage solution, each point with the rows of the stage in effect
-    there: ``output`` runs once per stage combination present, on a copy of ``sol`` whose system
-    is that combination's and whose switches show that stage's equations; the results are
-    combined point by point (arrays along the first axis, tuples element by element)."""
-    import dataclasses
-
-    model = sol.model
-    switches = model._switches()
-    combos = np.stack([np.asarray(np.atleast_1d(sol.extra["stages"][sw.name])) - 1
-                       for sw in switches], axis=1)
-    keys = sorted({tuple(int(x) for x in c) for c in combos})
-    extra = {k: v for k, v in sol.extra.items() if k != "stages"}
-    out = None
-    try:
-        for key in keys:
-            for sw, k in zip(switches, key):
-                sw._view = k
-            part = dataclasses.replace(sol, system=stage_system(model, key), extra=extra,
-                                       scalar=False)
-            val = output(part)
-            mask = np.all(combos == np.array(key), axis=1)
-            if out is None:
-                out = (tuple(np.array(v, dtype=float) for v in val) if isinstance(val, tuple)
-                       else np.array(val, dtype=float))
-            if isinstance(val, tuple):
-                for o, v in zip(out, val):
-                    o[mask] = np.asarray(v)[mask]
-            else:
-                out[mask] = np.asarray(val)[mask]
-    finally:
-        for sw in switches:
-            sw._view = None
-    if sol.scalar:
-        return tuple(o[0] for o in out) if isinstance(out, tuple) else out[0]
-    return out
 
 
 # -- finding times ------------------------------------------------------------------------

@@ -123,7 +123,7 @@ class StageSwitch(ConstraintBase):
         return self.stage_equations(space, 0)
 
     #: the stage whose rows :meth:`equations` shows (``None``: stage 1); set only while the
-    #: outputs of a multistage solution are evaluated stage by stage (``_multistage.stagewise``)
+    #: outputs of a multistage solution are evaluated stage by stage (``results/_stagewise.py``)
     _view: int | None = None
 
     def equations(self, space) -> list[sp.Expr]:

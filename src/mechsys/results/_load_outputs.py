@@ -28,6 +28,7 @@ import sympy as sp
 
 from .._errors import ModelError
 from ._outputs import All, Rest, is_selection, selected_coordinates
+from ._stagewise import is_staged as _staged
 
 
 class LoadOutputs:
@@ -121,7 +122,7 @@ class LoadOutputs:
         On ground, the reaction is the opposite of that on the constraint's other body
         (the constraint must join ground to exactly one body)."""
         if _staged(self):  # a multistage solution: each point with its stage's rows
-            from ..analyses._multistage import stagewise
+            from ._stagewise import stagewise
 
             return stagewise(self, lambda s: s.reaction(constraint, body, at, coordinates))
         m = self._model()
@@ -155,7 +156,7 @@ class LoadOutputs:
         model variables' part, a coordinate symbol its element, a list of bodies and
         symbols the parts concatenated."""
         if type == "reaction" and _staged(self):  # each point with its stage's rows
-            from ..analyses._multistage import stagewise
+            from ._stagewise import stagewise
 
             return stagewise(self, lambda s: s.loads(body, type, coordinates))
         if is_selection(body) and coordinates is not None:
@@ -232,7 +233,7 @@ class LoadOutputs:
         """Power a constraint delivers to the mechanism (a driver's power):
         ``-lambda_c^T (Phi_c)_q qd``."""
         if _staged(self):  # a multistage solution: each point with its stage's rows
-            from ..analyses._multistage import stagewise
+            from ._stagewise import stagewise
 
             return stagewise(self, lambda s: s.power(constraint))
         m = self._model()
@@ -242,12 +243,6 @@ class LoadOutputs:
         eqs = sp.Matrix(c.equations(m.space))
         q, qd = list(s.layout.q_symbols), sp.Matrix(s.layout.qd_symbols)
         return self._finish(-(lam.T * eqs.jacobian(q) * qd)[0, 0])
-
-
-def _staged(out) -> bool:
-    """A Solution of a model with stage switches (its switch rows differ by point)."""
-    extra = getattr(out, "extra", None)
-    return bool(isinstance(extra, dict) and extra.get("stages"))
 
 
 def lambda_guess_vector(system, model, spec) -> np.ndarray:

@@ -212,10 +212,9 @@ class OutputFunctions:
 
             sol.jacobian(ms.All, ms.All).T @ sol.generalized(ms.All) == sol.loads(ms.All)
         """
-        extra = getattr(self, "extra", None)
-        if isinstance(extra, dict) and extra.get("stages"):  # multistage: each point's rows
-            from ..analyses._multistage import stagewise
+        from ._stagewise import is_staged, stagewise
 
+        if is_staged(self):  # a multistage solution: each point with its stage's rows
             return stagewise(self, lambda s: s.jacobian(constraint, body))
         m = self._model()
         eqs = sp.Matrix(self._equation_rows(constraint))
