@@ -159,6 +159,21 @@ def test_free_motion_with_switches_bad_options_are_named():
         m.free(drop=[("latch", 1)], solution="static")
     with pytest.raises(ms.ModelError, match=r"max_events must be a positive integer"):
         fs.simulate((0.0, 1.0), at_switch="project", max_events=0)
+    # switch times given by parameters are checked when the motion is integrated
+    m2 = ms.Model2D()
+    s2 = m2.add_body("slider", points={"pin": (0, 0)}, guess=((0, 0), 0), mass=1.0, inertia=1.0)
+    pin = s2.point("pin")
+    m2.add(ms.RotationLock1(s2, 0), name="no rotation")
+    m2.add(ms.RelativeY1(pin, 0), name="track")
+    t1 = m2.parameter("t1", 1.0)
+    m2.add(ms.RelativeX1(pin, T), name="drive")
+    ld = m2.add_load(ms.TimeSwitch(ms.Force(pin, (1, 0), 1.0), t1, ms.Force(pin, (1, 0), 2.0),
+                                   2.0))
+    free2 = m2.free(drop=["drive"])
+    m2.set_parameters(t1=3.0)
+    with pytest.raises(ms.ModelError, match=rf"load '{ld.name}' \(TimeSwitch of loads\): switch "
+                                            r"times must increase"):
+        free2.simulate((0.0, 1.0))
     with pytest.raises(ms.ConvergenceError, match=r"more than max_events = 1 events"):
         fs.simulate((0.0, 1.2), at_switch=("restitution", 0.5), max_events=1, **TOL)
 

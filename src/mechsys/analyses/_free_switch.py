@@ -59,6 +59,7 @@ from scipy.integrate import DOP853, RK45
 from .._errors import ConvergenceError, MechError, ModelError
 from .._symbols import T
 from ..constraints._switches import StageSwitch
+from ..loads._switched import check_switched_loads
 from ..results._load_outputs import lambda_guess_vector
 from ..results._solution import Solution
 from ..solvers._free import free_acceleration, project, project_positions, scaling_at
@@ -189,6 +190,7 @@ class SwitchedFreeSystem(FreeSystem):
             raise ModelError(f"solve(t): t must be a finite number, got {t!r}")
         t = float(t)
         kw = self._newton(tolerance, max_iterations, "FreeSystem.solve")
+        _check_times(self.model)
         if lambda_guess is not None:
             kw["lam_guess"] = lambda_guess_vector(self.system, self.model, lambda_guess)
         q, qd, p, held = self._start(initial_condition)
@@ -223,6 +225,7 @@ class SwitchedFreeSystem(FreeSystem):
             raise ModelError(f"max_events must be a positive integer, got {max_events!r}")
         kw = self._newton(tolerance, max_iterations, "FreeSystem.simulate")
         t0, t1, t_eval = output_times(t)
+        _check_times(self.model)
         model = self.model
         base = stage_system(model, None)
         tests = _Tests(model, base)
@@ -431,6 +434,14 @@ class SwitchedFreeSystem(FreeSystem):
         return Solution(t=np.asarray(out_t, dtype=float), q=Y[:, :n].copy(), qd=Y[:, n:].copy(),
                         qdd=QDD, p=p, system=base, model=model, iterations=np.zeros(N, dtype=int),
                         lam=LAM, mode="free-dynamic", extra=extra, scalar=scalar)
+
+
+def _check_times(model) -> None:
+    """Switch times (TimeSwitch constraints and loads) increasing with the parameters now."""
+    params = dict(zip(model._params, model._p()))
+    for sw in model._switches():
+        sw.check_times(params)
+    check_switched_loads(model)
 
 
 def _row_map(free, full) -> tuple[list[int], list[int]]:
