@@ -255,12 +255,6 @@ def test_inconsistent_tests_name_the_switch():
         m.solve(0.0)
 
 
-def test_multistage_statics_not_supported_yet():
-    m, s = _jog_stage()
-    with pytest.raises(ms.ModelError, match=r"switches is not supported yet"):
-        m.solve(0.0, solution="static")
-
-
 def test_stage_chosen_by_a_parameter_without_recompiling():
     # Mech 5.1.1's "whichtrack": the pin in one of two tracks, y = 0 or y = x / 2
     m = ms.Model2D()
@@ -309,11 +303,12 @@ def test_replace_by_a_switch_checks_its_stages():
         m.replace("jog", bad)
 
 
-def test_free_motion_with_a_switch_is_refused_not_wrong():
+def test_path_motion_with_a_switch_is_refused_not_wrong():
     m, s = _jog_stage()
     with pytest.raises(ms.ModelError,
-                       match=r"free and path motion .* switches \('jog'\) is not supported yet"):
-        m.free(drop=["drive"])
+                       match=r"path motion of a model with stage or time switches \('jog'\) is not "
+                             r"supported"):
+        m._system_without([m.constraint("drive")], loads=[])
 
 
 def test_stage_without_solution_past_its_end_hands_over_to_the_next():

@@ -514,11 +514,16 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         """A System of this model's equations minus those of ``removed`` constraints (free
         and path systems); same coordinates, parameters and (by default) loads."""
         if self._switches():
+            if loads is None:  # free motion: the first stages (analyses/_free_switch.py)
+                from .analyses._multistage import stage_system
+
+                return stage_system(self, None, tuple(removed))
             raise ModelError(
-                f"free and path motion of a model with stage or time switches "
-                f"({', '.join(repr(c.name) for c in self._switches())}) is not supported yet (issue "
-                "14: switch events in free motion are a later step); replace each switch by the "
-                "constraint of the stage you need (m.replace(name, constraint))")
+                f"path motion of a model with stage or time switches "
+                f"({', '.join(repr(c.name) for c in self._switches())}) is not supported; "
+                "replace each switch by the constraint of the stage you need "
+                "(m.replace(name, constraint)), or use free motion (m.free), which passes "
+                "through stage changes")
         eqs, owners, index = self._all_equations()
         keep = [i for i, o in enumerate(owners) if o not in removed]
         eqs = [eqs[i] for i in keep]
@@ -720,6 +725,10 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
             raise ModelError(f"solution must be one of {list(ORDERS) + list(modes)}, "
                              f"got {solution!r}")
         times = self._check_times(t)
+        if self._loads:  # TimeSwitch loads with parameter times: increasing (issue 14)
+            from .loads._switched import check_switched_loads
+
+            check_switched_loads(self)
         if isinstance(options, Mapping):
             fields = set(PositionOptions.__dataclass_fields__)
             unknown = sorted(map(str, set(options) - fields))
@@ -741,7 +750,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         if self._switches():  # stages chosen point by point (analyses/_multistage.py)
             from .analyses._multistage import solve_stages
 
-            self.last_solution = solve_stages(self, times, g, solution, options, scalar)
+            self.last_solution = solve_stages(self, times, g, solution, options, scalar,
+                                              lambda_guess=lambda_guess)
             return self.last_solution
         try:
             res = sweep(system, times, g, order, options, self._p())
@@ -786,6 +796,11 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         acceleration and motion (``"dynamic"``). Returns a :class:`FreeSystem`."""
         from .analyses._free import FreeSystem
 
+        if self._switches() or (solution == "dynamic" and
+                                any(getattr(ld, "tests", None) for ld in self._loads)):
+            from .analyses._free_switch import SwitchedFreeSystem  # events (issue 14)
+
+            return SwitchedFreeSystem(self, drop, solution, initial_guess, initial_condition)
         return FreeSystem(self, drop, solution, initial_guess, initial_condition)
 
     def couple(self, unknowns, conditions=None, t=None, guess=None, configurations=None,

@@ -28,58 +28,39 @@ from collections.abc import Mapping
 import numpy as np
 import sympy as sp
 from scipy.optimize import brentq
+from sympy.printing.numpy import NumPyPrinter
 
 from .._errors import ConvergenceError, MechError, ModelError, SingularJacobianError
 from .._symbols import T
-from ..compile import System, make_layout
+from ..compile import System
+from ..compile._stages import _cache, stage_system
 from ..constraints._switches import StageSwitch, TimeSwitch
 from ..solvers import ORDERS, PositionOptions, sweep
 from ..solvers._kinematics import SweepResult, _predict, _solve_point
 from ..solvers._linalg import Scaling, rotation_columns
+
+#: the solutions with multipliers (Model.solve's load modes) and their kinematic order
+MODES = {"static": 0, "kinematic": 1, "dynamic": 2}
 
 #: a point may change its stage combination at most this many times before the tests are
 #: declared inconsistent (each change must lead to a combination not tried yet anyway)
 MAX_STAGE_CHANGES = 8
 
 
-def _cache(model) -> dict:
-    c = model.__dict__.get("_stage_cache")
-    if c is None or c[0] != model._version:
-        c = model.__dict__["_stage_cache"] = (model._version, {})
-    return c[1]
+class _ExactFloats(NumPyPrinter):
+    """NumPy printer that writes floats with all their digits (SymPy's default writes 15
+    significant digits, which moves a test's threshold such as ``-pi/3`` by ~1e-15: a
+    configuration exactly on a stage's boundary would choose the other stage)."""
+
+    def _print_Float(self, expr):
+        return repr(float(expr))
 
 
-def stage_system(model, stages) -> System:
-    """The System of the stage combination ``stages`` (0-based stage index per switch, in
-    model order; ``None``: every switch at its first stage), compiled once per model version."""
-    switches = model._switches()
-    stages = tuple(stages) if stages is not None else (0,) * len(switches)
-    cache = _cache(model)
-    if stages in cache:
-        return cache[stages]
-    chosen = dict(zip(map(id, switches), zip(switches, stages)))
-    eqs0, owners0, index0 = model._all_equations()
-    eqs, owners, index, done = [], [], [], set()
-    for e, o, i in zip(eqs0, owners0, index0):
-        if id(o) in chosen:
-            if id(o) not in done:
-                done.add(id(o))
-                rows = o.stage_equations(model.space, chosen[id(o)][1])
-                eqs += rows
-                owners += [o] * len(rows)
-                index += list(range(len(rows)))
-            continue
-        eqs.append(e)
-        owners.append(o)
-        index.append(i)
-    held = [s for sw in switches for s in sw.held_symbols()]
-    model._check_symbols([e for e in eqs if not e.free_symbols & set(held)], owners)
-    layout = make_layout(model._bodies[1:], model._variables, list(model._params) + held, owners,
-                         index)
-    system = System(model.space, layout, eqs, model._p(), model.guess(), backend=model._backend,
-                    version=model._version, model=model, loads=list(model._loads))
-    cache[stages] = system
-    return system
+def lambdify_exact(args, expr):
+    """``sympy.lambdify`` to NumPy with floats printed exactly (:class:`_ExactFloats`)."""
+    return sp.lambdify(args, expr, modules="numpy", printer=_ExactFloats(
+        {"fully_qualified_modules": False, "inline": True, "allow_unknown_functions": True,
+         "user_functions": {}}))
 
 
 class _Tests:
@@ -100,7 +81,7 @@ class _Tests:
                         f"{sw.label()}: the test of stage {k + 1} ({test}) uses "
                         f"{sorted(map(str, extra))}, which are not T, coordinates or parameters "
                         "of the model; declare parameters with m.parameter(name, value)")
-                fs.append(sp.lambdify(args, test, modules="numpy"))
+                fs.append(lambdify_exact(args, test))
             self.funcs.append(fs)
 
     def stage_of(self, j: int, t: float, q, p) -> int:
@@ -156,22 +137,48 @@ def _switch_index(model, switch) -> int:
 
 
 def solve_stages(model, times, guess, solution: str, options: PositionOptions | None,
-                 scalar: bool, forced: Mapping | None = None):
+                 scalar: bool, forced: Mapping | None = None, lambda_guess=None):
     """``Model.solve`` of a model with switches (see the module docstring). ``forced``:
-    ``{switch index: stage index}`` fixes stages regardless of their tests (FindSwitchTime)."""
+    ``{switch index: stage index}`` fixes stages regardless of their tests (FindSwitchTime).
+    With ``solution`` ``"static"``, ``"kinematic"`` or ``"dynamic"`` the multipliers of each
+    point are those of the stage combination in effect there (its Jacobian rows)."""
     from ..results._solution import Solution
 
-    if solution not in ORDERS:
-        raise ModelError(f"solution={solution!r} with stage or time switches is not supported yet "
-                         "(multistage loads and dynamics, Mech 7.4, are a later step); solve with "
-                         f"solution in {list(ORDERS)}")
-    res, stages = _sweep_stages(model, np.atleast_1d(times), guess, ORDERS[solution], options,
-                                forced or {})
+    order = ORDERS.get(solution, MODES.get(solution))
+    if order is None:
+        raise ModelError(f"solution must be one of {list(ORDERS) + list(MODES)}, got {solution!r}")
+    res, stages = _sweep_stages(model, np.atleast_1d(times), guess, order, options, forced or {})
+    lam = None
+    if solution in MODES:
+        lam = _multipliers_by_stage(model, res, stages, solution, lambda_guess)
     base = stage_system(model, None)
-    sol = Solution.from_sweep(model, base, res, model._p(), scalar=scalar, mode=solution)
+    sol = Solution.from_sweep(model, base, res, model._p(), scalar=scalar, lam=lam, mode=solution)
     sw = model._switches()
     sol.extra["stages"] = {s.name: stages[:, j] + 1 for j, s in enumerate(sw)}
     return sol
+
+
+def _multipliers_by_stage(model, res, stages, mode, lambda_guess):
+    """Multipliers ``(N, m)`` point by point, each with the system of its stage combination
+    (every combination has ``m`` rows: see :meth:`StageSwitch.stage_equations`)."""
+    from ..results._load_outputs import lambda_guess_vector
+    from ..solvers import MultiplierOptions, solve_multipliers
+
+    held = _HeldValues(model, stage_system(model, None), res.q[0])
+    lam = None
+    for k in range(len(res.t)):
+        system = stage_system(model, tuple(stages[k]))
+        if lam is None:
+            lam = np.empty((len(res.t), system.m))
+            guess = lambda_guess_vector(system, model, lambda_guess)
+        held.update(res.q[k], tuple(stages[k]))
+        qd = None if res.qd is None else res.qd[k]
+        qdd = None if res.qdd is None else res.qdd[k]
+        opt = MultiplierOptions(lambda_guess=guess)
+        lam[k], _ = solve_multipliers(system, system.dynamics, res.t[k], res.q[k], qd, qdd,
+                                      held.p, mode, opt)
+        guess = lam[k]
+    return lam
 
 
 def _sweep_stages(model, times, guess, order, options, forced):

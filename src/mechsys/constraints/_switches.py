@@ -47,6 +47,18 @@ def _as_stage(stage, where: str) -> tuple:
     return tuple(items)
 
 
+def _has_loads(items) -> bool:
+    """Whether the arguments of a switch hold loads (then it is a switch of loads, Mech 7.4)."""
+    from ..loads._loads import LoadBase
+
+    def any_load(x):
+        if isinstance(x, (list, tuple)):
+            return any(any_load(y) for y in x)
+        return isinstance(x, LoadBase)
+
+    return any(any_load(x) for x in items)
+
+
 def _as_test(test, where: str):
     if isinstance(test, bool):
         return sp.true if test else sp.false
@@ -66,6 +78,15 @@ class StageSwitch(ConstraintBase):
     """
 
     mech_name = "StageSwitch"
+
+    def __new__(cls, *args):
+        # StageSwitch/TimeSwitch of loads (Mech 7.4.1): the same names build a switched load,
+        # which the model takes with add_load (loads are cumulative: see loads/_switched.py)
+        if _has_loads(args):
+            from ..loads._switched import StageSwitchedLoad, TimeSwitchedLoad
+
+            return (TimeSwitchedLoad if issubclass(cls, TimeSwitch) else StageSwitchedLoad)(*args)
+        return super().__new__(cls)
 
     def __init__(self, *pairs):
         super().__init__()
@@ -100,6 +121,16 @@ class StageSwitch(ConstraintBase):
     def _build(self, space) -> list[sp.Expr]:
         """Stage 1's rows with ``v_held`` placeholders (the model's default stage)."""
         return self.stage_equations(space, 0)
+
+    #: the stage whose rows :meth:`equations` shows (``None``: stage 1); set only while the
+    #: outputs of a multistage solution are evaluated stage by stage (``results/_stagewise.py``)
+    _view: int | None = None
+
+    def equations(self, space) -> list[sp.Expr]:
+        """The rows of stage 1, or of the stage being evaluated (see ``_view``)."""
+        if self._view:
+            return self.stage_equations(space, self._view)
+        return super().equations(space)
 
     # -- stages ---------------------------------------------------------------------------
     def held_symbol(self, var: sp.Symbol) -> sp.Symbol:

@@ -28,6 +28,7 @@ import sympy as sp
 
 from .._errors import ModelError
 from ._outputs import All, Rest, is_selection, selected_coordinates
+from ._stagewise import is_staged as _staged
 
 
 class LoadOutputs:
@@ -120,6 +121,10 @@ class LoadOutputs:
 
         On ground, the reaction is the opposite of that on the constraint's other body
         (the constraint must join ground to exactly one body)."""
+        if _staged(self):  # a multistage solution: each point with its stage's rows
+            from ._stagewise import stagewise
+
+            return stagewise(self, lambda s: s.reaction(constraint, body, at, coordinates))
         m = self._model()
         c = m.constraint(constraint)
         b = m.body(body)
@@ -150,6 +155,10 @@ class LoadOutputs:
         Mech's other forms (generalized only): ``All`` the whole load vector, ``Rest`` the
         model variables' part, a coordinate symbol its element, a list of bodies and
         symbols the parts concatenated."""
+        if type == "reaction" and _staged(self):  # each point with its stage's rows
+            from ._stagewise import stagewise
+
+            return stagewise(self, lambda s: s.loads(body, type, coordinates))
         if is_selection(body) and coordinates is not None:
             raise ModelError(f"loads({body!r}, coordinates={coordinates!r}): a force and moment "
                              "belong to one body; give a single body, or coordinates=None")
@@ -223,6 +232,10 @@ class LoadOutputs:
     def power(self, constraint):
         """Power a constraint delivers to the mechanism (a driver's power):
         ``-lambda_c^T (Phi_c)_q qd``."""
+        if _staged(self):  # a multistage solution: each point with its stage's rows
+            from ._stagewise import stagewise
+
+            return stagewise(self, lambda s: s.power(constraint))
         m = self._model()
         c = m.constraint(constraint)
         s = self._sys()

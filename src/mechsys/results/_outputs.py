@@ -212,6 +212,10 @@ class OutputFunctions:
 
             sol.jacobian(ms.All, ms.All).T @ sol.generalized(ms.All) == sol.loads(ms.All)
         """
+        from ._stagewise import is_staged, stagewise
+
+        if is_staged(self):  # a multistage solution: each point with its stage's rows
+            return stagewise(self, lambda s: s.jacobian(constraint, body))
         m = self._model()
         eqs = sp.Matrix(self._equation_rows(constraint))
         syms = (m._coordinate_symbols() if body is None

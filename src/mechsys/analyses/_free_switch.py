@@ -1,0 +1,467 @@
+r"""Free motion through stage changes (issue 14; Mech chapters 5 and 7.4 with ``SolveFree``).
+
+``m.free(drop=[...])`` of a model with ``StageSwitch``/``TimeSwitch`` constraints or switched
+loads returns a :class:`SwitchedFreeSystem`. Besides whole constraints, ``drop`` takes
+``(switch, stage)`` pairs (stage numbered from 1): in that stage the switch constrains
+nothing, e.g. a pendulum that swings freely (stage 1 dropped) until it latches (stage 2)::
+
+    m.add(ms.StageSwitch((rod.q[2] > -beta, ms.RotationLock1(rod, -T)),
+                         (True, ms.RotationLock1(rod, -beta))), name="latch")
+    sol = m.free(drop=[("latch", 1)]).simulate((0, 1), at_switch="project")
+
+**Events.** Every relation in the switches' tests (constraints and loads), written
+``g = lhs - rhs``, is an event function of ``(T, q, qd, p)``. After each accepted
+Runge-Kutta step the signs of all ``g`` are compared with the previous ones; where one
+changed, its first zero in the step is located by bisection on the step's dense output down
+to a few ulps in time, so the event time has the integrator's accuracy (the dense output's
+error). A ``g`` within rounding of zero (``16 eps (|lhs| + |rhs|)``) has no sign: a
+configuration held on a boundary (a latched stop) makes no events, and the event is where
+``g`` is first strictly on the far side. After an event the event's relation is expected on
+the far side, or back on the near side after a rebound, so a crossing within the first step
+after the restart is not missed. The integration stops there, the tests are evaluated just past the zero, and
+
+* a switched load only changes its force: the integration restarts at the event;
+* a constraint stage change restarts in the new stage's free system, with positions
+  projected onto its constraints (a change of ``Phi`` at the event is of the order of the
+  integration error) and velocities by the **velocity policy** ``at_switch``:
+
+  - ``None`` (default): the velocities must already satisfy the new stage
+    (``|Phi_q qd + Phi_t|`` below ``1e-6`` in the unit-free scaling of the solver); if they
+    do not, the change is an impact the model does not describe, and a :class:`ModelError`
+    names the switch, the time and the options, rather than silently dropping velocity;
+  - ``"project"``: keep the compatible part. The velocity after is the one closest to the
+    velocity before in the kinetic-energy metric that satisfies the new stage,
+    ``[M Phi_q^T; Phi_q 0] [qd+; P] = [M qd-; -Phi_t]`` — a perfectly plastic impact whose
+    impulse ``P`` the new constraints apply. The kinetic energy lost is reported;
+  - ``("restitution", e)`` with ``0 <= e <= 1``: Newton's law on the new stage's rows,
+    ``Phi_q qd+ + Phi_t = -e (Phi_q qd- + Phi_t)`` by the same impulse equations: the motion
+    rebounds off the new stage's constraint (a stop) and **continues in the old stage**.
+    Once an approach speed falls below ``1e-6`` times that of the first impact on the same
+    switch (the rebounds of a body settling on a stop come ever faster) the stage is taken
+    with ``"project"``. ``e = 0`` is ``"project"``.
+
+Each event is reported in ``sol.extra["events"]``: time, kind (``"stage"``; ``"load"`` when
+only a switched load changed; ``"relation"`` when a relation crossed without changing any
+stage), switch, stages, policy, kinetic energy before and after, energy lost, impulse. The
+solution has every stage's free-system multipliers mapped into the rows of the full stage
+system (a dropped constraint carries no force: its multipliers are zero), so
+``sol.reaction`` and ``sol.stage`` work as for a kinematic sweep.
+"""
+
+from __future__ import annotations
+
+from numbers import Real
+
+import numpy as np
+import sympy as sp
+from scipy.integrate import DOP853, RK45
+
+from .._errors import ConvergenceError, MechError, ModelError
+from .._symbols import T
+from ..constraints._switches import StageSwitch
+from ..loads._switched import check_switched_loads
+from ..results._load_outputs import lambda_guess_vector
+from ..results._solution import Solution
+from ..solvers._free import free_acceleration, project, project_positions, scaling_at
+from ..solvers._integrators import ATOL, MAX_ERROR, MAX_STEP, RTOL, integration_options, output_times
+from ..solvers._linalg import factor
+from ._free import FreeSystem, _reject_unknown
+from ._multistage import _HeldValues, _Tests, lambdify_exact, stage_system
+
+#: velocities are compatible with a stage when its scaled velocity residual is below this
+COMPATIBLE = 1e-6
+#: a rebound whose approach speed is below this fraction of the first impact's latches
+LATCH_FRACTION = 1e-6
+
+
+def _policy(at_switch):
+    """``(name, e)`` of a checked velocity policy."""
+    if at_switch is None:
+        return None, None
+    if at_switch == "project":
+        return "project", 0.0
+    if isinstance(at_switch, (tuple, list)) and len(at_switch) == 2 and \
+            at_switch[0] == "restitution":
+        e = at_switch[1]
+        if isinstance(e, bool) or not isinstance(e, Real) or not 0 <= e <= 1:
+            raise ModelError(f"at_switch=('restitution', e): e must be a number in [0, 1], got "
+                             f"{e!r}")
+        return ("project", 0.0) if e == 0 else ("restitution", float(e))
+    raise ModelError(f"at_switch must be None (velocities must be compatible with the new stage), "
+                     f"'project' (keep the compatible part, report the energy lost) or "
+                     f"('restitution', e) with 0 <= e <= 1, got {at_switch!r}")
+
+
+class _Events:
+    """The relations of all tests (switched constraints and loads) as ``g = lhs - rhs``."""
+
+    def __init__(self, model, system):
+        lay = system.layout
+        args = [T, *lay.q_symbols, *lay.qd_symbols, *lay.p_symbols]
+        rels = [(r, False) for sw in model._switches() for t in sw.tests
+                for r in t.atoms(sp.core.relational.Relational)]
+        rels += [(r, True) for ld in model._loads if hasattr(ld, "relations")
+                 for r in ld.relations()]
+        exprs, sides, seen = [], [], set()
+        self.of_load = set()      # the g of relations of switched loads
+        for r, of_load in rels:
+            g = sp.sympify(r.lhs - r.rhs)
+            if not g.is_number and of_load:
+                self.of_load.add(g)
+            if g.is_number or g in seen:
+                continue
+            extra = g.free_symbols - set(args)
+            if extra:
+                raise ModelError(f"the switch test {r} uses {sorted(map(str, extra))}, which are "
+                                 "not T, coordinates, velocities or parameters of the model")
+            seen.add(g)
+            exprs.append(g)
+            sides += [sp.sympify(r.lhs), sp.sympify(r.rhs)]
+        self.exprs = exprs
+        self.f = lambdify_exact(args, sides) if exprs else None
+
+    def __call__(self, t, y, p) -> np.ndarray:
+        """The signs of the ``g``, zero within rounding of the boundary
+        (``|g| <= 16 eps (|lhs| + |rhs|)``): a configuration held on a boundary (a latched
+        stop) must not produce events from the last bits of its coordinates."""
+        if self.f is None:
+            return np.zeros(0)
+        v = np.array(self.f(t, *y, *p), dtype=float).reshape(-1, 2)
+        g = v[:, 0] - v[:, 1]
+        band = 16 * np.finfo(float).eps * (np.abs(v[:, 0]) + np.abs(v[:, 1]))
+        return np.where(np.abs(g) > band, np.sign(g), 0.0)
+
+
+class SwitchedFreeSystem(FreeSystem):
+    """A free system of a model with switches: :meth:`simulate` passes through stage changes
+    as events (module docstring). Only ``solution="dynamic"`` (free motion)."""
+
+    def __init__(self, model, drop=(), solution: str = "dynamic", initial_guess=None,
+                 initial_condition=None):
+        if solution != "dynamic":
+            raise ModelError(f"free(solution={solution!r}) of a model with stage or time switches "
+                             "is not supported: equilibria with switches have no stage to start "
+                             "from; use solution='dynamic' (free motion through stage changes), or "
+                             "replace each switch by the constraint of the stage you need")
+        items = list(drop) if isinstance(drop, list) or (
+            isinstance(drop, tuple) and not self._is_pair(model, drop)) else [drop]
+        plain, staged = [], []
+        for c in items:
+            if self._is_pair(model, c):
+                sw = model.constraint(c[0])
+                if not 1 <= c[1] <= len(sw.stages):
+                    raise ModelError(f"free(drop=...): {sw.label()} has stages 1..{len(sw.stages)}, "
+                                     f"got stage {c[1]!r}")
+                staged.append((sw, int(c[1]) - 1))
+            else:
+                plain.append(c)
+        self.stage_drops = staged
+        super().__init__(model, plain, solution, initial_guess, initial_condition)
+
+    @staticmethod
+    def _is_pair(model, c) -> bool:
+        if not (isinstance(c, tuple) and len(c) == 2 and isinstance(c[1], (int, np.integer))
+                and not isinstance(c[1], bool)):
+            return False
+        try:
+            return isinstance(model.constraint(c[0]), StageSwitch)
+        except MechError:
+            return False
+
+    def _dropped(self) -> tuple:
+        return tuple(self.dropped) + tuple(self.stage_drops)
+
+    def _free_system(self, combo):
+        return stage_system(self.model, combo, self._dropped())
+
+    def _params(self, given=None) -> np.ndarray:
+        # the model's parameters, then the held values of the switches' variables
+        p = self.model._p()
+        for over in (self._p_given, given or {}):
+            for i, v in over.items():
+                p[i] = v
+        return p
+
+    def solve(self, t: float = 0.0, initial_condition=None, lambda_guess=None,
+              tolerance: float | None = None, max_iterations: int | None = None) -> Solution:
+        """The free acceleration at one state, in the stage its tests choose there (a
+        one-point :class:`Solution` with ``stage``, multipliers in the full stage's rows)."""
+        if isinstance(t, bool) or not isinstance(t, Real) or not np.isfinite(t):
+            raise ModelError(f"solve(t): t must be a finite number, got {t!r}")
+        t = float(t)
+        kw = self._newton(tolerance, max_iterations, "FreeSystem.solve")
+        _check_times(self.model)
+        if lambda_guess is not None:
+            kw["lam_guess"] = lambda_guess_vector(self.system, self.model, lambda_guess)
+        q, qd, p, held = self._start(initial_condition)
+        combo = _Tests(self.model, stage_system(self.model, None)).stages(t, q, p, {})
+        self.system = self._free_system(combo)
+        sc = scaling_at(self.system, t, q, p)
+        q, qd = self._project_start(t, q, qd, p, held, sc)
+        return self._assemble([t], [np.concatenate((q, qd))], [combo], p, kw, {}, sc, scalar=True)
+
+    def simulate(self, t, initial_condition=None, at_switch=None, method: str = "dop853",
+                 rtol: float = RTOL, atol: float = ATOL, max_step: float = MAX_STEP,
+                 max_error=MAX_ERROR, max_events: int = 1000, tolerance: float | None = None,
+                 max_iterations: int | None = None, **unknown) -> Solution:
+        """Integrate the free motion through stage changes (see the module docstring).
+
+        ``t``, ``initial_condition``, ``method`` (``"dop853"`` or ``"rk45"``: events need their
+        dense output), ``rtol``/``atol``/``max_step``/``max_error``, ``tolerance``/
+        ``max_iterations`` as :meth:`FreeSystem.simulate`; ``at_switch`` the velocity policy at a
+        constraint stage change (``None``, ``"project"``, ``("restitution", e)``);
+        ``max_events`` the number of events after which a :class:`ConvergenceError` is raised
+        (e.g. a motion chattering on a switch boundary)."""
+        _reject_unknown("FreeSystem.simulate (with switches)", unknown, (
+            "initial_condition", "at_switch", "method", "rtol", "atol", "max_step", "max_error",
+            "max_events", "tolerance", "max_iterations"))
+        if not (isinstance(method, str) and method.lower() in ("dop853", "rk45")):
+            raise ModelError(f"simulate(method={method!r}) with switches: events are located on the "
+                             "Runge-Kutta dense output; use method='dop853' or 'rk45'")
+        opt = integration_options(method, rtol, atol, max_step, max_error=max_error)
+        policy = _policy(at_switch)
+        if isinstance(max_events, bool) or not isinstance(max_events, (int, np.integer)) or \
+                max_events < 1:
+            raise ModelError(f"max_events must be a positive integer, got {max_events!r}")
+        kw = self._newton(tolerance, max_iterations, "FreeSystem.simulate")
+        t0, t1, t_eval = output_times(t)
+        _check_times(self.model)
+        model = self.model
+        base = stage_system(model, None)
+        tests = _Tests(model, base)
+        events = _Events(model, base)
+        n = base.n
+        q, qd, p, held_ic = self._start(initial_condition)
+        held = _HeldValues(model, base, q)
+        held.p = p
+        combo = tests.stages(t0, q, p, {})
+        self.system = self._free_system(combo)
+        sc = scaling_at(self.system, t0, q, p)
+        q, qd = self._project_start(t0, q, qd, p, held_ic, sc)
+        y = np.concatenate((q, qd))
+        scale = np.concatenate((sc.columns, sc.columns))
+        cls = DOP853 if opt.method == "dop853" else RK45
+        d = 1.0 if t1 > t0 else -1.0
+        out_t, out_y, out_c = [t0], [y.copy()], [combo]
+        ie = 1 if t_eval is not None else 0
+        log, first_speed = [], {}
+        fresh: dict = {}
+        t_now, evals, steps = t0, 0, 0
+        while (t1 - t_now) * d > 0:
+            S = self._free_system(combo)
+
+            def rhs(tt, yy, S=S):
+                return np.concatenate((yy[n:], free_acceleration(S, tt, yy[:n], yy[n:], p,
+                                                                 **kw)[0]))
+
+            solver = cls(rhs, t_now, y, t1, rtol=opt.rtol, atol=opt.atol * scale,
+                         max_step=opt.max_step)
+            g_ref = events(t_now, y, p)
+            for i, side in fresh.items():   # the event just handled: the side the motion takes
+                g_ref[i] = side
+            hit = None
+            while solver.status == "running":
+                t_old = solver.t
+                msg = solver.step()
+                if solver.status == "failed":
+                    raise MechError(f"integration failed at t = {solver.t:.6g}: {msg}")
+                steps += 1
+                dense = solver.dense_output()
+                g_new = events(solver.t, solver.y, p)
+                crossed = [i for i in range(len(g_new)) if g_ref[i] != 0 and g_new[i] == -g_ref[i]]
+                g_ref = np.where(g_ref == 0, g_new, g_ref)
+                t_end = solver.t
+                if crossed:
+                    hit = min((self._bracket(events, dense, p, i, t_old, solver.t, g_ref[i])
+                               for i in crossed), key=lambda h: h[1] * d)
+                    t_end = hit[2]      # output times up to the old side of the event
+                if t_eval is not None:
+                    # before an event only the times strictly on its near side; a time on
+                    # the boundary belongs to the new stage (a TimeSwitch's later stage at t_j)
+                    while ie < len(t_eval) and (
+                            ((t_eval[ie] - t_end) * d <= 0) if hit is None else (
+                                (t_eval[ie] - t_end) * d <= 0 and
+                                events(t_eval[ie], dense(t_eval[ie]), p)[hit[0]] == hit[3])):
+                        yi = dense(t_eval[ie])
+                        out_t.append(float(t_eval[ie]))
+                        out_y.append(np.concatenate(project(S, t_eval[ie], yi[:n], yi[n:], p,
+                                                            scaling=sc)))
+                        out_c.append(combo)
+                        ie += 1
+                if hit is not None:
+                    break
+                yp = np.concatenate(project(S, solver.t, solver.y[:n], solver.y[n:], p,
+                                            scaling=sc))
+                solver.y = yp
+                solver.f = solver.fun(solver.t, yp)
+                if t_eval is None:
+                    out_t.append(float(solver.t))
+                    out_y.append(yp.copy())
+                    out_c.append(combo)
+            evals += solver.nfev
+            if hit is None:
+                t_now = t1
+                break
+            if len(log) >= max_events:
+                raise ConvergenceError(
+                    f"free motion with switches: more than max_events = {max_events} events by "
+                    f"t = {hit[1]:.6g} (the motion chatters on a switch boundary, or a rebound "
+                    "never settles); raise max_events or change the tests", time=hit[1])
+            i_ev, te = hit[0], hit[1]
+            ye = dense(te)
+            new = tests.stages(te, ye[:n], p, {})
+            s0 = hit[3]
+            fresh = {i_ev: -s0}         # the motion goes on to the far side ...
+            if new == combo:
+                y = np.concatenate(project(S, te, ye[:n], ye[n:], p, scaling=sc))
+                g = events.exprs[i_ev]
+                log.append({"t": te, "kind": "load" if g in events.of_load else "relation",
+                            "event": str(g)})
+            else:
+                held.update(ye[:n], combo)
+                before = combo
+                combo, y, entry = self._switch(combo, new, te, ye, p, sc, policy, first_speed)
+                log.append(entry)
+                if combo == before:     # ... unless it rebounded off the new stage
+                    fresh = {i_ev: s0}
+            t_now = te
+            if t_eval is None:
+                out_t.append(float(te))
+                out_y.append(y.copy())
+                out_c.append(combo)
+        while t_eval is not None and ie < len(t_eval):   # an event exactly at the end time
+            out_t.append(float(t_eval[ie]))
+            out_y.append(y.copy())
+            out_c.append(combo)
+            ie += 1
+        info = {"events": log, "evaluations": evals, "steps": steps, "method": opt.method,
+                "rtol": opt.rtol, "atol": opt.atol}
+        return self._assemble(out_t, out_y, out_c, p, kw, info, sc)
+
+    @staticmethod
+    def _bracket(events, dense, p, i, ta, tb, s0):
+        """``(i, b, a, s0)``: the first crossing of event ``i`` in ``[ta, tb]`` by bisection on
+        the dense output to a few ulps: ``b`` the first time strictly on the far side (sign
+        ``-s0`` beyond the rounding band), ``a`` the last time before it."""
+        a, b = ta, tb
+        for _ in range(200):
+            if abs(b - a) <= 4 * np.finfo(float).eps * max(abs(a), abs(b), 1e-300):
+                break
+            c = 0.5 * (a + b)
+            if events(c, dense(c), p)[i] == -s0:
+                b = c
+            else:
+                a = c
+        return i, b, a, s0
+
+    def _switch(self, old, new, te, ye, p, sc, policy, first_speed):
+        """Positions and velocities in the new stage by the velocity policy; the event log."""
+        n = self.system.n
+        model = self.model
+        names = [sw.name for j, sw in enumerate(model._switches()) if old[j] != new[j]]
+        SB = self._free_system(new)
+        q = project_positions(SB, te, ye[:n], p, scaling=sc)
+        qd = ye[n:]
+        M = SB.dynamics.terms(te, q, qd, np.zeros(SB.m), p, np.zeros(n))[0]
+        J, rhs = SB.velocity_rhs(te, q, p)
+        J = np.asarray(J.toarray() if hasattr(J, "toarray") else J)
+        viol = J @ qd - rhs
+        r = sc.rows(J) if SB.m else np.zeros(0)
+        speed = float(np.abs(viol / r).max(initial=0.0)) if SB.m else 0.0
+        ke0 = 0.5 * float(qd @ M @ qd)
+        entry = {"t": te, "kind": "stage", "switch": names[0] if len(names) == 1 else names,
+                 "from": [k + 1 for k in old], "to": [k + 1 for k in new],
+                 "kinetic_energy_before": ke0}
+        target, e = new, 0.0
+        if speed <= COMPATIBLE * (1.0 + np.abs(qd / sc.columns).max(initial=0.0)):
+            entry["policy"] = "compatible"
+            qd_new = project(SB, te, q, qd, p, scaling=sc)[1]
+        else:
+            kind, e = policy
+            if kind is None:
+                raise ModelError(
+                    f"free motion: switch {entry['switch']!r} changes from stage {entry['from']} "
+                    f"to {entry['to']} at t = {te:.10g} with velocities its new stage does not "
+                    f"allow (scaled velocity residual {speed:.3g}): an impact the model does not "
+                    "describe. Choose what happens to the velocities with simulate(at_switch="
+                    "'project') (keep the compatible part; the kinetic energy lost is reported) "
+                    "or at_switch=('restitution', e) (rebound off the new stage's constraint)")
+            if kind == "restitution":
+                key = tuple(names)
+                first = first_speed.setdefault(key, speed)
+                if speed <= LATCH_FRACTION * first:
+                    kind, e = "project", 0.0
+                else:
+                    target = old
+            entry["policy"] = kind if kind == "project" else f"restitution e={e:g}"
+            m = SB.m
+            K = np.zeros((n + m, n + m))
+            K[:n, :n], K[:n, n:], K[n:, :n] = M, J.T, J
+            x = factor(K).solve(np.concatenate((M @ qd, rhs - e * viol)))
+            qd_new = x[:n]
+            entry["impulse"] = x[n:].copy()
+        if target is old:       # a rebound: the old stage continues, its constraints exact
+            SA = self._free_system(old)
+            q, qd_new = project(SA, te, q, qd_new, p, scaling=sc)
+        ke1 = 0.5 * float(qd_new @ M @ qd_new)
+        entry.update(kinetic_energy_after=ke1, energy_lost=ke0 - ke1, stage_after=[k + 1 for k in target])
+        return target, np.concatenate((q, qd_new)), entry
+
+    def _assemble(self, out_t, out_y, out_c, p, kw, info, sc, scalar=False) -> Solution:
+        """The Solution: accelerations and multipliers per point in its stage's free system,
+        the multipliers placed in the rows of the full stage system (dropped rows zero)."""
+        model = self.model
+        base = stage_system(model, None)
+        n, N = base.n, len(out_t)
+        Y = np.array(out_y)
+        QDD = np.empty((N, n))
+        LAM = np.zeros((N, base.m))
+        rows: dict = {}
+        for k, (tk, yk, ck) in enumerate(zip(out_t, Y, out_c)):
+            S = self._free_system(ck)
+            qdd, lam, _ = free_acceleration(S, tk, yk[:n], yk[n:], p, **kw)
+            QDD[k] = qdd
+            if ck not in rows:
+                rows[ck] = _row_map(S, stage_system(model, ck))
+            src, dst = rows[ck]
+            LAM[k, dst] = lam[src]
+        switches = model._switches()
+        C = np.array(out_c, dtype=int).reshape(N, len(switches))
+        extra = {**info, "length_scale": sc.length}
+        if switches:
+            extra["stages"] = {sw.name: C[:, j] + 1 for j, sw in enumerate(switches)}
+        self.system = self._free_system(out_c[-1])
+        return Solution(t=np.asarray(out_t, dtype=float), q=Y[:, :n].copy(), qd=Y[:, n:].copy(),
+                        qdd=QDD, p=p, system=base, model=model, iterations=np.zeros(N, dtype=int),
+                        lam=LAM, mode="free-dynamic", extra=extra, scalar=scalar)
+
+
+def _check_times(model) -> None:
+    """Switch times (TimeSwitch constraints and loads) increasing with the parameters now."""
+    params = dict(zip(model._params, model._p()))
+    for sw in model._switches():
+        sw.check_times(params)
+    check_switched_loads(model)
+
+
+def _row_map(free, full) -> tuple[list[int], list[int]]:
+    """``(rows of free, rows of full)``: the rows of ``free`` that ``full`` has too (same owner,
+    same equation). A row holding a variable of a dropped stage (``v - v_held``) has no place
+    in the full stage (which uses the variable): its multiplier is not a reaction and is left
+    out."""
+    def key(o):
+        return o if isinstance(o, str) else id(o)
+
+    where = {}
+    for i, (o, e) in enumerate(zip(full.layout.eq_owner, full.phi)):
+        where.setdefault((key(o), sp.srepr(e)), i)
+    src, dst = [], []
+    for k, (o, e) in enumerate(zip(free.layout.eq_owner, free.phi)):
+        i = where.get((key(o), sp.srepr(e)))
+        if i is not None:
+            src.append(k)
+            dst.append(i)
+    return src, dst
+
+
+__all__ = ["SwitchedFreeSystem"]
