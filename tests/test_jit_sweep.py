@@ -50,6 +50,40 @@ def test_compiled_and_python_sweeps_agree(monkeypatch, build):
     np.testing.assert_allclose(fast.extra["rcond"], slow.extra["rcond"], rtol=1e-12)
 
 
+def _spline_cam():
+    """A disk cam whose radius is a closed cubic spline (two-stage Piecewise kernels) pushing
+    a follower along x (benchmarks/curves.py)."""
+    a = np.linspace(0, 2 * np.pi, 25)
+    r = ms.SplineFunction(2 + 0.3 * np.sin(3 * a), "closed", knots=a)
+    m = ms.Model2D()
+    cam = m.add_body("cam", guess=((0, 0), 0))
+    fol = m.add_body("follower", guess=((2.0, 0), 0))
+    u = sp.Symbol("u")
+    prof = cam.point((r(u) * sp.cos(u), r(u) * sp.sin(u)))
+    m.add(ms.Revolute2(m.ground.point((0, 0)), cam.point(0)))
+    m.add(ms.RotationLock1(cam, 2 * sp.pi * T))
+    m.add(ms.Translate2(m.ground.axis((0, 0), (1, 0)), fol.axis((0, 0), (1, 0))))
+    loc = m.location(prof)
+    x, y, _ = fol.q
+    m.add(ms.Constraint([x - loc[0], y - loc[1]], {u: 0.0}), name="contact")
+    return m, r
+
+
+def test_spline_cam_two_stage_kernels(monkeypatch):
+    """Piecewise kernels run in two stages; the compiled loop calls both: same numbers, and the
+    follower is at r(-theta) with the spline's own derivatives."""
+    t = np.linspace(0.0, 1.0, 81)
+    fast, slow = _both(monkeypatch, lambda: _spline_cam()[0], t)
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    assert _jit.plan(fast.system, 10, 2)[0, 2] != 0          # a first stage is there
+    _same(fast, slow)
+    r = _spline_cam()[1]
+    uu = 2 * np.pi - 2 * np.pi * t
+    np.testing.assert_allclose(fast.coordinate("follower.x"), r.derivative(uu, 0), atol=1e-10)
+    np.testing.assert_allclose(fast.coordinate("follower.x", 2), 4 * np.pi**2 * r.derivative(uu, 2),
+                               rtol=1e-8, atol=1e-8)
+
+
 def test_compiled_path_ran(monkeypatch):
     """The agreement above is not two runs of the Python loop: the compiled loop is entered
     and finishes the sweep itself."""

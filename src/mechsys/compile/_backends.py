@@ -239,8 +239,9 @@ class _SymengineCompiled(Compiled):
         exprs = [_se.sympify(e) for e in exprs]
         pieces, exprs = _split_piecewise(exprs)
         self._pre = None
+        self._npieces = len(pieces)
         if pieces:
-            self._pre, _ = _lambdify(args, list(pieces.values()), opt_level)
+            self._pre, self._pre_backend = _lambdify(args, list(pieces.values()), opt_level)
             self._nargs = len(args)
             args = [*args, *pieces]
             self._buf = np.empty(len(args))     # [x, Piecewise values]: one call each
@@ -271,18 +272,26 @@ class _SymengineCompiled(Compiled):
         return out
 
     def c_function(self):
-        """``(address, context)`` of the kernel's C entry point
-        ``void f(double *out, const double *x, void *context)`` (the LLVM backend, no
-        ``Piecewise`` stage), for compiled loops (``solvers/_jit.py``); None otherwise. Valid
-        while this object lives."""
-        if self._pre is not None or self.backend != "symengine-llvm":
+        """C entry points ``void f(double *out, const double *x, void *context)`` of the
+        kernel, for compiled loops (``solvers/_jit.py``): ``(address, context, pre_address,
+        pre_context, pieces)``. With ``Piecewise`` (two stages, see the class) the first stage
+        at ``pre_address`` writes the ``pieces`` values after the ``x`` arguments and the
+        kernel reads ``[x, pieces]``; otherwise ``pre_address`` is 0. None when a stage is not
+        LLVM code. Valid while this object lives."""
+        if self.backend != "symengine-llvm" or (
+                self._pre is not None and self._pre_backend != "symengine-llvm"):
             return None
         import ctypes
 
+        def entry(f):
+            fn, ctx = f.as_ctypes()
+            return (fn, ctx), (ctypes.cast(fn, ctypes.c_void_p).value, ctx.value or 0)
+
         if not hasattr(self, "_cfun"):
-            self._cfun = self._f.as_ctypes()     # keeps the pointers' owners alive
-        fn, ctx = self._cfun
-        return ctypes.cast(fn, ctypes.c_void_p).value, ctx.value or 0
+            keep, main = entry(self._f)
+            keep_pre, pre = entry(self._pre) if self._pre is not None else (None, (0, 0))
+            self._cfun = (keep, keep_pre, (*main, *pre, self._npieces))  # owners kept alive
+        return self._cfun[2]
 
     def _slow(self, x):
         if self._pre is not None:

@@ -19,8 +19,8 @@ When it runs (``MECHSYS_JIT``): ``0`` never, ``1`` whenever possible, unset (``a
 the sweep has at least :data:`AUTO_POINTS` points or the compiled loop has already run in
 this process: loading Numba and the cached machine code costs about 0.7 s CPU once per
 process, which a short sweep would not recover. Possible means: Numba installed (the
-``fast`` extra), the SymEngine LLVM backend without ``Piecewise`` (spline) kernels, as many
-equations as coordinates, and a dense system (``n <= SPARSE_THRESHOLD``).
+``fast`` extra), the SymEngine LLVM backend (two-stage ``Piecewise`` kernels of spline
+profiles included), as many equations as coordinates, and a dense system (``n <= SPARSE_THRESHOLD``).
 
 Measured (slider-crank, 1000 points with velocities and accelerations): see
 ``docs/performance.md`` and ``docs/decisions/0010-compiled-sweep.md``.
@@ -89,8 +89,9 @@ def plan(system, points: int, order: int):
     if any(p is None for p in ptrs):
         return None
     while len(ptrs) < 3:
-        ptrs.append((0, 0))
-    return np.array([a for pair in ptrs for a in pair], dtype=np.int64)
+        ptrs.append((0, 0, 0, 0, 0))
+    # one row per kernel: address, context, first-stage address, its context, Piecewise values
+    return np.array(ptrs, dtype=np.int64)
 
 
 def _capsule_address(capsule) -> int:

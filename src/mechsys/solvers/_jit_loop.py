@@ -52,8 +52,12 @@ def _ccall(typingctx, addr, args):
 
 
 @nb.njit(cache=True)
-def _eval(addr, ctx, x, out):
-    _ccall(addr, (out, x, ctx))
+def _eval(ptr, x, nin, out):
+    """One kernel (a row of the pointer table: see ``_jit.plan``) at ``x[:nin]``; a
+    two-stage kernel first writes its ``Piecewise`` values into ``x[nin:]``."""
+    if ptr[2] != 0:
+        _ccall(ptr[2], (x[nin:nin + ptr[4]], x, ptr[3]))
+    _ccall(ptr[0], (out, x, ptr[1]))
 
 
 @nb.njit(cache=True)
@@ -195,7 +199,8 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
     nnz = jr.size
     npar = p.size
     N = times.size
-    x = np.zeros(1 + 2 * n + npar)
+    nin = 1 + 2 * n + npar
+    x = np.zeros(nin + max(ptrs[0, 4], ptrs[1, 4], ptrs[2, 4]))
     for j in range(npar):
         x[1 + 2 * n + j] = p[j]
     out_pos = np.empty(m + nnz)
@@ -230,7 +235,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
             q[j] = g[j]
             x[1 + j] = q[j]
             x[1 + n + j] = 0.0
-        _eval(ptrs[0], ptrs[1], x, out_pos)
+        _eval(ptrs[0], x, nin, out_pos)
         e = 1
         for i in range(m):
             F[i] = out_pos[i]
@@ -261,7 +266,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
                 for j in range(n):
                     qn[j] = q[j] + a * dq[j]
                     x[1 + j] = qn[j]
-                _eval(ptrs[0], ptrs[1], x, out_pos)
+                _eval(ptrs[0], x, nin, out_pos)
                 e += 1
                 nn = 0.0
                 for i in range(m):
@@ -286,7 +291,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
         if order >= 1:
             for j in range(n):
                 x[1 + j] = q[j]
-            _eval(ptrs[2], ptrs[3], x, out_vel)
+            _eval(ptrs[1], x, nin, out_vel)
             _assemble(out_vel, 0, jr, jc, J)
             rc = _factor(lapack, J, r, columns, B, ipiv, ibuf, cbuf, dbuf, work, iwork)
             if rc < 0:
@@ -299,7 +304,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
             if order >= 2:
                 for j in range(n):
                     x[1 + n + j] = QD[k, j]
-                _eval(ptrs[4], ptrs[5], x, out_gam)
+                _eval(ptrs[2], x, nin, out_gam)
                 _solve(lapack, B, ipiv, r, columns, out_gam, QDD[k], ibuf, cbuf)
                 e += 1
         for j in range(n):
