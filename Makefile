@@ -1,4 +1,5 @@
 # Two entry points: `make demo` and `make test`. Both create .venv on first use.
+# `make docs` builds the documentation site into build/docs/html.
 PYTHON ?= python3
 VENV   := .venv
 PY     := $(VENV)/bin/python
@@ -26,8 +27,14 @@ lint: $(STAMP)
 bench: $(STAMP)
 	$(PY) benchmarks/kinematic_sweep.py
 
+# The documentation site: regenerated reference pages, the gallery (examples run only when
+# changed, pictures cached in docs/gallery/_media), then Sphinx with warnings as errors.
 docs: $(STAMP)
 	$(PY) -m mechsys._docgen docs/constraints.md
+	$(PY) -m mechsys._mech_map docs/mech_to_mechsys.md
+	$(PY) -m mechsys._gallery
+	$(PY) -m sphinx -W --keep-going -q -b html docs build/docs/html
+	@echo "site: build/docs/html/index.html"
 
 clean:
 	rm -rf $(VENV) out build *.egg-info src/*.egg-info

@@ -22,15 +22,15 @@ from ._outputs import OutputFunctions, VelocityViews
 class Solution(OutputFunctions, LoadOutputs, VelocityViews):
     """Kinematic (or later dynamic) solution over ``N`` time points.
 
-    Attributes
-    ----------
-    t : (N,) times;  q, qd, qdd : (N, n) coordinates, velocities, accelerations (``None``
-    when that order was not solved);  p : (np,) parameter values used;
-    system : the compiled System;  model : the Model (for symbolic outputs);
-    iterations : (N,) Newton iterations per point;  evaluations : compiled-function calls;
-    success, status, message : outcome (a failed solve raises instead);
-    extra : more per-point data, e.g. ``"rcond"``, and with switches ``"stages"``
-    (``{switch name: (N,) stage numbers}``, read with :meth:`stage`).
+    Attributes:
+
+    * ``t`` (N,) times; ``q``, ``qd``, ``qdd`` (N, n) coordinates, velocities, accelerations
+      (``None`` when that order was not solved); ``p`` (np,) parameter values used;
+    * ``system`` the compiled System; ``model`` the Model (for symbolic outputs);
+    * ``iterations`` (N,) Newton iterations per point; ``evaluations`` compiled-function calls;
+    * ``success``, ``status``, ``message`` the outcome (a failed solve raises instead);
+    * ``extra`` more per-point data, e.g. ``"rcond"``, and with switches ``"stages"``
+      (``{switch name: (N,) stage numbers}``, read with :meth:`stage`).
     """
 
     t: np.ndarray
