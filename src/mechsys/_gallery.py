@@ -201,17 +201,20 @@ def update_media(exs: list[Example], media: Path = MEDIA, refresh: bool = False,
     raise when an example's pictures are missing or stale."""
     manifest = _load_manifest(media / "manifest.json")
     stale = [ex for ex in exs if refresh or not _fresh(ex, manifest.get(ex.name), media)]
-    if check and stale:
-        raise MechError("gallery pictures missing or out of date for "
-                        + ", ".join(ex.path.name for ex in stale)
-                        + ": run `make docs` (python -m mechsys._gallery) and commit docs/gallery/_media")
+    gone = sorted(set(manifest) - {ex.name for ex in exs})       # examples that were removed
+    if check:
+        if stale or gone:
+            raise MechError("gallery pictures missing or out of date for "
+                            + ", ".join([ex.path.name for ex in stale] + [f"{g} (removed)" for g in gone])
+                            + ": run `make docs` (python -m mechsys._gallery) and commit "
+                            "docs/gallery/_media")
+        return manifest
     for ex in stale:
         log(f"gallery: running {ex.path.name}")
         manifest[ex.name] = run_example(ex, media / ex.name)
-    names = {ex.name for ex in exs}
-    for gone in sorted(set(manifest) - names):    # examples that were removed
-        manifest.pop(gone)
-        shutil.rmtree(media / gone, ignore_errors=True)
+    for name in gone:
+        manifest.pop(name)
+        shutil.rmtree(media / name, ignore_errors=True)
     media.mkdir(parents=True, exist_ok=True)
     (media / "manifest.json").write_text(json.dumps(manifest, indent=1, sort_keys=True) + "\n",
                                          encoding="utf-8")

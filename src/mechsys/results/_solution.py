@@ -250,6 +250,17 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews):
         return (f"<Solution: {len(self.t)} time point(s){span}, {n} coordinates, {orders}; "
                 f"Newton iterations {its}>")
 
+    def _repr_html_(self) -> str:
+        """A summary table in Jupyter (see :mod:`mechsys.results._repr`)."""
+        from ._repr import solution_html
+
+        return solution_html(self)
+
+    def _repr_markdown_(self) -> str:
+        from ._repr import solution_markdown
+
+        return solution_markdown(self)
+
 
 @dataclass(frozen=True, eq=False)
 class State:
