@@ -203,7 +203,8 @@ async function probe(url) {
   await Promise.all(imgs.map(i => i.complete ? null :
       new Promise(res => { i.onload = res; i.onerror = res; })));
   out.title = d.title;
-  out.h1 = d.querySelector("h1") ? d.querySelector("h1").textContent : null;
+  const h1 = d.querySelector(".body h1") || d.querySelector("h1");
+  out.h1 = h1 ? h1.textContent : null;
   out.images = imgs.map(i => [i.getAttribute("src"), i.naturalWidth, i.naturalHeight]);
   out.frames = [];
   for (const fr of Array.from(d.querySelectorAll("iframe"))) {
@@ -289,6 +290,8 @@ def test_gallery_pages_open_in_headless_chromium(site, served, tmp_path):
             assert status == 200 and canvas, f"{page}: viewer {src} did not load"
     for ex in _gallery.examples():
         r = results[f"gallery/{ex.name}.html"]
+        words = " ".join(re.sub(r"[`*]", "", ex.title).split()[:3])
+        assert r["h1"].startswith(words), (ex.name, r["h1"])
         n_pic = sum(f.endswith(_gallery.PICTURES) for f in manifest[ex.name]["files"])
         n_view = sum(f.endswith(_gallery.VIEWERS) for f in manifest[ex.name]["files"])
         assert len(r["images"]) >= n_pic >= 1, (ex.name, r["images"])
