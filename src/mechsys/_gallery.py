@@ -107,6 +107,10 @@ def read_example(path: Path) -> Example:
 
 
 def examples(folder: Path = EXAMPLES) -> list[Example]:
+    """The example scripts of a source checkout, by file name."""
+    if not folder.is_dir():
+        raise MechError(f"no examples folder at {folder}: the gallery is built from a source "
+                        "checkout of mechsys (pip install -e .)")
     return [read_example(p) for p in sorted(folder.glob("*.py"))]
 
 
