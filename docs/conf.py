@@ -52,15 +52,18 @@ myst_enable_extensions.append("html_image")
 
 
 def _guides_in_toctree(app, docname, source):
-    """Every top-level page of docs/ is in the index's Guides toctree: pages added later
-    (by any change) join it at the end instead of breaking the build with a warning."""
+    """Every page of docs/ outside api/, decisions/ and gallery/ is in the index's Guides
+    toctree: pages added later (by any change) join it at the end instead of breaking the
+    build with a "not in any toctree" warning."""
     if docname != "index":
         return
     text = source[0]
     here = Path(app.srcdir)
     listed = set(re.findall(r"^([\w\-/]+)\s*$", text, flags=re.MULTILINE))
-    extra = sorted(p.stem for p in here.glob("*.md")
-                   if p.stem not in listed and p.stem not in {"index", "README"})
+    own_index = {"api", "decisions", "gallery"}          # folders with their own toctree
+    pages = [p.relative_to(here).with_suffix("").as_posix() for p in here.rglob("*.md")]
+    extra = sorted(d for d in pages if d not in listed and d not in {"index", "README"}
+                   and d.split("/")[0] not in own_index and not d.startswith(("_", ".")))
     if extra:
         marker = ":caption: Guides\n\n"
         head, tail = text.split(marker, 1)
