@@ -169,3 +169,19 @@ def test_animation_is_an_inline_javascript_player(crank):
     assert player.count("data:image/png;base64") == 5     # one embedded frame each
     assert "<script" in player and "Animation" in player
     anim.close()
+
+
+def test_spatial_model_lists_the_euler_normalisations():
+    m = ms.Model3D()
+    top = m.add_body("top", points={"tip": (0, 0, 0)}, guess=((0, 0, 0), (1, 0, 0, 0)))
+    m.add(ms.Spherical3(m.ground.point((0, 0, 0)), top.point("tip")), name="ball")
+    d = m.dof()
+    assert (d.coordinates, d.equations, int(d)) == (7, 4, 3)
+    text = m._repr_html_()
+    assert "7 coordinates, 4 equations, 3 degrees of freedom" in text
+    rows = _tables(text)[1][1:]
+    assert [r[1:3] for r in rows] == [["ball", "Spherical3"], ["body top", "Euler normalisation"]]
+    tex = m._repr_latex_()
+    assert len(tex.split("\\\\\n")) == d.equations            # every equation of the system
+    (norm,) = m.space.body_normalization(top.q[3:])
+    assert f"{sp.latex(norm)} &= 0 &&\\text{{(body top)}}" in tex

@@ -68,13 +68,20 @@ def _model_dof(m):
 
 
 def _equations(m):
-    """``[(constraint, [equations] or error text)]``."""
+    """``[(number, name, type, [equations] or error text)]``: each constraint, then in 3D
+    each body's Euler-parameter normalisation (also an equation of the system)."""
     out = []
     for c in m.constraints:
         try:
-            out.append((c, c.equations(m.space)))
+            eqs = c.equations(m.space)
         except MechError as exc:
-            out.append((c, f"{type(exc).__name__}: {exc}"))
+            eqs = f"{type(exc).__name__}: {exc}"
+        out.append((c.number, c.name if c.name is not None else "", type(c).__name__, eqs))
+    dim = m.space.dim
+    for b in m.bodies[1:]:
+        norm = list(m.space.body_normalization(b.q[dim:]))
+        if norm:
+            out.append(("", f"body {b.name}", "Euler normalisation", norm))
     return out
 
 
@@ -104,10 +111,6 @@ def _body_rows(m):
         yield b.number, b.name, coords, b.mass, pts
 
 
-def _constraint_name(c) -> str:
-    return c.name if c.name is not None else ""
-
-
 def model_html(m) -> str:
     head, dof = _summary(m)
     out = [_CSS, '<div class="mechsys-repr">', f"<b>{_esc(head)}</b><br>{_esc(dof)}"]
@@ -123,7 +126,7 @@ def model_html(m) -> str:
     out += ["<table><caption>Constraints</caption><tr><th>#</th><th>name</th><th>type</th>"
             "<th>equations \\(\\Phi = 0\\)</th></tr>"]
     shown = 0
-    for c, eqs in _equations(m):
+    for num, name, kind, eqs in _equations(m):
         if isinstance(eqs, str):
             cell = _esc(eqs)
         else:
@@ -132,8 +135,8 @@ def model_html(m) -> str:
             cell = "<br>".join(f"\\({_esc(_latex(e))} = 0\\)" for e in take)
             if len(take) < len(eqs):
                 cell += f"<br><i>... {len(eqs) - len(take)} more</i>"
-        out.append(f"<tr><td>{c.number}</td><td>{_esc(_constraint_name(c))}</td>"
-                   f"<td>{_esc(type(c).__name__)}</td><td>{cell}</td></tr>")
+        out.append(f"<tr><td>{num}</td><td>{_esc(name)}</td>"
+                   f"<td>{_esc(kind)}</td><td>{cell}</td></tr>")
     out.append("</table>")
     params = m.parameters
     if params:
@@ -166,27 +169,28 @@ def model_markdown(m) -> str:
         out.append(f"| {num} | {_md_cell(name)} | {_md_cell(coords)} | {_md_cell(mass)} | "
                    f"{_md_cell(pts)} |")
     out += ["", "| # | constraint | type | equations |", "| --- | --- | --- | --- |"]
-    for c, eqs in _equations(m)[:MAX_ROWS]:
+    for num, name, kind, eqs in _equations(m)[:MAX_ROWS]:
         cell = eqs if isinstance(eqs, str) else "<br>".join(
             f"${_latex(e)} = 0$" for e in eqs[:MAX_EQUATIONS])
-        out.append(f"| {c.number} | {_md_cell(_constraint_name(c))} | {type(c).__name__} | "
-                   f"{_md_cell(cell)} |")
+        out.append(f"| {num} | {_md_cell(name)} | {kind} | {_md_cell(cell)} |")
     if m.parameters:
         out += ["", "Parameters: " + ", ".join(f"`{k} = {_num(v)}`" for k, v in m.parameters.items())]
     return "\n".join(out)
 
 
 def model_latex(m) -> str:
-    r"""The constraint equations as ``$$\begin{aligned} ... \end{aligned}$$``, each
-    labelled with its constraint number."""
+    r"""The equations of the system as ``$$\begin{aligned} ... \end{aligned}$$``, each
+    labelled with its constraint number and equation (``(2.1)``), in 3D followed by each
+    body's Euler-parameter normalisation (labelled with the body)."""
     lines = []
-    for c, eqs in _equations(m):
+    for num, name, _kind, eqs in _equations(m):
         if isinstance(eqs, str):
             continue
         for k, e in enumerate(eqs):
             if len(lines) >= MAX_EQUATIONS:
                 break
-            lines.append(f"{_latex(e)} &= 0 &&\\text{{({c.number}.{k + 1})}}")
+            tag = f"{num}.{k + 1}" if num != "" else name
+            lines.append(f"{_latex(e)} &= 0 &&\\text{{({tag})}}")
     if not lines:
         return "$\\text{no constraints}$"
     return "$$\\begin{aligned}\n" + " \\\\\n".join(lines) + "\n\\end{aligned}$$"
