@@ -271,6 +271,23 @@ def _thumb(ex: Example, entry: dict, rel: str) -> str:
     return f'<img src="{rel}/{ex.name}/{pics[0]}" alt="{ex.name}" width="180">'
 
 
+#: The manual's chapters, for grouping its worked examples.
+CHAPTERS = {1: "Getting started", 2: "Kinematic modeling", 3: "Output functions",
+            4: "Velocity and acceleration", 5: "Multistage mechanisms", 6: "Cams and gears",
+            7: "Loads and reactions", 8: "Inverse dynamics", 9: "Parametric design",
+            10: "Underconstrained systems", 11: "Generalized coordinates",
+            12: "Performance improvement", 13: "Debugging models"}
+
+
+def _table(group: list[Example], manifest: dict, rel: str, first: str) -> list[str]:
+    lines = [f"| {first} | example | picture |", "| --- | --- | --- |"]
+    for e in group:
+        where = e.section or ""
+        lines.append(f"| {where} | [{_inline(e.title)}]({e.name}.md) | "
+                     f"{_thumb(e, manifest[e.name], rel)} |")
+    return lines + [""]
+
+
 def index_page(exs: list[Example], manifest: dict, rel: str = "_media") -> str:
     manual = sorted((e for e in exs if e.section), key=Example.section_key)
     other = [e for e in exs if not e.section]
@@ -279,15 +296,16 @@ def index_page(exs: list[Example], manifest: dict, rel: str = "_media") -> str:
              "Every script in `examples/`, with the pictures and animations it draws, what it "
              "prints and its source. Each runs as it is (`python examples/<name>.py`), and the "
              "test suite runs them all.", ""]
-    for heading, group in (("The manual's worked examples", manual), ("More examples", other)):
-        if not group:
-            continue
-        lines += [f"## {heading}", "", "| | example | |", "| --- | --- | --- |"]
-        for e in group:
-            where = f"section {e.section}" if e.section else ""
-            lines.append(f"| {where} | [{_inline(e.title)}]({e.name}.md) | "
-                         f"{_thumb(e, manifest[e.name], rel)} |")
-        lines.append("")
+    if manual:
+        lines += ["## The manual's worked examples", "",
+                  "The examples that rebuild a worked example of Mech's manual, by chapter and "
+                  "section.", ""]
+        for ch in sorted({e.section_key()[0] for e in manual}):
+            group = [e for e in manual if e.section_key()[0] == ch]
+            lines += [f"### Chapter {ch}: {CHAPTERS.get(ch, '')}".rstrip(": "), ""]
+            lines += _table(group, manifest, rel, "section")
+    if other:
+        lines += ["## More examples", ""] + _table(other, manifest, rel, "")
     lines += ["```{toctree}", ":hidden:", ""] + [e.name for e in manual + other] + ["```", ""]
     return "\n".join(lines)
 
