@@ -22,7 +22,7 @@ test: $(STAMP)
 	$(PY) -m pytest tests
 
 lint: $(STAMP)
-	$(VENV)/bin/ruff check src tests examples benchmarks
+	$(VENV)/bin/ruff check src tests examples benchmarks docs/conf.py docs/_gen
 
 bench: $(STAMP)
 	$(PY) benchmarks/kinematic_sweep.py
@@ -31,8 +31,8 @@ bench: $(STAMP)
 # changed, pictures cached in docs/gallery/_media), then Sphinx with warnings as errors.
 docs: $(STAMP)
 	$(PY) -m mechsys._docgen docs/constraints.md
-	$(PY) -m mechsys._mech_map docs/mech_to_mechsys.md
-	$(PY) -m mechsys._gallery
+	$(PY) docs/_gen/gen_mech_map.py docs/mech_to_mechsys.md
+	$(PY) docs/_gen/gen_gallery.py
 	$(PY) -m sphinx -W --keep-going -q -b html docs build/docs/html
 	@echo "site: build/docs/html/index.html"
 

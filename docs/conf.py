@@ -2,7 +2,7 @@
 
 Sources are the Markdown pages of ``docs/`` as they are (MyST), an API reference generated
 from the docstrings (autodoc + napoleon) and a gallery of the example scripts, whose pages
-``mechsys._gallery`` writes into ``docs/gallery/`` before the build. The build runs with
+``docs/_gen/gen_gallery.py`` writes into ``docs/gallery/`` before the build. The build runs with
 warnings as errors (``-W``), in ``make docs`` and in ``tests/test_docs_site.py``. Why Sphinx:
 docs/decisions/0011-docs-site.md.
 """
@@ -31,7 +31,7 @@ extensions = [
 
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
 root_doc = "index"
-exclude_patterns = ["_build", "gallery/_media/**"]
+exclude_patterns = ["_build", "_gen", "gallery/_media/**"]
 myst_heading_anchors = 4
 myst_enable_extensions = ["deflist"]
 

@@ -6,6 +6,7 @@ cache included, so no example runs unless an example changed since `make docs`).
 
 import functools
 import http.server
+import importlib.util
 import json
 import os
 import re
@@ -18,11 +19,24 @@ from pathlib import Path
 
 import pytest
 
-from mechsys import MechError, _gallery, _mech_map
+from mechsys import MechError
 from mechsys.constraints import REGISTRY
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
+
+
+def _load(name: str):
+    """A documentation generator of docs/_gen/ (tools of the checkout, not of the package)."""
+    spec = importlib.util.spec_from_file_location(name, DOCS / "_gen" / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[name] = mod                  # dataclasses look their module up by name
+    spec.loader.exec_module(mod)
+    return mod
+
+
+_gallery = _load("gen_gallery")
+_mech_map = _load("gen_mech_map")
 SEED = "mech-manual-toc-and-function-reference.txt"
 
 
@@ -31,7 +45,7 @@ SEED = "mech-manual-toc-and-function-reference.txt"
 def test_mech_map_page_is_generated_from_code():
     committed = (DOCS / "mech_to_mechsys.md").read_text(encoding="utf-8")
     assert committed == _mech_map.render(), (
-        "docs/mech_to_mechsys.md is stale: run `python -m mechsys._mech_map "
+        "docs/mech_to_mechsys.md is stale: run `python docs/_gen/gen_mech_map.py "
         "docs/mech_to_mechsys.md` (make docs)")
 
 
@@ -299,3 +313,13 @@ def test_gallery_pages_open_in_headless_chromium(site, served, tmp_path):
         assert len(r["frames"]) == n_view, (ex.name, r["frames"])
     thumbs = results["gallery/index.html"]["images"]
     assert len(thumbs) == len(_gallery.examples())
+
+
+def test_docs_tools_are_ruff_clean():
+    """docs/conf.py and the generators in docs/_gen/ (outside test_lint's folders)."""
+    ruff = shutil.which("ruff") or str(Path(sys.executable).with_name("ruff"))
+    if not Path(ruff).exists():
+        pytest.skip("ruff is not installed (it comes with the test extra)")
+    res = subprocess.run([ruff, "check", "docs/conf.py", "docs/_gen"], cwd=ROOT,
+                         capture_output=True, text=True)
+    assert res.returncode == 0, res.stdout + res.stderr

@@ -21,7 +21,6 @@ LAYER = {
     "constraints": 2, "loads": 2, "results": 2, "compile": 2,
     "model": 3, "analyses": 3,
     "models": 4, "testing": 4, "draw": 4, "cli": 5, "_docgen": 5, "__init__": 5, "__main__": 5,
-    "_gallery": 5, "_mech_map": 5,
 }
 
 # (importing module, imported part): call-time imports that go up, each a documented convenience
