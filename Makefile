@@ -1,4 +1,5 @@
 # Two entry points: `make demo` and `make test`. Both create .venv on first use.
+# `make docs` builds the documentation site into build/docs/html.
 PYTHON ?= python3
 VENV   := .venv
 PY     := $(VENV)/bin/python
@@ -21,15 +22,21 @@ test: $(STAMP)
 	$(PY) -m pytest tests
 
 lint: $(STAMP)
-	$(VENV)/bin/ruff check src tests examples benchmarks
+	$(VENV)/bin/ruff check src tests examples benchmarks docs/conf.py docs/_gen
 
 bench: $(STAMP)
 	$(PY) -m pip install --quiet -e ".[bench]"
 	$(PY) benchmarks/kinematic_sweep.py --write docs/performance.md
 	$(PY) benchmarks/peers/run.py --write docs/performance.md
 
+# The documentation site: regenerated reference pages, the gallery (examples run only when
+# changed, pictures cached in docs/gallery/_media), then Sphinx with warnings as errors.
 docs: $(STAMP)
 	$(PY) -m mechsys._docgen docs/constraints.md
+	$(PY) docs/_gen/gen_mech_map.py docs/mech_to_mechsys.md
+	$(PY) docs/_gen/gen_gallery.py
+	$(PY) -m sphinx -W --keep-going -q -b html docs build/docs/html
+	@echo "site: build/docs/html/index.html"
 
 clean:
 	rm -rf $(VENV) out build *.egg-info src/*.egg-info

@@ -868,6 +868,22 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         return (f"<{type(self).__name__}: {len(self._bodies) - 1} moving bodies, "
                 f"{len(self._constraints)} constraints>")
 
+    # -- Jupyter displays (mechsys.results._repr) --------------------------------------------
+    def _repr_html_(self) -> str:
+        from .results._repr import model_html
+
+        return model_html(self)
+
+    def _repr_markdown_(self) -> str:
+        from .results._repr import model_markdown
+
+        return model_markdown(self)
+
+    def _repr_latex_(self) -> str:
+        from .results._repr import model_latex
+
+        return model_latex(self)
+
 
 class Model2D(Model):
     """Planar model. Bodies have coordinates ``x, y, theta``."""

@@ -29,6 +29,7 @@ import numpy as np
 from ._animate import Animation, ffmpeg_available
 from ._default import Skeleton
 from ._eval import STYLE_KEYS, Item
+from ._jupyter import ViewerHTML
 from ._plots import phase_plot, plot
 from ._primitives import (
     Arrow,
@@ -132,6 +133,7 @@ __all__ = [
     "Sphere",
     "Torus",
     "Vertex",
+    "ViewerHTML",
     "Wheel",
     "animate",
     "attach",

@@ -35,19 +35,19 @@ from ..geometry._points import Point
 class Item:
     """One drawable thing, in global coordinates.
 
-    kind   : ``"line"`` (polyline), ``"polygon"`` (one face), ``"mesh"`` (faces over shared
-             vertices, 3D), ``"points"`` (markers) or ``"text"`` (one label per vertex).
-    xyz    : ``(N, V, dim)`` vertices per frame, or ``(1, V, dim)`` when static.
-    style  : colour and line options (see :data:`STYLE_KEYS`).
-    faces  : for meshes, a list of vertex-index tuples (triangles or quads).
-    texts  : for text, one string per vertex.
-    closed : for lines, join the last vertex to the first.
-    upto   : optional ``(N,)`` number of vertices shown per frame (growing trails).
-    rigid  : ``(pose, local (V, dim))`` when every vertex is fixed in one body; lets the HTML
-             viewer ship local meshes plus body poses instead of vertices per frame.
-    layer  : drawing order (higher on top; 2D depth order, 3D tie-break).
-    fit    : whether the picture's bounds must hold all its vertices (instant centres only
-             count when they lie within one picture size of the rest).
+    * ``kind``: ``"line"`` (polyline), ``"polygon"`` (one face), ``"mesh"`` (faces over shared
+      vertices, 3D), ``"points"`` (markers) or ``"text"`` (one label per vertex).
+    * ``xyz``: ``(N, V, dim)`` vertices per frame, or ``(1, V, dim)`` when static.
+    * ``style``: colour and line options (see :data:`STYLE_KEYS`).
+    * ``faces``: for meshes, a list of vertex-index tuples (triangles or quads).
+    * ``texts``: for text, one string per vertex.
+    * ``closed``: for lines, join the last vertex to the first.
+    * ``upto``: optional ``(N,)`` number of vertices shown per frame (growing trails).
+    * ``rigid``: ``(pose, local (V, dim))`` when every vertex is fixed in one body; lets the
+      HTML viewer ship local meshes plus body poses instead of vertices per frame.
+    * ``layer``: drawing order (higher on top; 2D depth order, 3D tie-break).
+    * ``fit``: whether the picture's bounds must hold all its vertices (instant centres only
+      count when they lie within one picture size of the rest).
     """
 
     kind: str

@@ -209,7 +209,9 @@ class Scene:
 
         html = viewer_html(fr, title=title or "mechsys", rate=rate, autoplay=autoplay, size=size)
         if path is None:
-            return html
+            from ._jupyter import ViewerHTML
+
+            return ViewerHTML(html, size=size)      # a str that shows itself in Jupyter
         p = Path(path)
         p.parent.mkdir(parents=True, exist_ok=True)
         p.write_text(html, encoding="utf-8")

@@ -22,15 +22,15 @@ from ._outputs import OutputFunctions, VelocityViews
 class Solution(OutputFunctions, LoadOutputs, VelocityViews):
     """Kinematic (or later dynamic) solution over ``N`` time points.
 
-    Attributes
-    ----------
-    t : (N,) times;  q, qd, qdd : (N, n) coordinates, velocities, accelerations (``None``
-    when that order was not solved);  p : (np,) parameter values used;
-    system : the compiled System;  model : the Model (for symbolic outputs);
-    iterations : (N,) Newton iterations per point;  evaluations : compiled-function calls;
-    success, status, message : outcome (a failed solve raises instead);
-    extra : more per-point data, e.g. ``"rcond"``, and with switches ``"stages"``
-    (``{switch name: (N,) stage numbers}``, read with :meth:`stage`).
+    Attributes:
+
+    * ``t`` (N,) times; ``q``, ``qd``, ``qdd`` (N, n) coordinates, velocities, accelerations
+      (``None`` when that order was not solved); ``p`` (np,) parameter values used;
+    * ``system`` the compiled System; ``model`` the Model (for symbolic outputs);
+    * ``iterations`` (N,) Newton iterations per point; ``evaluations`` compiled-function calls;
+    * ``success``, ``status``, ``message`` the outcome (a failed solve raises instead);
+    * ``extra`` more per-point data, e.g. ``"rcond"``, and with switches ``"stages"``
+      (``{switch name: (N,) stage numbers}``, read with :meth:`stage`).
     """
 
     t: np.ndarray
@@ -255,6 +255,17 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews):
         n = getattr(self.system, "n", "?")
         return (f"<Solution: {len(self.t)} time point(s){span}, {n} coordinates, {orders}; "
                 f"Newton iterations {its}>")
+
+    def _repr_html_(self) -> str:
+        """A summary table in Jupyter (see :mod:`mechsys.results._repr`)."""
+        from ._repr import solution_html
+
+        return solution_html(self)
+
+    def _repr_markdown_(self) -> str:
+        from ._repr import solution_markdown
+
+        return solution_markdown(self)
 
 
 @dataclass(frozen=True, eq=False)

@@ -1,0 +1,90 @@
+"""Sphinx configuration of the mechsys documentation site (``make docs``).
+
+Sources are the Markdown pages of ``docs/`` as they are (MyST), an API reference generated
+from the docstrings (autodoc + napoleon) and a gallery of the example scripts, whose pages
+``docs/_gen/gen_gallery.py`` writes into ``docs/gallery/`` before the build. The build runs with
+warnings as errors (``-W``), in ``make docs`` and in ``tests/test_docs_site.py``. Why Sphinx:
+docs/decisions/0011-docs-site.md.
+"""
+
+import re
+import shutil
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "src"))
+
+import mechsys  # noqa: E402
+
+project = "mechsys"
+author = "the mechsys authors"
+copyright = "the mechsys authors, MIT licence"
+version = release = mechsys.__version__ if hasattr(mechsys, "__version__") else "0.1.0"
+
+extensions = [
+    "myst_parser",
+    "sphinx.ext.autodoc",
+    "sphinx.ext.napoleon",
+    "sphinx.ext.viewcode",
+]
+
+source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
+root_doc = "index"
+exclude_patterns = ["_build", "_gen", "gallery/_media/**"]
+myst_heading_anchors = 4
+myst_enable_extensions = ["deflist"]
+
+autodoc_member_order = "bysource"
+autodoc_typehints = "description"
+autodoc_default_options = {"members": True, "undoc-members": False, "show-inheritance": False}
+napoleon_numpy_docstring = True
+napoleon_google_docstring = False
+napoleon_use_ivar = True
+
+html_theme = "alabaster"
+html_title = "mechsys"
+html_static_path = []
+html_theme_options = {"description": "Kinematics and dynamics of mechanisms, the Python Mech",
+                      "fixed_sidebar": True}
+
+myst_enable_extensions.append("html_image")
+
+
+def _guides_in_toctree(app, docname, source):
+    """Every page of docs/ outside api/, decisions/ and gallery/ is in the index's Guides
+    toctree: pages added later (by any change) join it at the end instead of breaking the
+    build with a "not in any toctree" warning."""
+    if docname != "index":
+        return
+    text = source[0]
+    here = Path(app.srcdir)
+    listed = set(re.findall(r"^([\w\-/]+)\s*$", text, flags=re.MULTILINE))
+    own_index = {"api", "decisions", "gallery"}          # folders with their own toctree
+    pages = [p.relative_to(here).with_suffix("").as_posix() for p in here.rglob("*.md")]
+    extra = sorted(d for d in pages if d not in listed and d not in {"index", "README"}
+                   and d.split("/")[0] not in own_index and not d.startswith(("_", ".")))
+    if extra:
+        marker = ":caption: Guides\n\n"
+        head, tail = text.split(marker, 1)
+        block_end = tail.index("```")
+        tail = tail[:block_end] + "".join(f"{e}\n" for e in extra) + tail[block_end:]
+        source[0] = head + marker + tail
+
+
+def _copy_viewers(app, exception):
+    """The gallery's HTML viewers and players are shown in inline frames: copy them beside
+    the pages (Sphinx copies only the pictures it knows)."""
+    if exception is not None or app.builder.format != "html":
+        return
+    media = Path(app.srcdir) / "gallery" / "_media"
+    for f in media.glob("*/*.html"):
+        dest = Path(app.outdir) / "gallery" / "_media" / f.parent.name / f.name
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(f, dest)
+
+
+def setup(app):
+    app.connect("source-read", _guides_in_toctree)
+    app.connect("build-finished", _copy_viewers)
+    return {"parallel_read_safe": True}
