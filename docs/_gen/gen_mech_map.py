@@ -95,8 +95,7 @@ ENTRIES: tuple[Entry, ...] = (
     _e("Jacobian", BUILD, ("mechsys.Model.jacobian", "mechsys.Solution.jacobian")),
     _e("CheckSystem", BUILD, "mechsys.Model.dof", "degrees of freedom, redundant equations"),
     _e("BuildMech", BUILD, "mechsys.Model.compile", "derived lazily, part by part"),
-    _e("LockMech", BUILD, status="n/a",
-       note="compiled functions are built once per model already; nothing to lock"),
+    _e("LockMech", BUILD, "mechsys.Model.lock", "then `.solve(\"static\", parameters={...})`"),
     _e("FunctionOfTime", OPTS, "mechsys.Solution.interpolate", "results are arrays over `t`"),
     _e("MakeRules", OPTS, "mechsys.Solution.coordinate", "every coordinate is kept"),
     # -- outputs ----------------------------------------------------------------------------
@@ -204,14 +203,14 @@ ENTRIES: tuple[Entry, ...] = (
     _e("Global", OPTS, "mechsys.Solution.loads(coordinates=)", 'coordinates="global"'),
     _e("Local", OPTS, "mechsys.Solution.loads(coordinates=)", 'coordinates="local"'),
     _e("Type", OPTS, "mechsys.Solution.loads(type=)", '"applied", "reaction", "dynamic"'),
-    _e("Free", COUPLE, note="a setting of SetCouple"),
+    _e("Free", COUPLE, "mechsys.Free", "time as an unknown of a couple"),
     _e("Method", OPTS, status="n/a",
        note="one angular-velocity representation (decision 0006); nothing to choose"),
     _e("All", OPTS, "mechsys.All"),
     # -- parametric design ----------------------------------------------------------------------
-    _e("SetCouple", COUPLE, note="chapter 9"),
-    _e("SolveCouple", COUPLE, note="chapter 9"),
-    _e("SetSensitivity", COUPLE, note="chapter 9"),
+    _e("SetCouple", COUPLE, "mechsys.Model.couple", "chapter 9.1-9.4"),
+    _e("SolveCouple", COUPLE, "mechsys.CoupleSystem.solve"),
+    _e("SetSensitivity", COUPLE, "mechsys.Model.sensitivity", "chapter 9.5"),
     _e("Parameterize", COUPLE, "mechsys.Model.parameter", "parameters are SymPy symbols"),
     # -- session and model management -----------------------------------------------------------
     _e("MechVersion", SESSION, "mechsys.__version__"),
