@@ -48,6 +48,8 @@ from ..solvers._integrators import (
     integration_options,
     output_times,
 )
+from ..solvers._position import describe_singular
+from ..solvers._rank import InZone, project_regularized, zone_guard
 
 KINDS = ("static", "kinematic", "dynamic")
 
@@ -74,6 +76,22 @@ def _reject_unknown(what: str, unknown: dict, known) -> None:
     if unknown:
         raise ModelError(f"{what}: unknown option(s) {sorted(unknown)}; the options are "
                          f"{', '.join(known)}")
+
+
+def _flag(box, value):
+    """``value``, noting in ``box[0]`` that it is not ``None``."""
+    if value is not None:
+        box[0] = True
+    return value
+
+
+def _check_independent(system, t, q, p, scaling) -> None:
+    """Dependent kept constraints at the start raise :class:`SingularJacobianError` naming
+    them (the integration tolerates only singular instants on the way, not a redundancy)."""
+    if system.m:
+        J = system.jacobian(t, q, p)
+        if scaling.dependent_rows(J)[1]:
+            raise describe_singular(system, J, t, q, "free motion", scaling)
 
 
 class FreeSystem:
@@ -375,22 +393,47 @@ class FreeSystem:
         q0, qd0 = self._project_start(t0, q0, qd0, p, held, sc)
         lam_box = [None]
 
+        # loads linear in the multipliers: singular instants are passed (solvers/_rank.py)
+        robust = s.m > 0 and not (s.dynamics.depends_on_lambda or s.dynamics.depends_on_qdd)
+        zone = [False]                 # a derivative of this step came from the zone
+        guard = None
+        if robust:
+            inner = zone_guard(s, sc, sc.rows(s.jacobian(t0, q0, p)))
+
+            def guard(K, b, x):
+                return _flag(zone, inner(K, b, x))
+
+        def accel(tt, y, lam_guess=None):
+            qdd, lam, _ = free_acceleration(s, tt, y[:n], y[n:], p, lam_guess, guard=guard, **kw)
+            return y[n:], qdd, lam
+
         def rhs(tt, y):
-            qdd, lam, _ = free_acceleration(s, tt, y[:n], y[n:], p, lam_box[0], **kw)
+            qd, qdd, lam = accel(tt, y, lam_box[0])
             if s.dynamics.depends_on_lambda:
                 lam_box[0] = lam
-            return np.concatenate((y[n:], qdd))
+            return np.concatenate((qd, qdd))
+
+        _check_independent(s, t0, q0, p, sc)
 
         def proj(tt, y):
-            qq, vv = project(s, tt, y[:n], y[n:], p, scaling=sc)
+            # rank-tolerant: the motion passes through singular instants (links collinear)
+            try:
+                qq, vv = project(s, tt, y[:n], y[n:], p, scaling=sc, rank_tolerant=robust)
+            except InZone:
+                qq, vv = project_regularized(s, tt, y[:n], y[n:], p, sc)
             return np.concatenate((qq, vv))
 
+        def kinked():
+            out, zone[0] = zone[0], False
+            return out
+
         times, Y, res, m = integrate(rhs, proj, t, np.concatenate((q0, qd0)), opt,
-                                     scale=np.concatenate((sc.columns, sc.columns)))
+                                     scale=np.concatenate((sc.columns, sc.columns)),
+                                     kinked=kinked if robust else None)
         QDD = np.empty((len(times), n))
         LAM = np.empty((len(times), s.m))
         for k, (tk, yk) in enumerate(zip(times, Y)):
-            QDD[k], LAM[k], _ = free_acceleration(s, tk, yk[:n], yk[n:], p, **kw)
+            _, QDD[k], LAM[k] = accel(tk, yk)
         extra = {"evaluations": res.evaluations, "steps": res.steps, "rejected": res.rejected,
                  "method": m, "length_scale": sc.length}
         if opt.runge_kutta:
