@@ -215,3 +215,43 @@ def solve_in_zone(scaling, K, rhs, n):
     K = _dense(K)
     J = K[n:, :n]
     return kkt_regularized(K[:n, :n], J, rhs[:n], rhs[n:], scaling.rows(J), scaling.columns)
+
+
+def min_norm_truncated(A, b, tol: float = RANK_TOL) -> np.ndarray:
+    """Minimum-norm least-squares ``x`` of ``A x = b``, singular values below ``tol s_1``
+    dropped: ``x = V_r S_r^-1 U_r^T b``."""
+    U, s, Vt = truncated_svd(A, tol)
+    return Vt.T @ ((U.T @ np.asarray(b, dtype=float)) / s)
+
+
+def continue_position(system, t, guess, p, scaling, ftol: float = 1e-12,
+                      max_iterations: int = 50):
+    r"""Position at a singular instant of a kinematic sweep, from the sweep's prediction
+    ``guess`` (on the branch the previous points followed): Gauss-Newton with minimum-norm
+    steps on the truncated SVD of the scaled Jacobian, ``dq = -D pinv(J^) R^-1 Phi``. The
+    dependent equations are consistent there (the mechanism assembles), so it converges to
+    the solution nearest the prediction: the continuation of the branch. Returns ``(q,
+    iterations, evaluations, residual)``; ``None`` when it does not converge."""
+    q = np.array(guess, dtype=float)
+    F, J = system.residual_and_jacobian(t, q, p)
+    rows = scaling.rows(J)
+    tol = ftol * (1.0 + scaling.offset)
+    for it in range(max_iterations + 1):
+        norm = np.abs(F / rows).max(initial=0.0)
+        if norm <= tol and it > 0:
+            return q, it, it + 1, norm
+        if not np.isfinite(norm):
+            return None
+        q = q - scaling.columns * min_norm_truncated(scaling.scaled(_dense(J), rows), F / rows)
+        F, J = system.residual_and_jacobian(t, q, p)
+    return None
+
+
+def continue_rates(J, b, predicted, scaling, rows) -> np.ndarray:
+    r"""Velocities (or accelerations) at a singular instant of a sweep: of the solutions of
+    the consistent, rank-deficient ``J x = b``, the one nearest (unit-free) to ``predicted``
+    (extrapolated from the previous points): ``x = p + D pinv(J^) R^-1 (b - J p)``. The
+    components the equations do not fix are those of the continuous branch."""
+    predicted = np.asarray(predicted, dtype=float)
+    res = (np.asarray(b, dtype=float) - _dense(J) @ predicted) / rows
+    return predicted + scaling.columns * min_norm_truncated(scaling.scaled(_dense(J), rows), res)
