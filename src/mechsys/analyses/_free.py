@@ -48,6 +48,7 @@ from ..solvers._integrators import (
     integration_options,
     output_times,
 )
+from ..solvers._linalg import Scaling
 from ..solvers._position import describe_singular
 from ..solvers._rank import InZone, project_regularized, zone_guard
 
@@ -112,20 +113,25 @@ class FreeSystem:
         if self.system.n == 0:
             raise ModelError("free(): the model has no moving bodies (or variables); add bodies "
                              "before freeing constraints")
-        if self.system.m > self.system.n:
-            raise ModelError(f"free system is still overconstrained ({self.system.m} equations,"
-                             f" {self.system.n} coordinates)")
+        self._full, self._redundancy = self.system, None
         if solution == "static" and not model.load_list:
             raise ModelError(
                 "free(solution='static'): the model has no loads, so every configuration the "
                 "kept constraints allow is an equilibrium; add the loads (m.add_load) that "
                 "determine it")
-        self.dof = self.system.n - self.system.m
         self._eq = self._eqv = None
         # parameter values given here: {index in layout.p_symbols: value}, kept for every call
         self._p_given: dict[int, float] = {}
         self._q0, self._qd0 = self._state_from(
             initial_guess if initial_guess is not None else model.last_solution)
+        # redundant but consistent kept constraints (Adams): the independent equations at
+        # the start configuration are solved, the others' reactions shared (minimum norm)
+        self.system, self._redundancy, _ = model._independent(self._full, 0.0, self._q0,
+                                                               "free motion")
+        if self.system.m > self.system.n:
+            raise ModelError(f"free system is still overconstrained ({self.system.m} equations,"
+                             f" {self.system.n} coordinates)")
+        self.dof = self.system.n - self.system.m
         self._held0: dict = {"q": set(), "qd": set()}
         if initial_condition is not None:
             self._q0, self._qd0, self._p_given = self._apply_condition(
@@ -279,10 +285,23 @@ class FreeSystem:
 
     def _result(self, t, Q, QD, QDD, LAM, p, its, extra=None, scalar=False):
         N = len(t)
+        system = self.system
+        if self._redundancy is not None:
+            from ..solvers._rank import expand_multipliers
+
+            system, d = self._full, self._redundancy
+            extra = dict(extra or {}, redundant=[getattr(o, "name", str(o)) for o in d.owners],
+                         indeterminate=[getattr(o, "name", str(o)) for o in d.involved])
+            if LAM is not None:
+                LAM = np.asarray(LAM).reshape(N, -1)
+                LAM = np.array([expand_multipliers(
+                    J := system.jacobian(tk, qk, p), self.system.jacobian(tk, qk, p), lk,
+                    Scaling.of(system, qk, J)) for tk, qk, lk in zip(t, np.asarray(Q).reshape(
+                        N, -1), LAM)])
         sol = Solution(t=np.asarray(t, dtype=float), q=np.asarray(Q).reshape(N, -1),
                        qd=None if QD is None else np.asarray(QD).reshape(N, -1),
                        qdd=None if QDD is None else np.asarray(QDD).reshape(N, -1),
-                       p=p, system=self.system, model=self.model,
+                       p=p, system=system, model=self.model,
                        iterations=np.asarray(its, dtype=int).reshape(N), scalar=scalar,
                        lam=None if LAM is None else np.asarray(LAM).reshape(N, -1),
                        mode=f"free-{self.kind}", extra=extra or {})

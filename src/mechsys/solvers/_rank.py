@@ -255,3 +255,27 @@ def continue_rates(J, b, predicted, scaling, rows) -> np.ndarray:
     predicted = np.asarray(predicted, dtype=float)
     res = (np.asarray(b, dtype=float) - _dense(J) @ predicted) / rows
     return predicted + scaling.columns * min_norm_truncated(scaling.scaled(_dense(J), rows), res)
+
+
+# -- redundant but consistent constraints ---------------------------------------------------
+def min_norm_multipliers(J_full, force, scaling) -> np.ndarray:
+    r"""The minimum-norm multipliers ``lambda`` (unit-free: ``mu = R lambda`` of least norm)
+    with ``Phi_q^T lambda = force`` for a Jacobian ``J_full`` with dependent rows::
+
+        mu = pinv((R^-1 J D)^T) (D force),   lambda = R^-1 mu
+
+    The components along rows that take no part in a dependency are unique (the
+    determinate reactions, exact); the others are the minimum-norm share of an
+    indeterminate set."""
+    J = _dense(J_full)
+    r = scaling.rows(J)
+    Js = (J * scaling.columns) / r[:, None]
+    return min_norm_truncated(Js.T, scaling.columns * np.asarray(force, dtype=float),
+                              RANK_TOL) / r
+
+
+def expand_multipliers(J_full, J_kept, lam_kept, scaling) -> np.ndarray:
+    """Multipliers of every equation from those of the independent equations: the same
+    constraint forces ``J_kept^T lam_kept``, shared by :func:`min_norm_multipliers`."""
+    return min_norm_multipliers(J_full, _dense(J_kept).T @ np.asarray(lam_kept, dtype=float),
+                                scaling)
