@@ -588,7 +588,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
             warnings.warn(RedundantConstraintWarning(
                 f"{what}: redundant but consistent constraints {d.text} These equations are "
                 "left out of the solution (they hold wherever the others do); the reactions of "
-                "the constraints involved (" + ", ".join(_owner_name(o) for o in d.involved)
+                "the constraints involved (" + ", ".join(_constraint_names(d.involved))
                 + ") are statically indeterminate and reported as the minimum-norm solution, "
                 "flagged in Solution.extra['indeterminate']." + meant,
                 redundant=d.owners, mobility=mobility), stacklevel=4)
@@ -829,8 +829,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         sol = Solution.from_sweep(self, full, res, self._p(), scalar=scalar, lam=lam,
                                   mode=solution)
         if red is not None:
-            sol.extra["redundant"] = [_owner_name(o) for o in red.owners]
-            sol.extra["indeterminate"] = [_owner_name(o) for o in red.involved]
+            sol.extra["redundant"] = _constraint_names(red.owners)
+            sol.extra["indeterminate"] = _constraint_names(red.involved)
         self.last_solution = sol
         return sol
 
@@ -892,6 +892,11 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
 
 def _owner_name(owner) -> str:
     return getattr(owner, "name", None) or str(owner)
+
+
+def _constraint_names(owners) -> list:
+    """Names of the constraints among equation owners (Euler normalisations left out)."""
+    return [o.name for o in owners if isinstance(o, ConstraintBase)]
 
 
 def _redundant_solution(full, reduced, res, lam, red, p):

@@ -287,11 +287,12 @@ class FreeSystem:
         N = len(t)
         system = self.system
         if self._redundancy is not None:
+            from ..model import _constraint_names
             from ..solvers._rank import expand_multipliers
 
             system, d = self._full, self._redundancy
-            extra = dict(extra or {}, redundant=[getattr(o, "name", str(o)) for o in d.owners],
-                         indeterminate=[getattr(o, "name", str(o)) for o in d.involved])
+            extra = dict(extra or {}, redundant=_constraint_names(d.owners),
+                         indeterminate=_constraint_names(d.involved))
             if LAM is not None:
                 LAM = np.asarray(LAM).reshape(N, -1)
                 LAM = np.array([expand_multipliers(
