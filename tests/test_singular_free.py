@@ -74,6 +74,19 @@ def test_n_four_bar_free_motion_passes_its_singular_instants(n_loops):
     assert worst < 1e-10
 
 
+@pytest.mark.parametrize("unit", [1e-3, 1e3])
+def test_n_four_bar_in_other_units(unit):
+    """The same motion with lengths in millimetres or kilometres (the zone test, the
+    regularisation and the projections are unit-free)."""
+    m = models.n_four_bar(2, length=unit)
+    m.solve(0.0)
+    t = np.linspace(0.0, 1.6, 33)
+    sol = m.free(drop=["hold"]).simulate(t, initial_condition={"crank0.th_d": -1.0})
+    th = exact_theta(2, t)[0]
+    np.testing.assert_allclose(sol.coordinate("coupler0.x") / unit, np.cos(th), rtol=0,
+                               atol=1e-5)
+
+
 def horizontal_state(n_loops, w):
     """All links horizontal (the singular configuration), crank rate ``w``."""
     cond = {}

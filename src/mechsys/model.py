@@ -570,13 +570,14 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         keep = tuple(i for i in range(system.m) if i not in set(d.rows))
         cache = self.__dict__.setdefault("_reduced", {})
         key = (id(system), system.version, keep)
-        if key not in cache:
+        if key not in cache or cache[key][0] is not system:   # (the entry keeps the id taken)
             lay = dataclasses.replace(system.layout,
                                       eq_owner=tuple(system.layout.eq_owner[i] for i in keep),
                                       eq_index=tuple(system.layout.eq_index[i] for i in keep))
-            cache[key] = System(self.space, lay, [system.phi[i] for i in keep],
-                                system.p_values, system.guess, backend=system.backend,
-                                version=system.version, model=self, loads=system._loads)
+            cache[key] = (system, System(self.space, lay, [system.phi[i] for i in keep],
+                                         system.p_values, system.guess, backend=system.backend,
+                                         version=system.version, model=self,
+                                         loads=system._loads))
             full = self.compile()
             Jm = full.jacobian(t, q, self._p()) if full.n == system.n else J
             mobility = full.n - Scaling.of(full, q, Jm).dependent_rows(Jm)[0] if (
@@ -592,7 +593,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
                 + ") are statically indeterminate and reported as the minimum-norm solution, "
                 "flagged in Solution.extra['indeterminate']." + meant,
                 redundant=d.owners, mobility=mobility), stacklevel=4)
-        return cache[key], d, q
+        return cache[key][1], d, q
 
     def compile(self) -> System:
         """The compiled :class:`System` (cached until the model changes). With switches
