@@ -35,6 +35,7 @@ from .results._outputs import OutputFunctions, VelocityViews
 from .solvers import ORDERS, PositionOptions, sweep
 from .solvers._linalg import Scaling
 from .solvers._position import dependency
+from .solvers._rank import constraint_names as _constraint_names
 
 
 def _parameter_value(name: str, value) -> float:
@@ -592,7 +593,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
                 "the constraints involved (" + ", ".join(_constraint_names(d.involved))
                 + ") are statically indeterminate and reported as the minimum-norm solution, "
                 "flagged in Solution.extra['indeterminate']." + meant,
-                redundant=d.owners, mobility=mobility), stacklevel=4)
+                redundant=d.owners, mobility=mobility), stacklevel=3 if what == "solve" else 4)
         return cache[key][1], d, q
 
     def compile(self) -> System:
@@ -893,11 +894,6 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
 
 def _owner_name(owner) -> str:
     return getattr(owner, "name", None) or str(owner)
-
-
-def _constraint_names(owners) -> list:
-    """Names of the constraints among equation owners (Euler normalisations left out)."""
-    return [o.name for o in owners if isinstance(o, ConstraintBase)]
 
 
 def _redundant_solution(full, reduced, res, lam, red, p):

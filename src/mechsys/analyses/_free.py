@@ -287,7 +287,7 @@ class FreeSystem:
         N = len(t)
         system = self.system
         if self._redundancy is not None:
-            from ..model import _constraint_names
+            from ..solvers._rank import constraint_names as _constraint_names
             from ..solvers._rank import expand_multipliers
 
             system, d = self._full, self._redundancy

@@ -279,3 +279,9 @@ def expand_multipliers(J_full, J_kept, lam_kept, scaling) -> np.ndarray:
     constraint forces ``J_kept^T lam_kept``, shared by :func:`min_norm_multipliers`."""
     return min_norm_multipliers(J_full, _dense(J_kept).T @ np.asarray(lam_kept, dtype=float),
                                 scaling)
+
+
+def constraint_names(owners) -> list:
+    """Names of the constraints among equation owners (the Euler-parameter normalisations,
+    whose owner is a text label, left out)."""
+    return [o.name for o in owners if not isinstance(o, str)]
