@@ -1,30 +1,29 @@
-r"""Rank-tolerant linear algebra for singular instants of free motion.
+r"""Rank-revealing and rank-tolerant pieces: singular instants of free motion and of
+kinematic sweeps, redundant but consistent constraints. Every decision is taken on the
+unit-free scaled Jacobian ``J^ = R^-1 Phi_q D`` (:class:`~mechsys.solvers._linalg.Scaling`),
+so it does not depend on the unit of length. Choices and measurements:
+``docs/decisions/0012-singular-and-redundant.md``.
 
-A mechanism whose constraint Jacobian loses rank at isolated instants (the N-four-bar:
-all links collinear; ``N`` loop equations become dependent there) has a well-defined motion
-through them, but the index-1 augmented matrix ``[[M, Phi_q^T], [Phi_q, 0]]`` and the
-projection's ``J J^T`` are singular at those instants. The pieces here replace only the
-dependent part, on the unit-free scaled Jacobian ``J^ = R^-1 Phi_q D``
-(:class:`~mechsys.solvers._linalg.Scaling`) so that the decision does not depend on the unit
-of length:
+Free motion near a singular instant (``s_min / s_max`` of ``J^`` below ``ZONE``):
 
-* :func:`independent_combinations`: the SVD ``J^ = U S V^T`` truncated at
-  ``s_i > RANK_TOL s_1``; the ``r`` rows ``W = U_r^T R^-1`` give ``W Phi_q`` of full row rank
-  whose equations ``W Phi_q x = W b`` are the consistent part of ``Phi_q x = b``.
-* :func:`kkt_rank_tolerant`: the free acceleration with the combinations ``W``::
+* :func:`zone_guard` checks each free-acceleration solution (a cheap multiplier test, then
+  :func:`in_zone`) and replaces it by :func:`kkt_regularized`, the augmented system with a
+  ``-KAPPA I`` block: exact where ``s^2 >> KAPPA``, softened (not amplified) along the
+  dependent direction at the instant;
+* :func:`project_regularized`: mass-orthogonal, regularised projections (those of the
+  augmented-Lagrangian index-3 methods) where the ordinary projection raises
+  :class:`InZone`;
+* :func:`kkt_rank_tolerant`: at an exactly singular state outside an integration, the
+  null-space solution with the truncated SVD (singular values below ``RANK_TOL s_1`` are
+  zero) and minimum-norm multipliers.
 
-      [ M          Phi_q^T W^T ] [ qdd  ]   [ Q + Qv  ]
-      [ W Phi_q    0           ] [ mu   ] = [ W gamma ],    lambda = W^T mu
+Kinematic sweeps through an exactly singular sample: :func:`continue_position`
+(Gauss-Newton with minimum-norm steps from a prediction on the branch) and
+:func:`continue_rates` (the solution of the rank-deficient rate equations nearest to the
+predicted one).
 
-  ``qdd`` is the physical acceleration (unique when ``M`` is regular on the motions the
-  constraints leave free, as the dependent equations restrict nothing more to first
-  order); ``lambda`` is the minimum-norm multiplier (scaled), the reaction components along
-  the dependent combinations being indeterminate at the instant itself.
-* :func:`min_norm_truncated`: the minimum-norm least-squares solution of ``J^ x = b`` with
-  the same truncation, for the position and velocity projections.
-
-``RANK_TOL`` (relative to the largest singular value of the scaled Jacobian) was chosen by
-measurement on the N-four-bar: see ``docs/decisions/0012-singular-and-redundant.md``.
+Redundant constraints: :func:`min_norm_multipliers` and :func:`expand_multipliers` share
+the constraint forces of the independent equations over all equations (minimum norm).
 """
 
 from __future__ import annotations
@@ -55,15 +54,6 @@ def truncated_svd(A, tol: float = RANK_TOL):
     U, s, Vt = np.linalg.svd(A, full_matrices=False)
     r = int((s > tol * s[0]).sum()) if s.size and s[0] > 0 else 0
     return U[:, :r], s[:r], Vt[:r]
-
-
-def independent_combinations(J, rows: np.ndarray, columns: np.ndarray,
-                             tol: float = RANK_TOL) -> tuple[np.ndarray, int]:
-    """``(W (r, m), r)``: combinations of the equations of ``J`` (row scales ``rows``, column
-    units ``columns``) with ``W J`` of full row rank ``r`` (see the module docstring)."""
-    J = _dense(J)
-    U, _, _ = truncated_svd((J * columns) / rows[:, None], tol)
-    return U.T / rows, U.shape[1]
 
 
 def kkt_rank_tolerant(M, J, F, gamma, rows, columns, tol: float = RANK_TOL):
