@@ -127,11 +127,18 @@ def test_underconstrained_kinematic_solve_says_how_many_dof(crank_model):
 
 
 def test_overconstrained_names_the_redundant_constraints():
+    # consistent (issue 12): solved as Adams does, with a warning naming the pair that fixes
+    # the piston's y twice; inconsistent: an error naming them
     m = models.slider_crank()
     m.add(ms.RelativeY1(m.body("piston").point(0), 0), name="extra")
-    with pytest.raises(ms.ConstraintCountError, match="overconstrained by 1 equation") as err:
+    with pytest.warns(ms.RedundantConstraintWarning, match="redundant but consistent") as rec:
         m.solve(0.0)
-    # the pair that fixes the piston's y twice: the slider and the extra constraint
+    assert "'slider'" in str(rec[0].message)
+    assert "'extra'" in str(rec[0].message)
+    m.replace("extra", ms.RelativeY1(m.body("piston").point(0), 0.5))
+    with pytest.warns(ms.RedundantConstraintWarning), \
+            pytest.raises(ms.ConstraintCountError, match="inconsistent") as err:
+        m.solve(0.0)
     assert "'slider'" in str(err.value)
     assert "'extra'" in str(err.value)
 

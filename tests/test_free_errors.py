@@ -158,16 +158,21 @@ def test_massless_free_motion_names_the_body(mass, inertia, lacks):
         assert isinstance(exc.value, ms.SingularJacobianError)
 
 
-def test_redundant_kept_constraints_in_the_projection_name_them():
-    # the projection's J J^T was factored unchecked: the internal `Singular` escaped
+def test_redundant_kept_constraints_are_named_and_solved():
+    # the projection's J J^T was factored unchecked: the internal `Singular` escaped; then
+    # (issue 12) redundant but consistent kept constraints are solved as Adams does: the
+    # dependent equation is left out with a warning naming it, and the motion is the same
     m = pendulum()
     m.add(ms.RelativeX1(m.body("bar").point(0), 0.0), name="extra x")   # repeats the pivot's x
-    free = m.free(drop=["hold"])
-    with pytest.raises(ms.SingularJacobianError) as exc:
-        free.simulate((0.0, 0.1))
-    msg = str(exc.value)
-    assert "singular at t = 0" in msg and "'extra x'" in msg
-    assert not isinstance(exc.value, ms.SingularMassError)
+    with pytest.warns(ms.RedundantConstraintWarning, match="free motion: redundant") as rec:
+        free = m.free(drop=["hold"])
+    msg = str(rec[0].message)
+    assert "'extra x'" in msg and "'pivot'" in msg
+    t = np.linspace(0.0, 0.5, 11)
+    sol = free.simulate(t)
+    ref = pendulum().free(drop=["hold"]).simulate(t)
+    np.testing.assert_allclose(sol["bar.th"], ref["bar.th"], rtol=0, atol=1e-9)
+    assert sol.extra["indeterminate"] == ["pivot", "extra x"]
 
 
 def test_static_equilibrium_without_loads_raises():

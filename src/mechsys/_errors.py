@@ -75,6 +75,19 @@ class NearSingularWarning(UserWarning):
     velocities and accelerations there are large and sensitive."""
 
 
+class RedundantConstraintWarning(UserWarning):
+    """Redundant but consistent constraints (as in Adams): the dependent equations, found by
+    a rank-revealing factorisation at the start, are left out of the solution; their
+    reactions are not determined by rigid-body statics and are reported as the minimum-norm
+    solution (``Solution.extra["indeterminate"]``). ``redundant``: the constraints whose
+    equations were left out; ``mobility``: the degrees of freedom of the mechanism."""
+
+    def __init__(self, message: str, *, redundant=None, mobility=None):
+        super().__init__(message)
+        self.redundant = redundant or []
+        self.mobility = mobility
+
+
 def parameter_value(name: str, value) -> float:
     """A parameter value as a finite float, or a :class:`ModelError` naming the parameter
     (shared by ``Model.parameter``/``set_parameters`` and the analyses that take parameter

@@ -6,7 +6,9 @@ through the compiled :class:`~mechsys.compile.System` it caches.
 
 from __future__ import annotations
 
+import dataclasses
 import re
+import warnings
 from collections.abc import Mapping
 
 import numpy as np
@@ -15,6 +17,7 @@ import sympy as sp
 from ._errors import (
     ConstraintCountError,
     ModelError,
+    RedundantConstraintWarning,
     SingularJacobianError,
     UnknownBodyError,
     UnknownConstraintError,
@@ -32,6 +35,7 @@ from .results._outputs import OutputFunctions, VelocityViews
 from .solvers import ORDERS, PositionOptions, sweep
 from .solvers._linalg import Scaling
 from .solvers._position import dependency
+from .solvers._rank import constraint_names as _constraint_names
 
 _parameter_value = parameter_value   # the validation lives with the errors it raises
 
@@ -535,6 +539,59 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
                       backend=self._backend, version=self._version, model=self,
                       loads=list(self._loads) if loads is None else loads)
 
+    def _independent(self, system: System, t, q, what: str = "solve"):
+        """``(system, redundancy, q)``: when the equations of ``system`` are dependent at ``q``
+        (consistent redundant constraints, as Adams accepts them), the System of an
+        independent subset (pivoted QR of the scaled ``Phi_q^T``: the equations chosen last
+        are dropped) and the :class:`~mechsys.solvers._position.Dependency`; else
+        ``(system, None)``; ``q`` the configuration decided at (the guess, or where least
+        squares on all equations assembles the mechanism). Only when the rest still fixes as much as the whole
+        (``rank == n`` for a kinematic solve, any rank for free motion). Warns once per
+        model version and set of dropped equations (RedundantConstraintWarning)."""
+        if system.m == 0 or (what == "solve" and system.m <= system.n):
+            return system, None, q
+        J = system.jacobian(t, q, self._p())
+        d = dependency(system, J, Scaling.of(system, q, J), q)
+        if what == "solve" and d.rank < system.n:
+            # the guess may not assemble the mechanism (a driver's row can vanish there):
+            # decide at the configuration least squares on all equations reaches
+            from .solvers._rank import continue_position
+
+            got = continue_position(system, t, q, self._p(), Scaling.of(system, q, J))
+            if got is not None:
+                q = got[0]
+                J = system.jacobian(t, q, self._p())
+                d = dependency(system, J, Scaling.of(system, q, J), q)
+        if not d.deficiency or (what == "solve" and d.rank < system.n):
+            return system, None, q
+        keep = tuple(i for i in range(system.m) if i not in set(d.rows))
+        cache = self.__dict__.setdefault("_reduced", {})
+        key = (id(system), system.version, keep)
+        if key not in cache or cache[key][0] is not system:   # (the entry keeps the id taken)
+            lay = dataclasses.replace(system.layout,
+                                      eq_owner=tuple(system.layout.eq_owner[i] for i in keep),
+                                      eq_index=tuple(system.layout.eq_index[i] for i in keep))
+            cache[key] = (system, System(self.space, lay, [system.phi[i] for i in keep],
+                                         system.p_values, system.guess, backend=system.backend,
+                                         version=system.version, model=self,
+                                         loads=system._loads))
+            full = self.compile()
+            Jm = full.jacobian(t, q, self._p()) if full.n == system.n else J
+            mobility = full.n - Scaling.of(full, q, Jm).dependent_rows(Jm)[0] if (
+                full.n == system.n) else None
+            meant = "" if mobility is None else (
+                f" The mechanism has {mobility} degree(s) of freedom (mobility), the "
+                f"Gruebler count says {full.n - full.m}: that mobility is probably what you "
+                "meant.")
+            warnings.warn(RedundantConstraintWarning(
+                f"{what}: redundant but consistent constraints {d.text} These equations are "
+                "left out of the solution (they hold wherever the others do); the reactions of "
+                "the constraints involved (" + ", ".join(_constraint_names(d.involved))
+                + ") are statically indeterminate and reported as the minimum-norm solution, "
+                "flagged in Solution.extra['indeterminate']." + meant,
+                redundant=d.owners, mobility=mobility), stacklevel=3 if what == "solve" else 4)
+        return cache[key][1], d, q
+
     def compile(self) -> System:
         """The compiled :class:`System` (cached until the model changes). With switches
         (StageSwitch, TimeSwitch) it is the system of every switch's first stage."""
@@ -743,8 +800,10 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         if system.n == 0:
             raise ModelError("solve: the model has no moving bodies (or variables), so there is "
                              "nothing to solve; add bodies with m.add_body(...) first")
-        self._require_square(system)
         g = self._resolve_guess(system, guess)
+        full, (system, red, g_red) = system, self._independent(system, times[0], g)
+        g = g_red if red is not None else g
+        self._require_square(system)
         scalar = np.ndim(t) == 0
         order = ORDERS.get(solution, modes.get(solution))
         if self._switches():  # stages chosen point by point (analyses/_multistage.py)
@@ -768,8 +827,13 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         lam = None
         if solution in modes:
             lam = self._multipliers_over(system, res, solution, lambda_guess)
-        sol = Solution.from_sweep(self, system, res, self._p(), scalar=scalar, lam=lam,
+        if red is not None:
+            lam = _redundant_solution(full, system, res, lam, red, self._p())
+        sol = Solution.from_sweep(self, full, res, self._p(), scalar=scalar, lam=lam,
                                   mode=solution)
+        if red is not None:
+            sol.extra["redundant"] = _constraint_names(red.owners)
+            sol.extra["indeterminate"] = _constraint_names(red.involved)
         self.last_solution = sol
         return sol
 
@@ -883,6 +947,36 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         from .results._repr import model_latex
 
         return model_latex(self)
+
+
+def _owner_name(owner) -> str:
+    return getattr(owner, "name", None) or str(owner)
+
+
+def _redundant_solution(full, reduced, res, lam, red, p):
+    """Check that the left-out equations hold at every solved point (consistent
+    redundancy; else :class:`ConstraintCountError` naming them) and expand the multipliers
+    to every equation (minimum norm for the indeterminate ones)."""
+    from .solvers._rank import expand_multipliers
+
+    for tk, qk in zip(res.t, res.q):
+        F, J = full.residual_and_jacobian(tk, qk, p)
+        sc = Scaling.of(full, qk, J)
+        left = np.abs(F / sc.rows(J)).max(initial=0.0)
+        if not left <= 1e-8 * (1.0 + sc.offset):
+            raise ConstraintCountError(
+                f"the model is overconstrained and the redundant equations are inconsistent at "
+                f"t = {tk:.6g}: with the independent equations solved, the dependent ones keep a "
+                f"scaled residual {left:.2e} {red.text} Make the constraints agree (same axes "
+                "and points), or remove or relax the dependent equations.")
+    if lam is None:
+        return None
+    out = np.empty((len(res.t), full.m))
+    for k, (tk, qk) in enumerate(zip(res.t, res.q)):
+        J = full.jacobian(tk, qk, p)
+        out[k] = expand_multipliers(J, reduced.jacobian(tk, qk, p), lam[k],
+                                    Scaling.of(full, qk, J))
+    return out
 
 
 class Model2D(Model):

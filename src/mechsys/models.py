@@ -131,6 +131,45 @@ def pendulum_chain(n_links: int, g: float = 9.81) -> Model2D:
     return m
 
 
+def n_four_bar(n_loops: int, g: float = 9.81, length: float = 1.0) -> Model2D:
+    """The IFToMM multibody benchmark's N-four-bar mechanism (problem A02): ``n_loops``
+    parallelogram loops of ``2 N + 1`` uniform links (length 1, mass 1, centroidal inertia
+    1/12; ``length`` changes the unit of length: every length and ``g`` are multiplied by
+    it). Cranks ``crank0 ... crankN`` are pinned to the ground at ``x = 0 ... N``
+    (joints ``A{k}``); couplers ``coupler0 ... coupler{N-1}`` join the crank tips (joints
+    ``B{k}``, ``C{k}``). At the start the cranks are vertical; gravity ``g`` along -y. The
+    constraint ``"hold"`` fixes ``crank0`` for assembly: drop it for the free motion, whose
+    benchmark initial condition is a velocity of 1 along +x of point ``B0`` (the tip of
+    ``crank0``, the origin of ``coupler0``)::
+
+        m = models.n_four_bar(2)
+        m.solve(0.0)
+        free = m.free(drop=["hold"])
+        sol = free.simulate(np.linspace(0, 10, 401), initial_condition={"crank0.th_d": -1.0})
+
+    When the links are horizontal (twice per turn) all of them are collinear and the
+    Jacobian loses ``N`` ranks: the mobility jumps from 1 to ``N + 1`` for an instant.
+    """
+    from .loads import Gravity
+
+    m = Model2D()
+    L = float(length)
+    link = {"mass": 1.0, "centroid": (L / 2, 0), "inertia": L * L / 12}
+    cranks = []
+    for k in range(n_loops + 1):
+        c = m.add_body(f"crank{k}", points={"tip": (L, 0)}, guess=((k * L, 0.0), np.pi / 2),
+                       **link)
+        m.add(Revolute2(m.ground.point((k * L, 0.0)), c.point(0)), name=f"A{k}")
+        cranks.append(c)
+    for k in range(n_loops):
+        b = m.add_body(f"coupler{k}", points={"end": (L, 0)}, guess=((k * L, L), 0.0), **link)
+        m.add(Revolute2(cranks[k].point("tip"), b.point(0)), name=f"B{k}")
+        m.add(Revolute2(b.point("end"), cranks[k + 1].point("tip")), name=f"C{k}")
+    m.add(RotationLock1(cranks[0], np.pi / 2), name="hold")
+    m.add_load(Gravity((0, -1), g * L))
+    return m
+
+
 # -- spatial ---------------------------------------------------------------------------------
 
 

@@ -48,6 +48,9 @@ from ..solvers._integrators import (
     integration_options,
     output_times,
 )
+from ..solvers._linalg import Scaling
+from ..solvers._position import describe_singular
+from ..solvers._rank import InZone, project_regularized, zone_guard
 
 KINDS = ("static", "kinematic", "dynamic")
 
@@ -76,6 +79,22 @@ def _reject_unknown(what: str, unknown: dict, known) -> None:
                          f"{', '.join(known)}")
 
 
+def _flag(box, value):
+    """``value``, noting in ``box[0]`` that it is not ``None``."""
+    if value is not None:
+        box[0] = True
+    return value
+
+
+def _check_independent(system, t, q, p, scaling) -> None:
+    """Dependent kept constraints at the start raise :class:`SingularJacobianError` naming
+    them (the integration tolerates only singular instants on the way, not a redundancy)."""
+    if system.m:
+        J = system.jacobian(t, q, p)
+        if scaling.dependent_rows(J)[1]:
+            raise describe_singular(system, J, t, q, "free motion", scaling)
+
+
 class FreeSystem:
     """A model with constraints dropped. Attributes: ``model``, ``dropped`` (constraints),
     ``system`` (the compiled System of the kept equations), ``kind``, ``linear`` (whether the
@@ -94,20 +113,25 @@ class FreeSystem:
         if self.system.n == 0:
             raise ModelError("free(): the model has no moving bodies (or variables); add bodies "
                              "before freeing constraints")
-        if self.system.m > self.system.n:
-            raise ModelError(f"free system is still overconstrained ({self.system.m} equations,"
-                             f" {self.system.n} coordinates)")
+        self._full, self._redundancy = self.system, None
         if solution == "static" and not model.load_list:
             raise ModelError(
                 "free(solution='static'): the model has no loads, so every configuration the "
                 "kept constraints allow is an equilibrium; add the loads (m.add_load) that "
                 "determine it")
-        self.dof = self.system.n - self.system.m
         self._eq = self._eqv = None
         # parameter values given here: {index in layout.p_symbols: value}, kept for every call
         self._p_given: dict[int, float] = {}
         self._q0, self._qd0 = self._state_from(
             initial_guess if initial_guess is not None else model.last_solution)
+        # redundant but consistent kept constraints (Adams): the independent equations at
+        # the start configuration are solved, the others' reactions shared (minimum norm)
+        self.system, self._redundancy, _ = model._independent(self._full, 0.0, self._q0,
+                                                               "free motion")
+        if self.system.m > self.system.n:
+            raise ModelError(f"free system is still overconstrained ({self.system.m} equations,"
+                             f" {self.system.n} coordinates)")
+        self.dof = self.system.n - self.system.m
         self._held0: dict = {"q": set(), "qd": set()}
         if initial_condition is not None:
             self._q0, self._qd0, self._p_given = self._apply_condition(
@@ -261,10 +285,24 @@ class FreeSystem:
 
     def _result(self, t, Q, QD, QDD, LAM, p, its, extra=None, scalar=False):
         N = len(t)
+        system = self.system
+        if self._redundancy is not None:
+            from ..solvers._rank import constraint_names as _constraint_names
+            from ..solvers._rank import expand_multipliers
+
+            system, d = self._full, self._redundancy
+            extra = dict(extra or {}, redundant=_constraint_names(d.owners),
+                         indeterminate=_constraint_names(d.involved))
+            if LAM is not None:
+                LAM = np.asarray(LAM).reshape(N, -1)
+                LAM = np.array([expand_multipliers(
+                    J := system.jacobian(tk, qk, p), self.system.jacobian(tk, qk, p), lk,
+                    Scaling.of(system, qk, J)) for tk, qk, lk in zip(t, np.asarray(Q).reshape(
+                        N, -1), LAM)])
         sol = Solution(t=np.asarray(t, dtype=float), q=np.asarray(Q).reshape(N, -1),
                        qd=None if QD is None else np.asarray(QD).reshape(N, -1),
                        qdd=None if QDD is None else np.asarray(QDD).reshape(N, -1),
-                       p=p, system=self.system, model=self.model,
+                       p=p, system=system, model=self.model,
                        iterations=np.asarray(its, dtype=int).reshape(N), scalar=scalar,
                        lam=None if LAM is None else np.asarray(LAM).reshape(N, -1),
                        mode=f"free-{self.kind}", extra=extra or {})
@@ -375,22 +413,47 @@ class FreeSystem:
         q0, qd0 = self._project_start(t0, q0, qd0, p, held, sc)
         lam_box = [None]
 
+        # loads linear in the multipliers: singular instants are passed (solvers/_rank.py)
+        robust = s.m > 0 and not (s.dynamics.depends_on_lambda or s.dynamics.depends_on_qdd)
+        zone = [False]                 # a derivative of this step came from the zone
+        guard = None
+        if robust:
+            inner = zone_guard(s, sc, sc.rows(s.jacobian(t0, q0, p)))
+
+            def guard(K, b, x):
+                return _flag(zone, inner(K, b, x))
+
+        def accel(tt, y, lam_guess=None):
+            qdd, lam, _ = free_acceleration(s, tt, y[:n], y[n:], p, lam_guess, guard=guard, **kw)
+            return y[n:], qdd, lam
+
         def rhs(tt, y):
-            qdd, lam, _ = free_acceleration(s, tt, y[:n], y[n:], p, lam_box[0], **kw)
+            qd, qdd, lam = accel(tt, y, lam_box[0])
             if s.dynamics.depends_on_lambda:
                 lam_box[0] = lam
-            return np.concatenate((y[n:], qdd))
+            return np.concatenate((qd, qdd))
+
+        _check_independent(s, t0, q0, p, sc)
 
         def proj(tt, y):
-            qq, vv = project(s, tt, y[:n], y[n:], p, scaling=sc)
+            # rank-tolerant: the motion passes through singular instants (links collinear)
+            try:
+                qq, vv = project(s, tt, y[:n], y[n:], p, scaling=sc, rank_tolerant=robust)
+            except InZone:
+                qq, vv = project_regularized(s, tt, y[:n], y[n:], p, sc)
             return np.concatenate((qq, vv))
 
+        def kinked():
+            out, zone[0] = zone[0], False
+            return out
+
         times, Y, res, m = integrate(rhs, proj, t, np.concatenate((q0, qd0)), opt,
-                                     scale=np.concatenate((sc.columns, sc.columns)))
+                                     scale=np.concatenate((sc.columns, sc.columns)),
+                                     kinked=kinked if robust else None)
         QDD = np.empty((len(times), n))
         LAM = np.empty((len(times), s.m))
         for k, (tk, yk) in enumerate(zip(times, Y)):
-            QDD[k], LAM[k], _ = free_acceleration(s, tk, yk[:n], yk[n:], p, **kw)
+            _, QDD[k], LAM[k] = accel(tk, yk)
         extra = {"evaluations": res.evaluations, "steps": res.steps, "rejected": res.rejected,
                  "method": m, "length_scale": sc.length}
         if opt.runge_kutta:

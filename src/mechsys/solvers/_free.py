@@ -28,6 +28,7 @@ from scipy.linalg.lapack import dgesv as _dgesv
 from .._errors import ConvergenceError, SingularJacobianError, SingularMassError
 from ._linalg import SPARSE_THRESHOLD, Scaling, Singular, dependent_rows, factor
 from ._position import describe_singular
+from ._rank import ZONE, InZone, kkt_rank_tolerant
 
 
 def _augmented(M, J, D=None):
@@ -43,8 +44,12 @@ def _augmented(M, J, D=None):
     return K
 
 
-def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterations=30):
-    """``(qdd (n,), lambda (m,), iterations)`` of a free system at ``(t, q, qd)``."""
+def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterations=30,
+                      guard=None):
+    """``(qdd (n,), lambda (m,), iterations)`` of a free system at ``(t, q, qd)``.
+    ``guard(K, rhs, x)`` (free motion, linear case): ``None`` to keep the solution ``x`` of
+    the augmented system, or a replacement ``(qdd, lambda)`` near a singular instant
+    (:func:`._rank.zone_guard`)."""
     dyn = system.dynamics
     n, m = system.n, system.m
     if not (dyn.depends_on_lambda or dyn.depends_on_qdd):
@@ -53,7 +58,14 @@ def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterat
         try:
             x = _solve_fast(K, rhs)
         except Singular:
-            raise _singular_free(system, t, q, qd, p) from None
+            # a singular instant (dependent equations, e.g. links collinear): the
+            # acceleration is still determined; solve with the independent combinations
+            y = guard(K, rhs, None) if guard is not None else None
+            return (*y, 0) if y is not None else _rank_tolerant(system, t, q, qd, p, K, rhs)
+        if guard is not None:
+            y = guard(K, rhs, x)
+            if y is not None:
+                return (*y, 0)
         return x[:n], x[n:], 0
     J = system.jacobian(t, q, p)
     g = system.gamma_values(t, q, qd, p)
@@ -79,6 +91,22 @@ def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterat
         f"accelerations did not converge in {max_iterations} iterations (residual {err:.3e}); "
         "try lambda_guess=.",
         time=t)
+
+
+def _rank_tolerant(system, t, q, qd, p, K, rhs):
+    """Free acceleration at a singular ``Phi_q`` (:func:`._rank.kkt_rank_tolerant`), or the
+    error of :func:`_singular_free` when the mass matrix is singular on the free motions."""
+    n = system.n
+    K = K.toarray() if sps.issparse(K) else K
+    J = K[n:, :n]
+    if not (np.all(np.isfinite(K)) and np.all(np.isfinite(rhs))):
+        raise _singular_free(system, t, q, qd, p)
+    sc = Scaling.of(system, q, J)
+    try:
+        qdd, lam, _ = kkt_rank_tolerant(K[:n, :n], J, rhs[:n], rhs[n:], sc.rows(J), sc.columns)
+    except Singular:
+        raise _singular_free(system, t, q, qd, p) from None
+    return qdd, lam, 0
 
 
 _ZERO_LAM: dict = {}
@@ -192,7 +220,8 @@ def scaling_at(system, t, q, p) -> Scaling:
     return Scaling.of(system, q, J)
 
 
-def project_positions(system, t, q, p, tol=1e-12, max_iterations=8, scaling=None):
+def project_positions(system, t, q, p, tol=1e-12, max_iterations=8, scaling=None,
+                      rank_tolerant=False):
     r"""Minimum-norm correction of ``q`` onto ``Phi(q, t) = 0``, iterated, in the unit-free
     coordinates of ``scaling`` (positions in units of the characteristic length ``L``,
     angles in radians; each equation divided by its row scale ``r``)::
@@ -201,7 +230,8 @@ def project_positions(system, t, q, p, tol=1e-12, max_iterations=8, scaling=None
 
     Converged when ``max_i |Phi_i| / r_i <= tol (1 + offset)``: the same relative accuracy
     in any unit of length. A singular ``J^ J^^T`` (dependent constraints, lock-up) raises
-    :class:`SingularJacobianError` naming the constraints."""
+    :class:`SingularJacobianError` naming the constraints, unless ``rank_tolerant`` (free
+    motion through a singular instant: see :func:`_min_norm`)."""
     q = np.array(q, dtype=float)
     if system.m == 0:
         return q
@@ -214,26 +244,34 @@ def project_positions(system, t, q, p, tol=1e-12, max_iterations=8, scaling=None
         Fs = F / r
         if np.abs(Fs).max(initial=0.0) <= tol * (1.0 + scaling.offset):
             break
-        q -= _min_norm(system, J, r, scaling, Fs, t, q)
+        q -= _min_norm(system, J, r, scaling, Fs, t, q, rank_tolerant)
     return q
 
 
-def _min_norm(system, J, r, scaling, b, t, q):
+def _min_norm(system, J, r, scaling, b, t, q, rank_tolerant=False):
     """``D J^T (J^ J^T)^-1 b`` with ``J^ = R^-1 J D``: the smallest correction (in scaled
-    coordinates) that changes the scaled residual by ``b``."""
+    coordinates) that changes the scaled residual by ``b``. ``rank_tolerant``: at or near a
+    singular ``J^`` (reciprocal condition of ``J^ J^T`` below ``ZONE^2``) raise the internal
+    :class:`._rank.InZone` instead, for the caller's regularised projection."""
     Js = scaling.scaled(J, r)
     try:
-        y = factor(Js @ Js.T).solve(b)
+        fac = factor(Js @ Js.T)
+        if rank_tolerant and fac.rcond < ZONE**2:
+            raise InZone
+        y = fac.solve(b)
     except Singular:
+        if rank_tolerant:
+            raise InZone from None
         raise describe_singular(system, J, t, q, "projection onto the constraints",
                                 scaling=scaling) from None
     return scaling.columns * (Js.T @ y)
 
 
-def project(system, t, q, qd, p, tol=1e-12, max_iterations=8, scaling=None):
+def project(system, t, q, qd, p, tol=1e-12, max_iterations=8, scaling=None,
+            rank_tolerant=False):
     """Project ``(q, qd)`` onto the constraints: positions by :func:`project_positions`,
     then the smallest velocity change (scaled as there) with ``J qd = -Phi_t``."""
-    q = project_positions(system, t, q, p, tol, max_iterations, scaling)
+    q = project_positions(system, t, q, p, tol, max_iterations, scaling, rank_tolerant)
     if system.m == 0:
         return q, np.array(qd, dtype=float)
     sparse = system.n > SPARSE_THRESHOLD
@@ -241,7 +279,7 @@ def project(system, t, q, qd, p, tol=1e-12, max_iterations=8, scaling=None):
     if scaling is None:
         scaling = Scaling.of(system, q, J.toarray() if sparse else J)
     r = scaling.rows(J)
-    qd = qd - _min_norm(system, J, r, scaling, (J @ qd - rhs) / r, t, q)
+    qd = qd - _min_norm(system, J, r, scaling, (J @ qd - rhs) / r, t, q, rank_tolerant)
     return q, qd
 
 

@@ -59,9 +59,13 @@ class IntegrationResult:
 
 def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-10,
                  max_step=np.inf, first_step=None, correction=True,
-                 t_eval=None, scale=None) -> IntegrationResult:
+                 t_eval=None, scale=None, kinked=None) -> IntegrationResult:
     """Explicit Runge-Kutta with projection after each accepted step. With ``t_eval``
     the states at those times come from each step's dense output (then projected).
+    ``kinked()`` (optional), asked after each step: whether the derivative had a kink in it
+    (a singular instant of free motion); the output times in such a step are then reached
+    by integrating from the step's start to each of them (the dense output polynomial
+    assumes a smooth derivative).
     ``scale`` (len(y0),): the unit of each component; the absolute tolerance of component
     ``i`` is ``atol * scale[i]``."""
     cls = {"dop853": DOP853, "rk45": RK45}[method]
@@ -83,13 +87,16 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
     rejected = 0
     while solver.status == "running":
         before = solver.nfev
+        t_prev, y_prev = solver.t, solver.y.copy()
         msg = solver.step()
         if solver.status == "failed":
             raise MechError(f"integration failed at t = {solver.t:.6g}: {msg}")
         # every attempt costs n_stages evaluations (FSAL); more than one attempt: rejections
         rejected += max((solver.nfev - before) // solver.n_stages - 1, 0)
+        kink = kinked() if kinked is not None else False
         if te is not None and ie < len(te) and (te[ie] - solver.t) * d <= 0:
-            dense = solver.dense_output()
+            dense = solver.dense_output() if not kink else _restarted(
+                cls, fun, t_prev, y_prev, rtol, atol, max_step)
             while ie < len(te) and (te[ie] - solver.t) * d <= 0:
                 yi = dense(te[ie])
                 ev_t.append(te[ie])
@@ -112,6 +119,20 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
     diag["projections"] = extra
     return IntegrationResult(np.array(ts), np.array(ys), solver.nfev, len(ts) - 1, rejected,
                              "finished", diag)
+
+
+def _restarted(cls, fun, t0, y0, rtol, atol, max_step):
+    """``y(te)`` by a fresh integration from ``(t0, y0)`` that ends at ``te``."""
+    def at(te):
+        if te == t0:
+            return y0.copy()
+        sub = cls(fun, t0, y0.copy(), te, rtol=rtol, atol=atol, max_step=max_step)
+        while sub.status == "running":
+            msg = sub.step()
+            if sub.status == "failed":
+                raise MechError(f"integration failed at t = {sub.t:.6g}: {msg}")
+        return sub.y
+    return at
 
 
 def _adams_weights(times, t_from, h):
@@ -375,7 +396,7 @@ def output_times(t) -> tuple[float, float, np.ndarray | None]:
     return float(tt[0]), float(tt[-1]), tt
 
 
-def integrate(fun, project, t, y0, opt: IntegrationOptions, scale=None):
+def integrate(fun, project, t, y0, opt: IntegrationOptions, scale=None, kinked=None):
     """Integrate ``y' = fun(t, y)`` with checked options ``opt`` (the dispatch shared by free
     and path systems). ``t``: a tuple ``(t0, t1)`` returns every accepted step; an array
     returns those times (RK dense output, or cubic Hermite with ``fun`` at the Adams steps).
@@ -386,7 +407,8 @@ def integrate(fun, project, t, y0, opt: IntegrationOptions, scale=None):
     t0, t1, t_eval = output_times(t)
     if opt.runge_kutta:
         res = integrate_rk(fun, project, t0, t1, y0, opt.method, opt.rtol, opt.atol,
-                           opt.max_step, correction=opt.correction, t_eval=t_eval, scale=scale)
+                           opt.max_step, correction=opt.correction, t_eval=t_eval, scale=scale,
+                           kinked=kinked)
         times, Y = res.diagnostics["t_eval"] if t_eval is not None else (res.t, res.y)
     else:
         res = integrate_adams(fun, project, t0, t1, y0, opt.degree, opt.max_error, opt.method,

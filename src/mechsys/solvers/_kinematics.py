@@ -31,11 +31,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sps
 
 from .._errors import ConvergenceError, SingularJacobianError
 from . import _jit
 from ._linalg import SPARSE_THRESHOLD, Scaling, Singular, rotation_columns
-from ._position import PositionOptions, describe_singular, solve_position
+from ._position import PositionOptions, PositionResult, describe_singular, solve_position
+from ._rank import continue_position, continue_rates
 
 ORDERS = {"location": 0, "velocity": 1, "acceleration": 2}
 
@@ -122,7 +124,8 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
     for k in range(k0, N):
         t = times[k]
         g = q0 if k == 0 else _predict(Q, QD, QDD, rconds, times, k, rot)
-        res = _solve_point(system, t, g, Q[k - 1] if k else None, options, p, sc, rot)
+        res = _solve_point(system, t, g, Q[k - 1] if k else None, options, p, sc, rot,
+                           times[k - 1] if k else None)
         q = res.q
         its[k] = res.iterations
         evals += res.evaluations
@@ -133,10 +136,24 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
                 # the position solve's row scales (from the predictor's Jacobian) serve here too
                 fac = sc.factor(J, res.rows)
             except Singular:
-                err = describe_singular(system, J, t, q, "velocity solve", sc)
-                raise SingularJacobianError(
-                    f"{err} Sweep stopped at point {k} of {N}.", time=t,
-                    dependent=err.dependent, rank=err.rank) from None
+                if k == 0:
+                    err = describe_singular(system, J, t, q, "velocity solve", sc)
+                    raise SingularJacobianError(
+                        f"{err} Sweep stopped at point {k} of {N}.", time=t,
+                        dependent=err.dependent, rank=err.rank) from None
+                # a singular instant on the way (the driver still moves the mechanism): the
+                # rates the equations leave open continue those of the previous points
+                J = np.asarray(J.toarray() if sps.issparse(J) else J)
+                vd, ad = _rates_before(system, t, res.approach, p, sc)
+                if vd is None:
+                    vd, ad = _extrapolate(QD, times, k), _extrapolate(QDD, times, k) \
+                        if order >= 2 else None
+                QD[k] = continue_rates(J, rhs, vd, sc, res.rows)
+                rconds[k] = 0.0
+                if order >= 2:
+                    QDD[k] = continue_rates(J, system.gamma_values(t, q, QD[k], p), ad, sc,
+                                            res.rows)
+                continue
             qd = fac.solve(rhs)
             QD[k] = qd
             rconds[k] = fac.rcond
@@ -185,16 +202,27 @@ def _predict(Q, QD, QDD, rconds, times, k: int, rot) -> np.ndarray:
     return g
 
 
-def _solve_point(system, t, g, q_prev, options, p, sc, rot):
+def _solve_point(system, t, g, q_prev, options, p, sc, rot, t_prev=None):
     """Newton from the prediction ``g``; again from ``q_prev`` when that fails or when the
-    result jumps (a rotational coordinate further than ``ROTATION_JUMP`` from ``g``)."""
+    result jumps (a rotational coordinate further than ``ROTATION_JUMP`` from ``g``). At a
+    singular instant after the first point, minimum-norm Gauss-Newton from ``g``
+    (:func:`._rank.continue_position`) continues the branch."""
     try:
         res = solve_position(system, t, g, options, p, sc)
         if q_prev is None or _jump(res.q, g, rot) <= ROTATION_JUMP:
             return res
-    except (ConvergenceError, SingularJacobianError):
+    except (ConvergenceError, SingularJacobianError) as exc:
         if q_prev is None or np.array_equal(g, q_prev):
             raise
+        if isinstance(exc, SingularJacobianError):
+            opt = options or PositionOptions()
+            g, near = _approach(system, t, t_prev, q_prev, options, p, sc, g)
+            got = continue_position(system, t, g, p, sc, opt.ftol, opt.max_iterations)
+            if got is not None and _jump(got[0], g, rot) <= ROTATION_JUMP:
+                q, its, evals, norm = got
+                F, J = system.residual_and_jacobian(t, q, p)
+                return PositionResult(q, True, 0, "converged at a singular instant", its, evals,
+                                      norm, (norm,), sc.rows(J), near)
     # the predictor can throw the guess far away where velocities are huge (near a
     # toggle): start again from the previous position
     res = solve_position(system, t, q_prev, options, p, sc)
@@ -209,6 +237,58 @@ def _solve_point(system, t, g, q_prev, options, p, sc, rot):
             time=t, residuals=system.residual(t, res.q, p),
             history=res.history)
     return res
+
+
+#: the approach to a singular instant stops this fraction of the last step before it
+APPROACH = 2.0**-14
+
+
+def _approach(system, t, t_prev, q_prev, options, p, sc, g):
+    """A prediction of the position at the singular instant ``t`` good enough to pick the
+    continuous branch there (where the solutions of ``Phi = 0`` cross): positions at
+    ``t - dt / 2, t - dt / 4, ... , t - APPROACH dt`` (regular instants, Newton from the
+    secant of the previous two), then their secant at ``t``. Its error is of the order of
+    ``APPROACH^2`` of the step's, where the step's own prediction ``g`` (returned when an
+    intermediate solve fails) has an error of the order of the step's curvature. Returns
+    ``(prediction, (t_a, q_a))`` with the last regular instant solved (``None`` on failure).
+    """
+    ts, qs = [t_prev], [np.asarray(q_prev, dtype=float)]
+    frac = 0.5
+    try:
+        while frac >= APPROACH:
+            tk = t - frac * (t - t_prev)
+            guess = qs[-1] if len(ts) < 2 else qs[-1] + (qs[-1] - qs[-2]) * (
+                (tk - ts[-1]) / (ts[-1] - ts[-2]))
+            ts.append(tk)
+            qs.append(solve_position(system, tk, guess, options, p, sc).q)
+            frac *= 0.5
+    except (ConvergenceError, SingularJacobianError):
+        return g, None
+    return qs[-1] + (qs[-1] - qs[-2]) * ((t - ts[-1]) / (ts[-1] - ts[-2])), (ts[-1], qs[-1])
+
+
+def _rates_before(system, t, near, p, sc):
+    """Predicted ``(qd, qdd)`` at the singular instant ``t`` from the regular instant
+    ``near = (t_a, q_a)`` just before it: ``qd_a + qdd_a (t - t_a)`` and ``qdd_a`` (the
+    acceleration's own error is of order ``t - t_a``). ``(None, None)`` without it."""
+    if near is None:
+        return None, None
+    ta, qa = near
+    try:
+        va = solve_velocity(system, ta, qa, p, sc)
+        aa = solve_acceleration(system, ta, qa, va, p, scaling=sc)
+    except SingularJacobianError:
+        return None, None
+    return va + aa * (t - ta), aa
+
+
+def _extrapolate(X, times, k: int) -> np.ndarray:
+    """Linear extrapolation of the rows ``X[k-2], X[k-1]`` to ``times[k]`` (``X[k-1]`` when
+    there is one previous point, or a step of zero length)."""
+    if k < 2 or times[k - 1] == times[k - 2]:
+        return X[k - 1].copy()
+    w = (times[k] - times[k - 1]) / (times[k - 1] - times[k - 2])
+    return X[k - 1] + w * (X[k - 1] - X[k - 2])
 
 
 def _jump(q, ref, rot) -> float:

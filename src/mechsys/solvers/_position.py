@@ -68,6 +68,9 @@ class PositionResult:
     history: tuple
     #: row scales r (m,) of the unit-free equations used by this solve
     rows: np.ndarray | None = None
+    #: at a singular instant of a sweep: ``(t, q)`` of the regular instant just before it
+    #: from which the position was approached (see ``solvers._kinematics``)
+    approach: tuple | None = None
 
 
 def _label(owner) -> str:
