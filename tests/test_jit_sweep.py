@@ -183,9 +183,10 @@ def test_when_it_does_not_run(monkeypatch):
     monkeypatch.setenv("MECHSYS_JIT", "1")
     assert _jit.plan(s, 5, 2) is not None
     monkeypatch.delenv("MECHSYS_JIT")
-    monkeypatch.setitem(_jit._state, "loaded", False)
     assert _jit.plan(s, _jit.AUTO_POINTS - 1, 2) is None      # auto: too short to pay the load
     assert _jit.plan(s, _jit.AUTO_POINTS, 2) is not None
+    models.slider_crank().solve(np.linspace(0, 1, _jit.AUTO_POINTS))   # loaded now ...
+    assert _jit.plan(s, _jit.AUTO_POINTS - 1, 2) is None      # ... and still the same choice
     # the SymPy backend has no C entry points
     monkeypatch.setenv("MECHSYS_JIT", "1")
     monkeypatch.setenv("MECHSYS_BACKEND", "sympy")

@@ -16,9 +16,9 @@ it stops and returns that point's index; the Python loop takes over from there w
 whole logic (retries, toggle handling, diagnostics). Results never depend on which path ran.
 
 When it runs (``MECHSYS_JIT``): ``0`` never, ``1`` whenever possible, unset (``auto``) when
-the sweep has at least :data:`AUTO_POINTS` points or the compiled loop has already run in
-this process: loading Numba and the cached machine code costs about 0.7 s CPU once per
-process, which a short sweep would not recover. Possible means: Numba installed (the
+the sweep has at least :data:`AUTO_POINTS` points: loading Numba and the cached machine code
+costs about 0.7 s CPU once per process, which a short sweep would not recover. (The choice
+depends on the sweep alone, never on what ran before in the process.) Possible means: Numba installed (the
 ``fast`` extra), the SymEngine LLVM backend (two-stage ``Piecewise`` kernels of spline
 profiles included), as many equations as coordinates, and a dense system (``n <= SPARSE_THRESHOLD``).
 
@@ -35,8 +35,7 @@ import numpy as np
 
 from ._linalg import RCOND_MIN, SPARSE_THRESHOLD
 
-#: ``auto``: the compiled loop is used for sweeps of at least this many points (or once it
-#: has been loaded in this process)
+#: ``auto``: the compiled loop is used for sweeps of at least this many points
 AUTO_POINTS = 1000
 
 _state: dict = {"loaded": False, "loop": None, "lapack": None, "failed": None}
@@ -76,7 +75,7 @@ def plan(system, points: int, order: int):
     m = mode()
     if m == "off" or system.n == 0 or system.m != system.n or system.n > SPARSE_THRESHOLD:
         return None
-    if m == "auto" and not _state["loaded"] and points < AUTO_POINTS:
+    if m == "auto" and points < AUTO_POINTS:
         return None
     if not available():
         return None
