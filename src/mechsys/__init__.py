@@ -26,7 +26,15 @@ from ._errors import (
     UnknownPointError,
 )
 from ._symbols import T
-from .analyses import FindSwitchTime, FindTime, FreeSystem, PathSystem, find_switch_time, find_time
+from .analyses import (
+    FindSwitchTime,
+    FindTime,
+    FreeSystem,
+    PathSystem,
+    VibrationModes,
+    find_switch_time,
+    find_time,
+)
 from .constraints import (
     REGISTRY,
     CamToCam1,
@@ -275,6 +283,7 @@ __all__ = [
     "UnknownPointError",
     "Variable",
     "Vector",
+    "VibrationModes",
     "VirtualRotation",
     "XYZToCylindrical",
     "XYZToSpherical",

@@ -797,6 +797,15 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
 
         return FreeSystem(self, drop, solution, initial_guess, initial_condition)
 
+    def vibration(self, at=None, drop=(), t=None, tolerance: float = 1e-6):
+        """Linearised vibration about an equilibrium or a steady motion: natural frequencies
+        [rad/s and Hz], damping ratios and mode shapes (a :class:`VibrationModes`). ``at``: the
+        reference state (a Solution/State, a mapping or a coordinate array); ``drop``:
+        constraints removed first, as in :meth:`free`. See ``docs/vibration.md``."""
+        from .analyses._vibration import vibration
+
+        return vibration(self, at=at, drop=drop, t=t, tolerance=tolerance)
+
     def path(self, replace, initial_condition=None):
         """Replace dummy constraints by velocity constraints (Mech's ``SetPath``):
         ``replace={dummy: velocity_constraint}``. Returns a :class:`PathSystem` whose

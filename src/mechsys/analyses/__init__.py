@@ -7,5 +7,7 @@
 from ._free import FreeSystem
 from ._multistage import FindSwitchTime, FindTime, find_switch_time, find_time
 from ._path import PathSystem
+from ._vibration import VibrationModes
 
-__all__ = ["FindSwitchTime", "FindTime", "FreeSystem", "PathSystem", "find_switch_time", "find_time"]
+__all__ = ["FindSwitchTime", "FindTime", "FreeSystem", "PathSystem", "VibrationModes", "find_switch_time",
+           "find_time"]
