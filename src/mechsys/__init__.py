@@ -151,6 +151,7 @@ from .geometry._rotations import (
 from .loads._friction import JointFriction
 from .loads._gyro import GyroFilter, GyroMoment, gyro_filter
 from .loads._loads import Damper, Force, Gravity, Load, LoadBase, Moment, Spring
+from .loads._torsion import TorsionDamper, TorsionSpring
 from .model import DOF, Model, Model2D, Model3D
 from .results._outputs import All, Rest
 from .results._solution import Solution, State
@@ -268,6 +269,8 @@ __all__ = [
     "State",
     "T",
     "TimeSwitch",
+    "TorsionDamper",
+    "TorsionSpring",
     "Translate2",
     "Translate5",
     "TwoGears1",

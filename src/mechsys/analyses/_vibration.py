@@ -338,11 +338,9 @@ def vibration(model, at=None, drop=(), t=None, tolerance: float = 1e-6) -> Vibra
     trans = _frame_columns(system)
     D = np.where(trans, sc.length, 1.0)
     J = system.jacobian(t0, q, p) if system.m else np.zeros((0, n))
-    JB = (J @ B) * D
-    if JB.shape[0]:
-        r = np.abs(JB).max(axis=1)
-        r[~(r > 0)] = 1.0
-        JB = JB / r[:, None]
+    # rows scaled as the solvers scale Phi_q (a normalisation row of Phi_q B is zero only
+    # up to rounding: scaling it by its own size would turn the rounding into a constraint)
+    JB = (J @ B) * D / (sc.rows(J)[:, None] if J.shape[0] else 1.0)
     _, sv, Vt = sla.svd(JB) if JB.size else (None, np.zeros(0), np.eye(B.shape[1]))
     rank = int(np.sum(sv > 1e-10 * max(sv.max(initial=0.0), 1.0)))
     N = D[:, None] * Vt[rank:].T

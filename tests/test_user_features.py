@@ -1,0 +1,100 @@
+"""Features users looked for at once (issue 17): torsion springs and dampers, momentum
+outputs, linkage metrics, tabulated drivers, Model.copy / remove_body, units."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import mechsys as ms
+
+# -- torsion springs and dampers ----------------------------------------------------------
+
+
+def torsion_pendulum(k=30.0, phi0=0.4, mass=2.0, L=0.7, J=0.05, g=9.81):
+    m = ms.Model2D()
+    arm = m.add_body("arm", mass=mass, centroid=(L, 0), inertia=J, guess=((0, 0), 0.0))
+    m.add(ms.Revolute2(m.ground.point((0, 0)), arm.point(0)))
+    m.add_load(ms.TorsionSpring(m.ground, arm, k, free_angle=phi0))
+    if g:
+        m.add_load(ms.Gravity((0, -1), g))
+    return m
+
+
+def test_torsion_spring_closes_the_energy_balance_of_a_free_pendulum():
+    m = torsion_pendulum()
+    sol = m.free().simulate(np.linspace(0, 2.0, 41), initial_condition={"arm.th_d": 3.0},
+                            rtol=1e-11, atol=1e-12)
+    E = sol.body_energy() + sol.potential_energy()
+    # the torsion spring's energy is part of potential_energy: without it E is not constant
+    spring = m.load_list[0]
+    Vs = sol.eval(spring.potential(m))
+    th = sol.coordinate("arm.th")
+    assert Vs == pytest.approx(30.0 * (th - 0.4) ** 2 / 2, rel=1e-12)
+    assert np.ptp(E) < 1e-8 * np.abs(E).max()
+    assert np.ptp(E - Vs) > 1.0
+
+
+def test_torsion_spring_static_equilibrium_closed_form():
+    # 2D: a constant moment M against the spring: theta = phi0 + M / k
+    m = torsion_pendulum(g=0)
+    m.add_load(ms.Moment("arm", 6.0))
+    eq = m.free(solution="static").solve()
+    assert float(eq.coordinate("arm.th")) == pytest.approx(0.4 + 6.0 / 30.0, rel=1e-12)
+    # with gravity: k (theta - phi0) = -m g L cos(theta), solved independently
+    from scipy.optimize import brentq
+
+    m = torsion_pendulum()
+    eq = m.free(solution="static").solve()
+    th = brentq(lambda x: 30.0 * (x - 0.4) + 2.0 * 9.81 * 0.7 * np.cos(x), -np.pi / 2, 0.4)
+    assert float(eq.coordinate("arm.th")) == pytest.approx(th, rel=1e-11)
+
+
+def test_torsion_spring_3d_about_a_revolute_axis():
+    k, phi0, M = 12.0, 0.2, 3.0
+    m = ms.Model3D()
+    w = m.add_body("wheel", mass=1.0, inertia=(0.1, 0.1, 0.2, 0, 0, 0))
+    ga = m.ground.axis((0, 0, 0), (0, 0, 1), (1, 0, 0))
+    wa = w.axis((0, 0, 0), (0, 0, 1), (1, 0, 0))
+    m.add(ms.Revolute5(wa, ga))
+    m.add_load(ms.TorsionSpring(ga, wa, k, free_angle=phi0))
+    m.add_load(ms.Moment(w, (0, 0, 1), M))
+    eq = m.free(solution="static").solve()
+    e = eq.q[0, 3:7]
+    angle = 2 * np.arctan2(e[3], e[0])
+    assert angle == pytest.approx(phi0 + M / k, rel=1e-10)
+    # the same spring as a torsional oscillator: w = sqrt(k / Jz)
+    m.remove_load(m.load_list[1])
+    modes = m.vibration(at={"wheel.e0": np.cos(phi0 / 2), "wheel.e3": np.sin(phi0 / 2)})
+    assert modes.omega == pytest.approx([np.sqrt(k / 0.2)], rel=1e-9)
+
+
+def test_torsion_damper_damping_ratio():
+    k, c, J = 40.0, 0.6, 0.08
+    m = ms.Model2D()
+    disk = m.add_body("disk", inertia=J, mass=1.0)
+    m.add(ms.Revolute2(m.ground.point((0, 0)), disk.point(0)))
+    m.add_load(ms.TorsionSpring(m.ground, disk, k))
+    m.add_load(ms.TorsionDamper(m.ground, disk, c))
+    modes = m.vibration(at=m.guess())
+    assert modes.omega[0] == pytest.approx(np.sqrt(k / J), rel=1e-9)
+    assert modes.damping_ratio[0] == pytest.approx(c / (2 * np.sqrt(k * J)), rel=1e-9)
+    # the damper's torque on the disk: -c theta_dot
+    damper = m.load_list[1]
+    Q = damper.contributions(m)
+    assert len(Q) == 1 and Q[0].magnitude.equals(-c * m.velocity_symbols()[disk.q[2]])
+
+
+def test_torsion_errors():
+    m = ms.Model2D()
+    a = m.add_body("a")
+    with pytest.raises(ms.ModelError, match="two bodies"):
+        ms.TorsionSpring(a, a.axis((0, 0), (1, 0)), 1.0)
+    with pytest.raises(ms.ModelError, match="both ends"):
+        m.add_load(ms.TorsionSpring(a, "a", 1.0))
+    with pytest.raises(ms.ModelError, match="stiffness"):
+        ms.TorsionSpring(a, m.ground, "x + ")
+    m3 = ms.Model3D()
+    b = m3.add_body("b")
+    with pytest.raises(ms.ModelError, match="in 3D give two axes"):
+        m3.add_load(ms.TorsionSpring(m3.ground, b, 1.0))
