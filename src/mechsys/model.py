@@ -28,6 +28,7 @@ from .geometry._bodies import Body
 from .geometry._points import Axis, Point, Vector, as_point, as_vector
 from .geometry._space import PLANAR, SPATIAL, Space
 from .results._load_outputs import LoadOutputs, lambda_guess_vector
+from .results._momentum import MomentumOutputs
 from .results._outputs import OutputFunctions, VelocityViews
 from .solvers import ORDERS, PositionOptions, sweep
 from .solvers._linalg import Scaling
@@ -76,7 +77,7 @@ class DOF(int):
     __str__ = __repr__
 
 
-class Model(OutputFunctions, LoadOutputs, VelocityViews):
+class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs):
     """An editable mechanism model. Use :class:`Model2D` or :class:`Model3D`."""
 
     space: Space
