@@ -151,3 +151,52 @@ def test_momentum_2d_pendulum_and_symbolic_forms():
     mm.add_body("ghost")
     with pytest.raises(ms.ModelError, match="no mass"):
         mm.centre_of_mass()
+
+
+# -- linkage metrics ----------------------------------------------------------------------
+
+
+def test_four_bar_transmission_angle_and_mechanical_advantage():
+    from mechsys import models
+
+    a, b, c, d = 1.0, 4.0, 3.0, 4.0
+    m = models.four_bar(ground=d, crank=a, coupler=b, rocker=c)
+    cr, ro = m.body("crank"), m.body("rocker")
+    sol = m.solve(np.linspace(0, 2 * np.pi, 25))
+    th2 = sol.coordinate("crank.th")
+    th4 = sol.coordinate("rocker.th")
+    B, C = sol.location(cr.point("tip")), sol.location(ro.point("tip"))
+    th3 = np.arctan2(C[:, 1] - B[:, 1], C[:, 0] - B[:, 0])
+    mu = sol.transmission_angle(ms.Vector(ro.point("tip"), cr.point("tip")),
+                                ms.Vector(ro.point("tip"), m.ground.point((d, 0))))
+    cos_mu = (b**2 + c**2 - a**2 - d**2 + 2 * a * d * np.cos(th2)) / (2 * b * c)
+    assert mu == pytest.approx(np.arccos(cos_mu), rel=1e-10)
+    # torque ratio T_rocker / T_crank = w2 / w4 = c sin(th4 - th3) / (a sin(th2 - th3))
+    ma = sol.mechanical_advantage(cr, ro)
+    assert ma == pytest.approx(c * np.sin(th4 - th3) / (a * np.sin(th2 - th3)), rel=1e-9)
+
+
+def test_slider_crank_transmission_angle_and_mechanical_advantage():
+    from mechsys import models
+
+    r, L = 2.0, 6.0
+    m = models.slider_crank(crank=r, rod=L)
+    cr, rod, piston = m.body("crank"), m.body("rod"), m.body("piston")
+    t = np.linspace(0.01, 0.49, 13)          # away from the dead centres
+    sol = m.solve(t)
+    th = sol.coordinate("crank.th")
+    mu = sol.transmission_angle(rod.vector((1, 0)), piston.vector((0, 1)))
+    phi = np.arcsin(r * np.sin(th) / L)       # rod angle to the path
+    # the normal's sense is arbitrary: mu = 90 deg +- phi, the deviation from 90 deg is |phi|
+    assert np.abs(np.pi / 2 - mu) == pytest.approx(np.abs(phi), rel=1e-10)
+    # force on the piston per crank torque: w / v_piston (closed form of the velocity)
+    x = m.location(piston.point(0))[0]
+    ma = sol.mechanical_advantage(cr, x)
+    v_over_w = -r * np.sin(th) * (1 + r * np.cos(th) / np.sqrt(L**2 - r**2 * np.sin(th) ** 2))
+    assert ma == pytest.approx(1 / v_over_w, rel=1e-9)
+    with pytest.raises(ms.ModelError, match="ground does not move"):
+        sol.mechanical_advantage(m.ground, cr)
+    with pytest.raises(ms.ModelError, match="no body named"):
+        sol.mechanical_advantage("no such", cr)
+    with pytest.raises(ms.ModelError, match="scalar expression"):
+        sol.mechanical_advantage(cr, m.location(piston.point(0)))

@@ -27,6 +27,7 @@ from .constraints._switches import StageSwitch
 from .geometry._bodies import Body
 from .geometry._points import Axis, Point, Vector, as_point, as_vector
 from .geometry._space import PLANAR, SPATIAL, Space
+from .results._linkage import LinkageOutputs
 from .results._load_outputs import LoadOutputs, lambda_guess_vector
 from .results._momentum import MomentumOutputs
 from .results._outputs import OutputFunctions, VelocityViews
@@ -77,7 +78,7 @@ class DOF(int):
     __str__ = __repr__
 
 
-class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs):
+class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, LinkageOutputs):
     """An editable mechanism model. Use :class:`Model2D` or :class:`Model3D`."""
 
     space: Space
