@@ -200,3 +200,48 @@ def test_slider_crank_transmission_angle_and_mechanical_advantage():
         sol.mechanical_advantage("no such", cr)
     with pytest.raises(ms.ModelError, match="scalar expression"):
         sol.mechanical_advantage(cr, m.location(piston.point(0)))
+
+
+# -- tabulated drivers --------------------------------------------------------------------
+
+
+def test_tabulated_driver_reproduces_the_table_with_consistent_derivatives():
+    t_tab = np.array([0.0, 0.3, 0.7, 1.0, 1.6, 2.0])
+    x_tab = np.array([1.0, 1.4, 2.5, 2.6, 2.0, 2.2])
+    m = ms.Model2D()
+    s = m.add_body("slider", guess=((1.0, 0), 0))
+    m.add(ms.Translate2(m.ground.axis((0, 0), (1, 0)), s.axis((0, 0), (1, 0))))
+    m.add(ms.RelativeX1(s.point(0), ms.tabulated(t_tab, x_tab)), name="measured")
+    # at the knots the slider is where the table says
+    sol = m.solve(t_tab)
+    assert sol.coordinate("slider.x") == pytest.approx(x_tab, rel=1e-12, abs=1e-12)
+    # between them its velocity and acceleration are the spline's analytic derivatives
+    spline = ms.SplineFit(x_tab, knots=t_tab)
+    t = np.linspace(0.05, 1.95, 23)
+    sol = m.solve(t)
+    assert sol.coordinate("slider.x") == pytest.approx(spline(t), rel=1e-12)
+    assert sol.coordinate("slider.x", 1) == pytest.approx(spline.derivative(t, 1), rel=1e-10,
+                                                          abs=1e-12)
+    assert sol.coordinate("slider.x", 2) == pytest.approx(spline.derivative(t, 2), rel=1e-10,
+                                                          abs=1e-12)
+    # and consistent with each other: finite differences of the solved positions
+    h = 1e-5
+    tc = np.array([0.5, 1.3])
+    qp, qm = m.solve(tc + h).coordinate("slider.x"), m.solve(tc - h).coordinate("slider.x")
+    assert (qp - qm) / (2 * h) == pytest.approx(m.solve(tc).coordinate("slider.x", 1), rel=1e-7)
+
+
+def test_tabulated_clamped_ends_and_errors():
+    t_tab, y_tab = [0, 1, 2, 3], [0.0, 0.5, 0.4, 1.0]
+    expr = ms.tabulated(t_tab, y_tab, end_conditions=(0.2, -0.1))
+    import sympy as sp
+
+    d = sp.diff(expr, ms.T)
+    assert float(d.subs(ms.T, 0)) == pytest.approx(0.2, rel=1e-12)
+    assert float(d.subs(ms.T, 3)) == pytest.approx(-0.1, rel=1e-12)
+    with pytest.raises(ms.ModelError, match="equal length"):
+        ms.tabulated([0, 1, 2], [1, 2])
+    with pytest.raises(ms.ModelError, match="strictly increasing"):
+        ms.tabulated([0, 2, 1], [1, 2, 3])
+    with pytest.raises(ms.ModelError, match="end_conditions"):
+        ms.tabulated([0, 1, 2], [1, 2, 3], end_conditions="sticky")

@@ -148,6 +148,7 @@ from .geometry._rotations import (
     xyz_to_cylindrical,
     xyz_to_spherical,
 )
+from .geometry._tabulated import tabulated
 from .loads._friction import JointFriction
 from .loads._gyro import GyroFilter, GyroMoment, gyro_filter
 from .loads._loads import Damper, Force, Gravity, Load, LoadBase, Moment, Spring
@@ -312,6 +313,7 @@ __all__ = [
     "rotation",
     "rotation_matrix",
     "spherical_to_xyz",
+    "tabulated",
     "unit",
     "virtual_rotation",
     "xyz_to_cylindrical",
