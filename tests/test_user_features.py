@@ -245,3 +245,72 @@ def test_tabulated_clamped_ends_and_errors():
         ms.tabulated([0, 2, 1], [1, 2, 3])
     with pytest.raises(ms.ModelError, match="end_conditions"):
         ms.tabulated([0, 1, 2], [1, 2, 3], end_conditions="sticky")
+
+
+# -- Model.copy and remove_body --------------------------------------------------------------
+
+
+def test_model_copy_is_independent_and_solves_identically():
+    from mechsys import models
+
+    m = models.slider_crank_dynamic(piston_force=50.0)
+    m.set_guess({"rod.th": -0.05})
+    ref = m.solve(np.linspace(0, 0.5, 6), solution="dynamic")
+    c = m.copy()
+    assert c is not m and c.bodies[1] is not m.bodies[1]
+    assert all(b.model is c for b in c.bodies)
+    assert all(k.model is c for k in c.constraints) and all(ld.model is c for ld in c.load_list)
+    sol = c.solve(np.linspace(0, 0.5, 6), solution="dynamic")
+    assert sol.q == pytest.approx(ref.q, rel=1e-13, abs=1e-13)
+    assert sol.lam == pytest.approx(ref.lam, rel=1e-12, abs=1e-12)
+    # edits of the copy leave the original alone
+    c.set_mass_properties("rod", mass=10.0)
+    c.remove("drive")
+    c.add_body("extra")
+    assert m.body("rod").mass == 2.0 and len(m.constraints) == 5 and len(m.bodies) == 4
+    again = m.solve(np.linspace(0, 0.5, 6), solution="dynamic")
+    assert again.lam == pytest.approx(ref.lam, rel=1e-12, abs=1e-12)
+    # a body handle of the original does not address the copy
+    with pytest.raises(ms.ModelError, match="another model"):
+        c.body(m.body("rod"))
+
+
+def test_model_copy_carries_attached_graphics():
+    from mechsys import draw, models
+    from mechsys.draw._scene import attached
+
+    m = models.slider_crank()
+    m.add_graphics(draw.Bar(m.body("rod"), ("a", "b")))
+    c = m.copy()
+    (bar,) = attached(c)
+    assert bar.body is c.body("rod") and bar.body is not m.body("rod")
+
+
+def test_remove_body_refuses_while_used_then_cascades():
+    from mechsys import models
+
+    m = models.slider_crank()
+    with pytest.raises(ms.ModelError, match=r"used by .*wrist pin.*slider.*cascade=True"):
+        m.remove_body("piston")
+    with pytest.raises(ms.ModelError, match="ground"):
+        m.remove_body(1)
+    removed = m.remove_body("piston", cascade=True)
+    assert removed.model is None
+    assert [c.name for c in m.constraints] == ["crank pin", "crank-rod", "drive"]
+    assert [b.name for b in m.bodies] == ["ground", "crank", "rod"]
+    # numbers and symbols of the others stay; a new body takes a fresh number
+    assert m.body(3).name == "rod" and str(m.body("rod").q[0]) == "x3"
+    with pytest.raises(ms.UnknownBodyError, match="no body number 4"):
+        m.body(4)
+    new = m.add_body("slider2", guess=((8, 0), 0))
+    assert new.number == 5 and str(new.q[0]) == "x5"
+    m.add(ms.Revolute2(m.body("rod").point("b"), new.point(0)))
+    m.add(ms.Translate2(m.ground.axis((0, 0), (1, 0)), new.axis((0, 0), (1, 0))))
+    ref = models.slider_crank().solve(np.linspace(0, 1, 5))
+    sol = m.solve(np.linspace(0, 1, 5))
+    assert sol.location(new.point(0)) == pytest.approx(
+        ref.location(ref.model.body("piston").point(0)), rel=1e-12, abs=1e-12)
+    # a load on a removed body goes with it
+    m2 = models.slider_crank_dynamic(piston_force=5.0)
+    m2.remove_body("piston", cascade=True)
+    assert [ld.name for ld in m2.load_list] == ["load1"]

@@ -120,7 +120,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
             raise ModelError(f"body name must be a non-empty string, got {name!r}")
         if any(b.name == name for b in self._bodies):
             raise ModelError(f"a body named {name!r} already exists; body names must be unique")
-        number = len(self._bodies) + 1
+        # numbers are never reused: a removed body's successors keep theirs (and their symbols)
+        number = max(max(b.number for b in self._bodies), getattr(self, "_last_number", 1)) + 1
         taken = {s.name for s in self._params} | {v.symbol.name for v in self._variables}
         for c in self.space.coordinate_names:
             for sym in (f"{c}{number}", f"{c}{number}_d", f"{c}{number}_dd"):
@@ -131,8 +132,60 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
                  centroid=centroid, inertia=inertia)
         b.model = self
         self._bodies.append(b)
+        self._last_number = number
         self._touch()
         return b
+
+    def remove_body(self, body, cascade: bool = False) -> Body:
+        """Remove a moving body (by handle, name or number); returns it.
+
+        A body still used by constraints or loads is refused with a :class:`ModelError`
+        naming them, unless ``cascade=True``, which removes those constraints and loads
+        too. The other bodies keep their numbers and coordinate symbols (a later
+        ``add_body`` takes a new number), as constraints keep theirs after :meth:`remove`.
+        Guesses set for the body's coordinates are dropped."""
+        b = self.body(body)
+        if b.is_ground:
+            raise ModelError("ground (body 1) cannot be removed")
+        users = [c for c in self._constraints if any(self.body(x) is b for x in c.bodies())]
+        loads = [ld for ld in self._loads if any(self.body(x) is b for x in ld.bodies())]
+        if (users or loads) and not cascade:
+            names = [c.label() for c in users] + [ld.label() for ld in loads]
+            raise ModelError(
+                f"body {b.name!r} is used by {', '.join(names)}; remove them first "
+                "(m.remove(...), m.remove_load(...)) or call remove_body(..., cascade=True) to "
+                "remove them with the body")
+        for c in users:
+            self.remove(c)
+        for ld in loads:
+            self.remove_load(ld)
+        self._bodies.remove(b)
+        for s in b.q:
+            self._guess_override.pop(s, None)
+        b.model = None
+        self._touch()
+        return b
+
+    def copy(self) -> Model:
+        """An independent copy of the model: bodies, points, constraints, loads,
+        parameters, variables, guesses and attached graphics, all rebound to the copy
+        (editing one does not change the other). The compiled system and the last solution
+        are not copied (the copy compiles on first use)."""
+        import copy as _copy
+        import sys
+
+        # shared singletons stay shared: the spaces (compared by identity) and the time symbol
+        memo = {id(PLANAR): PLANAR, id(SPATIAL): SPATIAL, id(T): T}
+        saved = (self._system, self.last_solution)
+        self._system = self.last_solution = None
+        try:
+            new = _copy.deepcopy(self, memo)
+        finally:
+            self._system, self.last_solution = saved
+        scene = sys.modules.get("mechsys.draw._scene")  # graphics, if any were attached
+        if scene is not None and scene.attached(self):
+            scene.attach(new, *_copy.deepcopy(scene.attached(self), memo))
+        return new
 
     def set_mass_properties(self, body, mass=None, centroid=None, inertia=None) -> None:
         """Change a body's mass, centroid (local) or inertia (about the centroid, body axes)
@@ -171,10 +224,12 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
             raise UnknownBodyError(
                 f"no body named {spec!r}; bodies are {[b.name for b in self._bodies]}")
         if isinstance(spec, (int, np.integer)) and not isinstance(spec, bool):
-            if 1 <= spec <= len(self._bodies):
-                return self._bodies[spec - 1]
+            for b in self._bodies:
+                if b.number == spec:
+                    return b
             raise UnknownBodyError(
-                f"no body number {spec}; bodies are numbered 1..{len(self._bodies)} (1 = ground)")
+                f"no body number {spec}; the bodies are numbered "
+                f"{[b.number for b in self._bodies]} (1 = ground)")
         raise UnknownBodyError(f"cannot address a body by {spec!r}; use a handle, name or number")
 
     # -- parameters and variables --------------------------------------------------------
@@ -258,8 +313,9 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
             rest = name[len(c):]
             if name.startswith(c) and rest.isdigit() and rest[0] != "0" and int(rest) >= 2:
                 n = int(rest)
-                who = (f"body {self._bodies[n - 1].name!r}" if n <= len(self._bodies)
-                       else "the body that will be added as number " + rest)
+                owner = [b for b in self._bodies if b.number == n]
+                who = (f"body {owner[0].name!r}" if owner
+                       else "a body number that is or will be used: " + rest)
                 return f"it is the symbol of coordinate {c} of {who}"
         return None
 
