@@ -314,3 +314,51 @@ def test_remove_body_refuses_while_used_then_cascades():
     m2 = models.slider_crank_dynamic(piston_force=5.0)
     m2.remove_body("piston", cascade=True)
     assert [ld.name for ld in m2.load_list] == ["load1"]
+
+
+# -- units --------------------------------------------------------------------------------
+
+
+def test_pint_quantities_converted_to_the_declared_units():
+    pint = pytest.importorskip("pint")
+    ureg = pint.get_application_registry()
+    m = ms.Model2D()
+    m.set_units(length="mm", mass="kg", time="s")
+    L = m.parameter("L", 0.15 * ureg.m)
+    g = m.parameter("g", 9.81 * ureg.m / ureg.s**2)
+    assert m.parameters == {"L": pytest.approx(150.0), "g": pytest.approx(9810.0)}
+    assert m.to_units(20 * ureg.N) == pytest.approx(20000.0)          # kg mm / s^2
+    assert m.to_units(2 * ureg.N * ureg.m) == pytest.approx(2e6)        # moment: kg mm^2 / s^2
+    assert m.to_units(30 * ureg.deg) == pytest.approx(np.pi / 6)
+    assert m.to_units(3.0) == 3.0                                       # plain numbers pass
+    m.set_parameters(L=20 * ureg.cm)
+    assert m.parameters["L"] == pytest.approx(200.0)
+    # the physics does not depend on the system: a pendulum in mm and in m
+    freqs = []
+    for length, gval in ((L, g), (0.2, 9.81)):
+        mm = m if length is L else ms.Model2D()
+        b = mm.add_body("bob", mass=1.0, centroid=(length, 0), inertia=0, guess=((0, 0), -np.pi / 2))
+        mm.add(ms.Revolute2(mm.ground.point((0, 0)), b.point(0)))
+        mm.add_load(ms.Gravity((0, -1), gval))
+        freqs.append(mm.vibration(at=mm.guess()).omega[0])
+    assert freqs[0] == pytest.approx(freqs[1], rel=1e-12)
+    assert freqs[1] == pytest.approx(np.sqrt(9.81 / 0.2), rel=1e-12)
+
+
+def test_units_errors():
+    pint = pytest.importorskip("pint")
+    ureg = pint.get_application_registry()
+    m = ms.Model2D()
+    with pytest.raises(ms.ModelError, match="set_units"):
+        m.parameter("L", 1 * ureg.m)
+    with pytest.raises(ms.ModelError, match="not a length unit"):
+        m.set_units(length="kg")
+    with pytest.raises(ms.ModelError, match="not a unit pint knows"):
+        m.set_units(length="furlongzz")
+    with pytest.raises(ms.ModelError, match="at least one"):
+        m.set_units()
+    m.set_units(length="m")
+    with pytest.raises(ms.ModelError, match="needs a mass unit"):
+        m.to_units(1 * ureg.kg)
+    with pytest.raises(ms.ModelError, match="dimension"):
+        m.to_units(1 * ureg.ampere)

@@ -27,6 +27,7 @@ from .constraints._switches import StageSwitch
 from .geometry._bodies import Body
 from .geometry._points import Axis, Point, Vector, as_point, as_vector
 from .geometry._space import PLANAR, SPATIAL, Space
+from .geometry._units import check_units, to_units
 from .results._linkage import LinkageOutputs
 from .results._load_outputs import LoadOutputs, lambda_guess_vector
 from .results._momentum import MomentumOutputs
@@ -249,7 +250,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         why = self._name_conflict(name)
         if why:
             raise ModelError(f"parameter name {name!r} is reserved: {why}; choose another name")
-        self._params[s] = _parameter_value(name, value)
+        self._params[s] = _parameter_value(name, to_units(value, self.units, f"parameter {name!r}"))
         self._touch()
         return s
 
@@ -263,8 +264,29 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
             if s not in self._params:
                 raise ModelError(f"unknown parameter {k!r}; parameters are "
                                  f"{[p.name for p in self._params]}")
-            new[s] = _parameter_value(s.name, v)
+            new[s] = _parameter_value(s.name, to_units(v, self.units, f"parameter {s.name!r}"))
         self._params.update(new)  # all or nothing: one bad value changes none
+
+    #: the declared unit system (``{"length": ..., "mass": ..., "time": ...}``) or None
+    units: dict | None = None
+
+    def set_units(self, length: str | None = None, mass: str | None = None,
+                  time: str | None = None) -> None:
+        """Declare the model's consistent unit system (pint unit names, e.g. ``"mm"``,
+        ``"kg"``, ``"s"``); pint quantities given as parameter values, or converted with
+        :meth:`to_units`, are then turned into numbers in it. Computation never needs units
+        (any consistent system works); see ``docs/guide.md``, Units. Needs pint."""
+        given = {k: v for k, v in (("length", length), ("mass", mass), ("time", time)) if v}
+        if not given:
+            raise ModelError("set_units: give at least one of length=, mass=, time=")
+        self.units = {**(self.units or {}), **check_units(given)}
+
+    def to_units(self, value) -> float:
+        """A pint quantity as a number in the model's declared units (``m.set_units``):
+        ``[length]^a [mass]^b [time]^c`` becomes ``length^a mass^b time^c``, a dimensionless
+        one (an angle) radians. Any other value is returned unchanged.
+        ``ms.Force(p, (1, 0), m.to_units(20 * ureg.N))``."""
+        return to_units(value, self.units, "to_units")
 
     @property
     def parameters(self) -> dict[str, float]:

@@ -8,7 +8,7 @@ The relative angle ``phi`` of body 2 with respect to body 1:
   direction of ``axis1``, from the reference direction ``g_1`` of ``axis1`` to the reference
   direction ``g_2`` of ``axis2`` projected on the plane normal to ``axis1``
   (``phi = atan2(k_1 . g_2, g_1 . g_2)`` with ``k_1 = u_1 x g_1``, the angle frame of
-  :func:`~mechsys.constraints._angles.angle_frame`; in 2D ``g`` is the axis direction).
+  ``RotationLock1``; in 2D ``g`` is the axis direction).
   Meant for two bodies joined about a common axis (a revolute joint, ``axis1`` and
   ``axis2`` its two halves); any other relative motion is allowed and the spring acts on the
   projected angle only. In 3D ``phi`` lies in ``(-pi, pi]``: keep ``phi - free_angle``
@@ -30,7 +30,6 @@ from __future__ import annotations
 import sympy as sp
 
 from .._errors import ModelError
-from ..constraints._angles import angle_frame
 from ..geometry._points import Axis, as_axis
 from ._loads import DirectLoad, LoadBase, _magnitude
 
@@ -97,8 +96,8 @@ class TorsionSpring(LoadBase):
             bs = [model.body(b) for b in (self.b1, self.b2)]
             th = [0 if b.is_ground else sp_.angle(b.q[sp_.dim:]) for b in bs]
             return sp.sympify(th[1] - th[0])
-        g1, k1 = angle_frame(sp_, self.axis1)
-        g2 = angle_frame(sp_, self.axis2)[0]
+        g1, k1 = _angle_frame(sp_, self.axis1)
+        g2 = _angle_frame(sp_, self.axis2)[0]
         return sp.atan2(k1.dot(g2), g1.dot(g2))
 
     def torque(self, model) -> sp.Expr:
@@ -146,6 +145,18 @@ class TorsionDamper(TorsionSpring):
 
     def potential(self, model):
         return None
+
+
+def _angle_frame(space, axis: Axis):
+    """``(g, k)``: the axis' reference direction ``g`` (2D: the unit axis direction) and
+    ``k = g`` turned +90 degrees about the axis (as RotationLock1's frame; the ratio of the two
+    components is all ``atan2`` needs, so ``g``'s length does not matter)."""
+    u = axis.direction()
+    if space.dim == 2:
+        return u, sp.Matrix([-u[1], u[0]])
+    g = axis.reference_vector().direction()
+    d = axis.dir.local if axis.dir.points is None else u  # a body-fixed length is constant
+    return g, (u / sp.sqrt(d.dot(d))).cross(g)
 
 
 def _is_coordinate(model, s) -> bool:
