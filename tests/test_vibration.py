@@ -184,3 +184,47 @@ def test_mode_animation(tmp_path):
     assert anim.frames == 4
     path = modes.animate(1, tmp_path / "mode1.html", frames=3)
     assert path.exists() and path.stat().st_size > 1000
+
+
+def test_centrifugal_pendulum_in_a_rotating_frame():
+    """A pendulum pinned at radius R on a disc driven at W (no gravity): about its radial
+    relative equilibrium it swings at W sqrt(R / l) (the centrifugal pendulum absorber)."""
+    R, l, W = 0.3, 0.08, 50.0
+    m = ms.Model2D()
+    disc = m.add_body("disc", points={"pin": (R, 0)}, mass=2.0, inertia=0.1)
+    pend = m.add_body("pend", mass=0.2, centroid=(l, 0), inertia=0, guess=((R, 0), 0))
+    m.add(ms.Revolute2(m.ground.point((0, 0)), disc.point(0)))
+    m.add(ms.RotationLock1(disc, W * ms.T), name="drive")
+    m.add(ms.Revolute2(disc.point("pin"), pend.point(0)))
+    modes = m.vibration(at=m.guess(), rotating=(W, (0, 0)))
+    assert modes.omega == pytest.approx([W * np.sqrt(R / l)], rel=1e-9)
+    # the velocities were those of the rotating frame, consistent with the driver
+    assert modes.qd[m.compile().layout.index("pend.y")] == pytest.approx(W * R)
+    # without the rotating frame the (orbiting) reference is not an equilibrium
+    with pytest.raises(ms.ModelError, match="not an equilibrium"):
+        m.vibration(at={"disc.th_d": W, "pend.th_d": W, "pend.y_d": W * R})
+
+
+def test_bead_on_a_rotating_hoop_3d():
+    """A bead (point mass on an arm of length a) on a hoop spinning at W about the vertical,
+    with gravity: relative equilibrium cos(th0) = g / (a W^2), frequency W sin(th0)."""
+    a, g, W = 0.5, 9.81, 6.0
+    th0 = np.arccos(g / (a * W**2))
+    m = ms.Model3D()
+    hoop = m.add_body("hoop", mass=1.0, inertia=(0.1, 0.1, 0.2, 0, 0, 0))
+    arm = m.add_body("arm", mass=0.3, centroid=(0, 0, -a), inertia=(0, 0, 0, 0, 0, 0))
+    gz = m.ground.axis((0, 0, 0), (0, 0, 1), (1, 0, 0))
+    hz = hoop.axis((0, 0, 0), (0, 0, 1), (1, 0, 0))
+    m.add(ms.Revolute5(hz, gz))
+    m.add(ms.RotationLock1(hz, gz, W * ms.T), name="spin")
+    m.add(ms.Revolute5(arm.axis((0, 0, 0), (0, 1, 0)), hoop.axis((0, 0, 0), (0, 1, 0))))
+    m.add_load(ms.Gravity((0, 0, -1), g))
+    at = {"arm.e0": np.cos(th0 / 2), "arm.e2": np.sin(th0 / 2)}
+    modes = m.vibration(at=at, rotating=(W, (0, 0, 0), (0, 0, 1)))
+    assert modes.omega == pytest.approx([W * np.sin(th0)], rel=1e-9)
+    # off the relative equilibrium the reference is refused
+    with pytest.raises(ms.ModelError, match="not an equilibrium"):
+        m.vibration(at={"arm.e0": np.cos(0.3), "arm.e2": np.sin(0.3)},
+                    rotating=(W, (0, 0, 0), (0, 0, 1)))
+    with pytest.raises(ms.ModelError, match="rotating="):
+        m.vibration(at=at, rotating=(W, (0, 0)))

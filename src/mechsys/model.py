@@ -877,14 +877,15 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
 
         return FreeSystem(self, drop, solution, initial_guess, initial_condition)
 
-    def vibration(self, at=None, drop=(), t=None, tolerance: float = 1e-6):
+    def vibration(self, at=None, drop=(), t=None, tolerance: float = 1e-6, rotating=None):
         """Linearised vibration about an equilibrium or a steady motion: natural frequencies
         [rad/s and Hz], damping ratios and mode shapes (a :class:`VibrationModes`). ``at``: the
         reference state (a Solution/State, a mapping or a coordinate array); ``drop``:
-        constraints removed first, as in :meth:`free`. See ``docs/vibration.md``."""
+        constraints removed first, as in :meth:`free`; ``rotating=(omega, center[, axis])``:
+        linearise in a rotating frame (relative equilibria). See ``docs/vibration.md``."""
         from .analyses._vibration import vibration
 
-        return vibration(self, at=at, drop=drop, t=t, tolerance=tolerance)
+        return vibration(self, at=at, drop=drop, t=t, tolerance=tolerance, rotating=rotating)
 
     def path(self, replace, initial_condition=None):
         """Replace dummy constraints by velocity constraints (Mech's ``SetPath``):

@@ -306,12 +306,16 @@ def _reference(model, system, at, t):
     return t0, q, np.zeros(n)
 
 
-def vibration(model, at=None, drop=(), t=None, tolerance: float = 1e-6) -> VibrationModes:
+def vibration(model, at=None, drop=(), t=None, tolerance: float = 1e-6,
+              rotating=None) -> VibrationModes:
     """Linearised vibration modes of ``model`` about the reference state ``at`` (see the
     module docstring for the equations). ``drop``: constraints removed first (drivers), as
     in ``m.free``; ``t``: time of the linearisation (default the reference solution's time,
     else 0); ``tolerance``: how far from steady the reference may be (the unbalanced
-    generalized force, relative to the forces acting, in the independent coordinates).
+    generalized force, relative to the forces acting, in the independent coordinates);
+    ``rotating``: ``(omega, center)`` (2D) or ``(omega, center, axis)`` (3D) -- linearise in
+    a frame turning at ``omega`` [rad/s] about that point (and axis), in which the reference
+    motion is an equilibrium (a relative equilibrium: centrifugal pendulum, rotating hoop).
 
     Example::
 
@@ -329,6 +333,9 @@ def vibration(model, at=None, drop=(), t=None, tolerance: float = 1e-6) -> Vibra
         raise ModelError("vibration: the model has no moving bodies (or variables)")
     p = np.array([model._params[s] for s in system.layout.p_symbols], dtype=float)
     t0, q, qd = _reference(model, system, at, t)
+    W = _rotation_rate(rotating, system.space.dim)
+    if W is not None and not np.any(qd):  # at rest in the rotating frame
+        qd = _frame_velocities(system, q, *W)
     sc = scaling_at(system, t0, q, p)
     q, qd = project(system, t0, q, qd, p, scaling=sc)
     qdd, lam, _ = free_acceleration(system, t0, q, qd, p)
@@ -357,11 +364,15 @@ def vibration(model, at=None, drop=(), t=None, tolerance: float = 1e-6) -> Vibra
     Aq, Av, Aa = lin(t0, q, qd, qdd, lam, p)
     Pd = _rate(system, qd) @ N
     Pdd = _rate(system, qdd) @ N
+    if W is not None:  # the perturbation frame turns with the rotating frame: R' = W R
+        Wm = _frame_rotation(system, W[0])
+        Pd = Pd + B @ Wm @ N
+        Pdd = Pdd + 2 * _rate(system, qd) @ Wm @ N + B @ Wm @ Wm @ N
     Mr = P.T @ Aa @ P
     Cr = P.T @ (Av @ P + 2 * Aa @ Pd)
     Kr = P.T @ (Aq @ P + Av @ Pd + Aa @ Pdd)
 
-    _check_steady(system, B, P, q, qd, qdd, lam, p, t0, tolerance)
+    _check_steady(system, B, P, q, qd, qdd, lam, p, t0, tolerance, W)
     s, Z, real = _eigen(Mr, Cr, Kr)
     shapes = (P @ Z).T
     unit = np.where(_coordinate_translation(system), sc.length, 1.0)
@@ -393,6 +404,62 @@ def _coordinate_translation(system) -> np.ndarray:
     return out
 
 
+def _rotation_rate(rotating, dim):
+    """``(W (3, 3) = omega n~, center (dim,))`` of ``rotating`` or None."""
+    if rotating is None:
+        return None
+    form = "(omega, center)" if dim == 2 else "(omega, center, axis)"
+    if not isinstance(rotating, (tuple, list)) or len(rotating) != (2 if dim == 2 else 3):
+        raise ModelError(f"vibration rotating=: give {form} in {dim}D, got {rotating!r}")
+    try:
+        om = float(rotating[0])
+        c = np.asarray(rotating[1], dtype=float)
+        n = np.array([0.0, 0.0, 1.0]) if dim == 2 else np.asarray(rotating[2], dtype=float)
+    except (TypeError, ValueError):
+        raise ModelError(f"vibration rotating=: give {form} as numbers, got {rotating!r}") from None
+    if c.shape != (dim,) or n.shape != (3,) or not (np.all(np.isfinite(c)) and np.isfinite(om)):
+        raise ModelError(f"vibration rotating=: give {form}: a rate, a {dim}D point"
+                         + ("" if dim == 2 else " and a 3D direction") + f", got {rotating!r}")
+    norm = np.linalg.norm(n)
+    if not norm > 0:
+        raise ModelError("vibration rotating=: the axis direction is zero")
+    n = n / norm
+    W = om * np.array([[0, -n[2], n[1]], [n[2], 0, -n[0]], [-n[1], n[0], 0]])
+    return W, c
+
+
+def _frame_rotation(system, W) -> np.ndarray:
+    """``W`` acting on the perturbation coordinates: positions and 3D rotation vectors turn,
+    a planar angle does not, model variables do not."""
+    dim = system.space.dim
+    nmin = _frame_columns(system).size
+    R = np.zeros((nmin, nmin))
+    c = 0
+    for _ in system.layout.body_slices:
+        R[c : c + dim, c : c + dim] = W[:dim, :dim]
+        if dim == 3:
+            R[c + 3 : c + 6, c + 3 : c + 6] = W
+            c += 6
+        else:
+            c += 3
+    return R
+
+
+def _frame_velocities(system, q, W, c) -> np.ndarray:
+    """Velocities of every body carried by the rotating frame: ``rdot = W (r - c)``,
+    ``omega = w`` (``thdot = omega`` in 2D; ``e_dot = E(e)^T w / 2`` in 3D)."""
+    dim = system.space.dim
+    qd = np.zeros(system.n)
+    w = np.array([W[2, 1], W[0, 2], W[1, 0]])
+    for sl in system.layout.body_slices.values():
+        qd[sl.start : sl.start + dim] = W[:dim, :dim] @ (q[sl.start : sl.start + dim] - c)
+        if dim == 2:
+            qd[sl.start + 2] = w[2]
+        else:
+            qd[sl.start + 3 : sl.stop] = 0.5 * _E(q[sl.start + 3 : sl.stop]).T @ w
+    return qd
+
+
 def _rate(system, x) -> np.ndarray:
     """``B(x)`` with the Euler parameters replaced by ``x``'s entries and no translation or
     variable part: the time derivative of ``B`` along a motion with rates ``x``."""
@@ -405,10 +472,11 @@ def _rate(system, x) -> np.ndarray:
     return keep
 
 
-def _check_steady(system, B, P, q, qd, qdd, lam, p, t, tol):
+def _check_steady(system, B, P, q, qd, qdd, lam, p, t, tol, W=None):
     """The reference must be an equilibrium or a steady motion: the bodies' linear and
-    global angular accelerations vanish. Measured as the generalized force in the independent
-    coordinates that those accelerations need, relative to the forces acting."""
+    global angular accelerations vanish (in a rotating frame ``W``: equal ``W rdot`` and
+    ``W omega``, those of a motion carried by the frame). Measured as the generalized force
+    ``M B a`` that the remaining accelerations ``a`` need, relative to the forces acting."""
     dyn = system.dynamics
     Mm, Q, Qv = dyn.terms(t, q, qd, lam, p, qdd)
     # minimal accelerations a (positions: r_dd; 3D rotations: alpha = 2 E(e) e_dd)
@@ -418,10 +486,20 @@ def _check_steady(system, B, P, q, qd, qdd, lam, p, t, tol):
         for sl in system.layout.body_slices.values():
             a[c + 3 : c + 6] = 2 * _E(q[sl.start + 3 : sl.stop]) @ qdd[sl.start + 3 : sl.stop]
             c += 6
-    unsteady = P.T @ (Mm @ (B @ a))
+    if W is not None:  # the accelerations of a motion carried by the rotating frame
+        v = np.linalg.lstsq(B, qd, rcond=None)[0]
+        if system.space.dim == 3:
+            c = 0
+            for sl in system.layout.body_slices.values():
+                v[c + 3 : c + 6] = 2 * _E(q[sl.start + 3 : sl.stop]) @ qd[sl.start + 3 : sl.stop]
+                c += 6
+        a = a - _frame_rotation(system, W[0]) @ v
+    # on every coordinate, not only the free ones: a driven or orbiting body that accelerates
+    # turns the constraints' tangent space with time, which the frozen linearisation misses
+    unsteady = Mm @ (B @ a)
     J = system.jacobian(t, q, p) if system.m else np.zeros((0, system.n))
     forces = np.abs(Q) + np.abs(Qv) + np.abs(Mm @ qdd) + np.abs(J.T @ lam)
-    ref = float(np.abs(P).sum(axis=0).max(initial=0.0) * forces.max(initial=0.0))
+    ref = float(forces.max(initial=0.0))
     bad = float(np.abs(unsteady).max(initial=0.0))
     if bad > tol * ref and bad > 0:
         names = system.layout.q_names
