@@ -66,25 +66,19 @@ def _E(e) -> np.ndarray:
 def _frame(system, q) -> np.ndarray:
     """``B`` (n, n_min): coordinate changes per unit position change / global small rotation
     of each body (and per unit change of each model variable)."""
-    lay, dim = system.layout, system.space.dim
-    n = system.n
-    blocks = []
-    for sl in lay.body_slices.values():
-        blocks.append((sl, dim == 3))
+    n, dim = system.n, system.space.dim
+    B = np.zeros((n, _frame_columns(system).size))
     covered = np.zeros(n, dtype=bool)
-    nmin = n - sum(1 for _, is3 in blocks if is3)
-    B = np.zeros((n, nmin))
     c = 0
-    for sl, is3 in blocks:
+    for sl in system.layout.body_slices.values():
         covered[sl] = True
-        if is3:
-            B[sl.start : sl.start + 3, c : c + 3] = np.eye(3)
+        B[sl.start : sl.start + dim, c : c + dim] = np.eye(dim)
+        if dim == 3:
             B[sl.start + 3 : sl.stop, c + 3 : c + 6] = 0.5 * _E(q[sl.start + 3 : sl.stop]).T
             c += 6
         else:
-            k = sl.stop - sl.start
-            B[sl, c : c + k] = np.eye(k)
-            c += k
+            B[sl.start + 2, c + 2] = 1.0
+            c += 3
     for i in np.flatnonzero(~covered):  # model variables (gear angles, curve parameters)
         B[i, c] = 1.0
         c += 1
@@ -92,15 +86,15 @@ def _frame(system, q) -> np.ndarray:
 
 
 def _frame_columns(system) -> np.ndarray:
-    """Unit scale of each perturbation coordinate: ``L`` for positions, 1 for rotations and
-    variables (as :class:`Scaling` does for the coordinates)."""
+    """Per perturbation coordinate: is it a position change (measured in units of the
+    characteristic length ``L``, as :class:`Scaling` does) rather than a rotation or a
+    variable change."""
     dim = system.space.dim
     out = []
     for _ in system.layout.body_slices:
-        out += ["t"] * dim + ["r"] * (1 if dim == 2 else 3)
+        out += [True] * dim + [False] * (1 if dim == 2 else 3)
     nvar = system.n - sum(sl.stop - sl.start for sl in system.layout.body_slices.values())
-    out += ["r"] * nvar
-    return np.array([c == "t" for c in out], dtype=bool)
+    return np.array(out + [False] * nvar, dtype=bool)
 
 
 @dataclass(frozen=True)
