@@ -228,9 +228,10 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
             for b in self._bodies:
                 if b.number == spec:
                     return b
-            raise UnknownBodyError(
-                f"no body number {spec}; the bodies are numbered "
-                f"{[b.number for b in self._bodies]} (1 = ground)")
+            nums = [b.number for b in self._bodies]
+            which = (f"1..{len(nums)}" if nums == list(range(1, len(nums) + 1))
+                     else f"{nums} (numbers of removed bodies are not reused)")
+            raise UnknownBodyError(f"no body number {spec}; bodies are numbered {which} (1 = ground)")
         raise UnknownBodyError(f"cannot address a body by {spec!r}; use a handle, name or number")
 
     # -- parameters and variables --------------------------------------------------------
@@ -336,8 +337,10 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
             if name.startswith(c) and rest.isdigit() and rest[0] != "0" and int(rest) >= 2:
                 n = int(rest)
                 owner = [b for b in self._bodies if b.number == n]
+                last = max(max(b.number for b in self._bodies), getattr(self, "_last_number", 1))
                 who = (f"body {owner[0].name!r}" if owner
-                       else "a body number that is or will be used: " + rest)
+                       else "the body that will be added as number " + rest if n > last
+                       else f"a removed body (number {rest}, not reused)")
                 return f"it is the symbol of coordinate {c} of {who}"
         return None
 
