@@ -51,5 +51,5 @@ assert np.allclose(modes.damping_ratio, -s.real / np.abs(s), rtol=1e-9)
 # mode 2: the links swing against each other
 shape = modes.shape(1, ["upper.th", "lower.th"])
 print("mode 2 angles (complex):", np.round(shape, 4))
-path = modes.animate(1, "vibration_mode2.gif", amplitude=0.3, frames=16)
+path = modes.animate(1, "vibration_mode2.gif", amplitude=0.3, frames=10, dpi=60)
 print("wrote", path)

@@ -177,13 +177,12 @@ def test_driver_dropped_and_mode_motion():
     assert sol.t[-1] == pytest.approx(2 * np.pi / modes.omega[1])
 
 
-def test_mode_animation(tmp_path):
+def test_mode_animation():
     m = chain(2, 10.0, 1.0)
     modes = m.vibration(at=m.guess())
     anim = modes.animate(0, frames=4)
     assert anim.frames == 4
-    path = modes.animate(1, tmp_path / "mode1.html", frames=3)
-    assert path.exists() and path.stat().st_size > 1000
+    assert anim.times[-1] == pytest.approx(2 * np.pi / modes.omega[0])
 
 
 def test_centrifugal_pendulum_in_a_rotating_frame():
