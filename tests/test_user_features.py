@@ -48,6 +48,8 @@ def test_torsion_spring_static_equilibrium_closed_form():
     eq = m.free(solution="static").solve()
     th = brentq(lambda x: 30.0 * (x - 0.4) + 2.0 * 9.81 * 0.7 * np.cos(x), -np.pi / 2, 0.4)
     assert float(eq.coordinate("arm.th")) == pytest.approx(th, rel=1e-11)
+    with pytest.raises(ms.ModelError, match="needs the motion's velocities"):
+        eq.mechanical_advantage("arm", "arm")
 
 
 def test_torsion_spring_3d_about_a_revolute_axis():
@@ -194,6 +196,16 @@ def test_slider_crank_transmission_angle_and_mechanical_advantage():
     ma = sol.mechanical_advantage(cr, x)
     v_over_w = -r * np.sin(th) * (1 + r * np.cos(th) / np.sqrt(L**2 - r**2 * np.sin(th) ** 2))
     assert ma == pytest.approx(1 / v_over_w, rel=1e-9)
+    # virtual work, an independent check: with a force F on the piston (massless links), the
+    # statics driver torque is F / MA (the driver's reaction on the crank is its negative)
+    F = 50.0
+    ms_ = models.slider_crank_dynamic(crank=r, rod=L, masses=(0, 0, 0), inertias=(0, 0, 0), g=0,
+                                      piston_force=F)
+    st = ms_.solve(t, solution="static")
+    ma_static = st.mechanical_advantage("crank", ms_.location(ms_.body("piston").point(0))[0])
+    assert ma_static == pytest.approx(ma, rel=1e-9)
+    torque = st.reaction("drive", "crank")[1]
+    assert torque == pytest.approx(-F / ma_static, rel=1e-9)
     with pytest.raises(ms.ModelError, match="ground does not move"):
         sol.mechanical_advantage(m.ground, cr)
     with pytest.raises(ms.ModelError, match="no body named"):

@@ -78,8 +78,32 @@ class LinkageOutputs:
         return m.time_derivative(expr)
 
     def mechanical_advantage(self, input, output):  # noqa: A002 - the engineering names
-        """``(d input/dt) / (d output/dt)``: output effort per unit input effort (module doc)."""
-        return self._finish(self._rate_of(input, "input") / self._rate_of(output, "output"))
+        """``(d input/dt) / (d output/dt)``: output effort per unit input effort (module doc).
+        On a static solution of a driven model (zero velocities by definition) the rates are
+        those of the drivers' motion, ``Phi_q qd = -Phi_t`` at each point: the ratio does not
+        depend on the drivers' speed."""
+        expr = self._rate_of(input, "input") / self._rate_of(output, "output")
+        if getattr(self, "_at_rest", False):
+            return self._driven_rates()._finish(expr)
+        return self._finish(expr)
+
+    def _driven_rates(self):
+        """This static solution with the velocities of its drivers' motion."""
+        import dataclasses
+
+        import numpy as np
+
+        s = self.system
+        if self.mode != "static" or s.m != s.n:
+            raise ModelError(
+                "mechanical_advantage needs the motion's velocities: this equilibrium of a "
+                "free system has none (no drivers say how it moves); use a kinematic solution "
+                "of the driven model (solution='velocity')")
+        qd = []
+        for t, q in zip(np.atleast_1d(self.t), np.atleast_2d(self.q)):
+            J, rhs = s.velocity_rhs(t, q, self.p)
+            qd.append(np.linalg.solve(J, rhs))
+        return dataclasses.replace(self, qd=np.array(qd))
 
 
 __all__ = ["LinkageOutputs"]
