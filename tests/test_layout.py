@@ -28,6 +28,7 @@ LAZY_UP = {
     ("mechsys.results._solution", "draw"),   # Solution.plot
     ("mechsys.model", "draw"),               # Model.add_graphics
     ("mechsys.analyses._sweep", "draw"),     # sweep's progress bar (draw/_progress.py)
+    ("mechsys.analyses._vibration", "draw"),  # VibrationModes.animate
 }
 
 

@@ -46,6 +46,9 @@ REQUIRED_TOP_LEVEL |= {"Sensitivity", "SensitivitySystem", "ParameterSensitivity
 #: Coupled models and parameter sweeps (issue 15, Mech chapter 9).
 REQUIRED_TOP_LEVEL |= {"Configuration", "CoupleSystem", "CoupleSolution", "Free", "sweep"}
 
+#: Vibration and the features users looked for at once (issue 17).
+REQUIRED_TOP_LEVEL |= {"VibrationModes", "TorsionSpring", "TorsionDamper", "tabulated"}
+
 #: Public subpackages and modules; every other module is private (``_name.py``).
 PUBLIC_MODULES = {"constraints", "compile", "solvers", "testing", "draw", "models", "cli", "model",
                   "geometry", "loads", "analyses", "results"}
@@ -75,6 +78,14 @@ REQUIRED_MEMBERS = {
                  "coordinate", "names", "table"},
 }
 
+
+#: Issue 17: vibration, momentum and linkage outputs, copies, units.
+_ISSUE17_OUTPUTS = {"linear_momentum", "angular_momentum", "centre_of_mass", "transmission_angle",
+                    "mechanical_advantage"}
+REQUIRED_MEMBERS["Model"] |= _ISSUE17_OUTPUTS | {"vibration", "copy", "remove_body", "set_units",
+                                                 "to_units"}
+REQUIRED_MEMBERS["Solution"] |= _ISSUE17_OUTPUTS
+REQUIRED_MEMBERS["VibrationModes"] = {"shape", "motion", "animate", "table"}
 
 def test_all_contains_the_required_names():
     missing = REQUIRED_TOP_LEVEL - set(mechsys.__all__)

@@ -36,6 +36,7 @@ from .analyses import (
     Free,
     FreeSystem,
     PathSystem,
+    VibrationModes,
     find_switch_time,
     find_time,
     sweep,
@@ -154,9 +155,11 @@ from .geometry._rotations import (
     xyz_to_cylindrical,
     xyz_to_spherical,
 )
+from .geometry._tabulated import tabulated
 from .loads._friction import JointFriction
 from .loads._gyro import GyroFilter, GyroMoment, gyro_filter
 from .loads._loads import Damper, Force, Gravity, Load, LoadBase, Moment, Spring
+from .loads._torsion import TorsionDamper, TorsionSpring
 from .model import DOF, Model, Model2D, Model3D
 from .results._outputs import All, Rest
 from .results._sensitivity import ParameterSensitivity, Sensitivity
@@ -283,6 +286,8 @@ __all__ = [
     "State",
     "T",
     "TimeSwitch",
+    "TorsionDamper",
+    "TorsionSpring",
     "Translate2",
     "Translate5",
     "TwoGears1",
@@ -298,6 +303,7 @@ __all__ = [
     "UnknownPointError",
     "Variable",
     "Vector",
+    "VibrationModes",
     "VirtualRotation",
     "XYZToCylindrical",
     "XYZToSpherical",
@@ -324,6 +330,7 @@ __all__ = [
     "rotation_matrix",
     "spherical_to_xyz",
     "sweep",
+    "tabulated",
     "unit",
     "virtual_rotation",
     "xyz_to_cylindrical",

@@ -30,7 +30,10 @@ from .constraints._switches import StageSwitch
 from .geometry._bodies import Body
 from .geometry._points import Axis, Point, Vector, as_point, as_vector
 from .geometry._space import PLANAR, SPATIAL, Space
+from .geometry._units import check_units, to_units
+from .results._linkage import LinkageOutputs
 from .results._load_outputs import LoadOutputs, lambda_guess_vector
+from .results._momentum import MomentumOutputs
 from .results._outputs import OutputFunctions, VelocityViews
 from .solvers import ORDERS, PositionOptions, sweep
 from .solvers._linalg import Scaling
@@ -71,7 +74,7 @@ class DOF(int):
     __str__ = __repr__
 
 
-class Model(OutputFunctions, LoadOutputs, VelocityViews):
+class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, LinkageOutputs):
     """An editable mechanism model. Use :class:`Model2D` or :class:`Model3D`."""
 
     space: Space
@@ -113,7 +116,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
             raise ModelError(f"body name must be a non-empty string, got {name!r}")
         if any(b.name == name for b in self._bodies):
             raise ModelError(f"a body named {name!r} already exists; body names must be unique")
-        number = len(self._bodies) + 1
+        # numbers are never reused: a removed body's successors keep theirs (and their symbols)
+        number = max(max(b.number for b in self._bodies), getattr(self, "_last_number", 1)) + 1
         taken = {s.name for s in self._params} | {v.symbol.name for v in self._variables}
         for c in self.space.coordinate_names:
             for sym in (f"{c}{number}", f"{c}{number}_d", f"{c}{number}_dd"):
@@ -124,8 +128,60 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
                  centroid=centroid, inertia=inertia)
         b.model = self
         self._bodies.append(b)
+        self._last_number = number
         self._touch()
         return b
+
+    def remove_body(self, body, cascade: bool = False) -> Body:
+        """Remove a moving body (by handle, name or number); returns it.
+
+        A body still used by constraints or loads is refused with a :class:`ModelError`
+        naming them, unless ``cascade=True``, which removes those constraints and loads
+        too. The other bodies keep their numbers and coordinate symbols (a later
+        ``add_body`` takes a new number), as constraints keep theirs after :meth:`remove`.
+        Guesses set for the body's coordinates are dropped."""
+        b = self.body(body)
+        if b.is_ground:
+            raise ModelError("ground (body 1) cannot be removed")
+        users = [c for c in self._constraints if any(self.body(x) is b for x in c.bodies())]
+        loads = [ld for ld in self._loads if any(self.body(x) is b for x in ld.bodies())]
+        if (users or loads) and not cascade:
+            names = [c.label() for c in users] + [ld.label() for ld in loads]
+            raise ModelError(
+                f"body {b.name!r} is used by {', '.join(names)}; remove them first "
+                "(m.remove(...), m.remove_load(...)) or call remove_body(..., cascade=True) to "
+                "remove them with the body")
+        for c in users:
+            self.remove(c)
+        for ld in loads:
+            self.remove_load(ld)
+        self._bodies.remove(b)
+        for s in b.q:
+            self._guess_override.pop(s, None)
+        b.model = None
+        self._touch()
+        return b
+
+    def copy(self) -> Model:
+        """An independent copy of the model: bodies, points, constraints, loads,
+        parameters, variables, guesses and attached graphics, all rebound to the copy
+        (editing one does not change the other). The compiled system and the last solution
+        are not copied (the copy compiles on first use)."""
+        import copy as _copy
+        import sys
+
+        # shared singletons stay shared: the spaces (compared by identity) and the time symbol
+        memo = {id(PLANAR): PLANAR, id(SPATIAL): SPATIAL, id(T): T}
+        saved = (self._system, self.last_solution)
+        self._system = self.last_solution = None
+        try:
+            new = _copy.deepcopy(self, memo)
+        finally:
+            self._system, self.last_solution = saved
+        scene = sys.modules.get("mechsys.draw._scene")  # graphics, if any were attached
+        if scene is not None and scene.attached(self):
+            scene.attach(new, *_copy.deepcopy(scene.attached(self), memo))
+        return new
 
     def set_mass_properties(self, body, mass=None, centroid=None, inertia=None) -> None:
         """Change a body's mass, centroid (local) or inertia (about the centroid, body axes)
@@ -164,10 +220,13 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
             raise UnknownBodyError(
                 f"no body named {spec!r}; bodies are {[b.name for b in self._bodies]}")
         if isinstance(spec, (int, np.integer)) and not isinstance(spec, bool):
-            if 1 <= spec <= len(self._bodies):
-                return self._bodies[spec - 1]
-            raise UnknownBodyError(
-                f"no body number {spec}; bodies are numbered 1..{len(self._bodies)} (1 = ground)")
+            for b in self._bodies:
+                if b.number == spec:
+                    return b
+            nums = [b.number for b in self._bodies]
+            which = (f"1..{len(nums)}" if nums == list(range(1, len(nums) + 1))
+                     else f"{nums} (numbers of removed bodies are not reused)")
+            raise UnknownBodyError(f"no body number {spec}; bodies are numbered {which} (1 = ground)")
         raise UnknownBodyError(f"cannot address a body by {spec!r}; use a handle, name or number")
 
     # -- parameters and variables --------------------------------------------------------
@@ -187,7 +246,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         why = self._name_conflict(name)
         if why:
             raise ModelError(f"parameter name {name!r} is reserved: {why}; choose another name")
-        self._params[s] = _parameter_value(name, value)
+        self._params[s] = _parameter_value(name, to_units(value, self.units, f"parameter {name!r}"))
         self._touch()
         return s
 
@@ -201,8 +260,29 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
             if s not in self._params:
                 raise ModelError(f"unknown parameter {k!r}; parameters are "
                                  f"{[p.name for p in self._params]}")
-            new[s] = _parameter_value(s.name, v)
+            new[s] = _parameter_value(s.name, to_units(v, self.units, f"parameter {s.name!r}"))
         self._params.update(new)  # all or nothing: one bad value changes none
+
+    #: the declared unit system (``{"length": ..., "mass": ..., "time": ...}``) or None
+    units: dict | None = None
+
+    def set_units(self, length: str | None = None, mass: str | None = None,
+                  time: str | None = None) -> None:
+        """Declare the model's consistent unit system (pint unit names, e.g. ``"mm"``,
+        ``"kg"``, ``"s"``); pint quantities given as parameter values, or converted with
+        :meth:`to_units`, are then turned into numbers in it. Computation never needs units
+        (any consistent system works); see ``docs/guide.md``, Units. Needs pint."""
+        given = {k: v for k, v in (("length", length), ("mass", mass), ("time", time)) if v}
+        if not given:
+            raise ModelError("set_units: give at least one of length=, mass=, time=")
+        self.units = {**(self.units or {}), **check_units(given)}
+
+    def to_units(self, value) -> float:
+        """A pint quantity as a number in the model's declared units (``m.set_units``):
+        ``[length]^a [mass]^b [time]^c`` becomes ``length^a mass^b time^c``, a dimensionless
+        one (an angle) radians. Any other value is returned unchanged.
+        ``ms.Force(p, (1, 0), m.to_units(20 * ureg.N))``."""
+        return to_units(value, self.units, "to_units")
 
     @property
     def parameters(self) -> dict[str, float]:
@@ -251,8 +331,11 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
             rest = name[len(c):]
             if name.startswith(c) and rest.isdigit() and rest[0] != "0" and int(rest) >= 2:
                 n = int(rest)
-                who = (f"body {self._bodies[n - 1].name!r}" if n <= len(self._bodies)
-                       else "the body that will be added as number " + rest)
+                owner = [b for b in self._bodies if b.number == n]
+                last = max(max(b.number for b in self._bodies), getattr(self, "_last_number", 1))
+                who = (f"body {owner[0].name!r}" if owner
+                       else "the body that will be added as number " + rest if n > last
+                       else f"a removed body (number {rest}, not reused)")
                 return f"it is the symbol of coordinate {c} of {who}"
         return None
 
@@ -878,6 +961,16 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         from .analyses._couple import CoupleSystem
 
         return CoupleSystem(self, unknowns, conditions, t, guess, configurations, solution)
+
+    def vibration(self, at=None, drop=(), t=None, tolerance: float = 1e-6, rotating=None):
+        """Linearised vibration about an equilibrium or a steady motion: natural frequencies
+        [rad/s and Hz], damping ratios and mode shapes (a :class:`VibrationModes`). ``at``: the
+        reference state (a Solution/State, a mapping or a coordinate array); ``drop``:
+        constraints removed first, as in :meth:`free`; ``rotating=(omega, center[, axis])``:
+        linearise in a rotating frame (relative equilibria). See ``docs/vibration.md``."""
+        from .analyses._vibration import vibration
+
+        return vibration(self, at=at, drop=drop, t=t, tolerance=tolerance, rotating=rotating)
 
     def path(self, replace, initial_condition=None):
         """Replace dummy constraints by velocity constraints (Mech's ``SetPath``):

@@ -12,6 +12,8 @@ from ._lock import LockedModel
 from ._multistage import FindSwitchTime, FindTime, find_switch_time, find_time
 from ._path import PathSystem
 from ._sweep import sweep
+from ._vibration import VibrationModes
 
 __all__ = ["Configuration", "CoupleSolution", "CoupleSystem", "FindSwitchTime", "FindTime", "Free",
-           "FreeSystem", "FreeTime", "LockedModel", "PathSystem", "find_switch_time", "find_time", "sweep"]
+           "FreeSystem", "FreeTime", "LockedModel", "PathSystem", "VibrationModes", "find_switch_time",
+           "find_time", "sweep"]

@@ -18,8 +18,10 @@ from ._loads import (
     PointForce,
     Spring,
 )
+from ._torsion import TorsionDamper, TorsionSpring
 
 __all__ = [
     "BodyMoment", "Damper", "DirectLoad", "Force", "Gravity", "GyroMoment", "JointFriction",
-    "Load", "LoadBase", "Moment", "PointForce", "Spring", "gyro_filter",
+    "Load", "LoadBase", "Moment", "PointForce", "Spring", "TorsionDamper", "TorsionSpring",
+    "gyro_filter",
 ]

@@ -14,12 +14,14 @@ import numpy as np
 import sympy as sp
 
 from .._errors import MechError, ModelError
+from ._linkage import LinkageOutputs
 from ._load_outputs import LoadOutputs
+from ._momentum import MomentumOutputs
 from ._outputs import OutputFunctions, VelocityViews
 
 
 @dataclass(frozen=True, eq=False)
-class Solution(OutputFunctions, LoadOutputs, VelocityViews):
+class Solution(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, LinkageOutputs):
     """Kinematic (or later dynamic) solution over ``N`` time points.
 
     Attributes:
