@@ -26,7 +26,7 @@ import numpy as np
 import scipy.sparse as sps
 import sympy as sp
 
-from .._symbols import T
+from .._symbols import T, velocity_symbol
 from ._backends import compile_exprs
 from ._derive import hessian_terms, time_derivative, to_sympy_list
 
@@ -136,6 +136,7 @@ def generalized_forces(model, loads, layout) -> list:
     n = layout.n
     qd_of = dict(zip(layout.q_symbols, layout.qd_symbols))
     index = {s: i for i, s in enumerate(layout.q_symbols)}
+    gen = model._gen_substitution() if hasattr(model, "_gen_substitution") else {}
     Q = [sp.S.Zero] * n
     for load in loads:
         for c in load.contributions(model):
@@ -151,7 +152,11 @@ def generalized_forces(model, loads, layout) -> list:
                 # virtual work: d(velocity)/d(qd_s) = d(location)/d(q_s) for a body point
                 r = list(c.point.location())
                 F = list(c.force)
-                for s in body.q:
+                coords = body.q
+                if gen and body.gen_joint is not None:  # a slave: its pose is P(q)
+                    r, F = [e.xreplace(gen) for e in r], [sp.sympify(e).xreplace(gen) for e in F]
+                    coords = [s for s in layout.q_symbols if any(s in e.free_symbols for e in r)]
+                for s in coords:
                     # scalar diffs: Matrix.diff goes through SymPy's array derivatives (slow)
                     Q[index[s]] += sp.Add(*(ri.diff(s) * fi for ri, fi in zip(r, F)))
             elif isinstance(c, BodyMoment):
@@ -159,11 +164,20 @@ def generalized_forces(model, loads, layout) -> list:
                 if body.is_ground:
                     continue
                 rot = body.q[model.space.dim :]
-                w = model.space.as_rotation_vector(
-                    model.space.omega(rot, [qd_of[s] for s in rot], local=False))
+                coords = body.q
                 M = model.space.as_rotation_vector(c.moment)
-                for s in body.q:
+                if gen and body.gen_joint is not None:
+                    w = model.space.as_rotation_vector(model.space.omega(
+                        rot, [velocity_symbol(s.name) for s in rot], local=False)).xreplace(gen)
+                    M = M.xreplace(gen)
+                    coords = [s for s in layout.q_symbols if any(qd_of[s] in e.free_symbols for e in w)]
+                else:
+                    w = model.space.as_rotation_vector(
+                        model.space.omega(rot, [qd_of[s] for s in rot], local=False))
+                for s in coords:
                     Q[index[s]] += (w.diff(qd_of[s]).T * M)[0, 0]
+    if gen:  # load magnitudes of slave coordinates (a spring to a slave point)
+        Q = [sp.sympify(e).xreplace(gen) for e in Q]
     return Q
 
 
@@ -187,22 +201,37 @@ class Dynamics:
         # accumulate natively: a SymPy zero plus a SymEngine term would turn SymPy and lose
         # the real assumptions of the symbols
         zero = se.Integer(0) if se is not None else sp.S.Zero
-        rows, cols, vals, Qv = [], [], [], [zero] * lay.n
+        Qv = [zero] * lay.n
+        entries: dict = {}  # (row, col) -> value: slaves' projected blocks overlap
         kinetic = {}
+        gen = system.gen_subs
         for b in bodies:
             q = list(b.q)
-            Tb, Mb, Qvb = body_terms(model.space, tuple(q), tuple(qd_of[s] for s in q),
-                                     *_mass_key(model.space, b))
-            kinetic[b.name] = Tb
+            slave = gen and b.gen_joint is not None
+            rates = tuple(velocity_symbol(s.name) if slave else qd_of[s] for s in q)
+            Tb, Mb, Qvb = body_terms(model.space, tuple(q), rates, *_mass_key(model.space, b))
             if Tb == 0:
+                kinetic[b.name] = Tb
                 continue
+            if slave:  # the slave's inertia projected on the coordinates it depends on
+                from ..constraints._generalized import project_inertia
+
+                kinetic[b.name], blocks, forces = project_inertia(b, Tb, Mb, Qvb, gen, lay)
+                for key, v in blocks.items():
+                    entries[key] = entries[key] + v if key in entries else v
+                for i, v in forces.items():
+                    Qv[i] += v
+                continue
+            kinetic[b.name] = Tb
             for i, si in enumerate(q):
                 for j in range(len(q)):
                     if Mb[i][j] != 0:
-                        rows.append(index[si])
-                        cols.append(index[q[j]])
-                        vals.append(Mb[i][j])
+                        key = (index[si], index[q[j]])
+                        entries[key] = entries[key] + Mb[i][j] if key in entries else Mb[i][j]
                 Qv[index[si]] += Qvb[i]
+        rows = [k[0] for k in entries]
+        cols = [k[1] for k in entries]
+        vals = list(entries.values())
         self.M_rows = np.array(rows, dtype=int)
         self.M_cols = np.array(cols, dtype=int)
         # native (SymEngine) expressions feed the compiler; SymPy copies are made on first use
@@ -247,6 +276,8 @@ class Dynamics:
             model, loads = self._potential
             pots = [p for p in (ld.potential(model) for ld in loads) if p is not None]
             self._potential = sp.Add(*pots) if pots else None
+            if self._potential is not None and self.system.gen_subs:
+                self._potential = self._potential.xreplace(self.system.gen_subs)
         return self._potential
 
     def _sympy_copy(self, key):

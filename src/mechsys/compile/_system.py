@@ -122,6 +122,8 @@ class System:
         self._dynamics = None
 
         self.lam_symbols = multiplier_symbols(layout)
+        #: slave-body symbol -> expression in this layout's coordinates (Gen joints)
+        self.gen_subs = model._gen_substitution() if model is not None else {}
 
     def kinematic_exprs(self, key: str, for_compile: bool = False) -> list:
         """``"jac"`` (nonzero Jacobian entries), ``"phi_t"`` or ``"gamma"``: SymPy lists (made
@@ -267,6 +269,8 @@ class System:
         """Compile any expressions of ``T, q, qd, qdd, lambda, p`` (cached) as a function of
         ``[t, q, qd, qdd, lambda, p]``."""
         key = tuple(sp.sympify(e) for e in exprs)
+        if self.gen_subs:
+            key = tuple(e.xreplace(self.gen_subs) for e in key)
         f = self._eval_cache.get(key)
         if f is None:
             lay = self.layout
@@ -291,6 +295,8 @@ class System:
 def make_layout(bodies, variables, parameters, eq_owner, eq_index) -> Layout:
     q, names, slices = [], [], {}
     for b in bodies:
+        if getattr(b, "gen_joint", None) is not None:  # a slave: its pose is substituted
+            continue
         start = len(q)
         q.extend(b.q)
         names.extend(f"{b.name}.{c}" for c in b.space.coordinate_names)
