@@ -23,8 +23,7 @@ from ._errors import (
 from ._symbols import T, velocity_symbol
 from .compile import System, make_layout, time_derivative
 from .constraints import Constraint, ConstraintBase, Variable
-from .constraints._generalized import GenJoint, check_new_joint
-from .constraints._generalized import substitution as gen_substitution
+from .constraints._generalized import GenJoint, GenKinematics, check_new_joint
 from .constraints._switches import StageSwitch
 from .geometry._bodies import Body
 from .geometry._points import Axis, Point, Vector, as_point, as_vector
@@ -515,13 +514,19 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
     def _gen_substitution(self) -> dict:
         """Slave-body symbol -> expression of the independent coordinates (Gen joints,
         ``constraints/_generalized.py``); empty without Gen joints. Cached per version."""
+        kin = self._gen_kinematics()
+        return kin.sympy if kin is not None else {}
+
+    def _gen_kinematics(self):
+        """The slaves' :class:`~mechsys.constraints._generalized.GenKinematics` (None
+        without Gen joints), cached per version."""
         cache = getattr(self, "_gen_cache", None)
         if cache is None or cache[0] != self._version:
-            sub = {}
+            kin = None
             if any(isinstance(c, GenJoint) for c in self._constraints):
                 lay = make_layout(self._bodies[1:], self._variables, [], [], [])
-                sub = gen_substitution(self, lay)
-            self._gen_cache = cache = (self._version, sub)
+                kin = GenKinematics(self, lay)
+            self._gen_cache = cache = (self._version, kin)
         return cache[1]
 
     def _all_equations(self):

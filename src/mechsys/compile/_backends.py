@@ -97,12 +97,12 @@ def _split_piecewise(exprs):
     return {v: k for k, v in found.items()}, [e.xreplace(found) for e in exprs]
 
 
-def _lambdify(args, exprs, opt_level):
+def _lambdify(args, exprs, opt_level, cse=False):
     try:
-        return _se.Lambdify(list(args), list(exprs), backend="llvm", cse=False,
+        return _se.Lambdify(list(args), list(exprs), backend="llvm", cse=cse,
                             opt_level=opt_level), "symengine-llvm"
     except (ValueError, TypeError, RuntimeError):  # built without LLVM, or unsupported
-        return _se.Lambdify(list(args), list(exprs), cse=False), "symengine-lambda"
+        return _se.Lambdify(list(args), list(exprs), cse=cse), "symengine-lambda"
 
 
 class _SymengineCompiled(Compiled):
@@ -111,17 +111,17 @@ class _SymengineCompiled(Compiled):
 
     backend = "symengine"
 
-    def __init__(self, args, exprs, opt_level: int = 3):
+    def __init__(self, args, exprs, opt_level: int = 3, cse: bool = False):
         self.nout = len(exprs)
         exprs = [_se.sympify(e) for e in exprs]
         pieces, exprs = _split_piecewise(exprs)
         self._pre = None
         if pieces:
-            self._pre, _ = _lambdify(args, list(pieces.values()), opt_level)
+            self._pre, _ = _lambdify(args, list(pieces.values()), opt_level, cse)
             self._nargs = len(args)
             args = [*args, *pieces]
             self._buf = np.empty(len(args))     # [x, Piecewise values]: one call each
-        self._f, self.backend = _lambdify(args, exprs, opt_level)
+        self._f, self.backend = _lambdify(args, exprs, opt_level, cse)
         self._nin = len(args) - len(pieces)
         # SymEngine's unchecked entry point costs ~0.8 us a call instead of ~4 us: the
         # checks it skips (length, dtype, contiguity) are done here, once per call
@@ -175,12 +175,16 @@ def default_backend() -> str:
 
 
 def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
-                  backend: str | None = None, once: bool = False) -> Compiled:
+                  backend: str | None = None, once: bool = False, cse: bool = False) -> Compiled:
     """Compile ``exprs`` as a function of the flat argument list ``args``.
 
     ``once``: the function is evaluated a few times only (``m.dof()``'s Jacobian): LLVM
     without optimisation compiles ~30 times faster (0.03 s instead of 1 s for a 600-coordinate
-    chain's Jacobian) and evaluates ~1.5 times slower."""
+    chain's Jacobian) and evaluates ~1.5 times slower.
+
+    ``cse``: common subexpressions first (SymEngine). Off by default (slow on the flat
+    expressions of absolute coordinates); on for models with Gen joints, whose nested slave
+    poses share most of their subexpressions (decision 0010: 10 times faster compiles)."""
     if not exprs:
         return _Empty()
     backend = backend or default_backend()
@@ -194,7 +198,7 @@ def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
             # SymEngine 0.15 crashes on some functions (Mod): keep them with SymPy
             return _SympyCompiled(args, [sp.sympify(e) for e in exprs])
         try:
-            return _SymengineCompiled(args, exprs, opt_level=0 if once else 3)
+            return _SymengineCompiled(args, exprs, opt_level=0 if once else 3, cse=cse)
         except (RuntimeError, TypeError, ValueError, NotImplementedError):
             # a function SymEngine cannot compile (e.g. Mod, Abs): SymPy can
             return _SympyCompiled(args, [sp.sympify(e) for e in exprs])

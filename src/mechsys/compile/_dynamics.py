@@ -152,11 +152,11 @@ def generalized_forces(model, loads, layout) -> list:
                 # virtual work: d(velocity)/d(qd_s) = d(location)/d(q_s) for a body point
                 r = list(c.point.location())
                 F = list(c.force)
-                coords = body.q
-                if gen and body.gen_joint is not None:  # a slave: its pose is P(q)
-                    r, F = [e.xreplace(gen) for e in r], [sp.sympify(e).xreplace(gen) for e in F]
-                    coords = [s for s in layout.q_symbols if any(s in e.free_symbols for e in r)]
-                for s in coords:
+                if gen and body.gen_joint is not None:  # a slave: project on q (J^T Q_p)
+                    _project(Q, body, [sp.Add(*(ri.diff(s) * fi for ri, fi in zip(r, F)))
+                                       for s in body.q], model)
+                    continue
+                for s in body.q:
                     # scalar diffs: Matrix.diff goes through SymPy's array derivatives (slow)
                     Q[index[s]] += sp.Add(*(ri.diff(s) * fi for ri, fi in zip(r, F)))
             elif isinstance(c, BodyMoment):
@@ -164,21 +164,31 @@ def generalized_forces(model, loads, layout) -> list:
                 if body.is_ground:
                     continue
                 rot = body.q[model.space.dim :]
-                coords = body.q
                 M = model.space.as_rotation_vector(c.moment)
                 if gen and body.gen_joint is not None:
-                    w = model.space.as_rotation_vector(model.space.omega(
-                        rot, [velocity_symbol(s.name) for s in rot], local=False)).xreplace(gen)
-                    M = M.xreplace(gen)
-                    coords = [s for s in layout.q_symbols if any(qd_of[s] in e.free_symbols for e in w)]
-                else:
+                    rates = [velocity_symbol(s.name) for s in body.q]
                     w = model.space.as_rotation_vector(
-                        model.space.omega(rot, [qd_of[s] for s in rot], local=False))
-                for s in coords:
+                        model.space.omega(rot, rates[model.space.dim:], local=False))
+                    _project(Q, body, [(w.diff(v).T * M)[0, 0] for v in rates], model)
+                    continue
+                w = model.space.as_rotation_vector(
+                    model.space.omega(rot, [qd_of[s] for s in rot], local=False))
+                for s in body.q:
                     Q[index[s]] += (w.diff(qd_of[s]).T * M)[0, 0]
     if gen:  # load magnitudes of slave coordinates (a spring to a slave point)
         Q = [sp.sympify(e).xreplace(gen) for e in Q]
     return Q
+
+
+def _project(Q, body, Qp, model) -> None:
+    """Add a slave's generalized force ``Qp`` (on its own pose coordinates) to ``Q`` as
+    ``J^T Qp`` (``J`` its pose Jacobian, ``constraints/_generalized.GenKinematics``)."""
+    kin = model._gen_kinematics()
+    for s, f in zip(body.q, Qp):
+        if f == 0:
+            continue
+        for i, d in kin.jac_sympy(s).items():
+            Q[i] += d * f
 
 
 class Dynamics:
@@ -216,7 +226,8 @@ class Dynamics:
             if slave:  # the slave's inertia projected on the coordinates it depends on
                 from ..constraints._generalized import project_inertia
 
-                kinetic[b.name], blocks, forces = project_inertia(b, Tb, Mb, Qvb, gen, lay)
+                kinetic[b.name], blocks, forces = project_inertia(b, Tb, Mb, Qvb,
+                                                                  model._gen_kinematics())
                 for key, v in blocks.items():
                     entries[key] = entries[key] + v if key in entries else v
                 for i, v in forces.items():
@@ -322,7 +333,8 @@ class Dynamics:
             Q = [se.sympify(e) for e in self.Q] if (
                 self.system.backend == "symengine" and se is not None) else list(self.Q)
             self._f_terms = compile_exprs(self.args(), self.for_compile("M") + Q
-                                          + self.for_compile("Qv"), self.system.backend)
+                                          + self.for_compile("Qv"), self.system.backend,
+                                          cse=self.system.cse)
         return self._f_terms
 
     def _sparse_derivative(self, wrt, args):
@@ -335,7 +347,7 @@ class Dynamics:
                     dc.append(j)
                     dv.append(sp.diff(e, w))
         return (np.array(dr, dtype=int), np.array(dc, dtype=int),
-                compile_exprs(args, dv, self.system.backend))
+                compile_exprs(args, dv, self.system.backend, cse=self.system.cse))
 
     def free_kernel(self, sparse: bool = False) -> FreeKernel:
         """The compiled augmented system of free motion (built once, cached)."""
@@ -403,7 +415,7 @@ class FreeKernel:
         exprs = dyn.for_compile("M") + list(jac) + dyn.for_compile("Q+Qv") + list(gamma)
         self.k_M, self.k_J = len(dyn.M_rows), len(jac)
         self._zeros = np.zeros(n)
-        self.f = compile_exprs(dyn.args(), exprs, system.backend)
+        self.f = compile_exprs(dyn.args(), exprs, system.backend, cse=system.cse)
         rows = np.concatenate((dyn.M_rows, system.jac_cols, n + system.jac_rows))
         cols = np.concatenate((dyn.M_cols, n + system.jac_rows, system.jac_cols))
         self._map = np.concatenate((np.arange(self.k_M), self.k_M + np.arange(self.k_J),

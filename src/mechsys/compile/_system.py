@@ -124,6 +124,8 @@ class System:
         self.lam_symbols = multiplier_symbols(layout)
         #: slave-body symbol -> expression in this layout's coordinates (Gen joints)
         self.gen_subs = model._gen_substitution() if model is not None else {}
+        #: compile with common subexpressions (nested slave poses share most of theirs)
+        self.cse = bool(self.gen_subs)
 
     def kinematic_exprs(self, key: str, for_compile: bool = False) -> list:
         """``"jac"`` (nonzero Jacobian entries), ``"phi_t"`` or ``"gamma"``: SymPy lists (made
@@ -148,7 +150,8 @@ class System:
                     parts += self._native["phi"] if native else self.phi
                 else:
                     parts += self.kinematic_exprs(key, for_compile=True)
-            k = self._kernels[name] = compile_exprs(self.layout.args(), parts, self.backend)
+            k = self._kernels[name] = compile_exprs(self.layout.args(), parts, self.backend,
+                                                    cse=self.cse)
         return k
 
     @property
@@ -245,7 +248,7 @@ class System:
         if k is None:
             k = self._kernels["jac_once"] = compile_exprs(
                 self.layout.args(), self.kinematic_exprs("jac", for_compile=True), self.backend,
-                once=True)
+                once=True, cse=self.cse)
         return self.assemble(k(self.pack(t, q, None, p)))
 
     def jacobian(self, t: float, q, p=None, sparse: bool = False):
@@ -287,7 +290,7 @@ class System:
                         "coordinates, velocities, accelerations, multipliers, parameters or T "
                         "of this model"
                     )
-            f = compile_exprs(args, list(key), self.backend)
+            f = compile_exprs(args, list(key), self.backend, cse=self.cse)
             self._eval_cache[key] = f
         return f
 

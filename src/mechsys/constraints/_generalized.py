@@ -24,7 +24,7 @@ import numpy as np
 import sympy as sp
 
 from .._errors import GeometryError, ModelError
-from .._symbols import acceleration_symbol, velocity_symbol
+from .._symbols import T, acceleration_symbol, velocity_symbol
 from ..geometry._points import Axis, GlobalVector, as_point
 from ..geometry._rotations import _from_matrix, quaternion_inverse, quaternion_product
 from ..geometry._rotations import _parse as _rotation_spec
@@ -412,94 +412,188 @@ def is_slave(body) -> bool:
     return getattr(body, "gen_joint", None) is not None
 
 
+class GenKinematics:
+    r"""Poses, velocities, accelerations and pose Jacobians of every slave body in the
+    layout's (independent) coordinates, derived *recursively* (masters first): with the
+    joint's local relation ``p_s = F(x, t)`` (``x`` = the master's pose symbols and the joint's
+    coordinates, ``x_dot`` their rates)::
+
+        p_s_dot  = sum_x F_x x_dot                    J_s = sum_x F_x J_x
+        p_s_ddot = sum_x (V_x x_dot + V_xdot x_ddot)  (V = p_s_dot)
+
+    then the master's own expressions replace ``x, x_dot, x_ddot``. Each derivative is of
+    one joint's small expression, never of the nested chain (SymEngine when installed).
+
+    ``pos``/``vel``/``acc`` map slave symbols to expressions, ``jac`` maps a slave's pose
+    symbol to ``{layout index: dp/dq_i}``; ``sympy`` is the SymPy substitution dict.
+    """
+
+    def __init__(self, model, layout):
+        try:
+            import symengine as se
+        except ImportError:  # pragma: no cover
+            se = None
+        conv = se.sympify if se is not None else sp.sympify
+        self.conv = conv
+        joints = {c.slave: c for c in gen_joints(model)}
+        space = model.space
+        qs = list(layout.q_symbols)
+        index = {s: i for i, s in enumerate(qs)}
+        self.pos, self.vel, self.acc, self.jac = {}, {}, {}, {}
+        self.index = index
+        tsym = conv(T)
+
+        def resolve(body):
+            if body.q[0] in self.pos:
+                return
+            j = joints[body]
+            if j.master is not None and j.master in joints:
+                resolve(j.master)
+            r, rot = j.pose(space)
+            F = [conv(e) for e in [*r, *rot]]
+            slaves = set(self.pos)
+            free = set().union(*(sp.sympify(e).free_symbols for e in [*r, *rot]))
+            X = [x for x in free if x in index or x in slaves]
+            xd = {x: conv(velocity_symbol(x.name)) for x in X}
+            xdd = {x: conv(acceleration_symbol(x.name)) for x in X}
+            cx = {x: conv(x) for x in X}
+            has_t = T in free
+            sub = {}
+            for x in X:
+                if x in slaves:
+                    sub[cx[x]] = self.pos[x]
+                    sub[xd[x]] = self.velocity(x)
+                    sub[xdd[x]] = self.acceleration(x)
+            for s, f in zip(body.q, F):
+                parts = {x: f.diff(cx[x]) for x in X}
+                v = sum((parts[x] * xd[x] for x in X if parts[x] != 0), conv(0))
+                if has_t:
+                    v = v + f.diff(tsym)
+                a = sum((v.diff(cx[x]) * xd[x] + v.diff(xd[x]) * xdd[x] for x in X), conv(0))
+                if has_t:
+                    a = a + v.diff(tsym)
+                row: dict = {}
+                for x in X:
+                    if parts[x] == 0:
+                        continue
+                    px = parts[x].xreplace(sub) if sub else parts[x]
+                    for i, d in (self.jac[x].items() if x in slaves else [(index[x], conv(1))]):
+                        row[i] = row[i] + px * d if i in row else px * d
+                self.jac[s] = row
+                self.pos[s] = f.xreplace(sub) if sub else f
+                self.vel[velocity_symbol(s.name)] = v.xreplace(sub) if sub else v
+                self.acc[acceleration_symbol(s.name)] = a.xreplace(sub) if sub else a
+
+        for b in joints:
+            resolve(b)
+        # velocities keyed by the pose symbol too, for the projection
+        self._sympy = None
+
+    def velocity(self, s):
+        return self.vel[velocity_symbol(s.name)]
+
+    def acceleration(self, s):
+        return self.acc[acceleration_symbol(s.name)]
+
+    @property
+    def sympy(self) -> dict:
+        """SymPy ``{slave symbol: expression}`` for coordinates, velocities, accelerations;
+        each value converted from SymEngine on first use (large chains need few of them)."""
+        if self._sympy is None:
+            self._sympy = _LazySympy({k: v for d in (self.pos, self.vel, self.acc)
+                                      for k, v in d.items()})
+        return self._sympy
+
+    def jac_sympy(self, s) -> dict:
+        """``jac[s]`` with SymPy values (cached)."""
+        from .._symbols import restore_assumptions
+
+        cache = self.__dict__.setdefault("_jac_sympy", {})
+        if s not in cache:
+            cache[s] = {i: restore_assumptions(sp.sympify(v)) for i, v in self.jac[s].items()}
+        return cache[s]
+
+
+class _LazySympy(dict):
+    """A substitution dict (for ``xreplace``) whose SymEngine values become SymPy on first
+    lookup."""
+
+    def __init__(self, native: dict):
+        super().__init__({k: None for k in native})
+        self._native = native
+
+    def __getitem__(self, key):
+        v = dict.__getitem__(self, key)
+        if v is None:
+            from .._symbols import restore_assumptions
+
+            v = restore_assumptions(sp.sympify(self._native[key]))
+            dict.__setitem__(self, key, v)
+        return v
+
+    def get(self, key, default=None):
+        return self[key] if key in self else default
+
+    def items(self):
+        return [(k, self[k]) for k in self]
+
+    def values(self):
+        return [self[k] for k in self]
+
+
 def substitution(model, layout) -> dict:
-    """``{slave symbol: expression}`` for the coordinates, velocities and accelerations of
-    every slave body, in the layout's (independent) coordinates; masters resolved first."""
-    joints = {c.slave: c for c in gen_joints(model)}
-    if not joints:
-        return {}
-    space = model.space
-    q, qd, qdd = layout.q_symbols, layout.qd_symbols, layout.qdd_symbols
-    pos: dict = {}
-    done: set = set()
-
-    def resolve(body):
-        if body in done:
-            return
-        j = joints[body]
-        if j.master is not None and j.master in joints:
-            resolve(j.master)
-        r, rot = j.pose(space)
-        exprs = [*r, *rot]
-        for s, e in zip(body.q, exprs):
-            pos[s] = e.xreplace(pos) if pos else e
-        done.add(body)
-
-    for b in joints:
-        resolve(b)
-    out = dict(pos)
-    for s, e in pos.items():
-        v = _derivative(e, q, qd, qdd)
-        a = _derivative(v, q, qd, qdd)
-        out[velocity_symbol(s.name)] = v
-        out[acceleration_symbol(s.name)] = a
-    return out
+    """``{slave symbol: expression}`` (SymPy) for the coordinates, velocities and
+    accelerations of every slave body, in the layout's coordinates (see GenKinematics)."""
+    return GenKinematics(model, layout).sympy
 
 
-def project_inertia(body, Tb, Mb, Qvb, gen: dict, layout) -> tuple:
+def project_inertia(body, Tb, Mb, Qvb, kin: GenKinematics) -> tuple:
     r"""A slave's kinetic energy, mass matrix and velocity forces on the independent
-    coordinates. With the pose ``p = P(q)``, ``p_dot = J q_dot`` (``J = dP/dq``) and
-    ``p_ddot = J q_ddot + h``, ``h = J_dot q_dot``, Lagrange's equations transform as::
+    coordinates. With the pose ``p = P(q)``, ``p_dot = J q_dot`` and ``p_ddot = J q_ddot +
+    h`` (``h = J_dot q_dot``: ``p_ddot`` at ``q_ddot = 0``), Lagrange's equations transform
+    as::
 
         M_q  = J^T M_b(P) J
         Qv_q = J^T (Qv_b(P, J q_dot) - M_b(P) h)
 
     (``M_b``, ``Qv_b`` the body's terms in its own pose coordinates, ``_dynamics``).
-    Returns ``(T, {(i, j): M_ij}, {i: Qv_i})`` with layout indices, expressions of the
-    type the body terms have (SymEngine when installed)."""
-    try:
-        import symengine as se
-    except ImportError:  # pragma: no cover
-        se = None
-    native = se is not None and isinstance(Tb, se.Basic)
-    conv = se.sympify if native else sp.sympify
+    Returns ``(T, {(i, j): M_ij}, {i: Qv_i})`` with layout indices."""
+    conv = kin.conv
     p = list(body.q)
-    pd = [velocity_symbol(s.name) for s in p]
-    pdd = [acceleration_symbol(s.name) for s in p]
-    P = [gen[s] for s in p]
-    qs = layout.q_symbols
-    deps = [i for i, s in enumerate(qs) if any(s in e.free_symbols for e in P)]
-    J = [[conv(sp.diff(P[a], qs[i])) for i in deps] for a in range(len(p))]
-    no_qdd = {a: sp.S.Zero for a in layout.qdd_symbols}
-    h = [conv(gen[a].xreplace(no_qdd)) for a in pdd]
-    sub = {conv(s): conv(gen[s]) for s in [*p, *pd]}
-    Ms = [[e.xreplace(sub) if e != 0 else e for e in row] for row in Mb]
-    Qs = [e.xreplace(sub) for e in Qvb]
-    n, k = len(p), len(deps)
-    MJ = [[sum((Ms[a][b] * J[b][j] for b in range(n) if Ms[a][b] != 0 and J[b][j] != 0),
-               conv(0)) for j in range(k)] for a in range(n)]
+    n = len(p)
+    deps = sorted(set().union(*(kin.jac[s].keys() for s in p)))
+    k = len(deps)
+    zero = conv(0)
+    J = [[kin.jac[s].get(i, zero) for i in deps] for s in p]
+    h = [kin.acceleration(s) for s in p]
+    qdd0 = {conv(a): zero for a in _layout_qdd(kin)}
+    h = [e.xreplace(qdd0) for e in h]
+    sub = {conv(s): kin.pos[s] for s in p}
+    sub.update({conv(velocity_symbol(s.name)): kin.velocity(s) for s in p})
+    Ms = [[conv(e).xreplace(sub) if e != 0 else zero for e in row] for row in Mb]
+    Qs = [conv(e).xreplace(sub) for e in Qvb]
+    MJ = [[sum((Ms[a][b] * J[b][j] for b in range(n) if Ms[a][b] != 0 and J[b][j] != 0), zero)
+           for j in range(k)] for a in range(n)]
     blocks = {}
     for i in range(k):
         for j in range(i, k):
-            v = sum((J[a][i] * MJ[a][j] for a in range(n) if J[a][i] != 0 and MJ[a][j] != 0), conv(0))
+            v = sum((J[a][i] * MJ[a][j] for a in range(n) if J[a][i] != 0 and MJ[a][j] != 0), zero)
             if v != 0:
                 blocks[(deps[i], deps[j])] = v
                 if i != j:
                     blocks[(deps[j], deps[i])] = v
-    rest = [Qs[a] - sum((Ms[a][b] * h[b] for b in range(n) if Ms[a][b] != 0 and h[b] != 0), conv(0))
+    rest = [Qs[a] - sum((Ms[a][b] * h[b] for b in range(n) if Ms[a][b] != 0 and h[b] != 0), zero)
             for a in range(n)]
     forces = {}
     for i in range(k):
-        v = sum((J[a][i] * rest[a] for a in range(n) if J[a][i] != 0 and rest[a] != 0), conv(0))
+        v = sum((J[a][i] * rest[a] for a in range(n) if J[a][i] != 0 and rest[a] != 0), zero)
         if v != 0:
             forces[deps[i]] = v
-    return Tb.xreplace(sub), blocks, forces
+    return conv(Tb).xreplace(sub), blocks, forces
 
 
-def _derivative(e, q, qd, qdd):
-    from ..compile._derive import time_derivative
-
-    return time_derivative(e, q, qd, qdd)
+def _layout_qdd(kin) -> list:
+    return [acceleration_symbol(s.name) for s in kin.index]
 
 
 def apply(sub: dict, expr):
