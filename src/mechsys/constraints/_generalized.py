@@ -514,6 +514,112 @@ class GenKinematics:
         return cache[s]
 
 
+def slave_refused(body, what: str) -> ModelError:
+    """Mech 11.2: a slave body has no Cartesian coordinates of its own, so the loads and
+    reactions *on it* are not defined; those on the generalized coordinates are."""
+    j = body.gen_joint
+    syms = ", ".join(repr(s.name) for s in j.coordinates)
+    return ModelError(
+        f"{what} on body {body.name!r}: it is the slave of {j.label()} and has no coordinates "
+        f"of its own (Mech 11.2); ask for the {what} on its generalized coordinate(s) {syms} "
+        f"(e.g. sol.loads(sym), sol.reaction(constraint, sym)), or for the force the joint "
+        "transmits with sol.joint_reaction(joint)")
+
+
+def generalized_reaction(model, c, coordinate, lams):
+    r"""Mech 11.2's ``Reaction[cnum, sym]``: the generalized load constraint ``c`` applies to
+    the coordinate ``sym``, ``-(dPhi_c/dsym)^T lambda_c`` (a moment for an angle, a force for
+    a distance). A Gen joint is not a constraint and applies none (``ModelError``)."""
+    if isinstance(c, GenJoint):
+        raise ModelError(f"reaction of {c.label()}: a generalized-coordinate joint is not a "
+                         "constraint and has no multipliers (Mech 11.2); use "
+                         "sol.joint_reaction(joint) for the force and moment it transmits, or "
+                         "sol.loads(sym) for the loads on its coordinates")
+    if not isinstance(coordinate, sp.Symbol) or coordinate not in model._coordinate_symbols():
+        raise ModelError(f"reaction of {c.label()} on {coordinate!r}: give a body or a coordinate "
+                         "symbol of this model")
+    sub = model._gen_substitution()
+    eqs = [e.xreplace(sub) if sub else e for e in c.equations(model.space)]
+    lam = lams(c)
+    return -sp.Add(*(e.diff(coordinate) * la for e, la in zip(eqs, lam)))
+
+
+def joint_generalized_load(model, joint: GenJoint, lams) -> list:
+    r"""The load the master applies to the slave through ``joint``, generalized on the slave's
+    own pose coordinates ``p_s``: Newton-Euler on the subtree the joint carries (the slave
+    and every body whose chain of masters passes through it), moved rigidly with ``p_s``::
+
+        G_s = sum_b (d p_b / d p_s)^T (M_b p_b_ddot - Qv_b - Q_b + Phi_c,p_b^T lambda_c)
+
+    (``M_b``, ``Qv_b`` body ``b``'s inertia terms and ``Q_b`` its applied loads in its own
+    pose coordinates, the last term the ordinary constraints acting on ``b``). Loads on the
+    subtree's own generalized coordinates are internal to it and cancel. Expressions of the
+    slaves' symbols (substituted on output)."""
+    from .._symbols import restore_assumptions
+    from ..compile._dynamics import _mass_key, body_terms
+    from ..loads._loads import BodyMoment, PointForce
+
+    space = model.space
+    s = joint.slave
+    children: dict = {}
+    for c in gen_joints(model):
+        children.setdefault(c.master, []).append(c)
+    # subtree poses in the slave's symbols
+    expr = {x: x for x in s.q}
+    order = [s]
+    stack = [s]
+    while stack:
+        b = stack.pop()
+        for c in children.get(b, []):
+            r, rot = c.pose(space)
+            for x, e in zip(c.slave.q, [*r, *rot]):
+                expr[x] = e.xreplace({k: v for k, v in expr.items() if k in e.free_symbols})
+            order.append(c.slave)
+            stack.append(c.slave)
+    members = set(order)
+    X = {b: [sp.S.Zero] * len(b.q) for b in order}
+    for b in order:
+        rates = tuple(velocity_symbol(x.name) for x in b.q)
+        _, Mb, Qvb = body_terms(space, tuple(b.q), rates, *_mass_key(space, b))
+        acc = [acceleration_symbol(x.name) for x in b.q]
+        for a in range(len(b.q)):
+            row = sp.Add(*(restore_assumptions(sp.sympify(Mb[a][k])) * acc[k]
+                           for k in range(len(b.q)) if Mb[a][k] != 0))
+            X[b][a] += row - restore_assumptions(sp.sympify(Qvb[a]))
+    for ld in model._loads:
+        for c in ld.contributions(model):
+            if isinstance(c, PointForce) and c.point.body in members:
+                b = c.point.body
+                r = list(c.point.location())
+                for a, x in enumerate(b.q):
+                    X[b][a] -= sp.Add(*(ri.diff(x) * fi for ri, fi in zip(r, c.force)))
+            elif isinstance(c, BodyMoment) and c.body in members:
+                b = c.body
+                rates = [velocity_symbol(x.name) for x in b.q]
+                w = space.as_rotation_vector(space.omega(b.q[space.dim:], rates[space.dim:]))
+                Mv = space.as_rotation_vector(c.moment)
+                for a, v in enumerate(rates):
+                    X[b][a] -= (w.diff(v).T * Mv)[0, 0]
+    for c in model._constraints:
+        if isinstance(c, GenJoint) or not (set(c.bodies()) & members):
+            continue
+        try:
+            lam = lams(c)
+        except ModelError:  # dropped by free(): no multipliers
+            continue
+        eqs = c.equations(space)
+        for b in order:
+            if b not in c.bodies():
+                continue
+            for a, x in enumerate(b.q):
+                X[b][a] += sp.Add(*(e.diff(x) * la for e, la in zip(eqs, lam)))
+    G = []
+    for y in s.q:
+        G.append(sp.Add(*(expr[x].diff(y) * X[b][a] for b in order
+                          for a, x in enumerate(b.q) if X[b][a] != 0)))
+    return G
+
+
 class _LazySympy(dict):
     """A substitution dict (for ``xreplace``) whose SymEngine values become SymPy on first
     lookup."""
