@@ -119,3 +119,160 @@ def test_energy_is_conserved(pendulums):
     dyn = g.free().system.dynamics
     E = sg.eval(sp.Add(*dyn.kinetic.values()) + dyn.potential)
     assert np.ptp(E) < 1e-8
+
+
+def test_slider_on_gen_translate_with_spring_closed_form():
+    """A mass on an inclined GenTranslate2 slide, held by a spring along the slide:
+    s(t) = s_eq + (s0 - s_eq) cos(w t) + v0/w sin(w t), w^2 = k/m, s_eq = -m g sin(a)/k."""
+    ang, k, mass, s0, v0 = np.radians(30), 40.0, 2.0, 0.25, -0.3
+    u = (np.cos(ang), np.sin(ang))
+    m = ms.Model2D()
+    cart = m.add_body("cart", points={"o": (0, 0)}, mass=mass, inertia=0.05, centroid=(0.1, 0.05))
+    m.add(ms.GenTranslate2(cart.axis("o"), m.ground.axis((0, 0), u), ("s", s0)), name="slide")
+    m.add_load(ms.Spring(cart.point("o"), m.ground.point((-u[0], -u[1])), stiffness=k,
+                         free_length=1.0))
+    m.add_load(ms.Gravity((0, -1), G))
+    assert m.compile().layout.q_names == ("s",)
+    t = np.linspace(0, 2, 9)
+    sol = m.free().simulate(t, initial_condition={"s": s0, "s_d": v0}, rtol=1e-12, atol=1e-12)
+    w = np.sqrt(k / mass)
+    s_eq = -mass * G * np.sin(ang) / k
+    exact = s_eq + (s0 - s_eq) * np.cos(w * t) + v0 / w * np.sin(w * t)
+    np.testing.assert_allclose(sol["s"], exact, atol=1e-9)
+    # the slave turns with the slide's direction (its axis, local x, is parallel to it)
+    np.testing.assert_allclose(np.ravel(sol.eval(cart.q[2])), ang, atol=1e-14)
+    np.testing.assert_allclose(sol.location(cart.point("o")), np.outer(sol["s"], u), atol=1e-12)
+    # static equilibrium in the generalized coordinate
+    eq = m.free(solution="static").solve()
+    assert abs(float(np.ravel(eq["s"])[0]) - s_eq) < 1e-10
+
+
+def _four_bar(gen_rocker: bool):
+    """Crank a and coupler b on a Gen chain from ground; rocker c (Gen or absolute) closed
+    on the coupler's tip by a Revolute2; the crank angle driven."""
+    a_, b_, c_, d_ = 1.0, 3.0, 2.5, 3.2
+    m = ms.Model2D()
+    crank = m.add_body("crank", points={"o": (0, 0), "e": (a_, 0)})
+    coupler = m.add_body("coupler", points={"o": (0, 0), "e": (b_, 0)})
+    rocker = m.add_body("rocker", points={"o": (0, 0), "e": (c_, 0)}, guess=((d_, 0), 1.8))
+    m.add(ms.GenRevolute2(crank.axis("o"), m.ground.axis((0, 0)), ("th", 0.5)), name="j1")
+    m.add(ms.GenRevolute2(coupler.axis("o"), crank.axis("e"), ("phi", 0.5)), name="j2")
+    if gen_rocker:
+        m.add(ms.GenRevolute2(rocker.axis("o"), m.ground.axis((d_, 0)), ("psi", 1.8)), name="j4")
+    else:
+        m.add(ms.Revolute2(rocker.point("o"), m.ground.point((d_, 0))), name="j4")
+    m.add(ms.Revolute2(coupler.point("e"), rocker.point("e")), name="close")
+    m.add(ms.Constraint(sp.Symbol("th") - 0.5 - 2 * ms.T), name="drive")
+    return m, (a_, b_, c_, d_)
+
+
+@pytest.mark.parametrize("gen_rocker", [True, False])
+def test_four_bar_closed_on_gen_chain_freudenstein(gen_rocker):
+    m, (a_, b_, c_, d_) = _four_bar(gen_rocker)
+    assert int(m.dof()) == 0
+    t = np.linspace(0, 1, 6)
+    sol = m.solve(t)
+    th = np.ravel(sol["th"])
+    psi = np.ravel(sol.eval(m.body("rocker").q[2]))
+    K1, K2, K3 = d_ / a_, d_ / c_, (a_**2 - b_**2 + c_**2 + d_**2) / (2 * a_ * c_)
+    res = K1 * np.cos(psi) - K2 * np.cos(th) + K3 - np.cos(th - psi)
+    assert np.abs(res).max() < 1e-10
+    np.testing.assert_allclose(th, 0.5 + 2 * t, atol=1e-12)
+    # the rocker's angular velocity by finite differences of the position solution
+    h = 1e-4
+    p = np.ravel(m.solve([0.3 - h, 0.3 + h], solution="location").eval(m.body("rocker").q[2]))
+    w = np.ravel(m.solve(0.3, solution="velocity").omega("rocker"))[0]
+    assert abs(w - (p[1] - p[0]) / (2 * h)) < 1e-6 * max(1.0, abs(w))
+
+
+def test_torque_on_joint_angle_inverse_dynamics_and_statics():
+    """Loads on a generalized coordinate (a torque on a joint angle) and Mech 11.2's
+    Reaction[cnum, sym]: the driver's reaction on the coordinate is the joint torque."""
+    m = gen_pendulum()
+    th1, th2 = sp.symbols("t1 t2")
+    m.add(ms.Constraint(th1 - 0.3 - ms.T), name="d1")
+    m.add(ms.Constraint(th2 - 0.2 + 0.5 * ms.T**2), name="d2")
+    sol = m.solve([0.0, 0.4], solution="dynamic")
+    y = np.array([np.ravel(sol["t1"]), np.ravel(sol["t2"]),
+                  np.ravel(sol.coordinate("t1", 1)), np.ravel(sol.coordinate("t2", 1))])
+    qdd = np.array([np.ravel(sol.coordinate("t1", 2)), np.ravel(sol.coordinate("t2", 2))])
+    for k in range(2):
+        # torques the minimal ODE needs for these accelerations: tau = M qdd + c + g
+        free_qdd = np.array(minimal_rhs(0, y[:, k])[2:])
+        M = _minimal_mass(y[1, k])
+        tau = M @ (qdd[:, k] - free_qdd)
+        np.testing.assert_allclose([np.ravel(sol.reaction("d1", th1))[k],
+                                    np.ravel(sol.reaction("d2", th2))[k]], tau, atol=1e-9)
+    # statics: a torque on t2 holds link b horizontal-ish; the load on the coordinate balances
+    s = m.solve(0.0, solution="static")
+    assert abs(float(np.ravel(s.loads(th2, "applied"))[0]
+                     + np.ravel(s.loads(th2, "reaction"))[0])) < 1e-10
+    with pytest.raises(ms.ModelError, match="slave of"):
+        s.loads("b")
+    with pytest.raises(ms.ModelError, match="not a constraint"):
+        s.reaction("j1", "a")
+
+
+def _minimal_mass(q2):
+    d1 = C1[0]
+    d2, de = np.hypot(*C2), np.arctan2(C2[1], C2[0])
+    c = np.cos(q2 + de)
+    return np.array([[M1 * d1**2 + J1 + M2 * (L1**2 + d2**2 + 2 * L1 * d2 * c) + J2,
+                      M2 * (d2**2 + L1 * d2 * c) + J2],
+                     [M2 * (d2**2 + L1 * d2 * c) + J2, M2 * d2**2 + J2]])
+
+
+def test_moment_load_on_slave_and_gen_constraint():
+    """A Moment on a slave body (reacted on its master) equals a Load on its joint angle;
+    GenConstraint reproduces GenRevolute2 (user-defined relation)."""
+    m1 = gen_pendulum()
+    m1.add_load(ms.Moment("b", 3.0, reaction="a"))
+    m2 = gen_pendulum()
+    m2.add_load(ms.Load(sp.Symbol("t2"), 3.0))
+    ic = {"t1": 0.3, "t2": 0.2, "t1_d": 0.4}
+    a1 = m1.free().solve(0.0, initial_condition=ic).qdd
+    a2 = m2.free().solve(0.0, initial_condition=ic).qdd
+    np.testing.assert_allclose(a1, a2, atol=1e-12)
+    m3 = ms.Model2D()
+    a, b = _links(m3)
+    m3.add(ms.GenConstraint(a.point("o"), m3.ground.point((0, 0)), "t1", ("t1", 0.3)))
+    m3.add(ms.GenConstraint(b.point("o"), a.point("e"), "t2", ("t2", 0.2)))
+    m3.add_load(ms.Gravity((0, -1), G))
+    m3.add_load(ms.Moment("b", 3.0, reaction="a"))
+    a3 = m3.free().solve(0.0, initial_condition=ic).qdd
+    np.testing.assert_allclose(a1, a3, atol=1e-12)
+
+
+def test_bad_input_names_the_joint():
+    m = ms.Model2D()
+    a = m.add_body("a", points={"e": (1, 0)})
+    b = m.add_body("b")
+    m.add(ms.GenRevolute2(a.axis(0), m.ground.axis((0, 0)), ("t1", 0)), name="j1")
+    with pytest.raises(ms.ModelError, match="'j2'.*already the slave of constraint 'j1'"):
+        m.add(ms.GenRevolute2(a.axis(0), b.axis(0), ("t9", 0)), name="j2")
+    with pytest.raises(ms.ModelError, match="slave of itself"):
+        ms.GenRevolute2(a.axis(0), a.axis("e"), ("t9", 0))
+    m.add(ms.GenRevolute2(b.axis(0), a.axis("e"), ("t2", 0)), name="j3")
+    c = m.add_body("c")
+    with pytest.raises(ms.ModelError, match="'j4'.*loop"):  # a's master would be b: a loop
+        m2 = ms.Model2D()
+        x = m2.add_body("x")
+        y = m2.add_body("y")
+        m2.add(ms.GenRevolute2(x.axis(0), y.axis(0), ("u", 0)), name="j1")
+        m2.add(ms.GenRevolute2(y.axis(0), x.axis(0), ("v", 0)), name="j4")
+    with pytest.raises(ms.ModelError, match="'j5'.*'t2' is already a variable"):
+        m.add(ms.GenRevolute2(c.axis(0), b.axis(0), ("t2", 0)), name="j5")
+    other = ms.Model2D()
+    stranger = other.add_body("stranger")
+    with pytest.raises(ms.ModelError, match="'j6'.*'stranger' is not a body of this model"):
+        m.add(ms.GenRevolute2(c.axis(0), stranger.axis(0), ("t3", 0)), name="j6")
+    with pytest.raises(ms.ModelError, match="ground"):
+        ms.GenRevolute2(m.ground.axis((0, 0)), a.axis(0), ("t4", 0))
+    with pytest.raises(ms.ModelError, match="name"):
+        m.add(ms.GenRevolute2(c.axis(0), b.axis(0), ("x4", 0)), name="j7")
+    with pytest.raises(ms.GeometryError, match="entirely on one body"):
+        ms.GenRevolute2(ms.Axis(c.point(0), ms.Vector(c.point(0), a.point("e"))), b.axis(0), ("t5", 0))
+    m3 = ms.Model3D()
+    z = m3.add_body("z")
+    with pytest.raises(ms.ModelError, match="GenRevolute2.*planar"):
+        m3.add(ms.GenRevolute2(z.axis(0), ((0, 0, 0), (0, 0, 1)), ("t", 0)))

@@ -25,7 +25,7 @@ import sympy as sp
 
 from .._errors import GeometryError, ModelError
 from .._symbols import T, acceleration_symbol, velocity_symbol
-from ..geometry._points import Axis, GlobalVector, as_point
+from ..geometry._points import Axis, GlobalVector, as_axis, as_point
 from ..geometry._rotations import _from_matrix, quaternion_inverse, quaternion_product
 from ..geometry._rotations import _parse as _rotation_spec
 from ._base import ConstraintBase, Variable
@@ -53,9 +53,12 @@ class GenJoint(ConstraintBase):
     """
 
     dof_removed = None  # negative: -len(coordinates), see count_removed
+    _axes = True  # the arguments are axes (GenConstraint: points)
 
     def __init__(self, slave_geometry, master_geometry, coordinates):
         super().__init__()
+        if self._axes:
+            slave_geometry, master_geometry = as_axis(slave_geometry), as_axis(master_geometry)
         self._g1, self._g2 = slave_geometry, master_geometry
         who = type(self).__name__
         self._vars = [_variable(c, who) for c in coordinates]
@@ -327,6 +330,7 @@ class GenConstraint(GenJoint):
     """
 
     mech_name = "GenConstraint"
+    _axes = False
 
     def __init__(self, point1, point2, rot, *coordinates):
         if not coordinates:
