@@ -272,13 +272,16 @@ class System:
         """Compile any expressions of ``T, q, qd, qdd, lambda, p`` (cached) as a function of
         ``[t, q, qd, qdd, lambda, p]``."""
         key = tuple(sp.sympify(e) for e in exprs)
-        if self.gen_subs:
-            key = tuple(e.xreplace(self.gen_subs) for e in key)
         f = self._eval_cache.get(key)
         if f is None:
             lay = self.layout
             args = [T, *lay.q_symbols, *lay.qd_symbols, *lay.qdd_symbols, *self.lam_symbols,
                     *lay.p_symbols]
+            if self.gen_subs:  # slave-body symbols: their values first (Gen joints)
+                from ..constraints._generalized import compile_with_slaves
+
+                f = self._eval_cache[key] = compile_with_slaves(self, args, key)
+                return f
             allowed = set(args)
             for e in key:
                 extra = e.free_symbols - allowed
