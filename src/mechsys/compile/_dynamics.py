@@ -137,6 +137,7 @@ def generalized_forces(model, loads, layout) -> list:
     qd_of = dict(zip(layout.q_symbols, layout.qd_symbols))
     index = {s: i for i, s in enumerate(layout.q_symbols)}
     gen = model._gen_substitution() if hasattr(model, "_gen_substitution") else {}
+    projected: dict = {}  # layout index -> the slaves' projected loads
     Q = [sp.S.Zero] * n
     for load in loads:
         for c in load.contributions(model):
@@ -153,8 +154,8 @@ def generalized_forces(model, loads, layout) -> list:
                 r = list(c.point.location())
                 F = list(c.force)
                 if gen and body.gen_joint is not None:  # a slave: project on q (J^T Q_p)
-                    _project(Q, body, [sp.Add(*(ri.diff(s) * fi for ri, fi in zip(r, F)))
-                                       for s in body.q], model)
+                    _project(projected, body, [sp.Add(*(ri.diff(s) * fi for ri, fi in zip(r, F)))
+                                               for s in body.q], model)
                     continue
                 for s in body.q:
                     # scalar diffs: Matrix.diff goes through SymPy's array derivatives (slow)
@@ -169,26 +170,36 @@ def generalized_forces(model, loads, layout) -> list:
                     rates = [velocity_symbol(s.name) for s in body.q]
                     w = model.space.as_rotation_vector(
                         model.space.omega(rot, rates[model.space.dim:], local=False))
-                    _project(Q, body, [(w.diff(v).T * M)[0, 0] for v in rates], model)
+                    _project(projected, body, [(w.diff(v).T * M)[0, 0] for v in rates], model)
                     continue
                 w = model.space.as_rotation_vector(
                     model.space.omega(rot, [qd_of[s] for s in rot], local=False))
                 for s in body.q:
                     Q[index[s]] += (w.diff(qd_of[s]).T * M)[0, 0]
     if gen:  # load magnitudes of slave coordinates (a spring to a slave point)
-        Q = [sp.sympify(e).xreplace(gen) for e in Q]
+        slaves = set(gen)
+        Q = [e.xreplace(gen) if (e := sp.sympify(q)).free_symbols & slaves else e for q in Q]
+        from .._symbols import restore_assumptions
+
+        for i, v in projected.items():  # slaves' loads, projected natively (SymEngine)
+            Q[i] += restore_assumptions(sp.sympify(v))
     return Q
 
 
-def _project(Q, body, Qp, model) -> None:
-    """Add a slave's generalized force ``Qp`` (on its own pose coordinates) to ``Q`` as
-    ``J^T Qp`` (``J`` its pose Jacobian, ``constraints/_generalized.GenKinematics``)."""
+def _project(out: dict, body, Qp, model) -> None:
+    """Add a slave's generalized force ``Qp`` (on its own pose coordinates, SymPy, in the
+    slave's symbols) to ``out`` ({layout index: value}) as ``J^T Qp`` (``J`` its pose
+    Jacobian, ``constraints/_generalized.GenKinematics``), natively: SymEngine when
+    installed, where the slave symbols are replaced by their expressions too."""
     kin = model._gen_kinematics()
+    conv = kin.conv
+    native = kin.native_subs
     for s, f in zip(body.q, Qp):
         if f == 0:
             continue
-        for i, d in kin.jac_sympy(s).items():
-            Q[i] += d * f
+        fn = conv(f).xreplace(native)
+        for i, d in kin.jac[s].items():
+            out[i] = out[i] + d * fn if i in out else d * fn
 
 
 class Dynamics:

@@ -496,6 +496,14 @@ class GenKinematics:
     def velocity(self, s):
         return self.vel[velocity_symbol(s.name)]
 
+    @property
+    def native_subs(self) -> dict:
+        """``{slave symbol: expression}`` with native (SymEngine) keys, for ``xreplace``."""
+        if getattr(self, "_native_subs", None) is None:
+            self._native_subs = {self.conv(k): v for d in (self.pos, self.vel, self.acc)
+                                 for k, v in d.items()}
+        return self._native_subs
+
     def acceleration(self, s):
         return self.acc[acceleration_symbol(s.name)]
 
