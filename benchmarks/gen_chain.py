@@ -68,7 +68,7 @@ def build(builder, n_links):
 
 def timed(free, repeat=3):
     best, sol = np.inf, None
-    for k in range(repeat):
+    for _ in range(repeat):
         c0 = time.process_time()
         sol = free.simulate((0.0, T_END), **SETTING)
         dt = time.process_time() - c0
@@ -123,8 +123,10 @@ def report(rows) -> str:
     L.append("")
     for r in rows:
         g, a = r["gen"], r["abs"]
-        L.append(f"* N = {r['N']}: per evaluation Gen / absolute = {g['per_eval_us'] / a['per_eval_us']:.2f}, "
-                 f"compile Gen / absolute = {(g['build'] + g['dynamics']) / (a['build'] + a['dynamics']):.1f}.")
+        per_eval = g["per_eval_us"] / a["per_eval_us"]
+        comp = (g["build"] + g["dynamics"]) / (a["build"] + a["dynamics"])
+        L.append(f"* N = {r['N']}: per evaluation Gen / absolute = {per_eval:.2f}, "
+                 f"compile Gen / absolute = {comp:.1f}.")
     L += ["", END]
     return "\n".join(L)
 

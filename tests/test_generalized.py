@@ -276,3 +276,25 @@ def test_bad_input_names_the_joint():
     z = m3.add_body("z")
     with pytest.raises(ms.ModelError, match="GenRevolute2.*planar"):
         m3.add(ms.GenRevolute2(z.axis(0), ((0, 0, 0), (0, 0, 1)), ("t", 0)))
+
+
+def test_symbolic_outputs_on_the_model_and_rest_selection():
+    """Symbolic outputs of a model with slaves are in the generalized coordinates; Mech's
+    Loads[Rest] selects the model variables, the Gen coordinates among them."""
+    m = gen_pendulum()
+    t1, t2 = sp.symbols("t1 t2")
+    tip = m.location(m.body("b").point("e"))
+    assert sp.simplify(tip[0] - (sp.cos(t1) + sp.cos(t1 + t2))) == 0
+    w = m.omega("b")
+    assert sp.simplify(w - (m.velocity_symbols()[t1] + m.velocity_symbols()[t2])) == 0
+    m.add(ms.Constraint(t1 - 0.3 - ms.T), name="d1")
+    m.add(ms.Constraint(t2 - 0.2), name="d2")
+    s = m.solve([0.0, 0.1], solution="dynamic")
+    rest = np.asarray(s.loads(ms.Rest))
+    assert rest.shape == (2, 2)
+    np.testing.assert_allclose(rest[:, 1], np.ravel(s.loads(t2)), atol=1e-14)
+    # the gravity moment about each joint, by hand (applied load on the joint angles)
+    q1, q2 = np.ravel(s["t1"]), np.ravel(s["t2"])
+    d2, de = np.hypot(*C2), np.arctan2(C2[1], C2[0])
+    g2 = -M2 * G * d2 * np.cos(q1 + q2 + de)
+    np.testing.assert_allclose(rest[:, 1], g2, atol=1e-12)

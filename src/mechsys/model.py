@@ -637,7 +637,9 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
 
     def _finish(self, expr):
         sub = self._gen_substitution()
-        return expr.xreplace(sub) if sub and isinstance(expr, sp.Basic) else expr
+        if sub and isinstance(expr, (sp.Basic, sp.MatrixBase)):
+            return expr.xreplace(sub)
+        return expr
 
     def _point(self, obj) -> Point:
         if isinstance(obj, Axis):
