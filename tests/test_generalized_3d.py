@@ -186,3 +186,26 @@ def test_other_3d_gen_joints_satisfy_the_standard_joint(kind):
     else:
         assert abs(np.arctan2(np.cross(g2, u1) @ u2, g2 @ u1) - vals[0]) < 1e-12
         assert abs(np.arctan2(np.cross(g1, u2) @ u1, g1 @ u2) - vals[1]) < 1e-12
+
+
+def test_gen_constraint_3d_matches_gen_revolute5():
+    """GenConstraint(point1, point2, (angle, axis), (sym, guess)) is the hinge GenRevolute5
+    gives for the same axis, with a slide in the master's local coordinates."""
+    q, s = sp.symbols("q s")
+    poses = []
+    for kind in ("gen", "user"):
+        m = ms.Model3D()
+        base = m.add_body("base", points={"p": (0.3, 0.0, 0.2)})
+        arm = m.add_body("arm", points={"tip": (0.5, 0.2, 0.1)}, mass=1.0, inertia=(0.1, 0.1, 0.1))
+        m.add(ms.GenTranslate5(base.axis(0, (1, 0, 0)), m.ground.axis((0, 0, 0), (1, 0, 0)), (s, 0.1)))
+        if kind == "gen":
+            m.add(ms.GenRevolute5(arm.axis(0, (0, 0, 1)), base.axis("p", (0, 0, 1)), (q, 0.2)))
+        else:
+            m.add(ms.GenConstraint(arm.point(0), base.point("p"), (q, (0, 0, 1)), (q, 0.2)))
+        m.add(ms.Constraint(q - 0.2 - ms.T))
+        m.add(ms.Constraint(s - 0.1 - ms.T**2))
+        sol = m.solve([0.0, 0.7])
+        poses.append((sol.location(arm.point("tip")), sol.velocity(arm.point("tip")),
+                      np.asarray(sol.alpha("arm"))))
+    for a, b in zip(*poses):
+        np.testing.assert_allclose(a, b, atol=1e-12)
