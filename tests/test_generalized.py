@@ -298,3 +298,9 @@ def test_symbolic_outputs_on_the_model_and_rest_selection():
     d2, de = np.hypot(*C2), np.arctan2(C2[1], C2[0])
     g2 = -M2 * G * d2 * np.cos(q1 + q2 + de)
     np.testing.assert_allclose(rest[:, 1], g2, atol=1e-12)
+
+
+def test_slave_angular_velocity_initial_condition_refused():
+    g = gen_pendulum()
+    with pytest.raises(ms.ModelError, match="slave of constraint 'j2'.*t2_d"):
+        g.free().solve(0.0, initial_condition={("omega", "b"): 1.0})

@@ -690,7 +690,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
             return None
         default = np.array([0.0] * dim + list(self.space.zero_rotation()), dtype=float)
         lay = system.layout
-        idle = [b for b in self._bodies[1:] if np.array_equal(g[lay.body_slices[b.name]], default)]
+        idle = [b for b in self._bodies[1:] if b.name in lay.body_slices  # slaves have none
+                and np.array_equal(g[lay.body_slices[b.name]], default)]
         if not idle:
             return None
         rng = np.random.default_rng(12345)  # deterministic: the same report every call

@@ -65,6 +65,8 @@ def stage_system(model, stages) -> System:
             if id(o) not in done:
                 done.add(id(o))
                 rows = o.stage_equations(model.space, chosen[id(o)][1])
+                gen = model._gen_substitution()  # slave bodies (Gen joints): their poses
+                rows = [e.xreplace(gen) for e in rows] if gen else rows
                 eqs += rows
                 owners += [o] * len(rows)
                 index += list(range(len(rows)))
