@@ -412,10 +412,6 @@ def check_new_joint(model, joint: GenJoint) -> None:
                              "variable of the model (another joint's coordinate?); give it a new name")
 
 
-def is_slave(body) -> bool:
-    return getattr(body, "gen_joint", None) is not None
-
-
 class GenKinematics:
     r"""Poses, velocities, accelerations and pose Jacobians of every slave body in the
     layout's (independent) coordinates, derived *recursively* (masters first): with the
@@ -490,7 +486,6 @@ class GenKinematics:
 
         for b in joints:
             resolve(b)
-        # velocities keyed by the pose symbol too, for the projection
         self._sympy = None
 
     def velocity(self, s):
@@ -515,15 +510,6 @@ class GenKinematics:
             self._sympy = _LazySympy({k: v for d in (self.pos, self.vel, self.acc)
                                       for k, v in d.items()})
         return self._sympy
-
-    def jac_sympy(self, s) -> dict:
-        """``jac[s]`` with SymPy values (cached)."""
-        from .._symbols import restore_assumptions
-
-        cache = self.__dict__.setdefault("_jac_sympy", {})
-        if s not in cache:
-            cache[s] = {i: restore_assumptions(sp.sympify(v)) for i, v in self.jac[s].items()}
-        return cache[s]
 
 
 def slave_refused(body, what: str) -> ModelError:
@@ -713,12 +699,6 @@ class _LazySympy(dict):
         return [self[k] for k in self]
 
 
-def substitution(model, layout) -> dict:
-    """``{slave symbol: expression}`` (SymPy) for the coordinates, velocities and
-    accelerations of every slave body, in the layout's coordinates (see GenKinematics)."""
-    return GenKinematics(model, layout).sympy
-
-
 def project_inertia(body, Tb, Mb, Qvb, kin: GenKinematics) -> tuple:
     r"""A slave's kinetic energy, mass matrix and velocity forces on the independent
     coordinates. With the pose ``p = P(q)``, ``p_dot = J q_dot`` and ``p_ddot = J q_ddot +
@@ -766,17 +746,6 @@ def project_inertia(body, Tb, Mb, Qvb, kin: GenKinematics) -> tuple:
 
 def _layout_qdd(kin) -> list:
     return [acceleration_symbol(s.name) for s in kin.index]
-
-
-def apply(sub: dict, expr):
-    """``expr`` (expression or matrix) with the slaves' symbols replaced."""
-    if not sub:
-        return expr
-    if isinstance(expr, sp.MatrixBase):
-        return expr.xreplace(sub)
-    if isinstance(expr, sp.Basic):
-        return expr.xreplace(sub)
-    return expr
 
 
 __all__ = [t.__name__ for t in GEN_TYPES] + ["GEN_TYPES", "GenJoint"]
