@@ -235,7 +235,7 @@ class Dynamics:
                 kinetic[b.name] = Tb
                 continue
             if slave:  # the slave's inertia projected on the coordinates it depends on
-                from ..constraints._generalized import project_inertia
+                from ._generalized import project_inertia
 
                 kinetic[b.name], blocks, forces = project_inertia(b, Tb, Mb, Qvb,
                                                                   model._gen_kinematics())

@@ -278,7 +278,7 @@ class System:
             args = [T, *lay.q_symbols, *lay.qd_symbols, *lay.qdd_symbols, *self.lam_symbols,
                     *lay.p_symbols]
             if self.gen_subs:  # slave-body symbols: their values first (Gen joints)
-                from ..constraints._generalized import compile_with_slaves
+                from ._generalized import compile_with_slaves
 
                 f = self._eval_cache[key] = compile_with_slaves(self, args, key)
                 return f

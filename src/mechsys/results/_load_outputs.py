@@ -149,7 +149,8 @@ class LoadOutputs:
         joint is not a constraint). Includes any load on the joint's own coordinates (an
         actuator torque); needs accelerations (a dynamic or free-motion solution) when the
         carried bodies have mass."""
-        from ..constraints._generalized import GenJoint, joint_generalized_load
+        from ..constraints._generalized import GenJoint
+        from ._generalized import joint_generalized_load
 
         m = self._model()
         c = m.constraint(joint)

@@ -147,7 +147,7 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews):
         lay = self.system.layout
         free = set().union(*(e.free_symbols for e in m)) if len(m) else set()
         if self.system.gen_subs:  # slave symbols stand for expressions of q, qd, qdd
-            from ..constraints._generalized import slave_dependencies
+            from ..compile._generalized import slave_dependencies
 
             free |= slave_dependencies(self.system, free)
         for order, syms in ((2, lay.qdd_symbols), (1, lay.qd_symbols)):  # the highest first
