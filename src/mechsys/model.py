@@ -23,9 +23,10 @@ from ._errors import (
     UnknownConstraintError,
     parameter_value,
 )
-from ._symbols import T
+from ._symbols import T, velocity_symbol
 from .compile import System, make_layout, time_derivative
 from .constraints import Constraint, ConstraintBase, Variable
+from .constraints._generalized import GenJoint, GenKinematics, check_new_joint
 from .constraints._switches import StageSwitch
 from .geometry._bodies import Body
 from .geometry._points import Axis, Point, Vector, as_point, as_vector
@@ -369,11 +370,19 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
                                  "give its variable explicitly as (sym, guess)")
         if isinstance(constraint, StageSwitch):
             constraint.check_stages(self.space, name)
+        if isinstance(constraint, GenJoint):
+            constraint.name, constraint.number = name, len(self._constraints) + 1
+            try:
+                check_new_joint(self, constraint)
+            finally:
+                constraint.name = constraint.number = None
         self._validate(constraint)
         constraint.name = name
         constraint.number = len(self._constraints) + 1
         constraint.model = self
         self._constraints.append(constraint)
+        if isinstance(constraint, GenJoint):
+            constraint.slave.gen_joint = constraint
         for v in constraint.new_variables():
             if all(v.symbol != w.symbol for w in self._variables):
                 self._variables.append(v)
@@ -420,6 +429,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         """Remove a constraint (by handle, name or number); later ones keep their numbers."""
         c = self.constraint(spec)
         self._constraints.remove(c)
+        if isinstance(c, GenJoint):
+            c.slave.gen_joint = None
         c.model = None
         self._touch()
         return c
@@ -429,6 +440,10 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         old = self.constraint(spec)
         if new.model is not None:
             raise ModelError(f"{new.label()} is already in a model")
+        if isinstance(old, GenJoint) or isinstance(new, GenJoint):
+            raise ModelError(f"replace: {old.label()} -> {type(new).__name__}: generalized-"
+                             "coordinate joints change the model's coordinates; remove and add "
+                             "them instead")
         if isinstance(new, StageSwitch):
             new.check_stages(self.space, old.name)
         self._validate(new)
@@ -555,7 +570,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         """The current initial guess vector ``(n,)`` in layout order."""
         vals = []
         for b in self._bodies[1:]:
-            vals.extend(b.guess)
+            if b.gen_joint is None:  # a slave's pose follows from its master's and its joint's
+                vals.extend(b.guess)
         vals.extend(v.guess for v in self._variables)
         syms = self._coordinate_symbols()
         g = np.array(vals, dtype=float)
@@ -570,16 +586,38 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         self._system = None
 
     def _coordinate_symbols(self) -> list:
-        return [s for b in self._bodies for s in b.q] + [v.symbol for v in self._variables]
+        return ([s for b in self._bodies if b.gen_joint is None for s in b.q]
+                + [v.symbol for v in self._variables])
+
+    def _gen_substitution(self) -> dict:
+        """Slave-body symbol -> expression of the independent coordinates (Gen joints,
+        ``constraints/_generalized.py``); empty without Gen joints. Cached per version."""
+        kin = self._gen_kinematics()
+        return kin.sympy if kin is not None else {}
+
+    def _gen_kinematics(self):
+        """The slaves' :class:`~mechsys.constraints._generalized.GenKinematics` (None
+        without Gen joints), cached per version."""
+        cache = getattr(self, "_gen_cache", None)
+        if cache is None or cache[0] != self._version:
+            kin = None
+            if any(isinstance(c, GenJoint) for c in self._constraints):
+                lay = make_layout(self._bodies[1:], self._variables, [], [], [])
+                kin = GenKinematics(self, lay)
+            self._gen_cache = cache = (self._version, kin)
+        return cache[1]
 
     def _all_equations(self):
         eqs, owners, index = [], [], []
+        sub = self._gen_substitution()
         for c in self._constraints:
             for k, e in enumerate(c.equations(self.space)):
-                eqs.append(e)
+                eqs.append(e.xreplace(sub) if sub else e)
                 owners.append(c)
                 index.append(k)
         for b in self._bodies[1:]:
+            if b.gen_joint is not None:  # a slave's Euler parameters are its master's, turned
+                continue
             for k, e in enumerate(self.space.body_normalization(b.q[self.space.dim :])):
                 eqs.append(e)
                 owners.append(f"Euler-parameter normalization of body {b.name!r}")
@@ -705,6 +743,9 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         """Total time derivative of a SymPy expression (or matrix) of coordinates, velocities
         and ``T``: ``f_q qd + f_qd qdd + f_t``."""
         lay = make_layout(self._bodies[1:], self._variables, [], [], [])
+        sub = self._gen_substitution()
+        if sub:
+            expr = expr.xreplace(sub) if isinstance(expr, sp.Basic) else sp.sympify(expr).xreplace(sub)
         if isinstance(expr, sp.MatrixBase):
             return expr.applyfunc(lambda e: time_derivative(e, lay.q_symbols, lay.qd_symbols,
                                                             lay.qdd_symbols))
@@ -713,7 +754,11 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
     def velocity_symbols(self) -> dict:
         """``{coordinate symbol: velocity symbol}``."""
         lay = make_layout(self._bodies[1:], self._variables, [], [], [])
-        return dict(zip(lay.q_symbols, lay.qd_symbols))
+        out = dict(zip(lay.q_symbols, lay.qd_symbols))
+        for b in self._bodies[1:]:  # slaves: their rate symbols, substituted on output
+            if b.gen_joint is not None:
+                out.update({s: velocity_symbol(s.name) for s in b.q})
+        return out
 
     def _omega(self, b: Body, local: bool):
         if b.is_ground:
@@ -727,6 +772,9 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         return self
 
     def _finish(self, expr):
+        sub = self._gen_substitution()
+        if sub and isinstance(expr, (sp.Basic, sp.MatrixBase)):
+            return expr.xreplace(sub)
         return expr
 
     def _point(self, obj) -> Point:
@@ -778,7 +826,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
             return None
         default = np.array([0.0] * dim + list(self.space.zero_rotation()), dtype=float)
         lay = system.layout
-        idle = [b for b in self._bodies[1:] if np.array_equal(g[lay.body_slices[b.name]], default)]
+        idle = [b for b in self._bodies[1:] if b.name in lay.body_slices  # slaves have none
+                and np.array_equal(g[lay.body_slices[b.name]], default)]
         if not idle:
             return None
         rng = np.random.default_rng(12345)  # deterministic: the same report every call

@@ -247,6 +247,10 @@ class FreeSystem:
         """Euler-parameter rates from an angular velocity: ``e_dot = E^T w / 2`` (global) or
         ``G^T w' / 2`` (local). Key: ``("omega", body)`` or ``("omega_local", body)``."""
         b = self.model.body(body)
+        if b.gen_joint is not None:
+            raise ModelError(f"initial_condition ({'omega'}, {b.name!r}): body {b.name!r} is the "
+                             f"slave of {b.gen_joint.label()}; give the rates of its generalized "
+                             f"coordinates ({', '.join(s.name + '_d' for s in b.gen_joint.coordinates)})")
         sl = self.system.layout.body_slices[b.name]
         if self.model.space.dim == 2:
             qd[sl][2] = float(w)

@@ -74,8 +74,10 @@ class PathSystem:
         self.velocity_constraints = list(self.replaced.values())
         psi, owners_psi = [], []
         allowed = set(lay.q_symbols) | set(lay.qd_symbols) | set(lay.p_symbols) | {T}
+        gen = model._gen_substitution()  # slave bodies (Gen joints): their poses
         for vc in self.velocity_constraints:
             for e in vc.equations(model.space):
+                e = e.xreplace(gen) if gen else e
                 extra = e.free_symbols - allowed
                 if extra:
                     raise ModelError(f"{vc.label()} uses unknown symbol(s) "

@@ -98,16 +98,16 @@ def _split_piecewise(exprs):
     return {v: k for k, v in found.items()}, [e.xreplace(found) for e in exprs]
 
 
-def _lambdify(args, exprs, opt_level):
-    path = _cache_path(args, exprs, opt_level)
+def _lambdify(args, exprs, opt_level, cse=False):
+    path = _cache_path(args, exprs, opt_level, cse)
     if path is not None:
         f = _cache_load(path)
         if f is not None:
             return f, "symengine-llvm"
     try:
-        f = _se.Lambdify(list(args), list(exprs), backend="llvm", cse=False, opt_level=opt_level)
+        f = _se.Lambdify(list(args), list(exprs), backend="llvm", cse=cse, opt_level=opt_level)
     except (ValueError, TypeError, RuntimeError):  # built without LLVM, or unsupported
-        return _se.Lambdify(list(args), list(exprs), cse=False), "symengine-lambda"
+        return _se.Lambdify(list(args), list(exprs), cse=cse), "symengine-lambda"
     if path is not None:
         _cache_store(path, f)
     return f, "symengine-llvm"
@@ -151,14 +151,14 @@ def _host() -> str:
     return cpu
 
 
-def _cache_path(args, exprs, opt_level) -> Path | None:
+def _cache_path(args, exprs, opt_level, cse=False) -> Path | None:
     d = cache_dir()
     if d is None:
         return None
     import hashlib
 
     h = hashlib.sha256()
-    for part in (str(_CACHE_FORMAT), _se.__version__, str(opt_level), _host(),
+    for part in (str(_CACHE_FORMAT), _se.__version__, str(opt_level), f"cse={bool(cse)}", _host(),
                  repr([str(a) for a in args]), _fingerprint(exprs)):
         h.update(part.encode())
         h.update(b"\0")
@@ -234,18 +234,28 @@ class _SymengineCompiled(Compiled):
 
     backend = "symengine"
 
-    def __init__(self, args, exprs, opt_level: int = 3):
+    def __init__(self, args, exprs, opt_level: int = 3, cse: bool = False):
         self.nout = len(exprs)
         exprs = [_se.sympify(e) for e in exprs]
         pieces, exprs = _split_piecewise(exprs)
         self._pre = None
         self._npieces = len(pieces)
         if pieces:
-            self._pre, self._pre_backend = _lambdify(args, list(pieces.values()), opt_level)
+            self._pre, self._pre_backend = _lambdify(args, list(pieces.values()), opt_level, cse)
             self._nargs = len(args)
             args = [*args, *pieces]
             self._buf = np.empty(len(args))     # [x, Piecewise values]: one call each
-        self._f, self.backend = _lambdify(args, exprs, opt_level)
+        self._expand = None
+        if cse:
+            # SymEngine 0.15's CSE returns wrong values for repeated outputs (decision 0002):
+            # compile each distinct output once and copy it to every place it occurs
+            distinct = list(dict.fromkeys(exprs))
+            if len(distinct) < len(exprs):
+                where = {e: i for i, e in enumerate(distinct)}
+                self._expand = np.array([where[e] for e in exprs], dtype=np.intp)
+                exprs = distinct
+        self._nf = len(exprs)
+        self._f, self.backend = _lambdify(args, exprs, opt_level, cse)
         self._nin = len(args) - len(pieces)
         # SymEngine's unchecked entry point costs ~0.8 us a call instead of ~4 us: the
         # checks it skips (length, dtype, contiguity) are done here, once per call
@@ -267,9 +277,9 @@ class _SymengineCompiled(Compiled):
             buf[:self._nargs] = x
             self._pre.unsafe_real(x, buf[self._nargs:])
             x = buf
-        out = np.empty(self.nout)      # a new array per call: callers may keep the last one
+        out = np.empty(self._nf)       # a new array per call: callers may keep the last one
         self._f.unsafe_real(x, out)
-        return out
+        return out if self._expand is None else out[self._expand]
 
     def c_function(self):
         """C entry points ``void f(double *out, const double *x, void *context)`` of the
@@ -278,7 +288,7 @@ class _SymengineCompiled(Compiled):
         at ``pre_address`` writes the ``pieces`` values after the ``x`` arguments and the
         kernel reads ``[x, pieces]``; otherwise ``pre_address`` is 0. None when a stage is not
         LLVM code. Valid while this object lives."""
-        if self.backend != "symengine-llvm" or (
+        if self.backend != "symengine-llvm" or self._expand is not None or (
                 self._pre is not None and self._pre_backend != "symengine-llvm"):
             return None
         import ctypes
@@ -299,13 +309,15 @@ class _SymengineCompiled(Compiled):
             buf[:self._nargs] = x
             buf[self._nargs:] = self._pre(x)
             x = buf
-        return self._f(x).reshape(self.nout)
+        out = self._f(x).reshape(self._nf)
+        return out if self._expand is None else out[self._expand]
 
     def batch(self, X):
         X = np.atleast_2d(np.asarray(X, dtype=float))
         if self._pre is not None:
             X = np.hstack([X, self._pre(X).reshape(X.shape[0], -1)])
-        return self._f(X).reshape(X.shape[0], self.nout)
+        out = self._f(X).reshape(X.shape[0], self._nf)
+        return out if self._expand is None else out[:, self._expand]
 
 
 def available_backends() -> list[str]:
@@ -321,12 +333,16 @@ def default_backend() -> str:
 
 
 def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
-                  backend: str | None = None, once: bool = False) -> Compiled:
+                  backend: str | None = None, once: bool = False, cse: bool = False) -> Compiled:
     """Compile ``exprs`` as a function of the flat argument list ``args``.
 
     ``once``: the function is evaluated a few times only (``m.dof()``'s Jacobian): LLVM
     without optimisation compiles ~30 times faster (0.03 s instead of 1 s for a 600-coordinate
-    chain's Jacobian) and evaluates ~1.5 times slower."""
+    chain's Jacobian) and evaluates ~1.5 times slower.
+
+    ``cse``: common subexpressions first (SymEngine). Off by default (slow on the flat
+    expressions of absolute coordinates); on for models with Gen joints, whose nested slave
+    poses share most of their subexpressions (decision 0010: 10 times faster compiles)."""
     if not exprs:
         return _Empty()
     backend = backend or default_backend()
@@ -340,7 +356,7 @@ def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
             # SymEngine 0.15 crashes on some functions (Mod): keep them with SymPy
             return _SympyCompiled(args, [sp.sympify(e) for e in exprs])
         try:
-            return _SymengineCompiled(args, exprs, opt_level=0 if once else 3)
+            return _SymengineCompiled(args, exprs, opt_level=0 if once else 3, cse=cse)
         except (RuntimeError, TypeError, ValueError, NotImplementedError):
             # a function SymEngine cannot compile (e.g. Mod, Abs): SymPy can
             return _SympyCompiled(args, [sp.sympify(e) for e in exprs])

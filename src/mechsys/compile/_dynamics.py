@@ -26,7 +26,7 @@ import numpy as np
 import scipy.sparse as sps
 import sympy as sp
 
-from .._symbols import T
+from .._symbols import T, velocity_symbol
 from ._backends import compile_exprs
 from ._derive import hessian_terms, time_derivative, to_sympy_list
 
@@ -136,6 +136,8 @@ def generalized_forces(model, loads, layout) -> list:
     n = layout.n
     qd_of = dict(zip(layout.q_symbols, layout.qd_symbols))
     index = {s: i for i, s in enumerate(layout.q_symbols)}
+    gen = model._gen_substitution() if hasattr(model, "_gen_substitution") else {}
+    projected: dict = {}  # layout index -> the slaves' projected loads
     Q = [sp.S.Zero] * n
     for load in loads:
         for c in load.contributions(model):
@@ -151,6 +153,10 @@ def generalized_forces(model, loads, layout) -> list:
                 # virtual work: d(velocity)/d(qd_s) = d(location)/d(q_s) for a body point
                 r = list(c.point.location())
                 F = list(c.force)
+                if gen and body.gen_joint is not None:  # a slave: project on q (J^T Q_p)
+                    _project(projected, body, [sp.Add(*(ri.diff(s) * fi for ri, fi in zip(r, F)))
+                                               for s in body.q], model)
+                    continue
                 for s in body.q:
                     # scalar diffs: Matrix.diff goes through SymPy's array derivatives (slow)
                     Q[index[s]] += sp.Add(*(ri.diff(s) * fi for ri, fi in zip(r, F)))
@@ -159,12 +165,41 @@ def generalized_forces(model, loads, layout) -> list:
                 if body.is_ground:
                     continue
                 rot = body.q[model.space.dim :]
+                M = model.space.as_rotation_vector(c.moment)
+                if gen and body.gen_joint is not None:
+                    rates = [velocity_symbol(s.name) for s in body.q]
+                    w = model.space.as_rotation_vector(
+                        model.space.omega(rot, rates[model.space.dim:], local=False))
+                    _project(projected, body, [(w.diff(v).T * M)[0, 0] for v in rates], model)
+                    continue
                 w = model.space.as_rotation_vector(
                     model.space.omega(rot, [qd_of[s] for s in rot], local=False))
-                M = model.space.as_rotation_vector(c.moment)
                 for s in body.q:
                     Q[index[s]] += (w.diff(qd_of[s]).T * M)[0, 0]
+    if gen:  # load magnitudes of slave coordinates (a spring to a slave point)
+        slaves = set(gen)
+        Q = [e.xreplace(gen) if (e := sp.sympify(q)).free_symbols & slaves else e for q in Q]
+        from .._symbols import restore_assumptions
+
+        for i, v in projected.items():  # slaves' loads, projected natively (SymEngine)
+            Q[i] += restore_assumptions(sp.sympify(v))
     return Q
+
+
+def _project(out: dict, body, Qp, model) -> None:
+    """Add a slave's generalized force ``Qp`` (on its own pose coordinates, SymPy, in the
+    slave's symbols) to ``out`` ({layout index: value}) as ``J^T Qp`` (``J`` its pose
+    Jacobian, ``constraints/_generalized.GenKinematics``), natively: SymEngine when
+    installed, where the slave symbols are replaced by their expressions too."""
+    kin = model._gen_kinematics()
+    conv = kin.conv
+    native = kin.native_subs
+    for s, f in zip(body.q, Qp):
+        if f == 0:
+            continue
+        fn = conv(f).xreplace(native)
+        for i, d in kin.jac[s].items():
+            out[i] = out[i] + d * fn if i in out else d * fn
 
 
 class Dynamics:
@@ -187,22 +222,38 @@ class Dynamics:
         # accumulate natively: a SymPy zero plus a SymEngine term would turn SymPy and lose
         # the real assumptions of the symbols
         zero = se.Integer(0) if se is not None else sp.S.Zero
-        rows, cols, vals, Qv = [], [], [], [zero] * lay.n
+        Qv = [zero] * lay.n
+        entries: dict = {}  # (row, col) -> value: slaves' projected blocks overlap
         kinetic = {}
+        gen = system.gen_subs
         for b in bodies:
             q = list(b.q)
-            Tb, Mb, Qvb = body_terms(model.space, tuple(q), tuple(qd_of[s] for s in q),
-                                     *_mass_key(model.space, b))
-            kinetic[b.name] = Tb
+            slave = gen and b.gen_joint is not None
+            rates = tuple(velocity_symbol(s.name) if slave else qd_of[s] for s in q)
+            Tb, Mb, Qvb = body_terms(model.space, tuple(q), rates, *_mass_key(model.space, b))
             if Tb == 0:
+                kinetic[b.name] = Tb
                 continue
+            if slave:  # the slave's inertia projected on the coordinates it depends on
+                from ._generalized import project_inertia
+
+                kinetic[b.name], blocks, forces = project_inertia(b, Tb, Mb, Qvb,
+                                                                  model._gen_kinematics())
+                for key, v in blocks.items():
+                    entries[key] = entries[key] + v if key in entries else v
+                for i, v in forces.items():
+                    Qv[i] += v
+                continue
+            kinetic[b.name] = Tb
             for i, si in enumerate(q):
                 for j in range(len(q)):
                     if Mb[i][j] != 0:
-                        rows.append(index[si])
-                        cols.append(index[q[j]])
-                        vals.append(Mb[i][j])
+                        key = (index[si], index[q[j]])
+                        entries[key] = entries[key] + Mb[i][j] if key in entries else Mb[i][j]
                 Qv[index[si]] += Qvb[i]
+        rows = [k[0] for k in entries]
+        cols = [k[1] for k in entries]
+        vals = list(entries.values())
         self.M_rows = np.array(rows, dtype=int)
         self.M_cols = np.array(cols, dtype=int)
         # native (SymEngine) expressions feed the compiler; SymPy copies are made on first use
@@ -247,6 +298,8 @@ class Dynamics:
             model, loads = self._potential
             pots = [p for p in (ld.potential(model) for ld in loads) if p is not None]
             self._potential = sp.Add(*pots) if pots else None
+            if self._potential is not None and self.system.gen_subs:
+                self._potential = self._potential.xreplace(self.system.gen_subs)
         return self._potential
 
     def _sympy_copy(self, key):
@@ -291,7 +344,8 @@ class Dynamics:
             Q = [se.sympify(e) for e in self.Q] if (
                 self.system.backend == "symengine" and se is not None) else list(self.Q)
             self._f_terms = compile_exprs(self.args(), self.for_compile("M") + Q
-                                          + self.for_compile("Qv"), self.system.backend)
+                                          + self.for_compile("Qv"), self.system.backend,
+                                          cse=self.system.cse)
         return self._f_terms
 
     def _sparse_derivative(self, wrt, args):
@@ -304,7 +358,7 @@ class Dynamics:
                     dc.append(j)
                     dv.append(sp.diff(e, w))
         return (np.array(dr, dtype=int), np.array(dc, dtype=int),
-                compile_exprs(args, dv, self.system.backend))
+                compile_exprs(args, dv, self.system.backend, cse=self.system.cse))
 
     def free_kernel(self, sparse: bool = False) -> FreeKernel:
         """The compiled augmented system of free motion (built once, cached)."""
@@ -372,7 +426,7 @@ class FreeKernel:
         exprs = dyn.for_compile("M") + list(jac) + dyn.for_compile("Q+Qv") + list(gamma)
         self.k_M, self.k_J = len(dyn.M_rows), len(jac)
         self._zeros = np.zeros(n)
-        self.f = compile_exprs(dyn.args(), exprs, system.backend)
+        self.f = compile_exprs(dyn.args(), exprs, system.backend, cse=system.cse)
         rows = np.concatenate((dyn.M_rows, system.jac_cols, n + system.jac_rows))
         cols = np.concatenate((dyn.M_cols, n + system.jac_rows, system.jac_cols))
         self._map = np.concatenate((np.arange(self.k_M), self.k_M + np.arange(self.k_J),

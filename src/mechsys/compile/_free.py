@@ -37,7 +37,8 @@ class _Residual:
         self.rows, self.cols = np.array(rows, dtype=int), np.array(cols, dtype=int)
         self.size = len(R)
         self.nR = len(R)
-        self.f = compile_exprs(args, list(R) + vals, system.backend)
+        self.f = compile_exprs(args, list(R) + vals, system.backend,
+                               cse=getattr(system, "cse", False))
 
     def _eval(self, x):
         out = self.f(x)

@@ -122,6 +122,10 @@ class System:
         self._dynamics = None
 
         self.lam_symbols = multiplier_symbols(layout)
+        #: slave-body symbol -> expression in this layout's coordinates (Gen joints)
+        self.gen_subs = model._gen_substitution() if model is not None else {}
+        #: compile with common subexpressions (nested slave poses share most of theirs)
+        self.cse = bool(self.gen_subs)
 
     def kinematic_exprs(self, key: str, for_compile: bool = False) -> list:
         """``"jac"`` (nonzero Jacobian entries), ``"phi_t"`` or ``"gamma"``: SymPy lists (made
@@ -146,7 +150,8 @@ class System:
                     parts += self._native["phi"] if native else self.phi
                 else:
                     parts += self.kinematic_exprs(key, for_compile=True)
-            k = self._kernels[name] = compile_exprs(self.layout.args(), parts, self.backend)
+            k = self._kernels[name] = compile_exprs(self.layout.args(), parts, self.backend,
+                                                    cse=self.cse)
         return k
 
     @property
@@ -243,7 +248,7 @@ class System:
         if k is None:
             k = self._kernels["jac_once"] = compile_exprs(
                 self.layout.args(), self.kinematic_exprs("jac", for_compile=True), self.backend,
-                once=True)
+                once=True, cse=self.cse)
         return self.assemble(k(self.pack(t, q, None, p)))
 
     def jacobian(self, t: float, q, p=None, sparse: bool = False):
@@ -272,6 +277,11 @@ class System:
             lay = self.layout
             args = [T, *lay.q_symbols, *lay.qd_symbols, *lay.qdd_symbols, *self.lam_symbols,
                     *lay.p_symbols]
+            if self.gen_subs:  # slave-body symbols: their values first (Gen joints)
+                from ._generalized import compile_with_slaves
+
+                f = self._eval_cache[key] = compile_with_slaves(self, args, key)
+                return f
             allowed = set(args)
             for e in key:
                 extra = e.free_symbols - allowed
@@ -283,7 +293,7 @@ class System:
                         "coordinates, velocities, accelerations, multipliers, parameters or T "
                         "of this model"
                     )
-            f = compile_exprs(args, list(key), self.backend)
+            f = compile_exprs(args, list(key), self.backend, cse=self.cse)
             self._eval_cache[key] = f
         return f
 
@@ -291,6 +301,8 @@ class System:
 def make_layout(bodies, variables, parameters, eq_owner, eq_index) -> Layout:
     q, names, slices = [], [], {}
     for b in bodies:
+        if getattr(b, "gen_joint", None) is not None:  # a slave: its pose is substituted
+            continue
         start = len(q)
         q.extend(b.q)
         names.extend(f"{b.name}.{c}" for c in b.space.coordinate_names)

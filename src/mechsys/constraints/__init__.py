@@ -34,6 +34,17 @@ from ._gears import (
     TwoPulleys5,
 )
 from ._general import Constraint
+from ._generalized import (
+    GEN_TYPES,
+    GenConstraint,
+    GenCylindrical4,
+    GenJoint,
+    GenOrthoRevolute4,
+    GenRevolute2,
+    GenRevolute5,
+    GenTranslate2,
+    GenTranslate5,
+)
 from ._planar import (
     OriginLock2,
     Orthogonal1,
@@ -112,6 +123,15 @@ __all__ = [
     "CurveToPlane1",
     "CurveToPoint2",
     "Cylindrical4",
+    "GEN_TYPES",
+    "GenConstraint",
+    "GenCylindrical4",
+    "GenJoint",
+    "GenOrthoRevolute4",
+    "GenRevolute2",
+    "GenRevolute5",
+    "GenTranslate2",
+    "GenTranslate5",
     "LeadScrew5",
     "LineOnCylinder3",
     "LineToCircle1",

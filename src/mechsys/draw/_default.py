@@ -44,7 +44,7 @@ ON_LINE = ("PointOnLine",)
 
 
 def _kind(c) -> str | None:
-    name = type(c).__name__
+    name = type(c).__name__.removeprefix("Gen")  # a Gen joint is drawn as the joint it replaces
     for words, kind in ((PIN, "pin"), (SLIDE, "slide"), (LINK, "link"), (ON_LINE, "online")):
         if any(name.startswith(w) for w in words):
             return kind

@@ -41,6 +41,8 @@ class Body(BodyRef):
         self.name = name
         self.number = number
         self.is_ground = is_ground
+        #: the generalized-coordinate joint whose slave this body is (None: own coordinates)
+        self.gen_joint = None
         self._points: dict[str, sp.Matrix] = {}
         self._order: list[str] = []
         for key, coords in _normalize_points(points):

@@ -63,6 +63,10 @@ class LoadOutputs:
         b = m.body(body)
         if b.is_ground:
             return s, b, slice(0, 0)
+        if b.gen_joint is not None:
+            from ..constraints._generalized import slave_refused
+
+            raise slave_refused(b, "loads")
         return s, b, s.layout.body_slices[b.name]
 
     def _wrench(self, b, G, at=None, coordinates="global"):
@@ -127,6 +131,10 @@ class LoadOutputs:
             return stagewise(self, lambda s: s.reaction(constraint, body, at, coordinates))
         m = self._model()
         c = m.constraint(constraint)
+        if getattr(c, "slave", None) is not None or isinstance(body, sp.Symbol):
+            from ..constraints._generalized import generalized_reaction
+
+            return self._finish(generalized_reaction(m, c, body, self._lams))
         b = m.body(body)
         if b.is_ground:
             others = [x for x in c.bodies() if not x.is_ground]
@@ -139,8 +147,31 @@ class LoadOutputs:
         F, M = self._reaction_expr(c, b, at, coordinates)
         return self._finish_pair(F, M)
 
+    def joint_reaction(self, joint, at=None, coordinates: str = "global"):
+        """``(force, moment)`` the master applies to the slave through a generalized-coordinate
+        joint (``GenRevolute2`` ...), the moment about ``at`` (default the slave's origin),
+        found by Newton-Euler on the bodies the joint carries (Mech 11.2 offers none: a Gen
+        joint is not a constraint). Includes any load on the joint's own coordinates (an
+        actuator torque); needs accelerations (a dynamic or free-motion solution) when the
+        carried bodies have mass."""
+        from ..constraints._generalized import GenJoint
+        from ._generalized import joint_generalized_load
+
+        m = self._model()
+        c = m.constraint(joint)
+        if not isinstance(c, GenJoint):
+            raise ModelError(f"joint_reaction: {c.label()} is not a generalized-coordinate joint; "
+                             "use reaction(constraint, body)")
+        G = joint_generalized_load(m, c, self._lams)
+        F, M = self._wrench(c.slave, G, at, coordinates)
+        return self._finish_pair(F, M)
+
     def _reaction_expr(self, c, b, at, coordinates):
         m = self._model()
+        if b.gen_joint is not None:
+            from ..constraints._generalized import slave_refused
+
+            raise slave_refused(b, "reaction")
         lam = sp.Matrix(self._lams(c))
         eqs = sp.Matrix(c.equations(m.space))
         G = -(eqs.jacobian(list(b.q)).T * lam)

@@ -148,6 +148,10 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Lin
         m = sp.Matrix(expr) if is_matrix else sp.Matrix([sp.sympify(expr)])
         lay = self.system.layout
         free = set().union(*(e.free_symbols for e in m)) if len(m) else set()
+        if self.system.gen_subs:  # slave symbols stand for expressions of q, qd, qdd
+            from ..compile._generalized import slave_dependencies
+
+            free |= slave_dependencies(self.system, free)
         for order, syms in ((2, lay.qdd_symbols), (1, lay.qd_symbols)):  # the highest first
             if free & set(syms):
                 self._order(order)  # raises when this order is missing
