@@ -69,3 +69,20 @@ def test_fast_entry_point_agrees_with_the_checked_call_and_returns_fresh_arrays(
         np.testing.assert_allclose(fa, ref, rtol=1e-14)
         with pytest.raises(ValueError, match="called with shape"):
             f(np.zeros(3))
+
+
+def test_cse_kernels_repeated_outputs_are_right():
+    """SymEngine 0.15's CSE returns the first argument for a repeated output (decision 0002,
+    benchmarks/symengine_cse_bug.py); kernels compiled with ``cse=True`` (models with Gen
+    joints) compile each distinct output once and copy it, so the values are right."""
+    pytest.importorskip("symengine")
+    import math
+
+    x2, x4, y4, th4 = sp.symbols("x2 x4 y4 th4")
+    exprs = [sp.sin(th4), -sp.cos(th4), x4 * sp.cos(th4) + y4 * sp.sin(th4), -sp.cos(th4)]
+    f = compile_exprs([x2, x4, y4, th4], exprs, "symengine", cse=True)
+    x = np.array([0.3, 1.5, -0.7, 0.4])
+    exact = [math.sin(0.4), -math.cos(0.4), 1.5 * math.cos(0.4) - 0.7 * math.sin(0.4), -math.cos(0.4)]
+    np.testing.assert_allclose(f(x), exact, rtol=1e-14)
+    np.testing.assert_allclose(f.batch(np.vstack([x, x])), [exact, exact], rtol=1e-14)
+    assert f.c_function() is None       # the compiled sweep needs the kernel's own outputs
