@@ -293,12 +293,16 @@ def resolve(target: str):
 def entries() -> list[Entry]:
     """All rows: constraints from the registry and the manual's constraint names, then
     :data:`ENTRIES`."""
+    import mechsys
     from mechsys.constraints import REGISTRY
 
     rows = []
     for name in sorted(set(MANUAL_CONSTRAINTS) | set(REGISTRY)):
         if name in REGISTRY:
             rows.append(Entry(name, "Constraints", (f"mechsys.{name}",)))
+        elif hasattr(mechsys, name):
+            # joints that write no equations (the Gen joints of chapter 11) are not registered
+            rows.append(Entry(name, "Constraints", (f"mechsys.{name}",), "generalized coordinates"))
         else:
             rows.append(Entry(name, "Constraints"))
     seen = {r.mech for r in rows}
