@@ -144,9 +144,11 @@ from .loads._friction import JointFriction
 from .loads._gyro import GyroFilter, GyroMoment, gyro_filter
 from .loads._loads import Damper, Force, Gravity, Load, LoadBase, Moment, Spring
 from .model import DOF, Model, Model2D, Model3D
+from .results._equations import Equations
 from .results._outputs import All, Rest
 from .results._solution import Solution, State
 from .solvers import PositionOptions
+from .solvers._diagnostics import ConvergenceDiagnosis, Iteration, SingularityReport
 
 __version__ = "0.1.0"
 
@@ -165,6 +167,7 @@ __all__ = [
     "Constraint",
     "ConstraintBase",
     "ConstraintCountError",
+    "ConvergenceDiagnosis",
     "ConvergenceError",
     "CurveToCam1",
     "CurveToCylinder1",
@@ -176,6 +179,7 @@ __all__ = [
     "Damper",
     "Direction",
     "Distance",
+    "Equations",
     "EulerInverse",
     "EulerMultiply",
     "EulerParameters",
@@ -188,6 +192,7 @@ __all__ = [
     "GyroFilter",
     "GyroMoment",
     "IntersectionPoint",
+    "Iteration",
     "Involute",
     "JointFriction",
     "LeadScrew5",
@@ -250,6 +255,7 @@ __all__ = [
     "RotationMatrix",
     "SingularJacobianError",
     "SingularMassError",
+    "SingularityReport",
     "Solution",
     "Spherical3",
     "SphericalToXYZ",

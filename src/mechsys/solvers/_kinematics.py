@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._errors import ConvergenceError, SingularJacobianError
+from ._diagnostics import Stopped
 from ._linalg import SPARSE_THRESHOLD, Scaling, Singular, rotation_columns
 from ._position import PositionOptions, describe_singular, solve_position
 
@@ -93,10 +94,13 @@ class SweepResult:
 
 
 def sweep(system, times, guess, order: int = 2, options: PositionOptions | None = None,
-          p=None, scaling: Scaling | None = None) -> SweepResult:
+          p=None, scaling: Scaling | None = None, hooks=None) -> SweepResult:
     """Kinematic solution at each of ``times`` (1D, any order; continuation follows the
     given order). ``order`` 0 = location, 1 = + velocity, 2 = + acceleration. ``scaling``
-    defaults to the one of ``guess`` at the first time."""
+    defaults to the one of ``guess`` at the first time. ``hooks``
+    (:class:`~mechsys.solvers._diagnostics.Hooks`): ``pre_solve(t)`` before each point's
+    position solve; a hook returning False raises ``Stopped`` carrying the points solved so
+    far (``partial``, a :class:`SweepResult`)."""
     times = np.atleast_1d(np.asarray(times, dtype=float))
     n, N = system.n, len(times)
     sparse = n > SPARSE_THRESHOLD
@@ -112,8 +116,17 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
         sc, evals = _scaling(system, times[0], q0, p, sparse), 1
     rot = np.flatnonzero(rotation_columns(system))  # indices of angles / Euler parameters
     for k, t in enumerate(times):
-        g = q0 if k == 0 else _predict(Q, QD, QDD, rconds, times, k, rot)
-        res = _solve_point(system, t, g, Q[k - 1] if k else None, options, p, sc, rot)
+        try:
+            if hooks is not None and hooks.pre_solve is not None and hooks.pre_solve(float(t)) is False:
+                raise Stopped("pre_solve", float(t))
+            g = q0 if k == 0 else _predict(Q, QD, QDD, rconds, times, k, rot)
+            res = _solve_point(system, t, g, Q[k - 1] if k else None, options, p, sc, rot, hooks)
+        except Stopped as exc:
+            exc.k = k
+            exc.partial = SweepResult(times[:k], Q[:k], None if QD is None else QD[:k],
+                                      None if QDD is None else QDD[:k], its[:k], evals,
+                                      order, None if rconds is None else rconds[:k])
+            raise
         q = res.q
         its[k] = res.iterations
         evals += res.evaluations
@@ -176,11 +189,11 @@ def _predict(Q, QD, QDD, rconds, times, k: int, rot) -> np.ndarray:
     return g
 
 
-def _solve_point(system, t, g, q_prev, options, p, sc, rot):
+def _solve_point(system, t, g, q_prev, options, p, sc, rot, hooks=None):
     """Newton from the prediction ``g``; again from ``q_prev`` when that fails or when the
     result jumps (a rotational coordinate further than ``ROTATION_JUMP`` from ``g``)."""
     try:
-        res = solve_position(system, t, g, options, p, sc)
+        res = solve_position(system, t, g, options, p, sc, hooks)
         if q_prev is None or _jump(res.q, g, rot) <= ROTATION_JUMP:
             return res
     except (ConvergenceError, SingularJacobianError):
@@ -188,7 +201,7 @@ def _solve_point(system, t, g, q_prev, options, p, sc, rot):
             raise
     # the predictor can throw the guess far away where velocities are huge (near a
     # toggle): start again from the previous position
-    res = solve_position(system, t, q_prev, options, p, sc)
+    res = solve_position(system, t, q_prev, options, p, sc, hooks)
     jump = _jump(res.q, q_prev, rot)
     if jump > ROTATION_JUMP:
         i = rot[np.argmax(np.abs(res.q[rot] - q_prev[rot]))]
