@@ -166,10 +166,14 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
     it = 0
     while True:
         if not np.all(np.isfinite(F)):
+            bad = system.layout.owners_of(np.flatnonzero(~np.isfinite(F)))
             raise ConvergenceError(
                 f"position solve at t = {t:.6g}: constraint equations are not finite "
-                "(a coordinate left the domain of an expression)", time=t,
-                residuals=_residual_table(system, F), history=tuple(history))
+                "(a coordinate left the domain of an expression, or a division by zero) in "
+                + ", ".join(_label(o) for o in bad)
+                + ("; check their expressions at this time and the guess" if it == 0 else
+                   f" after {it} Newton iteration(s); give a better guess"), time=t,
+                residuals=F.copy(), history=tuple(history))
         if norm <= tol and it > 0:
             return PositionResult(q, True, 0, "converged", it, evals, norm, tuple(history), rows)
         if it >= opt.max_iterations:
