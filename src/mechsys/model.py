@@ -771,7 +771,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
         from .results._solution import Solution
 
         modes = {"static": 0, "kinematic": 1, "dynamic": 2}
-        if solution not in ORDERS and solution not in modes:
+        if not isinstance(solution, str) or (solution not in ORDERS and solution not in modes):
             raise ModelError(f"solution must be one of {list(ORDERS) + list(modes)}, "
                              f"got {solution!r}")
         times = self._check_times(t)
@@ -878,7 +878,12 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews):
                 self._guess_override = saved
         if hasattr(guess, "q") and hasattr(guess, "system"):
             return np.atleast_2d(guess.q)[-1].copy()
-        g = np.asarray(guess, dtype=float)
+        try:
+            g = np.asarray(guess, dtype=float)
+        except (TypeError, ValueError):
+            raise ModelError(f"guess must be an array of {system.n} numbers (coordinates "
+                             f"{list(system.layout.q_names)}), a mapping, or a Solution/State; "
+                             f"got {guess!r}") from None
         if g.shape != (system.n,):
             raise ModelError(f"guess must have shape ({system.n},) (coordinates "
                              f"{list(system.layout.q_names)}); got {g.shape}")
