@@ -192,8 +192,9 @@ def _predict(Q, QD, QDD, rconds, times, k: int, rot) -> np.ndarray:
 def _solve_point(system, t, g, q_prev, options, p, sc, rot, hooks=None):
     """Newton from the prediction ``g``; again from ``q_prev`` when that fails or when the
     result jumps (a rotational coordinate further than ``ROTATION_JUMP`` from ``g``)."""
+    kw = {} if hooks is None else {"hooks": hooks}  # (the plain call stays as it was)
     try:
-        res = solve_position(system, t, g, options, p, sc, hooks)
+        res = solve_position(system, t, g, options, p, sc, **kw)
         if q_prev is None or _jump(res.q, g, rot) <= ROTATION_JUMP:
             return res
     except (ConvergenceError, SingularJacobianError):
@@ -201,7 +202,7 @@ def _solve_point(system, t, g, q_prev, options, p, sc, rot, hooks=None):
             raise
     # the predictor can throw the guess far away where velocities are huge (near a
     # toggle): start again from the previous position
-    res = solve_position(system, t, q_prev, options, p, sc, hooks)
+    res = solve_position(system, t, q_prev, options, p, sc, **kw)
     jump = _jump(res.q, q_prev, rot)
     if jump > ROTATION_JUMP:
         i = rot[np.argmax(np.abs(res.q[rot] - q_prev[rot]))]
