@@ -71,13 +71,12 @@ class Equations:
         self.jacobian = J.extract(keep, list(range(system.n))) if keep else sp.zeros(0, system.n)
         self.phi_t = sp.Matrix([system.phi_t[i] for i in keep]) if keep else sp.zeros(0, 1)
         self.gamma = sp.Matrix([system.gamma[i] for i in keep]) if keep else sp.zeros(0, 1)
-        dyn = system.dynamics
-        M = sp.zeros(system.n, system.n)
-        for r, c, e in zip(dyn.M_rows, dyn.M_cols, dyn.M_exprs):
-            M[r, c] += e
-        self.mass_matrix = M
-        self.loads = sp.Matrix(dyn.Q) if system.n else sp.zeros(0, 1)
-        self.centrifugal = sp.Matrix(dyn.Qv) if system.n else sp.zeros(0, 1)
+        # the model's own symbolic outputs (Mech's MassMatrix, Loads[All], Centrifugal)
+        from ._outputs import All
+
+        self.mass_matrix = model.mass_matrix()
+        self.loads = model.loads(All) if system.n else sp.zeros(0, 1)
+        self.centrifugal = model.centrifugal() if system.n else sp.zeros(0, 1)
 
     def _part(self, name: str):
         if name not in dict(PARTS):
