@@ -27,6 +27,7 @@ LAYER = {
 LAZY_UP = {
     ("mechsys.results._solution", "draw"),   # Solution.plot
     ("mechsys.model", "draw"),               # Model.add_graphics
+    ("mechsys.analyses._free", "draw"),      # FreeSystem.simulate's progress bar
 }
 
 
