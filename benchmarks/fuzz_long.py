@@ -76,14 +76,16 @@ def run(models: int, start: int, minutes: float | None, log=None) -> dict:
 
 
 def summary(r: dict) -> str:
+    dims = {int(k): v for k, v in r["dims"].items()}  # (JSON turns the keys into strings)
     lines = [
         f"* models checked: **{r['models']:,}** (seeds {r['start']} to {r['start'] + r['models'] - 1}), "
-        f"{r['types']} of {r['all_types']} constraint types; planar {r['dims'].get(2, 0)}, "
-        f"spatial {r['dims'].get(3, 0)}",
+        f"{r['types']} of {r['all_types']} constraint types; planar {dims.get(2, 0)}, "
+        f"spatial {dims.get(3, 0)}",
         f"* failures: **{len(r['failures'])}**",
-        f"* largest finite-difference mismatch (relative): Jacobian {r['worst']['jacobian_fd']:.1e}, "
-        f"gamma {r['worst']['gamma_fd']:.1e}; free acceleration residual "
-        f"{r['worst']['free_acceleration']:.1e}",
+        f"* largest finite-difference mismatch (absolute; the checks allow 1e-6 for the Jacobian "
+        f"and 1e-5 for gamma, times 1 + the largest entry): Jacobian "
+        f"{r['worst']['jacobian_fd']:.1e}, gamma {r['worst']['gamma_fd']:.1e}; free acceleration "
+        f"residual (scaled) {r['worst']['free_acceleration']:.1e}",
         "* outcomes (a model can have several): " + ", ".join(
             f"{k} {v}" for k, v in sorted(r["outcomes"].items())),
         f"* time: {r['wall_s'] / 60:.0f} min wall, {r['cpu_s'] / 60:.0f} min CPU "

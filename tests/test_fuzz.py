@@ -37,7 +37,8 @@ SETTINGS = dict(derandomize=True, database=None, deadline=None, print_blob=True,
 def test_random_mechanisms_keep_their_invariants(seed, name, extra):
     res = check_mechanism(seed, extra=extra, name=name)
     assert res["outcome"], res
-    assert res["jacobian_fd"] < 1e-5 and res["gamma_fd"] < 1e-4
+    # (check_mechanism asserted them against their scaled tolerances; these are absolute)
+    assert res["jacobian_fd"] < 1e-5 and res["gamma_fd"] < 1e-3
 
 
 # -- odd arguments -----------------------------------------------------------------------------
