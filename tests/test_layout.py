@@ -29,6 +29,7 @@ LAZY_UP = {
     ("mechsys.model", "draw"),               # Model.add_graphics
     ("mechsys.analyses._sweep", "draw"),     # sweep's progress bar (draw/_progress.py)
     ("mechsys.analyses._vibration", "draw"),  # VibrationModes.animate
+    ("mechsys.analyses._free", "draw"),      # FreeSystem.simulate's progress bar
 }
 
 

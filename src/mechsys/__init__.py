@@ -168,10 +168,12 @@ from .loads._gyro import GyroFilter, GyroMoment, gyro_filter
 from .loads._loads import Damper, Force, Gravity, Load, LoadBase, Moment, Spring
 from .loads._torsion import TorsionDamper, TorsionSpring
 from .model import DOF, Model, Model2D, Model3D
+from .results._equations import Equations
 from .results._outputs import All, Rest
 from .results._sensitivity import ParameterSensitivity, Sensitivity
 from .results._solution import Solution, State
 from .solvers import PositionOptions
+from .solvers._diagnostics import ConvergenceDiagnosis, Iteration, SingularityReport
 
 __version__ = "0.1.0"
 
@@ -191,6 +193,7 @@ __all__ = [
     "Constraint",
     "ConstraintBase",
     "ConstraintCountError",
+    "ConvergenceDiagnosis",
     "ConvergenceError",
     "CoupleSolution",
     "CoupleSystem",
@@ -204,6 +207,7 @@ __all__ = [
     "Damper",
     "Direction",
     "Distance",
+    "Equations",
     "EulerInverse",
     "EulerMultiply",
     "EulerParameters",
@@ -224,6 +228,7 @@ __all__ = [
     "GyroFilter",
     "GyroMoment",
     "IntersectionPoint",
+    "Iteration",
     "Involute",
     "JointFriction",
     "LeadScrew5",
@@ -290,6 +295,7 @@ __all__ = [
     "SensitivitySystem",
     "SingularJacobianError",
     "SingularMassError",
+    "SingularityReport",
     "Solution",
     "Spherical3",
     "SphericalToXYZ",

@@ -43,11 +43,29 @@ class ConstraintCountError(MechError):
 class ConvergenceError(MechError):
     """Newton's method did not converge. ``residuals`` and ``history`` say by how much."""
 
-    def __init__(self, message: str, *, time=None, residuals=None, history=None):
+    def __init__(self, message: str, *, time=None, residuals=None, history=None,
+                 diagnosis=None):
         super().__init__(message)
         self.time = time
         self.residuals = residuals
         self.history = history
+        #: a ``ConvergenceDiagnosis`` (Mech 13.2) when the solver made one, else None
+        self.diagnosis = diagnosis
+
+    @property
+    def constraints(self) -> tuple:
+        """``((constraint label, scaled residual), ...)``, worst first (empty if unknown)."""
+        return self.diagnosis.constraints if self.diagnosis is not None else ()
+
+    @property
+    def coordinates(self) -> tuple:
+        """``((coordinate name, move, scaled move), ...)``: the coordinates Newton moved most."""
+        return self.diagnosis.coordinates if self.diagnosis is not None else ()
+
+    @property
+    def suggestion(self) -> str:
+        """What to try (empty if unknown)."""
+        return self.diagnosis.suggestion if self.diagnosis is not None else ""
 
 
 class SingularJacobianError(MechError):

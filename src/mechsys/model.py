@@ -16,6 +16,7 @@ import sympy as sp
 
 from ._errors import (
     ConstraintCountError,
+    MechError,
     ModelError,
     RedundantConstraintWarning,
     SingularJacobianError,
@@ -813,6 +814,42 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
                    gruebler=system.n - system.m, rank=rank, redundant=owners,
                    singular_guess=note)
 
+    def equations(self, constraints=None):
+        """The model's equations as SymPy matrices (Mech 13.4): constraints ``phi``, Jacobian
+        ``jacobian``, ``phi_t``, acceleration right side ``gamma``, ``mass_matrix``, applied
+        ``loads`` and velocity-dependent ``centrifugal`` forces, with pretty and LaTeX
+        display; ``constraints`` restricts the constraint rows (a handle, name, number or a
+        list of them). See :class:`~mechsys.results._equations.Equations`."""
+        from .results._equations import Equations
+
+        return Equations(self, constraints)
+
+    def singularity(self, at=None, t: float | None = None, threshold: float = 1e-6):
+        """Singular and near-singular directions of the constraint Jacobian (Mech 13.3) with
+        the constraints involved and the motion left uncontrolled. ``at``: coordinates
+        (array (n,)), a mapping of guesses, or a ``Solution`` (its point of smallest
+        ``rcond``, or its last point); default the current guess. Returns a
+        :class:`~mechsys.solvers._diagnostics.SingularityReport` (``print`` it)."""
+        from .solvers._diagnostics import diagnose_singularity
+
+        system = self.compile()
+        tt = 0.0 if t is None else float(t)
+        if at is not None and hasattr(at, "q") and hasattr(at, "system"):
+            Q = np.atleast_2d(at.q)
+            rc = at.extra.get("rcond") if isinstance(getattr(at, "extra", None), dict) else None
+            k = int(np.nanargmin(rc)) if rc is not None and np.any(np.isfinite(rc)) else len(Q) - 1
+            q = Q[k].copy()
+            if t is None:
+                tt = float(np.atleast_1d(at.t)[k])
+            if at.system is not system and at.system.n != system.n:
+                raise ModelError("singularity: the solution belongs to another system")
+        else:
+            q = self._resolve_guess(system, at)
+        if t is not None and (not np.isfinite(tt)):
+            raise ModelError(f"singularity: t must be finite, got {t!r}")
+        J = system.jacobian_once(tt, q, self._p())
+        return diagnose_singularity(system, J, Scaling.of(system, q, J), tt, threshold)
+
     def _singular_guess(self, system, t, g, rank):
         """``(rank, message)`` when the Jacobian, rank deficient (``rank``) at the guess
         ``g`` which does not assemble the mechanism, has a higher rank once the bodies left
@@ -893,7 +930,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         return arr
 
     def solve(self, t=0.0, solution: str = "acceleration", guess=None,
-              options: PositionOptions | None = None, lambda_guess=None):
+              options: PositionOptions | None = None, lambda_guess=None, pre_solve=None,
+              post_iterate=None):
         """Kinematic solution at time(s) ``t`` (Mech's ``SolveMech``).
 
         ``solution``: ``"location"``, ``"velocity"`` or ``"acceleration"`` (default), or with
@@ -906,11 +944,19 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         ``guess``: starting coordinates (array (n,), a ``State``/``Solution`` or a mapping);
         default the model's guesses. A sweep continues each point from the previous one.
         Returns a :class:`~mechsys.Solution` and stores it as ``last_solution``.
+
+        Hooks (Mech's ``$MechPreSolve`` and ``$MechPostIterate``, see docs/debugging.md):
+        ``pre_solve(t)`` is called with each time before its position solve;
+        ``post_iterate(it)`` after each Newton iteration with an
+        :class:`~mechsys.solvers.Iteration` (``t, iteration, q, residual, step, names``).
+        A hook returning ``False`` stops the solve: the points solved before are returned
+        with ``sol.extra["stopped"]`` saying which hook stopped it where (a
+        :class:`MechError` when no point was solved yet).
         """
         from .results._solution import Solution
 
         modes = {"static": 0, "kinematic": 1, "dynamic": 2}
-        if solution not in ORDERS and solution not in modes:
+        if not isinstance(solution, str) or (solution not in ORDERS and solution not in modes):
             raise ModelError(f"solution must be one of {list(ORDERS) + list(modes)}, "
                              f"got {solution!r}")
         times = self._check_times(t)
@@ -928,6 +974,9 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         if options is not None and not isinstance(options, PositionOptions):
             raise ModelError(f"options must be a PositionOptions(ftol=..., max_iterations=..., "
                              f"damping=...) or a mapping of its fields, got {options!r}")
+        from .solvers._diagnostics import Hooks, Stopped
+
+        hooks = Hooks.make(pre_solve, post_iterate)
         system = self.compile()
         if system.n == 0:
             raise ModelError("solve: the model has no moving bodies (or variables), so there is "
@@ -941,11 +990,21 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         if self._switches():  # stages chosen point by point (analyses/_multistage.py)
             from .analyses._multistage import solve_stages
 
+            if hooks is not None:
+                raise ModelError("solve: pre_solve/post_iterate hooks are not supported for "
+                                 "models with stage or time switches yet; leave them out")
+
             self.last_solution = solve_stages(self, times, g, solution, options, scalar,
                                               lambda_guess=lambda_guess)
             return self.last_solution
+        stopped = None
         try:
-            res = sweep(system, times, g, order, options, self._p())
+            res = sweep(system, times, g, order, options, self._p(), hooks=hooks)
+        except Stopped as stop:
+            if stop.k == 0:
+                raise MechError(f"solve stopped before any point was solved: {stop.describe()}"
+                                ) from None
+            res, stopped = stop.partial, stop.describe()
         except SingularJacobianError as err:
             # a singular first point may be the guess's fault, not the constraints'
             J = system.jacobian(times[0], g, self._p())
@@ -966,6 +1025,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         if red is not None:
             sol.extra["redundant"] = _constraint_names(red.owners)
             sol.extra["indeterminate"] = _constraint_names(red.involved)
+        if stopped is not None:
+            sol.extra["stopped"] = stopped
         self.last_solution = sol
         return sol
 
@@ -1064,7 +1125,12 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
                 self._guess_override = saved
         if hasattr(guess, "q") and hasattr(guess, "system"):
             return np.atleast_2d(guess.q)[-1].copy()
-        g = np.asarray(guess, dtype=float)
+        try:
+            g = np.asarray(guess, dtype=float)
+        except (TypeError, ValueError):
+            raise ModelError(f"guess must be an array of {system.n} numbers (coordinates "
+                             f"{list(system.layout.q_names)}), a mapping, or a Solution/State; "
+                             f"got {guess!r}") from None
         if g.shape != (system.n,):
             raise ModelError(f"guess must have shape ({system.n},) (coordinates "
                              f"{list(system.layout.q_names)}); got {g.shape}")

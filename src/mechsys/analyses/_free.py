@@ -21,6 +21,7 @@ call of this FreeSystem).
 
 from __future__ import annotations
 
+import time
 from collections.abc import Mapping
 from numbers import Integral, Real
 
@@ -380,7 +381,7 @@ class FreeSystem:
                  atol: float = ATOL, max_step: float = MAX_STEP, fit_degree=FIT_DEGREE,
                  max_error=MAX_ERROR, step_size=None, constraint_correction: bool = True,
                  diagnostics: bool = False, tolerance: float | None = None,
-                 max_iterations: int | None = None, **unknown) -> Solution:
+                 max_iterations: int | None = None, progress=None, **unknown) -> Solution:
         """Integrate the free motion (Mech's ``SolveFree[fs, {t0, t1}]``).
 
         ``t``: ``(t0, t1)`` returns every accepted step; an array of strictly increasing (or,
@@ -399,10 +400,18 @@ class FreeSystem:
         ``max_iterations``: Newton options of the free acceleration (as :meth:`solve`).
         The initial state is projected onto the constraints first. See
         ``solvers/_integrators.py``.
+
+        ``progress``: show a progress bar on stderr (``None``, the default: only on a
+        terminal); Ctrl-C (KeyboardInterrupt) during the integration returns the solution so
+        far, with ``sol.extra["interrupted"] = True`` and a warning (see docs/robustness_fuzz.md).
         """
         _reject_unknown("FreeSystem.simulate", unknown, (
             "initial_condition", "method", "rtol", "atol", "max_step", "fit_degree", "max_error",
-            "step_size", "constraint_correction", "diagnostics", "tolerance", "max_iterations"))
+            "step_size", "constraint_correction", "diagnostics", "tolerance", "max_iterations",
+            "progress"))
+        if progress is not None and not isinstance(progress, (bool, np.bool_)):
+            raise ModelError(f"FreeSystem.simulate: progress must be True, False or None, got "
+                             f"{progress!r}")
         if self.kind != "dynamic":
             raise MechError("simulate() integrates the free motion: build the FreeSystem with "
                             "solution='dynamic'")
@@ -451,9 +460,27 @@ class FreeSystem:
             out, zone[0] = zone[0], False
             return out
 
-        times, Y, res, m = integrate(rhs, proj, t, np.concatenate((q0, qd0)), opt,
-                                     scale=np.concatenate((sc.columns, sc.columns)),
-                                     kinked=kinked if robust else None)
+        from ..draw._progress import Progress
+
+        t_start, t_stop = output_times(t)[:2]
+        bar = Progress(1000, "simulate", enabled=progress, unit="")
+        span = (t_stop - t_start) or 1.0
+
+        # by default (progress=None, on a terminal) the bar appears once a run takes 2 s
+        delay = 2.0 if progress is None else 0.0
+
+        def monitor(tt):
+            if delay == 0.0 or time.monotonic() - bar.start > delay:
+                bar.update(int(1000 * (tt - t_start) / span))
+
+        try:
+            times, Y, res, m = integrate(rhs, proj, t, np.concatenate((q0, qd0)), opt,
+                                         scale=np.concatenate((sc.columns, sc.columns)),
+                                         monitor=monitor if bar.enabled else None,
+                                         kinked=kinked if robust else None)
+        finally:
+            if bar._last >= 0:       # something was drawn: end its line
+                bar.close()
         QDD = np.empty((len(times), n))
         LAM = np.empty((len(times), s.m))
         for k, (tk, yk) in enumerate(zip(times, Y)):
@@ -466,5 +493,12 @@ class FreeSystem:
             extra["max_error"] = opt.max_error
         if diagnostics:
             extra["diagnostics"] = res.diagnostics
+        if res.message == "interrupted":
+            import warnings
+
+            extra["interrupted"] = True
+            warnings.warn(f"simulate: interrupted at t = {times[-1]:.6g} (of {t_stop:.6g}); "
+                          "returning the solution so far (sol.extra['interrupted'])",
+                          RuntimeWarning, stacklevel=2)
         return self._result(times, Y[:, :n], Y[:, n:], QDD, LAM, p, np.zeros(len(times)),
                             extra=extra)

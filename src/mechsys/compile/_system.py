@@ -62,6 +62,11 @@ class Layout:
                 if key in lst:
                     return lst.index(key)
             key = key.name
+        if not isinstance(key, str):
+            from .._errors import ModelError
+
+            raise ModelError(f"a coordinate is named by a string (\"crank.th\", \"th2\") or a "
+                             f"symbol, got {key!r}; coordinates are {list(self.q_names)}")
         names = [s.name for s in self.q_symbols]
         if key in names:
             return names.index(key)

@@ -155,7 +155,7 @@ def _describe(side) -> str:
 def as_expr(value, what: str) -> sp.Expr:
     try:
         return sp.sympify(value)
-    except (sp.SympifyError, TypeError) as exc:
+    except (sp.SympifyError, TypeError, ValueError, AttributeError, SyntaxError, NameError) as exc:
         raise GeometryError(f"{what}: {value!r} is not a number or expression") from exc
 
 

@@ -20,9 +20,9 @@ class Progress:
             enabled = total >= 60 and bool(isatty())
         self.enabled = bool(enabled)
         self.total, self.label, self.width = max(int(total), 1), label, width
+        self.unit = unit  # "" shows a percentage instead of "done/total unit"
         self.start = time.monotonic()
         self._last = -1
-        self.unit = unit
 
     def update(self, done: int) -> None:
         if not self.enabled:
@@ -33,7 +33,8 @@ class Progress:
         self._last = filled
         bar = "#" * filled + "." * (self.width - filled)
         el = time.monotonic() - self.start
-        self.stream.write(f"\r{self.label} [{bar}] {done}/{self.total} {self.unit} {el:5.1f} s")
+        count = f"{done}/{self.total} {self.unit}" if self.unit else f"{100 * done // self.total:3d} %"
+        self.stream.write(f"\r{self.label} [{bar}] {count} {el:5.1f} s")
         self.stream.flush()
 
     def close(self) -> None:

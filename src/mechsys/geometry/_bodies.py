@@ -207,8 +207,8 @@ def _scalar(value, what: str) -> sp.Expr:
                          f"string {value!r} (use the symbol m.parameter(...) returns)")
     try:
         v = sp.sympify(value, strict=True)
-    except (sp.SympifyError, TypeError, ValueError):
-        v = None
+    except (sp.SympifyError, TypeError, ValueError, AttributeError, SyntaxError, NameError):
+        v = None  # (a dict of strings is parsed as code: AttributeError, SyntaxError ...)
     if not isinstance(v, sp.Expr):
         raise ModelError(f"{what} must be a number or an expression of parameters, got {value!r}")
     if v.is_number and not (v.is_real and v.is_finite):

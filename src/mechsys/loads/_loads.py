@@ -82,8 +82,8 @@ def _magnitude(value, what: str) -> sp.Expr:
     """A load magnitude: an expression, finite and real when it is a number."""
     try:
         v = sp.sympify(value)
-    except (sp.SympifyError, TypeError):
-        v = None
+    except (sp.SympifyError, TypeError, ValueError, AttributeError, SyntaxError, NameError):
+        v = None  # (a dict of strings is parsed as code: AttributeError, SyntaxError ...)
     if not isinstance(v, sp.Expr) or (v.is_number and not (v.is_real and v.is_finite)):
         raise ModelError(f"{what} must be a finite real number or an expression, got {value!r}")
     return v

@@ -59,7 +59,7 @@ class IntegrationResult:
 
 def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-10,
                  max_step=np.inf, first_step=None, correction=True,
-                 t_eval=None, scale=None, kinked=None) -> IntegrationResult:
+                 t_eval=None, scale=None, kinked=None, monitor=None) -> IntegrationResult:
     """Explicit Runge-Kutta with projection after each accepted step. With ``t_eval``
     the states at those times come from each step's dense output (then projected).
     ``kinked()`` (optional), asked after each step: whether the derivative had a kink in it
@@ -85,40 +85,52 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
             ev_y.append(solver.y.copy())
             ie += 1
     rejected = 0
-    while solver.status == "running":
-        before = solver.nfev
-        t_prev, y_prev = solver.t, solver.y.copy()
-        msg = solver.step()
-        if solver.status == "failed":
-            raise MechError(f"integration failed at t = {solver.t:.6g}: {msg}")
-        # every attempt costs n_stages evaluations (FSAL); more than one attempt: rejections
-        rejected += max((solver.nfev - before) // solver.n_stages - 1, 0)
-        kink = kinked() if kinked is not None else False
-        if te is not None and ie < len(te) and (te[ie] - solver.t) * d <= 0:
-            dense = solver.dense_output() if not kink else _restarted(
-                cls, fun, t_prev, y_prev, rtol, atol, max_step)
-            while ie < len(te) and (te[ie] - solver.t) * d <= 0:
-                yi = dense(te[ie])
-                ev_t.append(te[ie])
-                ev_y.append(project(te[ie], yi) if correction else yi)
-                extra += 1 if correction else 0
-                ie += 1
-        if correction:
-            yp = project(solver.t, solver.y)
-            # the stepper keeps the derivative at its current state (FSAL): refresh it
-            # (solver.fun counts this evaluation in solver.nfev)
-            solver.y = yp
-            solver.f = solver.fun(solver.t, yp)
-            extra += 1
-        hs.append(solver.step_size)
-        ts.append(solver.t)
-        ys.append(solver.y.copy())
+    message = "finished"
+    try:
+        while solver.status == "running":
+            before = solver.nfev
+            t_prev, y_prev = solver.t, solver.y.copy()
+            msg = solver.step()
+            if solver.status == "failed":
+                raise MechError(f"integration failed at t = {solver.t:.6g}: {msg}")
+            # every attempt costs n_stages evaluations (FSAL); more than one attempt: rejections
+            rejected += max((solver.nfev - before) // solver.n_stages - 1, 0)
+            kink = kinked() if kinked is not None else False
+            if te is not None and ie < len(te) and (te[ie] - solver.t) * d <= 0:
+                dense = solver.dense_output() if not kink else _restarted(
+                    cls, fun, t_prev, y_prev, rtol, atol, max_step)
+                while ie < len(te) and (te[ie] - solver.t) * d <= 0:
+                    yi = dense(te[ie])
+                    ev_t.append(te[ie])
+                    ev_y.append(project(te[ie], yi) if correction else yi)
+                    extra += 1 if correction else 0
+                    ie += 1
+            if correction:
+                yp = project(solver.t, solver.y)
+                # the stepper keeps the derivative at its current state (FSAL): refresh it
+                # (solver.fun counts this evaluation in solver.nfev)
+                solver.y = yp
+                solver.f = solver.fun(solver.t, yp)
+                extra += 1
+            hs.append(solver.step_size)
+            ts.append(solver.t)
+            ys.append(solver.y.copy())
+            if monitor is not None:
+                monitor(solver.t)
+    except KeyboardInterrupt:
+        # Ctrl-C: keep the steps accepted so far (an interrupted step is dropped whole: the
+        # lists grow only after a step and its projection are complete)
+        message = "interrupted"
+        n_ok = min(len(ts), len(ys))
+        del ts[n_ok:], ys[n_ok:]
+        n_ev = min(len(ev_t), len(ev_y))
+        del ev_t[n_ev:], ev_y[n_ev:]
     diag = {"step_size": np.array(hs), "step_times": np.array(ts)}
     if te is not None:
         diag["t_eval"] = (np.array(ev_t), np.array(ev_y))
     diag["projections"] = extra
     return IntegrationResult(np.array(ts), np.array(ys), solver.nfev, len(ts) - 1, rejected,
-                             "finished", diag)
+                             message, diag)
 
 
 def _restarted(cls, fun, t0, y0, rtol, atol, max_step):
@@ -160,7 +172,8 @@ _WEIGHTS: dict = {}
 
 def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4,
                     method="automatic", step_size=None, correction=False,
-                    first_step=None, max_steps=2_000_000, scale=None) -> IntegrationResult:
+                    first_step=None, max_steps=2_000_000, scale=None,
+                    monitor=None) -> IntegrationResult:
     """Mech's adaptive Adams-Bashforth / Adams-Moulton integrator (see module doc).
     ``scale`` (len(y0),): the unit of each component; the error estimate is
     ``max_i |y_corr_i - y_pred_i| / scale_i``."""
@@ -185,52 +198,61 @@ def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4
     ts, ys, steps_h, steps_e = [t], [y.copy()], [], []
     recent: list[float] = []
     rejected = 0
-    while (t1 - t) * np.sign(span) > 1e-14 * max(1.0, abs(t1)):
-        if len(ts) > max_steps:
-            raise MechError(f"adams: more than {max_steps} steps; loosen max_error")
-        h_try = h if (t + h - t1) * np.sign(span) <= 0 else t1 - t
-        deg = min(k, len(hist_t) - 1)
-        # predictor: fit through the last deg+1 derivative values
-        pt, pf = hist_t[-(deg + 1):], hist_f[-(deg + 1):]
-        w = _adams_weights(pt, t, h_try)
-        y_pred = y + sum(wi * fi for wi, fi in zip(w, pf))
-        f_pred = fun(t + h_try, y_pred)
-        nfev += 1
-        # corrector: fit through the new point and the last deg values (degree deg)
-        ct = hist_t[-deg:] + [t + h_try] if deg > 0 else [t, t + h_try]
-        cf = hist_f[-deg:] + [f_pred] if deg > 0 else [f, f_pred]
-        wc = _adams_weights(ct, t, h_try)
-        y_corr = y + sum(wi * fi for wi, fi in zip(wc, cf))
-        err = float((np.abs(y_corr - y_pred) * inv_scale).max())
-        if step_size is None and err > a and abs(h_try) > 1e-14 * max(1.0, abs(t)):
-            h = h_try / 2
-            rejected += 1
-            continue
-        if method == "corrector" or (method == "automatic" and err > b):
-            y_new = y_corr
-            f_new = fun(t + h_try, y_new)
+    message = "finished"
+    try:
+        while (t1 - t) * np.sign(span) > 1e-14 * max(1.0, abs(t1)):
+            if len(ts) > max_steps:
+                raise MechError(f"adams: more than {max_steps} steps; loosen max_error")
+            h_try = h if (t + h - t1) * np.sign(span) <= 0 else t1 - t
+            deg = min(k, len(hist_t) - 1)
+            # predictor: fit through the last deg+1 derivative values
+            pt, pf = hist_t[-(deg + 1):], hist_f[-(deg + 1):]
+            w = _adams_weights(pt, t, h_try)
+            y_pred = y + sum(wi * fi for wi, fi in zip(w, pf))
+            f_pred = fun(t + h_try, y_pred)
             nfev += 1
-        else:
-            y_new, f_new = y_pred, f_pred
-        t = t + h_try
-        if correction:
-            y_new = project(t, y_new)
-            f_new = fun(t, y_new)
-            nfev += 1
-        y = y_new
-        hist_t.append(t)
-        hist_f.append(f_new)
-        if len(hist_t) > 6:
-            hist_t, hist_f = hist_t[-6:], hist_f[-6:]
-        ts.append(t)
-        ys.append(y.copy())
-        steps_h.append(h_try)
-        steps_e.append(err)
-        recent.append(err)
-        if step_size is None and len(recent) >= 4 and sum(recent[-4:]) < c:
-            h = 2 * h
-            recent.clear()
-    return IntegrationResult(np.array(ts), np.array(ys), nfev, len(ts) - 1, rejected, "finished",
+            # corrector: fit through the new point and the last deg values (degree deg)
+            ct = hist_t[-deg:] + [t + h_try] if deg > 0 else [t, t + h_try]
+            cf = hist_f[-deg:] + [f_pred] if deg > 0 else [f, f_pred]
+            wc = _adams_weights(ct, t, h_try)
+            y_corr = y + sum(wi * fi for wi, fi in zip(wc, cf))
+            err = float((np.abs(y_corr - y_pred) * inv_scale).max())
+            if step_size is None and err > a and abs(h_try) > 1e-14 * max(1.0, abs(t)):
+                h = h_try / 2
+                rejected += 1
+                continue
+            if method == "corrector" or (method == "automatic" and err > b):
+                y_new = y_corr
+                f_new = fun(t + h_try, y_new)
+                nfev += 1
+            else:
+                y_new, f_new = y_pred, f_pred
+            t = t + h_try
+            if correction:
+                y_new = project(t, y_new)
+                f_new = fun(t, y_new)
+                nfev += 1
+            y = y_new
+            hist_t.append(t)
+            hist_f.append(f_new)
+            if len(hist_t) > 6:
+                hist_t, hist_f = hist_t[-6:], hist_f[-6:]
+            ts.append(t)
+            ys.append(y.copy())
+            steps_h.append(h_try)
+            steps_e.append(err)
+            recent.append(err)
+            if step_size is None and len(recent) >= 4 and sum(recent[-4:]) < c:
+                h = 2 * h
+                recent.clear()
+            if monitor is not None:
+                monitor(t)
+    except KeyboardInterrupt:
+        # Ctrl-C: keep the steps accepted so far (see integrate_rk)
+        message = "interrupted"
+        n_ok = min(len(ts), len(ys))
+        del ts[n_ok:], ys[n_ok:]
+    return IntegrationResult(np.array(ts), np.array(ys), nfev, len(ts) - 1, rejected, message,
                              {"step_size": np.array(steps_h), "max_error": np.array(steps_e)})
 
 
@@ -396,25 +418,32 @@ def output_times(t) -> tuple[float, float, np.ndarray | None]:
     return float(tt[0]), float(tt[-1]), tt
 
 
-def integrate(fun, project, t, y0, opt: IntegrationOptions, scale=None, kinked=None):
+def integrate(fun, project, t, y0, opt: IntegrationOptions, scale=None, kinked=None, monitor=None):
     """Integrate ``y' = fun(t, y)`` with checked options ``opt`` (the dispatch shared by free
     and path systems). ``t``: a tuple ``(t0, t1)`` returns every accepted step; an array
     returns those times (RK dense output, or cubic Hermite with ``fun`` at the Adams steps).
     ``scale`` (len(y0),): the unit of each component (the characteristic length for position
     coordinates and their rates, 1 for angles), so that absolute tolerances and
     ``max_error`` mean the same in any unit of length. Returns ``(times, Y, result,
-    method)``."""
+    method)``. ``monitor(t)`` is called after each accepted step (progress); a
+    KeyboardInterrupt ends the integration with the steps so far (``result.message`` is
+    ``"interrupted"``)."""
     t0, t1, t_eval = output_times(t)
     if opt.runge_kutta:
         res = integrate_rk(fun, project, t0, t1, y0, opt.method, opt.rtol, opt.atol,
                            opt.max_step, correction=opt.correction, t_eval=t_eval, scale=scale,
-                           kinked=kinked)
+                           kinked=kinked, monitor=monitor)
         times, Y = res.diagnostics["t_eval"] if t_eval is not None else (res.t, res.y)
     else:
         res = integrate_adams(fun, project, t0, t1, y0, opt.degree, opt.max_error, opt.method,
-                              opt.step_size, opt.correction, scale=scale)
+                              opt.step_size, opt.correction, scale=scale, monitor=monitor)
         times, Y = res.t, res.y
-        if t_eval is not None:
+        if t_eval is not None and res.message == "interrupted":
+            # only the output times the integration reached
+            t_eval = t_eval[(t_eval - res.t[-1]) * np.sign(t1 - t0) <= 0]
+        if t_eval is not None and len(times) < 2:
+            times, Y = times[:1], Y[:1]          # interrupted before the first step: t0 only
+        elif t_eval is not None:
             from scipy.interpolate import CubicHermiteSpline
 
             if t1 < t0:                      # backwards: interpolate on rising times

@@ -35,6 +35,7 @@ import scipy.sparse as sps
 
 from .._errors import ConvergenceError, SingularJacobianError
 from . import _jit
+from ._diagnostics import Stopped
 from ._linalg import SPARSE_THRESHOLD, Scaling, Singular, rotation_columns
 from ._position import PositionOptions, PositionResult, describe_singular, solve_position
 from ._rank import continue_position, continue_rates
@@ -96,10 +97,13 @@ class SweepResult:
 
 
 def sweep(system, times, guess, order: int = 2, options: PositionOptions | None = None,
-          p=None, scaling: Scaling | None = None) -> SweepResult:
+          p=None, scaling: Scaling | None = None, hooks=None) -> SweepResult:
     """Kinematic solution at each of ``times`` (1D, any order; continuation follows the
     given order). ``order`` 0 = location, 1 = + velocity, 2 = + acceleration. ``scaling``
-    defaults to the one of ``guess`` at the first time."""
+    defaults to the one of ``guess`` at the first time. ``hooks``
+    (:class:`~mechsys.solvers._diagnostics.Hooks`): ``pre_solve(t)`` before each point's
+    position solve; a hook returning False raises ``Stopped`` carrying the points solved so
+    far (``partial``, a :class:`SweepResult`)."""
     times = np.atleast_1d(np.asarray(times, dtype=float))
     n, N = system.n, len(times)
     sparse = n > SPARSE_THRESHOLD
@@ -115,7 +119,8 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
         sc, evals = _scaling(system, times[0], q0, p, sparse), 1
     rot = np.flatnonzero(rotation_columns(system))  # indices of angles / Euler parameters
     k0 = 0
-    pointers = _jit.plan(system, N, order) if N else None
+    # hooks (pre_solve, post_iterate) run in the Python loop only
+    pointers = _jit.plan(system, N, order) if N and hooks is None else None
     if pointers is not None:
         # the regular points in compiled code; the first one needing care is left to the loop below
         k0, done = _jit.run(system, pointers, times, q0, p, order, options or PositionOptions(), sc,
@@ -123,9 +128,18 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
         evals += done
     for k in range(k0, N):
         t = times[k]
-        g = q0 if k == 0 else _predict(Q, QD, QDD, rconds, times, k, rot)
-        res = _solve_point(system, t, g, Q[k - 1] if k else None, options, p, sc, rot,
-                           times[k - 1] if k else None)
+        try:
+            if hooks is not None and hooks.pre_solve is not None and hooks.pre_solve(float(t)) is False:
+                raise Stopped("pre_solve", float(t))
+            g = q0 if k == 0 else _predict(Q, QD, QDD, rconds, times, k, rot)
+            res = _solve_point(system, t, g, Q[k - 1] if k else None, options, p, sc, rot,
+                               times[k - 1] if k else None, hooks)
+        except Stopped as exc:
+            exc.k = k
+            exc.partial = SweepResult(times[:k], Q[:k], None if QD is None else QD[:k],
+                                      None if QDD is None else QDD[:k], its[:k], evals,
+                                      order, None if rconds is None else rconds[:k])
+            raise
         q = res.q
         its[k] = res.iterations
         evals += res.evaluations
@@ -202,13 +216,14 @@ def _predict(Q, QD, QDD, rconds, times, k: int, rot) -> np.ndarray:
     return g
 
 
-def _solve_point(system, t, g, q_prev, options, p, sc, rot, t_prev=None):
+def _solve_point(system, t, g, q_prev, options, p, sc, rot, t_prev=None, hooks=None):
     """Newton from the prediction ``g``; again from ``q_prev`` when that fails or when the
     result jumps (a rotational coordinate further than ``ROTATION_JUMP`` from ``g``). At a
     singular instant after the first point, minimum-norm Gauss-Newton from ``g``
     (:func:`._rank.continue_position`) continues the branch."""
+    kw = {} if hooks is None else {"hooks": hooks}  # (the plain call stays as it was)
     try:
-        res = solve_position(system, t, g, options, p, sc)
+        res = solve_position(system, t, g, options, p, sc, **kw)
         if q_prev is None or _jump(res.q, g, rot) <= ROTATION_JUMP:
             return res
     except (ConvergenceError, SingularJacobianError) as exc:
@@ -225,7 +240,7 @@ def _solve_point(system, t, g, q_prev, options, p, sc, rot, t_prev=None):
                                       norm, (norm,), sc.rows(J), near)
     # the predictor can throw the guess far away where velocities are huge (near a
     # toggle): start again from the previous position
-    res = solve_position(system, t, q_prev, options, p, sc)
+    res = solve_position(system, t, q_prev, options, p, sc, **kw)
     jump = _jump(res.q, q_prev, rot)
     if jump > ROTATION_JUMP:
         i = rot[np.argmax(np.abs(res.q[rot] - q_prev[rot]))]

@@ -131,7 +131,7 @@ def describe_singular(system, J, t, q, what: str,
 
 
 def solve_position(system, t: float, guess, options: PositionOptions | None = None,
-                   p=None, scaling: Scaling | None = None) -> PositionResult:
+                   p=None, scaling: Scaling | None = None, hooks=None) -> PositionResult:
     """Solve ``Phi(q, t) = 0`` for ``q`` by damped Newton from ``guess`` (shape ``(n,)``).
 
     ``scaling`` (a :class:`~mechsys.solvers._linalg.Scaling`) fixes the unit-free form of
@@ -139,12 +139,17 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
     guess cannot loosen the tolerance). ``PositionResult.residual`` and ``history`` are
     the scaled residual ``max |Phi_i| / r_i``.
 
-    Raises :class:`ConvergenceError` (with per-equation residuals and the iteration history)
-    or :class:`SingularJacobianError` (naming dependent constraints).
+    Raises :class:`ConvergenceError` (with per-equation residuals, the iteration history
+    and a :class:`~mechsys.solvers._diagnostics.ConvergenceDiagnosis`) or
+    :class:`SingularJacobianError` (naming dependent constraints). ``hooks`` (a
+    :class:`~mechsys.solvers._diagnostics.Hooks`): ``post_iterate`` is called after each
+    iteration; returning False stops the solve (``Stopped``).
     """
     opt = options or _DEFAULT
     sparse = system.n > SPARSE_THRESHOLD
     q = np.array(guess, dtype=float)
+    q_start = q.copy()
+    post = hooks.post_iterate if hooks is not None else None
     F, J = system.residual_and_jacobian(t, q, p, sparse)
     evals = 1
     if scaling is None:
@@ -164,10 +169,14 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
     it = 0
     while True:
         if not np.all(np.isfinite(F)):
+            bad = system.layout.owners_of(np.flatnonzero(~np.isfinite(F)))
             raise ConvergenceError(
                 f"position solve at t = {t:.6g}: constraint equations are not finite "
-                "(a coordinate left the domain of an expression)", time=t,
-                residuals=_residual_table(system, F), history=tuple(history))
+                "(a coordinate left the domain of an expression, or a division by zero) in "
+                + ", ".join(_label(o) for o in bad)
+                + ("; check their expressions at this time and the guess" if it == 0 else
+                   f" after {it} Newton iteration(s); give a better guess"), time=t,
+                residuals=F.copy(), history=tuple(history))
         if norm <= tol and it > 0:
             return PositionResult(q, True, 0, "converged", it, evals, norm, tuple(history), rows)
         if it >= opt.max_iterations:
@@ -188,13 +197,22 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
         q, F, J, norm = qn, Fn, Jn, nn
         it += 1
         history.append(norm)
+        if post is not None:
+            from ._diagnostics import Iteration, Stopped
+
+            if post(Iteration(float(t), it, q.copy(), float(norm), a * dq,
+                              tuple(system.layout.q_names))) is False:
+                raise Stopped("post_iterate", float(t), it)
+    from ._diagnostics import diagnose_convergence
+
+    diag = diagnose_convergence(system, t, q_start, q, F, rows, scaling, history)
     raise ConvergenceError(
         f"position solve at t = {t:.6g} did not converge in {opt.max_iterations} iterations "
         f"(max residual {np.abs(F).max():.3e}, scaled {norm:.3e} > {tol:.1e}). Largest "
-        f"residuals:\n{_residual_table(system, F, rows)}\n"
+        f"residuals:\n{_residual_table(system, F, rows)}\n{diag.text}\n"
         "Give a better initial guess (add_body(..., guess=...) or guess=), or check that the "
         "mechanism can assemble at this time.",
-        time=t, residuals=F.copy(), history=tuple(history))
+        time=t, residuals=F.copy(), history=tuple(history), diagnosis=diag)
 
 
 def _residual_table(system, F, rows=None, k: int = 8) -> str:

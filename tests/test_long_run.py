@@ -1,0 +1,81 @@
+"""Long free-motion runs: progress display, Ctrl-C returning the solution so far, and a
+short profile of benchmarks/long_run.py (bounded constraint drift and energy error)."""
+
+import io
+import pathlib
+import sys
+
+import numpy as np
+import pytest
+
+import mechsys as ms
+import mechsys.analyses._free as free_module
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+import long_run  # noqa: E402
+
+
+def _interrupt_after(monkeypatch, calls: int):
+    """Make the free acceleration raise KeyboardInterrupt at its ``calls``-th evaluation
+    (as Ctrl-C would at any moment of a long run)."""
+    real = free_module.free_acceleration
+    count = [0]
+
+    def accel(*a, **k):
+        count[0] += 1
+        if count[0] == calls:
+            raise KeyboardInterrupt
+        return real(*a, **k)
+
+    monkeypatch.setattr(free_module, "free_acceleration", accel)
+
+
+@pytest.mark.parametrize("method,t", [("dop853", (0.0, 4.0)), ("adams", (0.0, 4.0)),
+                                      ("dop853", "grid"), ("adams", "grid")])
+def test_keyboard_interrupt_returns_the_solution_so_far(monkeypatch, method, t):
+    _, free = long_run.pendulum()
+    grid = np.linspace(0.0, 4.0, 81)
+    tt = grid if isinstance(t, str) else t
+    kw = {"step_size": 1e-2} if method == "adams" else {}
+    full = free.simulate(tt, method=method, **kw)
+    _interrupt_after(monkeypatch, 300)
+    with pytest.warns(RuntimeWarning, match="interrupted at t = "):
+        part = free.simulate(tt, method=method, **kw)
+    assert part.extra["interrupted"] is True and "interrupted" not in full.extra
+    k = len(part.t)
+    assert 2 <= k < len(full.t)
+    # the states so far are exactly those of the uninterrupted run (same steps)
+    np.testing.assert_array_equal(part.t, full.t[:k])
+    np.testing.assert_allclose(part.q, full.q[:k], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(part.qd, full.qd[:k], rtol=0, atol=1e-12)
+    # and usable: accelerations and multipliers at every returned point
+    assert np.all(np.isfinite(part.qdd)) and np.all(np.isfinite(part.lam))
+
+
+def test_progress_bar_on_request(monkeypatch):
+    _, free = long_run.pendulum()
+    buf = io.StringIO()
+    monkeypatch.setattr(sys, "stderr", buf)
+    free.simulate((0.0, 1.0), progress=True)
+    text = buf.getvalue()
+    assert text.startswith("\rsimulate [") and "100 %" in text and text.endswith("\n")
+    buf.truncate(0)
+    buf.seek(0)
+    free.simulate((0.0, 1.0), progress=False)
+    free.simulate((0.0, 1.0))           # default: only on a terminal (a StringIO is not)
+    assert buf.getvalue() == ""
+    with pytest.raises(ms.ModelError, match="progress must be True, False or None"):
+        free.simulate((0.0, 1.0), progress=1)
+
+
+@pytest.mark.parametrize("build", ["pendulum", "four-bar"])
+def test_short_long_run_has_bounded_drift_and_energy_error(build):
+    fn = long_run.pendulum if build == "pendulum" else long_run.four_bar
+    r = long_run.measure(build, fn, 2000, 1e-3)
+    assert r["steps"] >= 2000 and not r["interrupted"]
+    assert r["pos"] < 1e-10          # positions projected every step
+    assert r["vel"] < 1e-10
+    assert r["E_max"] < 1e-7         # the corrector keeps the energy (measured 2e-8, 1e-11)
+    assert "| pendulum |" in long_run.table([r]).replace(build, "pendulum")
