@@ -146,7 +146,7 @@ CATALOGUE = [
     ("solve", "ms.Model2D().solve(0.0)", "ModelError", "no moving bodies"),
     ("solve", 'm = crank(); m.remove("drive"); m.solve(0.0)', "ConstraintCountError",
      "1 degree(s) of freedom"),
-    ("solve", 'm = crank(); m.add(ms.RotationLock1(m.body("crank"), 0.0), name="lock"); m.solve(0.0)',
+    ("solve", 'm = crank(); m.add(ms.RotationLock1(m.body("crank"), 0.5), name="lock"); m.solve(0.0)',
      "ConstraintCountError", "'lock'"),
     ("solve", 'm = crank(); m.add(ms.PointOnLine1(m.body("crank").point("tip"), m.ground.axis((0, 2),'
      ' (1, 0))), name="reach"); m.remove("drive"); m.solve(0.0)', "ConvergenceError", "'reach'"),
