@@ -48,3 +48,31 @@ def restore_assumptions(expr):
         if r is not None and s is not r and s != r:
             back[s] = r
     return expr.xreplace(back) if back else expr
+
+
+def switch_times(label: str, times, params: dict) -> list[float]:
+    """Numeric switch times of a ``TimeSwitch`` (of constraints or of loads) named ``label``:
+    each time (a number or an expression of parameters) with the values ``params``
+    ({symbol: value}); a symbol that is not a parameter is a ``ModelError``."""
+    from ._errors import ModelError
+
+    out = []
+    for j, tj in enumerate(times, 1):
+        v = sp.sympify(tj).subs(params)
+        if not v.is_number:
+            raise ModelError(f"{label}: switch time {j} ({tj}) uses symbols "
+                             f"{sorted(map(str, v.free_symbols))} that are not parameters; "
+                             "declare them with m.parameter(name, value)")
+        out.append(float(v))
+    return out
+
+
+def check_switch_times(label: str, ts) -> None:
+    """A ``ModelError`` naming ``label`` unless the switch times ``ts`` strictly increase."""
+    from ._errors import ModelError
+
+    for j in range(1, len(ts)):
+        if not ts[j] > ts[j - 1]:
+            raise ModelError(f"{label}: switch times must increase, but switch time {j + 1} "
+                             f"({ts[j]:.6g}) is not after switch time {j} ({ts[j - 1]:.6g}); "
+                             "give them in increasing order")

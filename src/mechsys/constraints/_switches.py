@@ -29,7 +29,7 @@ from __future__ import annotations
 import sympy as sp
 
 from .._errors import ModelError
-from .._symbols import T
+from .._symbols import T, check_switch_times, switch_times
 from ._base import ConstraintBase, Variable
 
 
@@ -217,22 +217,10 @@ class TimeSwitch(StageSwitch):
 
     def switch_times(self, params: dict) -> list[float]:
         """Numeric switch times with the parameter values ``params`` ({symbol: value})."""
-        out = []
-        for j, tj in enumerate(self.times, 1):
-            v = tj.subs(params)
-            if not v.is_number:
-                raise ModelError(f"{self.label()}: switch time {j} ({tj}) uses symbols "
-                                 f"{sorted(map(str, v.free_symbols))} that are not parameters")
-            out.append(float(v))
-        return out
+        return switch_times(self.label(), self.times, params)
 
     def check_times(self, params: dict) -> None:
-        ts = self.switch_times(params)
-        for j in range(1, len(ts)):
-            if not ts[j] > ts[j - 1]:
-                raise ModelError(f"{self.label()}: switch times must increase, but switch time "
-                                 f"{j + 1} ({ts[j]:.6g}) is not after switch time {j} "
-                                 f"({ts[j - 1]:.6g}); give them in increasing order")
+        check_switch_times(self.label(), self.switch_times(params))
 
 
 __all__ = ["StageSwitch", "TimeSwitch"]

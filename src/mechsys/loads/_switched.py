@@ -31,7 +31,7 @@ from __future__ import annotations
 import sympy as sp
 
 from .._errors import ModelError
-from .._symbols import T
+from .._symbols import T, check_switch_times, switch_times
 from ._loads import BodyMoment, DirectLoad, LoadBase, PointForce
 
 
@@ -200,23 +200,11 @@ class TimeSwitchedLoad(SwitchedLoad):
             self.check_times({})
 
     def switch_times(self, params: dict) -> list[float]:
-        out = []
-        for j, tj in enumerate(self.times, 1):
-            v = tj.subs(params)
-            if not v.is_number:
-                raise ModelError(f"{self.label()}: switch time {j} ({tj}) uses symbols "
-                                 f"{sorted(map(str, v.free_symbols))} that are not parameters; "
-                                 "declare them with m.parameter(name, value)")
-            out.append(float(v))
-        return out
+        """Numeric switch times with the parameter values ``params`` ({symbol: value})."""
+        return switch_times(self.label(), self.times, params)
 
     def check_times(self, params: dict) -> None:
-        ts = self.switch_times(params)
-        for j in range(1, len(ts)):
-            if not ts[j] > ts[j - 1]:
-                raise ModelError(f"{self.label()}: switch times must increase, but time {j + 1} "
-                                 f"({ts[j]:.6g}) is not after time {j} ({ts[j - 1]:.6g}); give "
-                                 "them in increasing order")
+        check_switch_times(self.label(), self.switch_times(params))
 
 
 def check_switched_loads(model) -> None:
