@@ -8,7 +8,7 @@ The exact motion has one degree of freedom: every crank turns by the same angle 
 (energy of N + 1 cranks and N translating couplers). The script integrates both and prints
 the largest difference of point B0's x and the energy error.
 
-Run: python examples/n_four_bar.py [N] [t_end]
+Run: python examples/n_four_bar.py [N] [t_end] [picture.png]
 """
 
 from __future__ import annotations
@@ -41,7 +41,7 @@ def one_dof(n_loops: int, t: np.ndarray) -> np.ndarray:
     return sol.y[0]
 
 
-def main(n_loops: int = 2, t_end: float = 3.0) -> None:
+def main(n_loops: int = 2, t_end: float = 3.0, picture: str | None = None) -> None:
     sol = simulate(n_loops, t_end)
     th = one_dof(n_loops, sol.t)
     err = np.abs(sol.coordinate("coupler0.x") - np.cos(th)).max()
@@ -52,8 +52,23 @@ def main(n_loops: int = 2, t_end: float = 3.0) -> None:
     print(f"N = {n_loops}: {crossings} singular instants in {t_end} s, "
           f"max |x_B0 - exact| = {err:.2e} m, "
           f"max |E - E0| / E0 = {np.abs(E - E[0]).max() / E[0]:.2e}")
+    if picture:
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(figsize=(6, 3.2))
+        ax.plot(sol.t, sol.coordinate("coupler0.x"), label="mechsys, free motion")
+        ax.plot(sol.t, np.cos(th), "--", label="exact one-DOF motion")
+        ax.set_xlabel("t [s]")
+        ax.set_ylabel("x of B0 [m]")
+        ax.set_title(f"N-four-bar, N = {n_loops}: through {crossings} singular instants")
+        ax.legend()
+        fig.tight_layout()
+        fig.savefig(picture, dpi=80)
 
 
 if __name__ == "__main__":
-    main(int(sys.argv[1]) if len(sys.argv) > 1 else 2,
-         float(sys.argv[2]) if len(sys.argv) > 2 else 3.0)
+    # arguments: [N [t_end]] [picture.png]
+    numbers = [a for a in sys.argv[1:] if not a.endswith((".png", ".svg", ".pdf"))]
+    pictures = [a for a in sys.argv[1:] if a.endswith((".png", ".svg", ".pdf"))]
+    main(int(numbers[0]) if numbers else 2, float(numbers[1]) if len(numbers) > 1 else 3.0,
+         pictures[0] if pictures else None)
