@@ -63,3 +63,23 @@ def test_bad_representation_names():
         ms.Model3D(velocity="quaternion")
     with pytest.raises(ms.ModelError, match="coordinates must be"):
         ms.Model3D(coordinates="body")
+
+
+def test_model_velocity_method_not_shadowed_by_the_representation_option():
+    """Model3D used to store its ``velocity=`` option as ``self.velocity``, hiding the output
+    method: ``m.velocity(point)`` raised "'str' object is not callable" on every 3D model, and
+    ``velocities()`` on a 2D model picked up the method as its representation."""
+    m = tumbling(velocity="angular")
+    b = m.body("b")
+    v = m.velocity(b.point((1, 0, 0)))            # symbolic velocity of a body point
+    assert v.shape == (3, 1)
+    sol = m.solve(0.4)
+    np.testing.assert_allclose(sol.velocity(b.point(0)), [np.cos(0.4), 0, 0.8], atol=1e-12)
+    # the option still sets the default representation of the views: angular here (6 rows)
+    assert np.ravel(sol.velocities("b")).size == 6
+    m2 = ms.Model2D()
+    arm = m2.add_body("arm", points={"tip": (1, 0)}, guess=((0, 0), 0.1))
+    m2.add(ms.Revolute2(m2.ground.point((0, 0)), arm.point(0)))
+    m2.add(ms.RotationLock1(arm, 2 * T))
+    s2 = m2.solve(0.5)
+    np.testing.assert_allclose(np.ravel(s2.velocities("arm")), [0, 0, 2], atol=1e-12)

@@ -1211,7 +1211,8 @@ class Model3D(Model):
             raise ModelError(f"velocity must be 'euler' or 'angular', got {velocity!r}")
         if coordinates not in ("global", "local"):
             raise ModelError(f"coordinates must be 'global' or 'local', got {coordinates!r}")
-        self.velocity, self.coordinates = velocity, coordinates
+        # not ``self.velocity``: that name is the output method ``m.velocity(point)``
+        self.velocity_representation, self.coordinates = velocity, coordinates
         super().__init__(backend)
 
 

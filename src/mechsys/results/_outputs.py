@@ -276,7 +276,7 @@ class VelocityViews:
 
     def _views(self, body, representation, coordinates, order):
         m = self._model()
-        rep = representation or getattr(m, "velocity", "euler")
+        rep = representation or getattr(m, "velocity_representation", "euler")
         coords = coordinates or getattr(m, "coordinates", "global")
         if rep not in ("euler", "angular"):
             raise ModelError(f"representation must be 'euler' or 'angular', got {rep!r}")
