@@ -159,6 +159,11 @@ def test_overlay_draws_several_configurations(slider):
     alphas = sorted({round(p.get_facecolor()[3], 3) for p in ax.patches})
     assert alphas[0] < 0.5 and alphas[-1] == 1.0
     plt.close(fig)
+    # with 7 frames the last weight, 0.2 + 0.8 * 6 / 6, rounds to 1 + 2e-16: matplotlib
+    # refused the colour (ValueError) before the weight was clipped to 1
+    fig = d.overlay(sol, frames=7, figsize=(6, 3), dpi=60)
+    assert max(p.get_facecolor()[3] for p in fig.axes[0].patches) == 1.0
+    plt.close(fig)
 
 
 def test_gif_has_the_requested_frames(slider, tmp_path):

@@ -329,7 +329,8 @@ def overlay(fr: Frames, ax=None, figsize=None, dpi=None, title=None, grid=True, 
     _setup(ax, fr, grid, view)
     n = len(fr)
     for k in range(n):
-        alpha = 1.0 if n == 1 else faint + (1 - faint) * k / (n - 1)
+        # min: faint + (1 - faint) * (n-1)/(n-1) can round to 1 + ulp, which matplotlib refuses
+        alpha = 1.0 if n == 1 else min(1.0, faint + (1 - faint) * k / (n - 1))
         _artists(ax, fr, k, alpha, moving_only=k < n - 1)
     if title is None:
         title = f"{n} configurations, {fr.label} = {fr.t[0]:.3g} ... {fr.t[-1]:.3g}"
