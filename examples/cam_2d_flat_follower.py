@@ -14,8 +14,11 @@ the largest angle under which the pivot sees a point of the turned profile (samp
 The radius of curvature of the profile at the contact stays positive: the profile is convex
 everywhere a flat face touches it (a concave stretch would be skipped by a real flat face).
 
-Run: ``python examples/cam_2d_flat_follower.py``
+Run: ``python examples/cam_2d_flat_follower.py [picture.png]`` (the picture: the cam profile,
+drawn with ``CamPlot``, and the lever at a quarter turn).
 """
+
+import sys
 
 import numpy as np
 import sympy as sp
@@ -37,6 +40,13 @@ m.add(ms.RotationLock1(cam, T), name="drive")  # one radian per second
 m.add(ms.Revolute2(m.ground.point(tuple(PIVOT)), follower.point(0)), name="pivot")
 contact = m.add(ms.CamToLine1(cam.point(profile), (alpha, 1.3), follower.axis((0, 0), (1, 0))),
                 name="cam contact")
+
+# every picture of the model shows the cam profile, carried by the cam (Mech's CamPlot), the
+# lever with its flat face along its x axis, and the two ground pivots
+ms.draw.attach(m, ms.draw.CamPlot(cam.point(profile), (alpha, 0, 2 * sp.pi)),
+               ms.draw.Bar(follower, ((0, 0), (6.5, 0)), width=0.12),
+               ms.draw.GroundPivot(m.ground.point((0, 0))),
+               ms.draw.GroundPivot(m.ground.point(tuple(PIVOT))))
 
 print(m.dof())
 th = np.linspace(0, 2 * np.pi, 73)
@@ -66,3 +76,11 @@ if err > 1e-8:
     raise SystemExit("the follower does not rest on the cam")
 if not np.all(rho > 0):
     raise SystemExit("the flat face touches a concave stretch of the profile")
+
+if len(sys.argv) > 1:
+    import matplotlib.pyplot as plt
+
+    fig = ms.draw.snapshot(sol, index=18)      # cam turned by 90 degrees
+    fig.savefig(sys.argv[1], dpi=90)
+    plt.close(fig)
+    print(f"picture written to {sys.argv[1]}")
