@@ -80,3 +80,194 @@ def test_expression_rejected(text, why):
     assert why in str(err.value)
     if "at most" not in str(err.value):
         assert "file.json: bodies[0].mass" in str(err.value)
+
+
+# -- save / load ------------------------------------------------------------------------------
+import json  # noqa: E402
+
+import mechsys as ms  # noqa: E402
+from mechsys import models  # noqa: E402
+from mechsys.testing import CASES, iter_cases  # noqa: E402
+
+
+def _same_system(m1, m2, t, q, tol=1e-12):
+    """Residual and Jacobian of two models equal at (t, q), matching coordinates by name."""
+    s1, s2 = m1.compile(), m2.compile()
+    n1 = [s.name for s in s1.layout.q_symbols]
+    n2 = [s.name for s in s2.layout.q_symbols]
+    assert sorted(n1) == sorted(n2)
+    perm = [n1.index(k) for k in n2]
+    r1, r2 = s1.residual(t, q), s2.residual(t, q[perm])
+    np.testing.assert_allclose(r2, r1, rtol=tol, atol=tol)
+    np.testing.assert_allclose(s2.jacobian(t, q[perm]), s1.jacobian(t, q)[:, perm], rtol=tol, atol=tol)
+
+
+def test_every_conformance_case_round_trips(tmp_path):
+    """Every constraint type of the conformance suite saves, loads, and gives the same residual
+    and Jacobian at its configuration and at a perturbed one."""
+    rng = np.random.default_rng(3)
+    types = set()
+    for name, c in iter_cases():
+        path = c.model.save(tmp_path / "case.json")
+        m2 = ms.load(path)
+        assert [x.name for x in m2.constraints] == [x.name for x in c.model.constraints]
+        for q in (c.q, c.q + 0.1 * rng.standard_normal(c.q.shape)):
+            _same_system(c.model, m2, c.t, q)
+        types.add(name)
+    assert types == set(CASES)  # every constraint type of the suite saved (59 types)
+
+
+@pytest.mark.parametrize("build", [
+    lambda: models.slider_crank(crank=2.0, rod=6.0, speed=2 * np.pi),
+    lambda: models.four_bar(),
+    lambda: models.slider_crank_3d(crank=2.0, rod=6.0, height=1.5),
+], ids=["slider_crank", "four_bar", "slider_crank_3d"])
+def test_solved_examples_identical(tmp_path, build):
+    m = build()
+    m2 = ms.load(m.save(tmp_path / "m.json"))
+    t = np.linspace(0.0, 1.0, 13)
+    s1, s2 = m.solve(t), m2.solve(t)
+    assert s1.q.shape == s2.q.shape
+    np.testing.assert_array_equal(s2.q, s1.q)
+    np.testing.assert_array_equal(s2.qdd, s1.qdd)
+
+
+def _loaded_model():
+    m = ms.Model2D()
+    L = m.parameter("L", 1.5)
+    k = m.parameter("k", 40.0)
+    a = m.add_body("a", points={"tip": (L, 0)}, mass=2.0, centroid=(L / 2, 0), inertia=0.4,
+                   guess=((0, 0), 0.3))
+    b = m.add_body("b", points={"end": (1.0, 0.0)}, mass=1.0, centroid=(0.5, 0), inertia=0.1,
+                   guess=((1.5, 0.4), -0.2))
+    m.add(ms.Revolute2(m.ground.point((0, 0)), a.point(0)), name="base")
+    m.add(ms.Revolute2(a.point("tip"), b.point(0)), name="elbow")
+    m.add(ms.RotationLock1(a, 0.3 + np.pi / 2 * ms.T), name="drive")
+    m.add(ms.RotationLock1(b, -0.2 + sp.sin(ms.T)), name="drive2")
+    m.add_load(ms.Gravity((0, -1), 9.81), name="g")
+    m.add_load(ms.Force(b.point("end"), (1, 0), 3 * ms.T), name="push")
+    m.add_load(ms.Moment(b, 0.7))
+    m.add_load(ms.Spring(b.point("end"), m.ground.point((2, -1)), stiffness=k, free_length=0.5))
+    m.add_load(ms.Damper(b.point("end"), m.ground.point((2, -1)), damping=0.3))
+    m.add_load(ms.TorsionSpring(a, b, stiffness=5.0, free_angle=0.1))
+    m.add_load(ms.TorsionDamper(a, b, damping=0.2))
+    m.set_guess(th3=-0.25)
+    return m
+
+
+def test_loads_parameters_and_guesses_round_trip(tmp_path):
+    m = _loaded_model()
+    m2 = ms.load(m.save(tmp_path / "loads.json"))
+    assert m2.parameters == m.parameters
+    assert [ld.name for ld in m2.load_list] == [ld.name for ld in m.load_list]
+    assert [type(ld) for ld in m2.load_list] == [type(ld) for ld in m.load_list]
+    np.testing.assert_array_equal(m2.guess(), m.guess())
+    for b in m.bodies[1:]:
+        b2 = m2.body(b.name)
+        assert (b2.mass, b2.inertia, list(b2.centroid), b2.points) == (b.mass, b.inertia, list(b.centroid),
+                                                                       b.points)
+    # the driven dynamics: reaction multipliers carry every load
+    t = np.linspace(0.0, 0.5, 5)
+    s1, s2 = m.solve(t, solution="dynamic"), m2.solve(t, solution="dynamic")
+    np.testing.assert_array_equal(s2.lam, s1.lam)
+    # and the free motion (drive dropped): springs, dampers and gravity in the equations of motion
+    f1 = m.free(drop=["drive", "drive2"]).simulate(np.linspace(0.0, 0.3, 4))
+    f2 = m2.free(drop=["drive", "drive2"]).simulate(np.linspace(0.0, 0.3, 4))
+    np.testing.assert_allclose(f2.q, f1.q, rtol=0, atol=1e-12)
+    # the parameters stay parameters: changing one changes the loaded model too
+    m.set_parameters(k=10.0)
+    m2.set_parameters(k=10.0)
+    l1, l2 = m.solve(t, solution="dynamic").lam, m2.solve(t, solution="dynamic").lam
+    np.testing.assert_array_equal(l2, l1)
+    assert np.abs(l1 - s1.lam).max() > 1e-3
+
+
+def test_unsaveable_things_are_named(tmp_path):
+    m = _loaded_model()
+    m.add_load(ms.Spring(m.body("b").point("end"), m.ground.point((2, -1)), stiffness=1.0,
+                         law=lambda d, v: d), name="custom")
+    with pytest.raises(ModelError, match="load 'custom'.*cannot save .*function"):
+        m.save(tmp_path / "x.json")
+    assert not (tmp_path / "x.json").exists()
+    m = ms.Model2D()
+    b = m.add_body("b")
+    m.add(ms.RotationLock1(b, sp.Piecewise((ms.T, ms.T < 1), (1, True))), name="switchy")
+    with pytest.raises(ModelError, match="constraint 'switchy', argument 2"):
+        m.save(tmp_path / "y.json")
+
+
+# -- malicious files ------------------------------------------------------------------------------
+def _good(tmp_path) -> dict:
+    m = models.slider_crank(crank=2.0, rod=6.0, speed=2 * np.pi)
+    return json.loads(m.save(tmp_path / "good.json").read_text())
+
+
+def _load_data(tmp_path, data):
+    p = tmp_path / "bad.json"
+    p.write_text(data if isinstance(data, str) else json.dumps(data))
+    return ms.load(p)
+
+
+def _set_drive(data, text):
+    drive = next(c for c in data["constraints"] if c["name"] == "drive")
+    drive["args"][1] = {"expr": text}
+    return data
+
+
+@pytest.mark.parametrize("text,why", [
+    ("__import__('os').system('touch /tmp/pwned')", "unexpected character"),
+    ("T.__class__", "unexpected character '.'"),
+    ("(lambda: 0)()", "unexpected character ':'"),
+    ("exec(1)", "unknown function 'exec'"),
+    ("9" * 400, "more than 40 digits"),
+    ("1e999*T", "larger than"),
+    ("(" * 10000 + "T" + ")" * 10000, "at most"),
+    ("(" * 1000 + "T" + ")" * 1000, "nesting deeper"),
+])
+def test_malicious_expressions_rejected(tmp_path, text, why):
+    data = _set_drive(_good(tmp_path), text)
+    with pytest.raises(ModelError, match="bad.json: constraint 'drive', argument 2") as err:
+        _load_data(tmp_path, data)
+    assert why in str(err.value)
+
+
+def test_malicious_structure_rejected(tmp_path):
+    data = _good(tmp_path)
+    data["constraints"][0]["type"] = "os.system"
+    with pytest.raises(ModelError, match="unknown constraint type 'os.system'"):
+        _load_data(tmp_path, data)
+    data = _good(tmp_path)
+    data["loads"] = [{"name": "x", "type": "Popen", "args": []}]
+    with pytest.raises(ModelError, match="unknown load type 'Popen'"):
+        _load_data(tmp_path, data)
+    # strings reach constructors that may sympify them: only plain names pass
+    data = _good(tmp_path)
+    data["constraints"][-1]["args"][1] = "__import__('os').getcwd()"
+    with pytest.raises(ModelError, match="expected a name"):
+        _load_data(tmp_path, data)
+    data = _good(tmp_path)
+    data["constraints"][-1]["args"][1] = {"expr": "1", "tuple": []}
+    with pytest.raises(ModelError, match="one key"):
+        _load_data(tmp_path, data)
+    with pytest.raises(ModelError, match="nests deeper"):
+        _load_data(tmp_path, "[" * 10000 + "]" * 10000)
+    with pytest.raises(ModelError, match="integer of"):
+        _load_data(tmp_path, '{"format": "mechsys-model", "version": ' + "9" * 5000 + "}")
+    with pytest.raises(ModelError, match="numbers must be finite"):
+        _load_data(tmp_path, '{"format": "mechsys-model", "version": 1, "parameters": [["a", NaN]]}')
+    with pytest.raises(ModelError, match="not a mechsys model file"):
+        _load_data(tmp_path, '{"hello": 1}')
+    with pytest.raises(ModelError, match="not valid JSON"):
+        _load_data(tmp_path, '{"format": ')
+    huge = tmp_path / "huge.json"
+    huge.write_text('{"format": "mechsys-model", "pad": "' + "x" * 6_000_000 + '"}')
+    with pytest.raises(ModelError, match="bytes; at most"):
+        ms.load(huge)
+    data = _good(tmp_path)
+    data["parameters"] = [["p", 1e308]]
+    with pytest.raises(ModelError, match="finite number"):
+        _load_data(tmp_path, data)
+    data = _good(tmp_path)
+    data["bodies"][0]["points"][0][1][0] = "nonexistent_name"
+    with pytest.raises(ModelError, match="body 'crank', point 'pin'.*unknown name 'nonexistent_name'"):
+        _load_data(tmp_path, data)

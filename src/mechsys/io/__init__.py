@@ -3,5 +3,6 @@ pickle; expressions read by the restricted grammar of :mod:`mechsys.io._expr`)."
 
 from ._expr import parse as parse_expression
 from ._expr import to_text as expression_text
+from ._files import load, model_from_dict, model_to_dict, save
 
-__all__ = ["expression_text", "parse_expression"]
+__all__ = ["expression_text", "load", "model_from_dict", "model_to_dict", "parse_expression", "save"]
