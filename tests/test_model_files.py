@@ -271,3 +271,50 @@ def test_malicious_structure_rejected(tmp_path):
     data["bodies"][0]["points"][0][1][0] = "nonexistent_name"
     with pytest.raises(ModelError, match="body 'crank', point 'pin'.*unknown name 'nonexistent_name'"):
         _load_data(tmp_path, data)
+
+
+# -- command line: mechsys run ---------------------------------------------------------------------
+def test_cli_run_writes_the_solution(tmp_path, capsys):
+    from mechsys.cli import main
+
+    m = models.slider_crank(crank=2.0, rod=6.0, speed=2 * np.pi)
+    path = m.save(tmp_path / "crank.json")
+    out = tmp_path / "res" / "results.csv"
+    assert main(["run", str(path), "--t", "0:1:21", "--out", str(out), "--progress"]) == 0
+    err = capsys.readouterr().err
+    assert "21/21 points" in err  # the progress bar reached the end
+    with open(out) as f:
+        header = f.readline().strip().split(",")
+    table = np.loadtxt(out, delimiter=",", skiprows=1)
+    sol = m.solve(np.linspace(0.0, 1.0, 21))
+    assert header[0] == "t" and table.shape == (21, 1 + 3 * len(sol.names))
+    np.testing.assert_array_equal(table[:, 0], sol.t)
+    j = sol.names.index("piston.x")
+    k = header.index("piston.x")
+    np.testing.assert_array_equal(table[:, k], sol.q[:, j])  # written exactly (17 digits)
+    np.testing.assert_array_equal(table[:, header.index("piston.x_dd")], sol.qdd[:, j])
+    # the piston's closed form: x = r cos(th) + sqrt(l^2 - r^2 sin^2(th))
+    th = 2 * np.pi * sol.t
+    np.testing.assert_allclose(table[:, k], 2 * np.cos(th) + np.sqrt(36 - 4 * np.sin(th) ** 2), atol=1e-9)
+
+
+def test_cli_run_parquet_and_errors(tmp_path, capsys):
+    from mechsys.cli import main, parse_times
+
+    path = models.four_bar().save(tmp_path / "fb.json")
+    pq = pytest.importorskip("pyarrow.parquet")
+    out = tmp_path / "r.parquet"
+    assert main(["run", str(path), "--t", "0:0.5:5", "--out", str(out), "--no-progress"]) == 0
+    table = pq.read_table(out).to_pydict()
+    np.testing.assert_array_equal(table["t"], np.linspace(0, 0.5, 5))
+    assert capsys.readouterr().err == ""
+    assert main(["run", str(path), "--t", "0:1", "--out", str(tmp_path / "x.csv")]) == 1
+    assert "start:stop:count" in capsys.readouterr().err
+    assert main(["run", str(path), "--out", str(tmp_path / "x.xlsx")]) == 1
+    assert ".csv or .parquet" in capsys.readouterr().err
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"format": "mechsys-model", "version": 1, "space": "planar", "parameters": [["a", '
+                   '{"expr": "1"}]]}')
+    assert main(["run", str(bad)]) == 1
+    assert "bad.json: parameters[0]: expected a finite number" in capsys.readouterr().err
+    np.testing.assert_array_equal(parse_times("2.5"), [2.5])
