@@ -87,6 +87,7 @@ import json  # noqa: E402
 
 import mechsys as ms  # noqa: E402
 from mechsys import models  # noqa: E402
+from mechsys.io import model_from_dict  # noqa: E402
 from mechsys.testing import CASES, iter_cases  # noqa: E402
 
 
@@ -318,3 +319,70 @@ def test_cli_run_parquet_and_errors(tmp_path, capsys):
     assert main(["run", str(bad)]) == 1
     assert "bad.json: parameters[0]: expected a finite number" in capsys.readouterr().err
     np.testing.assert_array_equal(parse_times("2.5"), [2.5])
+
+
+def test_mutated_files_raise_only_our_errors(tmp_path):
+    """Random damage to a good file (values swapped for other JSON values, keys dropped) loads
+    or raises a MechError: never another exception."""
+    good = json.loads(_loaded_model().save(tmp_path / "good.json").read_text())
+    rng = np.random.default_rng(11)
+    junk = [None, True, 0, -1, 1e300, "x", "T", [], {}, [1, 2], {"expr": "T"}, {"tuple": [1]},
+            {"body": "nope"}, {"point": {}}, {"vector": {"body": None}}, {"array": ["T"]},
+            {"matrix": [[1], [1, 2]]}, {"dict": [[1]]}, {"axis": {"origin": 1}}, {"line": [1, 2]},
+            {"constraint": {"type": "Revolute2"}}, {"constraint_ref": "base"}, [[1, "a"]]]
+
+    def places(node, path=()):
+        yield path
+        if isinstance(node, dict):
+            for k, v in node.items():
+                yield from places(v, (*path, k))
+        elif isinstance(node, list):
+            for i, v in enumerate(node):
+                yield from places(v, (*path, i))
+
+    spots = list(places(good))[1:]
+    outcomes = {"loaded": 0, "rejected": 0}
+    for _ in range(150):
+        data = json.loads(json.dumps(good))
+        path = spots[rng.integers(len(spots))]
+        parent = data
+        for k in path[:-1]:
+            parent = parent[k]
+        if isinstance(parent, dict) and rng.random() < 0.3:
+            del parent[path[-1]]
+        else:
+            parent[path[-1]] = junk[rng.integers(len(junk))]
+        try:
+            model_from_dict(data)
+            outcomes["loaded"] += 1
+        except ms.MechError:
+            outcomes["rejected"] += 1
+    assert outcomes["rejected"] > 50
+
+
+def test_friction_gyroscopic_and_generic_constraints_round_trip(tmp_path):
+    """JointFriction (referring to a constraint by name), GyroMoment and the generic
+    Constraint (equations in the coordinates) save and give the same dynamic solution."""
+    m = ms.Model2D()
+    blk = m.add_body("block", mass=2.0, inertia=0.1, guess=((0.0, 0.0), 0.3))
+    ca, sa = np.cos(0.3), np.sin(0.3)
+    slide = m.add(ms.Translate2(blk.axis((0, 0), (1, 0)), m.ground.axis((0, 0), (ca, sa))), name="slide")
+    m.add(ms.RelativeX1(blk.point(0), ca * ms.T), name="push")
+    m.add_load(ms.Gravity((0, -1), 9.81))
+    m.add_load(ms.JointFriction(slide, mu=0.25, v_eps=1e-4))
+    m2 = ms.load(m.save(tmp_path / "friction.json"))
+    t = np.linspace(0.1, 1.0, 4)
+    np.testing.assert_array_equal(m2.solve(t, solution="dynamic").lam, m.solve(t, solution="dynamic").lam)
+
+    m = ms.Model3D()
+    b = m.add_body("rotor", mass=2.0, inertia=(0.5, 0.8, 1.0, 0.12, 0.0, 0.0),
+                   guess=((0, 0, 0), (1, 0, 0, 0)))
+    x, y, z, e0, e1, e2, e3 = b.q
+    m.add(ms.Constraint([x, y, z]), name="fixed point")
+    m.add(ms.Constraint([e1, e2]), name="z axis")
+    m.add(ms.Constraint([e3 - sp.sin((3 * ms.T + 0.7 * ms.T ** 2) / 2)]), name="spin")
+    m.add_load(ms.GyroMoment(b, (1.0, 1.0, 0.0), 40.0), name="gyro")
+    m2 = ms.load(m.save(tmp_path / "gyro.json"))
+    s1, s2 = m.solve(t, solution="dynamic"), m2.solve(t, solution="dynamic")
+    np.testing.assert_array_equal(s2.lam, s1.lam)
+    assert np.abs(s1.lam).max() > 1.0  # the gyroscopic moment is really there

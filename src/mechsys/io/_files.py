@@ -34,7 +34,7 @@ import numpy as np
 import sympy as sp
 
 from .. import loads as _loads_pkg
-from .._errors import ModelError
+from .._errors import MechError, ModelError
 from .._symbols import T, acceleration_symbol, velocity_symbol
 from ..constraints import REGISTRY
 from ..constraints._base import ConstraintBase
@@ -438,7 +438,19 @@ def _json_depth_ok(text: str) -> bool:
 
 
 def model_from_dict(data: dict, source: str = "model file"):
-    """Build a model from the data of :func:`model_to_dict` (checked as from a stranger)."""
+    """Build a model from the data of :func:`model_to_dict` (checked as from a stranger).
+    Every problem is a :class:`~mechsys.ModelError` (or another :class:`~mechsys.MechError`)."""
+    try:
+        return _model_from_dict(data, source)
+    except MechError:
+        raise
+    except (TypeError, ValueError, AttributeError, IndexError, KeyError, RecursionError,
+            ZeroDivisionError, OverflowError) as exc:
+        # malformed data that slipped past the checks into a constructor: still our error
+        raise ModelError(f"{source}: malformed model file ({type(exc).__name__}: {exc})") from None
+
+
+def _model_from_dict(data: dict, source: str):
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise ModelError(f"{source}: not a mechsys model file (no \"format\": \"{FORMAT}\")")
     if data.get("version") != VERSION:
