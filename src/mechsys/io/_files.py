@@ -50,6 +50,9 @@ MAX_FILE_BYTES = 5_000_000
 MAX_NESTING = 64
 MAX_ITEMS = 100_000
 _IDENT = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,99}")
+# strings of graphics (colours, label texts): no quotes, brackets, dots or markup, so that they
+# can reach neither an expression parser nor the HTML of the 3D viewer as code
+_GRAPHIC_TEXT = re.compile(r"[A-Za-z0-9_#: +-]{0,100}")
 
 #: load class name -> class: the only load classes a file may name
 LOAD_TYPES = {name: obj for name in _loads_pkg.__all__
@@ -61,6 +64,7 @@ class _Writer:
     def __init__(self, model):
         self.m = model
         self.in_model = {id(c): c.name for c in model.constraints}
+        self.texts = _IDENT  # the strings allowed where the writer is (graphics: _GRAPHIC_TEXT)
 
     def value(self, v, where: str):
         if v is None or isinstance(v, bool):
@@ -72,9 +76,10 @@ class _Writer:
                 raise ModelError(f"{where}: cannot save the non-finite number {v!r}")
             return float(v)
         if isinstance(v, str):
-            if not _IDENT.fullmatch(v):
+            if not self.texts.fullmatch(v):
                 raise ModelError(f"{where}: cannot save the string {v!r}; model files take strings "
-                                 "that are plain names (letters, digits, _)")
+                                 "that are plain names (letters, digits, _; in graphics also "
+                                 "spaces, #, :, + and -)")
             return v
         if isinstance(v, sp.MatrixBase):
             return {"matrix": [[self.expr(e, where) for e in v.row(i)] for i in range(v.rows)]}
@@ -181,6 +186,15 @@ _REAL_ASSUMPTIONS = sp.Symbol("x", real=True).assumptions0
 _PLAIN_ASSUMPTIONS = sp.Symbol("x").assumptions0
 
 
+def _primitive_types() -> dict:
+    """Graphics class name -> class: the only graphics classes a file may name."""
+    from .. import draw
+
+    return {name: obj for name in draw.__all__
+            if isinstance(obj := getattr(draw, name), type) and issubclass(obj, draw.Primitive)
+            and obj is not draw.Primitive}
+
+
 def _all_names(m) -> dict:
     """Every symbol name an expression of model ``m`` may use."""
     names = {"T": T}
@@ -201,10 +215,18 @@ def model_to_dict(m) -> dict:
     :class:`~mechsys.ModelError` naming anything that cannot be saved."""
     from ..draw._scene import attached
 
-    if attached(m):
-        raise ModelError("save: the model has attached graphics (add_graphics); model files do "
-                         "not hold drawings yet: save a copy without them")
     w = _Writer(m)
+    graphics = []
+    prims = attached(m)
+    if prims:
+        types = _primitive_types()
+        w.texts = _GRAPHIC_TEXT
+        for i, g in enumerate(prims):
+            where = f"graphics[{i}] ({type(g).__name__})"
+            if types.get(type(g).__name__) is not type(g):
+                raise ModelError(f"{where}: not a graphics class of mechsys.draw; it cannot be saved")
+            graphics.append(w.call(g, type(g).__name__, where))
+        w.texts = _IDENT
     con_vars = {id(v) for c in m.constraints for v in c.new_variables()}
     con_syms = {v.symbol for c in m.constraints for v in c.new_variables()}
     bodies = []
@@ -236,6 +258,7 @@ def model_to_dict(m) -> dict:
                         for c in m.constraints],
         "loads": [dict(name=ld.name, **w.load(ld, f"load {ld.name!r}")) for ld in m.load_list],
         "guesses": [[s.name, float(v)] for s, v in m._guess_override.items()],
+        "graphics": graphics,
     }
 
 
@@ -252,6 +275,7 @@ class _Reader:
     def __init__(self, m, source: str):
         self.m, self.source = m, source
         self.names = _all_names(m)
+        self.texts = _IDENT
 
     def err(self, where: str, why: str) -> ModelError:
         return ModelError(f"{self.source}: {where}: {why}")
@@ -319,7 +343,10 @@ class _Reader:
             self.number(v, where)
             return v
         if isinstance(v, str):
-            return self.name(v, where)
+            if not self.texts.fullmatch(v):
+                raise self.err(where, f"the string {v[:80]!r} is not allowed here (plain names of "
+                                      "letters, digits and _; in graphics also spaces, #, :, + and -)")
+            return v
         if isinstance(v, list):
             return [self.value(x, where) for x in v]
         if not isinstance(v, dict):
@@ -543,6 +570,18 @@ def _model_from_dict(data: dict, source: str):
             m.set_guess(guesses)
         except ModelError as exc:
             raise r.err("guesses", str(exc)) from None
+    graphics = _list(data, "graphics", source)
+    if graphics:
+        from .. import draw
+
+        types = _primitive_types()
+        r.texts = _GRAPHIC_TEXT
+        prims = []
+        for i, g in enumerate(graphics):
+            if not isinstance(g, dict):
+                raise r.err(f"graphics[{i}]", "expected an object")
+            prims.append(r.call(g, types, "graphics", f"graphics[{i}]"))
+        draw.attach(m, *prims)
     return m
 
 
