@@ -426,3 +426,22 @@ def test_graphics_round_trip(tmp_path):
     data["graphics"][2]["type"] = "ViewerHTML"
     with pytest.raises(ModelError, match="unknown graphics type 'ViewerHTML'"):
         _load_data(tmp_path, data)
+
+
+def test_options_and_variable_rates_round_trip(tmp_path):
+    m = ms.Model3D(velocity="angular", coordinates="local", backend="sympy")
+    s = m.variable("s", 0.4)
+    b = m.add_body("b", guess=((0.4, 0, 0), (1, 0, 0, 0)))
+    m.add(ms.Constraint([b.q[0] - s, b.q[1], b.q[2], b.q[4], b.q[5], b.q[6]]), name="slide")
+    m.add(ms.Constraint([s - 0.3 * ms.T]), name="drive")
+    m.add_load(ms.Force(b.point(0), (1, 0, 0), 2 + ms._symbols.velocity_symbol("s")), name="viscous")
+    m2 = ms.load(m.save(tmp_path / "o.json"))
+    assert (m2.velocity, m2.coordinates, m2._backend) == ("angular", "local", "sympy")
+    assert m2.save(tmp_path / "o2.json").read_text() == (tmp_path / "o.json").read_text()
+    data = json.loads((tmp_path / "o.json").read_text())
+    data["space"] = "planar"
+    with pytest.raises(ModelError, match="options are for spatial models"):
+        _load_data(tmp_path, data)
+    data["options"] = {"backend": "os.system"}
+    with pytest.raises(ModelError, match="options must map names to plain names"):
+        _load_data(tmp_path, data)

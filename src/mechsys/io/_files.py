@@ -64,6 +64,7 @@ class _Writer:
     def __init__(self, model):
         self.m = model
         self.in_model = {id(c): c.name for c in model.constraints}
+        self.names = _all_names(model)
         self.texts = _IDENT  # the strings allowed where the writer is (graphics: _GRAPHIC_TEXT)
 
     def value(self, v, where: str):
@@ -115,7 +116,7 @@ class _Writer:
                 raise ModelError(f"{where}: the symbol name {s.name!r} cannot be written to a "
                                  "model file; use names of letters, digits and _")
         text = to_text(e)
-        back = parse(text, _all_names(self.m), where)  # everything written must read back
+        back = parse(text, self.names, where)  # everything written must read back
         if back != e and sp.simplify(back - e) != 0:
             raise ModelError(f"{where}: the expression {e} does not read back from its text "
                              f"{text!r}; it cannot be saved")
@@ -201,12 +202,12 @@ def _all_names(m) -> dict:
     names.update({s.name: s for s in m._params})
     for v in m._variables:
         names[v.symbol.name] = v.symbol
-    for b in m.bodies:
-        for s in b.q:
-            names[s.name] = s
-            for f in (velocity_symbol, acceleration_symbol):
-                d = f(s.name)
-                names[d.name] = d
+    coords = [s for b in m.bodies for s in b.q] + [v.symbol for v in m._variables]
+    for s in coords:  # body coordinates and variables, with their rates
+        names[s.name] = s
+        for f in (velocity_symbol, acceleration_symbol):
+            d = f(s.name)
+            names[d.name] = d
     return names
 
 
@@ -247,8 +248,9 @@ def model_to_dict(m) -> dict:
         "format": FORMAT,
         "version": VERSION,
         "space": m.space.name,
-        "options": ({"velocity": m.velocity, "coordinates": m.coordinates}
-                    if isinstance(m, Model3D) else {}),
+        "options": {**({"velocity": m.velocity, "coordinates": m.coordinates}
+                       if isinstance(m, Model3D) else {}),
+                    **({"backend": m._backend} if m._backend else {})},
         "units": dict(m.units) if m.units else None,
         "parameters": [[s.name, float(v)] for s, v in m._params.items()],
         "variables": [[v.symbol.name, float(v.guess)] for v in m._variables
@@ -486,12 +488,18 @@ def _model_from_dict(data: dict, source: str):
     _check_shape(data)
     space = data.get("space")
     opts = data.get("options") or {}
+    if not isinstance(opts, dict) or not all(isinstance(v, str) and _IDENT.fullmatch(v)
+                                             for v in opts.values()):
+        raise ModelError(f"{source}: options must map names to plain names")
+    unknown = sorted(set(opts) - {"velocity", "coordinates", "backend"})
+    if unknown:
+        raise ModelError(f"{source}: unknown options {unknown}")
     if space == "planar":
-        m = Model2D()
+        if set(opts) - {"backend"}:
+            raise ModelError(f"{source}: velocity and coordinates options are for spatial models")
+        m = Model2D(backend=opts.get("backend"))
     elif space == "spatial":
-        if not isinstance(opts, dict) or not all(isinstance(v, str) for v in opts.values()):
-            raise ModelError(f"{source}: options must map names to strings")
-        m = Model3D(**{k: opts[k] for k in ("velocity", "coordinates") if k in opts})
+        m = Model3D(**opts)
     else:
         raise ModelError(f"{source}: space must be 'planar' or 'spatial', got {space!r}")
     r = _Reader(m, source)
