@@ -20,7 +20,7 @@ LAYER = {
     "geometry": 1,
     "constraints": 2, "loads": 2, "results": 2, "compile": 2,
     "model": 3, "analyses": 3,
-    "models": 4, "testing": 4, "draw": 4, "cli": 5, "_docgen": 5, "__init__": 5, "__main__": 5,
+    "models": 4, "testing": 4, "draw": 4, "io": 4, "cli": 5, "_docgen": 5, "__init__": 5, "__main__": 5,
 }
 
 # (importing module, imported part): call-time imports that go up, each a documented convenience
@@ -30,6 +30,7 @@ LAZY_UP = {
     ("mechsys.analyses._sweep", "draw"),     # sweep's progress bar (draw/_progress.py)
     ("mechsys.analyses._vibration", "draw"),  # VibrationModes.animate
     ("mechsys.analyses._free", "draw"),      # FreeSystem.simulate's progress bar
+    ("mechsys.model", "io"),                 # Model.save (model files)
 }
 
 
@@ -158,5 +159,5 @@ def test_top_level_has_only_the_tiers():
     assert loose == ["__init__.py", "__main__.py", "_docgen.py", "_errors.py", "_symbols.py",
                      "cli.py", "model.py", "models.py"]
     folders = sorted(p.name for p in PKG.iterdir() if p.is_dir() and (p / "__init__.py").exists())
-    assert folders == ["analyses", "compile", "constraints", "draw", "geometry", "loads",
+    assert folders == ["analyses", "compile", "constraints", "draw", "geometry", "io", "loads",
                        "results", "solvers", "testing"]

@@ -51,7 +51,7 @@ REQUIRED_TOP_LEVEL |= {"VibrationModes", "TorsionSpring", "TorsionDamper", "tabu
 
 #: Public subpackages and modules; every other module is private (``_name.py``).
 PUBLIC_MODULES = {"constraints", "compile", "solvers", "testing", "draw", "models", "cli", "model",
-                  "geometry", "loads", "analyses", "results"}
+                  "geometry", "loads", "analyses", "results", "io"}
 
 REQUIRED_IN_MODULE = {
     "mechsys.constraints": {"REGISTRY", "ConstraintBase", "Constraint", "Variable", "register",
@@ -86,6 +86,10 @@ REQUIRED_MEMBERS["Model"] |= _ISSUE17_OUTPUTS | {"vibration", "copy", "remove_bo
                                                  "to_units"}
 REQUIRED_MEMBERS["Solution"] |= _ISSUE17_OUTPUTS
 REQUIRED_MEMBERS["VibrationModes"] = {"shape", "motion", "animate", "table"}
+#: Issue 17: model files (docs/model_files.md).
+REQUIRED_TOP_LEVEL |= {"load"}
+REQUIRED_MEMBERS["Model"] |= {"save"}
+REQUIRED_IN_MODULE["mechsys.io"] = {"load", "save", "parse_expression", "expression_text"}
 
 def test_all_contains_the_required_names():
     missing = REQUIRED_TOP_LEVEL - set(mechsys.__all__)

@@ -163,6 +163,7 @@ from .geometry._rotations import (
     xyz_to_spherical,
 )
 from .geometry._tabulated import tabulated
+from .io import load
 from .loads._friction import JointFriction
 from .loads._gyro import GyroFilter, GyroMoment, gyro_filter
 from .loads._loads import Damper, Force, Gravity, Load, LoadBase, Moment, Spring
@@ -337,6 +338,7 @@ __all__ = [
     "find_time",
     "gyro_filter",
     "intersection_point",
+    "load",
     "magnitude",
     "parallel_axis",
     "pressure_angle",

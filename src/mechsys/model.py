@@ -1090,6 +1090,16 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
 
         return PathSystem(self, replace, initial_condition)
 
+    def save(self, path):
+        """Write the model to a JSON model file (docs/model_files.md): bodies, points, mass
+        properties, guesses, parameters, variables, constraints and loads, expressions as text
+        of a restricted grammar. Read it back with ``mechsys.load(path)`` (safe for files from
+        strangers). Anything a file cannot hold (a Python callable, attached graphics) raises
+        :class:`ModelError` naming it. ``m.save("crank.json")``; returns the path."""
+        from .io._files import save
+
+        return save(self, path)
+
     def lock(self, at=0.0, solution: str = "location", guess=None):
         """Freeze the mechanism at one configuration (Mech's ``LockMech``): ``at`` is a time
         (solved now), a one-point :class:`~mechsys.Solution` or a ``State``; ``solution``

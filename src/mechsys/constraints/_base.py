@@ -50,6 +50,13 @@ class ConstraintBase:
     #: Mech's name; the registry is keyed by it.
     mech_name: ClassVar[str] = ""
 
+    def __new__(cls, *args, **kwargs):
+        # the constructor's arguments, kept for model files (mechsys.io): a constraint is
+        # written as its Mech name and these arguments
+        self = super().__new__(cls)
+        self._init_args = (args, kwargs)
+        return self
+
     def __init__(self) -> None:
         self.name: str | None = None
         self.number: int | None = None

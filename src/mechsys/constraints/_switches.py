@@ -86,7 +86,7 @@ class StageSwitch(ConstraintBase):
             from ..loads._switched import StageSwitchedLoad, TimeSwitchedLoad
 
             return (TimeSwitchedLoad if issubclass(cls, TimeSwitch) else StageSwitchedLoad)(*args)
-        return super().__new__(cls)
+        return super().__new__(cls, *args)
 
     def __init__(self, *pairs):
         super().__init__()

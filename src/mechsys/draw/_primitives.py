@@ -80,6 +80,12 @@ class Primitive:
     #: the model dimensions a primitive works in
     dims: tuple[int, ...] = (2, 3)
 
+    def __new__(cls, *args, **kwargs):
+        # the constructor's arguments, kept for model files (mechsys.io)
+        self = super().__new__(cls)
+        self._init_args = (args, kwargs)
+        return self
+
     def __init__(self, **style):
         self.style = check_style(style, type(self).__name__)
 

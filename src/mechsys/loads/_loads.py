@@ -48,6 +48,12 @@ class DirectLoad:
 class LoadBase:
     """A load: ``contributions(model)`` and, when conservative, ``potential(model)``."""
 
+    def __new__(cls, *args, **kwargs):
+        # the constructor's arguments, kept for model files (mechsys.io)
+        self = super().__new__(cls)
+        self._init_args = (args, kwargs)
+        return self
+
     def __init__(self) -> None:
         self.name: str | None = None
         self.model = None

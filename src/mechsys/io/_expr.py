@@ -1,0 +1,258 @@
+r"""A restricted expression language for model files: safe to read from strangers.
+
+SymPy's ``sympify``/``parse_expr`` run Python's ``eval`` on their input, so a model file
+must never reach them. This module reads expressions with its own tokenizer and
+recursive-descent parser and builds SymPy objects directly. The grammar::
+
+    expr   := term (("+" | "-") term)*
+    term   := unary (("*" | "/") unary)*
+    unary  := ("-" | "+") unary | power
+    power  := atom (("**" | "^") unary)?          (right-associative: 2**3**2 = 2**9)
+    atom   := NUMBER | NAME | NAME "(" expr ("," expr)* ")" | "(" expr ")"
+
+``NAME`` is a constant (``pi``, ``E``), a whitelisted function (:data:`FUNCTIONS`) or a
+symbol the caller supplies (the model's time, parameters, variables and coordinates);
+anything else is an error. Limits: :data:`MAX_LENGTH` characters, :data:`MAX_DEPTH`
+nesting levels, number literals of at most :data:`MAX_DIGITS` digits and every number
+(literal or folded by SymPy, e.g. ``10**400``) at most :data:`MAX_MAGNITUDE` in size.
+
+Writing uses :func:`to_text` (SymPy's ``str`` with floats printed exactly, shortest
+round-tripping ``repr``), and :func:`parse` reads back everything it writes:
+
+>>> import sympy as sp
+>>> x = sp.Symbol("x")
+>>> parse(to_text(sp.sin(x) ** 2 / 3 + 0.1), {"x": x}) == sp.sin(x) ** 2 / 3 + 0.1
+True
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping
+
+import sympy as sp
+from sympy.printing.str import StrPrinter
+
+from .._errors import ModelError
+
+MAX_LENGTH = 20_000
+MAX_DEPTH = 100
+MAX_DIGITS = 40
+MAX_MAGNITUDE = 1e300
+
+#: name -> (SymPy function, allowed argument counts)
+FUNCTIONS: dict[str, tuple[object, tuple[int, ...]]] = {
+    "sin": (sp.sin, (1,)), "cos": (sp.cos, (1,)), "tan": (sp.tan, (1,)),
+    "asin": (sp.asin, (1,)), "acos": (sp.acos, (1,)), "atan": (sp.atan, (1,)),
+    "atan2": (sp.atan2, (2,)), "sinh": (sp.sinh, (1,)), "cosh": (sp.cosh, (1,)),
+    "tanh": (sp.tanh, (1,)), "sqrt": (sp.sqrt, (1,)), "exp": (sp.exp, (1,)),
+    "log": (sp.log, (1,)), "Abs": (sp.Abs, (1,)), "abs": (sp.Abs, (1,)),
+    "sign": (sp.sign, (1,)), "Heaviside": (sp.Heaviside, (1, 2)),
+    "Min": (sp.Min, (2, 3, 4)), "Max": (sp.Max, (2, 3, 4)),
+}
+CONSTANTS = {"pi": sp.pi, "E": sp.E}
+
+_TOKEN = re.compile(r"""
+    (?P<ws>\s+)
+  | (?P<num>(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)
+  | (?P<name>[A-Za-z_][A-Za-z0-9_]*)
+  | (?P<op>\*\*|[-+*/^(),])
+""", re.VERBOSE)
+
+
+class _Printer(StrPrinter):
+    """``str`` with floats printed so that ``float(text)`` gives the same double back."""
+
+    def _print_Float(self, expr):
+        v = float(expr)
+        if not math.isfinite(v):
+            raise ModelError(f"cannot write the non-finite number {expr} to a model file")
+        return repr(v)
+
+
+def to_text(expr) -> str:
+    """The text of a SymPy expression (or number) that :func:`parse` reads back equal."""
+    e = sp.sympify(expr) if isinstance(expr, (int, float)) else expr
+    if not isinstance(e, sp.Expr):
+        raise ModelError(f"cannot write {expr!r} to a model file: not an expression")
+    return _Printer().doprint(e)
+
+
+def _error(where: str, text: str, pos: int, why: str) -> ModelError:
+    snippet = text[max(0, pos - 20): pos + 20]
+    return ModelError(f"{where}: {why} at character {pos + 1} (near {snippet!r}); model files "
+                      "allow numbers, the model's names, + - * / ** ^, parentheses and the "
+                      f"functions {', '.join(sorted(FUNCTIONS))}")
+
+
+def _tokens(text: str, where: str) -> list[tuple[str, str, int]]:
+    out, pos = [], 0
+    while pos < len(text):
+        m = _TOKEN.match(text, pos)
+        if m is None:
+            raise _error(where, text, pos, f"unexpected character {text[pos]!r}")
+        kind = m.lastgroup
+        if kind != "ws":
+            out.append((kind, m.group(), pos))
+        pos = m.end()
+    out.append(("end", "", len(text)))
+    return out
+
+
+class _Parser:
+    def __init__(self, text: str, names: Mapping[str, sp.Basic], where: str):
+        self.text, self.names, self.where = text, names, where
+        self.toks = _tokens(text, where)
+        self.i = 0
+        self.depth = 0
+
+    # -- helpers ----------------------------------------------------------------------
+    def peek(self) -> tuple[str, str, int]:
+        return self.toks[self.i]
+
+    def take(self) -> tuple[str, str, int]:
+        tok = self.toks[self.i]
+        self.i += 1
+        return tok
+
+    def expect(self, value: str) -> None:
+        kind, v, pos = self.take()
+        if v != value or kind != "op":
+            raise _error(self.where, self.text, pos, f"expected {value!r}, found {v or 'the end'!r}")
+
+    def fail(self, why: str, pos: int | None = None) -> ModelError:
+        return _error(self.where, self.text, self.peek()[2] if pos is None else pos, why)
+
+    def enter(self) -> None:
+        self.depth += 1
+        if self.depth > MAX_DEPTH:
+            raise self.fail(f"nesting deeper than {MAX_DEPTH} levels")
+
+    def checked(self, value, pos: int):
+        """Numbers SymPy folded (``10**400``) are held to the same magnitude limit."""
+        if isinstance(value, sp.Number):
+            if value.is_finite is False or value.has(sp.nan, sp.zoo):
+                raise self.fail("the expression is not finite", pos)
+            if abs(value) > MAX_MAGNITUDE:
+                raise self.fail(f"a number larger than {MAX_MAGNITUDE:g}", pos)
+        return value
+
+    # -- grammar ----------------------------------------------------------------------
+    def expr(self):
+        self.enter()
+        value = self.term()
+        while self.peek()[1] in ("+", "-") and self.peek()[0] == "op":
+            _, op, pos = self.take()
+            rhs = self.term()
+            value = self.checked(value + rhs if op == "+" else value - rhs, pos)
+        self.depth -= 1
+        return value
+
+    def term(self):
+        value = self.unary()
+        while self.peek()[1] in ("*", "/") and self.peek()[0] == "op":
+            _, op, pos = self.take()
+            rhs = self.unary()
+            if op == "/" and rhs == 0:
+                raise self.fail("division by zero", pos)
+            value = self.checked(value * rhs if op == "*" else value / rhs, pos)
+        return value
+
+    def unary(self):
+        kind, v, pos = self.peek()
+        if kind == "op" and v in ("-", "+"):
+            self.take()
+            self.enter()
+            value = self.unary()
+            self.depth -= 1
+            return -value if v == "-" else value
+        return self.power()
+
+    def power(self):
+        base = self.atom()
+        kind, v, pos = self.peek()
+        if kind == "op" and v in ("**", "^"):
+            self.take()
+            self.enter()
+            exponent = self.unary()
+            self.depth -= 1
+            if base.is_Number and exponent.is_Number:
+                # fold only what stays small: 10**10**10 must not be computed
+                b, e = abs(float(base)), float(exponent)
+                if b == 0 and e < 0:
+                    raise self.fail("zero to a negative power", pos)
+                if b not in (0.0, 1.0) and abs(e * math.log10(b)) > math.log10(MAX_MAGNITUDE):
+                    raise self.fail(f"a power larger than {MAX_MAGNITUDE:g} (or smaller than its "
+                                    "inverse)", pos)
+            return self.checked(base ** exponent, pos)
+        return base
+
+    def atom(self):
+        kind, v, pos = self.take()
+        if kind == "num":
+            digits = len(re.sub(r"[eE].*|\.", "", v).lstrip("0"))
+            if digits > MAX_DIGITS:
+                raise self.fail(f"a number with more than {MAX_DIGITS} digits", pos)
+            if re.fullmatch(r"\d+", v):
+                return self.checked(sp.Integer(int(v)), pos)
+            f = float(v)
+            if not math.isfinite(f) or abs(f) > MAX_MAGNITUDE:
+                raise self.fail(f"a number larger than {MAX_MAGNITUDE:g}", pos)
+            return sp.Float(f)
+        if kind == "name":
+            if self.peek()[1] == "(" and self.peek()[0] == "op":
+                return self.call(v, pos)
+            if v in self.names:
+                return self.names[v]
+            if v in CONSTANTS:
+                return CONSTANTS[v]
+            if v in FUNCTIONS:
+                raise self.fail(f"function {v!r} used without arguments", pos)
+            raise self.fail(f"unknown name {v!r} (not a parameter, variable, coordinate or T of "
+                            "this model)", pos)
+        if kind == "op" and v == "(":
+            value = self.expr()
+            self.expect(")")
+            return value
+        raise self.fail(f"expected a number, name or '(', found {v or 'the end'!r}", pos)
+
+    def call(self, name: str, pos: int):
+        if name not in FUNCTIONS:
+            raise self.fail(f"unknown function {name!r}", pos)
+        fn, counts = FUNCTIONS[name]
+        self.expect("(")
+        args = [self.expr()]
+        while self.peek()[1] == "," and self.peek()[0] == "op":
+            self.take()
+            args.append(self.expr())
+        self.expect(")")
+        if len(args) not in counts:
+            raise self.fail(f"{name} takes {' or '.join(map(str, counts))} arguments, got "
+                            f"{len(args)}", pos)
+        return self.checked(fn(*args), pos)
+
+
+def parse(text: str, names: Mapping[str, sp.Basic] | None = None, where: str = "expression"):
+    """Read an expression of the restricted grammar (module docstring) into SymPy.
+
+    ``names`` maps the allowed symbol names to their SymPy symbols; ``where`` names the place
+    in the file for error messages. Bad input raises :class:`~mechsys.ModelError`.
+    """
+    if isinstance(text, bool) or not isinstance(text, (str, int, float)):
+        raise ModelError(f"{where}: expected an expression (a string or a number), got "
+                         f"{type(text).__name__}")
+    if not isinstance(text, str):
+        if not math.isfinite(text) or abs(text) > MAX_MAGNITUDE:
+            raise ModelError(f"{where}: the number {text!r} is not finite or larger than "
+                             f"{MAX_MAGNITUDE:g}")
+        return sp.Integer(text) if isinstance(text, int) else sp.Float(text)
+    if len(text) > MAX_LENGTH:
+        raise ModelError(f"{where}: expression of {len(text)} characters; at most {MAX_LENGTH} "
+                         "are allowed")
+    p = _Parser(text, names or {}, where)
+    value = p.expr()
+    kind, v, pos = p.peek()
+    if kind != "end":
+        raise p.fail(f"unexpected {v!r} after a complete expression", pos)
+    return value
