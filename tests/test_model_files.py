@@ -436,7 +436,7 @@ def test_options_and_variable_rates_round_trip(tmp_path):
     m.add(ms.Constraint([s - 0.3 * ms.T]), name="drive")
     m.add_load(ms.Force(b.point(0), (1, 0, 0), 2 + ms._symbols.velocity_symbol("s")), name="viscous")
     m2 = ms.load(m.save(tmp_path / "o.json"))
-    assert (m2.velocity, m2.coordinates, m2._backend) == ("angular", "local", "sympy")
+    assert (m2.velocity_representation, m2.coordinates, m2._backend) == ("angular", "local", "sympy")
     assert m2.save(tmp_path / "o2.json").read_text() == (tmp_path / "o.json").read_text()
     data = json.loads((tmp_path / "o.json").read_text())
     data["space"] = "planar"
@@ -445,3 +445,76 @@ def test_options_and_variable_rates_round_trip(tmp_path):
     data["options"] = {"backend": "os.system"}
     with pytest.raises(ModelError, match="options must map names to plain names"):
         _load_data(tmp_path, data)
+
+
+# -- switches, switched loads and Gen joints (chapters 5, 7.4, 11) ----------------------------
+def _saved(m, tmp_path, name="m.json"):
+    path = tmp_path / name
+    m.save(path)
+    return ms.load(path)
+
+
+def _slider():
+    m = ms.Model2D()
+    b = m.add_body("s", mass=1.0, guess=((0, 0), 0))
+    m.add(ms.Translate2(m.ground.axis((0, 0), (1, 0)), b.axis((0, 0), (1, 0))), name="rail")
+    return m, b
+
+
+def test_stage_and_time_switches_round_trip(tmp_path):
+    t = np.linspace(0.0, 1.0, 11)
+    m, b = _slider()
+    m.add(ms.TimeSwitch(ms.RelativeX1(b.point(0), T), 0.5, ms.RelativeX1(b.point(0), 1 - T)),
+          name="track")
+    a, c = m.solve(t), _saved(m, tmp_path).solve(t)
+    np.testing.assert_array_equal(a.q, c.q)
+    np.testing.assert_array_equal(a.stage("track"), c.stage("track"))
+    m, b = _slider()
+    x = b.q[0]
+    test = sp.And(T >= 0.2, sp.Or(T < 0.7, x > 5))            # a compound test with a coordinate
+    m.add(ms.StageSwitch((test, ms.RelativeX1(b.point(0), T)),
+                         (True, ms.RelativeX1(b.point(0), 0.2 + 0.5 * T))), name="sw")
+    a, c = m.solve(t), _saved(m, tmp_path).solve(t)
+    np.testing.assert_array_equal(a.q, c.q)
+    np.testing.assert_array_equal(a.stage("sw"), c.stage("sw"))
+    assert set(a.stage("sw")) == {1, 2}
+
+
+def test_switched_loads_round_trip(tmp_path):
+    m, b = _slider()
+    m.add(ms.RelativeX1(b.point(0), T), name="drive")
+    m.add_load(ms.TimeSwitch(ms.Force(b.point(0), (1, 0), 2.0), 0.5, ms.Force(b.point(0), (1, 0), -1.0)),
+               name="push")
+    t = np.linspace(0.0, 1.0, 5)
+    a, c = m.solve(t, solution="static"), _saved(m, tmp_path).solve(t, solution="static")
+    np.testing.assert_array_equal(a.lam, c.lam)
+    assert {round(float(v), 9) for v in np.abs(a.lam[:, -1])} == {1.0, 2.0}   # both load sets act
+
+
+def test_gen_joints_round_trip(tmp_path):
+    """A double pendulum in GenRevolute2 coordinates (tests/test_generalized.py): the loaded
+    model has the same coordinates and the same free motion."""
+    m = ms.Model2D()
+    links = [m.add_body(f"l{k}", points={"o": (0, 0), "e": (1, 0)}, mass=1.0, centroid=(0.5, 0),
+                        inertia=1 / 12) for k in range(2)]
+    m.add(ms.GenRevolute2(links[0].axis("o"), m.ground.axis((0, 0)), ("t1", 0.3)), name="j1")
+    m.add(ms.GenRevolute2(links[1].axis("o"), links[0].axis("e"), ("t2", 0.2)), name="j2")
+    m.add_load(ms.Gravity((0, -1), 9.81))
+    m2 = _saved(m, tmp_path)
+    assert m2.compile().layout.q_names == m.compile().layout.q_names == ("t1", "t2")
+    a, c = m.free().simulate((0.0, 0.5)), m2.free().simulate((0.0, 0.5))
+    np.testing.assert_allclose(c.q[-1], a.q[-1], rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("text, why", [
+    ("T < ", "expected a number"),
+    ("T == 1", "unexpected character"),
+    ("x", "expected a comparison"),
+    ("(T < 1", "expected '\\)'"),
+    ("__import__('os') < 1", "unexpected character"),
+])
+def test_conditions_rejected(text, why):
+    from mechsys.io._expr import parse_condition
+
+    with pytest.raises(ModelError, match=why):
+        parse_condition(text, {"T": T, "x": sp.Symbol("x")})

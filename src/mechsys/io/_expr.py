@@ -57,8 +57,12 @@ _TOKEN = re.compile(r"""
     (?P<ws>\s+)
   | (?P<num>(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)
   | (?P<name>[A-Za-z_][A-Za-z0-9_]*)
-  | (?P<op>\*\*|[-+*/^(),])
+  | (?P<op>\*\*|<=|>=|[-+*/^(),<>&|~])
 """, re.VERBOSE)
+
+#: comparison operators of conditions (switch tests) and their SymPy relations
+RELATIONS = {"<": sp.StrictLessThan, "<=": sp.LessThan, ">": sp.StrictGreaterThan,
+             ">=": sp.GreaterThan}
 
 
 class _Printer(StrPrinter):
@@ -77,6 +81,23 @@ def to_text(expr) -> str:
     if not isinstance(e, sp.Expr):
         raise ModelError(f"cannot write {expr!r} to a model file: not an expression")
     return _Printer().doprint(e)
+
+
+def condition_text(cond) -> str:
+    """The text of a SymPy condition (relations of expressions joined by ``&``, ``|``, ``~``,
+    or ``True``/``False``) that :func:`parse_condition` reads back equal."""
+    c = sp.sympify(cond) if isinstance(cond, bool) else cond
+    if c is sp.true or c is sp.false:
+        return str(c)
+    if isinstance(c, sp.And | sp.Or):
+        op = " & " if isinstance(c, sp.And) else " | "
+        return op.join(f"({condition_text(a)})" for a in c.args)
+    if isinstance(c, sp.Not):
+        return f"~({condition_text(c.args[0])})"
+    if isinstance(c, tuple(RELATIONS.values())):
+        return f"{to_text(c.lhs)} {c.rel_op} {to_text(c.rhs)}"
+    raise ModelError(f"cannot write the condition {cond!r} to a model file: conditions are "
+                     "relations (<, <=, >, >=) of expressions joined by &, | and ~")
 
 
 def _error(where: str, text: str, pos: int, why: str) -> ModelError:
@@ -217,6 +238,53 @@ class _Parser:
             return value
         raise self.fail(f"expected a number, name or '(', found {v or 'the end'!r}", pos)
 
+    # -- conditions (switch tests) -------------------------------------------------------
+    def condition(self):
+        self.enter()
+        value = self.conjunction()
+        while self.peek()[1] == "|" and self.peek()[0] == "op":
+            self.take()
+            value = sp.Or(value, self.conjunction())
+        self.depth -= 1
+        return value
+
+    def conjunction(self):
+        value = self.negation()
+        while self.peek()[1] == "&" and self.peek()[0] == "op":
+            self.take()
+            value = sp.And(value, self.negation())
+        return value
+
+    def negation(self):
+        kind, v, pos = self.peek()
+        if kind == "op" and v == "~":
+            self.take()
+            self.enter()
+            value = sp.Not(self.negation())
+            self.depth -= 1
+            return value
+        if kind == "name" and v in ("True", "False"):
+            self.take()
+            return sp.true if v == "True" else sp.false
+        if kind == "op" and v == "(":
+            # a parenthesised condition, or an expression in parentheses starting a relation
+            start, depth = self.i, self.depth
+            try:
+                self.take()
+                value = self.condition()
+                self.expect(")")
+                if not (self.peek()[0] == "op" and self.peek()[1] in (*RELATIONS, "+", "-", "*",
+                                                                      "/", "**", "^")):
+                    return value
+            except ModelError:
+                pass
+            self.i, self.depth = start, depth
+        lhs = self.expr()
+        kind, op, pos = self.take()
+        if kind != "op" or op not in RELATIONS:
+            raise self.fail(f"expected a comparison (<, <=, >, >=), found {op or 'the end'!r}", pos)
+        return RELATIONS[op](lhs, self.expr())
+
     def call(self, name: str, pos: int):
         if name not in FUNCTIONS:
             raise self.fail(f"unknown function {name!r}", pos)
@@ -231,6 +299,24 @@ class _Parser:
             raise self.fail(f"{name} takes {' or '.join(map(str, counts))} arguments, got "
                             f"{len(args)}", pos)
         return self.checked(fn(*args), pos)
+
+
+def parse_condition(text: str, names: Mapping[str, sp.Basic] | None = None,
+                    where: str = "condition"):
+    """Read a condition (a switch test): relations ``<``, ``<=``, ``>``, ``>=`` of expressions
+    of the restricted grammar, joined by ``&``, ``|``, ``~`` and parentheses, or ``True``/
+    ``False``. Same limits and errors as :func:`parse`."""
+    if not isinstance(text, str):
+        raise ModelError(f"{where}: expected a condition (a string), got {type(text).__name__}")
+    if len(text) > MAX_LENGTH:
+        raise ModelError(f"{where}: condition of {len(text)} characters; at most {MAX_LENGTH} "
+                         "are allowed")
+    p = _Parser(text, names or {}, where)
+    value = p.condition()
+    kind, v, pos = p.peek()
+    if kind != "end":
+        raise p.fail(f"unexpected {v!r} after a complete condition", pos)
+    return value
 
 
 def parse(text: str, names: Mapping[str, sp.Basic] | None = None, where: str = "expression"):

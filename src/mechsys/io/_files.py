@@ -38,11 +38,22 @@ from .._errors import MechError, ModelError
 from .._symbols import T, acceleration_symbol, velocity_symbol
 from ..constraints import REGISTRY
 from ..constraints._base import ConstraintBase
+from ..constraints._generalized import (
+    GenConstraint,
+    GenCylindrical4,
+    GenOrthoRevolute4,
+    GenRevolute2,
+    GenRevolute5,
+    GenTranslate2,
+    GenTranslate5,
+)
+from ..constraints._switches import StageSwitch, TimeSwitch
 from ..geometry._bodies import Body
 from ..geometry._points import Axis, GlobalVector, Line, Plane, Point, Vector
 from ..loads._loads import LoadBase
+from ..loads._switched import StageSwitchedLoad, TimeSwitchedLoad
 from ..model import Model2D, Model3D
-from ._expr import parse, to_text
+from ._expr import condition_text, parse, parse_condition, to_text
 
 FORMAT = "mechsys-model"
 VERSION = 1
@@ -57,6 +68,13 @@ _GRAPHIC_TEXT = re.compile(r"[A-Za-z0-9_#: +-]{0,100}")
 #: load class name -> class: the only load classes a file may name
 LOAD_TYPES = {name: obj for name in _loads_pkg.__all__
               if isinstance(obj := getattr(_loads_pkg, name), type) and issubclass(obj, LoadBase)}
+# switched loads (Mech 7.4.1) are built by StageSwitch/TimeSwitch of loads: saved by their class
+LOAD_TYPES.update({cls.__name__: cls for cls in (StageSwitchedLoad, TimeSwitchedLoad)})
+GEN_JOINTS = (GenRevolute2, GenTranslate2, GenRevolute5, GenTranslate5, GenCylindrical4,
+              GenOrthoRevolute4, GenConstraint)
+#: constraint types a file may name: the registry, the Gen joints (chapter 11), which write no
+#: equations, and the stage and time switches (chapter 5), which hold other constraints
+CONSTRAINT_TYPES = {**REGISTRY, **{cls.mech_name: cls for cls in (*GEN_JOINTS, StageSwitch, TimeSwitch)}}
 
 
 # -- writing ------------------------------------------------------------------------------
@@ -84,6 +102,8 @@ class _Writer:
             return v
         if isinstance(v, sp.MatrixBase):
             return {"matrix": [[self.expr(e, where) for e in v.row(i)] for i in range(v.rows)]}
+        if isinstance(v, _CONDITIONS):                   # a switch test
+            return {"condition": self.condition(v, where)}
         if isinstance(v, sp.Basic):
             return {"expr": self.expr(v, where)}
         if isinstance(v, np.ndarray):
@@ -102,6 +122,8 @@ class _Writer:
             if id(v) in self.in_model:
                 return {"constraint_ref": self.in_model[id(v)]}
             return {"constraint": self.constraint(v, where)}
+        if isinstance(v, LoadBase):                       # a load inside a switched load
+            return {"load": self.load(v, where)}
         raise ModelError(f"{where}: cannot save {v!r} ({type(v).__name__}) to a model file; "
                          "model files hold numbers, expressions, bodies, geometry and the "
                          "registered constraint and load types (no Python callables or objects)")
@@ -119,6 +141,20 @@ class _Writer:
         back = parse(text, self.names, where)  # everything written must read back
         if back != e and sp.simplify(back - e) != 0:
             raise ModelError(f"{where}: the expression {e} does not read back from its text "
+                             f"{text!r}; it cannot be saved")
+        return text
+
+    def condition(self, c, where: str) -> str:
+        for sym in c.free_symbols:
+            if not _IDENT.fullmatch(sym.name):
+                raise ModelError(f"{where}: the symbol name {sym.name!r} cannot be written to a "
+                                 "model file; use names of letters, digits and _")
+        try:
+            text = condition_text(c)
+        except ModelError as exc:
+            raise ModelError(f"{where}: {exc}") from None
+        if parse_condition(text, self.names, where) != c:   # everything written must read back
+            raise ModelError(f"{where}: the condition {c} does not read back from its text "
                              f"{text!r}; it cannot be saved")
         return text
 
@@ -156,10 +192,10 @@ class _Writer:
 
     def constraint(self, c: ConstraintBase, where: str) -> dict:
         kind = type(c).mech_name
-        if REGISTRY.get(kind) is not type(c):
+        if CONSTRAINT_TYPES.get(kind) is not type(c):
             raise ModelError(f"{where}: the constraint class {type(c).__name__} is not a registered "
-                             "constraint type; only the types of mechsys.constraints.REGISTRY "
-                             "can be saved")
+                             "constraint type; only the types of mechsys.constraints.REGISTRY, "
+                             "the Gen joints and the switches can be saved")
         out = self.call(c, kind, where)
         # the symbols the constraint introduces (cam parameters, variables): declared before
         # its arguments are read, with their one allowed assumption (real or none)
@@ -183,6 +219,9 @@ class _Writer:
 
 
 Geometry_types = (Point, Vector, Axis)
+# (not sp.logic.boolalg.Boolean: a SymPy Symbol is one too)
+_CONDITIONS = (sp.core.relational.Relational, sp.And, sp.Or, sp.Not, sp.logic.boolalg.BooleanTrue,
+               sp.logic.boolalg.BooleanFalse)
 _REAL_ASSUMPTIONS = sp.Symbol("x", real=True).assumptions0
 _PLAIN_ASSUMPTIONS = sp.Symbol("x").assumptions0
 
@@ -248,7 +287,7 @@ def model_to_dict(m) -> dict:
         "format": FORMAT,
         "version": VERSION,
         "space": m.space.name,
-        "options": {**({"velocity": m.velocity, "coordinates": m.coordinates}
+        "options": {**({"velocity": m.velocity_representation, "coordinates": m.coordinates}
                        if isinstance(m, Model3D) else {}),
                     **({"backend": m._backend} if m._backend else {})},
         "units": dict(m.units) if m.units else None,
@@ -356,6 +395,10 @@ class _Reader:
         key, d = self.one_key(v, where)
         if key == "expr":
             return self.expr(d, where)
+        if key == "condition":
+            return parse_condition(d, self.names, f"{self.source}: {where}")
+        if key == "load" and isinstance(d, dict):
+            return self.call(d, LOAD_TYPES, "load", where)
         if key == "dict" and isinstance(d, list) and all(isinstance(p, list) and len(p) == 2 for p in d):
             return {self.value(k, where): self.value(x, where) for k, x in d}
         if key == "tuple" and isinstance(d, list):
@@ -424,7 +467,7 @@ class _Reader:
             name = self.name(item[0], where)
             if name not in self.names:
                 self.names[name] = sp.Symbol(name, real=True) if item[1] else sp.Symbol(name)
-        return self.call(d, REGISTRY, "constraint", where)
+        return self.call(d, CONSTRAINT_TYPES, "constraint", where)
 
 
 def _check_shape(obj, depth: int = 0, count: list | None = None) -> None:
