@@ -63,6 +63,8 @@ MAX_ITEMS = 100_000
 _IDENT = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,99}")
 # strings of graphics (colours, label texts): no quotes, brackets, dots or markup, so that they
 # can reach neither an expression parser nor the HTML of the 3D viewer as code
+#: a coordinate named as "body.coord" (e.g. ``Load("piston.x", ...)``): two plain names
+_COORDINATE_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,99}\.[A-Za-z][A-Za-z0-9_]{0,99}")
 _GRAPHIC_TEXT = re.compile(r"[A-Za-z0-9_#: +-]{0,100}")
 
 #: load class name -> class: the only load classes a file may name
@@ -95,7 +97,7 @@ class _Writer:
                 raise ModelError(f"{where}: cannot save the non-finite number {v!r}")
             return float(v)
         if isinstance(v, str):
-            if not self.texts.fullmatch(v):
+            if not (self.texts.fullmatch(v) or _COORDINATE_NAME.fullmatch(v)):
                 raise ModelError(f"{where}: cannot save the string {v!r}; model files take strings "
                                  "that are plain names (letters, digits, _; in graphics also "
                                  "spaces, #, :, + and -)")
@@ -384,7 +386,7 @@ class _Reader:
             self.number(v, where)
             return v
         if isinstance(v, str):
-            if not self.texts.fullmatch(v):
+            if not (self.texts.fullmatch(v) or _COORDINATE_NAME.fullmatch(v)):
                 raise self.err(where, f"the string {v[:80]!r} is not allowed here (plain names of "
                                       "letters, digits and _; in graphics also spaces, #, :, + and -)")
             return v
