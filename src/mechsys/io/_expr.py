@@ -308,15 +308,7 @@ def parse_condition(text: str, names: Mapping[str, sp.Basic] | None = None,
     ``False``. Same limits and errors as :func:`parse`."""
     if not isinstance(text, str):
         raise ModelError(f"{where}: expected a condition (a string), got {type(text).__name__}")
-    if len(text) > MAX_LENGTH:
-        raise ModelError(f"{where}: condition of {len(text)} characters; at most {MAX_LENGTH} "
-                         "are allowed")
-    p = _Parser(text, names or {}, where)
-    value = p.condition()
-    kind, v, pos = p.peek()
-    if kind != "end":
-        raise p.fail(f"unexpected {v!r} after a complete condition", pos)
-    return value
+    return _parse_whole(text, names, where, "condition")
 
 
 def parse(text: str, names: Mapping[str, sp.Basic] | None = None, where: str = "expression"):
@@ -333,12 +325,17 @@ def parse(text: str, names: Mapping[str, sp.Basic] | None = None, where: str = "
             raise ModelError(f"{where}: the number {text!r} is not finite or larger than "
                              f"{MAX_MAGNITUDE:g}")
         return sp.Integer(text) if isinstance(text, int) else sp.Float(text)
+    return _parse_whole(text, names, where, "expression")
+
+
+def _parse_whole(text: str, names, where: str, what: str):
+    """``text`` as one ``what`` (``"expression"`` or ``"condition"``), nothing after it."""
     if len(text) > MAX_LENGTH:
-        raise ModelError(f"{where}: expression of {len(text)} characters; at most {MAX_LENGTH} "
+        raise ModelError(f"{where}: {what} of {len(text)} characters; at most {MAX_LENGTH} "
                          "are allowed")
     p = _Parser(text, names or {}, where)
-    value = p.expr()
+    value = p.expr() if what == "expression" else p.condition()
     kind, v, pos = p.peek()
     if kind != "end":
-        raise p.fail(f"unexpected {v!r} after a complete expression", pos)
+        raise p.fail(f"unexpected {v!r} after a complete {what}", pos)
     return value
