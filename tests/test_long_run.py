@@ -35,6 +35,7 @@ def _interrupt_after(monkeypatch, calls: int):
 @pytest.mark.parametrize("method,t", [("dop853", (0.0, 4.0)), ("adams", (0.0, 4.0)),
                                       ("dop853", "grid"), ("adams", "grid")])
 def test_keyboard_interrupt_returns_the_solution_so_far(monkeypatch, method, t):
+    monkeypatch.setenv("MECHSYS_JIT", "0")      # the Python stepper (compiled: the next test)
     _, free = long_run.pendulum()
     grid = np.linspace(0.0, 4.0, 81)
     tt = grid if isinstance(t, str) else t
@@ -52,6 +53,41 @@ def test_keyboard_interrupt_returns_the_solution_so_far(monkeypatch, method, t):
     np.testing.assert_allclose(part.qd, full.qd[:k], rtol=0, atol=1e-12)
     # and usable: accelerations and multipliers at every returned point
     assert np.all(np.isfinite(part.qdd)) and np.all(np.isfinite(part.lam))
+
+
+@pytest.mark.parametrize("t", [(0.0, 4.0), "grid"])
+def test_keyboard_interrupt_between_compiled_chunks(monkeypatch, t):
+    """The compiled stepper returns every CHUNK_STEPS steps; a Ctrl-C that arrives during a
+    chunk is raised when it returns: the solution so far comes back, as from Python."""
+    pytest.importorskip("numba")
+    import mechsys.solvers._jit_free as jf
+
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    monkeypatch.setattr(jf, "CHUNK_STEPS", 5)
+    _, free = long_run.pendulum()
+    tt = np.linspace(0.0, 4.0, 81) if isinstance(t, str) else t
+    full = free.simulate(tt)
+    assert full.extra["compiled_steps"] == full.extra["steps"] > 20
+    real = jf.FreeStepper.advance
+    calls = [0]
+
+    def advance(self, *a, **k):
+        calls[0] += 1
+        if calls[0] == 3:
+            raise KeyboardInterrupt
+        return real(self, *a, **k)
+
+    monkeypatch.setattr(jf.FreeStepper, "advance", advance)
+    with pytest.warns(RuntimeWarning, match="interrupted at t = "):
+        part = free.simulate(tt)
+    k = len(part.t)
+    assert part.extra["interrupted"] is True and 2 <= k < len(full.t)
+    if isinstance(t, tuple):
+        assert k == 11 and part.extra["compiled_steps"] == 10     # two chunks and the start
+    np.testing.assert_array_equal(part.t, full.t[:k])
+    np.testing.assert_array_equal(part.q, full.q[:k])
+    np.testing.assert_array_equal(part.qdd, full.qdd[:k])
+    assert np.all(np.isfinite(part.lam))
 
 
 def test_progress_bar_on_request(monkeypatch):

@@ -49,6 +49,7 @@ from ..solvers._integrators import (
     integration_options,
     output_times,
 )
+from ..solvers._jit_free import FreeStepper
 from ..solvers._linalg import Scaling
 from ..solvers._position import describe_singular
 from ..solvers._rank import InZone, project_regularized, zone_guard
@@ -430,8 +431,9 @@ class FreeSystem:
         robust = s.m > 0 and not (s.dynamics.depends_on_lambda or s.dynamics.depends_on_qdd)
         zone = [False]                 # a derivative of this step came from the zone
         guard = None
+        rows0 = sc.rows(s.jacobian(t0, q0, p)) if robust else None
         if robust:
-            inner = zone_guard(s, sc, sc.rows(s.jacobian(t0, q0, p)))
+            inner = zone_guard(s, sc, rows0)
 
             def guard(K, b, x):
                 return _flag(zone, inner(K, b, x))
@@ -473,20 +475,29 @@ class FreeSystem:
             if delay == 0.0 or time.monotonic() - bar.start > delay:
                 bar.update(int(1000 * (tt - t_start) / span))
 
+        # the compiled stepper (solvers/_jit_free.py) takes the regular steps when it can
+        fast = FreeStepper.plan(s, opt.method if opt.runge_kutta else None, p, sc, rows0,
+                                robust, opt.correction, output_times(t)[2])
         try:
             times, Y, res, m = integrate(rhs, proj, t, np.concatenate((q0, qd0)), opt,
                                          scale=np.concatenate((sc.columns, sc.columns)),
                                          monitor=monitor if bar.enabled else None,
-                                         kinked=kinked if robust else None)
+                                         kinked=kinked if robust else None, fast=fast)
         finally:
             if bar._last >= 0:       # something was drawn: end its line
                 bar.close()
         QDD = np.empty((len(times), n))
         LAM = np.empty((len(times), s.m))
+        known = res.diagnostics.get("derivatives") or [None] * len(times)
         for k, (tk, yk) in enumerate(zip(times, Y)):
-            _, QDD[k], LAM[k] = accel(tk, yk)
+            d = known[k]
+            if d is not None and np.all(np.isfinite(d[0])) and np.all(np.isfinite(d[1])):
+                QDD[k], LAM[k] = d
+            else:
+                _, QDD[k], LAM[k] = accel(tk, yk)
         extra = {"evaluations": res.evaluations, "steps": res.steps, "rejected": res.rejected,
-                 "method": m, "length_scale": sc.length}
+                 "method": m, "length_scale": sc.length,
+                 "compiled_steps": res.diagnostics.get("compiled_steps", 0)}
         if opt.runge_kutta:
             extra["rtol"], extra["atol"] = opt.rtol, opt.atol
         else:

@@ -39,6 +39,7 @@ import numpy as np
 from scipy.integrate import DOP853, RK45
 
 from .._errors import MechError, ModelError
+from ._jit_free import PAUSE_STEPS
 
 FIT_DEGREES = {"linear": 1, "quadratic": 2, "cubic": 3, "quartic": 4}
 
@@ -59,7 +60,8 @@ class IntegrationResult:
 
 def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-10,
                  max_step=np.inf, first_step=None, correction=True,
-                 t_eval=None, scale=None, kinked=None, monitor=None) -> IntegrationResult:
+                 t_eval=None, scale=None, kinked=None, monitor=None,
+                 fast=None) -> IntegrationResult:
     """Explicit Runge-Kutta with projection after each accepted step. With ``t_eval``
     the states at those times come from each step's dense output (then projected).
     ``kinked()`` (optional), asked after each step: whether the derivative had a kink in it
@@ -67,7 +69,12 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
     by integrating from the step's start to each of them (the dense output polynomial
     assumes a smooth derivative).
     ``scale`` (len(y0),): the unit of each component; the absolute tolerance of component
-    ``i`` is ``atol * scale[i]``."""
+    ``i`` is ``atol * scale[i]``.
+    ``fast`` (optional, DOP853): a compiled stepper (:class:`._jit_free.FreeStepper`) that
+    takes the regular steps of the same SciPy solver; after a handover this loop takes
+    :data:`._jit_free.PAUSE_STEPS` steps itself. The accelerations and multipliers it
+    computed come back in ``diagnostics["derivatives"]`` (``(qdd, lam, known)`` per output
+    row; ``known`` False where the caller must evaluate them)."""
     cls = {"dop853": DOP853, "rk45": RK45}[method]
     if scale is not None:
         atol = atol * np.asarray(scale, dtype=float)
@@ -86,8 +93,35 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
             ie += 1
     rejected = 0
     message = "finished"
+    # per output row after the start: (qdd, lam) from the compiled stepper, or None
+    known = []
+    pre = len(ev_t) if te is not None else 1      # output rows at the start
+    pause = 0
     try:
         while solver.status == "running":
+            if fast is not None and pause == 0:
+                status, T, Yc, H, QDD, LAM, ie_new, rej, proj = fast.advance(solver, ie)
+                if te is not None:
+                    for k in range(ie, ie_new):
+                        ev_t.append(te[k])
+                        ev_y.append(fast.EY[k].copy())
+                        known.append((fast.EQDD[k], fast.ELAM[k]))
+                    ie = ie_new
+                    ts.extend(T.tolist())
+                    ys.extend(Yc)
+                else:
+                    ts.extend(T.tolist())
+                    ys.extend(Yc)
+                    known.extend(zip(QDD, LAM))
+                hs.extend(H.tolist())
+                rejected += rej
+                extra += proj
+                if len(T) and monitor is not None:
+                    monitor(solver.t)
+                if status == 2:        # handover: this loop takes the next steps
+                    pause = PAUSE_STEPS
+                continue
+            pause = max(pause - 1, 0)
             before = solver.nfev
             t_prev, y_prev = solver.t, solver.y.copy()
             msg = solver.step()
@@ -103,6 +137,7 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
                     yi = dense(te[ie])
                     ev_t.append(te[ie])
                     ev_y.append(project(te[ie], yi) if correction else yi)
+                    known.append(None)
                     extra += 1 if correction else 0
                     ie += 1
             if correction:
@@ -115,6 +150,8 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
             hs.append(solver.step_size)
             ts.append(solver.t)
             ys.append(solver.y.copy())
+            if te is None:
+                known.append(None)
             if monitor is not None:
                 monitor(solver.t)
     except KeyboardInterrupt:
@@ -126,6 +163,13 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
         n_ev = min(len(ev_t), len(ev_y))
         del ev_t[n_ev:], ev_y[n_ev:]
     diag = {"step_size": np.array(hs), "step_times": np.array(ts)}
+    if fast is not None:
+        rows = len(ev_t) if te is not None else len(ts)
+        # the start is never from the stepper; Ctrl-C can leave the lists uneven
+        known = [None] * pre + known
+        known = (known + [None] * rows)[:rows]
+        diag["derivatives"] = known
+        diag["compiled_steps"] = fast.steps
     if te is not None:
         diag["t_eval"] = (np.array(ev_t), np.array(ev_y))
     diag["projections"] = extra
@@ -418,21 +462,23 @@ def output_times(t) -> tuple[float, float, np.ndarray | None]:
     return float(tt[0]), float(tt[-1]), tt
 
 
-def integrate(fun, project, t, y0, opt: IntegrationOptions, scale=None, kinked=None, monitor=None):
+def integrate(fun, project, t, y0, opt: IntegrationOptions, scale=None, kinked=None, monitor=None,
+              fast=None):
     """Integrate ``y' = fun(t, y)`` with checked options ``opt`` (the dispatch shared by free
     and path systems). ``t``: a tuple ``(t0, t1)`` returns every accepted step; an array
     returns those times (RK dense output, or cubic Hermite with ``fun`` at the Adams steps).
     ``scale`` (len(y0),): the unit of each component (the characteristic length for position
     coordinates and their rates, 1 for angles), so that absolute tolerances and
     ``max_error`` mean the same in any unit of length. Returns ``(times, Y, result,
-    method)``. ``monitor(t)`` is called after each accepted step (progress); a
+    method)``. ``fast``: a compiled stepper for the Runge-Kutta path (:func:`integrate_rk`).
+    ``monitor(t)`` is called after each accepted step (progress); a
     KeyboardInterrupt ends the integration with the steps so far (``result.message`` is
     ``"interrupted"``)."""
     t0, t1, t_eval = output_times(t)
     if opt.runge_kutta:
         res = integrate_rk(fun, project, t0, t1, y0, opt.method, opt.rtol, opt.atol,
                            opt.max_step, correction=opt.correction, t_eval=t_eval, scale=scale,
-                           kinked=kinked, monitor=monitor)
+                           kinked=kinked, monitor=monitor, fast=fast)
         times, Y = res.diagnostics["t_eval"] if t_eval is not None else (res.t, res.y)
     else:
         res = integrate_adams(fun, project, t0, t1, y0, opt.degree, opt.max_error, opt.method,

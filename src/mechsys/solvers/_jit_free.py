@@ -1,0 +1,162 @@
+r"""Free motion compiled with Numba: DOP853 steps, the augmented-system solves and the
+projections onto the constraints with no Python between the compiled equations.
+
+:meth:`~mechsys.analyses._free.FreeSystem.simulate` integrates
+
+.. math::  y = (q, \dot q), \qquad \dot y = (\dot q, \ddot q), \qquad
+           \begin{bmatrix} M & \Phi_q^T \\ \Phi_q & 0 \end{bmatrix}
+           \begin{bmatrix} \ddot q \\ \lambda \end{bmatrix} =
+           \begin{bmatrix} Q + Q_v \\ \gamma \end{bmatrix}
+
+with SciPy's DOP853 and projects ``(q, qd)`` onto ``Phi = 0``, ``Phi_q qd = -Phi_t`` after
+every accepted step. The compiled loop (``_jit_free_loop.dop853``) performs exactly these
+steps: SciPy's Runge-Kutta stages, error norm and step-size control (same coefficients,
+read from SciPy), the augmented system from the compiled SymEngine kernel solved by the
+LAPACK ``dgesv`` SciPy calls, the projection's unit-free minimum-norm Newton corrections,
+and DOP853's dense output at requested output times. Sums over stages are plain loops where
+SciPy calls BLAS, so the two paths agree to rounding (about 1e-15 per step), not bit for bit.
+
+The compiled loop takes the regular steps. Where the Python path needs its special
+handling (a singular instant: singular augmented matrix, or multipliers large against the
+constraint forces; a projection near a singular Jacobian; a step-size failure) it stops at
+the last accepted step and the Python stepper continues from that state (the same SciPy
+solver object, so nothing restarts) for :data:`PAUSE_STEPS` steps before the compiled loop
+resumes. It also returns every :data:`CHUNK_STEPS` steps so that progress is shown and
+Ctrl-C is honoured.
+
+When it runs (``MECHSYS_JIT``, as for the kinematic sweep): ``0`` never; ``1`` or unset
+whenever possible. Possible means: Numba installed (the ``fast`` extra); the DOP853 method;
+loads that do not depend on the multipliers or accelerations; a dense augmented system
+(``n + m <= SPARSE_THRESHOLD``); every kernel SymEngine LLVM code (the CSE kernels of
+generalized coordinates are not). Loading Numba and the cached machine code costs about
+0.7 s CPU once per process. ``sol.extra["compiled_steps"]`` tells how many steps ran
+compiled.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import _jit
+from ._linalg import SPARSE_THRESHOLD
+
+#: Python steps after a handover before the compiled loop resumes
+PAUSE_STEPS = 8
+#: compiled steps per call (progress and Ctrl-C are handled between calls)
+CHUNK_STEPS = 2000
+
+_state: dict = {"loop": None, "coef": None, "gesv": None}
+
+
+def _coefficients():
+    if _state["coef"] is None:
+        from scipy.integrate._ivp import dop853_coefficients as c
+
+        _state["coef"] = tuple(np.ascontiguousarray(a, dtype=float)
+                               for a in (c.A, c.B, c.C, c.E3, c.E5, c.D))
+    return _state["coef"]
+
+
+def _lapack() -> np.ndarray:
+    """Addresses of dgetrf, dgecon, dgetrs (as the sweep) and dgesv."""
+    if _state["gesv"] is None:
+        from scipy.linalg import cython_lapack
+
+        gesv = _jit._capsule_address(cython_lapack.__pyx_capi__["dgesv"])
+        _state["gesv"] = np.concatenate((_jit._lapack(), [gesv])).astype(np.int64)
+    return _state["gesv"]
+
+
+class FreeStepper:
+    """The compiled stepper of one free-motion run (see the module docstring).
+
+    ``scaling``: the run's :class:`~mechsys.solvers._linalg.Scaling`; ``rows0`` (m,): the
+    row scales of the zone guard (at the start of the motion); ``robust``: the run passes
+    singular instants (the zone guard applies); ``correction``: project after each step;
+    ``t_eval`` (k,) or None: output times."""
+
+    def __init__(self, system, p, scaling, rows0, robust, correction, t_eval, kernels):
+        kern, fpos, fvel = kernels
+        n, m = system.n, system.m
+        N = n + m
+        self.n, self.m = n, m
+        self.kp = np.array([kern, fpos, fvel], dtype=np.int64)
+        fk = system.dynamics.free_kernel(False)
+        flat = np.asarray(fk._flat, dtype=np.int64)
+        self.flat_t = (flat % N) * N + flat // N          # K^T in C order = K in Fortran order
+        self.mp = np.asarray(fk._map, dtype=np.int64)
+        self.kk = int(fk.k_M + fk.k_J)
+        self.p = np.ascontiguousarray(p, dtype=float)
+        self.jr = system.jac_rows.astype(np.int64)
+        self.jc = system.jac_cols.astype(np.int64)
+        self.rows0 = np.ascontiguousarray(rows0 if rows0 is not None else np.ones(m), dtype=float)
+        self.columns = np.ascontiguousarray(scaling.columns, dtype=float)
+        self.offset = float(scaling.offset)
+        self.robust = bool(robust)
+        self.correction = bool(correction) and m > 0
+        self.t_eval = np.zeros(0) if t_eval is None else np.ascontiguousarray(t_eval, dtype=float)
+        k = len(self.t_eval)
+        self.ET, self.EY = np.zeros(k), np.zeros((k, 2 * n))
+        self.EQDD, self.ELAM = np.full((k, n), np.nan), np.full((k, m), np.nan)
+        self.steps = 0
+        if _state["loop"] is None:
+            from ._jit_free_loop import dop853
+
+            _state["loop"] = dop853
+        _jit._state["loaded"] = True
+
+    @classmethod
+    def plan(cls, system, method, p, scaling, rows0, robust, correction, t_eval):
+        """The stepper when the compiled loop can run this simulation, else None."""
+        if _jit.mode() == "off" or method != "dop853" or system.n == 0:
+            return None
+        if system.n + system.m > SPARSE_THRESHOLD:
+            return None
+        dyn = system.dynamics
+        if dyn.depends_on_lambda or dyn.depends_on_qdd or not _jit.available():
+            return None
+        rows = [_jit._pointer(dyn.free_kernel(False).f)]
+        if system.m:
+            rows += [_jit._pointer(system.f_position), _jit._pointer(system.f_velocity)]
+        else:
+            rows += [(0, 0, 0, 0, 0)] * 2
+        if any(r is None for r in rows):
+            return None
+        return cls(system, p, scaling, rows0, robust, correction, t_eval, rows)
+
+    def advance(self, solver, ie: int, max_steps: int | None = None):
+        """Compiled steps of the SciPy DOP853 ``solver`` from its current state; the solver is
+        left at the last accepted step (status ``"finished"`` at the end). Returns ``(status,
+        T, Y, H, QDD, LAM, ie)``: the accepted steps' times, states, step sizes, accelerations
+        and multipliers (NaN rows: not known), and the next output index."""
+        n, m = self.n, self.m
+        max_steps = CHUNK_STEPS if max_steps is None else max_steps
+        A, B, C, E3, E5, D = _coefficients()
+        T, H = np.empty(max_steps), np.empty(max_steps)
+        Y = np.empty((max_steps, 2 * n))
+        QDD, LAM = np.empty((max_steps, n)), np.empty((max_steps, m))
+        state = np.array([solver.t, solver.h_abs], dtype=float)
+        y = np.array(solver.y, dtype=float)
+        f = np.array(solver.f, dtype=float)
+        atol = np.broadcast_to(np.asarray(solver.atol, dtype=float), (2 * n,)).copy()
+        t_prev = solver.t
+        status, steps, ie, evals, rejected, projections = _state["loop"](
+            self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr, self.jc,
+            self.rows0, self.columns, self.offset, self.robust, self.correction, 1e-12, 8,
+            A, B, C, E3, E5, D, float(solver.rtol), atol, float(solver.max_step),
+            float(solver.t_bound), float(solver.direction), state, y, f, self.t_eval, int(ie),
+            int(max_steps), T, Y, H, QDD, LAM, self.ET, self.EY, self.EQDD, self.ELAM)
+        solver.nfev += int(evals)
+        if steps:
+            solver.t_old = float(T[steps - 2]) if steps >= 2 else t_prev
+            solver.t, solver.y, solver.f = float(state[0]), y, f
+            solver.h_abs = float(state[1])
+            solver.h_previous = float(T[steps - 1] - solver.t_old)
+            if status == 0:
+                solver.status = "finished"
+        self.steps += int(steps)
+        return (int(status), T[:steps], Y[:steps], H[:steps], QDD[:steps], LAM[:steps], int(ie),
+                int(rejected), int(projections))
+
+
+__all__ = ["CHUNK_STEPS", "PAUSE_STEPS", "FreeStepper"]

@@ -1,0 +1,446 @@
+"""Numba code of the compiled free-motion stepper (imported only when it runs: see
+``_jit_free.py``).
+
+Each function mirrors one piece of the Python path, in the same order of operations where
+the Python path fixes one:
+
+* ``_accel``     ``solvers._free.free_acceleration`` (linear case) with the cheap test of
+                 ``solvers._rank.zone_guard``: the augmented system ``[[M, J^T], [J, 0]]``
+                 from the compiled kernel, solved by LAPACK ``dgesv`` (SciPy's own)
+* ``_min_norm``  ``solvers._free._min_norm``: ``D J^T (J^ J^T)^-1 b``, ``J^ = R^-1 J D``
+* ``_project``   ``solvers._free.project`` (positions, then velocities)
+* ``_stage``     ``scipy.integrate._ivp.rk.rk_step`` for DOP853, with its error norm
+                 (``DOP853._estimate_error_norm``) and step-size control (``_step_impl``)
+* ``_dense``     ``DOP853._dense_output_impl`` and ``Dop853DenseOutput``
+
+Anything the Python path would treat specially (a singular or non-finite augmented matrix,
+multipliers large against the constraint forces: a singular instant near; a projection in
+the zone of a singular Jacobian; a step size below SciPy's minimum) ends the compiled run
+with status ``HANDOVER`` at the last accepted step, before the step that needed the care.
+The Python integrator then continues from that state with its whole logic.
+
+The matrices handed to LAPACK are stored transposed in C order, which is column-major
+(Fortran) order of the matrix itself.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+from ._jit_loop import _assemble, _ccall, _eval, _rows
+from ._linalg import RCOND_MIN
+from ._rank import ZONE
+
+FINISHED, CHUNK, HANDOVER = 0, 1, 2
+
+# SciPy's step-size control constants (scipy.integrate._ivp.rk)
+SAFETY = 0.9
+MIN_FACTOR = 0.2
+MAX_FACTOR = 10.0
+ERROR_EXPONENT = -1.0 / 8.0          # -1 / (error_estimator_order + 1), DOP853
+N_STAGES = 12
+
+
+@nb.njit(cache=True)
+def _accel(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, columns,
+           robust, ipiv, ibuf, rhs, b, qdd, lam):
+    """Free acceleration at ``x = [t, q, qd, 0, p, 0]``: ``qdd`` (n,), ``lam`` (m,);
+    False where the Python path would need its special handling."""
+    N = n + m
+    _eval(kp, x, nin, out)
+    KT[:, :] = 0.0
+    flat = KT.ravel()
+    for k in range(flat_t.size):
+        flat[flat_t[k]] = out[mp[k]]
+    for k in range(N * N):
+        if not np.isfinite(flat[k]):
+            return False
+    big_rhs = 0.0
+    for i in range(N):
+        rhs[i] = out[kk + i]
+        b[i] = rhs[i]
+        v = abs(rhs[i])
+        if v > big_rhs:
+            big_rhs = v
+    ibuf[0] = N          # n, nrhs, lda = ldb, info
+    ibuf[1] = 1
+    ibuf[2] = N
+    ibuf[3] = 0
+    _ccall(lapack[3], (ibuf[0:1], ibuf[1:2], KT, ibuf[2:3], ipiv, b, ibuf[2:3], ibuf[3:4]))
+    if ibuf[3] != 0:
+        return False
+    big = 0.0
+    for i in range(N):
+        v = abs(b[i])
+        if not v <= big:          # NaN too
+            big = v
+    if not big < 1e15 * (1.0 + big_rhs):
+        return False
+    for j in range(n):
+        qdd[j] = b[j]
+    for i in range(m):
+        lam[i] = b[n + i]
+    if robust and m > 0:
+        # zone_guard's cheap test: multipliers large against the constraint forces they
+        # make (J^T lam, from the Jacobian values of the kernel) mean a singular instant near
+        bl = 0.0
+        for i in range(m):
+            v = abs(rows0[i] * lam[i])
+            if v > bl:
+                bl = v
+        if bl != 0.0:
+            force = np.zeros(n)
+            j0 = kk - jr.size          # the Jacobian's values precede the right-hand side
+            for k in range(jr.size):
+                force[jc[k]] += out[j0 + k] * lam[jr[k]]
+            fmax = 0.0
+            for j in range(n):
+                v = abs(columns[j] * force[j])
+                if v > fmax:
+                    fmax = v
+            if not (bl < fmax / ZONE and np.isfinite(bl)):
+                return False
+    return True
+
+
+@nb.njit(cache=True)
+def _rhs(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, columns, robust,
+         ipiv, ibuf, rhs, b, qdd, lam, t, y, f):
+    """``f = (qd, qdd)`` at ``(t, y)``; False: hand over."""
+    x[0] = t
+    for j in range(2 * n):
+        x[1 + j] = y[j]
+    if not _accel(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, columns,
+                  robust, ipiv, ibuf, rhs, b, qdd, lam):
+        return False
+    for j in range(n):
+        f[j] = y[n + j]
+        f[n + j] = qdd[j]
+    return True
+
+
+@nb.njit(cache=True)
+def _min_norm(lapack, J, r, columns, bvec, out, Js, A, ipiv, ibuf, cbuf, dbuf, work, iwork,
+              ybuf, robust):
+    """``out = D J^T (J^ J^T)^-1 bvec``; False at a singular (or, ``robust``, nearly singular:
+    reciprocal condition below ``ZONE^2``) ``J^ J^T``."""
+    m, n = J.shape
+    for i in range(m):
+        inv = 1.0 / r[i]
+        for j in range(n):
+            Js[i, j] = (J[i, j] * columns[j]) * inv
+    for i in range(m):              # A = Js Js^T (symmetric: its transposed storage is itself)
+        for k in range(i + 1):
+            s = 0.0
+            for j in range(n):
+                s += Js[i, j] * Js[k, j]
+            A[i, k] = s
+            A[k, i] = s
+    anorm = 0.0
+    for j in range(m):
+        s = 0.0
+        for i in range(m):
+            s += abs(A[i, j])
+        if s > anorm:
+            anorm = s
+    ibuf[0] = m
+    ibuf[1] = m
+    ibuf[2] = m
+    ibuf[3] = 0
+    _ccall(lapack[0], (ibuf[0:1], ibuf[1:2], A, ibuf[2:3], ipiv, ibuf[3:4]))
+    if ibuf[3] > 0 or anorm == 0:
+        return False
+    cbuf[0] = 49         # '1': one-norm
+    dbuf[0] = anorm
+    dbuf[1] = 0.0
+    _ccall(lapack[1], (cbuf[0:1], ibuf[1:2], A, ibuf[2:3], dbuf[0:1], dbuf[1:2], work, iwork,
+                       ibuf[3:4]))
+    rcond = dbuf[1]
+    if rcond < RCOND_MIN or (robust and rcond < ZONE * ZONE):
+        return False
+    for i in range(m):
+        ybuf[i] = bvec[i]
+    cbuf[1] = 78         # 'N'
+    ibuf[4] = 1
+    _ccall(lapack[2], (cbuf[1:2], ibuf[1:2], ibuf[4:5], A, ibuf[2:3], ipiv, ybuf, ibuf[2:3],
+                       ibuf[3:4]))
+    for j in range(n):
+        s = 0.0
+        for i in range(m):
+            s += Js[i, j] * ybuf[i]
+        out[j] = columns[j] * s
+    return True
+
+
+@nb.njit(cache=True)
+def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offset, tol, maxit,
+             robust, n, m, t, y, J, r, Fs, dq, Js, A, ipiv, ibuf, cbuf, dbuf, work, iwork, ybuf):
+    """Project ``y = (q, qd)`` in place onto the constraints (``solvers._free.project``);
+    False (``y`` then undefined): hand over."""
+    xk[0] = t
+    for j in range(n):
+        xk[1 + n + j] = 0.0
+    lim = tol * (1.0 + offset)
+    for _ in range(maxit):
+        for j in range(n):
+            xk[1 + j] = y[j]
+        _eval(pp, xk, nin_k, out_pos)
+        _assemble(out_pos, m, jr, jc, J)
+        _rows(J, columns, r)
+        big = 0.0
+        for i in range(m):
+            Fs[i] = out_pos[i] / r[i]
+            v = abs(Fs[i])
+            if not v <= big:
+                big = v
+        if big <= lim:
+            break
+        if not _min_norm(lapack, J, r, columns, Fs, dq, Js, A, ipiv, ibuf, cbuf, dbuf, work,
+                         iwork, ybuf, robust):
+            return False
+        for j in range(n):
+            y[j] -= dq[j]
+    for j in range(n):
+        xk[1 + j] = y[j]
+    _eval(pv, xk, nin_k, out_vel)
+    nnz = jr.size
+    _assemble(out_vel, 0, jr, jc, J)
+    _rows(J, columns, r)
+    for i in range(m):
+        s = 0.0
+        for j in range(n):
+            s += J[i, j] * y[n + j]
+        Fs[i] = (s - (-out_vel[nnz + i])) / r[i]
+    if not _min_norm(lapack, J, r, columns, Fs, dq, Js, A, ipiv, ibuf, cbuf, dbuf, work, iwork,
+                     ybuf, robust):
+        return False
+    for j in range(n):
+        y[n + j] = y[n + j] - dq[j]
+    for j in range(2 * n):
+        if not np.isfinite(y[j]):
+            return False
+    return True
+
+
+@nb.njit(cache=True)
+def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, robust,
+           correction, ptol, pmaxit, Acoef, Bcoef, Ccoef, E3, E5, Dcoef, rtol, atol, max_step,
+           t_bound, direction, state, y, f, t_eval, ie0, max_steps,
+           T, Y, H, QDD, LAM, ET, EY, EQDD, ELAM):
+    """Accepted DOP853 steps from ``(state[0] = t, y, f, state[1] = h_abs)``; see the module
+    docstring. Returns ``(status, steps, ie, evaluations, rejected, projections)``; the
+    state arrays hold the last accepted (projected) state and its derivative."""
+    N2 = 2 * n
+    npar = p.size
+    nin = 1 + 2 * n + m + npar + n                   # [t, q, qd, lambda, p, qdd]
+    nin_k = 1 + 2 * n + npar                         # [t, q, qd, p]
+    x = np.zeros(nin + max(kp[0, 4], 0))
+    for j in range(npar):
+        x[1 + 2 * n + m + j] = p[j]
+    xk = np.zeros(nin_k + max(kp[1, 4], kp[2, 4]))
+    for j in range(npar):
+        xk[1 + 2 * n + j] = p[j]
+    nnz = jr.size
+    out = np.empty(kk + n + m)
+    out_pos = np.empty(m + nnz)
+    out_vel = np.empty(nnz + m)
+    NN = n + m
+    KT = np.empty((NN, NN))
+    ipiv = np.empty(max(NN, 1), dtype=np.int32)
+    ibuf = np.zeros(5, dtype=np.int32)
+    cbuf = np.zeros(2, dtype=np.uint8)
+    dbuf = np.zeros(2)
+    rhsb = np.empty(NN)
+    bb = np.empty(NN)
+    qdd = np.empty(n)
+    lam = np.empty(m)
+    J = np.empty((m, n))
+    r = np.empty(m)
+    Fs = np.empty(m)
+    dq = np.empty(n)
+    Js = np.empty((m, n))
+    Am = np.empty((m, m))
+    work = np.empty(4 * max(m, 1))
+    iwork = np.empty(max(m, 1), dtype=np.int32)
+    ybuf = np.empty(m)
+    K = np.empty((16, N2))
+    ynew = np.empty(N2)
+    fnew = np.empty(N2)
+    ytmp = np.empty(N2)
+    scale = np.empty(N2)
+    F = np.empty((7, N2))
+    yo = np.empty(N2)
+    t = state[0]
+    h_abs = state[1]
+    evals = 0
+    rejected = 0
+    projections = 0
+    steps = 0
+    ie = ie0
+    n_eval = t_eval.size
+    while steps < max_steps:
+        # -- one step of scipy's RungeKutta._step_impl --
+        min_step = 10.0 * abs(np.nextafter(t, direction * np.inf) - t)
+        if h_abs > max_step:
+            h_abs = max_step
+        elif h_abs < min_step:
+            h_abs = min_step
+        accepted = False
+        was_rejected = False
+        h = 0.0
+        t_new = t
+        while not accepted:
+            if h_abs < min_step:
+                return HANDOVER, steps, ie, evals, rejected, projections
+            h = h_abs * direction
+            t_new = t + h
+            if direction * (t_new - t_bound) > 0:
+                t_new = t_bound
+            h = t_new - t
+            h_abs = abs(h)
+            for j in range(N2):
+                K[0, j] = f[j]
+            for s in range(1, N_STAGES):
+                for j in range(N2):
+                    acc = 0.0
+                    for k in range(s):
+                        acc += K[k, j] * Acoef[s, k]
+                    ytmp[j] = y[j] + acc * h
+                evals += 1
+                if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0,
+                            columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam,
+                            t + Ccoef[s] * h, ytmp, K[s]):
+                    return HANDOVER, steps, ie, evals, rejected, projections
+            for j in range(N2):
+                acc = 0.0
+                for k in range(N_STAGES):
+                    acc += K[k, j] * Bcoef[k]
+                ynew[j] = y[j] + h * acc
+            evals += 1
+            if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0,
+                        columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, t + h, ynew, fnew):
+                return HANDOVER, steps, ie, evals, rejected, projections
+            for j in range(N2):
+                K[N_STAGES, j] = fnew[j]
+            # DOP853._estimate_error_norm
+            e5 = 0.0
+            e3 = 0.0
+            for j in range(N2):
+                scale[j] = atol[j] + max(abs(y[j]), abs(ynew[j])) * rtol
+                a5 = 0.0
+                a3 = 0.0
+                for k in range(N_STAGES + 1):
+                    a5 += K[k, j] * E5[k]
+                    a3 += K[k, j] * E3[k]
+                a5 /= scale[j]
+                a3 /= scale[j]
+                e5 += a5 * a5
+                e3 += a3 * a3
+            if e5 == 0 and e3 == 0:
+                error_norm = 0.0
+            else:
+                error_norm = abs(h) * e5 / np.sqrt((e5 + 0.01 * e3) * N2)
+            if error_norm < 1:
+                if error_norm == 0:
+                    factor = MAX_FACTOR
+                else:
+                    factor = min(MAX_FACTOR, SAFETY * error_norm ** ERROR_EXPONENT)
+                if was_rejected:
+                    factor = min(1.0, factor)
+                h_abs *= factor
+                accepted = True
+            else:
+                h_abs *= max(MIN_FACTOR, SAFETY * error_norm ** ERROR_EXPONENT)
+                was_rejected = True
+                rejected += 1
+        # -- output times inside the step: DOP853 dense output, then projection --
+        ie_step = ie
+        if ie < n_eval and (t_eval[ie] - t_new) * direction <= 0:
+            for s in range(N_STAGES + 1, 16):
+                for j in range(N2):
+                    acc = 0.0
+                    for k in range(s):
+                        acc += K[k, j] * Acoef[s, k]
+                    ytmp[j] = y[j] + acc * h
+                evals += 1
+                if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc,
+                            rows0, columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam,
+                            t + Ccoef[s] * h, ytmp, K[s]):
+                    return HANDOVER, steps, ie_step, evals, rejected, projections
+            for j in range(N2):
+                dy = ynew[j] - y[j]
+                F[0, j] = dy
+                F[1, j] = h * K[0, j] - dy
+                F[2, j] = 2 * dy - h * (fnew[j] + K[0, j])
+                for i in range(4):
+                    acc = 0.0
+                    for k in range(16):
+                        acc += Dcoef[i, k] * K[k, j]
+                    F[3 + i, j] = h * acc
+            while ie < n_eval and (t_eval[ie] - t_new) * direction <= 0:
+                xi = (t_eval[ie] - t) / h
+                for j in range(N2):
+                    v = 0.0
+                    for i in range(7):
+                        v += F[6 - i, j]
+                        if i % 2 == 0:
+                            v *= xi
+                        else:
+                            v *= 1 - xi
+                    yo[j] = v + y[j]
+                if correction:
+                    if not _project(kp[1], kp[2], lapack, xk, nin_k, out_pos, out_vel, jr, jc,
+                                    columns, offset, ptol, pmaxit, robust, n, m, t_eval[ie], yo,
+                                    J, r, Fs, dq, Js, Am, ipiv, ibuf, cbuf, dbuf, work, iwork,
+                                    ybuf):
+                        return HANDOVER, steps, ie_step, evals, rejected, projections
+                    projections += 1
+                if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc,
+                            rows0, columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, t_eval[ie],
+                            yo, ytmp):
+                    return HANDOVER, steps, ie_step, evals, rejected, projections
+                ET[ie] = t_eval[ie]
+                for j in range(N2):
+                    EY[ie, j] = yo[j]
+                for j in range(n):
+                    EQDD[ie, j] = qdd[j]
+                for i in range(m):
+                    ELAM[ie, i] = lam[i]
+                ie += 1
+        # -- projection after the accepted step; the derivative at the projected state --
+        if correction:
+            if not _project(kp[1], kp[2], lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns,
+                            offset, ptol, pmaxit, robust, n, m, t_new, ynew, J, r, Fs, dq, Js,
+                            Am, ipiv, ibuf, cbuf, dbuf, work, iwork, ybuf):
+                return HANDOVER, steps, ie_step, evals, rejected, projections
+            projections += 1
+            evals += 1
+            if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0,
+                        columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, t_new, ynew, fnew):
+                return HANDOVER, steps, ie_step, evals, rejected, projections
+        # -- commit --
+        t = t_new
+        for j in range(N2):
+            y[j] = ynew[j]
+            f[j] = fnew[j]
+        T[steps] = t
+        H[steps] = abs(h)
+        for j in range(N2):
+            Y[steps, j] = y[j]
+        for j in range(n):
+            QDD[steps, j] = f[n + j]
+        # the multipliers belong to the last evaluation, which was at (t, y) only when it
+        # came after the output times (projection on) or no output was made in this step
+        if correction or ie == ie_step:
+            for i in range(m):
+                LAM[steps, i] = lam[i]
+        else:
+            for i in range(m):
+                LAM[steps, i] = np.nan
+        steps += 1
+        state[0] = t
+        state[1] = h_abs
+        if direction * (t - t_bound) >= 0:
+            return FINISHED, steps, ie, evals, rejected, projections
+    return CHUNK, steps, ie, evals, rejected, projections

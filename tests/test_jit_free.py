@@ -1,0 +1,155 @@
+"""The compiled free-motion stepper (solvers/_jit_free.py) against the Python stepper.
+
+Both run SciPy's DOP853 step-size control on the same equations; the compiled one sums the
+stages in its own order, so the two agree to the integration tolerance (not bit for bit:
+at tight tolerances the error estimate itself is a difference of rounding-sized numbers).
+Each case checks that the compiled path really ran, that the states agree at common output
+times, and that its accelerations and multipliers are those of the model at those states."""
+
+import importlib.util
+import pathlib
+import sys
+
+import numpy as np
+import pytest
+
+import mechsys as ms
+from mechsys.solvers._free import free_acceleration
+
+pytest.importorskip("numba")
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+import free_motion  # noqa: E402
+import long_run  # noqa: E402
+
+
+def _example(name):
+    """An example script as a module of its own (benchmarks/ has modules of the same names)."""
+    spec = importlib.util.spec_from_file_location(f"_example_{name}", ROOT / "examples" / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _both(monkeypatch, free, t, **options):
+    out = {}
+    for mode in ("0", "1"):
+        monkeypatch.setenv("MECHSYS_JIT", mode)
+        out[mode] = free.simulate(t, **options)
+    return out["0"], out["1"]
+
+
+def _check_derivatives(free, sol, rows):
+    """qdd and lambda returned with the compiled steps = a fresh solve at those states."""
+    s = free.system
+    for k in rows:
+        qdd, lam, _ = free_acceleration(s, float(sol.t[k]), sol.q[k], sol.qd[k], s.p_values)
+        np.testing.assert_allclose(sol.qdd[k], qdd, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(sol.lam[k], lam, rtol=1e-12, atol=1e-12)
+
+
+def test_double_pendulum_compiled_equals_python(monkeypatch):
+    free, _ = free_motion.compiled(free_motion.double_pendulum)
+    grid = np.linspace(0.0, 2.0, 41)
+    py, jit = _both(monkeypatch, free, grid, rtol=1e-10, atol=1e-12)
+    assert py.extra["compiled_steps"] == 0
+    assert jit.extra["compiled_steps"] == jit.extra["steps"] > 20
+    np.testing.assert_array_equal(jit.t, grid)
+    np.testing.assert_allclose(jit.q, py.q, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(jit.qd, py.qd, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(jit.qdd, py.qdd, rtol=0, atol=1e-7)
+    # the same step-size control: the same work, within a few steps
+    assert abs(jit.extra["steps"] - py.extra["steps"]) <= 2
+    assert np.abs(free.system.residual(2.0, jit.q[-1])).max() < 1e-11    # projected
+    _check_derivatives(free, jit, [5, 40])
+
+
+def test_every_step_output_and_no_projection(monkeypatch):
+    free, _ = free_motion.compiled(free_motion.double_pendulum)
+    py, jit = _both(monkeypatch, free, (0.0, 1.0), rtol=1e-8, atol=1e-10,
+                    constraint_correction=False)
+    assert jit.extra["compiled_steps"] == jit.extra["steps"]
+    # the local errors of these small steps are rounding-sized, so the step sizes differ at
+    # the 1e-7 level; the motions agree to the tolerance
+    assert abs(len(jit.t) - len(py.t)) <= 2 and jit.t[-1] == py.t[-1] == 1.0
+    np.testing.assert_allclose(jit.q[-1], py.q[-1], rtol=0, atol=1e-7)
+    _check_derivatives(free, jit, [1, len(jit.t) // 2, len(jit.t) - 1])
+
+
+def test_four_bar_keeps_the_loop_closed(monkeypatch):
+    _, free = long_run.four_bar()
+    py, jit = _both(monkeypatch, free, np.linspace(0.0, 1.0, 21), rtol=1e-9, atol=1e-11)
+    assert jit.extra["compiled_steps"] == jit.extra["steps"]
+    np.testing.assert_allclose(jit.q, py.q, rtol=0, atol=1e-8)
+    gap = max(np.abs(free.system.residual(tk, qk)).max() for tk, qk in zip(jit.t, jit.q))
+    assert gap < 1e-11
+    _check_derivatives(free, jit, [10, 20])
+
+
+def test_backwards_in_time(monkeypatch):
+    _, free = long_run.pendulum()
+    py, jit = _both(monkeypatch, free, np.linspace(1.0, 0.0, 11), rtol=1e-10, atol=1e-12)
+    assert jit.extra["compiled_steps"] == jit.extra["steps"] > 0
+    np.testing.assert_allclose(jit.q, py.q, rtol=0, atol=1e-9)
+
+
+def test_spatial_gyroscope(monkeypatch):
+    gyroscope = _example("gyroscope")
+    m = gyroscope.build("rotor")
+    m.solve(0.0)
+    free = m.free(drop=["base lock"])
+    ic = gyroscope.initial_condition("rotor")
+    py, jit = _both(monkeypatch, free, np.linspace(0.0, 0.5, 11), initial_condition=ic,
+                    rtol=1e-10, atol=1e-12)
+    assert jit.extra["compiled_steps"] == jit.extra["steps"] > 5
+    np.testing.assert_allclose(jit.q, py.q, rtol=0, atol=1e-8)
+    _check_derivatives(free, jit, [10])
+
+
+def test_without_constraints(monkeypatch):
+    """A free body under gravity: no equations, the parabola exactly."""
+    m = ms.Model2D()
+    m.add_load(ms.loads.Gravity((0, -1), 9.81))
+    m.add_body("ball", mass=2.0, inertia=0.1, guess=((0, 0), 0))
+    m.add(ms.constraints.Revolute2(m.body("ball").point((0, 0)), m.ground.point((0, 0))),
+          name="hold")
+    m.add(ms.constraints.RotationLock1(m.body("ball"), 0.0), name="spin")
+    m.solve(0.0)
+    free = m.free(drop=["hold", "spin"])
+    assert free.system.m == 0
+    py, jit = _both(monkeypatch, free, np.linspace(0.0, 1.0, 5),
+                    initial_condition={"ball.x_d": 1.0, "ball.y_d": 2.0})
+    assert jit.extra["compiled_steps"] == jit.extra["steps"]
+    t = jit.t
+    np.testing.assert_allclose(jit["ball.y"], 2.0 * t - 9.81 / 2 * t**2, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(jit.q, py.q, rtol=0, atol=1e-12)
+
+
+def test_singular_instants_are_handed_to_python(monkeypatch):
+    """The n-four-bar (parallelograms) passes instants where its Jacobian is singular: the
+    compiled loop hands those steps to the Python stepper (zone guard, regularised
+    projection) and takes over again; the motion is that of the Python path."""
+    n_four_bar = _example("n_four_bar")
+    out = {}
+    for mode in ("0", "1"):
+        monkeypatch.setenv("MECHSYS_JIT", mode)
+        out[mode] = n_four_bar.simulate(2, 3.0, 61)
+    py, jit = out["0"], out["1"]
+    assert 0 < jit.extra["compiled_steps"] < jit.extra["steps"]
+    np.testing.assert_allclose(jit.q, py.q, rtol=0, atol=1e-6)
+    # the crank angle of a parallelogram four-bar moves through the instants smoothly
+    assert np.all(np.isfinite(jit.qdd)) and np.all(np.isfinite(jit.lam))
+
+
+def test_mode_off_and_unsupported_methods(monkeypatch):
+    _, free = long_run.pendulum()
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    for method, kw in (("rk45", {}), ("adams", {"step_size": 1e-2})):
+        sol = free.simulate((0.0, 0.2), method=method, **kw)
+        assert sol.extra["compiled_steps"] == 0
+    monkeypatch.setenv("MECHSYS_JIT", "off")
+    assert free.simulate((0.0, 0.2)).extra["compiled_steps"] == 0
+    monkeypatch.delenv("MECHSYS_JIT")
+    assert free.simulate((0.0, 0.2)).extra["compiled_steps"] > 0         # default: on
