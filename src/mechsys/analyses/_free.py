@@ -486,15 +486,11 @@ class FreeSystem:
         finally:
             if bar._last >= 0:       # something was drawn: end its line
                 bar.close()
-        QDD = np.empty((len(times), n))
-        LAM = np.empty((len(times), s.m))
-        known = res.diagnostics.get("derivatives") or [None] * len(times)
-        for k, (tk, yk) in enumerate(zip(times, Y)):
-            d = known[k]
-            if d is not None and np.all(np.isfinite(d[0])) and np.all(np.isfinite(d[1])):
-                QDD[k], LAM[k] = d
-            else:
-                _, QDD[k], LAM[k] = accel(tk, yk)
+        # accelerations and multipliers: from the compiled stepper where it ran, else here
+        QDD, LAM = res.diagnostics.get("derivatives") or (np.full((len(times), n), np.nan),
+                                                          np.full((len(times), s.m), np.nan))
+        for k in np.nonzero(~(np.isfinite(QDD).all(axis=1) & np.isfinite(LAM).all(axis=1)))[0]:
+            _, QDD[k], LAM[k] = accel(times[k], Y[k])
         extra = {"evaluations": res.evaluations, "steps": res.steps, "rejected": res.rejected,
                  "method": m, "length_scale": sc.length,
                  "compiled_steps": res.diagnostics.get("compiled_steps", 0)}

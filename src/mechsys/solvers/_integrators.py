@@ -73,8 +73,8 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
     ``fast`` (optional, DOP853): a compiled stepper (:class:`._jit_free.FreeStepper`) that
     takes the regular steps of the same SciPy solver; after a handover this loop takes
     :data:`._jit_free.PAUSE_STEPS` steps itself. The accelerations and multipliers it
-    computed come back in ``diagnostics["derivatives"]`` (``(qdd, lam, known)`` per output
-    row; ``known`` False where the caller must evaluate them)."""
+    computed come back in ``diagnostics["derivatives"]``: ``(qdd (rows, n), lam (rows, m))``
+    per output row, NaN rows where the caller must evaluate them."""
     cls = {"dop853": DOP853, "rk45": RK45}[method]
     if scale is not None:
         atol = atol * np.asarray(scale, dtype=float)
@@ -93,26 +93,21 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
             ie += 1
     rejected = 0
     message = "finished"
-    # per output row after the start: (qdd, lam) from the compiled stepper, or None
-    known = []
-    pre = len(ev_t) if te is not None else 1      # output rows at the start
+    known = []        # blocks (first output row, qdd, lam) from the compiled stepper
     pause = 0
     try:
         while solver.status == "running":
             if fast is not None and pause == 0:
                 status, T, Yc, H, QDD, LAM, ie_new, rej, proj = fast.advance(solver, ie)
                 if te is not None:
-                    for k in range(ie, ie_new):
-                        ev_t.append(te[k])
-                        ev_y.append(fast.EY[k].copy())
-                        known.append((fast.EQDD[k], fast.ELAM[k]))
+                    known.append((len(ev_t), fast.EQDD[ie:ie_new], fast.ELAM[ie:ie_new]))
+                    ev_t.extend(te[ie:ie_new].tolist())
+                    ev_y.extend(fast.EY[ie:ie_new].copy())
                     ie = ie_new
-                    ts.extend(T.tolist())
-                    ys.extend(Yc)
                 else:
-                    ts.extend(T.tolist())
-                    ys.extend(Yc)
-                    known.extend(zip(QDD, LAM))
+                    known.append((len(ts), QDD, LAM))
+                ts.extend(T.tolist())
+                ys.extend(Yc)
                 hs.extend(H.tolist())
                 rejected += rej
                 extra += proj
@@ -137,7 +132,6 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
                     yi = dense(te[ie])
                     ev_t.append(te[ie])
                     ev_y.append(project(te[ie], yi) if correction else yi)
-                    known.append(None)
                     extra += 1 if correction else 0
                     ie += 1
             if correction:
@@ -150,8 +144,6 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
             hs.append(solver.step_size)
             ts.append(solver.t)
             ys.append(solver.y.copy())
-            if te is None:
-                known.append(None)
             if monitor is not None:
                 monitor(solver.t)
     except KeyboardInterrupt:
@@ -165,10 +157,12 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
     diag = {"step_size": np.array(hs), "step_times": np.array(ts)}
     if fast is not None:
         rows = len(ev_t) if te is not None else len(ts)
-        # the start is never from the stepper; Ctrl-C can leave the lists uneven
-        known = [None] * pre + known
-        known = (known + [None] * rows)[:rows]
-        diag["derivatives"] = known
+        QDD, LAM = np.full((rows, fast.n), np.nan), np.full((rows, fast.m), np.nan)
+        for k, qdd, lam in known:
+            j = min(len(qdd), rows - k)     # Ctrl-C can leave a block beyond the rows kept
+            if j > 0:
+                QDD[k:k + j], LAM[k:k + j] = qdd[:j], lam[:j]
+        diag["derivatives"] = (QDD, LAM)
         diag["compiled_steps"] = fast.steps
     if te is not None:
         diag["t_eval"] = (np.array(ev_t), np.array(ev_y))

@@ -6,7 +6,8 @@ the Python path fixes one:
 
 * ``_accel``     ``solvers._free.free_acceleration`` (linear case) with the cheap test of
                  ``solvers._rank.zone_guard``: the augmented system ``[[M, J^T], [J, 0]]``
-                 from the compiled kernel, solved by LAPACK ``dgesv`` (SciPy's own)
+                 from the compiled kernel, solved by LAPACK ``dgesv`` (SciPy's own) or,
+                 up to ``SMALL`` unknowns, by the same elimination written out here
 * ``_min_norm``  ``solvers._free._min_norm``: ``D J^T (J^ J^T)^-1 b``, ``J^ = R^-1 J D``
 * ``_project``   ``solvers._free.project`` (positions, then velocities)
 * ``_stage``     ``scipy.integrate._ivp.rk.rk_step`` for DOP853, with its error norm
@@ -34,6 +35,10 @@ from ._rank import ZONE
 
 FINISHED, CHUNK, HANDOVER = 0, 1, 2
 
+#: augmented systems up to this size are solved by the loop's own elimination (``_lu_solve``);
+#: larger ones by LAPACK ``dgesv``, whose call overhead no longer matters there
+SMALL = 24
+
 # SciPy's step-size control constants (scipy.integrate._ivp.rk)
 SAFETY = 0.9
 MIN_FACTOR = 0.2
@@ -43,8 +48,47 @@ N_STAGES = 12
 
 
 @nb.njit(cache=True)
+def _lu_solve(KT, b, N):
+    """``K x = b`` in place (``b`` becomes ``x``; ``KT`` holds ``K`` transposed and is
+    overwritten): Gaussian elimination with partial pivoting, LAPACK ``dgesv``'s algorithm,
+    without the call overhead that dominates for small systems. False at an exactly zero
+    pivot (``dgesv``'s ``info > 0``)."""
+    for k in range(N):
+        p = k
+        big = abs(KT[k, k])
+        for i in range(k + 1, N):
+            v = abs(KT[k, i])
+            if v > big:
+                big = v
+                p = i
+        if big == 0.0:
+            return False
+        if p != k:
+            for j in range(N):
+                tmp = KT[j, k]
+                KT[j, k] = KT[j, p]
+                KT[j, p] = tmp
+            tmp = b[k]
+            b[k] = b[p]
+            b[p] = tmp
+        inv = 1.0 / KT[k, k]
+        for i in range(k + 1, N):
+            l = KT[k, i] * inv
+            if l != 0.0:
+                for j in range(k + 1, N):
+                    KT[j, i] -= l * KT[j, k]
+                b[i] -= l * b[k]
+    for i in range(N - 1, -1, -1):
+        s = b[i]
+        for j in range(i + 1, N):
+            s -= KT[j, i] * b[j]
+        b[i] = s / KT[i, i]
+    return True
+
+
+@nb.njit(cache=True)
 def _accel(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, columns,
-           robust, ipiv, ibuf, rhs, b, qdd, lam):
+           robust, ipiv, ibuf, rhs, b, qdd, lam, force):
     """Free acceleration at ``x = [t, q, qd, 0, p, 0]``: ``qdd`` (n,), ``lam`` (m,);
     False where the Python path would need its special handling."""
     N = n + m
@@ -63,13 +107,17 @@ def _accel(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, col
         v = abs(rhs[i])
         if v > big_rhs:
             big_rhs = v
-    ibuf[0] = N          # n, nrhs, lda = ldb, info
-    ibuf[1] = 1
-    ibuf[2] = N
-    ibuf[3] = 0
-    _ccall(lapack[3], (ibuf[0:1], ibuf[1:2], KT, ibuf[2:3], ipiv, b, ibuf[2:3], ibuf[3:4]))
-    if ibuf[3] != 0:
-        return False
+    if N <= SMALL:
+        if not _lu_solve(KT, b, N):
+            return False
+    else:
+        ibuf[0] = N          # n, nrhs, lda = ldb, info
+        ibuf[1] = 1
+        ibuf[2] = N
+        ibuf[3] = 0
+        _ccall(lapack[3], (ibuf[0:1], ibuf[1:2], KT, ibuf[2:3], ipiv, b, ibuf[2:3], ibuf[3:4]))
+        if ibuf[3] != 0:
+            return False
     big = 0.0
     for i in range(N):
         v = abs(b[i])
@@ -90,7 +138,7 @@ def _accel(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, col
             if v > bl:
                 bl = v
         if bl != 0.0:
-            force = np.zeros(n)
+            force[:] = 0.0
             j0 = kk - jr.size          # the Jacobian's values precede the right-hand side
             for k in range(jr.size):
                 force[jc[k]] += out[j0 + k] * lam[jr[k]]
@@ -106,13 +154,13 @@ def _accel(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, col
 
 @nb.njit(cache=True)
 def _rhs(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, columns, robust,
-         ipiv, ibuf, rhs, b, qdd, lam, t, y, f):
+         ipiv, ibuf, rhs, b, qdd, lam, force, t, y, f):
     """``f = (qd, qdd)`` at ``(t, y)``; False: hand over."""
     x[0] = t
     for j in range(2 * n):
         x[1 + j] = y[j]
     if not _accel(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, columns,
-                  robust, ipiv, ibuf, rhs, b, qdd, lam):
+                  robust, ipiv, ibuf, rhs, b, qdd, lam, force):
         return False
     for j in range(n):
         f[j] = y[n + j]
@@ -255,6 +303,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
     bb = np.empty(NN)
     qdd = np.empty(n)
     lam = np.empty(m)
+    force = np.empty(n)
     J = np.empty((m, n))
     r = np.empty(m)
     Fs = np.empty(m)
@@ -309,7 +358,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
                     ytmp[j] = y[j] + acc * h
                 evals += 1
                 if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0,
-                            columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam,
+                            columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force,
                             t + Ccoef[s] * h, ytmp, K[s]):
                     return HANDOVER, steps, ie, evals, rejected, projections
             for j in range(N2):
@@ -319,7 +368,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
                 ynew[j] = y[j] + h * acc
             evals += 1
             if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0,
-                        columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, t + h, ynew, fnew):
+                        columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force, t + h, ynew, fnew):
                 return HANDOVER, steps, ie, evals, rejected, projections
             for j in range(N2):
                 K[N_STAGES, j] = fnew[j]
@@ -365,7 +414,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
                     ytmp[j] = y[j] + acc * h
                 evals += 1
                 if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc,
-                            rows0, columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam,
+                            rows0, columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force,
                             t + Ccoef[s] * h, ytmp, K[s]):
                     return HANDOVER, steps, ie_step, evals, rejected, projections
             for j in range(N2):
@@ -397,7 +446,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
                         return HANDOVER, steps, ie_step, evals, rejected, projections
                     projections += 1
                 if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc,
-                            rows0, columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, t_eval[ie],
+                            rows0, columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force, t_eval[ie],
                             yo, ytmp):
                     return HANDOVER, steps, ie_step, evals, rejected, projections
                 ET[ie] = t_eval[ie]
@@ -417,7 +466,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
             projections += 1
             evals += 1
             if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0,
-                        columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, t_new, ynew, fnew):
+                        columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force, t_new, ynew, fnew):
                 return HANDOVER, steps, ie_step, evals, rejected, projections
         # -- commit --
         t = t_new
