@@ -476,8 +476,8 @@ class FreeSystem:
                 bar.update(int(1000 * (tt - t_start) / span))
 
         # the compiled stepper (solvers/_jit_free.py) takes the regular steps when it can
-        fast = FreeStepper.plan(s, opt.method if opt.runge_kutta else None, p, sc, rows0,
-                                robust, opt.correction, output_times(t)[2])
+        fast = FreeStepper.plan(s, opt.method, p, sc, rows0, robust, opt.correction,
+                                output_times(t)[2])
         try:
             times, Y, res, m = integrate(rhs, proj, t, np.concatenate((q0, qd0)), opt,
                                          scale=np.concatenate((sc.columns, sc.columns)),

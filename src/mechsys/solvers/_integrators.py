@@ -211,10 +211,12 @@ _WEIGHTS: dict = {}
 def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4,
                     method="automatic", step_size=None, correction=False,
                     first_step=None, max_steps=2_000_000, scale=None,
-                    monitor=None) -> IntegrationResult:
+                    monitor=None, fast=None) -> IntegrationResult:
     """Mech's adaptive Adams-Bashforth / Adams-Moulton integrator (see module doc).
     ``scale`` (len(y0),): the unit of each component; the error estimate is
-    ``max_i |y_corr_i - y_pred_i| / scale_i``."""
+    ``max_i |y_corr_i - y_pred_i| / scale_i``. ``fast``: a compiled stepper
+    (:meth:`._jit_free.FreeStepper.advance_adams`) that takes the regular steps from this
+    loop's state, as in :func:`integrate_rk`."""
     inv_scale = 1.0 if scale is None else 1.0 / np.asarray(scale, dtype=float)
     k = FIT_DEGREES[fit_degree] if isinstance(fit_degree, str) else int(fit_degree)
     if not 1 <= k <= 4:
@@ -237,10 +239,47 @@ def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4
     recent: list[float] = []
     rejected = 0
     message = "finished"
+    known = []        # blocks (first row, qdd, lam) from the compiled stepper
+    pause = 0
+    if fast is not None:
+        fixed = step_size is not None
+        code = {"automatic": 0, "predictor": 1, "corrector": 2}[method]
+        inv = np.broadcast_to(inv_scale, (len(y),)).astype(float)
+        options = (k, (a, b, c), code, fixed, inv, t1)
     try:
         while (t1 - t) * np.sign(span) > 1e-14 * max(1.0, abs(t1)):
             if len(ts) > max_steps:
                 raise MechError(f"adams: more than {max_steps} steps; loosen max_error")
+            if fast is not None and pause == 0:
+                last = recent[-4:]
+                state = np.array([t, h, len(hist_t), len(last), rejected], dtype=float)
+                ht = np.zeros(6)
+                ht[:len(hist_t)] = hist_t
+                hf = np.zeros((6, len(y)))
+                hf[:len(hist_f)] = hist_f
+                rec = np.zeros(4)
+                rec[:len(last)] = last
+                yy = y.copy()
+                status, T, Yc, H, E, QDD, LAM, ev, proj = fast.advance_adams(
+                    state, yy, ht, hf, rec, options)
+                nfev += ev
+                if len(T):
+                    known.append((len(ts), QDD, LAM))
+                    ts.extend(T.tolist())
+                    ys.extend(Yc)
+                    steps_h.extend(H.tolist())
+                    steps_e.extend(E.tolist())
+                    t, h, y = float(state[0]), float(state[1]), yy
+                    nh, nrec = int(state[2]), int(state[3])
+                    hist_t, hist_f = ht[:nh].tolist(), list(hf[:nh].copy())
+                    recent = rec[:nrec].tolist()
+                    rejected = int(state[4])
+                    if monitor is not None:
+                        monitor(t)
+                if status == 2:        # handover: this loop takes the next steps
+                    pause = PAUSE_STEPS
+                continue
+            pause = max(pause - 1, 0)
             h_try = h if (t + h - t1) * np.sign(span) <= 0 else t1 - t
             deg = min(k, len(hist_t) - 1)
             # predictor: fit through the last deg+1 derivative values
@@ -290,8 +329,18 @@ def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4
         message = "interrupted"
         n_ok = min(len(ts), len(ys))
         del ts[n_ok:], ys[n_ok:]
+    diag = {"step_size": np.array(steps_h), "max_error": np.array(steps_e)}
+    if fast is not None:
+        rows = len(ts)
+        QDD, LAM = np.full((rows, fast.n), np.nan), np.full((rows, fast.m), np.nan)
+        for k0, qdd, lam in known:
+            j = min(len(qdd), rows - k0)     # Ctrl-C can leave a block beyond the rows kept
+            if j > 0:
+                QDD[k0:k0 + j], LAM[k0:k0 + j] = qdd[:j], lam[:j]
+        diag["derivatives"] = (QDD, LAM)
+        diag["compiled_steps"] = fast.steps
     return IntegrationResult(np.array(ts), np.array(ys), nfev, len(ts) - 1, rejected, message,
-                             {"step_size": np.array(steps_h), "max_error": np.array(steps_e)})
+                             diag)
 
 
 RK_METHODS = ("dop853", "rk45")
@@ -476,7 +525,8 @@ def integrate(fun, project, t, y0, opt: IntegrationOptions, scale=None, kinked=N
         times, Y = res.diagnostics["t_eval"] if t_eval is not None else (res.t, res.y)
     else:
         res = integrate_adams(fun, project, t0, t1, y0, opt.degree, opt.max_error, opt.method,
-                              opt.step_size, opt.correction, scale=scale, monitor=monitor)
+                              opt.step_size, opt.correction, scale=scale, monitor=monitor,
+                              fast=fast)
         times, Y = res.t, res.y
         if t_eval is not None and res.message == "interrupted":
             # only the output times the integration reached
@@ -488,7 +538,13 @@ def integrate(fun, project, t, y0, opt: IntegrationOptions, scale=None, kinked=N
 
             if t1 < t0:                      # backwards: interpolate on rising times
                 times, Y = times[::-1], Y[::-1]
-            F = np.array([fun(tk, yk) for tk, yk in zip(times, Y)])
+            # the derivatives at the steps: from the compiled stepper where it ran
+            known = res.diagnostics.pop("derivatives", None)
+            if known is not None and t1 < t0:
+                known = (known[0][::-1], known[1][::-1])
+            F = np.array([np.concatenate((yk[len(yk) // 2:], known[0][i]))
+                          if known is not None and np.all(np.isfinite(known[0][i]))
+                          else fun(tk, yk) for i, (tk, yk) in enumerate(zip(times, Y))])
             Y = CubicHermiteSpline(times, Y, F, axis=0)(t_eval)
             times = t_eval
     return np.asarray(times, dtype=float), np.asarray(Y), res, opt.name.lower()

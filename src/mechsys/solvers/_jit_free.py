@@ -44,8 +44,10 @@ from ._linalg import SPARSE_THRESHOLD
 PAUSE_STEPS = 8
 #: compiled steps per call (progress and Ctrl-C are handled between calls)
 CHUNK_STEPS = 2000
+#: the methods with a compiled loop (``integration_options`` names; Adams: Mech's three)
+METHODS = ("dop853", "automatic", "predictor", "corrector")
 
-_state: dict = {"loop": None, "coef": None, "gesv": None}
+_state: dict = {"loop": None, "adams": None, "coef": None, "gesv": None}
 
 
 def _coefficients():
@@ -100,16 +102,19 @@ class FreeStepper:
         self.EQDD, self.ELAM = np.full((k, n), np.nan), np.full((k, m), np.nan)
         self.steps = 0
         if _state["loop"] is None:
-            from ._jit_free_loop import dop853
+            from ._jit_free_loop import adams, dop853
 
-            _state["loop"] = dop853
+            _state["loop"], _state["adams"] = dop853, adams
         _jit._state["loaded"] = True
 
     @classmethod
     def plan(cls, system, method, p, scaling, rows0, robust, correction, t_eval):
-        """The stepper when the compiled loop can run this simulation, else None."""
-        if _jit.mode() == "off" or method != "dop853" or system.n == 0:
+        """The stepper when the compiled loop can run this simulation (``method``: DOP853 or
+        one of Mech's Adams methods), else None."""
+        if _jit.mode() == "off" or method not in METHODS or system.n == 0:
             return None
+        if method != "dop853":
+            t_eval = None              # Adams output times are interpolated afterwards
         if system.n + system.m > SPARSE_THRESHOLD:
             return None
         dyn = system.dynamics
@@ -159,4 +164,25 @@ class FreeStepper:
                 int(rejected), int(projections))
 
 
-__all__ = ["CHUNK_STEPS", "PAUSE_STEPS", "FreeStepper"]
+    def advance_adams(self, state, y, hist_t, hist_f, recent, options, max_steps=None):
+        """Compiled steps of Mech's Adams integrator from the state of
+        ``solvers._integrators.integrate_adams`` (see ``_jit_free_loop.adams``): ``state =
+        [t, h, history length, recent count, rejected]``, arrays updated in place. Returns
+        ``(status, T, Y, H, E, QDD, LAM, evaluations, projections)``."""
+        n, m = self.n, self.m
+        max_steps = CHUNK_STEPS if max_steps is None else max_steps
+        T, H, E = np.empty(max_steps), np.empty(max_steps), np.empty(max_steps)
+        Y = np.empty((max_steps, 2 * n))
+        QDD, LAM = np.empty((max_steps, n)), np.empty((max_steps, m))
+        k, (a, b, c), method, fixed, inv_scale, t1 = options
+        status, steps, evals, projections = _state["adams"](
+            self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr, self.jc,
+            self.rows0, self.columns, self.offset, self.robust, self.correction, 1e-12, 8,
+            int(k), float(a), float(b), float(c), int(method), bool(fixed), inv_scale,
+            float(t1), state, y, hist_t, hist_f, recent, int(max_steps), T, Y, H, E, QDD, LAM)
+        self.steps += int(steps)
+        return (int(status), T[:steps], Y[:steps], H[:steps], E[:steps], QDD[:steps],
+                LAM[:steps], int(evals), int(projections))
+
+
+__all__ = ["CHUNK_STEPS", "METHODS", "PAUSE_STEPS", "FreeStepper"]

@@ -493,3 +493,204 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
         if direction * (t - t_bound) >= 0:
             return FINISHED, steps, ie, evals, rejected, projections
     return CHUNK, steps, ie, evals, rejected, projections
+
+
+@nb.njit(cache=True)
+def _adams_weights(times, cnt, t_from, h, V, w):
+    """``w[:cnt]``: ``solvers._integrators._adams_weights`` (the nodes rounded to 1e-9 as
+    there, so that constant steps give the same weights)."""
+    for i in range(cnt):
+        x = np.round((times[i] - t_from) / h, 9)
+        p = 1.0
+        for j in range(cnt):
+            V[i, j] = p            # V[i, j] = x_i^j; V holds (V^T) transposed
+            p *= x
+    for j in range(cnt):
+        w[j] = 1.0 / (j + 1)
+    if not _lu_solve(V[:cnt, :cnt], w, cnt):
+        return False
+    for j in range(cnt):
+        w[j] *= h
+    return True
+
+
+@nb.njit(cache=True)
+def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, robust,
+          correction, ptol, pmaxit, k, a, b, c, method, fixed, inv_scale, t1, state, y,
+          hist_t, hist_f, recent, max_steps, T, Y, H, E, QDD, LAM):
+    """Accepted steps of Mech's Adams integrator (``solvers._integrators.integrate_adams``,
+    operation for operation) from ``state = [t, h, history length, recent count,
+    rejected]``, ``y``, the derivative history ``hist_t`` (6,), ``hist_f`` (6, 2n) and the
+    last errors ``recent`` (4,). ``method``: 0 automatic, 1 predictor, 2 corrector.
+    Returns ``(status, steps, evaluations, projections)``; the state arrays hold the last
+    accepted state."""
+    N2 = 2 * n
+    npar = p.size
+    nin = 1 + 2 * n + m + npar + n
+    nin_k = 1 + 2 * n + npar
+    x = np.zeros(nin + max(kp[0, 4], 0))
+    for j in range(npar):
+        x[1 + 2 * n + m + j] = p[j]
+    xk = np.zeros(nin_k + max(kp[1, 4], kp[2, 4]))
+    for j in range(npar):
+        xk[1 + 2 * n + j] = p[j]
+    nnz = jr.size
+    out = np.empty(kk + n + m)
+    out_pos = np.empty(m + nnz)
+    out_vel = np.empty(nnz + m)
+    NN = n + m
+    KT = np.empty((NN, NN))
+    ipiv = np.empty(max(NN, 1), dtype=np.int32)
+    ibuf = np.zeros(5, dtype=np.int32)
+    cbuf = np.zeros(2, dtype=np.uint8)
+    dbuf = np.zeros(2)
+    rhsb = np.empty(NN)
+    bb = np.empty(NN)
+    qdd = np.empty(n)
+    lam = np.empty(m)
+    force = np.empty(n)
+    J = np.empty((m, n))
+    r = np.empty(m)
+    Fs = np.empty(m)
+    dq = np.empty(n)
+    Js = np.empty((m, n))
+    Am = np.empty((m, m))
+    work = np.empty(4 * max(m, 1))
+    iwork = np.empty(max(m, 1), dtype=np.int32)
+    ybuf = np.empty(m)
+    V = np.empty((6, 6))
+    w = np.empty(6)
+    wc = np.empty(6)
+    ct = np.empty(6)
+    cf = np.empty((6, N2))
+    y_pred = np.empty(N2)
+    f_pred = np.empty(N2)
+    y_corr = np.empty(N2)
+    f_new = np.empty(N2)
+    t = state[0]
+    h = state[1]
+    nh = int(state[2])
+    nrec = int(state[3])
+    rejected = int(state[4])
+    sign = 1.0 if t1 - t >= 0 else -1.0
+    evals = 0
+    projections = 0
+    steps = 0
+    while (t1 - t) * sign > 1e-14 * max(1.0, abs(t1)):
+        if steps >= max_steps:
+            break
+        h_try = h if (t + h - t1) * sign <= 0 else t1 - t
+        deg = min(k, nh - 1)
+        # predictor: the last deg + 1 derivative values
+        p0 = nh - (deg + 1)
+        if not _adams_weights(hist_t[p0:nh], deg + 1, t, h_try, V, w):
+            return HANDOVER, steps, evals, projections
+        for j in range(N2):
+            acc = 0.0
+            for i in range(deg + 1):
+                acc += w[i] * hist_f[p0 + i, j]
+            y_pred[j] = y[j] + acc
+        evals += 1
+        if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0,
+                    columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force, t + h_try, y_pred,
+                    f_pred):
+            return HANDOVER, steps, evals, projections
+        # corrector: the new point and the last deg values (two points at the start)
+        if deg > 0:
+            for i in range(deg):
+                ct[i] = hist_t[nh - deg + i]
+                for j in range(N2):
+                    cf[i, j] = hist_f[nh - deg + i, j]
+            nc = deg + 1
+        else:
+            ct[0] = hist_t[nh - 1]
+            for j in range(N2):
+                cf[0, j] = hist_f[nh - 1, j]
+            nc = 2
+        ct[nc - 1] = t + h_try
+        for j in range(N2):
+            cf[nc - 1, j] = f_pred[j]
+        if not _adams_weights(ct, nc, t, h_try, V, wc):
+            return HANDOVER, steps, evals, projections
+        err = 0.0
+        for j in range(N2):
+            acc = 0.0
+            for i in range(nc):
+                acc += wc[i] * cf[i, j]
+            y_corr[j] = y[j] + acc
+            v = abs(y_corr[j] - y_pred[j]) * inv_scale[j]
+            if not v <= err:
+                err = v
+        if not np.isfinite(err):
+            return HANDOVER, steps, evals, projections
+        if not fixed and err > a and abs(h_try) > 1e-14 * max(1.0, abs(t)):
+            h = h_try / 2
+            rejected += 1
+            continue
+        if method == 2 or (method == 0 and err > b):
+            evals += 1
+            if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0,
+                        columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force, t + h_try,
+                        y_corr, f_new):
+                return HANDOVER, steps, evals, projections
+        else:
+            for j in range(N2):
+                y_corr[j] = y_pred[j]
+                f_new[j] = f_pred[j]
+        t_new = t + h_try
+        if correction:
+            if not _project(kp[1], kp[2], lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns,
+                            offset, ptol, pmaxit, robust, n, m, t_new, y_corr, J, r, Fs, dq, Js,
+                            Am, ipiv, ibuf, cbuf, dbuf, work, iwork, ybuf):
+                return HANDOVER, steps, evals, projections
+            projections += 1
+            evals += 1
+            if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0,
+                        columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force, t_new, y_corr,
+                        f_new):
+                return HANDOVER, steps, evals, projections
+        # -- commit --
+        t = t_new
+        for j in range(N2):
+            y[j] = y_corr[j]
+        if nh == 6:
+            for i in range(5):
+                hist_t[i] = hist_t[i + 1]
+                for j in range(N2):
+                    hist_f[i, j] = hist_f[i + 1, j]
+            nh = 5
+        hist_t[nh] = t
+        for j in range(N2):
+            hist_f[nh, j] = f_new[j]
+        nh += 1
+        T[steps] = t
+        H[steps] = h_try
+        E[steps] = err
+        for j in range(N2):
+            Y[steps, j] = y[j]
+        for j in range(n):
+            QDD[steps, j] = f_new[n + j]
+        for i in range(m):
+            LAM[steps, i] = lam[i]
+        steps += 1
+        if nrec == 4:
+            for i in range(3):
+                recent[i] = recent[i + 1]
+            nrec = 3
+        recent[nrec] = err
+        nrec += 1
+        if not fixed and nrec >= 4:
+            tot = 0.0
+            for i in range(4):
+                tot += recent[i]
+            if tot < c:
+                h = 2 * h
+                nrec = 0
+        state[0] = t
+        state[1] = h
+        state[2] = nh
+        state[3] = nrec
+        state[4] = rejected
+    if (t1 - t) * sign > 1e-14 * max(1.0, abs(t1)):
+        return CHUNK, steps, evals, projections
+    return FINISHED, steps, evals, projections
