@@ -29,6 +29,8 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+from ._jit_lapack import gecon1, getrf, getrs
+from ._jit_loop import SMALL as SMALL_LU
 from ._jit_loop import _assemble, _ccall, _eval, _rows
 from ._linalg import RCOND_MIN
 from ._rank import ZONE
@@ -192,27 +194,36 @@ def _min_norm(lapack, J, r, columns, bvec, out, Js, A, ipiv, ibuf, cbuf, dbuf, w
             s += abs(A[i, j])
         if s > anorm:
             anorm = s
-    ibuf[0] = m
-    ibuf[1] = m
-    ibuf[2] = m
-    ibuf[3] = 0
-    _ccall(lapack[0], (ibuf[0:1], ibuf[1:2], A, ibuf[2:3], ipiv, ibuf[3:4]))
-    if ibuf[3] > 0 or anorm == 0:
-        return False
-    cbuf[0] = 49         # '1': one-norm
-    dbuf[0] = anorm
-    dbuf[1] = 0.0
-    _ccall(lapack[1], (cbuf[0:1], ibuf[1:2], A, ibuf[2:3], dbuf[0:1], dbuf[1:2], work, iwork,
-                       ibuf[3:4]))
-    rcond = dbuf[1]
+    small = m <= SMALL_LU
+    if small:
+        if getrf(A, m, ipiv) > 0 or anorm == 0:
+            return False
+        rcond = gecon1(A, m, anorm, work, work[m:])
+    else:
+        ibuf[0] = m
+        ibuf[1] = m
+        ibuf[2] = m
+        ibuf[3] = 0
+        _ccall(lapack[0], (ibuf[0:1], ibuf[1:2], A, ibuf[2:3], ipiv, ibuf[3:4]))
+        if ibuf[3] > 0 or anorm == 0:
+            return False
+        cbuf[0] = 49         # '1': one-norm
+        dbuf[0] = anorm
+        dbuf[1] = 0.0
+        _ccall(lapack[1], (cbuf[0:1], ibuf[1:2], A, ibuf[2:3], dbuf[0:1], dbuf[1:2], work,
+                           iwork, ibuf[3:4]))
+        rcond = dbuf[1]
     if rcond < RCOND_MIN or (robust and rcond < ZONE * ZONE):
         return False
     for i in range(m):
         ybuf[i] = bvec[i]
-    cbuf[1] = 78         # 'N'
-    ibuf[4] = 1
-    _ccall(lapack[2], (cbuf[1:2], ibuf[1:2], ibuf[4:5], A, ibuf[2:3], ipiv, ybuf, ibuf[2:3],
-                       ibuf[3:4]))
+    if small:
+        getrs(A, m, ipiv, ybuf)
+    else:
+        cbuf[1] = 78         # 'N'
+        ibuf[4] = 1
+        _ccall(lapack[2], (cbuf[1:2], ibuf[1:2], ibuf[4:5], A, ibuf[2:3], ipiv, ybuf,
+                           ibuf[2:3], ibuf[3:4]))
     for j in range(n):
         s = 0.0
         for i in range(m):

@@ -6,7 +6,8 @@ operations, so that both give the same numbers:
 * ``_eval``          ``System.f_position`` / ``f_velocity`` / ``f_gamma`` at ``[t, q, qd, p]``
 * ``_assemble``      ``System.assemble`` (dense ``Phi_q`` from its nonzero values)
 * ``_rows``          ``Scaling.rows``
-* ``_factor``        ``Scaling.factor`` -> ``Factor`` (LAPACK dgetrf + dgecon on ``R^-1 J D``)
+* ``_factor``        ``Scaling.factor`` -> ``Factor`` (LAPACK dgetrf + dgecon on ``R^-1 J D``;
+                     up to ``SMALL`` unknowns their algorithms from ``_jit_lapack``)
 * ``_solve``         ``ScaledFactor.solve``
 * ``_newton``        ``solve_position`` with a given scaling
 * ``_predict``       ``_kinematics._predict``
@@ -24,8 +25,13 @@ from numba import types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
+from ._jit_lapack import gecon1, getrf, getrs
 from ._kinematics import RCOND_WARN, ROTATION_JUMP, ROTATION_SLACK, ROTATION_START
 from ._linalg import RCOND_MIN
+
+#: up to this many unknowns the LU and condition estimate are computed in the loop
+#: (``_jit_lapack``: LAPACK's algorithms, without the call overhead); above, LAPACK is called
+SMALL = 32
 
 
 @intrinsic
@@ -95,19 +101,25 @@ def _factor(lapack, J, r, columns, B, ipiv, ibuf, cbuf, dbuf, work, iwork):
             s += abs(B[j, i])
         if s > anorm:
             anorm = s
-    ibuf[0] = n          # m, n, lda
-    ibuf[1] = n
-    ibuf[2] = n
-    ibuf[3] = 0          # info
-    _ccall(lapack[0], (ibuf[0:1], ibuf[1:2], B, ibuf[2:3], ipiv, ibuf[3:4]))
-    if ibuf[3] > 0 or anorm == 0:
-        return -1.0
-    cbuf[0] = 49         # '1': one-norm
-    dbuf[0] = anorm
-    dbuf[1] = 0.0
-    _ccall(lapack[1], (cbuf[0:1], ibuf[1:2], B, ibuf[2:3], dbuf[0:1], dbuf[1:2], work, iwork,
-                       ibuf[3:4]))
-    rcond = dbuf[1]
+    if n <= SMALL:
+        # LAPACK's algorithms written out (_jit_lapack): the calls' overhead dominated
+        if getrf(B, n, ipiv) > 0 or anorm == 0:
+            return -1.0
+        rcond = gecon1(B, n, anorm, work, work[n:])
+    else:
+        ibuf[0] = n          # m, n, lda
+        ibuf[1] = n
+        ibuf[2] = n
+        ibuf[3] = 0          # info
+        _ccall(lapack[0], (ibuf[0:1], ibuf[1:2], B, ibuf[2:3], ipiv, ibuf[3:4]))
+        if ibuf[3] > 0 or anorm == 0:
+            return -1.0
+        cbuf[0] = 49         # '1': one-norm
+        dbuf[0] = anorm
+        dbuf[1] = 0.0
+        _ccall(lapack[1], (cbuf[0:1], ibuf[1:2], B, ibuf[2:3], dbuf[0:1], dbuf[1:2], work, iwork,
+                           ibuf[3:4]))
+        rcond = dbuf[1]
     if rcond < RCOND_MIN:
         return -1.0
     return rcond
@@ -118,12 +130,15 @@ def _solve(lapack, B, ipiv, r, columns, b, out, ibuf, cbuf):
     n = r.size
     for i in range(n):
         out[i] = b[i] / r[i]
-    cbuf[1] = 78         # 'N': no transpose
-    ibuf[1] = n          # n, lda = ldb (set here too: a solve never relies on an earlier factor call)
-    ibuf[2] = n
-    ibuf[4] = 1          # nrhs
-    _ccall(lapack[2], (cbuf[1:2], ibuf[1:2], ibuf[4:5], B, ibuf[2:3], ipiv, out, ibuf[2:3],
-                       ibuf[3:4]))
+    if n <= SMALL:
+        getrs(B, n, ipiv, out)
+    else:
+        cbuf[1] = 78         # 'N': no transpose
+        ibuf[1] = n          # n, lda = ldb (set here too: a solve never relies on an earlier factor call)
+        ibuf[2] = n
+        ibuf[4] = 1          # nrhs
+        _ccall(lapack[2], (cbuf[1:2], ibuf[1:2], ibuf[4:5], B, ibuf[2:3], ipiv, out, ibuf[2:3],
+                           ibuf[3:4]))
     for i in range(n):
         out[i] = columns[i] * out[i]
 
