@@ -7,8 +7,9 @@ the damped Newton iteration on the unit-free equations ``R^-1 Phi_q D``, the vel
 ``Phi_q qd = -Phi_t`` and acceleration ``Phi_q qdd = gamma`` solves. The constraint
 kernels are SymEngine's LLVM functions, called through their C entry points
 (``void f(double *out, const double *in, void *ctx)``); the factorisations are LAPACK's
-``dgetrf``/``dgecon``/``dgetrs`` (SciPy's own, through ``scipy.linalg.cython_lapack``), the
-same routines the Python path calls, so both paths give the same numbers.
+``dgetrf``/``dgecon``/``dgetrs``, the routines the Python path calls: up to 32 unknowns their
+algorithms written out in the loop (``_jit_lapack``), above that SciPy's own (through
+``scipy.linalg.cython_lapack``). Both paths give the same numbers to rounding.
 
 The compiled loop handles the regular points. At the first point that needs the Python
 path's care (Newton not converging, a singular or nearly singular Jacobian, a branch jump)
