@@ -30,6 +30,7 @@ from .constraints import Constraint, ConstraintBase, Variable
 from .constraints._generalized import GenJoint, GenKinematics, check_new_joint
 from .constraints._switches import StageSwitch
 from .geometry._bodies import Body
+from .geometry._planar_euler import PLANAR_EULER
 from .geometry._points import Axis, Point, Vector, as_point, as_vector
 from .geometry._space import PLANAR, SPATIAL, Space
 from .geometry._units import check_units, to_units
@@ -173,7 +174,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         import sys
 
         # shared singletons stay shared: the spaces (compared by identity) and the time symbol
-        memo = {id(PLANAR): PLANAR, id(SPATIAL): SPATIAL, id(T): T}
+        memo = {id(PLANAR): PLANAR, id(SPATIAL): SPATIAL, id(PLANAR_EULER): PLANAR_EULER, id(T): T}
         saved = (self._system, self.last_solution)
         self._system = self.last_solution = None
         try:
@@ -1198,9 +1199,27 @@ def _redundant_solution(full, reduced, res, lam, red, p):
 
 
 class Model2D(Model):
-    """Planar model. Bodies have coordinates ``x, y, theta``."""
+    """Planar model. Bodies have coordinates ``x, y, theta``.
+
+    ``orientation="angle"`` (default, Mech's ``Method -> Angular``) or ``"euler"`` (Mech's
+    ``SetSymbols[Method -> Euler]``): each body's rotation as Mech's two degenerate Euler
+    parameters ``(ei, ej) = (cos th, sin th)`` with ``ei^2 + ej^2 = 1`` added per body, so
+    its coordinates are ``x, y, ei, ej`` and no constraint contains a sine or cosine of a
+    coordinate (manual 12.4.1; ``docs/performance-options.md``, decision 0014). Outputs
+    (``angle``, ``omega``, ``alpha``, reactions, drawing) stay in the user's terms; the
+    angle is then reported in ``(-pi, pi]``.
+    """
 
     space = PLANAR
+
+    def __init__(self, backend: str | None = None, orientation: str = "angle"):
+        if orientation not in ("angle", "euler"):
+            raise ModelError(f"orientation must be 'angle' or 'euler' (Mech's Method -> Angular "
+                             f"or Euler), got {orientation!r}")
+        self.orientation = orientation
+        if orientation == "euler":
+            self.space = PLANAR_EULER
+        super().__init__(backend)
 
 
 class Model3D(Model):

@@ -121,7 +121,7 @@ class OutputFunctions:
         b = m.body(body)
         if m.space.dim != 2:
             raise ModelError("angle(body) is planar; in 3D use euler_parameters or rotation")
-        return self._finish(sp.S.Zero if b.is_ground else b.q[2])
+        return self._finish(sp.S.Zero if b.is_ground else m.space.angle(b.q[2:]))
 
     def omega(self, body, coordinates: str | None = None):
         """Angular velocity: scalar in 2D, ``(3,)`` in 3D (global or ``"local"`` axes)."""
