@@ -26,6 +26,8 @@ from ._errors import (
 )
 from ._symbols import T, velocity_symbol
 from .compile import System, make_layout, time_derivative
+from .compile._options import CompileOptions, process_equation
+from .compile._options import updated as _updated_options
 from .constraints import Constraint, ConstraintBase, Variable
 from .constraints._generalized import GenJoint, GenKinematics, check_new_joint
 from .constraints._switches import StageSwitch
@@ -92,6 +94,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         self._system: System | None = None
         self._guess_override: dict[sp.Symbol, float] = {}
         self._backend = backend
+        self._compile_opts = CompileOptions()
         self.last_solution = None
         ground = Body(self.space, "ground", 1, is_ground=True)
         ground.model = self
@@ -614,6 +617,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         sub = self._gen_substitution()
         for c in self._constraints:
             for k, e in enumerate(c.equations(self.space)):
+                e = process_equation(self._compile_opts, e, c.label())  # Mech's $MechProcessFunction
                 eqs.append(e.xreplace(sub) if sub else e)
                 owners.append(c)
                 index.append(k)
@@ -714,6 +718,30 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
                 "flagged in Solution.extra['indeterminate']." + meant,
                 redundant=d.owners, mobility=mobility), stacklevel=3 if what == "solve" else 4)
         return cache[key][1], d, q
+
+    def set_compile_options(self, **options) -> dict:
+        """Simplification and compile options (Mech's ``$MechProcessFunction`` and
+        ``Compiled`` option, manual 12.2-12.3): ``process=None | "chop" | f`` applied to every
+        constraint equation, ``opt_level=0..3`` (LLVM), ``cse=None | True | False``. Only the
+        options given change; returns them all. See :mod:`mechsys.compile._options` and
+        ``docs/performance-options.md``.
+
+        Example: ``m.set_compile_options(process="chop", opt_level=1)``
+        """
+        unknown = sorted(set(options) - {"process", "opt_level", "cse"})
+        if unknown:
+            raise ModelError(f"unknown compile option(s) {unknown}; the options are process, "
+                             "opt_level and cse")
+        new = _updated_options(self._compile_opts, **options)
+        if new != self._compile_opts:
+            self._compile_opts = new
+            self._touch()
+        return new.as_dict()
+
+    @property
+    def compile_options(self) -> dict:
+        """The current simplification and compile options (:meth:`set_compile_options`)."""
+        return self._compile_opts.as_dict()
 
     def compile(self) -> System:
         """The compiled :class:`System` (cached until the model changes). With switches

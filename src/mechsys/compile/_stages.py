@@ -46,6 +46,9 @@ def stage_system(model, stages, dropped=()) -> System:
                 k = chosen[id(o)][1]
                 rows = (o.stage_equations(model.space, k) if (id(o), k) not in staged
                         else [v.symbol - o.held_symbol(v.symbol) for v in o.new_variables()])
+                from ._options import process_equation  # m.set_compile_options(process=)
+
+                rows = [process_equation(model._compile_opts, e, o.label()) for e in rows]
                 gen = model._gen_substitution()  # slave bodies (Gen joints): their poses
                 rows = [e.xreplace(gen) for e in rows] if gen else rows
                 eqs += rows
