@@ -26,7 +26,7 @@ from ._errors import (
 )
 from ._symbols import T, velocity_symbol
 from .compile import System, make_layout, time_derivative
-from .compile._options import CompileOptions, process_equation
+from .compile._options import _UNSET, CompileOptions, process_equation
 from .compile._options import updated as _updated_options
 from .constraints import Constraint, ConstraintBase, Variable
 from .constraints._generalized import GenJoint, GenKinematics, check_new_joint
@@ -719,7 +719,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
                 redundant=d.owners, mobility=mobility), stacklevel=3 if what == "solve" else 4)
         return cache[key][1], d, q
 
-    def set_compile_options(self, **options) -> dict:
+    def set_compile_options(self, process=_UNSET, opt_level=_UNSET, cse=_UNSET,
+                            **unknown) -> dict:
         """Simplification and compile options (Mech's ``$MechProcessFunction`` and
         ``Compiled`` option, manual 12.2-12.3): ``process=None | "chop" | f`` applied to every
         constraint equation, ``opt_level=0..3`` (LLVM), ``cse=None | True | False``. Only the
@@ -728,11 +729,10 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
 
         Example: ``m.set_compile_options(process="chop", opt_level=1)``
         """
-        unknown = sorted(set(options) - {"process", "opt_level", "cse"})
         if unknown:
-            raise ModelError(f"unknown compile option(s) {unknown}; the options are process, "
-                             "opt_level and cse")
-        new = _updated_options(self._compile_opts, **options)
+            raise ModelError(f"unknown compile option(s) {sorted(unknown)}; the options are "
+                             "process, opt_level and cse")
+        new = _updated_options(self._compile_opts, process, opt_level, cse)
         if new != self._compile_opts:
             self._compile_opts = new
             self._touch()
