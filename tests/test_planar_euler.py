@@ -163,3 +163,18 @@ def test_model_file_keeps_the_orientation(tmp_path):
     a, b = m.solve(0.2, solution="velocity"), back.solve(0.2, solution="velocity")
     assert abs(a.omega("rocker") - b.omega("rocker")) < 1e-12
     assert ms.load(four_bar("angle").save(tmp_path / "fa.json")).orientation == "angle"
+
+
+def test_drawing_places_the_bodies_as_in_angle_coordinates():
+    pytest.importorskip("matplotlib")
+    from mechsys import draw as d
+
+    t = np.linspace(0, 1, 4)
+    frames = [d.Scene(m).evaluate(m.solve(t, solution="location"))
+              for m in (four_bar("angle"), four_bar("euler"))]
+    a, e = (fr.items for fr in frames)
+    assert [it.kind for it in a] == [it.kind for it in e] and len(a) > 5
+    for ia, ie in zip(a, e):
+        xa = np.broadcast_to(ia.xyz, (len(t),) + ia.xyz.shape[1:])
+        xe = np.broadcast_to(ie.xyz, (len(t),) + ie.xyz.shape[1:])
+        np.testing.assert_allclose(xe, xa, rtol=0, atol=1e-9)   # (NaN: line breaks)
