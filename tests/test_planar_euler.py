@@ -66,6 +66,9 @@ def test_coordinates_are_x_y_ei_ej_with_one_normalisation_per_body():
         for f in e.atoms(sp.sin, sp.cos):
             assert not (f.free_symbols & q), e
     sol = m.solve(0.3, solution="location")
+    loc = np.asarray(sol.location([m.body("coupler")]), dtype=float).ravel()   # Location[3]
+    th = sol.angle("coupler")
+    assert np.allclose(loc, [sol["x3"], sol["y3"], np.cos(th), np.sin(th)], atol=1e-14)
     e2 = np.array([sol["ei3"], sol["ej3"]])
     assert abs(np.hypot(*e2) - 1) < 1e-12
     assert abs(np.arctan2(e2[1], e2[0]) - sol.angle("coupler")) < 1e-14

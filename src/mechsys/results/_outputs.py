@@ -86,7 +86,8 @@ class OutputFunctions:
         its origin, as a point).
 
         Mech's ``Location[bnum]`` form: a *list* of bodies (``[body]`` for one), ``All`` or
-        ``Rest`` gives the coordinates themselves (``(x, y, th)`` per planar body,
+        ``Rest`` gives the coordinates themselves (``(x, y, th)`` per planar body, ``(x, y, ei, ej)``
+        with ``Model2D(orientation="euler")``,
         ``(x, y, z, e0, e1, e2, e3)`` per spatial body, then variables), concatenated. Name
         the bodies (handles or names) in that list: a list of numbers is a global point.
         """
