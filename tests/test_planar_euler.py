@@ -181,3 +181,45 @@ def test_drawing_places_the_bodies_as_in_angle_coordinates():
         xa = np.broadcast_to(ia.xyz, (len(t),) + ia.xyz.shape[1:])
         xe = np.broadcast_to(ie.xyz, (len(t),) + ie.xyz.shape[1:])
         np.testing.assert_allclose(xe, xa, rtol=0, atol=1e-9)   # (NaN: line breaks)
+
+
+def _planar_cases():
+    from mechsys.constraints import REGISTRY
+    from mechsys.testing import CASES
+
+    out = []
+    for name, builders in CASES.items():
+        if "planar" not in getattr(REGISTRY.get(name), "spaces", ("planar",)):
+            continue
+        for k, f in enumerate(builders):
+            out.append((name, k, f))
+    return out
+
+
+def test_every_planar_constraint_case_in_euler_parameters(monkeypatch):
+    """The conformance cases (residual at a hand-built configuration, Jacobian and gamma
+    against finite differences, DOF count) rebuilt with degenerate Euler parameters: every
+    planar constraint type but the gears, which are refused."""
+    from mechsys.testing import check_constraint_case
+
+    monkeypatch.setattr(ms.Model2D.__init__, "__defaults__", (None, "euler"))
+    done, refused = set(), set()
+    for name, k, f in _planar_cases():
+        try:
+            c = f(np.random.default_rng(17 * k))
+        except ModelError as exc:
+            assert "orientation='angle'" in str(exc), (name, exc)
+            refused.add(name)
+            continue
+        if c.model.space.dim != 2:
+            continue
+        assert c.model.orientation == "euler"
+        c.label = f"{name}[{k}] (euler)"
+        errs = check_constraint_case(c)
+        assert errs["residual"] < 1e-10
+        done.add(name)
+    assert len(done) >= 15 and {"Revolute2", "RotationLock1", "RelativeAngle1"} <= done
+    # the gear forms that use a body's turning angle are refused (a rack with its own
+    # tracking variable works)
+    assert refused and all(n.startswith(("TwoGears", "TwoPulleys", "RackAndPinion"))
+                           for n in refused), refused
