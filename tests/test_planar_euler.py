@@ -223,3 +223,26 @@ def test_every_planar_constraint_case_in_euler_parameters(monkeypatch):
     # tracking variable works)
     assert refused and all(n.startswith(("TwoGears", "TwoPulleys", "RackAndPinion"))
                            for n in refused), refused
+
+
+def test_parameter_sensitivity_matches_angle_coordinates():
+    out = {}
+    for o in ("angle", "euler"):
+        m = ms.Model2D(orientation=o)
+        r = m.parameter("r", 2.0)
+        L = m.parameter("L", 6.0)
+        crank = m.add_body("crank", points={"pin": (r, 0)})
+        rod = m.add_body("rod", points={"b": (L, 0)}, guess=((2, 0.5), -0.1))
+        piston = m.add_body("piston", guess=((8, 0), 0))
+        m.add(ms.Revolute2((0, 0), crank.point(0)), name="main")
+        m.add(ms.Revolute2(crank.point("pin"), rod.point(0)), name="crank pin")
+        m.add(ms.Revolute2(rod.point("b"), piston.point(0)), name="wrist pin")
+        m.add(ms.Translate2(m.ground.axis((0, 0), (1, 0)), piston.axis((0, 0), (1, 0))),
+              name="slider")
+        m.add(ms.RotationLock1(crank, 2 * sp.pi * T), name="drive")
+        s = m.sensitivity(["L", "r"]).solve(np.linspace(0, 1, 7))
+        out[o] = (s["L"].coordinate("piston.x"), s["r"].angle(rod), s["r"].omega(rod),
+                  s["L"].alpha(rod))
+    for a, e in zip(out["angle"], out["euler"]):
+        assert np.abs(np.asarray(a) - np.asarray(e)).max() < 1e-9
+    assert np.abs(out["angle"][0]).max() > 0.5          # d x_piston / dL is about 1
