@@ -116,3 +116,20 @@ def test_opt_level_and_cse_reach_the_compiler_and_the_cache_key(tmp_path, monkey
     s = m.compile()
     m.set_compile_options(cse=True)
     assert m.compile() is s
+
+
+def test_process_reaches_the_rows_of_every_stage():
+    from mechsys.compile._stages import stage_system
+
+    m = ms.Model2D()
+    rod = m.add_body("rod", points={"pivot": (-0.5, 0.0)}, mass=1.0, inertia=0.1,
+                     guess=((0.5, 0.0), 0.0))
+    m.add(ms.Revolute2(rod.point("pivot"), m.ground.point((0.0, 0.0))), name="pivot")
+    m.add(ms.StageSwitch((rod.q[2] > -1.0, ms.RotationLock1(rod, -T)),
+                         (True, ms.RotationLock1(rod, -1.0))), name="latch")
+    seen = []
+    m.set_compile_options(process=lambda e: seen.append(e) or e)
+    second = stage_system(m, (1,))
+    th = rod.q[2]
+    assert th + 1.0 in seen and th + 1.0 in second.phi       # the second stage's lock
+    assert th + T in seen
