@@ -133,3 +133,28 @@ def test_process_reaches_the_rows_of_every_stage():
     th = rod.q[2]
     assert th + 1.0 in seen and th + 1.0 in second.phi       # the second stage's lock
     assert th + T in seen
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e-3])
+def test_dead_centre_guess_with_exact_or_chopped_geometry(scale):
+    """A slider-crank assembled at its dead centre (crank pin in line with the rod): the
+    rod's rotational Jacobian entry there is 0 exactly (pin at (0, r)) or round-off (pin at
+    (r cos(pi/2), r)). Neither may become the model's characteristic length: both sweeps
+    follow the drive, with and without process="chop" (solvers/_linalg.py Scaling.of)."""
+    t = np.linspace(0.0, 1.0, 11)
+    for px in (0.0, scale * np.cos(np.pi / 2)):
+        for process in (None, "chop"):
+            m = ms.Model2D()
+            m.set_compile_options(process=process)
+            crank = m.add_body("crank", points={"pin": (px, scale)}, guess=((0, 0), -np.pi / 2))
+            slider = m.add_body("slider", guess=((3.3 * scale, 0), 0))
+            m.add(ms.Revolute2(m.ground.point((0, 0)), crank.point(0)), name="O")
+            m.add(ms.Translate2(slider.axis(0, (1, 0)), m.ground.axis((0, 0), (1, 0))),
+                  name="slide")
+            m.add(ms.RelativeDistance1(crank.point("pin"), slider.point(0), 3 * scale), name="rod")
+            m.add(ms.RotationLock1(crank, T - np.pi / 2), name="drive")
+            sol = m.solve(t)
+            th = t - np.pi / 2
+            assert np.abs(sol.angle(crank) - th).max() < 1e-12
+            x = scale * (-np.sin(th) + np.sqrt(9 - np.cos(th) ** 2))   # closed form
+            assert np.abs(sol["x3"] - x).max() < 1e-12 * scale
