@@ -26,10 +26,13 @@ from ._errors import (
 )
 from ._symbols import T, velocity_symbol
 from .compile import System, make_layout, time_derivative
+from .compile._options import _UNSET, CompileOptions, process_equation
+from .compile._options import updated as _updated_options
 from .constraints import Constraint, ConstraintBase, Variable
 from .constraints._generalized import GenJoint, GenKinematics, check_new_joint
 from .constraints._switches import StageSwitch
 from .geometry._bodies import Body
+from .geometry._planar_euler import PLANAR_EULER
 from .geometry._points import Axis, Point, Vector, as_point, as_vector
 from .geometry._space import PLANAR, SPATIAL, Space
 from .geometry._units import check_units, to_units
@@ -91,6 +94,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         self._system: System | None = None
         self._guess_override: dict[sp.Symbol, float] = {}
         self._backend = backend
+        self._compile_opts = CompileOptions()
         self.last_solution = None
         ground = Body(self.space, "ground", 1, is_ground=True)
         ground.model = self
@@ -173,7 +177,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         import sys
 
         # shared singletons stay shared: the spaces (compared by identity) and the time symbol
-        memo = {id(PLANAR): PLANAR, id(SPATIAL): SPATIAL, id(T): T}
+        memo = {id(PLANAR): PLANAR, id(SPATIAL): SPATIAL, id(PLANAR_EULER): PLANAR_EULER, id(T): T}
         saved = (self._system, self.last_solution)
         self._system = self.last_solution = None
         try:
@@ -613,6 +617,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         sub = self._gen_substitution()
         for c in self._constraints:
             for k, e in enumerate(c.equations(self.space)):
+                e = process_equation(self._compile_opts, e, c.label())  # Mech's $MechProcessFunction
                 eqs.append(e.xreplace(sub) if sub else e)
                 owners.append(c)
                 index.append(k)
@@ -713,6 +718,30 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
                 "flagged in Solution.extra['indeterminate']." + meant,
                 redundant=d.owners, mobility=mobility), stacklevel=3 if what == "solve" else 4)
         return cache[key][1], d, q
+
+    def set_compile_options(self, process=_UNSET, opt_level=_UNSET, cse=_UNSET,
+                            **unknown) -> dict:
+        """Simplification and compile options (Mech's ``$MechProcessFunction`` and
+        ``Compiled`` option, manual 12.2-12.3): ``process=None | "chop" | f`` applied to every
+        constraint equation, ``opt_level=0..3`` (LLVM), ``cse=None | True | False``. Only the
+        options given change; returns them all. See :mod:`mechsys.compile._options` and
+        ``docs/performance-options.md``.
+
+        Example: ``m.set_compile_options(process="chop", opt_level=1)``
+        """
+        if unknown:
+            raise ModelError(f"unknown compile option(s) {sorted(unknown)}; the options are "
+                             "process, opt_level and cse")
+        new = _updated_options(self._compile_opts, process, opt_level, cse)
+        if new != self._compile_opts:
+            self._compile_opts = new
+            self._touch()
+        return new.as_dict()
+
+    @property
+    def compile_options(self) -> dict:
+        """The current simplification and compile options (:meth:`set_compile_options`)."""
+        return self._compile_opts.as_dict()
 
     def compile(self) -> System:
         """The compiled :class:`System` (cached until the model changes). With switches
@@ -1198,9 +1227,27 @@ def _redundant_solution(full, reduced, res, lam, red, p):
 
 
 class Model2D(Model):
-    """Planar model. Bodies have coordinates ``x, y, theta``."""
+    """Planar model. Bodies have coordinates ``x, y, theta``.
+
+    ``orientation="angle"`` (default, Mech's ``Method -> Angular``) or ``"euler"`` (Mech's
+    ``SetSymbols[Method -> Euler]``): each body's rotation as Mech's two degenerate Euler
+    parameters ``(ei, ej) = (cos th, sin th)`` with ``ei^2 + ej^2 = 1`` added per body, so
+    its coordinates are ``x, y, ei, ej`` and no constraint contains a sine or cosine of a
+    coordinate (manual 12.4.1; ``docs/performance-options.md``, decision 0014). Outputs
+    (``angle``, ``omega``, ``alpha``, reactions, drawing) stay in the user's terms; the
+    angle is then reported in ``(-pi, pi]``.
+    """
 
     space = PLANAR
+
+    def __init__(self, backend: str | None = None, orientation: str = "angle"):
+        if orientation not in ("angle", "euler"):
+            raise ModelError(f"orientation must be 'angle' or 'euler' (Mech's Method -> Angular "
+                             f"or Euler), got {orientation!r}")
+        self.orientation = orientation
+        if orientation == "euler":
+            self.space = PLANAR_EULER
+        super().__init__(backend)
 
 
 class Model3D(Model):

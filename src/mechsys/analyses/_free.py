@@ -255,6 +255,9 @@ class FreeSystem:
                              f"coordinates ({', '.join(s.name + '_d' for s in b.gen_joint.coordinates)})")
         sl = self.system.layout.body_slices[b.name]
         if self.model.space.dim == 2:
+            if len(q[sl]) == 4:  # orientation="euler": (ei, ej)' = w (-ej, ei)
+                qd[np.arange(sl.start, sl.stop)[2:]] = self.model.space.rates_from_omega(q[sl][2:], float(w))
+                return
             qd[sl][2] = float(w)
             return
         e0, e1, e2, e3 = q[sl][3:]

@@ -319,6 +319,9 @@ def vibration(model, at=None, drop=(), t=None, tolerance: float = 1e-6,
     """
     if not (isinstance(tolerance, (int, float)) and 0 < tolerance < 1):
         raise ModelError(f"vibration: tolerance must be a number in (0, 1), got {tolerance!r}")
+    if getattr(model.space, "orientation", "angle") == "euler":
+        raise ModelError("vibration: linearised modes use the angle coordinates; build the model "
+                         "with Model2D(orientation='angle') (the default) for m.vibration")
     drop = drop if isinstance(drop, (list, tuple)) else [drop]
     dropped = [model.constraint(c) for c in drop]
     system = model._system_without(dropped)

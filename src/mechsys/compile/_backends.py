@@ -356,7 +356,8 @@ def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
             # SymEngine 0.15 crashes on some functions (Mod): keep them with SymPy
             return _SympyCompiled(args, [sp.sympify(e) for e in exprs])
         try:
-            return _SymengineCompiled(args, exprs, opt_level=0 if once else 3, cse=cse)
+            level = 0 if once else getattr(backend, "opt_level", 3)   # compile._options.Backend
+            return _SymengineCompiled(args, exprs, opt_level=level, cse=cse)
         except (RuntimeError, TypeError, ValueError, NotImplementedError):
             # a function SymEngine cannot compile (e.g. Mod, Abs): SymPy can
             return _SympyCompiled(args, [sp.sympify(e) for e in exprs])

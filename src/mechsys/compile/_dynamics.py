@@ -84,7 +84,7 @@ def _body_template(space) -> tuple:
     installed (substitution there is ~50 times faster than SymPy's), else SymPy's.
     """
     dim = space.dim
-    nq = dim + (1 if dim == 2 else 4)
+    nq = space.ncoord
     q = sp.symbols(f"_q0:{nq}")
     qd = sp.symbols(f"_qd0:{nq}")
     m = sp.Symbol("_m")

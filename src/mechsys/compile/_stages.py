@@ -7,6 +7,7 @@ through stage changes (``analyses/_free_switch.py``) and stage-by-stage outputs
 
 from __future__ import annotations
 
+from ._options import process_equation
 from ._system import System, make_layout
 
 
@@ -46,6 +47,8 @@ def stage_system(model, stages, dropped=()) -> System:
                 k = chosen[id(o)][1]
                 rows = (o.stage_equations(model.space, k) if (id(o), k) not in staged
                         else [v.symbol - o.held_symbol(v.symbol) for v in o.new_variables()])
+                # m.set_compile_options(process=...) reaches the switched rows too
+                rows = [process_equation(model._compile_opts, e, o.label()) for e in rows]
                 gen = model._gen_substitution()  # slave bodies (Gen joints): their poses
                 rows = [e.xreplace(gen) for e in rows] if gen else rows
                 eqs += rows

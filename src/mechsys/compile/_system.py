@@ -25,6 +25,7 @@ import sympy as sp
 from .._symbols import T, acceleration_symbol, velocity_symbol
 from ._backends import Compiled, compile_exprs, default_backend
 from ._dynamics import Dynamics, multiplier_symbols
+from ._options import Backend
 
 
 @dataclass(frozen=True)
@@ -107,7 +108,8 @@ class System:
         self.space = space
         self.layout = layout
         self.version = version
-        self.backend = backend or default_backend()
+        opts = getattr(model, "_compile_opts", None)   # m.set_compile_options (12.3)
+        self.backend = Backend(backend or default_backend(), opts.opt_level if opts else 3)
         self.p_values = np.asarray(p_values, dtype=float)
         self.guess = np.asarray(guess, dtype=float)
         q, qd = layout.q_symbols, layout.qd_symbols
@@ -130,7 +132,7 @@ class System:
         #: slave-body symbol -> expression in this layout's coordinates (Gen joints)
         self.gen_subs = model._gen_substitution() if model is not None else {}
         #: compile with common subexpressions (nested slave poses share most of theirs)
-        self.cse = bool(self.gen_subs)
+        self.cse = bool(self.gen_subs) if opts is None or opts.cse is None else opts.cse
 
     def kinematic_exprs(self, key: str, for_compile: bool = False) -> list:
         """``"jac"`` (nonzero Jacobian entries), ``"phi_t"`` or ``"gamma"``: SymPy lists (made

@@ -147,6 +147,10 @@ class RotationLock1(ConstraintBase):
                 raise ModelError(
                     "in 3D, RotationLock1 takes axes: RotationLock1(axis1, axis2, angle) locks the "
                     "rotation about axis2; RotationLock3(body, ...) locks a whole orientation")
+            if hasattr(space, "relative_rotation"):  # orientation="euler": sin(th1 - th2 - a)
+                rot = [None if b is None or b.is_ground else b.q[2:] for b in (self.b1, self.b2)]
+                c, s = space.relative_rotation(*rot)
+                return [s * sp.cos(self.angle) - c * sp.sin(self.angle)]
             th1 = space.angle(self.b1.q[space.dim:]) if not self.b1.is_ground else 0
             th2 = 0
             if self.b2 is not None and not self.b2.is_ground:

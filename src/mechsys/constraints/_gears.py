@@ -91,6 +91,8 @@ def _body_angle(space, body) -> sp.Expr:
     """The planar angle coordinate of a body (0 for ground or no body)."""
     if body is None or getattr(body, "is_ground", False):
         return sp.Integer(0)
+    if hasattr(space, "continuous_angle"):  # orientation="euler"
+        space.continuous_angle("a gear constraint")
     return space.angle(body.q[space.dim:])
 
 

@@ -388,6 +388,8 @@ def check_new_joint(model, joint: GenJoint) -> None:
     """Mech's rules (11.1): a slave has one master, the chain of masters starts at ground or
     a standard body (no loops), and every argument belongs to this model."""
     who = joint.label()
+    if hasattr(model.space, "continuous_angle"):  # orientation="euler"
+        model.space.continuous_angle(who)
     for b in (joint.slave, joint.master):
         if b is not None and getattr(b, "model", None) is not model:
             raise ModelError(f"{who}: body {b.name!r} is not a body of this model (add it with "

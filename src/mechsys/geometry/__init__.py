@@ -8,6 +8,7 @@ loads, compile, results or analyses.
 from ._bodies import Body
 from ._curves import Involute, SplineFit, SplineFunction
 from ._inertia import composite_inertia, parallel_axis, principal_axes
+from ._planar_euler import PLANAR_EULER, PlanarEuler
 from ._points import (
     Axis,
     BodyRef,
@@ -25,8 +26,9 @@ from ._points import (
 from ._space import PLANAR, SPATIAL, Planar, Space, Spatial
 
 __all__ = [
-    "Axis", "Body", "BodyRef", "Geometry", "GlobalVector", "Line", "PLANAR", "Plane", "Planar",
-    "Point", "SPATIAL", "Space", "Spatial", "Vector", "as_axis", "as_point", "as_vector",
+    "Axis", "Body", "BodyRef", "Geometry", "GlobalVector", "Line", "PLANAR", "PLANAR_EULER", "Plane",
+    "Planar", "PlanarEuler", "Point", "SPATIAL", "Space", "Spatial", "Vector", "as_axis",
+    "as_point", "as_vector",
     "composite_inertia", "parallel_axis", "principal_axes", "reference_direction",
     "Involute", "SplineFit", "SplineFunction",
 ]

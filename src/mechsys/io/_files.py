@@ -291,6 +291,7 @@ def model_to_dict(m) -> dict:
         "space": m.space.name,
         "options": {**({"velocity": m.velocity_representation, "coordinates": m.coordinates}
                        if isinstance(m, Model3D) else {}),
+                    **({"orientation": "euler"} if getattr(m, "orientation", "angle") == "euler" else {}),
                     **({"backend": m._backend} if m._backend else {})},
         "units": dict(m.units) if m.units else None,
         "parameters": [[s.name, float(v)] for s, v in m._params.items()],
@@ -536,14 +537,16 @@ def _model_from_dict(data: dict, source: str):
     if not isinstance(opts, dict) or not all(isinstance(v, str) and _IDENT.fullmatch(v)
                                              for v in opts.values()):
         raise ModelError(f"{source}: options must map names to plain names")
-    unknown = sorted(set(opts) - {"velocity", "coordinates", "backend"})
+    unknown = sorted(set(opts) - {"velocity", "coordinates", "backend", "orientation"})
     if unknown:
         raise ModelError(f"{source}: unknown options {unknown}")
     if space == "planar":
-        if set(opts) - {"backend"}:
+        if set(opts) - {"backend", "orientation"}:
             raise ModelError(f"{source}: velocity and coordinates options are for spatial models")
-        m = Model2D(backend=opts.get("backend"))
+        m = Model2D(backend=opts.get("backend"), orientation=opts.get("orientation", "angle"))
     elif space == "spatial":
+        if "orientation" in opts:
+            raise ModelError(f"{source}: the orientation option is for planar models")
         m = Model3D(**opts)
     else:
         raise ModelError(f"{source}: space must be 'planar' or 'spatial', got {space!r}")

@@ -94,6 +94,9 @@ class TorsionSpring(LoadBase):
         sp_ = model.space
         if self.b1 is not None:
             bs = [model.body(b) for b in (self.b1, self.b2)]
+            if hasattr(sp_, "relative_rotation"):  # orientation="euler": no angle coordinate
+                c, s = sp_.relative_rotation(*(None if b.is_ground else b.q[2:] for b in bs[::-1]))
+                return sp.atan2(s, c)   # like the two-axis form: in (-pi, pi]
             th = [0 if b.is_ground else sp_.angle(b.q[sp_.dim:]) for b in bs]
             return sp.sympify(th[1] - th[0])
         g1, k1 = _angle_frame(sp_, self.axis1)

@@ -62,7 +62,7 @@ class LinkageOutputs:
                                  "give an expression (a joint variable, a projected angle)")
             if b.is_ground:
                 raise ModelError(f"mechanical_advantage {what}: ground does not move")
-            expr = b.q[2]
+            expr = m.space.angle(b.q[2:])
         elif isinstance(spec, (sp.MatrixBase, list, tuple)):
             raise ModelError(f"mechanical_advantage {what}: expected a scalar expression (one "
                              f"component, e.g. location(point)[0]), got {spec!r}")

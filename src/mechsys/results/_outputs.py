@@ -86,7 +86,8 @@ class OutputFunctions:
         its origin, as a point).
 
         Mech's ``Location[bnum]`` form: a *list* of bodies (``[body]`` for one), ``All`` or
-        ``Rest`` gives the coordinates themselves (``(x, y, th)`` per planar body,
+        ``Rest`` gives the coordinates themselves (``(x, y, th)`` per planar body, ``(x, y, ei, ej)``
+        with ``Model2D(orientation="euler")``,
         ``(x, y, z, e0, e1, e2, e3)`` per spatial body, then variables), concatenated. Name
         the bodies (handles or names) in that list: a list of numbers is a global point.
         """
@@ -121,7 +122,7 @@ class OutputFunctions:
         b = m.body(body)
         if m.space.dim != 2:
             raise ModelError("angle(body) is planar; in 3D use euler_parameters or rotation")
-        return self._finish(sp.S.Zero if b.is_ground else b.q[2])
+        return self._finish(sp.S.Zero if b.is_ground else m.space.angle(b.q[2:]))
 
     def omega(self, body, coordinates: str | None = None):
         """Angular velocity: scalar in 2D, ``(3,)`` in 3D (global or ``"local"`` axes)."""

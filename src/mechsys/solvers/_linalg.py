@@ -18,6 +18,8 @@ import scipy.sparse.linalg as spla
 
 SPARSE_THRESHOLD = 150
 RCOND_MIN = 1e-13
+#: a lever arm below this fraction of the model's length is round-off (see Scaling.of)
+ARM_ROUNDOFF = 1e-9
 
 
 class Singular(Exception):
@@ -149,6 +151,12 @@ class Scaling:
             big = 0.0
         arm = _lever_arm(J, trans, body)
         hint = float(getattr(system, "length_hint", 0.0) or 0.0)
+        # a lever arm that is round-off of the model's lengths is no length: a crank pin in
+        # line with its rod (a dead centre at the reference configuration) leaves only
+        # 1e-16-sized rotational entries, and L = 1e-16 would make every solve "singular"
+        ref = hint if hint > 0 else big
+        if ref > 0 and arm <= ARM_ROUNDOFF * ref:
+            arm = 0.0
         L = arm if arm > 0 else (hint if hint > 0 else (big if big > 0 else 1.0))
         columns = np.where(trans, L, 1.0)
         return cls(L, columns, big / L)

@@ -46,12 +46,16 @@ def case(name: str):
 
 
 def pose_vector(model, poses: dict) -> np.ndarray:
-    """Coordinates (n,) from ``{body: q_b}`` plus ``{symbol: value}`` for variables."""
+    """Coordinates (n,) from ``{body: q_b}`` plus ``{symbol: value}`` for variables. A
+    planar pose ``(x, y, th)`` given for a body in degenerate Euler parameters
+    (``Model2D(orientation="euler")``) becomes ``(x, y, cos th, sin th)``."""
     system = model.compile()
     q = np.zeros(system.n)
     for key, val in poses.items():
         if hasattr(key, "q") and not isinstance(key, type):
             sl = system.layout.body_slices[key.name]
+            if sl.stop - sl.start == 4 and len(val) == 3 and model.space.dim == 2:
+                val = [val[0], val[1], np.cos(float(val[2])), np.sin(float(val[2]))]
             q[sl] = val
         else:
             q[system.layout.index(key)] = val

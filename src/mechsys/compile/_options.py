@@ -1,0 +1,116 @@
+r"""Simplification and compile options of a model (Mech's manual 12.2 and 12.3).
+
+``m.set_compile_options(process=..., opt_level=..., cse=...)`` sets them; each changes the
+compiled code, so each enters the on-disk kernel cache key (the processed expressions are
+what is fingerprinted; ``opt_level`` and ``cse`` are parts of the key).
+
+* ``process`` -- Mech's ``$MechProcessFunction``: a function applied to every constraint
+  equation as the model builds it (Mech's default is ``Chop``). ``None`` (default): the
+  equations as the constraints write them. ``"chop"``: numbers smaller than ``1e-12`` times
+  the largest number of the same equation become 0 -- the round-off of local coordinates
+  such as ``cos(pi/2) = 6e-17`` -- relative, so the result does not depend on the unit of
+  length. A callable ``f(expr) -> expr`` (``sympy.expand``, ``sympy.trigsimp``...) must
+  return an *equal* expression: the multipliers and reactions are those of the processed
+  equations.
+* ``opt_level`` -- LLVM's optimisation level 0..3 for the SymEngine backend (default 3):
+  0 compiles several times faster and evaluates about 1.5 times slower (a large model run
+  for a few points).
+* ``cse`` -- common-subexpression elimination before compiling: ``None`` (default: on for
+  models with Gen joints, whose nested poses share most subexpressions, decision 0010),
+  ``True`` or ``False``.
+
+Example::
+
+    m.set_compile_options(process="chop", opt_level=1)
+    m.compile_options          # {'process': 'chop', 'opt_level': 1, 'cse': None}
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import sympy as sp
+
+from .._errors import ModelError
+
+#: relative size below which ``process="chop"`` drops a number
+CHOP_RELATIVE = 1e-12
+_UNSET = object()
+
+
+@dataclass(frozen=True)
+class CompileOptions:
+    process: object = None
+    opt_level: int = 3
+    cse: bool | None = None
+
+    def as_dict(self) -> dict:
+        return {"process": self.process, "opt_level": self.opt_level, "cse": self.cse}
+
+
+def updated(opts: CompileOptions, process=_UNSET, opt_level=_UNSET, cse=_UNSET) -> CompileOptions:
+    """``opts`` with the given options changed, each validated (:class:`ModelError` naming
+    the option and its valid values)."""
+    new = {}
+    if process is not _UNSET:
+        if not (process is None or process == "chop" or callable(process)):
+            raise ModelError(f"compile option process must be None, 'chop' or a function "
+                             f"f(expr) -> expr (Mech's $MechProcessFunction), got {process!r}")
+        new["process"] = process
+    if opt_level is not _UNSET:
+        if isinstance(opt_level, bool) or not isinstance(opt_level, int) or not 0 <= opt_level <= 3:
+            raise ModelError(f"compile option opt_level must be an integer 0, 1, 2 or 3 (LLVM's "
+                             f"optimisation level), got {opt_level!r}")
+        new["opt_level"] = opt_level
+    if cse is not _UNSET:
+        if cse not in (None, True, False) or not isinstance(cse, (bool, type(None))):
+            raise ModelError(f"compile option cse must be None (automatic), True or False, got "
+                             f"{cse!r}")
+        new["cse"] = cse
+    return replace(opts, **new)
+
+
+def chop(expr: sp.Expr, relative: float = CHOP_RELATIVE) -> sp.Expr:
+    """``expr`` with the floating-point numbers smaller than ``relative`` times its largest
+    number (in magnitude) replaced by 0."""
+    floats = expr.atoms(sp.Float)
+    if not floats:
+        return expr
+    nums = [abs(float(a)) for a in expr.atoms(sp.Number)]
+    big = max(nums)
+    small = {a: sp.S.Zero for a in floats if abs(float(a)) < relative * big}
+    return expr.xreplace(small) if small else expr
+
+
+def process_equation(opts: CompileOptions, expr: sp.Expr, owner: str) -> sp.Expr:
+    """Apply the ``process`` option to one equation of ``owner`` (a constraint's label)."""
+    f = opts.process
+    if f is None:
+        return expr
+    if f == "chop":
+        return chop(expr)
+    try:
+        out = sp.sympify(f(expr))
+    except Exception as exc:  # a user function: report which equation it failed on
+        raise ModelError(f"compile option process failed on an equation of {owner}: "
+                         f"{type(exc).__name__}: {exc}") from None
+    if not isinstance(out, sp.Expr):
+        raise ModelError(f"compile option process returned {out!r} for an equation of {owner}; "
+                         "it must return a SymPy expression")
+    return out
+
+
+class Backend(str):
+    """A backend name (``"symengine"``, ``"sympy"``) that also carries the LLVM optimisation
+    level, so every kernel a :class:`System` compiles -- wherever it is compiled -- uses the
+    model's setting; compares equal to its name."""
+
+    opt_level: int = 3
+
+    def __new__(cls, name: str, opt_level: int = 3):
+        obj = super().__new__(cls, name)
+        obj.opt_level = opt_level
+        return obj
+
+
+__all__ = ["Backend", "CompileOptions", "chop", "process_equation", "updated"]

@@ -1,0 +1,248 @@
+"""Model2D(orientation="euler"): Mech's 2D degenerate Euler parameters (manual 12.4.1).
+
+Every analysis is checked against the same model in the default angle coordinates (a second
+formulation), the Jacobians against central finite differences, and the option's handling
+of bad input and of the features that need an angle coordinate.
+"""
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import mechsys as ms
+from mechsys import ModelError, T
+
+
+def wrap(d):
+    return np.angle(np.exp(1j * np.asarray(d, dtype=float)))
+
+
+def four_bar(orientation):
+    a, b, c, d = 1.0, 4.0, 3.0, 4.0
+    m = ms.Model2D(orientation=orientation)
+    g = m.ground
+    crank = m.add_body("crank", points={"A": (a, 0)}, guess=((0, 0), 0), mass=1,
+                       inertia=0.1, centroid=(0.5, 0))
+    coupler = m.add_body("coupler", points={"A": (0, 0), "B": (b, 0)}, guess=((a, 0), 0.9),
+                         mass=2, inertia=1.0, centroid=(2, 0.1))
+    rocker = m.add_body("rocker", points={"B": (c, 0)}, guess=((d, 0), 1.8), mass=1.5,
+                        inertia=0.5, centroid=(1.5, 0))
+    m.add(ms.Revolute2(g.point((0, 0)), crank.point(0)), name="O2")
+    m.add(ms.Revolute2(crank.point("A"), coupler.point("A")), name="A")
+    m.add(ms.Revolute2(coupler.point("B"), rocker.point("B")), name="B")
+    m.add(ms.Revolute2(g.point((d, 0)), rocker.point(0)), name="O4")
+    m.add(ms.RotationLock1(crank, 2 * T), name="drive")
+    m.add_load(ms.Gravity((0, -1), 9.81))
+    return m
+
+
+def double_pendulum(orientation):
+    m = ms.Model2D(orientation=orientation)
+    b1 = m.add_body("link1", points={"O": (0, 0), "P": (1.0, 0)}, mass=1.0, inertia=1 / 12,
+                    centroid=(0.5, 0), guess=((0, 0), 0.7))
+    b2 = m.add_body("link2", points={"P": (0, 0), "Q": (0.8, 0)}, mass=0.7,
+                    inertia=0.7 * 0.64 / 12, centroid=(0.4, 0.05),
+                    guess=((np.cos(0.7), np.sin(0.7)), -0.4))
+    m.add(ms.Revolute2(m.ground.point((0, 0)), b1.point("O")), name="O")
+    m.add(ms.Revolute2(b1.point("P"), b2.point("P")), name="P")
+    m.add(ms.RotationLock1(b1, 0.7), name="hold1")
+    m.add(ms.RotationLock1(b2, -0.4), name="hold2")
+    m.add_load(ms.Gravity((0, -1), 9.81))
+    return m
+
+
+def test_coordinates_are_x_y_ei_ej_with_one_normalisation_per_body():
+    m = four_bar("euler")
+    crank = m.body("crank")
+    assert [s.name for s in crank.q] == ["x2", "y2", "ei2", "ej2"]
+    assert np.allclose(m.body("coupler").guess, [1, 0, np.cos(0.9), np.sin(0.9)])
+    eqs = list(m.equations().phi)
+    assert len(eqs) == len(four_bar("angle").equations().phi) + 3   # one normalisation per body
+    ei, ej = crank.q[2:]
+    assert any(sp.expand(e - (ei**2 + ej**2 - 1)) == 0 for e in eqs)
+    # no sine or cosine of a coordinate in any equation (manual 12.4.1)
+    q = {s for b in m.bodies[1:] for s in b.q}
+    for e in eqs:
+        for f in e.atoms(sp.sin, sp.cos):
+            assert not (f.free_symbols & q), e
+    sol = m.solve(0.3, solution="location")
+    loc = np.asarray(sol.location([m.body("coupler")]), dtype=float).ravel()   # Location[3]
+    th = sol.angle("coupler")
+    assert np.allclose(loc, [sol["x3"], sol["y3"], np.cos(th), np.sin(th)], atol=1e-14)
+    e2 = np.array([sol["ei3"], sol["ej3"]])
+    assert abs(np.hypot(*e2) - 1) < 1e-12
+    assert abs(np.arctan2(e2[1], e2[0]) - sol.angle("coupler")) < 1e-14
+
+
+def test_four_bar_sweep_matches_angle_coordinates():
+    t = np.linspace(0, np.pi, 19)   # the crank turns a full revolution (drive 2 T)
+    a, e = (four_bar(o).solve(t, solution="acceleration") for o in ("angle", "euler"))
+    for body in ("crank", "coupler", "rocker"):
+        assert np.abs(wrap(a.angle(body) - e.angle(body))).max() < 1e-9
+        assert np.abs(a.omega(body) - e.omega(body)).max() < 1e-9
+        assert np.abs(a.alpha(body) - e.alpha(body)).max() < 1e-9
+    for f in ("location", "velocity", "acceleration"):
+        pa = getattr(a, f)(a.model.body("coupler").point("B"))
+        pe = getattr(e, f)(e.model.body("coupler").point("B"))
+        assert np.abs(np.asarray(pa) - np.asarray(pe)).max() < 1e-9
+
+
+def test_statics_and_inverse_dynamics_reactions_match():
+    t = np.linspace(0, 1, 5)
+    for kind in ("static", "dynamic"):
+        a, e = (four_bar(o).solve(t, solution=kind) for o in ("angle", "euler"))
+        for c, b in (("drive", "crank"), ("O4", "rocker"), ("B", "coupler")):
+            Fa, Ma = a.reaction(c, b)
+            Fe, Me = e.reaction(c, b)
+            scale = 1 + np.abs(Fa).max()
+            assert np.abs(np.asarray(Fa) - np.asarray(Fe)).max() < 1e-9 * scale, (kind, c)
+            assert np.abs(np.asarray(Ma) - np.asarray(Me)).max() < 1e-9 * scale, (kind, c)
+
+
+def test_double_pendulum_free_motion_matches_angle_coordinates():
+    t = np.linspace(0, 2, 21)
+    out = {}
+    for o in ("angle", "euler"):
+        m = double_pendulum(o)
+        ic = {("omega", "link1"): 0.5, ("omega", "link2"): -1.0}
+        sol = m.free(drop=["hold1", "hold2"]).simulate(t, initial_condition=ic, rtol=1e-12,
+                                                      atol=1e-12)
+        out[o] = sol
+    a, e = out["angle"], out["euler"]
+    for body in ("link1", "link2"):
+        assert np.abs(wrap(a.angle(body) - e.angle(body))).max() < 1e-9
+        assert np.abs(a.omega(body) - e.omega(body)).max() < 1e-9
+    qa, qe = (s.location(s.model.body("link2").point("Q")) for s in (a, e))
+    assert np.abs(qa - qe).max() < 1e-9
+    # the Euler parameters stay normalised along the motion
+    assert np.abs(np.hypot(e["ei3"], e["ej3"]) - 1).max() < 1e-10
+
+
+def test_jacobian_matches_finite_differences():
+    m = four_bar("euler")
+    s = m.compile()
+    rng = np.random.default_rng(3)
+    q = s.guess + 0.1 * rng.standard_normal(s.n)
+    p = np.array([m._params[x] for x in s.layout.p_symbols], dtype=float)
+    J = s.jacobian(0.4, q, p)
+    h = 1e-6
+    fd = np.column_stack([(s.residual(0.4, q + h * ei, p) - s.residual(0.4, q - h * ei, p))
+                          / (2 * h) for ei in np.eye(s.n)])
+    assert np.abs(J - fd).max() < 1e-8
+
+
+def test_torsion_spring_equilibrium_matches():
+    out = {}
+    for o in ("angle", "euler"):
+        m = ms.Model2D(orientation=o)
+        rod = m.add_body("rod", points={"pivot": (-0.5, 0)}, mass=2.0, inertia=1 / 6,
+                         guess=((0.5, 0), 0.0))
+        m.add(ms.Revolute2(rod.point("pivot"), m.ground.point((0, 0))), name="pivot")
+        m.add_load(ms.Gravity((0, -1), 9.81))
+        m.add_load(ms.TorsionSpring(m.ground, rod, 40.0, 0.3))
+        out[o] = m.free(solution="static").solve()
+    th = out["angle"].angle("rod")
+    assert abs(th - out["euler"].angle("rod")) < 1e-9
+    # closed form: k (th - th0) = -m g c cos(th)
+    assert abs(40.0 * (th - 0.3) + 2.0 * 9.81 * 0.5 * np.cos(th)) < 1e-9
+
+
+def test_bad_orientation_and_features_needing_an_angle_coordinate():
+    with pytest.raises(ModelError, match="orientation must be 'angle' or 'euler'"):
+        ms.Model2D(orientation="eulr")
+    m = double_pendulum("euler")
+    with pytest.raises(ModelError, match="orientation='angle'"):
+        m.vibration()
+    with pytest.raises(ModelError, match="orientation='angle'"):
+        m.add(ms.GenRevolute2(m.body("link2").axis("P"), m.body("link1").axis("P"), ("phi", 0.1)))
+
+
+def test_model_file_keeps_the_orientation(tmp_path):
+    m = four_bar("euler")
+    path = m.save(tmp_path / "fb.json")
+    back = ms.load(path)
+    assert back.orientation == "euler" and [s.name for s in back.body("crank").q][2:] == [
+        "ei2", "ej2"]
+    a, b = m.solve(0.2, solution="velocity"), back.solve(0.2, solution="velocity")
+    assert abs(a.omega("rocker") - b.omega("rocker")) < 1e-12
+    assert ms.load(four_bar("angle").save(tmp_path / "fa.json")).orientation == "angle"
+
+
+def test_drawing_places_the_bodies_as_in_angle_coordinates():
+    pytest.importorskip("matplotlib")
+    from mechsys import draw as d
+
+    t = np.linspace(0, 1, 4)
+    frames = [d.Scene(m).evaluate(m.solve(t, solution="location"))
+              for m in (four_bar("angle"), four_bar("euler"))]
+    a, e = (fr.items for fr in frames)
+    assert [it.kind for it in a] == [it.kind for it in e] and len(a) > 5
+    for ia, ie in zip(a, e):
+        xa = np.broadcast_to(ia.xyz, (len(t),) + ia.xyz.shape[1:])
+        xe = np.broadcast_to(ie.xyz, (len(t),) + ie.xyz.shape[1:])
+        np.testing.assert_allclose(xe, xa, rtol=0, atol=1e-9)   # (NaN: line breaks)
+
+
+def _planar_cases():
+    from mechsys.constraints import REGISTRY
+    from mechsys.testing import CASES
+
+    out = []
+    for name, builders in CASES.items():
+        if "planar" not in getattr(REGISTRY.get(name), "spaces", ("planar",)):
+            continue
+        for k, f in enumerate(builders):
+            out.append((name, k, f))
+    return out
+
+
+def test_every_planar_constraint_case_in_euler_parameters(monkeypatch):
+    """The conformance cases (residual at a hand-built configuration, Jacobian and gamma
+    against finite differences, DOF count) rebuilt with degenerate Euler parameters: every
+    planar constraint type but the gears, which are refused."""
+    from mechsys.testing import check_constraint_case
+
+    monkeypatch.setattr(ms.Model2D.__init__, "__defaults__", (None, "euler"))
+    done, refused = set(), set()
+    for name, k, f in _planar_cases():
+        try:
+            c = f(np.random.default_rng(17 * k))
+        except ModelError as exc:
+            assert "orientation='angle'" in str(exc), (name, exc)
+            refused.add(name)
+            continue
+        if c.model.space.dim != 2:
+            continue
+        assert c.model.orientation == "euler"
+        c.label = f"{name}[{k}] (euler)"
+        errs = check_constraint_case(c)
+        assert errs["residual"] < 1e-10
+        done.add(name)
+    assert len(done) >= 15 and {"Revolute2", "RotationLock1", "RelativeAngle1"} <= done
+    # the gear forms that use a body's turning angle are refused (a rack with its own
+    # tracking variable works)
+    assert refused and all(n.startswith(("TwoGears", "TwoPulleys", "RackAndPinion"))
+                           for n in refused), refused
+
+
+def test_parameter_sensitivity_matches_angle_coordinates():
+    out = {}
+    for o in ("angle", "euler"):
+        m = ms.Model2D(orientation=o)
+        r = m.parameter("r", 2.0)
+        L = m.parameter("L", 6.0)
+        crank = m.add_body("crank", points={"pin": (r, 0)})
+        rod = m.add_body("rod", points={"b": (L, 0)}, guess=((2, 0.5), -0.1))
+        piston = m.add_body("piston", guess=((8, 0), 0))
+        m.add(ms.Revolute2((0, 0), crank.point(0)), name="main")
+        m.add(ms.Revolute2(crank.point("pin"), rod.point(0)), name="crank pin")
+        m.add(ms.Revolute2(rod.point("b"), piston.point(0)), name="wrist pin")
+        m.add(ms.Translate2(m.ground.axis((0, 0), (1, 0)), piston.axis((0, 0), (1, 0))),
+              name="slider")
+        m.add(ms.RotationLock1(crank, 2 * sp.pi * T), name="drive")
+        s = m.sensitivity(["L", "r"]).solve(np.linspace(0, 1, 7))
+        out[o] = (s["L"].coordinate("piston.x"), s["r"].angle(rod), s["r"].omega(rod),
+                  s["L"].alpha(rod))
+    for a, e in zip(out["angle"], out["euler"]):
+        assert np.abs(np.asarray(a) - np.asarray(e)).max() < 1e-9
+    assert np.abs(out["angle"][0]).max() > 0.5          # d x_piston / dL is about 1
