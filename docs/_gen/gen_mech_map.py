@@ -205,7 +205,7 @@ ENTRIES: tuple[Entry, ...] = (
     _e("Type", OPTS, "mechsys.Solution.loads(type=)", '"applied", "reaction", "dynamic"'),
     _e("Free", COUPLE, "mechsys.Free", "time as an unknown of a couple"),
     _e("Method", OPTS, ("mechsys.Model2D(orientation=)", "mechsys.Model3D(velocity=)"),
-       "2D: orientation=\"euler\" builds in degenerate Euler parameters (decision 0014); "
+       "2D: orientation=\"euler\" builds in degenerate Euler parameters (decision 0015); "
        "3D: a view of one formulation (decision 0006)"),
     _e("Euler", OPTS, "mechsys.Model2D(orientation=)",
        'orientation="euler": bodies (x, y, ei, ej), manual 12.4'),

@@ -1233,7 +1233,7 @@ class Model2D(Model):
     ``SetSymbols[Method -> Euler]``): each body's rotation as Mech's two degenerate Euler
     parameters ``(ei, ej) = (cos th, sin th)`` with ``ei^2 + ej^2 = 1`` added per body, so
     its coordinates are ``x, y, ei, ej`` and no constraint contains a sine or cosine of a
-    coordinate (manual 12.4.1; ``docs/performance-options.md``, decision 0014). Outputs
+    coordinate (manual 12.4.1; ``docs/performance-options.md``, decision 0015). Outputs
     (``angle``, ``omega``, ``alpha``, reactions, drawing) stay in the user's terms; the
     angle is then reported in ``(-pi, pi]``.
     """

@@ -11,7 +11,7 @@ Angular velocity and acceleration follow from the rates (exact on ``|e| = 1``)::
     omega = ei ej' - ej ei',    alpha = ei ej'' - ej ei''
 
 and the angle reported to the user is ``th = atan2(ej, ei)`` in ``(-pi, pi]``. Select it
-with ``Model2D(orientation="euler")``; decision 0014 records why it is an option and not
+with ``Model2D(orientation="euler")``; decision 0015 records why it is an option and not
 the default.
 
 Example::
