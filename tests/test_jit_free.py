@@ -104,8 +104,27 @@ def test_spatial_gyroscope(monkeypatch):
     py, jit = _both(monkeypatch, free, np.linspace(0.0, 0.5, 11), initial_condition=ic,
                     rtol=1e-10, atol=1e-12)
     assert jit.extra["compiled_steps"] == jit.extra["steps"] > 5
+    # Euler-parameter mass blocks are singular (4 parameters, 3 rotations): the augmented
+    # system is solved whole
+    assert jit.extra["compiled_solver"] == "augmented"
     np.testing.assert_allclose(jit.q, py.q, rtol=0, atol=1e-8)
     _check_derivatives(free, jit, [10])
+
+
+@pytest.mark.parametrize("links", [16, 52])
+def test_chains_take_the_block_path(monkeypatch, links):
+    """Larger systems (over 24 unknowns; 52 links: 260, above the sparse threshold, where
+    the Python path uses SuperLU) solve the augmented system by the Schur complement on the
+    block-diagonal mass matrix, banded: the same motion as the Python path."""
+    free, _ = free_motion.compiled(free_motion.chain, links)
+    py, jit = _both(monkeypatch, free, np.linspace(0.0, 0.5, 6), rtol=1e-8, atol=1e-10)
+    assert jit.extra["compiled_solver"] == "block" and py.extra["compiled_solver"] is None
+    assert jit.extra["compiled_steps"] == jit.extra["steps"]
+    np.testing.assert_allclose(jit.q, py.q, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(jit.qd, py.qd, rtol=0, atol=1e-8)
+    s = free.system
+    assert max(np.abs(s.residual(tk, qk)).max() for tk, qk in zip(jit.t, jit.q)) < 1e-10
+    _check_derivatives(free, jit, [5])
 
 
 def test_without_constraints(monkeypatch):
@@ -138,6 +157,7 @@ def test_singular_instants_are_handed_to_python(monkeypatch):
         out[mode] = n_four_bar.simulate(2, 3.0, 61)
     py, jit = out["0"], out["1"]
     assert 0 < jit.extra["compiled_steps"] < jit.extra["steps"]
+    assert jit.extra["compiled_solver"] == "block"
     np.testing.assert_allclose(jit.q, py.q, rtol=0, atol=1e-6)
     # the crank angle of a parallelogram four-bar moves through the instants smoothly
     assert np.all(np.isfinite(jit.qdd)) and np.all(np.isfinite(jit.lam))

@@ -480,7 +480,7 @@ class FreeSystem:
 
         # the compiled stepper (solvers/_jit_free.py) takes the regular steps when it can
         fast = FreeStepper.plan(s, opt.method, p, sc, rows0, robust, opt.correction,
-                                output_times(t)[2])
+                                output_times(t)[2], (t0, q0))
         try:
             times, Y, res, m = integrate(rhs, proj, t, np.concatenate((q0, qd0)), opt,
                                          scale=np.concatenate((sc.columns, sc.columns)),
@@ -496,7 +496,8 @@ class FreeSystem:
             _, QDD[k], LAM[k] = accel(times[k], Y[k])
         extra = {"evaluations": res.evaluations, "steps": res.steps, "rejected": res.rejected,
                  "method": m, "length_scale": sc.length,
-                 "compiled_steps": res.diagnostics.get("compiled_steps", 0)}
+                 "compiled_steps": res.diagnostics.get("compiled_steps", 0),
+                 "compiled_solver": None if fast is None else fast.solver}
         if opt.runge_kutta:
             extra["rtol"], extra["atol"] = opt.rtol, opt.atol
         else:

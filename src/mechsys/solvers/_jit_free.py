@@ -40,6 +40,9 @@ import numpy as np
 from . import _jit
 from ._linalg import SPARSE_THRESHOLD
 
+#: augmented systems with more unknowns take the block path when the mass matrix allows it
+SMALL = 24
+
 #: Python steps after a handover before the compiled loop resumes
 PAUSE_STEPS = 8
 #: compiled steps per call (progress and Ctrl-C are handled between calls)
@@ -69,6 +72,80 @@ def _lapack() -> np.ndarray:
     return _state["gesv"]
 
 
+class _Blocks:
+    """The block path's structure (``_jit_free_loop._accel_blocks``): the mass matrix is
+    block-diagonal, one block per body (model variables: one each), positive definite at the
+    start; the Jacobian's rows couple through common blocks, so ``S = J M^-1 J^T`` and the
+    projection's ``J^ J^T`` are banded with ``bandwidth`` (the largest distance of two rows
+    that share a block).
+
+    ``arrays``: ``bstart`` (blocks + 1) first coordinate of each block; ``boff`` (blocks + 1)
+    offsets of the blocks in the packed ``M`` store; ``rptr`` (m + 1), ``rblk`` the blocks
+    each row touches; ``roff`` (len(rblk) + 1) offsets of the (row, block) segments;
+    ``jpos`` (nnz,) segment position of each Jacobian value; ``bsize`` (blocks,); ``mpos``
+    (M nonzeros,) packed position of each mass-matrix value."""
+
+    def __init__(self, arrays, bandwidth):
+        self.arrays, self.bandwidth = arrays, int(bandwidth)
+
+    @staticmethod
+    def none():
+        z = np.zeros(1, dtype=np.int64)
+        return (z, z, z, z, z, z, z, z)
+
+    @classmethod
+    def of(cls, system, p, start):
+        """The structure, or None when the mass matrix is not block-diagonal by bodies or a
+        block is not positive definite at the start (then the augmented system is solved
+        whole)."""
+        n, m = system.n, system.m
+        spans = sorted((sl.start, sl.stop) for sl in system.layout.body_slices.values())
+        bstart, j = [], 0
+        for a, b in spans + [(n, n)]:
+            while j < a:                  # model variables between bodies: one block each
+                bstart.append(j)
+                j += 1
+            if a < n:
+                bstart.append(a)
+                j = b
+        bstart.append(n)
+        bstart = np.array(bstart, dtype=np.int64)
+        bsize = np.diff(bstart)
+        block_of = np.repeat(np.arange(len(bsize)), bsize)
+        dyn = system.dynamics
+        Mr, Mc = np.asarray(dyn.M_rows, dtype=np.int64), np.asarray(dyn.M_cols, dtype=np.int64)
+        if np.any(block_of[Mr] != block_of[Mc]):
+            return None
+        boff = np.concatenate(([0], np.cumsum(bsize**2))).astype(np.int64)
+        b = block_of[Mr]
+        mpos = boff[b] + (Mr - bstart[b]) * bsize[b] + (Mc - bstart[b])
+        jr = np.asarray(system.jac_rows, dtype=np.int64)
+        jc = np.asarray(system.jac_cols, dtype=np.int64)
+        rows_blocks = [sorted(set(block_of[jc[jr == i]].tolist())) for i in range(m)]
+        rptr = np.concatenate(([0], np.cumsum([len(r) for r in rows_blocks]))).astype(np.int64)
+        rblk = np.array([b for r in rows_blocks for b in r], dtype=np.int64)
+        roff = np.concatenate(([0], np.cumsum(bsize[rblk]))).astype(np.int64)
+        where = {(i, b): roff[rptr[i] + k] for i, r in enumerate(rows_blocks)
+                 for k, b in enumerate(r)}
+        jpos = np.array([where[(i, block_of[c])] + c - bstart[block_of[c]]
+                         for i, c in zip(jr.tolist(), jc.tolist())], dtype=np.int64)
+        touching: dict = {}
+        for i, r in enumerate(rows_blocks):
+            for b in r:
+                lo, hi = touching.get(b, (i, i))
+                touching[b] = (min(lo, i), max(hi, i))
+        bw = max((hi - lo for lo, hi in touching.values()), default=0)
+        # positive definite blocks at the start (else: the whole augmented system)
+        t0, q0 = start
+        M = dyn.terms(t0, q0, np.zeros(n), np.zeros(m), p, np.zeros(n))[0]
+        for a, z in zip(bstart[:-1], bsize):
+            try:
+                np.linalg.cholesky(M[a:a + z, a:a + z])
+            except np.linalg.LinAlgError:
+                return None
+        return cls((bstart, boff, rptr, rblk, roff, jpos, bsize, mpos.astype(np.int64)), bw)
+
+
 class FreeStepper:
     """The compiled stepper of one free-motion run (see the module docstring).
 
@@ -77,16 +154,25 @@ class FreeStepper:
     singular instants (the zone guard applies); ``correction``: project after each step;
     ``t_eval`` (k,) or None: output times."""
 
-    def __init__(self, system, p, scaling, rows0, robust, correction, t_eval, kernels):
+    def __init__(self, system, p, scaling, rows0, robust, correction, t_eval, kernels, fk,
+                 blocks=None):
         kern, fpos, fvel = kernels
         n, m = system.n, system.m
         N = n + m
         self.n, self.m = n, m
         self.kp = np.array([kern, fpos, fvel], dtype=np.int64)
-        fk = system.dynamics.free_kernel(False)
-        flat = np.asarray(fk._flat, dtype=np.int64)
-        self.flat_t = (flat % N) * N + flat // N          # K^T in C order = K in Fortran order
-        self.mp = np.asarray(fk._map, dtype=np.int64)
+        self.blocks = blocks
+        #: how the compiled loop solves the augmented system: "block" (Schur complement on
+        #: the block-diagonal mass matrix, banded) or "augmented" (the whole system, dense)
+        self.solver = "augmented" if blocks is None else "block"
+        if blocks is None:
+            flat = np.asarray(fk._flat, dtype=np.int64)
+            self.flat_t = (flat % N) * N + flat // N      # K^T in C order = K in Fortran order
+            self.mp = np.asarray(fk._map, dtype=np.int64)
+            self.blk_i, self.bw = _Blocks.none(), 0
+        else:
+            self.flat_t = self.mp = np.zeros(0, dtype=np.int64)
+            self.blk_i, self.bw = blocks.arrays, blocks.bandwidth
         self.kk = int(fk.k_M + fk.k_J)
         self.p = np.ascontiguousarray(p, dtype=float)
         self.jr = system.jac_rows.astype(np.int64)
@@ -108,26 +194,32 @@ class FreeStepper:
         _jit._state["loaded"] = True
 
     @classmethod
-    def plan(cls, system, method, p, scaling, rows0, robust, correction, t_eval):
+    def plan(cls, system, method, p, scaling, rows0, robust, correction, t_eval, start):
         """The stepper when the compiled loop can run this simulation (``method``: DOP853 or
-        one of Mech's Adams methods), else None."""
+        one of Mech's Adams methods; ``start``: ``(t0, q0)``), else None."""
         if _jit.mode() == "off" or method not in METHODS or system.n == 0:
             return None
         if method != "dop853":
             t_eval = None              # Adams output times are interpolated afterwards
-        if system.n + system.m > SPARSE_THRESHOLD:
-            return None
         dyn = system.dynamics
         if dyn.depends_on_lambda or dyn.depends_on_qdd or not _jit.available():
             return None
-        rows = [_jit._pointer(dyn.free_kernel(False).f)]
+        N = system.n + system.m
+        blocks = None
+        if N > SMALL:
+            blocks = _Blocks.of(system, p, start)
+            if blocks is None and N > SPARSE_THRESHOLD:
+                return None
+        # the kernel the Python path uses (sparse above the threshold): compiled once
+        fk = dyn.free_kernel(N > SPARSE_THRESHOLD)
+        rows = [_jit._pointer(fk.f)]
         if system.m:
             rows += [_jit._pointer(system.f_position), _jit._pointer(system.f_velocity)]
         else:
             rows += [(0, 0, 0, 0, 0)] * 2
         if any(r is None for r in rows):
             return None
-        return cls(system, p, scaling, rows0, robust, correction, t_eval, rows)
+        return cls(system, p, scaling, rows0, robust, correction, t_eval, rows, fk, blocks)
 
     def advance(self, solver, ie: int, max_steps: int | None = None):
         """Compiled steps of the SciPy DOP853 ``solver`` from its current state; the solver is
@@ -147,8 +239,9 @@ class FreeStepper:
         t_prev = solver.t
         status, steps, ie, evals, rejected, projections = _state["loop"](
             self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr, self.jc,
-            self.rows0, self.columns, self.offset, self.robust, self.correction, 1e-12, 8,
-            A, B, C, E3, E5, D, float(solver.rtol), atol, float(solver.max_step),
+            self.rows0, self.columns, self.offset, self.robust, self.blocks is not None,
+            self.blk_i, self.bw, self.correction, 1e-12, 8, A, B, C, E3, E5, D,
+            float(solver.rtol), atol, float(solver.max_step),
             float(solver.t_bound), float(solver.direction), state, y, f, self.t_eval, int(ie),
             int(max_steps), T, Y, H, QDD, LAM, self.ET, self.EY, self.EQDD, self.ELAM)
         solver.nfev += int(evals)
@@ -177,8 +270,9 @@ class FreeStepper:
         k, (a, b, c), method, fixed, inv_scale, t1 = options
         status, steps, evals, projections = _state["adams"](
             self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr, self.jc,
-            self.rows0, self.columns, self.offset, self.robust, self.correction, 1e-12, 8,
-            int(k), float(a), float(b), float(c), int(method), bool(fixed), inv_scale,
+            self.rows0, self.columns, self.offset, self.robust, self.blocks is not None,
+            self.blk_i, self.bw, self.correction, 1e-12, 8, int(k), float(a), float(b),
+            float(c), int(method), bool(fixed), inv_scale,
             float(t1), state, y, hist_t, hist_f, recent, int(max_steps), T, Y, H, E, QDD, LAM)
         self.steps += int(steps)
         return (int(status), T[:steps], Y[:steps], H[:steps], E[:steps], QDD[:steps],

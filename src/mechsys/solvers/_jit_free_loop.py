@@ -156,13 +156,19 @@ def _accel(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, col
 
 @nb.njit(cache=True)
 def _rhs(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, columns, robust,
-         ipiv, ibuf, rhs, b, qdd, lam, force, t, y, f):
-    """``f = (qd, qdd)`` at ``(t, y)``; False: hand over."""
+         ipiv, ibuf, rhs, b, qdd, lam, force, blocks, blk_i, blk_w, t, y, f):
+    """``f = (qd, qdd)`` at ``(t, y)``; False: hand over. ``blocks``: by the block path
+    (``blk_i``: its structure, ``blk_w``: its work arrays)."""
     x[0] = t
     for j in range(2 * n):
         x[1 + j] = y[j]
-    if not _accel(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, columns,
-                  robust, ipiv, ibuf, rhs, b, qdd, lam, force):
+    if blocks:
+        Mst, Jst, Wst, Sb, u, Pst = blk_w
+        if not _accel_blocks(kp, x, nin, out, kk, kk - jr.size, n, m, jr, jc, rows0, columns,
+                             robust, blk_i, Mst, Jst, Wst, Sb, u, qdd, lam, force):
+            return False
+    elif not _accel(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, columns,
+                    robust, ipiv, ibuf, rhs, b, qdd, lam, force):
         return False
     for j in range(n):
         f[j] = y[n + j]
@@ -234,9 +240,14 @@ def _min_norm(lapack, J, r, columns, bvec, out, Js, A, ipiv, ibuf, cbuf, dbuf, w
 
 @nb.njit(cache=True)
 def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offset, tol, maxit,
-             robust, n, m, t, y, J, r, Fs, dq, Js, A, ipiv, ibuf, cbuf, dbuf, work, iwork, ybuf):
+             robust, n, m, t, y, J, r, Fs, dq, Js, A, ipiv, ibuf, cbuf, dbuf, work, iwork, ybuf,
+             blocks, blk_i, blk_w):
     """Project ``y = (q, qd)`` in place onto the constraints (``solvers._free.project``);
-    False (``y`` then undefined): hand over."""
+    False (``y`` then undefined): hand over. ``blocks``: by the block path."""
+    if blocks:
+        return _project_blocks(pp, pv, xk, nin_k, out_pos, out_vel, jr, jc, columns, offset,
+                               tol, maxit, robust, n, m, t, y, r, Fs, dq, blk_i, blk_w[5],
+                               blk_w[3])
     xk[0] = t
     for j in range(n):
         xk[1 + n + j] = 0.0
@@ -284,7 +295,8 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
 
 @nb.njit(cache=True)
 def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, robust,
-           correction, ptol, pmaxit, Acoef, Bcoef, Ccoef, E3, E5, Dcoef, rtol, atol, max_step,
+           blocks, blk_i, bw, correction, ptol, pmaxit, Acoef, Bcoef, Ccoef, E3, E5, Dcoef, rtol,
+           atol, max_step,
            t_bound, direction, state, y, f, t_eval, ie0, max_steps,
            T, Y, H, QDD, LAM, ET, EY, EQDD, ELAM):
     """Accepted DOP853 steps from ``(state[0] = t, y, f, state[1] = h_abs)``; see the module
@@ -305,7 +317,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
     out_pos = np.empty(m + nnz)
     out_vel = np.empty(nnz + m)
     NN = n + m
-    KT = np.empty((NN, NN))
+    KT = np.empty((1, 1)) if blocks else np.empty((NN, NN))
     ipiv = np.empty(max(NN, 1), dtype=np.int32)
     ibuf = np.zeros(5, dtype=np.int32)
     cbuf = np.zeros(2, dtype=np.uint8)
@@ -315,6 +327,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
     qdd = np.empty(n)
     lam = np.empty(m)
     force = np.empty(n)
+    blk_w = _block_work(blocks, blk_i, n, m, bw)
     J = np.empty((m, n))
     r = np.empty(m)
     Fs = np.empty(m)
@@ -369,7 +382,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
                     ytmp[j] = y[j] + acc * h
                 evals += 1
                 if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0,
-                            columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force,
+                            columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force, blocks, blk_i, blk_w,
                             t + Ccoef[s] * h, ytmp, K[s]):
                     return HANDOVER, steps, ie, evals, rejected, projections
             for j in range(N2):
@@ -379,7 +392,8 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
                 ynew[j] = y[j] + h * acc
             evals += 1
             if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0,
-                        columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force, t + h, ynew, fnew):
+                        columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force,
+                        blocks, blk_i, blk_w, t + h, ynew, fnew):
                 return HANDOVER, steps, ie, evals, rejected, projections
             for j in range(N2):
                 K[N_STAGES, j] = fnew[j]
@@ -426,6 +440,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
                 evals += 1
                 if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc,
                             rows0, columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force,
+                            blocks, blk_i, blk_w,
                             t + Ccoef[s] * h, ytmp, K[s]):
                     return HANDOVER, steps, ie_step, evals, rejected, projections
             for j in range(N2):
@@ -453,11 +468,12 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
                     if not _project(kp[1], kp[2], lapack, xk, nin_k, out_pos, out_vel, jr, jc,
                                     columns, offset, ptol, pmaxit, robust, n, m, t_eval[ie], yo,
                                     J, r, Fs, dq, Js, Am, ipiv, ibuf, cbuf, dbuf, work, iwork,
-                                    ybuf):
+                                    ybuf, blocks, blk_i, blk_w):
                         return HANDOVER, steps, ie_step, evals, rejected, projections
                     projections += 1
                 if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc,
-                            rows0, columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force, t_eval[ie],
+                            rows0, columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force,
+                            blocks, blk_i, blk_w, t_eval[ie],
                             yo, ytmp):
                     return HANDOVER, steps, ie_step, evals, rejected, projections
                 ET[ie] = t_eval[ie]
@@ -472,12 +488,13 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
         if correction:
             if not _project(kp[1], kp[2], lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns,
                             offset, ptol, pmaxit, robust, n, m, t_new, ynew, J, r, Fs, dq, Js,
-                            Am, ipiv, ibuf, cbuf, dbuf, work, iwork, ybuf):
+                            Am, ipiv, ibuf, cbuf, dbuf, work, iwork, ybuf, blocks, blk_i, blk_w):
                 return HANDOVER, steps, ie_step, evals, rejected, projections
             projections += 1
             evals += 1
             if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0,
-                        columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force, t_new, ynew, fnew):
+                        columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force,
+                        blocks, blk_i, blk_w, t_new, ynew, fnew):
                 return HANDOVER, steps, ie_step, evals, rejected, projections
         # -- commit --
         t = t_new
@@ -527,7 +544,7 @@ def _adams_weights(times, cnt, t_from, h, V, w):
 
 @nb.njit(cache=True)
 def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, robust,
-          correction, ptol, pmaxit, k, a, b, c, method, fixed, inv_scale, t1, state, y,
+          blocks, blk_i, bw, correction, ptol, pmaxit, k, a, b, c, method, fixed, inv_scale, t1, state, y,
           hist_t, hist_f, recent, max_steps, T, Y, H, E, QDD, LAM):
     """Accepted steps of Mech's Adams integrator (``solvers._integrators.integrate_adams``,
     operation for operation) from ``state = [t, h, history length, recent count,
@@ -550,7 +567,7 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
     out_pos = np.empty(m + nnz)
     out_vel = np.empty(nnz + m)
     NN = n + m
-    KT = np.empty((NN, NN))
+    KT = np.empty((1, 1)) if blocks else np.empty((NN, NN))
     ipiv = np.empty(max(NN, 1), dtype=np.int32)
     ibuf = np.zeros(5, dtype=np.int32)
     cbuf = np.zeros(2, dtype=np.uint8)
@@ -560,6 +577,7 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
     qdd = np.empty(n)
     lam = np.empty(m)
     force = np.empty(n)
+    blk_w = _block_work(blocks, blk_i, n, m, bw)
     J = np.empty((m, n))
     r = np.empty(m)
     Fs = np.empty(m)
@@ -603,7 +621,8 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
             y_pred[j] = y[j] + acc
         evals += 1
         if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0,
-                    columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force, t + h_try, y_pred,
+                    columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force,
+                    blocks, blk_i, blk_w, t + h_try, y_pred,
                     f_pred):
             return HANDOVER, steps, evals, projections
         # corrector: the new point and the last deg values (two points at the start)
@@ -641,7 +660,8 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
         if method == 2 or (method == 0 and err > b):
             evals += 1
             if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0,
-                        columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force, t + h_try,
+                        columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force,
+                        blocks, blk_i, blk_w, t + h_try,
                         y_corr, f_new):
                 return HANDOVER, steps, evals, projections
         else:
@@ -652,12 +672,13 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
         if correction:
             if not _project(kp[1], kp[2], lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns,
                             offset, ptol, pmaxit, robust, n, m, t_new, y_corr, J, r, Fs, dq, Js,
-                            Am, ipiv, ibuf, cbuf, dbuf, work, iwork, ybuf):
+                            Am, ipiv, ibuf, cbuf, dbuf, work, iwork, ybuf, blocks, blk_i, blk_w):
                 return HANDOVER, steps, evals, projections
             projections += 1
             evals += 1
             if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0,
-                        columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force, t_new, y_corr,
+                        columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force,
+                        blocks, blk_i, blk_w, t_new, y_corr,
                         f_new):
                 return HANDOVER, steps, evals, projections
         # -- commit --
@@ -705,3 +726,294 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
     if (t1 - t) * sign > 1e-14 * max(1.0, abs(t1)):
         return CHUNK, steps, evals, projections
     return FINISHED, steps, evals, projections
+
+
+@nb.njit(cache=True)
+def _block_work(blocks, blk_i, n, m, bw):
+    """Work arrays of the block path: ``(Mst, Jst, Wst, Sb, u, Pst)``."""
+    if blocks:
+        boff, roff = blk_i[1], blk_i[4]
+        return (np.zeros(boff[-1]), np.zeros(roff[-1]), np.zeros(roff[-1]),
+                np.zeros((m, bw + 1)), np.zeros(n), np.zeros(roff[-1]))
+    return (np.zeros(1), np.zeros(1), np.zeros(1), np.zeros((1, 1)), np.zeros(1), np.zeros(1))
+
+
+# -- block path: M block-diagonal (one block per body), the Schur complement banded --------
+#
+# With M = diag(M_b) symmetric positive definite per block, the augmented system
+#     M qdd + J^T lam = f,   J qdd = gamma
+# is solved as  u = M^-1 f,  W = M^-1 J^T,  S = J W,  S lam = J u - gamma,  qdd = u - W lam.
+# S is symmetric positive definite when J has full row rank; rows i, k of J couple in S only
+# through a common block, so S is banded (bandwidth ``bw``, fixed per model: chains and trees
+# in their natural order give a few). Cost per evaluation: linear in the number of bodies.
+# ``blk``: int64 arrays packed by ``_jit_free._Blocks`` (see there).
+
+
+@nb.njit(cache=True)
+def _chol_blocks(Mst, bstart, boff, nblk):
+    """Cholesky (lower, in place) of every block of M; False if one is not positive definite."""
+    for b in range(nblk):
+        nb_ = bstart[b + 1] - bstart[b]
+        o = boff[b]
+        for i in range(nb_):
+            for j in range(i + 1):
+                s = Mst[o + i * nb_ + j]
+                for k in range(j):
+                    s -= Mst[o + i * nb_ + k] * Mst[o + j * nb_ + k]
+                if i == j:
+                    if not s > 0.0:
+                        return False
+                    Mst[o + i * nb_ + i] = np.sqrt(s)
+                else:
+                    Mst[o + i * nb_ + j] = s / Mst[o + j * nb_ + j]
+    return True
+
+
+@nb.njit(cache=True)
+def _block_solve(Mst, o, nb_, v, off):
+    """``v[off:off + nb_] <- M_b^-1 v[off:off + nb_]`` with the Cholesky factor at ``Mst[o:]``."""
+    for i in range(nb_):
+        s = v[off + i]
+        for k in range(i):
+            s -= Mst[o + i * nb_ + k] * v[off + k]
+        v[off + i] = s / Mst[o + i * nb_ + i]
+    for i in range(nb_ - 1, -1, -1):
+        s = v[off + i]
+        for k in range(i + 1, nb_):
+            s -= Mst[o + k * nb_ + i] * v[off + k]
+        v[off + i] = s / Mst[o + i * nb_ + i]
+
+
+@nb.njit(cache=True)
+def _band_chol(Sb, m, bw):
+    """Banded Cholesky in place: ``Sb[i, d] = S[i, i - d]``; returns the smallest ratio
+    ``L_ii / max L_jj`` (a cheap, optimistic conditioning measure), -1 if not positive
+    definite."""
+    for i in range(m):
+        j0 = max(0, i - bw)
+        for j in range(j0, i + 1):
+            s = Sb[i, i - j]
+            k0 = max(j0, j - bw)
+            for k in range(k0, j):
+                s -= Sb[i, i - k] * Sb[j, j - k]
+            if j == i:
+                if not s > 0.0:
+                    return -1.0
+                Sb[i, 0] = np.sqrt(s)
+            else:
+                Sb[i, i - j] = s / Sb[j, 0]
+    lo = np.inf
+    hi = 0.0
+    for i in range(m):
+        v = Sb[i, 0]
+        lo = min(lo, v)
+        hi = max(hi, v)
+    return lo / hi if hi > 0 else -1.0
+
+
+@nb.njit(cache=True)
+def _band_solve(Sb, m, bw, x):
+    for i in range(m):
+        s = x[i]
+        for k in range(max(0, i - bw), i):
+            s -= Sb[i, i - k] * x[k]
+        x[i] = s / Sb[i, 0]
+    for i in range(m - 1, -1, -1):
+        s = x[i]
+        for k in range(i + 1, min(m, i + bw + 1)):
+            s -= Sb[k, k - i] * x[k]
+        x[i] = s / Sb[i, 0]
+
+
+@nb.njit(cache=True)
+def _rows_sparse(vals, j0, jr, jc, columns, m, r):
+    """``Scaling.rows`` from the Jacobian's nonzero values ``vals[j0:]``."""
+    for i in range(m):
+        r[i] = 0.0
+    for k in range(jr.size):
+        v = abs(vals[j0 + k] * columns[jc[k]])
+        if v > r[jr[k]]:
+            r[jr[k]] = v
+    for i in range(m):
+        if not r[i] > 0:
+            r[i] = 1.0
+
+
+@nb.njit(cache=True)
+def _fill_rows(vals, j0, jpos, Jst, scale_rows, r, columns, jc, jr):
+    """Per (row, block) segments of ``J`` (or of ``R^-1 J D`` with ``scale_rows``)."""
+    Jst[:] = 0.0
+    for k in range(jpos.size):
+        v = vals[j0 + k]
+        if scale_rows:
+            v = (v * columns[jc[k]]) * (1.0 / r[jr[k]])
+        Jst[jpos[k]] = v
+
+
+@nb.njit(cache=True)
+def _gram(A_st, B_st, rptr, rblk, roff, bsize, m, bw, Sb):
+    """``Sb`` (banded) of ``A B^T`` from per-(row, block) segments (rows couple through a
+    common block only)."""
+    for i in range(m):
+        for k in range(max(0, i - bw), i + 1):
+            s = 0.0
+            for p in range(rptr[i], rptr[i + 1]):
+                b = rblk[p]
+                for q in range(rptr[k], rptr[k + 1]):
+                    if rblk[q] == b:
+                        oi = roff[p]
+                        ok = roff[q]
+                        for t in range(bsize[b]):
+                            s += A_st[oi + t] * B_st[ok + t]
+            Sb[i, i - k] = s
+
+
+@nb.njit(cache=True)
+def _accel_blocks(kp, x, nin, out, kk, kM, n, m, jr, jc, rows0, columns, robust, blk_i,
+                  Mst, Jst, Wst, Sb, u, qdd, lam, force):
+    """``_accel`` by the block path (see above); False: hand over."""
+    bstart, boff, rptr, rblk, roff, jpos, bsize, mpos = blk_i
+    nblk = bsize.size
+    bw = Sb.shape[1] - 1
+    _eval(kp, x, nin, out)
+    for k in range(kk + n + m):
+        if not np.isfinite(out[k]):
+            return False
+    Mst[:] = 0.0
+    for k in range(kM):
+        Mst[mpos[k]] = out[k]
+    if not _chol_blocks(Mst, bstart, boff, nblk):
+        return False
+    big_rhs = 0.0
+    for j in range(n):
+        u[j] = out[kk + j]
+        big_rhs = max(big_rhs, abs(u[j]))
+    for i in range(m):
+        big_rhs = max(big_rhs, abs(out[kk + n + i]))
+    for b in range(nblk):
+        _block_solve(Mst, boff[b], bsize[b], u, bstart[b])
+    _fill_rows(out, kM, jpos, Jst, False, lam, columns, jc, jr)
+    for i in range(m):                       # W = M^-1 J^T, segment by segment
+        for p in range(rptr[i], rptr[i + 1]):
+            b = rblk[p]
+            for t in range(bsize[b]):
+                Wst[roff[p] + t] = Jst[roff[p] + t]
+            _block_solve(Mst, boff[b], bsize[b], Wst, roff[p])
+    _gram(Jst, Wst, rptr, rblk, roff, bsize, m, bw, Sb)
+    for i in range(m):
+        lam[i] = -out[kk + n + i]
+    for k in range(jr.size):
+        lam[jr[k]] += out[kM + k] * u[jc[k]]
+    if _band_chol(Sb, m, bw) < 0:
+        return False
+    _band_solve(Sb, m, bw, lam)
+    for j in range(n):
+        qdd[j] = u[j]
+    for i in range(m):
+        for p in range(rptr[i], rptr[i + 1]):
+            b = rblk[p]
+            o = bstart[b]
+            for t in range(bsize[b]):
+                qdd[o + t] -= Wst[roff[p] + t] * lam[i]
+    big = 0.0
+    for j in range(n):
+        v = abs(qdd[j])
+        if not v <= big:
+            big = v
+    for i in range(m):
+        v = abs(lam[i])
+        if not v <= big:
+            big = v
+    if not big < 1e15 * (1.0 + big_rhs):
+        return False
+    if robust and m > 0:
+        bl = 0.0
+        for i in range(m):
+            bl = max(bl, abs(rows0[i] * lam[i]))
+        if bl != 0.0:
+            force[:] = 0.0
+            for k in range(jr.size):
+                force[jc[k]] += out[kM + k] * lam[jr[k]]
+            fmax = 0.0
+            for j in range(n):
+                fmax = max(fmax, abs(columns[j] * force[j]))
+            if not (bl < fmax / ZONE and np.isfinite(bl)):
+                return False
+    return True
+
+
+@nb.njit(cache=True)
+def _min_norm_blocks(vals, j0, jr, jc, columns, m, n, bvec, r, blk_i, Pst, Sb, robust, dq):
+    """``_min_norm`` by the block path: ``A = J^ J^T`` banded (rows couple through common
+    blocks), banded Cholesky; ``dq = D J^T A^-1 bvec``. False (hand over) when ``A`` is not
+    positive definite or, ``robust``, when its Cholesky diagonal spreads by more than
+    ``sqrt(ZONE)`` (an optimistic stand-in for the Python path's condition estimate: the
+    hand-over comes before the zone of a singular Jacobian)."""
+    bstart, boff, rptr, rblk, roff, jpos, bsize, mpos = blk_i
+    bw = Sb.shape[1] - 1
+    _fill_rows(vals, j0, jpos, Pst, True, r, columns, jc, jr)
+    _gram(Pst, Pst, rptr, rblk, roff, bsize, m, bw, Sb)
+    ratio = _band_chol(Sb, m, bw)
+    if ratio < 0 or (robust and ratio * ratio < ZONE):
+        return False
+    y = bvec.copy()
+    _band_solve(Sb, m, bw, y)
+    for j in range(n):
+        dq[j] = 0.0
+    for i in range(m):
+        for p in range(rptr[i], rptr[i + 1]):
+            b = rblk[p]
+            o = bstart[b]
+            for t in range(bsize[b]):
+                dq[o + t] += Pst[roff[p] + t] * y[i]
+    for j in range(n):
+        dq[j] = columns[j] * dq[j]
+    return True
+
+
+@nb.njit(cache=True)
+def _project_blocks(pp, pv, xk, nin_k, out_pos, out_vel, jr, jc, columns, offset, tol, maxit,
+                    robust, n, m, t, y, r, Fs, dq, blk_i, Pst, Sb):
+    """``_project`` by the block path."""
+    xk[0] = t
+    for j in range(n):
+        xk[1 + n + j] = 0.0
+    lim = tol * (1.0 + offset)
+    for _ in range(maxit):
+        for j in range(n):
+            xk[1 + j] = y[j]
+        _eval(pp, xk, nin_k, out_pos)
+        _rows_sparse(out_pos, m, jr, jc, columns, m, r)
+        big = 0.0
+        for i in range(m):
+            Fs[i] = out_pos[i] / r[i]
+            v = abs(Fs[i])
+            if not v <= big:
+                big = v
+        if big <= lim:
+            break
+        if not _min_norm_blocks(out_pos, m, jr, jc, columns, m, n, Fs, r, blk_i, Pst, Sb,
+                                robust, dq):
+            return False
+        for j in range(n):
+            y[j] -= dq[j]
+    for j in range(n):
+        xk[1 + j] = y[j]
+    _eval(pv, xk, nin_k, out_vel)
+    nnz = jr.size
+    _rows_sparse(out_vel, 0, jr, jc, columns, m, r)
+    for i in range(m):
+        Fs[i] = out_vel[nnz + i]          # J qd - (-Phi_t), accumulated below
+    for k in range(nnz):
+        Fs[jr[k]] += out_vel[k] * y[n + jc[k]]
+    for i in range(m):
+        Fs[i] = Fs[i] / r[i]
+    if not _min_norm_blocks(out_vel, 0, jr, jc, columns, m, n, Fs, r, blk_i, Pst, Sb, robust,
+                            dq):
+        return False
+    for j in range(n):
+        y[n + j] = y[n + j] - dq[j]
+    for j in range(2 * n):
+        if not np.isfinite(y[j]):
+            return False
+    return True
