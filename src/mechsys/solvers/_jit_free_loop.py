@@ -524,11 +524,24 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
 
 
 @nb.njit(cache=True)
-def _adams_weights(times, cnt, t_from, h, V, w):
+def _adams_weights(times, cnt, t_from, h, V, w, cache):
     """``w[:cnt]``: ``solvers._integrators._adams_weights`` (the nodes rounded to 1e-9 as
-    there, so that constant steps give the same weights)."""
+    there, so that constant steps give the same weights). ``cache`` (13,): the last call's
+    node count, nodes and unscaled weights (``cache[0]`` count, nodes at 1..6, weights at
+    7..12): while the step is constant the nodes repeat."""
+    same = cache[0] == cnt
     for i in range(cnt):
         x = np.round((times[i] - t_from) / h, 9)
+        if x != cache[1 + i]:
+            same = False
+            cache[1 + i] = x
+    if same:
+        for j in range(cnt):
+            w[j] = cache[7 + j] * h
+        return True
+    cache[0] = cnt
+    for i in range(cnt):
+        x = cache[1 + i]
         p = 1.0
         for j in range(cnt):
             V[i, j] = p            # V[i, j] = x_i^j; V holds (V^T) transposed
@@ -536,8 +549,10 @@ def _adams_weights(times, cnt, t_from, h, V, w):
     for j in range(cnt):
         w[j] = 1.0 / (j + 1)
     if not _lu_solve(V[:cnt, :cnt], w, cnt):
+        cache[0] = -1.0
         return False
     for j in range(cnt):
+        cache[7 + j] = w[j]
         w[j] *= h
     return True
 
@@ -588,6 +603,8 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
     iwork = np.empty(max(m, 1), dtype=np.int32)
     ybuf = np.empty(m)
     V = np.empty((6, 6))
+    cache_p = np.full(13, -1.0)
+    cache_c = np.full(13, -1.0)
     w = np.empty(6)
     wc = np.empty(6)
     ct = np.empty(6)
@@ -612,7 +629,7 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
         deg = min(k, nh - 1)
         # predictor: the last deg + 1 derivative values
         p0 = nh - (deg + 1)
-        if not _adams_weights(hist_t[p0:nh], deg + 1, t, h_try, V, w):
+        if not _adams_weights(hist_t[p0:nh], deg + 1, t, h_try, V, w, cache_p):
             return HANDOVER, steps, evals, projections
         for j in range(N2):
             acc = 0.0
@@ -640,7 +657,7 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
         ct[nc - 1] = t + h_try
         for j in range(N2):
             cf[nc - 1, j] = f_pred[j]
-        if not _adams_weights(ct, nc, t, h_try, V, wc):
+        if not _adams_weights(ct, nc, t, h_try, V, wc, cache_c):
             return HANDOVER, steps, evals, projections
         err = 0.0
         for j in range(N2):
