@@ -40,3 +40,4 @@ docs: $(STAMP)
 
 clean:
 	rm -rf $(VENV) out build *.egg-info src/*.egg-info
+	find src -name '*.nbi' -delete -o -name '*.nbc' -delete
