@@ -27,6 +27,7 @@ import scipy.sparse as sps
 import sympy as sp
 
 from .._symbols import T, velocity_symbol
+from ..solvers._linalg import FixedPattern
 from ._backends import compile_exprs
 from ._derive import hessian_terms, time_derivative, to_sympy_list
 
@@ -412,7 +413,9 @@ class FreeKernel:
 
     Values are scattered into ``K`` through precomputed flat indices (dense) or a fixed CSC
     pattern (sparse, ``n + m`` above the sparse threshold): no symbolic or Python-level
-    assembly work per evaluation beyond one compiled call.
+    assembly work per evaluation beyond one compiled call. The sparse pattern is analysed
+    once (:class:`~mechsys.solvers._linalg.FixedPattern`, attribute ``pattern``, also
+    ``K.pattern``): banded LU after a reverse Cuthill-McKee ordering for chains.
     """
 
     def __init__(self, system, sparse: bool):
@@ -437,6 +440,12 @@ class FreeKernel:
             self._indices = rows[order]
             counts = np.bincount(cols, minlength=N)
             self._indptr = np.concatenate(([0], np.cumsum(counts)))
+            # the pattern is analysed once (ordering, band widths); each evaluation only
+            # swaps the values of one reused matrix and refactors numerically
+            self.pattern = FixedPattern(self._indptr, self._indices, N)
+            self._K = sps.csc_matrix((np.zeros(len(order)), self.pattern.indices,
+                                      self.pattern.indptr), shape=(N, N))
+            self._K.pattern = self.pattern
         else:
             self._flat = rows * N + cols
 
@@ -446,8 +455,10 @@ class FreeKernel:
         vals = out[:kk]
         rhs = out[kk:]
         if self.sparse:
-            K = sps.csc_matrix((vals[self._perm], self._indices, self._indptr),
-                               shape=(self.N, self.N))
+            # one matrix object, new values: valid until the next call (the free
+            # acceleration uses it at once); ``K.pattern`` solves it (``_free._solve_fast``)
+            K = self._K
+            K.data = vals[self._perm]
         else:
             K = np.zeros((self.N, self.N))
             K.flat[self._flat] = vals[self._map]
