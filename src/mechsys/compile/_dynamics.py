@@ -158,6 +158,11 @@ def generalized_forces(model, loads, layout) -> list:
                     _project(projected, body, [sp.Add(*(ri.diff(s) * fi for ri, fi in zip(r, F)))
                                                for s in body.q], model)
                     continue
+                fast = _point_force_terms(model.space, body, c.point, F)
+                if fast is not None:
+                    for s, v in zip(body.q, fast):
+                        Q[index[s]] += v
+                    continue
                 for s in body.q:
                     # scalar diffs: Matrix.diff goes through SymPy's array derivatives (slow)
                     Q[index[s]] += sp.Add(*(ri.diff(s) * fi for ri, fi in zip(r, F)))
@@ -185,6 +190,38 @@ def generalized_forces(model, loads, layout) -> list:
         for i, v in projected.items():  # slaves' loads, projected natively (SymEngine)
             Q[i] += restore_assumptions(sp.sympify(v))
     return Q
+
+
+@functools.lru_cache(maxsize=4096)
+def _rotation_derivatives(space, rot: tuple) -> tuple:
+    """``dA/ds`` (SymPy matrices) for each rotational coordinate ``s`` of ``rot``."""
+    A = space.rotation_matrix(list(rot))
+    return tuple(A.diff(s) for s in rot)
+
+
+def _point_force_terms(space, body, point, F) -> list | None:
+    r"""Virtual work of the force ``F`` (global) at a body-fixed point ``c'`` of ``body``
+    (``r_P = r + A c'``) on the body's coordinates, in closed form::
+
+        Q_r = F,    Q_s = (dA/ds c')^T F   (s a rotational coordinate)
+
+    derived once per body for the rotation matrix only (instead of differentiating every
+    point's location expression); None when the point is not such a point (its local
+    coordinates depend on the body's coordinates), for the general path."""
+    from ..geometry._points import Point
+
+    if type(point) is not Point or point.body is not body:
+        return None
+    local = point.local
+    q = tuple(body.q)
+    if any(e.free_symbols & set(q) for e in local):
+        return None
+    dim = space.dim
+    out = [sp.sympify(f) for f in F[:dim]]
+    for dA in _rotation_derivatives(space, q[dim:]):
+        v = dA * local
+        out.append(sp.Add(*(vi * fi for vi, fi in zip(v, F))))
+    return out
 
 
 def _project(out: dict, body, Qp, model) -> None:
