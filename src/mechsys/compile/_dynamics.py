@@ -192,11 +192,23 @@ def generalized_forces(model, loads, layout) -> list:
     return Q
 
 
+@functools.lru_cache(maxsize=4)
+def _rotation_template(space) -> tuple:
+    """Generic rotational coordinates and ``dA/ds`` for each, derived once per space."""
+    k = 1 if space.dim == 2 else 4
+    gen = tuple(sp.Symbol(f"_rot{i}", real=True) for i in range(k))
+    A = space.rotation_matrix(list(gen))
+    # entry by entry: Matrix.diff goes through SymPy's array derivatives (slow)
+    return gen, tuple(A.applyfunc(lambda e, s=s: e.diff(s)) for s in gen)
+
+
 @functools.lru_cache(maxsize=4096)
 def _rotation_derivatives(space, rot: tuple) -> tuple:
-    """``dA/ds`` (SymPy matrices) for each rotational coordinate ``s`` of ``rot``."""
-    A = space.rotation_matrix(list(rot))
-    return tuple(A.diff(s) for s in rot)
+    """``dA/ds`` (SymPy matrices) for each rotational coordinate ``s`` of ``rot``: the
+    template's, with the body's symbols put in."""
+    gen, dA = _rotation_template(space)
+    sub = dict(zip(gen, rot))
+    return tuple(d.xreplace(sub) for d in dA)
 
 
 def _point_force_terms(space, body, point, F) -> list | None:
