@@ -362,7 +362,7 @@ def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
             return _SympyCompiled(args, [sp.sympify(e) for e in exprs])
         try:
             # LLVM's optimiser costs superlinear time in a kernel's size (decision
-            # fixed-pattern-sparse-solve.md): large kernels compile unoptimised
+            # 0014-fixed-pattern-sparse-solve.md): large kernels compile unoptimised
             opt = 0 if once or len(exprs) > LARGE_KERNEL else 3
             return _SymengineCompiled(args, exprs, opt_level=opt, cse=cse)
         except (RuntimeError, TypeError, ValueError, NotImplementedError):

@@ -21,10 +21,10 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 SPARSE_THRESHOLD = 150
 RCOND_MIN = 1e-13
-#: :class:`FixedPattern` solves banded (LAPACK) when the reordered matrix has at most this
-#: many sub- plus super-diagonals, else with SuperLU (measured: ``docs/decisions/``
-#: ``fixed-pattern-sparse-solve.md``)
-BAND_MAX = 60
+#: :class:`FixedPattern` solves banded (LAPACK) while ``N (kl + ku)^2``, the banded LU's
+#: work, is at most this, else with SuperLU: the two cost the same near it (measured on
+#: chains, grids and trees: ``docs/decisions/0014-fixed-pattern-sparse-solve.md``)
+BAND_WORK = 8e6
 
 
 class Singular(Exception):
@@ -94,7 +94,8 @@ class FixedPattern:
 
         (P A P^T) (P x) = P b,    AB[kl + ku + i - j, j] = (P A P^T)_ij
 
-    Patterns with wider bands (trees with many branches) keep SuperLU, with the column
+    Patterns with wide bands (trees with many branches; ``N (kl + ku)^2 > BAND_WORK``)
+    keep SuperLU, with the column
     ordering of the first factorisation reused (``permc_spec="NATURAL"`` on the permuted
     matrix): the ordering is not recomputed per evaluation.
 
@@ -122,7 +123,7 @@ class FixedPattern:
         self.kl = kl = int((pr - pc).max(initial=0))
         self.ku = ku = int((pc - pr).max(initial=0))
         self.perm = perm
-        self.banded = N > 0 and kl + ku <= BAND_MAX
+        self.banded = N > 0 and N * (kl + ku) ** 2 <= BAND_WORK
         if self.banded:
             self._ld = 2 * kl + ku + 1
             # flat position in the Fortran-ordered (ld, N) band storage of each stored value
@@ -136,7 +137,9 @@ class FixedPattern:
         A = sps.csc_matrix((data, self.indices, self.indptr), shape=(self.size, self.size))
         if self._permc is None:
             fac = Factor(A)
-            self._permc = fac._lu.perm_c.copy()
+            # SuperLU's perm_c[j] is the new position of column j: the columns in their
+            # factorisation order are its inverse
+            self._permc = np.argsort(fac._lu.perm_c)
             return fac
         return _PermutedFactor(A[:, self._permc], self._permc)
 
