@@ -151,17 +151,18 @@ def generalized_forces(model, loads, layout) -> list:
                 body = c.point.body
                 if body is None or body.is_ground:
                     continue
-                # virtual work: d(velocity)/d(qd_s) = d(location)/d(q_s) for a body point
-                r = list(c.point.location())
                 F = list(c.force)
-                if gen and body.gen_joint is not None:  # a slave: project on q (J^T Q_p)
-                    _project(projected, body, [sp.Add(*(ri.diff(s) * fi for ri, fi in zip(r, F)))
-                                               for s in body.q], model)
-                    continue
-                fast = _point_force_terms(model.space, body, c.point, F)
+                slave = gen and body.gen_joint is not None
+                fast = None if slave else _point_force_terms(model.space, body, c.point, F)
                 if fast is not None:
                     for s, v in zip(body.q, fast):
                         Q[index[s]] += v
+                    continue
+                # virtual work: d(velocity)/d(qd_s) = d(location)/d(q_s) for a body point
+                r = list(c.point.location())
+                if slave:  # a slave: project on q (J^T Q_p)
+                    _project(projected, body, [sp.Add(*(ri.diff(s) * fi for ri, fi in zip(r, F)))
+                                               for s in body.q], model)
                     continue
                 for s in body.q:
                     # scalar diffs: Matrix.diff goes through SymPy's array derivatives (slow)
