@@ -2,7 +2,9 @@ r"""Linear algebra for the constraint Jacobian: factorisation with a conditionin
 rank-revealing diagnosis of dependent equations.
 
 Small systems (``n <= SPARSE_THRESHOLD``) use dense LU with LAPACK's reciprocal condition
-estimate; larger ones sparse SuperLU. A matrix whose reciprocal condition number falls
+estimate; larger ones sparse SuperLU, or, for matrices of one fixed pattern factorised again
+and again (free motion's augmented matrix), :class:`FixedPattern`: the pattern analysed once,
+banded LU for chains. A matrix whose reciprocal condition number falls
 below ``RCOND_MIN`` is treated as singular and diagnosed with a pivoted QR of ``Phi_q^T``:
 its last ``m - rank`` pivots are the dependent equations.
 """
