@@ -194,22 +194,21 @@ def generalized_forces(model, loads, layout) -> list:
 
 
 @functools.lru_cache(maxsize=4)
-def _rotation_template(space) -> tuple:
-    """Generic rotational coordinates and ``dA/ds`` for each, derived once per space."""
-    k = 1 if space.dim == 2 else 4
-    gen = tuple(sp.Symbol(f"_rot{i}", real=True) for i in range(k))
-    A = space.rotation_matrix(list(gen))
-    # entry by entry: Matrix.diff goes through SymPy's array derivatives (slow)
-    return gen, tuple(A.applyfunc(lambda e, s=s: e.diff(s)) for s in gen)
-
-
-@functools.lru_cache(maxsize=4096)
-def _rotation_derivatives(space, rot: tuple) -> tuple:
-    """``dA/ds`` (SymPy matrices) for each rotational coordinate ``s`` of ``rot``: the
-    template's, with the body's symbols put in."""
-    gen, dA = _rotation_template(space)
-    sub = dict(zip(gen, rot))
-    return tuple(d.xreplace(sub) for d in dA)
+def _point_force_template(space) -> tuple:
+    """``(rot, c, F, Q_rot)``: generic rotational coordinates, local point coordinates and
+    force, and ``(dA/ds c)^T F`` for each rotational coordinate ``s``, derived once per
+    space."""
+    dim = space.dim
+    rot = tuple(sp.Symbol(f"_rot{i}", real=True) for i in range(1 if dim == 2 else 4))
+    c = tuple(sp.Symbol(f"_c{i}", real=True) for i in range(dim))
+    F = tuple(sp.Symbol(f"_F{i}", real=True) for i in range(dim))
+    A = space.rotation_matrix(list(rot))
+    out = []
+    for s in rot:
+        # entry by entry: Matrix.diff goes through SymPy's array derivatives (slow)
+        out.append(sp.Add(*(A[i, j].diff(s) * c[j] * F[i] for i in range(dim)
+                            for j in range(dim))))
+    return rot, c, F, tuple(out)
 
 
 def _point_force_terms(space, body, point, F) -> list | None:
@@ -218,8 +217,8 @@ def _point_force_terms(space, body, point, F) -> list | None:
 
         Q_r = F,    Q_s = (dA/ds c')^T F   (s a rotational coordinate)
 
-    derived once per body for the rotation matrix only (instead of differentiating every
-    point's location expression); None when the point is not such a point (its local
+    derived once per space on generic symbols and substituted per point (instead of
+    differentiating every point's location expression); None when the point is not such a point (its local
     coordinates depend on the body's coordinates), for the general path."""
     from ..geometry._points import Point
 
@@ -231,10 +230,9 @@ def _point_force_terms(space, body, point, F) -> list | None:
         return None
     dim = space.dim
     out = [sp.sympify(f) for f in F[:dim]]
-    for dA in _rotation_derivatives(space, q[dim:]):
-        v = dA * local
-        out.append(sp.Add(*(vi * fi for vi, fi in zip(v, F))))
-    return out
+    grot, gc, gF, Qrot = _point_force_template(space)
+    sub = {**dict(zip(grot, q[dim:])), **dict(zip(gc, local)), **dict(zip(gF, out))}
+    return out + [e.xreplace(sub) for e in Qrot]
 
 
 def _project(out: dict, body, Qp, model) -> None:
@@ -314,7 +312,8 @@ class Dynamics:
         self._potential = (model, tuple(loads))
         lamset = set(self.lam)
         self.depends_on_lambda = any(e.free_symbols & lamset for e in self.Q)
-        self.depends_on_qd = any(e.free_symbols & set(lay.qd_symbols) for e in self.Q)
+        qdset = set(lay.qd_symbols)           # once: not per load term (N^2 for N bodies)
+        self.depends_on_qd = any(e.free_symbols & qdset for e in self.Q)
         qddset = set(lay.qdd_symbols)
         #: loads that depend on accelerations (added mass, inertial couplings): free
         #: accelerations are then found by Newton on (qdd, lambda)
