@@ -2,10 +2,12 @@
 static and inverse-dynamic solutions, and ``m.free(...)`` plus a first short ``simulate``, on
 the N-link pendulum chain (3 N coordinates).
 
-Run: ``.venv/bin/python benchmarks/build_cost.py [N ...]`` (default 50 100 200). Times are CPU
-time of this process, each step after the previous one on the same model, so that a step
-shows only what it adds (what is shared is not paid twice). To compare with another checkout,
-run the same script with ``PYTHONPATH=<checkout>/src``.
+Run: ``.venv/bin/python benchmarks/build_cost.py [--cold] [N ...]`` (default 50 100 200).
+Times are CPU time of this process, each step after the previous one on the same model, so
+that a step shows only what it adds (what is shared is not paid twice). ``--cold`` compiles
+everything (an empty kernel cache in a temporary directory, as on a first run); without it,
+kernels cached on disk by earlier runs are loaded instead of compiled. To compare with
+another checkout, run the same script with ``PYTHONPATH=<checkout>/src``.
 """
 
 from __future__ import annotations
@@ -45,6 +47,15 @@ def steps(n: int) -> dict:
 
 
 def main(argv: list[str]) -> None:
+    if "--cold" in argv:
+        import atexit
+        import shutil
+        import tempfile
+
+        argv = [a for a in argv if a != "--cold"]
+        # before mechsys is imported: its kernels are compiled, none loaded from disk
+        os.environ["MECHSYS_CACHE"] = cache = tempfile.mkdtemp(prefix="mechsys-cold-")
+        atexit.register(shutil.rmtree, cache, True)
     sizes = [int(a) for a in argv] or [50, 100, 200]
     rows = {n: steps(n) for n in sizes}
     names = list(next(iter(rows.values())))

@@ -49,7 +49,7 @@ def test_options_are_validated_by_name():
     for bad in ("yes", 1, 0):
         with pytest.raises(ModelError, match="cse must be None .automatic., True or False"):
             m.set_compile_options(cse=bad)
-    assert m.compile_options == {"process": None, "opt_level": 3, "cse": None}
+    assert m.compile_options == {"process": None, "opt_level": None, "cse": None}
 
 
 @pytest.mark.parametrize("scale", [1.0, 1e-3])

@@ -332,6 +332,11 @@ def default_backend() -> str:
     return available_backends()[0]
 
 
+#: kernels with more outputs than this compile without LLVM optimisation: ~15 times faster
+#: to compile, ~3 times slower to evaluate (a 256-link chain's free kernel: 4.5 s -> 0.2 s)
+LARGE_KERNEL = 500
+
+
 def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
                   backend: str | None = None, once: bool = False, cse: bool = False) -> Compiled:
     """Compile ``exprs`` as a function of the flat argument list ``args``.
@@ -356,8 +361,13 @@ def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
             # SymEngine 0.15 crashes on some functions (Mod): keep them with SymPy
             return _SympyCompiled(args, [sp.sympify(e) for e in exprs])
         try:
-            level = 0 if once else getattr(backend, "opt_level", 3)   # compile._options.Backend
-            return _SymengineCompiled(args, exprs, opt_level=level, cse=cse)
+            # the model's level (compile._options.Backend); automatic (None): 3, but LLVM's
+            # optimiser costs superlinear time in a kernel's size (decision
+            # 0017-fixed-pattern-sparse-solve.md), so large kernels compile unoptimised
+            level = getattr(backend, "opt_level", None)
+            if level is None:
+                level = 0 if len(exprs) > LARGE_KERNEL else 3
+            return _SymengineCompiled(args, exprs, opt_level=0 if once else level, cse=cse)
         except (RuntimeError, TypeError, ValueError, NotImplementedError):
             # a function SymEngine cannot compile (e.g. Mod, Abs): SymPy can
             return _SympyCompiled(args, [sp.sympify(e) for e in exprs])

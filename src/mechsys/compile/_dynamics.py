@@ -27,6 +27,7 @@ import scipy.sparse as sps
 import sympy as sp
 
 from .._symbols import T, velocity_symbol
+from ..solvers._linalg import FixedPattern
 from ._backends import compile_exprs
 from ._derive import hessian_terms, time_derivative, to_sympy_list
 
@@ -150,10 +151,16 @@ def generalized_forces(model, loads, layout) -> list:
                 body = c.point.body
                 if body is None or body.is_ground:
                     continue
+                F = list(c.force)
+                slave = gen and body.gen_joint is not None
+                fast = None if slave else _point_force_terms(model.space, body, c.point, F)
+                if fast is not None:
+                    for s, v in zip(body.q, fast):
+                        Q[index[s]] += v
+                    continue
                 # virtual work: d(velocity)/d(qd_s) = d(location)/d(q_s) for a body point
                 r = list(c.point.location())
-                F = list(c.force)
-                if gen and body.gen_joint is not None:  # a slave: project on q (J^T Q_p)
+                if slave:  # a slave: project on q (J^T Q_p)
                     _project(projected, body, [sp.Add(*(ri.diff(s) * fi for ri, fi in zip(r, F)))
                                                for s in body.q], model)
                     continue
@@ -184,6 +191,48 @@ def generalized_forces(model, loads, layout) -> list:
         for i, v in projected.items():  # slaves' loads, projected natively (SymEngine)
             Q[i] += restore_assumptions(sp.sympify(v))
     return Q
+
+
+@functools.lru_cache(maxsize=4)
+def _point_force_template(space) -> tuple:
+    """``(rot, c, F, Q_rot)``: generic rotational coordinates, local point coordinates and
+    force, and ``(dA/ds c)^T F`` for each rotational coordinate ``s``, derived once per
+    space."""
+    dim = space.dim
+    rot = tuple(sp.Symbol(f"_rot{i}", real=True) for i in range(1 if dim == 2 else 4))
+    c = tuple(sp.Symbol(f"_c{i}", real=True) for i in range(dim))
+    F = tuple(sp.Symbol(f"_F{i}", real=True) for i in range(dim))
+    A = space.rotation_matrix(list(rot))
+    out = []
+    for s in rot:
+        # entry by entry: Matrix.diff goes through SymPy's array derivatives (slow)
+        out.append(sp.Add(*(A[i, j].diff(s) * c[j] * F[i] for i in range(dim)
+                            for j in range(dim))))
+    return rot, c, F, tuple(out)
+
+
+def _point_force_terms(space, body, point, F) -> list | None:
+    r"""Virtual work of the force ``F`` (global) at a body-fixed point ``c'`` of ``body``
+    (``r_P = r + A c'``) on the body's coordinates, in closed form::
+
+        Q_r = F,    Q_s = (dA/ds c')^T F   (s a rotational coordinate)
+
+    derived once per space on generic symbols and substituted per point (instead of
+    differentiating every point's location expression); None when the point is not such a point (its local
+    coordinates depend on the body's coordinates), for the general path."""
+    from ..geometry._points import Point
+
+    if type(point) is not Point or point.body is not body:
+        return None
+    local = point.local
+    q = tuple(body.q)
+    if any(e.free_symbols & set(q) for e in local):
+        return None
+    dim = space.dim
+    out = [sp.sympify(f) for f in F[:dim]]
+    grot, gc, gF, Qrot = _point_force_template(space)
+    sub = {**dict(zip(grot, q[dim:])), **dict(zip(gc, local)), **dict(zip(gF, out))}
+    return out + [e.xreplace(sub) for e in Qrot]
 
 
 def _project(out: dict, body, Qp, model) -> None:
@@ -263,7 +312,8 @@ class Dynamics:
         self._potential = (model, tuple(loads))
         lamset = set(self.lam)
         self.depends_on_lambda = any(e.free_symbols & lamset for e in self.Q)
-        self.depends_on_qd = any(e.free_symbols & set(lay.qd_symbols) for e in self.Q)
+        qdset = set(lay.qd_symbols)           # once: not per load term (N^2 for N bodies)
+        self.depends_on_qd = any(e.free_symbols & qdset for e in self.Q)
         qddset = set(lay.qdd_symbols)
         #: loads that depend on accelerations (added mass, inertial couplings): free
         #: accelerations are then found by Newton on (qdd, lambda)
@@ -412,7 +462,9 @@ class FreeKernel:
 
     Values are scattered into ``K`` through precomputed flat indices (dense) or a fixed CSC
     pattern (sparse, ``n + m`` above the sparse threshold): no symbolic or Python-level
-    assembly work per evaluation beyond one compiled call.
+    assembly work per evaluation beyond one compiled call. The sparse pattern is analysed
+    once (:class:`~mechsys.solvers._linalg.FixedPattern`, attribute ``pattern``, also
+    ``K.pattern``): banded LU after a reverse Cuthill-McKee ordering for chains.
     """
 
     def __init__(self, system, sparse: bool):
@@ -437,6 +489,12 @@ class FreeKernel:
             self._indices = rows[order]
             counts = np.bincount(cols, minlength=N)
             self._indptr = np.concatenate(([0], np.cumsum(counts)))
+            # the pattern is analysed once (ordering, band widths); each evaluation only
+            # swaps the values of one reused matrix and refactors numerically
+            self.pattern = FixedPattern(self._indptr, self._indices, N)
+            self._K = sps.csc_matrix((np.zeros(len(order)), self.pattern.indices,
+                                      self.pattern.indptr), shape=(N, N))
+            self._K.pattern = self.pattern
         else:
             self._flat = rows * N + cols
 
@@ -446,8 +504,10 @@ class FreeKernel:
         vals = out[:kk]
         rhs = out[kk:]
         if self.sparse:
-            K = sps.csc_matrix((vals[self._perm], self._indices, self._indptr),
-                               shape=(self.N, self.N))
+            # one matrix object, new values: valid until the next call (the free
+            # acceleration uses it at once); ``K.pattern`` solves it (``_free._solve_fast``)
+            K = self._K
+            K.data = vals[self._perm]
         else:
             K = np.zeros((self.N, self.N))
             K.flat[self._flat] = vals[self._map]

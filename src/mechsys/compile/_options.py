@@ -12,9 +12,12 @@ what is fingerprinted; ``opt_level`` and ``cse`` are parts of the key).
   length. A callable ``f(expr) -> expr`` (``sympy.expand``, ``sympy.trigsimp``...) must
   return an *equal* expression: the multipliers and reactions are those of the processed
   equations.
-* ``opt_level`` -- LLVM's optimisation level 0..3 for the SymEngine backend (default 3):
-  0 compiles several times faster and evaluates about 1.5 times slower (a large model run
-  for a few points).
+* ``opt_level`` -- LLVM's optimisation level 0..3 for the SymEngine backend. ``None``
+  (default, automatic): 3, and 0 for kernels of more than ``LARGE_KERNEL`` (500) outputs,
+  whose optimisation costs seconds (a 256-link chain's free-motion kernel: 5.5 s at level 3,
+  0.3 s at 0, evaluating 109 µs instead of 14 µs). 0 compiles several times faster and
+  evaluates about 1.5-8 times slower (a large model run for a few points); 3 everywhere
+  suits a long run of a large model.
 * ``cse`` -- common-subexpression elimination before compiling: ``None`` (default: on for
   models with Gen joints, whose nested poses share most subexpressions, decision 0010),
   ``True`` or ``False``.
@@ -41,7 +44,7 @@ _UNSET = object()
 @dataclass(frozen=True)
 class CompileOptions:
     process: object = None
-    opt_level: int = 3
+    opt_level: int | None = None
     cse: bool | None = None
 
     def as_dict(self) -> dict:
@@ -58,9 +61,10 @@ def updated(opts: CompileOptions, process=_UNSET, opt_level=_UNSET, cse=_UNSET) 
                              f"f(expr) -> expr (Mech's $MechProcessFunction), got {process!r}")
         new["process"] = process
     if opt_level is not _UNSET:
-        if isinstance(opt_level, bool) or not isinstance(opt_level, int) or not 0 <= opt_level <= 3:
+        if opt_level is not None and (isinstance(opt_level, bool) or not isinstance(
+                opt_level, int) or not 0 <= opt_level <= 3):
             raise ModelError(f"compile option opt_level must be an integer 0, 1, 2 or 3 (LLVM's "
-                             f"optimisation level), got {opt_level!r}")
+                             f"optimisation level) or None (automatic), got {opt_level!r}")
         new["opt_level"] = opt_level
     if cse is not _UNSET:
         if cse not in (None, True, False) or not isinstance(cse, (bool, type(None))):
@@ -105,9 +109,9 @@ class Backend(str):
     level, so every kernel a :class:`System` compiles -- wherever it is compiled -- uses the
     model's setting; compares equal to its name."""
 
-    opt_level: int = 3
+    opt_level: int | None = None
 
-    def __new__(cls, name: str, opt_level: int = 3):
+    def __new__(cls, name: str, opt_level: int | None = None):
         obj = super().__new__(cls, name)
         obj.opt_level = opt_level
         return obj

@@ -119,11 +119,13 @@ def _zeros(m):
 
 def _solve_fast(K, rhs):
     """Solve the augmented system; LAPACK gesv for dense (a singular matrix raises), SuperLU
-    for sparse. A non-finite answer is treated as singular. (``K`` is never empty: a free
-    system has coordinates, so gesv is never called with an illegal size, which would print
-    to stderr.)"""
+    for sparse, or the analysed pattern of the free kernel's matrix when it carries one
+    (``K.pattern``, :class:`._linalg.FixedPattern`: banded LU for chains). A non-finite
+    answer is treated as singular. (``K`` is never empty: a free system has coordinates, so
+    gesv is never called with an illegal size, which would print to stderr.)"""
     if sps.issparse(K):
-        return factor(K).solve(rhs)
+        pattern = getattr(K, "pattern", None)
+        return (factor(K) if pattern is None else pattern.factor(K.data)).solve(rhs)
     if not np.all(np.isfinite(K)):
         raise Singular("non-finite augmented matrix")
     _, _, x, info = _dgesv(K, rhs)

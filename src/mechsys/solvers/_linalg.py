@@ -2,7 +2,9 @@ r"""Linear algebra for the constraint Jacobian: factorisation with a conditionin
 rank-revealing diagnosis of dependent equations.
 
 Small systems (``n <= SPARSE_THRESHOLD``) use dense LU with LAPACK's reciprocal condition
-estimate; larger ones sparse SuperLU. A matrix whose reciprocal condition number falls
+estimate; larger ones sparse SuperLU, or, for matrices of one fixed pattern factorised again
+and again (free motion's augmented matrix), :class:`FixedPattern`: the pattern analysed once,
+banded LU for chains. A matrix whose reciprocal condition number falls
 below ``RCOND_MIN`` is treated as singular and diagnosed with a pivoted QR of ``Phi_q^T``:
 its last ``m - rank`` pivots are the dependent equations.
 """
@@ -15,11 +17,18 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sps
 import scipy.sparse.linalg as spla
+from scipy.linalg.lapack import dgbtrf as _dgbtrf
+from scipy.linalg.lapack import dgbtrs as _dgbtrs
+from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 SPARSE_THRESHOLD = 150
 RCOND_MIN = 1e-13
 #: a lever arm below this fraction of the model's length is round-off (see Scaling.of)
 ARM_ROUNDOFF = 1e-9
+#: :class:`FixedPattern` solves banded (LAPACK) while ``N (kl + ku)^2``, the banded LU's
+#: work, is at most this, else with SuperLU: the two cost the same near it (measured on
+#: chains, grids and trees: ``docs/decisions/0017-fixed-pattern-sparse-solve.md``)
+BAND_WORK = 8e6
 
 
 class Singular(Exception):
@@ -72,6 +81,115 @@ class Factor:
 
 def factor(J) -> Factor:
     return Factor(J)
+
+
+class FixedPattern:
+    r"""Square sparse matrices of one fixed CSC pattern (``indptr``, ``indices``), analysed
+    once and then factorised numerically for each new set of values ``data``.
+
+    Analysis: a reverse Cuthill-McKee ordering ``p`` of the symmetrised pattern
+    (``A + A^T``) and the band widths ``kl``, ``ku`` of ``P A P^T``. For chains, and any
+    mechanism whose bodies and joints form a path, the augmented matrix of free motion
+    ``[[M, Phi_q^T], [Phi_q, 0]]`` is then banded with widths independent of the number
+    of bodies, and LAPACK's banded LU with partial pivoting (``dgbtrf``) costs
+    ``O(N kl (kl + ku))``: linear in the number of bodies. The values are scattered into
+    the band storage through precomputed positions (no sparse-matrix objects per
+    evaluation)::
+
+        (P A P^T) (P x) = P b,    AB[kl + ku + i - j, j] = (P A P^T)_ij
+
+    Patterns with wide bands (trees with many branches; ``N (kl + ku)^2 > BAND_WORK``)
+    keep SuperLU, with the column
+    ordering of the first factorisation reused (``permc_spec="NATURAL"`` on the permuted
+    matrix): the ordering is not recomputed per evaluation.
+
+    Singular matrices raise :class:`Singular` as :class:`Factor` does for sparse ones: an
+    exact zero pivot, or a pivot ratio ``min |u_ii| / max |u_ii| <= RCOND_MIN`` (also for
+    non-finite values).
+
+    Example::
+
+        pat = FixedPattern(K.indptr, K.indices, K.shape[0])
+        x = pat.factor(K.data).solve(b)       # K x = b
+    """
+
+    def __init__(self, indptr: np.ndarray, indices: np.ndarray, size: int):
+        self.indptr = np.asarray(indptr, dtype=np.int32)
+        self.indices = np.asarray(indices, dtype=np.int32)
+        self.size = N = int(size)
+        rows = self.indices.astype(np.int64)
+        cols = np.repeat(np.arange(N), np.diff(self.indptr))
+        pat = sps.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(N, N))
+        perm = reverse_cuthill_mckee((pat + pat.T).tocsr(), symmetric_mode=True).astype(np.int64)
+        inv = np.empty(N, dtype=np.int64)
+        inv[perm] = np.arange(N)
+        pr, pc = inv[rows], inv[cols]
+        self.kl = kl = int((pr - pc).max(initial=0))
+        self.ku = ku = int((pc - pr).max(initial=0))
+        self.perm = perm
+        self.banded = N > 0 and N * (kl + ku) ** 2 <= BAND_WORK
+        if self.banded:
+            self._ld = 2 * kl + ku + 1
+            # flat position in the Fortran-ordered (ld, N) band storage of each stored value
+            self._pos = (kl + ku + pr - pc) + pc * self._ld
+        self._permc = None    # SuperLU: the column ordering found by the first factorisation
+
+    def factor(self, data: np.ndarray):
+        """Factorise the matrix with these values (in the pattern's order)."""
+        if self.banded:
+            return _BandFactor(self, data)
+        A = sps.csc_matrix((data, self.indices, self.indptr), shape=(self.size, self.size))
+        if self._permc is None:
+            fac = Factor(A)
+            # SuperLU's perm_c[j] is the new position of column j: the columns in their
+            # factorisation order are its inverse
+            self._permc = np.argsort(fac._lu.perm_c)
+            return fac
+        return _PermutedFactor(A[:, self._permc], self._permc)
+
+
+class _BandFactor:
+    """LAPACK banded LU of a :class:`FixedPattern` matrix; ``solve(b)``."""
+
+    def __init__(self, pat: FixedPattern, data: np.ndarray):
+        N, ld, kl, ku = pat.size, pat._ld, pat.kl, pat.ku
+        ab = np.bincount(pat._pos, weights=data, minlength=ld * N).reshape(N, ld).T
+        lu, ipiv, info = _dgbtrf(ab, kl, ku, overwrite_ab=1)
+        if info > 0:
+            raise Singular("exact zero pivot")
+        d = np.abs(lu[kl + ku])
+        if not d.min() > RCOND_MIN * d.max():        # also NaN
+            raise Singular("tiny pivot")
+        self.rcond = float(d.min() / d.max())
+        self._lu, self._ipiv, self._pat = lu, ipiv, pat
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        pat = self._pat
+        y, info = _dgbtrs(self._lu, pat.kl, pat.ku, np.asarray(b, dtype=float)[pat.perm], self._ipiv)
+        x = np.empty_like(y)
+        x[pat.perm] = y
+        return x
+
+
+class _PermutedFactor:
+    """SuperLU of ``A P_c`` with a fixed column ordering ``P_c``; ``solve(b)`` of ``A x = b``."""
+
+    def __init__(self, Ap, permc: np.ndarray):
+        try:
+            lu = spla.splu(Ap, permc_spec="NATURAL")
+        except RuntimeError as exc:  # "Factor is exactly singular"
+            raise Singular(str(exc)) from None
+        d = np.abs(lu.U.diagonal())
+        if not d.min() > RCOND_MIN * d.max():
+            raise Singular("tiny pivot")
+        self.rcond = float(d.min() / d.max())
+        self._lu, self._permc = lu, permc
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        y = self._lu.solve(np.asarray(b, dtype=float))
+        x = np.empty_like(y)
+        x[self._permc] = y
+        return x
 
 
 def dependent_rows(J, tol: float | None = None) -> tuple[int, list[int]]:

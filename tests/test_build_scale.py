@@ -1,0 +1,75 @@
+"""Build time at scale (issue 11): the closed-form virtual work of point forces and the
+unoptimised compilation of large kernels give the same numbers as the general paths."""
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import mechsys as ms
+from mechsys.compile import _backends
+from mechsys.compile._dynamics import _point_force_terms
+from mechsys.loads import Gravity
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_point_force_closed_form_equals_differentiated_virtual_work(dim):
+    """``Q_s = (d r_P / d s)^T F`` by SymPy's derivative of the point's location against
+    the closed form ``[F, (dA/ds c')^T F]``, at random coordinates (Euler parameters not
+    normalised: the identity holds for any values)."""
+    m = ms.Model2D() if dim == 2 else ms.Model3D()
+    a = sp.Symbol("a")
+    local = (0.3, -1.2) if dim == 2 else (0.3, -1.2, 0.7)
+    b = m.add_body("b", points={"P": (local[0] + a, *local[1:])}, mass=2.0)
+    F = sp.Matrix([1.5 * a, -2.0, 0.4][:dim])
+    P = b.point("P")
+    fast = _point_force_terms(m.space, b, P, F)
+    r = P.location()
+    slow = [sum(ri.diff(s) * fi for ri, fi in zip(r, F)) for s in b.q]
+    rng = np.random.default_rng(dim)
+    subs = {s: float(v) for s, v in zip([*b.q, a], rng.normal(size=len(b.q) + 1))}
+    got = [float(e.subs(subs)) for e in fast]
+    want = [float(e.subs(subs)) for e in slow]
+    np.testing.assert_allclose(got, want, rtol=1e-14, atol=1e-14)
+
+
+def test_point_depending_on_its_own_coordinates_takes_the_general_path():
+    m = ms.Model2D()
+    b = m.add_body("b", mass=1.0)
+    P = ms.Point(b, (b.q[2], 0))        # a local coordinate that moves with the angle
+    assert _point_force_terms(m.space, b, P, sp.Matrix([0, -1])) is None
+
+
+def test_gravity_forces_unchanged_on_a_model():
+    """Generalized gravity forces of a pendulum with an offset centroid against the
+    potential energy: ``Q = -dV/dq``."""
+    m = ms.Model2D()
+    b = m.add_body("rod", mass=3.0, centroid=(0.4, 0.1), inertia=0.2)
+    m.add(ms.Revolute2(m.ground.point((0, 0)), b.point((0, 0))))
+    m.add_load(Gravity((0, -1), 9.81))
+    dyn = m.compile().dynamics
+    V = dyn.potential
+    q = m.compile().layout.q_symbols
+    subs = dict(zip(q, (0.2, -0.3, 0.7)))
+    for s, Qs in zip(q, dyn.Q):
+        assert abs(float(Qs.subs(subs)) + float(V.diff(s).subs(subs))) < 1e-13
+
+
+def test_large_kernels_compile_unoptimised_with_the_same_values(monkeypatch):
+    if "symengine" not in _backends.available_backends():
+        pytest.skip("SymEngine not installed")
+    x, y = sp.symbols("x y")
+    exprs = [sp.sin(k * x) * y + sp.cos(y) ** k for k in range(1, 40)]
+    opt = _backends.compile_exprs([x, y], exprs, "symengine")
+    monkeypatch.setattr(_backends, "LARGE_KERNEL", 10)
+    seen = []
+    real = _backends._lambdify
+
+    def spy(args, ex, opt_level, cse=False):
+        seen.append(opt_level)
+        return real(args, ex, opt_level, cse)
+
+    monkeypatch.setattr(_backends, "_lambdify", spy)
+    big = _backends.compile_exprs([x, y], exprs, "symengine")
+    assert seen == [0]
+    for v in ([0.3, -1.1], [2.0, 0.5]):
+        np.testing.assert_allclose(big(np.array(v)), opt(np.array(v)), rtol=1e-15, atol=0)
