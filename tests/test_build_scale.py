@@ -11,12 +11,14 @@ from mechsys.compile._dynamics import _point_force_terms
 from mechsys.loads import Gravity
 
 
-@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("dim", [2, 3, "2-euler"])
 def test_point_force_closed_form_equals_differentiated_virtual_work(dim):
     """``Q_s = (d r_P / d s)^T F`` by SymPy's derivative of the point's location against
     the closed form ``[F, (dA/ds c')^T F]``, at random coordinates (Euler parameters not
     normalised: the identity holds for any values)."""
-    m = ms.Model2D() if dim == 2 else ms.Model3D()
+    euler = dim == "2-euler"            # planar bodies in (x, y, ei, ej) (12.4)
+    dim = 2 if euler else dim
+    m = ms.Model2D(orientation="euler") if euler else ms.Model2D() if dim == 2 else ms.Model3D()
     a = sp.Symbol("a")
     local = (0.3, -1.2) if dim == 2 else (0.3, -1.2, 0.7)
     b = m.add_body("b", points={"P": (local[0] + a, *local[1:])}, mass=2.0)

@@ -199,7 +199,7 @@ def _point_force_template(space) -> tuple:
     force, and ``(dA/ds c)^T F`` for each rotational coordinate ``s``, derived once per
     space."""
     dim = space.dim
-    rot = tuple(sp.Symbol(f"_rot{i}", real=True) for i in range(1 if dim == 2 else 4))
+    rot = tuple(sp.Symbol(f"_rot{i}", real=True) for i in range(space.ncoord - dim))
     c = tuple(sp.Symbol(f"_c{i}", real=True) for i in range(dim))
     F = tuple(sp.Symbol(f"_F{i}", real=True) for i in range(dim))
     A = space.rotation_matrix(list(rot))
