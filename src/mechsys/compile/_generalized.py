@@ -273,7 +273,6 @@ class RecursiveDynamics:
     recursive = True
 
     def __init__(self, system, model, bodies, loads):
-        from .._symbols import T as Tsym
         from ._dynamics import _mass_key, body_terms, generalized_forces, multiplier_symbols
 
         try:
