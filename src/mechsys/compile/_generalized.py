@@ -411,7 +411,7 @@ class RecursiveDynamics:
     # -- numbers -----------------------------------------------------------------------------
     def _engine(self):
         """The Numba forward pass and assembly (the ``fast`` extra; off with
-        ``MECHSYS_JIT=0``), or None for the plain-Python path (the same operations)."""
+        ``MECHSYS_JIT=0``), or False for the plain-Python path (the same operations)."""
         if self._numba is None:
             self._numba = False
             from ..solvers import _jit
@@ -422,52 +422,52 @@ class RecursiveDynamics:
                     from . import _generalized_jit as jit
 
                     self._numba = (jit, np.array([[p[0], p[1]] for p in ptrs], dtype=np.int64))
-        return self._numba or None
+        return self._numba
 
-    def evaluate(self, t, q, qd, lam, p):
-        """``(M (n, n), Q (n,), Qv (n,), Phi_q values, gamma)`` at one state."""
+    def _workspace(self):
         kid, par, root, nqm, goff, gcols, nq = self._tree
         S = len(kid)
+        kmax = max(1, int(np.diff(goff).max(initial=1)))
+        width = max(nq, kmax)
+        nin = 1 + 2 * nq + 2 * kmax + len(self.system.p_values)
+        nout = nq * (4 + nq + kmax + nq)
+        z = np.zeros
+        return (z((S, nq)), z((S, nq)), z((S, nq, nq)), z((S, nq, kmax)), z((S, nq)), z((S, nq, nq)),
+                z((S, nq)), z((S, nq, nq)), z((S, nq)), z((S, nq)), z((nq, width)), z((nq, width)),
+                z(nin), z(nout))
+
+    def evaluate(self, t, q, qd, lam, p, K=None):
+        """``(M (n, n), Q (n,), Qv (n,), Phi_q values, gamma)`` at one state; with ``K``
+        (zeros, at least ``(n, n)``) the mass matrix is written into ``K[:n, :n]``, which is
+        returned as ``M``."""
+        kid, par, root, nqm, goff, gcols, nq = self._tree
         if self._work is None:
-            kmax = max(1, int(np.diff(goff).max(initial=1)))
-            width = max(nq, kmax)
-            nin = 1 + 2 * nq + 2 * kmax + len(self.system.p_values)
-            nout = nq * (4 + nq + kmax + nq)
-            self._work = dict(P=np.zeros((S, nq)), Pd=np.zeros((S, nq)), FP=np.zeros((S, nq, nq)),
-                              Fg=np.zeros((S, nq, kmax)), H=np.zeros((S, nq)),
-                              Mb=np.zeros((S, nq, nq)), Qvb=np.zeros((S, nq)), C=np.zeros((S, nq, nq)),
-                              BQ=np.zeros((S, nq)), BV=np.zeros((S, nq)), X=np.zeros((nq, width)),
-                              Y=np.zeros((nq, width)), x=np.zeros(nin), out=np.zeros(nout))
-        w = self._work
-        q = np.ascontiguousarray(q, dtype=float)
-        qd = np.ascontiguousarray(qd, dtype=float)
-        p = np.ascontiguousarray(p, dtype=float)
-        eng = self._engine()
-        if eng is not None:
+            self._work = self._workspace()
+        P, Pd, FP, Fg, H, Mb, Qvb, C, BQ, BV, X, Y, xbuf, obuf = self._work
+        n = self.system.n
+        q = np.asarray(q, dtype=float)
+        qd = np.asarray(qd, dtype=float)
+        p = np.asarray(p, dtype=float)
+        eng = self._numba if self._numba is not None else self._engine()
+        if eng:
             jit, ptrs = eng
-            jit.forward(ptrs, kid, par, root, nqm, goff, gcols, nq, float(t), q, qd, p, w["x"],
-                        w["out"], w["P"], w["Pd"], w["FP"], w["Fg"], w["H"], w["Mb"], w["Qvb"])
+            jit.forward(ptrs, kid, par, root, nqm, goff, gcols, nq, float(t), q, qd, p, xbuf, obuf,
+                        P, Pd, FP, Fg, H, Mb, Qvb)
         else:
             _forward_py(self._kernels, kid, par, root, nqm, goff, gcols, nq, float(t), q, qd, p,
-                        w["P"], w["Pd"], w["FP"], w["Fg"], w["H"], w["Mb"], w["Qvb"])
-        n = self.system.n
+                        P, Pd, FP, Fg, H, Mb, Qvb)
         kM, kJ, _, kg, _ = self._sizes
-        out = self._main(np.concatenate(([t], q, qd, np.asarray(lam, dtype=float), p, np.zeros(n),
-                                         w["P"].ravel(), w["Pd"].ravel())))
-        M = np.zeros((n, n))
+        out = self._main(np.concatenate(((t,), q, qd, lam, p, np.zeros(n), P.ravel(), Pd.ravel())))
+        M = np.zeros((n, n)) if K is None else K[:n, :n]
         M[self._M_rows, self._M_cols] = out[:kM]
-        o = kM
-        jv = out[o:o + kJ]
-        o += kJ
-        Q = out[o:o + n].copy()
-        Qv = out[o + n:o + 2 * n].copy()
+        o = kM + kJ
+        Q = out[o:o + n]
+        Qv = out[o + n:o + 2 * n]
         o += 2 * n
-        gamma = out[o:o + kg]
-        Qp = out[o + kg:].reshape(S, nq)
-        asm = eng[0].assemble if eng is not None else _assemble
-        asm(par, root, nqm, goff, gcols, nq, w["FP"], w["Fg"], w["H"], w["Mb"], w["Qvb"],
-            np.ascontiguousarray(Qp), w["C"], w["BQ"], w["BV"], w["X"], w["Y"], M, Q, Qv)
-        return M, Q, Qv, jv, gamma
+        Qp = out[o + kg:].reshape(len(kid), nq)
+        (jit.assemble if eng else _assemble)(par, root, nqm, goff, gcols, nq, FP, Fg, H, Mb, Qvb, Qp,
+                                             C, BQ, BV, X, Y, M, Q, Qv)
+        return M, Q, Qv, out[kM:kM + kJ], out[o:o + kg]
 
     def terms(self, t, q, qd, lam, p, qdd=None):
         """``(M (n, n) dense, Q (n,), Qv (n,))`` at one state, by the recursion."""
@@ -493,16 +493,14 @@ class _RecursiveFreeKernel:
         self._rows, self._cols = s.jac_rows, s.jac_cols
 
     def __call__(self, t, q, qd, lam, p):
-        import scipy.sparse as sps
-
-        n, N = self.n, self.N
-        M, Q, Qv, jv, gamma = self.dyn.evaluate(t, q, qd, lam, p)
-        K = np.zeros((N, N))
-        K[:n, :n] = M
+        # dense even above the sparse threshold: the mass matrix of a chain in joint
+        # coordinates is full, and LAPACK beats a sparse LU on it (the solvers accept both)
+        n = self.n
+        K = np.zeros((self.N, self.N))
+        _, Q, Qv, jv, gamma = self.dyn.evaluate(t, q, qd, lam, p, K)
         K[self._cols, n + self._rows] = jv
         K[n + self._rows, self._cols] = jv
-        rhs = np.concatenate((Q + Qv, gamma))
-        return (sps.csc_matrix(K) if self.sparse else K), rhs
+        return K, np.concatenate((Q + Qv, gamma))
 
 
 # The numeric recursion as plain loops: run by Python when Numba is missing, compiled by
