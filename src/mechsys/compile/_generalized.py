@@ -432,32 +432,40 @@ class RecursiveDynamics:
         nin = 1 + 2 * nq + 2 * kmax + len(self.system.p_values)
         nout = nq * (4 + nq + kmax + nq)
         z = np.zeros
-        return (z((S, nq)), z((S, nq)), z((S, nq, nq)), z((S, nq, kmax)), z((S, nq)), z((S, nq, nq)),
-                z((S, nq)), z((S, nq, nq)), z((S, nq)), z((S, nq)), z((nq, width)), z((nq, width)),
-                z(nin), z(nout))
+        return dict(P=z((S, nq)), Pd=z((S, nq)), FP=z((S, nq, nq)), Fg=z((S, nq, kmax)), H=z((S, nq)),
+                    HL=z((S, nq)), Mb=z((S, nq, nq)), Qvb=z((S, nq)), C=z((S, nq, nq)), BQ=z((S, nq)),
+                    BV=z((S, nq)), X=z((nq, width)), Y=z((nq, width)), x=z(nin), out=z(nout),
+                    U=z((S, nq, kmax)), L=z((S, kmax, kmax)), Z=z((kmax, nq + 1)), W=z((nq, nq + 1)))
 
-    def evaluate(self, t, q, qd, lam, p, K=None):
-        """``(M (n, n), Q (n,), Qv (n,), Phi_q values, gamma)`` at one state; with ``K``
-        (zeros, at least ``(n, n)``) the mass matrix is written into ``K[:n, :n]``, which is
-        returned as ``M``."""
+    def _forward(self, t, q, qd, lam, p):
+        """Joint kernels (masters first), then the kernel of the rest: ``(out, eng, w)``."""
         kid, par, root, nqm, goff, gcols, nq = self._tree
         if self._work is None:
             self._work = self._workspace()
-        P, Pd, FP, Fg, H, Mb, Qvb, C, BQ, BV, X, Y, xbuf, obuf = self._work
+        w = self._work
         n = self.system.n
         q = np.asarray(q, dtype=float)
         qd = np.asarray(qd, dtype=float)
         p = np.asarray(p, dtype=float)
         eng = self._numba if self._numba is not None else self._engine()
+        P, Pd = w["P"], w["Pd"]
         if eng:
-            jit, ptrs = eng
-            jit.forward(ptrs, kid, par, root, nqm, goff, gcols, nq, float(t), q, qd, p, xbuf, obuf,
-                        P, Pd, FP, Fg, H, Mb, Qvb)
+            eng[0].forward(eng[1], kid, par, root, nqm, goff, gcols, nq, float(t), q, qd, p, w["x"],
+                           w["out"], P, Pd, w["FP"], w["Fg"], w["H"], w["HL"], w["Mb"], w["Qvb"])
         else:
             _forward_py(self._kernels, kid, par, root, nqm, goff, gcols, nq, float(t), q, qd, p,
-                        P, Pd, FP, Fg, H, Mb, Qvb)
-        kM, kJ, _, kg, _ = self._sizes
+                        P, Pd, w["FP"], w["Fg"], w["H"], w["HL"], w["Mb"], w["Qvb"])
         out = self._main(np.concatenate(((t,), q, qd, lam, p, np.zeros(n), P.ravel(), Pd.ravel())))
+        return out, eng, w
+
+    def evaluate(self, t, q, qd, lam, p, K=None):
+        """``(M (n, n), Q (n,), Qv (n,), Phi_q values, gamma)`` at one state (composite
+        bodies); with ``K`` (zeros, at least ``(n, n)``) the mass matrix is written into
+        ``K[:n, :n]``, which is returned as ``M``."""
+        kid, par, root, nqm, goff, gcols, nq = self._tree
+        out, eng, w = self._forward(t, q, qd, lam, p)
+        n = self.system.n
+        kM, kJ, _, kg, _ = self._sizes
         M = np.zeros((n, n)) if K is None else K[:n, :n]
         M[self._M_rows, self._M_cols] = out[:kM]
         o = kM + kJ
@@ -465,9 +473,36 @@ class RecursiveDynamics:
         Qv = out[o + n:o + 2 * n]
         o += 2 * n
         Qp = out[o + kg:].reshape(len(kid), nq)
-        (jit.assemble if eng else _assemble)(par, root, nqm, goff, gcols, nq, FP, Fg, H, Mb, Qvb, Qp,
-                                             C, BQ, BV, X, Y, M, Q, Qv)
+        (eng[0].assemble if eng else _assemble)(
+            par, root, nqm, goff, gcols, nq, w["FP"], w["Fg"], w["H"], w["Mb"], w["Qvb"], Qp, w["C"],
+            w["BQ"], w["BV"], w["X"], w["Y"], M, Q, Qv)
         return M, Q, Qv, out[kM:kM + kJ], out[o:o + kg]
+
+    @property
+    def tree_only(self) -> bool:
+        """Only slaves on ground and their coordinates, no constraint equation: the free
+        accelerations come from the O(N) articulated-body recursion (:meth:`accelerations`)."""
+        kid, par, root, nqm, goff, gcols, nq = self._tree
+        return self.system.m == 0 and len(gcols) == self.system.n and bool((root < 0).all())
+
+    def accelerations(self, t, q, qd, p):
+        """Free accelerations ``qdd`` (n,) by the articulated-body recursion
+        (:func:`_articulated`) when :attr:`tree_only`, else None; None too when a joint's
+        motion carries no mass (the full system then gives the diagnosis)."""
+        if not self.tree_only:
+            return None
+        kid, par, root, nqm, goff, gcols, nq = self._tree
+        out, eng, w = self._forward(t, q, qd, np.zeros(0), p)
+        n = self.system.n
+        kM, kJ, _, kg, _ = self._sizes
+        o = kM + kJ
+        Qd = out[o:o + n] + out[o + n:o + 2 * n]
+        Qp = out[o + 2 * n + kg:].reshape(len(kid), nq)
+        qdd = np.empty(n)
+        bad = (eng[0].articulated if eng else _articulated)(
+            par, nqm, goff, gcols, nq, w["FP"], w["Fg"], w["HL"], w["Mb"], w["Qvb"], Qp, Qd, w["C"],
+            w["BQ"], w["U"], w["L"], w["Z"], w["W"], qdd, 1e-13)
+        return qdd if bad < 0 else None
 
     def terms(self, t, q, qd, lam, p, qdd=None):
         """``(M (n, n) dense, Q (n,), Qv (n,))`` at one state, by the recursion."""
@@ -491,6 +526,8 @@ class _RecursiveFreeKernel:
         self.n, self.m = s.n, s.m
         self.N = s.n + s.m
         self._rows, self._cols = s.jac_rows, s.jac_cols
+        #: ``(t, q, qd, p) -> qdd`` or None: the O(N) path of a pure tree (``solvers/_free.py``)
+        self.accelerations = dyn.accelerations if dyn.tree_only else None
 
     def __call__(self, t, q, qd, lam, p):
         # dense even above the sparse threshold: the mass matrix of a chain in joint
@@ -531,7 +568,7 @@ def _fill(x, s, t, q, qd, p, par, root, nqm, goff, gcols, P, Pd):
         x[o + i] = p[i]
 
 
-def _unpack(out, s, nq, nm, k, par, P, Pd, FP, Fg, H, Mb, Qvb):
+def _unpack(out, s, nq, nm, k, par, P, Pd, FP, Fg, H, HL, Mb, Qvb):
     """Store a joint kernel's outputs; ``h_s = F_P h_master + h_loc``."""
     for i in range(nq):
         P[s, i] = out[i]
@@ -548,6 +585,7 @@ def _unpack(out, s, nq, nm, k, par, P, Pd, FP, Fg, H, Mb, Qvb):
     a = par[s]
     for i in range(nq):
         h = out[o + i]
+        HL[s, i] = h
         if a >= 0:
             for j in range(nm):
                 h += FP[s, i, j] * H[a, j]
@@ -562,13 +600,13 @@ def _unpack(out, s, nq, nm, k, par, P, Pd, FP, Fg, H, Mb, Qvb):
 
 
 def _forward_py(kernels, kid, par, root, nqm, goff, gcols, nq, t, q, qd, p, P, Pd, FP, Fg, H,
-                Mb, Qvb):
+                HL, Mb, Qvb):
     for s in range(len(kid)):
         nm = nqm[s]
         k = goff[s + 1] - goff[s]
         x = np.empty(1 + 2 * nm + 2 * k + p.size)
         _fill(x, s, t, q, qd, p, par, root, nqm, goff, gcols, P, Pd)
-        _unpack(kernels[kid[s]](x), s, nq, nm, k, par, P, Pd, FP, Fg, H, Mb, Qvb)
+        _unpack(kernels[kid[s]](x), s, nq, nm, k, par, P, Pd, FP, Fg, H, HL, Mb, Qvb)
 
 
 def _assemble(par, root, nqm, goff, gcols, nq, FP, Fg, H, Mb, Qvb, Qp, C, BQ, BV, X, Y, M, Q, Qv):
@@ -672,3 +710,126 @@ def _assemble(par, root, nqm, goff, gcols, nq, FP, Fg, H, Mb, Qvb, Qp, C, BQ, BV
                         M[r + i, gcols[g0 + jj]] += X[i, jj]
                         M[gcols[g0 + jj], r + i] += X[i, jj]
                 break
+
+
+def _articulated(par, nqm, goff, gcols, nq, FP, Fg, HL, Mb, Qvb, Qp, Qd, IA, PA, U, L, Z, W, qdd, tol):
+    r"""Free accelerations of a tree of slaves on ground with no constraint equations, in
+    O(N): the articulated-body algorithm in pose coordinates. Backward, with ``IA_s``,
+    ``PA_s`` the subtree's articulated inertia and force on the slave's pose (leaf: ``M_s``,
+    ``Qv_s + Q_s``), ``U = IA F_g``, ``D = F_g^T U`` (Cholesky ``L``), ``Qd`` the forces
+    applied to the coordinates themselves::
+
+        Ia = IA - U D^-1 U^T,   pa = PA - U D^-1 (F_g^T PA + Qd_g)
+        IA_master += F_P^T Ia F_P,   PA_master += F_P^T (pa - Ia h_loc)
+
+    forward, masters first (``pdd`` of ground = 0)::
+
+        w = F_P pdd_master + h_loc,   g_dd = D^-1 (F_g^T PA + Qd_g - U^T w),   pdd = w + F_g g_dd
+
+    Writes ``qdd``; returns -1, or the index of the slave whose ``D`` is not positive
+    definite (no mass on that joint's motion: the caller falls back to the full system)."""
+    S = par.size
+    for s in range(S):
+        for i in range(nq):
+            PA[s, i] = Qvb[s, i] + Qp[s, i]
+            for j in range(nq):
+                IA[s, i, j] = Mb[s, i, j]
+    for s in range(S - 1, -1, -1):
+        g0 = goff[s]
+        k = goff[s + 1] - g0
+        big = 0.0
+        for i in range(nq):
+            big = max(big, abs(IA[s, i, i]))
+        for i in range(nq):
+            for jj in range(k):
+                v = 0.0
+                for l in range(nq):  # noqa: E741
+                    v += IA[s, i, l] * Fg[s, l, jj]
+                U[s, i, jj] = v
+        for ii in range(k):      # Cholesky of D = Fg^T U, lower triangle in L
+            for jj in range(ii + 1):
+                v = 0.0
+                for l in range(nq):  # noqa: E741
+                    v += Fg[s, l, ii] * U[s, l, jj]
+                for r in range(jj):
+                    v -= L[s, ii, r] * L[s, jj, r]
+                if ii == jj:
+                    if not v > tol * big:
+                        return s
+                    L[s, ii, ii] = np.sqrt(v)
+                else:
+                    L[s, ii, jj] = v / L[s, jj, jj]
+        nm = nqm[s]
+        if nm == 0:
+            continue
+        a = par[s]
+        # Z = D^-1 [U^T | Fg^T PA]  (k x (nq + 1)): forward and back substitution
+        for c in range(nq + 1):
+            for ii in range(k):
+                if c < nq:
+                    v = U[s, c, ii]
+                else:
+                    v = Qd[gcols[g0 + ii]]
+                    for l in range(nq):  # noqa: E741
+                        v += Fg[s, l, ii] * PA[s, l]
+                for r in range(ii):
+                    v -= L[s, ii, r] * Z[r, c]
+                Z[ii, c] = v / L[s, ii, ii]
+            for ii in range(k - 1, -1, -1):
+                v = Z[ii, c]
+                for r in range(ii + 1, k):
+                    v -= L[s, r, ii] * Z[r, c]
+                Z[ii, c] = v / L[s, ii, ii]
+        # W[:, :nq] = Ia, W[:, nq] = pa - Ia h_loc
+        for i in range(nq):
+            for j in range(nq):
+                v = IA[s, i, j]
+                for ii in range(k):
+                    v -= U[s, i, ii] * Z[ii, j]
+                W[i, j] = v
+            v = PA[s, i]
+            for ii in range(k):
+                v -= U[s, i, ii] * Z[ii, nq]
+            for j in range(nq):
+                v -= W[i, j] * HL[s, j]
+            W[i, nq] = v
+        for i in range(nm):
+            v = 0.0
+            for l in range(nq):  # noqa: E741
+                v += FP[s, l, i] * W[l, nq]
+            PA[a, i] += v
+            for j in range(nm):
+                v = 0.0
+                for l in range(nq):  # noqa: E741
+                    for r in range(nq):
+                        v += FP[s, l, i] * W[l, r] * FP[s, r, j]
+                IA[a, i, j] += v
+    for s in range(S):
+        g0 = goff[s]
+        k = goff[s + 1] - g0
+        nm = nqm[s]
+        a = par[s]
+        for i in range(nq):           # w, kept in W[:, 0]
+            v = HL[s, i]
+            for j in range(nm):
+                v += FP[s, i, j] * PA[a, j]
+            W[i, 0] = v
+        for ii in range(k):
+            v = Qd[gcols[g0 + ii]]
+            for l in range(nq):  # noqa: E741
+                v += Fg[s, l, ii] * PA[s, l] - U[s, l, ii] * W[l, 0]
+            for r in range(ii):
+                v -= L[s, ii, r] * Z[r, 0]
+            Z[ii, 0] = v / L[s, ii, ii]
+        for ii in range(k - 1, -1, -1):
+            v = Z[ii, 0]
+            for r in range(ii + 1, k):
+                v -= L[s, r, ii] * Z[r, 0]
+            Z[ii, 0] = v / L[s, ii, ii]
+            qdd[gcols[g0 + ii]] = Z[ii, 0]
+        for i in range(nq):           # pdd of this slave, in PA (no longer needed)
+            v = W[i, 0]
+            for ii in range(k):
+                v += Fg[s, i, ii] * Z[ii, 0]
+            PA[s, i] = v
+    return -1

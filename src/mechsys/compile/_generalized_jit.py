@@ -8,16 +8,17 @@ from __future__ import annotations
 import numba as nb
 
 from ..solvers._jit_loop import _ccall
-from ._generalized import _assemble, _fill, _unpack
+from ._generalized import _articulated, _assemble, _fill, _unpack
 
 _fill_nb = nb.njit(cache=True)(_fill)
 _unpack_nb = nb.njit(cache=True)(_unpack)
 assemble = nb.njit(cache=True)(_assemble)
+articulated = nb.njit(cache=True)(_articulated)
 
 
 @nb.njit(cache=True)
 def forward(ptrs, kid, par, root, nqm, goff, gcols, nq, t, q, qd, p, xbuf, obuf, P, Pd, FP, Fg, H,
-            Mb, Qvb):
+            HL, Mb, Qvb):
     """Masters first: each slave's kernel at its master's pose, then its outputs stored."""
     for s in range(kid.size):
         nm = nqm[s]
@@ -25,4 +26,4 @@ def forward(ptrs, kid, par, root, nqm, goff, gcols, nq, t, q, qd, p, xbuf, obuf,
         x = xbuf[:1 + 2 * nm + 2 * k + p.size]
         _fill_nb(x, s, t, q, qd, p, par, root, nqm, goff, gcols, P, Pd)
         _ccall(ptrs[kid[s], 0], (obuf, x, ptrs[kid[s], 1]))
-        _unpack_nb(obuf, s, nq, nm, k, par, P, Pd, FP, Fg, H, Mb, Qvb)
+        _unpack_nb(obuf, s, nq, nm, k, par, P, Pd, FP, Fg, H, HL, Mb, Qvb)
