@@ -237,6 +237,15 @@ class _SymengineCompiled(Compiled):
     def __init__(self, args, exprs, opt_level: int = 3, cse: bool = False):
         self.nout = len(exprs)
         exprs = [_se.sympify(e) for e in exprs]
+        if cse:
+            # SymEngine's CSE names its temporaries x0, x1, ..., avoiding only the symbols that
+            # occur in the expressions: an argument of such a name that does not occur (a
+            # coordinate x4 absent from a mass matrix) was then read as the temporary (wrong
+            # values). Arguments get names no temporary can take.
+            safe = [_se.Symbol(f"_mechsys_arg{i}") for i in range(len(args))]
+            ren = {_se.sympify(a): b for a, b in zip(args, safe)}
+            exprs = [e.xreplace(ren) for e in exprs]
+            args = safe
         pieces, exprs = _split_piecewise(exprs)
         self._pre = None
         self._npieces = len(pieces)

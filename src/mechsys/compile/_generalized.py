@@ -299,8 +299,6 @@ class RecursiveDynamics:
         gcols: list = []
         kid = np.zeros(S, dtype=np.int64)
         kernels, keys = [], {}
-        from ._backends import _fingerprint
-
         for s, b in enumerate(order):
             j = b.gen_joint
             mst = j.master
@@ -318,8 +316,9 @@ class RecursiveDynamics:
             goff[s + 1] = len(gcols)
             args, exprs, nm, _ = _joint_exprs(space, b, lay.p_symbols, conv)
             nqm[s] = nm
-            key = (tuple(map(str, args)), _fingerprint([se.sympify(e) for e in exprs])
-                   if se is not None else tuple(map(str, exprs)))
+            # equal expressions hash equal (a printed form or a tree hash may depend on the
+            # order SymEngine keeps the terms of a sum in)
+            key = (tuple(map(str, args)), tuple(exprs))
             if key not in keys:
                 keys[key] = len(kernels)
                 kernels.append(_compile(args, exprs, system.backend))
