@@ -241,11 +241,14 @@ class _SymengineCompiled(Compiled):
             # SymEngine's CSE names its temporaries x0, x1, ..., avoiding only the symbols that
             # occur in the expressions: an argument of such a name that does not occur (a
             # coordinate x4 absent from a mass matrix) was then read as the temporary (wrong
-            # values). Arguments get names no temporary can take.
-            safe = [_se.Symbol(f"_mechsys_arg{i}") for i in range(len(args))]
-            ren = {_se.sympify(a): b for a, b in zip(args, safe)}
-            exprs = [e.xreplace(ren) for e in exprs]
-            args = safe
+            # values). Such arguments get names no temporary can take.
+            import re
+
+            ren = {_se.sympify(a): _se.Symbol(f"_mechsys_arg{i}") for i, a in enumerate(args)
+                   if re.fullmatch(r"x\d+", str(a))}
+            if ren:
+                exprs = list(_se.DenseMatrix(len(exprs), 1, exprs).xreplace(ren))
+                args = [ren.get(_se.sympify(a), a) for a in args]
         pieces, exprs = _split_piecewise(exprs)
         self._pre = None
         self._npieces = len(pieces)
