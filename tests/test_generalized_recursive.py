@@ -200,3 +200,15 @@ def test_cse_kernel_with_an_absent_argument_named_like_a_temporary():
     for backend in ("symengine", "sympy"):
         np.testing.assert_allclose(compile_exprs([x4, th, phi], exprs, backend, cse=True)(x), want,
                                    rtol=1e-14)
+
+
+def test_free_system_pickles(monkeypatch):
+    """A sweep's payload may carry a free system: the recursion's per-thread work arrays and
+    C entry points are rebuilt after unpickling."""
+    import pickle
+
+    m, s, d = _dynamics(monkeypatch, gen_pendulum, "recursive")
+    free = m.free()
+    a = free.solve(0.0, initial_condition={"t1_d": 0.5}).qdd
+    b = pickle.loads(pickle.dumps(free)).solve(0.0, initial_condition={"t1_d": 0.5}).qdd
+    np.testing.assert_allclose(b, a, rtol=1e-15)

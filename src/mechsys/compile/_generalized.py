@@ -377,8 +377,32 @@ class RecursiveDynamics:
         self._main = compile_exprs([*self.args(), *pose_syms, *vel_syms], exprs, system.backend,
                                    cse=system.cse)
         self._sizes = (len(entries), len(jac), lay.n, len(gamma), S * nq)
-        self._work = None
+        import threading
+
+        self._local = threading.local()      # work arrays per thread (sweeps may use threads)
         self._numba = None
+
+    def __getstate__(self):
+        """Without the per-thread work arrays and the kernels' C entry points (ctypes): a
+        pickled free system (a sweep's payload) rebuilds them on first use."""
+        import copy
+
+        state = dict(self.__dict__)
+        state["_local"] = state["_numba"] = None
+        kernels = []
+        for k in self._kernels:
+            if hasattr(k, "_cfun"):
+                k = copy.copy(k)
+                del k._cfun
+            kernels.append(k)
+        state["_kernels"] = kernels
+        return state
+
+    def __setstate__(self, state):
+        import threading
+
+        self.__dict__.update(state)
+        self._local = threading.local()
 
     # -- the symbolic twin -------------------------------------------------------------------
     def __getattr__(self, name):
@@ -439,9 +463,9 @@ class RecursiveDynamics:
     def _forward(self, t, q, qd, lam, p):
         """Joint kernels (masters first), then the kernel of the rest: ``(out, eng, w)``."""
         kid, par, root, nqm, goff, gcols, nq = self._tree
-        if self._work is None:
-            self._work = self._workspace()
-        w = self._work
+        w = getattr(self._local, "work", None)
+        if w is None:
+            w = self._local.work = self._workspace()
         n = self.system.n
         q = np.asarray(q, dtype=float)
         qd = np.asarray(qd, dtype=float)
