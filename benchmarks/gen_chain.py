@@ -217,7 +217,8 @@ def report(rows) -> str:
                  f"{c['Exudyn']} | {c['MuJoCo']} | {p['cpu'] * 1e3 / best:.2f} |")
     L += ["", "The symbolic minimal-coordinate mass matrix is dense (`J^T M_b J` summed over the "
           "links): N^2 entries, each a sum over the links beyond both joints, so its symbolic "
-          "size and compile time grow like N^4 (16.7 s at N = 32, minutes at 64, hours at 256), "
+          "size and compile time grow like N^4 (the symbolic rows above; minutes at N = 64, "
+          "hours at 256), "
           "which is why the recursive formulation is the default for chains of 8 Gen joints and "
           "more: one small kernel per distinct joint (here two: the first joint on ground and "
           "the others), compile time about linear in N (the rest is building the model and its "
