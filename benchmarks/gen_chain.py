@@ -220,7 +220,7 @@ def report(rows) -> str:
           "size and compile time grow like N^4 (the symbolic rows above; minutes at N = 64, "
           "hours at 256), "
           "which is why the recursive formulation is the default for chains of 8 Gen joints and "
-          "more: one small kernel per distinct joint (here two: the first joint on ground and "
+          "more (3D: 4): one small kernel per distinct joint (here two: the first joint on ground and "
           "the others), compile time about linear in N (the rest is building the model and its "
           "slave kinematics), and the free accelerations of a tree of Gen joints on ground by "
           "the O(N) articulated-body recursion (Numba). Mixed models and models with "

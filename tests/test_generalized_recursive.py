@@ -212,3 +212,30 @@ def test_free_system_pickles(monkeypatch):
     a = free.solve(0.0, initial_condition={"t1_d": 0.5}).qdd
     b = pickle.loads(pickle.dumps(free)).solve(0.0, initial_condition={"t1_d": 0.5}).qdd
     np.testing.assert_allclose(b, a, rtol=1e-15)
+
+
+def test_other_3d_gen_joints(monkeypatch):
+    """A spatial chain of a universal joint (two angles), a cylindrical joint (slide and
+    angle) and a prismatic joint: the joints with two coordinates and the slides, on Euler-
+    parameter poses; both paths agree on M, Q, Qv and the accelerations."""
+    def build():
+        m = ms.Model3D()
+        bs = [m.add_body(f"b{k}", points={"o": (0, 0, 0), "e": (0.8, 0, 0)}, mass=1.0 + k,
+                         centroid=(0.4, 0.05, 0.02), inertia=(0.02, 0.05, 0.06, 0.001, 0.0, 0.002))
+              for k in range(3)]
+        m.add(ms.GenOrthoRevolute4(bs[0].axis("o", (1, 0, 0)), m.ground.axis((0, 0, 0), (0, 0, 1)),
+                                   ("a0", 0.2), ("b0", 0.3)), name="u")
+        m.add(ms.GenCylindrical4(bs[1].axis("o", (1, 0, 0)), bs[0].axis("e", (1, 0, 0)),
+                                 ("s1", 0.1), ("c1", 0.4)), name="cyl")
+        m.add(ms.GenTranslate5(bs[2].axis("o", (0, 1, 0)), bs[1].axis("e", (0, 1, 0)), ("s2", 0.2)),
+              name="pri")
+        m.add_load(ms.Gravity((0, 0, -1), 9.81))
+        # (a spring to a slave point makes the symbolic path's compile minutes long)
+        m.add_load(ms.Force(bs[2].point("e"), (1, 2, -1), 3.0))
+        m.add_load(ms.Moment("b1", (0.2, -0.1, 0.3), 0.5, reaction="b0"))
+        return m
+
+    d = _compare_terms(monkeypatch, build, states=1)
+    assert d.tree_only and d.nslaves == 3 and d.system.n == 5
+    monkeypatch.setenv("MECHSYS_GEN_DYNAMICS", "auto")
+    assert not isinstance(build().free().system.dynamics, RecursiveDynamics)   # 3 < 4 slaves

@@ -123,8 +123,9 @@ def compile_with_slaves(system, args, exprs):
 
 import os  # noqa: E402
 
-#: ``MECHSYS_GEN_DYNAMICS=auto``: the recursive path is used from this many slave bodies on
-RECURSIVE_AUTO = 8
+#: ``MECHSYS_GEN_DYNAMICS=auto``: the recursive path is used from this many slave bodies on,
+#: planar and spatial (measured: decision 0014; a 3D chain's symbolic matrix grows faster)
+RECURSIVE_AUTO = {2: 8, 3: 4}
 
 
 def gen_dynamics_mode() -> str:
@@ -144,14 +145,14 @@ class _Unsupported(Exception):
 def make_dynamics(system, model, bodies, loads):
     """The :class:`~mechsys.compile._dynamics.Dynamics` of a system with Gen joints: the
     symbolic projection (few slaves, or ``MECHSYS_GEN_DYNAMICS=symbolic``) or
-    :class:`RecursiveDynamics` (``auto`` from :data:`RECURSIVE_AUTO` slaves on, or
-    ``recursive``). In ``auto`` a model the recursion does not cover goes to the symbolic
+    :class:`RecursiveDynamics` (``auto`` from :data:`RECURSIVE_AUTO` slaves on: 8 planar, 4
+    spatial; or ``recursive``). In ``auto`` a model the recursion does not cover goes to the symbolic
     path; forced, it raises ``ModelError`` with the reason."""
     from ._dynamics import Dynamics
 
     mode = gen_dynamics_mode()
     nslaves = sum(1 for b in bodies if b.gen_joint is not None)
-    if mode == "symbolic" or (mode == "auto" and nslaves < RECURSIVE_AUTO):
+    if mode == "symbolic" or (mode == "auto" and nslaves < RECURSIVE_AUTO[model.space.dim]):
         return Dynamics(system, model, bodies, loads)
     try:
         return RecursiveDynamics(system, model, bodies, loads)
