@@ -1,6 +1,8 @@
 r"""The compiled side of generalized-coordinate joints (``constraints/_generalized.py``):
-the slaves' inertia projected on the independent coordinates and outputs of slave symbols
-compiled in two stages (decision 0010). ``kin`` is the model's ``GenKinematics``."""
+the slaves' inertia projected symbolically on the independent coordinates and outputs of
+slave symbols compiled in two stages (decision 0010; ``kin`` is the model's
+``GenKinematics``), and the recursive dynamics for long chains (decision 0014:
+``RecursiveDynamics``, per-joint kernels, composite and articulated-body recursions)."""
 
 from __future__ import annotations
 
