@@ -237,6 +237,18 @@ class _SymengineCompiled(Compiled):
     def __init__(self, args, exprs, opt_level: int = 3, cse: bool = False):
         self.nout = len(exprs)
         exprs = [_se.sympify(e) for e in exprs]
+        if cse:
+            # SymEngine's CSE names its temporaries x0, x1, ..., avoiding only the symbols that
+            # occur in the expressions: an argument of such a name that does not occur (a
+            # coordinate x4 absent from a mass matrix) was then read as the temporary (wrong
+            # values). Such arguments get names no temporary can take.
+            import re
+
+            ren = {_se.sympify(a): _se.Symbol(f"_mechsys_arg{i}") for i, a in enumerate(args)
+                   if re.fullmatch(r"x\d+", str(a))}
+            if ren:
+                exprs = list(_se.DenseMatrix(len(exprs), 1, exprs).xreplace(ren))
+                args = [ren.get(_se.sympify(a), a) for a in args]
         pieces, exprs = _split_piecewise(exprs)
         self._pre = None
         self._npieces = len(pieces)

@@ -130,8 +130,11 @@ def body_terms(space, q: tuple, qd: tuple, mass, centroid: tuple, inertia: tuple
     return rep(T), [[rep(e) for e in row] for row in M], [rep(e) for e in Qv]
 
 
-def generalized_forces(model, loads, layout) -> list:
-    """Applied generalized forces ``Q`` (n,) of ``loads`` by virtual work."""
+def generalized_forces(model, loads, layout, slaves: dict | None = None) -> list:
+    """Applied generalized forces ``Q`` (n,) of ``loads`` by virtual work. With ``slaves``
+    (a dict, recursive Gen dynamics: ``compile/_generalized.py``) the forces on slave bodies
+    are not projected: ``slaves[body]`` receives them on the slave's own pose coordinates, and
+    slave symbols stay in ``Q``."""
     from ..loads._loads import BodyMoment, DirectLoad, PointForce
 
     n = layout.n
@@ -160,6 +163,10 @@ def generalized_forces(model, loads, layout) -> list:
                     continue
                 # virtual work: d(velocity)/d(qd_s) = d(location)/d(q_s) for a body point
                 r = list(c.point.location())
+                if slave and slaves is not None:
+                    _collect(slaves, body, [sp.Add(*(ri.diff(s) * fi for ri, fi in zip(r, F)))
+                                            for s in body.q])
+                    continue
                 if slave:  # a slave: project on q (J^T Q_p)
                     _project(projected, body, [sp.Add(*(ri.diff(s) * fi for ri, fi in zip(r, F)))
                                                for s in body.q], model)
@@ -177,13 +184,17 @@ def generalized_forces(model, loads, layout) -> list:
                     rates = [velocity_symbol(s.name) for s in body.q]
                     w = model.space.as_rotation_vector(
                         model.space.omega(rot, rates[model.space.dim:], local=False))
-                    _project(projected, body, [(w.diff(v).T * M)[0, 0] for v in rates], model)
+                    wq = [(w.diff(v).T * M)[0, 0] for v in rates]
+                    if slaves is not None:
+                        _collect(slaves, body, wq)
+                    else:
+                        _project(projected, body, wq, model)
                     continue
                 w = model.space.as_rotation_vector(
                     model.space.omega(rot, [qd_of[s] for s in rot], local=False))
                 for s in body.q:
                     Q[index[s]] += (w.diff(qd_of[s]).T * M)[0, 0]
-    if gen:  # load magnitudes of slave coordinates (a spring to a slave point)
+    if gen and slaves is None:  # load magnitudes of slave coordinates (a spring to a slave point)
         slaves = set(gen)
         Q = [e.xreplace(gen) if (e := sp.sympify(q)).free_symbols & slaves else e for q in Q]
         from .._symbols import restore_assumptions
@@ -233,6 +244,12 @@ def _point_force_terms(space, body, point, F) -> list | None:
     grot, gc, gF, Qrot = _point_force_template(space)
     sub = {**dict(zip(grot, q[dim:])), **dict(zip(gc, local)), **dict(zip(gF, out))}
     return out + [e.xreplace(sub) for e in Qrot]
+
+
+def _collect(out: dict, body, Qp) -> None:
+    """Add ``Qp`` (on the slave's pose coordinates) to ``out[body]``."""
+    prev = out.get(body)
+    out[body] = list(Qp) if prev is None else [a + b for a, b in zip(prev, Qp)]
 
 
 def _project(out: dict, body, Qp, model) -> None:

@@ -1,10 +1,13 @@
 r"""The compiled side of generalized-coordinate joints (``constraints/_generalized.py``):
-the slaves' inertia projected on the independent coordinates and outputs of slave symbols
-compiled in two stages (decision 0010). ``kin`` is the model's ``GenKinematics``."""
+the slaves' inertia projected symbolically on the independent coordinates and outputs of
+slave symbols compiled in two stages (decision 0010; ``kin`` is the model's
+``GenKinematics``), and the recursive dynamics for long chains (decision 0016:
+``RecursiveDynamics``, per-joint kernels, composite and articulated-body recursions)."""
 
 from __future__ import annotations
 
 import numpy as np
+import sympy as sp
 
 from .._errors import ModelError
 from .._symbols import acceleration_symbol, velocity_symbol
@@ -110,3 +113,749 @@ def compile_with_slaves(system, args, exprs):
         return main
     pre = compile_exprs(args, [native[s] for s in slaves], system.backend, cse=True)
     return _TwoStage(pre, main, len(exprs))
+
+
+# -- recursive dynamics (decision 0016) ----------------------------------------------------
+#
+# For long Gen chains the symbolic J^T M_b J above is dense and grows like N^4 in size. The
+# recursive path keeps the kinematics symbolic *per joint* (one small kernel per distinct
+# joint: the slave's pose, its partial derivatives and the velocity-product terms, and the
+# slave's own mass matrix and velocity forces) and evaluates the mass matrix and forces in
+# the mixed coordinates numerically, by a composite-body recursion over the tree of slaves.
+
+import os  # noqa: E402
+
+#: ``MECHSYS_GEN_DYNAMICS=auto``: the recursive path is used from this many slave bodies on,
+#: planar and spatial (measured: decision 0016; a 3D chain's symbolic matrix grows faster)
+RECURSIVE_AUTO = {2: 8, 3: 4}
+
+
+def gen_dynamics_mode() -> str:
+    """``"auto"``, ``"symbolic"`` or ``"recursive"`` from ``MECHSYS_GEN_DYNAMICS``."""
+    v = os.environ.get("MECHSYS_GEN_DYNAMICS", "").strip().lower()
+    if v in ("", "auto"):
+        return "auto"
+    if v in ("symbolic", "recursive"):
+        return v
+    raise ModelError(f"MECHSYS_GEN_DYNAMICS={v!r}: choose 'auto', 'symbolic' or 'recursive'")
+
+
+class _Unsupported(Exception):
+    """A model the recursive Gen dynamics does not cover (the reason is the message)."""
+
+
+def make_dynamics(system, model, bodies, loads):
+    """The :class:`~mechsys.compile._dynamics.Dynamics` of a system with Gen joints: the
+    symbolic projection (few slaves, or ``MECHSYS_GEN_DYNAMICS=symbolic``) or
+    :class:`RecursiveDynamics` (``auto`` from :data:`RECURSIVE_AUTO` slaves on: 8 planar, 4
+    spatial; or ``recursive``). In ``auto`` a model the recursion does not cover goes to the symbolic
+    path; forced, it raises ``ModelError`` with the reason."""
+    from ._dynamics import Dynamics
+
+    mode = gen_dynamics_mode()
+    nslaves = sum(1 for b in bodies if b.gen_joint is not None)
+    if mode == "symbolic" or (mode == "auto" and nslaves < RECURSIVE_AUTO[model.space.dim]):
+        return Dynamics(system, model, bodies, loads)
+    try:
+        return RecursiveDynamics(system, model, bodies, loads)
+    except _Unsupported as exc:
+        if mode == "recursive":
+            raise ModelError(f"MECHSYS_GEN_DYNAMICS=recursive: {exc}; use "
+                             "MECHSYS_GEN_DYNAMICS=symbolic (or auto) for this model") from None
+        return Dynamics(system, model, bodies, loads)
+
+
+def _slave_order(bodies) -> list:
+    """The slave bodies, every master before its slaves."""
+    order, seen = [], set()
+
+    def visit(b):
+        if b in seen:
+            return
+        m = b.gen_joint.master
+        if m is not None and getattr(m, "gen_joint", None) is not None:
+            visit(m)
+        seen.add(b)
+        order.append(b)
+
+    for b in bodies:
+        if b.gen_joint is not None:
+            visit(b)
+    return order
+
+
+def _joint_exprs(space, body, p_syms, conv):
+    r"""The local kernel of one slave, as ``(args, exprs, nm, k)``: with ``P`` the master's
+    pose (``nm`` = 0 for ground), ``g`` the joint's ``k`` coordinates and ``x = (P, g)``::
+
+        p   = F(x, t)                                  the slave's pose
+        pd  = F_x x_dot + F_t                          its velocity
+        F_P, F_g                                       p's partial derivatives
+        h   = sum_x (pd)_x x_dot + (pd)_t              p_ddot at x_ddot = 0
+        M_b(p), Qv_b(p, pd)                            the slave's own inertia terms
+
+    in generic symbols (``_gP0``, ``_gg0``...), so identical joints share one kernel."""
+    from .._symbols import T as Tsym
+    from ._dynamics import _mass_key, body_terms
+
+    joint = body.gen_joint
+    m = joint.master
+    ground = m is None or m.is_ground
+    r, rot = joint.pose(space)
+    F = [*r, *rot]
+    coords = list(joint.coordinates)
+    mq = [] if ground else list(m.q)
+    allowed = set(mq) | set(coords) | set(p_syms) | {Tsym}
+    extra = set().union(*(sp.sympify(e).free_symbols for e in F)) - allowed
+    if extra:
+        raise _Unsupported(f"{joint.label()}: the slave's pose uses {sorted(map(str, extra))}, "
+                           "not only its master's pose and its own coordinates")
+    nm, k, nq = len(mq), len(coords), len(body.q)
+    P = [sp.Symbol(f"_gP{i}") for i in range(nm)]
+    Pd = [sp.Symbol(f"_gPd{i}") for i in range(nm)]
+    g = [sp.Symbol(f"_gg{i}") for i in range(k)]
+    gd = [sp.Symbol(f"_ggd{i}") for i in range(k)]
+    sub = {conv(a): conv(b) for a, b in [*zip(mq, P), *zip(coords, g)]}
+    F = [conv(e).xreplace(sub) for e in F]
+    X = [conv(s) for s in [*P, *g]]
+    Xd = [conv(s) for s in [*Pd, *gd]]
+    t = conv(Tsym)
+    zero = conv(0)
+    FX = [[f.diff(x) for x in X] for f in F]
+    pd = [sum((row[j] * Xd[j] for j in range(len(X)) if row[j] != 0), zero) + f.diff(t)
+          for f, row in zip(F, FX)]
+    h = [sum((v.diff(x) * xd for x, xd in zip(X, Xd)), zero) + v.diff(t) for v in pd]
+    rates = tuple(velocity_symbol(s.name) for s in body.q)
+    _, Mb, Qvb = body_terms(space, tuple(body.q), rates, *_mass_key(space, body))
+    bsub = {conv(a): b for a, b in [*zip(body.q, F), *zip(rates, pd)]}
+    Mb = [conv(e).xreplace(bsub) for row in Mb for e in row]
+    Qvb = [conv(e).xreplace(bsub) for e in Qvb]
+    exprs = [*F, *pd, *(FX[i][j] for i in range(nq) for j in range(nm)),
+             *(FX[i][nm + j] for i in range(nq) for j in range(k)), *h, *Mb, *Qvb]
+    return [Tsym, *P, *Pd, *g, *gd, *p_syms], exprs, nm, k
+
+
+def _compile(args, exprs, backend):
+    from ._backends import compile_exprs
+    from ._derive import to_sympy_list
+
+    if backend == "symengine":
+        return compile_exprs(args, exprs, backend)
+    return compile_exprs(args, to_sympy_list(exprs), backend)
+
+
+class RecursiveDynamics:
+    r"""Dynamics of a system with Gen joints evaluated by recursion over the tree of slaves
+    (decision 0016). Per slave ``s`` (master ``a``, coordinates ``g_s``), from its joint
+    kernel (:func:`_joint_exprs`)::
+
+        J_s = F_P J_a + F_g E_s,          h_s = F_P h_a + h_loc       (forward, masters first)
+        C_s = M_s + sum_c F_P,c^T C_c F_P,c                           (backward: composite)
+        B_s = Q_s + Qv_s - M_s h_s + sum_c F_P,c^T B_c
+        M[g_a, g_s] = F_g,a^T Phi_{s<-a}^T C_s F_g,s,  Phi_{s<-a} = F_P,s ... (walk up from s)
+        Q[g_s] += F_g,s^T B_s
+
+    (``Q_s`` the applied loads on the slave's pose coordinates); an absolute master ``a``
+    receives ``F_P^T C_s F_P`` and ``F_P^T B_s`` on its own coordinates, ground nothing.
+    This is the composite-rigid-body algorithm written in pose coordinates: O(N) kernel
+    calls and O(N * depth) small products per evaluation, and a compile cost linear in the
+    number of *distinct* joints. The absolute bodies' terms, the loads, the constraint
+    Jacobian and ``gamma`` stay in one compiled kernel with the slaves' poses and
+    velocities as extra arguments.
+
+    The symbolic terms (``Q``, ``M_exprs``, ``Qv``, ``kinetic``, ``potential``, ``f_terms``)
+    are those of the symbolic :class:`~mechsys.compile._dynamics.Dynamics`, made on first
+    use (outputs of loads and reactions need them; free motion does not).
+
+    Example::
+
+        os.environ["MECHSYS_GEN_DYNAMICS"] = "recursive"   # or many Gen joints ("auto")
+        M, Q, Qv = m.free().system.dynamics.terms(0.0, q, qd, [], p)
+    """
+
+    recursive = True
+
+    def __init__(self, system, model, bodies, loads):
+        from ._dynamics import _mass_key, body_terms, generalized_forces, multiplier_symbols
+
+        try:
+            import symengine as se
+        except ImportError:  # pragma: no cover
+            se = None
+        self.system = system
+        self._twin_args = (model, bodies, loads)
+        self._twin = None
+        self._kernel = None
+        lay = system.layout
+        self.lam = multiplier_symbols(lay)
+        space = model.space
+        conv = se.sympify if (se is not None and system.backend == "symengine") else sp.sympify
+        index = {s: i for i, s in enumerate(lay.q_symbols)}
+        order = _slave_order(bodies)
+        S = len(order)
+        nq = space.dim + (1 if space.dim == 2 else 4)
+        pos = {b: i for i, b in enumerate(order)}
+        par = np.full(S, -1, dtype=np.int64)
+        root = np.full(S, -1, dtype=np.int64)
+        nqm = np.zeros(S, dtype=np.int64)
+        goff = np.zeros(S + 1, dtype=np.int64)
+        gcols: list = []
+        kid = np.zeros(S, dtype=np.int64)
+        kernels, keys = [], {}
+        for s, b in enumerate(order):
+            j = b.gen_joint
+            mst = j.master
+            if mst is not None and not mst.is_ground:
+                if mst.gen_joint is not None:
+                    par[s] = pos[mst]
+                elif mst.name in lay.body_slices:
+                    root[s] = lay.body_slices[mst.name].start
+                else:
+                    raise _Unsupported(f"{j.label()}: its master {mst.name!r} is not in the system")
+            for c in j.coordinates:
+                if c not in index:
+                    raise _Unsupported(f"{j.label()}: coordinate {c} is not a coordinate of the system")
+                gcols.append(index[c])
+            goff[s + 1] = len(gcols)
+            args, exprs, nm, _ = _joint_exprs(space, b, lay.p_symbols, conv)
+            nqm[s] = nm
+            # equal expressions hash equal (a printed form or a tree hash may depend on the
+            # order SymEngine keeps the terms of a sum in)
+            key = (tuple(map(str, args)), tuple(exprs))
+            if key not in keys:
+                keys[key] = len(kernels)
+                kernels.append(_compile(args, exprs, system.backend))
+            kid[s] = keys[key]
+        self._tree = (kid, par, root, nqm, goff, np.array(gcols, dtype=np.int64), nq)
+        self._kernels = kernels
+        self.nslaves, self.nkernels = S, len(kernels)
+
+        # the rest in one kernel: absolute bodies, loads, constraints; slave poses as arguments
+        slave_q = {b: [0] * nq for b in order}
+        Q = generalized_forces(model, loads, lay, slaves=slave_q)
+        qd_of = dict(zip(lay.q_symbols, lay.qd_symbols))
+        entries: dict = {}
+        zero = conv(0)
+        Qv = [zero] * lay.n
+        for b in bodies:
+            if b.gen_joint is not None:
+                continue
+            q = list(b.q)
+            _, Mb, Qvb = body_terms(space, tuple(q), tuple(qd_of[s] for s in q), *_mass_key(space, b))
+            for i, si in enumerate(q):
+                for jj in range(len(q)):
+                    if Mb[i][jj] != 0:
+                        entries[(index[si], index[q[jj]])] = (
+                            entries.get((index[si], index[q[jj]]), zero) + conv(Mb[i][jj]))
+                Qv[index[si]] += conv(Qvb[i])
+        self._M_rows = np.array([k[0] for k in entries], dtype=np.int64)
+        self._M_cols = np.array([k[1] for k in entries], dtype=np.int64)
+        pose_syms = [s for b in order for s in b.q]
+        vel_syms = [velocity_symbol(s.name) for s in pose_syms]
+        Qp = [e for b in order for e in slave_q[b]]
+        lamset, qddset = set(self.lam), set(lay.qdd_symbols)
+        slave_acc = {acceleration_symbol(s.name) for s in pose_syms}
+        known = set(self.args()) | set(pose_syms) | set(vel_syms)
+        for e in [*Q, *Qp]:
+            fs = sp.sympify(e).free_symbols
+            if fs & lamset or fs & qddset or fs & slave_acc:
+                raise _Unsupported("a load depends on multipliers (friction) or accelerations")
+            if fs - known:
+                raise _Unsupported(f"a load uses unknown symbol(s) {sorted(map(str, fs - known))}")
+        self.depends_on_lambda = self.depends_on_qdd = False
+        self.linear_in_qdd = True
+        qdset = set(lay.qd_symbols) | set(vel_syms)
+        self.depends_on_qd = any(sp.sympify(e).free_symbols & qdset for e in [*Q, *Qp])
+        jac = system.kinematic_exprs("jac", for_compile=True)
+        gamma = system.kinematic_exprs("gamma", for_compile=True)
+        exprs = [*entries.values(), *jac, *Q, *Qv, *gamma, *Qp]
+        if conv is not sp.sympify:
+            exprs = [conv(e) for e in exprs]
+        else:
+            from ._derive import to_sympy_list
+
+            exprs = to_sympy_list(exprs)
+        from ._backends import compile_exprs
+
+        self._main = compile_exprs([*self.args(), *pose_syms, *vel_syms], exprs, system.backend,
+                                   cse=system.cse)
+        self._sizes = (len(entries), len(jac), lay.n, len(gamma), S * nq)
+        import threading
+
+        self._local = threading.local()      # work arrays per thread (sweeps may use threads)
+        self._numba = None
+
+    def __getstate__(self):
+        """Without the per-thread work arrays and the kernels' C entry points (ctypes): a
+        pickled free system (a sweep's payload) rebuilds them on first use."""
+        import copy
+
+        state = dict(self.__dict__)
+        state["_local"] = state["_numba"] = None
+        kernels = []
+        for k in self._kernels:
+            if hasattr(k, "_cfun"):
+                k = copy.copy(k)
+                del k._cfun
+            kernels.append(k)
+        state["_kernels"] = kernels
+        return state
+
+    def __setstate__(self, state):
+        import threading
+
+        self.__dict__.update(state)
+        self._local = threading.local()
+
+    # -- the symbolic twin -------------------------------------------------------------------
+    def __getattr__(self, name):
+        if name.startswith("__") or name in ("_twin", "_twin_args"):
+            raise AttributeError(name)
+        twin = self.__dict__.get("_twin")
+        if twin is None:
+            from ._dynamics import Dynamics
+
+            twin = self.__dict__["_twin"] = Dynamics(self.system, *self._twin_args)
+        return getattr(twin, name)
+
+    def args(self) -> list:
+        from ._dynamics import Dynamics
+
+        return Dynamics.args(self)
+
+    def pack(self, t, q, qd, lam, p, qdd=None):
+        from ._dynamics import Dynamics
+
+        return Dynamics.pack(self, t, q, qd, lam, p, qdd)
+
+    def dQ_dlam(self, t, q, qd, lam, p, qdd=None) -> np.ndarray:
+        return np.zeros((self.system.n, self.system.m))
+
+    def dQ_dqdd(self, t, q, qd, lam, p, qdd=None) -> np.ndarray:
+        return np.zeros((self.system.n, self.system.n))
+
+    # -- numbers -----------------------------------------------------------------------------
+    def _engine(self):
+        """The Numba forward pass and assembly (the ``fast`` extra; off with
+        ``MECHSYS_JIT=0``), or False for the plain-Python path (the same operations)."""
+        if self._numba is None:
+            self._numba = False
+            from ..solvers import _jit
+
+            if _jit.mode() != "off" and _jit.available():
+                ptrs = [getattr(k, "c_function", lambda: None)() for k in self._kernels]
+                if all(p is not None and p[2] == 0 for p in ptrs):
+                    from . import _generalized_jit as jit
+
+                    self._numba = (jit, np.array([[p[0], p[1]] for p in ptrs], dtype=np.int64))
+        return self._numba
+
+    def _workspace(self):
+        kid, par, root, nqm, goff, gcols, nq = self._tree
+        S = len(kid)
+        kmax = max(1, int(np.diff(goff).max(initial=1)))
+        width = max(nq, kmax)
+        nin = 1 + 2 * nq + 2 * kmax + len(self.system.p_values)
+        nout = nq * (4 + nq + kmax + nq)
+        z = np.zeros
+        return dict(P=z((S, nq)), Pd=z((S, nq)), FP=z((S, nq, nq)), Fg=z((S, nq, kmax)), H=z((S, nq)),
+                    HL=z((S, nq)), Mb=z((S, nq, nq)), Qvb=z((S, nq)), C=z((S, nq, nq)), BQ=z((S, nq)),
+                    BV=z((S, nq)), X=z((nq, width)), Y=z((nq, width)), x=z(nin), out=z(nout),
+                    U=z((S, nq, kmax)), L=z((S, kmax, kmax)), Z=z((kmax, nq + 1)), W=z((nq, nq + 1)))
+
+    def _forward(self, t, q, qd, lam, p):
+        """Joint kernels (masters first), then the kernel of the rest: ``(out, eng, w)``."""
+        kid, par, root, nqm, goff, gcols, nq = self._tree
+        w = getattr(self._local, "work", None)
+        if w is None:
+            w = self._local.work = self._workspace()
+        n = self.system.n
+        q = np.asarray(q, dtype=float)
+        qd = np.asarray(qd, dtype=float)
+        p = np.asarray(p, dtype=float)
+        eng = self._numba if self._numba is not None else self._engine()
+        P, Pd = w["P"], w["Pd"]
+        if eng:
+            eng[0].forward(eng[1], kid, par, root, nqm, goff, gcols, nq, float(t), q, qd, p, w["x"],
+                           w["out"], P, Pd, w["FP"], w["Fg"], w["H"], w["HL"], w["Mb"], w["Qvb"])
+        else:
+            _forward_py(self._kernels, kid, par, root, nqm, goff, gcols, nq, float(t), q, qd, p,
+                        P, Pd, w["FP"], w["Fg"], w["H"], w["HL"], w["Mb"], w["Qvb"])
+        out = self._main(np.concatenate(((t,), q, qd, lam, p, np.zeros(n), P.ravel(), Pd.ravel())))
+        return out, eng, w
+
+    def evaluate(self, t, q, qd, lam, p, K=None):
+        """``(M (n, n), Q (n,), Qv (n,), Phi_q values, gamma)`` at one state (composite
+        bodies); with ``K`` (zeros, at least ``(n, n)``) the mass matrix is written into
+        ``K[:n, :n]``, which is returned as ``M``."""
+        kid, par, root, nqm, goff, gcols, nq = self._tree
+        out, eng, w = self._forward(t, q, qd, lam, p)
+        n = self.system.n
+        kM, kJ, _, kg, _ = self._sizes
+        M = np.zeros((n, n)) if K is None else K[:n, :n]
+        M[self._M_rows, self._M_cols] = out[:kM]
+        o = kM + kJ
+        Q = out[o:o + n]
+        Qv = out[o + n:o + 2 * n]
+        o += 2 * n
+        Qp = out[o + kg:].reshape(len(kid), nq)
+        (eng[0].assemble if eng else _assemble)(
+            par, root, nqm, goff, gcols, nq, w["FP"], w["Fg"], w["H"], w["Mb"], w["Qvb"], Qp, w["C"],
+            w["BQ"], w["BV"], w["X"], w["Y"], M, Q, Qv)
+        return M, Q, Qv, out[kM:kM + kJ], out[o:o + kg]
+
+    @property
+    def tree_only(self) -> bool:
+        """Only slaves on ground and their coordinates, no constraint equation: the free
+        accelerations come from the O(N) articulated-body recursion (:meth:`accelerations`)."""
+        kid, par, root, nqm, goff, gcols, nq = self._tree
+        return self.system.m == 0 and len(gcols) == self.system.n and bool((root < 0).all())
+
+    def accelerations(self, t, q, qd, p):
+        """Free accelerations ``qdd`` (n,) by the articulated-body recursion
+        (:func:`_articulated`) when :attr:`tree_only`, else None; None too when a joint's
+        motion carries no mass (the full system then gives the diagnosis)."""
+        if not self.tree_only:
+            return None
+        kid, par, root, nqm, goff, gcols, nq = self._tree
+        out, eng, w = self._forward(t, q, qd, np.zeros(0), p)
+        n = self.system.n
+        kM, kJ, _, kg, _ = self._sizes
+        o = kM + kJ
+        Qd = out[o:o + n] + out[o + n:o + 2 * n]
+        Qp = out[o + 2 * n + kg:].reshape(len(kid), nq)
+        qdd = np.empty(n)
+        bad = (eng[0].articulated if eng else _articulated)(
+            par, nqm, goff, gcols, nq, w["FP"], w["Fg"], w["HL"], w["Mb"], w["Qvb"], Qp, Qd, w["C"],
+            w["BQ"], w["U"], w["L"], w["Z"], w["W"], qdd, 1e-13)
+        return qdd if bad < 0 else None
+
+    def terms(self, t, q, qd, lam, p, qdd=None):
+        """``(M (n, n) dense, Q (n,), Qv (n,))`` at one state, by the recursion."""
+        M, Q, Qv, _, _ = self.evaluate(t, q, qd, lam, p)
+        return M, Q, Qv
+
+    def free_kernel(self, sparse: bool = False):
+        """The augmented system of free motion (``FreeKernel``'s contract), by the recursion."""
+        if self._kernel is None or self._kernel.sparse != sparse:
+            self._kernel = _RecursiveFreeKernel(self, sparse)
+        return self._kernel
+
+
+class _RecursiveFreeKernel:
+    """``(K, rhs)`` of free motion, ``K = [[M, Phi_q^T], [Phi_q, 0]]``, ``rhs = [Q + Qv;
+    gamma]``, with ``M``, ``Q``, ``Qv`` from :meth:`RecursiveDynamics.evaluate`."""
+
+    def __init__(self, dyn, sparse: bool):
+        s = dyn.system
+        self.dyn, self.sparse = dyn, sparse
+        self.n, self.m = s.n, s.m
+        self.N = s.n + s.m
+        self._rows, self._cols = s.jac_rows, s.jac_cols
+        #: ``(t, q, qd, p) -> qdd`` or None: the O(N) path of a pure tree (``solvers/_free.py``)
+        self.accelerations = dyn.accelerations if dyn.tree_only else None
+
+    def __call__(self, t, q, qd, lam, p):
+        # dense even above the sparse threshold: the mass matrix of a chain in joint
+        # coordinates is full, and LAPACK beats a sparse LU on it (the solvers accept both)
+        n = self.n
+        K = np.zeros((self.N, self.N))
+        _, Q, Qv, jv, gamma = self.dyn.evaluate(t, q, qd, lam, p, K)
+        K[self._cols, n + self._rows] = jv
+        K[n + self._rows, self._cols] = jv
+        return K, np.concatenate((Q + Qv, gamma))
+
+
+# The numeric recursion as plain loops: run by Python when Numba is missing, compiled by
+# Numba (``_generalized_jit.py``) otherwise; the same operations in the same order.
+
+
+def _fill(x, s, t, q, qd, p, par, root, nqm, goff, gcols, P, Pd):
+    """A joint kernel's arguments ``[t, P_master, Pd_master, g, gd, p]``."""
+    x[0] = t
+    nm = nqm[s]
+    a = par[s]
+    r = root[s]
+    for i in range(nm):
+        if a >= 0:
+            x[1 + i] = P[a, i]
+            x[1 + nm + i] = Pd[a, i]
+        else:
+            x[1 + i] = q[r + i]
+            x[1 + nm + i] = qd[r + i]
+    o = 1 + 2 * nm
+    g0 = goff[s]
+    k = goff[s + 1] - g0
+    for j in range(k):
+        x[o + j] = q[gcols[g0 + j]]
+        x[o + k + j] = qd[gcols[g0 + j]]
+    o += 2 * k
+    for i in range(p.size):
+        x[o + i] = p[i]
+
+
+def _unpack(out, s, nq, nm, k, par, P, Pd, FP, Fg, H, HL, Mb, Qvb):
+    """Store a joint kernel's outputs; ``h_s = F_P h_master + h_loc``."""
+    for i in range(nq):
+        P[s, i] = out[i]
+        Pd[s, i] = out[nq + i]
+    o = 2 * nq
+    for i in range(nq):
+        for j in range(nm):
+            FP[s, i, j] = out[o + i * nm + j]
+    o += nq * nm
+    for i in range(nq):
+        for j in range(k):
+            Fg[s, i, j] = out[o + i * k + j]
+    o += nq * k
+    a = par[s]
+    for i in range(nq):
+        h = out[o + i]
+        HL[s, i] = h
+        if a >= 0:
+            for j in range(nm):
+                h += FP[s, i, j] * H[a, j]
+        H[s, i] = h
+    o += nq
+    for i in range(nq):
+        for j in range(nq):
+            Mb[s, i, j] = out[o + i * nq + j]
+    o += nq * nq
+    for i in range(nq):
+        Qvb[s, i] = out[o + i]
+
+
+def _forward_py(kernels, kid, par, root, nqm, goff, gcols, nq, t, q, qd, p, P, Pd, FP, Fg, H,
+                HL, Mb, Qvb):
+    for s in range(len(kid)):
+        nm = nqm[s]
+        k = goff[s + 1] - goff[s]
+        x = np.empty(1 + 2 * nm + 2 * k + p.size)
+        _fill(x, s, t, q, qd, p, par, root, nqm, goff, gcols, P, Pd)
+        _unpack(kernels[kid[s]](x), s, nq, nm, k, par, P, Pd, FP, Fg, H, HL, Mb, Qvb)
+
+
+def _assemble(par, root, nqm, goff, gcols, nq, FP, Fg, H, Mb, Qvb, Qp, C, BQ, BV, X, Y, M, Q, Qv):
+    """Add the slaves' terms to ``M``, ``Q``, ``Qv`` (in place): composite inertias ``C`` and
+    forces ``BQ`` (applied), ``BV`` (velocity) backward, then the mass-matrix columns of
+    each slave's coordinates by the walk to the root."""
+    S = par.size
+    for s in range(S):
+        for i in range(nq):
+            BQ[s, i] = Qp[s, i]
+            v = Qvb[s, i]
+            for j in range(nq):
+                v -= Mb[s, i, j] * H[s, j]
+            BV[s, i] = v
+            for j in range(nq):
+                C[s, i, j] = Mb[s, i, j]
+    for s in range(S - 1, -1, -1):
+        g0 = goff[s]
+        for jj in range(goff[s + 1] - g0):
+            col = gcols[g0 + jj]
+            fq = 0.0
+            fv = 0.0
+            for i in range(nq):
+                fq += Fg[s, i, jj] * BQ[s, i]
+                fv += Fg[s, i, jj] * BV[s, i]
+            Q[col] += fq
+            Qv[col] += fv
+        nm = nqm[s]
+        if nm == 0:
+            continue
+        a = par[s]
+        r = root[s]
+        for i in range(nq):
+            for j in range(nm):
+                v = 0.0
+                for l in range(nq):  # noqa: E741
+                    v += C[s, i, l] * FP[s, l, j]
+                Y[i, j] = v
+        for i in range(nm):
+            bq = 0.0
+            bv = 0.0
+            for l in range(nq):  # noqa: E741
+                bq += FP[s, l, i] * BQ[s, l]
+                bv += FP[s, l, i] * BV[s, l]
+            if a >= 0:
+                BQ[a, i] += bq
+                BV[a, i] += bv
+            else:
+                Q[r + i] += bq
+                Qv[r + i] += bv
+            for j in range(nm):
+                v = 0.0
+                for l in range(nq):  # noqa: E741
+                    v += FP[s, l, i] * Y[l, j]
+                if a >= 0:
+                    C[a, i, j] += v
+                else:
+                    M[r + i, r + j] += v
+    for s in range(S):
+        g0 = goff[s]
+        k = goff[s + 1] - g0
+        for i in range(nq):
+            for jj in range(k):
+                v = 0.0
+                for l in range(nq):  # noqa: E741
+                    v += C[s, i, l] * Fg[s, l, jj]
+                X[i, jj] = v
+        for ii in range(k):
+            for jj in range(k):
+                v = 0.0
+                for l in range(nq):  # noqa: E741
+                    v += Fg[s, l, ii] * X[l, jj]
+                M[gcols[g0 + ii], gcols[g0 + jj]] += v
+        a = s
+        while nqm[a] > 0:
+            nm = nqm[a]
+            for i in range(nm):
+                for jj in range(k):
+                    v = 0.0
+                    for l in range(nq):  # noqa: E741
+                        v += FP[a, l, i] * X[l, jj]
+                    Y[i, jj] = v
+            for i in range(nm):
+                for jj in range(k):
+                    X[i, jj] = Y[i, jj]
+            b = par[a]
+            if b >= 0:
+                b0 = goff[b]
+                for ii in range(goff[b + 1] - b0):
+                    for jj in range(k):
+                        v = 0.0
+                        for l in range(nq):  # noqa: E741
+                            v += Fg[b, l, ii] * X[l, jj]
+                        M[gcols[b0 + ii], gcols[g0 + jj]] += v
+                        M[gcols[g0 + jj], gcols[b0 + ii]] += v
+                a = b
+            else:
+                r = root[a]
+                for i in range(nm):
+                    for jj in range(k):
+                        M[r + i, gcols[g0 + jj]] += X[i, jj]
+                        M[gcols[g0 + jj], r + i] += X[i, jj]
+                break
+
+
+def _articulated(par, nqm, goff, gcols, nq, FP, Fg, HL, Mb, Qvb, Qp, Qd, IA, PA, U, L, Z, W, qdd, tol):
+    r"""Free accelerations of a tree of slaves on ground with no constraint equations, in
+    O(N): the articulated-body algorithm in pose coordinates. Backward, with ``IA_s``,
+    ``PA_s`` the subtree's articulated inertia and force on the slave's pose (leaf: ``M_s``,
+    ``Qv_s + Q_s``), ``U = IA F_g``, ``D = F_g^T U`` (Cholesky ``L``), ``Qd`` the forces
+    applied to the coordinates themselves::
+
+        Ia = IA - U D^-1 U^T,   pa = PA - U D^-1 (F_g^T PA + Qd_g)
+        IA_master += F_P^T Ia F_P,   PA_master += F_P^T (pa - Ia h_loc)
+
+    forward, masters first (``pdd`` of ground = 0)::
+
+        w = F_P pdd_master + h_loc,   g_dd = D^-1 (F_g^T PA + Qd_g - U^T w),   pdd = w + F_g g_dd
+
+    Writes ``qdd``; returns -1, or the index of the slave whose ``D`` is not positive
+    definite (no mass on that joint's motion: the caller falls back to the full system)."""
+    S = par.size
+    for s in range(S):
+        for i in range(nq):
+            PA[s, i] = Qvb[s, i] + Qp[s, i]
+            for j in range(nq):
+                IA[s, i, j] = Mb[s, i, j]
+    for s in range(S - 1, -1, -1):
+        g0 = goff[s]
+        k = goff[s + 1] - g0
+        big = 0.0
+        for i in range(nq):
+            big = max(big, abs(IA[s, i, i]))
+        for i in range(nq):
+            for jj in range(k):
+                v = 0.0
+                for l in range(nq):  # noqa: E741
+                    v += IA[s, i, l] * Fg[s, l, jj]
+                U[s, i, jj] = v
+        for ii in range(k):      # Cholesky of D = Fg^T U, lower triangle in L
+            for jj in range(ii + 1):
+                v = 0.0
+                for l in range(nq):  # noqa: E741
+                    v += Fg[s, l, ii] * U[s, l, jj]
+                for r in range(jj):
+                    v -= L[s, ii, r] * L[s, jj, r]
+                if ii == jj:
+                    if not v > tol * big:
+                        return s
+                    L[s, ii, ii] = np.sqrt(v)
+                else:
+                    L[s, ii, jj] = v / L[s, jj, jj]
+        nm = nqm[s]
+        if nm == 0:
+            continue
+        a = par[s]
+        # Z = D^-1 [U^T | Fg^T PA]  (k x (nq + 1)): forward and back substitution
+        for c in range(nq + 1):
+            for ii in range(k):
+                if c < nq:
+                    v = U[s, c, ii]
+                else:
+                    v = Qd[gcols[g0 + ii]]
+                    for l in range(nq):  # noqa: E741
+                        v += Fg[s, l, ii] * PA[s, l]
+                for r in range(ii):
+                    v -= L[s, ii, r] * Z[r, c]
+                Z[ii, c] = v / L[s, ii, ii]
+            for ii in range(k - 1, -1, -1):
+                v = Z[ii, c]
+                for r in range(ii + 1, k):
+                    v -= L[s, r, ii] * Z[r, c]
+                Z[ii, c] = v / L[s, ii, ii]
+        # W[:, :nq] = Ia, W[:, nq] = pa - Ia h_loc
+        for i in range(nq):
+            for j in range(nq):
+                v = IA[s, i, j]
+                for ii in range(k):
+                    v -= U[s, i, ii] * Z[ii, j]
+                W[i, j] = v
+            v = PA[s, i]
+            for ii in range(k):
+                v -= U[s, i, ii] * Z[ii, nq]
+            for j in range(nq):
+                v -= W[i, j] * HL[s, j]
+            W[i, nq] = v
+        for i in range(nm):
+            v = 0.0
+            for l in range(nq):  # noqa: E741
+                v += FP[s, l, i] * W[l, nq]
+            PA[a, i] += v
+            for j in range(nm):
+                v = 0.0
+                for l in range(nq):  # noqa: E741
+                    for r in range(nq):
+                        v += FP[s, l, i] * W[l, r] * FP[s, r, j]
+                IA[a, i, j] += v
+    for s in range(S):
+        g0 = goff[s]
+        k = goff[s + 1] - g0
+        nm = nqm[s]
+        a = par[s]
+        for i in range(nq):           # w, kept in W[:, 0]
+            v = HL[s, i]
+            for j in range(nm):
+                v += FP[s, i, j] * PA[a, j]
+            W[i, 0] = v
+        for ii in range(k):
+            v = Qd[gcols[g0 + ii]]
+            for l in range(nq):  # noqa: E741
+                v += Fg[s, l, ii] * PA[s, l] - U[s, l, ii] * W[l, 0]
+            for r in range(ii):
+                v -= L[s, ii, r] * Z[r, 0]
+            Z[ii, 0] = v / L[s, ii, ii]
+        for ii in range(k - 1, -1, -1):
+            v = Z[ii, 0]
+            for r in range(ii + 1, k):
+                v -= L[s, r, ii] * Z[r, 0]
+            Z[ii, 0] = v / L[s, ii, ii]
+            qdd[gcols[g0 + ii]] = Z[ii, 0]
+        for i in range(nq):           # pdd of this slave, in PA (no longer needed)
+            v = W[i, 0]
+            for ii in range(k):
+                v += Fg[s, i, ii] * Z[ii, 0]
+            PA[s, i] = v
+    return -1

@@ -209,8 +209,12 @@ class System:
         """Mass matrix, applied and velocity-dependent forces (derived and compiled on first
         use: kinematics-only work never pays for them)."""
         if self._dynamics is None:
+            if self.gen_subs:  # Gen joints: symbolic or recursive (compile/_generalized.py)
+                from ._generalized import make_dynamics
 
-            self._dynamics = Dynamics(self, self._model, self._bodies, self._loads)
+                self._dynamics = make_dynamics(self, self._model, self._bodies, self._loads)
+            else:
+                self._dynamics = Dynamics(self, self._model, self._bodies, self._loads)
         return self._dynamics
 
     # -- numeric helpers (x = [t, q, qd, p]) ------------------------------------------

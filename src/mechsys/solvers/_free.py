@@ -54,6 +54,11 @@ def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterat
     n, m = system.n, system.m
     if not (dyn.depends_on_lambda or dyn.depends_on_qdd):
         kern = dyn.free_kernel(n + m > SPARSE_THRESHOLD)
+        direct = getattr(kern, "accelerations", None)  # a tree of Gen joints: O(N), no K
+        if direct is not None and m == 0:
+            qdd = direct(t, q, qd, p)
+            if qdd is not None:
+                return qdd, np.zeros(0), 0
         K, rhs = kern(t, q, qd, _ZERO_LAM.get(m) if m in _ZERO_LAM else _zeros(m), p)
         try:
             x = _solve_fast(K, rhs)

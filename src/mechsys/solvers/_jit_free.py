@@ -204,6 +204,8 @@ class FreeStepper:
         dyn = system.dynamics
         if dyn.depends_on_lambda or dyn.depends_on_qdd or not _jit.available():
             return None
+        if getattr(dyn, "recursive", False):
+            return None        # generalized coordinates, recursive dynamics: its own loops
         N = system.n + system.m
         blocks = None
         if N > SMALL:

@@ -1,0 +1,29 @@
+"""Numba versions of the recursive Gen dynamics (``_generalized.py``: ``RecursiveDynamics``),
+imported only when Numba is installed. ``_fill``, ``_unpack`` and ``_assemble`` are the very
+functions of the Python path, compiled; ``forward`` calls the joint kernels (SymEngine LLVM
+code) through their C entry points like the compiled sweep (``solvers/_jit_loop.py``)."""
+
+from __future__ import annotations
+
+import numba as nb
+
+from ..solvers._jit_loop import _ccall
+from ._generalized import _articulated, _assemble, _fill, _unpack
+
+_fill_nb = nb.njit(cache=True)(_fill)
+_unpack_nb = nb.njit(cache=True)(_unpack)
+assemble = nb.njit(cache=True)(_assemble)
+articulated = nb.njit(cache=True)(_articulated)
+
+
+@nb.njit(cache=True)
+def forward(ptrs, kid, par, root, nqm, goff, gcols, nq, t, q, qd, p, xbuf, obuf, P, Pd, FP, Fg, H,
+            HL, Mb, Qvb):
+    """Masters first: each slave's kernel at its master's pose, then its outputs stored."""
+    for s in range(kid.size):
+        nm = nqm[s]
+        k = goff[s + 1] - goff[s]
+        x = xbuf[:1 + 2 * nm + 2 * k + p.size]
+        _fill_nb(x, s, t, q, qd, p, par, root, nqm, goff, gcols, P, Pd)
+        _ccall(ptrs[kid[s], 0], (obuf, x, ptrs[kid[s], 1]))
+        _unpack_nb(obuf, s, nq, nm, k, par, P, Pd, FP, Fg, H, HL, Mb, Qvb)
