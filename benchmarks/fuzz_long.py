@@ -10,7 +10,9 @@ the free acceleration satisfies ``Phi_q qdd = gamma``.
 
 Run: ``python benchmarks/fuzz_long.py --models 10000`` (a few seconds a model: hours);
 ``--minutes 60`` stops after that long; ``--write docs/robustness_fuzz.md`` puts the summary
-between ``<!-- fuzz-long:begin -->`` and ``<!-- fuzz-long:end -->``. Failures are printed
+between ``<!-- fuzz-long:begin -->`` and ``<!-- fuzz-long:end -->``. Parallel runs
+over adjacent seed ranges (``--start``, ``--json``) are summarised by
+``--merge a.json b.json``. Failures are printed
 with their seed: ``check_mechanism(seed, name=...)`` reproduces one.
 """
 
@@ -96,6 +98,28 @@ def summary(r: dict) -> str:
     return "\n".join(lines)
 
 
+def merged(parts: list[dict]) -> dict:
+    """One summary of several runs (``--json`` files) over adjacent seed ranges, e.g. runs
+    in parallel processes: counts add up, the worst mismatches are the largest, times add
+    up (CPU) or are the longest (wall, parallel runs)."""
+    parts = sorted(parts, key=lambda r: r["start"])
+    for a, b in zip(parts, parts[1:]):
+        if a["start"] + a["models"] != b["start"]:
+            raise SystemExit(f"seed ranges not adjacent: {a['start']}+{a['models']} then "
+                             f"{b['start']}")
+    out = {"models": sum(r["models"] for r in parts), "start": parts[0]["start"],
+           "types": max(r["types"] for r in parts), "all_types": parts[0]["all_types"],
+           "dims": collections.Counter(), "outcomes": collections.Counter(), "failures": [],
+           "worst": {k: max(r["worst"][k] for r in parts) for k in parts[0]["worst"]},
+           "wall_s": max(r["wall_s"] for r in parts), "cpu_s": sum(r["cpu_s"] for r in parts)}
+    for r in parts:
+        out["dims"].update({int(k): v for k, v in r["dims"].items()})
+        out["outcomes"].update(r["outcomes"])
+        out["failures"] += r["failures"]
+    out["dims"], out["outcomes"] = dict(out["dims"]), dict(out["outcomes"])
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--models", type=int, default=10_000)
@@ -103,8 +127,13 @@ def main(argv=None) -> int:
     ap.add_argument("--minutes", type=float, default=None)
     ap.add_argument("--write", type=Path, default=None)
     ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument("--merge", type=Path, nargs="+", default=None,
+                    help="summarise these --json results (adjacent seed ranges) instead of running")
     a = ap.parse_args(argv)
-    r = run(a.models, a.start, a.minutes, log=sys.stderr)
+    if a.merge:
+        r = merged([json.loads(f.read_text()) for f in a.merge])
+    else:
+        r = run(a.models, a.start, a.minutes, log=sys.stderr)
     text = summary(r)
     print(text)
     if a.json:

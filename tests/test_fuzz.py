@@ -154,3 +154,30 @@ def test_regressions_found_by_the_fuzzer(op, value):
     m, sol, free = _fixtures()
     with pytest.raises(ms.MechError):
         OPS[op](m, sol, free, value)
+
+
+def test_long_profile_merges_parallel_runs():
+    """benchmarks/fuzz_long.py --merge: adjacent seed ranges add up; gaps are refused."""
+    import importlib.util
+    import pathlib
+
+    path = pathlib.Path(__file__).resolve().parents[1] / "benchmarks" / "fuzz_long.py"
+    spec = importlib.util.spec_from_file_location("_fuzz_long", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+
+    def part(start, models, worst, fails=()):
+        return {"models": models, "start": start, "types": 59, "all_types": 59,
+                "dims": {"2": models // 2, "3": models - models // 2},
+                "outcomes": {"dof": models, "solved": models - 1}, "failures": list(fails),
+                "worst": {"jacobian_fd": worst, "gamma_fd": worst / 2, "free_acceleration": 0.0},
+                "wall_s": 60.0 * models, "cpu_s": 1.0 * models}
+
+    r = mod.merged([part(100, 50, 1e-9), part(0, 100, 3e-9, [{"seed": 7, "type": "x",
+                                                              "what": "y"}])])
+    assert r["start"] == 0 and r["models"] == 150 and r["dims"] == {2: 75, 3: 75}
+    assert r["outcomes"] == {"dof": 150, "solved": 148} and len(r["failures"]) == 1
+    assert r["worst"]["jacobian_fd"] == 3e-9 and r["cpu_s"] == 150.0 and r["wall_s"] == 6000.0
+    assert "seeds 0 to 149" in mod.summary(r)
+    with pytest.raises(SystemExit, match="not adjacent"):
+        mod.merged([part(0, 100, 1e-9), part(101, 10, 1e-9)])
