@@ -83,7 +83,9 @@ class _Blocks:
     offsets of the blocks in the packed ``M`` store; ``rptr`` (m + 1), ``rblk`` the blocks
     each row touches; ``roff`` (len(rblk) + 1) offsets of the (row, block) segments;
     ``jpos`` (nnz,) segment position of each Jacobian value; ``bsize`` (blocks,); ``mpos``
-    (M nonzeros,) packed position of each mass-matrix value."""
+    (M nonzeros,) packed position of each mass-matrix value; ``pairs`` (couplings, 5): row,
+    band offset, the two segment offsets and the block size of every pair of rows
+    (``i >= k``) that share a block."""
 
     def __init__(self, arrays, bandwidth):
         self.arrays, self.bandwidth = arrays, int(bandwidth)
@@ -91,7 +93,7 @@ class _Blocks:
     @staticmethod
     def none():
         z = np.zeros(1, dtype=np.int64)
-        return (z, z, z, z, z, z, z, z)
+        return (z, z, z, z, z, z, z, z, np.zeros((1, 5), dtype=np.int64))
 
     @classmethod
     def of(cls, system, p, start):
@@ -135,6 +137,14 @@ class _Blocks:
                 lo, hi = touching.get(b, (i, i))
                 touching[b] = (min(lo, i), max(hi, i))
         bw = max((hi - lo for lo, hi in touching.values()), default=0)
+        # every coupling of two rows through a block, for the band of J W and J^ J^T
+        on = {}
+        for i, r in enumerate(rows_blocks):
+            for k, b in enumerate(r):
+                on.setdefault(b, []).append((i, int(roff[rptr[i] + k])))
+        pairs = [(i, i - k, oi, ok, int(bsize[b])) for b, rows in on.items()
+                 for i, oi in rows for k, ok in rows if k <= i]
+        pairs = np.array(sorted(pairs), dtype=np.int64).reshape(-1, 5)
         # positive definite blocks at the start (else: the whole augmented system)
         t0, q0 = start
         M = dyn.terms(t0, q0, np.zeros(n), np.zeros(m), p, np.zeros(n))[0]
@@ -143,7 +153,8 @@ class _Blocks:
                 np.linalg.cholesky(M[a:a + z, a:a + z])
             except np.linalg.LinAlgError:
                 return None
-        return cls((bstart, boff, rptr, rblk, roff, jpos, bsize, mpos.astype(np.int64)), bw)
+        return cls((bstart, boff, rptr, rblk, roff, jpos, bsize, mpos.astype(np.int64), pairs),
+                   bw)
 
 
 class FreeStepper:

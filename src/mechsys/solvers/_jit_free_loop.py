@@ -163,9 +163,9 @@ def _rhs(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, colum
     for j in range(2 * n):
         x[1 + j] = y[j]
     if blocks:
-        Mst, Jst, Wst, Sb, u, Pst = blk_w
+        Mst, Jst, Wst, Sb, u, Pst, Minv, Li = blk_w
         if not _accel_blocks(kp, x, nin, out, kk, kk - jr.size, n, m, jr, jc, rows0, columns,
-                             robust, blk_i, Mst, Jst, Wst, Sb, u, qdd, lam, force):
+                             robust, blk_i, Mst, Jst, Wst, Sb, u, Minv, Li, qdd, lam, force):
             return False
     elif not _accel(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, columns,
                     robust, ipiv, ibuf, rhs, b, qdd, lam, force):
@@ -747,12 +747,15 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
 
 @nb.njit(cache=True)
 def _block_work(blocks, blk_i, n, m, bw):
-    """Work arrays of the block path: ``(Mst, Jst, Wst, Sb, u, Pst)``."""
+    """Work arrays of the block path: ``(Mst, Jst, Wst, Sb, u, Pst, Minv, Li)``."""
     if blocks:
-        boff, roff = blk_i[1], blk_i[4]
+        boff, roff, bsize = blk_i[1], blk_i[4], blk_i[6]
+        big = bsize.max() if bsize.size else 1
         return (np.zeros(boff[-1]), np.zeros(roff[-1]), np.zeros(roff[-1]),
-                np.zeros((m, bw + 1)), np.zeros(n), np.zeros(roff[-1]))
-    return (np.zeros(1), np.zeros(1), np.zeros(1), np.zeros((1, 1)), np.zeros(1), np.zeros(1))
+                np.zeros((m, bw + 1)), np.zeros(n), np.zeros(roff[-1]), np.zeros(boff[-1]),
+                np.zeros(big * big))
+    return (np.zeros(1), np.zeros(1), np.zeros(1), np.zeros((1, 1)), np.zeros(1), np.zeros(1),
+            np.zeros(1), np.zeros(1))
 
 
 # -- block path: M block-diagonal (one block per body), the Schur complement banded --------
@@ -787,18 +790,66 @@ def _chol_blocks(Mst, bstart, boff, nblk):
 
 
 @nb.njit(cache=True)
-def _block_solve(Mst, o, nb_, v, off):
-    """``v[off:off + nb_] <- M_b^-1 v[off:off + nb_]`` with the Cholesky factor at ``Mst[o:]``."""
+def _invert_blocks(Mst, Minv, bstart, boff, nblk, Li):
+    """``Minv`` (packed like ``Mst``): every block's inverse ``L^-T L^-1`` from its Cholesky
+    factor in ``Mst`` (``Li``: work, at least the largest block squared). The products with
+    ``M^-1`` are then small matrix-vector products, without divisions."""
+    for b in range(nblk):
+        nb_ = bstart[b + 1] - bstart[b]
+        o = boff[b]
+        if nb_ == 3:               # planar bodies: written out (the general loops cost 4x)
+            _invert3(Mst, Minv, o)
+            continue
+        for j in range(nb_):
+            Li[j * nb_ + j] = 1.0 / Mst[o + j * nb_ + j]
+        for j in range(nb_):
+            for i in range(j + 1, nb_):
+                s = 0.0
+                for k in range(j, i):
+                    s -= Mst[o + i * nb_ + k] * Li[k * nb_ + j]
+                Li[i * nb_ + j] = s * Li[i * nb_ + i]
+        for i in range(nb_):
+            for j in range(i + 1):
+                s = 0.0
+                for k in range(i, nb_):
+                    s += Li[k * nb_ + i] * Li[k * nb_ + j]
+                Minv[o + i * nb_ + j] = s
+                Minv[o + j * nb_ + i] = s
+
+
+@nb.njit(cache=True)
+def _invert3(Mst, Minv, o):
+    """``_invert_blocks`` for one 3 x 3 block at ``o``."""
+    a = 1.0 / Mst[o]
+    d = 1.0 / Mst[o + 4]
+    f = 1.0 / Mst[o + 8]
+    b = -Mst[o + 3] * a * d                              # L^-1 = [[a, 0, 0], [b, d, 0], [c, e, f]]
+    e = -Mst[o + 7] * d * f
+    c = -(Mst[o + 6] * a + Mst[o + 7] * b) * f
+    Minv[o] = a * a + b * b + c * c                     # (L^-1)^T L^-1
+    Minv[o + 1] = Minv[o + 3] = b * d + c * e
+    Minv[o + 2] = Minv[o + 6] = c * f
+    Minv[o + 4] = d * d + e * e
+    Minv[o + 5] = Minv[o + 7] = e * f
+    Minv[o + 8] = f * f
+
+
+@nb.njit(cache=True)
+def _block_mul(Minv, o, nb_, src, soff, dst, doff):
+    """``dst[doff:doff + nb_] = M_b^-1 src[soff:soff + nb_]``."""
+    if nb_ == 3:
+        x0 = src[soff]
+        x1 = src[soff + 1]
+        x2 = src[soff + 2]
+        dst[doff] = Minv[o] * x0 + Minv[o + 1] * x1 + Minv[o + 2] * x2
+        dst[doff + 1] = Minv[o + 3] * x0 + Minv[o + 4] * x1 + Minv[o + 5] * x2
+        dst[doff + 2] = Minv[o + 6] * x0 + Minv[o + 7] * x1 + Minv[o + 8] * x2
+        return
     for i in range(nb_):
-        s = v[off + i]
-        for k in range(i):
-            s -= Mst[o + i * nb_ + k] * v[off + k]
-        v[off + i] = s / Mst[o + i * nb_ + i]
-    for i in range(nb_ - 1, -1, -1):
-        s = v[off + i]
-        for k in range(i + 1, nb_):
-            s -= Mst[o + k * nb_ + i] * v[off + k]
-        v[off + i] = s / Mst[o + i * nb_ + i]
+        s = 0.0
+        for k in range(nb_):
+            s += Minv[o + i * nb_ + k] * src[soff + k]
+        dst[doff + i] = s
 
 
 @nb.njit(cache=True)
@@ -868,28 +919,26 @@ def _fill_rows(vals, j0, jpos, Jst, scale_rows, r, columns, jc, jr):
 
 
 @nb.njit(cache=True)
-def _gram(A_st, B_st, rptr, rblk, roff, bsize, m, bw, Sb):
-    """``Sb`` (banded) of ``A B^T`` from per-(row, block) segments (rows couple through a
-    common block only)."""
-    for i in range(m):
-        for k in range(max(0, i - bw), i + 1):
-            s = 0.0
-            for p in range(rptr[i], rptr[i + 1]):
-                b = rblk[p]
-                for q in range(rptr[k], rptr[k + 1]):
-                    if rblk[q] == b:
-                        oi = roff[p]
-                        ok = roff[q]
-                        for t in range(bsize[b]):
-                            s += A_st[oi + t] * B_st[ok + t]
-            Sb[i, i - k] = s
+def _gram(A_st, B_st, pairs, Sb):
+    """``Sb`` (banded) of ``A B^T`` from per-(row, block) segments: rows couple through a
+    common block only; ``pairs`` (k, 5): row ``i``, band offset ``i - k``, the two segment
+    offsets and the block size of every such coupling (``_Blocks``)."""
+    Sb[:, :] = 0.0
+    for r in range(pairs.shape[0]):
+        i = pairs[r, 0]
+        oi = pairs[r, 2]
+        ok = pairs[r, 3]
+        s = 0.0
+        for t in range(pairs[r, 4]):
+            s += A_st[oi + t] * B_st[ok + t]
+        Sb[i, pairs[r, 1]] += s
 
 
 @nb.njit(cache=True)
 def _accel_blocks(kp, x, nin, out, kk, kM, n, m, jr, jc, rows0, columns, robust, blk_i,
-                  Mst, Jst, Wst, Sb, u, qdd, lam, force):
+                  Mst, Jst, Wst, Sb, u, Minv, Li, qdd, lam, force):
     """``_accel`` by the block path (see above); False: hand over."""
-    bstart, boff, rptr, rblk, roff, jpos, bsize, mpos = blk_i
+    bstart, boff, rptr, rblk, roff, jpos, bsize, mpos, pairs = blk_i
     nblk = bsize.size
     bw = Sb.shape[1] - 1
     _eval(kp, x, nin, out)
@@ -903,20 +952,18 @@ def _accel_blocks(kp, x, nin, out, kk, kM, n, m, jr, jc, rows0, columns, robust,
         return False
     big_rhs = 0.0
     for j in range(n):
-        u[j] = out[kk + j]
-        big_rhs = max(big_rhs, abs(u[j]))
+        big_rhs = max(big_rhs, abs(out[kk + j]))
     for i in range(m):
         big_rhs = max(big_rhs, abs(out[kk + n + i]))
+    _invert_blocks(Mst, Minv, bstart, boff, nblk, Li)
     for b in range(nblk):
-        _block_solve(Mst, boff[b], bsize[b], u, bstart[b])
+        _block_mul(Minv, boff[b], bsize[b], out, kk + bstart[b], u, bstart[b])
     _fill_rows(out, kM, jpos, Jst, False, lam, columns, jc, jr)
     for i in range(m):                       # W = M^-1 J^T, segment by segment
         for p in range(rptr[i], rptr[i + 1]):
             b = rblk[p]
-            for t in range(bsize[b]):
-                Wst[roff[p] + t] = Jst[roff[p] + t]
-            _block_solve(Mst, boff[b], bsize[b], Wst, roff[p])
-    _gram(Jst, Wst, rptr, rblk, roff, bsize, m, bw, Sb)
+            _block_mul(Minv, boff[b], bsize[b], Jst, roff[p], Wst, roff[p])
+    _gram(Jst, Wst, pairs, Sb)
     for i in range(m):
         lam[i] = -out[kk + n + i]
     for k in range(jr.size):
@@ -966,10 +1013,10 @@ def _min_norm_blocks(vals, j0, jr, jc, columns, m, n, bvec, r, blk_i, Pst, Sb, r
     positive definite or, ``robust``, when its Cholesky diagonal spreads by more than
     ``sqrt(ZONE)`` (an optimistic stand-in for the Python path's condition estimate: the
     hand-over comes before the zone of a singular Jacobian)."""
-    bstart, boff, rptr, rblk, roff, jpos, bsize, mpos = blk_i
+    bstart, boff, rptr, rblk, roff, jpos, bsize, mpos, pairs = blk_i
     bw = Sb.shape[1] - 1
     _fill_rows(vals, j0, jpos, Pst, True, r, columns, jc, jr)
-    _gram(Pst, Pst, rptr, rblk, roff, bsize, m, bw, Sb)
+    _gram(Pst, Pst, pairs, Sb)
     ratio = _band_chol(Sb, m, bw)
     if ratio < 0 or (robust and ratio * ratio < ZONE):
         return False
