@@ -61,10 +61,10 @@ def abs_chain(n_links: int):
 
 #: the peers' block of docs/performance.md (2026-11-23), N-link chain 2 s, error <= 1e-6:
 #: CPU [ms] of the cheapest setting that meets it (mechsys = absolute coordinates)
-PEERS = {4: {"mechsys": 58, "Exudyn": 4, "MuJoCo": 13},
-         16: {"mechsys": 160, "Exudyn": 41, "MuJoCo": 20},
-         64: {"mechsys": 852, "Exudyn": 959, "MuJoCo": 140},
-         256: {"mechsys": 2201, "Exudyn": 50600, "MuJoCo": 4086}}
+PEERS = {4: {"mechsys": 3, "Exudyn": 3, "MuJoCo": 8},
+         16: {"mechsys": 16, "Exudyn": 39, "MuJoCo": 18},
+         64: {"mechsys": 65, "Exudyn": 831, "MuJoCo": 116},
+         256: {"mechsys": 342, "Exudyn": 44800, "MuJoCo": 3819}}
 #: the mechsys setting of the peers' comparison (benchmarks/peers/peer_sides.py)
 PEER_SETTING = {"method": "dop853", "rtol": 1e-6, "atol": 1e-8}
 
