@@ -35,6 +35,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")  # before NumPy loads: CPU time of one thread, repeatable
 
 import argparse  # noqa: E402
+import re  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
@@ -595,7 +596,13 @@ def main(argv=None) -> int:
     print()
     print(text)
     if args.write:
-        Path(args.write).write_text(text)
+        page = Path(args.write)
+        # sections other scripts write (between <!-- name: begin ... --> and
+        # <!-- name: end -->) are kept, after this script's tables
+        old = page.read_text() if page.exists() else ""
+        blocks = [b.group(0) for b in re.finditer(r"<!-- (\w+): begin.*?<!-- \1: end -->", old,
+                                                  re.S)]
+        page.write_text(text.rstrip("\n") + "".join("\n\n" + b for b in blocks) + "\n")
         print(f"wrote {args.write}")
     return 0
 
