@@ -156,19 +156,25 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
         del ev_t[n_ev:], ev_y[n_ev:]
     diag = {"step_size": np.array(hs), "step_times": np.array(ts)}
     if fast is not None:
-        rows = len(ev_t) if te is not None else len(ts)
-        QDD, LAM = np.full((rows, fast.n), np.nan), np.full((rows, fast.m), np.nan)
-        for k, qdd, lam in known:
-            j = min(len(qdd), rows - k)     # Ctrl-C can leave a block beyond the rows kept
-            if j > 0:
-                QDD[k:k + j], LAM[k:k + j] = qdd[:j], lam[:j]
-        diag["derivatives"] = (QDD, LAM)
-        diag["compiled_steps"] = fast.steps
+        _compiled_derivatives(diag, fast, known, len(ev_t) if te is not None else len(ts))
     if te is not None:
         diag["t_eval"] = (np.array(ev_t), np.array(ev_y))
     diag["projections"] = extra
     return IntegrationResult(np.array(ts), np.array(ys), solver.nfev, len(ts) - 1, rejected,
                              message, diag)
+
+
+def _compiled_derivatives(diag, fast, known, rows) -> None:
+    """``diag["derivatives"] = (qdd (rows, n), lam (rows, m))`` from the compiled stepper's
+    blocks ``(first row, qdd, lam)`` (NaN rows: evaluated by the caller), and the count of
+    compiled steps."""
+    QDD, LAM = np.full((rows, fast.n), np.nan), np.full((rows, fast.m), np.nan)
+    for k, qdd, lam in known:
+        j = min(len(qdd), rows - k)     # Ctrl-C can leave a block beyond the rows kept
+        if j > 0:
+            QDD[k:k + j], LAM[k:k + j] = qdd[:j], lam[:j]
+    diag["derivatives"] = (QDD, LAM)
+    diag["compiled_steps"] = fast.steps
 
 
 def _restarted(cls, fun, t0, y0, rtol, atol, max_step):
@@ -331,14 +337,7 @@ def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4
         del ts[n_ok:], ys[n_ok:]
     diag = {"step_size": np.array(steps_h), "max_error": np.array(steps_e)}
     if fast is not None:
-        rows = len(ts)
-        QDD, LAM = np.full((rows, fast.n), np.nan), np.full((rows, fast.m), np.nan)
-        for k0, qdd, lam in known:
-            j = min(len(qdd), rows - k0)     # Ctrl-C can leave a block beyond the rows kept
-            if j > 0:
-                QDD[k0:k0 + j], LAM[k0:k0 + j] = qdd[:j], lam[:j]
-        diag["derivatives"] = (QDD, LAM)
-        diag["compiled_steps"] = fast.steps
+        _compiled_derivatives(diag, fast, known, len(ts))
     return IntegrationResult(np.array(ts), np.array(ys), nfev, len(ts) - 1, rejected, message,
                              diag)
 

@@ -50,41 +50,13 @@ N_STAGES = 12
 
 
 @nb.njit(cache=True)
-def _lu_solve(KT, b, N):
-    """``K x = b`` in place (``b`` becomes ``x``; ``KT`` holds ``K`` transposed and is
-    overwritten): Gaussian elimination with partial pivoting, LAPACK ``dgesv``'s algorithm,
-    without the call overhead that dominates for small systems. False at an exactly zero
-    pivot (``dgesv``'s ``info > 0``)."""
-    for k in range(N):
-        p = k
-        big = abs(KT[k, k])
-        for i in range(k + 1, N):
-            v = abs(KT[k, i])
-            if v > big:
-                big = v
-                p = i
-        if big == 0.0:
-            return False
-        if p != k:
-            for j in range(N):
-                tmp = KT[j, k]
-                KT[j, k] = KT[j, p]
-                KT[j, p] = tmp
-            tmp = b[k]
-            b[k] = b[p]
-            b[p] = tmp
-        inv = 1.0 / KT[k, k]
-        for i in range(k + 1, N):
-            l = KT[k, i] * inv
-            if l != 0.0:
-                for j in range(k + 1, N):
-                    KT[j, i] -= l * KT[j, k]
-                b[i] -= l * b[k]
-    for i in range(N - 1, -1, -1):
-        s = b[i]
-        for j in range(i + 1, N):
-            s -= KT[j, i] * b[j]
-        b[i] = s / KT[i, i]
+def _lu_solve(AT, b, N, piv):
+    """``A x = b`` in place (``b`` becomes ``x``; ``AT`` holds ``A`` transposed and is
+    overwritten) by ``_jit_lapack``'s ``dgetrf``/``dgetrs``, without LAPACK's call overhead.
+    False at an exactly zero pivot (``dgesv``'s ``info > 0``)."""
+    if getrf(AT, N, piv) > 0:
+        return False
+    getrs(AT, N, piv, b)
     return True
 
 
@@ -110,7 +82,7 @@ def _accel(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, col
         if v > big_rhs:
             big_rhs = v
     if N <= SMALL:
-        if not _lu_solve(KT, b, N):
+        if not _lu_solve(KT, b, N, ipiv):
             return False
     else:
         ibuf[0] = N          # n, nrhs, lda = ldb, info
@@ -524,7 +496,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
 
 
 @nb.njit(cache=True)
-def _adams_weights(times, cnt, t_from, h, V, w, cache):
+def _adams_weights(times, cnt, t_from, h, V, w, cache, piv):
     """``w[:cnt]``: ``solvers._integrators._adams_weights`` (the nodes rounded to 1e-9 as
     there, so that constant steps give the same weights). ``cache`` (13,): the last call's
     node count, nodes and unscaled weights (``cache[0]`` count, nodes at 1..6, weights at
@@ -548,7 +520,7 @@ def _adams_weights(times, cnt, t_from, h, V, w, cache):
             p *= x
     for j in range(cnt):
         w[j] = 1.0 / (j + 1)
-    if not _lu_solve(V[:cnt, :cnt], w, cnt):
+    if not _lu_solve(V[:cnt, :cnt], w, cnt, piv):
         cache[0] = -1.0
         return False
     for j in range(cnt):
@@ -604,6 +576,7 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
     ybuf = np.empty(m)
     V = np.empty((6, 6))
     cache_p = np.full(13, -1.0)
+    vpiv = np.empty(6, dtype=np.int32)
     cache_c = np.full(13, -1.0)
     w = np.empty(6)
     wc = np.empty(6)
@@ -629,7 +602,7 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
         deg = min(k, nh - 1)
         # predictor: the last deg + 1 derivative values
         p0 = nh - (deg + 1)
-        if not _adams_weights(hist_t[p0:nh], deg + 1, t, h_try, V, w, cache_p):
+        if not _adams_weights(hist_t[p0:nh], deg + 1, t, h_try, V, w, cache_p, vpiv):
             return HANDOVER, steps, evals, projections
         for j in range(N2):
             acc = 0.0
@@ -657,7 +630,7 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
         ct[nc - 1] = t + h_try
         for j in range(N2):
             cf[nc - 1, j] = f_pred[j]
-        if not _adams_weights(ct, nc, t, h_try, V, wc, cache_c):
+        if not _adams_weights(ct, nc, t, h_try, V, wc, cache_c, vpiv):
             return HANDOVER, steps, evals, projections
         err = 0.0
         for j in range(N2):
