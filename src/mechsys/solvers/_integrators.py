@@ -58,6 +58,51 @@ class IntegrationResult:
     diagnostics: dict = field(default_factory=dict)
 
 
+class _Rows:
+    """Rows gathered one at a time (Python steps) or in blocks (the compiled stepper's
+    arrays, kept as they are): ``array()`` joins them once at the end, so that long runs do
+    not turn every compiled row into a Python object."""
+
+    __slots__ = ("_blocks", "_n")
+
+    def __init__(self, *rows):
+        self._blocks, self._n = [], 0
+        for r in rows:
+            self.append(r)
+
+    def append(self, row) -> None:
+        self._blocks.append(np.asarray(row, dtype=float)[None].copy())
+        self._n += 1
+
+    def extend(self, block) -> None:
+        if len(block):
+            self._blocks.append(np.asarray(block, dtype=float))
+            self._n += len(block)
+
+    def __len__(self) -> int:
+        return self._n
+
+    def __getitem__(self, i):
+        if i != -1 or not self._n:
+            raise IndexError("_Rows gives only its last row")
+        return self._blocks[-1][-1]
+
+    def trim(self, n: int) -> None:
+        """Keep the first ``n`` rows."""
+        while self._n > n:
+            last = self._blocks[-1]
+            drop = min(len(last), self._n - n)
+            self._blocks[-1] = last[:len(last) - drop]
+            self._n -= drop
+            if not len(self._blocks[-1]):
+                self._blocks.pop()
+
+    def array(self, width: int | None = None) -> np.ndarray:
+        if not self._blocks:
+            return np.empty((0,) if width is None else (0, width))
+        return np.concatenate(self._blocks)
+
+
 def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-10,
                  max_step=np.inf, first_step=None, correction=True,
                  t_eval=None, scale=None, kinked=None, monitor=None,
@@ -80,9 +125,9 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
         atol = atol * np.asarray(scale, dtype=float)
     solver = cls(fun, t0, np.array(y0, dtype=float), t1, rtol=rtol, atol=atol,
                  max_step=max_step, first_step=first_step)
-    ts, ys, hs = [t0], [solver.y.copy()], []
+    ts, ys, hs = _Rows(t0), _Rows(solver.y), _Rows()
     extra = 0
-    ev_t, ev_y = [], []
+    ev_t, ev_y = _Rows(), _Rows()
     te = None if t_eval is None else np.asarray(t_eval, dtype=float)
     ie = 0
     d = 1.0 if t1 >= t0 else -1.0          # direction: t_eval is ordered along it
@@ -101,14 +146,14 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
                 status, T, Yc, H, QDD, LAM, ie_new, rej, proj = fast.advance(solver, ie)
                 if te is not None:
                     known.append((len(ev_t), fast.EQDD[ie:ie_new], fast.ELAM[ie:ie_new]))
-                    ev_t.extend(te[ie:ie_new].tolist())
+                    ev_t.extend(te[ie:ie_new].copy())
                     ev_y.extend(fast.EY[ie:ie_new].copy())
                     ie = ie_new
                 else:
                     known.append((len(ts), QDD, LAM))
-                ts.extend(T.tolist())
+                ts.extend(T)
                 ys.extend(Yc)
-                hs.extend(H.tolist())
+                hs.extend(H)
                 rejected += rej
                 extra += proj
                 if len(T) and monitor is not None:
@@ -143,7 +188,7 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
                 extra += 1
             hs.append(solver.step_size)
             ts.append(solver.t)
-            ys.append(solver.y.copy())
+            ys.append(solver.y)
             if monitor is not None:
                 monitor(solver.t)
     except KeyboardInterrupt:
@@ -151,16 +196,19 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
         # lists grow only after a step and its projection are complete)
         message = "interrupted"
         n_ok = min(len(ts), len(ys))
-        del ts[n_ok:], ys[n_ok:]
+        ts.trim(n_ok)
+        ys.trim(n_ok)
         n_ev = min(len(ev_t), len(ev_y))
-        del ev_t[n_ev:], ev_y[n_ev:]
-    diag = {"step_size": np.array(hs), "step_times": np.array(ts)}
+        ev_t.trim(n_ev)
+        ev_y.trim(n_ev)
+    ts, ys = ts.array(), ys.array(len(y0))
+    diag = {"step_size": hs.array(), "step_times": ts}
     if fast is not None:
         _compiled_derivatives(diag, fast, known, len(ev_t) if te is not None else len(ts))
     if te is not None:
-        diag["t_eval"] = (np.array(ev_t), np.array(ev_y))
+        diag["t_eval"] = (ev_t.array(), ev_y.array(len(y0)))
     diag["projections"] = extra
-    return IntegrationResult(np.array(ts), np.array(ys), solver.nfev, len(ts) - 1, rejected,
+    return IntegrationResult(ts, ys, solver.nfev, len(ts) - 1, rejected,
                              message, diag)
 
 
@@ -241,7 +289,7 @@ def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4
     f = fun(t, y)
     nfev = 1
     hist_t, hist_f = [t], [f]
-    ts, ys, steps_h, steps_e = [t], [y.copy()], [], []
+    ts, ys, steps_h, steps_e = _Rows(t), _Rows(y), _Rows(), _Rows()
     recent: list[float] = []
     rejected = 0
     message = "finished"
@@ -271,10 +319,10 @@ def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4
                 nfev += ev
                 if len(T):
                     known.append((len(ts), QDD, LAM))
-                    ts.extend(T.tolist())
+                    ts.extend(T)
                     ys.extend(Yc)
-                    steps_h.extend(H.tolist())
-                    steps_e.extend(E.tolist())
+                    steps_h.extend(H)
+                    steps_e.extend(E)
                     t, h, y = float(state[0]), float(state[1]), yy
                     nh, nrec = int(state[2]), int(state[3])
                     hist_t, hist_f = ht[:nh].tolist(), list(hf[:nh].copy())
@@ -321,7 +369,7 @@ def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4
             if len(hist_t) > 6:
                 hist_t, hist_f = hist_t[-6:], hist_f[-6:]
             ts.append(t)
-            ys.append(y.copy())
+            ys.append(y)
             steps_h.append(h_try)
             steps_e.append(err)
             recent.append(err)
@@ -334,11 +382,12 @@ def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4
         # Ctrl-C: keep the steps accepted so far (see integrate_rk)
         message = "interrupted"
         n_ok = min(len(ts), len(ys))
-        del ts[n_ok:], ys[n_ok:]
-    diag = {"step_size": np.array(steps_h), "max_error": np.array(steps_e)}
+        ts.trim(n_ok)
+        ys.trim(n_ok)
+    diag = {"step_size": steps_h.array(), "max_error": steps_e.array()}
     if fast is not None:
         _compiled_derivatives(diag, fast, known, len(ts))
-    return IntegrationResult(np.array(ts), np.array(ys), nfev, len(ts) - 1, rejected, message,
+    return IntegrationResult(ts.array(), ys.array(len(y0)), nfev, len(ts) - 1, rejected, message,
                              diag)
 
 
