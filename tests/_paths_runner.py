@@ -1,0 +1,148 @@
+"""Run one example script and check that the compiled and the Python paths give the same
+numbers on every free motion and kinematic sweep it computes (used by
+``tests/test_paths_agree.py``; run as ``python tests/_paths_runner.py examples/x.py``).
+
+The script runs once as written, with ``FreeSystem.simulate`` and the kinematic sweep
+(``solvers._kinematics.sweep``) recorded. Then each recorded computation is repeated with
+``MECHSYS_JIT=0`` (the Python loops) and ``MECHSYS_JIT=1`` (the compiled loops wherever they
+apply):
+
+* a sweep over all of its points;
+* a free motion over its first steps (about 20: over a whole run the step-size controller
+  amplifies rounding-sized differences of the error estimate into different steps, and a
+  chaotic motion amplifies those, so two correct implementations of one method agree to the
+  integration tolerance there, not to rounding).
+
+Printed on the last line, after ``paths-agree:``: a JSON list with, per computation, its kind, the largest
+difference (relative to ``max(1, |value|)``) and whether the compiled loop ran.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import runpy
+import sys
+
+import numpy as np
+
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+from mechsys import model as model_module  # noqa: E402
+from mechsys.analyses import _free  # noqa: E402
+from mechsys.solvers import _kinematics  # noqa: E402
+
+FIRST_STEPS = 20
+records: list = []
+
+
+def _record_simulate(original):
+    def simulate(self, t, *args, **kwargs):
+        sol = original(self, t, *args, **kwargs)
+        if len(records) < 40:
+            records.append(("free", self, t, args, kwargs, sol))
+        return sol
+    return simulate
+
+
+def _record_sweep(original):
+    def sweep(system, times, guess, *args, **kwargs):
+        out = original(system, times, guess, *args, **kwargs)
+        if len(records) < 40 and kwargs.get("hooks") is None and len(np.atleast_1d(times)) > 2:
+            records.append(("sweep", system, np.array(times, dtype=float), (np.array(guess),) + args,
+                            kwargs, out))
+        return out
+    return sweep
+
+
+def _diff(a, b) -> float:
+    """Largest difference, each column measured in its own scale ``max(1, max |column|)``
+    (an acceleration of 30 m/s² is compared in units of 30, an angle in radians); inf when
+    the shapes or the places of non-finite entries differ."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    if a.shape != b.shape or not np.array_equal(np.isfinite(a), np.isfinite(b)):
+        return float("inf")
+    if not a.size:
+        return 0.0
+    a2, b2 = a.reshape(len(a), -1), b.reshape(len(b), -1)
+    fin = np.isfinite(a2)
+    a2, b2 = np.where(fin, a2, 0.0), np.where(fin, b2, 0.0)
+    scale = np.maximum(1.0, np.abs(a2).max(axis=0))
+    return float((np.abs(a2 - b2) / scale).max())
+
+
+def _short_span(t, sol):
+    """Output times over the first ``FIRST_STEPS`` steps of a run. Always output times, so
+    the two runs are compared at the same instants: where the error estimate is a
+    difference of nearly equal numbers the two loops choose step sizes that differ by a
+    rounding-sized relative amount, and states at different instants differ by the motion
+    in between."""
+    steps = max(int(sol.extra.get("steps", len(sol.t))), 1)
+    frac = min(1.0, FIRST_STEPS / steps)
+    if isinstance(t, tuple | list) and len(t) == 2:
+        t0, t1 = float(t[0]), float(t[1])
+    else:
+        t = np.asarray(t, dtype=float)
+        t0, t1 = float(t[0]), float(t[-1])
+    return np.linspace(t0, t0 + frac * (t1 - t0), 11)
+
+
+def _both(fn, *args, **kwargs):
+    """``fn(*args, **kwargs)`` with the Python loops, then with the compiled ones."""
+    out = {}
+    for mode in ("0", "1"):
+        os.environ["MECHSYS_JIT"] = mode
+        out[mode] = fn(*args, **kwargs)
+    os.environ.pop("MECHSYS_JIT", None)
+    return out["0"], out["1"]
+
+
+def _counting(ran: list):
+    """``_jit.run`` that appends how many points the compiled loop solved to ``ran``."""
+    def run(*a, **k):
+        out = original_run(*a, **k)
+        ran.append(out[0])
+        return out
+    return run
+
+
+def check() -> list[dict]:
+    results = []
+    for kind, obj, t, args, kwargs, sol in records:
+        if kind == "free":
+            span = _short_span(t, sol)
+            py, jit = _both(original_simulate, obj, span, *args, **kwargs)
+            each = {k: _diff(getattr(py, k), getattr(jit, k))
+                    for k in ("t", "q", "qd", "qdd", "lam")}
+            results.append({"kind": "free", "difference": max(each.values()), "each": each,
+                            "rows": len(py.t),
+                            "compiled": int(jit.extra.get("compiled_steps", 0)),
+                            "python_compiled": int(py.extra.get("compiled_steps", 0))})
+        else:
+            ran: list = []
+            _kinematics._jit.run = _counting(ran)
+            try:
+                py, jit = _both(original_sweep, obj, t, *args, **kwargs)
+            finally:
+                _kinematics._jit.run = original_run
+            parts = [(py.q, jit.q), (py.qd, jit.qd), (py.qdd, jit.qdd)]
+            d = max(_diff(a, b) for a, b in parts if a is not None or b is not None)
+            results.append({"kind": "sweep", "difference": d, "rows": len(t),
+                            "compiled": int(sum(ran))})
+    return results
+
+
+original_simulate = _free.FreeSystem.simulate
+original_sweep = _kinematics.sweep
+original_run = _kinematics._jit.run
+
+if __name__ == "__main__":
+    script = sys.argv[1]
+    _free.FreeSystem.simulate = _record_simulate(original_simulate)
+    _kinematics.sweep = model_module.sweep = _record_sweep(original_sweep)
+    sys.argv = [script]
+    sys.path[0] = os.path.dirname(os.path.abspath(script))   # as `python script` has it
+    runpy.run_path(script, run_name="__main__")
+    _free.FreeSystem.simulate = original_simulate
+    _kinematics.sweep = model_module.sweep = original_sweep
+    print("paths-agree: " + json.dumps(check()))
