@@ -50,6 +50,11 @@ def test_options_are_validated_by_name():
         with pytest.raises(ModelError, match="cse must be None .automatic., True or False"):
             m.set_compile_options(cse=bad)
     assert m.compile_options == {"process": None, "opt_level": None, "cse": None}
+    # a level read from an array is a NumPy integer: taken, stored as a plain int
+    assert m.set_compile_options(opt_level=np.int64(2))["opt_level"] == 2
+    assert type(m.compile_options["opt_level"]) is int
+    with pytest.raises(ModelError, match="opt_level must be"):
+        m.set_compile_options(opt_level=np.bool_(True))
 
 
 @pytest.mark.parametrize("scale", [1.0, 1e-3])

@@ -137,6 +137,10 @@ CATALOGUE = [
     ("options", "crank().solve(0.0, pre_solve=1)", "ModelError", "pre_solve"),
     ("options", 'crank().solve(0.0, post_iterate="print")', "ModelError", "post_iterate"),
     ("options", "crank().singularity(threshold=2.0)", "ModelError", "threshold"),
+    ("options", "crank().set_compile_options(optlevel=1)", "ModelError", "'optlevel'"),
+    ("options", "crank().set_compile_options(opt_level=7)", "ModelError", "opt_level"),
+    ("options", 'crank().set_compile_options(process="Chop")', "ModelError", "'Chop'"),
+    ("options", 'ms.Model2D(orientation="Euler")', "ModelError", "'Euler'"),
     # solving
     ("solve", 'crank().solve(float("nan"))', "ModelError", "nan"),
     ("solve", "crank().solve([])", "ModelError", "empty"),

@@ -191,3 +191,20 @@ def test_when_it_does_not_run(monkeypatch):
     monkeypatch.setenv("MECHSYS_JIT", "1")
     monkeypatch.setenv("MECHSYS_BACKEND", "sympy")
     assert _jit.plan(models.slider_crank().compile(), 100, 2) is None
+
+
+@pytest.mark.parametrize("value", ["of", "2", "enable", "ture"])
+def test_a_misspelled_mode_is_an_error_not_a_default(monkeypatch, value):
+    """MECHSYS_JIT=of must not quietly run the compiled loops (it would mean the opposite of
+    what was typed): sweeps and free motion both refuse it, naming the variable."""
+    m = models.slider_crank()
+    chain = models.pendulum_chain(2)
+    chain.solve(0.0)
+    monkeypatch.setenv("MECHSYS_JIT", value)
+    with pytest.raises(ms.ModelError, match="MECHSYS_JIT=.*use 0 .*1 .*auto"):
+        m.solve(np.linspace(0.0, 1.0, 5))
+    with pytest.raises(ms.ModelError, match="MECHSYS_JIT"):
+        chain.free(drop=["lock0", "lock1"]).simulate((0.0, 0.1))
+    for ok in ("AUTO", " 0 ", "On"):
+        monkeypatch.setenv("MECHSYS_JIT", ok)
+        assert _jit.mode() in ("auto", "off", "on")

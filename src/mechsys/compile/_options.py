@@ -32,6 +32,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+import numpy as np
 import sympy as sp
 
 from .._errors import ModelError
@@ -61,11 +62,12 @@ def updated(opts: CompileOptions, process=_UNSET, opt_level=_UNSET, cse=_UNSET) 
                              f"f(expr) -> expr (Mech's $MechProcessFunction), got {process!r}")
         new["process"] = process
     if opt_level is not _UNSET:
-        if opt_level is not None and (isinstance(opt_level, bool) or not isinstance(
-                opt_level, int) or not 0 <= opt_level <= 3):
+        # NumPy integers too (a value read from an array); bools are not levels
+        if opt_level is not None and (isinstance(opt_level, (bool, np.bool_)) or not isinstance(
+                opt_level, (int, np.integer)) or not 0 <= opt_level <= 3):
             raise ModelError(f"compile option opt_level must be an integer 0, 1, 2 or 3 (LLVM's "
                              f"optimisation level) or None (automatic), got {opt_level!r}")
-        new["opt_level"] = opt_level
+        new["opt_level"] = None if opt_level is None else int(opt_level)
     if cse is not _UNSET:
         if cse not in (None, True, False) or not isinstance(cse, (bool, type(None))):
             raise ModelError(f"compile option cse must be None (automatic), True or False, got "

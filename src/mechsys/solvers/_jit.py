@@ -34,6 +34,7 @@ import os
 
 import numpy as np
 
+from .._errors import ModelError
 from ._linalg import RCOND_MIN, SPARSE_THRESHOLD
 
 #: ``auto``: the compiled loop is used for sweeps of at least this many points
@@ -43,13 +44,18 @@ _state: dict = {"loaded": False, "loop": None, "lapack": None, "failed": None}
 
 
 def mode() -> str:
-    """``"off"``, ``"on"`` or ``"auto"`` from ``MECHSYS_JIT``."""
+    """``"off"``, ``"on"`` or ``"auto"`` from ``MECHSYS_JIT`` (``0/off/false/no``,
+    ``1/on/true/yes``, unset or ``auto``). Anything else raises :class:`ModelError`: a
+    misspelled ``MECHSYS_JIT=of`` must not quietly mean the opposite."""
     v = os.environ.get("MECHSYS_JIT", "").strip().lower()
     if v in ("0", "off", "false", "no"):
         return "off"
     if v in ("1", "on", "true", "yes"):
         return "on"
-    return "auto"
+    if v in ("", "auto"):
+        return "auto"
+    raise ModelError(f"MECHSYS_JIT={os.environ['MECHSYS_JIT']!r}: use 0 (never compiled loops), "
+                     "1 (whenever possible) or auto (unset: the default)")
 
 
 def available() -> bool:
