@@ -106,6 +106,38 @@ def _to_sympy(x):
     return x
 
 
+#: per-equation derivatives (SymEngine): systems of one model share most equations -- the
+#: kinematic system, ``free()`` without the driver, ``path()``, the stages of a switch, the
+#: locked systems -- so each equation is differentiated once per process. Keyed by the
+#: equation and the (coordinate, velocity) symbol pairs it involves.
+_DERIVED: dict = {}
+_DERIVED_MAX = 200_000
+
+
+def _derive_one(e, mine, mine_d):
+    """``(phi, [(q_j, d phi / d q_j)], phi_t, gamma)`` of one equation (SymEngine), for its
+    coordinates ``mine`` (in column order) and their velocities ``mine_d``."""
+    E, thaw = _freeze_steps(e)
+    free = E.free_symbols
+    Ts = se.sympify(T)
+    jac = []
+    v = se.Integer(0)
+    for s, sd in zip(mine, mine_d):
+        d = E.diff(se.sympify(s))
+        if d != 0:
+            jac.append((s, _thaw(d, thaw)))
+            v += d * se.sympify(sd)
+    et = E.diff(Ts) if Ts in free else se.Integer(0)
+    v += et
+    fv = v.free_symbols
+    gm = v.diff(Ts) if Ts in fv else se.Integer(0)
+    for s, sd in zip(mine, mine_d):
+        a = se.sympify(s)
+        if a in fv:
+            gm += v.diff(a) * se.sympify(sd)
+    return _thaw(E, thaw), jac, _thaw(et, thaw), _thaw(-gm, thaw)
+
+
 def derive_kinematics(phi, q, qd, T):
     """``(rows, cols, jac, phi_t, gamma, native)`` for equations ``phi``.
 
@@ -139,32 +171,25 @@ def derive_kinematics(phi, q, qd, T):
                     gm += _diff(v, a) * b
             gamma.append(-gm)
         return rows, cols, jac, phi_t, gamma, None
-    qs = [se.sympify(s) for s in q]
-    qds = [se.sympify(s) for s in qd]
-    Ts = se.sympify(T)
-    sidx = {s: j for j, s in enumerate(qs)}
     n_phi, n_jac, n_pt, n_gm = [], [], [], []
     for i, e in enumerate(phi):
-        E, thaw = _freeze_steps(sp.sympify(e))
-        n_phi.append(_thaw(E, thaw))
-        free = E.free_symbols
-        v = se.Integer(0)
-        for s in sorted((s for s in free if s in sidx), key=sidx.get):
-            d = E.diff(s)
-            if d != 0:
-                rows.append(i)
-                cols.append(sidx[s])
-                n_jac.append(_thaw(d, thaw))
-                v += d * qds[sidx[s]]
-        et = E.diff(Ts) if Ts in free else se.Integer(0)
-        n_pt.append(_thaw(et, thaw))
-        v += et
-        fv = v.free_symbols
-        gm = v.diff(Ts) if Ts in fv else se.Integer(0)
-        for a, b in zip(qs, qds):
-            if a in fv:
-                gm += v.diff(a) * b
-        n_gm.append(_thaw(-gm, thaw))
+        e = sp.sympify(e)
+        mine = sorted((s for s in e.free_symbols if s in index), key=index.get)
+        key = (e, tuple((s, qd[index[s]]) for s in mine))
+        hit = _DERIVED.get(key)
+        if hit is None:
+            hit = _derive_one(e, mine, [qd[index[s]] for s in mine])
+            if len(_DERIVED) >= _DERIVED_MAX:
+                _DERIVED.clear()
+            _DERIVED[key] = hit
+        e_phi, e_jac, e_pt, e_gm = hit
+        n_phi.append(e_phi)
+        for s, d in e_jac:
+            rows.append(i)
+            cols.append(index[s])
+            n_jac.append(d)
+        n_pt.append(e_pt)
+        n_gm.append(e_gm)
     native = {"phi": n_phi, "jac": n_jac, "phi_t": n_pt, "gamma": n_gm}
     # SymPy versions are made lazily (System): 3D gammas can be megabytes of text
     return rows, cols, None, None, None, native
