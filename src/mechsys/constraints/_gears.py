@@ -96,6 +96,26 @@ def _body_angle(space, body) -> sp.Expr:
     return space.angle(body.q[space.dim:])
 
 
+def _in_euler(bodies) -> bool:
+    """Whether these bodies are in planar Euler coordinates (``orientation="euler"``)."""
+    return any(hasattr(getattr(b, "space", None), "continuous_angle") for b in bodies)
+
+
+def _angle_guess(body) -> sp.Expr:
+    """A body's angle for a variable's default guess only: the principal value in Euler
+    coordinates is enough to pick the branch."""
+    if body is None or getattr(body, "is_ground", False):
+        return sp.Integer(0)
+    return body.space.angle(body.q[body.space.dim:])
+
+
+def _body_frame(body) -> tuple[sp.Matrix, sp.Matrix]:
+    """``(g, k)``: a planar body's x and y axes in global coordinates (ground's for None)."""
+    if body is None or getattr(body, "is_ground", False):
+        return sp.Matrix([1, 0]), sp.Matrix([0, 1])
+    return body.A[:, 0], body.A[:, 1]
+
+
 def _guess_value(expr, bodies) -> float | None:
     """``expr`` evaluated at the bodies' guesses (time 0); None if it has other symbols."""
     from .._symbols import T
@@ -218,9 +238,14 @@ class _TwoWheels(_WheelPair):
 
     def _guess_expr(self):
         d = self._d()
+        if _in_euler(self.bodies()):
+            # Mech's Euler form: the variable is e1, the angle from d to wheel 1's x axis
+            return _angle_guess(self.p1.body) - sp.atan2(d[1], d[0])
         return sp.atan2(d[1], d[0])
 
     def _build(self, space):
+        if hasattr(space, "continuous_angle"):
+            return self._build_euler()
         th = self.alpha
         d = self._d()
         th1, th2 = _body_angle(space, self.p1.body), _body_angle(space, self.p2.body)
@@ -230,6 +255,27 @@ class _TwoWheels(_WheelPair):
             rho = sp.sqrt(rho**2)
             return [d[0] - rho * sp.cos(th), d[1] - rho * sp.sin(th), mesh]
         return [mesh, d[0] * sp.sin(th) - d[1] * sp.cos(th)]
+
+    def _build_euler(self):
+        """Planar Euler coordinates carry no turn-counting angle, so (as Mech's Euler method
+        and the spatial gears do) the variable is ``a = e1``, the angle from ``d`` to wheel
+        1's x axis, and ``e2 = (C - rad1 a) / (sign rad2)`` follows from the mesh; each is
+        imposed by a regular angle equation in its wheel's frame ``(g, k)``::
+
+            cos(-a) (k1 . d) - sin(-a) (g1 . d) = 0        (TwoGears1: with the next one)
+            d - rho (cos(a) g1 - sin(a) k1) = 0            (TwoGears2: instead, 2 equations)
+            cos(-e2) (k2 . d) - sin(-e2) (g2 . d) = 0
+        """
+        a = self.alpha
+        d = self._d()
+        e2 = (self.C - self.rad1 * a) / (self._sign * self.rad2)
+        g1, k1 = _body_frame(self.p1.body)
+        second = angle_equation(_body_frame(self.p2.body), d, -e2)
+        if self._with_distance:
+            rho = self.dist if self._with_dist_arg else self.rad1 + self.rad2
+            u = sp.cos(a) * g1 - sp.sin(a) * k1       # at angle -a from g1
+            return [d[0] - sp.sqrt(rho**2) * u[0], d[1] - sp.sqrt(rho**2) * u[1], second]
+        return [angle_equation((g1, k1), d, -a), second]
 
 
 @_signature("point1", "rad1", "point2", "rad2", "C")
@@ -321,8 +367,19 @@ class _PlanarRack(_Gear):
     """``point, rad[, (alpha, guess)], axis, C`` -- Mech adds ``alpha`` only when asked."""
 
     spaces = ("planar",)
-    _always_variable = False
     _with_distance = False
+
+    @property
+    def _always_variable(self) -> bool:
+        # the form without alpha uses the body angles: in Euler coordinates alpha is needed
+        return _in_euler(self.bodies())
+
+    def _guess_expr(self):
+        d = self.axis.dir
+        if d.points is not None or isinstance(d, GlobalVector) or d.local is None:
+            return None
+        return (_angle_guess(self.p.body) - _angle_guess(d.body)
+                - sp.atan2(d.local[1], d.local[0]))
 
     def __init__(self, *args, variable=None):
         super().__init__()

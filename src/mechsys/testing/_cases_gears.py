@@ -35,8 +35,11 @@ def _wheels(rng, kind, r1, r2, Cc, *, dist=None, explicit=False, sign=1, distanc
     c2 = c1 + rho * np.array([np.cos(Th), np.sin(Th)])
     th1 = rng.uniform(-3, 3)
     th2 = Th + (Cc - r1 * (th1 - Th)) / (sign * r2)
+    # the variable: the line of centres' angle, or in Euler coordinates (Mech's Euler form)
+    # the angle e1 from the line of centres to wheel 1's x axis
+    var_value = th1 - Th if m.orientation == "euler" else Th
     q = pose_vector(m, {b1: [*(c1 - _rot(th1) @ s1), th1], b2: [*(c2 - _rot(th2) @ s2), th2],
-                        c.alpha: Th})
+                        c.alpha: var_value})
     return Case(m, c, q)
 
 
@@ -102,7 +105,7 @@ def _rack(rng, kind, rad, Cc, *, explicit=False, distance=True, moving=True):
     poses = {pin: [*(p - _rot(th1) @ sp_), th1]}
     if rack is not None:
         poses[rack] = [*r2, th2]
-    if explicit:
+    if c.alpha is not None:          # explicit, or always in Euler coordinates
         poses[c.alpha] = alpha
     return Case(m, c, pose_vector(m, poses))
 
