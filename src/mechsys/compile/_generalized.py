@@ -293,7 +293,7 @@ class RecursiveDynamics:
         index = {s: i for i, s in enumerate(lay.q_symbols)}
         order = _slave_order(bodies)
         S = len(order)
-        nq = space.dim + (1 if space.dim == 2 else 4)
+        nq = space.ncoord          # pose coordinates: 3 planar, 4 planar Euler, 7 spatial
         pos = {b: i for i, b in enumerate(order)}
         par = np.full(S, -1, dtype=np.int64)
         root = np.full(S, -1, dtype=np.int64)

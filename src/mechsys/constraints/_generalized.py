@@ -130,7 +130,14 @@ class GenJoint(ConstraintBase):
         tj, Rj = self._relative(space)
         m = self.master
         ground = m is None or m.is_ground
-        if space.dim == 2:
+        if space.dim == 2 and hasattr(space, "continuous_angle"):
+            # planar Euler parameters (orientation="euler"): the master's (ei, ej) turned by
+            # the joint's angle; the Gen coordinate itself counts the turns
+            ei, ej = (sp.S.One, sp.S.Zero) if ground else (m.q[2], m.q[3])
+            psi = R2 + Rj - R1
+            c, s_ = sp.cos(psi), sp.sin(psi)
+            rot_s = [ei * c - ej * s_, ei * s_ + ej * c]
+        elif space.dim == 2:
             rot_m = sp.S.Zero if ground else m.q[2]
             rot_s = [rot_m + R2 + Rj - R1]
         else:
@@ -140,7 +147,10 @@ class GenJoint(ConstraintBase):
         A_m = sp.eye(space.dim) if ground else m.A
         r_m = sp.zeros(space.dim, 1) if ground else m.r
         A_s = space.rotation_matrix(rot_s)
-        R2m = space.rotation_matrix([R2]) if space.dim == 2 else space.rotation_matrix(R2)
+        if space.dim == 2:
+            R2m = sp.Matrix([[sp.cos(R2), -sp.sin(R2)], [sp.sin(R2), sp.cos(R2)]])
+        else:
+            R2m = space.rotation_matrix(R2)
         r_s = r_m + A_m * (o2 + R2m * tj) - A_s * o1
         return r_s, [sp.sympify(e) for e in rot_s]
 
@@ -388,8 +398,6 @@ def check_new_joint(model, joint: GenJoint) -> None:
     """Mech's rules (11.1): a slave has one master, the chain of masters starts at ground or
     a standard body (no loops), and every argument belongs to this model."""
     who = joint.label()
-    if hasattr(model.space, "continuous_angle"):  # orientation="euler"
-        model.space.continuous_angle(who)
     for b in (joint.slave, joint.master):
         if b is not None and getattr(b, "model", None) is not model:
             raise ModelError(f"{who}: body {b.name!r} is not a body of this model (add it with "
