@@ -375,3 +375,26 @@ def test_gen_joints_in_euler_parameters_match_angle_coordinates():
         Fe, Me = e.reaction(c, body)
         np.testing.assert_allclose(np.asarray(Fe), np.asarray(Fa), rtol=1e-8, atol=1e-8)
         np.testing.assert_allclose(np.asarray(Me), np.asarray(Ma), rtol=1e-8, atol=1e-8)
+
+
+def test_recursive_gen_dynamics_in_euler_parameters():
+    """Eight Gen links (the recursive dynamics' range, decision 0016): the same free motion
+    in both orientations; the recursion sizes each pose by the space (4 coordinates here)."""
+    from mechsys.compile._generalized import RecursiveDynamics
+
+    out = {}
+    for o in ("angle", "euler"):
+        m = ms.Model2D(orientation=o)
+        master = m.ground
+        for k in range(8):
+            b = m.add_body(f"l{k}", points={"o": (0, 0), "e": (1.0, 0)}, mass=1.0,
+                           inertia=1 / 12, centroid=(0.5, 0))
+            axis = master.axis((0, 0)) if k == 0 else master.axis("e")
+            m.add(ms.GenRevolute2(b.axis("o"), axis, (f"a{k}", 0.1 * (k + 1))), name=f"j{k}")
+            master = b
+        m.add_load(ms.Gravity((0, -1), 9.81))
+        free = m.free()
+        assert isinstance(free.system.dynamics, RecursiveDynamics)
+        out[o] = free.simulate(np.linspace(0.0, 0.5, 6), rtol=1e-10, atol=1e-12)
+    for k in range(8):
+        np.testing.assert_allclose(out["euler"][f"a{k}"], out["angle"][f"a{k}"], atol=1e-8)
