@@ -147,12 +147,9 @@ def test_torsion_spring_equilibrium_matches():
     assert abs(40.0 * (th - 0.3) + 2.0 * 9.81 * 0.5 * np.cos(th)) < 1e-9
 
 
-def test_bad_orientation_and_features_needing_an_angle_coordinate():
+def test_bad_orientation():
     with pytest.raises(ModelError, match="orientation must be 'angle' or 'euler'"):
         ms.Model2D(orientation="eulr")
-    m = double_pendulum("euler")
-    with pytest.raises(ModelError, match="orientation='angle'"):
-        m.vibration()
 
 
 def test_model_file_keeps_the_orientation(tmp_path):
@@ -398,3 +395,57 @@ def test_recursive_gen_dynamics_in_euler_parameters():
         out[o] = free.simulate(np.linspace(0.0, 0.5, 6), rtol=1e-10, atol=1e-12)
     for k in range(8):
         np.testing.assert_allclose(out["euler"][f"a{k}"], out["angle"][f"a{k}"], atol=1e-8)
+
+
+def test_vibration_modes_match_angle_coordinates():
+    """m.vibration in Euler coordinates: the perturbation of a body's rotation is a small
+    global angle, ``d(ei, ej) = (-ej, ei) dtheta``; the frequencies, damping ratios and mode
+    shapes (as angles) are those of the angle model."""
+    out = {}
+    for o in ("angle", "euler"):
+        m = ms.Model2D(orientation=o)
+        b1 = m.add_body("link1", points={"O": (0, 0), "P": (1.0, 0)}, mass=1.0,
+                        inertia=1 / 12, centroid=(0.5, 0), guess=((0, 0), -1.4))
+        b2 = m.add_body("link2", points={"P": (0, 0), "Q": (0.8, 0)}, mass=0.7,
+                        inertia=0.7 * 0.64 / 12, centroid=(0.4, 0.05),
+                        guess=((np.cos(-1.4), np.sin(-1.4)), -1.7))
+        m.add(ms.Revolute2(m.ground.point((0, 0)), b1.point("O")), name="O")
+        m.add(ms.Revolute2(b1.point("P"), b2.point("P")), name="P")
+        m.add(ms.RotationLock1(b1, -1.4), name="hold1")
+        m.add(ms.RotationLock1(b2, -1.7), name="hold2")
+        m.add_load(ms.Gravity((0, -1), 9.81))
+        m.add_load(ms.Damper(m.body("link1").point("P"), m.ground.point((2.0, -1.0)),
+                             damping=0.3))
+        eq = m.free(drop=["hold1", "hold2"], solution="static").solve()
+        out[o] = (m, m.vibration(at=eq, drop=["hold1", "hold2"]))
+    (ma, a), (me, e) = out["angle"], out["euler"]
+    assert a.stable and len(a.hz) == 2 and np.all(a.damping_ratio > 0)
+    np.testing.assert_allclose(e.hz, a.hz, rtol=1e-8)
+    np.testing.assert_allclose(e.damping_ratio, a.damping_ratio, rtol=1e-7, atol=1e-10)
+    ia = [ma.compile().layout.q_names.index(f"{b}.th") for b in ("link1", "link2")]
+    for k in range(2):
+        sa, se = a.shape(k), e.shape(k)
+        q = e.q
+        names = list(me.compile().layout.q_names)
+        th = []
+        for b in ("link1", "link2"):
+            i, j = names.index(f"{b}.ei"), names.index(f"{b}.ej")
+            th.append(q[i] * se[j] - q[j] * se[i])       # dtheta = ei dej - ej dei
+        va, ve = np.asarray(sa)[ia], np.asarray(th)
+        scale = va[np.argmax(np.abs(va))] / ve[np.argmax(np.abs(va))]
+        np.testing.assert_allclose(ve * scale, va, rtol=1e-7, atol=1e-9)
+
+
+def test_centrifugal_pendulum_in_a_rotating_frame_in_euler_parameters():
+    """The rotating-frame linearisation (frame velocities ``d(ei, ej)/dt = w (-ej, ei)``):
+    the centrifugal pendulum absorber swings at ``W sqrt(R / l)``, as in angles."""
+    R, l, W = 0.3, 0.08, 50.0
+    m = ms.Model2D(orientation="euler")
+    disc = m.add_body("disc", points={"pin": (R, 0)}, mass=2.0, inertia=0.1)
+    pend = m.add_body("pend", mass=0.2, centroid=(l, 0), inertia=0, guess=((R, 0), 0))
+    m.add(ms.Revolute2(m.ground.point((0, 0)), disc.point(0)))
+    m.add(ms.RotationLock1(disc, W * ms.T), name="drive")
+    m.add(ms.Revolute2(disc.point("pin"), pend.point(0)))
+    modes = m.vibration(at=m.guess(), rotating=(W, (0, 0)))
+    assert modes.omega == pytest.approx([W * np.sqrt(R / l)], rel=1e-9)
+    assert modes.qd[m.compile().layout.index("pend.ej")] == pytest.approx(W)

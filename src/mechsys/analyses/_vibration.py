@@ -8,8 +8,9 @@ The equations of free motion (constraints ``drop``-ped as in ``m.free``) are
 
 **Perturbation coordinates.** A small change of each body's pose is measured by its position
 change and a *global* small rotation (``dtheta`` in 2D, a rotation vector ``dphi`` in 3D):
-``dq = B dp`` with ``B = I`` in 2D and, per 3D body, ``de = E(e)^T dphi / 2`` (``E`` of
-``omega = 2 E(e) e_dot``), which keeps the Euler-parameter normalisation to first order.
+``dq = B dp`` with ``B = I`` in 2D angles, ``d(ei, ej) = (-ej, ei) dtheta`` in planar Euler
+parameters and, per 3D body, ``de = E(e)^T dphi / 2`` (``E`` of ``omega = 2 E(e) e_dot``):
+the Euler forms keep their normalisation to first order.
 The constrained perturbations are the null space of ``Phi_q B`` (computed on the unit-free
 scaled Jacobian, see :class:`~mechsys.solvers._linalg.Scaling`): ``dp = N z`` with ``f`` =
 number of degrees of freedom independent coordinates ``z``, and ``P = B N``.
@@ -63,22 +64,31 @@ def _E(e) -> np.ndarray:
     return np.array([[-e1, e0, -e3, e2], [-e2, e3, e0, -e1], [-e3, -e2, e1, e0]])
 
 
+def _rotation_block(space, rot) -> np.ndarray:
+    """Rotation coordinates' change per unit global small rotation of a body: 2D angle
+    ``[[1]]``; planar Euler parameters ``d(ei, ej) = (-ej, ei) dtheta``; 3D
+    ``de = E(e)^T dphi / 2``. Linear in ``rot`` except for the angle."""
+    if space.dim == 3:
+        return 0.5 * _E(rot).T
+    if space.ncoord == 4:                       # orientation="euler"
+        return np.array([[-rot[1]], [rot[0]]])
+    return np.ones((1, 1))
+
+
 def _frame(system, q) -> np.ndarray:
     """``B`` (n, n_min): coordinate changes per unit position change / global small rotation
     of each body (and per unit change of each model variable)."""
     n, dim = system.n, system.space.dim
+    nrot = 1 if dim == 2 else 3
     B = np.zeros((n, _frame_columns(system).size))
     covered = np.zeros(n, dtype=bool)
     c = 0
     for sl in system.layout.body_slices.values():
         covered[sl] = True
         B[sl.start : sl.start + dim, c : c + dim] = np.eye(dim)
-        if dim == 3:
-            B[sl.start + 3 : sl.stop, c + 3 : c + 6] = 0.5 * _E(q[sl.start + 3 : sl.stop]).T
-            c += 6
-        else:
-            B[sl.start + 2, c + 2] = 1.0
-            c += 3
+        B[sl.start + dim : sl.stop, c + dim : c + dim + nrot] = _rotation_block(
+            system.space, q[sl.start + dim : sl.stop])
+        c += dim + nrot
     for i in np.flatnonzero(~covered):  # model variables (gear angles, curve parameters)
         B[i, c] = 1.0
         c += 1
@@ -319,9 +329,6 @@ def vibration(model, at=None, drop=(), t=None, tolerance: float = 1e-6,
     """
     if not (isinstance(tolerance, (int, float)) and 0 < tolerance < 1):
         raise ModelError(f"vibration: tolerance must be a number in (0, 1), got {tolerance!r}")
-    if getattr(model.space, "orientation", "angle") == "euler":
-        raise ModelError("vibration: linearised modes use the angle coordinates; build the model "
-                         "with Model2D(orientation='angle') (the default) for m.vibration")
     drop = drop if isinstance(drop, (list, tuple)) else [drop]
     dropped = [model.constraint(c) for c in drop]
     system = model._system_without(dropped)
@@ -450,10 +457,8 @@ def _frame_velocities(system, q, W, c) -> np.ndarray:
     w = np.array([W[2, 1], W[0, 2], W[1, 0]])
     for sl in system.layout.body_slices.values():
         qd[sl.start : sl.start + dim] = W[:dim, :dim] @ (q[sl.start : sl.start + dim] - c)
-        if dim == 2:
-            qd[sl.start + 2] = w[2]
-        else:
-            qd[sl.start + 3 : sl.stop] = 0.5 * _E(q[sl.start + 3 : sl.stop]).T @ w
+        qd[sl.start + dim : sl.stop] = _rotation_block(system.space, q[sl.start + dim : sl.stop]) \
+            @ (w[2:] if dim == 2 else w)
     return qd
 
 
@@ -461,11 +466,12 @@ def _rate(system, x) -> np.ndarray:
     """``B(x)`` with the Euler parameters replaced by ``x``'s entries and no translation or
     variable part: the time derivative of ``B`` along a motion with rates ``x``."""
     B = _frame(system, x)
-    if system.space.dim == 2:
+    space = system.space
+    if space.dim == 2 and space.ncoord == 3:    # a planar angle's B is constant
         return np.zeros_like(B)
     keep = np.zeros_like(B)
     for sl in system.layout.body_slices.values():
-        keep[sl.start + 3 : sl.stop] = B[sl.start + 3 : sl.stop]
+        keep[sl.start + space.dim : sl.stop] = B[sl.start + space.dim : sl.stop]
     return keep
 
 
