@@ -20,8 +20,8 @@ Matrices are stored transposed in C order (column-major order of the matrix): en
 **Sparse factors** (``nz``, an int32 array of :func:`pattern_size` ``(n)`` entries): a
 mechanism's Jacobian has two to six nonzeros a row and its LU factors stay nearly as sparse
 (the slider-crank's 9 x 9: 8 entries below the diagonal of ``L``, 17 in ``U``, of 81).
-Given ``nz``, ``getrf`` eliminates only with the nonzero multipliers and records where the
-nonzeros of ``L`` and ``U`` are; ``getrs``, ``gecon1`` and :func:`inv_norm_bound` then
+Given ``nz``, ``getrf`` records where the nonzeros of ``L`` and ``U`` are (its elimination
+already skips zero multipliers); ``getrs``, ``gecon1`` and :func:`inv_norm_bound` then
 visit only those. Every operation skipped is ``x - 0 * y`` with ``y`` finite, which leaves
 ``x`` unchanged, and the remaining ones run in the same order: the numbers are those of the
 dense loops (up to the sign of a zero, which no decision reads). Without ``nz`` the dense
@@ -53,8 +53,7 @@ def pattern_size(n):
 def getrf(AT, n, piv, nz=None):
     """LU of ``A`` (n, n) in place; ``piv[j]``: the row swapped with row ``j`` (0-based).
     Returns LAPACK's ``info``: 0, or ``j + 1`` for the first exactly zero pivot. With ``nz``
-    (see the module docstring) only the nonzero multipliers eliminate, and ``nz`` receives
-    the factors' nonzero structure."""
+    (see the module docstring) ``nz`` receives the factors' nonzero structure."""
     info = 0
     for j in range(n):
         p = j
@@ -76,25 +75,11 @@ def getrf(AT, n, piv, nz=None):
                 AT[j, i] *= inv
         elif info == 0:
             info = j + 1
-        if nz is None:
-            for c in range(j + 1, n):
-                a = AT[c, j]
-                if a != 0.0:
-                    for i in range(j + 1, n):
-                        AT[c, i] -= AT[j, i] * a
-        else:
-            # the nonzero multipliers of this column (nz[:n] is scratch until _pattern)
-            cnt = 0
-            for i in range(j + 1, n):          # without a branch: the zeros are unpredictable
-                nz[cnt] = i
-                cnt += AT[j, i] != 0.0
-            if cnt:
-                for c in range(j + 1, n):
-                    a = AT[c, j]
-                    if a != 0.0:
-                        for k in range(cnt):
-                            i = nz[k]
-                            AT[c, i] -= AT[j, i] * a
+        for c in range(j + 1, n):
+            a = AT[c, j]
+            if a != 0.0:
+                for i in range(j + 1, n):
+                    AT[c, i] -= AT[j, i] * a
     if nz is not None:
         _pattern(AT, n, nz)
     return info
@@ -108,7 +93,7 @@ def _pattern(AT, n, nz):
     for j in range(n):
         nz[j] = pl
         nz[n + 1 + j] = pu
-        for i in range(j):               # branch-free, as in getrf
+        for i in range(j):               # branch-free: the zeros are unpredictable
             nz[pu] = i
             pu += AT[j, i] != 0.0
         for i in range(j + 1, n):
