@@ -193,7 +193,9 @@ of that function (no symbolic derivation).
 ## Reading the numbers
 
 * "loop": the sweep's loop in Python, or compiled (Numba calling the compiled equations and
-  LAPACK directly, [decision 0013](decisions/0013-compiled-sweep.md); bit-identical results).
+  LAPACK's algorithms directly, [decisions 0013](decisions/0013-compiled-sweep.md) and
+  [0019](decisions/0019-sweep-lu-structure-and-guard.md); the same numbers as the Python loop
+  to 1e-12 and the same decisions).
   The compiled loop runs by default for sweeps of 1000 points or more (`MECHSYS_JIT`, see the
   [guide](guide.md#compiled-sweeps-and-the-kernel-cache)); sparse models (over 150
   coordinates) always use the Python loop.

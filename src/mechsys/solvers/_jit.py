@@ -24,7 +24,8 @@ depends on the sweep alone, never on what ran before in the process.) Possible m
 profiles included), as many equations as coordinates, and a dense system (``n <= SPARSE_THRESHOLD``).
 
 Measured (slider-crank, 1000 points with velocities and accelerations): see
-``docs/performance.md`` and ``docs/decisions/0010-compiled-sweep.md``.
+``docs/performance.md``, ``docs/decisions/0013-compiled-sweep.md`` and
+``docs/decisions/0019-sweep-lu-structure-and-guard.md``.
 """
 
 from __future__ import annotations

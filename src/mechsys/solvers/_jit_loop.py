@@ -25,7 +25,7 @@ from numba import types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
-from ._jit_lapack import gecon1, getrf, getrs
+from ._jit_lapack import GUARD_MARGIN, gecon1, getrf, getrs, inv_norm_bound, pattern_size
 from ._kinematics import RCOND_WARN, ROTATION_JUMP, ROTATION_SLACK, ROTATION_START
 from ._linalg import RCOND_MIN
 
@@ -86,9 +86,16 @@ def _rows(J, columns, r):
 
 
 @nb.njit(cache=True)
-def _factor(lapack, J, r, columns, B, ipiv, ibuf, cbuf, dbuf, work, iwork):
+def _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, exact):
     """LU of ``R^-1 J D`` into ``B`` (transposed storage); returns its reciprocal condition
-    number, or -1 when singular (the Python path's ``Singular``)."""
+    number, or -1 when singular (the Python path's ``Singular``: an exact zero pivot or an
+    estimate below ``RCOND_MIN``).
+
+    ``exact`` False (Newton's steps, where only that decision matters): up to ``SMALL``
+    unknowns, when :func:`inv_norm_bound` proves that the estimate cannot fall below
+    ``RCOND_MIN`` it is not computed, and ``RCOND_MIN`` (a lower bound) is returned. The
+    decision is the estimate's own: the bound exceeds anything ``gecon1`` can compute from
+    these factors (``_jit_lapack.inv_norm_bound``), with a margin of ``1 / GUARD_MARGIN``."""
     n = J.shape[0]
     for i in range(n):
         inv = 1.0 / r[i]
@@ -103,9 +110,11 @@ def _factor(lapack, J, r, columns, B, ipiv, ibuf, cbuf, dbuf, work, iwork):
             anorm = s
     if n <= SMALL:
         # LAPACK's algorithms written out (_jit_lapack): the calls' overhead dominated
-        if getrf(B, n, ipiv) > 0 or anorm == 0:
+        if getrf(B, n, ipiv, nz) > 0 or anorm == 0:
             return -1.0
-        rcond = gecon1(B, n, anorm, work, work[n:])
+        if not exact and anorm * inv_norm_bound(B, n, nz, work) <= GUARD_MARGIN / RCOND_MIN:
+            return RCOND_MIN
+        rcond = gecon1(B, n, anorm, work, work[n:], nz)
     else:
         ibuf[0] = n          # m, n, lda
         ibuf[1] = n
@@ -126,12 +135,12 @@ def _factor(lapack, J, r, columns, B, ipiv, ibuf, cbuf, dbuf, work, iwork):
 
 
 @nb.njit(cache=True)
-def _solve(lapack, B, ipiv, r, columns, b, out, ibuf, cbuf):
+def _solve(lapack, B, ipiv, nz, r, columns, b, out, ibuf, cbuf):
     n = r.size
     for i in range(n):
         out[i] = b[i] / r[i]
     if n <= SMALL:
-        getrs(B, n, ipiv, out)
+        getrs(B, n, ipiv, out, nz)
     else:
         cbuf[1] = 78         # 'N': no transpose
         ibuf[1] = n          # n, lda = ldb (set here too: a solve never relies on an earlier factor call)
@@ -164,11 +173,10 @@ def _jump(q, ref, rot):
 
 
 @nb.njit(cache=True)
-def _predict(Q, QD, QDD, rconds, times, k, rot, order, g):
+def _predict(Q, QD, QDD, rconds, times, k, rot, order, g, sec):
     n = Q.shape[1]
     dt = times[k] - times[k - 1]
     have_secant = k >= 2
-    sec = np.empty(n)
     if have_secant:
         dt0 = times[k - 1] - times[k - 2]
         for j in range(n):
@@ -224,6 +232,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
     J = np.empty((m, n))
     B = np.empty((n, n))
     ipiv = np.empty(n, dtype=np.int32)
+    nz = np.empty(pattern_size(n), dtype=np.int32)
     ibuf = np.zeros(5, dtype=np.int32)
     cbuf = np.zeros(2, dtype=np.uint8)
     dbuf = np.zeros(2)
@@ -235,6 +244,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
     g = np.empty(n)
     dq = np.empty(n)
     qn = np.empty(n)
+    sec = np.empty(n)
     rhs = np.empty(m)
     evals = 0
     for k in range(N):
@@ -244,7 +254,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
             for j in range(n):
                 g[j] = q0[j]
         else:
-            _predict(Q, QD, QDD, rconds, times, k, rot, order, g)
+            _predict(Q, QD, QDD, rconds, times, k, rot, order, g, sec)
         # -- Newton (solve_position) from g --
         for j in range(n):
             q[j] = g[j]
@@ -271,9 +281,9 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
                 break
             if it >= maxit:
                 break
-            if _factor(lapack, J, r, columns, B, ipiv, ibuf, cbuf, dbuf, work, iwork) < 0:
+            if _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, False) < 0:
                 break
-            _solve(lapack, B, ipiv, r, columns, F, dq, ibuf, cbuf)
+            _solve(lapack, B, ipiv, nz, r, columns, F, dq, ibuf, cbuf)
             for j in range(n):
                 dq[j] = -dq[j]
             a = 1.0
@@ -308,19 +318,19 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
                 x[1 + j] = q[j]
             _eval(ptrs[1], x, nin, out_vel)
             _assemble(out_vel, 0, jr, jc, J)
-            rc = _factor(lapack, J, r, columns, B, ipiv, ibuf, cbuf, dbuf, work, iwork)
+            rc = _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, True)
             if rc < 0:
                 return k, evals
             for i in range(m):
                 rhs[i] = -out_vel[nnz + i]
-            _solve(lapack, B, ipiv, r, columns, rhs, QD[k], ibuf, cbuf)
+            _solve(lapack, B, ipiv, nz, r, columns, rhs, QD[k], ibuf, cbuf)
             rconds[k] = rc
             e += 1
             if order >= 2:
                 for j in range(n):
                     x[1 + n + j] = QD[k, j]
                 _eval(ptrs[2], x, nin, out_gam)
-                _solve(lapack, B, ipiv, r, columns, out_gam, QDD[k], ibuf, cbuf)
+                _solve(lapack, B, ipiv, nz, r, columns, out_gam, QDD[k], ibuf, cbuf)
                 e += 1
         for j in range(n):
             Q[k, j] = q[j]

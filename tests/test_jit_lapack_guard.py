@@ -1,0 +1,158 @@
+"""The compiled sweep's small LU (solvers/_jit_lapack.py): the sparse-structure solves give the
+dense loops' numbers, and the bound that lets Newton skip the condition estimate never skips a
+matrix the estimate (ours or LAPACK's, which the Python path calls) would call singular."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.linalg.lapack as lapack
+
+pytest.importorskip("numba")
+
+from mechsys.solvers._jit_lapack import (  # noqa: E402
+    GUARD_MARGIN,
+    gecon1,
+    getrf,
+    getrs,
+    inv_norm_bound,
+    pattern_size,
+)
+from mechsys.solvers._linalg import RCOND_MIN  # noqa: E402
+
+LIMIT = GUARD_MARGIN / RCOND_MIN     # the guard: anorm * bound <= LIMIT skips the estimate
+
+
+def _sparse(rng, n, density):
+    A = rng.standard_normal((n, n)) * (rng.random((n, n)) < density)
+    A[np.arange(n), rng.permutation(n)] += rng.standard_normal(n)   # structurally nonsingular
+    return A
+
+
+def _near_singular(rng, n):
+    """Singular values from 1 down to 1e-17 .. 1e-9, some columns scaled by 1e-8, then some
+    entries zeroed (a mechanism's Jacobian is sparse)."""
+    Uo, _ = np.linalg.qr(rng.standard_normal((n, n)))
+    Vo, _ = np.linalg.qr(rng.standard_normal((n, n)))
+    s = np.logspace(0, -rng.uniform(9, 17), n)
+    A = (Uo * s) @ Vo.T
+    if rng.random() < 0.5:
+        A[:, rng.random(n) < 0.3] *= 1e-8
+    if rng.random() < 0.5:
+        A[rng.random((n, n)) < 0.2] = 0.0
+    return A
+
+
+def _m_matrix_at(rng, n, target):
+    """``A = L U`` with ``M(L) = L``, ``M(U) = U`` (so ``|A^-1| = A^-1`` and the bound is
+    exact), ``|l_ij| < 1`` (partial pivoting keeps the order), and the last pivot chosen so
+    that the reciprocal condition number is about ``target``."""
+    L = np.eye(n) - np.tril(rng.uniform(0, 0.9, (n, n)) * (rng.random((n, n)) < 0.5), -1)
+    U = -np.triu(rng.uniform(0, 1, (n, n)) * (rng.random((n, n)) < 0.5), 1)
+    U[np.arange(n), np.arange(n)] = rng.uniform(0.5, 1.5, n)
+    for _ in range(6):
+        A = L @ U
+        rc = 1.0 / (np.abs(A).sum(axis=0).max() * np.abs(np.linalg.inv(A)).sum(axis=0).max())
+        U[-1, -1] *= target / rc
+    return L @ U
+
+
+def _rowscaled(A):
+    r = np.abs(A).max(axis=1)
+    r[r == 0] = 1.0
+    return A / r[:, None]
+
+
+def _ours(A):
+    """Transposed-storage factors, pivots, structure, anorm, our estimate and the bound."""
+    n = A.shape[0]
+    anorm = np.abs(A).sum(axis=0).max()
+    AT = np.ascontiguousarray(A.T)
+    piv = np.empty(n, np.int32)
+    nz = np.empty(pattern_size(n), np.int32)
+    info = getrf(AT, n, piv, nz)
+    work = np.empty(2 * n)
+    rc = gecon1(AT, n, anorm, work, work[n:], nz) if info == 0 else 0.0
+    bound = inv_norm_bound(AT, n, nz, np.empty(n)) if info == 0 else np.inf
+    return AT, piv, nz, info, anorm, rc, bound
+
+
+def _lapack_rcond(A, anorm):
+    lu, _, info = lapack.dgetrf(A)
+    if info > 0:
+        return 0.0
+    return lapack.dgecon(lu, anorm, norm="1")[0]
+
+
+def test_structure_solves_give_the_dense_numbers():
+    """With ``nz`` the factors, the solves and the estimate equal the dense loops' (the skipped
+    operations are ``x - 0 * y``), on sparse and on full matrices."""
+    rng = np.random.default_rng(11)
+    for trial in range(400):
+        n = int(rng.integers(1, 16))
+        A = _rowscaled(_sparse(rng, n, 0.25) if trial % 3 else _near_singular(rng, n))
+        anorm = np.abs(A).sum(axis=0).max()
+        AT, piv, nz, info, _, rc, _ = _ours(A)
+        DT = np.ascontiguousarray(A.T)
+        dpiv = np.empty(n, np.int32)
+        assert getrf(DT, n, dpiv) == info
+        np.testing.assert_array_equal(AT, DT)
+        np.testing.assert_array_equal(piv, dpiv)
+        if info:
+            continue
+        # the recorded structure is exactly the factors' nonzeros
+        for j in range(n):
+            assert list(nz[nz[j]:nz[j + 1]]) == [i for i in range(j + 1, n) if AT[j, i] != 0]
+            assert list(nz[nz[n + 1 + j]:nz[n + 2 + j]]) == [i for i in range(j) if AT[j, i] != 0]
+        b = rng.standard_normal(n)
+        x1, x2 = b.copy(), b.copy()
+        getrs(AT, n, piv, x1, nz)
+        getrs(DT, n, dpiv, x2)
+        np.testing.assert_array_equal(x1, x2)
+        w = np.empty(2 * n)
+        assert gecon1(DT, n, anorm, w, w[n:]) == rc
+
+
+def test_bound_never_skips_a_singular_decision():
+    """Over random and nearly singular matrices (rows scaled as in the sweep): the bound is
+    at least the estimate, and whenever the guard passes, both our estimate and LAPACK's
+    (the Python path's) are at least ``RCOND_MIN``; near the threshold the guard still
+    passes where the bound is tight, so the property is tested where it matters."""
+    rng = np.random.default_rng(2026)
+    passed = near = 0
+    for trial in range(3000):
+        n = int(rng.integers(1, 15))
+        kind = trial % 3
+        if kind == 0:
+            A = _rowscaled(_near_singular(rng, n))
+        elif kind == 1:
+            A = _rowscaled(_sparse(rng, n, 0.3))
+        else:
+            A = _m_matrix_at(rng, max(n, 2), 10 ** rng.uniform(np.log10(RCOND_MIN) - 0.5, -12))
+        AT, _, _, info, anorm, rc, bound = _ours(A)
+        if info or anorm == 0:
+            continue
+        ref = _lapack_rcond(A, anorm)
+        if rc > 0:
+            assert bound * (1 + 1e-12) >= 1.0 / (rc * anorm), trial   # est <= bound
+        if anorm * bound <= LIMIT:
+            passed += 1
+            assert rc >= RCOND_MIN and ref >= RCOND_MIN, (trial, rc, ref, anorm * bound)
+            if rc < 4 * RCOND_MIN:
+                near += 1
+        if kind == 2 and ref < RCOND_MIN:
+            assert anorm * bound > LIMIT                   # such matrices go to the estimate
+    assert passed > 1000
+    assert near > 20          # matrices within a factor of four of the threshold were skipped
+
+
+def test_bound_is_exact_for_comparison_matrices():
+    """For ``A = L U`` with ``M(L) = L`` and ``M(U) = U`` the bound is ``||A^-1||_1`` itself."""
+    rng = np.random.default_rng(5)
+    for _ in range(50):
+        n = int(rng.integers(2, 12))
+        A = _m_matrix_at(rng, n, 1e-6)
+        AT, piv, _, info, _, _, bound = _ours(A)
+        assert info == 0 and np.all(piv == np.arange(n))
+        exact = np.abs(np.linalg.inv(A)).sum(axis=0).max()
+        assert bound == pytest.approx(exact, rel=1e-9)
