@@ -87,7 +87,6 @@ def _accel(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, col
            robust, ipiv, ibuf, rhs, b, qdd, lam, force, ex, ph):
     """Free acceleration at ``x = [t, q, qd, 0, p, 0]``: ``qdd`` (n,), ``lam`` (m,);
     False where the Python path would need its special handling."""
-    N = n + m
     _evalx(kp, x, nin, out, ex, ph)
     KT[:, :] = 0.0
     flat = KT.ravel()
