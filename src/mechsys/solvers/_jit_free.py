@@ -25,12 +25,17 @@ resumes. It also returns every :data:`CHUNK_STEPS` steps so that progress is sho
 Ctrl-C is honoured.
 
 When it runs (``MECHSYS_JIT``, as for the kinematic sweep): ``0`` never; ``1`` or unset
-whenever possible. Possible means: Numba installed (the ``fast`` extra); the DOP853 method;
-loads that do not depend on the multipliers or accelerations; a dense augmented system
-(``n + m <= SPARSE_THRESHOLD``); every kernel SymEngine LLVM code (the CSE kernels of
-generalized coordinates are not). Loading Numba and the cached machine code costs about
-0.7 s CPU once per process. ``sol.extra["compiled_steps"]`` tells how many steps ran
-compiled.
+whenever possible. Possible means: Numba installed (the ``fast`` extra); DOP853 or one of
+Mech's Adams methods; loads that do not depend on the multipliers or accelerations; a dense
+augmented system (``n + m <= SPARSE_THRESHOLD``) or the block path; every kernel SymEngine
+LLVM code (CSE kernels included: their repeated outputs are expanded in the loop).
+Generalized coordinates with the recursive dynamics (decision 0018) run in the same loops:
+the joint kernels, the articulated-body recursion (a tree of Gen joints, no constraint
+equation) or the composite-body mass matrix in the augmented system, at any size. Loading
+Numba and the cached machine code costs about 0.7 s CPU once per process.
+``sol.extra["compiled_steps"]`` tells how many steps ran compiled and
+``sol.extra["compiled_solver"]`` how (``"augmented"``, ``"block"``, ``"recursive"``,
+``"recursive+augmented"``).
 """
 
 from __future__ import annotations
