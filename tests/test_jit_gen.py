@@ -229,3 +229,18 @@ def test_massless_joint_is_handed_to_python(monkeypatch):
     m.set_mass_properties("b", mass=0, inertia=0)
     with pytest.raises(ms.SingularMassError, match="'t2'"):
         m.free().simulate((0.0, 0.1))
+
+
+def test_pickles_after_a_compiled_run(monkeypatch):
+    """The kernels' C entry points (ctypes) are not pickled: a free system that ran compiled
+    is still a sweep's payload, and runs compiled again after unpickling."""
+    import pickle
+
+    monkeypatch.setenv("MECHSYS_GEN_DYNAMICS", "recursive")
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    free = _chain(4).free()
+    a = free.simulate((0.0, 0.2))
+    assert a.extra["compiled_solver"] == "recursive"
+    b = pickle.loads(pickle.dumps(free)).simulate((0.0, 0.2))
+    assert b.extra["compiled_solver"] == "recursive"
+    np.testing.assert_allclose(b.q, a.q, rtol=0, atol=1e-13)

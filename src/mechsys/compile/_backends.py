@@ -293,6 +293,14 @@ class _SymengineCompiled(Compiled):
         self._f.unsafe_real(x, out)
         return out if self._expand is None else out[self._expand]
 
+    def __getstate__(self):
+        """Without the C entry points (ctypes objects, which do not pickle): a free system
+        that ran in a compiled loop still pickles (a sweep's payload); they are made again
+        on first use."""
+        state = dict(self.__dict__)
+        state.pop("_cfun", None)
+        return state
+
     def c_function(self):
         """C entry points ``void f(double *out, const double *x, void *context)`` of the
         kernel, for compiled loops (``solvers/_jit.py``): ``(address, context, pre_address,

@@ -388,17 +388,9 @@ class RecursiveDynamics:
     def __getstate__(self):
         """Without the per-thread work arrays and the kernels' C entry points (ctypes): a
         pickled free system (a sweep's payload) rebuilds them on first use."""
-        import copy
-
         state = dict(self.__dict__)
         state["_local"] = state["_numba"] = None
-        kernels = []
-        for k in self._kernels:
-            if hasattr(k, "_cfun"):
-                k = copy.copy(k)
-                del k._cfun
-            kernels.append(k)
-        state["_kernels"] = kernels
+        # (the kernels leave out their C entry points themselves: _SymengineCompiled)
         return state
 
     def __setstate__(self, state):
