@@ -29,12 +29,12 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from ..compile._generalized_jit import articulated as _articulated
-from ..compile._generalized_jit import assemble as _gen_assemble
-from ..compile._generalized_jit import forward as _gen_forward
 from ._jit_lapack import gecon1, getrf, getrs
 from ._jit_loop import SMALL as SMALL_LU
 from ._jit_loop import _assemble, _ccall, _eval, _rows
+from ._jit_tree import articulated as _articulated
+from ._jit_tree import assemble as _gen_assemble
+from ._jit_tree import forward as _gen_forward
 from ._linalg import RCOND_MIN
 from ._rank import ZONE
 
