@@ -13,6 +13,10 @@ the Python path fixes one:
 * ``_stage``     ``scipy.integrate._ivp.rk.rk_step`` for DOP853, with its error norm
                  (``DOP853._estimate_error_norm``) and step-size control (``_step_impl``)
 * ``_dense``     ``DOP853._dense_output_impl`` and ``Dop853DenseOutput``
+* ``_accel_gen`` ``compile._generalized.RecursiveDynamics`` (generalized coordinates,
+                 decision 0018): the joint kernels, then the articulated-body recursion
+                 (a tree of Gen joints) or the composite-body mass matrix in the augmented
+                 system, solved as ``_accel`` does (``_solve_augmented``)
 
 Anything the Python path would treat specially (a singular or non-finite augmented matrix,
 multipliers large against the constraint forces: a singular instant near; a projection in
