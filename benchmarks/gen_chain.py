@@ -96,6 +96,17 @@ def timed(free, repeat=3):
     return best, sol
 
 
+def _stepper(sol):
+    """How the steps ran: the compiled loop's solve (``sol.extra["compiled_solver"]``) when
+    it took every step, else "Python" (with the compiled share)."""
+    x = sol.extra
+    if x.get("compiled_steps", 0) == x["steps"] and x.get("compiled_solver"):
+        return f"compiled, {x['compiled_solver']}"
+    if x.get("compiled_steps", 0):
+        return f"compiled {x['compiled_steps']}/{x['steps']}"
+    return "Python"
+
+
 def tip(m, sol, n_links):
     return np.asarray(sol.location(m.body(f"l{n_links - 1}").point("tip")))[-1]
 
@@ -111,6 +122,7 @@ def measure(n_links: int, symbolic_max: int) -> dict:
         cpu, sol = timed(free)
         ev, st = sol.extra["evaluations"], sol.extra["steps"]
         row[key] = {**comp, "cpu": cpu, "steps": st, "evals": ev,
+                    "stepper": _stepper(sol),
                     "per_step_ms": cpu / st * 1e3, "per_eval_us": cpu / ev * 1e6,
                     "tip": tip(m, sol, n_links)}
         print(f"  N={n_links:<4} {key}: n {comp['n']:4d} m {comp['m']:4d}  build {comp['build']:6.2f} s "
@@ -170,24 +182,27 @@ def report(rows) -> str:
          "kernels and the articulated-body recursion, decision 0016; the default from 8 Gen "
          "joints on) and, for short chains, with the symbolic minimal-coordinate mass matrix "
          "(\"symbolic\", decision 0010). All at DOP853 rtol 1e-8, atol 1e-10, best of up to 3 runs "
-         "(`time.process_time`); compilation (build + `free()` + the dynamics kernels, on-disk "
+         "(`time.process_time`); \"stepper\": how the steps ran (the compiled free-motion "
+         "stepper and how it solved for the accelerations, decisions 0014 and 0018, or "
+         "Python); compilation (build + `free()` + the dynamics kernels, on-disk "
          "kernel cache off) listed apart. \"tip diff\": the largest difference of the last "
          "tip's final position from the absolute model's.", "",
-         "| N | model | n | m | compile [s] | CPU [s] | steps | evaluations | per step [ms] "
-         "| per evaluation [µs] | tip diff |",
-         "| ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+         "| N | model | stepper | n | m | compile [s] | CPU [s] | steps | evaluations "
+         "| per step [ms] | per evaluation [µs] | tip diff |",
+         "| ---: | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for r in rows:
         for key, name in (("gen", "Gen, recursive"), ("sym", "Gen, symbolic"), ("abs", "absolute")):
             if key not in r:
                 continue
             x = r[key]
-            L.append(f"| {r['N']} | {name} | {x['n']} | {x['m']} | {_compile(x):.2f} | "
+            L.append(f"| {r['N']} | {name} | {x['stepper']} | {x['n']} | {x['m']} | {_compile(x):.2f} | "
                      f"{x['cpu']:.3f} | {x['steps']} | {x['evals']} | {x['per_step_ms']:.2f} | "
                      f"{x['per_eval_us']:.0f} | {x['tip_diff']:.1e} |")
     L.append("")
     for r in rows:
         g, a = r["gen"], r["abs"]
-        L.append(f"* N = {r['N']}: per evaluation Gen (recursive) / absolute = "
+        L.append(f"* N = {r['N']}: per step Gen (recursive) / absolute = "
+                 f"{g['per_step_ms'] / a['per_step_ms']:.2f}, per evaluation "
                  f"{g['per_eval_us'] / a['per_eval_us']:.2f}, compile Gen / absolute = "
                  f"{_compile(g) / _compile(a):.2f}.")
     n0, n1 = rows[0]["N"], rows[-1]["N"]

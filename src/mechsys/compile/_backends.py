@@ -293,14 +293,35 @@ class _SymengineCompiled(Compiled):
         self._f.unsafe_real(x, out)
         return out if self._expand is None else out[self._expand]
 
+    def __getstate__(self):
+        """Without the C entry points (ctypes objects, which do not pickle): a free system
+        that ran in a compiled loop still pickles (a sweep's payload); they are made again
+        on first use."""
+        state = dict(self.__dict__)
+        state.pop("_cfun", None)
+        return state
+
     def c_function(self):
         """C entry points ``void f(double *out, const double *x, void *context)`` of the
         kernel, for compiled loops (``solvers/_jit.py``): ``(address, context, pre_address,
         pre_context, pieces)``. With ``Piecewise`` (two stages, see the class) the first stage
         at ``pre_address`` writes the ``pieces`` values after the ``x`` arguments and the
         kernel reads ``[x, pieces]``; otherwise ``pre_address`` is 0. None when a stage is not
-        LLVM code. Valid while this object lives."""
-        if self.backend != "symengine-llvm" or self._expand is not None or (
+        LLVM code or the kernel has repeated outputs (see :meth:`c_entry`). Valid while this
+        object lives."""
+        if self._expand is not None:
+            return None
+        entry = self.c_entry()
+        return None if entry is None else entry[0]
+
+    def c_entry(self):
+        """``(row, expand)``: the C entry points of :meth:`c_function` and, for a CSE kernel
+        whose repeated outputs are computed once (``_expand``), the index array that maps
+        each output to the distinct value the C function writes (``out[i] =
+        distinct[expand[i]]``; None when the outputs are all distinct). None when a stage is
+        not LLVM code. The compiled free-motion stepper (``solvers/_jit_free.py``) expands
+        the values itself, so the CSE kernels of generalized coordinates serve it too."""
+        if self.backend != "symengine-llvm" or (
                 self._pre is not None and self._pre_backend != "symengine-llvm"):
             return None
         import ctypes
@@ -313,7 +334,7 @@ class _SymengineCompiled(Compiled):
             keep, main = entry(self._f)
             keep_pre, pre = entry(self._pre) if self._pre is not None else (None, (0, 0))
             self._cfun = (keep, keep_pre, (*main, *pre, self._npieces))  # owners kept alive
-        return self._cfun[2]
+        return self._cfun[2], self._expand
 
     def _slow(self, x):
         if self._pre is not None:

@@ -25,12 +25,17 @@ resumes. It also returns every :data:`CHUNK_STEPS` steps so that progress is sho
 Ctrl-C is honoured.
 
 When it runs (``MECHSYS_JIT``, as for the kinematic sweep): ``0`` never; ``1`` or unset
-whenever possible. Possible means: Numba installed (the ``fast`` extra); the DOP853 method;
-loads that do not depend on the multipliers or accelerations; a dense augmented system
-(``n + m <= SPARSE_THRESHOLD``); every kernel SymEngine LLVM code (the CSE kernels of
-generalized coordinates are not). Loading Numba and the cached machine code costs about
-0.7 s CPU once per process. ``sol.extra["compiled_steps"]`` tells how many steps ran
-compiled.
+whenever possible. Possible means: Numba installed (the ``fast`` extra); DOP853 or one of
+Mech's Adams methods; loads that do not depend on the multipliers or accelerations; a dense
+augmented system (``n + m <= SPARSE_THRESHOLD``) or the block path; every kernel SymEngine
+LLVM code (CSE kernels included: their repeated outputs are expanded in the loop).
+Generalized coordinates with the recursive dynamics (decision 0018) run in the same loops:
+the joint kernels, the articulated-body recursion (a tree of Gen joints, no constraint
+equation) or the composite-body mass matrix in the augmented system, at any size. Loading
+Numba and the cached machine code costs about 0.7 s CPU once per process.
+``sol.extra["compiled_steps"]`` tells how many steps ran compiled and
+``sol.extra["compiled_solver"]`` how (``"augmented"``, ``"block"``, ``"recursive"``,
+``"recursive+augmented"``).
 """
 
 from __future__ import annotations
@@ -157,6 +162,64 @@ class _Blocks:
                    bw)
 
 
+def _entry(kernel):
+    """``(row, expand)`` of a kernel's C entry points (``_SymengineCompiled.c_entry``: the
+    pointer-table row and the map of its repeated outputs, an empty array when there are
+    none), or None when it has no LLVM code."""
+    get = getattr(kernel, "c_entry", None)
+    e = get() if get is not None else None
+    if e is None:
+        return None
+    row, expand = e
+    return row, (np.zeros(0, dtype=np.int64) if expand is None
+                 else np.asarray(expand, dtype=np.int64))
+
+
+_NO_EXPAND = np.zeros(0, dtype=np.int64)
+
+
+class _Gen:
+    """The recursive Gen dynamics (``compile._generalized.RecursiveDynamics``) as the
+    compiled loop evaluates it (``_jit_free_loop._accel_gen``): ``arrays = (joint kernel
+    entry points (kernels, 2), kid, par, root, nqm, goff, gcols, M_rows, M_cols, sizes)``
+    with ``sizes = [nq, kM, kJ, kg, slaves, kmax, joint inputs, joint outputs, main inputs,
+    main outputs]``; ``tree``: the articulated-body recursion (no constraint equation)."""
+
+    def __init__(self, arrays, tree):
+        self.arrays, self.tree = arrays, bool(tree)
+
+    @staticmethod
+    def none():
+        z = np.zeros(1, dtype=np.int64)
+        return (np.zeros((1, 2), dtype=np.int64), z, z, z, z, z, z, z, z,
+                np.ones(10, dtype=np.int64))
+
+    @classmethod
+    def of(cls, system, dyn, main_row):
+        """The structure, or None when the joint kernels have no C entry points (then the
+        Python stepper runs)."""
+        # the joint kernels' C entry points (as RecursiveDynamics._engine, which may have
+        # settled on plain Python in an earlier MECHSYS_JIT=0 run)
+        ptrs = [_jit._pointer(k) for k in dyn._kernels]
+        if any(p is None or p[2] != 0 for p in ptrs):
+            return None
+        kid, par, root, nqm, goff, gcols, nq = dyn._tree
+        kM, kJ, _, kg, _ = dyn._sizes
+        n, m = system.n, system.m
+        S = len(kid)
+        kmax = max(1, int(np.diff(goff).max(initial=1)))
+        npar = len(system.p_values)
+        nin = 1 + 3 * n + m + npar
+        sizes = [nq, kM, kJ, kg, S, kmax, 1 + 2 * nq + 2 * kmax + npar,
+                 nq * (4 + nq + kmax + nq), nin + 2 * S * nq + max(int(main_row[4]), 0),
+                 kM + kJ + 2 * n + kg + S * nq]
+        i64 = np.int64
+        arrays = (np.array([[p[0], p[1]] for p in ptrs], dtype=i64), *(np.ascontiguousarray(a, dtype=i64)
+                  for a in (kid, par, root, nqm, goff, gcols, dyn._M_rows, dyn._M_cols)),
+                  np.array(sizes, dtype=i64))
+        return cls(arrays, dyn.tree_only)
+
+
 class FreeStepper:
     """The compiled stepper of one free-motion run (see the module docstring).
 
@@ -166,25 +229,40 @@ class FreeStepper:
     ``t_eval`` (k,) or None: output times."""
 
     def __init__(self, system, p, scaling, rows0, robust, correction, t_eval, kernels, fk,
-                 blocks=None):
+                 blocks=None, expand=(_NO_EXPAND,) * 3, gen=None):
+        from ._jit_free_loop import AUGMENTED, BLOCK, GEN_AUGMENTED, GEN_TREE
+
         kern, fpos, fvel = kernels
         n, m = system.n, system.m
         N = n + m
         self.n, self.m = n, m
         self.kp = np.array([kern, fpos, fvel], dtype=np.int64)
         self.blocks = blocks
-        #: how the compiled loop solves the augmented system: "block" (Schur complement on
-        #: the block-diagonal mass matrix, banded) or "augmented" (the whole system, dense)
-        self.solver = "augmented" if blocks is None else "block"
-        if blocks is None:
+        #: how the compiled loop solves for the accelerations: "block" (Schur complement on
+        #: the block-diagonal mass matrix, banded), "augmented" (the whole system, dense),
+        #: "recursive" (Gen joints: the articulated-body recursion) or "recursive+augmented"
+        #: (Gen joints with constraint equations: the composite-body mass matrix in the
+        #: augmented system)
+        if gen is not None:
+            self.mode = GEN_TREE if gen.tree else GEN_AUGMENTED
+            self.solver = "recursive" if gen.tree else "recursive+augmented"
+        else:
+            self.mode = AUGMENTED if blocks is None else BLOCK
+            self.solver = "augmented" if blocks is None else "block"
+        if blocks is None and gen is None:
             flat = np.asarray(fk._flat, dtype=np.int64)
             self.flat_t = (flat % N) * N + flat // N      # K^T in C order = K in Fortran order
             self.mp = np.asarray(fk._map, dtype=np.int64)
-            self.blk_i, self.bw = _Blocks.none(), 0
+            blk, self.bw = _Blocks.none(), 0
+        elif blocks is None:
+            self.flat_t = self.mp = np.zeros(0, dtype=np.int64)
+            blk, self.bw = _Blocks.none(), 0
         else:
             self.flat_t = self.mp = np.zeros(0, dtype=np.int64)
-            self.blk_i, self.bw = blocks.arrays, blocks.bandwidth
-        self.kk = int(fk.k_M + fk.k_J)
+            blk, self.bw = blocks.arrays, blocks.bandwidth
+        # the loop's structure argument: (block path, Gen tree, the kernels' output maps)
+        self.blk_i = (blk, _Gen.none() if gen is None else gen.arrays, tuple(expand))
+        self.kk = 0 if gen is not None else int(fk.k_M + fk.k_J)
         self.p = np.ascontiguousarray(p, dtype=float)
         self.jr = system.jac_rows.astype(np.int64)
         self.jc = system.jac_cols.astype(np.int64)
@@ -215,24 +293,35 @@ class FreeStepper:
         dyn = system.dynamics
         if dyn.depends_on_lambda or dyn.depends_on_qdd or not _jit.available():
             return None
-        if getattr(dyn, "recursive", False):
-            return None        # generalized coordinates, recursive dynamics: its own loops
         N = system.n + system.m
-        blocks = None
-        if N > SMALL:
-            blocks = _Blocks.of(system, p, start)
-            if blocks is None and N > SPARSE_THRESHOLD:
-                return None
-        # the kernel the Python path uses (sparse above the threshold): compiled once
-        fk = dyn.free_kernel(N > SPARSE_THRESHOLD)
-        rows = [_jit._pointer(fk.f)]
-        if system.m:
-            rows += [_jit._pointer(system.f_position), _jit._pointer(system.f_velocity)]
+        blocks = gen = None
+        if getattr(dyn, "recursive", False):
+            # generalized coordinates, recursive dynamics (decision 0018): the joint kernels
+            # and the kernel of the rest, the recursion in the loop (dense at any size, as
+            # the Python path: the mass matrix of a chain in joint coordinates is full)
+            fk = None
+            entries = [_entry(dyn._main)]
         else:
-            rows += [(0, 0, 0, 0, 0)] * 2
-        if any(r is None for r in rows):
+            if N > SMALL:
+                blocks = _Blocks.of(system, p, start)
+                if blocks is None and N > SPARSE_THRESHOLD:
+                    return None
+            # the kernel the Python path uses (sparse above the threshold): compiled once
+            fk = dyn.free_kernel(N > SPARSE_THRESHOLD)
+            entries = [_entry(fk.f)]
+        if system.m:
+            entries += [_entry(system.f_position), _entry(system.f_velocity)]
+        else:
+            entries += [((0, 0, 0, 0, 0), _NO_EXPAND)] * 2
+        if any(e is None for e in entries):
             return None
-        return cls(system, p, scaling, rows0, robust, correction, t_eval, rows, fk, blocks)
+        rows = [e[0] for e in entries]
+        if fk is None:
+            gen = _Gen.of(system, dyn, rows[0])
+            if gen is None:
+                return None
+        return cls(system, p, scaling, rows0, robust, correction, t_eval, rows, fk, blocks,
+                   [e[1] for e in entries], gen)
 
     def advance(self, solver, ie: int, max_steps: int | None = None):
         """Compiled steps of the SciPy DOP853 ``solver`` from its current state; the solver is
@@ -252,7 +341,7 @@ class FreeStepper:
         t_prev = solver.t
         status, steps, ie, evals, rejected, projections = _state["loop"](
             self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr, self.jc,
-            self.rows0, self.columns, self.offset, self.robust, self.blocks is not None,
+            self.rows0, self.columns, self.offset, self.robust, self.mode,
             self.blk_i, self.bw, self.correction, 1e-12, 8, A, B, C, E3, E5, D,
             float(solver.rtol), atol, float(solver.max_step),
             float(solver.t_bound), float(solver.direction), state, y, f, self.t_eval, int(ie),
@@ -283,7 +372,7 @@ class FreeStepper:
         k, (a, b, c), method, fixed, inv_scale, t1 = options
         status, steps, evals, projections = _state["adams"](
             self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr, self.jc,
-            self.rows0, self.columns, self.offset, self.robust, self.blocks is not None,
+            self.rows0, self.columns, self.offset, self.robust, self.mode,
             self.blk_i, self.bw, self.correction, 1e-12, 8, int(k), float(a), float(b),
             float(c), int(method), bool(fixed), inv_scale,
             float(t1), state, y, hist_t, hist_f, recent, int(max_steps), T, Y, H, E, QDD, LAM)

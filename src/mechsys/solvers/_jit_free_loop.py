@@ -13,6 +13,10 @@ the Python path fixes one:
 * ``_stage``     ``scipy.integrate._ivp.rk.rk_step`` for DOP853, with its error norm
                  (``DOP853._estimate_error_norm``) and step-size control (``_step_impl``)
 * ``_dense``     ``DOP853._dense_output_impl`` and ``Dop853DenseOutput``
+* ``_accel_gen`` ``compile._generalized.RecursiveDynamics`` (generalized coordinates,
+                 decision 0018): the joint kernels, then the articulated-body recursion
+                 (a tree of Gen joints) or the composite-body mass matrix in the augmented
+                 system, solved as ``_accel`` does (``_solve_augmented``)
 
 Anything the Python path would treat specially (a singular or non-finite augmented matrix,
 multipliers large against the constraint forces: a singular instant near; a projection in
@@ -32,10 +36,19 @@ import numpy as np
 from ._jit_lapack import gecon1, getrf, getrs
 from ._jit_loop import SMALL as SMALL_LU
 from ._jit_loop import _assemble, _ccall, _eval, _rows
+from ._jit_tree import articulated as _articulated
+from ._jit_tree import assemble as _gen_assemble
+from ._jit_tree import forward as _gen_forward
 from ._linalg import RCOND_MIN
 from ._rank import ZONE
 
 FINISHED, CHUNK, HANDOVER = 0, 1, 2
+
+#: how ``_rhs`` evaluates the derivative (the loops' ``blocks`` argument): the augmented
+#: system from one kernel, solved whole; the block path; generalized coordinates with the
+#: recursive dynamics (decision 0018): a tree of Gen joints by the articulated-body recursion,
+#: or the composite-body mass matrix in the augmented system
+AUGMENTED, BLOCK, GEN_TREE, GEN_AUGMENTED = 0, 1, 2, 3
 
 #: augmented systems up to this size are solved by the loop's own elimination (``_lu_solve``);
 #: larger ones by LAPACK ``dgesv``, whose call overhead no longer matters there
@@ -61,22 +74,46 @@ def _lu_solve(AT, b, N, piv):
 
 
 @nb.njit(cache=True)
+def _evalx(ptr, x, nin, out, ex, ph):
+    """``_eval`` of a kernel whose repeated outputs are computed once (a CSE kernel:
+    ``_backends._SymengineCompiled.c_entry``): the distinct values into ``ph``, then ``out[i]
+    = ph[ex[i]]``; ``ex`` empty: straight into ``out``."""
+    if ex.size == 0:
+        _eval(ptr, x, nin, out)
+        return
+    _eval(ptr, x, nin, ph)
+    for i in range(ex.size):
+        out[i] = ph[ex[i]]
+
+
+@nb.njit(cache=True)
 def _accel(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, columns,
-           robust, ipiv, ibuf, rhs, b, qdd, lam, force):
+           robust, ipiv, ibuf, rhs, b, qdd, lam, force, ex, ph):
     """Free acceleration at ``x = [t, q, qd, 0, p, 0]``: ``qdd`` (n,), ``lam`` (m,);
     False where the Python path would need its special handling."""
-    N = n + m
-    _eval(kp, x, nin, out)
+    _evalx(kp, x, nin, out, ex, ph)
     KT[:, :] = 0.0
     flat = KT.ravel()
     for k in range(flat_t.size):
         flat[flat_t[k]] = out[mp[k]]
+    return _solve_augmented(lapack, KT, out, kk, out, kk - jr.size, n, m, jr, jc, rows0,
+                            columns, robust, ipiv, ibuf, rhs, b, qdd, lam, force)
+
+
+@nb.njit(cache=True)
+def _solve_augmented(lapack, KT, rv, r0, jv, j0, n, m, jr, jc, rows0, columns, robust, ipiv,
+                     ibuf, rhs, b, qdd, lam, force):
+    """Solve the augmented system (``KT`` its matrix transposed, ``rv[r0:r0 + n + m]`` its
+    right-hand side, ``jv[j0:]`` the Jacobian's values) with the checks of the Python path:
+    ``qdd`` (n,), ``lam`` (m,); False: hand over."""
+    N = n + m
+    flat = KT.ravel()
     for k in range(N * N):
         if not np.isfinite(flat[k]):
             return False
     big_rhs = 0.0
     for i in range(N):
-        rhs[i] = out[kk + i]
+        rhs[i] = rv[r0 + i]
         b[i] = rhs[i]
         v = abs(rhs[i])
         if v > big_rhs:
@@ -113,9 +150,8 @@ def _accel(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, col
                 bl = v
         if bl != 0.0:
             force[:] = 0.0
-            j0 = kk - jr.size          # the Jacobian's values precede the right-hand side
             for k in range(jr.size):
-                force[jc[k]] += out[j0 + k] * lam[jr[k]]
+                force[jc[k]] += jv[j0 + k] * lam[jr[k]]
             fmax = 0.0
             for j in range(n):
                 v = abs(columns[j] * force[j])
@@ -129,18 +165,26 @@ def _accel(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, col
 @nb.njit(cache=True)
 def _rhs(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, columns, robust,
          ipiv, ibuf, rhs, b, qdd, lam, force, blocks, blk_i, blk_w, t, y, f):
-    """``f = (qd, qdd)`` at ``(t, y)``; False: hand over. ``blocks``: by the block path
-    (``blk_i``: its structure, ``blk_w``: its work arrays)."""
+    """``f = (qd, qdd)`` at ``(t, y)``; False: hand over. ``blocks``: how (``AUGMENTED``,
+    ``BLOCK``, ``GEN_TREE``, ``GEN_AUGMENTED``); ``blk_i = (block structure, Gen tree,
+    expansion maps of the three kernels)``, ``blk_w`` their work arrays (``_block_work``)."""
     x[0] = t
     for j in range(2 * n):
         x[1 + j] = y[j]
-    if blocks:
-        Mst, Jst, Wst, Sb, u, Pst, Minv, Li = blk_w
+    ex, ph = blk_i[2], blk_w[2]
+    if blocks == BLOCK:
+        Mst, Jst, Wst, Sb, u, Pst, Minv, Li = blk_w[0]
         if not _accel_blocks(kp, x, nin, out, kk, kk - jr.size, n, m, jr, jc, rows0, columns,
-                             robust, blk_i, Mst, Jst, Wst, Sb, u, Minv, Li, qdd, lam, force):
+                             robust, blk_i[0], Mst, Jst, Wst, Sb, u, Minv, Li, qdd, lam, force,
+                             ex[0], ph[0]):
+            return False
+    elif blocks >= GEN_TREE:
+        if not _accel_gen(kp, lapack, x, nin, n, m, jr, jc, rows0, columns, robust, ipiv, ibuf,
+                          rhs, b, qdd, lam, force, blk_i[1], blk_w[1], ex[0], ph[0],
+                          blocks == GEN_TREE, y):
             return False
     elif not _accel(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, columns,
-                    robust, ipiv, ibuf, rhs, b, qdd, lam, force):
+                    robust, ipiv, ibuf, rhs, b, qdd, lam, force, ex[0], ph[0]):
         return False
     for j in range(n):
         f[j] = y[n + j]
@@ -215,11 +259,12 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
              robust, n, m, t, y, J, r, Fs, dq, Js, A, ipiv, ibuf, cbuf, dbuf, work, iwork, ybuf,
              blocks, blk_i, blk_w):
     """Project ``y = (q, qd)`` in place onto the constraints (``solvers._free.project``);
-    False (``y`` then undefined): hand over. ``blocks``: by the block path."""
-    if blocks:
+    False (``y`` then undefined): hand over. ``blocks``: by the block path when ``BLOCK``."""
+    ex, ph = blk_i[2], blk_w[2]
+    if blocks == BLOCK:
         return _project_blocks(pp, pv, xk, nin_k, out_pos, out_vel, jr, jc, columns, offset,
-                               tol, maxit, robust, n, m, t, y, r, Fs, dq, blk_i, blk_w[5],
-                               blk_w[3])
+                               tol, maxit, robust, n, m, t, y, r, Fs, dq, blk_i[0], blk_w[0][5],
+                               blk_w[0][3], ex, ph)
     xk[0] = t
     for j in range(n):
         xk[1 + n + j] = 0.0
@@ -227,7 +272,7 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
     for _ in range(maxit):
         for j in range(n):
             xk[1 + j] = y[j]
-        _eval(pp, xk, nin_k, out_pos)
+        _evalx(pp, xk, nin_k, out_pos, ex[1], ph[1])
         _assemble(out_pos, m, jr, jc, J)
         _rows(J, columns, r)
         big = 0.0
@@ -245,7 +290,7 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
             y[j] -= dq[j]
     for j in range(n):
         xk[1 + j] = y[j]
-    _eval(pv, xk, nin_k, out_vel)
+    _evalx(pv, xk, nin_k, out_vel, ex[2], ph[2])
     nnz = jr.size
     _assemble(out_vel, 0, jr, jc, J)
     _rows(J, columns, r)
@@ -720,15 +765,115 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
 
 @nb.njit(cache=True)
 def _block_work(blocks, blk_i, n, m, bw):
-    """Work arrays of the block path: ``(Mst, Jst, Wst, Sb, u, Pst, Minv, Li)``."""
-    if blocks:
-        boff, roff, bsize = blk_i[1], blk_i[4], blk_i[6]
+    """Work arrays of ``blk_i = (block structure, Gen tree, expansion maps)`` (see ``_rhs``):
+    ``((Mst, Jst, Wst, Sb, u, Pst, Minv, Li), Gen work (_gen_work), (the three kernels'
+    distinct outputs))``."""
+    if blocks == BLOCK:
+        boff, roff, bsize = blk_i[0][1], blk_i[0][4], blk_i[0][6]
         big = bsize.max() if bsize.size else 1
-        return (np.zeros(boff[-1]), np.zeros(roff[-1]), np.zeros(roff[-1]),
-                np.zeros((m, bw + 1)), np.zeros(n), np.zeros(roff[-1]), np.zeros(boff[-1]),
-                np.zeros(big * big))
-    return (np.zeros(1), np.zeros(1), np.zeros(1), np.zeros((1, 1)), np.zeros(1), np.zeros(1),
-            np.zeros(1), np.zeros(1))
+        bw_ = (np.zeros(boff[-1]), np.zeros(roff[-1]), np.zeros(roff[-1]),
+               np.zeros((m, bw + 1)), np.zeros(n), np.zeros(roff[-1]), np.zeros(boff[-1]),
+               np.zeros(big * big))
+    else:
+        bw_ = (np.zeros(1), np.zeros(1), np.zeros(1), np.zeros((1, 1)), np.zeros(1), np.zeros(1),
+               np.zeros(1), np.zeros(1))
+    ex = blk_i[2]
+    ph = (np.zeros(ex[0].max() + 1 if ex[0].size else 1),
+          np.zeros(ex[1].max() + 1 if ex[1].size else 1),
+          np.zeros(ex[2].max() + 1 if ex[2].size else 1))
+    return bw_, _gen_work(blocks, blk_i[1], n, m), ph
+
+
+@nb.njit(cache=True)
+def _gen_work(blocks, gi, n, m):
+    """Work arrays of the recursive Gen dynamics (the same as
+    ``compile._generalized.RecursiveDynamics._workspace``, plus the main kernel's arguments
+    and outputs, the mass matrix and the augmented matrix): tiny unless ``blocks`` is
+    ``GEN_TREE`` or ``GEN_AUGMENTED``."""
+    sc = gi[9]
+    nq, S, kmax, nin_j, nout_j, nin_g, nout_g = sc[0], sc[4], sc[5], sc[6], sc[7], sc[8], sc[9]
+    if blocks < GEN_TREE:
+        S = nq = kmax = nin_j = nout_j = nin_g = nout_g = 1
+    width = max(nq, kmax)
+    z = np.zeros
+    NN = n + m if blocks == GEN_AUGMENTED else 1
+    nM = n if blocks == GEN_AUGMENTED else 1
+    return (z((S, nq)), z((S, nq)), z((S, nq, nq)), z((S, nq, kmax)), z((S, nq)), z((S, nq)),
+            z((S, nq, nq)), z((S, nq)), z((S, nq, nq)), z((S, nq)), z((S, nq)), z((nq, width)),
+            z((nq, width)), z((S, nq, kmax)), z((S, kmax, kmax)), z((kmax, nq + 1)),
+            z((nq, nq + 1)), z((S, nq)), z(nin_j), z(nout_j), z(nin_g), z(nout_g), z(max(n, 1)),
+            z(max(n, 1)), z(max(n, 1)), z((nM, nM)), z((NN, NN)))
+
+
+@nb.njit(cache=True)
+def _accel_gen(kp, lapack, x, nin, n, m, jr, jc, rows0, columns, robust, ipiv, ibuf, rhs, b,
+               qdd, lam, force, gi, gw, ex, ph, tree, y):
+    """Free acceleration of a system with recursive Gen dynamics
+    (``compile._generalized.RecursiveDynamics``, decision 0016) at ``x = [t, q, qd, 0, p,
+    0]``, ``y = (q, qd)``: the joint kernels masters first (``forward``), then the kernel of
+    the rest (``kp``: absolute bodies' mass entries, Jacobian, ``Q``, ``Qv``, ``gamma`` and
+    the loads on the slaves' poses, with the slaves' poses and velocities as extra
+    arguments); ``tree``: ``qdd`` by the articulated-body recursion (no constraint
+    equation), else the composite-body mass matrix in the augmented system, solved as
+    ``_accel`` does. False: hand over (a joint whose motion carries no mass, a singular or
+    non-finite system)."""
+    ptrs, kid, par, root, nqm, goff, gcols, Mr, Mc, sc = gi
+    (P, Pd, FP, Fg, H, HL, Mb, Qvb, C, BQ, BV, X, Y, U, L, Z, W, Qp, xj, oj, xg, og, Q, Qv, Qd,
+     M, KT) = gw
+    nq, kM, kJ, kg, S = sc[0], sc[1], sc[2], sc[3], sc[4]
+    npar = nin - (1 + 3 * n + m)
+    p0 = 1 + 2 * n + m
+    _gen_forward(ptrs, kid, par, root, nqm, goff, gcols, nq, x[0], y[:n], y[n:2 * n],
+                 x[p0:p0 + npar], xj, oj, P, Pd, FP, Fg, H, HL, Mb, Qvb)
+    for i in range(nin):                 # [t, q, qd, lambda = 0, p, qdd = 0, P, Pd]
+        xg[i] = x[i]
+    for s in range(S):
+        for i in range(nq):
+            xg[nin + s * nq + i] = P[s, i]
+            xg[nin + (S + s) * nq + i] = Pd[s, i]
+    _evalx(kp, xg, nin + 2 * S * nq, og, ex, ph)
+    for k in range(kM + kJ + 2 * n + kg + S * nq):
+        if not np.isfinite(og[k]):
+            return False
+    o = kM + kJ
+    oq = o + 2 * n + kg
+    for s in range(S):
+        for i in range(nq):
+            Qp[s, i] = og[oq + s * nq + i]
+    if tree:
+        for j in range(n):
+            Qd[j] = og[o + j] + og[o + n + j]
+        if _articulated(par, nqm, goff, gcols, nq, FP, Fg, HL, Mb, Qvb, Qp, Qd, C, BQ, U, L, Z,
+                        W, qdd, 1e-13) >= 0:
+            return False
+        for j in range(n):
+            if not np.isfinite(qdd[j]):
+                return False
+        return True
+    M[:, :] = 0.0
+    for k in range(kM):
+        M[Mr[k], Mc[k]] = og[k]
+    for j in range(n):
+        Q[j] = og[o + j]
+        Qv[j] = og[o + n + j]
+    _gen_assemble(par, root, nqm, goff, gcols, nq, FP, Fg, H, Mb, Qvb, Qp, C, BQ, BV, X, Y, M,
+                  Q, Qv)
+    KT[:, :] = 0.0
+    for i in range(n):                   # K transposed (M is symmetric only to rounding)
+        for j in range(n):
+            KT[j, i] = M[i, j]
+    for k in range(jr.size):
+        v = og[kM + k]
+        KT[n + jr[k], jc[k]] = v
+        KT[jc[k], n + jr[k]] = v
+    # the right-hand side [Q + Qv; gamma] over og[o:o + n + m] (Q, Qv are copied out above;
+    # the Jacobian's values before it stay)
+    for j in range(n):
+        og[o + j] = Q[j] + Qv[j]
+    for i in range(m):
+        og[o + n + i] = og[o + 2 * n + i]
+    return _solve_augmented(lapack, KT, og, o, og, kM, n, m, jr, jc, rows0, columns, robust,
+                            ipiv, ibuf, rhs, b, qdd, lam, force)
 
 
 # -- block path: M block-diagonal (one block per body), the Schur complement banded --------
@@ -909,12 +1054,12 @@ def _gram(A_st, B_st, pairs, Sb):
 
 @nb.njit(cache=True)
 def _accel_blocks(kp, x, nin, out, kk, kM, n, m, jr, jc, rows0, columns, robust, blk_i,
-                  Mst, Jst, Wst, Sb, u, Minv, Li, qdd, lam, force):
+                  Mst, Jst, Wst, Sb, u, Minv, Li, qdd, lam, force, ex, ph):
     """``_accel`` by the block path (see above); False: hand over."""
     bstart, boff, rptr, rblk, roff, jpos, bsize, mpos, pairs = blk_i
     nblk = bsize.size
     bw = Sb.shape[1] - 1
-    _eval(kp, x, nin, out)
+    _evalx(kp, x, nin, out, ex, ph)
     for k in range(kk + n + m):
         if not np.isfinite(out[k]):
             return False
@@ -1010,7 +1155,7 @@ def _min_norm_blocks(vals, j0, jr, jc, columns, m, n, bvec, r, blk_i, Pst, Sb, r
 
 @nb.njit(cache=True)
 def _project_blocks(pp, pv, xk, nin_k, out_pos, out_vel, jr, jc, columns, offset, tol, maxit,
-                    robust, n, m, t, y, r, Fs, dq, blk_i, Pst, Sb):
+                    robust, n, m, t, y, r, Fs, dq, blk_i, Pst, Sb, ex, ph):
     """``_project`` by the block path."""
     xk[0] = t
     for j in range(n):
@@ -1019,7 +1164,7 @@ def _project_blocks(pp, pv, xk, nin_k, out_pos, out_vel, jr, jc, columns, offset
     for _ in range(maxit):
         for j in range(n):
             xk[1 + j] = y[j]
-        _eval(pp, xk, nin_k, out_pos)
+        _evalx(pp, xk, nin_k, out_pos, ex[1], ph[1])
         _rows_sparse(out_pos, m, jr, jc, columns, m, r)
         big = 0.0
         for i in range(m):
@@ -1036,7 +1181,7 @@ def _project_blocks(pp, pv, xk, nin_k, out_pos, out_vel, jr, jc, columns, offset
             y[j] -= dq[j]
     for j in range(n):
         xk[1 + j] = y[j]
-    _eval(pv, xk, nin_k, out_vel)
+    _evalx(pv, xk, nin_k, out_vel, ex[2], ph[2])
     nnz = jr.size
     _rows_sparse(out_vel, 0, jr, jc, columns, m, r)
     for i in range(m):

@@ -1,5 +1,6 @@
-"""Numba versions of the recursive Gen dynamics (``_generalized.py``: ``RecursiveDynamics``),
-imported only when Numba is installed. ``_fill``, ``_unpack`` and ``_assemble`` are the very
+"""Numba versions of the recursive Gen dynamics (``compile/_generalized.py``:
+``RecursiveDynamics``; the loops in ``_tree.py``), imported only when Numba is installed.
+``_fill``, ``_unpack``, ``_assemble`` and ``_articulated`` are the very
 functions of the Python path, compiled; ``forward`` calls the joint kernels (SymEngine LLVM
 code) through their C entry points like the compiled sweep (``solvers/_jit_loop.py``)."""
 
@@ -7,8 +8,8 @@ from __future__ import annotations
 
 import numba as nb
 
-from ..solvers._jit_loop import _ccall
-from ._generalized import _articulated, _assemble, _fill, _unpack
+from ._jit_loop import _ccall
+from ._tree import _articulated, _assemble, _fill, _unpack
 
 _fill_nb = nb.njit(cache=True)(_fill)
 _unpack_nb = nb.njit(cache=True)(_unpack)
