@@ -14,31 +14,14 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import mechsys as ms
-from mechsys.solvers._free import free_acceleration
 from test_generalized import T_OUT, Y0, _four_bar, abs_pendulum, gen_pendulum, minimal_rhs
 from test_generalized_3d import AXES, abs_arm, frames, gen_arm
 from test_generalized_recursive import _mixed
+from test_jit_free import _both, _check_derivatives
 
 pytest.importorskip("numba")
 
 IC = {"t1": Y0[0], "t2": Y0[1], "t1_d": Y0[2], "t2_d": Y0[3]}
-
-
-def _both(monkeypatch, free, t, **options):
-    out = {}
-    for mode in ("0", "1"):
-        monkeypatch.setenv("MECHSYS_JIT", mode)
-        out[mode] = free.simulate(t, **options)
-    return out["0"], out["1"]
-
-
-def _check_derivatives(free, sol, rows):
-    """qdd and lambda returned with the compiled steps = a fresh Python solve there."""
-    s = free.system
-    for k in rows:
-        qdd, lam, _ = free_acceleration(s, float(sol.t[k]), sol.q[k], sol.qd[k], s.p_values)
-        np.testing.assert_allclose(sol.qdd[k], qdd, rtol=1e-12, atol=1e-12)
-        np.testing.assert_allclose(sol.lam[k], lam, rtol=1e-12, atol=1e-12)
 
 
 def _chain(links=6):
