@@ -8,15 +8,15 @@ guards against a hang; it is not a speed requirement.
 
 Agreement: a kinematic sweep performs the same operations in both loops (decision 0013):
 1e-12. A free motion is compared at 11 output times over its first 20 or so steps, each
-column in its own scale: 1e-10. Not bit for bit: the two loops' sums round differently
+column in its own scale: 1e-9. Not bit for bit: the two loops' sums round differently
 (SciPy's BLAS against the loop's own), and where the local error of a step is near the
 rounding level (smooth motion, e.g. the n-four-bar's first steps) or the steps are set by
 stability rather than accuracy (a stiff motion: the Gen serial arm's PD-controlled joints, initial
 accelerations of 4e3) DOP853's error estimate is a difference of nearly equal numbers, so
 the two loops choose step sizes that differ by up to 1e-4 relative; both steps meet the
 tolerance, and the states between them differ (measured: positions at most 1.3e-12,
-velocities 1.5e-11, accelerations 8e-11 (the stiff arm), multipliers 4e-12; sweeps at most
-1e-15).
+velocities 1.9e-11, accelerations 8e-11 to 1.1e-10 (the stiff arm; it varies from run to
+run with the Python path's BLAS), multipliers 4e-12; sweeps at most 1e-15).
 """
 
 import json
@@ -32,7 +32,7 @@ EXAMPLES = ROOT / "examples"
 RUNNER = ROOT / "tests" / "_paths_runner.py"
 SCRIPTS = sorted(EXAMPLES.glob("*.py"))
 HANG_GUARD_S = 900
-AGREE = {"sweep": 1e-12, "free": 1e-10}
+AGREE = {"sweep": 1e-12, "free": 1e-9}
 COMPILED = {"four_bar.py": "sweep", "slider_crank_3d.py": "sweep", "gyroscope.py": "free",
             "pendulum_on_rope.py": "free"}
 
