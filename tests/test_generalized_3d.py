@@ -126,6 +126,17 @@ def abs_arm(q):
     return m
 
 
+def abs_arm_omegas(q0, qd0) -> dict:
+    """Initial condition of :func:`abs_arm` with the joint rates ``qd0``: each link's angular
+    velocity, the sum of the joint rates about the joint axes in global axes."""
+    A, _ = frames(q0)
+    w, om = np.zeros(3), {}
+    for k in range(3):
+        w = w + qd0[k] * ((A[k - 1] if k else np.eye(3)) @ np.array(AXES[k], float))
+        om[("omega", f"l{k}")] = tuple(w)
+    return om
+
+
 def test_arm_forward_dynamics_vs_absolute_model():
     q0, qd0 = [0.3, -0.4, 0.7], [0.8, 0.0, -0.6]
     t = np.linspace(0, 0.6, 4)
@@ -133,12 +144,7 @@ def test_arm_forward_dynamics_vs_absolute_model():
     ic = {f"q{k}": q0[k] for k in range(3)} | {f"q{k}_d": qd0[k] for k in range(3)}
     sg = g.free().simulate(t, initial_condition=ic, rtol=1e-11, atol=1e-11)
     a = abs_arm(q0)
-    A, _ = frames(q0)
-    w, om = np.zeros(3), {}
-    for k in range(3):
-        w = w + qd0[k] * ((A[k - 1] if k else np.eye(3)) @ np.array(AXES[k], float))
-        om[("omega", f"l{k}")] = tuple(w)
-    sa = a.free().simulate(t, initial_condition=om, rtol=1e-11, atol=1e-11)
+    sa = a.free().simulate(t, initial_condition=abs_arm_omegas(q0, qd0), rtol=1e-11, atol=1e-11)
     for k in range(3):
         pg = sg.location(g.body(f"l{k}").point("e"))
         pa = sa.location(a.body(f"l{k}").point("e"))

@@ -123,17 +123,22 @@ def test_absolute_master_and_loads(monkeypatch):
     assert not d.tree_only        # the cart's coordinates and its slide: the composite path
 
 
+def slide_chain(links=6):
+    """A planar chain of GenRevolute2 joints with a GenTranslate2 slide in it (three distinct
+    joint kernels), links with offset centroids."""
+    m = ms.Model2D()
+    master = m.ground.axis((0, 0))
+    for k in range(links):
+        b = m.add_body(f"l{k}", points={"tip": (1, 0)}, mass=1.5, inertia=0.1, centroid=(0.5, 0.02))
+        joint = ms.GenTranslate2 if k == 3 else ms.GenRevolute2
+        m.add(joint(b.axis(0), master, (f"q{k}", 0.1)), name=f"j{k}")
+        master = b.axis("tip")
+    m.add_load(ms.Gravity((0, -1), 9.81))
+    return m
+
+
 def test_chain_numba_and_python_paths_agree(monkeypatch):
-    def chain():
-        m = ms.Model2D()
-        master = m.ground.axis((0, 0))
-        for k in range(6):
-            b = m.add_body(f"l{k}", points={"tip": (1, 0)}, mass=1.5, inertia=0.1, centroid=(0.5, 0.02))
-            joint = ms.GenTranslate2 if k == 3 else ms.GenRevolute2
-            m.add(joint(b.axis(0), master, (f"q{k}", 0.1)), name=f"j{k}")
-            master = b.axis("tip")
-        m.add_load(ms.Gravity((0, -1), 9.81))
-        return m
+    chain = slide_chain
 
     _, s, d1 = _dynamics(monkeypatch, chain, "recursive", jit="1")
     assert d1._engine()

@@ -15,8 +15,8 @@ from scipy.integrate import solve_ivp
 
 import mechsys as ms
 from test_generalized import T_OUT, Y0, _four_bar, abs_pendulum, gen_pendulum, minimal_rhs
-from test_generalized_3d import AXES, abs_arm, frames, gen_arm
-from test_generalized_recursive import _mixed
+from test_generalized_3d import abs_arm, abs_arm_omegas, gen_arm
+from test_generalized_recursive import _mixed, slide_chain
 from test_jit_free import _both, _check_derivatives
 
 pytest.importorskip("numba")
@@ -24,23 +24,9 @@ pytest.importorskip("numba")
 IC = {"t1": Y0[0], "t2": Y0[1], "t1_d": Y0[2], "t2_d": Y0[3]}
 
 
-def _chain(links=6):
-    """A planar chain of GenRevolute2 joints with a GenTranslate2 slide in it (three distinct
-    joint kernels), links with offset centroids."""
-    m = ms.Model2D()
-    master = m.ground.axis((0, 0))
-    for k in range(links):
-        b = m.add_body(f"l{k}", points={"tip": (1, 0)}, mass=1.5, inertia=0.1, centroid=(0.5, 0.02))
-        joint = ms.GenTranslate2 if k == 3 else ms.GenRevolute2
-        m.add(joint(b.axis(0), master, (f"q{k}", 0.1)), name=f"j{k}")
-        master = b.axis("tip")
-    m.add_load(ms.Gravity((0, -1), 9.81))
-    return m
-
-
 def test_recursive_chain_dop853_compiled_equals_python(monkeypatch):
     monkeypatch.setenv("MECHSYS_GEN_DYNAMICS", "recursive")
-    free = _chain().free()
+    free = slide_chain().free()
     grid = np.linspace(0.0, 1.0, 21)
     py, jit = _both(monkeypatch, free, grid, rtol=1e-10, atol=1e-12)
     assert py.extra["compiled_steps"] == 0 and py.extra["compiled_solver"] is None
@@ -56,7 +42,7 @@ def test_recursive_chain_dop853_compiled_equals_python(monkeypatch):
 @pytest.mark.parametrize("method", ["automatic", "predictor", "corrector"])
 def test_recursive_chain_adams_compiled_equals_python(monkeypatch, method):
     monkeypatch.setenv("MECHSYS_GEN_DYNAMICS", "recursive")
-    free = _chain().free()
+    free = slide_chain().free()
     py, jit = _both(monkeypatch, free, (0.0, 0.5), method=method, max_error=1e-7)
     assert jit.extra["compiled_solver"] == "recursive"
     assert jit.extra["compiled_steps"] > 0.9 * jit.extra["steps"]
@@ -184,12 +170,7 @@ def test_arm_3d_compiled_vs_absolute_model(monkeypatch, mode):
     assert sg.extra["compiled_steps"] == sg.extra["steps"]
     assert sg.extra["compiled_solver"] == ("recursive" if mode == "recursive" else "augmented")
     a = abs_arm(q0)
-    A, _ = frames(q0)
-    w, om = np.zeros(3), {}
-    for k in range(3):
-        w = w + qd0[k] * ((A[k - 1] if k else np.eye(3)) @ np.array(AXES[k], float))
-        om[("omega", f"l{k}")] = tuple(w)
-    sa = a.free().simulate(t, initial_condition=om, rtol=1e-11, atol=1e-11)
+    sa = a.free().simulate(t, initial_condition=abs_arm_omegas(q0, qd0), rtol=1e-11, atol=1e-11)
     for k in range(3):
         np.testing.assert_allclose(sg.location(g.body(f"l{k}").point("e")),
                                    sa.location(a.body(f"l{k}").point("e")), atol=1e-7)
@@ -199,7 +180,7 @@ def test_arm_3d_compiled_vs_absolute_model(monkeypatch, mode):
 def test_mode_off_keeps_the_python_stepper(monkeypatch):
     monkeypatch.setenv("MECHSYS_GEN_DYNAMICS", "recursive")
     monkeypatch.setenv("MECHSYS_JIT", "0")
-    sol = _chain(4).free().simulate((0.0, 0.2))
+    sol = slide_chain(4).free().simulate((0.0, 0.2))
     assert sol.extra["compiled_steps"] == 0 and sol.extra["compiled_solver"] is None
 
 
@@ -221,7 +202,7 @@ def test_pickles_after_a_compiled_run(monkeypatch):
 
     monkeypatch.setenv("MECHSYS_GEN_DYNAMICS", "recursive")
     monkeypatch.setenv("MECHSYS_JIT", "1")
-    free = _chain(4).free()
+    free = slide_chain(4).free()
     a = free.simulate((0.0, 0.2))
     assert a.extra["compiled_solver"] == "recursive"
     b = pickle.loads(pickle.dumps(free)).simulate((0.0, 0.2))

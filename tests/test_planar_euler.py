@@ -439,13 +439,10 @@ def test_vibration_modes_match_angle_coordinates():
 def test_centrifugal_pendulum_in_a_rotating_frame_in_euler_parameters():
     """The rotating-frame linearisation (frame velocities ``d(ei, ej)/dt = w (-ej, ei)``):
     the centrifugal pendulum absorber swings at ``W sqrt(R / l)``, as in angles."""
+    from test_vibration import centrifugal_pendulum
+
     R, l, W = 0.3, 0.08, 50.0
-    m = ms.Model2D(orientation="euler")
-    disc = m.add_body("disc", points={"pin": (R, 0)}, mass=2.0, inertia=0.1)
-    pend = m.add_body("pend", mass=0.2, centroid=(l, 0), inertia=0, guess=((R, 0), 0))
-    m.add(ms.Revolute2(m.ground.point((0, 0)), disc.point(0)))
-    m.add(ms.RotationLock1(disc, W * ms.T), name="drive")
-    m.add(ms.Revolute2(disc.point("pin"), pend.point(0)))
+    m = centrifugal_pendulum(R, l, W, orientation="euler")
     modes = m.vibration(at=m.guess(), rotating=(W, (0, 0)))
     assert modes.omega == pytest.approx([W * np.sqrt(R / l)], rel=1e-9)
     assert modes.qd[m.compile().layout.index("pend.ej")] == pytest.approx(W)

@@ -185,16 +185,22 @@ def test_mode_animation():
     assert anim.times[-1] == pytest.approx(2 * np.pi / modes.omega[0])
 
 
-def test_centrifugal_pendulum_in_a_rotating_frame():
-    """A pendulum pinned at radius R on a disc driven at W (no gravity): about its radial
-    relative equilibrium it swings at W sqrt(R / l) (the centrifugal pendulum absorber)."""
-    R, l, W = 0.3, 0.08, 50.0
-    m = ms.Model2D()
+def centrifugal_pendulum(R=0.3, l=0.08, W=50.0, orientation="angle"):
+    """A pendulum pinned at radius R on a disc driven at W (no gravity)."""
+    m = ms.Model2D(orientation=orientation)
     disc = m.add_body("disc", points={"pin": (R, 0)}, mass=2.0, inertia=0.1)
     pend = m.add_body("pend", mass=0.2, centroid=(l, 0), inertia=0, guess=((R, 0), 0))
     m.add(ms.Revolute2(m.ground.point((0, 0)), disc.point(0)))
     m.add(ms.RotationLock1(disc, W * ms.T), name="drive")
     m.add(ms.Revolute2(disc.point("pin"), pend.point(0)))
+    return m
+
+
+def test_centrifugal_pendulum_in_a_rotating_frame():
+    """A pendulum pinned at radius R on a disc driven at W (no gravity): about its radial
+    relative equilibrium it swings at W sqrt(R / l) (the centrifugal pendulum absorber)."""
+    R, l, W = 0.3, 0.08, 50.0
+    m = centrifugal_pendulum(R, l, W)
     modes = m.vibration(at=m.guess(), rotating=(W, (0, 0)))
     assert modes.omega == pytest.approx([W * np.sqrt(R / l)], rel=1e-9)
     # the velocities were those of the rotating frame, consistent with the driver

@@ -82,11 +82,6 @@ class _Rows:
     def __len__(self) -> int:
         return self._n
 
-    def __getitem__(self, i):
-        if i != -1 or not self._n:
-            raise IndexError("_Rows gives only its last row")
-        return self._blocks[-1][-1]
-
     def trim(self, n: int) -> None:
         """Keep the first ``n`` rows."""
         while self._n > n:
