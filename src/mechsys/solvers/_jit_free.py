@@ -55,7 +55,7 @@ CHUNK_STEPS = 2000
 #: the methods with a compiled loop (``integration_options`` names; Adams: Mech's three)
 METHODS = ("dop853", "automatic", "predictor", "corrector")
 
-_state: dict = {"loop": None, "adams": None, "coef": None, "gesv": None}
+_state: dict = {"loop": None, "adams": None, "workspace": None, "coef": None, "gesv": None}
 
 
 def _coefficients():
@@ -277,9 +277,13 @@ class FreeStepper:
         self.EQDD, self.ELAM = np.full((k, n), np.nan), np.full((k, m), np.nan)
         self.steps = 0
         if _state["loop"] is None:
-            from ._jit_free_loop import adams, dop853
+            from ._jit_free_loop import adams, dop853, workspace
 
-            _state["loop"], _state["adams"] = dop853, adams
+            _state["loop"], _state["adams"], _state["workspace"] = dop853, adams, workspace
+        # the loops' work arrays, owned here for every run of this stepper (the loops borrow
+        # them: decision 0021)
+        self.ws = _state["workspace"](self.kp, n, m, self.p.size, self.kk, self.jr.size,
+                                      self.mode, self.blk_i, self.bw)
         _jit._state["loaded"] = True
 
     @classmethod
@@ -342,7 +346,7 @@ class FreeStepper:
         status, steps, ie, evals, rejected, projections = _state["loop"](
             self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr, self.jc,
             self.rows0, self.columns, self.offset, self.robust, self.mode,
-            self.blk_i, self.bw, self.correction, 1e-12, 8, A, B, C, E3, E5, D,
+            self.blk_i, self.ws, self.correction, 1e-12, 8, A, B, C, E3, E5, D,
             float(solver.rtol), atol, float(solver.max_step),
             float(solver.t_bound), float(solver.direction), state, y, f, self.t_eval, int(ie),
             int(max_steps), T, Y, H, QDD, LAM, self.ET, self.EY, self.EQDD, self.ELAM)
@@ -373,7 +377,7 @@ class FreeStepper:
         status, steps, evals, projections = _state["adams"](
             self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr, self.jc,
             self.rows0, self.columns, self.offset, self.robust, self.mode,
-            self.blk_i, self.bw, self.correction, 1e-12, 8, int(k), float(a), float(b),
+            self.blk_i, self.ws, self.correction, 1e-12, 8, int(k), float(a), float(b),
             float(c), int(method), bool(fixed), inv_scale,
             float(t1), state, y, hist_t, hist_f, recent, int(max_steps), T, Y, H, E, QDD, LAM)
         self.steps += int(steps)

@@ -33,6 +33,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+from ._jit_borrow import borrow
 from ._jit_lapack import gecon1, getrf, getrs
 from ._jit_loop import SMALL as SMALL_LU
 from ._jit_loop import _assemble, _ccall, _eval, _rows
@@ -73,7 +74,7 @@ def _lu_solve(AT, b, N, piv):
     return True
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline='always')
 def _evalx(ptr, x, nin, out, ex, ph):
     """``_eval`` of a kernel whose repeated outputs are computed once (a CSE kernel:
     ``_backends._SymengineCompiled.c_entry``): the distinct values into ``ph``, then ``out[i]
@@ -100,7 +101,7 @@ def _accel(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, col
                             columns, robust, ipiv, ibuf, rhs, b, qdd, lam, force)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline='always')
 def _solve_augmented(lapack, KT, rv, r0, jv, j0, n, m, jr, jc, rows0, columns, robust, ipiv,
                      ibuf, rhs, b, qdd, lam, force):
     """Solve the augmented system (``KT`` its matrix transposed, ``rv[r0:r0 + n + m]`` its
@@ -162,7 +163,7 @@ def _solve_augmented(lapack, KT, rv, r0, jv, j0, n, m, jr, jc, rows0, columns, r
     return True
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline='always')
 def _rhs(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, columns, robust,
          ipiv, ibuf, rhs, b, qdd, lam, force, blocks, blk_i, blk_w, t, y, f):
     """``f = (qd, qdd)`` at ``(t, y)``; False: hand over. ``blocks``: how (``AUGMENTED``,
@@ -312,7 +313,7 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
 
 @nb.njit(cache=True)
 def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, robust,
-           blocks, blk_i, bw, correction, ptol, pmaxit, Acoef, Bcoef, Ccoef, E3, E5, Dcoef, rtol,
+           blocks, blk_i, ws, correction, ptol, pmaxit, Acoef, Bcoef, Ccoef, E3, E5, Dcoef, rtol,
            atol, max_step,
            t_bound, direction, state, y, f, t_eval, ie0, max_steps,
            T, Y, H, QDD, LAM, ET, EY, EQDD, ELAM):
@@ -323,37 +324,16 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
     npar = p.size
     nin = 1 + 2 * n + m + npar + n                   # [t, q, qd, lambda, p, qdd]
     nin_k = 1 + 2 * n + npar                         # [t, q, qd, p]
-    x = np.zeros(nin + max(kp[0, 4], 0))
+    (x, xk, out, out_pos, out_vel, KT, ipiv, ibuf, cbuf, dbuf, rhsb, bb, qdd, lam, force,
+     blk_w, J, r, Fs, dq, Js, Am, work, iwork, ybuf) = borrow(ws)
+    (lapack, p, flat_t, mp, jr, jc, rows0, columns, blk_i, y, state, f, t_eval, atol) = borrow(
+        (lapack, p, flat_t, mp, jr, jc, rows0, columns, blk_i, y, state, f, t_eval, atol))
+    x[:] = 0.0                       # [t, q, qd, lambda = 0, p, qdd = 0]
     for j in range(npar):
         x[1 + 2 * n + m + j] = p[j]
-    xk = np.zeros(nin_k + max(kp[1, 4], kp[2, 4]))
+    xk[:] = 0.0                      # [t, q, qd = 0 (positions), p]
     for j in range(npar):
         xk[1 + 2 * n + j] = p[j]
-    nnz = jr.size
-    out = np.empty(kk + n + m)
-    out_pos = np.empty(m + nnz)
-    out_vel = np.empty(nnz + m)
-    NN = n + m
-    KT = np.empty((1, 1)) if blocks else np.empty((NN, NN))
-    ipiv = np.empty(max(NN, 1), dtype=np.int32)
-    ibuf = np.zeros(5, dtype=np.int32)
-    cbuf = np.zeros(2, dtype=np.uint8)
-    dbuf = np.zeros(2)
-    rhsb = np.empty(NN)
-    bb = np.empty(NN)
-    qdd = np.empty(n)
-    lam = np.empty(m)
-    force = np.empty(n)
-    blk_w = _block_work(blocks, blk_i, n, m, bw)
-    J = np.empty((m, n))
-    r = np.empty(m)
-    Fs = np.empty(m)
-    dq = np.empty(n)
-    Js = np.empty((m, n))
-    Am = np.empty((m, m))
-    work = np.empty(4 * max(m, 1))
-    iwork = np.empty(max(m, 1), dtype=np.int32)
-    ybuf = np.empty(m)
     K = np.empty((16, N2))
     ynew = np.empty(N2)
     fnew = np.empty(N2)
@@ -576,7 +556,7 @@ def _adams_weights(times, cnt, t_from, h, V, w, cache, piv):
 
 @nb.njit(cache=True)
 def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, robust,
-          blocks, blk_i, bw, correction, ptol, pmaxit, k, a, b, c, method, fixed, inv_scale, t1, state, y,
+          blocks, blk_i, ws, correction, ptol, pmaxit, k, a, b, c, method, fixed, inv_scale, t1, state, y,
           hist_t, hist_f, recent, max_steps, T, Y, H, E, QDD, LAM):
     """Accepted steps of Mech's Adams integrator (``solvers._integrators.integrate_adams``,
     operation for operation) from ``state = [t, h, history length, recent count,
@@ -588,37 +568,16 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
     npar = p.size
     nin = 1 + 2 * n + m + npar + n
     nin_k = 1 + 2 * n + npar
-    x = np.zeros(nin + max(kp[0, 4], 0))
+    (x, xk, out, out_pos, out_vel, KT, ipiv, ibuf, cbuf, dbuf, rhsb, bb, qdd, lam, force,
+     blk_w, J, r, Fs, dq, Js, Am, work, iwork, ybuf) = borrow(ws)
+    (lapack, p, flat_t, mp, jr, jc, rows0, columns, blk_i, y, state, hist_t, hist_f, recent) = borrow(
+        (lapack, p, flat_t, mp, jr, jc, rows0, columns, blk_i, y, state, hist_t, hist_f, recent))
+    x[:] = 0.0                       # [t, q, qd, lambda = 0, p, qdd = 0]
     for j in range(npar):
         x[1 + 2 * n + m + j] = p[j]
-    xk = np.zeros(nin_k + max(kp[1, 4], kp[2, 4]))
+    xk[:] = 0.0                      # [t, q, qd = 0 (positions), p]
     for j in range(npar):
         xk[1 + 2 * n + j] = p[j]
-    nnz = jr.size
-    out = np.empty(kk + n + m)
-    out_pos = np.empty(m + nnz)
-    out_vel = np.empty(nnz + m)
-    NN = n + m
-    KT = np.empty((1, 1)) if blocks else np.empty((NN, NN))
-    ipiv = np.empty(max(NN, 1), dtype=np.int32)
-    ibuf = np.zeros(5, dtype=np.int32)
-    cbuf = np.zeros(2, dtype=np.uint8)
-    dbuf = np.zeros(2)
-    rhsb = np.empty(NN)
-    bb = np.empty(NN)
-    qdd = np.empty(n)
-    lam = np.empty(m)
-    force = np.empty(n)
-    blk_w = _block_work(blocks, blk_i, n, m, bw)
-    J = np.empty((m, n))
-    r = np.empty(m)
-    Fs = np.empty(m)
-    dq = np.empty(n)
-    Js = np.empty((m, n))
-    Am = np.empty((m, m))
-    work = np.empty(4 * max(m, 1))
-    iwork = np.empty(max(m, 1), dtype=np.int32)
-    ybuf = np.empty(m)
     V = np.empty((6, 6))
     cache_p = np.full(13, -1.0)
     vpiv = np.empty(6, dtype=np.int32)
@@ -761,6 +720,26 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
     if (t1 - t) * sign > 1e-14 * max(1.0, abs(t1)):
         return CHUNK, steps, evals, projections
     return FINISHED, steps, evals, projections
+
+
+@nb.njit(cache=True)
+def workspace(kp, n, m, npar, kk, nnz, blocks, blk_i, bw):
+    """The work arrays of ``dop853`` and ``adams`` (their ``ws`` argument), allocated once per
+    stepper by the Python caller: it owns them for the loops' whole run, which is what lets
+    the loops borrow them (``_jit_borrow``: no reference counting in the inner calls).
+    ``kp`` (3, 5) the kernels' rows, ``kk`` the kernel's outputs before the right-hand side,
+    ``nnz`` the Jacobian's nonzeros, ``bw`` the block path's bandwidth."""
+    nin = 1 + 2 * n + m + npar + n                   # [t, q, qd, lambda, p, qdd]
+    nin_k = 1 + 2 * n + npar                         # [t, q, qd, p]
+    NN = n + m
+    return (np.zeros(nin + max(kp[0, 4], 0)), np.zeros(nin_k + max(kp[1, 4], kp[2, 4])),
+            np.empty(kk + n + m), np.empty(m + nnz), np.empty(nnz + m),
+            np.empty((1, 1)) if blocks else np.empty((NN, NN)),
+            np.empty(max(NN, 1), dtype=np.int32), np.zeros(5, dtype=np.int32),
+            np.zeros(2, dtype=np.uint8), np.zeros(2), np.empty(NN), np.empty(NN), np.empty(n),
+            np.empty(m), np.empty(n), _block_work(blocks, blk_i, n, m, bw), np.empty((m, n)),
+            np.empty(m), np.empty(m), np.empty(n), np.empty((m, n)), np.empty((m, m)),
+            np.empty(4 * max(m, 1)), np.empty(max(m, 1), dtype=np.int32), np.empty(m))
 
 
 @nb.njit(cache=True)

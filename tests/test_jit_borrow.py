@@ -1,0 +1,92 @@
+"""``solvers._jit_borrow.borrow``: the same data without reference counting (decision 0021),
+and the free-motion loops' workspace that relies on it."""
+
+import numpy as np
+import pytest
+
+nb = pytest.importorskip("numba")
+
+from mechsys.solvers._jit_borrow import borrow  # noqa: E402
+
+
+@nb.njit(cache=False)
+def _through(a, pair):
+    """Borrow, write through the borrowed copies, read a strided view of one."""
+    a2, (b2, k, c2) = borrow((a, pair))
+    a2[0] = 7.0
+    b2[1, 1] = -3.0
+    for i in range(c2.size):
+        c2[i] += 1
+    return a2[::2].sum() + b2[:, 1].sum() + k + c2.sum(), a2.shape[0], b2.strides[0]
+
+
+@nb.njit(cache=False)
+def _counted_sum(ws, n):
+    s = 0.0
+    for i in range(n):
+        s += _leaf(ws, i)
+    return s
+
+
+@nb.njit(cache=False)
+def _borrowed_sum(ws, n):
+    ws = borrow(ws)
+    s = 0.0
+    for i in range(n):
+        s += _leaf(ws, i)
+    return s
+
+
+@nb.njit(cache=False)
+def _leaf(ws, i):
+    a, (b, c) = ws
+    if i < 0:
+        return -1.0
+    return a[i % a.size] + b[0, i % b.shape[1]] * c[i % c.size]
+
+
+def test_borrowed_arrays_are_the_same_data():
+    a = np.arange(6.0)
+    b = np.zeros((3, 4))
+    c = np.ones(2, dtype=np.int64)
+    total, size, stride = _through(a, (b, 5, c))
+    # writes through the borrowed copies land in the caller's arrays
+    assert a[0] == 7.0 and b[1, 1] == -3.0 and np.array_equal(c, [2, 2])
+    assert total == (7.0 + 2.0 + 4.0) + (-3.0) + 5 + 4
+    assert size == 6 and stride == b.strides[0]
+
+
+def test_borrowed_loop_gives_the_counted_loops_numbers():
+    rng = np.random.default_rng(1)
+    ws = (rng.normal(size=7), (rng.normal(size=(2, 5)), rng.normal(size=3)))
+    assert _borrowed_sum(ws, 1000) == _counted_sum(ws, 1000)
+
+
+def test_borrow_refuses_what_it_cannot_strip():
+    @nb.njit(cache=False)
+    def f(x):
+        return borrow(x)
+
+    with pytest.raises(nb.core.errors.TypingError):
+        f([np.zeros(2)])                     # a reflected list: would need counting
+
+
+def test_free_stepper_workspace_carries_no_state_between_chunks(monkeypatch):
+    """A stepper allocates its work arrays once and the loops borrow them for every chunk
+    of steps: a run cut into chunks of 7 steps is bit-identical to a run in one chunk."""
+    from mechsys import models
+    from mechsys.solvers import _jit_free
+
+    m = models.pendulum_chain(3, 9.81)
+    m.solve(0.0)
+    free = m.free(drop=["lock0", "lock1", "lock2"])
+    for method, opts in (("dop853", {"rtol": 1e-9, "atol": 1e-11}),
+                         ("adams", {"max_error": 1e-6})):
+        whole = free.simulate((0.0, 1.0), method=method, **opts)
+        assert whole.extra["compiled_steps"] > 3 * 7
+        with monkeypatch.context() as mp:
+            mp.setattr(_jit_free, "CHUNK_STEPS", 7)
+            cut = free.simulate((0.0, 1.0), method=method, **opts)
+        assert cut.extra["compiled_steps"] == whole.extra["compiled_steps"]
+        for a, b in ((whole.q, cut.q), (whole.qd, cut.qd), (whole.lam, cut.lam)):
+            assert np.array_equal(a, b)
