@@ -16,7 +16,10 @@ Two families, selected by ``method``:
   - ``err > a``: reject, back up, halve the step;
   - ``b < err <= a``: accept the corrected (Adams-Moulton) value;
   - ``err <= b``: accept the predicted value (``method_adams="automatic"``);
-  - the step doubles when the sum of the errors of the last four steps is below ``c``.
+  - the step doubles when the error of each of the last ``2 fit_degree`` steps (since the
+    last change of the step size) is below ``c``: Mech's ``MaxError`` rule, "doubled if
+    the maximum error in any of the last 2n steps drops below c, where n is the degree
+    of the integrand fitting polynomial" (decision 0022).
 
   ``method_adams`` ``"predictor"`` never corrects, ``"corrector"`` always does; a constant
   ``step_size`` turns the adaptation off. ``constraint_correction`` projects after each step.
@@ -277,6 +280,7 @@ def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4
         a, b, c = (float(v) for v in max_error)
     if method not in ("automatic", "predictor", "corrector"):
         raise MechError("method must be 'automatic', 'predictor' or 'corrector'")
+    window = 2 * k           # Mech: the step doubles after 2n steps below c (n: the degree)
     span = t1 - t0
     h = step_size or first_step or min(abs(span) / 100, 1e-3)
     h = float(np.copysign(h, span))
@@ -300,13 +304,13 @@ def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4
             if len(ts) > max_steps:
                 raise MechError(f"adams: more than {max_steps} steps; loosen max_error")
             if fast is not None and pause == 0:
-                last = recent[-4:]
+                last = recent[-window:]
                 state = np.array([t, h, len(hist_t), len(last), rejected], dtype=float)
                 ht = np.zeros(6)
                 ht[:len(hist_t)] = hist_t
                 hf = np.zeros((6, len(y)))
                 hf[:len(hist_f)] = hist_f
-                rec = np.zeros(4)
+                rec = np.zeros(8)
                 rec[:len(last)] = last
                 yy = y.copy()
                 status, T, Yc, H, E, QDD, LAM, ev, proj = fast.advance_adams(
@@ -368,9 +372,11 @@ def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4
             steps_h.append(h_try)
             steps_e.append(err)
             recent.append(err)
-            if step_size is None and len(recent) >= 4 and sum(recent[-4:]) < c:
+            if step_size is None and len(recent) >= window and max(recent[-window:]) < c:
                 h = 2 * h
                 recent.clear()
+            elif len(recent) > window:
+                del recent[0]
             if monitor is not None:
                 monitor(t)
     except KeyboardInterrupt:

@@ -88,15 +88,14 @@ def _evalx(ptr, x, nin, out, ex, ph):
 
 
 @nb.njit(cache=True)
-def _accel(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, columns,
+def _accel(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, columns,
            robust, ipiv, ibuf, rhs, b, qdd, lam, force, ex, ph):
     """Free acceleration at ``x = [t, q, qd, 0, p, 0]``: ``qdd`` (n,), ``lam`` (m,);
     False where the Python path would need its special handling."""
     _evalx(kp, x, nin, out, ex, ph)
-    KT[:, :] = 0.0
-    flat = KT.ravel()
+    KTf[:] = 0.0                     # KT's flat view (made once: no reshape per call)
     for k in range(flat_t.size):
-        flat[flat_t[k]] = out[mp[k]]
+        KTf[flat_t[k]] = out[mp[k]]
     return _solve_augmented(lapack, KT, out, kk, out, kk - jr.size, n, m, jr, jc, rows0,
                             columns, robust, ipiv, ibuf, rhs, b, qdd, lam, force)
 
@@ -108,10 +107,10 @@ def _solve_augmented(lapack, KT, rv, r0, jv, j0, n, m, jr, jc, rows0, columns, r
     right-hand side, ``jv[j0:]`` the Jacobian's values) with the checks of the Python path:
     ``qdd`` (n,), ``lam`` (m,); False: hand over."""
     N = n + m
-    flat = KT.ravel()
-    for k in range(N * N):
-        if not np.isfinite(flat[k]):
-            return False
+    for i in range(N):
+        for j in range(N):
+            if not np.isfinite(KT[i, j]):
+                return False
     big_rhs = 0.0
     for i in range(N):
         rhs[i] = rv[r0 + i]
@@ -164,7 +163,7 @@ def _solve_augmented(lapack, KT, rv, r0, jv, j0, n, m, jr, jc, rows0, columns, r
 
 
 @nb.njit(cache=True, inline='always')
-def _rhs(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, columns, robust,
+def _rhs(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, columns, robust,
          ipiv, ibuf, rhs, b, qdd, lam, force, blocks, blk_i, blk_w, t, y, f):
     """``f = (qd, qdd)`` at ``(t, y)``; False: hand over. ``blocks``: how (``AUGMENTED``,
     ``BLOCK``, ``GEN_TREE``, ``GEN_AUGMENTED``); ``blk_i = (block structure, Gen tree,
@@ -184,7 +183,7 @@ def _rhs(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, colum
                           rhs, b, qdd, lam, force, blk_i[1], blk_w[1], ex[0], ph[0],
                           blocks == GEN_TREE, y):
             return False
-    elif not _accel(kp, lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0, columns,
+    elif not _accel(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, columns,
                     robust, ipiv, ibuf, rhs, b, qdd, lam, force, ex[0], ph[0]):
         return False
     for j in range(n):
@@ -324,7 +323,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
     npar = p.size
     nin = 1 + 2 * n + m + npar + n                   # [t, q, qd, lambda, p, qdd]
     nin_k = 1 + 2 * n + npar                         # [t, q, qd, p]
-    (x, xk, out, out_pos, out_vel, KT, ipiv, ibuf, cbuf, dbuf, rhsb, bb, qdd, lam, force,
+    (x, xk, out, out_pos, out_vel, KT, KTf, ipiv, ibuf, cbuf, dbuf, rhsb, bb, qdd, lam, force,
      blk_w, J, r, Fs, dq, Js, Am, work, iwork, ybuf) = borrow(ws)
     (lapack, p, flat_t, mp, jr, jc, rows0, columns, blk_i, y, state, f, t_eval, atol) = borrow(
         (lapack, p, flat_t, mp, jr, jc, rows0, columns, blk_i, y, state, f, t_eval, atol))
@@ -378,7 +377,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
                         acc += K[k, j] * Acoef[s, k]
                     ytmp[j] = y[j] + acc * h
                 evals += 1
-                if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0,
+                if not _rhs(kp[0], lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0,
                             columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force, blocks, blk_i, blk_w,
                             t + Ccoef[s] * h, ytmp, K[s]):
                     return HANDOVER, steps, ie, evals, rejected, projections
@@ -388,7 +387,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
                     acc += K[k, j] * Bcoef[k]
                 ynew[j] = y[j] + h * acc
             evals += 1
-            if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0,
+            if not _rhs(kp[0], lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0,
                         columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force,
                         blocks, blk_i, blk_w, t + h, ynew, fnew):
                 return HANDOVER, steps, ie, evals, rejected, projections
@@ -435,7 +434,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
                         acc += K[k, j] * Acoef[s, k]
                     ytmp[j] = y[j] + acc * h
                 evals += 1
-                if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc,
+                if not _rhs(kp[0], lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc,
                             rows0, columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force,
                             blocks, blk_i, blk_w,
                             t + Ccoef[s] * h, ytmp, K[s]):
@@ -468,7 +467,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
                                     ybuf, blocks, blk_i, blk_w):
                         return HANDOVER, steps, ie_step, evals, rejected, projections
                     projections += 1
-                if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc,
+                if not _rhs(kp[0], lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc,
                             rows0, columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force,
                             blocks, blk_i, blk_w, t_eval[ie],
                             yo, ytmp):
@@ -489,7 +488,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
                 return HANDOVER, steps, ie_step, evals, rejected, projections
             projections += 1
             evals += 1
-            if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0,
+            if not _rhs(kp[0], lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0,
                         columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force,
                         blocks, blk_i, blk_w, t_new, ynew, fnew):
                 return HANDOVER, steps, ie_step, evals, rejected, projections
@@ -528,7 +527,8 @@ def _adams_weights(times, cnt, t_from, h, V, w, cache, piv):
     7..12): while the step is constant the nodes repeat."""
     same = cache[0] == cnt
     for i in range(cnt):
-        x = np.round((times[i] - t_from) / h, 9)
+        # np.round(v, 9) as Numba computes it (v * 1e9, rint, / 1e9), without its pow call
+        x = np.rint((times[i] - t_from) / h * 1e9) / 1e9
         if x != cache[1 + i]:
             same = False
             cache[1 + i] = x
@@ -561,14 +561,14 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
     """Accepted steps of Mech's Adams integrator (``solvers._integrators.integrate_adams``,
     operation for operation) from ``state = [t, h, history length, recent count,
     rejected]``, ``y``, the derivative history ``hist_t`` (6,), ``hist_f`` (6, 2n) and the
-    last errors ``recent`` (4,). ``method``: 0 automatic, 1 predictor, 2 corrector.
+    last errors ``recent`` (8,): up to ``2 k`` of them. ``method``: 0 automatic, 1 predictor, 2 corrector.
     Returns ``(status, steps, evaluations, projections)``; the state arrays hold the last
     accepted state."""
     N2 = 2 * n
     npar = p.size
     nin = 1 + 2 * n + m + npar + n
     nin_k = 1 + 2 * n + npar
-    (x, xk, out, out_pos, out_vel, KT, ipiv, ibuf, cbuf, dbuf, rhsb, bb, qdd, lam, force,
+    (x, xk, out, out_pos, out_vel, KT, KTf, ipiv, ibuf, cbuf, dbuf, rhsb, bb, qdd, lam, force,
      blk_w, J, r, Fs, dq, Js, Am, work, iwork, ybuf) = borrow(ws)
     (lapack, p, flat_t, mp, jr, jc, rows0, columns, blk_i, y, state, hist_t, hist_f, recent) = borrow(
         (lapack, p, flat_t, mp, jr, jc, rows0, columns, blk_i, y, state, hist_t, hist_f, recent))
@@ -594,6 +594,7 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
     h = state[1]
     nh = int(state[2])
     nrec = int(state[3])
+    window = 2 * k                   # Mech's doubling rule: the last 2n errors below c
     rejected = int(state[4])
     sign = 1.0 if t1 - t >= 0 else -1.0
     evals = 0
@@ -614,7 +615,7 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
                 acc += w[i] * hist_f[p0 + i, j]
             y_pred[j] = y[j] + acc
         evals += 1
-        if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0,
+        if not _rhs(kp[0], lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0,
                     columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force,
                     blocks, blk_i, blk_w, t + h_try, y_pred,
                     f_pred):
@@ -653,7 +654,7 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
             continue
         if method == 2 or (method == 0 and err > b):
             evals += 1
-            if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0,
+            if not _rhs(kp[0], lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0,
                         columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force,
                         blocks, blk_i, blk_w, t + h_try,
                         y_corr, f_new):
@@ -670,7 +671,7 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
                 return HANDOVER, steps, evals, projections
             projections += 1
             evals += 1
-            if not _rhs(kp[0], lapack, x, nin, out, KT, flat_t, mp, kk, n, m, jr, jc, rows0,
+            if not _rhs(kp[0], lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0,
                         columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force,
                         blocks, blk_i, blk_w, t_new, y_corr,
                         f_new):
@@ -699,17 +700,18 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
         for i in range(m):
             LAM[steps, i] = lam[i]
         steps += 1
-        if nrec == 4:
-            for i in range(3):
+        if nrec == window:
+            for i in range(window - 1):
                 recent[i] = recent[i + 1]
-            nrec = 3
+            nrec = window - 1
         recent[nrec] = err
         nrec += 1
-        if not fixed and nrec >= 4:
-            tot = 0.0
-            for i in range(4):
-                tot += recent[i]
-            if tot < c:
+        if not fixed and nrec >= window:
+            big = 0.0
+            for i in range(window):
+                if recent[i] > big:
+                    big = recent[i]
+            if big < c:
                 h = 2 * h
                 nrec = 0
         state[0] = t
@@ -732,9 +734,10 @@ def workspace(kp, n, m, npar, kk, nnz, blocks, blk_i, bw):
     nin = 1 + 2 * n + m + npar + n                   # [t, q, qd, lambda, p, qdd]
     nin_k = 1 + 2 * n + npar                         # [t, q, qd, p]
     NN = n + m
+    KTf = np.empty(1 if blocks else NN * NN)
     return (np.zeros(nin + max(kp[0, 4], 0)), np.zeros(nin_k + max(kp[1, 4], kp[2, 4])),
             np.empty(kk + n + m), np.empty(m + nnz), np.empty(nnz + m),
-            np.empty((1, 1)) if blocks else np.empty((NN, NN)),
+            KTf.reshape((1, 1) if blocks else (NN, NN)), KTf,
             np.empty(max(NN, 1), dtype=np.int32), np.zeros(5, dtype=np.int32),
             np.zeros(2, dtype=np.uint8), np.zeros(2), np.empty(NN), np.empty(NN), np.empty(n),
             np.empty(m), np.empty(n), _block_work(blocks, blk_i, n, m, bw), np.empty((m, n)),
