@@ -120,10 +120,12 @@ def _lapack() -> np.ndarray:
     return _state["lapack"]
 
 
-def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD, its, rconds):
+def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD, its, rconds,
+        rprev):
     """Fill ``Q``, ``QD``, ``QDD``, ``its``, ``rconds`` from point 0 on; return ``(k, evals)``:
     the first point left to the Python loop (``len(times)`` when all are done) and the number
-    of kernel calls made."""
+    of kernel calls made. ``rprev`` (n,) receives the row scales of the last solved point's
+    velocity factorisation (the chord the Python loop continues with)."""
     if _state["loop"] is None:
         from ._jit_loop import sweep_dense
 
@@ -142,7 +144,7 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
                     system.jac_rows.astype(np.int64), system.jac_cols.astype(np.int64),
                     np.ascontiguousarray(scaling.columns, dtype=float), float(tol),
                     int(options.max_iterations), bool(options.damping), int(order),
-                    rot.astype(np.int64), Q, qd_out, qdd_out, its, rc)
+                    rot.astype(np.int64), Q, qd_out, qdd_out, its, rc, rprev)
     return int(k), int(evals)
 
 

@@ -27,6 +27,7 @@ from numba.extending import intrinsic
 
 from ._jit_lapack import GUARD_MARGIN, gecon1, getrf, getrs, inv_norm_bound, pattern_size
 from ._kinematics import RCOND_WARN, ROTATION_JUMP, ROTATION_SLACK, ROTATION_START
+from ._position import CHORD_RATE
 from ._linalg import RCOND_MIN
 
 #: up to this many unknowns the LU and condition estimate are computed in the loop
@@ -64,6 +65,15 @@ def _eval(ptr, x, nin, out):
     if ptr[2] != 0:
         _ccall(ptr[2], (x[nin:nin + ptr[4]], x, ptr[3]))
     _ccall(ptr[0], (out, x, ptr[1]))
+
+
+@nb.njit(cache=True)
+def _eval_row(ptrs, row, x, nin, out):
+    """:func:`_eval` of row ``row`` of the pointer table, given the table: a view of the row
+    per call costs its reference counting, about as much as a small kernel."""
+    if ptrs[row, 2] != 0:
+        _ccall(ptrs[row, 2], (x[nin:nin + ptrs[row, 4]], x, ptrs[row, 3]))
+    _ccall(ptrs[row, 0], (out, x, ptrs[row, 1]))
 
 
 @nb.njit(cache=True)
@@ -140,7 +150,25 @@ def _solve(lapack, B, ipiv, nz, r, columns, b, out, ibuf, cbuf):
     for i in range(n):
         out[i] = b[i] / r[i]
     if n <= SMALL:
-        getrs(B, n, ipiv, out, nz)
+        # getrs(B, n, ipiv, out, nz) written out (the same operations in the same order): the
+        # calls cost about half as much as the solve itself at this size
+        for j in range(n):
+            p = ipiv[j]
+            if p != j:
+                tmp = out[j]
+                out[j] = out[p]
+                out[p] = tmp
+        for j in range(n):
+            xj = out[j]
+            for k in range(nz[j], nz[j + 1]):
+                i = nz[k]
+                out[i] -= xj * B[j, i]
+        for j in range(n - 1, -1, -1):
+            xj = out[j] / B[j, j]
+            out[j] = xj
+            for k in range(nz[n + 1 + j], nz[n + 2 + j]):
+                i = nz[k]
+                out[i] -= xj * B[j, i]
     else:
         cbuf[1] = 78         # 'N': no transpose
         ibuf[1] = n          # n, lda = ldb (set here too: a solve never relies on an earlier factor call)
@@ -201,6 +229,10 @@ def _predict(Q, QD, QDD, rconds, times, k, rot, order, g, sec):
     if order >= 2:
         for j in range(n):
             g[j] = g[j] + 0.5 * QDD[k - 1, j] * dt * dt
+        if have_secant and dt0 != 0 and rconds[k - 2] >= RCOND_WARN:
+            c = dt * dt * dt / (6.0 * dt0)
+            for j in range(n):
+                g[j] = g[j] + (QDD[k - 1, j] - QDD[k - 2, j]) * c
     if have_secant and rot.size:
         a = 0.0
         b = 0.0
@@ -214,9 +246,11 @@ def _predict(Q, QD, QDD, rconds, times, k, rot, order, g, sec):
 
 @nb.njit(cache=True)
 def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping, order, rot,
-                Q, QD, QDD, its, rconds):
+                Q, QD, QDD, its, rconds, rprev):
     """The sweep's regular points (see the module docstring); returns ``(k, evaluations)``
-    with ``k`` the first point left to the Python loop."""
+    with ``k`` the first point left to the Python loop. ``rprev`` (n,) receives the row
+    scales of the last solved point's velocity factorisation (the chord of the next point:
+    the Python loop refactorises it from them when it takes over)."""
     n = q0.size
     m = n
     nnz = jr.size
@@ -246,7 +280,10 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
     qn = np.empty(n)
     sec = np.empty(n)
     rhs = np.empty(m)
+    jv = np.empty(nnz)
     evals = 0
+    # B, ipiv, nz hold the previous point's velocity factorisation while have_chord is set
+    have_chord = False
     for k in range(N):
         t = times[k]
         x[0] = t
@@ -260,7 +297,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
             q[j] = g[j]
             x[1 + j] = q[j]
             x[1 + n + j] = 0.0
-        _eval(ptrs[0], x, nin, out_pos)
+        _eval_row(ptrs, 0, x, nin, out_pos)
         e = 1
         for i in range(m):
             F[i] = out_pos[i]
@@ -269,6 +306,9 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
         norm = _scaled_norm(F, r, m)
         it = 0
         ok = False
+        chord = have_chord
+        prev = np.inf                    # scaled residual before the last chord step
+        stale = False                    # J lags q (chord steps): its values are in jv
         while True:
             finite = True
             for i in range(m):
@@ -276,11 +316,45 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
                     finite = False
             if not finite:
                 break
-            if norm <= tol and it > 0:
+            if norm <= tol and it > 0 and (not chord or prev <= tol or it >= maxit):
                 ok = True
                 break
             if it >= maxit:
                 break
+            if chord:
+                # chord step with the previous point's factorisation (_position.solve_position)
+                _solve(lapack, B, ipiv, nz, rprev, columns, F, dq, ibuf, cbuf)
+                for j in range(n):
+                    dq[j] = -dq[j]
+                    qn[j] = q[j] + dq[j]
+                    x[1 + j] = qn[j]
+                _eval_row(ptrs, 0, x, nin, out_pos)
+                e += 1
+                nn = 0.0
+                for i in range(m):
+                    v = abs(out_pos[i] / r[i])
+                    if v > nn:
+                        nn = v
+                if nn <= CHORD_RATE * norm:
+                    for j in range(n):
+                        q[j] = qn[j]
+                    for i in range(m):
+                        F[i] = out_pos[i]
+                    for i in range(nnz):
+                        jv[i] = out_pos[m + i]
+                    stale = True
+                    prev = norm
+                    norm = nn
+                    it += 1
+                    continue
+                if norm <= tol and it > 0:
+                    ok = True            # within tol, and no progress left at this accuracy
+                    break
+                chord = False            # too slow: Newton from q with its own Jacobian
+                have_chord = False       # (B is overwritten)
+            if stale:
+                _assemble(jv, 0, jr, jc, J)
+                stale = False
             if _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, False) < 0:
                 break
             _solve(lapack, B, ipiv, nz, r, columns, F, dq, ibuf, cbuf)
@@ -291,7 +365,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
                 for j in range(n):
                     qn[j] = q[j] + a * dq[j]
                     x[1 + j] = qn[j]
-                _eval(ptrs[0], x, nin, out_pos)
+                _eval_row(ptrs, 0, x, nin, out_pos)
                 e += 1
                 nn = 0.0
                 for i in range(m):
@@ -316,21 +390,30 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
         if order >= 1:
             for j in range(n):
                 x[1 + j] = q[j]
-            _eval(ptrs[1], x, nin, out_vel)
+            _eval_row(ptrs, 1, x, nin, out_vel)
             _assemble(out_vel, 0, jr, jc, J)
             rc = _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, True)
             if rc < 0:
                 return k, evals
+            # the chord of the next point: only from a well-conditioned point (near a toggle
+            # Newton keeps its fresh Jacobian)
+            have_chord = rc >= RCOND_WARN
+            for i in range(m):
+                rprev[i] = r[i]
             for i in range(m):
                 rhs[i] = -out_vel[nnz + i]
-            _solve(lapack, B, ipiv, nz, r, columns, rhs, QD[k], ibuf, cbuf)
+            _solve(lapack, B, ipiv, nz, r, columns, rhs, dq, ibuf, cbuf)
+            for j in range(n):
+                QD[k, j] = dq[j]
             rconds[k] = rc
             e += 1
             if order >= 2:
                 for j in range(n):
-                    x[1 + n + j] = QD[k, j]
-                _eval(ptrs[2], x, nin, out_gam)
-                _solve(lapack, B, ipiv, nz, r, columns, out_gam, QDD[k], ibuf, cbuf)
+                    x[1 + n + j] = dq[j]
+                _eval_row(ptrs, 2, x, nin, out_gam)
+                _solve(lapack, B, ipiv, nz, r, columns, out_gam, dq, ibuf, cbuf)
+                for j in range(n):
+                    QDD[k, j] = dq[j]
                 e += 1
         for j in range(n):
             Q[k, j] = q[j]

@@ -119,13 +119,22 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
         sc, evals = _scaling(system, times[0], q0, p, sparse), 1
     rot = np.flatnonzero(rotation_columns(system))  # indices of angles / Euler parameters
     k0 = 0
+    chord = None    # the previous point's velocity factorisation: Newton's first steps reuse it
     # hooks (pre_solve, post_iterate) run in the Python loop only
     pointers = _jit.plan(system, N, order) if N and hooks is None else None
     if pointers is not None:
         # the regular points in compiled code; the first one needing care is left to the loop below
+        rprev = np.ones(n)
         k0, done = _jit.run(system, pointers, times, q0, p, order, options or PositionOptions(), sc,
-                            rot, Q, QD, QDD, its, rconds)
+                            rot, Q, QD, QDD, its, rconds, rprev)
         evals += done
+        if 0 < k0 < N and order >= 1 and rconds[k0 - 1] >= RCOND_WARN:
+            # the chord the compiled loop had: the same matrix, factorised again (not counted
+            # as an evaluation: the all-Python sweep has it at hand)
+            try:
+                chord = sc.factor(system.jacobian(times[k0 - 1], Q[k0 - 1], p, sparse), rprev)
+            except Singular:
+                chord = None
     for k in range(k0, N):
         t = times[k]
         try:
@@ -133,7 +142,7 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
                 raise Stopped("pre_solve", float(t))
             g = q0 if k == 0 else _predict(Q, QD, QDD, rconds, times, k, rot)
             res = _solve_point(system, t, g, Q[k - 1] if k else None, options, p, sc, rot,
-                               times[k - 1] if k else None, hooks)
+                               times[k - 1] if k else None, hooks, chord)
         except Stopped as exc:
             exc.k = k
             exc.partial = SweepResult(times[:k], Q[:k], None if QD is None else QD[:k],
@@ -141,6 +150,7 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
                                       order, None if rconds is None else rconds[:k])
             raise
         q = res.q
+        chord = None
         its[k] = res.iterations
         evals += res.evaluations
         Q[k] = q
@@ -171,11 +181,14 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
             qd = fac.solve(rhs)
             QD[k] = qd
             rconds[k] = fac.rcond
+            # the next point's chord: only from a well-conditioned point (near a toggle Newton
+            # keeps its fresh Jacobian)
+            chord = fac if fac.rcond >= RCOND_WARN else None
             evals += 1
             if order >= 2:
                 QDD[k] = fac.solve(system.gamma_values(t, q, qd, p))
                 evals += 1
-    if rconds is not None and np.nanmin(rconds, initial=1.0) < RCOND_WARN:
+    if rconds is not None and (rconds < RCOND_WARN).any():    # (NaN: not solved, no warning)
         import warnings
 
         from .._errors import NearSingularWarning
@@ -209,6 +222,10 @@ def _predict(Q, QD, QDD, rconds, times, k: int, rot) -> np.ndarray:
     g = q + QD[k - 1] * dt
     if QDD is not None:
         g = g + 0.5 * QDD[k - 1] * dt * dt
+        if secant is not None and dt0 != 0 and rconds[k - 2] >= RCOND_WARN:
+            # the third derivative from the last two accelerations: an O(dt^4) prediction,
+            # which the first chord step of the position solve takes to near rounding
+            g = g + (QDD[k - 1] - QDD[k - 2]) * (dt * dt * dt / (6.0 * dt0))
     if secant is not None and rot.size:
         qr = q[rot]
         if np.abs(g[rot] - qr).max() > ROTATION_SLACK + 4 * np.abs(secant[rot] - qr).max():
@@ -216,12 +233,16 @@ def _predict(Q, QD, QDD, rconds, times, k: int, rot) -> np.ndarray:
     return g
 
 
-def _solve_point(system, t, g, q_prev, options, p, sc, rot, t_prev=None, hooks=None):
-    """Newton from the prediction ``g``; again from ``q_prev`` when that fails or when the
-    result jumps (a rotational coordinate further than ``ROTATION_JUMP`` from ``g``). At a
-    singular instant after the first point, minimum-norm Gauss-Newton from ``g``
-    (:func:`._rank.continue_position`) continues the branch."""
+def _solve_point(system, t, g, q_prev, options, p, sc, rot, t_prev=None, hooks=None,
+                 chord=None):
+    """Newton from the prediction ``g`` (starting with chord steps on ``chord``, the
+    previous point's factorisation, when given); again from ``q_prev`` (plain Newton) when
+    that fails or when the result jumps (a rotational coordinate further than
+    ``ROTATION_JUMP`` from ``g``). At a singular instant after the first point, minimum-norm
+    Gauss-Newton from ``g`` (:func:`._rank.continue_position`) continues the branch."""
     kw = {} if hooks is None else {"hooks": hooks}  # (the plain call stays as it was)
+    if chord is not None:
+        kw["chord"] = chord
     try:
         res = solve_position(system, t, g, options, p, sc, **kw)
         if q_prev is None or _jump(res.q, g, rot) <= ROTATION_JUMP:
@@ -240,6 +261,7 @@ def _solve_point(system, t, g, q_prev, options, p, sc, rot, t_prev=None, hooks=N
                                       norm, (norm,), sc.rows(J), near)
     # the predictor can throw the guess far away where velocities are huge (near a
     # toggle): start again from the previous position
+    kw.pop("chord", None)
     res = solve_position(system, t, q_prev, options, p, sc, **kw)
     jump = _jump(res.q, q_prev, rot)
     if jump > ROTATION_JUMP:

@@ -55,6 +55,10 @@ class PositionOptions:
 
 _DEFAULT = PositionOptions()
 
+#: a chord step (with a factorisation of an earlier Jacobian, see :func:`solve_position`) is
+#: kept when it reduces the scaled residual at least this much; otherwise Newton takes over
+CHORD_RATE = 0.1
+
 
 @dataclass(frozen=True)
 class PositionResult:
@@ -131,8 +135,21 @@ def describe_singular(system, J, t, q, what: str,
 
 
 def solve_position(system, t: float, guess, options: PositionOptions | None = None,
-                   p=None, scaling: Scaling | None = None, hooks=None) -> PositionResult:
+                   p=None, scaling: Scaling | None = None, hooks=None,
+                   chord=None) -> PositionResult:
     """Solve ``Phi(q, t) = 0`` for ``q`` by damped Newton from ``guess`` (shape ``(n,)``).
+
+    ``chord``: a factorisation (:class:`~mechsys.solvers._linalg.ScaledFactor`) of a nearby
+    Jacobian ``J_c`` (a sweep passes its previous point's). The iteration then starts with
+    chord steps ``q <- q - J_c^-1 Phi(q)``, each kept while it reduces the scaled residual by
+    at least the factor ``CHORD_RATE``; the first one that does not is discarded and damped
+    Newton continues from the last kept iterate with the Jacobian there. A chord step costs
+    an evaluation and a solve, a Newton step also a factorisation and its condition
+    estimate. Close to the solution (a sweep's predictor) a chord step multiplies the error
+    by about ``|J_c^-1 (Phi_q - J_c)|`` where Newton's squares it, so the chord iteration
+    takes one more step once within the tolerance (converged when the step started within
+    it, or when a step from within it makes no progress, or at ``max_iterations``): the
+    solution is then as accurate as Newton's, not merely within ``ftol``.
 
     ``scaling`` (a :class:`~mechsys.solvers._linalg.Scaling`) fixes the unit-free form of
     the equations; by default it is taken at the system's own guess (so a wild starting
@@ -167,6 +184,7 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
     norm = np.abs(F / rows).max() if F.size else 0.0
     history.append(norm)
     it = 0
+    prev = np.inf       # the scaled residual before the last chord step
     while True:
         if not np.all(np.isfinite(F)):
             bad = system.layout.owners_of(np.flatnonzero(~np.isfinite(F)))
@@ -177,10 +195,29 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
                 + ("; check their expressions at this time and the guess" if it == 0 else
                    f" after {it} Newton iteration(s); give a better guess"), time=t,
                 residuals=F.copy(), history=tuple(history))
-        if norm <= tol and it > 0:
+        # a chord step only shrinks the error by a factor where Newton's squares it: after
+        # chord steps one more step is taken from within tol (see the docstring)
+        if norm <= tol and it > 0 and (chord is None or prev <= tol or it >= opt.max_iterations):
             return PositionResult(q, True, 0, "converged", it, evals, norm, tuple(history), rows)
         if it >= opt.max_iterations:
             break
+        if chord is not None:
+            dq = -chord.solve(F)
+            qn = q + dq
+            Fn, Jn = system.residual_and_jacobian(t, qn, p, sparse)
+            evals += 1
+            nn = np.abs(Fn / rows).max() if Fn.size else 0.0
+            if nn <= CHORD_RATE * norm:
+                prev, q, F, J, norm = norm, qn, Fn, Jn, nn
+                it += 1
+                history.append(norm)
+                if post is not None:
+                    _post(post, system, t, it, q, norm, dq)
+                continue
+            if norm <= tol and it > 0:  # within tol, and no progress left at this accuracy
+                return PositionResult(q, True, 0, "converged", it, evals, norm, tuple(history),
+                                      rows)
+            chord = None            # too slow (or not finite): Newton from q with its own J
         try:
             dq = -scaling.factor(J, rows).solve(F)
         except Singular:
@@ -198,11 +235,7 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
         it += 1
         history.append(norm)
         if post is not None:
-            from ._diagnostics import Iteration, Stopped
-
-            if post(Iteration(float(t), it, q.copy(), float(norm), a * dq,
-                              tuple(system.layout.q_names))) is False:
-                raise Stopped("post_iterate", float(t), it)
+            _post(post, system, t, it, q, norm, a * dq)
     from ._diagnostics import diagnose_convergence
 
     diag = diagnose_convergence(system, t, q_start, q, F, rows, scaling, history)
@@ -213,6 +246,15 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
         "Give a better initial guess (add_body(..., guess=...) or guess=), or check that the "
         "mechanism can assemble at this time.",
         time=t, residuals=F.copy(), history=tuple(history), diagnosis=diag)
+
+
+def _post(post, system, t, it, q, norm, step) -> None:
+    """Call the ``post_iterate`` hook; ``Stopped`` when it returns False."""
+    from ._diagnostics import Iteration, Stopped
+
+    if post(Iteration(float(t), it, q.copy(), float(norm), step,
+                      tuple(system.layout.q_names))) is False:
+        raise Stopped("post_iterate", float(t), it)
 
 
 def _residual_table(system, F, rows=None, k: int = 8) -> str:
