@@ -25,10 +25,10 @@ from numba import types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
-from ._jit_lapack import GUARD_MARGIN, gecon1, getrf, getrs, inv_norm_bound, pattern_size
+from ._jit_lapack import GUARD_MARGIN, gecon1, getrf, inv_norm_bound, pattern_size
 from ._kinematics import RCOND_WARN, ROTATION_JUMP, ROTATION_SLACK, ROTATION_START
-from ._position import CHORD_RATE
 from ._linalg import RCOND_MIN
+from ._position import CHORD_RATE
 
 #: up to this many unknowns the LU and condition estimate are computed in the loop
 #: (``_jit_lapack``: LAPACK's algorithms, without the call overhead); above, LAPACK is called
