@@ -96,6 +96,21 @@ def _rows(J, columns, r):
 
 
 @nb.njit(cache=True)
+def _rows_nz(vals, jr, jc, columns, r):
+    """:func:`_rows` from the nonzero values (each position once): the same maxima."""
+    m = r.size
+    for i in range(m):
+        r[i] = 0.0
+    for k in range(jr.size):
+        v = abs(vals[k] * columns[jc[k]])
+        if v > r[jr[k]]:
+            r[jr[k]] = v
+    for i in range(m):
+        if not r[i] > 0:
+            r[i] = 1.0
+
+
+@nb.njit(cache=True)
 def _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, exact):
     """LU of ``R^-1 J D`` into ``B`` (transposed storage); returns its reciprocal condition
     number, or -1 when singular (the Python path's ``Singular``: an exact zero pivot or an
@@ -281,6 +296,12 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
     sec = np.empty(n)
     rhs = np.empty(m)
     jv = np.empty(nnz)
+    seen = np.zeros((m, n), dtype=np.bool_)
+    unique = True                        # no (row, column) twice among the nonzeros
+    for k in range(nnz):
+        if seen[jr[k], jc[k]]:
+            unique = False
+        seen[jr[k], jc[k]] = True
     evals = 0
     # B, ipiv, nz hold the previous point's velocity factorisation while have_chord is set
     have_chord = False
@@ -301,14 +322,22 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
         e = 1
         for i in range(m):
             F[i] = out_pos[i]
-        _assemble(out_pos, m, jr, jc, J)
-        _rows(J, columns, r)
+        # J at q is assembled only when a Newton step needs it (stale: its values are in jv);
+        # the row scales come from the values (the same numbers as from J: no duplicates)
+        for i in range(nnz):
+            jv[i] = out_pos[m + i]
+        stale = True
+        if unique:
+            _rows_nz(jv, jr, jc, columns, r)
+        else:
+            _assemble(jv, 0, jr, jc, J)
+            stale = False
+            _rows(J, columns, r)
         norm = _scaled_norm(F, r, m)
         it = 0
         ok = False
         chord = have_chord
         prev = np.inf                    # scaled residual before the last chord step
-        stale = False                    # J lags q (chord steps): its values are in jv
         while True:
             finite = True
             for i in range(m):
@@ -379,7 +408,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
                 q[j] = qn[j]
             for i in range(m):
                 F[i] = out_pos[i]
-            _assemble(out_pos, m, jr, jc, J)
+            _assemble(out_pos, m, jr, jc, J)      # (a Newton step: J is current)
             norm = nn
             it += 1
         if not ok:
