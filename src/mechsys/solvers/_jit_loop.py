@@ -245,9 +245,18 @@ def _predict(Q, QD, QDD, rconds, times, k, rot, order, g, sec):
         for j in range(n):
             g[j] = g[j] + 0.5 * QDD[k - 1, j] * dt * dt
         if have_secant and dt0 != 0 and rconds[k - 2] >= RCOND_WARN:
-            c = dt * dt * dt / (6.0 * dt0)
-            for j in range(n):
-                g[j] = g[j] + (QDD[k - 1, j] - QDD[k - 2, j]) * c
+            c3 = dt * dt * dt / 6.0
+            dt1 = times[k - 2] - times[k - 3] if k >= 3 else 0.0
+            if dt1 != 0 and dt0 + dt1 != 0 and rconds[k - 3] >= RCOND_WARN:
+                c4 = dt * dt * dt * dt / 12.0
+                for j in range(n):
+                    a = (QDD[k - 1, j] - QDD[k - 2, j]) / dt0
+                    b = (a - (QDD[k - 2, j] - QDD[k - 3, j]) / dt1) / (dt0 + dt1)
+                    g[j] = g[j] + (a + b * dt0) * c3 + b * c4
+            else:
+                for j in range(n):
+                    a = (QDD[k - 1, j] - QDD[k - 2, j]) / dt0
+                    g[j] = g[j] + a * c3
     if have_secant and rot.size:
         a = 0.0
         b = 0.0

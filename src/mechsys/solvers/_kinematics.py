@@ -223,9 +223,17 @@ def _predict(Q, QD, QDD, rconds, times, k: int, rot) -> np.ndarray:
     if QDD is not None:
         g = g + 0.5 * QDD[k - 1] * dt * dt
         if secant is not None and dt0 != 0 and rconds[k - 2] >= RCOND_WARN:
-            # the third derivative from the last two accelerations: an O(dt^4) prediction,
-            # which the first chord step of the position solve takes to near rounding
-            g = g + (QDD[k - 1] - QDD[k - 2]) * (dt * dt * dt / (6.0 * dt0))
+            # the third (and fourth) derivative from the last two (three) accelerations, by
+            # divided differences: an O(dt^4) (O(dt^5)) prediction, close enough for one chord
+            # step of the position solve to reach rounding (decision 0020)
+            a = (QDD[k - 1] - QDD[k - 2]) / dt0
+            c3 = dt * dt * dt / 6.0
+            dt1 = times[k - 2] - times[k - 3] if k >= 3 else 0.0
+            if dt1 != 0 and dt0 + dt1 != 0 and rconds[k - 3] >= RCOND_WARN:
+                b = (a - (QDD[k - 2] - QDD[k - 3]) / dt1) / (dt0 + dt1)
+                g = g + (a + b * dt0) * c3 + b * (dt * dt * dt * dt / 12.0)
+            else:
+                g = g + a * c3
     if secant is not None and rot.size:
         qr = q[rot]
         if np.abs(g[rot] - qr).max() > ROTATION_SLACK + 4 * np.abs(secant[rot] - qr).max():
