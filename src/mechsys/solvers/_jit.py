@@ -14,7 +14,10 @@ algorithms written out in the loop (``_jit_lapack``), above that SciPy's own (th
 The compiled loop handles the regular points. At the first point that needs the Python
 path's care (Newton not converging, a singular or nearly singular Jacobian, a branch jump)
 it stops and returns that point's index; the Python loop takes over from there with its
-whole logic (retries, toggle handling, diagnostics). Results never depend on which path ran.
+whole logic (retries, toggle handling, diagnostics). It factorises the last solved point's
+Jacobian again, with the row scales the compiled loop returns, so that its first position
+solve starts with the same chord steps (decision 0020). Results never depend on which path
+ran.
 
 When it runs (``MECHSYS_JIT``): ``0`` never, ``1`` whenever possible, unset (``auto``) when
 the sweep has at least :data:`AUTO_POINTS` points: loading Numba and the cached machine code
@@ -25,7 +28,8 @@ profiles included), as many equations as coordinates, and a dense system (``n <=
 
 Measured (slider-crank, 1000 points with velocities and accelerations): see
 ``docs/performance.md``, ``docs/decisions/0013-compiled-sweep.md`` and
-``docs/decisions/0019-sweep-lu-structure-and-guard.md``.
+``docs/decisions/0019-sweep-lu-structure-and-guard.md`` and
+``docs/decisions/0020-sweep-chord-steps.md``.
 """
 
 from __future__ import annotations

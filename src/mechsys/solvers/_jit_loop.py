@@ -9,7 +9,9 @@ operations, so that both give the same numbers:
 * ``_factor``        ``Scaling.factor`` -> ``Factor`` (LAPACK dgetrf + dgecon on ``R^-1 J D``;
                      up to ``SMALL`` unknowns their algorithms from ``_jit_lapack``)
 * ``_solve``         ``ScaledFactor.solve``
-* ``_newton``        ``solve_position`` with a given scaling
+* ``_newton``        ``solve_position`` with a given scaling and the previous point's
+                     velocity factorisation as its chord (kept in ``B``, ``ipiv``, ``nz``
+                     with its row scales ``rprev``)
 * ``_predict``       ``_kinematics._predict``
 
 The matrices handed to LAPACK are stored transposed in C order, which is column-major

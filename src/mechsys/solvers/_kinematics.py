@@ -8,7 +8,10 @@ A sweep over times ``t_0 < t_1 < ...`` solves each position by Newton from a pre
 previous point, so it follows one assembly branch:
 
 * the Taylor predictor ``q + qd dt + qdd dt^2 / 2`` (as far as solved) when the previous
-  point is well conditioned (``rcond >= RCOND_WARN``);
+  point is well conditioned (``rcond >= RCOND_WARN``), with ``+ q3 dt^3 / 6 + q4 dt^4 / 24``
+  when the two (three) points before are too: ``q3``, ``q4`` from the divided differences
+  of their accelerations (``a = qdd[k-1, k-2]``, ``b = qdd[k-1, k-2, k-3]``:
+  ``q3 = a + b dt_{k-1}``, ``q4 = 2 b``), an ``O(dt^5)`` prediction;
 * the secant ``q_k + (q_k - q_{k-1}) dt_k / dt_{k-1}`` when it is not (and in location-only
   sweeps, which have no ``qd``): at and next to a
   toggle (lock-up) position ``qd`` and ``qdd`` are undefined or meaningless, and the secant
@@ -19,6 +22,11 @@ previous point, so it follows one assembly branch:
   meaningful there;
 * the secant also replaces a Taylor prediction that moves a rotational coordinate by far
   more than the previous step did (``> ROTATION_SLACK + 4 |secant step|``).
+
+Newton starts with chord steps on the previous point's velocity factorisation when that
+point is well conditioned (:func:`~mechsys.solvers._position.solve_position`, decision 0020):
+at fine sampling the predictor is within the tolerance and one chord step reaches rounding,
+so a regular point factorises its Jacobian once, for the velocity and acceleration.
 
 A point whose solved rotational coordinates lie more than ``ROTATION_JUMP`` (a quarter turn)
 from the prediction is solved again from the previous point; if it still jumps, the sweep
