@@ -348,7 +348,9 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
         it = 0
         ok = False
         chord = have_chord
-        prev = np.inf                    # scaled residual before the last chord step
+        polish = have_chord              # converge to rounding (_position.solve_position)
+        last_chord = True                # B holds the chord (rows rprev), else Newton's (r)
+        prev = np.inf                    # scaled residual before the last step
         while True:
             finite = True
             for i in range(m):
@@ -356,7 +358,31 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
                     finite = False
             if not finite:
                 break
-            if norm <= tol and it > 0 and (not chord or prev <= tol or it >= maxit):
+            if norm <= tol and it > 0:
+                if polish and prev > tol and it < maxit:
+                    # one more step with the last factorisation, kept while within tol
+                    if last_chord:
+                        _solve(lapack, B, ipiv, nz, rprev, columns, F, dq, ibuf, cbuf)
+                    else:
+                        _solve(lapack, B, ipiv, nz, r, columns, F, dq, ibuf, cbuf)
+                    for j in range(n):
+                        dq[j] = -dq[j]
+                        qn[j] = q[j] + dq[j]
+                        x[1 + j] = qn[j]
+                    _eval_row(ptrs, 0, x, nin, out_pos)
+                    e += 1
+                    nn = 0.0
+                    for i in range(m):
+                        v = abs(out_pos[i] / r[i])
+                        if v > nn:
+                            nn = v
+                    if nn <= tol:
+                        for j in range(n):
+                            q[j] = qn[j]
+                        for i in range(m):
+                            F[i] = out_pos[i]
+                        norm = nn
+                        it += 1
                 ok = True
                 break
             if it >= maxit:
@@ -387,14 +413,12 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
                     norm = nn
                     it += 1
                     continue
-                if norm <= tol and it > 0:
-                    ok = True            # within tol, and no progress left at this accuracy
-                    break
-                chord = False            # too slow: Newton from q with its own Jacobian
+                chord = False            # too slow: a Newton step from q with its own Jacobian
                 have_chord = False       # (B is overwritten)
             if stale:
                 _assemble(jv, 0, jr, jc, J)
                 stale = False
+            last_chord = False
             if _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, False) < 0:
                 break
             _solve(lapack, B, ipiv, nz, r, columns, F, dq, ibuf, cbuf)
@@ -420,6 +444,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
             for i in range(m):
                 F[i] = out_pos[i]
             _assemble(out_pos, m, jr, jc, J)      # (a Newton step: J is current)
+            prev = norm
             norm = nn
             it += 1
         if not ok:

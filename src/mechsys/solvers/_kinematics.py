@@ -152,13 +152,9 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
             res = _solve_point(system, t, g, Q[k - 1] if k else None, options, p, sc, rot,
                                times[k - 1] if k else None, hooks, chord)
         except Stopped as exc:
-            exc.k = k
-            exc.partial = SweepResult(times[:k], Q[:k], None if QD is None else QD[:k],
-                                      None if QDD is None else QDD[:k], its[:k], evals,
-                                      order, None if rconds is None else rconds[:k])
-            raise
+            raise _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds) from None
         q = res.q
-        chord = None
+        had_chord, chord = chord is not None, None
         its[k] = res.iterations
         evals += res.evaluations
         Q[k] = q
@@ -168,6 +164,26 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
                 # the position solve's row scales (from the predictor's Jacobian) serve here too
                 fac = sc.factor(J, res.rows)
             except Singular:
+                fac = None
+            if fac is None and had_chord:
+                # chord steps do not factorise the Jacobian, so they can converge at a singular
+                # instant without noticing: solve the point again with Newton alone, which
+                # diagnoses it (and approaches it: the rates below use that)
+                try:
+                    res = _solve_point(system, t, g, Q[k - 1], options, p, sc, rot, times[k - 1],
+                                       hooks)
+                except Stopped as exc:
+                    raise _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds) from None
+                q = res.q
+                its[k] = res.iterations
+                evals += res.evaluations
+                Q[k] = q
+                J, rhs = system.velocity_rhs(t, q, p, sparse)
+                try:
+                    fac = sc.factor(J, res.rows)
+                except Singular:
+                    fac = None
+            if fac is None:
                 if k == 0:
                     err = describe_singular(system, J, t, q, "velocity solve", sc)
                     raise SingularJacobianError(
@@ -210,6 +226,15 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
             "points followed. Solution.extra['rcond'] has the value at every point."),
             stacklevel=3)
     return SweepResult(times, Q, QD, QDD, its, evals, order, rconds)
+
+
+def _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds):
+    """``exc`` (a ``Stopped``) carrying the ``k`` points solved so far."""
+    exc.k = k
+    exc.partial = SweepResult(times[:k], Q[:k], None if QD is None else QD[:k],
+                              None if QDD is None else QDD[:k], its[:k], evals,
+                              order, None if rconds is None else rconds[:k])
+    return exc
 
 
 def _predict(Q, QD, QDD, rconds, times, k: int, rot) -> np.ndarray:

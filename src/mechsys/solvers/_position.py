@@ -56,8 +56,10 @@ class PositionOptions:
 _DEFAULT = PositionOptions()
 
 #: a chord step (with a factorisation of an earlier Jacobian, see :func:`solve_position`) is
-#: kept when it reduces the scaled residual at least this much; otherwise Newton takes over
-CHORD_RATE = 0.1
+#: kept when it reduces the scaled residual at least this much; otherwise Newton takes over.
+#: (At 0.1 a chord took 6-7 steps on a coarse sweep where Newton takes 2-3, and near that
+#: rate rounding decided between a step more or less.)
+CHORD_RATE = 0.01
 
 
 @dataclass(frozen=True)
@@ -146,10 +148,12 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
     Newton continues from the last kept iterate with the Jacobian there. A chord step costs
     an evaluation and a solve, a Newton step also a factorisation and its condition
     estimate. Close to the solution (a sweep's predictor) a chord step multiplies the error
-    by about ``|J_c^-1 (Phi_q - J_c)|`` where Newton's squares it, so the chord iteration
-    takes one more step once within the tolerance (converged when the step started within
-    it, or when a step from within it makes no progress, or at ``max_iterations``): the
-    solution is then as accurate as Newton's, not merely within ``ftol``.
+    by about ``|J_c^-1 (Phi_q - J_c)|`` where Newton's squares it; so that the result is at
+    rounding, not merely within ``ftol``, a solve given a chord converges only after a step
+    that started within the tolerance: when the step that reached it started outside, one
+    more step with the last factorisation (the chord, or Newton's own) is taken, kept while
+    the residual stays within the tolerance (not at ``max_iterations``). Without ``chord`` the
+    iteration is plain damped Newton.
 
     ``scaling`` (a :class:`~mechsys.solvers._linalg.Scaling`) fixes the unit-free form of
     the equations; by default it is taken at the system's own guess (so a wild starting
@@ -184,7 +188,9 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
     norm = np.abs(F / rows).max() if F.size else 0.0
     history.append(norm)
     it = 0
-    prev = np.inf       # the scaled residual before the last chord step
+    polish = chord is not None   # a sweep's solve: converged to rounding, see the docstring
+    last = chord                 # the last factorisation used
+    prev = np.inf                # the scaled residual before the last step
     while True:
         if not np.all(np.isfinite(F)):
             bad = system.layout.owners_of(np.flatnonzero(~np.isfinite(F)))
@@ -195,9 +201,23 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
                 + ("; check their expressions at this time and the guess" if it == 0 else
                    f" after {it} Newton iteration(s); give a better guess"), time=t,
                 residuals=F.copy(), history=tuple(history))
-        # a chord step only shrinks the error by a factor where Newton's squares it: after
-        # chord steps one more step is taken from within tol (see the docstring)
-        if norm <= tol and it > 0 and (chord is None or prev <= tol or it >= opt.max_iterations):
+        if norm <= tol and it > 0:
+            if polish and prev > tol and it < opt.max_iterations:
+                # the step that reached tol started outside it: one more step with the last
+                # factorisation takes the error from within tol to rounding, as Newton's
+                # squaring does from close enough (kept while within tol: at rounding the
+                # residual only scatters, and the count must not depend on that scatter)
+                dq = -last.solve(F)
+                qn = q + dq
+                Fn, Jn = system.residual_and_jacobian(t, qn, p, sparse)
+                evals += 1
+                nn = np.abs(Fn / rows).max() if Fn.size else 0.0
+                if nn <= tol:
+                    q, F, J, norm = qn, Fn, Jn, nn
+                    it += 1
+                    history.append(norm)
+                    if post is not None:
+                        _post(post, system, t, it, q, norm, dq)
             return PositionResult(q, True, 0, "converged", it, evals, norm, tuple(history), rows)
         if it >= opt.max_iterations:
             break
@@ -214,12 +234,10 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
                 if post is not None:
                     _post(post, system, t, it, q, norm, dq)
                 continue
-            if norm <= tol and it > 0:  # within tol, and no progress left at this accuracy
-                return PositionResult(q, True, 0, "converged", it, evals, norm, tuple(history),
-                                      rows)
             chord = None            # too slow (or not finite): Newton from q with its own J
         try:
-            dq = -scaling.factor(J, rows).solve(F)
+            last = scaling.factor(J, rows)
+            dq = -last.solve(F)
         except Singular:
             raise describe_singular(system, J, t, q, "position solve", scaling) from None
         a = 1.0
@@ -231,7 +249,7 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
             if not opt.damping or nn <= (1 - 1e-4 * a) * norm or a < 1e-3 or norm <= tol:
                 break
             a *= 0.5
-        q, F, J, norm = qn, Fn, Jn, nn
+        prev, q, F, J, norm = norm, qn, Fn, Jn, nn
         it += 1
         history.append(norm)
         if post is not None:
