@@ -181,3 +181,30 @@ def test_handover_passes_the_chord(monkeypatch):
         for x, y in ((a.q, plain.q), (a.qd, plain.qd), (a.qdd, plain.qdd)):
             np.testing.assert_allclose(x, y, rtol=0, atol=1e-12)
         np.testing.assert_allclose(a.extra["rcond"], plain.extra["rcond"], rtol=1e-12)
+
+
+def test_singular_instant_found_by_the_chord_is_solved_again_with_newton(monkeypatch):
+    """Chord steps do not factorise the Jacobian, so at a singular instant (a parallelogram
+    chain driven through its flat position, tests/test_singular_free.py) they converge
+    without noticing; the singular velocity factorisation then sends the point back to
+    Newton, which diagnoses and approaches it: the rates there are the continuous motion's."""
+    import sympy as sp
+
+    m = models.n_four_bar(2)
+    m.replace("hold", ms.RotationLock1(m.body("crank0"), sp.pi / 2 - sp.pi / 2 * ms.T))
+    t = np.linspace(0.0, 2.0, 21)
+    calls = []
+    real = _kinematics.solve_position
+
+    def spy(system, tk, *a, **k):
+        calls.append((float(tk), k.get("chord") is not None))
+        return real(system, tk, *a, **k)
+
+    monkeypatch.setattr(_kinematics, "solve_position", spy)
+    monkeypatch.setenv("MECHSYS_JIT", "0")
+    with pytest.warns(ms.NearSingularWarning):
+        sol = m.solve(t)
+    at = [c for tk, c in calls if tk == 1.0]
+    assert at[:2] == [True, False]          # chord first, then Newton alone
+    assert sol.extra["rcond"][10] == 0.0
+    np.testing.assert_allclose(sol.omega("crank1")[10], -np.pi / 2, rtol=0, atol=1e-5)
