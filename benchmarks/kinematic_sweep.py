@@ -199,9 +199,13 @@ of that function (no symbolic derivation).
   The compiled loop runs by default for sweeps of 1000 points or more (`MECHSYS_JIT`, see the
   [guide](guide.md#compiled-sweeps-and-the-kernel-cache)); sparse models (over 150
   coordinates) always use the Python loop.
-* A sweep needs about one Newton iteration per point: the predictor
-  `q + qd dt + qdd dt^2/2` from the previous point lands close to the solution. Each point
-  then costs four calls of compiled functions (residual and Jacobian twice, velocity, gamma).
+* A sweep needs about one iteration per point: the predictor (the Taylor step
+  `q + qd dt + qdd dt^2/2` from the previous point with third- and fourth-derivative terms
+  from the last accelerations) lands within the tolerance at fine sampling, and the position
+  solve starts with chord steps on the previous point's velocity factorisation
+  ([decision 0020](decisions/0020-sweep-chord-steps.md)), so a regular point factorises its
+  Jacobian once. Each point then costs four calls of compiled functions (residual and
+  Jacobian twice, velocity, gamma).
 * For small models the time per point is Python overhead in the solver (assembling,
   factorising and solving with NumPy/SciPy), not equation evaluation, which is a few µs of it;
   the two backends are then equally fast.

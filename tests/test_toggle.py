@@ -90,8 +90,8 @@ def test_whole_turn_jump_is_retried_then_reported(monkeypatch):
     real = _kinematics.solve_position
     calls = []
 
-    def turning(system, tk, g, options=None, p=None, scaling=None, *, every=False):
-        res = real(system, tk, g, options, p, scaling)
+    def turning(system, tk, g, options=None, p=None, scaling=None, chord=None, *, every=False):
+        res = real(system, tk, g, options, p, scaling, chord=chord)
         calls.append(tk)
         i = system.layout.index("crank.th")
         if tk == t[2] and (every or len([c for c in calls if c == tk]) == 1):

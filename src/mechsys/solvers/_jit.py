@@ -14,7 +14,10 @@ algorithms written out in the loop (``_jit_lapack``), above that SciPy's own (th
 The compiled loop handles the regular points. At the first point that needs the Python
 path's care (Newton not converging, a singular or nearly singular Jacobian, a branch jump)
 it stops and returns that point's index; the Python loop takes over from there with its
-whole logic (retries, toggle handling, diagnostics). Results never depend on which path ran.
+whole logic (retries, toggle handling, diagnostics). It factorises the last solved point's
+Jacobian again, with the row scales the compiled loop returns, so that its first position
+solve starts with the same chord steps (decision 0020). Results never depend on which path
+ran.
 
 When it runs (``MECHSYS_JIT``): ``0`` never, ``1`` whenever possible, unset (``auto``) when
 the sweep has at least :data:`AUTO_POINTS` points: loading Numba and the cached machine code
@@ -25,7 +28,8 @@ profiles included), as many equations as coordinates, and a dense system (``n <=
 
 Measured (slider-crank, 1000 points with velocities and accelerations): see
 ``docs/performance.md``, ``docs/decisions/0013-compiled-sweep.md`` and
-``docs/decisions/0019-sweep-lu-structure-and-guard.md``.
+``docs/decisions/0019-sweep-lu-structure-and-guard.md`` and
+``docs/decisions/0020-sweep-chord-steps.md``.
 """
 
 from __future__ import annotations
@@ -120,10 +124,12 @@ def _lapack() -> np.ndarray:
     return _state["lapack"]
 
 
-def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD, its, rconds):
+def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD, its, rconds,
+        rprev):
     """Fill ``Q``, ``QD``, ``QDD``, ``its``, ``rconds`` from point 0 on; return ``(k, evals)``:
     the first point left to the Python loop (``len(times)`` when all are done) and the number
-    of kernel calls made."""
+    of kernel calls made. ``rprev`` (n,) receives the row scales of the last solved point's
+    velocity factorisation (the chord the Python loop continues with)."""
     if _state["loop"] is None:
         from ._jit_loop import sweep_dense
 
@@ -142,7 +148,7 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
                     system.jac_rows.astype(np.int64), system.jac_cols.astype(np.int64),
                     np.ascontiguousarray(scaling.columns, dtype=float), float(tol),
                     int(options.max_iterations), bool(options.damping), int(order),
-                    rot.astype(np.int64), Q, qd_out, qdd_out, its, rc)
+                    rot.astype(np.int64), Q, qd_out, qdd_out, its, rc, rprev)
     return int(k), int(evals)
 
 

@@ -206,13 +206,34 @@ def _inv(AT, n, x, transposed, nz=None):
         else:
             _lower(AT, n, x)
             _upper(AT, n, x)
+    elif transposed:
+        # the loops of _upper_t_nz and _lower_t_nz (and below _lower_nz, _upper_nz) written
+        # out: the same operations in the same order, without a call per triangle (which cost
+        # about as much as the triangle at this size)
+        for j in range(n):
+            s = x[j]
+            for k in range(nz[n + 1 + j], nz[n + 2 + j]):
+                i = nz[k]
+                s -= AT[j, i] * x[i]
+            x[j] = s / AT[j, j]
+        for j in range(n - 1, -1, -1):
+            s = x[j]
+            for k in range(nz[j], nz[j + 1]):
+                i = nz[k]
+                s -= AT[j, i] * x[i]
+            x[j] = s
     else:
-        if transposed:
-            _upper_t_nz(AT, n, x, nz)
-            _lower_t_nz(AT, n, x, nz)
-        else:
-            _lower_nz(AT, n, x, nz)
-            _upper_nz(AT, n, x, nz)
+        for j in range(n):
+            xj = x[j]
+            for k in range(nz[j], nz[j + 1]):
+                i = nz[k]
+                x[i] -= xj * AT[j, i]
+        for j in range(n - 1, -1, -1):
+            xj = x[j] / AT[j, j]
+            x[j] = xj
+            for k in range(nz[n + 1 + j], nz[n + 2 + j]):
+                i = nz[k]
+                x[i] -= xj * AT[j, i]
 
 
 @nb.njit(cache=True)

@@ -9,7 +9,9 @@ operations, so that both give the same numbers:
 * ``_factor``        ``Scaling.factor`` -> ``Factor`` (LAPACK dgetrf + dgecon on ``R^-1 J D``;
                      up to ``SMALL`` unknowns their algorithms from ``_jit_lapack``)
 * ``_solve``         ``ScaledFactor.solve``
-* ``_newton``        ``solve_position`` with a given scaling
+* ``_newton``        ``solve_position`` with a given scaling and the previous point's
+                     velocity factorisation as its chord (kept in ``B``, ``ipiv``, ``nz``
+                     with its row scales ``rprev``)
 * ``_predict``       ``_kinematics._predict``
 
 The matrices handed to LAPACK are stored transposed in C order, which is column-major
@@ -25,9 +27,10 @@ from numba import types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
-from ._jit_lapack import GUARD_MARGIN, gecon1, getrf, getrs, inv_norm_bound, pattern_size
+from ._jit_lapack import GUARD_MARGIN, gecon1, getrf, inv_norm_bound, pattern_size
 from ._kinematics import RCOND_WARN, ROTATION_JUMP, ROTATION_SLACK, ROTATION_START
 from ._linalg import RCOND_MIN
+from ._position import CHORD_RATE
 
 #: up to this many unknowns the LU and condition estimate are computed in the loop
 #: (``_jit_lapack``: LAPACK's algorithms, without the call overhead); above, LAPACK is called
@@ -67,6 +70,15 @@ def _eval(ptr, x, nin, out):
 
 
 @nb.njit(cache=True)
+def _eval_row(ptrs, row, x, nin, out):
+    """:func:`_eval` of row ``row`` of the pointer table, given the table: a view of the row
+    per call costs its reference counting, about as much as a small kernel."""
+    if ptrs[row, 2] != 0:
+        _ccall(ptrs[row, 2], (x[nin:nin + ptrs[row, 4]], x, ptrs[row, 3]))
+    _ccall(ptrs[row, 0], (out, x, ptrs[row, 1]))
+
+
+@nb.njit(cache=True)
 def _assemble(vals, off, jr, jc, J):
     J[:, :] = 0.0
     for k in range(jr.size):
@@ -83,6 +95,21 @@ def _rows(J, columns, r):
             if v > big:
                 big = v
         r[i] = big if big > 0 else 1.0
+
+
+@nb.njit(cache=True)
+def _rows_nz(vals, jr, jc, columns, r):
+    """:func:`_rows` from the nonzero values (each position once): the same maxima."""
+    m = r.size
+    for i in range(m):
+        r[i] = 0.0
+    for k in range(jr.size):
+        v = abs(vals[k] * columns[jc[k]])
+        if v > r[jr[k]]:
+            r[jr[k]] = v
+    for i in range(m):
+        if not r[i] > 0:
+            r[i] = 1.0
 
 
 @nb.njit(cache=True)
@@ -140,7 +167,25 @@ def _solve(lapack, B, ipiv, nz, r, columns, b, out, ibuf, cbuf):
     for i in range(n):
         out[i] = b[i] / r[i]
     if n <= SMALL:
-        getrs(B, n, ipiv, out, nz)
+        # getrs(B, n, ipiv, out, nz) written out (the same operations in the same order): the
+        # calls cost about half as much as the solve itself at this size
+        for j in range(n):
+            p = ipiv[j]
+            if p != j:
+                tmp = out[j]
+                out[j] = out[p]
+                out[p] = tmp
+        for j in range(n):
+            xj = out[j]
+            for k in range(nz[j], nz[j + 1]):
+                i = nz[k]
+                out[i] -= xj * B[j, i]
+        for j in range(n - 1, -1, -1):
+            xj = out[j] / B[j, j]
+            out[j] = xj
+            for k in range(nz[n + 1 + j], nz[n + 2 + j]):
+                i = nz[k]
+                out[i] -= xj * B[j, i]
     else:
         cbuf[1] = 78         # 'N': no transpose
         ibuf[1] = n          # n, lda = ldb (set here too: a solve never relies on an earlier factor call)
@@ -201,6 +246,19 @@ def _predict(Q, QD, QDD, rconds, times, k, rot, order, g, sec):
     if order >= 2:
         for j in range(n):
             g[j] = g[j] + 0.5 * QDD[k - 1, j] * dt * dt
+        if have_secant and dt0 != 0 and rconds[k - 2] >= RCOND_WARN:
+            c3 = dt * dt * dt / 6.0
+            dt1 = times[k - 2] - times[k - 3] if k >= 3 else 0.0
+            if dt1 != 0 and dt0 + dt1 != 0 and rconds[k - 3] >= RCOND_WARN:
+                c4 = dt * dt * dt * dt / 12.0
+                for j in range(n):
+                    a = (QDD[k - 1, j] - QDD[k - 2, j]) / dt0
+                    b = (a - (QDD[k - 2, j] - QDD[k - 3, j]) / dt1) / (dt0 + dt1)
+                    g[j] = g[j] + (a + b * dt0) * c3 + b * c4
+            else:
+                for j in range(n):
+                    a = (QDD[k - 1, j] - QDD[k - 2, j]) / dt0
+                    g[j] = g[j] + a * c3
     if have_secant and rot.size:
         a = 0.0
         b = 0.0
@@ -214,9 +272,11 @@ def _predict(Q, QD, QDD, rconds, times, k, rot, order, g, sec):
 
 @nb.njit(cache=True)
 def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping, order, rot,
-                Q, QD, QDD, its, rconds):
+                Q, QD, QDD, its, rconds, rprev):
     """The sweep's regular points (see the module docstring); returns ``(k, evaluations)``
-    with ``k`` the first point left to the Python loop."""
+    with ``k`` the first point left to the Python loop. ``rprev`` (n,) receives the row
+    scales of the last solved point's velocity factorisation (the chord of the next point:
+    the Python loop refactorises it from them when it takes over)."""
     n = q0.size
     m = n
     nnz = jr.size
@@ -246,7 +306,16 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
     qn = np.empty(n)
     sec = np.empty(n)
     rhs = np.empty(m)
+    jv = np.empty(nnz)
+    seen = np.zeros((m, n), dtype=np.bool_)
+    unique = True                        # no (row, column) twice among the nonzeros
+    for k in range(nnz):
+        if seen[jr[k], jc[k]]:
+            unique = False
+        seen[jr[k], jc[k]] = True
     evals = 0
+    # B, ipiv, nz hold the previous point's velocity factorisation while have_chord is set
+    have_chord = False
     for k in range(N):
         t = times[k]
         x[0] = t
@@ -260,15 +329,28 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
             q[j] = g[j]
             x[1 + j] = q[j]
             x[1 + n + j] = 0.0
-        _eval(ptrs[0], x, nin, out_pos)
+        _eval_row(ptrs, 0, x, nin, out_pos)
         e = 1
         for i in range(m):
             F[i] = out_pos[i]
-        _assemble(out_pos, m, jr, jc, J)
-        _rows(J, columns, r)
+        # J at q is assembled only when a Newton step needs it (stale: its values are in jv);
+        # the row scales come from the values (the same numbers as from J: no duplicates)
+        for i in range(nnz):
+            jv[i] = out_pos[m + i]
+        stale = True
+        if unique:
+            _rows_nz(jv, jr, jc, columns, r)
+        else:
+            _assemble(jv, 0, jr, jc, J)
+            stale = False
+            _rows(J, columns, r)
         norm = _scaled_norm(F, r, m)
         it = 0
         ok = False
+        chord = have_chord
+        polish = have_chord              # converge to rounding (_position.solve_position)
+        last_chord = True                # B holds the chord (rows rprev), else Newton's (r)
+        prev = np.inf                    # scaled residual before the last step
         while True:
             finite = True
             for i in range(m):
@@ -277,10 +359,66 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
             if not finite:
                 break
             if norm <= tol and it > 0:
+                if polish and prev > tol and it < maxit:
+                    # one more step with the last factorisation, kept while within tol
+                    if last_chord:
+                        _solve(lapack, B, ipiv, nz, rprev, columns, F, dq, ibuf, cbuf)
+                    else:
+                        _solve(lapack, B, ipiv, nz, r, columns, F, dq, ibuf, cbuf)
+                    for j in range(n):
+                        dq[j] = -dq[j]
+                        qn[j] = q[j] + dq[j]
+                        x[1 + j] = qn[j]
+                    _eval_row(ptrs, 0, x, nin, out_pos)
+                    e += 1
+                    nn = 0.0
+                    for i in range(m):
+                        v = abs(out_pos[i] / r[i])
+                        if v > nn:
+                            nn = v
+                    if nn <= tol:
+                        for j in range(n):
+                            q[j] = qn[j]
+                        for i in range(m):
+                            F[i] = out_pos[i]
+                        norm = nn
+                        it += 1
                 ok = True
                 break
             if it >= maxit:
                 break
+            if chord:
+                # chord step with the previous point's factorisation (_position.solve_position)
+                _solve(lapack, B, ipiv, nz, rprev, columns, F, dq, ibuf, cbuf)
+                for j in range(n):
+                    dq[j] = -dq[j]
+                    qn[j] = q[j] + dq[j]
+                    x[1 + j] = qn[j]
+                _eval_row(ptrs, 0, x, nin, out_pos)
+                e += 1
+                nn = 0.0
+                for i in range(m):
+                    v = abs(out_pos[i] / r[i])
+                    if v > nn:
+                        nn = v
+                if nn <= CHORD_RATE * norm:
+                    for j in range(n):
+                        q[j] = qn[j]
+                    for i in range(m):
+                        F[i] = out_pos[i]
+                    for i in range(nnz):
+                        jv[i] = out_pos[m + i]
+                    stale = True
+                    prev = norm
+                    norm = nn
+                    it += 1
+                    continue
+                chord = False            # too slow: a Newton step from q with its own Jacobian
+                have_chord = False       # (B is overwritten)
+            if stale:
+                _assemble(jv, 0, jr, jc, J)
+                stale = False
+            last_chord = False
             if _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, False) < 0:
                 break
             _solve(lapack, B, ipiv, nz, r, columns, F, dq, ibuf, cbuf)
@@ -291,7 +429,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
                 for j in range(n):
                     qn[j] = q[j] + a * dq[j]
                     x[1 + j] = qn[j]
-                _eval(ptrs[0], x, nin, out_pos)
+                _eval_row(ptrs, 0, x, nin, out_pos)
                 e += 1
                 nn = 0.0
                 for i in range(m):
@@ -305,7 +443,8 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
                 q[j] = qn[j]
             for i in range(m):
                 F[i] = out_pos[i]
-            _assemble(out_pos, m, jr, jc, J)
+            _assemble(out_pos, m, jr, jc, J)      # (a Newton step: J is current)
+            prev = norm
             norm = nn
             it += 1
         if not ok:
@@ -316,21 +455,30 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
         if order >= 1:
             for j in range(n):
                 x[1 + j] = q[j]
-            _eval(ptrs[1], x, nin, out_vel)
+            _eval_row(ptrs, 1, x, nin, out_vel)
             _assemble(out_vel, 0, jr, jc, J)
             rc = _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, True)
             if rc < 0:
                 return k, evals
+            # the chord of the next point: only from a well-conditioned point (near a toggle
+            # Newton keeps its fresh Jacobian)
+            have_chord = rc >= RCOND_WARN
+            for i in range(m):
+                rprev[i] = r[i]
             for i in range(m):
                 rhs[i] = -out_vel[nnz + i]
-            _solve(lapack, B, ipiv, nz, r, columns, rhs, QD[k], ibuf, cbuf)
+            _solve(lapack, B, ipiv, nz, r, columns, rhs, dq, ibuf, cbuf)
+            for j in range(n):
+                QD[k, j] = dq[j]
             rconds[k] = rc
             e += 1
             if order >= 2:
                 for j in range(n):
-                    x[1 + n + j] = QD[k, j]
-                _eval(ptrs[2], x, nin, out_gam)
-                _solve(lapack, B, ipiv, nz, r, columns, out_gam, QDD[k], ibuf, cbuf)
+                    x[1 + n + j] = dq[j]
+                _eval_row(ptrs, 2, x, nin, out_gam)
+                _solve(lapack, B, ipiv, nz, r, columns, out_gam, dq, ibuf, cbuf)
+                for j in range(n):
+                    QDD[k, j] = dq[j]
                 e += 1
         for j in range(n):
             Q[k, j] = q[j]

@@ -8,7 +8,10 @@ A sweep over times ``t_0 < t_1 < ...`` solves each position by Newton from a pre
 previous point, so it follows one assembly branch:
 
 * the Taylor predictor ``q + qd dt + qdd dt^2 / 2`` (as far as solved) when the previous
-  point is well conditioned (``rcond >= RCOND_WARN``);
+  point is well conditioned (``rcond >= RCOND_WARN``), with ``+ q3 dt^3 / 6 + q4 dt^4 / 24``
+  when the two (three) points before are too: ``q3``, ``q4`` from the divided differences
+  of their accelerations (``a = qdd[k-1, k-2]``, ``b = qdd[k-1, k-2, k-3]``:
+  ``q3 = a + b dt_{k-1}``, ``q4 = 2 b``), an ``O(dt^5)`` prediction;
 * the secant ``q_k + (q_k - q_{k-1}) dt_k / dt_{k-1}`` when it is not (and in location-only
   sweeps, which have no ``qd``): at and next to a
   toggle (lock-up) position ``qd`` and ``qdd`` are undefined or meaningless, and the secant
@@ -19,6 +22,11 @@ previous point, so it follows one assembly branch:
   meaningful there;
 * the secant also replaces a Taylor prediction that moves a rotational coordinate by far
   more than the previous step did (``> ROTATION_SLACK + 4 |secant step|``).
+
+Newton starts with chord steps on the previous point's velocity factorisation when that
+point is well conditioned (:func:`~mechsys.solvers._position.solve_position`, decision 0020):
+at fine sampling the predictor is within the tolerance and one chord step reaches rounding,
+so a regular point factorises its Jacobian once, for the velocity and acceleration.
 
 A point whose solved rotational coordinates lie more than ``ROTATION_JUMP`` (a quarter turn)
 from the prediction is solved again from the previous point; if it still jumps, the sweep
@@ -119,13 +127,22 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
         sc, evals = _scaling(system, times[0], q0, p, sparse), 1
     rot = np.flatnonzero(rotation_columns(system))  # indices of angles / Euler parameters
     k0 = 0
+    chord = None    # the previous point's velocity factorisation: Newton's first steps reuse it
     # hooks (pre_solve, post_iterate) run in the Python loop only
     pointers = _jit.plan(system, N, order) if N and hooks is None else None
     if pointers is not None:
         # the regular points in compiled code; the first one needing care is left to the loop below
+        rprev = np.ones(n)
         k0, done = _jit.run(system, pointers, times, q0, p, order, options or PositionOptions(), sc,
-                            rot, Q, QD, QDD, its, rconds)
+                            rot, Q, QD, QDD, its, rconds, rprev)
         evals += done
+        if 0 < k0 < N and order >= 1 and rconds[k0 - 1] >= RCOND_WARN:
+            # the chord the compiled loop had: the same matrix, factorised again (not counted
+            # as an evaluation: the all-Python sweep has it at hand)
+            try:
+                chord = sc.factor(system.jacobian(times[k0 - 1], Q[k0 - 1], p, sparse), rprev)
+            except Singular:
+                chord = None
     for k in range(k0, N):
         t = times[k]
         try:
@@ -133,14 +150,11 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
                 raise Stopped("pre_solve", float(t))
             g = q0 if k == 0 else _predict(Q, QD, QDD, rconds, times, k, rot)
             res = _solve_point(system, t, g, Q[k - 1] if k else None, options, p, sc, rot,
-                               times[k - 1] if k else None, hooks)
+                               times[k - 1] if k else None, hooks, chord)
         except Stopped as exc:
-            exc.k = k
-            exc.partial = SweepResult(times[:k], Q[:k], None if QD is None else QD[:k],
-                                      None if QDD is None else QDD[:k], its[:k], evals,
-                                      order, None if rconds is None else rconds[:k])
-            raise
+            raise _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds) from None
         q = res.q
+        had_chord, chord = chord is not None, None
         its[k] = res.iterations
         evals += res.evaluations
         Q[k] = q
@@ -150,6 +164,26 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
                 # the position solve's row scales (from the predictor's Jacobian) serve here too
                 fac = sc.factor(J, res.rows)
             except Singular:
+                fac = None
+            if fac is None and had_chord:
+                # chord steps do not factorise the Jacobian, so they can converge at a singular
+                # instant without noticing: solve the point again with Newton alone, which
+                # diagnoses it (and approaches it: the rates below use that)
+                try:
+                    res = _solve_point(system, t, g, Q[k - 1], options, p, sc, rot, times[k - 1],
+                                       hooks)
+                except Stopped as exc:
+                    raise _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds) from None
+                q = res.q
+                its[k] = res.iterations
+                evals += res.evaluations
+                Q[k] = q
+                J, rhs = system.velocity_rhs(t, q, p, sparse)
+                try:
+                    fac = sc.factor(J, res.rows)
+                except Singular:
+                    fac = None
+            if fac is None:
                 if k == 0:
                     err = describe_singular(system, J, t, q, "velocity solve", sc)
                     raise SingularJacobianError(
@@ -171,11 +205,14 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
             qd = fac.solve(rhs)
             QD[k] = qd
             rconds[k] = fac.rcond
+            # the next point's chord: only from a well-conditioned point (near a toggle Newton
+            # keeps its fresh Jacobian)
+            chord = fac if fac.rcond >= RCOND_WARN else None
             evals += 1
             if order >= 2:
                 QDD[k] = fac.solve(system.gamma_values(t, q, qd, p))
                 evals += 1
-    if rconds is not None and np.nanmin(rconds, initial=1.0) < RCOND_WARN:
+    if rconds is not None and (rconds < RCOND_WARN).any():    # (NaN: not solved, no warning)
         import warnings
 
         from .._errors import NearSingularWarning
@@ -189,6 +226,15 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
             "points followed. Solution.extra['rcond'] has the value at every point."),
             stacklevel=3)
     return SweepResult(times, Q, QD, QDD, its, evals, order, rconds)
+
+
+def _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds):
+    """``exc`` (a ``Stopped``) carrying the ``k`` points solved so far."""
+    exc.k = k
+    exc.partial = SweepResult(times[:k], Q[:k], None if QD is None else QD[:k],
+                              None if QDD is None else QDD[:k], its[:k], evals,
+                              order, None if rconds is None else rconds[:k])
+    return exc
 
 
 def _predict(Q, QD, QDD, rconds, times, k: int, rot) -> np.ndarray:
@@ -209,6 +255,18 @@ def _predict(Q, QD, QDD, rconds, times, k: int, rot) -> np.ndarray:
     g = q + QD[k - 1] * dt
     if QDD is not None:
         g = g + 0.5 * QDD[k - 1] * dt * dt
+        if secant is not None and dt0 != 0 and rconds[k - 2] >= RCOND_WARN:
+            # the third (and fourth) derivative from the last two (three) accelerations, by
+            # divided differences: an O(dt^4) (O(dt^5)) prediction, close enough for one chord
+            # step of the position solve to reach rounding (decision 0020)
+            a = (QDD[k - 1] - QDD[k - 2]) / dt0
+            c3 = dt * dt * dt / 6.0
+            dt1 = times[k - 2] - times[k - 3] if k >= 3 else 0.0
+            if dt1 != 0 and dt0 + dt1 != 0 and rconds[k - 3] >= RCOND_WARN:
+                b = (a - (QDD[k - 2] - QDD[k - 3]) / dt1) / (dt0 + dt1)
+                g = g + (a + b * dt0) * c3 + b * (dt * dt * dt * dt / 12.0)
+            else:
+                g = g + a * c3
     if secant is not None and rot.size:
         qr = q[rot]
         if np.abs(g[rot] - qr).max() > ROTATION_SLACK + 4 * np.abs(secant[rot] - qr).max():
@@ -216,12 +274,16 @@ def _predict(Q, QD, QDD, rconds, times, k: int, rot) -> np.ndarray:
     return g
 
 
-def _solve_point(system, t, g, q_prev, options, p, sc, rot, t_prev=None, hooks=None):
-    """Newton from the prediction ``g``; again from ``q_prev`` when that fails or when the
-    result jumps (a rotational coordinate further than ``ROTATION_JUMP`` from ``g``). At a
-    singular instant after the first point, minimum-norm Gauss-Newton from ``g``
-    (:func:`._rank.continue_position`) continues the branch."""
+def _solve_point(system, t, g, q_prev, options, p, sc, rot, t_prev=None, hooks=None,
+                 chord=None):
+    """Newton from the prediction ``g`` (starting with chord steps on ``chord``, the
+    previous point's factorisation, when given); again from ``q_prev`` (plain Newton) when
+    that fails or when the result jumps (a rotational coordinate further than
+    ``ROTATION_JUMP`` from ``g``). At a singular instant after the first point, minimum-norm
+    Gauss-Newton from ``g`` (:func:`._rank.continue_position`) continues the branch."""
     kw = {} if hooks is None else {"hooks": hooks}  # (the plain call stays as it was)
+    if chord is not None:
+        kw["chord"] = chord
     try:
         res = solve_position(system, t, g, options, p, sc, **kw)
         if q_prev is None or _jump(res.q, g, rot) <= ROTATION_JUMP:
@@ -240,6 +302,7 @@ def _solve_point(system, t, g, q_prev, options, p, sc, rot, t_prev=None, hooks=N
                                       norm, (norm,), sc.rows(J), near)
     # the predictor can throw the guess far away where velocities are huge (near a
     # toggle): start again from the previous position
+    kw.pop("chord", None)
     res = solve_position(system, t, q_prev, options, p, sc, **kw)
     jump = _jump(res.q, q_prev, rot)
     if jump > ROTATION_JUMP:

@@ -398,13 +398,23 @@ def _csc(J):
 
 
 def _column_kinds(system) -> tuple[np.ndarray, np.ndarray]:
-    """Per coordinate: is it a body position coordinate; which body (-1: a variable)."""
-    n, dim = system.n, system.space.dim
+    """Per coordinate: is it a body position coordinate; which body (-1: a variable).
+    (Read-only arrays, kept on the system for its layout: every sweep asks twice.)"""
+    n, dim, layout = system.n, system.space.dim, system.layout
+    got = getattr(system, "_column_kinds_of", None)
+    if got is not None and got[0] is layout and got[1] == n and got[2] == dim:
+        return got[3], got[4]
     trans = np.zeros(n, dtype=bool)
     body = np.full(n, -1)
-    for k, sl in enumerate(system.layout.body_slices.values()):
+    for k, sl in enumerate(layout.body_slices.values()):
         body[sl] = k
         trans[sl.start : sl.start + dim] = True
+    trans.setflags(write=False)
+    body.setflags(write=False)
+    try:
+        system._column_kinds_of = (layout, n, dim, trans, body)
+    except (AttributeError, TypeError):  # a frozen or slotted stand-in: no cache
+        pass
     return trans, body
 
 
@@ -416,6 +426,9 @@ def _lever_arm(J, trans: np.ndarray, body: np.ndarray) -> float:
         i, j, v = c.row, c.col, np.abs(c.data)
     else:
         J = np.asarray(J, dtype=float)
+        arm = _lever_arm_dense(J, trans, body)
+        if arm is not None:
+            return arm
         i, j = np.nonzero(J)
         v = np.abs(J[i, j])
     keep = (body[j] >= 0) & np.isfinite(v)
@@ -431,6 +444,50 @@ def _lever_arm(J, trans: np.ndarray, body: np.ndarray) -> float:
     np.maximum.at(rmax, key[~trans[j]], v[~trans[j]])
     ok = (tmax > 0) & (rmax > 0)
     return float((rmax[ok] / tmax[ok]).max()) if ok.any() else 0.0
+
+
+def _lever_arm_dense(J: np.ndarray, trans: np.ndarray, body: np.ndarray) -> float | None:
+    """:func:`_lever_arm` of a dense ``J`` whose bodies' columns are contiguous, each with
+    translational and then rotational ones (every body of a layout): the largest entries per
+    row and column group by one ``maximum.reduceat`` (the general scatter costs several
+    times more). The same maxima and ratios, hence the same value. None when the columns
+    are not so grouped."""
+    groups = _groups(trans, body)
+    if groups is None or J.shape[0] == 0:
+        return None
+    cols, starts = groups
+    A = np.abs(J[:, cols])
+    A[~np.isfinite(A)] = 0.0
+    M = np.maximum.reduceat(A, starts, axis=1)
+    tmax, rmax = M[:, 0::2], M[:, 1::2]
+    ok = (tmax > 0) & (rmax > 0)
+    return float((rmax[ok] / tmax[ok]).max()) if ok.any() else 0.0
+
+
+_GROUPS: dict = {}
+
+
+def _groups(trans: np.ndarray, body: np.ndarray):
+    """``(cols, starts)`` of :func:`_lever_arm_dense` (kept per column layout), or None."""
+    key = (trans.tobytes(), body.tobytes())
+    if key in _GROUPS:
+        return _GROUPS[key]
+    cols = np.flatnonzero(body >= 0)
+    out = None
+    if cols.size:
+        b, tr = body[cols], trans[cols]
+        new = np.ones(cols.size, dtype=bool)
+        new[1:] = (b[1:] != b[:-1]) | (tr[1:] != tr[:-1])
+        starts = np.flatnonzero(new)
+        gb, gt = b[starts], tr[starts]
+        # each body exactly one translational group followed by one rotational group
+        if gb.size % 2 == 0 and np.all(gb[0::2] == gb[1::2]) and np.all(gt[0::2]) \
+                and not np.any(gt[1::2]) and np.unique(gb).size == gb.size // 2:
+            out = (cols, starts)
+    if len(_GROUPS) > 256:
+        _GROUPS.clear()
+    _GROUPS[key] = out
+    return out
 
 
 def rotation_columns(system) -> np.ndarray:
