@@ -34,6 +34,7 @@ import numba as nb
 import numpy as np
 
 from ._jit_borrow import borrow
+from ._jit_cache import check as _check_cache
 from ._jit_lapack import gecon1, getrf, getrs
 from ._jit_loop import SMALL as SMALL_LU
 from ._jit_loop import _assemble, _ccall, _eval, _rows
@@ -42,6 +43,8 @@ from ._jit_tree import assemble as _gen_assemble
 from ._jit_tree import forward as _gen_forward
 from ._linalg import RCOND_MIN
 from ._rank import ZONE
+
+_check_cache()   # stale cached loops go before anything here compiles (see _jit_cache)
 
 FINISHED, CHUNK, HANDOVER = 0, 1, 2
 

@@ -37,6 +37,10 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+from ._jit_cache import check as _check_cache
+
+_check_cache()   # stale cached loops go before anything here compiles (see _jit_cache)
+
 #: :func:`inv_norm_bound` exceeds what ``gecon1`` can compute from the same factors up to a
 #: relative ``(4 n^2 + 8 n + 20) u`` (``n <= 32``: below 5e-13); the compiled sweep's guard
 #: leaves a factor of two (``_jit_loop._factor``)

@@ -27,10 +27,13 @@ from numba import types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
+from ._jit_cache import check as _check_cache
 from ._jit_lapack import GUARD_MARGIN, gecon1, getrf, inv_norm_bound, pattern_size
 from ._kinematics import RCOND_WARN, ROTATION_JUMP, ROTATION_SLACK, ROTATION_START
 from ._linalg import RCOND_MIN
 from ._position import CHORD_RATE
+
+_check_cache()   # stale cached loops go before anything here compiles (see _jit_cache)
 
 #: up to this many unknowns the LU and condition estimate are computed in the loop
 #: (``_jit_lapack``: LAPACK's algorithms, without the call overhead); above, LAPACK is called

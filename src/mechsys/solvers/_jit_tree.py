@@ -8,8 +8,11 @@ from __future__ import annotations
 
 import numba as nb
 
+from ._jit_cache import check as _check_cache
 from ._jit_loop import _ccall
 from ._tree import _articulated, _assemble, _fill, _unpack
+
+_check_cache()   # stale cached loops go before anything here compiles (see _jit_cache)
 
 _fill_nb = nb.njit(cache=True)(_fill)
 _unpack_nb = nb.njit(cache=True)(_unpack)

@@ -1,0 +1,62 @@
+"""Keeps Numba's on-disk cache of the compiled loops consistent with their sources.
+
+Numba keys a cached function on the timestamp of its own source file only. The loops call,
+inline or link code from other modules (``_jit_lapack``, ``_jit_borrow``, ``_tree``) and bake
+in constants from others (``RCOND_MIN``, ``ZONE``), so an edit there leaves a loop compiled
+from the old code in the cache, and it would be loaded as if current: a silent wrong
+answer. At the first import of a loop module, :func:`check` hashes the sources of the
+``solvers`` package; when the hash differs from the one stored beside the cache, the cached
+loops are deleted and compile again on first use (about two minutes for all of them).
+
+Only the cache beside the sources (``solvers/__pycache__``, where Numba writes it for a
+checkout or a writable install) is managed; an installed copy's files change their
+timestamps when reinstalled, which Numba's own check sees.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+_HERE = Path(__file__).resolve().parent
+_STAMP = "mechsys-jit-sources.sha256"
+_done: dict = {}
+
+
+def sources_digest(directory: Path) -> str:
+    """SHA-256 over the names and contents of the ``*.py`` files of ``directory``."""
+    h = hashlib.sha256()
+    for path in sorted(directory.glob("*.py")):
+        h.update(path.name.encode())
+        h.update(path.read_bytes())
+    return h.hexdigest()
+
+
+def sync(directory: Path) -> bool:
+    """Delete the cached Numba functions (``*.nbi``, ``*.nbc``) of ``directory/__pycache__``
+    unless they were made from the current sources (the stored digest); returns True when
+    it deleted. A directory that cannot be written is left alone (Numba then caches
+    elsewhere)."""
+    cache = directory / "__pycache__"
+    digest = sources_digest(directory)
+    stamp = cache / _STAMP
+    try:
+        if stamp.is_file() and stamp.read_text().strip() == digest:
+            return False
+        stale = list(cache.glob("*.nb[ic]")) if cache.is_dir() else []
+        for p in stale:
+            p.unlink(missing_ok=True)
+        cache.mkdir(exist_ok=True)
+        stamp.write_text(digest + "\n")
+        return bool(stale)
+    except OSError:
+        return False
+
+
+def check() -> None:
+    """:func:`sync` of the ``solvers`` package, once per process (before any loop compiles)."""
+    if not _done:
+        _done["deleted"] = sync(_HERE)
+
+
+__all__ = ["check", "sources_digest", "sync"]
