@@ -37,7 +37,7 @@ from ._jit_borrow import borrow
 from ._jit_cache import check as _check_cache
 from ._jit_lapack import gecon1, getrf, getrs
 from ._jit_loop import SMALL as SMALL_LU
-from ._jit_loop import _assemble, _ccall, _eval, _rows
+from ._jit_loop import _assemble, _ccall, _eval, _rows, _rows_nz
 from ._jit_tree import articulated as _articulated
 from ._jit_tree import assemble as _gen_assemble
 from ._jit_tree import forward as _gen_forward
@@ -997,20 +997,6 @@ def _band_solve(Sb, m, bw, x):
 
 
 @nb.njit(cache=True)
-def _rows_sparse(vals, j0, jr, jc, columns, m, r):
-    """``Scaling.rows`` from the Jacobian's nonzero values ``vals[j0:]``."""
-    for i in range(m):
-        r[i] = 0.0
-    for k in range(jr.size):
-        v = abs(vals[j0 + k] * columns[jc[k]])
-        if v > r[jr[k]]:
-            r[jr[k]] = v
-    for i in range(m):
-        if not r[i] > 0:
-            r[i] = 1.0
-
-
-@nb.njit(cache=True)
 def _fill_rows(vals, j0, jpos, Jst, scale_rows, r, columns, jc, jr):
     """Per (row, block) segments of ``J`` (or of ``R^-1 J D`` with ``scale_rows``)."""
     Jst[:] = 0.0
@@ -1150,7 +1136,7 @@ def _project_blocks(pp, pv, xk, nin_k, out_pos, out_vel, jr, jc, columns, offset
         for j in range(n):
             xk[1 + j] = y[j]
         _evalx(pp, xk, nin_k, out_pos, ex[1], ph[1])
-        _rows_sparse(out_pos, m, jr, jc, columns, m, r)
+        _rows_nz(out_pos[m:], jr, jc, columns, r)
         big = 0.0
         for i in range(m):
             Fs[i] = out_pos[i] / r[i]
@@ -1168,7 +1154,7 @@ def _project_blocks(pp, pv, xk, nin_k, out_pos, out_vel, jr, jc, columns, offset
         xk[1 + j] = y[j]
     _evalx(pv, xk, nin_k, out_vel, ex[2], ph[2])
     nnz = jr.size
-    _rows_sparse(out_vel, 0, jr, jc, columns, m, r)
+    _rows_nz(out_vel, jr, jc, columns, r)
     for i in range(m):
         Fs[i] = out_vel[nnz + i]          # J qd - (-Phi_t), accumulated below
     for k in range(nnz):
