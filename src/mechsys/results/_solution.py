@@ -14,6 +14,7 @@ import numpy as np
 import sympy as sp
 
 from .._errors import MechError, ModelError
+from ._extra import Extra
 from ._linkage import LinkageOutputs
 from ._load_outputs import LoadOutputs
 from ._momentum import MomentumOutputs
@@ -31,8 +32,9 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Lin
     * ``system`` the compiled System; ``model`` the Model (for symbolic outputs);
     * ``iterations`` (N,) Newton iterations per point; ``evaluations`` compiled-function calls;
     * ``success``, ``status``, ``message`` the outcome (a failed solve raises instead);
-    * ``extra`` more per-point data, e.g. ``"rcond"``, and with switches ``"stages"``
-      (``{switch name: (N,) stage numbers}``, read with :meth:`stage`).
+    * ``extra`` more per-point data (a ``dict``), e.g. ``"rcond"`` (N,) the reciprocal
+      condition estimate of the scaled ``Phi_q`` (computed when first read), and with
+      switches ``"stages"`` (``{switch name: (N,) stage numbers}``, read with :meth:`stage`).
     """
 
     t: np.ndarray
@@ -58,7 +60,12 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Lin
         for a in (res.q, res.qd, res.qdd, lam):
             if a is not None:
                 a.setflags(write=False)
-        extra = {} if getattr(res, "rcond", None) is None else {"rcond": res.rcond}
+        if getattr(res, "rcond_pending", False):
+            # computed when first read (a compiled sweep's regular points: decision 0023)
+            extra = Extra(deferred={"rcond": lambda: res.rcond})
+        else:
+            rc = getattr(res, "rcond", None)
+            extra = Extra() if rc is None else Extra({"rcond": rc})
         return cls(t=res.t, q=res.q, qd=res.qd, qdd=res.qdd, p=np.asarray(p), system=system,
                    model=model, iterations=res.iterations, evaluations=res.evaluations,
                    scalar=scalar, lam=lam, mode=mode, extra=extra)

@@ -45,7 +45,8 @@ from ._linalg import RCOND_MIN, SPARSE_THRESHOLD
 #: ``auto``: the compiled loop is used for sweeps of at least this many points
 AUTO_POINTS = 1000
 
-_state: dict = {"loaded": False, "loop": None, "lapack": None, "failed": None}
+_PLANS: dict = {}    # plan(): kernel ids -> (kernels, pointer table)
+_state: dict = {"loaded": False, "loop": None, "fill": None, "lapack": None, "failed": None}
 
 
 def mode() -> str:
@@ -96,13 +97,28 @@ def plan(system, points: int, order: int):
         kernels.append(system.f_velocity)
     if order >= 2:
         kernels.append(system.f_gamma)
+    # kept per kernel objects, which the entry holds (their entry points live as long as they
+    # do; not on the system: a pickled copy must not carry another process's addresses)
+    key = tuple(id(k) for k in kernels)
+    got = _PLANS.get(key)
+    if got is not None and all(a is b for a, b in zip(got[0], kernels)):
+        return got[1]
     ptrs = [_pointer(k) for k in kernels]
     if any(p is None for p in ptrs):
         return None
     while len(ptrs) < 3:
         ptrs.append((0, 0, 0, 0, 0))
     # one row per kernel: address, context, first-stage address, its context, Piecewise values
-    return np.array(ptrs, dtype=np.int64)
+    table = np.array(ptrs, dtype=np.int64)
+    if len(_PLANS) >= 64:
+        _PLANS.clear()
+    _PLANS[key] = (tuple(kernels), table)
+    return table
+
+
+def _index(a) -> np.ndarray:
+    """``a`` as int64 (no copy when it is already)."""
+    return np.asarray(a, dtype=np.int64)
 
 
 def _capsule_address(capsule) -> int:
@@ -125,11 +141,14 @@ def _lapack() -> np.ndarray:
 
 
 def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD, its, rconds,
-        rprev):
+        rprev, R=None):
     """Fill ``Q``, ``QD``, ``QDD``, ``its``, ``rconds`` from point 0 on; return ``(k, evals)``:
     the first point left to the Python loop (``len(times)`` when all are done) and the number
     of kernel calls made. ``rprev`` (n,) receives the row scales of the last solved point's
-    velocity factorisation (the chord the Python loop continues with)."""
+    velocity factorisation (the chord the Python loop continues with). ``R`` (N, n): when
+    given, a point whose condition estimate is proven to be at least ``RCOND_WARN`` gets
+    ``RCOND_PENDING`` in ``rconds`` and its row scales in ``R``, for :func:`rcond_filler`
+    (decision 0023); None: every estimate is computed in the loop."""
     if _state["loop"] is None:
         from ._jit_loop import sweep_dense
 
@@ -141,15 +160,41 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
     qd_out = QD if QD is not None else dummy
     qdd_out = QDD if QDD is not None else dummy
     rc = rconds if rconds is not None else np.full(len(times), np.nan)
+    lazy = R is not None
     tol = options.ftol * (1.0 + scaling.offset)
     k, evals = loop(pointers, _lapack(), np.ascontiguousarray(times, dtype=float),
                     np.ascontiguousarray(q0, dtype=float),
                     np.ascontiguousarray(system.p_values if p is None else p, dtype=float),
-                    system.jac_rows.astype(np.int64), system.jac_cols.astype(np.int64),
+                    _index(system.jac_rows), _index(system.jac_cols),
                     np.ascontiguousarray(scaling.columns, dtype=float), float(tol),
                     int(options.max_iterations), bool(options.damping), int(order),
-                    rot.astype(np.int64), Q, qd_out, qdd_out, its, rc, rprev)
+                    _index(rot), Q, qd_out, qdd_out, its, rc, rprev, lazy,
+                    R if lazy else dummy)
     return int(k), int(evals)
 
 
-__all__ = ["AUTO_POINTS", "RCOND_MIN", "available", "mode", "plan", "run"]
+def rcond_filler(system, pointers, times, Q, p, scaling, R):
+    """A function ``fill(rconds)`` computing in place the estimates :func:`run` left
+    ``RCOND_PENDING`` (``rconds`` may be a leading part of the sweep's): the same numbers the
+    loop computes when it is not lazy (``_jit_loop.fill_rconds``)."""
+    if _state["fill"] is None:
+        from ._jit_loop import fill_rconds
+
+        _state["fill"] = fill_rconds
+    fill_rconds = _state["fill"]
+    args = (pointers, _lapack(), np.ascontiguousarray(times, dtype=float), Q,
+            np.ascontiguousarray(system.p_values if p is None else p, dtype=float),
+            _index(system.jac_rows), _index(system.jac_cols),
+            np.ascontiguousarray(scaling.columns, dtype=float), R)
+    def fill(rconds: np.ndarray) -> None:
+        k = len(rconds)
+        bad = fill_rconds(*args[:3], args[3][:k], *args[4:8], args[8][:k], rconds)
+        if bad:
+            raise RuntimeError(f"mechsys internal error: {bad} condition estimate(s) of a compiled "
+                               "sweep proven regular came out singular; please report it")
+
+    fill.kernel = system.f_velocity    # the pointer in ``pointers`` is valid while it lives
+    return fill
+
+
+__all__ = ["AUTO_POINTS", "RCOND_MIN", "available", "mode", "plan", "rcond_filler", "run"]

@@ -13,6 +13,8 @@ operations, so that both give the same numbers:
                      velocity factorisation as its chord (kept in ``B``, ``ipiv``, ``nz``
                      with its row scales ``rprev``)
 * ``_predict``       ``_kinematics._predict``
+* ``fill_rconds``    the condition estimates the loop proved regular and left for later
+                     (``SweepResult.rcond``, decision 0023)
 
 The matrices handed to LAPACK are stored transposed in C order, which is column-major
 (Fortran) order of the matrix itself.
@@ -29,7 +31,7 @@ from numba.extending import intrinsic
 
 from ._jit_cache import check as _check_cache
 from ._jit_lapack import GUARD_MARGIN, gecon1, getrf, inv_norm_bound, pattern_size
-from ._kinematics import RCOND_WARN, ROTATION_JUMP, ROTATION_SLACK, ROTATION_START
+from ._kinematics import RCOND_PENDING, RCOND_WARN, ROTATION_JUMP, ROTATION_SLACK, ROTATION_START
 from ._linalg import RCOND_MIN
 from ._position import CHORD_RATE
 
@@ -116,16 +118,18 @@ def _rows_nz(vals, jr, jc, columns, r):
 
 
 @nb.njit(cache=True)
-def _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, exact):
+def _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, guard):
     """LU of ``R^-1 J D`` into ``B`` (transposed storage); returns its reciprocal condition
     number, or -1 when singular (the Python path's ``Singular``: an exact zero pivot or an
     estimate below ``RCOND_MIN``).
 
-    ``exact`` False (Newton's steps, where only that decision matters): up to ``SMALL``
-    unknowns, when :func:`inv_norm_bound` proves that the estimate cannot fall below
-    ``RCOND_MIN`` it is not computed, and ``RCOND_MIN`` (a lower bound) is returned. The
-    decision is the estimate's own: the bound exceeds anything ``gecon1`` can compute from
-    these factors (``_jit_lapack.inv_norm_bound``), with a margin of ``1 / GUARD_MARGIN``."""
+    ``guard`` > 0 (up to ``SMALL`` unknowns): when :func:`inv_norm_bound` proves that the
+    estimate is at least ``guard`` it is not computed and ``RCOND_PENDING`` (``inf``) is
+    returned. Newton's steps pass ``RCOND_MIN`` (only "singular or not" matters there), the
+    sweep's velocity factorisation ``RCOND_WARN`` (its estimate is computed later, on
+    demand: :func:`fill_rconds`). The decision is the estimate's own: the bound exceeds
+    anything ``gecon1`` can compute from these factors (``_jit_lapack.inv_norm_bound``),
+    with a margin of ``1 / GUARD_MARGIN``. ``guard`` 0: the estimate, always."""
     n = J.shape[0]
     for i in range(n):
         inv = 1.0 / r[i]
@@ -142,8 +146,8 @@ def _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, e
         # LAPACK's algorithms written out (_jit_lapack): the calls' overhead dominated
         if getrf(B, n, ipiv, nz) > 0 or anorm == 0:
             return -1.0
-        if not exact and anorm * inv_norm_bound(B, n, nz, work) <= GUARD_MARGIN / RCOND_MIN:
-            return RCOND_MIN
+        if guard > 0 and anorm * inv_norm_bound(B, n, nz, work) <= GUARD_MARGIN / guard:
+            return RCOND_PENDING
         rcond = gecon1(B, n, anorm, work, work[n:], nz)
     else:
         ibuf[0] = n          # m, n, lda
@@ -275,11 +279,14 @@ def _predict(Q, QD, QDD, rconds, times, k, rot, order, g, sec):
 
 @nb.njit(cache=True)
 def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping, order, rot,
-                Q, QD, QDD, its, rconds, rprev):
+                Q, QD, QDD, its, rconds, rprev, lazy, R):
     """The sweep's regular points (see the module docstring); returns ``(k, evaluations)``
     with ``k`` the first point left to the Python loop. ``rprev`` (n,) receives the row
     scales of the last solved point's velocity factorisation (the chord of the next point:
-    the Python loop refactorises it from them when it takes over)."""
+    the Python loop refactorises it from them when it takes over). ``lazy``: a point whose
+    condition estimate is proven to be at least ``RCOND_WARN`` gets ``RCOND_PENDING`` in
+    ``rconds`` and its velocity factorisation's row scales in ``R`` (N, n), from which
+    :func:`fill_rconds` computes the estimate when it is asked for (decision 0023)."""
     n = q0.size
     m = n
     nnz = jr.size
@@ -424,7 +431,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
                 _assemble(jv, 0, jr, jc, J)
                 stale = False
             last_chord = False
-            if _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, False) < 0:
+            if _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, RCOND_MIN) < 0:
                 break
             _solve(lapack, B, ipiv, nz, r, columns, F, dq, ibuf, cbuf)
             for j in range(n):
@@ -462,9 +469,13 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
                 x[1 + j] = q[j]
             _eval_row(ptrs, 1, x, nin, out_vel)
             _assemble(out_vel, 0, jr, jc, J)
-            rc = _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, True)
+            rc = _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork,
+                         RCOND_WARN if lazy else 0.0)
             if rc < 0:
                 return k, evals
+            if rc == RCOND_PENDING:
+                for i in range(m):
+                    R[k, i] = r[i]
             # the chord of the next point: only from a well-conditioned point (near a toggle
             # Newton keeps its fresh Jacobian)
             have_chord = rc >= RCOND_WARN
@@ -490,3 +501,47 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
         its[k] = it
         evals += e
     return N, evals
+
+
+@nb.njit(cache=True)
+def fill_rconds(ptrs, lapack, times, Q, p, jr, jc, columns, R, rconds):
+    """The condition estimates :func:`sweep_dense` left ``RCOND_PENDING``: each point's
+    velocity factorisation made again, from the same Jacobian (``f_velocity`` at ``Q[k]``)
+    and row scales ``R[k]`` with the same code, so the same number as the loop would have
+    computed. Returns the number of points found singular (none can be: their bound proved
+    the estimate to be at least ``RCOND_WARN``)."""
+    n = Q.shape[1]
+    m = n
+    nnz = jr.size
+    npar = p.size
+    nin = 1 + 2 * n + npar
+    x = np.zeros(nin + ptrs[1, 4])
+    for j in range(npar):
+        x[1 + 2 * n + j] = p[j]
+    out_vel = np.empty(nnz + m)
+    J = np.empty((m, n))
+    B = np.empty((n, n))
+    ipiv = np.empty(n, dtype=np.int32)
+    nz = np.empty(pattern_size(n), dtype=np.int32)
+    ibuf = np.zeros(5, dtype=np.int32)
+    cbuf = np.zeros(2, dtype=np.uint8)
+    dbuf = np.zeros(2)
+    work = np.empty(4 * n)
+    iwork = np.empty(n, dtype=np.int32)
+    r = np.empty(m)
+    bad = 0
+    for k in range(rconds.size):
+        if rconds[k] != RCOND_PENDING:
+            continue
+        x[0] = times[k]
+        for j in range(n):
+            x[1 + j] = Q[k, j]
+        for i in range(m):
+            r[i] = R[k, i]
+        _eval_row(ptrs, 1, x, nin, out_vel)
+        _assemble(out_vel, 0, jr, jc, J)
+        rc = _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, 0.0)
+        if rc < 0:
+            bad += 1
+        rconds[k] = rc
+    return bad

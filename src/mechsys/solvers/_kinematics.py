@@ -36,7 +36,8 @@ turns. Points below ``RCOND_WARN`` raise one :class:`NearSingularWarning` naming
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sps
@@ -53,6 +54,9 @@ ORDERS = {"location": 0, "velocity": 1, "acceleration": 2}
 #: below this reciprocal condition number of the scaled Phi_q a sweep warns (near a toggle
 #: position) and does not trust qd, qdd in its predictor
 RCOND_WARN = 1e-6
+#: in a compiled sweep's ``rconds``: an estimate proven to be at least ``RCOND_WARN`` and not
+#: computed yet (``SweepResult.rcond`` computes it when asked: decision 0023)
+RCOND_PENDING = np.inf
 #: largest distance (rad) of a solved rotational coordinate from its prediction
 ROTATION_JUMP = np.pi / 2
 #: largest rotation (rad) of the first predictor step when the sweep starts near a toggle
@@ -92,7 +96,13 @@ def solve_acceleration(system, t: float, q, qd, p=None, J=None,
 @dataclass(frozen=True)
 class SweepResult:
     """Raw arrays of a sweep: t (N,), q/qd/qdd (N, n) (None when not solved),
-    iterations (N,) Newton iterations per point, evaluations (total function calls)."""
+    iterations (N,) Newton iterations per point, evaluations (total function calls),
+    ``rcond`` (N,) the velocity factorisation's reciprocal condition estimate per point
+    (None below ``order`` 1).
+
+    ``rcond_raw`` may hold ``RCOND_PENDING`` entries (a compiled sweep proved them to be at
+    least ``RCOND_WARN`` and left them for later); ``fill(rcond_raw)`` computes them in
+    place. Reading ``rcond`` does that first: the estimate is computed once, on demand."""
 
     t: np.ndarray
     q: np.ndarray
@@ -101,7 +111,20 @@ class SweepResult:
     iterations: np.ndarray
     evaluations: int
     order: int
-    rcond: np.ndarray | None = None
+    rcond_raw: np.ndarray | None = None
+    fill: Callable[[np.ndarray], None] | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def rcond(self) -> np.ndarray | None:
+        if self.fill is not None:
+            self.fill(self.rcond_raw)
+            object.__setattr__(self, "fill", None)     # (frozen: the estimates are final now)
+        return self.rcond_raw
+
+    @property
+    def rcond_pending(self) -> bool:
+        """Whether reading ``rcond`` still has estimates to compute."""
+        return self.fill is not None
 
 
 def sweep(system, times, guess, order: int = 2, options: PositionOptions | None = None,
@@ -130,11 +153,15 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
     chord = None    # the previous point's velocity factorisation: Newton's first steps reuse it
     # hooks (pre_solve, post_iterate) run in the Python loop only
     pointers = _jit.plan(system, N, order) if N and hooks is None else None
+    fill = None
     if pointers is not None:
         # the regular points in compiled code; the first one needing care is left to the loop below
         rprev = np.ones(n)
+        R = np.empty((N, n)) if order >= 1 else None   # row scales of the pending estimates
         k0, done = _jit.run(system, pointers, times, q0, p, order, options or PositionOptions(), sc,
-                            rot, Q, QD, QDD, its, rconds, rprev)
+                            rot, Q, QD, QDD, its, rconds, rprev, R)
+        if order >= 1 and (rconds[:k0] == RCOND_PENDING).any():
+            fill = _jit.rcond_filler(system, pointers, times, Q, p, sc, R)
         evals += done
         if 0 < k0 < N and order >= 1 and rconds[k0 - 1] >= RCOND_WARN:
             # the chord the compiled loop had: the same matrix, factorised again (not counted
@@ -152,7 +179,7 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
             res = _solve_point(system, t, g, Q[k - 1] if k else None, options, p, sc, rot,
                                times[k - 1] if k else None, hooks, chord)
         except Stopped as exc:
-            raise _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds) from None
+            raise _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds, fill) from None
         q = res.q
         had_chord, chord = chord is not None, None
         its[k] = res.iterations
@@ -173,7 +200,8 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
                     res = _solve_point(system, t, g, Q[k - 1], options, p, sc, rot, times[k - 1],
                                        hooks)
                 except Stopped as exc:
-                    raise _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds) from None
+                    raise _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds,
+                                   fill) from None
                 q = res.q
                 its[k] = res.iterations
                 evals += res.evaluations
@@ -225,15 +253,15 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
             "and sensitive, and the sweep continued through it on the branch its previous "
             "points followed. Solution.extra['rcond'] has the value at every point."),
             stacklevel=3)
-    return SweepResult(times, Q, QD, QDD, its, evals, order, rconds)
+    return SweepResult(times, Q, QD, QDD, its, evals, order, rconds, fill)
 
 
-def _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds):
+def _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds, fill=None):
     """``exc`` (a ``Stopped``) carrying the ``k`` points solved so far."""
     exc.k = k
     exc.partial = SweepResult(times[:k], Q[:k], None if QD is None else QD[:k],
                               None if QDD is None else QDD[:k], its[:k], evals,
-                              order, None if rconds is None else rconds[:k])
+                              order, None if rconds is None else rconds[:k], fill)
     return exc
 
 
