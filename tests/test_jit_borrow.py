@@ -84,3 +84,44 @@ def test_free_stepper_workspace_carries_no_state_between_chunks(monkeypatch):
         assert cut.extra["compiled_steps"] == whole.extra["compiled_steps"]
         for a, b in ((whole.q, cut.q), (whole.qd, cut.qd), (whole.lam, cut.lam)):
             assert np.array_equal(a, b)
+
+
+def test_a_reused_workspace_carries_nothing_from_the_last_run():
+    """Steppers of the same system take over the last one's work arrays once its run is
+    over (``_jit_free._workspace``): a run after another with other initial conditions and
+    options is bit-identical to the same run first, and a stepper still alive keeps its own."""
+    import gc
+
+    from mechsys import models
+    from mechsys.solvers import _jit_free
+
+    m = models.pendulum_chain(3, 9.81)
+    m.solve(0.0)
+    free = m.free(drop=["lock0", "lock1", "lock2"])
+    for method, opts in (("dop853", {"rtol": 1e-9, "atol": 1e-11}),
+                         ("adams", {"max_error": 1e-6})):
+        first = free.simulate((0.0, 0.5), method=method, **opts)
+        other = free.simulate((0.0, 0.3), method="dop853", rtol=1e-5, atol=1e-7,
+                              initial_condition={"l0.th": 0.4, "l1.th": -0.2, "l2.th": 0.1})
+        assert not np.array_equal(other.q[-1], first.q[-1])
+        gc.collect()
+        again = free.simulate((0.0, 0.5), method=method, **opts)
+        assert again.extra["compiled_steps"] == first.extra["compiled_steps"] > 0
+        for a, b in ((first.q, again.q), (first.qd, again.qd), (first.lam, again.lam)):
+            assert np.array_equal(a, b)
+    s = free.system
+    steppers = []
+    orig = _jit_free.FreeStepper.__init__
+
+    def keep(self, *a, **k):
+        orig(self, *a, **k)
+        steppers.append(self)
+
+    _jit_free.FreeStepper.__init__ = keep
+    try:
+        free.simulate((0.0, 0.1))
+        free.simulate((0.0, 0.1))
+    finally:
+        _jit_free.FreeStepper.__init__ = orig
+    assert steppers[0].ws is not steppers[1].ws       # the first still lives: not shared
+    assert s is free.system

@@ -79,7 +79,7 @@ def mechsys_cases(problems: set[str], sizes) -> list[Case]:
         free, comp = F.compiled(F.double_pendulum)
         grid = [dop(r, c) for r in (1e-7, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13) for c in (True, False)]
         # Mech's MaxError -> e means {e, e/10, e/100}; the three-number form also sets when
-        # the step doubles (the last four errors summing below c): c = a/20 doubles sooner
+        # the step doubles (each of the last 2n errors below c): c = a/20 doubles sooner
         errors = [1e-11, 1e-12, 1e-13] + [(e, e / 10, e / 20) for e in (2e-12, 1e-12, 5e-13)]
         grid += [("adams", {"fit_degree": "quartic", "max_error": e, "constraint_correction": False})
                  for e in errors]

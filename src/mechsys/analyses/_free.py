@@ -421,7 +421,7 @@ class FreeSystem:
                             "solution='dynamic'")
         opt = integration_options(method, rtol, atol, max_step, fit_degree, max_error,
                                   step_size, constraint_correction)
-        t0 = output_times(t)[0]
+        t0, t_stop, t_eval = output_times(t)      # (checked once)
         kw = self._newton(tolerance, max_iterations, "FreeSystem.simulate")
         s = self.system
         n = s.n
@@ -467,7 +467,7 @@ class FreeSystem:
 
         from ..draw._progress import Progress
 
-        t_start, t_stop = output_times(t)[:2]
+        t_start = t0
         bar = Progress(1000, "simulate", enabled=progress, unit="")
         span = (t_stop - t_start) or 1.0
 
@@ -480,7 +480,7 @@ class FreeSystem:
 
         # the compiled stepper (solvers/_jit_free.py) takes the regular steps when it can
         fast = FreeStepper.plan(s, opt.method, p, sc, rows0, robust, opt.correction,
-                                output_times(t)[2], (t0, q0))
+                                t_eval, (t0, q0))
         try:
             times, Y, res, m = integrate(rhs, proj, t, np.concatenate((q0, qd0)), opt,
                                          scale=np.concatenate((sc.columns, sc.columns)),
