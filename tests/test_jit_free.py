@@ -199,3 +199,44 @@ def test_mode_off_and_unsupported_methods(monkeypatch):
     assert free.simulate((0.0, 0.2)).extra["compiled_steps"] == 0
     monkeypatch.delenv("MECHSYS_JIT")
     assert free.simulate((0.0, 0.2)).extra["compiled_steps"] > 0         # default: on
+
+
+def test_single_derivative_is_the_python_paths_and_says_when_it_cannot(monkeypatch):
+    """``FreeStepper.derivative`` (SciPy's set-up and the output points' multipliers use it):
+    the Python path's accelerations and multipliers to rounding; None where the Python path
+    must decide (here: a state with a NaN), and a run makes no Python derivative at all."""
+    from mechsys import models
+    from mechsys.analyses import _free as AF
+    from mechsys.solvers import _jit_free
+
+    m = models.pendulum_chain(3, 9.81)
+    m.solve(0.0)
+    free = m.free(drop=["lock0", "lock1", "lock2"])
+    steppers, calls = [], [0]
+    init = _jit_free.FreeStepper.__init__
+
+    def keep(self, *a, **k):
+        init(self, *a, **k)
+        steppers.append(self)
+
+    def counted(*a, **k):
+        calls[0] += 1
+        return free_acceleration(*a, **k)
+
+    monkeypatch.setattr(_jit_free.FreeStepper, "__init__", keep)
+    monkeypatch.setattr(AF, "free_acceleration", counted)
+    sol = free.simulate((0.0, 0.7), rtol=1e-9, atol=1e-11)
+    assert calls[0] == 0 and sol.extra["compiled_steps"] > 0
+    st = steppers[-1]
+    n = free.system.n
+    for k in (0, len(sol.t) // 2, len(sol.t) - 1):
+        y = np.concatenate([sol.q[k], sol.qd[k]])
+        f, lam = st.derivative(sol.t[k], y)
+        qdd, lam_py, _ = free_acceleration(free.system, sol.t[k], sol.q[k], sol.qd[k], st.p)
+        np.testing.assert_allclose(f[:n], sol.qd[k], rtol=0, atol=0)
+        np.testing.assert_allclose(f[n:], qdd, rtol=1e-12, atol=1e-12 * np.abs(qdd).max())
+        np.testing.assert_allclose(lam, lam_py, rtol=1e-12, atol=1e-12 * np.abs(lam_py).max())
+        np.testing.assert_allclose(sol.qdd[k], qdd, rtol=1e-12, atol=1e-12 * np.abs(qdd).max())
+    y = np.concatenate([sol.q[0], sol.qd[0]])
+    y[2] = np.nan                     # an angle (l0.th): every equation of the link sees it
+    assert st.derivative(0.0, y) is None

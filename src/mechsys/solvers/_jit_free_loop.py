@@ -728,6 +728,30 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
 
 
 @nb.njit(cache=True)
+def derivative(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, robust, blocks,
+               blk_i, ws, t, y, f, lam_out):
+    """One derivative ``f = (qd, qdd)`` (2n,) and the multipliers ``lam_out`` (m,) at
+    ``(t, y)``, as the loops compute them (``_rhs`` on the stepper's work arrays); False
+    where the Python path must decide (the loops' hand-over)."""
+    (x, xk, out, out_pos, out_vel, KT, KTf, ipiv, ibuf, cbuf, dbuf, rhsb, bb, qdd, lam, force,
+     blk_w, J, r, Fs, dq, Js, Am, work, iwork, ybuf) = borrow(ws)
+    (lapack, p, flat_t, mp, jr, jc, rows0, columns, blk_i, y, f, lam_out) = borrow(
+        (lapack, p, flat_t, mp, jr, jc, rows0, columns, blk_i, y, f, lam_out))
+    npar = p.size
+    nin = 1 + 2 * n + m + npar + n
+    x[:] = 0.0                       # [t, q, qd, lambda = 0, p, qdd = 0]
+    for j in range(npar):
+        x[1 + 2 * n + m + j] = p[j]
+    if not _rhs(kp[0], lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0,
+                columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force, blocks, blk_i, blk_w,
+                t, y, f):
+        return False
+    for i in range(m):
+        lam_out[i] = lam[i]
+    return True
+
+
+@nb.njit(cache=True)
 def workspace(kp, n, m, npar, kk, nnz, blocks, blk_i, bw):
     """The work arrays of ``dop853`` and ``adams`` (their ``ws`` argument), allocated once per
     stepper by the Python caller: it owns them for the loops' whole run, which is what lets
