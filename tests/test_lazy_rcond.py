@@ -9,10 +9,8 @@ import pickle
 
 import numpy as np
 import pytest
-import sympy as sp
 
-import mechsys as ms
-from mechsys import T, models
+from mechsys import models
 from mechsys.results._extra import Extra
 from mechsys.solvers import _jit
 from mechsys.solvers._kinematics import RCOND_PENDING, RCOND_WARN
@@ -22,18 +20,11 @@ pytestmark = pytest.mark.filterwarnings("ignore::mechsys.NearSingularWarning")
 
 
 def _dead_centres():
-    """A slider-crank driven at the piston through both dead centres: its points near them
-    are below ``RCOND_WARN`` (estimated in the loop), the others are left pending."""
-    W = 2 * np.pi
-    m = models.slider_crank()
-    m.remove("drive")
-    m.add(ms.RelativeX1(m.body("piston").point(0),
-                        2 * sp.cos(W * T) + sp.sqrt(36 - 4 * sp.sin(W * T) ** 2)), name="piston drive")
-    th0 = 0.05 * W
-    phi = np.arcsin(-2 * np.sin(th0) / 6)
-    m.set_guess({"crank.th": th0, "rod.th": phi, "rod.x": 2 * np.cos(th0), "rod.y": 2 * np.sin(th0),
-                 "piston.x": 2 * np.cos(th0) + 6 * np.cos(phi)})
-    return m
+    """Its points near the dead centres are below ``RCOND_WARN`` (estimated in the loop), the
+    others are left pending."""
+    from test_jit_sweep import dead_centre_crank
+
+    return dead_centre_crank()
 
 
 def _eager(monkeypatch):

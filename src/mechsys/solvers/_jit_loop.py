@@ -169,6 +169,17 @@ def _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, g
 
 
 @nb.njit(cache=True)
+def _factor_work(m, n):
+    """The work arrays of :func:`_factor` and :func:`_solve`: ``J`` (m, n), ``B`` (n, n),
+    pivots, the factors' pattern ``nz``, LAPACK's integer, character and real buffers, its
+    work arrays, and the row scales ``r`` (m,)."""
+    return (np.empty((m, n)), np.empty((n, n)), np.empty(n, dtype=np.int32),
+            np.empty(pattern_size(n), dtype=np.int32), np.zeros(5, dtype=np.int32),
+            np.zeros(2, dtype=np.uint8), np.zeros(2), np.empty(4 * n), np.empty(n, dtype=np.int32),
+            np.empty(m))
+
+
+@nb.njit(cache=True)
 def _solve(lapack, B, ipiv, nz, r, columns, b, out, ibuf, cbuf):
     n = r.size
     for i in range(n):
@@ -299,16 +310,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
     out_pos = np.empty(m + nnz)
     out_vel = np.empty(nnz + m)
     out_gam = np.empty(m)
-    J = np.empty((m, n))
-    B = np.empty((n, n))
-    ipiv = np.empty(n, dtype=np.int32)
-    nz = np.empty(pattern_size(n), dtype=np.int32)
-    ibuf = np.zeros(5, dtype=np.int32)
-    cbuf = np.zeros(2, dtype=np.uint8)
-    dbuf = np.zeros(2)
-    work = np.empty(4 * n)
-    iwork = np.empty(n, dtype=np.int32)
-    r = np.empty(m)
+    J, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, r = _factor_work(m, n)
     F = np.empty(m)
     q = np.empty(n)
     g = np.empty(n)
@@ -519,16 +521,7 @@ def fill_rconds(ptrs, lapack, times, Q, p, jr, jc, columns, R, rconds):
     for j in range(npar):
         x[1 + 2 * n + j] = p[j]
     out_vel = np.empty(nnz + m)
-    J = np.empty((m, n))
-    B = np.empty((n, n))
-    ipiv = np.empty(n, dtype=np.int32)
-    nz = np.empty(pattern_size(n), dtype=np.int32)
-    ibuf = np.zeros(5, dtype=np.int32)
-    cbuf = np.zeros(2, dtype=np.uint8)
-    dbuf = np.zeros(2)
-    work = np.empty(4 * n)
-    iwork = np.empty(n, dtype=np.int32)
-    r = np.empty(m)
+    J, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, r = _factor_work(m, n)
     bad = 0
     for k in range(rconds.size):
         if rconds[k] != RCOND_PENDING:
