@@ -293,7 +293,7 @@ def main(argv=None) -> int:
     cases, notes = build_cases(wanted, sizes, full=not args.quick)
     print(f"measuring {len(cases)} cases ...", flush=True)
     rows = measure(cases, refs, max_rounds=3 if args.quick else 5)
-    sweep = sweep_row(3 if args.quick else 7) if "D" in wanted else None
+    sweep = sweep_row(3 if args.quick else 15) if "D" in wanted else None   # (rounds: cheap, noisy)
     builds = build_rows((4, 16) if args.quick else (4, 16, 64, 256)) if "build" in wanted else []
     command = "python benchmarks/peers/run.py " + " ".join(sys.argv[1:] if argv is None else argv)
     text = page(rows, sweep, builds, sizes, notes, command.strip(), machine())
