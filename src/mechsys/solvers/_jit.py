@@ -39,7 +39,7 @@ import os
 
 import numpy as np
 
-from .._errors import ModelError
+from .._errors import MechError, ModelError
 from ._linalg import RCOND_MIN, SPARSE_THRESHOLD
 
 #: ``auto``: the compiled loop is used for sweeps of at least this many points
@@ -186,12 +186,13 @@ def rcond_filler(system, pointers, times, Q, p, scaling, R):
             np.ascontiguousarray(system.p_values if p is None else p, dtype=float),
             _index(system.jac_rows), _index(system.jac_cols),
             np.ascontiguousarray(scaling.columns, dtype=float), R)
+
     def fill(rconds: np.ndarray) -> None:
         k = len(rconds)
         bad = fill_rconds(*args[:3], args[3][:k], *args[4:8], args[8][:k], rconds)
         if bad:
-            raise RuntimeError(f"mechsys internal error: {bad} condition estimate(s) of a compiled "
-                               "sweep proven regular came out singular; please report it")
+            raise MechError(f"mechsys internal error: {bad} condition estimate(s) of a compiled "
+                            "sweep proven regular came out singular; please report it")
 
     fill.kernel = system.f_velocity    # the pointer in ``pointers`` is valid while it lives
     return fill
