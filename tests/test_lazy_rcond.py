@@ -101,3 +101,25 @@ def test_sweep_result_fills_once(monkeypatch):
     assert res.rcond_pending and (res.rcond_raw == RCOND_PENDING).any()
     first = res.rcond
     assert not res.rcond_pending and res.rcond is first and np.isfinite(first).all()
+
+
+def test_reading_releases_the_row_scales(monkeypatch):
+    """The (N, n) row scales kept for the deferred estimates are freed once they are read."""
+    import gc
+    import weakref
+
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    refs = []
+    real = _jit.rcond_filler
+
+    def spy(system, pointers, times, Q, p, scaling, R):
+        refs.append(weakref.ref(R))
+        return real(system, pointers, times, Q, p, scaling, R)
+
+    monkeypatch.setattr(_jit, "rcond_filler", spy)
+    sol = models.slider_crank().solve(np.linspace(0, 1, 50))
+    gc.collect()
+    assert refs and refs[0]() is not None
+    sol.extra["rcond"]
+    gc.collect()
+    assert refs[0]() is None
