@@ -156,49 +156,6 @@ def _lower_t(AT, n, x):          # L^T x = b (dtrsv 'L', 'T', 'U')
         x[j] = s
 
 
-# The same four solves visiting only the factors' nonzeros, without the dense loops' test for
-# a zero x[j] (an unpredictable branch that skips only exact no-ops at this size). They divide
-# by the pivots as dtrsv does: multiplying by reciprocals would differ by rounding, which a
-# nearly singular matrix (a dead centre) amplifies beyond the 1e-12 the two paths agree to.
-@nb.njit(cache=True)
-def _lower_nz(AT, n, x, nz):
-    for j in range(n):
-        xj = x[j]
-        for k in range(nz[j], nz[j + 1]):
-            i = nz[k]
-            x[i] -= xj * AT[j, i]
-
-
-@nb.njit(cache=True)
-def _upper_nz(AT, n, x, nz):
-    for j in range(n - 1, -1, -1):
-        xj = x[j] / AT[j, j]
-        x[j] = xj
-        for k in range(nz[n + 1 + j], nz[n + 2 + j]):
-            i = nz[k]
-            x[i] -= xj * AT[j, i]
-
-
-@nb.njit(cache=True)
-def _upper_t_nz(AT, n, x, nz):
-    for j in range(n):
-        s = x[j]
-        for k in range(nz[n + 1 + j], nz[n + 2 + j]):
-            i = nz[k]
-            s -= AT[j, i] * x[i]
-        x[j] = s / AT[j, j]
-
-
-@nb.njit(cache=True)
-def _lower_t_nz(AT, n, x, nz):
-    for j in range(n - 1, -1, -1):
-        s = x[j]
-        for k in range(nz[j], nz[j + 1]):
-            i = nz[k]
-            s -= AT[j, i] * x[i]
-        x[j] = s
-
-
 @nb.njit(cache=True)
 def _inv(AT, n, x, transposed, nz=None):
     """``x <- A^-1 x`` (``transposed``: ``A^-T x``) without the row interchanges, as
@@ -211,9 +168,12 @@ def _inv(AT, n, x, transposed, nz=None):
             _lower(AT, n, x)
             _upper(AT, n, x)
     elif transposed:
-        # the loops of _upper_t_nz and _lower_t_nz (and below _lower_nz, _upper_nz) written
-        # out: the same operations in the same order, without a call per triangle (which cost
-        # about as much as the triangle at this size)
+        # the same four solves visiting only the factors' nonzeros (U^T, then L^T; below L,
+        # then U), written in place: a call per triangle cost about as much as the triangle
+        # at this size. No test for a zero x[j] as the dense loops have (an unpredictable
+        # branch that skips only exact no-ops here). They divide by the pivots as dtrsv
+        # does: multiplying by reciprocals would differ by rounding, which a nearly singular
+        # matrix (a dead centre) amplifies beyond the 1e-12 the two paths agree to.
         for j in range(n):
             s = x[j]
             for k in range(nz[n + 1 + j], nz[n + 2 + j]):
