@@ -17,6 +17,7 @@ from mechsys.solvers._jit_lapack import (  # noqa: E402
     getrs,
     inv_norm_bound,
     pattern_size,
+    symbolic_pattern,
 )
 from mechsys.solvers._linalg import RCOND_MIN  # noqa: E402
 
@@ -111,6 +112,62 @@ def test_structure_solves_give_the_dense_numbers():
         np.testing.assert_array_equal(x1, x2)
         w = np.empty(2 * n)
         assert gecon1(DT, n, anorm, w, w[n:]) == rc
+
+
+def _ranges(nz, n):
+    return ([set(nz[nz[j]:nz[j + 1]]) for j in range(n)],
+            [set(nz[nz[n + 1 + j]:nz[n + 2 + j]]) for j in range(n)])
+
+
+def test_symbolic_structure_covers_the_factors_and_gives_their_numbers():
+    """The structure the sweep computes once per pivot sequence (``symbolic_pattern`` of the
+    Jacobian's structure) contains every nonzero of the factors, also where the numbers
+    cancel or a structural entry is zero at this configuration, and the solves, the estimate
+    and the bound with it give exactly the numbers of the recorded structure."""
+    rng = np.random.default_rng(12)
+    larger = 0
+    for trial in range(400):
+        n = int(rng.integers(1, 16))
+        A = _rowscaled(_sparse(rng, n, 0.25) if trial % 3 else _near_singular(rng, n))
+        S = np.ascontiguousarray((A != 0).T.astype(float))
+        if trial % 4 == 0:                   # a structural entry that is zero right now
+            S[rng.integers(n), rng.integers(n)] = 1.0
+        AT, piv, nz, info, anorm, rc, bound = _ours(A)
+        if info:
+            continue
+        snz = np.empty_like(nz)
+        symbolic_pattern(S, n, piv, snz, np.empty((n, n)))
+        lo, up = _ranges(nz, n)
+        slo, sup = _ranges(snz, n)
+        assert all(a <= b for a, b in zip(lo, slo)) and all(a <= b for a, b in zip(up, sup))
+        for j in range(n):                   # each list ascending, as the solves expect
+            assert list(snz[snz[j]:snz[j + 1]]) == sorted(slo[j])
+            assert list(snz[snz[n + 1 + j]:snz[n + 2 + j]]) == sorted(sup[j])
+        larger += sum(map(len, slo + sup)) > sum(map(len, lo + up))
+        b = rng.standard_normal(n)
+        x1, x2 = b.copy(), b.copy()
+        getrs(AT, n, piv, x1, nz)
+        getrs(AT, n, piv, x2, snz)
+        np.testing.assert_array_equal(x1, x2)
+        w = np.empty(2 * n)
+        assert gecon1(AT, n, anorm, w, w[n:], snz) == rc
+        assert inv_norm_bound(AT, n, snz, np.empty(n)) == bound
+    assert larger > 20                       # the superset case is exercised
+
+
+def test_bound_is_infinite_when_a_structural_zero_meets_an_overflow():
+    """A pivot so small that ``M(U)^-1`` overflows: with a structure listing zeros (as
+    ``symbolic_pattern`` may), ``0 * inf`` makes NaNs that a running maximum passes over; the
+    bound must still be ``inf`` (not a finite number that would skip the estimate)."""
+    n = 2
+    AT = np.array([[1e-320, 0.0], [0.0, 1.0]])     # U = diag(1e-320, 1), L = I (transposed)
+    piv = np.arange(n, dtype=np.int32)
+    dense = np.empty(pattern_size(n), np.int32)
+    symbolic_pattern(np.ones((n, n)), n, piv, dense, np.empty((n, n)))   # lists both zeros
+    assert inv_norm_bound(AT, n, dense, np.empty(n)) == np.inf
+    exact = np.empty(pattern_size(n), np.int32)
+    symbolic_pattern(np.eye(n), n, piv, exact, np.empty((n, n)))
+    assert inv_norm_bound(AT, n, exact, np.empty(n)) == np.inf
 
 
 def test_bound_never_skips_a_singular_decision():

@@ -98,7 +98,8 @@ def test_compiled_path_ran(monkeypatch):
     monkeypatch.setattr(_jit, "run", spy)
     monkeypatch.setenv("MECHSYS_JIT", "1")
     sol = models.slider_crank().solve(np.linspace(0, 1, 50))
-    assert calls and calls[0][0] == 50 and calls[0][1] == sol.evaluations - 1   # minus the scaling's
+    # every evaluation is the loop's: the scaling comes from its first one
+    assert calls and calls[0][0] == 50 and calls[0][1] == sol.evaluations
 
 
 @pytest.mark.parametrize("order", ["location", "velocity", "acceleration"])
@@ -167,8 +168,7 @@ def test_handover_mid_sweep_gives_the_python_result(monkeypatch):
     t = np.linspace(0.0, 1.0, 30)
 
     def partial(system, pointers, times, *rest):
-        k, e = real(system, pointers, times[:7], *rest)
-        return k, e
+        return real(system, pointers, times[:7], *rest)
 
     monkeypatch.setattr(_jit, "run", partial)
     monkeypatch.setenv("MECHSYS_JIT", "1")
@@ -176,6 +176,98 @@ def test_handover_mid_sweep_gives_the_python_result(monkeypatch):
     monkeypatch.setenv("MECHSYS_JIT", "0")
     plain = models.four_bar().solve(t)
     _same(mixed, plain)
+
+
+def _far_crank():
+    """A millimetre slider-crank whose guess puts bodies a million times its size away (a
+    large offset)."""
+    m = models.slider_crank(crank=2e-3, rod=6e-3)
+    m.set_guess({"piston.x": 7e3, "rod.x": -5e2, "rod.th": 0.3})
+    return m
+
+
+def _dead_centre_guess():
+    """The guess at a dead centre: crank in line with the rod (the lever-arm round-off case
+    of ``Scaling.of``)."""
+    m = models.slider_crank()
+    m.set_guess({"crank.th": 0.0, "rod.th": 0.0, "rod.x": 2.0, "piston.x": 8.0})
+    return m
+
+
+@pytest.mark.parametrize("build", [models.slider_crank, models.four_bar, _spatial_crank, _far_crank,
+                                   _dead_centre_guess, dead_centre_crank,
+                                   lambda: models.slider_crank(crank=2e-6, rod=6e-6)],
+                         ids=["slider-crank", "four-bar", "spatial", "far", "dead-centre-guess",
+                              "dead-centres", "micro"])
+def test_the_loops_scaling_is_the_python_one(build):
+    """Without a given scaling the compiled loop takes it from its first evaluation: the same
+    length, offset and column scales as ``Scaling.of`` on ``system.jacobian`` at the guess."""
+    from mechsys.solvers._linalg import Scaling, rotation_indices
+    from mechsys.solvers._position import PositionOptions
+
+    m = build()
+    s = m.compile()
+    q0, p = m.guess(), m._p()
+    t = np.linspace(0.0, 0.1, 3)
+    want = Scaling.of(s, q0, s.jacobian(t[0], q0, p))
+    N, n = len(t), s.n
+    out = [np.empty((N, n)) for _ in range(3)]
+    _, _, got = _jit.run(s, _jit.plan(s, 10_000, 2), t, q0, p, 2, PositionOptions(), None,
+                         rotation_indices(s), *out, np.zeros(N, dtype=int), np.full(N, np.nan),
+                         np.ones(n))
+    assert got.length == want.length and got.offset == want.offset
+    np.testing.assert_array_equal(got.columns, want.columns)
+
+
+def _stub(bodies, variables, hint):
+    """A planar system's layout only (what ``Scaling.of`` reads)."""
+    from types import SimpleNamespace
+
+    slices = {f"b{k}": slice(3 * k, 3 * k + 3) for k in range(bodies)}
+    return SimpleNamespace(n=3 * bodies + variables, space=SimpleNamespace(dim=2),
+                           layout=SimpleNamespace(body_slices=slices), length_hint=hint)
+
+
+def test_the_loops_scaling_takes_every_branch_like_scaling_of():
+    """``_jit_loop._scaling`` against ``Scaling.of`` on random Jacobians of every kind it
+    decides on: ordinary, lever arms at round-off (the fallback to the hint or to the
+    coordinates), entries and coordinates not finite, empty rows, model variables, no
+    length at all."""
+    from mechsys.solvers._jit_loop import _scaling
+    from mechsys.solvers._linalg import Scaling, _column_kinds
+
+    rng = np.random.default_rng(5)
+    seen = set()                            # which length each trial came to
+    for trial in range(300):
+        bodies, variables = int(rng.integers(1, 5)), int(rng.integers(0, 3))
+        hint = [0.0, 1.0, 6.0, 1e-3][(trial // 6) % 4]   # every hint with every kind
+        sys_ = _stub(bodies, variables, hint)
+        n = sys_.n
+        trans, body = _column_kinds(sys_)
+        J = rng.standard_normal((n, n)) * (rng.random((n, n)) < 0.4) * 10.0 ** rng.integers(-6, 7)
+        q = rng.standard_normal(n) * 10.0 ** rng.integers(-3, 4)
+        kind = trial % 6
+        if kind == 1:                       # rotational entries at round-off of the lengths
+            J[:, ~trans & (body >= 0)] *= 1e-17
+        elif kind == 2:
+            J[rng.integers(n), rng.integers(n)] = np.nan
+            J[rng.integers(n), rng.integers(n)] = np.inf
+        elif kind == 3:
+            q[trans.nonzero()[0][0]] = [np.inf, np.nan][trial % 2]
+        elif kind == 4:
+            J[rng.integers(n)] = 0.0        # an empty row
+        elif kind == 5:
+            J[:] = 0.0                      # no lengths anywhere
+            q[:] = 0.0
+        want = Scaling.of(sys_, q, J)
+        columns = np.empty(n)
+        L, offset = _scaling(J, q, trans, body, max(int(body.max()) + 1, 0), hint, columns)
+        assert L == want.length and offset == want.offset, trial
+        np.testing.assert_array_equal(columns, want.columns)
+        big = np.abs(q[trans]).max() if np.isfinite(q[trans]).all() else 0.0
+        seen.add("hint" if L == hint else "coordinates" if L == big else "one" if L == 1.0
+                 else "lever arm")
+    assert seen == {"lever arm", "hint", "coordinates", "one"}
 
 
 def test_when_it_does_not_run(monkeypatch):

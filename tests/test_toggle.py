@@ -90,8 +90,9 @@ def test_whole_turn_jump_is_retried_then_reported(monkeypatch):
     real = _kinematics.solve_position
     calls = []
 
-    def turning(system, tk, g, options=None, p=None, scaling=None, chord=None, *, every=False):
-        res = real(system, tk, g, options, p, scaling, chord=chord)
+    def turning(system, tk, g, options=None, p=None, scaling=None, chord=None, start=None, *,
+                every=False):
+        res = real(system, tk, g, options, p, scaling, chord=chord, start=start)
         calls.append(tk)
         i = system.layout.index("crank.th")
         if tk == t[2] and (every or len([c for c in calls if c == tk]) == 1):

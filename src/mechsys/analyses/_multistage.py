@@ -37,7 +37,7 @@ from ..compile._stages import _cache, stage_system
 from ..constraints._switches import StageSwitch, TimeSwitch
 from ..solvers import ORDERS, PositionOptions, sweep
 from ..solvers._kinematics import SweepResult, _predict, _solve_point
-from ..solvers._linalg import Scaling, rotation_columns
+from ..solvers._linalg import Scaling, rotation_indices
 
 #: the solutions with multipliers (Model.solve's load modes) and their kinematic order
 MODES = {"static": 0, "kinematic": 1, "dynamic": 2}
@@ -198,7 +198,7 @@ def _sweep_stages(model, times, guess, order, options, forced):
     rconds = np.full(N, np.nan) if order >= 1 else None
     its = np.zeros(N, dtype=int)
     stages = np.zeros((N, len(switches)), dtype=int)
-    rot = np.flatnonzero(rotation_columns(base))
+    rot = rotation_indices(base)
     scalings: dict = {}
     evals, current = 0, None
     for k, t in enumerate(times):

@@ -40,7 +40,7 @@ import os
 import numpy as np
 
 from .._errors import MechError, ModelError
-from ._linalg import RCOND_MIN, SPARSE_THRESHOLD
+from ._linalg import RCOND_MIN, SPARSE_THRESHOLD, Scaling, _column_kinds, length_hint
 
 #: ``auto``: the compiled loop is used for sweeps of at least this many points
 AUTO_POINTS = 1000
@@ -142,13 +142,15 @@ def _lapack() -> np.ndarray:
 
 def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD, its, rconds,
         rprev, R=None):
-    """Fill ``Q``, ``QD``, ``QDD``, ``its``, ``rconds`` from point 0 on; return ``(k, evals)``:
-    the first point left to the Python loop (``len(times)`` when all are done) and the number
-    of kernel calls made. ``rprev`` (n,) receives the row scales of the last solved point's
-    velocity factorisation (the chord the Python loop continues with). ``R`` (N, n): when
-    given, a point whose condition estimate is proven to be at least ``RCOND_WARN`` gets
-    ``RCOND_PENDING`` in ``rconds`` and its row scales in ``R``, for :func:`rcond_filler`
-    (decision 0023); None: every estimate is computed in the loop."""
+    """Fill ``Q``, ``QD``, ``QDD``, ``its``, ``rconds`` from point 0 on; return ``(k, evals,
+    scaling)``: the first point left to the Python loop (``len(times)`` when all are done),
+    the number of kernel calls made, and the :class:`~mechsys.solvers._linalg.Scaling` used.
+    ``scaling`` None: the loop takes ``Scaling.of`` the guess ``q0`` at the first time from
+    its first evaluation (the same numbers). ``rprev`` (n,) receives the row scales of the
+    last solved point's velocity factorisation (the chord the Python loop continues with).
+    ``R`` (N, n): when given, a point whose condition estimate is proven to be at least
+    ``RCOND_WARN`` gets ``RCOND_PENDING`` in ``rconds`` and its row scales in ``R``, for
+    :func:`rcond_filler` (decision 0023); None: every estimate is computed in the loop."""
     if _state["loop"] is None:
         from ._jit_loop import sweep_dense
 
@@ -161,16 +163,23 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
     qdd_out = QDD if QDD is not None else dummy
     rc = rconds if rconds is not None else np.full(len(times), np.nan)
     lazy = R is not None
-    tol = options.ftol * (1.0 + scaling.offset)
+    trans, body = _column_kinds(system)
+    if scaling is None:
+        scale = np.zeros(2)
+        columns = np.empty(n)
+    else:
+        scale = np.array([scaling.length, scaling.offset])
+        columns = np.ascontiguousarray(scaling.columns, dtype=float)
     k, evals = loop(pointers, _lapack(), np.ascontiguousarray(times, dtype=float),
                     np.ascontiguousarray(q0, dtype=float),
                     np.ascontiguousarray(system.p_values if p is None else p, dtype=float),
-                    _index(system.jac_rows), _index(system.jac_cols),
-                    np.ascontiguousarray(scaling.columns, dtype=float), float(tol),
-                    int(options.max_iterations), bool(options.damping), int(order),
-                    _index(rot), Q, qd_out, qdd_out, its, rc, rprev, lazy,
-                    R if lazy else dummy)
-    return int(k), int(evals)
+                    _index(system.jac_rows), _index(system.jac_cols), columns, scale,
+                    float(options.ftol), int(options.max_iterations), bool(options.damping),
+                    int(order), _index(rot), trans, _index(body), length_hint(system), Q,
+                    qd_out, qdd_out, its, rc, rprev, lazy, R if lazy else dummy)
+    if scaling is None:
+        scaling = Scaling(float(scale[0]), columns, float(scale[1]))
+    return int(k), int(evals), scaling
 
 
 def rcond_filler(system, pointers, times, Q, p, scaling, R):

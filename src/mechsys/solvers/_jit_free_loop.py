@@ -37,7 +37,7 @@ from ._jit_borrow import borrow
 from ._jit_cache import check as _check_cache
 from ._jit_lapack import gecon1, getrf, getrs
 from ._jit_loop import SMALL as SMALL_LU
-from ._jit_loop import _assemble, _ccall, _eval, _rows, _rows_nz
+from ._jit_loop import _assemble, _ccall, _eval, _norm1, _rows, _rows_nz
 from ._jit_tree import articulated as _articulated
 from ._jit_tree import assemble as _gen_assemble
 from ._jit_tree import forward as _gen_forward
@@ -212,13 +212,7 @@ def _min_norm(lapack, J, r, columns, bvec, out, Js, A, ipiv, ibuf, cbuf, dbuf, w
                 s += Js[i, j] * Js[k, j]
             A[i, k] = s
             A[k, i] = s
-    anorm = 0.0
-    for j in range(m):
-        s = 0.0
-        for i in range(m):
-            s += abs(A[i, j])
-        if s > anorm:
-            anorm = s
+    anorm = _norm1(A, m)             # (A symmetric: the same sums in the same order)
     small = m <= SMALL_LU
     if small:
         if getrf(A, m, ipiv) > 0 or anorm == 0:

@@ -108,6 +108,33 @@ def _pattern(AT, n, nz):
 
 
 @nb.njit(cache=True)
+def symbolic_pattern(S, n, piv, nz, W):
+    """``nz`` (module docstring) for the factors of any matrix whose nonzeros lie within the
+    structure ``S`` (n, n; transposed storage, nonzero where ``A`` may be) and whose
+    elimination takes the pivots ``piv``: :func:`getrf`'s steps on the structure (row
+    interchanges, and fill wherever a multiplier and a pivot-row entry may both be nonzero).
+    Every nonzero the numbers can produce is in it, so it may replace the recorded ``nz``:
+    the operations it adds are ``x - 0 * y`` (the sweep computes it once per pivot sequence,
+    not after every factorisation). ``W`` (n, n): work."""
+    for c in range(n):
+        for i in range(n):
+            W[c, i] = 1.0 if S[c, i] != 0.0 else 0.0
+    for j in range(n):
+        p = piv[j]
+        if p != j:
+            for c in range(n):
+                tmp = W[c, j]
+                W[c, j] = W[c, p]
+                W[c, p] = tmp
+        for c in range(j + 1, n):
+            if W[c, j] != 0.0:
+                for i in range(j + 1, n):
+                    if W[j, i] != 0.0:
+                        W[c, i] = 1.0
+    _pattern(W, n, nz)
+
+
+@nb.njit(cache=True)
 def getrs(AT, n, piv, x, nz=None):
     """``x <- A^-1 x`` from :func:`getrf`'s factors (``nz``: as given to it)."""
     for j in range(n):
@@ -310,14 +337,16 @@ def inv_norm_bound(AT, n, nz, y):
             s += abs(AT[j, i]) * y[i]
         y[j] = s / abs(AT[j, j])
     big = 0.0
-    for j in range(n - 1, -1, -1):   # M(L)^T z = y: backward, z_j = y_j + sum |l_ij| z_i
-        s = y[j]
+    total = 0.0                      # (an inf in y can meet a zero of a symbolic_pattern:
+    for j in range(n - 1, -1, -1):   # 0 * inf is NaN, which "s > big" would pass over)
+        s = y[j]                     # M(L)^T z = y: backward, z_j = y_j + sum |l_ij| z_i
         for k in range(nz[j], nz[j + 1]):
             i = nz[k]
             s += abs(AT[j, i]) * y[i]
         y[j] = s
+        total += s
         if s > big:
             big = s
-    if not np.isfinite(big):
+    if not np.isfinite(total):
         return np.inf
     return big

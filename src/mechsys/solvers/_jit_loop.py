@@ -30,9 +30,9 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 
 from ._jit_cache import check as _check_cache
-from ._jit_lapack import GUARD_MARGIN, gecon1, getrf, inv_norm_bound, pattern_size
+from ._jit_lapack import GUARD_MARGIN, gecon1, getrf, inv_norm_bound, pattern_size, symbolic_pattern
 from ._kinematics import RCOND_PENDING, RCOND_WARN, ROTATION_JUMP, ROTATION_SLACK, ROTATION_START
-from ._linalg import RCOND_MIN
+from ._linalg import ARM_ROUNDOFF, RCOND_MIN
 from ._position import CHORD_RATE
 
 _check_cache()   # stale cached loops go before anything here compiles (see _jit_cache)
@@ -118,10 +118,62 @@ def _rows_nz(vals, jr, jc, columns, r):
 
 
 @nb.njit(cache=True)
-def _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, guard):
-    """LU of ``R^-1 J D`` into ``B`` (transposed storage); returns its reciprocal condition
-    number, or -1 when singular (the Python path's ``Singular``: an exact zero pivot or an
-    estimate below ``RCOND_MIN``).
+def _norm1(B, n):
+    """One-norm of the matrix stored transposed in ``B``: its largest column sum."""
+    anorm = 0.0
+    for j in range(n):
+        s = 0.0
+        for i in range(n):
+            s += abs(B[j, i])
+        if s > anorm:
+            anorm = s
+    return anorm
+
+
+@nb.njit(cache=True)
+def _fill(J, r, columns, B):
+    """``B`` = ``R^-1 J D`` in transposed storage; returns its one-norm."""
+    n = J.shape[0]
+    for i in range(n):
+        inv = 1.0 / r[i]
+        for j in range(n):
+            B[j, i] = (J[i, j] * columns[j]) * inv
+    return _norm1(B, n)
+
+
+@nb.njit(cache=True)
+def _fill_nz(vals, jr, jc, r, columns, B):
+    """:func:`_fill` of the Jacobian whose nonzero values are ``vals`` (each position once:
+    ``sweep_dense`` checks), without assembling it: the same entries (``0.0 + v`` as
+    :func:`_assemble` forms them, so even the sign of a zero is the same), the same norm."""
+    B[:, :] = 0.0
+    for k in range(jr.size):
+        i = jr[k]
+        j = jc[k]
+        B[j, i] = ((0.0 + vals[k]) * columns[j]) * (1.0 / r[i])
+    return _norm1(B, r.size)
+
+
+@nb.njit(cache=True)
+def _factor(lapack, J, r, columns, B, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, work, iwork,
+            guard):
+    """LU of ``R^-1 J D`` into ``B`` (transposed storage): :func:`_fill`, then
+    :func:`_factor_filled`."""
+    return _factor_filled(lapack, B, _fill(J, r, columns, B), ipiv, nz, S, W, seen, ibuf, cbuf,
+                          dbuf, work, iwork, guard)
+
+
+@nb.njit(cache=True)
+def _factor_filled(lapack, B, anorm, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, work, iwork,
+                   guard):
+    """LU of the matrix in ``B`` (transposed storage, one-norm ``anorm``); returns its
+    reciprocal condition number, or -1 when singular (the Python path's ``Singular``: an
+    exact zero pivot or an estimate below ``RCOND_MIN``).
+
+    Up to ``SMALL`` unknowns the factors' nonzero structure ``nz`` (used by the solves and
+    estimates) is :func:`symbolic_pattern` of the Jacobian's structure ``S`` (n, n, transposed
+    storage), made again only when the pivots differ from ``seen`` (n,), those it was made
+    for (``W`` (n, n): its work); :func:`_structure` makes the three.
 
     ``guard`` > 0 (up to ``SMALL`` unknowns): when :func:`inv_norm_bound` proves that the
     estimate is at least ``guard`` it is not computed and ``RCOND_PENDING`` (``inf``) is
@@ -130,22 +182,21 @@ def _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, g
     demand: :func:`fill_rconds`). The decision is the estimate's own: the bound exceeds
     anything ``gecon1`` can compute from these factors (``_jit_lapack.inv_norm_bound``),
     with a margin of ``1 / GUARD_MARGIN``. ``guard`` 0: the estimate, always."""
-    n = J.shape[0]
-    for i in range(n):
-        inv = 1.0 / r[i]
-        for j in range(n):
-            B[j, i] = (J[i, j] * columns[j]) * inv
-    anorm = 0.0
-    for j in range(n):
-        s = 0.0
-        for i in range(n):
-            s += abs(B[j, i])
-        if s > anorm:
-            anorm = s
+    n = B.shape[0]
     if n <= SMALL:
         # LAPACK's algorithms written out (_jit_lapack): the calls' overhead dominated
-        if getrf(B, n, ipiv, nz) > 0 or anorm == 0:
+        if getrf(B, n, ipiv) > 0 or anorm == 0:
             return -1.0
+        same = True
+        for j in range(n):
+            if ipiv[j] != seen[j]:
+                same = False
+        if not same:
+            # the factors' structure, once per pivot sequence: recording it after every
+            # factorisation cost 6 % of the sweep
+            symbolic_pattern(S, n, ipiv, nz, W)
+            for j in range(n):
+                seen[j] = ipiv[j]
         if guard > 0 and anorm * inv_norm_bound(B, n, nz, work) <= GUARD_MARGIN / guard:
             return RCOND_PENDING
         rcond = gecon1(B, n, anorm, work, work[n:], nz)
@@ -177,6 +228,16 @@ def _factor_work(m, n):
             np.empty(pattern_size(n), dtype=np.int32), np.zeros(5, dtype=np.int32),
             np.zeros(2, dtype=np.uint8), np.zeros(2), np.empty(4 * n), np.empty(n, dtype=np.int32),
             np.empty(m))
+
+
+@nb.njit(cache=True)
+def _structure(jr, jc, n):
+    """``S``, ``W``, ``seen`` of :func:`_factor_filled`: the square Jacobian's structure from
+    its nonzeros' rows and columns (transposed storage), work, no pivots seen yet."""
+    S = np.zeros((n, n))
+    for k in range(jr.size):
+        S[jc[k], jr[k]] = 1.0
+    return S, np.empty((n, n)), np.full(n, -1, dtype=np.int32)
 
 
 @nb.njit(cache=True)
@@ -289,15 +350,82 @@ def _predict(Q, QD, QDD, rconds, times, k, rot, order, g, sec):
 
 
 @nb.njit(cache=True)
-def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping, order, rot,
-                Q, QD, QDD, its, rconds, rprev, lazy, R):
+def _scaling(J, q, trans, body, nbody, hint, columns):
+    """``Scaling.of(system, q, J)`` (``_linalg``): fills ``columns`` and returns the length
+    ``L`` and the offset. The same comparisons and divisions, hence the same numbers: ``big``
+    the largest position coordinate (0 when one is not finite), the lever arm the largest
+    ratio, over rows and bodies, of the largest rotational to the largest translational
+    entry (entries not finite count as 0), then the same choice of ``L``."""
+    n = q.size
+    m = J.shape[0]
+    big = 0.0
+    finite = True
+    for j in range(n):
+        if trans[j]:
+            v = abs(q[j])
+            if not np.isfinite(v):
+                finite = False
+            elif v > big:
+                big = v
+    if not finite:
+        big = 0.0
+    tmax = np.zeros(nbody)
+    rmax = np.zeros(nbody)
+    arm = 0.0
+    for i in range(m):
+        tmax[:] = 0.0
+        rmax[:] = 0.0
+        for j in range(n):
+            b = body[j]
+            v = abs(J[i, j])
+            if b < 0 or not np.isfinite(v):
+                continue
+            if trans[j]:
+                if v > tmax[b]:
+                    tmax[b] = v
+            elif v > rmax[b]:
+                rmax[b] = v
+        for b in range(nbody):
+            if tmax[b] > 0 and rmax[b] > 0:
+                ratio = rmax[b] / tmax[b]
+                if ratio > arm:
+                    arm = ratio
+    ref = hint if hint > 0 else big
+    if ref > 0 and arm <= ARM_ROUNDOFF * ref:
+        arm = 0.0
+    L = arm if arm > 0 else (hint if hint > 0 else (big if big > 0 else 1.0))
+    for j in range(n):
+        columns[j] = L if trans[j] else 1.0
+    return L, big / L
+
+
+@nb.njit(cache=True)
+def _unique(jr, jc, m, n):
+    """No (row, column) twice among the Jacobian's nonzeros."""
+    seen = np.zeros((m, n), dtype=np.bool_)
+    for k in range(jr.size):
+        if seen[jr[k], jc[k]]:
+            return False
+        seen[jr[k], jc[k]] = True
+    return True
+
+
+@nb.njit(cache=True)
+def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit, damping, order,
+                rot, trans, body, hint, Q, QD, QDD, its, rconds, rprev, lazy, R):
     """The sweep's regular points (see the module docstring); returns ``(k, evaluations)``
     with ``k`` the first point left to the Python loop. ``rprev`` (n,) receives the row
     scales of the last solved point's velocity factorisation (the chord of the next point:
     the Python loop refactorises it from them when it takes over). ``lazy``: a point whose
     condition estimate is proven to be at least ``RCOND_WARN`` gets ``RCOND_PENDING`` in
     ``rconds`` and its velocity factorisation's row scales in ``R`` (N, n), from which
-    :func:`fill_rconds` computes the estimate when it is asked for (decision 0023)."""
+    :func:`fill_rconds` computes the estimate when it is asked for (decision 0023).
+
+    ``scale`` (2,): ``Scaling.length`` and ``offset`` with ``columns`` (n,) its column
+    scales; ``scale[0] == 0``: the scaling of ``q0`` at the first time is computed from the
+    first evaluation (:func:`_scaling`, with the columns' kinds ``trans``, ``body`` and the
+    system's ``length_hint``) and returned in ``scale`` and ``columns``. The Newton
+    tolerance is ``ftol (1 + offset)``."""
     n = q0.size
     m = n
     nnz = jr.size
@@ -311,6 +439,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
     out_vel = np.empty(nnz + m)
     out_gam = np.empty(m)
     J, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, r = _factor_work(m, n)
+    S, W, seen = _structure(jr, jc, n)
     F = np.empty(m)
     q = np.empty(n)
     g = np.empty(n)
@@ -319,12 +448,12 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
     sec = np.empty(n)
     rhs = np.empty(m)
     jv = np.empty(nnz)
-    seen = np.zeros((m, n), dtype=np.bool_)
-    unique = True                        # no (row, column) twice among the nonzeros
-    for k in range(nnz):
-        if seen[jr[k], jc[k]]:
-            unique = False
-        seen[jr[k], jc[k]] = True
+    unique = _unique(jr, jc, m, n)
+    nbody = 0
+    for j in range(n):
+        if body[j] + 1 > nbody:
+            nbody = body[j] + 1
+    tol = ftol * (1.0 + scale[1])
     evals = 0
     # B, ipiv, nz hold the previous point's velocity factorisation while have_chord is set
     have_chord = False
@@ -350,6 +479,11 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
         for i in range(nnz):
             jv[i] = out_pos[m + i]
         stale = True
+        if k == 0 and scale[0] == 0.0:
+            # the scaling of q0 (= g) from this evaluation (the Python path's _scaling)
+            _assemble(jv, 0, jr, jc, J)
+            scale[0], scale[1] = _scaling(J, g, trans, body, nbody, hint, columns)
+            tol = ftol * (1.0 + scale[1])
         if unique:
             _rows_nz(jv, jr, jc, columns, r)
         else:
@@ -433,7 +567,8 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
                 _assemble(jv, 0, jr, jc, J)
                 stale = False
             last_chord = False
-            if _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, RCOND_MIN) < 0:
+            if _factor(lapack, J, r, columns, B, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, work, iwork,
+                       RCOND_MIN) < 0:
                 break
             _solve(lapack, B, ipiv, nz, r, columns, F, dq, ibuf, cbuf)
             for j in range(n):
@@ -470,9 +605,13 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, tol, maxit, damping
             for j in range(n):
                 x[1 + j] = q[j]
             _eval_row(ptrs, 1, x, nin, out_vel)
-            _assemble(out_vel, 0, jr, jc, J)
-            rc = _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork,
-                         RCOND_WARN if lazy else 0.0)
+            if unique:       # (B straight from the values: assembling J first cost 4 %)
+                anorm = _fill_nz(out_vel, jr, jc, r, columns, B)
+            else:
+                _assemble(out_vel, 0, jr, jc, J)
+                anorm = _fill(J, r, columns, B)
+            rc = _factor_filled(lapack, B, anorm, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, work,
+                                iwork, RCOND_WARN if lazy else 0.0)
             if rc < 0:
                 return k, evals
             if rc == RCOND_PENDING:
@@ -522,6 +661,8 @@ def fill_rconds(ptrs, lapack, times, Q, p, jr, jc, columns, R, rconds):
         x[1 + 2 * n + j] = p[j]
     out_vel = np.empty(nnz + m)
     J, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, r = _factor_work(m, n)
+    S, W, seen = _structure(jr, jc, n)
+    unique = _unique(jr, jc, m, n)
     bad = 0
     for k in range(rconds.size):
         if rconds[k] != RCOND_PENDING:
@@ -532,8 +673,13 @@ def fill_rconds(ptrs, lapack, times, Q, p, jr, jc, columns, R, rconds):
         for i in range(m):
             r[i] = R[k, i]
         _eval_row(ptrs, 1, x, nin, out_vel)
-        _assemble(out_vel, 0, jr, jc, J)
-        rc = _factor(lapack, J, r, columns, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, 0.0)
+        if unique:                       # (as the loop forms B)
+            anorm = _fill_nz(out_vel, jr, jc, r, columns, B)
+        else:
+            _assemble(out_vel, 0, jr, jc, J)
+            anorm = _fill(J, r, columns, B)
+        rc = _factor_filled(lapack, B, anorm, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, work, iwork,
+                            0.0)
         if rc < 0:
             bad += 1
         rconds[k] = rc

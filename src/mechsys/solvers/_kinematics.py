@@ -45,7 +45,7 @@ import scipy.sparse as sps
 from .._errors import ConvergenceError, SingularJacobianError
 from . import _jit
 from ._diagnostics import Stopped
-from ._linalg import SPARSE_THRESHOLD, Scaling, Singular, rotation_columns
+from ._linalg import SPARSE_THRESHOLD, Scaling, Singular, rotation_indices
 from ._position import PositionOptions, PositionResult, describe_singular, solve_position
 from ._rank import continue_position, continue_rates
 
@@ -63,10 +63,6 @@ ROTATION_JUMP = np.pi / 2
 ROTATION_START = np.pi / 8
 #: a Taylor prediction may turn this much (rad) more than 4 x the secant step
 ROTATION_SLACK = 0.25
-
-
-def _scaling(system, t, q, p, sparse) -> Scaling:
-    return Scaling.of(system, q, system.jacobian(t, q, p, sparse))
 
 
 def solve_velocity(system, t: float, q, p=None, scaling: Scaling | None = None) -> np.ndarray:
@@ -146,20 +142,23 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
     q0 = np.asarray(guess, dtype=float)
     sc = scaling
     evals = 0
-    if sc is None and N:
-        sc, evals = _scaling(system, times[0], q0, p, sparse), 1
-    rot = np.flatnonzero(rotation_columns(system))  # indices of angles / Euler parameters
+    rot = rotation_indices(system)  # indices of angles / Euler parameters
     k0 = 0
     chord = None    # the previous point's velocity factorisation: Newton's first steps reuse it
     # hooks (pre_solve, post_iterate) run in the Python loop only
     pointers = _jit.plan(system, N, order) if N and hooks is None else None
+    start = None    # the first point's equations at the guess, evaluated for the scaling
+    if sc is None and N and pointers is None:
+        F0, J0 = system.residual_and_jacobian(times[0], q0, p, sparse)
+        sc, start = Scaling.of(system, q0, J0), (F0, J0)
     fill = None
     if pointers is not None:
-        # the regular points in compiled code; the first one needing care is left to the loop below
+        # the regular points in compiled code; the first one needing care is left to the loop
+        # below (the loop takes the scaling from its first evaluation when none is given)
         rprev = np.ones(n)
         R = np.empty((N, n)) if order >= 1 else None   # row scales of the pending estimates
-        k0, done = _jit.run(system, pointers, times, q0, p, order, options or PositionOptions(), sc,
-                            rot, Q, QD, QDD, its, rconds, rprev, R)
+        k0, done, sc = _jit.run(system, pointers, times, q0, p, order, options or PositionOptions(),
+                                sc, rot, Q, QD, QDD, its, rconds, rprev, R)
         if order >= 1 and (rconds[:k0] == RCOND_PENDING).any():
             fill = _jit.rcond_filler(system, pointers, times, Q, p, sc, R)
         evals += done
@@ -177,7 +176,8 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
                 raise Stopped("pre_solve", float(t))
             g = q0 if k == 0 else _predict(Q, QD, QDD, rconds, times, k, rot)
             res = _solve_point(system, t, g, Q[k - 1] if k else None, options, p, sc, rot,
-                               times[k - 1] if k else None, hooks, chord)
+                               times[k - 1] if k else None, hooks, chord,
+                               start if k == 0 else None)
         except Stopped as exc:
             raise _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds, fill) from None
         q = res.q
@@ -303,15 +303,18 @@ def _predict(Q, QD, QDD, rconds, times, k: int, rot) -> np.ndarray:
 
 
 def _solve_point(system, t, g, q_prev, options, p, sc, rot, t_prev=None, hooks=None,
-                 chord=None):
+                 chord=None, start=None):
     """Newton from the prediction ``g`` (starting with chord steps on ``chord``, the
-    previous point's factorisation, when given); again from ``q_prev`` (plain Newton) when
+    previous point's factorisation, when given; ``start``: the equations at ``g``, already
+    evaluated, as ``solve_position`` takes them); again from ``q_prev`` (plain Newton) when
     that fails or when the result jumps (a rotational coordinate further than
     ``ROTATION_JUMP`` from ``g``). At a singular instant after the first point, minimum-norm
     Gauss-Newton from ``g`` (:func:`._rank.continue_position`) continues the branch."""
     kw = {} if hooks is None else {"hooks": hooks}  # (the plain call stays as it was)
     if chord is not None:
         kw["chord"] = chord
+    if start is not None:
+        kw["start"] = start
     try:
         res = solve_position(system, t, g, options, p, sc, **kw)
         if q_prev is None or _jump(res.q, g, rot) <= ROTATION_JUMP:
@@ -331,6 +334,7 @@ def _solve_point(system, t, g, q_prev, options, p, sc, rot, t_prev=None, hooks=N
     # the predictor can throw the guess far away where velocities are huge (near a
     # toggle): start again from the previous position
     kw.pop("chord", None)
+    kw.pop("start", None)
     res = solve_position(system, t, q_prev, options, p, sc, **kw)
     jump = _jump(res.q, q_prev, rot)
     if jump > ROTATION_JUMP:

@@ -344,7 +344,7 @@ class Scaling:
         if not np.isfinite(big):
             big = 0.0
         arm = _lever_arm(J, trans, body)
-        hint = float(getattr(system, "length_hint", 0.0) or 0.0)
+        hint = length_hint(system)
         # a lever arm that is round-off of the model's lengths is no length: a crank pin in
         # line with its rod (a dead centre at the reference configuration) leaves only
         # 1e-16-sized rotational entries, and L = 1e-16 would make every solve "singular"
@@ -415,6 +415,11 @@ class ScaledFactor:
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         return self._columns * self._fac.solve(np.asarray(b, dtype=float) / self._rows)
+
+
+def length_hint(system) -> float:
+    """The system's ``length_hint`` (0.0 when it has none): :class:`Scaling`'s fallback length."""
+    return float(getattr(system, "length_hint", 0.0) or 0.0)
 
 
 def _csc(J):
@@ -518,3 +523,18 @@ def rotation_columns(system) -> np.ndarray:
     """Mask (n,) of the bodies' rotational coordinates (angles, Euler parameters)."""
     trans, body = _column_kinds(system)
     return (body >= 0) & ~trans
+
+
+def rotation_indices(system) -> np.ndarray:
+    """Indices (int64, read-only) of :func:`rotation_columns` (kept with the column kinds)."""
+    trans, body = _column_kinds(system)
+    got = getattr(system, "_rotation_indices_of", None)
+    if got is not None and got[0] is trans:
+        return got[1]
+    idx = np.flatnonzero((body >= 0) & ~trans).astype(np.int64)
+    idx.setflags(write=False)
+    try:
+        system._rotation_indices_of = (trans, idx)
+    except (AttributeError, TypeError):  # a frozen or slotted stand-in: no cache
+        pass
+    return idx

@@ -138,7 +138,7 @@ def describe_singular(system, J, t, q, what: str,
 
 def solve_position(system, t: float, guess, options: PositionOptions | None = None,
                    p=None, scaling: Scaling | None = None, hooks=None,
-                   chord=None) -> PositionResult:
+                   chord=None, start=None) -> PositionResult:
     """Solve ``Phi(q, t) = 0`` for ``q`` by damped Newton from ``guess`` (shape ``(n,)``).
 
     ``chord``: a factorisation (:class:`~mechsys.solvers._linalg.ScaledFactor`) of a nearby
@@ -153,7 +153,8 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
     that started within the tolerance: when the step that reached it started outside, one
     more step with the last factorisation (the chord, or Newton's own) is taken, kept while
     the residual stays within the tolerance (not at ``max_iterations``). Without ``chord`` the
-    iteration is plain damped Newton.
+    iteration is plain damped Newton. ``start``: ``(Phi, Phi_q)`` at ``guess``, when the caller
+    has evaluated them already (a sweep's first point, for its scaling); counted here.
 
     ``scaling`` (a :class:`~mechsys.solvers._linalg.Scaling`) fixes the unit-free form of
     the equations; by default it is taken at the system's own guess (so a wild starting
@@ -171,7 +172,7 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
     q = np.array(guess, dtype=float)
     q_start = q.copy()
     post = hooks.post_iterate if hooks is not None else None
-    F, J = system.residual_and_jacobian(t, q, p, sparse)
+    F, J = start if start is not None else system.residual_and_jacobian(t, q, p, sparse)
     evals = 1
     if scaling is None:
         g0 = getattr(system, "guess", None)
