@@ -29,7 +29,7 @@ profiles included), as many equations as coordinates, and a dense system (``n <=
 Measured (slider-crank, 1000 points with velocities and accelerations): see
 ``docs/performance.md``, ``docs/decisions/0013-compiled-sweep.md`` and
 ``docs/decisions/0019-sweep-lu-structure-and-guard.md`` and
-``docs/decisions/0020-sweep-chord-steps.md``.
+``docs/decisions/0020-sweep-chord-steps.md``, ``0023`` and ``0025``.
 """
 
 from __future__ import annotations

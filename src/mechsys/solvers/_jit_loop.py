@@ -6,6 +6,7 @@ operations, so that both give the same numbers:
 * ``_eval``          ``System.f_position`` / ``f_velocity`` / ``f_gamma`` at ``[t, q, qd, p]``
 * ``_assemble``      ``System.assemble`` (dense ``Phi_q`` from its nonzero values)
 * ``_rows``          ``Scaling.rows``
+* ``_scaling``       ``Scaling.of`` at the guess (from the loop's first evaluation)
 * ``_factor``        ``Scaling.factor`` -> ``Factor`` (LAPACK dgetrf + dgecon on ``R^-1 J D``;
                      up to ``SMALL`` unknowns their algorithms from ``_jit_lapack``)
 * ``_solve``         ``ScaledFactor.solve``
@@ -17,7 +18,8 @@ operations, so that both give the same numbers:
                      (``SweepResult.rcond``, decision 0023)
 
 The matrices handed to LAPACK are stored transposed in C order, which is column-major
-(Fortran) order of the matrix itself.
+(Fortran) order of the matrix itself. The helpers that allocate nothing are compiled
+without reference counting (``_jit_lapack.leaf``, decision 0025).
 """
 
 from __future__ import annotations
@@ -30,7 +32,7 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 
 from ._jit_cache import check as _check_cache
-from ._jit_lapack import GUARD_MARGIN, gecon1, getrf, inv_norm_bound, pattern_size, symbolic_pattern
+from ._jit_lapack import GUARD_MARGIN, gecon1, getrf, inv_norm_bound, leaf, pattern_size, symbolic_pattern
 from ._kinematics import RCOND_PENDING, RCOND_WARN, ROTATION_JUMP, ROTATION_SLACK, ROTATION_START
 from ._linalg import ARM_ROUNDOFF, RCOND_MIN
 from ._position import CHORD_RATE
@@ -65,32 +67,53 @@ def _ccall(typingctx, addr, args):
     return sig, codegen
 
 
-@nb.njit(cache=True)
+@intrinsic
+def _kcall(typingctx, addr, out, off, x, ctx):
+    """Call the kernel ``void f(double *out, const double *x, void *ctx)`` at ``addr`` with
+    ``out`` starting at element ``off``. The arrays pass as arguments, not in a tuple as to
+    :func:`_ccall`: building a tuple of arrays increments and decrements their reference
+    counts (atomic operations), which cost 10-15 % of the sweep, measured."""
+    sig = types.void(addr, out, off, x, ctx)
+
+    def codegen(context, builder, signature, llargs):
+        vp = ir.IntType(8).as_pointer()
+        o = context.make_array(signature.args[1])(context, builder, llargs[1])
+        a = context.make_array(signature.args[3])(context, builder, llargs[3])
+        optr = builder.gep(o.data, [llargs[2]])
+        fn = builder.inttoptr(llargs[0], ir.FunctionType(ir.VoidType(), [vp, vp, vp]).as_pointer())
+        builder.call(fn, [builder.bitcast(optr, vp), builder.bitcast(a.data, vp),
+                          builder.inttoptr(llargs[4], vp)])
+        return context.get_dummy_value()
+
+    return sig, codegen
+
+
+@leaf
 def _eval(ptr, x, nin, out):
     """One kernel (a row of the pointer table: see ``_jit.plan``) at ``x[:nin]``; a
     two-stage kernel first writes its ``Piecewise`` values into ``x[nin:]``."""
     if ptr[2] != 0:
-        _ccall(ptr[2], (x[nin:nin + ptr[4]], x, ptr[3]))
-    _ccall(ptr[0], (out, x, ptr[1]))
+        _kcall(ptr[2], x, nin, x, ptr[3])
+    _kcall(ptr[0], out, 0, x, ptr[1])
 
 
-@nb.njit(cache=True)
+@leaf
 def _eval_row(ptrs, row, x, nin, out):
     """:func:`_eval` of row ``row`` of the pointer table, given the table: a view of the row
     per call costs its reference counting, about as much as a small kernel."""
     if ptrs[row, 2] != 0:
-        _ccall(ptrs[row, 2], (x[nin:nin + ptrs[row, 4]], x, ptrs[row, 3]))
-    _ccall(ptrs[row, 0], (out, x, ptrs[row, 1]))
+        _kcall(ptrs[row, 2], x, nin, x, ptrs[row, 3])
+    _kcall(ptrs[row, 0], out, 0, x, ptrs[row, 1])
 
 
-@nb.njit(cache=True)
+@leaf
 def _assemble(vals, off, jr, jc, J):
     J[:, :] = 0.0
     for k in range(jr.size):
         J[jr[k], jc[k]] += vals[off + k]
 
 
-@nb.njit(cache=True)
+@leaf
 def _rows(J, columns, r):
     n = J.shape[0]
     for i in range(n):
@@ -102,7 +125,7 @@ def _rows(J, columns, r):
         r[i] = big if big > 0 else 1.0
 
 
-@nb.njit(cache=True)
+@leaf
 def _rows_nz(vals, jr, jc, columns, r):
     """:func:`_rows` from the nonzero values (each position once): the same maxima."""
     m = r.size
@@ -117,7 +140,7 @@ def _rows_nz(vals, jr, jc, columns, r):
             r[i] = 1.0
 
 
-@nb.njit(cache=True)
+@leaf
 def _norm1(B, n):
     """One-norm of the matrix stored transposed in ``B``: its largest column sum."""
     anorm = 0.0
@@ -130,7 +153,7 @@ def _norm1(B, n):
     return anorm
 
 
-@nb.njit(cache=True)
+@leaf
 def _fill(J, r, columns, B):
     """``B`` = ``R^-1 J D`` in transposed storage; returns its one-norm."""
     n = J.shape[0]
@@ -141,7 +164,7 @@ def _fill(J, r, columns, B):
     return _norm1(B, n)
 
 
-@nb.njit(cache=True)
+@leaf
 def _fill_nz(vals, jr, jc, r, columns, B):
     """:func:`_fill` of the Jacobian whose nonzero values are ``vals`` (each position once:
     ``sweep_dense`` checks), without assembling it: the same entries (``0.0 + v`` as
@@ -154,7 +177,7 @@ def _fill_nz(vals, jr, jc, r, columns, B):
     return _norm1(B, r.size)
 
 
-@nb.njit(cache=True)
+@leaf
 def _factor(lapack, J, r, columns, B, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, work, iwork,
             guard):
     """LU of ``R^-1 J D`` into ``B`` (transposed storage): :func:`_fill`, then
@@ -163,7 +186,7 @@ def _factor(lapack, J, r, columns, B, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, wo
                           dbuf, work, iwork, guard)
 
 
-@nb.njit(cache=True)
+@leaf
 def _factor_filled(lapack, B, anorm, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, work, iwork,
                    guard):
     """LU of the matrix in ``B`` (transposed storage, one-norm ``anorm``); returns its
@@ -240,7 +263,7 @@ def _structure(jr, jc, n):
     return S, np.empty((n, n)), np.full(n, -1, dtype=np.int32)
 
 
-@nb.njit(cache=True)
+@leaf
 def _solve(lapack, B, ipiv, nz, r, columns, b, out, ibuf, cbuf):
     n = r.size
     for i in range(n):
@@ -276,7 +299,7 @@ def _solve(lapack, B, ipiv, nz, r, columns, b, out, ibuf, cbuf):
         out[i] = columns[i] * out[i]
 
 
-@nb.njit(cache=True)
+@leaf
 def _scaled_norm(F, r, m):
     norm = 0.0
     for i in range(m):
@@ -286,7 +309,7 @@ def _scaled_norm(F, r, m):
     return norm
 
 
-@nb.njit(cache=True)
+@leaf
 def _jump(q, ref, rot):
     big = 0.0
     for j in rot:
@@ -296,7 +319,7 @@ def _jump(q, ref, rot):
     return big
 
 
-@nb.njit(cache=True)
+@leaf
 def _predict(Q, QD, QDD, rconds, times, k, rot, order, g, sec):
     n = Q.shape[1]
     dt = times[k] - times[k - 1]
@@ -454,6 +477,9 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
         if body[j] + 1 > nbody:
             nbody = body[j] + 1
     tol = ftol * (1.0 + scale[1])
+    # (not a conditional inside the call below: Numba would copy every argument through a
+    # phi, each copy with its reference count)
+    vguard = RCOND_WARN if lazy else 0.0
     evals = 0
     # B, ipiv, nz hold the previous point's velocity factorisation while have_chord is set
     have_chord = False
@@ -611,7 +637,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                 _assemble(out_vel, 0, jr, jc, J)
                 anorm = _fill(J, r, columns, B)
             rc = _factor_filled(lapack, B, anorm, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, work,
-                                iwork, RCOND_WARN if lazy else 0.0)
+                                iwork, vguard)
             if rc < 0:
                 return k, evals
             if rc == RCOND_PENDING:

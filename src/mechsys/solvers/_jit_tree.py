@@ -9,7 +9,7 @@ from __future__ import annotations
 import numba as nb
 
 from ._jit_cache import check as _check_cache
-from ._jit_loop import _ccall
+from ._jit_loop import _kcall
 from ._tree import _articulated, _assemble, _fill, _unpack
 
 _check_cache()   # stale cached loops go before anything here compiles (see _jit_cache)
@@ -29,5 +29,5 @@ def forward(ptrs, kid, par, root, nqm, goff, gcols, nq, t, q, qd, p, xbuf, obuf,
         k = goff[s + 1] - goff[s]
         x = xbuf[:1 + 2 * nm + 2 * k + p.size]
         _fill_nb(x, s, t, q, qd, p, par, root, nqm, goff, gcols, P, Pd)
-        _ccall(ptrs[kid[s], 0], (obuf, x, ptrs[kid[s], 1]))
+        _kcall(ptrs[kid[s], 0], obuf, 0, x, ptrs[kid[s], 1])
         _unpack_nb(obuf, s, nq, nm, k, par, P, Pd, FP, Fg, H, HL, Mb, Qvb)
