@@ -125,3 +125,39 @@ def test_a_reused_workspace_carries_nothing_from_the_last_run():
         _jit_free.FreeStepper.__init__ = orig
     assert steppers[0].ws is not steppers[1].ws       # the first still lives: not shared
     assert s is free.system
+
+
+def test_a_finished_run_frees_its_stepper_without_the_garbage_collector():
+    """SciPy's solver objects live in reference cycles; the stepper must not be kept alive
+    by them (the derivative SciPy calls holds it weakly), or the next run cannot reuse its
+    work arrays until a garbage collection: with the collector off, the second run's
+    stepper has the first one's workspace."""
+    import gc
+    import weakref
+
+    from mechsys import models
+    from mechsys.solvers import _jit_free
+
+    m = models.pendulum_chain(3, 9.81)
+    m.solve(0.0)
+    free = m.free(drop=["lock0", "lock1", "lock2"])
+    free.simulate((0.0, 0.1))
+    made = []
+    orig = _jit_free.FreeStepper.__init__
+
+    def note(self, *a, **k):
+        orig(self, *a, **k)
+        made.append((weakref.ref(self), self.ws))
+
+    was = gc.isenabled()
+    gc.disable()
+    _jit_free.FreeStepper.__init__ = note
+    try:
+        free.simulate((0.0, 0.1))
+        assert made[0][0]() is None                  # gone when the run returned
+        free.simulate((0.0, 0.1), rtol=1e-6, atol=1e-8)
+    finally:
+        _jit_free.FreeStepper.__init__ = orig
+        if was:
+            gc.enable()
+    assert len(made) == 2 and made[1][1] is made[0][1]

@@ -405,10 +405,19 @@ class FreeStepper:
         """``python_fun(t, y) -> f`` answered by :meth:`derivative` while ``switch[0]`` is
         true and it can (SciPy's set-up of the solver: its first derivative and initial
         step). The steps the Python loop takes after a hand-over keep ``python_fun``: its
-        zone guard marks the steps with a kink, which the compiled derivative does not."""
+        zone guard marks the steps with a kink, which the compiled derivative does not.
+
+        The function holds the stepper weakly: SciPy's solver objects live in reference
+        cycles (freed by the garbage collector, not when the run ends), and a strong
+        reference would keep the stepper alive with them, so that the next run could not
+        reuse its work arrays (:func:`_workspace`). The run holds the stepper meanwhile."""
+        import weakref
+
+        ref = weakref.ref(self)
 
         def fun(t, y):
-            got = self.derivative(t, y) if switch[0] else None
+            stepper = ref() if switch[0] else None
+            got = stepper.derivative(t, y) if stepper is not None else None
             return python_fun(t, y) if got is None else got[0]
 
         return fun

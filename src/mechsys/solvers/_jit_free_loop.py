@@ -35,7 +35,7 @@ import numpy as np
 
 from ._jit_borrow import borrow
 from ._jit_cache import check as _check_cache
-from ._jit_lapack import gecon1, getrf, getrs
+from ._jit_lapack import gecon1, getrf, getrs, leaf
 from ._jit_loop import SMALL as SMALL_LU
 from ._jit_loop import _assemble, _ccall, _eval, _norm1, _rows, _rows_nz
 from ._jit_tree import articulated as _articulated
@@ -66,7 +66,7 @@ ERROR_EXPONENT = -1.0 / 8.0          # -1 / (error_estimator_order + 1), DOP853
 N_STAGES = 12
 
 
-@nb.njit(cache=True)
+@leaf
 def _lu_solve(AT, b, N, piv):
     """``A x = b`` in place (``b`` becomes ``x``; ``AT`` holds ``A`` transposed and is
     overwritten) by ``_jit_lapack``'s ``dgetrf``/``dgetrs``, without LAPACK's call overhead.
@@ -90,7 +90,7 @@ def _evalx(ptr, x, nin, out, ex, ph):
         out[i] = ph[ex[i]]
 
 
-@nb.njit(cache=True)
+@leaf
 def _accel(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, columns,
            robust, ipiv, ibuf, rhs, b, qdd, lam, force, ex, ph):
     """Free acceleration at ``x = [t, q, qd, 0, p, 0]``: ``qdd`` (n,), ``lam`` (m,);
@@ -195,7 +195,7 @@ def _rhs(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, 
     return True
 
 
-@nb.njit(cache=True)
+@leaf
 def _min_norm(lapack, J, r, columns, bvec, out, Js, A, ipiv, ibuf, cbuf, dbuf, work, iwork,
               ybuf, robust):
     """``out = D J^T (J^ J^T)^-1 bvec``; False at a singular (or, ``robust``, nearly singular:
@@ -251,7 +251,7 @@ def _min_norm(lapack, J, r, columns, bvec, out, Js, A, ipiv, ibuf, cbuf, dbuf, w
     return True
 
 
-@nb.njit(cache=True)
+@leaf
 def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offset, tol, maxit,
              robust, n, m, t, y, J, r, Fs, dq, Js, A, ipiv, ibuf, cbuf, dbuf, work, iwork, ybuf,
              blocks, blk_i, blk_w):
@@ -516,7 +516,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
     return CHUNK, steps, ie, evals, rejected, projections
 
 
-@nb.njit(cache=True)
+@leaf
 def _adams_weights(times, cnt, t_from, h, V, w, cache, piv):
     """``w[:cnt]``: ``solvers._integrators._adams_weights`` (the nodes rounded to 1e-9 as
     there, so that constant steps give the same weights). ``cache`` (13,): the last call's
@@ -808,7 +808,7 @@ def _gen_work(blocks, gi, n, m):
             z(max(n, 1)), z(max(n, 1)), z((nM, nM)), z((NN, NN)))
 
 
-@nb.njit(cache=True)
+@leaf
 def _accel_gen(kp, lapack, x, nin, n, m, jr, jc, rows0, columns, robust, ipiv, ibuf, rhs, b,
                qdd, lam, force, gi, gw, ex, ph, tree, y):
     """Free acceleration of a system with recursive Gen dynamics
@@ -890,7 +890,7 @@ def _accel_gen(kp, lapack, x, nin, n, m, jr, jc, rows0, columns, robust, ipiv, i
 # ``blk``: int64 arrays packed by ``_jit_free._Blocks`` (see there).
 
 
-@nb.njit(cache=True)
+@leaf
 def _chol_blocks(Mst, bstart, boff, nblk):
     """Cholesky (lower, in place) of every block of M; False if one is not positive definite."""
     for b in range(nblk):
@@ -910,7 +910,7 @@ def _chol_blocks(Mst, bstart, boff, nblk):
     return True
 
 
-@nb.njit(cache=True)
+@leaf
 def _invert_blocks(Mst, Minv, bstart, boff, nblk, Li):
     """``Minv`` (packed like ``Mst``): every block's inverse ``L^-T L^-1`` from its Cholesky
     factor in ``Mst`` (``Li``: work, at least the largest block squared). The products with
@@ -938,7 +938,7 @@ def _invert_blocks(Mst, Minv, bstart, boff, nblk, Li):
                 Minv[o + j * nb_ + i] = s
 
 
-@nb.njit(cache=True)
+@leaf
 def _invert3(Mst, Minv, o):
     """``_invert_blocks`` for one 3 x 3 block at ``o``."""
     a = 1.0 / Mst[o]
@@ -955,7 +955,7 @@ def _invert3(Mst, Minv, o):
     Minv[o + 8] = f * f
 
 
-@nb.njit(cache=True)
+@leaf
 def _block_mul(Minv, o, nb_, src, soff, dst, doff):
     """``dst[doff:doff + nb_] = M_b^-1 src[soff:soff + nb_]``."""
     if nb_ == 3:
@@ -973,7 +973,7 @@ def _block_mul(Minv, o, nb_, src, soff, dst, doff):
         dst[doff + i] = s
 
 
-@nb.njit(cache=True)
+@leaf
 def _band_chol(Sb, m, bw):
     """Banded Cholesky in place: ``Sb[i, d] = S[i, i - d]``; returns the smallest ratio
     ``L_ii / max L_jj`` (a cheap, optimistic conditioning measure), -1 if not positive
@@ -1000,7 +1000,7 @@ def _band_chol(Sb, m, bw):
     return lo / hi if hi > 0 else -1.0
 
 
-@nb.njit(cache=True)
+@leaf
 def _band_solve(Sb, m, bw, x):
     for i in range(m):
         s = x[i]
@@ -1014,7 +1014,7 @@ def _band_solve(Sb, m, bw, x):
         x[i] = s / Sb[i, 0]
 
 
-@nb.njit(cache=True)
+@leaf
 def _fill_rows(vals, j0, jpos, Jst, scale_rows, r, columns, jc, jr):
     """Per (row, block) segments of ``J`` (or of ``R^-1 J D`` with ``scale_rows``)."""
     Jst[:] = 0.0
@@ -1025,7 +1025,7 @@ def _fill_rows(vals, j0, jpos, Jst, scale_rows, r, columns, jc, jr):
         Jst[jpos[k]] = v
 
 
-@nb.njit(cache=True)
+@leaf
 def _gram(A_st, B_st, pairs, Sb):
     """``Sb`` (banded) of ``A B^T`` from per-(row, block) segments: rows couple through a
     common block only; ``pairs`` (k, 5): row ``i``, band offset ``i - k``, the two segment
@@ -1041,7 +1041,7 @@ def _gram(A_st, B_st, pairs, Sb):
         Sb[i, pairs[r, 1]] += s
 
 
-@nb.njit(cache=True)
+@leaf
 def _accel_blocks(kp, x, nin, out, kk, kM, n, m, jr, jc, rows0, columns, robust, blk_i,
                   Mst, Jst, Wst, Sb, u, Minv, Li, qdd, lam, force, ex, ph):
     """``_accel`` by the block path (see above); False: hand over."""
@@ -1113,13 +1113,13 @@ def _accel_blocks(kp, x, nin, out, kk, kM, n, m, jr, jc, rows0, columns, robust,
     return True
 
 
-@nb.njit(cache=True)
+@leaf
 def _min_norm_blocks(vals, j0, jr, jc, columns, m, n, bvec, r, blk_i, Pst, Sb, robust, dq):
     """``_min_norm`` by the block path: ``A = J^ J^T`` banded (rows couple through common
     blocks), banded Cholesky; ``dq = D J^T A^-1 bvec``. False (hand over) when ``A`` is not
     positive definite or, ``robust``, when its Cholesky diagonal spreads by more than
     ``sqrt(ZONE)`` (an optimistic stand-in for the Python path's condition estimate: the
-    hand-over comes before the zone of a singular Jacobian)."""
+    hand-over comes before the zone of a singular Jacobian). ``bvec`` is overwritten."""
     bstart, boff, rptr, rblk, roff, jpos, bsize, mpos, pairs = blk_i
     bw = Sb.shape[1] - 1
     _fill_rows(vals, j0, jpos, Pst, True, r, columns, jc, jr)
@@ -1127,7 +1127,7 @@ def _min_norm_blocks(vals, j0, jr, jc, columns, m, n, bvec, r, blk_i, Pst, Sb, r
     ratio = _band_chol(Sb, m, bw)
     if ratio < 0 or (robust and ratio * ratio < ZONE):
         return False
-    y = bvec.copy()
+    y = bvec                      # (overwritten: the callers compute it again before use)
     _band_solve(Sb, m, bw, y)
     for j in range(n):
         dq[j] = 0.0
@@ -1142,7 +1142,7 @@ def _min_norm_blocks(vals, j0, jr, jc, columns, m, n, bvec, r, blk_i, Pst, Sb, r
     return True
 
 
-@nb.njit(cache=True)
+@leaf
 def _project_blocks(pp, pv, xk, nin_k, out_pos, out_vel, jr, jc, columns, offset, tol, maxit,
                     robust, n, m, t, y, r, Fs, dq, blk_i, Pst, Sb, ex, ph):
     """``_project`` by the block path."""
