@@ -6,21 +6,21 @@ code) through their C entry points like the compiled sweep (``solvers/_jit_loop.
 
 from __future__ import annotations
 
-import numba as nb
-
 from ._jit_cache import check as _check_cache
+from ._jit_lapack import leaf
 from ._jit_loop import _kcall
 from ._tree import _articulated, _assemble, _fill, _unpack
 
 _check_cache()   # stale cached loops go before anything here compiles (see _jit_cache)
 
-_fill_nb = nb.njit(cache=True)(_fill)
-_unpack_nb = nb.njit(cache=True)(_unpack)
-assemble = nb.njit(cache=True)(_assemble)
-articulated = nb.njit(cache=True)(_articulated)
+# leaves (decision 0025): they allocate nothing, so no reference counting on each call
+_fill_nb = leaf(_fill)
+_unpack_nb = leaf(_unpack)
+assemble = leaf(_assemble)
+articulated = leaf(_articulated)
 
 
-@nb.njit(cache=True)
+@leaf
 def forward(ptrs, kid, par, root, nqm, goff, gcols, nq, t, q, qd, p, xbuf, obuf, P, Pd, FP, Fg, H,
             HL, Mb, Qvb):
     """Masters first: each slave's kernel at its master's pose, then its outputs stored."""
