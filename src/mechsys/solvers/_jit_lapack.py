@@ -38,6 +38,7 @@ the rows ``i < j`` with ``U(i, j) != 0``, ascending.
 from __future__ import annotations
 
 import numba as nb
+import numba.core.options  # noqa: F401  (leaf below reads it)
 import numpy as np
 
 from ._jit_cache import check as _check_cache
@@ -47,8 +48,12 @@ _check_cache()   # stale cached loops go before anything here compiles (see _jit
 #: The compiled loops' leaf functions (they allocate nothing; their callers hold every array
 #: they pass): compiled without reference counting. With it, each call incremented and
 #: decremented the count of every array argument on entry and exit, atomic operations that
-#: took 10-15 % of the sweep (measured: ``NRT_incref``/``NRT_decref`` in a profile).
-leaf = nb.njit(cache=True, _nrt=False)
+#: took 10-15 % of the sweep (measured: ``NRT_incref``/``NRT_decref`` in a profile). NumPy's
+#: error model: no zero test before each division (every divisor here is guarded).
+#: (``_nrt`` is Numba's own option name, not documented: a Numba without it gets the plain
+#: decorator rather than an error at the first compilation.)
+leaf = nb.njit(cache=True, error_model="numpy", **(
+    {"_nrt": False} if hasattr(getattr(nb.core.options, "DefaultOptions", None), "_nrt") else {}))
 
 #: :func:`inv_norm_bound` exceeds what ``gecon1`` can compute from the same factors up to a
 #: relative ``(4 n^2 + 8 n + 20) u`` (``n <= 32``: below 5e-13); the compiled sweep's guard
