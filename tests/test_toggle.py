@@ -111,3 +111,18 @@ def test_whole_turn_jump_is_retried_then_reported(monkeypatch):
                                                   r"\(crank\.th\) jumped by 6\.6 rad") as err:
         m.solve(t)
     assert err.value.time == t[2]
+
+
+def test_an_ill_conditioned_iterate_is_not_called_a_redundancy():
+    """A guess far from any assembled position (the crank turned 1e9 rad with the rod and
+    piston guessed for 0) drives Newton to an iterate whose Jacobian is too ill-conditioned
+    to factorise although every equation is independent: the error says so, instead of
+    "singular ... (rank 9 of 9 equations)" and advice about redundant constraints."""
+    m = models.slider_crank()
+    m.set_guess({"crank.th": 1e9})
+    with pytest.raises(ms.SingularJacobianError) as exc:
+        m.solve([0.0, 0.1])
+    msg = str(exc.value)
+    assert "too ill-conditioned" in msg and "no equation depends on the others" in msg
+    assert "(rank 9 of 9 equations" in msg and "redundant" not in msg
+    assert "check the guess" in msg and exc.value.dependent == []

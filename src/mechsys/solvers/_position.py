@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._errors import ConvergenceError, ModelError, SingularJacobianError
-from ._linalg import SPARSE_THRESHOLD, Scaling, Singular
+from ._linalg import RCOND_MIN, SPARSE_THRESHOLD, Scaling, Singular
 
 
 @dataclass(frozen=True)
@@ -127,12 +127,21 @@ def describe_singular(system, J, t, q, what: str,
     """A :class:`SingularJacobianError` naming the dependent equations of ``J`` at ``(t, q)``."""
     d = dependency(system, J, scaling, q)
     where = f" at t = {t:.6g}" if t is not None else ""
-    msg = f"{what}: the constraint Jacobian is singular{where} {d.text}"
-    msg += (
-        " Either these constraints are redundant (remove or relax as many equations as are "
-        "dependent), or the mechanism is at a lock-up/toggle position where it cannot be "
-        "driven as specified."
-    )
+    if d.deficiency == 0:
+        # the factorisation's condition estimate was below RCOND_MIN, yet the rank-revealing
+        # QR finds every equation independent: not a redundancy, an ill-conditioned iterate
+        msg = (f"{what}: the constraint Jacobian{where} is too ill-conditioned to solve with "
+               f"(reciprocal condition number below {RCOND_MIN:.0e} in its unit-free form), "
+               f"although no equation depends on the others {d.text} The coordinates there "
+               "are close to a lock-up/toggle position, or far from any assembled position: "
+               "check the guess (a wrong angle or length, a point on the wrong side).")
+    else:
+        msg = f"{what}: the constraint Jacobian is singular{where} {d.text}"
+        msg += (
+            " Either these constraints are redundant (remove or relax as many equations as "
+            "are dependent), or the mechanism is at a lock-up/toggle position where it cannot "
+            "be driven as specified."
+        )
     return SingularJacobianError(msg, time=t, dependent=d.owners, rank=d.rank)
 
 
