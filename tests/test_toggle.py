@@ -126,3 +126,21 @@ def test_an_ill_conditioned_iterate_is_not_called_a_redundancy():
     assert "too ill-conditioned" in msg and "no equation depends on the others" in msg
     assert "(rank 9 of 9 equations" in msg and "redundant" not in msg
     assert "check the guess" in msg and exc.value.dependent == []
+
+
+def test_solve_position_start_is_checked():
+    """``solve_position(start=...)`` (the equations at the guess, already evaluated): the
+    same answer as without it, and a clear error for a pair of the wrong shapes."""
+    from mechsys.solvers import solve_position
+
+    m = models.slider_crank()
+    s = m.compile()
+    g, p = m.guess(), m._p()
+    F, J = s.residual_and_jacobian(0.1, g, p)
+    plain = solve_position(s, 0.1, g, p=p)
+    given = solve_position(s, 0.1, g, p=p, start=(F, J))
+    np.testing.assert_array_equal(plain.q, given.q)
+    assert plain.evaluations == given.evaluations
+    for bad in ((F[:-1], J), (F, J[:, :-1]), (F,), "FJ", (F, None)):
+        with pytest.raises(ms.ModelError, match="start"):
+            solve_position(s, 0.1, g, p=p, start=bad)

@@ -145,6 +145,23 @@ def describe_singular(system, J, t, q, what: str,
     return SingularJacobianError(msg, time=t, dependent=d.owners, rank=d.rank)
 
 
+def _checked_start(system, start):
+    """``start`` of :func:`solve_position` as ``(Phi (m,), Phi_q (m, n))``, or a
+    :class:`ModelError` saying what is wrong with it."""
+    m, n = system.m, system.n
+    try:
+        F, J = start
+        F = np.asarray(F, dtype=float)
+        shape = J.shape
+    except (TypeError, ValueError, AttributeError):
+        raise ModelError("solve_position: start must be the pair (Phi, Phi_q) at the guess, "
+                         f"a vector of {m} residuals and a ({m}, {n}) Jacobian") from None
+    if F.shape != (m,) or shape != (m, n):
+        raise ModelError(f"solve_position: start has shapes {F.shape} and {shape}; the "
+                         f"residuals at the guess must be ({m},) and the Jacobian ({m}, {n})")
+    return F, J
+
+
 def solve_position(system, t: float, guess, options: PositionOptions | None = None,
                    p=None, scaling: Scaling | None = None, hooks=None,
                    chord=None, start=None) -> PositionResult:
@@ -181,7 +198,10 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
     q = np.array(guess, dtype=float)
     q_start = q.copy()
     post = hooks.post_iterate if hooks is not None else None
-    F, J = start if start is not None else system.residual_and_jacobian(t, q, p, sparse)
+    if start is None:
+        F, J = system.residual_and_jacobian(t, q, p, sparse)
+    else:
+        F, J = _checked_start(system, start)
     evals = 1
     if scaling is None:
         g0 = getattr(system, "guess", None)
