@@ -65,17 +65,24 @@ def test_borrow_refuses_what_it_cannot_strip():
         f([np.zeros(2)])                     # a reflected list: would need counting
 
 
-def test_free_stepper_workspace_carries_no_state_between_chunks(monkeypatch):
-    """A stepper allocates its work arrays once and the loops borrow them for every chunk
-    of steps: a run cut into chunks of 7 steps is bit-identical to a run in one chunk."""
+def _three_links():
+    """The free 3-link pendulum chain the workspace tests run, and the two compiled methods
+    with their options."""
     from mechsys import models
-    from mechsys.solvers import _jit_free
 
     m = models.pendulum_chain(3, 9.81)
     m.solve(0.0)
-    free = m.free(drop=["lock0", "lock1", "lock2"])
-    for method, opts in (("dop853", {"rtol": 1e-9, "atol": 1e-11}),
-                         ("adams", {"max_error": 1e-6})):
+    return m.free(drop=["lock0", "lock1", "lock2"]), (("dop853", {"rtol": 1e-9, "atol": 1e-11}),
+                                                      ("adams", {"max_error": 1e-6}))
+
+
+def test_free_stepper_workspace_carries_no_state_between_chunks(monkeypatch):
+    """A stepper allocates its work arrays once and the loops borrow them for every chunk
+    of steps: a run cut into chunks of 7 steps is bit-identical to a run in one chunk."""
+    from mechsys.solvers import _jit_free
+
+    free, methods = _three_links()
+    for method, opts in methods:
         whole = free.simulate((0.0, 1.0), method=method, **opts)
         assert whole.extra["compiled_steps"] > 3 * 7
         with monkeypatch.context() as mp:
@@ -92,14 +99,10 @@ def test_a_reused_workspace_carries_nothing_from_the_last_run():
     options is bit-identical to the same run first, and a stepper still alive keeps its own."""
     import gc
 
-    from mechsys import models
     from mechsys.solvers import _jit_free
 
-    m = models.pendulum_chain(3, 9.81)
-    m.solve(0.0)
-    free = m.free(drop=["lock0", "lock1", "lock2"])
-    for method, opts in (("dop853", {"rtol": 1e-9, "atol": 1e-11}),
-                         ("adams", {"max_error": 1e-6})):
+    free, methods = _three_links()
+    for method, opts in methods:
         first = free.simulate((0.0, 0.5), method=method, **opts)
         other = free.simulate((0.0, 0.3), method="dop853", rtol=1e-5, atol=1e-7,
                               initial_condition={"l0.th": 0.4, "l1.th": -0.2, "l2.th": 0.1})
@@ -135,12 +138,9 @@ def test_a_finished_run_frees_its_stepper_without_the_garbage_collector():
     import gc
     import weakref
 
-    from mechsys import models
     from mechsys.solvers import _jit_free
 
-    m = models.pendulum_chain(3, 9.81)
-    m.solve(0.0)
-    free = m.free(drop=["lock0", "lock1", "lock2"])
+    free, _ = _three_links()
     free.simulate((0.0, 0.1))
     made = []
     orig = _jit_free.FreeStepper.__init__
