@@ -4,6 +4,9 @@ and the cost of one evaluation of the compiled equations, for both numeric backe
 Models: the planar slider-crank (``mechsys.models.slider_crank``) over one revolution, and the
 chain of four-bar loops ``mechsys.models.four_bar_chain(N)`` (``3 (2N + 1)`` coordinates) for
 N = 1, 10, 100. Each sweep solves position, velocity and acceleration at every point.
+Loads over a sweep: the slider-crank with masses, gravity and a gas force
+(``models.slider_crank_dynamic``) solved for its multipliers (statics, kinematic loads,
+inverse dynamics) at 1000 points, Python and compiled loops.
 
 Run: ``.venv/bin/python benchmarks/kinematic_sweep.py`` (what ``make bench`` runs) prints the
 tables; ``--write docs/performance.md`` also writes them into that page; ``--quick`` uses
@@ -89,6 +92,42 @@ def sweep_case(case: str, n_loops: int | None, points: int, backend: str,
         "iterations": float(sol.iterations.mean()),
         "evaluations": sol.evaluations / points,
     }
+
+
+def loads_case(solution: str, loop: str, points: int, repeat: int = 3) -> dict:
+    """The loaded slider-crank solved with ``solution`` at ``points`` points of one revolution
+    (best of ``repeat``): the whole ``m.solve`` and, against the kinematic sweep alone, the
+    part spent on the multipliers."""
+    from mechsys import T, models
+
+    os.environ["MECHSYS_JIT"] = "1" if loop == "compiled" else "0"
+    try:
+        import sympy as sp
+
+        m = models.slider_crank_dynamic(piston_force=300 * sp.sin(2 * sp.pi * T) + 50)
+        t = np.linspace(0.0, 1.0, points)
+        best = {}
+        for sol in ("acceleration", solution):
+            m.solve(t[:3], solution=sol)          # compiles kernels and loads the loops
+            b = np.inf
+            for _ in range(repeat):
+                s0 = clock()
+                m.solve(t, solution=sol)
+                b = min(b, clock() - s0)
+            best[sol] = b
+    finally:
+        os.environ.pop("MECHSYS_JIT", None)
+    return {"solution": solution, "loop": loop, "points": points, "solve_s": best[solution],
+            "multipliers_s": best[solution] - best["acceleration"]}
+
+
+def loads_table(rows: list[dict]) -> str:
+    lines = ["| solution | loop | points | whole solve [ms] | multipliers [µs / point] |",
+             "| --- | --- | ---: | ---: | ---: |"]
+    for r in rows:
+        lines.append(f"| {r['solution']} | {r['loop']} | {r['points']} | {r['solve_s'] * 1e3:.1f} | "
+                     f"{r['multipliers_s'] / r['points'] * 1e6:.1f} |")
+    return "\n".join(lines)
 
 
 def eval_case(case: str, n_loops: int | None, backend: str) -> dict:
@@ -181,6 +220,17 @@ evaluations of the compiled functions.
 Growth of the time per point with the number of coordinates `n` (chain):
 {growth}.
 
+## Loads over a sweep
+
+The slider-crank with masses, gravity and a gas force on the piston
+(`models.slider_crank_dynamic`), one revolution at 1000 points, solved for its multipliers:
+`"static"` (`Phi_q^T lambda = Q`), `"dynamic"` (inverse dynamics, `Phi_q^T lambda = Q + Qv -
+M qdd`). "multipliers" is the whole solve minus the kinematic sweep alone (`"acceleration"`),
+per point. The compiled loop ([decision 0026](decisions/0026-compiled-multiplier-solves.md))
+makes the same operations as the Python one (the same numbers to 1e-13).
+
+{loads}
+
 ## One evaluation of the equations
 
 One compiled function returning `Phi`, the Jacobian's nonzero values and `gamma`, called at a
@@ -255,6 +305,14 @@ def main(argv: list[str] | None = None) -> int:
             print(f"eval  {r['case']:<20} {r['backend']:<16} n={r['n']:<4} compile "
                   f"{r['compile_s']:6.2f} s  {r['call_us']:8.1f} µs/call", flush=True)
 
+    loads = []
+    for solution in ("static", "dynamic"):
+        for loop in ["python"] + (["compiled"] if _jit_available() else []):
+            r = loads_case(solution, loop, sc_points)
+            loads.append(r)
+            print(f"loads {solution:<10} {loop:<8} {r['solve_s'] * 1e3:8.1f} ms  multipliers "
+                  f"{r['multipliers_s'] / r['points'] * 1e6:6.1f} µs/point", flush=True)
+
     growth = "; ".join(
         f"{b}: {_growth([r for r in sweeps if r['backend'].startswith(b)], 'per_point_us')}"
         for b in backends)
@@ -263,12 +321,14 @@ def main(argv: list[str] | None = None) -> int:
     print()
     print(eval_table(evals))
     print()
+    print(loads_table(loads))
+    print()
     print("growth of time per point:", growth)
     if args.write:
         cmd = "python benchmarks/kinematic_sweep.py " + " ".join(
             sys.argv[1:] if argv is None else argv)
         page = PAGE.format(machine=machine(), command=cmd.strip(), sweeps=sweep_table(sweeps),
-                           evals=eval_table(evals), growth=growth)
+                           evals=eval_table(evals), growth=growth, loads=loads_table(loads))
         out = Path(args.write)
         old = out.read_text(encoding="utf-8") if out.exists() else ""
         begin, end = "<!-- peers:begin -->", "<!-- peers:end -->"

@@ -8,6 +8,7 @@ The script runs once as written, with ``FreeSystem.simulate`` and the kinematic 
 apply):
 
 * a sweep over all of its points;
+* the multipliers of a static, kinematic or dynamic solve over all of its points;
 * a free motion over its first steps (about 20: over a whole run the step-size controller
   amplifies rounding-sized differences of the error estimate into different steps, and a
   chaotic motion amplifies those, so two correct implementations of one method agree to the
@@ -30,7 +31,7 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 
 from mechsys import model as model_module  # noqa: E402
 from mechsys.analyses import _free  # noqa: E402
-from mechsys.solvers import _kinematics  # noqa: E402
+from mechsys.solvers import _kinematics, _statics  # noqa: E402
 
 FIRST_STEPS = 20
 records: list = []
@@ -53,6 +54,16 @@ def _record_sweep(original):
                             kwargs, out))
         return out
     return sweep
+
+
+def _record_multipliers(original):
+    def multipliers_over(system, times, Q, QD, QDD, p, *args, **kwargs):
+        lam = original(system, times, Q, QD, QDD, p, *args, **kwargs)
+        if len(records) < 40 and len(times) > 2:
+            copy = [None if a is None else np.array(a) for a in (times, Q, QD, QDD, p)]
+            records.append(("multipliers", system, None, (*copy, *args), kwargs, lam))
+        return lam
+    return multipliers_over
 
 
 def _diff(a, b) -> float:
@@ -106,6 +117,15 @@ def _counting(ran: list):
     return run
 
 
+def _counting_multipliers(ran: list):
+    """``_jit.multipliers`` that appends how many points the compiled loop solved to ``ran``."""
+    def multipliers(*a, **k):
+        out = original_jit_multipliers(*a, **k)
+        ran.append(out)
+        return out
+    return multipliers
+
+
 def check() -> list[dict]:
     results = []
     for kind, obj, t, args, kwargs, sol in records:
@@ -118,6 +138,15 @@ def check() -> list[dict]:
                             "rows": len(py.t),
                             "compiled": int(jit.extra.get("compiled_steps", 0)),
                             "python_compiled": int(py.extra.get("compiled_steps", 0))})
+        elif kind == "multipliers":
+            ran = []
+            _statics._jit.multipliers = _counting_multipliers(ran)
+            try:
+                py, jit = _both(original_multipliers, obj, *args, **kwargs)
+            finally:
+                _statics._jit.multipliers = original_jit_multipliers
+            results.append({"kind": "multipliers", "difference": _diff(py, jit),
+                            "rows": len(py), "compiled": int(sum(ran))})
         else:
             ran: list = []
             _kinematics._jit.run = _counting(ran)
@@ -135,14 +164,18 @@ def check() -> list[dict]:
 original_simulate = _free.FreeSystem.simulate
 original_sweep = _kinematics.sweep
 original_run = _kinematics._jit.run
+original_multipliers = _statics.multipliers_over
+original_jit_multipliers = _statics._jit.multipliers
 
 if __name__ == "__main__":
     script = sys.argv[1]
     _free.FreeSystem.simulate = _record_simulate(original_simulate)
     _kinematics.sweep = model_module.sweep = _record_sweep(original_sweep)
+    _statics.multipliers_over = _record_multipliers(original_multipliers)
     sys.argv = [script]
     sys.path[0] = os.path.dirname(os.path.abspath(script))   # as `python script` has it
     runpy.run_path(script, run_name="__main__")
     _free.FreeSystem.simulate = original_simulate
     _kinematics.sweep = model_module.sweep = original_sweep
+    _statics.multipliers_over = original_multipliers
     print("paths-agree: " + json.dumps(check()))

@@ -159,6 +159,8 @@ CATALOGUE = [
     ("solve", 'm = crank(); m.solve([0.0, 0.5], post_iterate=lambda it: False)', "MechError",
      "post_iterate"),
     ("solve", 'pend().solve(0.0, "static", lambda_guess=[1.0] * 5)', "ModelError", "lambda_guess"),
+    ("solve", 'm = pend(); m.add_load(ms.Force(m.body("bar").point("tip"), (0, 1), 1 / (T - 1))); '
+     'm.solve([0.0, 1.0], "static")', "ModelError", "bar.y"),
     ("solve", 'ms.Model2D().add_body("a", inertia=-1.0)', "ModelError", "'a'"),
     # free motion
     ("free", 'pend().free(drop=["brake"])', "UnknownConstraintError", "'brake'"),

@@ -1060,20 +1060,10 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         return sol
 
     def _multipliers_over(self, system, res, mode, lambda_guess):
-        from .solvers import MultiplierOptions, solve_multipliers
+        from .solvers._statics import multipliers_over
 
-        dyn = system.dynamics
-        p = self._p()
-        N = len(res.t)
-        lam = np.empty((N, system.m))
-        guess = lambda_guess_vector(system, self, lambda_guess)
-        for k in range(N):
-            qd = None if res.qd is None else res.qd[k]
-            qdd = None if res.qdd is None else res.qdd[k]
-            opt = MultiplierOptions(lambda_guess=guess)
-            lam[k], _ = solve_multipliers(system, dyn, res.t[k], res.q[k], qd, qdd, p, mode, opt)
-            guess = lam[k]
-        return lam
+        return multipliers_over(system, res.t, res.q, res.qd, res.qdd, self._p(), mode,
+                                lambda_guess_vector(system, self, lambda_guess))
 
     def free(self, drop=(), solution: str = "dynamic", initial_guess=None,
              initial_condition=None):

@@ -46,7 +46,8 @@ from ._linalg import RCOND_MIN, SPARSE_THRESHOLD, Scaling, _column_kinds, length
 AUTO_POINTS = 1000
 
 _PLANS: dict = {}    # plan(): kernel ids -> (kernels, pointer table)
-_state: dict = {"loaded": False, "loop": None, "fill": None, "lapack": None, "failed": None}
+_state: dict = {"loaded": False, "loop": None, "fill": None, "lapack": None, "failed": None,
+                "multipliers": None}
 
 
 def mode() -> str:
@@ -85,20 +86,22 @@ def _pointer(kernel):
 
 def plan(system, points: int, order: int):
     """The kernels' C entry points when the compiled loop should run this sweep, else None."""
-    m = mode()
-    if m == "off" or system.n == 0 or system.m != system.n or system.n > SPARSE_THRESHOLD:
-        return None
-    if m == "auto" and points < AUTO_POINTS:
-        return None
-    if not available():
+    if not _wanted(system, points):
         return None
     kernels = [system.f_position]
     if order >= 1:
         kernels.append(system.f_velocity)
     if order >= 2:
         kernels.append(system.f_gamma)
-    # kept per kernel objects, which the entry holds (their entry points live as long as they
-    # do; not on the system: a pickled copy must not carry another process's addresses)
+    return _table(kernels)
+
+
+def _table(kernels):
+    """The pointer table of ``kernels`` (one row each: address, context, first-stage address,
+    its context, Piecewise values; rows of zeros up to three), or None when one has no C
+    entry point. Kept per kernel objects, which the entry holds (their entry points live
+    as long as they do; not on the system: a pickled copy must not carry another process's
+    addresses)."""
     key = tuple(id(k) for k in kernels)
     got = _PLANS.get(key)
     if got is not None and all(a is b for a, b in zip(got[0], kernels)):
@@ -108,12 +111,57 @@ def plan(system, points: int, order: int):
         return None
     while len(ptrs) < 3:
         ptrs.append((0, 0, 0, 0, 0))
-    # one row per kernel: address, context, first-stage address, its context, Piecewise values
     table = np.array(ptrs, dtype=np.int64)
     if len(_PLANS) >= 64:
         _PLANS.clear()
     _PLANS[key] = (tuple(kernels), table)
     return table
+
+
+def _wanted(system, points: int) -> bool:
+    """Whether a compiled loop should run for ``points`` points of this system (the
+    ``MECHSYS_JIT`` rule of the module docstring; Numba importable)."""
+    m = mode()
+    if m == "off" or system.n == 0 or system.m != system.n or system.n > SPARSE_THRESHOLD:
+        return False
+    if m == "auto" and points < AUTO_POINTS:
+        return False
+    return available()
+
+
+def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM) -> int:
+    """Fill ``LAM`` (N, m) with the multipliers of the solved sweep ``Q``, ``QD``, ``QDD``
+    (N, n) in compiled code (``_jit_multipliers``) from point 0 on; return the first point
+    left to the Python path (``len(times)`` when all are done, 0 when the compiled loop
+    cannot run: loads that depend on the multipliers (Newton), a dynamics without C entry
+    points (generalized-coordinate recursions, SymPy fallbacks), or the ``MECHSYS_JIT``
+    rule). ``mode_name``: ``"static"``, ``"kinematic"`` or ``"dynamic"``."""
+    from ..compile._dynamics import Dynamics
+
+    N = len(times)
+    dyn = system.dynamics
+    if not N or not isinstance(dyn, Dynamics) or dyn.depends_on_lambda or not _wanted(system, N):
+        return 0
+    code = {"static": 0, "kinematic": 1, "dynamic": 2}[mode_name]
+    if (code >= 1 and QD is None) or (code == 2 and QDD is None):
+        return 0
+    table = _table([system.f_position, dyn.f_terms])
+    if table is None:
+        return 0
+    if _state.get("multipliers") is None:
+        from ._jit_multipliers import multipliers as loop
+
+        _state["multipliers"] = loop
+    _state["loaded"] = True
+    dummy = np.zeros((1, system.n))
+    return int(_state["multipliers"](
+        table, _lapack(), np.ascontiguousarray(times, dtype=float),
+        np.ascontiguousarray(Q, dtype=float),
+        dummy if code == 0 else np.ascontiguousarray(QD, dtype=float),
+        dummy if code < 2 else np.ascontiguousarray(QDD, dtype=float),
+        np.ascontiguousarray(system.p_values if p is None else p, dtype=float),
+        _index(system.jac_rows), _index(system.jac_cols), _index(dyn.M_rows),
+        _index(dyn.M_cols), len(dyn.M_rows), code, LAM))
 
 
 def _index(a) -> np.ndarray:
@@ -207,4 +255,5 @@ def rcond_filler(system, pointers, times, Q, p, scaling, R):
     return fill
 
 
-__all__ = ["AUTO_POINTS", "RCOND_MIN", "available", "mode", "plan", "rcond_filler", "run"]
+__all__ = ["AUTO_POINTS", "RCOND_MIN", "available", "mode", "multipliers", "plan", "rcond_filler",
+           "run"]

@@ -17,7 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._errors import ConvergenceError
+from .._errors import ConvergenceError, ModelError
+from . import _jit
 from ._linalg import Singular, factor
 from ._position import describe_singular
 
@@ -41,6 +42,9 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
     n, m = system.n, system.m
     if J is None:
         J = system.jacobian(t, q, p)
+    if not np.all(np.isfinite(J)):
+        raise ModelError(f"{mode} load solve at t = {t:.6g}: the constraint Jacobian is not "
+                         "finite at this state (a coordinate or parameter is NaN or inf)")
     qd_eff = np.zeros(n) if (mode == "static" or qd is None) else qd
     lam = np.broadcast_to(np.asarray(opt.lambda_guess, dtype=float), (m,)).copy()
     try:
@@ -52,9 +56,15 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
 
     def rhs(lam):
         M, Q, Qv = dyn.terms(t, q, qd_eff, lam, p, qdd_eff)
-        if mode == "dynamic":
-            return Q + Qv - M @ qdd
-        return Q
+        b = Q + Qv - M @ qdd if mode == "dynamic" else Q
+        if not np.all(np.isfinite(b)):
+            bad = ", ".join(system.layout.q_names[i] for i in np.flatnonzero(~np.isfinite(b)))
+            what = "forces Q + Qv - M qdd" if mode == "dynamic" else "applied loads"
+            raise ModelError(
+                f"{mode} load solve at t = {t:.6g}: the {what} are not finite on coordinate(s) "
+                f"{bad}: a load expression divides by zero or a parameter is NaN or inf at this "
+                "time; check the loads and the parameter values")
+        return b
 
     if not dyn.depends_on_lambda:
         return fac.solve(rhs(lam)), 0
@@ -81,3 +91,24 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
         "mechanism self-locks here (no finite reaction can drive it with this friction), or "
         "the start is poor: give lambda_guess= closer to the expected multipliers "
         "(Mech's LambdaGuess).", time=t, residuals=R, history=tuple(history))
+
+
+def multipliers_over(system, times, Q, QD, QDD, p, mode: str = "dynamic", lambda_guess=1.0):
+    """Multipliers ``(N, m)`` at each point of a solved sweep (``Q``, ``QD``, ``QDD`` (N, n);
+    ``QD``/``QDD`` None where the sweep did not compute them): :func:`solve_multipliers`
+    point by point, each point's ``lambda_guess`` the previous point's multipliers (Newton,
+    loads that depend on the multipliers). The points the compiled loop can take go there
+    first (``_jit.multipliers``: loads linear in the multipliers; the same operations);
+    the Python loop continues from the first point it leaves."""
+    N = len(times)
+    lam = np.empty((N, system.m))
+    k0 = _jit.multipliers(system, times, Q, QD, QDD, p, mode, lam)
+    dyn = system.dynamics
+    guess = lambda_guess
+    for k in range(k0, N):
+        qd = None if QD is None else QD[k]
+        qdd = None if QDD is None else QDD[k]
+        lam[k], _ = solve_multipliers(system, dyn, times[k], Q[k], qd, qdd, p, mode,
+                                      MultiplierOptions(lambda_guess=guess))
+        guess = lam[k]
+    return lam

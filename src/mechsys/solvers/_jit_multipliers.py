@@ -1,0 +1,105 @@
+r"""Numba loop of the multiplier solves over a solved sweep (imported only when it runs: see
+``_jit.multipliers``): statics, kinematic loads and inverse dynamics at every point,
+
+    static:     Phi_q^T lambda = Q(t, q, 0)
+    kinematic:  Phi_q^T lambda = Q(t, q, qd)
+    dynamic:    Phi_q^T lambda = Q(t, q, qd, qdd) + Qv(q, qd) - M(q) qdd
+
+each point's operations those of :func:`~mechsys.solvers._statics.solve_multipliers` for
+loads linear in the multipliers (the Python path), in the same order:
+
+* ``Phi_q`` from the position kernel (``System.jacobian``), assembled dense;
+* ``Phi_q^T`` factorised by LU with partial pivoting and its reciprocal condition estimated
+  (``Factor``: LAPACK ``dgetrf`` + ``dgecon``; up to ``SMALL`` unknowns their algorithms
+  from ``_jit_lapack``). ``Phi_q`` in C order *is* ``Phi_q^T`` in the transposed storage
+  the LAPACK helpers use, so no transpose is formed;
+* ``M``, ``Q``, ``Qv`` from the dynamics kernel (``Dynamics.terms``); ``M qdd`` from the
+  mass matrix's nonzeros (the Python path multiplies the dense ``M``: the same to rounding);
+* one solve (``dgetrs``).
+
+A point that the Python path would refuse (an exactly zero pivot, a reciprocal condition
+below ``RCOND_MIN``) or whose multipliers come out non-finite ends the loop there: the
+Python path takes that point and the rest, with its diagnostics.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+from ._jit_cache import check as _check_cache
+from ._jit_loop import _assemble, _eval_row, _factor_filled, _factor_work, _norm1, _solve, _structure
+
+_check_cache()   # stale cached loops go before anything here compiles (see _jit_cache)
+
+STATIC, KINEMATIC, DYNAMIC = 0, 1, 2
+
+
+@nb.njit(cache=True)
+def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LAM):
+    """``LAM[k]`` (m,) at each point ``k`` from 0 on; returns the first point left to the
+    Python path (``len(times)`` when all are done).
+
+    ``ptrs`` (2, 5): the position kernel ``x = [t, q, qd, p] -> [Phi, Phi_q values]`` and
+    the dynamics kernel ``x = [t, q, qd, lambda, p, qdd] -> [M values (kM), Q, Qv]`` (rows of
+    the pointer table, see ``_jit.plan``); ``jr``, ``jc`` the Jacobian's nonzero positions,
+    ``mr``, ``mc`` the mass matrix's. ``Q``, ``QD``, ``QDD`` (N, n): the sweep's states
+    (``QD``, ``QDD`` are read only in the modes that use them). ``mode``: ``STATIC``,
+    ``KINEMATIC``, ``DYNAMIC``."""
+    N = times.size
+    n = Q.shape[1]
+    m = n
+    npar = p.size
+    nnz = jr.size
+    nin = 1 + 2 * n + npar
+    nin_d = 1 + 2 * n + m + npar + n
+    x = np.zeros(nin + max(ptrs[0, 4], 0))
+    xd = np.zeros(nin_d + max(ptrs[1, 4], 0))        # lambda = 0: the loads do not read it
+    for j in range(npar):
+        x[1 + 2 * n + j] = p[j]
+        xd[1 + 2 * n + m + j] = p[j]
+    out_pos = np.empty(m + nnz)
+    out_dyn = np.empty(kM + 2 * n)
+    J, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, r = _factor_work(m, n)
+    S, W, seen = _structure(jc, jr, n)               # the structure of Phi_q^T
+    ones = np.ones(n)
+    Mq = np.empty(n)
+    rhs = np.empty(n)
+    lam = np.empty(m)
+    for k in range(N):
+        t = times[k]
+        x[0] = t
+        xd[0] = t
+        for j in range(n):
+            x[1 + j] = Q[k, j]
+            xd[1 + j] = Q[k, j]
+        _eval_row(ptrs, 0, x, nin, out_pos)
+        _assemble(out_pos, m, jr, jc, B)             # B = Phi_q (C order) = Phi_q^T stored transposed
+        if _factor_filled(lapack, B, _norm1(B, n), ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, work,
+                          iwork, 0.0) < 0:
+            return k
+        if mode != STATIC:
+            for j in range(n):
+                xd[1 + n + j] = QD[k, j]
+        if mode == DYNAMIC:
+            for j in range(n):
+                xd[1 + 2 * n + m + npar + j] = QDD[k, j]
+        _eval_row(ptrs, 1, xd, nin_d, out_dyn)
+        if mode == DYNAMIC:
+            # Q + Qv - M qdd, the product from M's nonzeros (Python: M dense times qdd with
+            # BLAS, whose order of summation is its own: the two agree to rounding)
+            for i in range(n):
+                Mq[i] = 0.0
+            for e in range(kM):
+                Mq[mr[e]] += out_dyn[e] * QDD[k, mc[e]]
+            for i in range(n):
+                rhs[i] = (out_dyn[kM + i] + out_dyn[kM + n + i]) - Mq[i]
+        else:
+            for i in range(n):
+                rhs[i] = out_dyn[kM + i]
+        _solve(lapack, B, ipiv, nz, ones, ones, rhs, lam, ibuf, cbuf)
+        for i in range(m):
+            if not np.isfinite(lam[i]):
+                return k
+            LAM[k, i] = lam[i]
+    return N

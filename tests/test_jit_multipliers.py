@@ -1,0 +1,183 @@
+"""The compiled multiplier solves of static, kinematic and dynamic sweeps
+(solvers/_jit_multipliers.py) against the Python path: the same numbers on planar, spatial
+and two-stage (spline) models, the load balance they satisfy, the hand-over to the Python path
+at a point it must diagnose, and the cases where the compiled loop must not run."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import mechsys as ms
+from mechsys import T, models
+from mechsys.solvers import _jit, _statics
+
+pytest.importorskip("numba")
+
+MODES = ("static", "kinematic", "dynamic")
+
+
+def _gas_crank():
+    """The slider-crank with masses, gravity and a piston force varying in time."""
+    return models.slider_crank_dynamic(piston_force=300 * sp.sin(2 * sp.pi * T) + 50)
+
+
+def _rotor():
+    """A spatial rotor on a fixed axis (Euler parameters), spin accelerating, under gravity
+    with its centroid off the axis (tests/test_inverse_dynamics_3d.py)."""
+    m = ms.Model3D()
+    b = m.add_body("rotor", mass=2.0, centroid=(0.1, 0.05, 0.2),
+                   inertia=(0.5, 0.8, 1.1, 0.12, -0.07, 0.05), guess=((0, 0, 0), (1, 0, 0, 0)))
+    x, y, z, e0, e1, e2, e3 = b.q
+    th = 3.0 * T + 0.7 * T**2
+    m.add(ms.Constraint([x, y, z]), name="fixed point")
+    m.add(ms.Constraint([e1, e2]), name="z axis")
+    m.add(ms.Constraint([e3 - sp.sin(th / 2)]), name="spin")
+    m.add_load(ms.Gravity((0, 1, -1), 9.81))
+    return m
+
+
+def _loaded_spline_cam():
+    """The spline cam of tests/test_jit_sweep.py (two-stage Piecewise kernels) with masses,
+    its follower pushed back by a spring-like force along x."""
+    from test_jit_sweep import _spline_cam
+
+    m, _ = _spline_cam()
+    m.set_mass_properties("cam", mass=1.0, inertia=0.2)
+    m.set_mass_properties("follower", mass=0.5, inertia=0.01)
+    fol = m.body("follower")
+    m.add_load(ms.Force(fol.point(0), (1, 0), -40 * (fol.q[0] - 1.5)))
+    return m
+
+
+BUILDS = {"slider-crank": _gas_crank, "n-four-bar": lambda: models.n_four_bar(3),
+          "rotor-3d": _rotor, "spline-cam": _loaded_spline_cam}
+
+
+def _solve_both(monkeypatch, build, t, mode):
+    """The same solve with the compiled loops and with the Python ones; also how many points
+    the compiled multiplier loop took."""
+    taken = []
+    real = _jit.multipliers
+
+    def spy(*a, **k):
+        taken.append(real(*a, **k))
+        return taken[-1]
+
+    monkeypatch.setattr(_statics._jit, "multipliers", spy)
+    out = {}
+    for jit in ("1", "0"):
+        monkeypatch.setenv("MECHSYS_JIT", jit)
+        out[jit] = build().solve(t, solution=mode)
+    return out["1"], out["0"], taken
+
+
+@pytest.mark.parametrize("mode", MODES)
+@pytest.mark.parametrize("name", list(BUILDS))
+def test_compiled_and_python_multipliers_agree(monkeypatch, name, mode):
+    t = np.linspace(0.0, 1.0, 41)
+    fast, slow, taken = _solve_both(monkeypatch, BUILDS[name], t, mode)
+    assert taken[0] == len(t)                # the compiled loop took every point
+    assert taken[1] == 0                     # MECHSYS_JIT=0: none
+    scale = np.maximum(1.0, np.abs(slow.lam).max(axis=0))
+    assert np.abs(slow.lam).max() > 0.1      # loads are there: not a comparison of zeros
+    assert (np.abs(fast.lam - slow.lam) / scale).max() <= 1e-13
+
+
+@pytest.mark.parametrize("name", list(BUILDS))
+def test_compiled_multipliers_balance_the_loads(monkeypatch, name):
+    """An independent check of the compiled numbers: ``Phi_q^T lambda = Q + Qv - M qdd`` with
+    the Jacobian and dynamic terms evaluated separately in Python."""
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    t = np.linspace(0.0, 1.0, 13)
+    sol = BUILDS[name]().solve(t, solution="dynamic")
+    s, dyn = sol.system, sol.system.dynamics
+    for k in range(len(t)):
+        J = s.jacobian(t[k], sol.q[k], sol.p)
+        M, Q, Qv = dyn.terms(t[k], sol.q[k], sol.qd[k], sol.lam[k], sol.p, sol.qdd[k])
+        rhs = Q + Qv - M @ sol.qdd[k]
+        res = J.T @ sol.lam[k] - rhs
+        assert np.abs(res).max() <= 1e-11 * (1 + np.abs(rhs).max() + np.abs(J).max()
+                                              * np.abs(sol.lam[k]).max())
+
+
+def test_closed_form_static_crank_torque(monkeypatch):
+    """A crank of mass m (centroid at r/2) held at angle th by its driver: the driver's
+    multiplier is the gravity moment m g r/2 cos(th) (up to the sign convention of
+    RotationLock1), compiled and Python alike."""
+    def crank():
+        m = ms.Model2D()
+        c = m.add_body("crank", mass=3.0, centroid=(0.5, 0), inertia=0.25, guess=((0, 0), 0.0))
+        m.add(ms.Revolute2(m.ground.point((0, 0)), c.point(0)), name="pivot")
+        m.add(ms.RotationLock1(c, 2 * sp.pi * T), name="drive")
+        m.add_load(ms.Gravity((0, -1), 9.81))
+        return m
+
+    t = np.linspace(0.0, 1.0, 25)
+    fast, slow, taken = _solve_both(monkeypatch, crank, t, "static")
+    assert taken[0] == len(t)
+    k = fast.system.m - 1                    # the driver's row comes last
+    moment = 3.0 * 9.81 * 0.5 * np.cos(2 * np.pi * t)
+    np.testing.assert_allclose(np.abs(fast.lam[:, k]), np.abs(moment), atol=1e-12)
+    np.testing.assert_allclose(fast.lam, slow.lam, rtol=0, atol=1e-13)
+
+
+def test_non_finite_loads_are_refused_in_both_paths(monkeypatch):
+    """A load that divides by zero at t = 0.5: the compiled loop hands that point to the
+    Python path, whose error names the time and the coordinate (not a NaN answer)."""
+    for jit in ("1", "0"):
+        monkeypatch.setenv("MECHSYS_JIT", jit)
+        m = models.slider_crank_dynamic(piston_force=1 / (T - sp.Rational(1, 2)))
+        with pytest.raises(ms.ModelError, match=r"t = 0\.5: the applied loads are not finite "
+                                                r"on coordinate\(s\) piston\.x"):
+            m.solve(np.linspace(0, 1, 11), solution="static")
+
+
+def test_hand_over_mid_sweep_gives_the_python_result(monkeypatch):
+    """The compiled loop stopped after 7 points: the Python path continues, and the whole
+    equals an all-Python solve."""
+    real = _jit.multipliers
+
+    def partial(system, times, Q, QD, QDD, p, mode, LAM):
+        cut = lambda a: None if a is None else a[:7]   # noqa: E731
+        return real(system, times[:7], Q[:7], cut(QD), cut(QDD), p, mode, LAM[:7])
+
+    t = np.linspace(0.0, 1.0, 30)
+    monkeypatch.setattr(_statics._jit, "multipliers", partial)
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    mixed = _gas_crank().solve(t, solution="dynamic")
+    monkeypatch.setenv("MECHSYS_JIT", "0")
+    plain = _gas_crank().solve(t, solution="dynamic")
+    np.testing.assert_allclose(mixed.lam, plain.lam, rtol=1e-13, atol=1e-12)
+
+
+def test_friction_stays_with_the_python_newton(monkeypatch):
+    """Loads that depend on the multipliers (friction) need the Python path's Newton: the
+    compiled loop declines, and both settings give the same numbers."""
+    from test_friction import incline
+
+    t = np.linspace(0.1, 1.0, 6)
+    fast, slow, taken = _solve_both(monkeypatch, lambda: incline(0.3, 0.25), t, "dynamic")
+    assert taken == [0, 0]
+    np.testing.assert_array_equal(fast.lam, slow.lam)
+
+
+def test_when_the_compiled_loop_runs(monkeypatch):
+    """``MECHSYS_JIT``: 0 never; auto from ``AUTO_POINTS`` points on (a shorter sweep stays in
+    Python: loading Numba costs more than it saves); 1 always."""
+    m = _gas_crank()
+    t = np.linspace(0.0, 1.0, 5)
+    sol = m.solve(t, solution="dynamic")
+    s = sol.system
+    lam = np.empty((len(t), s.m))
+    args = (s, t, sol.q, sol.qd, sol.qdd, sol.p, "dynamic", lam)
+    monkeypatch.setenv("MECHSYS_JIT", "0")
+    assert _jit.multipliers(*args) == 0
+    monkeypatch.delenv("MECHSYS_JIT")
+    assert _jit.multipliers(*args) == 0
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    assert _jit.multipliers(*args) == len(t)
+    np.testing.assert_allclose(lam, sol.lam, rtol=1e-13, atol=1e-12)
+    # a mode whose rates were not computed cannot run compiled
+    assert _jit.multipliers(s, t, sol.q, None, None, sol.p, "kinematic", lam) == 0
