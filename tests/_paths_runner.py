@@ -9,7 +9,8 @@ apply):
 
 * a sweep over all of its points;
 * the multipliers of a static, kinematic or dynamic solve over all of its points;
-* a free motion over its first steps (about 20: over a whole run the step-size controller
+* a free motion or a nonholonomic path over its first steps (about 20: over a whole run the
+  step-size controller
   amplifies rounding-sized differences of the error estimate into different steps, and a
   chaotic motion amplifies those, so two correct implementations of one method agree to the
   integration tolerance there, not to rounding).
@@ -30,18 +31,18 @@ import numpy as np
 os.environ.setdefault("MPLBACKEND", "Agg")
 
 from mechsys import model as model_module  # noqa: E402
-from mechsys.analyses import _free  # noqa: E402
+from mechsys.analyses import _free, _path  # noqa: E402
 from mechsys.solvers import _kinematics, _statics  # noqa: E402
 
 FIRST_STEPS = 20
 records: list = []
 
 
-def _record_simulate(original):
+def _record_simulate(original, kind="free"):
     def simulate(self, t, *args, **kwargs):
         sol = original(self, t, *args, **kwargs)
         if len(records) < 40:
-            records.append(("free", self, t, args, kwargs, sol))
+            records.append((kind, self, t, args, kwargs, sol))
         return sol
     return simulate
 
@@ -129,12 +130,13 @@ def _counting_multipliers(ran: list):
 def check() -> list[dict]:
     results = []
     for kind, obj, t, args, kwargs, sol in records:
-        if kind == "free":
+        if kind in ("free", "path"):
             span = _short_span(t, sol)
-            py, jit = _both(original_simulate, obj, span, *args, **kwargs)
+            run = original_simulate if kind == "free" else original_path
+            py, jit = _both(run, obj, span, *args, **kwargs)
             each = {k: _diff(getattr(py, k), getattr(jit, k))
-                    for k in ("t", "q", "qd", "qdd", "lam")}
-            results.append({"kind": "free", "difference": max(each.values()), "each": each,
+                    for k in ("t", "q", "qd", "qdd", "lam") if getattr(py, k) is not None}
+            results.append({"kind": kind, "difference": max(each.values()), "each": each,
                             "rows": len(py.t),
                             "compiled": int(jit.extra.get("compiled_steps", 0)),
                             "python_compiled": int(py.extra.get("compiled_steps", 0))})
@@ -162,6 +164,7 @@ def check() -> list[dict]:
 
 
 original_simulate = _free.FreeSystem.simulate
+original_path = _path.PathSystem.simulate
 original_sweep = _kinematics.sweep
 original_run = _kinematics._jit.run
 original_multipliers = _statics.multipliers_over
@@ -170,12 +173,14 @@ original_jit_multipliers = _statics._jit.multipliers
 if __name__ == "__main__":
     script = sys.argv[1]
     _free.FreeSystem.simulate = _record_simulate(original_simulate)
+    _path.PathSystem.simulate = _record_simulate(original_path, "path")
     _kinematics.sweep = model_module.sweep = _record_sweep(original_sweep)
     _statics.multipliers_over = _record_multipliers(original_multipliers)
     sys.argv = [script]
     sys.path[0] = os.path.dirname(os.path.abspath(script))   # as `python script` has it
     runpy.run_path(script, run_name="__main__")
     _free.FreeSystem.simulate = original_simulate
+    _path.PathSystem.simulate = original_path
     _kinematics.sweep = model_module.sweep = original_sweep
     _statics.multipliers_over = original_multipliers
     print("paths-agree: " + json.dumps(check()))

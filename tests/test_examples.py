@@ -1,6 +1,6 @@
 """Every script in examples/ runs to completion (exit code 0) in a fresh interpreter, and
-the compiled and Python paths give the same numbers on every sweep, multiplier solve and
-free motion it computes (``tests/_paths_runner.py``: each is repeated with ``MECHSYS_JIT=0``
+the compiled and Python paths give the same numbers on every sweep, multiplier solve, free
+motion and nonholonomic path it computes (``tests/_paths_runner.py``: each is repeated with ``MECHSYS_JIT=0``
 and ``1``).
 
 New examples are picked up automatically. Each runs in a temporary working directory (so
@@ -10,7 +10,7 @@ guards against a hang; it is not a speed requirement.
 Agreement: a kinematic sweep performs the same operations in both loops (decision 0013):
 1e-12. So do the multiplier solves of a static, kinematic or dynamic sweep (decision 0026),
 except that the Python path multiplies ``M qdd`` with BLAS: 1e-12 (measured: 5e-16). A free
-motion is compared at 11 output times over its first 20 or so steps, each
+motion (or a path) is compared at 11 output times over its first 20 or so steps, each
 column in its own scale: 1e-9. Not bit for bit: the two loops' sums round differently
 (SciPy's BLAS against the loop's own), and where the local error of a step is near the
 rounding level (smooth motion, e.g. the n-four-bar's first steps) or the steps are set by
@@ -35,10 +35,11 @@ EXAMPLES = ROOT / "examples"
 RUNNER = ROOT / "tests" / "_paths_runner.py"
 SCRIPTS = sorted(EXAMPLES.glob("*.py"))
 HANG_GUARD_S = 900
-AGREE = {"sweep": 1e-12, "multipliers": 1e-12, "free": 1e-9}
+AGREE = {"sweep": 1e-12, "multipliers": 1e-12, "free": 1e-9, "path": 1e-9}
 COMPILED = {"four_bar.py": {"sweep"}, "slider_crank_3d.py": {"sweep"}, "gyroscope.py": {"free"},
             "pendulum_on_rope.py": {"free"},
-            "design_slider_crank_torque.py": {"sweep", "multipliers"}}
+            "design_slider_crank_torque.py": {"sweep", "multipliers"}, "caster.py": {"path"},
+            "knife_edge.py": {"path"}}
 
 
 def test_foundation_examples_exist():

@@ -43,6 +43,7 @@ from ..solvers._integrators import (
     integration_options,
     output_times,
 )
+from ..solvers._jit_free import FreeStepper
 from ..solvers._linalg import Scaling, Singular, dependent_rows, factor, involved_rows
 from ._free import _reject_unknown
 
@@ -245,7 +246,7 @@ class PathSystem:
             "step_size", "constraint_correction", "diagnostics"))
         opt = integration_options(method, rtol, atol, max_step, fit_degree, max_error,
                                   step_size, constraint_correction)
-        t0 = output_times(t)[0]
+        t0, _, t_eval = output_times(t)
         s = self.system
         if initial_condition is None:
             q0, p = self._q0.copy(), self._params()
@@ -264,12 +265,23 @@ class PathSystem:
         def proj(tk, y):
             return project_positions(s, tk, y, p, scaling=sc)
 
-        times, Q, res, m = integrate(rhs, proj, t, q0, opt, scale=sc.columns)
-        QD = np.array([self.velocities(tk, qk, p=p, scaling=sc) for tk, qk in zip(times, Q)])
-        QDD = np.array([self.accelerations(tk, qk, vk, p) for tk, qk, vk in zip(times, Q, QD)])
+        # the compiled stepper (solvers/_jit_free.py, kind PATH) takes the regular steps
+        fast = FreeStepper.plan_path(self, opt.method, p, sc, opt.correction, t_eval)
+        times, Q, res, m = integrate(rhs, proj, t, q0, opt, scale=sc.columns, fast=fast)
+        # velocities at the outputs: the compiled stepper's where it ran, else here
+        known = res.diagnostics.get("derivatives")
+        QD = np.array([known[0][k] if known is not None and np.all(np.isfinite(known[0][k]))
+                       else self.velocities(tk, qk, p=p, scaling=sc)
+                       for k, (tk, qk) in enumerate(zip(times, Q))])
+        QDD = np.empty_like(QD)
+        k0 = 0 if fast is None else fast.path_accelerations(self, times, Q, QD, QDD)
+        for k in range(k0, len(times)):
+            QDD[k] = self.accelerations(times[k], Q[k], QD[k], p)
         drift = max(np.abs(s.residual(tk, qk, p)).max(initial=0.0) for tk, qk in zip(times, Q))
         extra = {"evaluations": res.evaluations, "steps": res.steps, "method": m, "drift": drift,
-                 "length_scale": sc.length}
+                 "length_scale": sc.length,
+                 "compiled_steps": res.diagnostics.get("compiled_steps", 0),
+                 "compiled_solver": None if fast is None else fast.solver}
         if diagnostics:
             extra["diagnostics"] = res.diagnostics
         return Solution(t=times, q=Q, qd=QD, qdd=QDD, p=p, system=s, model=self.model,

@@ -136,11 +136,11 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM) -> int:
     cannot run: loads that depend on the multipliers (Newton), a dynamics without C entry
     points (generalized-coordinate recursions, SymPy fallbacks), or the ``MECHSYS_JIT``
     rule). ``mode_name``: ``"static"``, ``"kinematic"`` or ``"dynamic"``."""
-    from ..compile._dynamics import Dynamics
-
     N = len(times)
     dyn = system.dynamics
-    if not N or not isinstance(dyn, Dynamics) or dyn.depends_on_lambda or not _wanted(system, N):
+    # (the recursive dynamics of generalized coordinates has no f_terms kernel)
+    if (not N or getattr(dyn, "recursive", False) or dyn.depends_on_lambda
+            or not _wanted(system, N)):
         return 0
     code = {"static": 0, "kinematic": 1, "dynamic": 2}[mode_name]
     if (code >= 1 and QD is None) or (code == 2 and QDD is None):

@@ -35,7 +35,12 @@ equation) or the composite-body mass matrix in the augmented system, at any size
 Numba and the cached machine code costs about 0.7 s CPU once per process.
 ``sol.extra["compiled_steps"]`` tells how many steps ran compiled and
 ``sol.extra["compiled_solver"]`` how (``"augmented"``, ``"block"``, ``"recursive"``,
-``"recursive+augmented"``).
+``"recursive+augmented"``, ``"path"``).
+
+Nonholonomic paths (:class:`~mechsys.analyses._path.PathSystem`, Mech's ``SolvePath``) run
+in the same loops (:meth:`FreeStepper.plan_path`, decision 0027): the state is ``q``, its
+derivative the velocities from ``[Phi_q; psi_qd] qd = [-Phi_t; -psi_0]`` (velocity
+constraints linear in the velocities), the projection onto the positions only.
 """
 
 from __future__ import annotations
@@ -56,7 +61,7 @@ CHUNK_STEPS = 2000
 METHODS = ("dop853", "automatic", "predictor", "corrector")
 
 _state: dict = {"loop": None, "adams": None, "workspace": None, "derivative": None, "coef": None,
-                "gesv": None}
+                "gesv": None, "path_acc": None}
 
 
 def _coefficients():
@@ -179,6 +184,14 @@ def _entry(kernel):
 _NO_EXPAND = np.zeros(0, dtype=np.int64)
 
 
+def _constraint_entries(system, *kernels) -> list:
+    """:func:`_entry` of each of the constraint kernels ``kernels``, or rows of zeros (never
+    called) when the system has no constraint equation."""
+    if system.m:
+        return [_entry(k) for k in kernels]
+    return [((0, 0, 0, 0, 0), _NO_EXPAND)] * len(kernels)
+
+
 class _Gen:
     """The recursive Gen dynamics (``compile._generalized.RecursiveDynamics``) as the
     compiled loop evaluates it (``_jit_free_loop._accel_gen``): ``arrays = (joint kernel
@@ -254,13 +267,15 @@ class FreeStepper:
     ``t_eval`` (k,) or None: output times."""
 
     def __init__(self, system, p, scaling, rows0, robust, correction, t_eval, kernels, fk,
-                 blocks=None, expand=(_NO_EXPAND,) * 3, gen=None):
-        from ._jit_free_loop import AUGMENTED, BLOCK, GEN_AUGMENTED, GEN_TREE
+                 blocks=None, expand=(_NO_EXPAND,) * 3, gen=None, path=None):
+        from ._jit_free_loop import AUGMENTED, BLOCK, GEN_AUGMENTED, GEN_TREE, PATH
 
         kern, fpos, fvel = kernels
         n, m = system.n, system.m
         N = n + m
         self.n, self.m = n, m
+        #: the state's size: (q, qd) for free motion, q for a path
+        self.ny = n if path is not None else 2 * n
         self.kp = np.array([kern, fpos, fvel], dtype=np.int64)
         self.blocks = blocks
         #: how the compiled loop solves for the accelerations: "block" (Schur complement on
@@ -268,13 +283,21 @@ class FreeStepper:
         #: "recursive" (Gen joints: the articulated-body recursion) or "recursive+augmented"
         #: (Gen joints with constraint equations: the composite-body mass matrix in the
         #: augmented system)
-        if gen is not None:
+        if path is not None:
+            self.mode, self.solver = PATH, "path"
+        elif gen is not None:
             self.mode = GEN_TREE if gen.tree else GEN_AUGMENTED
             self.solver = "recursive" if gen.tree else "recursive+augmented"
         else:
             self.mode = AUGMENTED if blocks is None else BLOCK
             self.solver = "augmented" if blocks is None else "block"
-        if blocks is None and gen is None:
+        if path is not None:
+            # the path's numbers in the block structure's first array: [k, npar, the
+            # holonomic velocity kernel's row] (the loops hand the derivative one kernel row)
+            self.flat_t = self.mp = np.zeros(0, dtype=np.int64)
+            blk = (np.array([path, len(p), *fvel], dtype=np.int64), *_Blocks.none()[1:])
+            self.bw = 0
+        elif blocks is None and gen is None:
             flat = np.asarray(fk._flat, dtype=np.int64)
             self.flat_t = (flat % N) * N + flat // N      # K^T in C order = K in Fortran order
             self.mp = np.asarray(fk._map, dtype=np.int64)
@@ -287,7 +310,10 @@ class FreeStepper:
             blk, self.bw = blocks.arrays, blocks.bandwidth
         # the loop's structure argument: (block path, Gen tree, the kernels' output maps)
         self.blk_i = (blk, _Gen.none() if gen is None else gen.arrays, tuple(expand))
-        self.kk = 0 if gen is not None else int(fk.k_M + fk.k_J)
+        if path is not None:
+            self.kk = int(2 * path + path * n)          # the velocity constraints' outputs
+        else:
+            self.kk = 0 if gen is not None else int(fk.k_M + fk.k_J)
         self.p = np.ascontiguousarray(p, dtype=float)
         self.jr = system.jac_rows.astype(np.int64)
         self.jc = system.jac_cols.astype(np.int64)
@@ -298,7 +324,7 @@ class FreeStepper:
         self.correction = bool(correction) and m > 0
         self.t_eval = np.zeros(0) if t_eval is None else np.ascontiguousarray(t_eval, dtype=float)
         k = len(self.t_eval)
-        self.ET, self.EY = np.zeros(k), np.zeros((k, 2 * n))
+        self.ET, self.EY = np.zeros(k), np.zeros((k, self.ny))
         self.EQDD, self.ELAM = np.full((k, n), np.nan), np.full((k, m), np.nan)
         self.steps = 0
         if _state["loop"] is None:
@@ -338,10 +364,7 @@ class FreeStepper:
             # the kernel the Python path uses (sparse above the threshold): compiled once
             fk = dyn.free_kernel(N > SPARSE_THRESHOLD)
             entries = [_entry(fk.f)]
-        if system.m:
-            entries += [_entry(system.f_position), _entry(system.f_velocity)]
-        else:
-            entries += [((0, 0, 0, 0, 0), _NO_EXPAND)] * 2
+        entries += _constraint_entries(system, system.f_position, system.f_velocity)
         if any(e is None for e in entries):
             return None
         rows = [e[0] for e in entries]
@@ -352,6 +375,51 @@ class FreeStepper:
         return cls(system, p, scaling, rows0, robust, correction, t_eval, rows, fk, blocks,
                    [e[1] for e in entries], gen)
 
+    @classmethod
+    def plan_path(cls, path, method, p, scaling, correction, t_eval):
+        """The stepper of a nonholonomic path (:class:`~mechsys.analyses._path.PathSystem`)
+        when the compiled loop can run it, else None: velocity constraints linear in the
+        velocities (the nonlinear ones need a Newton iteration per evaluation, left to the
+        Python path), at most ``SMALL_LU`` coordinates, LLVM kernels."""
+        from ._jit_loop import SMALL as SMALL_LU
+
+        system = path.system
+        n = system.n
+        if (_jit.mode() == "off" or method not in METHODS or n == 0 or n > SMALL_LU
+                or not path.linear or not _jit.available()):
+            return None
+        if method != "dop853":
+            t_eval = None
+        entries = [_entry(path._f)] + _constraint_entries(system, system.f_position,
+                                                          system.f_velocity)
+        if any(e is None for e in entries):
+            return None
+        return cls(system, p, scaling, None, False, correction, t_eval, [e[0] for e in entries],
+                   None, expand=[e[1] for e in entries], path=len(path.psi))
+
+    def path_accelerations(self, path, times, Q, QD, QDD) -> int:
+        """A path's accelerations at the rows of ``times``, ``Q``, ``QD`` into ``QDD`` (N, n)
+        in compiled code (``_jit_free_loop.path_accelerations``); returns the first row left
+        to the Python path (0 when a kernel has no C entry point)."""
+        system = path.system
+        entries = _constraint_entries(system, system.f_position, system.f_gamma)
+        entries.append(_entry(path._f))
+        if any(e is None for e in entries):
+            return 0
+        if _state.get("path_acc") is None:
+            from ._jit_free_loop import path_accelerations
+
+            _state["path_acc"] = path_accelerations
+        return int(_state["path_acc"](
+            np.array([e[0] for e in entries], dtype=np.int64), tuple(e[1] for e in entries),
+            np.ascontiguousarray(times, dtype=float), np.ascontiguousarray(Q, dtype=float),
+            np.ascontiguousarray(QD, dtype=float), self.p, self.jr, self.jc, len(path.psi), QDD))
+
+    def rate(self, y, row):
+        """The state's derivative at ``y`` from a row the loop returned (its ``QDD``):
+        ``(qd, qdd)`` for free motion, the velocities themselves for a path."""
+        return row if self.ny == self.n else np.concatenate((y[self.n:], row))
+
     def advance(self, solver, ie: int, max_steps: int | None = None):
         """Compiled steps of the SciPy DOP853 ``solver`` from its current state; the solver is
         left at the last accepted step (status ``"finished"`` at the end). Returns ``(status,
@@ -361,12 +429,12 @@ class FreeStepper:
         max_steps = CHUNK_STEPS if max_steps is None else max_steps
         A, B, C, E3, E5, D = _coefficients()
         T, H = np.empty(max_steps), np.empty(max_steps)
-        Y = np.empty((max_steps, 2 * n))
+        Y = np.empty((max_steps, self.ny))
         QDD, LAM = np.empty((max_steps, n)), np.empty((max_steps, m))
         state = np.array([solver.t, solver.h_abs], dtype=float)
         y = np.array(solver.y, dtype=float)
         f = np.array(solver.f, dtype=float)
-        atol = np.broadcast_to(np.asarray(solver.atol, dtype=float), (2 * n,)).copy()
+        atol = np.broadcast_to(np.asarray(solver.atol, dtype=float), (self.ny,)).copy()
         t_prev = solver.t
         status, steps, ie, evals, rejected, projections = _state["loop"](
             self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr, self.jc,
@@ -394,7 +462,7 @@ class FreeStepper:
         instead of about 40 µs for the Python path's), or None where the Python path must
         decide (its special handling: the loops hand over there too)."""
         n, m = self.n, self.m
-        f, lam = np.empty(2 * n), np.empty(m)
+        f, lam = np.empty(self.ny), np.empty(m)
         ok = _state["derivative"](
             self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr, self.jc,
             self.rows0, self.columns, self.robust, self.mode, self.blk_i, self.ws, float(t),
@@ -430,7 +498,7 @@ class FreeStepper:
         n, m = self.n, self.m
         max_steps = CHUNK_STEPS if max_steps is None else max_steps
         T, H, E = np.empty(max_steps), np.empty(max_steps), np.empty(max_steps)
-        Y = np.empty((max_steps, 2 * n))
+        Y = np.empty((max_steps, self.ny))
         QDD, LAM = np.empty((max_steps, n)), np.empty((max_steps, m))
         k, (a, b, c), method, fixed, inv_scale, t1 = options
         status, steps, evals, projections = _state["adams"](

@@ -13,6 +13,9 @@ the Python path fixes one:
 * ``_stage``     ``scipy.integrate._ivp.rk.rk_step`` for DOP853, with its error norm
                  (``DOP853._estimate_error_norm``) and step-size control (``_step_impl``)
 * ``_dense``     ``DOP853._dense_output_impl`` and ``Dop853DenseOutput``
+* ``_path_velocity`` ``analyses._path.PathSystem.velocities`` (a nonholonomic path's
+                 derivative, velocity constraints linear in the velocities; decision 0027),
+                 and ``path_accelerations`` its ``accelerations`` at the outputs
 * ``_accel_gen`` ``compile._generalized.RecursiveDynamics`` (generalized coordinates,
                  decision 0018): the joint kernels, then the articulated-body recursion
                  (a tree of Gen joints) or the composite-body mass matrix in the augmented
@@ -53,6 +56,10 @@ FINISHED, CHUNK, HANDOVER = 0, 1, 2
 #: recursive dynamics (decision 0018): a tree of Gen joints by the articulated-body recursion,
 #: or the composite-body mass matrix in the augmented system
 AUGMENTED, BLOCK, GEN_TREE, GEN_AUGMENTED = 0, 1, 2, 3
+#: a nonholonomic path (``analyses._path.PathSystem``, Mech's ``SolvePath``): the state is
+#: ``q`` alone and its derivative the velocities of the holonomic and velocity constraints
+#: (``_path_velocity``); the projection is onto the positions only
+PATH = 4
 
 #: augmented systems up to this size are solved by the loop's own elimination (``_lu_solve``);
 #: larger ones by LAPACK ``dgesv``, whose call overhead no longer matters there
@@ -170,7 +177,13 @@ def _rhs(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, 
          ipiv, ibuf, rhs, b, qdd, lam, force, blocks, blk_i, blk_w, t, y, f):
     """``f = (qd, qdd)`` at ``(t, y)``; False: hand over. ``blocks``: how (``AUGMENTED``,
     ``BLOCK``, ``GEN_TREE``, ``GEN_AUGMENTED``); ``blk_i = (block structure, Gen tree,
-    expansion maps of the three kernels)``, ``blk_w`` their work arrays (``_block_work``)."""
+    expansion maps of the three kernels)``, ``blk_w`` their work arrays (``_block_work``).
+    ``PATH``: ``f = qd`` (n,) at ``(t, q = y)``, also left in ``qdd`` (the next evaluation's
+    guess, as the Python path's)."""
+    if blocks == PATH:
+        return _path_velocity(kp, x, out, KT, n, m, jr, jc, columns, ipiv, rhs, b, qdd,
+                              blk_i[0][0], blk_w[0], blk_i[2][0], blk_w[2][0], blk_i[2][2],
+                              blk_w[2][2], t, y, f)
     x[0] = t
     for j in range(2 * n):
         x[1 + j] = y[j]
@@ -193,6 +206,149 @@ def _rhs(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, 
         f[j] = y[n + j]
         f[n + j] = qdd[j]
     return True
+
+
+@leaf
+def _path_velocity(kp, x, out, KT, n, m, jr, jc, columns, ipiv, w1, w2, last, info, pw, ex_psi,
+                   ph_psi, ex_vel, ph_vel, t, q, f):
+    """The velocities of a path at ``(t, q)``: ``analyses._path.PathSystem.velocities`` for
+    velocity constraints linear in the velocities, operation for operation. ``kp`` the
+    velocity constraints' kernel ``[t, q, qd, p] -> [psi (k), psi_qd (k, n), rest (k)]``
+    (its pointer-table row); ``info = [k, npar, the holonomic velocity kernel's row (5)]``,
+    that kernel ``-> [Phi_q values, Phi_t]`` (``m`` rows); ``pw = (velocity kernel outputs,
+    R, r, J (m, n), dq, ...)``. From
+    the guess ``last`` (the previous evaluation's velocities, as the Python path's):
+
+        K = [Phi_q; psi_qd],  R = [Phi_q qd + Phi_t; psi(qd)],  qd <- qd - K^-1 R
+
+    unless ``R`` is already within the tolerance. ``f = last = qd``; False where the Python
+    path must decide (``K`` singular or nearly: its reciprocal condition below
+    ``RCOND_MIN``; a value not finite)."""
+    out_vel, R, r, J, dq = pw[0], pw[1], pw[2], pw[3], pw[4]
+    k = info[0]
+    nnz = jr.size
+    nin_k = 1 + 2 * n + info[1]          # [t, q, qd, p]: p is written by the loops' set-up
+    x[0] = t
+    for j in range(n):
+        x[1 + j] = q[j]
+        x[1 + n + j] = 0.0
+    if m > 0:
+        _evalx(info[2:7], x, nin_k, out_vel, ex_vel, ph_vel)
+        _assemble(out_vel, 0, jr, jc, J)
+    for j in range(n):
+        x[1 + n + j] = last[j]
+    _evalx(kp, x, nin_k, out, ex_psi, ph_psi)
+    # K (transposed storage): the holonomic rows, then psi_qd (row-major k x n in ``out``)
+    for i in range(m):
+        for j in range(n):
+            KT[j, i] = J[i, j]
+    for i in range(k):
+        for j in range(n):
+            KT[j, m + i] = out[k + i * n + j]
+    big = 0.0
+    for i in range(n):
+        rmax = 0.0
+        for j in range(n):
+            v = abs(KT[j, i] * columns[j])
+            if v > rmax:
+                rmax = v
+        r[i] = rmax if rmax > 0 else 1.0
+    for i in range(m):
+        acc = 0.0
+        for j in range(n):
+            acc += J[i, j] * last[j]
+        R[i] = acc - (-out_vel[nnz + i])
+    for i in range(k):
+        R[m + i] = out[i]
+    qmax = 0.0
+    for i in range(n):
+        v = abs(R[i] / r[i])
+        if not v <= big:                 # NaN too
+            big = v
+        v = abs(last[i] / columns[i])
+        if v > qmax:
+            qmax = v
+    if not np.isfinite(big):
+        return False
+    if big <= 1e-12 * (1.0 + qmax):
+        for j in range(n):
+            f[j] = last[j]
+        return True
+    anorm = _norm1(KT, n)
+    if getrf(KT, n, ipiv) > 0 or anorm == 0:
+        return False
+    if gecon1(KT, n, anorm, w1, w2) < RCOND_MIN:
+        return False
+    for i in range(n):
+        dq[i] = R[i]
+    getrs(KT, n, ipiv, dq)
+    for j in range(n):
+        v = last[j] - dq[j]
+        if not np.isfinite(v):
+            return False
+        last[j] = v
+        f[j] = v
+    return True
+
+
+@nb.njit(cache=True)
+def path_accelerations(kp, ex, times, Q, QD, p, jr, jc, k, QDD):
+    """A path's accelerations at each output row (``analyses._path.PathSystem.accelerations``,
+    operation for operation): ``[Phi_q; psi_qd] qdd = [gamma; -rest]``. ``kp`` (3, 5) the
+    position, gamma and velocity-constraint kernels' rows, ``ex`` their output maps (CSE
+    kernels). Returns the first row left to the Python path (a singular or nearly singular
+    matrix: it raises the diagnosis), ``len(times)`` when all are done."""
+    N, n = Q.shape
+    m = n - k
+    nnz = jr.size
+    npar = p.size
+    nin = 1 + 2 * n + npar
+    x = np.zeros(nin + max(kp[0, 4], kp[1, 4], kp[2, 4], 0))
+    for j in range(npar):
+        x[1 + 2 * n + j] = p[j]
+    out_pos = np.empty(m + nnz)
+    g = np.empty(m)
+    out = np.empty(2 * k + k * n)
+    ph = (np.zeros(ex[0].max() + 1 if ex[0].size else 1),
+          np.zeros(ex[1].max() + 1 if ex[1].size else 1),
+          np.zeros(ex[2].max() + 1 if ex[2].size else 1))
+    J = np.zeros((m, n))
+    KT = np.empty((n, n))
+    ipiv = np.empty(n, dtype=np.int32)
+    w = np.empty(2 * n)
+    b = np.empty(n)
+    for row in range(N):
+        x[0] = times[row]
+        for j in range(n):
+            x[1 + j] = Q[row, j]
+            x[1 + n + j] = 0.0
+        if m > 0:
+            _evalx(kp[0], x, nin, out_pos, ex[0], ph[0])
+            _assemble(out_pos, m, jr, jc, J)
+        for j in range(n):
+            x[1 + n + j] = QD[row, j]
+        if m > 0:
+            _evalx(kp[1], x, nin, g, ex[1], ph[1])
+        _evalx(kp[2], x, nin, out, ex[2], ph[2])
+        for i in range(m):
+            for j in range(n):
+                KT[j, i] = J[i, j]
+            b[i] = g[i]
+        for i in range(k):
+            for j in range(n):
+                KT[j, m + i] = out[k + i * n + j]
+            b[m + i] = -out[k + k * n + i]
+        anorm = _norm1(KT, n)
+        if getrf(KT, n, ipiv) > 0 or anorm == 0:
+            return row
+        if gecon1(KT, n, anorm, w, w[n:]) < RCOND_MIN:
+            return row
+        getrs(KT, n, ipiv, b)
+        for j in range(n):
+            if not np.isfinite(b[j]):
+                return row
+            QDD[row, j] = b[j]
+    return N
 
 
 @leaf
@@ -285,6 +441,11 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
             return False
         for j in range(n):
             y[j] -= dq[j]
+    if blocks == PATH:                   # a path's state is q alone
+        for j in range(n):
+            if not np.isfinite(y[j]):
+                return False
+        return True
     for j in range(n):
         xk[1 + j] = y[j]
     _evalx(pv, xk, nin_k, out_vel, ex[2], ph[2])
@@ -307,6 +468,19 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
     return True
 
 
+@leaf
+def _setup(x, p, n, m, blocks, lam):
+    """The derivative's argument array at the start of a run: zeros and the parameters, at
+    ``[t, q, qd, lambda = 0, p, qdd = 0]`` (free motion) or ``[t, q, qd, p]`` (a path, whose
+    multipliers ``lam`` are none: NaN)."""
+    x[:] = 0.0
+    at = 1 + 2 * n if blocks == PATH else 1 + 2 * n + m
+    for j in range(p.size):
+        x[at + j] = p[j]
+    if blocks == PATH:
+        lam[:] = np.nan
+
+
 @nb.njit(cache=True)
 def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, robust,
            blocks, blk_i, ws, correction, ptol, pmaxit, Acoef, Bcoef, Ccoef, E3, E5, Dcoef, rtol,
@@ -316,7 +490,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
     """Accepted DOP853 steps from ``(state[0] = t, y, f, state[1] = h_abs)``; see the module
     docstring. Returns ``(status, steps, ie, evaluations, rejected, projections)``; the
     state arrays hold the last accepted (projected) state and its derivative."""
-    N2 = 2 * n
+    N2 = n if blocks == PATH else 2 * n
     npar = p.size
     nin = 1 + 2 * n + m + npar + n                   # [t, q, qd, lambda, p, qdd]
     nin_k = 1 + 2 * n + npar                         # [t, q, qd, p]
@@ -324,9 +498,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
      blk_w, J, r, Fs, dq, Js, Am, work, iwork, ybuf) = borrow(ws)
     (lapack, p, flat_t, mp, jr, jc, rows0, columns, blk_i, y, state, f, t_eval, atol) = borrow(
         (lapack, p, flat_t, mp, jr, jc, rows0, columns, blk_i, y, state, f, t_eval, atol))
-    x[:] = 0.0                       # [t, q, qd, lambda = 0, p, qdd = 0]
-    for j in range(npar):
-        x[1 + 2 * n + m + j] = p[j]
+    _setup(x, p, n, m, blocks, lam)
     xk[:] = 0.0                      # [t, q, qd = 0 (positions), p]
     for j in range(npar):
         xk[1 + 2 * n + j] = p[j]
@@ -499,7 +671,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
         for j in range(N2):
             Y[steps, j] = y[j]
         for j in range(n):
-            QDD[steps, j] = f[n + j]
+            QDD[steps, j] = f[N2 - n + j]      # accelerations (free motion), velocities (path)
         # the multipliers belong to the last evaluation, which was at (t, y) only when it
         # came after the output times (projection on) or no output was made in this step
         if correction or ie == ie_step:
@@ -561,7 +733,7 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
     last errors ``recent`` (8,): up to ``2 k`` of them. ``method``: 0 automatic, 1 predictor, 2 corrector.
     Returns ``(status, steps, evaluations, projections)``; the state arrays hold the last
     accepted state."""
-    N2 = 2 * n
+    N2 = n if blocks == PATH else 2 * n
     npar = p.size
     nin = 1 + 2 * n + m + npar + n
     nin_k = 1 + 2 * n + npar
@@ -569,9 +741,7 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
      blk_w, J, r, Fs, dq, Js, Am, work, iwork, ybuf) = borrow(ws)
     (lapack, p, flat_t, mp, jr, jc, rows0, columns, blk_i, y, state, hist_t, hist_f, recent) = borrow(
         (lapack, p, flat_t, mp, jr, jc, rows0, columns, blk_i, y, state, hist_t, hist_f, recent))
-    x[:] = 0.0                       # [t, q, qd, lambda = 0, p, qdd = 0]
-    for j in range(npar):
-        x[1 + 2 * n + m + j] = p[j]
+    _setup(x, p, n, m, blocks, lam)
     xk[:] = 0.0                      # [t, q, qd = 0 (positions), p]
     for j in range(npar):
         xk[1 + 2 * n + j] = p[j]
@@ -693,7 +863,7 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
         for j in range(N2):
             Y[steps, j] = y[j]
         for j in range(n):
-            QDD[steps, j] = f_new[n + j]
+            QDD[steps, j] = f_new[N2 - n + j]
         for i in range(m):
             LAM[steps, i] = lam[i]
         steps += 1
@@ -733,9 +903,7 @@ def derivative(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, robu
         (lapack, p, flat_t, mp, jr, jc, rows0, columns, blk_i, y, f, lam_out))
     npar = p.size
     nin = 1 + 2 * n + m + npar + n
-    x[:] = 0.0                       # [t, q, qd, lambda = 0, p, qdd = 0]
-    for j in range(npar):
-        x[1 + 2 * n + m + j] = p[j]
+    _setup(x, p, n, m, blocks, lam)
     if not _rhs(kp[0], lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0,
                 columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force, blocks, blk_i, blk_w,
                 t, y, f):
@@ -755,23 +923,31 @@ def workspace(kp, n, m, npar, kk, nnz, blocks, blk_i, bw):
     nin = 1 + 2 * n + m + npar + n                   # [t, q, qd, lambda, p, qdd]
     nin_k = 1 + 2 * n + npar                         # [t, q, qd, p]
     NN = n + m
-    KTf = np.empty(1 if blocks else NN * NN)
-    return (np.zeros(nin + max(kp[0, 4], 0)), np.zeros(nin_k + max(kp[1, 4], kp[2, 4])),
+    # the dense matrix: the augmented system, a path's velocity system (n x n), else unused
+    side = NN if blocks == AUGMENTED else (n if blocks == PATH else 1)
+    KTf = np.empty(side * side)
+    # (a path evaluates its two kernels at [t, q, qd, p] in the first array)
+    first = max(nin + max(kp[0, 4], 0), nin_k + max(kp[0, 4], kp[2, 4], 0))
+    return (np.zeros(first), np.zeros(nin_k + max(kp[1, 4], kp[2, 4])),
             np.empty(kk + n + m), np.empty(m + nnz), np.empty(nnz + m),
-            KTf.reshape((1, 1) if blocks else (NN, NN)), KTf,
+            KTf.reshape((side, side)), KTf,
             np.empty(max(NN, 1), dtype=np.int32), np.zeros(5, dtype=np.int32),
-            np.zeros(2, dtype=np.uint8), np.zeros(2), np.empty(NN), np.empty(NN), np.empty(n),
-            np.empty(m), np.empty(n), _block_work(blocks, blk_i, n, m, bw), np.empty((m, n)),
+            np.zeros(2, dtype=np.uint8), np.zeros(2), np.empty(NN), np.empty(NN), np.zeros(n),
+            np.empty(m), np.empty(n), _block_work(blocks, blk_i, n, m, bw, nnz), np.empty((m, n)),
             np.empty(m), np.empty(m), np.empty(n), np.empty((m, n)), np.empty((m, m)),
             np.empty(4 * max(m, 1)), np.empty(max(m, 1), dtype=np.int32), np.empty(m))
 
 
 @nb.njit(cache=True)
-def _block_work(blocks, blk_i, n, m, bw):
+def _block_work(blocks, blk_i, n, m, bw, nnz):
     """Work arrays of ``blk_i = (block structure, Gen tree, expansion maps)`` (see ``_rhs``):
     ``((Mst, Jst, Wst, Sb, u, Pst, Minv, Li), Gen work (_gen_work), (the three kernels'
-    distinct outputs))``."""
-    if blocks == BLOCK:
+    distinct outputs))``; a path's ``(velocity kernel outputs, R, r, J, dq, -, -, -)`` in the
+    first (``_path_velocity``)."""
+    if blocks == PATH:
+        bw_ = (np.zeros(nnz + m), np.zeros(n), np.zeros(n), np.zeros((m, n)), np.zeros(n),
+               np.zeros(1), np.zeros(1), np.zeros(1))
+    elif blocks == BLOCK:
         boff, roff, bsize = blk_i[0][1], blk_i[0][4], blk_i[0][6]
         big = bsize.max() if bsize.size else 1
         bw_ = (np.zeros(boff[-1]), np.zeros(roff[-1]), np.zeros(roff[-1]),
