@@ -1,6 +1,6 @@
 """The compiled stepper of nonholonomic paths (``_jit_free_loop`` kind ``PATH``, decision
 0027) against the Python stepper and closed forms: DOP853 and Mech's Adams, a path without
-holonomic constraints, and the cases left to the Python path. (Parameters reach the
+holonomic constraints, and velocity constraints nonlinear in the velocities. (Parameters reach the
 compiled loop: tests/test_path.py's parameter test runs compiled by default.)"""
 
 from __future__ import annotations
@@ -83,11 +83,8 @@ def test_path_without_holonomic_constraints(monkeypatch):
     np.testing.assert_allclose(sol.location(m.body("sled").point("blade")), ref, atol=1e-8)
 
 
-def test_nonlinear_velocity_constraints_stay_in_python(monkeypatch):
-    """A velocity constraint nonlinear in the velocities needs a Newton iteration per
-    evaluation: the Python stepper runs it (the compiled one declines), with the same
-    result as the linear form of the same motion."""
-    monkeypatch.setenv("MECHSYS_JIT", "1")
+def _cubic_sled():
+    """The knife edge with its speed prescribed by an equation cubic in the velocities."""
     m = ms.Model2D()
     sled = m.add_body("sled", points={"blade": (0.0, 0.0)})
     m.add(ms.RelativeX1(sled.point("blade"), 0.0), name="dummy x")
@@ -99,12 +96,20 @@ def test_nonlinear_velocity_constraints_stay_in_python(monkeypatch):
     speed = (v.T * ahead)[0, 0]
     # speed + speed^3 / 10 increases monotonically: its one root is the speed SPEED
     cubic = speed + speed**3 / 10 - (knife.SPEED + knife.SPEED**3 / 10)
-    path = m.path(replace={"dummy x": ms.Orthogonal1(v, sled.vector((0, 1))),
-                           "dummy y": ms.Constraint([cubic])})
-    assert not path.linear
+    return m, m.path(replace={"dummy x": ms.Orthogonal1(v, sled.vector((0, 1))),
+                              "dummy y": ms.Constraint([cubic])})
+
+
+def test_nonlinear_velocity_constraints(monkeypatch):
+    """A velocity constraint nonlinear in the velocities: Newton in every evaluation, in the
+    loop as in the Python stepper; both on the closed-form circle."""
     t = np.linspace(0, 2.0, 5)
-    sol = path.simulate(t, rtol=1e-11, atol=1e-12)
-    assert sol.extra["compiled_steps"] == 0 and sol.extra["compiled_solver"] is None
+    fast, slow = _both(monkeypatch, _cubic_sled, t, rtol=1e-11, atol=1e-12)
+    assert not _cubic_sled()[1].linear
+    assert fast.extra["compiled_steps"] == fast.extra["steps"] > 0
+    for a, b in ((fast.q, slow.q), (fast.qd, slow.qd), (fast.qdd, slow.qdd)):
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-9 * max(1.0, np.abs(b).max()))
     R = knife.SPEED / knife.RATE
     ref = np.c_[R * np.sin(knife.RATE * t), R * (1 - np.cos(knife.RATE * t))]
-    np.testing.assert_allclose(sol.location(m.body("sled").point("blade")), ref, atol=1e-8)
+    np.testing.assert_allclose(fast.location(fast.model.body("sled").point("blade")), ref,
+                               atol=1e-8)

@@ -39,8 +39,9 @@ Numba and the cached machine code costs about 0.7 s CPU once per process.
 
 Nonholonomic paths (:class:`~mechsys.analyses._path.PathSystem`, Mech's ``SolvePath``) run
 in the same loops (:meth:`FreeStepper.plan_path`, decision 0027): the state is ``q``, its
-derivative the velocities from ``[Phi_q; psi_qd] qd = [-Phi_t; -psi_0]`` (velocity
-constraints linear in the velocities), the projection onto the positions only.
+derivative the velocities of the holonomic and velocity constraints (Newton on ``qd`` with
+``[Phi_q; psi_qd]``: one step when the velocity constraints are linear in the velocities),
+the projection onto the positions only.
 """
 
 from __future__ import annotations
@@ -295,7 +296,9 @@ class FreeStepper:
             # the path's numbers in the block structure's first array: [k, npar, the
             # holonomic velocity kernel's row] (the loops hand the derivative one kernel row)
             self.flat_t = self.mp = np.zeros(0, dtype=np.int64)
-            blk = (np.array([path, len(p), *fvel], dtype=np.int64), *_Blocks.none()[1:])
+            k, linear = path
+            blk = (np.array([k, len(p), *fvel, int(linear)], dtype=np.int64),
+                   *_Blocks.none()[1:])
             self.bw = 0
         elif blocks is None and gen is None:
             flat = np.asarray(fk._flat, dtype=np.int64)
@@ -311,7 +314,7 @@ class FreeStepper:
         # the loop's structure argument: (block path, Gen tree, the kernels' output maps)
         self.blk_i = (blk, _Gen.none() if gen is None else gen.arrays, tuple(expand))
         if path is not None:
-            self.kk = int(2 * path + path * n)          # the velocity constraints' outputs
+            self.kk = int(2 * path[0] + path[0] * n)    # the velocity constraints' outputs
         else:
             self.kk = 0 if gen is not None else int(fk.k_M + fk.k_J)
         self.p = np.ascontiguousarray(p, dtype=float)
@@ -378,15 +381,14 @@ class FreeStepper:
     @classmethod
     def plan_path(cls, path, method, p, scaling, correction, t_eval):
         """The stepper of a nonholonomic path (:class:`~mechsys.analyses._path.PathSystem`)
-        when the compiled loop can run it, else None: velocity constraints linear in the
-        velocities (the nonlinear ones need a Newton iteration per evaluation, left to the
-        Python path), at most ``SMALL_LU`` coordinates, LLVM kernels."""
+        when the compiled loop can run it, else None: at most ``SMALL_LU`` coordinates, LLVM
+        kernels."""
         from ._jit_loop import SMALL as SMALL_LU
 
         system = path.system
         n = system.n
         if (_jit.mode() == "off" or method not in METHODS or n == 0 or n > SMALL_LU
-                or not path.linear or not _jit.available()):
+                or not _jit.available()):
             return None
         if method != "dop853":
             t_eval = None
@@ -395,7 +397,7 @@ class FreeStepper:
         if any(e is None for e in entries):
             return None
         return cls(system, p, scaling, None, False, correction, t_eval, [e[0] for e in entries],
-                   None, expand=[e[1] for e in entries], path=len(path.psi))
+                   None, expand=[e[1] for e in entries], path=(len(path.psi), path.linear))
 
     def path_accelerations(self, path, times, Q, QD, QDD) -> int:
         """A path's accelerations at the rows of ``times``, ``Q``, ``QD`` into ``QDD`` (N, n)

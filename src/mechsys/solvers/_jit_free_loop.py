@@ -211,21 +211,23 @@ def _rhs(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, 
 @leaf
 def _path_velocity(kp, x, out, KT, n, m, jr, jc, columns, ipiv, w1, w2, last, info, pw, ex_psi,
                    ph_psi, ex_vel, ph_vel, t, q, f):
-    """The velocities of a path at ``(t, q)``: ``analyses._path.PathSystem.velocities`` for
-    velocity constraints linear in the velocities, operation for operation. ``kp`` the
+    """The velocities of a path at ``(t, q)``: ``analyses._path.PathSystem.velocities``,
+    operation for operation. ``kp`` the
     velocity constraints' kernel ``[t, q, qd, p] -> [psi (k), psi_qd (k, n), rest (k)]``
-    (its pointer-table row); ``info = [k, npar, the holonomic velocity kernel's row (5)]``,
-    that kernel ``-> [Phi_q values, Phi_t]`` (``m`` rows); ``pw = (velocity kernel outputs,
-    R, r, J (m, n), dq, ...)``. From
+    (its pointer-table row); ``info = [k, npar, the holonomic velocity kernel's row (5),
+    linear]``, that kernel ``-> [Phi_q values, Phi_t]`` (``m`` rows); ``pw = (velocity kernel
+    outputs, R, r, J (m, n), dq, ...)``. From
     the guess ``last`` (the previous evaluation's velocities, as the Python path's):
 
         K = [Phi_q; psi_qd],  R = [Phi_q qd + Phi_t; psi(qd)],  qd <- qd - K^-1 R
 
-    unless ``R`` is already within the tolerance. ``f = last = qd``; False where the Python
-    path must decide (``K`` singular or nearly: its reciprocal condition below
-    ``RCOND_MIN``; a value not finite)."""
+    unless ``R`` is already within the tolerance; once when the velocity constraints are
+    linear in the velocities, else until it is (at most 20 steps). ``f = last = qd``; False
+    where the Python path must decide (``K`` singular or nearly: its reciprocal condition
+    below ``RCOND_MIN``; a value not finite; no convergence)."""
     out_vel, R, r, J, dq = pw[0], pw[1], pw[2], pw[3], pw[4]
     k = info[0]
+    linear = info[7] != 0
     nnz = jr.size
     nin_k = 1 + 2 * n + info[1]          # [t, q, qd, p]: p is written by the loops' set-up
     x[0] = t
@@ -235,60 +237,65 @@ def _path_velocity(kp, x, out, KT, n, m, jr, jc, columns, ipiv, w1, w2, last, in
     if m > 0:
         _evalx(info[2:7], x, nin_k, out_vel, ex_vel, ph_vel)
         _assemble(out_vel, 0, jr, jc, J)
-    for j in range(n):
-        x[1 + n + j] = last[j]
-    _evalx(kp, x, nin_k, out, ex_psi, ph_psi)
-    # K (transposed storage): the holonomic rows, then psi_qd (row-major k x n in ``out``)
-    for i in range(m):
+    for _ in range(20):
         for j in range(n):
-            KT[j, i] = J[i, j]
-    for i in range(k):
-        for j in range(n):
-            KT[j, m + i] = out[k + i * n + j]
-    big = 0.0
-    for i in range(n):
-        rmax = 0.0
-        for j in range(n):
-            v = abs(KT[j, i] * columns[j])
-            if v > rmax:
-                rmax = v
-        r[i] = rmax if rmax > 0 else 1.0
-    for i in range(m):
-        acc = 0.0
-        for j in range(n):
-            acc += J[i, j] * last[j]
-        R[i] = acc - (-out_vel[nnz + i])
-    for i in range(k):
-        R[m + i] = out[i]
-    qmax = 0.0
-    for i in range(n):
-        v = abs(R[i] / r[i])
-        if not v <= big:                 # NaN too
-            big = v
-        v = abs(last[i] / columns[i])
-        if v > qmax:
-            qmax = v
-    if not np.isfinite(big):
-        return False
-    if big <= 1e-12 * (1.0 + qmax):
-        for j in range(n):
-            f[j] = last[j]
-        return True
-    anorm = _norm1(KT, n)
-    if getrf(KT, n, ipiv) > 0 or anorm == 0:
-        return False
-    if gecon1(KT, n, anorm, w1, w2) < RCOND_MIN:
-        return False
-    for i in range(n):
-        dq[i] = R[i]
-    getrs(KT, n, ipiv, dq)
-    for j in range(n):
-        v = last[j] - dq[j]
-        if not np.isfinite(v):
+            x[1 + n + j] = last[j]
+        _evalx(kp, x, nin_k, out, ex_psi, ph_psi)
+        # K (transposed storage): the holonomic rows, then psi_qd (row-major k x n in ``out``)
+        for i in range(m):
+            for j in range(n):
+                KT[j, i] = J[i, j]
+        for i in range(k):
+            for j in range(n):
+                KT[j, m + i] = out[k + i * n + j]
+        for i in range(n):
+            rmax = 0.0
+            for j in range(n):
+                v = abs(KT[j, i] * columns[j])
+                if v > rmax:
+                    rmax = v
+            r[i] = rmax if rmax > 0 else 1.0
+        for i in range(m):
+            acc = 0.0
+            for j in range(n):
+                acc += J[i, j] * last[j]
+            R[i] = acc - (-out_vel[nnz + i])
+        for i in range(k):
+            R[m + i] = out[i]
+        big = 0.0
+        qmax = 0.0
+        for i in range(n):
+            v = abs(R[i] / r[i])
+            if not v <= big:             # NaN too
+                big = v
+            v = abs(last[i] / columns[i])
+            if v > qmax:
+                qmax = v
+        if not np.isfinite(big):
             return False
-        last[j] = v
-        f[j] = v
-    return True
+        if big <= 1e-12 * (1.0 + qmax):
+            for j in range(n):
+                f[j] = last[j]
+            return True
+        anorm = _norm1(KT, n)
+        if getrf(KT, n, ipiv) > 0 or anorm == 0:
+            return False
+        if gecon1(KT, n, anorm, w1, w2) < RCOND_MIN:
+            return False
+        for i in range(n):
+            dq[i] = R[i]
+        getrs(KT, n, ipiv, dq)
+        for j in range(n):
+            dq[j] = last[j] - dq[j]
+            if not np.isfinite(dq[j]):
+                return False
+        for j in range(n):
+            last[j] = dq[j]
+        if linear:
+            for j in range(n):
+                f[j] = last[j]
+            return True
+    return False                         # not converged: the Python path says so
 
 
 @nb.njit(cache=True)
