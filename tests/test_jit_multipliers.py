@@ -1,7 +1,7 @@
 """The compiled multiplier solves of static, kinematic and dynamic sweeps
 (solvers/_jit_multipliers.py) against the Python path: the same numbers on planar, spatial
-and two-stage (spline) models, the load balance they satisfy, the hand-over to the Python path
-at a point it must diagnose, and the cases where the compiled loop must not run."""
+and two-stage (spline) models, friction's Newton, the load balance they satisfy, the
+hand-over to the Python path at a point it must diagnose, and when the compiled loop runs."""
 
 from __future__ import annotations
 
@@ -134,33 +134,53 @@ def test_non_finite_loads_are_refused_in_both_paths(monkeypatch):
             m.solve(np.linspace(0, 1, 11), solution="static")
 
 
-def test_hand_over_mid_sweep_gives_the_python_result(monkeypatch):
-    """The compiled loop stopped after 7 points: the Python path continues, and the whole
-    equals an all-Python solve."""
-    real = _jit.multipliers
-
-    def partial(system, times, Q, QD, QDD, p, mode, LAM):
-        cut = lambda a: None if a is None else a[:7]   # noqa: E731
-        return real(system, times[:7], Q[:7], cut(QD), cut(QDD), p, mode, LAM[:7])
-
-    t = np.linspace(0.0, 1.0, 30)
-    monkeypatch.setattr(_statics._jit, "multipliers", partial)
-    monkeypatch.setenv("MECHSYS_JIT", "1")
-    mixed = _gas_crank().solve(t, solution="dynamic")
-    monkeypatch.setenv("MECHSYS_JIT", "0")
-    plain = _gas_crank().solve(t, solution="dynamic")
-    np.testing.assert_allclose(mixed.lam, plain.lam, rtol=1e-13, atol=1e-12)
-
-
-def test_friction_stays_with_the_python_newton(monkeypatch):
-    """Loads that depend on the multipliers (friction) need the Python path's Newton: the
-    compiled loop declines, and both settings give the same numbers."""
+def _friction_incline():
     from test_friction import incline
 
-    t = np.linspace(0.1, 1.0, 6)
-    fast, slow, taken = _solve_both(monkeypatch, lambda: incline(0.3, 0.25), t, "dynamic")
-    assert taken == [0, 0]
-    np.testing.assert_array_equal(fast.lam, slow.lam)
+    return incline(0.3, 0.25)
+
+
+@pytest.mark.parametrize("build", [_gas_crank, _friction_incline], ids=["linear", "friction"])
+def test_hand_over_mid_sweep_gives_the_python_result(monkeypatch, build):
+    """The compiled loop stopped after 7 points: the Python path continues (with friction,
+    its Newton from the 7th point's multipliers), and the whole equals an all-Python solve."""
+    real = _jit.multipliers
+
+    def partial(system, times, Q, QD, QDD, p, mode, LAM, *rest):
+        cut = lambda a: None if a is None else a[:7]   # noqa: E731
+        return real(system, times[:7], Q[:7], cut(QD), cut(QDD), p, mode, LAM[:7], *rest)
+
+    t = np.linspace(0.1, 1.0, 30)
+    monkeypatch.setattr(_statics._jit, "multipliers", partial)
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    mixed = build().solve(t, solution="dynamic")
+    monkeypatch.setenv("MECHSYS_JIT", "0")
+    plain = build().solve(t, solution="dynamic")
+    np.testing.assert_allclose(mixed.lam, plain.lam, rtol=1e-9, atol=1e-9)
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_friction_newton_in_the_loop(monkeypatch, mode):
+    """Loads that depend on the multipliers (Coulomb friction driven by the joint reactions):
+    Newton at every point, in the loop as in the Python path, each point from the previous
+    one's multipliers. The two stop on the same tolerance but sum ``J^T lambda`` in their own
+    order, so they agree to the tolerance rather than to rounding."""
+    t = np.linspace(0.1, 1.0, 12)
+    fast, slow, taken = _solve_both(monkeypatch, _friction_incline, t, mode)
+    assert taken[0] == len(t)
+    assert np.abs(slow.lam).max() > 1.0
+    np.testing.assert_allclose(fast.lam, slow.lam, rtol=1e-9, atol=1e-9)
+
+
+def test_friction_too_large_hands_over_with_the_python_error(monkeypatch):
+    """Friction that locks the joint: the compiled Newton does not converge at the first
+    point, and the Python path raises its ConvergenceError there (as without the loop)."""
+    from test_friction import incline
+
+    for jit in ("1", "0"):
+        monkeypatch.setenv("MECHSYS_JIT", jit)
+        with pytest.raises(ms.ConvergenceError, match="t = 0.1"):
+            incline(0.3, 5.0).solve(np.linspace(0.1, 1.0, 4), solution="dynamic")
 
 
 def test_when_the_compiled_loop_runs(monkeypatch):

@@ -129,23 +129,31 @@ def _wanted(system, points: int) -> bool:
     return available()
 
 
-def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM) -> int:
+def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, tol=1e-10,
+                max_iterations=50) -> int:
     """Fill ``LAM`` (N, m) with the multipliers of the solved sweep ``Q``, ``QD``, ``QDD``
     (N, n) in compiled code (``_jit_multipliers``) from point 0 on; return the first point
     left to the Python path (``len(times)`` when all are done, 0 when the compiled loop
-    cannot run: loads that depend on the multipliers (Newton), a dynamics without C entry
-    points (generalized-coordinate recursions, SymPy fallbacks), or the ``MECHSYS_JIT``
-    rule). ``mode_name``: ``"static"``, ``"kinematic"`` or ``"dynamic"``."""
+    cannot run: a dynamics without C entry points (generalized-coordinate recursions, SymPy
+    fallbacks), or the ``MECHSYS_JIT`` rule). ``mode_name``: ``"static"``, ``"kinematic"`` or
+    ``"dynamic"``. Loads that depend on the multipliers (friction): Newton from ``guess``
+    (scalar or (m,)) at the first point, with ``tol`` and ``max_iterations`` of
+    :class:`~mechsys.solvers.MultiplierOptions`."""
     N = len(times)
     dyn = system.dynamics
     # (the recursive dynamics of generalized coordinates has no f_terms kernel)
-    if (not N or getattr(dyn, "recursive", False) or dyn.depends_on_lambda
-            or not _wanted(system, N)):
+    if not N or getattr(dyn, "recursive", False) or not _wanted(system, N):
         return 0
     code = {"static": 0, "kinematic": 1, "dynamic": 2}[mode_name]
     if (code >= 1 and QD is None) or (code == 2 and QDD is None):
         return 0
-    table = _table([system.f_position, dyn.f_terms])
+    kernels = [system.f_position, dyn.f_terms]
+    if dyn.depends_on_lambda:
+        kernels.append(dyn.f_dQ_dlam)
+        dr, dc = _index(dyn.dQ_rows), _index(dyn.dQ_cols)
+    else:
+        dr = dc = np.zeros(0, dtype=np.int64)
+    table = _table(kernels)
     if table is None:
         return 0
     if _state.get("multipliers") is None:
@@ -161,7 +169,9 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM) -> int:
         dummy if code < 2 else np.ascontiguousarray(QDD, dtype=float),
         np.ascontiguousarray(system.p_values if p is None else p, dtype=float),
         _index(system.jac_rows), _index(system.jac_cols), _index(dyn.M_rows),
-        _index(dyn.M_cols), len(dyn.M_rows), code, LAM))
+        _index(dyn.M_cols), len(dyn.M_rows), code, LAM, dr, dc,
+        np.broadcast_to(np.asarray(guess, dtype=float), (system.m,)).copy(), float(tol),
+        int(max_iterations)))
 
 
 def _index(a) -> np.ndarray:

@@ -5,8 +5,8 @@ r"""Numba loop of the multiplier solves over a solved sweep (imported only when 
     kinematic:  Phi_q^T lambda = Q(t, q, qd)
     dynamic:    Phi_q^T lambda = Q(t, q, qd, qdd) + Qv(q, qd) - M(q) qdd
 
-each point's operations those of :func:`~mechsys.solvers._statics.solve_multipliers` for
-loads linear in the multipliers (the Python path), in the same order:
+each point's operations those of :func:`~mechsys.solvers._statics.solve_multipliers` (the
+Python path), in the same order:
 
 * ``Phi_q`` from the position kernel (``System.jacobian``), assembled dense;
 * ``Phi_q^T`` factorised by LU with partial pivoting and its reciprocal condition estimated
@@ -15,7 +15,8 @@ loads linear in the multipliers (the Python path), in the same order:
   the LAPACK helpers use, so no transpose is formed;
 * ``M``, ``Q``, ``Qv`` from the dynamics kernel (``Dynamics.terms``); ``M qdd`` from the
   mass matrix's nonzeros (the Python path multiplies the dense ``M``: the same to rounding);
-* one solve (``dgetrs``).
+* one solve (``dgetrs``); or, for loads that depend on the multipliers (friction), Newton
+  with ``Phi_q^T - dQ/dlambda`` from the previous point's multipliers.
 
 A point that the Python path would refuse (an exactly zero pivot, a reciprocal condition
 below ``RCOND_MIN``) or whose multipliers come out non-finite ends the loop there: the
@@ -28,6 +29,7 @@ import numba as nb
 import numpy as np
 
 from ._jit_cache import check as _check_cache
+from ._jit_lapack import leaf
 from ._jit_loop import _assemble, _eval_row, _factor_filled, _factor_work, _norm1, _solve, _structure
 
 _check_cache()   # stale cached loops go before anything here compiles (see _jit_cache)
@@ -35,17 +37,49 @@ _check_cache()   # stale cached loops go before anything here compiles (see _jit
 STATIC, KINEMATIC, DYNAMIC = 0, 1, 2
 
 
+@leaf
+def _loads(ptrs, xd, nin_d, out_dyn, mode, QDD, k, mr, mc, kM, n, Mq, rhs):
+    """The right-hand side at the arguments ``xd``: ``Q`` (static, kinematic) or ``Q + Qv -
+    M qdd`` (dynamic, the product from ``M``'s nonzeros: the Python path multiplies the dense
+    ``M`` with BLAS, whose order of summation is its own, so the two agree to rounding).
+    False when a value is not finite (the Python path raises the error naming it)."""
+    _eval_row(ptrs, 1, xd, nin_d, out_dyn)
+    if mode == DYNAMIC:
+        for i in range(n):
+            Mq[i] = 0.0
+        for e in range(kM):
+            Mq[mr[e]] += out_dyn[e] * QDD[k, mc[e]]
+        for i in range(n):
+            rhs[i] = (out_dyn[kM + i] + out_dyn[kM + n + i]) - Mq[i]
+    else:
+        for i in range(n):
+            rhs[i] = out_dyn[kM + i]
+    for i in range(n):
+        if not np.isfinite(rhs[i]):
+            return False
+    return True
+
+
 @nb.njit(cache=True)
-def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LAM):
+def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LAM, dr, dc,
+                guess, tol, maxit):
     """``LAM[k]`` (m,) at each point ``k`` from 0 on; returns the first point left to the
     Python path (``len(times)`` when all are done).
 
-    ``ptrs`` (2, 5): the position kernel ``x = [t, q, qd, p] -> [Phi, Phi_q values]`` and
-    the dynamics kernel ``x = [t, q, qd, lambda, p, qdd] -> [M values (kM), Q, Qv]`` (rows of
-    the pointer table, see ``_jit.plan``); ``jr``, ``jc`` the Jacobian's nonzero positions,
-    ``mr``, ``mc`` the mass matrix's. ``Q``, ``QD``, ``QDD`` (N, n): the sweep's states
-    (``QD``, ``QDD`` are read only in the modes that use them). ``mode``: ``STATIC``,
-    ``KINEMATIC``, ``DYNAMIC``."""
+    ``ptrs`` (3, 5): the position kernel ``x = [t, q, qd, p] -> [Phi, Phi_q values]``, the
+    dynamics kernel ``x = [t, q, qd, lambda, p, qdd] -> [M values (kM), Q, Qv]`` and, for
+    loads that depend on the multipliers, the kernel of ``dQ/dlambda``'s values at ``(dr,
+    dc)`` (rows of the pointer table, see ``_jit.plan``; a row of zeros and empty ``dr``
+    otherwise); ``jr``, ``jc`` the Jacobian's nonzero positions, ``mr``, ``mc`` the mass
+    matrix's. ``Q``, ``QD``, ``QDD`` (N, n): the sweep's states (``QD``, ``QDD`` are read
+    only in the modes that use them). ``mode``: ``STATIC``, ``KINEMATIC``, ``DYNAMIC``.
+
+    Loads that depend on the multipliers (``ptrs[2, 0] != 0``, friction): Newton on ``R =
+    Phi_q^T lambda - rhs(lambda)`` with the matrix ``Phi_q^T - dQ/dlambda``, from ``guess``
+    (m,) at the first point and from the previous point's multipliers after it, converged
+    when ``max |R| <= tol (1 + max |rhs|)``, at most ``maxit`` iterations (``MultiplierOptions``).
+    The Python path's ``J.T @ lambda`` sums with BLAS, so the two can stop one iteration
+    apart at the tolerance: they agree to it, not to rounding."""
     N = times.size
     n = Q.shape[1]
     m = n
@@ -53,19 +87,30 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
     nnz = jr.size
     nin = 1 + 2 * n + npar
     nin_d = 1 + 2 * n + m + npar + n
+    newton = ptrs[2, 0] != 0
     x = np.zeros(nin + max(ptrs[0, 4], 0))
-    xd = np.zeros(nin_d + max(ptrs[1, 4], 0))        # lambda = 0: the loads do not read it
+    xd = np.zeros(nin_d + max(ptrs[1, 4], ptrs[2, 4], 0))  # lambda = 0 unless the loads read it
     for j in range(npar):
         x[1 + 2 * n + j] = p[j]
         xd[1 + 2 * n + m + j] = p[j]
     out_pos = np.empty(m + nnz)
     out_dyn = np.empty(kM + 2 * n)
+    out_d = np.empty(max(dr.size, 1))
     J, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, r = _factor_work(m, n)
     S, W, seen = _structure(jc, jr, n)               # the structure of Phi_q^T
+    # Newton's matrix Phi_q^T - dQ/dlambda: its own factors and structure (both terms')
+    _, K, ipiv2, nz2, _, _, _, _, _, _ = _factor_work(m, n)
+    S2, W2, seen2 = _structure(jc, jr, n)
+    for e in range(dr.size):
+        S2[dc[e], dr[e]] = 1.0
     ones = np.ones(n)
     Mq = np.empty(n)
     rhs = np.empty(n)
+    R = np.empty(n)
+    dl = np.empty(m)
     lam = np.empty(m)
+    for i in range(m):
+        lam[i] = guess[i]
     for k in range(N):
         t = times[k]
         x[0] = t
@@ -74,7 +119,10 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
             x[1 + j] = Q[k, j]
             xd[1 + j] = Q[k, j]
         _eval_row(ptrs, 0, x, nin, out_pos)
-        _assemble(out_pos, m, jr, jc, B)             # B = Phi_q (C order) = Phi_q^T stored transposed
+        _assemble(out_pos, m, jr, jc, J)              # Phi_q (C order) = Phi_q^T stored transposed
+        for i in range(m):
+            for j in range(n):
+                B[i, j] = J[i, j]
         if _factor_filled(lapack, B, _norm1(B, n), ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, work,
                           iwork, 0.0) < 0:
             return k
@@ -84,20 +132,43 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
         if mode == DYNAMIC:
             for j in range(n):
                 xd[1 + 2 * n + m + npar + j] = QDD[k, j]
-        _eval_row(ptrs, 1, xd, nin_d, out_dyn)
-        if mode == DYNAMIC:
-            # Q + Qv - M qdd, the product from M's nonzeros (Python: M dense times qdd with
-            # BLAS, whose order of summation is its own: the two agree to rounding)
-            for i in range(n):
-                Mq[i] = 0.0
-            for e in range(kM):
-                Mq[mr[e]] += out_dyn[e] * QDD[k, mc[e]]
-            for i in range(n):
-                rhs[i] = (out_dyn[kM + i] + out_dyn[kM + n + i]) - Mq[i]
+        if not newton:
+            if not _loads(ptrs, xd, nin_d, out_dyn, mode, QDD, k, mr, mc, kM, n, Mq, rhs):
+                return k
+            _solve(lapack, B, ipiv, nz, ones, ones, rhs, lam, ibuf, cbuf)
         else:
-            for i in range(n):
-                rhs[i] = out_dyn[kM + i]
-        _solve(lapack, B, ipiv, nz, ones, ones, rhs, lam, ibuf, cbuf)
+            done = False
+            for _ in range(maxit):
+                for i in range(m):
+                    xd[1 + 2 * n + i] = lam[i]
+                if not _loads(ptrs, xd, nin_d, out_dyn, mode, QDD, k, mr, mc, kM, n, Mq, rhs):
+                    return k
+                err = 0.0
+                bmax = 0.0
+                for i in range(n):
+                    acc = 0.0
+                    for j in range(m):
+                        acc += J[j, i] * lam[j]
+                    R[i] = acc - rhs[i]
+                    err = max(err, abs(R[i]))
+                    bmax = max(bmax, abs(rhs[i]))
+                if err <= tol * (1.0 + bmax):
+                    done = True
+                    break
+                _eval_row(ptrs, 2, xd, nin_d, out_d)
+                for i in range(m):                   # K^T = Phi_q - (dQ/dlambda)^T
+                    for j in range(n):
+                        K[i, j] = J[i, j]
+                for e in range(dr.size):
+                    K[dc[e], dr[e]] -= out_d[e]
+                if _factor_filled(lapack, K, _norm1(K, n), ipiv2, nz2, S2, W2, seen2, ibuf, cbuf,
+                                  dbuf, work, iwork, 0.0) < 0:
+                    return k
+                _solve(lapack, K, ipiv2, nz2, ones, ones, R, dl, ibuf, cbuf)
+                for i in range(m):
+                    lam[i] = lam[i] - dl[i]
+            if not done:
+                return k
         for i in range(m):
             if not np.isfinite(lam[i]):
                 return k

@@ -98,13 +98,15 @@ def multipliers_over(system, times, Q, QD, QDD, p, mode: str = "dynamic", lambda
     ``QD``/``QDD`` None where the sweep did not compute them): :func:`solve_multipliers`
     point by point, each point's ``lambda_guess`` the previous point's multipliers (Newton,
     loads that depend on the multipliers). The points the compiled loop can take go there
-    first (``_jit.multipliers``: loads linear in the multipliers; the same operations);
-    the Python loop continues from the first point it leaves."""
+    first (``_jit.multipliers``: the same operations); the Python loop continues from the
+    first point it leaves."""
     N = len(times)
     lam = np.empty((N, system.m))
-    k0 = _jit.multipliers(system, times, Q, QD, QDD, p, mode, lam)
+    opt = MultiplierOptions()
+    k0 = _jit.multipliers(system, times, Q, QD, QDD, p, mode, lam, lambda_guess, opt.tol,
+                          opt.max_iterations)
     dyn = system.dynamics
-    guess = lambda_guess
+    guess = lambda_guess if k0 == 0 else lam[k0 - 1]
     for k in range(k0, N):
         qd = None if QD is None else QD[k]
         qdd = None if QDD is None else QDD[k]
