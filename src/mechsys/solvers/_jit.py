@@ -7,9 +7,10 @@ the damped Newton iteration on the unit-free equations ``R^-1 Phi_q D``, the vel
 ``Phi_q qd = -Phi_t`` and acceleration ``Phi_q qdd = gamma`` solves. The constraint
 kernels are SymEngine's LLVM functions, called through their C entry points
 (``void f(double *out, const double *in, void *ctx)``); the factorisations are LAPACK's
-``dgetrf``/``dgecon``/``dgetrs``, the routines the Python path calls: up to 32 unknowns their
-algorithms written out in the loop (``_jit_lapack``), above that SciPy's own (through
-``scipy.linalg.cython_lapack``). Both paths give the same numbers to rounding.
+``dgetrf``/``dgecon``/``dgetrs``, the routines the Python path calls, their algorithms
+written out in the loop (``_jit_lapack``; SciPy's own, through ``scipy.linalg.cython_lapack``,
+only above ``_jit_loop.SMALL`` unknowns, which the sweep does not reach). Both paths give the
+same numbers to rounding.
 
 The compiled loop handles the regular points. At the first point that needs the Python
 path's care (Newton not converging, a singular or nearly singular Jacobian, a branch jump)

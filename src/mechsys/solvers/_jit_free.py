@@ -381,8 +381,8 @@ class FreeStepper:
     @classmethod
     def plan_path(cls, path, method, p, scaling, correction, t_eval):
         """The stepper of a nonholonomic path (:class:`~mechsys.analyses._path.PathSystem`)
-        when the compiled loop can run it, else None: at most ``SMALL_LU`` coordinates, LLVM
-        kernels."""
+        when the compiled loop can run it, else None: at most ``SMALL_LU`` coordinates (the
+        derivative's LU is the written-out one), LLVM kernels."""
         from ._jit_loop import SMALL as SMALL_LU
 
         system = path.system

@@ -2,8 +2,11 @@
 
 For the 5-30 unknowns of a mechanism's Jacobian a call of SciPy's LAPACK through its C
 address costs about 0.7 µs of overhead, more than the arithmetic; a sweep point makes
-about ten such calls. These functions perform the same algorithms as the routines the
-Python path calls (``scipy.linalg.lapack``):
+about ten such calls. For larger mechanisms (up to the 150 unknowns of the compiled loops)
+the sparsity wins instead: the elimination skips zero multipliers and the solves visit
+only the factors' nonzeros, 1.6-2.6 x faster than LAPACK's blocked LU on chains of 33 to
+147 unknowns (decision 0019, amended). These functions perform the same algorithms as the
+routines the Python path calls (``scipy.linalg.lapack``):
 
 * ``getrf``  ``dgetrf``: Gaussian elimination with partial pivoting (first largest pivot),
   unit lower ``L`` and upper ``U`` in place, ``info > 0`` at an exactly zero pivot;
