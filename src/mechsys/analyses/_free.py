@@ -480,7 +480,7 @@ class FreeSystem:
 
         # the compiled stepper (solvers/_jit_free.py) takes the regular steps when it can
         fast = FreeStepper.plan(s, opt.method, p, sc, rows0, robust, opt.correction,
-                                t_eval, (t0, q0))
+                                t_eval, (t0, q0), newton=kw)
         try:
             times, Y, res, m = integrate(rhs, proj, t, np.concatenate((q0, qd0)), opt,
                                          scale=np.concatenate((sc.columns, sc.columns)),

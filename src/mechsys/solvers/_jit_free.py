@@ -26,16 +26,17 @@ Ctrl-C is honoured.
 
 When it runs (``MECHSYS_JIT``, as for the kinematic sweep): ``0`` never; ``1`` or unset
 whenever possible. Possible means: Numba installed (the ``fast`` extra); DOP853 or one of
-Mech's Adams methods; loads that do not depend on the multipliers or accelerations; a dense
-augmented system (``n + m <= SPARSE_THRESHOLD``) or the block path; every kernel SymEngine
-LLVM code (CSE kernels included: their repeated outputs are expanded in the loop).
+Mech's Adams methods; a dense augmented system (``n + m <= SPARSE_THRESHOLD``) or the block
+path; every kernel SymEngine LLVM code (CSE kernels included: their repeated outputs are
+expanded in the loop). Loads that depend on the multipliers (friction) or accelerations
+(added mass) take ``free_acceleration``'s Newton in the loop (``"newton"``, decision 0028).
 Generalized coordinates with the recursive dynamics (decision 0018) run in the same loops:
 the joint kernels, the articulated-body recursion (a tree of Gen joints, no constraint
 equation) or the composite-body mass matrix in the augmented system, at any size. Loading
 Numba and the cached machine code costs about 0.7 s CPU once per process.
 ``sol.extra["compiled_steps"]`` tells how many steps ran compiled and
 ``sol.extra["compiled_solver"]`` how (``"augmented"``, ``"block"``, ``"recursive"``,
-``"recursive+augmented"``, ``"path"``).
+``"recursive+augmented"``, ``"path"``, ``"newton"``).
 
 Nonholonomic paths (:class:`~mechsys.analyses._path.PathSystem`, Mech's ``SolvePath``) run
 in the same loops (:meth:`FreeStepper.plan_path`, decision 0027): the state is ``q``, its
@@ -268,8 +269,9 @@ class FreeStepper:
     ``t_eval`` (k,) or None: output times."""
 
     def __init__(self, system, p, scaling, rows0, robust, correction, t_eval, kernels, fk,
-                 blocks=None, expand=(_NO_EXPAND,) * 3, gen=None, path=None):
-        from ._jit_free_loop import AUGMENTED, BLOCK, GEN_AUGMENTED, GEN_TREE, PATH
+                 blocks=None, expand=(_NO_EXPAND,) * 3, gen=None, path=None, newton=None,
+                 newton_tol=1e-10):
+        from ._jit_free_loop import AUGMENTED, BLOCK, GEN_AUGMENTED, GEN_TREE, NEWTON, PATH
 
         kern, fpos, fvel = kernels
         n, m = system.n, system.m
@@ -286,6 +288,8 @@ class FreeStepper:
         #: augmented system)
         if path is not None:
             self.mode, self.solver = PATH, "path"
+        elif newton is not None:
+            self.mode, self.solver = NEWTON, "newton"
         elif gen is not None:
             self.mode = GEN_TREE if gen.tree else GEN_AUGMENTED
             self.solver = "recursive" if gen.tree else "recursive+augmented"
@@ -300,6 +304,9 @@ class FreeStepper:
             blk = (np.array([k, len(p), *fvel, int(linear)], dtype=np.int64),
                    *_Blocks.none()[1:])
             self.bw = 0
+        elif newton is not None:
+            self.flat_t = self.mp = np.zeros(0, dtype=np.int64)
+            blk, self.bw = newton, 0
         elif blocks is None and gen is None:
             flat = np.asarray(fk._flat, dtype=np.int64)
             self.flat_t = (flat % N) * N + flat // N      # K^T in C order = K in Fortran order
@@ -315,6 +322,8 @@ class FreeStepper:
         self.blk_i = (blk, _Gen.none() if gen is None else gen.arrays, tuple(expand))
         if path is not None:
             self.kk = int(2 * path[0] + path[0] * n)    # the velocity constraints' outputs
+        elif newton is not None:
+            self.kk = int(newton[0][0]) + 2 * n           # [M values, Q, Qv]
         else:
             self.kk = 0 if gen is not None else int(fk.k_M + fk.k_J)
         self.p = np.ascontiguousarray(p, dtype=float)
@@ -338,10 +347,14 @@ class FreeStepper:
         # the loops' work arrays, owned here for every run of this stepper (the loops borrow
         # them: decision 0021)
         self.ws = _workspace(self, system)
+        if newton is not None:
+            self.ws[14][:] = 1.0              # the first evaluation's multipliers (Python: ones)
+            self.ws[16][0][7][0] = newton_tol
         _jit._state["loaded"] = True
 
     @classmethod
-    def plan(cls, system, method, p, scaling, rows0, robust, correction, t_eval, start):
+    def plan(cls, system, method, p, scaling, rows0, robust, correction, t_eval, start,
+             newton=None):
         """The stepper when the compiled loop can run this simulation (``method``: DOP853 or
         one of Mech's Adams methods; ``start``: ``(t0, q0)``), else None."""
         if _jit.mode() == "off" or method not in METHODS or system.n == 0:
@@ -349,8 +362,10 @@ class FreeStepper:
         if method != "dop853":
             t_eval = None              # Adams output times are interpolated afterwards
         dyn = system.dynamics
-        if dyn.depends_on_lambda or dyn.depends_on_qdd or not _jit.available():
+        if not _jit.available():
             return None
+        if dyn.depends_on_lambda or dyn.depends_on_qdd:
+            return cls._plan_newton(system, p, scaling, correction, t_eval, newton)
         N = system.n + system.m
         blocks = gen = None
         if getattr(dyn, "recursive", False):
@@ -377,6 +392,42 @@ class FreeStepper:
                 return None
         return cls(system, p, scaling, rows0, robust, correction, t_eval, rows, fk, blocks,
                    [e[1] for e in entries], gen)
+
+    @classmethod
+    def _plan_newton(cls, system, p, scaling, correction, t_eval, newton):
+        """The stepper for loads that depend on the multipliers or accelerations (kind
+        ``NEWTON``: ``free_acceleration``'s Newton in the loop), or None: at most
+        ``SMALL_LU`` unknowns, a ``Dynamics`` (not the recursive one), LLVM kernels whose
+        outputs are all distinct and whose derivatives of the loads have no Piecewise stage.
+        ``newton``: ``free_acceleration``'s keyword options (``tol``, ``max_iterations``)."""
+        from ._jit_loop import SMALL as SMALL_LU
+
+        dyn = system.dynamics
+        n, m = system.n, system.m
+        if getattr(dyn, "recursive", False) or n + m > SMALL_LU:
+            return None
+        kw = dict(newton or {})
+        tol, maxit = float(kw.get("tol", 1e-10)), int(kw.get("max_iterations", 30))
+        main = [_entry(dyn.f_terms)] + _constraint_entries(system, system.f_position,
+                                                           system.f_velocity)
+        extra = _constraint_entries(system, system.f_position, system.f_gamma)
+        z = np.zeros(0, dtype=np.int64)
+        for flag, kern in ((dyn.depends_on_lambda, "f_dQ_dlam"), (dyn.depends_on_qdd, "f_dQ_dqdd")):
+            extra.append(_entry(getattr(dyn, kern)) if flag else ((0, 0, 0, 0, 0), _NO_EXPAND))
+        if any(e is None for e in main + extra) or any(len(e[1]) for e in extra):
+            return None
+        if any(e[0][2] != 0 for e in extra[2:]):
+            return None                     # (their Piecewise values would need more room)
+        dr, dc = ((dyn.dQ_rows, dyn.dQ_cols) if dyn.depends_on_lambda else (z, z))
+        ar, ac = ((dyn.dA_rows, dyn.dA_cols) if dyn.depends_on_qdd else (z, z))
+        info = [len(dyn.M_rows), int(dyn.depends_on_lambda), maxit, len(dr), len(ar), len(p)]
+        for e in extra:
+            info += list(e[0])
+        i64 = lambda a: np.ascontiguousarray(a, dtype=np.int64)   # noqa: E731
+        blk = (np.array(info, dtype=np.int64), i64(dyn.M_rows), i64(dyn.M_cols), i64(dr),
+               i64(dc), i64(ar), i64(ac), z, np.zeros((1, 5), dtype=np.int64))
+        return cls(system, p, scaling, None, False, correction, t_eval, [e[0] for e in main],
+                   None, expand=[e[1] for e in main], newton=blk, newton_tol=tol)
 
     @classmethod
     def plan_path(cls, path, method, p, scaling, correction, t_eval):

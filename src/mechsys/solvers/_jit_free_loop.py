@@ -16,6 +16,8 @@ the Python path fixes one:
 * ``_path_velocity`` ``analyses._path.PathSystem.velocities`` (a nonholonomic path's
                  derivative, velocity constraints linear in the velocities; decision 0027),
                  and ``path_accelerations`` its ``accelerations`` at the outputs
+* ``_newton_accel`` ``solvers._free.free_acceleration`` when the loads depend on the
+                 multipliers or accelerations (its Newton on ``(qdd, lambda)``)
 * ``_accel_gen`` ``compile._generalized.RecursiveDynamics`` (generalized coordinates,
                  decision 0018): the joint kernels, then the articulated-body recursion
                  (a tree of Gen joints) or the composite-body mass matrix in the augmented
@@ -60,6 +62,9 @@ AUGMENTED, BLOCK, GEN_TREE, GEN_AUGMENTED = 0, 1, 2, 3
 #: ``q`` alone and its derivative the velocities of the holonomic and velocity constraints
 #: (``_path_velocity``); the projection is onto the positions only
 PATH = 4
+#: loads that depend on the multipliers (friction) or on the accelerations (added masses):
+#: ``solvers._free.free_acceleration``'s Newton on ``(qdd, lambda)`` (``_newton_accel``)
+NEWTON = 5
 
 #: augmented systems up to this size are solved by the loop's own elimination (``_lu_solve``);
 #: larger ones by LAPACK ``dgesv``, whose call overhead no longer matters there
@@ -188,7 +193,13 @@ def _rhs(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, 
     for j in range(2 * n):
         x[1 + j] = y[j]
     ex, ph = blk_i[2], blk_w[2]
-    if blocks == BLOCK:
+    if blocks == NEWTON:
+        bi = blk_i[0]
+        if not _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, rhs, b, qdd, lam, bi[0],
+                             bi[1], bi[2], bi[3], bi[4], bi[5], bi[6], blk_w[0], ex[0], ph[0],
+                             t, y):
+            return False
+    elif blocks == BLOCK:
         Mst, Jst, Wst, Sb, u, Pst, Minv, Li = blk_w[0]
         if not _accel_blocks(kp, x, nin, out, kk, kk - jr.size, n, m, jr, jc, rows0, columns,
                              robust, blk_i[0], Mst, Jst, Wst, Sb, u, Minv, Li, qdd, lam, force,
@@ -206,6 +217,118 @@ def _rhs(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, 
         f[j] = y[n + j]
         f[n + j] = qdd[j]
     return True
+
+
+@leaf
+def _factor_checked(AT, n, ipiv, w1, w2):
+    """LU of the matrix in ``AT`` (transposed storage) in place, as ``_linalg.factor``
+    accepts it: False at an exactly zero pivot, a zero norm or a reciprocal condition
+    estimate below ``RCOND_MIN``. ``w1``, ``w2`` (n,): work."""
+    anorm = _norm1(AT, n)
+    if getrf(AT, n, ipiv) > 0 or anorm == 0:
+        return False
+    return gecon1(AT, n, anorm, w1, w2) >= RCOND_MIN
+
+
+@leaf
+def _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, w1, w2, qdd, lam, info, Mr, Mc, Dr,
+                  Dc, Ar, Ac, nw, ex, ph, t, y):
+    """Free acceleration when the loads depend on the multipliers or accelerations:
+    ``solvers._free.free_acceleration``'s Newton, operation for operation. ``kp`` the
+    dynamics kernel ``[t, q, qd, lambda, p, qdd] -> [M values (kM), Q, Qv]`` (its row;
+    ``ex``, ``ph`` its output map and buffer, ``_evalx``); ``info = [kM, chain,
+    max_iterations, nD, nA, npar, the rows (5 each) of the position, gamma, dQ/dlambda and
+    dQ/dqdd kernels]``; ``Mr, Mc``, ``Dr, Dc``, ``Ar, Ac`` the nonzero positions of ``M``,
+    ``dQ/dlambda``, ``dQ/dqdd``; ``nw = (x of the constraint kernels, their outputs,
+    gamma, J (m, n), dQ/dlambda values, dQ/dqdd values, residual, [tol])``. From ``qdd = 0``
+    and ``lambda`` = the previous evaluation's (``chain``: the loads depend on the
+    multipliers) or ones::
+
+        r = [M qdd + J^T lambda - Q - Qv;  J qdd - gamma]
+        [[M - dQ/dqdd, J^T - dQ/dlambda], [J, 0]] dx = -r
+
+    until ``max |r| <= tol (1 + max |Q|)`` after at least one step. ``qdd``, ``lam`` the
+    result; False (hand over: the Python path raises its diagnosis) at a singular matrix
+    (reciprocal condition below ``RCOND_MIN``), a value not finite or no convergence."""
+    xk, out_pos, g, J, od, oa, res, tolv = nw
+    kM, chain, maxit, nD, nA, npar = info[0], info[1], info[2], info[3], info[4], info[5]
+    N = n + m
+    nin_k = 1 + 2 * n + npar
+    tol = tolv[0]
+    xk[0] = t
+    for j in range(n):
+        xk[1 + j] = y[j]
+        xk[1 + n + j] = 0.0
+    for j in range(npar):
+        xk[1 + 2 * n + j] = x[1 + 2 * n + m + j]
+    if m > 0:
+        _eval(info[6:11], xk, nin_k, out_pos)
+        _assemble(out_pos, m, jr, jc, J)
+        for j in range(n):
+            xk[1 + n + j] = y[n + j]
+        _eval(info[11:16], xk, nin_k, g)
+    for i in range(m):
+        if chain == 0:
+            lam[i] = 1.0
+        x[1 + 2 * n + i] = lam[i]
+    for j in range(n):
+        qdd[j] = 0.0
+        x[1 + 2 * n + m + npar + j] = 0.0
+    _evalx(kp, x, nin, out, ex, ph)
+    for it in range(1, maxit + 1):
+        err = 0.0
+        qmax = 0.0
+        for i in range(n):
+            res[i] = 0.0
+        for e in range(kM):
+            res[Mr[e]] += out[e] * qdd[Mc[e]]
+        for i in range(n):
+            acc = 0.0
+            for j in range(m):
+                acc += J[j, i] * lam[j]
+            res[i] = ((res[i] + acc) - out[kM + i]) - out[kM + n + i]
+            qmax = max(qmax, abs(out[kM + i]))
+        for i in range(m):
+            acc = 0.0
+            for j in range(n):
+                acc += J[i, j] * qdd[j]
+            res[n + i] = acc - g[i]
+        for i in range(N):
+            v = abs(res[i])
+            if not v <= err:             # NaN too
+                err = v
+        if not np.isfinite(err):
+            return False
+        if err <= tol * (1.0 + qmax) and it > 1:
+            return True
+        if nD > 0:
+            _eval(info[16:21], x, nin, od)
+        if nA > 0:
+            _eval(info[21:26], x, nin, oa)
+        KT[:, :] = 0.0                   # K = [[M - A, J^T - D], [J, 0]], stored transposed
+        for e in range(kM):
+            KT[Mc[e], Mr[e]] += out[e]
+        for e in range(nA):
+            KT[Ac[e], Ar[e]] -= oa[e]
+        for i in range(m):
+            for j in range(n):
+                KT[n + i, j] = J[i, j]
+                KT[j, n + i] = J[i, j]
+        for e in range(nD):
+            KT[n + Dc[e], Dr[e]] -= od[e]
+        if not _factor_checked(KT, N, ipiv, w1, w2):
+            return False
+        for i in range(N):
+            res[i] = -res[i]
+        getrs(KT, N, ipiv, res)
+        for j in range(n):
+            qdd[j] += res[j]
+            x[1 + 2 * n + m + npar + j] = qdd[j]
+        for i in range(m):
+            lam[i] += res[n + i]
+            x[1 + 2 * n + i] = lam[i]
+        _evalx(kp, x, nin, out, ex, ph)
+    return False
 
 
 @leaf
@@ -277,10 +400,7 @@ def _path_velocity(kp, x, out, KT, n, m, jr, jc, columns, ipiv, w1, w2, last, in
             for j in range(n):
                 f[j] = last[j]
             return True
-        anorm = _norm1(KT, n)
-        if getrf(KT, n, ipiv) > 0 or anorm == 0:
-            return False
-        if gecon1(KT, n, anorm, w1, w2) < RCOND_MIN:
+        if not _factor_checked(KT, n, ipiv, w1, w2):
             return False
         for i in range(n):
             dq[i] = R[i]
@@ -345,10 +465,7 @@ def path_accelerations(kp, ex, times, Q, QD, p, jr, jc, k, QDD):
             for j in range(n):
                 KT[j, m + i] = out[k + i * n + j]
             b[m + i] = -out[k + k * n + i]
-        anorm = _norm1(KT, n)
-        if getrf(KT, n, ipiv) > 0 or anorm == 0:
-            return row
-        if gecon1(KT, n, anorm, w, w[n:]) < RCOND_MIN:
+        if not _factor_checked(KT, n, ipiv, w, w[n:]):
             return row
         getrs(KT, n, ipiv, b)
         for j in range(n):
@@ -931,7 +1048,7 @@ def workspace(kp, n, m, npar, kk, nnz, blocks, blk_i, bw):
     nin_k = 1 + 2 * n + npar                         # [t, q, qd, p]
     NN = n + m
     # the dense matrix: the augmented system, a path's velocity system (n x n), else unused
-    side = NN if blocks == AUGMENTED else (n if blocks == PATH else 1)
+    side = NN if blocks == AUGMENTED or blocks == NEWTON else (n if blocks == PATH else 1)
     KTf = np.empty(side * side)
     # (a path evaluates its two kernels at [t, q, qd, p] in the first array)
     first = max(nin + max(kp[0, 4], 0), nin_k + max(kp[0, 4], kp[2, 4], 0))
@@ -954,6 +1071,12 @@ def _block_work(blocks, blk_i, n, m, bw, nnz):
     if blocks == PATH:
         bw_ = (np.zeros(nnz + m), np.zeros(n), np.zeros(n), np.zeros((m, n)), np.zeros(n),
                np.zeros(1), np.zeros(1), np.zeros(1))
+    elif blocks == NEWTON:
+        info = blk_i[0][0]
+        pieces = max(info[10], info[15], 0)
+        bw_ = (np.zeros(1 + 2 * n + info[5] + pieces), np.zeros(m + nnz), np.zeros(m),
+               np.zeros((m, n)), np.zeros(max(info[3], 1)), np.zeros(max(info[4], 1)),
+               np.zeros(n + m), np.zeros(1))
     elif blocks == BLOCK:
         boff, roff, bsize = blk_i[0][1], blk_i[0][4], blk_i[0][6]
         big = bsize.max() if bsize.size else 1

@@ -1,0 +1,127 @@
+"""Free motion whose loads depend on the multipliers (friction) or on the accelerations (added
+mass) in the compiled loops (``_jit_free_loop`` kind ``NEWTON``, decision 0028): the Newton
+of ``solvers._free.free_acceleration`` in the loop, against the Python stepper, the equations
+of motion and a conserved energy; the Newton options reach the loop."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import mechsys as ms
+
+pytest.importorskip("numba")
+
+
+def sliding_block(mu=0.3, alpha=0.5):
+    """A block released on an incline, Coulomb friction driven by the normal reaction."""
+    m = ms.Model2D()
+    blk = m.add_body("block", mass=2.0, inertia=0.1, guess=((0.0, 0.0), alpha))
+    slide = m.add(ms.Translate2(blk.axis((0, 0), (1, 0)),
+                                m.ground.axis((0, 0), (np.cos(alpha), np.sin(alpha)))),
+                  name="slide")
+    m.add(ms.RelativeX1(blk.point(0), 0.0), name="hold")
+    m.add_load(ms.Gravity((0, -1), 9.81))
+    m.add_load(ms.JointFriction(slide, mu=mu, v_eps=1e-3))
+    m.solve(0.0)
+    return m.free(drop=["hold"])
+
+
+def added_mass_pendulum(L=1.2, m0=2.0, ma=0.5):
+    """A pendulum whose bob carries the load ``-m_a a`` (tests/test_free_motion.py)."""
+    m = ms.Model2D()
+    b = m.add_body("bar", mass=m0, centroid=(L, 0), inertia=0.0, guess=((0, 0), -0.3))
+    m.add(ms.Revolute2(m.ground.point((0, 0)), b.point(0)), name="pivot")
+    m.add(ms.RotationLock1(b, -0.3), name="hold")
+    m.add_load(ms.Gravity((0, -1), 9.81))
+    m.add_load(ms.Force(b.point((L, 0)), -ma * m.acceleration(b.point((L, 0))), mode="relative"))
+    m.solve(0.0)
+    return m.free(drop=["hold"])
+
+
+def _both(monkeypatch, build, t, **kw):
+    out = {}
+    for jit in ("1", "0"):
+        monkeypatch.setenv("MECHSYS_JIT", jit)
+        out[jit] = build().simulate(t, **kw)
+    return out["1"], out["0"]
+
+
+CASES = {"friction": (sliding_block, {"rtol": 1e-10, "atol": 1e-12}),
+         "added-mass": (added_mass_pendulum, {"rtol": 1e-10, "atol": 1e-12}),
+         "friction-adams": (sliding_block, {"method": "adams", "max_error": 1e-10})}
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_compiled_and_python_newton_agree(monkeypatch, name):
+    build, kw = CASES[name]
+    t = np.linspace(0.0, 1.0, 11)
+    fast, slow = _both(monkeypatch, build, t, **kw)
+    assert fast.extra["compiled_solver"] == "newton"
+    assert fast.extra["compiled_steps"] == fast.extra["steps"] > 10
+    assert slow.extra["compiled_steps"] == 0
+    for a, b in ((fast.q, slow.q), (fast.qd, slow.qd), (fast.qdd, slow.qdd),
+                 (fast.lam, slow.lam)):
+        scale = np.maximum(1.0, np.abs(b).max(axis=0))
+        assert (np.abs(a - b) / scale).max() <= 1e-9
+
+
+@pytest.mark.parametrize("name", ["friction", "added-mass"])
+def test_compiled_newton_satisfies_the_equations_of_motion(monkeypatch, name):
+    """An independent check of the loop's numbers at every output: ``M qdd + J^T lambda = Q +
+    Qv`` with the loads evaluated at the loop's own multipliers and accelerations, and
+    ``J qdd = gamma``, by the Python kernels."""
+    build, kw = CASES[name]
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    sol = build().simulate(np.linspace(0.0, 1.0, 6), **kw)
+    s = sol.system
+    for k in range(len(sol.t)):
+        t, q, qd, qdd, lam = sol.t[k], sol.q[k], sol.qd[k], sol.qdd[k], sol.lam[k]
+        M, Q, Qv = s.dynamics.terms(t, q, qd, lam, sol.p, qdd)
+        J = s.jacobian(t, q, sol.p)
+        r1 = M @ qdd + J.T @ lam - Q - Qv
+        r2 = J @ qdd - s.gamma_values(t, q, qd, sol.p)
+        assert np.abs(r1).max() <= 1e-9 * (1 + np.abs(Q).max())
+        assert np.abs(r2).max() <= 1e-9 * (1 + np.abs(qdd).max())
+
+
+def test_added_mass_energy_of_the_equivalent_system(monkeypatch):
+    """The pendulum with added mass moves like one of mass m + m_a under the weight of m
+    alone: that system's energy is conserved along the compiled run."""
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    L, m0, ma, g = 1.2, 2.0, 0.5, 9.81
+    sol = added_mass_pendulum(L, m0, ma).simulate((0.0, 2.0), rtol=1e-10, atol=1e-12)
+    assert sol.extra["compiled_steps"] > 0
+    th, w = sol["bar.th"], sol.coordinate("bar.th", 1)
+    E = 0.5 * (m0 + ma) * (L * w) ** 2 + m0 * g * L * np.sin(th)
+    assert np.ptp(E) < 1e-8
+
+
+@pytest.mark.parametrize("jit", ["1", "0"])
+def test_newton_options_reach_the_loop(monkeypatch, jit):
+    """``max_iterations=1`` cannot converge (at least one step, then a check): the loop hands
+    the step over and the Python stepper raises the same error as without the loop; with 2
+    the loop converges and takes every step."""
+    monkeypatch.setenv("MECHSYS_JIT", jit)
+    with pytest.raises(ms.ConvergenceError, match="in 1 iterations"):
+        added_mass_pendulum().simulate((0.0, 0.1), max_iterations=1)
+    sol = added_mass_pendulum().simulate((0.0, 0.1), max_iterations=2)
+    assert sol.extra["compiled_steps"] == (sol.extra["steps"] if jit == "1" else 0)
+
+
+def test_newton_tolerance_is_the_loops(monkeypatch):
+    """The tolerance given to simulate is the one the loop tests against (its work array),
+    and the iteration limit is in its structure."""
+    from mechsys.solvers._jit_free import FreeStepper
+
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    free = sliding_block()
+    s = free.system
+    from mechsys.solvers._free import scaling_at
+
+    q0 = free.simulate((0.0, 0.01)).q[0]
+    fast = FreeStepper.plan(s, "dop853", s.p_values, scaling_at(s, 0.0, q0, s.p_values), None,
+                            False, True, None, (0.0, q0), newton={"tol": 1e-3, "max_iterations": 7})
+    assert fast.solver == "newton"
+    assert fast.ws[16][0][7][0] == 1e-3
+    assert fast.blk_i[0][0][2] == 7
