@@ -185,21 +185,16 @@ def _rhs(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, 
     expansion maps of the three kernels)``, ``blk_w`` their work arrays (``_block_work``).
     ``PATH``: ``f = qd`` (n,) at ``(t, q = y)``, also left in ``qdd`` (the next evaluation's
     guess, as the Python path's)."""
-    if blocks == PATH:
-        return _path_velocity(kp, x, out, KT, n, m, jr, jc, columns, ipiv, rhs, b, qdd,
-                              blk_i[0][0], blk_w[0], blk_i[2][0], blk_w[2][0], blk_i[2][2],
-                              blk_w[2][2], t, y, f)
+    if blocks >= PATH:
+        # (one call site for both kinds: the loops inline _rhs, and a smaller body here kept
+        # them as fast as before the two kinds existed)
+        return _other_rhs(blocks, kp, x, nin, out, KT, n, m, jr, jc, columns, ipiv, rhs, b,
+                          qdd, lam, blk_i, blk_w, t, y, f)
     x[0] = t
     for j in range(2 * n):
         x[1 + j] = y[j]
     ex, ph = blk_i[2], blk_w[2]
-    if blocks == NEWTON:
-        bi = blk_i[0]
-        if not _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, rhs, b, qdd, lam, bi[0],
-                             bi[1], bi[2], bi[3], bi[4], bi[5], bi[6], blk_w[0], ex[0], ph[0],
-                             t, y):
-            return False
-    elif blocks == BLOCK:
+    if blocks == BLOCK:
         Mst, Jst, Wst, Sb, u, Pst, Minv, Li = blk_w[0]
         if not _accel_blocks(kp, x, nin, out, kk, kk - jr.size, n, m, jr, jc, rows0, columns,
                              robust, blk_i[0], Mst, Jst, Wst, Sb, u, Minv, Li, qdd, lam, force,
@@ -212,6 +207,28 @@ def _rhs(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, 
             return False
     elif not _accel(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, columns,
                     robust, ipiv, ibuf, rhs, b, qdd, lam, force, ex[0], ph[0]):
+        return False
+    for j in range(n):
+        f[j] = y[n + j]
+        f[n + j] = qdd[j]
+    return True
+
+
+@leaf
+def _other_rhs(blocks, kp, x, nin, out, KT, n, m, jr, jc, columns, ipiv, rhs, b, qdd, lam,
+               blk_i, blk_w, t, y, f):
+    """``_rhs`` of the kinds ``PATH`` (``f = qd``) and ``NEWTON`` (``f = (qd, qdd)``)."""
+    if blocks == PATH:
+        return _path_velocity(kp, x, out, KT, n, m, jr, jc, columns, ipiv, rhs, b, qdd,
+                              blk_i[0][0], blk_w[0], blk_i[2][0], blk_w[2][0], blk_i[2][2],
+                              blk_w[2][2], t, y, f)
+    x[0] = t
+    for j in range(2 * n):
+        x[1 + j] = y[j]
+    bi = blk_i[0]
+    if not _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, rhs, b, qdd, lam, bi[0],
+                         bi[1], bi[2], bi[3], bi[4], bi[5], bi[6], blk_w[0], blk_i[2][0],
+                         blk_w[2][0], t, y):
         return False
     for j in range(n):
         f[j] = y[n + j]
