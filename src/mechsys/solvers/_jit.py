@@ -163,6 +163,7 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
         _state["multipliers"] = loop
     _state["loaded"] = True
     dummy = np.zeros((1, system.n))
+    trans, body = _column_kinds(system)
     return int(_state["multipliers"](
         table, _lapack(), np.ascontiguousarray(times, dtype=float),
         np.ascontiguousarray(Q, dtype=float),
@@ -172,7 +173,7 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
         _index(system.jac_rows), _index(system.jac_cols), _index(dyn.M_rows),
         _index(dyn.M_cols), len(dyn.M_rows), code, LAM, dr, dc,
         np.broadcast_to(np.asarray(guess, dtype=float), (system.m,)).copy(), float(tol),
-        int(max_iterations)))
+        int(max_iterations), trans, _index(body), length_hint(system)))
 
 
 def _index(a) -> np.ndarray:

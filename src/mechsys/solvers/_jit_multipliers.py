@@ -9,14 +9,16 @@ each point's operations those of :func:`~mechsys.solvers._statics.solve_multipli
 Python path), in the same order:
 
 * ``Phi_q`` from the position kernel (``System.jacobian``), assembled dense;
-* ``Phi_q^T`` factorised by LU with partial pivoting and its reciprocal condition estimated
-  (``Factor``: LAPACK ``dgetrf`` + ``dgecon``; up to ``SMALL`` unknowns their algorithms
-  from ``_jit_lapack``). ``Phi_q`` in C order *is* ``Phi_q^T`` in the transposed storage
+* its unit-free form ``B = R^-1 Phi_q D`` (``Scaling.of`` at the point: ``_scaling``,
+  ``_rows``), and ``B^T`` factorised by LU with partial pivoting and its reciprocal condition
+  estimated (``Factor``: LAPACK ``dgetrf`` + ``dgecon``; up to ``SMALL`` unknowns their
+  algorithms from ``_jit_lapack``). ``B`` in C order *is* ``B^T`` in the transposed storage
   the LAPACK helpers use, so no transpose is formed;
 * ``M``, ``Q``, ``Qv`` from the dynamics kernel (``Dynamics.terms``); ``M qdd`` from the
   mass matrix's nonzeros (the Python path multiplies the dense ``M``: the same to rounding);
-* one solve (``dgetrs``); or, for loads that depend on the multipliers (friction), Newton
-  with ``Phi_q^T - dQ/dlambda`` from the previous point's multipliers.
+* one solve (``dgetrs``) of ``B^T (R lambda) = D rhs``; or, for loads that depend on the
+  multipliers (friction), Newton with ``D (Phi_q^T - dQ/dlambda) R^-1`` from the previous
+  point's multipliers.
 
 A point that the Python path would refuse (an exactly zero pivot, a reciprocal condition
 below ``RCOND_MIN``) or whose multipliers come out non-finite ends the loop there: the
@@ -30,7 +32,17 @@ import numpy as np
 
 from ._jit_cache import check as _check_cache
 from ._jit_lapack import leaf
-from ._jit_loop import _assemble, _eval_row, _factor_filled, _factor_work, _norm1, _solve, _structure
+from ._jit_loop import (
+    _assemble,
+    _eval_row,
+    _factor_filled,
+    _factor_work,
+    _norm1,
+    _rows,
+    _scaling,
+    _solve,
+    _structure,
+)
 
 _check_cache()   # stale cached loops go before anything here compiles (see _jit_cache)
 
@@ -62,7 +74,7 @@ def _loads(ptrs, xd, nin_d, out_dyn, mode, QDD, k, mr, mc, kM, n, Mq, rhs):
 
 @nb.njit(cache=True)
 def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LAM, dr, dc,
-                guess, tol, maxit):
+                guess, tol, maxit, trans, body, hint):
     """``LAM[k]`` (m,) at each point ``k`` from 0 on; returns the first point left to the
     Python path (``len(times)`` when all are done).
 
@@ -73,6 +85,7 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
     otherwise); ``jr``, ``jc`` the Jacobian's nonzero positions, ``mr``, ``mc`` the mass
     matrix's. ``Q``, ``QD``, ``QDD`` (N, n): the sweep's states (``QD``, ``QDD`` are read
     only in the modes that use them). ``mode``: ``STATIC``, ``KINEMATIC``, ``DYNAMIC``.
+    ``trans``, ``body``, ``hint``: the columns' kinds and the length hint of ``Scaling.of``.
 
     Loads that depend on the multipliers (``ptrs[2, 0] != 0``, friction): Newton on ``R =
     Phi_q^T lambda - rhs(lambda)`` with the matrix ``Phi_q^T - dQ/dlambda``, from ``guess``
@@ -104,6 +117,11 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
     for e in range(dr.size):
         S2[dc[e], dr[e]] = 1.0
     ones = np.ones(n)
+    cols = np.empty(n)
+    nbody = 0
+    for j in range(n):
+        if body[j] + 1 > nbody:
+            nbody = body[j] + 1
     Mq = np.empty(n)
     rhs = np.empty(n)
     R = np.empty(n)
@@ -119,10 +137,13 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
             x[1 + j] = Q[k, j]
             xd[1 + j] = Q[k, j]
         _eval_row(ptrs, 0, x, nin, out_pos)
-        _assemble(out_pos, m, jr, jc, J)              # Phi_q (C order) = Phi_q^T stored transposed
-        for i in range(m):
+        _assemble(out_pos, m, jr, jc, J)
+        _scaling(J, Q[k], trans, body, nbody, hint, cols)
+        _rows(J, cols, r)
+        for i in range(m):                            # B = R^-1 J D (C order) = B^T stored transposed
+            inv = 1.0 / r[i]
             for j in range(n):
-                B[i, j] = J[i, j]
+                B[i, j] = (J[i, j] * cols[j]) * inv
         if _factor_filled(lapack, B, _norm1(B, n), ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, work,
                           iwork, 0.0) < 0:
             return k
@@ -135,7 +156,11 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
         if not newton:
             if not _loads(ptrs, xd, nin_d, out_dyn, mode, QDD, k, mr, mc, kM, n, Mq, rhs):
                 return k
-            _solve(lapack, B, ipiv, nz, ones, ones, rhs, lam, ibuf, cbuf)
+            for j in range(n):
+                rhs[j] = cols[j] * rhs[j]
+            _solve(lapack, B, ipiv, nz, ones, ones, rhs, dl, ibuf, cbuf)
+            for i in range(m):
+                lam[i] = dl[i] / r[i]
         else:
             done = False
             for _ in range(maxit):
@@ -161,12 +186,17 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
                         K[i, j] = J[i, j]
                 for e in range(dr.size):
                     K[dc[e], dr[e]] -= out_d[e]
+                for i in range(m):                   # unit-free: D K R^-1 (as the linear solve)
+                    for j in range(n):
+                        K[i, j] = (cols[j] * K[i, j]) / r[i]
                 if _factor_filled(lapack, K, _norm1(K, n), ipiv2, nz2, S2, W2, seen2, ibuf, cbuf,
                                   dbuf, work, iwork, 0.0) < 0:
                     return k
+                for j in range(n):
+                    R[j] = cols[j] * R[j]
                 _solve(lapack, K, ipiv2, nz2, ones, ones, R, dl, ibuf, cbuf)
                 for i in range(m):
-                    lam[i] = lam[i] - dl[i]
+                    lam[i] = lam[i] - dl[i] / r[i]
             if not done:
                 return k
         for i in range(m):

@@ -6,6 +6,14 @@ With ``n`` coordinates and ``m = n`` equations, the multipliers follow from::
     kinematic:  Phi_q^T lambda = Q(t, q, qd, lambda)
     dynamic:    Phi_q^T lambda = Q(t, q, qd, lambda) + Qv(q, qd) - M(q) qdd
 
+solved in the unit-free form of the Jacobian (``Scaling.of`` at ``q``: ``B = R^-1 Phi_q D``,
+positions in units of the model's length, each equation divided by its row scale)::
+
+    B^T (R lambda) = D rhs
+
+so that the conditioning, hence the refusal of a singular Jacobian, does not depend on the
+unit of length (unscaled, a mechanism modelled in micrometres was refused as singular).
+
 Linear in ``lambda`` unless loads depend on the multipliers (friction); then Newton on
 ``R(lambda) = Phi_q^T lambda - rhs(lambda)`` with Jacobian ``Phi_q^T - dQ/dlambda`` from
 ``lambda_guess`` (default 1 for every multiplier, as in Mech).
@@ -19,7 +27,7 @@ import numpy as np
 
 from .._errors import ConvergenceError, ModelError
 from . import _jit
-from ._linalg import Singular, factor
+from ._linalg import Scaling, Singular, factor
 from ._position import describe_singular
 
 MODES = ("static", "kinematic", "dynamic")
@@ -47,10 +55,12 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
                          "finite at this state (a coordinate or parameter is NaN or inf)")
     qd_eff = np.zeros(n) if (mode == "static" or qd is None) else qd
     lam = np.broadcast_to(np.asarray(opt.lambda_guess, dtype=float), (m,)).copy()
+    sc = Scaling.of(system, q, J)
+    r = sc.rows(J)
     try:
-        fac = factor(J.T)
+        fac = factor(sc.scaled(J, r).T)
     except Singular:
-        raise describe_singular(system, J, t, q, f"{mode} load solve") from None
+        raise describe_singular(system, J, t, q, f"{mode} load solve", scaling=sc) from None
 
     qdd_eff = qdd if mode == "dynamic" else None
 
@@ -67,7 +77,7 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
         return b
 
     if not dyn.depends_on_lambda:
-        return fac.solve(rhs(lam)), 0
+        return fac.solve(sc.columns * rhs(lam)) / r, 0
     history = []
     for it in range(1, opt.max_iterations + 1):
         b = rhs(lam)
@@ -78,7 +88,8 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
             return lam, it - 1
         K = J.T - dyn.dQ_dlam(t, q, qd_eff, lam, p, qdd_eff)
         try:
-            lam = lam - factor(K).solve(R)
+            # (unit-free as the linear solve: D K R^-1 (R dlambda) = D R)
+            lam = lam - factor((sc.columns[:, None] * K) / r[None, :]).solve(sc.columns * R) / r
         except Singular:
             raise ConvergenceError(
                 f"{mode} load solve at t = {t:.6g}: the multiplier Newton matrix "
