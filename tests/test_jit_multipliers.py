@@ -12,6 +12,7 @@ import sympy as sp
 import mechsys as ms
 from mechsys import T, models
 from mechsys.solvers import _jit, _statics
+from mechsys.solvers._linalg import Scaling
 
 pytest.importorskip("numba")
 
@@ -191,13 +192,16 @@ def test_when_the_compiled_loop_runs(monkeypatch):
     sol = m.solve(t, solution="dynamic")
     s = sol.system
     lam = np.empty((len(t), s.m))
+    columns = Scaling.of(s, sol.q[0], s.jacobian(t[0], sol.q[0], sol.p)).columns
     args = (s, t, sol.q, sol.qd, sol.qdd, sol.p, "dynamic", lam)
+    kw = {"columns": columns}
     monkeypatch.setenv("MECHSYS_JIT", "0")
-    assert _jit.multipliers(*args) == 0
+    assert _jit.multipliers(*args, **kw) == 0
     monkeypatch.delenv("MECHSYS_JIT")
-    assert _jit.multipliers(*args) == 0
+    assert _jit.multipliers(*args, **kw) == 0
     monkeypatch.setenv("MECHSYS_JIT", "1")
-    assert _jit.multipliers(*args) == len(t)
+    assert _jit.multipliers(*args, **kw) == len(t)
     np.testing.assert_allclose(lam, sol.lam, rtol=1e-13, atol=1e-12)
-    # a mode whose rates were not computed cannot run compiled
-    assert _jit.multipliers(s, t, sol.q, None, None, sol.p, "kinematic", lam) == 0
+    # without the column scales, or in a mode whose rates were not computed: not compiled
+    assert _jit.multipliers(*args) == 0
+    assert _jit.multipliers(s, t, sol.q, None, None, sol.p, "kinematic", lam, **kw) == 0

@@ -1063,7 +1063,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         from .solvers._statics import multipliers_over
 
         return multipliers_over(system, res.t, res.q, res.qd, res.qdd, self._p(), mode,
-                                lambda_guess_vector(system, self, lambda_guess))
+                                lambda_guess_vector(system, self, lambda_guess),
+                                scaling=res.scaling)
 
     def free(self, drop=(), solution: str = "dynamic", initial_guess=None,
              initial_condition=None):

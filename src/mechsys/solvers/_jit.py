@@ -131,7 +131,7 @@ def _wanted(system, points: int) -> bool:
 
 
 def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, tol=1e-10,
-                max_iterations=50) -> int:
+                max_iterations=50, columns=None) -> int:
     """Fill ``LAM`` (N, m) with the multipliers of the solved sweep ``Q``, ``QD``, ``QDD``
     (N, n) in compiled code (``_jit_multipliers``) from point 0 on; return the first point
     left to the Python path (``len(times)`` when all are done, 0 when the compiled loop
@@ -139,11 +139,12 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
     fallbacks), or the ``MECHSYS_JIT`` rule). ``mode_name``: ``"static"``, ``"kinematic"`` or
     ``"dynamic"``. Loads that depend on the multipliers (friction): Newton from ``guess``
     (scalar or (m,)) at the first point, with ``tol`` and ``max_iterations`` of
-    :class:`~mechsys.solvers.MultiplierOptions`."""
+    :class:`~mechsys.solvers.MultiplierOptions`. ``columns`` (n,): the unit-free form's column
+    scales (``Scaling.columns``; None: 0 is returned, the Python path scales itself)."""
     N = len(times)
     dyn = system.dynamics
     # (the recursive dynamics of generalized coordinates has no f_terms kernel)
-    if not N or getattr(dyn, "recursive", False) or not _wanted(system, N):
+    if not N or columns is None or getattr(dyn, "recursive", False) or not _wanted(system, N):
         return 0
     code = {"static": 0, "kinematic": 1, "dynamic": 2}[mode_name]
     if (code >= 1 and QD is None) or (code == 2 and QDD is None):
@@ -163,7 +164,6 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
         _state["multipliers"] = loop
     _state["loaded"] = True
     dummy = np.zeros((1, system.n))
-    trans, body = _column_kinds(system)
     return int(_state["multipliers"](
         table, _lapack(), np.ascontiguousarray(times, dtype=float),
         np.ascontiguousarray(Q, dtype=float),
@@ -173,7 +173,7 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
         _index(system.jac_rows), _index(system.jac_cols), _index(dyn.M_rows),
         _index(dyn.M_cols), len(dyn.M_rows), code, LAM, dr, dc,
         np.broadcast_to(np.asarray(guess, dtype=float), (system.m,)).copy(), float(tol),
-        int(max_iterations), trans, _index(body), length_hint(system)))
+        int(max_iterations), np.ascontiguousarray(columns, dtype=float)))
 
 
 def _index(a) -> np.ndarray:

@@ -9,8 +9,8 @@ each point's operations those of :func:`~mechsys.solvers._statics.solve_multipli
 Python path), in the same order:
 
 * ``Phi_q`` from the position kernel (``System.jacobian``), assembled dense;
-* its unit-free form ``B = R^-1 Phi_q D`` (``Scaling.of`` at the point: ``_scaling``,
-  ``_rows``), and ``B^T`` factorised by LU with partial pivoting and its reciprocal condition
+* its unit-free form ``B = R^-1 Phi_q D`` (the sweep's column scales, the row scales of
+  the point: ``_rows``), and ``B^T`` factorised by LU with partial pivoting and its reciprocal condition
   estimated (``Factor``: LAPACK ``dgetrf`` + ``dgecon``; up to ``SMALL`` unknowns their
   algorithms from ``_jit_lapack``). ``B`` in C order *is* ``B^T`` in the transposed storage
   the LAPACK helpers use, so no transpose is formed;
@@ -39,7 +39,6 @@ from ._jit_loop import (
     _factor_work,
     _norm1,
     _rows,
-    _scaling,
     _solve,
     _structure,
 )
@@ -74,7 +73,7 @@ def _loads(ptrs, xd, nin_d, out_dyn, mode, QDD, k, mr, mc, kM, n, Mq, rhs):
 
 @nb.njit(cache=True)
 def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LAM, dr, dc,
-                guess, tol, maxit, trans, body, hint):
+                guess, tol, maxit, cols):
     """``LAM[k]`` (m,) at each point ``k`` from 0 on; returns the first point left to the
     Python path (``len(times)`` when all are done).
 
@@ -85,7 +84,7 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
     otherwise); ``jr``, ``jc`` the Jacobian's nonzero positions, ``mr``, ``mc`` the mass
     matrix's. ``Q``, ``QD``, ``QDD`` (N, n): the sweep's states (``QD``, ``QDD`` are read
     only in the modes that use them). ``mode``: ``STATIC``, ``KINEMATIC``, ``DYNAMIC``.
-    ``trans``, ``body``, ``hint``: the columns' kinds and the length hint of ``Scaling.of``.
+    ``cols`` (n,): the column scales of the unit-free form (the sweep's ``Scaling.columns``).
 
     Loads that depend on the multipliers (``ptrs[2, 0] != 0``, friction): Newton on ``R =
     Phi_q^T lambda - rhs(lambda)`` with the matrix ``Phi_q^T - dQ/dlambda``, from ``guess``
@@ -117,11 +116,6 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
     for e in range(dr.size):
         S2[dc[e], dr[e]] = 1.0
     ones = np.ones(n)
-    cols = np.empty(n)
-    nbody = 0
-    for j in range(n):
-        if body[j] + 1 > nbody:
-            nbody = body[j] + 1
     Mq = np.empty(n)
     rhs = np.empty(n)
     R = np.empty(n)
@@ -138,7 +132,6 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
             xd[1 + j] = Q[k, j]
         _eval_row(ptrs, 0, x, nin, out_pos)
         _assemble(out_pos, m, jr, jc, J)
-        _scaling(J, Q[k], trans, body, nbody, hint, cols)
         _rows(J, cols, r)
         for i in range(m):                            # B = R^-1 J D (C order) = B^T stored transposed
             inv = 1.0 / r[i]

@@ -98,7 +98,9 @@ class SweepResult:
 
     ``rcond_raw`` may hold ``RCOND_PENDING`` entries (a compiled sweep proved them to be at
     least ``RCOND_WARN`` and left them for later); ``fill(rcond_raw)`` computes them in
-    place. Reading ``rcond`` does that first: the estimate is computed once, on demand."""
+    place. Reading ``rcond`` does that first: the estimate is computed once, on demand.
+    ``scaling``: the sweep's :class:`~mechsys.solvers._linalg.Scaling` (the multiplier solves
+    over the sweep use it too), or None."""
 
     t: np.ndarray
     q: np.ndarray
@@ -109,6 +111,7 @@ class SweepResult:
     order: int
     rcond_raw: np.ndarray | None = None
     fill: Callable[[np.ndarray], None] | None = field(default=None, repr=False, compare=False)
+    scaling: Scaling | None = field(default=None, repr=False, compare=False)
 
     @property
     def rcond(self) -> np.ndarray | None:
@@ -253,7 +256,7 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
             "and sensitive, and the sweep continued through it on the branch its previous "
             "points followed. Solution.extra['rcond'] has the value at every point."),
             stacklevel=3)
-    return SweepResult(times, Q, QD, QDD, its, evals, order, rconds, fill)
+    return SweepResult(times, Q, QD, QDD, its, evals, order, rconds, fill, sc)
 
 
 def _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds, fill=None):

@@ -6,8 +6,9 @@ With ``n`` coordinates and ``m = n`` equations, the multipliers follow from::
     kinematic:  Phi_q^T lambda = Q(t, q, qd, lambda)
     dynamic:    Phi_q^T lambda = Q(t, q, qd, lambda) + Qv(q, qd) - M(q) qdd
 
-solved in the unit-free form of the Jacobian (``Scaling.of`` at ``q``: ``B = R^-1 Phi_q D``,
-positions in units of the model's length, each equation divided by its row scale)::
+solved in the unit-free form of the Jacobian (``B = R^-1 Phi_q D``, positions in units of
+the model's length, each equation divided by its row scale; a sweep's own scaling, else
+``Scaling.of`` at ``q``)::
 
     B^T (R lambda) = D rhs
 
@@ -44,8 +45,10 @@ class MultiplierOptions:
 
 
 def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
-                      options: MultiplierOptions | None = None, J=None):
-    """Multipliers ``lambda`` (m,) and the Newton iteration count at one state."""
+                      options: MultiplierOptions | None = None, J=None, scaling=None):
+    """Multipliers ``lambda`` (m,) and the Newton iteration count at one state. ``scaling``:
+    the unit-free form's column scales (default ``Scaling.of`` at ``q``; a sweep passes its
+    own)."""
     opt = options or MultiplierOptions()
     n, m = system.n, system.m
     if J is None:
@@ -55,7 +58,7 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
                          "finite at this state (a coordinate or parameter is NaN or inf)")
     qd_eff = np.zeros(n) if (mode == "static" or qd is None) else qd
     lam = np.broadcast_to(np.asarray(opt.lambda_guess, dtype=float), (m,)).copy()
-    sc = Scaling.of(system, q, J)
+    sc = Scaling.of(system, q, J) if scaling is None else scaling
     r = sc.rows(J)
     try:
         fac = factor(sc.scaled(J, r).T)
@@ -104,24 +107,28 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
         "(Mech's LambdaGuess).", time=t, residuals=R, history=tuple(history))
 
 
-def multipliers_over(system, times, Q, QD, QDD, p, mode: str = "dynamic", lambda_guess=1.0):
+def multipliers_over(system, times, Q, QD, QDD, p, mode: str = "dynamic", lambda_guess=1.0,
+                     scaling=None):
     """Multipliers ``(N, m)`` at each point of a solved sweep (``Q``, ``QD``, ``QDD`` (N, n);
     ``QD``/``QDD`` None where the sweep did not compute them): :func:`solve_multipliers`
     point by point, each point's ``lambda_guess`` the previous point's multipliers (Newton,
     loads that depend on the multipliers). The points the compiled loop can take go there
     first (``_jit.multipliers``: the same operations); the Python loop continues from the
-    first point it leaves."""
+    first point it leaves. ``scaling``: the unit-free form's column scales for every point
+    (the sweep's; default ``Scaling.of`` at the first point)."""
     N = len(times)
     lam = np.empty((N, system.m))
+    if N and scaling is None:
+        scaling = Scaling.of(system, Q[0], system.jacobian(times[0], Q[0], p))
     opt = MultiplierOptions()
     k0 = _jit.multipliers(system, times, Q, QD, QDD, p, mode, lam, lambda_guess, opt.tol,
-                          opt.max_iterations)
+                          opt.max_iterations, None if scaling is None else scaling.columns)
     dyn = system.dynamics
     guess = lambda_guess if k0 == 0 else lam[k0 - 1]
     for k in range(k0, N):
         qd = None if QD is None else QD[k]
         qdd = None if QDD is None else QDD[k]
         lam[k], _ = solve_multipliers(system, dyn, times[k], Q[k], qd, qdd, p, mode,
-                                      MultiplierOptions(lambda_guess=guess))
+                                      MultiplierOptions(lambda_guess=guess), scaling=scaling)
         guess = lam[k]
     return lam
