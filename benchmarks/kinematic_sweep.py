@@ -122,11 +122,16 @@ def loads_case(solution: str, loop: str, points: int, repeat: int = 3) -> dict:
 
 
 def loads_table(rows: list[dict]) -> str:
-    lines = ["| solution | loop | points | whole solve [ms] | multipliers [µs / point] |",
-             "| --- | --- | ---: | ---: | ---: |"]
-    for r in rows:
-        lines.append(f"| {r['solution']} | {r['loop']} | {r['points']} | {r['solve_s'] * 1e3:.1f} | "
-                     f"{r['multipliers_s'] / r['points'] * 1e6:.1f} |")
+    return _markdown(["solution", "loop", "points", "whole solve [ms]", "multipliers [µs / point]"],
+                     "llrrr", [(r["solution"], r["loop"], r["points"], f"{r['solve_s'] * 1e3:.1f}",
+                                     f"{r['multipliers_s'] / r['points'] * 1e6:.1f}") for r in rows])
+
+
+def _markdown(head: list[str], align: str, body) -> str:
+    """A markdown table: ``align`` one letter a column (``l`` left, ``r`` right)."""
+    lines = ["| " + " | ".join(head) + " |",
+             "| " + " | ".join("---:" if a == "r" else "---" for a in align) + " |"]
+    lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in body]
     return "\n".join(lines)
 
 
@@ -177,23 +182,18 @@ def _growth(rows: list[dict], key: str) -> str:
 
 
 def sweep_table(rows: list[dict]) -> str:
-    head = ("| model | backend | loop | coordinates | points | compile [s] | per point [µs] "
-            "| Newton iterations / point | function calls / point |")
-    lines = [head, "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
-    for r in rows:
-        lines.append(f"| {r['case']} | {r['backend']} | {r['loop']} | {r['n']} | {r['points']} | "
-                     f"{r['compile_s']:.2f} | {r['per_point_us']:.0f} | {r['iterations']:.2f} | "
-                     f"{r['evaluations']:.2f} |")
-    return "\n".join(lines)
+    return _markdown(["model", "backend", "loop", "coordinates", "points", "compile [s]",
+                      "per point [µs]", "Newton iterations / point", "function calls / point"],
+                     "lllrrrrrr", [(r["case"], r["backend"], r["loop"], r["n"], r["points"],
+                                    f"{r['compile_s']:.2f}", f"{r['per_point_us']:.0f}",
+                                    f"{r['iterations']:.2f}", f"{r['evaluations']:.2f}")
+                                   for r in rows])
 
 
 def eval_table(rows: list[dict]) -> str:
-    lines = ["| model | coordinates | outputs | backend | compile [s] | per call [µs] |",
-             "| --- | ---: | ---: | --- | ---: | ---: |"]
-    for r in rows:
-        lines.append(f"| {r['case']} | {r['n']} | {r['outputs']} | {r['backend']} | "
-                     f"{r['compile_s']:.2f} | {r['call_us']:.1f} |")
-    return "\n".join(lines)
+    return _markdown(["model", "coordinates", "outputs", "backend", "compile [s]", "per call [µs]"],
+                     "lrrlrr", [(r["case"], r["n"], r["outputs"], r["backend"],
+                                 f"{r['compile_s']:.2f}", f"{r['call_us']:.1f}") for r in rows])
 
 
 PAGE = """\

@@ -222,18 +222,10 @@ def _other_rhs(blocks, kp, x, nin, out, KT, n, m, jr, jc, columns, ipiv, rhs, b,
         return _path_velocity(kp, x, out, KT, n, m, jr, jc, columns, ipiv, rhs, b, qdd,
                               blk_i[0][0], blk_w[0], blk_i[2][0], blk_w[2][0], blk_i[2][2],
                               blk_w[2][2], t, y, f)
-    x[0] = t
-    for j in range(2 * n):
-        x[1 + j] = y[j]
     bi = blk_i[0]
-    if not _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, rhs, b, qdd, lam, bi[0],
-                         bi[1], bi[2], bi[3], bi[4], bi[5], bi[6], blk_w[0], blk_i[2][0],
-                         blk_w[2][0], t, y):
-        return False
-    for j in range(n):
-        f[j] = y[n + j]
-        f[n + j] = qdd[j]
-    return True
+    return _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, rhs, b, qdd, lam, bi[0], bi[1],
+                         bi[2], bi[3], bi[4], bi[5], bi[6], blk_w[0], blk_i[2][0], blk_w[2][0],
+                         t, y, f)
 
 
 @leaf
@@ -249,7 +241,7 @@ def _factor_checked(AT, n, ipiv, w1, w2):
 
 @leaf
 def _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, w1, w2, qdd, lam, info, Mr, Mc, Dr,
-                  Dc, Ar, Ac, nw, ex, ph, t, y):
+                  Dc, Ar, Ac, nw, ex, ph, t, y, f):
     """Free acceleration when the loads depend on the multipliers or accelerations:
     ``solvers._free.free_acceleration``'s Newton, operation for operation. ``kp`` the
     dynamics kernel ``[t, q, qd, lambda, p, qdd] -> [M values (kM), Q, Qv]`` (its row;
@@ -264,14 +256,17 @@ def _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, w1, w2, qdd, lam, inf
         r = [M qdd + J^T lambda - Q - Qv;  J qdd - gamma]
         [[M - dQ/dqdd, J^T - dQ/dlambda], [J, 0]] dx = -r
 
-    until ``max |r| <= tol (1 + max |Q|)`` after at least one step. ``qdd``, ``lam`` the
-    result; False (hand over: the Python path raises its diagnosis) at a singular matrix
+    until ``max |r| <= tol (1 + max |Q|)`` after at least one step. ``f = (qd, qdd)``, and
+    ``qdd``, ``lam`` the result; False (hand over: the Python path raises its diagnosis) at a singular matrix
     (reciprocal condition below ``RCOND_MIN``), a value not finite or no convergence."""
     xk, out_pos, g, J, od, oa, res, tolv = nw
     kM, chain, maxit, nD, nA, npar = info[0], info[1], info[2], info[3], info[4], info[5]
     N = n + m
     nin_k = 1 + 2 * n + npar
     tol = tolv[0]
+    x[0] = t
+    for j in range(2 * n):
+        x[1 + j] = y[j]
     xk[0] = t
     for j in range(n):
         xk[1 + j] = y[j]
@@ -317,6 +312,9 @@ def _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, w1, w2, qdd, lam, inf
         if not np.isfinite(err):
             return False
         if err <= tol * (1.0 + qmax) and it > 1:
+            for j in range(n):
+                f[j] = y[n + j]
+                f[n + j] = qdd[j]
             return True
         if nD > 0:
             _eval(info[16:21], x, nin, od)
