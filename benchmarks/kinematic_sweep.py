@@ -3,7 +3,8 @@ and the cost of one evaluation of the compiled equations, for both numeric backe
 
 Models: the planar slider-crank (``mechsys.models.slider_crank``) over one revolution, and the
 chain of four-bar loops ``mechsys.models.four_bar_chain(N)`` (``3 (2N + 1)`` coordinates) for
-N = 1, 10, 100. Each sweep solves position, velocity and acceleration at every point.
+N = 1, 10, 100; the Geneva drive (``models.geneva_drive``: a ``StageSwitch`` of five stages)
+over two crank turns. Each sweep solves position, velocity and acceleration at every point.
 Loads over a sweep: the slider-crank with masses, gravity and a gas force
 (``models.slider_crank_dynamic``) solved for its multipliers (statics, kinematic loads,
 inverse dynamics) at 1000 points, Python and compiled loops.
@@ -45,12 +46,16 @@ def _model(case: str, n_loops: int | None):
 
     if case == "slider-crank":
         return models.slider_crank()
+    if case == "geneva drive":
+        return models.geneva_drive()
     return models.four_bar_chain(n_loops)
 
 
 def _times(case: str, points: int) -> np.ndarray:
     if case == "slider-crank":
         return np.linspace(0.0, 1.0, points)  # one crank revolution
+    if case == "geneva drive":
+        return np.linspace(0.0, 4 * np.pi, points)  # two engagements, five stages
     return np.linspace(0.0, 2 * np.pi, points)  # one period of the chain's driver
 
 
@@ -213,7 +218,9 @@ Position (damped Newton, continued from a Taylor predictor of the previous point
 and acceleration at every point. "compile" is `m.compile()`: the symbolic derivation of the
 Jacobian, `Phi_t` and `gamma` plus compiling the three numeric functions. "per point" is the
 whole sweep (best of three runs) divided by the number of points. "function calls" counts
-evaluations of the compiled functions.
+evaluations of the compiled functions. The Geneva drive changes its stage (a `StageSwitch`
+of five stages) four times; its points go in runs of one stage between the changes
+([decision 0029](decisions/0029-multistage-runs.md)).
 
 {sweeps}
 
@@ -285,8 +292,8 @@ def main(argv: list[str] | None = None) -> int:
 
     sweeps, evals = [], []
     for backend in backends:
-        runs = [("slider-crank", None, sc_points)] + [("chain", k, chain_points)
-                                                      for k in chain_sizes]
+        runs = [("slider-crank", None, sc_points), ("geneva drive", None, sc_points)] + [
+            ("chain", k, chain_points) for k in chain_sizes]
         loops = ["python"]
         if backend == "symengine" and _jit_available():
             loops.append("compiled")

@@ -8,6 +8,8 @@ The script runs once as written, with ``FreeSystem.simulate`` and the kinematic 
 apply):
 
 * a sweep over all of its points;
+* a multistage sweep (a model with stage switches) over all of its points: the same
+  positions, rates and stages;
 * the multipliers of a static, kinematic or dynamic solve over all of its points;
 * a free motion or a nonholonomic path over its first steps (about 20: over a whole run the
   step-size controller
@@ -31,7 +33,7 @@ import numpy as np
 os.environ.setdefault("MPLBACKEND", "Agg")
 
 from mechsys import model as model_module  # noqa: E402
-from mechsys.analyses import _free, _path  # noqa: E402
+from mechsys.analyses import _free, _multistage, _path  # noqa: E402
 from mechsys.solvers import _kinematics, _statics  # noqa: E402
 
 FIRST_STEPS = 20
@@ -55,6 +57,17 @@ def _record_sweep(original):
                             kwargs, out))
         return out
     return sweep
+
+
+def _record_stages(original):
+    def sweep_stages(model, times, guess, order, options, forced):
+        out = original(model, times, guess, order, options, forced)
+        if len(records) < 40 and len(np.atleast_1d(times)) > 2:
+            records.append(("stages", model, np.array(times, dtype=float),
+                            (np.array(guess, dtype=float), order, options, dict(forced)), {},
+                            out))
+        return out
+    return sweep_stages
 
 
 def _record_multipliers(original):
@@ -153,12 +166,18 @@ def check() -> list[dict]:
             ran: list = []
             _kinematics._jit.run = _counting(ran)
             try:
-                py, jit = _both(original_sweep, obj, t, *args, **kwargs)
+                fn = original_sweep if kind == "sweep" else original_stages
+                py, jit = _both(fn, obj, t, *args, **kwargs)
             finally:
                 _kinematics._jit.run = original_run
+            d = 0.0
+            if kind == "stages":      # (result, stages, scalings): the stages must be equal
+                if not np.array_equal(py[1], jit[1]):
+                    d = float("inf")
+                py, jit = py[0], jit[0]
             parts = [(py.q, jit.q), (py.qd, jit.qd), (py.qdd, jit.qdd)]
-            d = max(_diff(a, b) for a, b in parts if a is not None or b is not None)
-            results.append({"kind": "sweep", "difference": d, "rows": len(t),
+            d = max([d] + [_diff(a, b) for a, b in parts if a is not None or b is not None])
+            results.append({"kind": kind, "difference": d, "rows": len(t),
                             "compiled": int(sum(ran))})
     return results
 
@@ -168,6 +187,7 @@ original_path = _path.PathSystem.simulate
 original_sweep = _kinematics.sweep
 original_run = _kinematics._jit.run
 original_multipliers = _statics.multipliers_over
+original_stages = _multistage._sweep_stages
 original_jit_multipliers = _statics._jit.multipliers
 
 if __name__ == "__main__":
@@ -176,6 +196,7 @@ if __name__ == "__main__":
     _path.PathSystem.simulate = _record_simulate(original_path, "path")
     _kinematics.sweep = model_module.sweep = _record_sweep(original_sweep)
     _statics.multipliers_over = _record_multipliers(original_multipliers)
+    _multistage._sweep_stages = _record_stages(original_stages)
     sys.argv = [script]
     sys.path[0] = os.path.dirname(os.path.abspath(script))   # as `python script` has it
     runpy.run_path(script, run_name="__main__")
@@ -183,4 +204,5 @@ if __name__ == "__main__":
     _path.PathSystem.simulate = original_path
     _kinematics.sweep = model_module.sweep = original_sweep
     _statics.multipliers_over = original_multipliers
+    _multistage._sweep_stages = original_stages
     print("paths-agree: " + json.dumps(check()))

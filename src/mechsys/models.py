@@ -254,3 +254,57 @@ def cardan_joint(bend: float = 0.5, speed: float = 2 * np.pi, joint: str = "univ
     m.add(RotationLock1(s1.axis(0, x, y), g.axis((0, 0, 0), x, y),
                         drive if drive is not None else speed * T), name="drive")
     return m
+
+
+def geneva_drive(slots: int = 4, center_distance: float = 2.0, turns: int = 2) -> Model2D:
+    r"""A Geneva drive as a ``StageSwitch`` (Mech chapter 5), the intermittent motion of a
+    wheel with ``slots`` radial slots driven by a crank pin.
+
+    The crank turns about the origin at 1 rad/s, ``theta = T - pi`` (so ``T`` from 0 to
+    ``2 pi turns`` covers ``turns`` engagements, the first around ``T = pi``); its pin, at
+    radius ``a = c sin(pi / slots)`` (tangential entry), engages the wheel centred at
+    ``(c, 0)``. While engaged (``|theta - 2 pi k| <= alpha = pi/2 - pi/slots``) the wheel
+    turns by ``-2 pi / slots``, following
+
+    .. math:: \tan\phi = \frac{\sin\theta}{c/a - \cos\theta},\qquad \text{wheel} = \text{mid} - \phi;
+
+    between engagements it is locked. The switch, named ``"geneva"``, has ``2 turns + 1``
+    stages: a ``RotationLock1`` of the wheel at ``pi/slots - 2 pi k / slots`` before
+    engagement ``k``, the pin on the line of slot ``k`` (``PointOnLine1``; the slot's local
+    direction at angle ``2 pi k / slots``) during it. Bodies ``crank`` (point ``pin``) and
+    ``wheel``; the crank's driver is named ``drive``.
+
+    >>> m = geneva_drive()
+    >>> sol = m.solve(np.linspace(0, 4 * np.pi, 101))
+    >>> sorted(set(sol.stage("geneva")))
+    [1, 2, 3, 4, 5]
+    """
+    from .constraints import PointOnLine1, StageSwitch
+
+    if isinstance(slots, bool) or not isinstance(slots, (int, np.integer)) or slots < 3:
+        raise ValueError(f"geneva_drive: slots must be an integer >= 3, got {slots!r}")
+    if isinstance(turns, bool) or not isinstance(turns, (int, np.integer)) or turns < 1:
+        raise ValueError(f"geneva_drive: turns must be an integer >= 1, got {turns!r}")
+    c = float(center_distance)
+    if not (np.isfinite(c) and c > 0):
+        raise ValueError(f"geneva_drive: center_distance must be positive, got {center_distance!r}")
+    step = 2 * sp.pi / slots                 # the wheel's turn per engagement
+    half = sp.pi / 2 - sp.pi / slots         # the crank's half angle of engagement
+    m = Model2D()
+    g = m.ground
+    crank = m.add_body("crank", points={"pin": (c * np.sin(np.pi / slots), 0)},
+                       guess=((0, 0), -np.pi))
+    wheel = m.add_body("wheel", guess=((c, 0), np.pi / slots))
+    m.add(Revolute2(g.point((0, 0)), crank.point(0)), name="crank pivot")
+    m.add(Revolute2(g.point((c, 0)), wheel.point(0)), name="wheel pivot")
+    m.add(RotationLock1(crank, T - sp.pi), name="drive")
+    th = crank.q[2]
+    stages = []
+    for k in range(turns):
+        slot = (float(sp.cos(k * step)), float(sp.sin(k * step)))
+        stages.append((th < 2 * sp.pi * k - half, RotationLock1(wheel, sp.pi / slots - k * step)))
+        stages.append((th <= 2 * sp.pi * k + half,
+                       PointOnLine1(crank.point("pin"), wheel.axis((0, 0), slot))))
+    stages.append((True, RotationLock1(wheel, sp.pi / slots - turns * step)))
+    m.add(StageSwitch(*stages), name="geneva")
+    return m

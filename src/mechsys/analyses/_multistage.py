@@ -8,11 +8,16 @@ every combination has the same coordinates and the same parameter vector (the mo
 parameters, then the hidden ``v_held`` values of the switches' variables), so positions,
 velocities and outputs are comparable across stages.
 
-**Sweep.** Point by point, in the given order of times: predict from the previous points
-(the kinematic sweep's predictor), solve the positions in the current combination, evaluate
-every switch's tests at the solved ``(T, q, p)``; if they choose another stage, solve again in
-that combination from the same prediction, until the tests confirm the stage the point was
-solved in. A stage is therefore recorded only where its own test holds at its own solution. When
+**Sweep.** In the given order of times. A point where the stage may change gets the stage
+logic: predict from the previous points (the kinematic sweep's predictor), solve the
+positions in the current combination, evaluate every switch's tests at the solved
+``(T, q, p)``; if they choose another stage, solve again in that combination from the same
+prediction, until the tests confirm the stage the point was solved in. The points after it
+go in runs of that combination, each one kinematic sweep continuing the points before it
+(compiled where the sweep's loop is; ``RUN_START`` points, doubling up to ``RUN_MAX`` while
+the runs are kept whole); the tests, evaluated on a run's points at once, keep it up to the
+first point they send to another combination (or the first that fails), which gets the stage
+logic (decision 0029). A stage is therefore recorded only where its own test holds at its own solution. When
 the current combination has no solution at a point (a stage past its end), the combination
 the tests choose at the predicted point is tried instead.
 Tests that keep choosing each other (A's solution says B, B's says A) raise a
@@ -30,13 +35,13 @@ import sympy as sp
 from scipy.optimize import brentq
 from sympy.printing.numpy import NumPyPrinter
 
-from .._errors import ConvergenceError, MechError, ModelError, SingularJacobianError
+from .._errors import ConvergenceError, MechError, ModelError
 from .._symbols import T
 from ..compile import System
 from ..compile._stages import _cache, stage_system
 from ..constraints._switches import StageSwitch, TimeSwitch
 from ..solvers import ORDERS, PositionOptions, sweep
-from ..solvers._kinematics import SweepResult, _predict, _solve_point
+from ..solvers._kinematics import SweepResult, _predict
 from ..solvers._linalg import Scaling, rotation_indices
 
 #: the solutions with multipliers (Model.solve's load modes) and their kinematic order
@@ -106,6 +111,34 @@ class _Tests:
         return tuple(forced[j] if j in forced else self.stage_of(j, t, q, p)
                      for j in range(len(self.switches)))
 
+    def stages_over(self, t, Q, p, forced: Mapping) -> np.ndarray:
+        """The combinations ``(L, switches)`` at the points ``t`` (L,), ``Q`` (L, n): the
+        tests evaluated on all points at once, each point's stage its first true test (as
+        :meth:`stages`, which serves point by point where a test does not give one Boolean
+        per point, and raises its errors)."""
+        L = len(t)
+        out = np.empty((L, len(self.switches)), dtype=int)
+        cols = list(np.asarray(Q, dtype=float).T)
+        for j in range(len(self.switches)):
+            if j in forced:
+                out[:, j] = forced[j]
+                continue
+            left = np.ones(L, dtype=bool)      # points with no true test so far
+            for k, f in enumerate(self.funcs[j]):
+                val = np.asarray(f(t, *cols, *p))
+                if val.dtype != np.bool_ or val.shape not in ((), (L,)):
+                    return np.array([self.stages(t[i], Q[i], p, forced) for i in range(L)],
+                                    dtype=int).reshape(L, -1)
+                hit = left & val
+                out[hit, j] = k
+                left &= ~hit
+                if not left.any():
+                    break
+            if left.any():
+                i = int(np.argmax(left))
+                self.stage_of(j, t[i], Q[i], p)    # raises: no test true there
+        return out
+
 
 class _HeldValues:
     """The values the switches' variables are held at, as the tail of the parameter vector:
@@ -147,10 +180,11 @@ def solve_stages(model, times, guess, solution: str, options: PositionOptions | 
     order = ORDERS.get(solution, MODES.get(solution))
     if order is None:
         raise ModelError(f"solution must be one of {list(ORDERS) + list(MODES)}, got {solution!r}")
-    res, stages = _sweep_stages(model, np.atleast_1d(times), guess, order, options, forced or {})
+    res, stages, scalings = _sweep_stages(model, np.atleast_1d(times), guess, order, options,
+                                          forced or {})
     lam = None
     if solution in MODES:
-        lam = _multipliers_by_stage(model, res, stages, solution, lambda_guess)
+        lam = _multipliers_by_stage(model, res, stages, solution, lambda_guess, scalings)
     base = stage_system(model, None)
     sol = Solution.from_sweep(model, base, res, model._p(), scalar=scalar, lam=lam, mode=solution)
     sw = model._switches()
@@ -158,76 +192,147 @@ def solve_stages(model, times, guess, solution: str, options: PositionOptions | 
     return sol
 
 
-def _multipliers_by_stage(model, res, stages, mode, lambda_guess):
-    """Multipliers ``(N, m)`` point by point, each with the system of its stage combination
-    (every combination has ``m`` rows: see :meth:`StageSwitch.stage_equations`)."""
+def _multipliers_by_stage(model, res, stages, mode, lambda_guess, scalings):
+    """Multipliers ``(N, m)``, each point with the system of its stage combination (every
+    combination has ``m`` rows: see :meth:`StageSwitch.stage_equations`): one
+    :func:`~mechsys.solvers._statics.multipliers_over` per run of points in one combination
+    (compiled where the sweep's loops are), with that combination's scaling; each point's
+    guess the previous point's multipliers, across runs too."""
     from ..results._load_outputs import lambda_guess_vector
-    from ..solvers import MultiplierOptions, solve_multipliers
+    from ..solvers._statics import multipliers_over
 
+    N = len(res.t)
     held = _HeldValues(model, stage_system(model, None), res.q[0])
-    lam = None
-    for k in range(len(res.t)):
-        system = stage_system(model, tuple(stages[k]))
+    change = np.flatnonzero((stages[1:] != stages[:-1]).any(axis=1)) + 1
+    lam = guess = None
+    for a, b in zip([0, *change], [*change, N]):
+        comb = tuple(int(s) for s in stages[a])
+        system = stage_system(model, comb)
         if lam is None:
-            lam = np.empty((len(res.t), system.m))
+            lam = np.empty((N, system.m))
             guess = lambda_guess_vector(system, model, lambda_guess)
-        held.update(res.q[k], tuple(stages[k]))
-        qd = None if res.qd is None else res.qd[k]
-        qdd = None if res.qdd is None else res.qdd[k]
-        opt = MultiplierOptions(lambda_guess=guess)
-        lam[k], _ = solve_multipliers(system, system.dynamics, res.t[k], res.q[k], qd, qdd,
-                                      held.p, mode, opt)
-        guess = lam[k]
+        # (the held values enter only rows v - v_held, whose Jacobian does not depend on them)
+        held.update(res.q[a], comb)
+        sc = scalings.get(comb)
+        if sc is None:
+            sc = Scaling.of(system, res.q[a], system.jacobian(res.t[a], res.q[a], held.p))
+        lam[a:b] = multipliers_over(
+            system, res.t[a:b], res.q[a:b], None if res.qd is None else res.qd[a:b],
+            None if res.qdd is None else res.qdd[a:b], held.p, mode, guess, sc, points=N)
+        guess = lam[b - 1]
     return lam
 
 
-def _sweep_stages(model, times, guess, order, options, forced):
-    switches = model._switches()
-    params = dict(zip(model._params, model._p()))
-    for sw in switches:
-        sw.check_times(params)
-    base = stage_system(model, None)
-    tests = _cache(model).get("tests")
-    if tests is None:  # compiled once per model version (FindTime solves many single points)
-        tests = _cache(model)["tests"] = _Tests(model, base)
-    held = _HeldValues(model, base, guess)
-    N, n = len(times), base.n
-    Q = np.empty((N, n))
-    QD = np.empty((N, n)) if order >= 1 else None
-    QDD = np.empty((N, n)) if order >= 2 else None
-    rconds = np.full(N, np.nan) if order >= 1 else None
-    its = np.zeros(N, dtype=int)
-    stages = np.zeros((N, len(switches)), dtype=int)
-    rot = rotation_indices(base)
-    scalings: dict = {}
-    evals, current = 0, None
-    for k, t in enumerate(times):
-        pred = np.asarray(guess, float) if k == 0 else _predict(Q, QD, QDD, rconds, times, k, rot)
+#: a multistage sweep solves the points after a stage change in runs of one combination,
+#: each one sweep: the first ``RUN_START`` long, each run the tests confirm to its end twice
+#: as long as the one before, up to ``RUN_MAX`` (a run that passes its stage's end has solved
+#: the points after it in vain). The same in both loops: a run's first point starts Newton
+#: without the previous point's chord, so the runs' bounds are part of the arithmetic
+RUN_START = 32
+RUN_MAX = 1024
+
+
+class _StageSweep:
+    """The state of one multistage sweep (arrays of the points solved so far, held values,
+    the combinations' scalings); see :func:`_sweep_stages`."""
+
+    def __init__(self, model, times, guess, order, options, forced):
+        self.model, self.times, self.order, self.options = model, times, order, options
+        self.forced = forced
+        base = stage_system(model, None)
+        tests = _cache(model).get("tests")
+        if tests is None:  # compiled once per model version (FindTime solves many single points)
+            tests = _cache(model)["tests"] = _Tests(model, base)
+        self.tests = tests
+        self.guess = np.asarray(guess, dtype=float)
+        self.held = _HeldValues(model, base, guess)
+        N, n = len(times), base.n
+        self.Q = np.empty((N, n))
+        self.QD = np.empty((N, n)) if order >= 1 else None
+        self.QDD = np.empty((N, n)) if order >= 2 else None
+        self.rconds = np.full(N, np.nan) if order >= 1 else None
+        self.its = np.zeros(N, dtype=int)
+        self.stages = np.zeros((N, len(tests.switches)), dtype=int)
+        self.rot = rotation_indices(base)
+        self.scalings: dict = {}
+        self.evals = 0
+        self.fills: list = []    # (first point, count, fill) of runs with pending estimates
+
+    def fill(self):
+        """``fill(rconds)`` for the sweep's result: each run's pending estimates."""
+        fills = self.fills
+
+        def fill(rconds: np.ndarray) -> None:
+            for k, count, f in fills:
+                if k < len(rconds):
+                    f(rconds[k:min(k + count, len(rconds))])
+        return fill
+
+    def prediction(self, k: int) -> np.ndarray:
+        if k == 0:
+            return self.guess
+        return _predict(self.Q, self.QD, self.QDD, self.rconds, self.times, k, self.rot)
+
+    def run(self, comb, k: int, length: int) -> SweepResult:
+        """Points ``k, k + 1, ...`` (``length`` of them) solved in combination ``comb`` as one
+        sweep continuing the points before ``k``; it ends early at a point that fails."""
+        system = stage_system(self.model, comb)
+        p = self.held.p.copy()      # (a run's pending estimates are computed with its own)
+        sc = self.scalings.get(comb)
+        if sc is None:
+            pred = self.prediction(k)
+            sc = self.scalings[comb] = Scaling.of(system, pred,
+                                                  system.jacobian(self.times[k], pred, p))
+        P = min(k, 3)
+        prior = None if k == 0 else tuple(
+            None if X is None else X[k - P:k] for X in (self.times, self.Q, self.QD, self.QDD,
+                                                        self.rconds))
+        got = sweep(system, self.times[k:k + length], self.guess if k == 0 else None,
+                    self.order, self.options, p, sc, prior=prior, partial=True,
+                    points=len(self.times))
+        self.evals += got.evaluations
+        return got
+
+    def keep(self, got: SweepResult, k: int, count: int, comb) -> None:
+        """Record the first ``count`` points of ``got`` as points ``k ...`` in ``comb``."""
+        if not count:
+            return
+        sl = slice(k, k + count)
+        self.Q[sl], self.its[sl], self.stages[sl] = got.q[:count], got.iterations[:count], comb
+        if self.order >= 1:
+            # estimates left pending by a compiled run stay pending (decision 0023): the
+            # predictor reads them as such, as in one long sweep
+            self.QD[sl], self.rconds[sl] = got.qd[:count], got.rcond_raw[:count]
+            if got.rcond_pending:
+                self.fills.append((k, count, got.fill))
+        if self.order >= 2:
+            self.QDD[sl] = got.qdd[:count]
+        self.held.update(self.Q[k + count - 1], comb)
+
+    def point(self, k: int, current):
+        """Point ``k`` with the stage logic of the module docstring; returns its combination."""
+        t, p, tests, forced = self.times[k], self.held.p, self.tests, self.forced
+        pred = self.prediction(k)
         if current is None:
-            current = tests.stages(t, pred, held.p, forced)
+            current = tests.stages(t, pred, p, forced)
         tried = [current]
         while True:
-            system = stage_system(model, current)
-            p = held.p
-            sc = scalings.get(current)
-            if sc is None:
-                sc = scalings[current] = Scaling.of(system, pred, system.jacobian(t, pred, p))
-            try:
-                pos = _solve_point(system, t, pred, Q[k - 1] if k else None, options, p, sc, rot)
-            except (ConvergenceError, SingularJacobianError):
+            got = self.run(current, k, 1)
+            if got.stopped is not None:
                 # the stage may have no solution past its end (a track that stops): if the
                 # tests at the prediction choose another stage, try that one
                 new = tests.stages(t, pred, p, forced)
                 if new == current or new in tried:
-                    raise
+                    raise got.stopped
                 tried.append(new)
                 current = new
                 continue
-            new = tests.stages(t, pos.q, p, forced)
+            new = tests.stages(t, got.q[0], p, forced)
             if new == current:
                 break
             if new in tried or len(tried) > MAX_STAGE_CHANGES:
-                names = [sw.label() for j, sw in enumerate(switches) if new[j] != current[j]]
+                names = [sw.label() for j, sw in enumerate(tests.switches)
+                         if new[j] != current[j]]
                 raise ModelError(
                     f"{', '.join(names)}: the tests are inconsistent at t = {t:.6g}: solved in "
                     f"stage(s) {[s + 1 for s in current]} they choose {[s + 1 for s in new]}, "
@@ -235,15 +340,44 @@ def _sweep_stages(model, times, guess, order, options, forced):
                     "own solutions (e.g. test a coordinate the stages share)")
             tried.append(new)
             current = new
-        one = sweep(system, [t], pos.q, order, options, p, sc)
-        evals += pos.evaluations + one.evaluations
-        Q[k], its[k], stages[k] = one.q[0], pos.iterations, current
-        if order >= 1:
-            QD[k], rconds[k] = one.qd[0], one.rcond[0]
-        if order >= 2:
-            QDD[k] = one.qdd[0]
-        held.update(Q[k], current)
-    return SweepResult(times, Q, QD, QDD, its, evals, order, rconds), stages
+        self.keep(got, k, 1, current)
+        return current
+
+
+def _sweep_stages(model, times, guess, order, options, forced):
+    """The multistage sweep (module docstring): a point where the stage may change gets the
+    stage logic (:meth:`_StageSweep.point`); the points after it go in runs of its
+    combination (:meth:`_StageSweep.run`), kept up to the first point whose tests choose
+    another combination or which fails, where the stage logic takes over again. Returns the
+    :class:`SweepResult`, the stages ``(N, switches)`` and the combinations' scalings."""
+    switches = model._switches()
+    params = dict(zip(model._params, model._p()))
+    for sw in switches:
+        sw.check_times(params)
+    st = _StageSweep(model, times, guess, order, options, forced)
+    N = len(times)
+    k, current, length, care = 0, None, RUN_START, True
+    while k < N:
+        if care:
+            current = st.point(k, current)
+            k, care = k + 1, False
+            continue
+        ask = min(length, N - k)
+        got = st.run(current, k, ask)
+        ok = len(got.t)
+        if ok:
+            same = (st.tests.stages_over(got.t, got.q, st.held.p, forced)
+                    == np.asarray(current)).all(axis=1)
+            ok = ok if same.all() else int(np.argmin(same))
+        st.keep(got, k, ok, current)
+        k += ok
+        if ok == ask:
+            length = min(2 * length, RUN_MAX)
+        else:
+            length, care = RUN_START, True
+    res = SweepResult(times, st.Q, st.QD, st.QDD, st.its, st.evals, order, st.rconds,
+                      st.fill() if st.fills else None)
+    return res, st.stages, st.scalings
 
 
 # -- finding times ------------------------------------------------------------------------

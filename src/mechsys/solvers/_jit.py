@@ -131,7 +131,7 @@ def _wanted(system, points: int) -> bool:
 
 
 def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, tol=1e-10,
-                max_iterations=50, columns=None) -> int:
+                max_iterations=50, columns=None, points=None) -> int:
     """Fill ``LAM`` (N, m) with the multipliers of the solved sweep ``Q``, ``QD``, ``QDD``
     (N, n) in compiled code (``_jit_multipliers``) from point 0 on; return the first point
     left to the Python path (``len(times)`` when all are done, 0 when the compiled loop
@@ -140,11 +140,13 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
     ``"dynamic"``. Loads that depend on the multipliers (friction): Newton from ``guess``
     (scalar or (m,)) at the first point, with ``tol`` and ``max_iterations`` of
     :class:`~mechsys.solvers.MultiplierOptions`. ``columns`` (n,): the unit-free form's column
-    scales (``Scaling.columns``; None: 0 is returned, the Python path scales itself)."""
+    scales (``Scaling.columns``; None: 0 is returned, the Python path scales itself).
+    ``points``: the size of the whole job, for the ``auto`` rule (default ``len(times)``)."""
     N = len(times)
     dyn = system.dynamics
     # (the recursive dynamics of generalized coordinates has no f_terms kernel)
-    if not N or columns is None or getattr(dyn, "recursive", False) or not _wanted(system, N):
+    if not N or columns is None or getattr(dyn, "recursive", False) \
+            or not _wanted(system, N if points is None else points):
         return 0
     code = {"static": 0, "kinematic": 1, "dynamic": 2}[mode_name]
     if (code >= 1 and QD is None) or (code == 2 and QDD is None):
@@ -201,8 +203,10 @@ def _lapack() -> np.ndarray:
 
 
 def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD, its, rconds,
-        rprev, R=None):
-    """Fill ``Q``, ``QD``, ``QDD``, ``its``, ``rconds`` from point 0 on; return ``(k, evals,
+        rprev, R=None, first=0):
+    """Fill ``Q``, ``QD``, ``QDD``, ``its``, ``rconds`` from point ``first`` on (the rows
+    before it: the points solved before, which the predictor continues; ``scaling`` given
+    then); return ``(k, evals,
     scaling)``: the first point left to the Python loop (``len(times)`` when all are done),
     the number of kernel calls made, and the :class:`~mechsys.solvers._linalg.Scaling` used.
     ``scaling`` None: the loop takes ``Scaling.of`` the guess ``q0`` at the first time from
@@ -236,7 +240,7 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
                     _index(system.jac_rows), _index(system.jac_cols), columns, scale,
                     float(options.ftol), int(options.max_iterations), bool(options.damping),
                     int(order), _index(rot), trans, _index(body), length_hint(system), Q,
-                    qd_out, qdd_out, its, rc, rprev, lazy, R if lazy else dummy)
+                    qd_out, qdd_out, its, rc, rprev, lazy, R if lazy else dummy, int(first))
     if scaling is None:
         scaling = Scaling(float(scale[0]), columns, float(scale[1]))
     return int(k), int(evals), scaling

@@ -439,7 +439,7 @@ def _unique(jr, jc, m, n):
 
 @nb.njit(cache=True)
 def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit, damping, order,
-                rot, trans, body, hint, Q, QD, QDD, its, rconds, rprev, lazy, R):
+                rot, trans, body, hint, Q, QD, QDD, its, rconds, rprev, lazy, R, first):
     """The sweep's regular points (see the module docstring); returns ``(k, evaluations)``
     with ``k`` the first point left to the Python loop. ``rprev`` (n,) receives the row
     scales of the last solved point's velocity factorisation (the chord of the next point:
@@ -452,7 +452,9 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
     scales; ``scale[0] == 0``: the scaling of ``q0`` at the first time is computed from the
     first evaluation (:func:`_scaling`, with the columns' kinds ``trans``, ``body`` and the
     system's ``length_hint``) and returned in ``scale`` and ``columns``. The Newton
-    tolerance is ``ftol (1 + offset)``."""
+    tolerance is ``ftol (1 + offset)``. ``first``: the first point to solve; the rows
+    before it of ``Q``, ``QD``, ``QDD``, ``rconds`` are the points solved before the sweep
+    (the predictor's history: a multistage sweep's runs), and ``scale`` is given then."""
     n = q0.size
     m = n
     nnz = jr.size
@@ -487,7 +489,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
     evals = 0
     # B, ipiv, nz hold the previous point's velocity factorisation while have_chord is set
     have_chord = False
-    for k in range(N):
+    for k in range(first, N):
         t = times[k]
         x[0] = t
         if k == 0:

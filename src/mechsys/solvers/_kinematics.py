@@ -112,6 +112,8 @@ class SweepResult:
     rcond_raw: np.ndarray | None = None
     fill: Callable[[np.ndarray], None] | None = field(default=None, repr=False, compare=False)
     scaling: Scaling | None = field(default=None, repr=False, compare=False)
+    #: the error that ended a ``partial`` sweep before its last time (None: all solved)
+    stopped: Exception | None = field(default=None, repr=False, compare=False)
 
     @property
     def rcond(self) -> np.ndarray | None:
@@ -127,14 +129,33 @@ class SweepResult:
 
 
 def sweep(system, times, guess, order: int = 2, options: PositionOptions | None = None,
-          p=None, scaling: Scaling | None = None, hooks=None) -> SweepResult:
+          p=None, scaling: Scaling | None = None, hooks=None, prior=None, partial: bool = False,
+          points: int | None = None) -> SweepResult:
     """Kinematic solution at each of ``times`` (1D, any order; continuation follows the
     given order). ``order`` 0 = location, 1 = + velocity, 2 = + acceleration. ``scaling``
     defaults to the one of ``guess`` at the first time. ``hooks``
     (:class:`~mechsys.solvers._diagnostics.Hooks`): ``pre_solve(t)`` before each point's
     position solve; a hook returning False raises ``Stopped`` carrying the points solved so
-    far (``partial``, a :class:`SweepResult`)."""
+    far (``partial``, a :class:`SweepResult`).
+
+    For a sweep that continues another (the runs of a multistage sweep):
+
+    * ``prior``: ``(times, Q, QD, QDD, rconds)`` of the points solved just before
+      ``times[0]`` (``QD``/``QDD``/``rconds`` None where ``order`` has none; three points
+      are all the predictor uses). The first point is predicted from them as in one long
+      sweep; ``guess`` is not used, ``scaling`` must be given.
+    * ``partial``: a point whose position solve fails (:class:`ConvergenceError`,
+      :class:`SingularJacobianError`) ends the sweep: the result holds the points before it,
+      ``stopped`` the error.
+    * ``points``: the size of the whole job, for the compiled loop's ``auto`` rule
+      (default ``len(times)``)."""
     times = np.atleast_1d(np.asarray(times, dtype=float))
+    P = 0
+    if prior is not None:
+        if scaling is None:
+            raise ValueError("sweep: a sweep continuing prior points needs their scaling")
+        P = len(prior[0])
+        times = np.concatenate([np.asarray(prior[0], dtype=float), times])
     n, N = system.n, len(times)
     sparse = n > SPARSE_THRESHOLD
     Q = np.empty((N, n))
@@ -142,14 +163,19 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
     QDD = np.empty((N, n)) if order >= 2 else None
     its = np.zeros(N, dtype=int)
     rconds = np.full(N, np.nan) if order >= 1 else None
-    q0 = np.asarray(guess, dtype=float)
+    if P:
+        for X, Xp in zip((Q, QD, QDD, rconds), prior[1:]):
+            if X is not None:
+                X[:P] = Xp
+    q0 = np.asarray(guess, dtype=float) if P == 0 else Q[P - 1]
     sc = scaling
     evals = 0
     rot = rotation_indices(system)  # indices of angles / Euler parameters
-    k0 = 0
+    k0 = P
     chord = None    # the previous point's velocity factorisation: Newton's first steps reuse it
     # hooks (pre_solve, post_iterate) run in the Python loop only
-    pointers = _jit.plan(system, N, order) if N and hooks is None else None
+    pointers = _jit.plan(system, N - P if points is None else points, order) \
+        if N > P and hooks is None else None
     start = None    # the first point's equations at the guess, evaluated for the scaling
     if sc is None and N and pointers is None:
         F0, J0 = system.residual_and_jacobian(times[0], q0, p, sparse)
@@ -161,88 +187,97 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
         rprev = np.ones(n)
         R = np.empty((N, n)) if order >= 1 else None   # row scales of the pending estimates
         k0, done, sc = _jit.run(system, pointers, times, q0, p, order, options or PositionOptions(),
-                                sc, rot, Q, QD, QDD, its, rconds, rprev, R)
-        if order >= 1 and (rconds[:k0] == RCOND_PENDING).any():
-            fill = _jit.rcond_filler(system, pointers, times, Q, p, sc, R)
+                                sc, rot, Q, QD, QDD, its, rconds, rprev, R, P)
+        if order >= 1 and (rconds[P:k0] == RCOND_PENDING).any():
+            fill = _jit.rcond_filler(system, pointers, times[P:], Q[P:], p, sc, R[P:])
         evals += done
-        if 0 < k0 < N and order >= 1 and rconds[k0 - 1] >= RCOND_WARN:
+        if P < k0 < N and order >= 1 and rconds[k0 - 1] >= RCOND_WARN:
             # the chord the compiled loop had: the same matrix, factorised again (not counted
             # as an evaluation: the all-Python sweep has it at hand)
             try:
                 chord = sc.factor(system.jacobian(times[k0 - 1], Q[k0 - 1], p, sparse), rprev)
             except Singular:
                 chord = None
-    for k in range(k0, N):
-        t = times[k]
-        try:
-            if hooks is not None and hooks.pre_solve is not None and hooks.pre_solve(float(t)) is False:
-                raise Stopped("pre_solve", float(t))
-            g = q0 if k == 0 else _predict(Q, QD, QDD, rconds, times, k, rot)
-            res = _solve_point(system, t, g, Q[k - 1] if k else None, options, p, sc, rot,
-                               times[k - 1] if k else None, hooks, chord,
-                               start if k == 0 else None)
-        except Stopped as exc:
-            raise _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds, fill) from None
-        q = res.q
-        had_chord, chord = chord is not None, None
-        its[k] = res.iterations
-        evals += res.evaluations
-        Q[k] = q
-        if order >= 1:
-            J, rhs = system.velocity_rhs(t, q, p, sparse)
+    end, stopped = N, None
+    try:
+        for k in range(k0, N):
+            t = times[k]
             try:
-                # the position solve's row scales (from the predictor's Jacobian) serve here too
-                fac = sc.factor(J, res.rows)
-            except Singular:
-                fac = None
-            if fac is None and had_chord:
-                # chord steps do not factorise the Jacobian, so they can converge at a singular
-                # instant without noticing: solve the point again with Newton alone, which
-                # diagnoses it (and approaches it: the rates below use that)
-                try:
-                    res = _solve_point(system, t, g, Q[k - 1], options, p, sc, rot, times[k - 1],
-                                       hooks)
-                except Stopped as exc:
-                    raise _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds,
-                                   fill) from None
-                q = res.q
-                its[k] = res.iterations
-                evals += res.evaluations
-                Q[k] = q
+                if hooks is not None and hooks.pre_solve is not None and hooks.pre_solve(float(t)) is False:
+                    raise Stopped("pre_solve", float(t))
+                g = q0 if k == 0 else _predict(Q, QD, QDD, rconds, times, k, rot)
+                res = _solve_point(system, t, g, Q[k - 1] if k else None, options, p, sc, rot,
+                                   times[k - 1] if k else None, hooks, chord,
+                                   start if k == 0 else None)
+            except Stopped as exc:
+                raise _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds, fill) from None
+            q = res.q
+            had_chord, chord = chord is not None, None
+            its[k] = res.iterations
+            evals += res.evaluations
+            Q[k] = q
+            if order >= 1:
                 J, rhs = system.velocity_rhs(t, q, p, sparse)
                 try:
+                    # the position solve's row scales (from the predictor's Jacobian) serve here too
                     fac = sc.factor(J, res.rows)
                 except Singular:
                     fac = None
-            if fac is None:
-                if k == 0:
-                    err = describe_singular(system, J, t, q, "velocity solve", sc)
-                    raise SingularJacobianError(
-                        f"{err} Sweep stopped at point {k} of {N}.", time=t,
-                        dependent=err.dependent, rank=err.rank) from None
-                # a singular instant on the way (the driver still moves the mechanism): the
-                # rates the equations leave open continue those of the previous points
-                J = np.asarray(J.toarray() if sps.issparse(J) else J)
-                vd, ad = _rates_before(system, t, res.approach, p, sc)
-                if vd is None:
-                    vd, ad = _extrapolate(QD, times, k), _extrapolate(QDD, times, k) \
-                        if order >= 2 else None
-                QD[k] = continue_rates(J, rhs, vd, sc, res.rows)
-                rconds[k] = 0.0
-                if order >= 2:
-                    QDD[k] = continue_rates(J, system.gamma_values(t, q, QD[k], p), ad, sc,
-                                            res.rows)
-                continue
-            qd = fac.solve(rhs)
-            QD[k] = qd
-            rconds[k] = fac.rcond
-            # the next point's chord: only from a well-conditioned point (near a toggle Newton
-            # keeps its fresh Jacobian)
-            chord = fac if fac.rcond >= RCOND_WARN else None
-            evals += 1
-            if order >= 2:
-                QDD[k] = fac.solve(system.gamma_values(t, q, qd, p))
+                if fac is None and had_chord:
+                    # chord steps do not factorise the Jacobian, so they can converge at a singular
+                    # instant without noticing: solve the point again with Newton alone, which
+                    # diagnoses it (and approaches it: the rates below use that)
+                    try:
+                        res = _solve_point(system, t, g, Q[k - 1], options, p, sc, rot, times[k - 1],
+                                           hooks)
+                    except Stopped as exc:
+                        raise _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds,
+                                       fill) from None
+                    q = res.q
+                    its[k] = res.iterations
+                    evals += res.evaluations
+                    Q[k] = q
+                    J, rhs = system.velocity_rhs(t, q, p, sparse)
+                    try:
+                        fac = sc.factor(J, res.rows)
+                    except Singular:
+                        fac = None
+                if fac is None:
+                    if k == 0:
+                        err = describe_singular(system, J, t, q, "velocity solve", sc)
+                        raise SingularJacobianError(
+                            f"{err} Sweep stopped at point {k} of {N}.", time=t,
+                            dependent=err.dependent, rank=err.rank) from None
+                    # a singular instant on the way (the driver still moves the mechanism): the
+                    # rates the equations leave open continue those of the previous points
+                    J = np.asarray(J.toarray() if sps.issparse(J) else J)
+                    vd, ad = _rates_before(system, t, res.approach, p, sc)
+                    if vd is None:
+                        vd, ad = _extrapolate(QD, times, k), _extrapolate(QDD, times, k) \
+                            if order >= 2 else None
+                    QD[k] = continue_rates(J, rhs, vd, sc, res.rows)
+                    rconds[k] = 0.0
+                    if order >= 2:
+                        QDD[k] = continue_rates(J, system.gamma_values(t, q, QD[k], p), ad, sc,
+                                                res.rows)
+                    continue
+                qd = fac.solve(rhs)
+                QD[k] = qd
+                rconds[k] = fac.rcond
+                # the next point's chord: only from a well-conditioned point (near a toggle Newton
+                # keeps its fresh Jacobian)
+                chord = fac if fac.rcond >= RCOND_WARN else None
                 evals += 1
+                if order >= 2:
+                    QDD[k] = fac.solve(system.gamma_values(t, q, qd, p))
+                    evals += 1
+    except (ConvergenceError, SingularJacobianError) as exc:
+        if not partial:
+            raise
+        end, stopped = k, exc     # (the points before k are complete)
+    if P or end < N:
+        times, Q, its = times[P:end], Q[P:end], its[P:end]
+        QD, QDD, rconds = (None if X is None else X[P:end] for X in (QD, QDD, rconds))
     if rconds is not None and (rconds < RCOND_WARN).any():    # (NaN: not solved, no warning)
         import warnings
 
@@ -256,7 +291,7 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
             "and sensitive, and the sweep continued through it on the branch its previous "
             "points followed. Solution.extra['rcond'] has the value at every point."),
             stacklevel=3)
-    return SweepResult(times, Q, QD, QDD, its, evals, order, rconds, fill, sc)
+    return SweepResult(times, Q, QD, QDD, its, evals, order, rconds, fill, sc, stopped)
 
 
 def _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds, fill=None):

@@ -108,21 +108,23 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
 
 
 def multipliers_over(system, times, Q, QD, QDD, p, mode: str = "dynamic", lambda_guess=1.0,
-                     scaling=None):
+                     scaling=None, points: int | None = None):
     """Multipliers ``(N, m)`` at each point of a solved sweep (``Q``, ``QD``, ``QDD`` (N, n);
     ``QD``/``QDD`` None where the sweep did not compute them): :func:`solve_multipliers`
     point by point, each point's ``lambda_guess`` the previous point's multipliers (Newton,
     loads that depend on the multipliers). The points the compiled loop can take go there
     first (``_jit.multipliers``: the same operations); the Python loop continues from the
     first point it leaves. ``scaling``: the unit-free form's column scales for every point
-    (the sweep's; default ``Scaling.of`` at the first point)."""
+    (the sweep's; default ``Scaling.of`` at the first point). ``points``: the size of the
+    whole job (a multistage sweep's), for the compiled loop's ``auto`` rule."""
     N = len(times)
     lam = np.empty((N, system.m))
     if N and scaling is None:
         scaling = Scaling.of(system, Q[0], system.jacobian(times[0], Q[0], p))
     opt = MultiplierOptions()
     k0 = _jit.multipliers(system, times, Q, QD, QDD, p, mode, lam, lambda_guess, opt.tol,
-                          opt.max_iterations, None if scaling is None else scaling.columns)
+                          opt.max_iterations, None if scaling is None else scaling.columns,
+                          points)
     dyn = system.dynamics
     guess = lambda_guess if k0 == 0 else lam[k0 - 1]
     for k in range(k0, N):

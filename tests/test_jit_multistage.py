@@ -1,0 +1,160 @@
+"""Multistage sweeps in runs of one stage combination (decision 0029): the compiled loops and
+the Python ones give the same positions, rates, stages and multipliers; each recorded stage is
+the one its tests choose at its own solution; a sweep continuing earlier points (``prior``)
+is the long sweep; ``partial`` keeps the points before a failure."""
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import mechsys as ms
+from mechsys import T, models
+from mechsys.analyses import _multistage
+from mechsys.solvers import _jit, sweep
+from mechsys.solvers._kinematics import RCOND_WARN
+
+pytestmark = pytest.mark.skipif(not _jit.available(), reason="Numba not installed")
+
+
+def _spy(monkeypatch, module, name):
+    """Record the value each call of ``module.name`` returns."""
+    real = getattr(module, name)
+    got = []
+
+    def spy(*a, **k):
+        got.append(real(*a, **k))
+        return got[-1]
+
+    monkeypatch.setattr(module, name, spy)
+    return got
+
+
+def _both(monkeypatch, build, t, **kw):
+    runs = _spy(monkeypatch, _jit, "run")
+    out = {}
+    for jit in ("1", "0"):
+        monkeypatch.setenv("MECHSYS_JIT", jit)
+        out[jit] = build().solve(t, **kw)
+    return out["1"], out["0"], runs
+
+
+def _close(a, b, tol=1e-12):
+    a, b = np.asarray(a), np.asarray(b)
+    scale = np.maximum(1.0, np.abs(b).max(axis=0))
+    return (np.abs(a - b) / scale).max() <= tol
+
+
+@pytest.mark.parametrize("solution", ["location", "velocity", "acceleration"])
+def test_compiled_and_python_multistage_sweeps_agree(monkeypatch, solution):
+    t = np.linspace(0, 4 * np.pi, 401)
+    fast, slow, runs = _both(monkeypatch, models.geneva_drive, t, solution=solution)
+    assert runs and sum(done for _, done, _ in runs) > 0.8 * len(t)  # the compiled loop ran
+    np.testing.assert_array_equal(fast.stage("geneva"), slow.stage("geneva"))
+    assert sorted(set(slow.stage("geneva"))) == [1, 2, 3, 4, 5]
+    assert _close(fast.q, slow.q)
+    if solution != "location":
+        assert _close(fast.qd, slow.qd)
+    if solution == "acceleration":
+        assert _close(fast.qdd, slow.qdd)
+
+
+@pytest.mark.parametrize("slots", [4, 6])
+def test_geneva_drive_follows_its_closed_form_and_each_stage_its_test(monkeypatch, slots):
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    m = models.geneva_drive(slots)
+    t = np.linspace(0, 4 * np.pi, 641)
+    sol = m.solve(t)
+    st, th, w = sol.stage("geneva"), sol.angle("crank"), sol.angle("wheel")
+    engaged = st % 2 == 0
+    k = st // 2 - 1                          # engagement number while engaged
+    rel = th - 2 * np.pi * k
+    phi = np.arctan2(np.sin(rel), 1 / np.sin(np.pi / slots) - np.cos(rel))
+    assert np.abs(w - (-2 * np.pi * k / slots - phi))[engaged].max() < 1e-11
+    for s in (1, 3, 5):                      # locked: pi/n - 2 pi j / n
+        assert np.abs(w[st == s] - np.pi / slots * (2 - s)).max() < 1e-12
+    # every recorded stage is the one the tests choose at the point's own solution
+    tests = _multistage._Tests(m, m.compile())
+    p = m._p()
+    each = [tests.stages(ti, qi, p, {})[0] for ti, qi in zip(sol.t, sol.q)]
+    np.testing.assert_array_equal(np.array(each) + 1, st)
+    np.testing.assert_array_equal(tests.stages_over(sol.t, sol.q, p, {})[:, 0] + 1, st)
+
+
+def _jog(mass):
+    m = ms.Model2D()
+    s = m.add_body("slider", points={"pin": (0, 0)}, guess=((0, 0), 0), mass=mass, inertia=1.0)
+    pin = s.point("pin")
+    m.add(ms.RelativeX1(pin, 0.5 * T + 0.1 * sp.sin(3 * T)), name="drive")
+    m.add(ms.RotationLock1(s, 0), name="no rotation")
+    ramp = ms.PointOnLine1(pin, m.ground.axis((2.0, 0), (np.cos(0.5), np.sin(0.5))))
+    m.add(ms.StageSwitch((s.q[0] < 2.0, ms.RelativeY1(pin, 0)), (True, ramp)), name="jog")
+    m.add_load(ms.Force(pin, (0, -1), 20.0))
+    return m
+
+
+@pytest.mark.parametrize("solution", ["static", "kinematic", "dynamic"])
+def test_compiled_and_python_multipliers_over_stages_agree(monkeypatch, solution):
+    taken = _spy(monkeypatch, _jit, "multipliers")
+    t = np.linspace(0, 8, 161)
+    fast, slow, _ = _both(monkeypatch, lambda: _jog(2.0), t, solution=solution)
+    np.testing.assert_array_equal(fast.stage("jog"), slow.stage("jog"))
+    assert set(slow.stage("jog")) == {1, 2}
+    compiled = [k for k in taken if k]
+    assert sum(compiled) == len(t)           # each stage's run of points, compiled
+    assert np.abs(slow.lam).max() > 1.0
+    assert _close(fast.lam, slow.lam)
+    # the balance Phi_q^T lambda = Q + Qv - M qdd with each point's stage Jacobian
+    if solution == "static":
+        J, lam, Q = fast.jacobian(ms.All, ms.All), fast.generalized(ms.All), fast.loads(ms.All)
+        np.testing.assert_allclose(np.einsum("kij,ki->kj", J, lam), Q, atol=1e-11)
+
+
+def test_multistage_sweep_follows_the_auto_rule(monkeypatch):
+    """``auto``: the whole multistage sweep's size decides, as for a plain sweep."""
+    monkeypatch.delenv("MECHSYS_JIT", raising=False)
+    runs = _spy(monkeypatch, _jit, "run")
+    m = models.geneva_drive()
+    m.solve(np.linspace(0, 4 * np.pi, 201))
+    assert not runs
+    m.solve(np.linspace(0, 4 * np.pi, _jit.AUTO_POINTS + 1))
+    assert runs
+
+
+@pytest.mark.parametrize("jit", ["1", "0"])
+def test_sweep_continuing_prior_points_is_the_long_sweep(monkeypatch, jit):
+    monkeypatch.setenv("MECHSYS_JIT", jit)
+    s = models.four_bar().compile()
+    t = np.linspace(0, 6, 241)
+    whole = sweep(s, t, s.guess, 2)
+    k = 100
+    prior = (t[k - 3:k], whole.q[k - 3:k], whole.qd[k - 3:k], whole.qdd[k - 3:k],
+             whole.rcond[k - 3:k])
+    rest = sweep(s, t[k:], None, 2, None, None, whole.scaling, prior=prior)
+    assert rest.stopped is None and len(rest.t) == len(t) - k
+    for a, b in ((rest.q, whole.q[k:]), (rest.qd, whole.qd[k:]), (rest.qdd, whole.qdd[k:])):
+        assert _close(a, b, 1e-13)
+    np.testing.assert_allclose(rest.rcond, whole.rcond[k:], rtol=1e-12)
+    assert (rest.rcond >= RCOND_WARN).all()
+    with pytest.raises(ValueError, match="needs their scaling"):
+        sweep(s, t[k:], None, 2, prior=prior)
+
+
+@pytest.mark.parametrize("jit", ["1", "0"])
+def test_partial_sweep_keeps_the_points_before_a_failure(monkeypatch, jit):
+    """A pin on a circle of radius 1 driven along x = T has no position past T = 1: the sweep
+    raises there, and with ``partial`` returns the points before it and the error."""
+    monkeypatch.setenv("MECHSYS_JIT", jit)
+    m = ms.Model2D()
+    b = m.add_body("arm", points={"tip": (1, 0)}, guess=((0, 0), 1.5))
+    m.add(ms.Revolute2(m.ground.point((0, 0)), b.point(0)))
+    m.add(ms.RelativeX1(b.point("tip"), T), name="drive")
+    s = m.compile()
+    t = np.linspace(0, 1.2, 121)             # T = 1 at index 100
+    with pytest.raises((ms.ConvergenceError, ms.SingularJacobianError)):
+        sweep(s, t, s.guess, 2)
+    with pytest.warns(ms.NearSingularWarning, match="t = 1 "):     # (the last point kept)
+        got = sweep(s, t, s.guess, 2, partial=True)
+    assert isinstance(got.stopped, (ms.ConvergenceError, ms.SingularJacobianError))
+    assert 90 <= len(got.t) <= 101 and len(got.q) == len(got.t) == len(got.iterations)
+    np.testing.assert_allclose(np.cos(got.q[:, 2]), got.t, atol=1e-9)   # tip x = T
+    assert np.isfinite(got.q).all() and np.isfinite(got.qd).all()
