@@ -169,3 +169,47 @@ def test_inverse_dynamics_is_the_same_in_any_unit(monkeypatch, jit):
                 continue
             power = 1 if np.isclose(ratio[keep, col][0], s, rtol=1e-6) else 2
             np.testing.assert_allclose(ratio[keep, col], s**power, rtol=1e-9)
+
+
+def _sliding_block(mass, mu=0.3, alpha=0.5, hold=True):
+    """A block on an incline with Coulomb friction driven by the normal reaction; pushed along
+    the incline at 1 m/s (``hold=False``) or released (the free motion)."""
+    m = ms.Model2D()
+    blk = m.add_body("block", mass=mass, inertia=0.1 * mass, guess=((0.0, 0.0), alpha))
+    ca, sa = np.cos(alpha), np.sin(alpha)
+    slide = m.add(ms.Translate2(blk.axis((0, 0), (1, 0)), m.ground.axis((0, 0), (ca, sa))),
+                  name="slide")
+    m.add(ms.RelativeX1(blk.point(0), ca * ms.T if hold else 0.0), name="push")
+    m.add_load(ms.Gravity((0, -1), 9.81))
+    m.add_load(ms.JointFriction(slide, mu=mu, v_eps=1e-4))
+    return m
+
+
+@pytest.mark.parametrize("jit", ["0", "1"])
+def test_friction_is_the_same_at_any_scale_of_force(monkeypatch, jit):
+    """Friction's Newton (statics, inverse dynamics, free motion) judged its convergence and
+    regularised the reaction's magnitude in absolute units: a block of a few picograms got a
+    push force 21 times too large (inverse dynamics), and a free acceleration wrong by
+    125 %, silently. Now the forces scale with the mass (1e-12 kg to 1 kg, Python and
+    compiled loops)."""
+    monkeypatch.setenv("MECHSYS_JIT", jit)
+    alpha, mu, g = 0.5, 0.3, 9.81
+    ca, sa = np.cos(alpha), np.sin(alpha)
+    t = np.linspace(0.1, 1.0, 4)
+    push = {}
+    for mass in (2.0, 2e-6, 2e-9, 2e-12):
+        m = _sliding_block(mass, mu, alpha)
+        for solution in ("kinematic", "dynamic"):      # (statics: no velocity, no friction)
+            F, _ = m.solve(t, solution=solution).reaction("push", "block")
+            push[mass, solution] = F[:, 0] / mass
+        free = _sliding_block(mass, mu, alpha, hold=False)
+        free.solve(0.0)
+        sol = free.free(drop=["push"]).simulate(np.linspace(0, 0.5, 3), rtol=1e-10, atol=1e-12)
+        # slides down: a = g (sin a - mu cos a) once moving (v >> v_eps)
+        acc = np.hypot(sol.qdd[-1, 0], sol.qdd[-1, 1])
+        assert abs(acc / (g * (sa - mu * ca)) - 1) < 1e-6, (mass, acc)
+    # pushed up at constant speed: F cos a = m g sin a + mu N, N = m g cos a + F sin a
+    Fx = g * (sa + mu * ca) / (ca - mu * sa)
+    for (mass, solution), f in push.items():
+        np.testing.assert_allclose(f, Fx, rtol=1e-7, err_msg=f"{mass} {solution}")
+        np.testing.assert_allclose(f, push[2.0, solution], rtol=1e-12, err_msg=f"{mass}")

@@ -442,7 +442,8 @@ class FreeSystem:
                 return _flag(zone, inner(K, b, x))
 
         def accel(tt, y, lam_guess=None):
-            qdd, lam, _ = free_acceleration(s, tt, y[:n], y[n:], p, lam_guess, guard=guard, **kw)
+            qdd, lam, _ = free_acceleration(s, tt, y[:n], y[n:], p, lam_guess, guard=guard,
+                                            columns=sc.columns, **kw)
             return y[n:], qdd, lam
 
         def rhs(tt, y):

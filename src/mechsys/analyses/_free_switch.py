@@ -251,8 +251,8 @@ class SwitchedFreeSystem(FreeSystem):
             S = self._free_system(combo)
 
             def rhs(tt, yy, S=S):
-                return np.concatenate((yy[n:], free_acceleration(S, tt, yy[:n], yy[n:], p,
-                                                                 **kw)[0]))
+                return np.concatenate((yy[n:], free_acceleration(
+                    S, tt, yy[:n], yy[n:], p, columns=sc.columns, **kw)[0]))
 
             solver = cls(rhs, t_now, y, t1, rtol=opt.rtol, atol=opt.atol * scale,
                          max_step=opt.max_step)
@@ -419,7 +419,7 @@ class SwitchedFreeSystem(FreeSystem):
         rows: dict = {}
         for k, (tk, yk, ck) in enumerate(zip(out_t, Y, out_c)):
             S = self._free_system(ck)
-            qdd, lam, _ = free_acceleration(S, tk, yk[:n], yk[n:], p, **kw)
+            qdd, lam, _ = free_acceleration(S, tk, yk[:n], yk[n:], p, columns=sc.columns, **kw)
             QDD[k] = qdd
             if ck not in rows:
                 rows[ck] = _row_map(S, stage_system(model, ck))

@@ -2,7 +2,9 @@ r"""Coulomb friction and viscous damping in joints, driven by the joint reaction
 
 The reaction force a joint applies to its first body is, from the multipliers,
 ``R = -(d Phi_c / d r_1)^T lambda_c``; its magnitude ``|R| = sqrt(R.R + eps_R^2)`` (``eps_R``
-tiny, keeps the Newton on the multipliers differentiable at zero load). The sign of the
+= ``eps_reaction``, 1e-30 units of force: it only keeps the Newton on the multipliers
+differentiable at zero load, and must stay far below any reaction of the model: at 1e-9 it
+dominated the reactions of a part of a few picograms in SI units). The sign of the
 sliding or turning velocity is regularised: ``s(v) = v / sqrt(v.v + v_eps^2)``.
 
 * rotational joints (``Revolute2``, ``Spherical3``, ``Revolute5``): moment on body 1
@@ -34,7 +36,7 @@ class JointFriction(LoadBase):
     the constraint type)."""
 
     def __init__(self, constraint, mu=0.0, radius=0.0, viscous=0.0, kind=None,
-                 v_eps=1e-3, eps_reaction=1e-9):
+                 v_eps=1e-3, eps_reaction=1e-30):
         super().__init__()
         self.constraint = constraint
         self.mu, self.radius, self.viscous = (sp.sympify(x) for x in (mu, radius, viscous))

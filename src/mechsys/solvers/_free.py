@@ -45,11 +45,28 @@ def _augmented(M, J, D=None):
 
 
 def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterations=30,
-                      guard=None):
-    """``(qdd (n,), lambda (m,), iterations)`` of a free system at ``(t, q, qd)``.
+                      guard=None, columns=None):
+    r"""``(qdd (n,), lambda (m,), iterations)`` of a free system at ``(t, q, qd)``.
     ``guard(K, rhs, x)`` (free motion, linear case): ``None`` to keep the solution ``x`` of
     the augmented system, or a replacement ``(qdd, lambda)`` near a singular instant
-    (:func:`._rank.zone_guard`)."""
+    (:func:`._rank.zone_guard`).
+
+    Loads that depend on the multipliers or accelerations: Newton on ``(qdd, lambda)`` from
+    ``qdd = 0`` and ``lam_guess`` (default ones) with the residuals ``r1 = M qdd + Phi_q^T
+    lambda - Q - Qv``, ``r2 = Phi_q qdd - gamma``, converged after at least one step when,
+    unit-free (``c = columns``, the column scales of
+    :class:`~mechsys.solvers._linalg.Scaling`, default those at ``q``; ``rho_i = max_j
+    |Phi_ij| c_j``),
+
+    .. math::
+
+        \max_j c_j |r_{1j}| \le tol \max_j c_j \Big(\sum_k |M_{jk} \ddot q_k|
+            + \sum_i |\Phi_{ij} \lambda_i| + |Q_j| + |Q_{v,j}|\Big), \qquad
+        \max_i \frac{|r_{2i}|}{\rho_i} \le tol \max\Big(\max_j \frac{|\ddot q_j|}{c_j},
+            \max_i \frac{|\gamma_i|}{\rho_i}\Big)
+
+    (each residual against the size of its own terms: the same answer whatever the units of
+    length, mass or force)."""
     dyn = system.dynamics
     n, m = system.n, system.m
     if not (dyn.depends_on_lambda or dyn.depends_on_qdd):
@@ -74,15 +91,23 @@ def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterat
         return x[:n], x[n:], 0
     J = system.jacobian(t, q, p)
     g = system.gamma_values(t, q, qd, p)
+    c = Scaling.of(system, q, J).columns if columns is None else np.asarray(columns, dtype=float)
+    rho = (np.abs(J) * c).max(axis=1, initial=0.0)
+    rho[rho == 0] = 1.0
     lam = np.ones(m) if lam_guess is None else np.array(lam_guess, dtype=float)
     qdd = np.zeros(n)
     Mm, Q, Qv = dyn.terms(t, q, qd, lam, p, qdd)
     for it in range(1, max_iterations + 1):
         r1 = Mm @ qdd + J.T @ lam - Q - Qv
         r2 = J @ qdd - g
-        err = max(np.abs(r1).max(initial=0), np.abs(r2).max(initial=0))
-        if err <= tol * (1 + np.abs(Q).max(initial=0)) and it > 1:
-            return qdd, lam, it - 1
+        e1, e2 = np.abs(c * r1).max(initial=0.0), np.abs(r2 / rho).max(initial=0.0)
+        err = max(e1, e2)
+        if it > 1:
+            size1 = (c * (np.abs(Mm * qdd).sum(axis=1) + np.abs(J.T * lam).sum(axis=1)
+                          + np.abs(Q) + np.abs(Qv))).max(initial=0.0)
+            size2 = max(np.abs(qdd / c).max(initial=0.0), np.abs(g / rho).max(initial=0.0))
+            if e1 <= tol * size1 and e2 <= tol * size2:
+                return qdd, lam, it - 1
         D = dyn.dQ_dlam(t, q, qd, lam, p, qdd)
         Meff = Mm - dyn.dQ_dqdd(t, q, qd, lam, p, qdd)
         try:

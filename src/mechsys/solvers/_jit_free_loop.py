@@ -256,10 +256,13 @@ def _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, w1, w2, qdd, lam, inf
         r = [M qdd + J^T lambda - Q - Qv;  J qdd - gamma]
         [[M - dQ/dqdd, J^T - dQ/dlambda], [J, 0]] dx = -r
 
-    until ``max |r| <= tol (1 + max |Q|)`` after at least one step. ``f = (qd, qdd)``, and
+    until, after at least one step, each residual is within ``tol`` of the size of its terms
+    in the unit-free measure of ``free_acceleration`` (the column scales ``c`` in ``tolv[1:]``,
+    ``tolv[0]`` the tolerance). ``f = (qd, qdd)``, and
     ``qdd``, ``lam`` the result; False (hand over: the Python path raises its diagnosis) at a singular matrix
     (reciprocal condition below ``RCOND_MIN``), a value not finite or no convergence."""
     xk, out_pos, g, J, od, oa, res, tolv = nw
+    mag = res[n + m:]                    # (the sizes of the force residuals' terms)
     kM, chain, maxit, nD, nA, npar = info[0], info[1], info[2], info[3], info[4], info[5]
     N = n + m
     nin_k = 1 + 2 * n + npar
@@ -288,30 +291,46 @@ def _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, w1, w2, qdd, lam, inf
         x[1 + 2 * n + m + npar + j] = 0.0
     _evalx(kp, x, nin, out, ex, ph)
     for it in range(1, maxit + 1):
+        # the residuals and the sizes of their terms, unit-free (free_acceleration's test)
         err = 0.0
-        qmax = 0.0
+        e1 = 0.0
+        e2 = 0.0
+        size1 = 0.0
+        size2 = 0.0
         for i in range(n):
             res[i] = 0.0
+            mag[i] = 0.0
         for e in range(kM):
             res[Mr[e]] += out[e] * qdd[Mc[e]]
+            mag[Mr[e]] += abs(out[e] * qdd[Mc[e]])
         for i in range(n):
             acc = 0.0
             for j in range(m):
                 acc += J[j, i] * lam[j]
+                mag[i] += abs(J[j, i] * lam[j])
             res[i] = ((res[i] + acc) - out[kM + i]) - out[kM + n + i]
-            qmax = max(qmax, abs(out[kM + i]))
+            c = tolv[1 + i]
+            e1 = max(e1, c * abs(res[i]))
+            size1 = max(size1, c * (mag[i] + abs(out[kM + i]) + abs(out[kM + n + i])))
+            size2 = max(size2, abs(qdd[i]) / c)
         for i in range(m):
             acc = 0.0
+            rho = 0.0
             for j in range(n):
                 acc += J[i, j] * qdd[j]
+                rho = max(rho, abs(J[i, j]) * tolv[1 + j])
+            if rho == 0.0:
+                rho = 1.0
             res[n + i] = acc - g[i]
+            e2 = max(e2, abs(res[n + i]) / rho)
+            size2 = max(size2, abs(g[i]) / rho)
         for i in range(N):
             v = abs(res[i])
             if not v <= err:             # NaN too
                 err = v
         if not np.isfinite(err):
             return False
-        if err <= tol * (1.0 + qmax) and it > 1:
+        if it > 1 and e1 <= tol * size1 and e2 <= tol * size2:
             for j in range(n):
                 f[j] = y[n + j]
                 f[n + j] = qdd[j]
@@ -1091,7 +1110,7 @@ def _block_work(blocks, blk_i, n, m, bw, nnz):
         pieces = max(info[10], info[15], 0)
         bw_ = (np.zeros(1 + 2 * n + info[5] + pieces), np.zeros(m + nnz), np.zeros(m),
                np.zeros((m, n)), np.zeros(max(info[3], 1)), np.zeros(max(info[4], 1)),
-               np.zeros(n + m), np.zeros(1))
+               np.zeros(2 * n + m), np.zeros(1 + n))
     elif blocks == BLOCK:
         boff, roff, bsize = blk_i[0][1], blk_i[0][4], blk_i[0][6]
         big = bsize.max() if bsize.size else 1

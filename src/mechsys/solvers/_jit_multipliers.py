@@ -89,7 +89,9 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
     Loads that depend on the multipliers (``ptrs[2, 0] != 0``, friction): Newton on ``R =
     Phi_q^T lambda - rhs(lambda)`` with the matrix ``Phi_q^T - dQ/dlambda``, from ``guess``
     (m,) at the first point and from the previous point's multipliers after it, converged
-    when ``max |R| <= tol (1 + max |rhs|)``, at most ``maxit`` iterations (``MultiplierOptions``).
+    when ``max_j c_j |R_j| <= tol max_j c_j (sum_i |Phi_ij lambda_i| + |rhs_j|)`` (``c =
+    cols``: unit-free, relative to the terms of ``R``), at most ``maxit`` iterations
+    (``MultiplierOptions``).
     The Python path's ``J.T @ lambda`` sums with BLAS, so the two can stop one iteration
     apart at the tolerance: they agree to it, not to rounding."""
     N = times.size
@@ -162,15 +164,17 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
                 if not _loads(ptrs, xd, nin_d, out_dyn, mode, QDD, k, mr, mc, kM, n, Mq, rhs):
                     return k
                 err = 0.0
-                bmax = 0.0
+                size = 0.0
                 for i in range(n):
                     acc = 0.0
+                    mag = 0.0
                     for j in range(m):
                         acc += J[j, i] * lam[j]
+                        mag += abs(J[j, i] * lam[j])
                     R[i] = acc - rhs[i]
-                    err = max(err, abs(R[i]))
-                    bmax = max(bmax, abs(rhs[i]))
-                if err <= tol * (1.0 + bmax):
+                    err = max(err, cols[i] * abs(R[i]))
+                    size = max(size, cols[i] * (mag + abs(rhs[i])))
+                if err <= tol * size:
                     done = True
                     break
                 _eval_row(ptrs, 2, xd, nin_d, out_d)

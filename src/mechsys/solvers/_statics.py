@@ -36,7 +36,8 @@ MODES = ("static", "kinematic", "dynamic")
 
 @dataclass(frozen=True)
 class MultiplierOptions:
-    """tol: residual tolerance of the multiplier Newton (relative to 1 + max|Q|);
+    """tol: residual tolerance of the multiplier Newton (relative to the size of the terms of
+    the residual, unit-free: see :func:`solve_multipliers`);
     max_iterations; lambda_guess: scalar or (m,) starting values (nonlinear case)."""
 
     tol: float = 1e-10
@@ -48,7 +49,10 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
                       options: MultiplierOptions | None = None, J=None, scaling=None):
     """Multipliers ``lambda`` (m,) and the Newton iteration count at one state. ``scaling``:
     the unit-free form's column scales (default ``Scaling.of`` at ``q``; a sweep passes its
-    own)."""
+    own). Loads that depend on the multipliers: Newton on ``R = Phi_q^T lambda - b(lambda)``
+    until ``max_j c_j |R_j| <= tol max_j c_j (sum_i |Phi_ij lambda_i| + |b_j|)`` (``c`` the
+    column scales: each generalized force in units of force times length, so the test is
+    relative to the size of the residual's terms whatever the units)."""
     opt = options or MultiplierOptions()
     n, m = system.n, system.m
     if J is None:
@@ -81,15 +85,22 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
 
     if not dyn.depends_on_lambda:
         return fac.solve(sc.columns * rhs(lam)) / r, 0
+    # converged when the residual is small against its own terms, unit-free (each generalized
+    # force times its coordinate's scale: a force times L, a moment times 1):
+    #   max_j c_j |R_j| <= tol max_j c_j (sum_i |Phi_ij lambda_i| + |b_j|)
+    # (not tol (1 + max |b|): for loads far below one unit of force that was an absolute test
+    # and ended Newton on a wrong answer, e.g. a part of a few micrograms)
+    c = sc.columns
+    JT = np.ascontiguousarray(J.T)
     history = []
     for it in range(1, opt.max_iterations + 1):
         b = rhs(lam)
-        R = J.T @ lam - b
-        err = np.abs(R).max()
+        R = JT @ lam - b
+        err = np.abs(c * R).max()
         history.append(err)
-        if err <= opt.tol * (1 + np.abs(b).max()):
+        if err <= opt.tol * (c * (np.abs(JT * lam).sum(axis=1) + np.abs(b))).max():
             return lam, it - 1
-        K = J.T - dyn.dQ_dlam(t, q, qd_eff, lam, p, qdd_eff)
+        K = JT - dyn.dQ_dlam(t, q, qd_eff, lam, p, qdd_eff)
         try:
             # (unit-free as the linear solve: D K R^-1 (R dlambda) = D R)
             lam = lam - factor((sc.columns[:, None] * K) / r[None, :]).solve(sc.columns * R) / r
