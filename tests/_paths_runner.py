@@ -11,7 +11,8 @@ apply):
 * a multistage sweep (a model with stage switches) over all of its points: the same
   positions, rates and stages;
 * the multipliers of a static, kinematic or dynamic solve over all of its points;
-* a free motion or a nonholonomic path over its first steps (about 20: over a whole run the
+* a free motion (through stage changes too) or a nonholonomic path over its first steps
+  (about 20: over a whole run the
   step-size controller
   amplifies rounding-sized differences of the error estimate into different steps, and a
   chaotic motion amplifies those, so two correct implementations of one method agree to the
@@ -33,7 +34,7 @@ import numpy as np
 os.environ.setdefault("MPLBACKEND", "Agg")
 
 from mechsys import model as model_module  # noqa: E402
-from mechsys.analyses import _free, _multistage, _path  # noqa: E402
+from mechsys.analyses import _free, _free_switch, _multistage, _path  # noqa: E402
 from mechsys.solvers import _kinematics, _statics  # noqa: E402
 
 FIRST_STEPS = 20
@@ -143,9 +144,10 @@ def _counting_multipliers(ran: list):
 def check() -> list[dict]:
     results = []
     for kind, obj, t, args, kwargs, sol in records:
-        if kind in ("free", "path"):
+        if kind in ("free", "path", "switched"):
             span = _short_span(t, sol)
-            run = original_simulate if kind == "free" else original_path
+            run = {"free": original_simulate, "path": original_path,
+                   "switched": original_switched}[kind]
             py, jit = _both(run, obj, span, *args, **kwargs)
             each = {k: _diff(getattr(py, k), getattr(jit, k))
                     for k in ("t", "q", "qd", "qdd", "lam") if getattr(py, k) is not None}
@@ -184,6 +186,7 @@ def check() -> list[dict]:
 
 original_simulate = _free.FreeSystem.simulate
 original_path = _path.PathSystem.simulate
+original_switched = _free_switch.SwitchedFreeSystem.simulate
 original_sweep = _kinematics.sweep
 original_run = _kinematics._jit.run
 original_multipliers = _statics.multipliers_over
@@ -194,6 +197,7 @@ if __name__ == "__main__":
     script = sys.argv[1]
     _free.FreeSystem.simulate = _record_simulate(original_simulate)
     _path.PathSystem.simulate = _record_simulate(original_path, "path")
+    _free_switch.SwitchedFreeSystem.simulate = _record_simulate(original_switched, "switched")
     _kinematics.sweep = model_module.sweep = _record_sweep(original_sweep)
     _statics.multipliers_over = _record_multipliers(original_multipliers)
     _multistage._sweep_stages = _record_stages(original_stages)
@@ -202,6 +206,7 @@ if __name__ == "__main__":
     runpy.run_path(script, run_name="__main__")
     _free.FreeSystem.simulate = original_simulate
     _path.PathSystem.simulate = original_path
+    _free_switch.SwitchedFreeSystem.simulate = original_switched
     _kinematics.sweep = model_module.sweep = original_sweep
     _statics.multipliers_over = original_multipliers
     _multistage._sweep_stages = original_stages

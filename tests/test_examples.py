@@ -1,6 +1,6 @@
 """Every script in examples/ runs to completion (exit code 0) in a fresh interpreter, and
-the compiled and Python paths give the same numbers on every sweep, multiplier solve, free
-motion and nonholonomic path it computes (``tests/_paths_runner.py``: each is repeated with ``MECHSYS_JIT=0``
+the compiled and Python paths give the same numbers on every sweep, multistage sweep,
+multiplier solve, free motion (through stage changes too) and nonholonomic path it computes (``tests/_paths_runner.py``: each is repeated with ``MECHSYS_JIT=0``
 and ``1``).
 
 New examples are picked up automatically. Each runs in a temporary working directory (so
@@ -37,12 +37,14 @@ EXAMPLES = ROOT / "examples"
 RUNNER = ROOT / "tests" / "_paths_runner.py"
 SCRIPTS = sorted(EXAMPLES.glob("*.py"))
 HANG_GUARD_S = 900
-AGREE = {"sweep": 1e-12, "multipliers": 1e-12, "stages": 1e-12, "free": 1e-9, "path": 1e-9}
+AGREE = {"sweep": 1e-12, "multipliers": 1e-12, "stages": 1e-12, "free": 1e-9, "path": 1e-9,
+         "switched": 1e-9}
 COMPILED = {"four_bar.py": {"sweep"}, "slider_crank_3d.py": {"sweep"}, "gyroscope.py": {"free"},
             "pendulum_on_rope.py": {"free"},
             "design_slider_crank_torque.py": {"sweep", "multipliers"}, "caster.py": {"path"},
             "knife_edge.py": {"path"}, "geneva_drive.py": {"stages"},
-            "rocker_eccentric.py": {"stages"}, "slider_jog.py": {"stages"}}
+            "rocker_eccentric.py": {"stages"}, "slider_jog.py": {"stages"},
+            "latching_pendulum.py": {"switched"}}
 
 
 def test_foundation_examples_exist():

@@ -158,3 +158,71 @@ def test_partial_sweep_keeps_the_points_before_a_failure(monkeypatch, jit):
     assert 90 <= len(got.t) <= 101 and len(got.q) == len(got.t) == len(got.iterations)
     np.testing.assert_allclose(np.cos(got.q[:, 2]), got.t, atol=1e-9)   # tip x = T
     assert np.isfinite(got.q).all() and np.isfinite(got.qd).all()
+
+
+# -- free motion through stage changes: compiled steps between events ---------------------
+def _latching():
+    from test_multistage_free import lp
+
+    m = lp.build()
+    m.solve(0.0, solution="location")
+    return m.free(drop=[("latch", 1)])
+
+
+def _pushed_slider():
+    """A free slider pushed by 3 N from t = 1 to t = 2 (a TimeSwitch of loads): events at
+    1 and 2, x = a/2 (t-1)^2 between them, a = F/m."""
+    m = ms.Model2D()
+    s = m.add_body("slider", points={"pin": (0, 0)}, guess=((0, 0), 0), mass=2.0, inertia=1.0)
+    pin = s.point("pin")
+    m.add(ms.RelativeX1(pin, T), name="drive")
+    m.add(ms.RotationLock1(s, 0), name="no rotation")
+    m.add(ms.RelativeY1(pin, 0), name="track")
+    m.add_load(ms.TimeSwitch(1.0, ms.Force(pin, (1, 0), 3.0), 2.0))
+    m.solve(0.0, solution="location")
+    return m.free(drop=["drive"])
+
+
+SWITCHED = {
+    "latch": (_latching, np.linspace(0.0, 1.0, 21), {"at_switch": "project"}),
+    "rebound": (_latching, np.linspace(0.0, 1.0, 21), {"at_switch": ("restitution", 0.5)}),
+    "load": (_pushed_slider, np.linspace(0, 3, 13), {}),
+}
+
+
+@pytest.mark.parametrize("name", list(SWITCHED))
+def test_compiled_and_python_free_motion_with_switches_agree(monkeypatch, name):
+    build, t, kw = SWITCHED[name]
+    out = {}
+    for jit in ("1", "0"):
+        monkeypatch.setenv("MECHSYS_JIT", jit)
+        out[jit] = build().simulate(t, rtol=1e-10, atol=1e-12, **kw)
+    fast, slow = out["1"], out["0"]
+    assert slow.extra["compiled_steps"] == 0
+    assert fast.extra["compiled_steps"] >= 0.7 * fast.extra["steps"] > 5
+    ev_f, ev_s = fast.extra["events"], slow.extra["events"]
+    assert [e["kind"] for e in ev_f] == [e["kind"] for e in ev_s] and ev_s
+    np.testing.assert_allclose([e["t"] for e in ev_f], [e["t"] for e in ev_s], atol=1e-12)
+    np.testing.assert_array_equal(fast.stage("latch") if name != "load" else 0,
+                                  slow.stage("latch") if name != "load" else 0)
+    assert fast.q.shape == slow.q.shape
+    for a, b in ((fast.q, slow.q), (fast.qd, slow.qd)):
+        assert _close(a, b, 1e-9)
+
+
+def test_compiled_free_motion_with_switches_follows_the_closed_form(monkeypatch):
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    t = np.linspace(0, 3, 13)
+    sol = _pushed_slider().simulate(t, rtol=1e-10, atol=1e-12)
+    assert sol.extra["compiled_steps"] > 0
+    a = 3.0 / 2.0
+    x = np.where(t < 1, 0, np.where(t < 2, a / 2 * (t - 1) ** 2, a / 2 + a * (t - 2)))
+    np.testing.assert_allclose(sol["slider.x"], x, atol=1e-10)
+    assert [round(e["t"], 12) for e in sol.extra["events"]] == [1.0, 2.0]
+
+
+def test_rk45_with_switches_stays_in_python(monkeypatch):
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    sol = _latching().simulate((0.0, 1.0), method="rk45", rtol=1e-8, atol=1e-10,
+                               at_switch="project")
+    assert sol.extra["compiled_steps"] == 0 and sol.extra["events"]

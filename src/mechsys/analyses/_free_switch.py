@@ -58,12 +58,14 @@ from scipy.integrate import DOP853, RK45
 
 from .._errors import ConvergenceError, MechError, ModelError
 from .._symbols import T
+from ..compile._stages import _cache
 from ..constraints._switches import StageSwitch
 from ..loads._switched import check_switched_loads
 from ..results._load_outputs import lambda_guess_vector
 from ..results._solution import Solution
 from ..solvers._free import free_acceleration, project, project_positions, scaling_at
 from ..solvers._integrators import ATOL, MAX_ERROR, MAX_STEP, RTOL, integration_options, output_times
+from ..solvers._jit_free import PAUSE_STEPS, FreeStepper
 from ..solvers._linalg import factor
 from ._free import FreeSystem, _reject_unknown
 from ._multistage import _HeldValues, _Tests, lambdify_exact, stage_system
@@ -72,6 +74,9 @@ from ._multistage import _HeldValues, _Tests, lambdify_exact, stage_system
 COMPATIBLE = 1e-6
 #: a rebound whose approach speed is below this fraction of the first impact's latches
 LATCH_FRACTION = 1e-6
+#: the compiled stepper takes at most this many steps between two looks at the events (the
+#: steps after one with an event are taken in vain)
+RUN_STEPS = 64
 
 
 def _policy(at_switch):
@@ -126,10 +131,28 @@ class _Events:
         stop) must not produce events from the last bits of its coordinates."""
         if self.f is None:
             return np.zeros(0)
-        v = np.array(self.f(t, *y, *p), dtype=float).reshape(-1, 2)
-        g = v[:, 0] - v[:, 1]
-        band = 16 * np.finfo(float).eps * (np.abs(v[:, 0]) + np.abs(v[:, 1]))
-        return np.where(np.abs(g) > band, np.sign(g), 0.0)
+        return _signs(np.array(self.f(t, *y, *p), dtype=float).reshape(-1, 2))
+
+    def signs_over(self, t, Y, p) -> np.ndarray:
+        """The signs (as :meth:`__call__`) at the states ``Y`` (K, 2n) at times ``t`` (K,),
+        evaluated on all at once: ``(K, number of relations)``."""
+        K = len(t)
+        if self.f is None:
+            return np.zeros((K, 0))
+        try:
+            sides = [np.broadcast_to(np.asarray(v, dtype=float), (K,))
+                     for v in self.f(np.asarray(t, dtype=float), *np.asarray(Y).T, *p)]
+        except (TypeError, ValueError):      # a side that does not evaluate on arrays
+            return np.array([self(t[k], Y[k], p) for k in range(K)]).reshape(K, -1)
+        return _signs(np.stack(sides, axis=1).reshape(K, -1, 2))
+
+
+def _signs(v: np.ndarray) -> np.ndarray:
+    """``sign(lhs - rhs)`` of the pairs ``v[..., 0], v[..., 1]``, zero within
+    ``16 eps (|lhs| + |rhs|)``."""
+    g = v[..., 0] - v[..., 1]
+    band = 16 * np.finfo(float).eps * (np.abs(v[..., 0]) + np.abs(v[..., 1]))
+    return np.where(np.abs(g) > band, np.sign(g), 0.0)
 
 
 class SwitchedFreeSystem(FreeSystem):
@@ -228,8 +251,13 @@ class SwitchedFreeSystem(FreeSystem):
         _check_times(self.model)
         model = self.model
         base = stage_system(model, None)
-        tests = _Tests(model, base)
-        events = _Events(model, base)
+        # the tests and the event relations, lambdified once per model version
+        cache = _cache(model)
+        if "tests" not in cache:
+            cache["tests"] = _Tests(model, base)
+        if "events" not in cache:
+            cache["events"] = _Events(model, base)
+        tests, events = cache["tests"], cache["events"]
         n = base.n
         q, qd, p, held_ic = self._start(initial_condition)
         held = _HeldValues(model, base, q)
@@ -246,7 +274,8 @@ class SwitchedFreeSystem(FreeSystem):
         ie = 1 if t_eval is not None else 0
         log, first_speed = [], {}
         fresh: dict = {}
-        t_now, evals, steps = t0, 0, 0
+        t_now, evals, steps, compiled_steps = t0, 0, 0, 0
+        plans: dict = {}
         while (t1 - t_now) * d > 0:
             S = self._free_system(combo)
 
@@ -254,20 +283,40 @@ class SwitchedFreeSystem(FreeSystem):
                 return np.concatenate((yy[n:], free_acceleration(
                     S, tt, yy[:n], yy[n:], p, columns=sc.columns, **kw)[0]))
 
-            solver = cls(rhs, t_now, y, t1, rtol=opt.rtol, atol=opt.atol * scale,
-                         max_step=opt.max_step)
+            # the compiled stepper of this stage takes the steps between events where it can
+            fast = self._stepper(plans, combo, S, opt, p, sc, t_eval, t_now, y, kw)
+            setup = [fast is not None]
+            solver = cls(rhs if fast is None else fast.fun(rhs, setup), t_now, y, t1,
+                         rtol=opt.rtol, atol=opt.atol * scale, max_step=opt.max_step)
+            setup[0] = False
             g_ref = events(t_now, y, p)
             for i, side in fresh.items():   # the event just handled: the side the motion takes
                 g_ref[i] = side
             hit = None
+            pause = 0
             while solver.status == "running":
+                if fast is not None and pause == 0:
+                    status, kept, g_ref, ie, crossing = self._compiled_steps(
+                        fast, solver, events, p, g_ref, ie, t_eval, d, out_t, out_y, out_c,
+                        combo)
+                    steps += kept
+                    compiled_steps += kept
+                    if crossing or status == 2:
+                        # the step with the event (or one the loop handed over) in Python
+                        pause = PAUSE_STEPS
+                    continue
+                pause = max(pause - 1, 0)
                 t_old = solver.t
                 msg = solver.step()
                 if solver.status == "failed":
                     raise MechError(f"integration failed at t = {solver.t:.6g}: {msg}")
                 steps += 1
                 dense = solver.dense_output()
-                g_new = events(solver.t, solver.y, p)
+                # the events at the projected state (the state the motion goes on from; the
+                # compiled steps are projected in the loop)
+                yp = np.concatenate(project(S, solver.t, solver.y[:n], solver.y[n:], p,
+                                            scaling=sc))
+                g_new = events(solver.t, yp, p)
                 crossed = [i for i in range(len(g_new)) if g_ref[i] != 0 and g_new[i] == -g_ref[i]]
                 g_ref = np.where(g_ref == 0, g_new, g_ref)
                 t_end = solver.t
@@ -290,8 +339,6 @@ class SwitchedFreeSystem(FreeSystem):
                         ie += 1
                 if hit is not None:
                     break
-                yp = np.concatenate(project(S, solver.t, solver.y[:n], solver.y[n:], p,
-                                            scaling=sc))
                 solver.y = yp
                 solver.f = solver.fun(solver.t, yp)
                 if t_eval is None:
@@ -335,8 +382,65 @@ class SwitchedFreeSystem(FreeSystem):
             out_c.append(combo)
             ie += 1
         info = {"events": log, "evaluations": evals, "steps": steps, "method": opt.method,
-                "rtol": opt.rtol, "atol": opt.atol}
+                "rtol": opt.rtol, "atol": opt.atol, "compiled_steps": compiled_steps}
         return self._assemble(out_t, out_y, out_c, p, kw, info, sc)
+
+    @staticmethod
+    def _stepper(plans, combo, S, opt, p, sc, t_eval, t_now, y, kw):
+        """The compiled stepper of stage combination ``combo`` (planned once per run), or
+        None where the compiled loop cannot run it (RK45, the ``MECHSYS_JIT`` rule, ...)."""
+        if opt.method != "dop853":
+            return None
+        if combo not in plans:
+            plans[combo] = FreeStepper.plan(S, "dop853", p, sc, None, False, True, t_eval,
+                                            (t_now, y[:S.n]), newton=kw)
+        fast = plans[combo]
+        if fast is not None:
+            fast.p[:] = p           # (the held values of the switches' variables change)
+        return fast
+
+    @staticmethod
+    def _compiled_steps(fast, solver, events, p, g_ref, ie, t_eval, d, out_t, out_y, out_c,
+                        combo):
+        """Up to ``RUN_STEPS`` compiled steps (each projected), kept up to the first whose
+        end state has an event relation on the other side (the Python loop's test, the
+        signs of all steps evaluated at once). The solver is put back to the start of that
+        step, with its size, for the Python loop to take it again and locate the event on
+        its dense output. Returns ``(status, steps kept, g_ref, next output index,
+        crossing)``."""
+        t0, y0, f0 = solver.t, solver.y.copy(), solver.f.copy()
+        status, T, Y, H, _, _, ie_new, _, _ = fast.advance(solver, ie, RUN_STEPS)
+        signs = events.signs_over(T, Y, p)
+        crossing = None
+        for j in range(len(T)):
+            g_new = signs[j]
+            if ((g_ref != 0) & (g_new == -g_ref)).any():
+                crossing = j
+                break
+            g_ref = np.where(g_ref == 0, g_new, g_ref)
+        kept = len(T) if crossing is None else crossing
+        t_last = T[kept - 1] if kept else t0
+        if t_eval is not None:
+            while ie < ie_new and (t_eval[ie] - t_last) * d <= 0:
+                out_t.append(float(t_eval[ie]))
+                out_y.append(fast.EY[ie].copy())
+                out_c.append(combo)
+                ie += 1
+        else:
+            for j in range(kept):
+                out_t.append(float(T[j]))
+                out_y.append(Y[j].copy())
+                out_c.append(combo)
+        if crossing is not None:
+            if kept:
+                solver.t, solver.y = float(T[kept - 1]), Y[kept - 1].copy()
+                got = fast.derivative(solver.t, solver.y)
+                solver.f = solver.fun(solver.t, solver.y) if got is None else got[0]
+            else:
+                solver.t, solver.y, solver.f = t0, y0, f0
+            solver.h_abs = abs(float(H[crossing]))
+            solver.status = "running"
+        return status, kept, g_ref, ie, crossing is not None
 
     @staticmethod
     def _bracket(events, dense, p, i, ta, tb, s0):
@@ -448,7 +552,16 @@ def _row_map(free, full) -> tuple[list[int], list[int]]:
     """``(rows of free, rows of full)``: the rows of ``free`` that ``full`` has too (same owner,
     same equation). A row holding a variable of a dropped stage (``v - v_held``) has no place
     in the full stage (which uses the variable): its multiplier is not a reaction and is left
-    out."""
+    out. Kept on ``free`` (both are compiled once per model version)."""
+    got = free.__dict__.get("_row_maps", {}).get(id(full))
+    if got is not None and got[0] is full:
+        return got[1]
+    out = _match_rows(free, full)
+    free.__dict__.setdefault("_row_maps", {})[id(full)] = (full, out)
+    return out
+
+
+def _match_rows(free, full) -> tuple[list[int], list[int]]:
     def key(o):
         return o if isinstance(o, str) else id(o)
 
