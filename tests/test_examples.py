@@ -1,7 +1,7 @@
 """Every script in examples/ runs to completion (exit code 0) in a fresh interpreter, and
 the compiled and Python paths give the same numbers on every sweep, multistage sweep,
-multiplier solve, free motion (through stage changes too) and nonholonomic path it computes (``tests/_paths_runner.py``: each is repeated with ``MECHSYS_JIT=0``
-and ``1``).
+multiplier solve, free motion (through stage changes too) and nonholonomic path it
+computes (``tests/_paths_runner.py``: each is repeated with ``MECHSYS_JIT=0`` and ``1``).
 
 New examples are picked up automatically. Each runs in a temporary working directory (so
 files it writes land there) with a non-interactive matplotlib backend. The timeout only

@@ -12,6 +12,7 @@ from mechsys import T, models
 from mechsys.analyses import _multistage
 from mechsys.solvers import _jit, sweep
 from mechsys.solvers._kinematics import RCOND_WARN
+from test_multistage_free import lp, pushed_slider
 
 pytestmark = pytest.mark.skipif(not _jit.available(), reason="Numba not installed")
 
@@ -162,31 +163,15 @@ def test_partial_sweep_keeps_the_points_before_a_failure(monkeypatch, jit):
 
 # -- free motion through stage changes: compiled steps between events ---------------------
 def _latching():
-    from test_multistage_free import lp
-
     m = lp.build()
     m.solve(0.0, solution="location")
     return m.free(drop=[("latch", 1)])
 
 
-def _pushed_slider():
-    """A free slider pushed by 3 N from t = 1 to t = 2 (a TimeSwitch of loads): events at
-    1 and 2, x = a/2 (t-1)^2 between them, a = F/m."""
-    m = ms.Model2D()
-    s = m.add_body("slider", points={"pin": (0, 0)}, guess=((0, 0), 0), mass=2.0, inertia=1.0)
-    pin = s.point("pin")
-    m.add(ms.RelativeX1(pin, T), name="drive")
-    m.add(ms.RotationLock1(s, 0), name="no rotation")
-    m.add(ms.RelativeY1(pin, 0), name="track")
-    m.add_load(ms.TimeSwitch(1.0, ms.Force(pin, (1, 0), 3.0), 2.0))
-    m.solve(0.0, solution="location")
-    return m.free(drop=["drive"])
-
-
 SWITCHED = {
     "latch": (_latching, np.linspace(0.0, 1.0, 21), {"at_switch": "project"}),
     "rebound": (_latching, np.linspace(0.0, 1.0, 21), {"at_switch": ("restitution", 0.5)}),
-    "load": (_pushed_slider, np.linspace(0, 3, 13), {}),
+    "load": (pushed_slider, np.linspace(0, 3, 13), {}),
 }
 
 
@@ -213,7 +198,7 @@ def test_compiled_and_python_free_motion_with_switches_agree(monkeypatch, name):
 def test_compiled_free_motion_with_switches_follows_the_closed_form(monkeypatch):
     monkeypatch.setenv("MECHSYS_JIT", "1")
     t = np.linspace(0, 3, 13)
-    sol = _pushed_slider().simulate(t, rtol=1e-10, atol=1e-12)
+    sol = pushed_slider().simulate(t, rtol=1e-10, atol=1e-12)
     assert sol.extra["compiled_steps"] > 0
     a = 3.0 / 2.0
     x = np.where(t < 1, 0, np.where(t < 2, a / 2 * (t - 1) ** 2, a / 2 + a * (t - 2)))

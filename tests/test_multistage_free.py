@@ -109,9 +109,10 @@ def test_restitution_rebounds_off_the_stop():
     np.testing.assert_allclose(sol.qd[-1], 0.0, atol=1e-12)
 
 
-def test_time_switch_load_in_free_motion_is_an_event():
-    # a free slider on a frictionless track pushed by F from t = 1 to t = 2: x = F/(2m) (t-1)^2
-    # for 1 <= t <= 2, then uniform motion at F/m
+def pushed_slider():
+    """A free slider on a frictionless track pushed by F = 3 from t = 1 to t = 2 (a
+    TimeSwitch of loads): ``x = F/(2m) (t-1)^2`` for 1 <= t <= 2, then uniform motion at
+    ``F/m`` (its free system)."""
     m = ms.Model2D()
     s = m.add_body("slider", points={"pin": (0, 0)}, guess=((0, 0), 0), mass=2.0, inertia=1.0)
     pin = s.point("pin")
@@ -120,8 +121,12 @@ def test_time_switch_load_in_free_motion_is_an_event():
     m.add(ms.RelativeY1(pin, 0), name="track")
     m.add_load(ms.TimeSwitch(1.0, ms.Force(pin, (1, 0), 3.0), 2.0))
     m.solve(0.0, solution="location")
+    return m.free(drop=["drive"])
+
+
+def test_time_switch_load_in_free_motion_is_an_event():
     t = np.linspace(0, 3, 13)
-    sol = m.free(drop=["drive"]).simulate(t, **TOL)
+    sol = pushed_slider().simulate(t, **TOL)
     a = 3.0 / 2.0
     x = np.where(t < 1, 0, np.where(t < 2, a / 2 * (t - 1) ** 2, a / 2 + a * (t - 2)))
     np.testing.assert_allclose(sol["slider.x"], x, atol=1e-10)
