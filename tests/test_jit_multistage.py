@@ -136,8 +136,15 @@ def test_sweep_continuing_prior_points_is_the_long_sweep(monkeypatch, jit):
         assert _close(a, b, 1e-13)
     np.testing.assert_allclose(rest.rcond, whole.rcond[k:], rtol=1e-12)
     assert (rest.rcond >= RCOND_WARN).all()
-    with pytest.raises(ValueError, match="needs their scaling"):
+    with pytest.raises(ms.ModelError, match="needs their scaling"):
         sweep(s, t[k:], None, 2, prior=prior)
+    with pytest.raises(ms.ModelError, match=r"prior QDD must be an array of shape \(3, 6\)"):
+        sweep(s, t[k:], None, 2, None, None, whole.scaling, prior=prior[:3] + (None, prior[4]))
+    with pytest.raises(ms.ModelError, match="prior must be"):
+        sweep(s, t[k:], None, 2, None, None, whole.scaling, prior=whole.q[:3])
+    bad = (prior[0], prior[1] * np.nan) + prior[2:]
+    with pytest.raises(ms.ModelError, match="prior Q must be"):
+        sweep(s, t[k:], None, 2, None, None, whole.scaling, prior=bad)
 
 
 @pytest.mark.parametrize("jit", ["1", "0"])

@@ -42,7 +42,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sps
 
-from .._errors import ConvergenceError, SingularJacobianError
+from .._errors import ConvergenceError, ModelError, SingularJacobianError
 from . import _jit
 from ._diagnostics import Stopped
 from ._linalg import SPARSE_THRESHOLD, Scaling, Singular, rotation_indices
@@ -152,10 +152,12 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
     times = np.atleast_1d(np.asarray(times, dtype=float))
     P = 0
     if prior is not None:
+        prior = _check_prior(prior, system.n, order)
         if scaling is None:
-            raise ValueError("sweep: a sweep continuing prior points needs their scaling")
+            raise ModelError("sweep: a sweep continuing prior points needs their scaling "
+                             "(scaling=, the SweepResult.scaling of the sweep they come from)")
         P = len(prior[0])
-        times = np.concatenate([np.asarray(prior[0], dtype=float), times])
+        times = np.concatenate([prior[0], times])
     n, N = system.n, len(times)
     sparse = n > SPARSE_THRESHOLD
     Q = np.empty((N, n))
@@ -292,6 +294,38 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
             "points followed. Solution.extra['rcond'] has the value at every point."),
             stacklevel=3)
     return SweepResult(times, Q, QD, QDD, its, evals, order, rconds, fill, sc, stopped)
+
+
+def _check_prior(prior, n: int, order: int) -> tuple:
+    """``prior = (times (P,), Q (P, n), QD, QDD (P, n) or None, rconds (P,) or None)`` as
+    arrays, with what ``order`` needs present and finite; else a :class:`ModelError`."""
+    try:
+        t, *rest = prior
+        Q, QD, QDD, rc = rest
+    except (TypeError, ValueError):
+        raise ModelError("sweep: prior must be (times, Q, QD, QDD, rconds) of the points "
+                         f"solved before, got {type(prior).__name__}") from None
+    t = np.atleast_1d(np.asarray(t, dtype=float))
+    P = len(t)
+    need = {"Q": (Q, (P, n)), "QD": (QD, (P, n)) if order >= 1 else None,
+            "QDD": (QDD, (P, n)) if order >= 2 else None,
+            "rconds": (rc, (P,)) if order >= 1 else None}
+    out = {}
+    for name, spec in need.items():
+        if spec is None:
+            continue
+        X, shape = spec
+        X = None if X is None else np.asarray(X, dtype=float)
+        # (an estimate may be RCOND_PENDING, inf)
+        bad = None if X is None else (np.isnan(X) if name == "rconds" else ~np.isfinite(X))
+        if X is None or X.shape != shape or bad.any():
+            raise ModelError(f"sweep: prior {name} must be an array of shape {shape} of "
+                             f"finite numbers for a sweep of order {order} (got "
+                             f"{None if X is None else X.shape})")
+        out[name] = X
+    if not P or not np.isfinite(t).all():
+        raise ModelError("sweep: prior times must be one or more finite numbers")
+    return (t, out["Q"], out.get("QD"), out.get("QDD"), out.get("rconds"))
 
 
 def _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds, fill=None):
