@@ -190,14 +190,14 @@ def test_friction_is_the_same_at_any_scale_of_force(monkeypatch, jit):
     """Friction's Newton (statics, inverse dynamics, free motion) judged its convergence and
     regularised the reaction's magnitude in absolute units: a block of a few picograms got a
     push force 21 times too large (inverse dynamics), and a free acceleration wrong by
-    125 %, silently. Now the forces scale with the mass (1e-12 kg to 1 kg, Python and
-    compiled loops)."""
+    125 %, silently; at 2e-15 kg the unscaled Newton matrix was declared singular. Now the
+    forces scale with the mass (2e-15 kg to 2 kg, Python and compiled loops)."""
     monkeypatch.setenv("MECHSYS_JIT", jit)
     alpha, mu, g = 0.5, 0.3, 9.81
     ca, sa = np.cos(alpha), np.sin(alpha)
     t = np.linspace(0.1, 1.0, 4)
     push = {}
-    for mass in (2.0, 2e-6, 2e-9, 2e-12):
+    for mass in (2.0, 2e-6, 2e-9, 2e-12, 2e-15):
         m = _sliding_block(mass, mu, alpha)
         for solution in ("kinematic", "dynamic"):      # (statics: no velocity, no friction)
             F, _ = m.solve(t, solution=solution).reaction("push", "block")
@@ -205,6 +205,7 @@ def test_friction_is_the_same_at_any_scale_of_force(monkeypatch, jit):
         free = _sliding_block(mass, mu, alpha, hold=False)
         free.solve(0.0)
         sol = free.free(drop=["push"]).simulate(np.linspace(0, 0.5, 3), rtol=1e-10, atol=1e-12)
+        assert (sol.extra["compiled_steps"] > 0) == (jit == "1")
         # slides down: a = g (sin a - mu cos a) once moving (v >> v_eps)
         acc = np.hypot(sol.qdd[-1, 0], sol.qdd[-1, 1])
         assert abs(acc / (g * (sa - mu * ca)) - 1) < 1e-6, (mass, acc)

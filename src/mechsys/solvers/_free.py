@@ -110,8 +110,17 @@ def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterat
                 return qdd, lam, it - 1
         D = dyn.dQ_dlam(t, q, qd, lam, p, qdd)
         Meff = Mm - dyn.dQ_dqdd(t, q, qd, lam, p, qdd)
+        # the Newton matrix unit-free (its singularity test then does not depend on the units
+        # of length and mass): rows diag(c/mu, 1/rho), columns diag(c, mu/rho), mu the size
+        # of C Meff C; its blocks are C Meff C / mu, B^T, B (B = rho^-1 Phi_q C, entries <= 1)
+        mu = (c[:, None] * np.abs(Meff) * c[None, :]).max(initial=0.0) or 1.0
+        dr = np.concatenate((c / mu, 1.0 / rho))
+        dc = np.concatenate((c, mu / rho))
+        K = _augmented(Meff, J, D)
+        K = (sps.diags(dr) @ K @ sps.diags(dc)).tocsc() if sps.issparse(K) else \
+            dr[:, None] * K * dc[None, :]
         try:
-            dx = factor(_augmented(Meff, J, D)).solve(-np.concatenate((r1, r2)))
+            dx = dc * factor(K).solve(-dr * np.concatenate((r1, r2)))
         except Singular:
             raise _singular_free(system, t, q, qd, p) from None
         qdd, lam = qdd + dx[:n], lam + dx[n:]

@@ -350,7 +350,7 @@ class FreeStepper:
         if newton is not None:
             self.ws[14][:] = 1.0              # the first evaluation's multipliers (Python: ones)
             self.ws[16][0][7][0] = newton_tol   # then the column scales (the unit-free test)
-            self.ws[16][0][7][1:] = self.columns
+            self.ws[16][0][7][1:1 + n] = self.columns
         _jit._state["loaded"] = True
 
     @classmethod

@@ -321,6 +321,7 @@ def _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, w1, w2, qdd, lam, inf
                 rho = max(rho, abs(J[i, j]) * tolv[1 + j])
             if rho == 0.0:
                 rho = 1.0
+            tolv[1 + n + i] = rho            # (the Newton matrix's row scales below)
             res[n + i] = acc - g[i]
             e2 = max(e2, abs(res[n + i]) / rho)
             size2 = max(size2, abs(g[i]) / rho)
@@ -350,11 +351,25 @@ def _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, w1, w2, qdd, lam, inf
                 KT[j, n + i] = J[i, j]
         for e in range(nD):
             KT[n + Dc[e], Dr[e]] -= od[e]
+        # unit-free, as free_acceleration: K~ = diag(c/mu, 1/rho) K diag(c, mu/rho), mu the
+        # size of C Meff C (KT[k, j] = Meff[j, k] in the first block)
+        mu = 0.0
+        for k in range(n):
+            for j in range(n):
+                mu = max(mu, abs(tolv[1 + j] * KT[k, j] * tolv[1 + k]))
+        if mu == 0.0:
+            mu = 1.0
+        for j in range(N):               # column j of K: KT's row j
+            sc = tolv[1 + j] if j < n else mu / tolv[1 + j]
+            for i in range(N):
+                KT[j, i] *= sc * (tolv[1 + i] / mu if i < n else 1.0 / tolv[1 + i])
         if not _factor_checked(KT, N, ipiv, w1, w2):
             return False
         for i in range(N):
-            res[i] = -res[i]
+            res[i] = -(res[i] * (tolv[1 + i] / mu if i < n else 1.0 / tolv[1 + i]))
         getrs(KT, N, ipiv, res)
+        for j in range(N):
+            res[j] *= tolv[1 + j] if j < n else mu / tolv[1 + j]
         for j in range(n):
             qdd[j] += res[j]
             x[1 + 2 * n + m + npar + j] = qdd[j]
@@ -1110,7 +1125,7 @@ def _block_work(blocks, blk_i, n, m, bw, nnz):
         pieces = max(info[10], info[15], 0)
         bw_ = (np.zeros(1 + 2 * n + info[5] + pieces), np.zeros(m + nnz), np.zeros(m),
                np.zeros((m, n)), np.zeros(max(info[3], 1)), np.zeros(max(info[4], 1)),
-               np.zeros(2 * n + m), np.zeros(1 + n))
+               np.zeros(2 * n + m), np.zeros(1 + n + m))
     elif blocks == BLOCK:
         boff, roff, bsize = blk_i[0][1], blk_i[0][4], blk_i[0][6]
         big = bsize.max() if bsize.size else 1
