@@ -14,8 +14,8 @@ positions in the current combination, evaluate every switch's tests at the solve
 ``(T, q, p)``; if they choose another stage, solve again in that combination from the same
 prediction, until the tests confirm the stage the point was solved in. The points after it
 go in runs of that combination, each one kinematic sweep continuing the points before it
-(compiled where the sweep's loop is; ``RUN_START`` points, doubling up to ``RUN_MAX`` while
-the runs are kept whole); the tests, evaluated on a run's points at once, keep it up to the
+(compiled where the sweep's loop is; ``RUNS`` points, doubling while the runs are kept
+whole); the tests, evaluated on a run's points at once, keep it up to the
 first point they send to another combination (or the first that fails), which gets the stage
 logic (decision 0029). A stage is therefore recorded only where its own test holds at its own solution. When
 the current combination has no solution at a point (a stage past its end), the combination
@@ -40,7 +40,7 @@ from .._symbols import T
 from ..compile import System
 from ..compile._stages import _cache, stage_system
 from ..constraints._switches import StageSwitch, TimeSwitch
-from ..solvers import ORDERS, PositionOptions, sweep
+from ..solvers import ORDERS, PositionOptions, _jit, sweep
 from ..solvers._kinematics import SweepResult, _predict
 from ..solvers._linalg import Scaling, rotation_indices
 
@@ -224,12 +224,13 @@ def _multipliers_by_stage(model, res, stages, mode, lambda_guess, scalings):
 
 
 #: a multistage sweep solves the points after a stage change in runs of one combination,
-#: each one sweep: the first ``RUN_START`` long, each run the tests confirm to its end twice
-#: as long as the one before, up to ``RUN_MAX`` (a run that passes its stage's end has solved
-#: the points after it in vain). The same in both loops: a run's first point starts Newton
-#: without the previous point's chord, so the runs' bounds are part of the arithmetic
-RUN_START = 32
-RUN_MAX = 1024
+#: each one sweep continuing the one before as one long sweep would (its predictor history and
+#: chord): the first ``RUNS[0]`` long, each run the tests confirm to its end twice as long as
+#: the one before, up to ``RUNS[1]``. A run that passes its stage's end has solved the points
+#: after it in vain, so the Python loop (a point costs about two sweep calls) keeps runs
+#: short, the compiled one (a point costs a hundredth of a call) long: ``RUNS_COMPILED``
+RUNS = (8, 32)
+RUNS_COMPILED = (64, 1024)
 
 
 class _StageSweep:
@@ -257,6 +258,8 @@ class _StageSweep:
         self.scalings: dict = {}
         self.evals = 0
         self.fills: list = []    # (first point, count, fill) of runs with pending estimates
+        self.rows = None         # the chord's rows after the last kept point (a whole run)
+        self.runs = RUNS_COMPILED if _jit.plan(base, N, order) is not None else RUNS
 
     def fill(self):
         """``fill(rconds)`` for the sweep's result: each run's pending estimates."""
@@ -284,9 +287,11 @@ class _StageSweep:
             sc = self.scalings[comb] = Scaling.of(system, pred,
                                                   system.jacobian(self.times[k], pred, p))
         P = min(k, 3)
+        # the chord continues only within one combination
+        rows = self.rows if k and tuple(self.stages[k - 1]) == tuple(comb) else None
         prior = None if k == 0 else tuple(
             None if X is None else X[k - P:k] for X in (self.times, self.Q, self.QD, self.QDD,
-                                                        self.rconds))
+                                                        self.rconds)) + (rows,)
         got = sweep(system, self.times[k:k + length], self.guess if k == 0 else None,
                     self.order, self.options, p, sc, prior=prior, partial=True,
                     points=len(self.times))
@@ -295,6 +300,7 @@ class _StageSweep:
 
     def keep(self, got: SweepResult, k: int, count: int, comb) -> None:
         """Record the first ``count`` points of ``got`` as points ``k ...`` in ``comb``."""
+        self.rows = got.rows if count == len(got.t) else None
         if not count:
             return
         sl = slice(k, k + count)
@@ -356,7 +362,7 @@ def _sweep_stages(model, times, guess, order, options, forced):
         sw.check_times(params)
     st = _StageSweep(model, times, guess, order, options, forced)
     N = len(times)
-    k, current, length, care = 0, None, RUN_START, True
+    k, current, length, care = 0, None, st.runs[0], True
     while k < N:
         if care:
             current = st.point(k, current)
@@ -372,9 +378,9 @@ def _sweep_stages(model, times, guess, order, options, forced):
         st.keep(got, k, ok, current)
         k += ok
         if ok == ask:
-            length = min(2 * length, RUN_MAX)
+            length = min(2 * length, st.runs[1])
         else:
-            length, care = RUN_START, True
+            length, care = st.runs[0], True
     res = SweepResult(times, st.Q, st.QD, st.QDD, st.its, st.evals, order, st.rconds,
                       st.fill() if st.fills else None)
     return res, st.stages, st.scalings

@@ -203,10 +203,11 @@ def _lapack() -> np.ndarray:
 
 
 def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD, its, rconds,
-        rprev, R=None, first=0):
+        rprev, R=None, first=0, chord_start=False):
     """Fill ``Q``, ``QD``, ``QDD``, ``its``, ``rconds`` from point ``first`` on (the rows
     before it: the points solved before, which the predictor continues; ``scaling`` given
-    then); return ``(k, evals,
+    then; ``chord_start``: point ``first - 1`` had the chord, of row scales ``rprev``);
+    return ``(k, evals,
     scaling)``: the first point left to the Python loop (``len(times)`` when all are done),
     the number of kernel calls made, and the :class:`~mechsys.solvers._linalg.Scaling` used.
     ``scaling`` None: the loop takes ``Scaling.of`` the guess ``q0`` at the first time from
@@ -240,7 +241,8 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
                     _index(system.jac_rows), _index(system.jac_cols), columns, scale,
                     float(options.ftol), int(options.max_iterations), bool(options.damping),
                     int(order), _index(rot), trans, _index(body), length_hint(system), Q,
-                    qd_out, qdd_out, its, rc, rprev, lazy, R if lazy else dummy, int(first))
+                    qd_out, qdd_out, its, rc, rprev, lazy, R if lazy else dummy, int(first),
+                    bool(chord_start))
     if scaling is None:
         scaling = Scaling(float(scale[0]), columns, float(scale[1]))
     return int(k), int(evals), scaling

@@ -439,7 +439,8 @@ def _unique(jr, jc, m, n):
 
 @nb.njit(cache=True)
 def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit, damping, order,
-                rot, trans, body, hint, Q, QD, QDD, its, rconds, rprev, lazy, R, first):
+                rot, trans, body, hint, Q, QD, QDD, its, rconds, rprev, lazy, R, first,
+                chord_start):
     """The sweep's regular points (see the module docstring); returns ``(k, evaluations)``
     with ``k`` the first point left to the Python loop. ``rprev`` (n,) receives the row
     scales of the last solved point's velocity factorisation (the chord of the next point:
@@ -454,7 +455,9 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
     system's ``length_hint``) and returned in ``scale`` and ``columns``. The Newton
     tolerance is ``ftol (1 + offset)``. ``first``: the first point to solve; the rows
     before it of ``Q``, ``QD``, ``QDD``, ``rconds`` are the points solved before the sweep
-    (the predictor's history: a multistage sweep's runs), and ``scale`` is given then."""
+    (the predictor's history: a multistage sweep's runs), and ``scale`` is given then;
+    ``chord_start``: point ``first - 1`` had the chord (its velocity factorisation, made again
+    here from ``Q[first - 1]`` and its row scales ``rprev``), as in one long sweep."""
     n = q0.size
     m = n
     nnz = jr.size
@@ -489,6 +492,21 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
     evals = 0
     # B, ipiv, nz hold the previous point's velocity factorisation while have_chord is set
     have_chord = False
+    if first > 0 and chord_start:
+        # the chord of point first - 1, made as the loop makes it after solving that point
+        x[0] = times[first - 1]
+        for j in range(n):
+            x[1 + j] = Q[first - 1, j]
+            x[1 + n + j] = 0.0
+            r[j] = rprev[j]
+        _eval_row(ptrs, 1, x, nin, out_vel)
+        if unique:
+            anorm = _fill_nz(out_vel, jr, jc, r, columns, B)
+        else:
+            _assemble(out_vel, 0, jr, jc, J)
+            anorm = _fill(J, r, columns, B)
+        have_chord = _factor_filled(lapack, B, anorm, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf,
+                                    work, iwork, vguard) >= RCOND_WARN
     for k in range(first, N):
         t = times[k]
         x[0] = t

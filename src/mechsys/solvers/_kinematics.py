@@ -114,6 +114,9 @@ class SweepResult:
     scaling: Scaling | None = field(default=None, repr=False, compare=False)
     #: the error that ended a ``partial`` sweep before its last time (None: all solved)
     stopped: Exception | None = field(default=None, repr=False, compare=False)
+    #: (n,) the row scales of the last point's velocity factorisation when it is the next
+    #: point's chord (``rcond >= RCOND_WARN``), else None: what ``prior`` continues with
+    rows: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @property
     def rcond(self) -> np.ndarray | None:
@@ -140,10 +143,12 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
 
     For a sweep that continues another (the runs of a multistage sweep):
 
-    * ``prior``: ``(times, Q, QD, QDD, rconds)`` of the points solved just before
+    * ``prior``: ``(times, Q, QD, QDD, rconds[, rows])`` of the points solved just before
       ``times[0]`` (``QD``/``QDD``/``rconds`` None where ``order`` has none; three points
-      are all the predictor uses). The first point is predicted from them as in one long
-      sweep; ``guess`` is not used, ``scaling`` must be given.
+      are all the predictor uses; ``rows`` the ``SweepResult.rows`` of the sweep they end,
+      or None). The first point is predicted from them, and starts Newton with the last
+      one's chord when ``rows`` is given, exactly as in one long sweep; ``guess`` is not
+      used, ``scaling`` must be given.
     * ``partial``: a point whose position solve fails (:class:`ConvergenceError`,
       :class:`SingularJacobianError`) ends the sweep: the result holds the points before it,
       ``stopped`` the error.
@@ -183,13 +188,24 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
         F0, J0 = system.residual_and_jacobian(times[0], q0, p, sparse)
         sc, start = Scaling.of(system, q0, J0), (F0, J0)
     fill = None
+    prior_rows = prior[5] if P and order >= 1 and rconds[P - 1] >= RCOND_WARN else None
+    rows_last = prior_rows     # the chord's rows of the last point solved
+    if pointers is None and prior_rows is not None:
+        # the last prior point's chord, as the long sweep has it (the hand-over's way below)
+        try:
+            chord = sc.factor(system.jacobian(times[P - 1], Q[P - 1], p, sparse), prior_rows)
+        except Singular:
+            chord = rows_last = None
     if pointers is not None:
         # the regular points in compiled code; the first one needing care is left to the loop
         # below (the loop takes the scaling from its first evaluation when none is given)
-        rprev = np.ones(n)
+        rprev = np.ones(n) if prior_rows is None else np.array(prior_rows, dtype=float)
         R = np.empty((N, n)) if order >= 1 else None   # row scales of the pending estimates
         k0, done, sc = _jit.run(system, pointers, times, q0, p, order, options or PositionOptions(),
-                                sc, rot, Q, QD, QDD, its, rconds, rprev, R, P)
+                                sc, rot, Q, QD, QDD, its, rconds, rprev, R, P,
+                                prior_rows is not None)
+        if k0 > P:
+            rows_last = rprev.copy() if order >= 1 and rconds[k0 - 1] >= RCOND_WARN else None
         if order >= 1 and (rconds[P:k0] == RCOND_PENDING).any():
             fill = _jit.rcond_filler(system, pointers, times[P:], Q[P:], p, sc, R[P:])
         evals += done
@@ -269,6 +285,7 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
                 # the next point's chord: only from a well-conditioned point (near a toggle Newton
                 # keeps its fresh Jacobian)
                 chord = fac if fac.rcond >= RCOND_WARN else None
+                rows_last = None if chord is None else res.rows
                 evals += 1
                 if order >= 2:
                     QDD[k] = fac.solve(system.gamma_values(t, q, qd, p))
@@ -293,7 +310,10 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
             "and sensitive, and the sweep continued through it on the branch its previous "
             "points followed. Solution.extra['rcond'] has the value at every point."),
             stacklevel=3)
-    return SweepResult(times, Q, QD, QDD, its, evals, order, rconds, fill, sc, stopped)
+    if end > P:       # (a last point near a singular instant has no chord)
+        rows_last = rows_last if order >= 1 and rconds[-1] >= RCOND_WARN else None
+    return SweepResult(times, Q, QD, QDD, its, evals, order, rconds, fill, sc, stopped,
+                       rows_last)
 
 
 def _check_prior(prior, n: int, order: int) -> tuple:
@@ -301,10 +321,18 @@ def _check_prior(prior, n: int, order: int) -> tuple:
     arrays, with what ``order`` needs present and finite; else a :class:`ModelError`."""
     try:
         t, *rest = prior
-        Q, QD, QDD, rc = rest
+        Q, QD, QDD, rc, *rows = rest
+        if len(rows) > 1:
+            raise ValueError
     except (TypeError, ValueError):
-        raise ModelError("sweep: prior must be (times, Q, QD, QDD, rconds) of the points "
-                         f"solved before, got {type(prior).__name__}") from None
+        raise ModelError("sweep: prior must be (times, Q, QD, QDD, rconds[, rows]) of the "
+                         f"points solved before, got {type(prior).__name__}") from None
+    rows = rows[0] if rows else None
+    if rows is not None:
+        rows = np.asarray(rows, dtype=float)
+        if rows.shape != (n,) or not (np.isfinite(rows).all() and (rows > 0).all()):
+            raise ModelError(f"sweep: prior rows must be {n} positive row scales (a "
+                             "SweepResult.rows), or None")
     t = np.atleast_1d(np.asarray(t, dtype=float))
     P = len(t)
     need = {"Q": (Q, (P, n)), "QD": (QD, (P, n)) if order >= 1 else None,
@@ -325,7 +353,7 @@ def _check_prior(prior, n: int, order: int) -> tuple:
         out[name] = X
     if not P or not np.isfinite(t).all():
         raise ModelError("sweep: prior times must be one or more finite numbers")
-    return (t, out["Q"], out.get("QD"), out.get("QDD"), out.get("rconds"))
+    return (t, out["Q"], out.get("QD"), out.get("QDD"), out.get("rconds"), rows)
 
 
 def _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds, fill=None):
