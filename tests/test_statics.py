@@ -100,3 +100,33 @@ def test_spring_static_balance():
     x = np.array([1.0, 1.5])
     np.testing.assert_allclose(F[:, 0], 200.0 * (x - 0.5), atol=1e-9)
     np.testing.assert_allclose(sol.potential_energy(), 0.5 * 200 * (x - 0.5) ** 2)
+
+
+@pytest.mark.parametrize("solution", ["static", "dynamic"])
+def test_large_model_multipliers_solve_sparse(solution):
+    """Above ``SPARSE_THRESHOLD`` coordinates the multiplier solve factorises the sparse
+    Jacobian (SuperLU, as the sweep): the same multipliers as the dense solve of the same
+    equations, and the load balance ``Phi_q^T lambda = Q + Qv - M qdd``."""
+    from mechsys.solvers import solve_multipliers
+    from mechsys.solvers._linalg import SPARSE_THRESHOLD
+
+    m = models.four_bar_chain(30)
+    for b in m.bodies:
+        if not b.is_ground:
+            m.set_mass_properties(b.name, mass=1.0, centroid=(0.5, 0), inertia=0.1)
+    m.add_load(ms.Gravity((0, -1), 9.81))
+    s = m.compile()
+    assert s.n > SPARSE_THRESHOLD
+    sol = m.solve(np.linspace(0.1, 0.5, 3), solution=solution)
+    for k in range(len(sol.t)):
+        t, q = sol.t[k], sol.q[k]
+        qd = None if sol.qd is None else sol.qd[k]
+        qdd = None if sol.qdd is None else sol.qdd[k]
+        J = s.jacobian(t, q, sol.p)                     # dense: the dense path
+        dense, _ = solve_multipliers(s, s.dynamics, t, q, qd, qdd, sol.p, solution, J=J)
+        scale = np.abs(dense).max()
+        assert scale > 1.0 and np.abs(sol.lam[k] - dense).max() <= 1e-10 * scale
+        M, Q, Qv = s.dynamics.terms(t, q, np.zeros(s.n) if qd is None else qd, sol.lam[k],
+                                    sol.p, qdd)
+        b = Q if solution == "static" else Q + Qv - M @ qdd
+        np.testing.assert_allclose(J.T @ sol.lam[k], b, atol=1e-9 * np.abs(b).max())

@@ -240,12 +240,32 @@ class System:
         return x
 
     def assemble(self, vals: np.ndarray, sparse: bool = False):
-        """Jacobian ``(m, n)`` from its nonzero values (dense, or CSC when ``sparse``)."""
+        """Jacobian ``(m, n)`` from its nonzero values (dense, or CSC when ``sparse``).
+
+        Sparse: the CSC structure of the pattern is made once (``_csc_structure``); each call
+        sums the values into it in their own order (as the dense path) and builds the matrix
+        from ``(data, indices, indptr)``: about 20 µs instead of 100 µs for SciPy's
+        conversion from coordinates, called several times a point by large sweeps."""
         if sparse:
-            return sps.csc_matrix((vals, (self.jac_rows, self.jac_cols)), shape=(self.m, self.n))
+            inv, indices, indptr = self._csc_structure()
+            data = np.bincount(inv, weights=vals, minlength=len(indices))
+            return sps.csc_matrix((data, indices, indptr), shape=(self.m, self.n), copy=False)
         J = np.zeros((self.m, self.n))
         np.add.at(J, (self.jac_rows, self.jac_cols), vals)
         return J
+
+    def _csc_structure(self):
+        """``(inv, indices, indptr)``: the position in CSC order of each nonzero value (equal
+        positions for duplicates), and the CSC row indices and column pointers."""
+        got = self.__dict__.get("_csc_struct")
+        if got is None:
+            r = np.asarray(self.jac_rows, dtype=np.int64)
+            c = np.asarray(self.jac_cols, dtype=np.int64)
+            uniq, inv = np.unique(c * max(self.m, 1) + r, return_inverse=True)
+            indices = (uniq % max(self.m, 1)).astype(np.int32)
+            indptr = np.searchsorted(uniq // max(self.m, 1), np.arange(self.n + 1)).astype(np.int32)
+            got = self.__dict__["_csc_struct"] = (inv.ravel(), indices, indptr)
+        return got
 
     def residual(self, t: float, q, p=None) -> np.ndarray:
         return self.f_position(self.pack(t, q, None, p))[: self.m]

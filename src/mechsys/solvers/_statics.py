@@ -25,10 +25,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sps
 
 from .._errors import ConvergenceError, ModelError
 from . import _jit
-from ._linalg import Scaling, Singular, factor
+from ._linalg import SPARSE_THRESHOLD, Scaling, Singular, factor
 from ._position import describe_singular
 
 MODES = ("static", "kinematic", "dynamic")
@@ -56,8 +57,10 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
     opt = options or MultiplierOptions()
     n, m = system.n, system.m
     if J is None:
-        J = system.jacobian(t, q, p)
-    if not np.all(np.isfinite(J)):
+        # large models: the sparse Jacobian and SuperLU, as their sweeps (a dense LU of a
+        # chain of 363 coordinates cost 5 ms a point); friction's Newton stays dense
+        J = system.jacobian(t, q, p, n > SPARSE_THRESHOLD and not dyn.depends_on_lambda)
+    if not np.all(np.isfinite(J.data if sps.issparse(J) else J)):
         raise ModelError(f"{mode} load solve at t = {t:.6g}: the constraint Jacobian is not "
                          "finite at this state (a coordinate or parameter is NaN or inf)")
     qd_eff = np.zeros(n) if (mode == "static" or qd is None) else qd
