@@ -190,12 +190,6 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
     fill = None
     prior_rows = prior[5] if P and order >= 1 and rconds[P - 1] >= RCOND_WARN else None
     rows_last = prior_rows     # the chord's rows of the last point solved
-    if pointers is None and prior_rows is not None:
-        # the last prior point's chord, as the long sweep has it (the hand-over's way below)
-        try:
-            chord = sc.factor(system.jacobian(times[P - 1], Q[P - 1], p, sparse), prior_rows)
-        except Singular:
-            chord = rows_last = None
     if pointers is not None:
         # the regular points in compiled code; the first one needing care is left to the loop
         # below (the loop takes the scaling from its first evaluation when none is given)
@@ -216,6 +210,13 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
                 chord = sc.factor(system.jacobian(times[k0 - 1], Q[k0 - 1], p, sparse), rprev)
             except Singular:
                 chord = None
+    if k0 == P and prior_rows is not None:
+        # the last prior point's chord, as the long sweep has it (also when the compiled
+        # loop left the first point to this loop)
+        try:
+            chord = sc.factor(system.jacobian(times[P - 1], Q[P - 1], p, sparse), prior_rows)
+        except Singular:
+            chord = rows_last = None
     end, stopped = N, None
     try:
         for k in range(k0, N):
