@@ -81,6 +81,23 @@ def test_geneva_drive_follows_its_closed_form_and_each_stage_its_test(monkeypatc
     np.testing.assert_array_equal(tests.stages_over(sol.t, sol.q, p, {})[:, 0] + 1, st)
 
 
+def test_geneva_drive_in_any_unit_and_its_bad_input():
+    """The wheel's angles and the stages do not depend on the unit of length; bad arguments
+    are named."""
+    t = np.linspace(0, 4 * np.pi, 161)
+    ref = models.geneva_drive(center_distance=2.0).solve(t)
+    for c in (2e-3, 2e3):
+        sol = models.geneva_drive(center_distance=c).solve(t)
+        np.testing.assert_array_equal(sol.stage("geneva"), ref.stage("geneva"))
+        np.testing.assert_allclose(sol.angle("wheel"), ref.angle("wheel"), atol=1e-12)
+    for kw, what in (({"slots": 2}, "slots"), ({"slots": 4.5}, "slots"), ({"turns": 0}, "turns"),
+                     ({"center_distance": 0.0}, "center_distance"),
+                     ({"center_distance": float("nan")}, "center_distance"),
+                     ({"center_distance": "two"}, "center_distance")):
+        with pytest.raises(ms.ModelError, match=f"geneva_drive: {what}"):
+            models.geneva_drive(**kw)
+
+
 def _jog(mass):
     m = ms.Model2D()
     s = m.add_body("slider", points={"pin": (0, 0)}, guess=((0, 0), 0), mass=mass, inertia=1.0)

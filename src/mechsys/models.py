@@ -279,15 +279,20 @@ def geneva_drive(slots: int = 4, center_distance: float = 2.0, turns: int = 2) -
     >>> sorted(set(sol.stage("geneva")))
     [1, 2, 3, 4, 5]
     """
+    from ._errors import ModelError
     from .constraints import PointOnLine1, StageSwitch
 
     if isinstance(slots, bool) or not isinstance(slots, (int, np.integer)) or slots < 3:
-        raise ValueError(f"geneva_drive: slots must be an integer >= 3, got {slots!r}")
+        raise ModelError(f"geneva_drive: slots must be an integer >= 3, got {slots!r}")
     if isinstance(turns, bool) or not isinstance(turns, (int, np.integer)) or turns < 1:
-        raise ValueError(f"geneva_drive: turns must be an integer >= 1, got {turns!r}")
-    c = float(center_distance)
+        raise ModelError(f"geneva_drive: turns must be an integer >= 1, got {turns!r}")
+    try:
+        c = float(center_distance)
+    except (TypeError, ValueError):
+        c = float("nan")
     if not (np.isfinite(c) and c > 0):
-        raise ValueError(f"geneva_drive: center_distance must be positive, got {center_distance!r}")
+        raise ModelError("geneva_drive: center_distance must be a positive length, got "
+                         f"{center_distance!r}")
     step = 2 * sp.pi / slots                 # the wheel's turn per engagement
     half = sp.pi / 2 - sp.pi / slots         # the crank's half angle of engagement
     m = Model2D()
