@@ -68,7 +68,7 @@ from ..solvers._integrators import ATOL, MAX_ERROR, MAX_STEP, RTOL, integration_
 from ..solvers._jit_free import PAUSE_STEPS, FreeStepper
 from ..solvers._linalg import factor
 from ._free import FreeSystem, _reject_unknown
-from ._multistage import _HeldValues, _Tests, lambdify_exact, stage_system
+from ._multistage import _HeldValues, cached_tests, lambdify_exact, stage_system
 
 #: velocities are compatible with a stage when its scaled velocity residual is below this
 COMPATIBLE = 1e-6
@@ -217,7 +217,7 @@ class SwitchedFreeSystem(FreeSystem):
         if lambda_guess is not None:
             kw["lam_guess"] = lambda_guess_vector(self.system, self.model, lambda_guess)
         q, qd, p, held = self._start(initial_condition)
-        combo = _Tests(self.model, stage_system(self.model, None)).stages(t, q, p, {})
+        combo = cached_tests(self.model, stage_system(self.model, None)).stages(t, q, p, {})
         self.system = self._free_system(combo)
         sc = scaling_at(self.system, t, q, p)
         q, qd = self._project_start(t, q, qd, p, held, sc)
@@ -252,12 +252,11 @@ class SwitchedFreeSystem(FreeSystem):
         model = self.model
         base = stage_system(model, None)
         # the tests and the event relations, lambdified once per model version
+        tests = cached_tests(model, base)
         cache = _cache(model)
-        if "tests" not in cache:
-            cache["tests"] = _Tests(model, base)
         if "events" not in cache:
             cache["events"] = _Events(model, base)
-        tests, events = cache["tests"], cache["events"]
+        events = cache["events"]
         n = base.n
         q, qd, p, held_ic = self._start(initial_condition)
         held = _HeldValues(model, base, q)

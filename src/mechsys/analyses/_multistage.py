@@ -140,6 +140,16 @@ class _Tests:
         return out
 
 
+def cached_tests(model, base: System) -> _Tests:
+    """The switches' tests of ``model`` (``base``: its first stage combination), lambdified
+    once per model version (FindTime solves many single points; free motion restarts at
+    every event)."""
+    cache = _cache(model)
+    if "tests" not in cache:
+        cache["tests"] = _Tests(model, base)
+    return cache["tests"]
+
+
 class _HeldValues:
     """The values the switches' variables are held at, as the tail of the parameter vector:
     while a stage uses a variable its value follows the solution; a stage that does not use
@@ -241,10 +251,7 @@ class _StageSweep:
         self.model, self.times, self.order, self.options = model, times, order, options
         self.forced = forced
         base = stage_system(model, None)
-        tests = _cache(model).get("tests")
-        if tests is None:  # compiled once per model version (FindTime solves many single points)
-            tests = _cache(model)["tests"] = _Tests(model, base)
-        self.tests = tests
+        self.tests = tests = cached_tests(model, base)
         self.guess = np.asarray(guess, dtype=float)
         self.held = _HeldValues(model, base, guess)
         N, n = len(times), base.n
