@@ -1,6 +1,7 @@
 """Run one example script and check that the compiled and the Python paths give the same
 numbers on every free motion and kinematic sweep it computes (used by
-``tests/test_paths_agree.py``; run as ``python tests/_paths_runner.py examples/x.py``).
+``tests/test_examples.py``; run as ``python tests/_paths_runner.py examples/x.py
+[--first-steps]``).
 
 The script runs once as written, with ``FreeSystem.simulate`` and the kinematic sweep
 (``solvers._kinematics.sweep``) recorded. Then each recorded computation is repeated with
@@ -11,12 +12,18 @@ apply):
 * a multistage sweep (a model with stage switches) over all of its points: the same
   positions, rates and stages;
 * the multipliers of a static, kinematic or dynamic solve over all of its points;
-* a free motion (through stage changes too) or a nonholonomic path over its first steps
-  (about 20: over a whole run the
-  step-size controller
-  amplifies rounding-sized differences of the error estimate into different steps, and a
-  chaotic motion amplifies those, so two correct implementations of one method agree to the
-  integration tolerance there, not to rounding).
+* a free motion (through stage changes too) or a nonholonomic path, twice:
+
+  - as the script asked, over its first steps (about 20). Over a whole run the step-size
+    controller amplifies rounding-sized differences of the error estimate into different
+    steps, and a chaotic motion amplifies those, so two correct implementations of one
+    method agree to the integration tolerance there, not to rounding;
+  - with the same steps in both loops (kind ``"free steps"`` etc.): every step half the
+    adaptive run's mean step, all accepted (``_same_steps``), over the whole run. This is
+    the comparison of the arithmetic: the two loops agree to rounding. With
+    ``--first-steps`` (a run through singular configurations, where the constraint Jacobian
+    loses rank and the solution is not a smooth function of rounding) it covers the first
+    steps only.
 
 Printed on the last line, after ``paths-agree:``: a JSON list with, per computation, its kind, the largest
 difference (relative to ``max(1, |value|)``) and whether the compiled loop ran.
@@ -38,6 +45,9 @@ from mechsys.analyses import _free, _free_switch, _multistage, _path  # noqa: E4
 from mechsys.solvers import _kinematics, _statics  # noqa: E402
 
 FIRST_STEPS = 20
+FIRST_STEPS_ONLY = False
+LOOSE = 1e6
+inf = float("inf")
 records: list = []
 
 
@@ -113,6 +123,32 @@ def _short_span(t, sol):
     return np.linspace(t0, t0 + frac * (t1 - t0), 11)
 
 
+def _same_steps_span(t, sol) -> tuple[np.ndarray, float]:
+    """Output times and step size of the comparison with the same steps: 11 times over the
+    whole run (over its first ``FIRST_STEPS`` steps with ``--first-steps``), and half the
+    adaptive run's mean step."""
+    steps = max(int(sol.extra.get("steps", len(sol.t))), 1)
+    if FIRST_STEPS_ONLY:
+        span = _short_span(t, sol)
+        return span, float(span[-1] - span[0]) / (2 * min(steps, FIRST_STEPS))
+    t0, t1 = (float(t[0]), float(t[-1])) if len(t) else (0.0, 0.0)
+    return np.linspace(t0, t1, 11), (t1 - t0) / (2 * steps)
+
+
+def _same_steps(h: float, kwargs) -> dict:
+    """The options of a run whose steps both loops take alike, of size ``h``. A Runge-Kutta
+    method gets ``max_step = h`` and tolerances so loose (``LOOSE``) that every step is
+    accepted: SciPy's first step is then 1e-4 (its floor of 1e-6, times 100), and each
+    accepted step grows ten-fold until ``max_step`` caps it, the same in both loops. Mech's
+    Adams integrator gets ``step_size = h``."""
+    out = {k: v for k, v in kwargs.items() if k not in ("rtol", "atol", "max_error", "max_step")}
+    if str(kwargs.get("method", "dop853")).lower() in ("dop853", "rk45"):
+        out.update(rtol=LOOSE, atol=LOOSE, max_step=h)
+    else:
+        out.update(step_size=h)
+    return out
+
+
 def _both(fn, *args, **kwargs):
     """``fn(*args, **kwargs)`` with the Python loops, then with the compiled ones."""
     out = {}
@@ -155,6 +191,16 @@ def check() -> list[dict]:
                             "rows": len(py.t),
                             "compiled": int(jit.extra.get("compiled_steps", 0)),
                             "python_compiled": int(py.extra.get("compiled_steps", 0))})
+            span, h = _same_steps_span(t, sol)
+            py, jit = _both(run, obj, span, *args, **_same_steps(h, kwargs))
+            each = {k: _diff(getattr(py, k), getattr(jit, k))
+                    for k in ("t", "q", "qd", "qdd", "lam") if getattr(py, k) is not None}
+            steps = [int(py.extra["steps"]), int(jit.extra["steps"])]
+            results.append({"kind": kind + " steps",
+                            "difference": max(each.values()) if steps[0] == steps[1] else inf,
+                            "each": each, "rows": len(py.t), "steps": steps,
+                            "compiled": int(jit.extra.get("compiled_steps", 0)),
+                            "python_compiled": int(py.extra.get("compiled_steps", 0))})
         elif kind == "multipliers":
             ran = []
             _statics._jit.multipliers = _counting_multipliers(ran)
@@ -194,6 +240,7 @@ original_stages = _multistage._sweep_stages
 original_jit_multipliers = _statics._jit.multipliers
 
 if __name__ == "__main__":
+    FIRST_STEPS_ONLY = "--first-steps" in sys.argv[2:]
     script = sys.argv[1]
     _free.FreeSystem.simulate = _record_simulate(original_simulate)
     _path.PathSystem.simulate = _record_simulate(original_path, "path")
