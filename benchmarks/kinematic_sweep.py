@@ -174,9 +174,9 @@ def _jit_available() -> bool:
     return _jit.available()
 
 
-def _growth(rows: list[dict], key: str) -> str:
-    """Exponent k of cost ~ n^k between consecutive chain sizes."""
-    chain = [r for r in rows if r["case"].startswith("four_bar_chain") and r.get("loop") == "python"]
+def _growth(rows: list[dict], key: str, loop: str = "python") -> str:
+    """Exponent k of cost ~ n^k between consecutive chain sizes of one loop."""
+    chain = [r for r in rows if r["case"].startswith("four_bar_chain") and r.get("loop") == loop]
     out = []
     for a, b in zip(chain, chain[1:], strict=False):
         if a["backend"] != b["backend"]:
@@ -224,7 +224,8 @@ of five stages) four times; its points go in runs of one stage between the chang
 
 {sweeps}
 
-Growth of the time per point with the number of coordinates `n` (chain):
+Growth of the time per point with the number of coordinates `n` (chain; the Python loop of
+each backend, then the compiled loop):
 {growth}.
 
 ## Loads over a sweep
@@ -254,8 +255,10 @@ of that function (no symbolic derivation).
   [0019](decisions/0019-sweep-lu-structure-and-guard.md); the same numbers as the Python loop
   to 1e-12 and the same decisions).
   The compiled loop runs by default for sweeps of 1000 points or more (`MECHSYS_JIT`, see the
-  [guide](guide.md#compiled-sweeps-and-the-kernel-cache)); sparse models (over 150
-  coordinates) always use the Python loop.
+  [guide](guide.md#compiled-sweeps-and-the-kernel-cache)); above 150 coordinates it takes
+  models whose Jacobian pattern is banded (chains), with the banded LU of the Python loop
+  ([decision 0030](decisions/0030-banded-kinematic-sweeps.md)); the growth exponents below
+  the table are given for each loop.
 * A sweep needs about one iteration per point: the predictor (the Taylor step
   `q + qd dt + qdd dt^2/2` from the previous point with third- and fourth-derivative terms
   from the last accelerations) lands within the tolerance at fine sampling, and the position
@@ -266,10 +269,11 @@ of that function (no symbolic derivation).
 * For small models the time per point is Python overhead in the solver (assembling,
   factorising and solving with NumPy/SciPy), not equation evaluation, which is a few µs of it;
   the two backends are then equally fast.
-* Above 150 coordinates the solver switches to sparse LU (SuperLU); the cost per point grows
-  more slowly than `n` over the sizes measured (exponents above). There the evaluation cost
-  shows: SymPy's per-call time grows linearly with the number of outputs, SymEngine's LLVM
-  code hardly at all.
+* Above 150 coordinates both loops factorise the Jacobian through its sparsity pattern,
+  analysed once per model: rows matched to columns, a reverse Cuthill-McKee ordering, then
+  LAPACK's banded LU (decision 0030); the cost per point grows about linearly with `n`
+  (exponents above). There the evaluation cost shows: SymPy's per-call time grows linearly
+  with the number of outputs, SymEngine's LLVM code hardly at all.
 * Compiling happens once per model change (`m.compile()` is cached), and changing parameter
   values does not recompile. For large models most of it is the numeric compile of the
   solver's three functions rather than the symbolic derivation.
@@ -298,8 +302,6 @@ def main(argv: list[str] | None = None) -> int:
         if backend == "symengine" and _jit_available():
             loops.append("compiled")
         for (case, n_loops, points), loop in ((c, lp) for c in runs for lp in loops):
-            if loop == "compiled" and n_loops is not None and n_loops > 20:
-                continue      # sparse systems (n > 150) stay on the Python loop
             r = sweep_case(case, n_loops, points, backend, loop=loop)
             sweeps.append(r)
             print(f"sweep {r['case']:<20} {r['backend']:<16} {loop:<8} n={r['n']:<4} compile "
@@ -323,6 +325,9 @@ def main(argv: list[str] | None = None) -> int:
     growth = "; ".join(
         f"{b}: {_growth([r for r in sweeps if r['backend'].startswith(b)], 'per_point_us')}"
         for b in backends)
+    compiled = _growth(sweeps, "per_point_us", "compiled")
+    if compiled:
+        growth += f"; compiled loop: {compiled}"
     print()
     print(sweep_table(sweeps))
     print()

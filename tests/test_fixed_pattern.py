@@ -138,3 +138,44 @@ def test_sparse_free_system_with_a_massless_link_is_diagnosed():
     assert free.system.n + free.system.m > _linalg.SPARSE_THRESHOLD
     with pytest.raises(ms.SingularMassError, match="l31"):
         free.solve(0.0)
+
+
+def test_jacobian_pattern_matches_rows_to_columns():
+    """A constraint Jacobian's row i has nothing to do with coordinate i: the rows are
+    matched to the columns (a zero-free diagonal) before the symmetric ordering. On a chain
+    the band is then as narrow as for 3 loops, where the symmetric ordering alone spans the
+    chain; the solves are those of dense LU."""
+    rng = np.random.default_rng(7)
+    s = models.four_bar_chain(40).compile()
+    pat = s.jacobian_pattern()
+    assert pat is s.jacobian_pattern() and pat.banded and pat.kl + pat.ku <= 10
+    _, indices, indptr = s._csc_structure()
+    assert FixedPattern(indptr, indices, s.n).kl > 50       # without the matching
+    J = s.jacobian(0.4, s.guess + 0.01 * rng.normal(size=s.n), None, sparse=True)
+    assert J.mechsys_pattern is pat
+    b = rng.normal(size=s.n)
+    fac = _linalg.factor(J)
+    assert type(fac).__name__ == "_BandFactor"
+    np.testing.assert_allclose(J.toarray() @ fac.solve(b), b, atol=1e-10)
+    # a matrix with rows shuffled: the matching finds its diagonal again
+    A = _banded_kkt(30, rng)
+    P = rng.permutation(A.shape[0])
+    K = _csc(A[P])
+    shuffled = FixedPattern(K.indptr, K.indices, K.shape[0], match_rows=True)
+    assert shuffled.banded and shuffled.kl + shuffled.ku <= 24
+    np.testing.assert_allclose(A[P] @ shuffled.factor(K.data).solve(b[:A.shape[0]]),
+                               b[:A.shape[0]], atol=1e-9)
+
+
+def test_structurally_singular_jacobian_pattern_still_raises():
+    """A pattern without a perfect matching (an empty column) keeps the rows' order, and its
+    matrices are singular as before."""
+    A = np.eye(6) * 2.0
+    A[:, 3] = 0.0
+    A[3, 4] = 1.0
+    K = _csc(A)
+    K.eliminate_zeros()
+    pat = FixedPattern(K.indptr, K.indices, 6, match_rows=True)
+    np.testing.assert_array_equal(np.sort(pat.row_perm), np.arange(6))
+    with pytest.raises(Singular):
+        pat.factor(K.data)

@@ -302,3 +302,79 @@ def test_a_misspelled_mode_is_an_error_not_a_default(monkeypatch, value):
     for ok in ("AUTO", " 0 ", "On"):
         monkeypatch.setenv("MECHSYS_JIT", ok)
         assert _jit.mode() in ("auto", "off", "on")
+
+
+def _runs(monkeypatch):
+    """Record ``(first point left to Python, evaluations)`` of each compiled sweep."""
+    real, got = _jit.run, []
+
+    def run(*a, **k):
+        out = real(*a, **k)
+        got.append(out[:2])
+        return out
+
+    monkeypatch.setattr(_jit, "run", run)
+    return got
+
+
+@pytest.mark.parametrize("loops", [30, 60])
+def test_large_banded_sweep_is_compiled_with_the_same_numbers(monkeypatch, loops):
+    """Above SPARSE_THRESHOLD coordinates (a chain of 183 and 363) the compiled loop takes
+    the sweep through the Jacobian's FixedPattern (the banded LU both paths call): the
+    Python loop's numbers bit for bit, with its iterations, evaluations and pivot ratios."""
+    from mechsys.solvers._linalg import SPARSE_THRESHOLD
+
+    runs = _runs(monkeypatch)
+    t = np.linspace(0.0, 2 * np.pi, 41)
+    fast, slow = _both(monkeypatch, lambda: models.four_bar_chain(loops), t)
+    assert fast.system.n > SPARSE_THRESHOLD
+    assert runs and runs[0][0] == len(t)                   # every point compiled
+    for x, y in ((fast.q, slow.q), (fast.qd, slow.qd), (fast.qdd, slow.qdd),
+                 (fast.extra["rcond"], slow.extra["rcond"])):
+        np.testing.assert_array_equal(x, y)
+    np.testing.assert_array_equal(fast.iterations, slow.iterations)
+    assert fast.evaluations == slow.evaluations
+    # the chain's exact motion: every crank turns with the driver
+    assert np.isfinite(fast.extra["rcond"]).all() and (fast.extra["rcond"] > 1e-6).all()
+
+
+def test_large_banded_sweep_hands_over_and_continues(monkeypatch):
+    """The compiled loop stopped after 7 points: the Python loop takes the rest (its chord
+    refactorised from the compiled loop's row scales), and the sweep is the all-Python one.
+    A sweep continuing prior points (``prior`` with the chord's rows) is the long sweep, bit
+    for bit, in the banded loop too."""
+    from mechsys.solvers import sweep
+
+    real = _jit.run
+    t = np.linspace(0.0, 1.0, 30)
+
+    def partial(system, pointers, times, *rest):
+        return real(system, pointers, times[:7], *rest)
+
+    monkeypatch.setattr(_jit, "run", partial)
+    mixed, plain = _both(monkeypatch, lambda: models.four_bar_chain(30), t)
+    _same(mixed, plain)
+    monkeypatch.setattr(_jit, "run", real)
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    s = models.four_bar_chain(30).compile()
+    t = np.linspace(0.0, 2.0, 40)
+    whole = sweep(s, t, s.guess, 2)
+    k = 17
+    head = sweep(s, t[:k], s.guess, 2)
+    prior = (t[k - 3:k], head.q[-3:], head.qd[-3:], head.qdd[-3:], head.rcond[-3:], head.rows)
+    rest = sweep(s, t[k:], None, 2, None, None, head.scaling, prior=prior)
+    for a, b in ((rest.q, whole.q[k:]), (rest.qd, whole.qd[k:]), (rest.qdd, whole.qdd[k:]),
+                 (rest.rcond, whole.rcond[k:]), (rest.iterations, whole.iterations[k:])):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_wide_pattern_keeps_the_python_loop(monkeypatch):
+    """A large system whose Jacobian has no narrow band is left to the Python loop (SuperLU
+    with the ordering found once); so are the multiplier solves of every large system."""
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    s = models.four_bar_chain(30).compile()
+    assert _jit.plan(s, 10, 2) is not None
+    monkeypatch.setattr(s.jacobian_pattern(), "banded", False)
+    assert _jit.plan(s, 10, 2) is None
+    monkeypatch.setattr(s.jacobian_pattern(), "banded", True)
+    assert not _jit._wanted(s, 10)

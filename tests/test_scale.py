@@ -122,8 +122,9 @@ def test_position_solve_scaled_tolerance(s):
 
 
 def test_sparse_path_agrees_with_dense(monkeypatch):
-    """Above SPARSE_THRESHOLD coordinates the scaled Jacobian is factorised by SuperLU (the
-    scaled values are swapped into the caller's matrix for the factorisation only)."""
+    """Above SPARSE_THRESHOLD coordinates the scaled Jacobian is factorised sparse, through
+    the system's FixedPattern (the scaled values are swapped into the caller's matrix for
+    the factorisation only)."""
     from mechsys.solvers import _kinematics, _linalg, _position
 
     m = models.four_bar_chain(25)                           # 153 coordinates: sparse

@@ -23,6 +23,7 @@ import scipy.sparse as sps
 import sympy as sp
 
 from .._symbols import T, acceleration_symbol, velocity_symbol
+from ..solvers._linalg import FixedPattern
 from ._backends import Compiled, compile_exprs, default_backend
 from ._dynamics import Dynamics, multiplier_symbols
 from ._options import Backend
@@ -249,10 +250,28 @@ class System:
         if sparse:
             inv, indices, indptr = self._csc_structure()
             data = np.bincount(inv, weights=vals, minlength=len(indices))
-            return sps.csc_matrix((data, indices, indptr), shape=(self.m, self.n), copy=False)
+            J = sps.csc_matrix((data, indices, indptr), shape=(self.m, self.n), copy=False)
+            # a square Jacobian is factorised through its pattern, analysed once
+            # (``_linalg.factor``)
+            J.mechsys_pattern = self.jacobian_pattern()
+            return J
         J = np.zeros((self.m, self.n))
         np.add.at(J, (self.jac_rows, self.jac_cols), vals)
         return J
+
+    def jacobian_pattern(self):
+        """The :class:`~mechsys.solvers._linalg.FixedPattern` of the square Jacobian's CSC
+        structure (None when ``m != n``), made once: its factorisations reuse the ordering
+        (reverse Cuthill-McKee) and band widths found here. Shared with the compiled sweep
+        (``_jit.run``), which performs the same banded LU."""
+        if self.m != self.n:
+            return None
+        got = self.__dict__.get("_jac_pattern")
+        if got is None:
+            _, indices, indptr = self._csc_structure()
+            got = self.__dict__["_jac_pattern"] = FixedPattern(indptr, indices, self.n,
+                                                                 match_rows=True)
+        return got
 
     def _csc_structure(self):
         """``(inv, indices, indptr)``: the position in CSC order of each nonzero value (equal

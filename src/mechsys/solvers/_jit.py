@@ -8,9 +8,11 @@ the damped Newton iteration on the unit-free equations ``R^-1 Phi_q D``, the vel
 kernels are SymEngine's LLVM functions, called through their C entry points
 (``void f(double *out, const double *in, void *ctx)``); the factorisations are LAPACK's
 ``dgetrf``/``dgecon``/``dgetrs``, the routines the Python path calls, their algorithms
-written out in the loop (``_jit_lapack``; SciPy's own, through ``scipy.linalg.cython_lapack``,
-only above ``_jit_loop.SMALL`` unknowns, which the sweep does not reach). Both paths give the
-same numbers to rounding.
+written out in the loop (``_jit_lapack``). Above ``SPARSE_THRESHOLD`` unknowns both paths
+factorise the Jacobian through its :class:`~mechsys.solvers._linalg.FixedPattern` (a row
+matching and reverse Cuthill-McKee ordering analysed once per system, then LAPACK's banded
+``dgbtrf``/``dgbtrs``: SciPy's own, through ``scipy.linalg.cython_lapack``, in the loop).
+Both paths give the same numbers to rounding.
 
 The compiled loop handles the regular points. At the first point that needs the Python
 path's care (Newton not converging, a singular or nearly singular Jacobian, a branch jump)
@@ -25,7 +27,9 @@ the sweep has at least :data:`AUTO_POINTS` points: loading Numba and the cached 
 costs about 0.7 s CPU once per process, which a short sweep would not recover. (The choice
 depends on the sweep alone, never on what ran before in the process.) Possible means: Numba installed (the
 ``fast`` extra), the SymEngine LLVM backend (two-stage ``Piecewise`` kernels of spline
-profiles included), as many equations as coordinates, and a dense system (``n <= SPARSE_THRESHOLD``).
+profiles included), as many equations as coordinates, and a dense system (``n <=
+SPARSE_THRESHOLD``) or a larger one whose Jacobian's pattern is banded (chains and other
+mechanisms whose loops follow each other; ``FixedPattern.banded``).
 
 Measured (slider-crank, 1000 points with velocities and accelerations): see
 ``docs/performance.md``, ``docs/decisions/0013-compiled-sweep.md`` and
@@ -87,7 +91,7 @@ def _pointer(kernel):
 
 def plan(system, points: int, order: int):
     """The kernels' C entry points when the compiled loop should run this sweep, else None."""
-    if not _wanted(system, points):
+    if not _wanted(system, points, banded_ok=True):
         return None
     kernels = [system.f_position]
     if order >= 1:
@@ -119,11 +123,15 @@ def _table(kernels):
     return table
 
 
-def _wanted(system, points: int) -> bool:
+def _wanted(system, points: int, banded_ok: bool = False) -> bool:
     """Whether a compiled loop should run for ``points`` points of this system (the
-    ``MECHSYS_JIT`` rule of the module docstring; Numba importable)."""
+    ``MECHSYS_JIT`` rule of the module docstring; Numba importable). ``banded_ok``: the loop
+    also takes systems above ``SPARSE_THRESHOLD`` unknowns whose Jacobian is banded (the
+    sweep; the multiplier solves take dense systems only)."""
     m = mode()
-    if m == "off" or system.n == 0 or system.m != system.n or system.n > SPARSE_THRESHOLD:
+    if m == "off" or system.n == 0 or system.m != system.n:
+        return False
+    if system.n > SPARSE_THRESHOLD and not (banded_ok and _banded(system)):
         return False
     if m == "auto" and points < AUTO_POINTS:
         return False
@@ -192,6 +200,41 @@ def _capsule_address(capsule) -> int:
     return api.PyCapsule_GetPointer(capsule, api.PyCapsule_GetName(capsule))
 
 
+def _banded(system) -> bool:
+    pattern = getattr(system, "jacobian_pattern", None)
+    pat = pattern() if pattern is not None else None
+    return pat is not None and pat.banded
+
+
+#: the dense sweep's (unused) band arguments
+_NO_BAND = (np.array([-1, 0, 1], dtype=np.int64), (np.zeros(0, dtype=np.int64),) * 6)
+
+
+def _band_args(system):
+    """``(bw, band)`` of ``_jit_loop.sweep_dense`` for a system above ``SPARSE_THRESHOLD``
+    unknowns: its Jacobian's ``FixedPattern`` (kept on the pattern, made once)."""
+    pat = system.jacobian_pattern()
+    got = getattr(pat, "_jit_band", None)
+    if got is None:
+        slot, rows, indptr = system._csc_structure()
+        cols = np.repeat(np.arange(system.n), np.diff(indptr))
+        got = (np.array([pat.kl, pat.ku, pat._ld], dtype=np.int64),
+               tuple(_index(a) for a in (slot, rows, cols, pat._pos, pat.row_perm, pat.perm)))
+        pat._jit_band = got
+    return got
+
+
+def _band_lapack() -> np.ndarray:
+    """The C addresses of SciPy's ``dgbtrf`` and ``dgbtrs``."""
+    if _state.get("band_lapack") is None:
+        from scipy.linalg import cython_lapack
+
+        caps = cython_lapack.__pyx_capi__
+        _state["band_lapack"] = np.array([_capsule_address(caps[f]) for f in ("dgbtrf", "dgbtrs")],
+                                         dtype=np.int64)
+    return _state["band_lapack"]
+
+
 def _lapack() -> np.ndarray:
     if _state["lapack"] is None:
         from scipy.linalg import cython_lapack
@@ -229,6 +272,14 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
     rc = rconds if rconds is not None else np.full(len(times), np.nan)
     lazy = R is not None
     trans, body = _column_kinds(system)
+    bw, band = _NO_BAND
+    if n > SPARSE_THRESHOLD:
+        bw, band = _band_args(system)
+        lazy = False                     # (the pivot ratio is always at hand)
+        if scaling is None:
+            # the Python path's scaling, from the sparse Jacobian at the guess (the loop's
+            # own is computed on a dense matrix)
+            scaling = Scaling.of(system, q0, system.jacobian(times[first], q0, p, True))
     if scaling is None:
         scale = np.zeros(2)
         columns = np.empty(n)
@@ -242,7 +293,7 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
                     float(options.ftol), int(options.max_iterations), bool(options.damping),
                     int(order), _index(rot), trans, _index(body), length_hint(system), Q,
                     qd_out, qdd_out, its, rc, rprev, lazy, R if lazy else dummy, int(first),
-                    bool(chord_start))
+                    bool(chord_start), _band_lapack(), bw, band)
     if scaling is None:
         scaling = Scaling(float(scale[0]), columns, float(scale[1]))
     return int(k), int(evals), scaling

@@ -247,12 +247,14 @@ def _factor_filled(lapack, B, anorm, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, wor
 
 
 @nb.njit(cache=True)
-def _factor_work(m, n):
+def _factor_work(m, n, nd):
     """The work arrays of :func:`_factor` and :func:`_solve`: ``J`` (m, n), ``B`` (n, n),
     pivots, the factors' pattern ``nz``, LAPACK's integer, character and real buffers, its
-    work arrays, and the row scales ``r`` (m,)."""
-    return (np.empty((m, n)), np.empty((n, n)), np.empty(n, dtype=np.int32),
-            np.empty(pattern_size(n), dtype=np.int32), np.zeros(5, dtype=np.int32),
+    work arrays, and the row scales ``r`` (m,). ``nd``: the dense matrices' size (``n``, or
+    1 for a banded sweep, which uses only the pivots, buffers and row scales)."""
+    md = m if nd == n else 1
+    return (np.empty((md, nd)), np.empty((nd, nd)), np.empty(n, dtype=np.int32),
+            np.empty(pattern_size(nd), dtype=np.int32), np.zeros(5, dtype=np.int32),
             np.zeros(2, dtype=np.uint8), np.zeros(2), np.empty(4 * n), np.empty(n, dtype=np.int32),
             np.empty(m))
 
@@ -299,6 +301,93 @@ def _solve(lapack, B, ipiv, nz, r, columns, b, out, ibuf, cbuf):
         ibuf[4] = 1          # nrhs
         _ccall(lapack[2], (cbuf[1:2], ibuf[1:2], ibuf[4:5], B, ibuf[2:3], ipiv, out, ibuf[2:3],
                            ibuf[3:4]))
+    for i in range(n):
+        out[i] = columns[i] * out[i]
+
+
+@leaf
+def _band_values(vals, off, slot, data):
+    """``System.assemble(sparse=True)``'s CSC values ``data`` (one per stored entry) from the
+    nonzero values ``vals[off:]``: duplicates summed in their order, as ``np.bincount``."""
+    for s in range(data.size):
+        data[s] = 0.0
+    for k in range(slot.size):
+        data[slot[k]] += vals[off + k]
+
+
+@leaf
+def _band_rows(data, cr, cc, columns, r):
+    """``Scaling.rows`` of the CSC Jacobian (stored entry ``s`` at row ``cr[s]``, column
+    ``cc[s]``): the same maxima."""
+    for i in range(r.size):
+        r[i] = 0.0
+    for s in range(data.size):
+        v = abs(data[s]) * columns[cc[s]]
+        if v > r[cr[s]]:
+            r[cr[s]] = v
+    for i in range(r.size):
+        if not r[i] > 0:
+            r[i] = 1.0
+
+
+@leaf
+def _band_factor(blapack, data, cr, cc, pos, r, columns, AB, bw, ipiv, bi):
+    """``Scaling.factor`` of a CSC Jacobian through its ``FixedPattern`` (``_linalg``): the
+    scaled values ``data * (c / r)`` scattered into LAPACK's band storage ``AB`` (flat,
+    column-major, ``bw = (kl, ku, ld)``) at the pattern's positions ``pos``, then ``dgbtrf``
+    (SciPy's, through its C address ``blapack[0]``: the routine the Python path calls).
+    Returns the pivot ratio ``min |u_jj| / max |u_jj|``, or -1 when singular (an exact zero
+    pivot, a ratio not above ``RCOND_MIN``, a non-finite pivot), as ``_BandFactor``."""
+    kl, ku, ld = bw[0], bw[1], bw[2]
+    n = r.size
+    for i in range(AB.size):
+        AB[i] = 0.0
+    for s in range(data.size):
+        AB[pos[s]] += data[s] * (columns[cc[s]] / r[cr[s]])
+    bi[0] = n            # m, n, kl, ku, ldab, info
+    bi[1] = n
+    bi[2] = kl
+    bi[3] = ku
+    bi[4] = ld
+    bi[5] = 0
+    _ccall(blapack[0], (bi[0:1], bi[1:2], bi[2:3], bi[3:4], AB, bi[4:5], ipiv, bi[5:6]))
+    if bi[5] > 0:
+        return -1.0
+    dmin = np.inf
+    dmax = 0.0
+    for j in range(n):
+        d = abs(AB[kl + ku + j * ld])
+        if not d == d:
+            return -1.0
+        if d < dmin:
+            dmin = d
+        if d > dmax:
+            dmax = d
+    if not dmin > RCOND_MIN * dmax:
+        return -1.0
+    return dmin / dmax
+
+
+@leaf
+def _band_solve(blapack, AB, bw, ipiv, row_perm, perm, r, columns, b, out, tmp, bi, cbuf):
+    """``ScaledFactor.solve`` of :func:`_band_factor`'s factors: ``b / r`` in the pattern's
+    row order, ``dgbtrs`` (``blapack[1]``), back to the coordinates' order, times ``c``."""
+    n = r.size
+    for i in range(n):
+        out[i] = b[i] / r[i]
+    for i in range(n):
+        tmp[i] = out[row_perm[i]]
+    cbuf[1] = 78         # 'N'
+    bi[1] = n            # n, kl, ku, ldab, info, nrhs
+    bi[2] = bw[0]
+    bi[3] = bw[1]
+    bi[4] = bw[2]
+    bi[5] = 0
+    bi[6] = 1
+    _ccall(blapack[1], (cbuf[1:2], bi[1:2], bi[2:3], bi[3:4], bi[6:7], AB, bi[4:5], ipiv, tmp,
+                        bi[1:2], bi[5:6]))
+    for i in range(n):
+        out[perm[i]] = tmp[i]
     for i in range(n):
         out[i] = columns[i] * out[i]
 
@@ -440,7 +529,7 @@ def _unique(jr, jc, m, n):
 @nb.njit(cache=True)
 def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit, damping, order,
                 rot, trans, body, hint, Q, QD, QDD, its, rconds, rprev, lazy, R, first,
-                chord_start):
+                chord_start, blapack, bw, band):
     """The sweep's regular points (see the module docstring); returns ``(k, evaluations)``
     with ``k`` the first point left to the Python loop. ``rprev`` (n,) receives the row
     scales of the last solved point's velocity factorisation (the chord of the next point:
@@ -457,7 +546,14 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
     before it of ``Q``, ``QD``, ``QDD``, ``rconds`` are the points solved before the sweep
     (the predictor's history: a multistage sweep's runs), and ``scale`` is given then;
     ``chord_start``: point ``first - 1`` had the chord (its velocity factorisation, made again
-    here from ``Q[first - 1]`` and its row scales ``rprev``), as in one long sweep."""
+    here from ``Q[first - 1]`` and its row scales ``rprev``), as in one long sweep.
+
+    ``bw[0] >= 0``: a large system (above ``SPARSE_THRESHOLD`` unknowns) solved as the
+    Python path solves it, through the Jacobian's ``FixedPattern`` (banded LU, LAPACK
+    ``dgbtrf``/``dgbtrs`` at ``blapack``): ``bw = (kl, ku, ld)``, ``band = (slot, cr, cc,
+    pos, row_perm, perm)`` (each nonzero value's CSC entry; each entry's row, column and
+    band position; the pattern's row and column orders). Its condition estimate is the
+    pivot ratio, always computed (never pending); ``scale`` must be given."""
     n = q0.size
     m = n
     nnz = jr.size
@@ -470,8 +566,18 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
     out_pos = np.empty(m + nnz)
     out_vel = np.empty(nnz + m)
     out_gam = np.empty(m)
-    J, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, r = _factor_work(m, n)
-    S, W, seen = _structure(jr, jc, n)
+    banded = bw[0] >= 0
+    slot, cr, cc, pos, row_perm, perm = band
+    nd = 1 if banded else n          # the dense matrices are not used when banded
+    J, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, r = _factor_work(m, n, nd)
+    if banded:
+        S, W, seen = np.empty((1, 1)), np.empty((1, 1)), np.full(1, -1, dtype=np.int32)
+    else:
+        S, W, seen = _structure(jr, jc, n)
+    AB = np.zeros(n * bw[2] if banded else 1)
+    data = np.empty(cr.size)
+    tmp = np.empty(n)
+    bi = np.zeros(8, dtype=np.int32)
     F = np.empty(m)
     q = np.empty(n)
     g = np.empty(n)
@@ -480,7 +586,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
     sec = np.empty(n)
     rhs = np.empty(m)
     jv = np.empty(nnz)
-    unique = _unique(jr, jc, m, n)
+    unique = not banded and _unique(jr, jc, m, n)
     nbody = 0
     for j in range(n):
         if body[j] + 1 > nbody:
@@ -500,13 +606,18 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
             x[1 + n + j] = 0.0
             r[j] = rprev[j]
         _eval_row(ptrs, 1, x, nin, out_vel)
-        if unique:
-            anorm = _fill_nz(out_vel, jr, jc, r, columns, B)
+        if banded:
+            _band_values(out_vel, 0, slot, data)
+            have_chord = _band_factor(blapack, data, cr, cc, pos, r, columns, AB, bw, ipiv,
+                                      bi) >= RCOND_WARN
         else:
-            _assemble(out_vel, 0, jr, jc, J)
-            anorm = _fill(J, r, columns, B)
-        have_chord = _factor_filled(lapack, B, anorm, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf,
-                                    work, iwork, vguard) >= RCOND_WARN
+            if unique:
+                anorm = _fill_nz(out_vel, jr, jc, r, columns, B)
+            else:
+                _assemble(out_vel, 0, jr, jc, J)
+                anorm = _fill(J, r, columns, B)
+            have_chord = _factor_filled(lapack, B, anorm, ipiv, nz, S, W, seen, ibuf, cbuf,
+                                        dbuf, work, iwork, vguard) >= RCOND_WARN
     for k in range(first, N):
         t = times[k]
         x[0] = t
@@ -534,7 +645,10 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
             _assemble(jv, 0, jr, jc, J)
             scale[0], scale[1] = _scaling(J, g, trans, body, nbody, hint, columns)
             tol = ftol * (1.0 + scale[1])
-        if unique:
+        if banded:
+            _band_values(jv, 0, slot, data)
+            _band_rows(data, cr, cc, columns, r)
+        elif unique:
             _rows_nz(jv, jr, jc, columns, r)
         else:
             _assemble(jv, 0, jr, jc, J)
@@ -559,7 +673,13 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                     # one more step with the last factorisation, kept while within tol
                     # (the step is the chord step's below, written twice on purpose: a shared
                     # helper, inlined by Numba, made the sweep 7-9 % slower, measured)
-                    if last_chord:
+                    if banded and last_chord:
+                        _band_solve(blapack, AB, bw, ipiv, row_perm, perm, rprev, columns, F,
+                                    dq, tmp, bi, cbuf)
+                    elif banded:
+                        _band_solve(blapack, AB, bw, ipiv, row_perm, perm, r, columns, F, dq,
+                                    tmp, bi, cbuf)
+                    elif last_chord:
                         _solve(lapack, B, ipiv, nz, rprev, columns, F, dq, ibuf, cbuf)
                     else:
                         _solve(lapack, B, ipiv, nz, r, columns, F, dq, ibuf, cbuf)
@@ -587,7 +707,11 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                 break
             if chord:
                 # chord step with the previous point's factorisation (_position.solve_position)
-                _solve(lapack, B, ipiv, nz, rprev, columns, F, dq, ibuf, cbuf)
+                if banded:
+                    _band_solve(blapack, AB, bw, ipiv, row_perm, perm, rprev, columns, F, dq,
+                                tmp, bi, cbuf)
+                else:
+                    _solve(lapack, B, ipiv, nz, rprev, columns, F, dq, ibuf, cbuf)
                 for j in range(n):
                     dq[j] = -dq[j]
                     qn[j] = q[j] + dq[j]
@@ -613,14 +737,21 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                     continue
                 chord = False            # too slow: a Newton step from q with its own Jacobian
                 have_chord = False       # (B is overwritten)
-            if stale:
-                _assemble(jv, 0, jr, jc, J)
-                stale = False
             last_chord = False
-            if _factor(lapack, J, r, columns, B, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, work, iwork,
-                       RCOND_MIN) < 0:
-                break
-            _solve(lapack, B, ipiv, nz, r, columns, F, dq, ibuf, cbuf)
+            if banded:
+                _band_values(jv, 0, slot, data)
+                if _band_factor(blapack, data, cr, cc, pos, r, columns, AB, bw, ipiv, bi) < 0:
+                    break
+                _band_solve(blapack, AB, bw, ipiv, row_perm, perm, r, columns, F, dq, tmp, bi,
+                            cbuf)
+            else:
+                if stale:
+                    _assemble(jv, 0, jr, jc, J)
+                    stale = False
+                if _factor(lapack, J, r, columns, B, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf,
+                           work, iwork, RCOND_MIN) < 0:
+                    break
+                _solve(lapack, B, ipiv, nz, r, columns, F, dq, ibuf, cbuf)
             for j in range(n):
                 dq[j] = -dq[j]
             a = 1.0
@@ -642,7 +773,11 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                 q[j] = qn[j]
             for i in range(m):
                 F[i] = out_pos[i]
-            _assemble(out_pos, m, jr, jc, J)      # (a Newton step: J is current)
+            if banded:                            # (a Newton step: J is current)
+                for i in range(nnz):
+                    jv[i] = out_pos[m + i]
+            else:
+                _assemble(out_pos, m, jr, jc, J)
             prev = norm
             norm = nn
             it += 1
@@ -655,13 +790,17 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
             for j in range(n):
                 x[1 + j] = q[j]
             _eval_row(ptrs, 1, x, nin, out_vel)
-            if unique:       # (B straight from the values: assembling J first cost 4 %)
-                anorm = _fill_nz(out_vel, jr, jc, r, columns, B)
+            if banded:
+                _band_values(out_vel, 0, slot, data)
+                rc = _band_factor(blapack, data, cr, cc, pos, r, columns, AB, bw, ipiv, bi)
             else:
-                _assemble(out_vel, 0, jr, jc, J)
-                anorm = _fill(J, r, columns, B)
-            rc = _factor_filled(lapack, B, anorm, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, work,
-                                iwork, vguard)
+                if unique:   # (B straight from the values: assembling J first cost 4 %)
+                    anorm = _fill_nz(out_vel, jr, jc, r, columns, B)
+                else:
+                    _assemble(out_vel, 0, jr, jc, J)
+                    anorm = _fill(J, r, columns, B)
+                rc = _factor_filled(lapack, B, anorm, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf,
+                                    work, iwork, vguard)
             if rc < 0:
                 return k, evals
             if rc == RCOND_PENDING:
@@ -674,7 +813,11 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                 rprev[i] = r[i]
             for i in range(m):
                 rhs[i] = -out_vel[nnz + i]
-            _solve(lapack, B, ipiv, nz, r, columns, rhs, dq, ibuf, cbuf)
+            if banded:
+                _band_solve(blapack, AB, bw, ipiv, row_perm, perm, r, columns, rhs, dq, tmp, bi,
+                            cbuf)
+            else:
+                _solve(lapack, B, ipiv, nz, r, columns, rhs, dq, ibuf, cbuf)
             for j in range(n):
                 QD[k, j] = dq[j]
             rconds[k] = rc
@@ -683,7 +826,11 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                 for j in range(n):
                     x[1 + n + j] = dq[j]
                 _eval_row(ptrs, 2, x, nin, out_gam)
-                _solve(lapack, B, ipiv, nz, r, columns, out_gam, dq, ibuf, cbuf)
+                if banded:
+                    _band_solve(blapack, AB, bw, ipiv, row_perm, perm, r, columns, out_gam, dq,
+                                tmp, bi, cbuf)
+                else:
+                    _solve(lapack, B, ipiv, nz, r, columns, out_gam, dq, ibuf, cbuf)
                 for j in range(n):
                     QDD[k, j] = dq[j]
                 e += 1
@@ -710,7 +857,7 @@ def fill_rconds(ptrs, lapack, times, Q, p, jr, jc, columns, R, rconds):
     for j in range(npar):
         x[1 + 2 * n + j] = p[j]
     out_vel = np.empty(nnz + m)
-    J, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, r = _factor_work(m, n)
+    J, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, r = _factor_work(m, n, n)
     S, W, seen = _structure(jr, jc, n)
     unique = _unique(jr, jc, m, n)
     bad = 0

@@ -110,10 +110,10 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
     out_pos = np.empty(m + nnz)
     out_dyn = np.empty(kM + 2 * n)
     out_d = np.empty(max(dr.size, 1))
-    J, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, r = _factor_work(m, n)
+    J, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, r = _factor_work(m, n, n)
     S, W, seen = _structure(jc, jr, n)               # the structure of Phi_q^T
     # Newton's matrix Phi_q^T - dQ/dlambda: its own factors and structure (both terms')
-    _, K, ipiv2, nz2, _, _, _, _, _, _ = _factor_work(m, n)
+    _, K, ipiv2, nz2, _, _, _, _, _, _ = _factor_work(m, n, n)
     S2, W2, seen2 = _structure(jc, jr, n)
     for e in range(dr.size):
         S2[dc[e], dr[e]] = 1.0

@@ -19,7 +19,7 @@ import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 from scipy.linalg.lapack import dgbtrf as _dgbtrf
 from scipy.linalg.lapack import dgbtrs as _dgbtrs
-from scipy.sparse.csgraph import reverse_cuthill_mckee
+from scipy.sparse.csgraph import maximum_bipartite_matching, reverse_cuthill_mckee
 
 SPARSE_THRESHOLD = 150
 RCOND_MIN = 1e-13
@@ -79,7 +79,16 @@ class Factor:
         return x
 
 
-def factor(J) -> Factor:
+def factor(J):
+    """The factorisation of ``J``: :class:`Factor`, or, for a square CSC Jacobian assembled
+    by a system (``System.assemble``, which attaches the system's
+    :class:`FixedPattern` as ``J.mechsys_pattern``), the pattern's factorisation (banded LU
+    for chains; the ordering analysed once instead of at every call). Each has ``rcond``
+    and ``solve(b)``, and raises :class:`Singular` alike."""
+    pat = getattr(J, "mechsys_pattern", None)
+    if pat is not None and J.format == "csc" and J.indptr is pat.indptr \
+            and len(J.data) == len(pat.indices):
+        return pat.factor(J.data)
     return Factor(J)
 
 
@@ -88,7 +97,12 @@ class FixedPattern:
     once and then factorised numerically for each new set of values ``data``.
 
     Analysis: a reverse Cuthill-McKee ordering ``p`` of the symmetrised pattern
-    (``A + A^T``) and the band widths ``kl``, ``ku`` of ``P A P^T``. For chains, and any
+    (``A + A^T``) and the band widths ``kl``, ``ku`` of ``P A P^T``. With ``match_rows``
+    (a constraint Jacobian, whose row ``i`` has nothing to do with column ``i``) the rows
+    are first permuted to put a nonzero on the diagonal (a maximum bipartite matching of
+    rows to columns, ``Q``), and the ordering is that of ``Q A``: ``(P Q A P^T) (P x) = P Q
+    b``. Without it, the symmetric ordering of a chain's Jacobian has the width of the
+    whole chain (its pinned coordinates' single-entry rows come first). For chains, and any
     mechanism whose bodies and joints form a path, the augmented matrix of free motion
     ``[[M, Phi_q^T], [Phi_q, 0]]`` is then banded with widths independent of the number
     of bodies, and LAPACK's banded LU with partial pivoting (``dgbtrf``) costs
@@ -113,17 +127,30 @@ class FixedPattern:
         x = pat.factor(K.data).solve(b)       # K x = b
     """
 
-    def __init__(self, indptr: np.ndarray, indices: np.ndarray, size: int):
+    def __init__(self, indptr: np.ndarray, indices: np.ndarray, size: int,
+                 match_rows: bool = False):
         self.indptr = np.asarray(indptr, dtype=np.int32)
         self.indices = np.asarray(indices, dtype=np.int32)
         self.size = N = int(size)
         rows = self.indices.astype(np.int64)
         cols = np.repeat(np.arange(N), np.diff(self.indptr))
         pat = sps.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(N, N))
-        perm = reverse_cuthill_mckee((pat + pat.T).tocsr(), symmetric_mode=True).astype(np.int64)
+        #: row_of[i]: the row of A that becomes row i of Q A (the identity without matching)
+        row_of = np.arange(N)
+        if match_rows and N:
+            got = maximum_bipartite_matching(pat, perm_type="row").astype(np.int64)
+            if (got >= 0).all():         # else structurally singular: no diagonal to find
+                row_of = got
+        pat_q = pat[row_of]
+        perm = reverse_cuthill_mckee((pat_q + pat_q.T).tocsr(),
+                                     symmetric_mode=True).astype(np.int64)
         inv = np.empty(N, dtype=np.int64)
         inv[perm] = np.arange(N)
-        pr, pc = inv[rows], inv[cols]
+        qinv = np.empty(N, dtype=np.int64)
+        qinv[row_of] = np.arange(N)
+        pr, pc = inv[qinv[rows]], inv[cols]
+        #: the right-hand side's entries in the order of P Q A's rows
+        self.row_perm = row_of[perm]
         self.kl = kl = int((pr - pc).max(initial=0))
         self.ku = ku = int((pc - pr).max(initial=0))
         self.perm = perm
@@ -165,7 +192,8 @@ class _BandFactor:
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         pat = self._pat
-        y, info = _dgbtrs(self._lu, pat.kl, pat.ku, np.asarray(b, dtype=float)[pat.perm], self._ipiv)
+        y, info = _dgbtrs(self._lu, pat.kl, pat.ku, np.asarray(b, dtype=float)[pat.row_perm],
+                          self._ipiv)
         x = np.empty_like(y)
         x[pat.perm] = y
         return x
@@ -389,7 +417,7 @@ class Scaling:
             raw = J.data
             J.data = raw * (self._nz_columns(J) / r[J.indices])
             try:
-                fac = Factor(J)
+                fac = factor(J)
             finally:
                 J.data = raw
         else:
