@@ -52,8 +52,19 @@ def _loaded_spline_cam():
     return m
 
 
+def _loaded_chain():
+    """A chain of 30 four-bar loops (183 coordinates: above SPARSE_THRESHOLD, a banded
+    Jacobian) with masses and gravity."""
+    m = models.four_bar_chain(30)
+    for b in m.bodies:
+        if not b.is_ground:
+            m.set_mass_properties(b.name, mass=1.0, centroid=(0.5, 0), inertia=0.1)
+    m.add_load(ms.Gravity((0, -1), 9.81))
+    return m
+
+
 BUILDS = {"slider-crank": _gas_crank, "n-four-bar": lambda: models.n_four_bar(3),
-          "rotor-3d": _rotor, "spline-cam": _loaded_spline_cam}
+          "rotor-3d": _rotor, "spline-cam": _loaded_spline_cam, "chain-183": _loaded_chain}
 
 
 def _solve_both(monkeypatch, build, t, mode):
@@ -141,7 +152,8 @@ def _friction_incline():
     return incline(0.3, 0.25)
 
 
-@pytest.mark.parametrize("build", [_gas_crank, _friction_incline], ids=["linear", "friction"])
+@pytest.mark.parametrize("build", [_gas_crank, _friction_incline, _loaded_chain],
+                         ids=["linear", "friction", "chain-183"])
 def test_hand_over_mid_sweep_gives_the_python_result(monkeypatch, build):
     """The compiled loop stopped after 7 points: the Python path continues (with friction,
     its Newton from the 7th point's multipliers), and the whole equals an all-Python solve."""
@@ -205,3 +217,20 @@ def test_when_the_compiled_loop_runs(monkeypatch):
     # without the column scales, or in a mode whose rates were not computed: not compiled
     assert _jit.multipliers(*args) == 0
     assert _jit.multipliers(s, t, sol.q, None, None, sol.p, "kinematic", lam, **kw) == 0
+
+
+def test_large_model_with_friction_keeps_the_python_path(monkeypatch):
+    """Above SPARSE_THRESHOLD coordinates loads that depend on the multipliers take the
+    Python path's dense Newton: the compiled loop declines them (returns 0)."""
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    m = _loaded_chain()
+    t = np.linspace(0.0, 1.0, 3)
+    sol = m.solve(t, solution="dynamic")
+    s = sol.system
+    columns = Scaling.of(s, sol.q[0], s.jacobian(t[0], sol.q[0], sol.p)).columns
+    lam = np.empty((len(t), s.m))
+    args = (s, t, sol.q, sol.qd, sol.qdd, sol.p, "dynamic", lam)
+    assert _jit.multipliers(*args, columns=columns) == len(t)
+    np.testing.assert_allclose(lam, sol.lam, rtol=1e-13, atol=1e-12)
+    monkeypatch.setattr(s.dynamics, "depends_on_lambda", True)
+    assert _jit.multipliers(*args, columns=columns) == 0

@@ -105,8 +105,9 @@ def test_spring_static_balance():
 @pytest.mark.parametrize("solution", ["static", "dynamic"])
 def test_large_model_multipliers_solve_sparse(solution):
     """Above ``SPARSE_THRESHOLD`` coordinates the multiplier solve factorises the sparse
-    Jacobian (SuperLU, as the sweep): the same multipliers as the dense solve of the same
-    equations, and the load balance ``Phi_q^T lambda = Q + Qv - M qdd``."""
+    Jacobian (through its pattern, as the sweep) and solves it transposed: the same
+    multipliers as the dense solve of the same equations, and the load balance
+    ``Phi_q^T lambda = Q + Qv - M qdd``."""
     from mechsys.solvers import solve_multipliers
     from mechsys.solvers._linalg import SPARSE_THRESHOLD
 

@@ -127,7 +127,7 @@ def _wanted(system, points: int, banded_ok: bool = False) -> bool:
     """Whether a compiled loop should run for ``points`` points of this system (the
     ``MECHSYS_JIT`` rule of the module docstring; Numba importable). ``banded_ok``: the loop
     also takes systems above ``SPARSE_THRESHOLD`` unknowns whose Jacobian is banded (the
-    sweep; the multiplier solves take dense systems only)."""
+    sweep, and the multiplier solves of loads that do not depend on the multipliers)."""
     m = mode()
     if m == "off" or system.n == 0 or system.m != system.n:
         return False
@@ -154,7 +154,8 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
     dyn = system.dynamics
     # (the recursive dynamics of generalized coordinates has no f_terms kernel)
     if not N or columns is None or getattr(dyn, "recursive", False) \
-            or not _wanted(system, N if points is None else points):
+            or not _wanted(system, N if points is None else points,
+                           banded_ok=not dyn.depends_on_lambda):
         return 0
     code = {"static": 0, "kinematic": 1, "dynamic": 2}[mode_name]
     if (code >= 1 and QD is None) or (code == 2 and QDD is None):
@@ -174,6 +175,7 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
         _state["multipliers"] = loop
     _state["loaded"] = True
     dummy = np.zeros((1, system.n))
+    bw, band = _band_args(system) if system.n > SPARSE_THRESHOLD else _NO_BAND
     return int(_state["multipliers"](
         table, _lapack(), np.ascontiguousarray(times, dtype=float),
         np.ascontiguousarray(Q, dtype=float),
@@ -183,7 +185,8 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
         _index(system.jac_rows), _index(system.jac_cols), _index(dyn.M_rows),
         _index(dyn.M_cols), len(dyn.M_rows), code, LAM, dr, dc,
         np.broadcast_to(np.asarray(guess, dtype=float), (system.m,)).copy(), float(tol),
-        int(max_iterations), np.ascontiguousarray(columns, dtype=float)))
+        int(max_iterations), np.ascontiguousarray(columns, dtype=float), _band_lapack(), bw,
+        band))
 
 
 def _index(a) -> np.ndarray:

@@ -393,6 +393,31 @@ def _band_solve(blapack, AB, bw, ipiv, row_perm, perm, r, columns, b, out, tmp, 
 
 
 @leaf
+def _band_solve_t(blapack, AB, bw, ipiv, row_perm, perm, r, columns, b, out, tmp, bi, cbuf):
+    """``ScaledFactor.solve_transposed`` of :func:`_band_factor`'s factors: ``lambda`` with
+    ``J^T lambda = b``, i.e. ``dgbtrs`` transposed (``blapack[1]``) on ``c b`` in the
+    pattern's column order, back in the rows' order, over ``r``."""
+    n = r.size
+    for i in range(n):
+        out[i] = columns[i] * b[i]
+    for i in range(n):
+        tmp[i] = out[perm[i]]
+    cbuf[1] = 84         # 'T'
+    bi[1] = n            # n, kl, ku, ldab, info, nrhs
+    bi[2] = bw[0]
+    bi[3] = bw[1]
+    bi[4] = bw[2]
+    bi[5] = 0
+    bi[6] = 1
+    _ccall(blapack[1], (cbuf[1:2], bi[1:2], bi[2:3], bi[3:4], bi[6:7], AB, bi[4:5], ipiv, tmp,
+                        bi[1:2], bi[5:6]))
+    for i in range(n):
+        out[row_perm[i]] = tmp[i]
+    for i in range(n):
+        out[i] = out[i] / r[i]
+
+
+@leaf
 def _scaled_norm(F, r, m):
     norm = 0.0
     for i in range(m):

@@ -20,6 +20,11 @@ Python path), in the same order:
   multipliers (friction), Newton with ``D (Phi_q^T - dQ/dlambda) R^-1`` from the previous
   point's multipliers.
 
+Above ``SPARSE_THRESHOLD`` unknowns (loads that do not depend on the multipliers, a
+banded Jacobian pattern) the Python path factorises ``R^-1 Phi_q D`` itself through the
+Jacobian's ``FixedPattern`` and solves it transposed; so does this loop, with the same
+operations and SciPy's ``dgbtrf``/``dgbtrs`` (``_jit_loop._band_factor``, ``_band_solve_t``).
+
 A point that the Python path would refuse (an exactly zero pivot, a reciprocal condition
 below ``RCOND_MIN``) or whose multipliers come out non-finite ends the loop there: the
 Python path takes that point and the rest, with its diagnostics.
@@ -34,6 +39,10 @@ from ._jit_cache import check as _check_cache
 from ._jit_lapack import leaf
 from ._jit_loop import (
     _assemble,
+    _band_factor,
+    _band_rows,
+    _band_solve_t,
+    _band_values,
     _eval_row,
     _factor_filled,
     _factor_work,
@@ -73,7 +82,7 @@ def _loads(ptrs, xd, nin_d, out_dyn, mode, QDD, k, mr, mc, kM, n, Mq, rhs):
 
 @nb.njit(cache=True)
 def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LAM, dr, dc,
-                guess, tol, maxit, cols):
+                guess, tol, maxit, cols, blapack, bw, band):
     """``LAM[k]`` (m,) at each point ``k`` from 0 on; returns the first point left to the
     Python path (``len(times)`` when all are done).
 
@@ -93,7 +102,10 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
     cols``: unit-free, relative to the terms of ``R``), at most ``maxit`` iterations
     (``MultiplierOptions``).
     The Python path's ``J.T @ lambda`` sums with BLAS, so the two can stop one iteration
-    apart at the tolerance: they agree to it, not to rounding."""
+    apart at the tolerance: they agree to it, not to rounding.
+
+    ``bw[0] >= 0``: a large system through its Jacobian's pattern (``bw``, ``band`` as in
+    ``_jit_loop.sweep_dense``; loads that do not depend on the multipliers only)."""
     N = times.size
     n = Q.shape[1]
     m = n
@@ -110,13 +122,26 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
     out_pos = np.empty(m + nnz)
     out_dyn = np.empty(kM + 2 * n)
     out_d = np.empty(max(dr.size, 1))
-    J, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, r = _factor_work(m, n, n)
-    S, W, seen = _structure(jc, jr, n)               # the structure of Phi_q^T
+    banded = bw[0] >= 0
+    if banded and newton:
+        return 0                     # (not taken: _jit.multipliers sends these to Python)
+    slot, cr, cc, pos, row_perm, perm = band
+    nd = 1 if banded else n          # the dense matrices are not used when banded
+    J, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, r = _factor_work(m, n, nd)
     # Newton's matrix Phi_q^T - dQ/dlambda: its own factors and structure (both terms')
-    _, K, ipiv2, nz2, _, _, _, _, _, _ = _factor_work(m, n, n)
-    S2, W2, seen2 = _structure(jc, jr, n)
-    for e in range(dr.size):
-        S2[dc[e], dr[e]] = 1.0
+    _, K, ipiv2, nz2, _, _, _, _, _, _ = _factor_work(m, n, nd if newton else 1)
+    if banded:
+        S, W, seen = np.empty((1, 1)), np.empty((1, 1)), np.full(1, -1, dtype=np.int32)
+        S2, W2, seen2 = S, W, seen
+    else:
+        S, W, seen = _structure(jc, jr, n)           # the structure of Phi_q^T
+        S2, W2, seen2 = _structure(jc, jr, n)
+        for e in range(dr.size):
+            S2[dc[e], dr[e]] = 1.0
+    AB = np.zeros(n * bw[2] if banded else 1)
+    data = np.empty(cr.size)
+    tmp = np.empty(n)
+    bi = np.zeros(8, dtype=np.int32)
     ones = np.ones(n)
     Mq = np.empty(n)
     rhs = np.empty(n)
@@ -133,15 +158,21 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
             x[1 + j] = Q[k, j]
             xd[1 + j] = Q[k, j]
         _eval_row(ptrs, 0, x, nin, out_pos)
-        _assemble(out_pos, m, jr, jc, J)
-        _rows(J, cols, r)
-        for i in range(m):                            # B = R^-1 J D (C order) = B^T stored transposed
-            inv = 1.0 / r[i]
-            for j in range(n):
-                B[i, j] = (J[i, j] * cols[j]) * inv
-        if _factor_filled(lapack, B, _norm1(B, n), ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, work,
-                          iwork, 0.0) < 0:
-            return k
+        if banded:
+            _band_values(out_pos, m, slot, data)
+            _band_rows(data, cr, cc, cols, r)
+            if _band_factor(blapack, data, cr, cc, pos, r, cols, AB, bw, ipiv, bi) < 0:
+                return k
+        else:
+            _assemble(out_pos, m, jr, jc, J)
+            _rows(J, cols, r)
+            for i in range(m):                        # B = R^-1 J D (C order) = B^T stored transposed
+                inv = 1.0 / r[i]
+                for j in range(n):
+                    B[i, j] = (J[i, j] * cols[j]) * inv
+            if _factor_filled(lapack, B, _norm1(B, n), ipiv, nz, S, W, seen, ibuf, cbuf, dbuf,
+                              work, iwork, 0.0) < 0:
+                return k
         if mode != STATIC:
             for j in range(n):
                 xd[1 + n + j] = QD[k, j]
@@ -151,11 +182,15 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
         if not newton:
             if not _loads(ptrs, xd, nin_d, out_dyn, mode, QDD, k, mr, mc, kM, n, Mq, rhs):
                 return k
-            for j in range(n):
-                rhs[j] = cols[j] * rhs[j]
-            _solve(lapack, B, ipiv, nz, ones, ones, rhs, dl, ibuf, cbuf)
-            for i in range(m):
-                lam[i] = dl[i] / r[i]
+            if banded:
+                _band_solve_t(blapack, AB, bw, ipiv, row_perm, perm, r, cols, rhs, lam, tmp, bi,
+                              cbuf)
+            else:
+                for j in range(n):
+                    rhs[j] = cols[j] * rhs[j]
+                _solve(lapack, B, ipiv, nz, ones, ones, rhs, dl, ibuf, cbuf)
+                for i in range(m):
+                    lam[i] = dl[i] / r[i]
         else:
             done = False
             for _ in range(maxit):

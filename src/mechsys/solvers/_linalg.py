@@ -78,6 +78,15 @@ class Factor:
         x, info = sla.lapack.dgetrs(self._lu, self._piv, b)
         return x
 
+    def solve_transposed(self, b: np.ndarray) -> np.ndarray:
+        """``J^T y = b`` from the same factors."""
+        if self.sparse:
+            return self._lu.solve(np.asarray(b, dtype=float), trans="T")
+        if self._lu is None:
+            return np.zeros_like(np.asarray(b, dtype=float))
+        x, info = sla.lapack.dgetrs(self._lu, self._piv, b, trans=1)
+        return x
+
 
 def factor(J):
     """The factorisation of ``J``: :class:`Factor`, or, for a square CSC Jacobian assembled
@@ -198,6 +207,15 @@ class _BandFactor:
         x[pat.perm] = y
         return x
 
+    def solve_transposed(self, b: np.ndarray) -> np.ndarray:
+        """``A^T y = b`` from the same factors: ``(P Q A P^T)^T (P Q y) = P b``."""
+        pat = self._pat
+        z, info = _dgbtrs(self._lu, pat.kl, pat.ku, np.asarray(b, dtype=float)[pat.perm],
+                          self._ipiv, trans=1)
+        y = np.empty_like(z)
+        y[pat.row_perm] = z
+        return y
+
 
 class _PermutedFactor:
     """SuperLU of ``A P_c`` with a fixed column ordering ``P_c``; ``solve(b)`` of ``A x = b``."""
@@ -218,6 +236,10 @@ class _PermutedFactor:
         x = np.empty_like(y)
         x[self._permc] = y
         return x
+
+    def solve_transposed(self, b: np.ndarray) -> np.ndarray:
+        """``A^T y = b``: ``(A P_c)^T y = P_c^T b``."""
+        return self._lu.solve(np.asarray(b, dtype=float)[self._permc], trans="T")
 
 
 #: from this many rows on, :func:`dependent_rows` first tries the sparse certificate
@@ -443,6 +465,10 @@ class ScaledFactor:
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         return self._columns * self._fac.solve(np.asarray(b, dtype=float) / self._rows)
+
+    def solve_transposed(self, b: np.ndarray) -> np.ndarray:
+        """``lambda`` with ``J^T lambda = b``: ``(R^-1 J D)^T (R lambda) = D b``."""
+        return self._fac.solve_transposed(self._columns * np.asarray(b, dtype=float)) / self._rows
 
 
 def length_hint(system) -> float:

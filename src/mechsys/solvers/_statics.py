@@ -57,8 +57,8 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
     opt = options or MultiplierOptions()
     n, m = system.n, system.m
     if J is None:
-        # large models: the sparse Jacobian and SuperLU, as their sweeps (a dense LU of a
-        # chain of 363 coordinates cost 5 ms a point); friction's Newton stays dense
+        # large models: the sparse Jacobian, as their sweeps (a dense LU of a chain of 363
+        # coordinates cost 5 ms a point); friction's Newton stays dense
         J = system.jacobian(t, q, p, n > SPARSE_THRESHOLD and not dyn.depends_on_lambda)
     if not np.all(np.isfinite(J.data if sps.issparse(J) else J)):
         raise ModelError(f"{mode} load solve at t = {t:.6g}: the constraint Jacobian is not "
@@ -68,7 +68,14 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
     sc = Scaling.of(system, q, J) if scaling is None else scaling
     r = sc.rows(J)
     try:
-        fac = factor(sc.scaled(J, r).T)
+        if sps.issparse(J):
+            # the Jacobian's own factorisation (through its pattern, analysed once: banded
+            # LU for chains), solved transposed
+            fac = sc.factor(J, r)
+            solve = fac.solve_transposed
+        else:
+            fac = factor(sc.scaled(J, r).T)
+            solve = lambda b: fac.solve(sc.columns * b) / r       # noqa: E731
     except Singular:
         raise describe_singular(system, J, t, q, f"{mode} load solve", scaling=sc) from None
 
@@ -87,7 +94,7 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
         return b
 
     if not dyn.depends_on_lambda:
-        return fac.solve(sc.columns * rhs(lam)) / r, 0
+        return solve(rhs(lam)), 0
     # converged when the residual is small against its own terms, unit-free (each generalized
     # force times its coordinate's scale: a force times L, a moment times 1):
     #   max_j c_j |R_j| <= tol max_j c_j (sum_i |Phi_ij lambda_i| + |b_j|)
