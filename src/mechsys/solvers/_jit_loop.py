@@ -369,23 +369,30 @@ def _band_factor(blapack, data, cr, cc, pos, r, columns, AB, bw, ipiv, bi):
 
 
 @leaf
-def _band_solve(blapack, AB, bw, ipiv, row_perm, perm, r, columns, b, out, tmp, bi, cbuf):
-    """``ScaledFactor.solve`` of :func:`_band_factor`'s factors: ``b / r`` in the pattern's
-    row order, ``dgbtrs`` (``blapack[1]``), back to the coordinates' order, times ``c``."""
-    n = r.size
-    for i in range(n):
-        out[i] = b[i] / r[i]
-    for i in range(n):
-        tmp[i] = out[row_perm[i]]
-    cbuf[1] = 78         # 'N'
+def _dgbtrs(blapack, AB, bw, ipiv, x, n, trans, bi, cbuf):
+    """LAPACK ``dgbtrs`` (``blapack[1]``) on :func:`_band_factor`'s factors, one right-hand
+    side ``x`` solved in place; ``trans``: ``78`` ('N') or ``84`` ('T')."""
+    cbuf[1] = trans
     bi[1] = n            # n, kl, ku, ldab, info, nrhs
     bi[2] = bw[0]
     bi[3] = bw[1]
     bi[4] = bw[2]
     bi[5] = 0
     bi[6] = 1
-    _ccall(blapack[1], (cbuf[1:2], bi[1:2], bi[2:3], bi[3:4], bi[6:7], AB, bi[4:5], ipiv, tmp,
+    _ccall(blapack[1], (cbuf[1:2], bi[1:2], bi[2:3], bi[3:4], bi[6:7], AB, bi[4:5], ipiv, x,
                         bi[1:2], bi[5:6]))
+
+
+@leaf
+def _band_solve(blapack, AB, bw, ipiv, row_perm, perm, r, columns, b, out, tmp, bi, cbuf):
+    """``ScaledFactor.solve`` of :func:`_band_factor`'s factors: ``b / r`` in the pattern's
+    row order, ``dgbtrs``, back to the coordinates' order, times ``c``."""
+    n = r.size
+    for i in range(n):
+        out[i] = b[i] / r[i]
+    for i in range(n):
+        tmp[i] = out[row_perm[i]]
+    _dgbtrs(blapack, AB, bw, ipiv, tmp, n, 78, bi, cbuf)
     for i in range(n):
         out[perm[i]] = tmp[i]
     for i in range(n):
@@ -395,22 +402,14 @@ def _band_solve(blapack, AB, bw, ipiv, row_perm, perm, r, columns, b, out, tmp, 
 @leaf
 def _band_solve_t(blapack, AB, bw, ipiv, row_perm, perm, r, columns, b, out, tmp, bi, cbuf):
     """``ScaledFactor.solve_transposed`` of :func:`_band_factor`'s factors: ``lambda`` with
-    ``J^T lambda = b``, i.e. ``dgbtrs`` transposed (``blapack[1]``) on ``c b`` in the
-    pattern's column order, back in the rows' order, over ``r``."""
+    ``J^T lambda = b``, i.e. ``dgbtrs`` transposed on ``c b`` in the pattern's column order,
+    back in the rows' order, over ``r``."""
     n = r.size
     for i in range(n):
         out[i] = columns[i] * b[i]
     for i in range(n):
         tmp[i] = out[perm[i]]
-    cbuf[1] = 84         # 'T'
-    bi[1] = n            # n, kl, ku, ldab, info, nrhs
-    bi[2] = bw[0]
-    bi[3] = bw[1]
-    bi[4] = bw[2]
-    bi[5] = 0
-    bi[6] = 1
-    _ccall(blapack[1], (cbuf[1:2], bi[1:2], bi[2:3], bi[3:4], bi[6:7], AB, bi[4:5], ipiv, tmp,
-                        bi[1:2], bi[5:6]))
+    _dgbtrs(blapack, AB, bw, ipiv, tmp, n, 84, bi, cbuf)
     for i in range(n):
         out[row_perm[i]] = tmp[i]
     for i in range(n):
