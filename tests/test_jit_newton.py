@@ -49,7 +49,8 @@ def _both(monkeypatch, build, t, **kw):
 
 CASES = {"friction": (sliding_block, {"rtol": 1e-10, "atol": 1e-12}),
          "added-mass": (added_mass_pendulum, {"rtol": 1e-10, "atol": 1e-12}),
-         "friction-adams": (sliding_block, {"method": "adams", "max_error": 1e-10})}
+         "friction-adams": (sliding_block, {"method": "adams", "max_error": 1e-10}),
+         "friction-rk45": (sliding_block, {"method": "rk45", "rtol": 1e-10, "atol": 1e-12})}
 
 
 @pytest.mark.parametrize("name", list(CASES))

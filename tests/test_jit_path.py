@@ -27,6 +27,7 @@ def _both(monkeypatch, build, t, **kw):
 
 
 @pytest.mark.parametrize("method,kw", [("dop853", {"rtol": 1e-11, "atol": 1e-12}),
+                                       ("rk45", {"rtol": 1e-10, "atol": 1e-12}),
                                        ("adams", {"max_error": 1e-9})])
 @pytest.mark.parametrize("example", [caster, knife], ids=["caster", "knife-edge"])
 def test_compiled_and_python_paths_agree(monkeypatch, example, method, kw):
@@ -41,6 +42,7 @@ def test_compiled_and_python_paths_agree(monkeypatch, example, method, kw):
 
 
 @pytest.mark.parametrize("method,kw,tol", [("dop853", {"rtol": 1e-11, "atol": 1e-12}, 1e-8),
+                                           ("rk45", {"rtol": 1e-10, "atol": 1e-12}, 1e-8),
                                            ("adams", {"max_error": 1e-8}, 1e-5)])
 def test_compiled_caster_follows_its_closed_form(monkeypatch, method, kw, tol):
     monkeypatch.setenv("MECHSYS_JIT", "1")

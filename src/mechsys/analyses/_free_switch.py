@@ -387,11 +387,9 @@ class SwitchedFreeSystem(FreeSystem):
     @staticmethod
     def _stepper(plans, combo, S, opt, p, sc, t_eval, t_now, y, kw):
         """The compiled stepper of stage combination ``combo`` (planned once per run), or
-        None where the compiled loop cannot run it (RK45, the ``MECHSYS_JIT`` rule, ...)."""
-        if opt.method != "dop853":
-            return None
+        None where the compiled loop cannot run it (the ``MECHSYS_JIT`` rule, ...)."""
         if combo not in plans:
-            plans[combo] = FreeStepper.plan(S, "dop853", p, sc, None, False, True, t_eval,
+            plans[combo] = FreeStepper.plan(S, opt.method, p, sc, None, False, True, t_eval,
                                             (t_now, y[:S.n]), newton=kw)
         fast = plans[combo]
         if fast is not None:

@@ -113,7 +113,7 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
     assumes a smooth derivative).
     ``scale`` (len(y0),): the unit of each component; the absolute tolerance of component
     ``i`` is ``atol * scale[i]``.
-    ``fast`` (optional, DOP853): a compiled stepper (:class:`._jit_free.FreeStepper`) that
+    ``fast`` (optional, DOP853 or RK45): a compiled stepper (:class:`._jit_free.FreeStepper`) that
     takes the regular steps of the same SciPy solver; after a handover this loop takes
     :data:`._jit_free.PAUSE_STEPS` steps itself. The accelerations and multipliers it
     computed come back in ``diagnostics["derivatives"]``: ``(qdd (rows, n), lam (rows, m))``

@@ -1,4 +1,4 @@
-r"""Free motion compiled with Numba: DOP853 steps, the augmented-system solves and the
+r"""Free motion compiled with Numba: DOP853 or RK45 steps, the augmented-system solves and the
 projections onto the constraints with no Python between the compiled equations.
 
 :meth:`~mechsys.analyses._free.FreeSystem.simulate` integrates
@@ -8,12 +8,12 @@ projections onto the constraints with no Python between the compiled equations.
            \begin{bmatrix} \ddot q \\ \lambda \end{bmatrix} =
            \begin{bmatrix} Q + Q_v \\ \gamma \end{bmatrix}
 
-with SciPy's DOP853 and projects ``(q, qd)`` onto ``Phi = 0``, ``Phi_q qd = -Phi_t`` after
-every accepted step. The compiled loop (``_jit_free_loop.dop853``) performs exactly these
+with SciPy's DOP853 (or RK45) and projects ``(q, qd)`` onto ``Phi = 0``, ``Phi_q qd = -Phi_t`` after
+every accepted step. The compiled loop (``_jit_free_loop.runge_kutta``) performs exactly these
 steps: SciPy's Runge-Kutta stages, error norm and step-size control (same coefficients,
 read from SciPy), the augmented system from the compiled SymEngine kernel solved by the
 LAPACK ``dgesv`` SciPy calls, the projection's unit-free minimum-norm Newton corrections,
-and DOP853's dense output at requested output times. Sums over stages are plain loops where
+and the method's dense output at requested output times. Sums over stages are plain loops where
 SciPy calls BLAS, so the two paths agree to rounding (about 1e-15 per step), not bit for bit.
 
 The compiled loop takes the regular steps. Where the Python path needs its special
@@ -25,8 +25,8 @@ resumes. It also returns every :data:`CHUNK_STEPS` steps so that progress is sho
 Ctrl-C is honoured.
 
 When it runs (``MECHSYS_JIT``, as for the kinematic sweep): ``0`` never; ``1`` or unset
-whenever possible. Possible means: Numba installed (the ``fast`` extra); DOP853 or one of
-Mech's Adams methods; a dense augmented system (``n + m <= SPARSE_THRESHOLD``) or the block
+whenever possible. Possible means: Numba installed (the ``fast`` extra); DOP853, RK45 or
+one of Mech's Adams methods; a dense augmented system (``n + m <= SPARSE_THRESHOLD``) or the block
 path; every kernel SymEngine LLVM code (CSE kernels included: their repeated outputs are
 expanded in the loop). Loads that depend on the multipliers (friction) or accelerations
 (added mass) take ``free_acceleration``'s Newton in the loop (``"newton"``, decision 0028).
@@ -60,19 +60,33 @@ PAUSE_STEPS = 8
 #: compiled steps per call (progress and Ctrl-C are handled between calls)
 CHUNK_STEPS = 2000
 #: the methods with a compiled loop (``integration_options`` names; Adams: Mech's three)
-METHODS = ("dop853", "automatic", "predictor", "corrector")
+METHODS = ("dop853", "rk45", "automatic", "predictor", "corrector")
+RK = ("dop853", "rk45")
 
 _state: dict = {"loop": None, "adams": None, "workspace": None, "derivative": None, "coef": None,
                 "gesv": None, "path_acc": None}
 
 
-def _coefficients():
-    if _state["coef"] is None:
-        from scipy.integrate._ivp import dop853_coefficients as c
+def _coefficients(solver):
+    """``(method, A, B, C, E3, E5, D)`` of ``_jit_free_loop.runge_kutta`` for the SciPy
+    ``solver`` (DOP853, or RK45: its ``E`` and ``P`` in the places of ``E5`` and ``D``)."""
+    from scipy.integrate import RK45
 
-        _state["coef"] = tuple(np.ascontiguousarray(a, dtype=float)
-                               for a in (c.A, c.B, c.C, c.E3, c.E5, c.D))
-    return _state["coef"]
+    from ._jit_free_loop import DOP853
+    from ._jit_free_loop import RK45 as RK45_CODE
+
+    key = "coef_rk45" if isinstance(solver, RK45) else "coef"
+    if _state.get(key) is None:
+        if key == "coef_rk45":
+            arrays = (solver.A, solver.B, solver.C, np.zeros(1), solver.E, solver.P)
+            code = RK45_CODE
+        else:
+            from scipy.integrate._ivp import dop853_coefficients as c
+
+            arrays = (c.A, c.B, c.C, c.E3, c.E5, c.D)
+            code = DOP853
+        _state[key] = (code,) + tuple(np.ascontiguousarray(a, dtype=float) for a in arrays)
+    return _state[key]
 
 
 def _lapack() -> np.ndarray:
@@ -340,9 +354,9 @@ class FreeStepper:
         self.EQDD, self.ELAM = np.full((k, n), np.nan), np.full((k, m), np.nan)
         self.steps = 0
         if _state["loop"] is None:
-            from ._jit_free_loop import adams, derivative, dop853, workspace
+            from ._jit_free_loop import adams, derivative, runge_kutta, workspace
 
-            _state["loop"], _state["adams"], _state["workspace"] = dop853, adams, workspace
+            _state["loop"], _state["adams"], _state["workspace"] = runge_kutta, adams, workspace
             _state["derivative"] = derivative
         # the loops' work arrays, owned here for every run of this stepper (the loops borrow
         # them: decision 0021)
@@ -360,7 +374,7 @@ class FreeStepper:
         one of Mech's Adams methods; ``start``: ``(t0, q0)``), else None."""
         if _jit.mode() == "off" or method not in METHODS or system.n == 0:
             return None
-        if method != "dop853":
+        if method not in RK:
             t_eval = None              # Adams output times are interpolated afterwards
         dyn = system.dynamics
         if not _jit.available():
@@ -442,7 +456,7 @@ class FreeStepper:
         if (_jit.mode() == "off" or method not in METHODS or n == 0 or n > SMALL_LU
                 or not _jit.available()):
             return None
-        if method != "dop853":
+        if method not in RK:
             t_eval = None
         entries = [_entry(path._f)] + _constraint_entries(system, system.f_position,
                                                           system.f_velocity)
@@ -475,13 +489,13 @@ class FreeStepper:
         return row if self.ny == self.n else np.concatenate((y[self.n:], row))
 
     def advance(self, solver, ie: int, max_steps: int | None = None):
-        """Compiled steps of the SciPy DOP853 ``solver`` from its current state; the solver is
-        left at the last accepted step (status ``"finished"`` at the end). Returns ``(status,
+        """Compiled steps of the SciPy DOP853 or RK45 ``solver`` from its current state; the
+        solver is left at the last accepted step (status ``"finished"`` at the end). Returns ``(status,
         T, Y, H, QDD, LAM, ie)``: the accepted steps' times, states, step sizes, accelerations
         and multipliers (NaN rows: not known), and the next output index."""
         n, m = self.n, self.m
         max_steps = CHUNK_STEPS if max_steps is None else max_steps
-        A, B, C, E3, E5, D = _coefficients()
+        method, A, B, C, E3, E5, D = _coefficients(solver)
         T, H = np.empty(max_steps), np.empty(max_steps)
         Y = np.empty((max_steps, self.ny))
         QDD, LAM = np.empty((max_steps, n)), np.empty((max_steps, m))
@@ -493,7 +507,7 @@ class FreeStepper:
         status, steps, ie, evals, rejected, projections = _state["loop"](
             self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr, self.jc,
             self.rows0, self.columns, self.offset, self.robust, self.mode,
-            self.blk_i, self.ws, self.correction, 1e-12, 8, A, B, C, E3, E5, D,
+            self.blk_i, self.ws, self.correction, 1e-12, 8, method, A, B, C, E3, E5, D,
             float(solver.rtol), atol, float(solver.max_step),
             float(solver.t_bound), float(solver.direction), state, y, f, self.t_eval, int(ie),
             int(max_steps), T, Y, H, QDD, LAM, self.ET, self.EY, self.EQDD, self.ELAM)

@@ -10,9 +10,10 @@ the Python path fixes one:
                  up to ``SMALL`` unknowns, by the same elimination written out here
 * ``_min_norm``  ``solvers._free._min_norm``: ``D J^T (J^ J^T)^-1 b``, ``J^ = R^-1 J D``
 * ``_project``   ``solvers._free.project`` (positions, then velocities)
-* ``_stage``     ``scipy.integrate._ivp.rk.rk_step`` for DOP853, with its error norm
-                 (``DOP853._estimate_error_norm``) and step-size control (``_step_impl``)
-* ``_dense``     ``DOP853._dense_output_impl`` and ``Dop853DenseOutput``
+* ``runge_kutta`` ``scipy.integrate._ivp.rk.rk_step`` for DOP853 and RK45, with their
+                 error norms (``DOP853._estimate_error_norm``, ``RungeKutta``'s RMS norm of
+                 ``K^T E h / scale``), step-size control (``_step_impl``) and dense output
+                 (``Dop853DenseOutput``; ``RkDenseOutput`` with ``Q = K^T P``)
 * ``_path_velocity`` ``analyses._path.PathSystem.velocities`` (a nonholonomic path's
                  derivative, velocity constraints linear in the velocities; decision 0027),
                  and ``path_accelerations`` its ``accelerations`` at the outputs
@@ -74,8 +75,8 @@ SMALL = 24
 SAFETY = 0.9
 MIN_FACTOR = 0.2
 MAX_FACTOR = 10.0
-ERROR_EXPONENT = -1.0 / 8.0          # -1 / (error_estimator_order + 1), DOP853
-N_STAGES = 12
+#: the methods of :func:`runge_kutta`
+DOP853, RK45 = 0, 1
 
 
 @leaf
@@ -655,14 +656,17 @@ def _setup(x, p, n, m, blocks, lam):
 
 
 @nb.njit(cache=True)
-def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, robust,
-           blocks, blk_i, ws, correction, ptol, pmaxit, Acoef, Bcoef, Ccoef, E3, E5, Dcoef, rtol,
-           atol, max_step,
-           t_bound, direction, state, y, f, t_eval, ie0, max_steps,
-           T, Y, H, QDD, LAM, ET, EY, EQDD, ELAM):
-    """Accepted DOP853 steps from ``(state[0] = t, y, f, state[1] = h_abs)``; see the module
-    docstring. Returns ``(status, steps, ie, evaluations, rejected, projections)``; the
-    state arrays hold the last accepted (projected) state and its derivative."""
+def runge_kutta(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, robust,
+                blocks, blk_i, ws, correction, ptol, pmaxit, method, Acoef, Bcoef, Ccoef, E3,
+                E5, Dcoef, rtol, atol, max_step,
+                t_bound, direction, state, y, f, t_eval, ie0, max_steps,
+                T, Y, H, QDD, LAM, ET, EY, EQDD, ELAM):
+    """Accepted DOP853 or RK45 (``method``) steps from ``(state[0] = t, y, f, state[1] =
+    h_abs)``; see the module docstring. The method's coefficients: DOP853's ``A`` (16, 16),
+    ``B``, ``C``, ``E3``, ``E5``, ``D`` (its dense output's); RK45's ``A``, ``B``, ``C``,
+    ``E`` (in ``E5``; ``E3`` unused) and ``P`` (in ``Dcoef``). Returns ``(status, steps,
+    ie, evaluations, rejected, projections)``; the state arrays hold the last accepted
+    (projected) state and its derivative."""
     N2 = n if blocks == PATH else 2 * n
     npar = p.size
     nin = 1 + 2 * n + m + npar + n                   # [t, q, qd, lambda, p, qdd]
@@ -690,6 +694,10 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
     steps = 0
     ie = ie0
     n_eval = t_eval.size
+    rk45 = method == RK45
+    n_stages = 6 if rk45 else 12
+    # -1 / (error_estimator_order + 1)
+    error_exponent = -1.0 / 5.0 if rk45 else -1.0 / 8.0
     while steps < max_steps:
         # -- one step of scipy's RungeKutta._step_impl --
         min_step = 10.0 * abs(np.nextafter(t, direction * np.inf) - t)
@@ -712,7 +720,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
             h_abs = abs(h)
             for j in range(N2):
                 K[0, j] = f[j]
-            for s in range(1, N_STAGES):
+            for s in range(1, n_stages):
                 for j in range(N2):
                     acc = 0.0
                     for k in range(s):
@@ -725,7 +733,7 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
                     return HANDOVER, steps, ie, evals, rejected, projections
             for j in range(N2):
                 acc = 0.0
-                for k in range(N_STAGES):
+                for k in range(n_stages):
                     acc += K[k, j] * Bcoef[k]
                 ynew[j] = y[j] + h * acc
             evals += 1
@@ -734,42 +742,62 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
                         blocks, blk_i, blk_w, t + h, ynew, fnew):
                 return HANDOVER, steps, ie, evals, rejected, projections
             for j in range(N2):
-                K[N_STAGES, j] = fnew[j]
-            # DOP853._estimate_error_norm
-            e5 = 0.0
-            e3 = 0.0
-            for j in range(N2):
-                scale[j] = atol[j] + max(abs(y[j]), abs(ynew[j])) * rtol
-                a5 = 0.0
-                a3 = 0.0
-                for k in range(N_STAGES + 1):
-                    a5 += K[k, j] * E5[k]
-                    a3 += K[k, j] * E3[k]
-                a5 /= scale[j]
-                a3 /= scale[j]
-                e5 += a5 * a5
-                e3 += a3 * a3
-            if e5 == 0 and e3 == 0:
-                error_norm = 0.0
+                K[n_stages, j] = fnew[j]
+            if rk45:
+                # RungeKutta._estimate_error_norm: the RMS norm of (K^T E) h / scale
+                e5 = 0.0
+                for j in range(N2):
+                    scale[j] = atol[j] + max(abs(y[j]), abs(ynew[j])) * rtol
+                    a5 = 0.0
+                    for k in range(n_stages + 1):
+                        a5 += K[k, j] * E5[k]
+                    a5 = a5 * h / scale[j]
+                    e5 += a5 * a5
+                error_norm = np.sqrt(e5) / np.sqrt(N2)
             else:
-                error_norm = abs(h) * e5 / np.sqrt((e5 + 0.01 * e3) * N2)
+                # DOP853._estimate_error_norm
+                e5 = 0.0
+                e3 = 0.0
+                for j in range(N2):
+                    scale[j] = atol[j] + max(abs(y[j]), abs(ynew[j])) * rtol
+                    a5 = 0.0
+                    a3 = 0.0
+                    for k in range(n_stages + 1):
+                        a5 += K[k, j] * E5[k]
+                        a3 += K[k, j] * E3[k]
+                    a5 /= scale[j]
+                    a3 /= scale[j]
+                    e5 += a5 * a5
+                    e3 += a3 * a3
+                if e5 == 0 and e3 == 0:
+                    error_norm = 0.0
+                else:
+                    error_norm = abs(h) * e5 / np.sqrt((e5 + 0.01 * e3) * N2)
             if error_norm < 1:
                 if error_norm == 0:
                     factor = MAX_FACTOR
                 else:
-                    factor = min(MAX_FACTOR, SAFETY * error_norm ** ERROR_EXPONENT)
+                    factor = min(MAX_FACTOR, SAFETY * error_norm ** error_exponent)
                 if was_rejected:
                     factor = min(1.0, factor)
                 h_abs *= factor
                 accepted = True
             else:
-                h_abs *= max(MIN_FACTOR, SAFETY * error_norm ** ERROR_EXPONENT)
+                h_abs *= max(MIN_FACTOR, SAFETY * error_norm ** error_exponent)
                 was_rejected = True
                 rejected += 1
-        # -- output times inside the step: DOP853 dense output, then projection --
+        # -- output times inside the step: the method's dense output, then projection --
         ie_step = ie
-        if ie < n_eval and (t_eval[ie] - t_new) * direction <= 0:
-            for s in range(N_STAGES + 1, 16):
+        if ie < n_eval and (t_eval[ie] - t_new) * direction <= 0 and rk45:
+            # RK45._dense_output_impl: Q = K^T P (rows 0-3 of F)
+            for j in range(N2):
+                for i in range(4):
+                    acc = 0.0
+                    for k in range(n_stages + 1):
+                        acc += K[k, j] * Dcoef[k, i]
+                    F[i, j] = acc
+        elif ie < n_eval and (t_eval[ie] - t_new) * direction <= 0:
+            for s in range(n_stages + 1, 16):
                 for j in range(N2):
                     acc = 0.0
                     for k in range(s):
@@ -791,17 +819,28 @@ def dop853(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, 
                     for k in range(16):
                         acc += Dcoef[i, k] * K[k, j]
                     F[3 + i, j] = h * acc
+        if ie < n_eval and (t_eval[ie] - t_new) * direction <= 0:
             while ie < n_eval and (t_eval[ie] - t_new) * direction <= 0:
                 xi = (t_eval[ie] - t) / h
-                for j in range(N2):
-                    v = 0.0
-                    for i in range(7):
-                        v += F[6 - i, j]
-                        if i % 2 == 0:
-                            v *= xi
-                        else:
-                            v *= 1 - xi
-                    yo[j] = v + y[j]
+                if rk45:
+                    # RkDenseOutput: y_old + h Q [x, x^2, x^3, x^4]
+                    for j in range(N2):
+                        v = 0.0
+                        pw = 1.0
+                        for i in range(4):
+                            pw *= xi
+                            v += F[i, j] * pw
+                        yo[j] = h * v + y[j]
+                else:
+                    for j in range(N2):
+                        v = 0.0
+                        for i in range(7):
+                            v += F[6 - i, j]
+                            if i % 2 == 0:
+                                v *= xi
+                            else:
+                                v *= 1 - xi
+                        yo[j] = v + y[j]
                 if correction:
                     if not _project(kp[1], kp[2], lapack, xk, nin_k, out_pos, out_vel, jr, jc,
                                     columns, offset, ptol, pmaxit, robust, n, m, t_eval[ie], yo,
@@ -1088,7 +1127,7 @@ def derivative(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, robu
 
 @nb.njit(cache=True)
 def workspace(kp, n, m, npar, kk, nnz, blocks, blk_i, bw):
-    """The work arrays of ``dop853`` and ``adams`` (their ``ws`` argument), allocated once per
+    """The work arrays of ``runge_kutta`` and ``adams`` (their ``ws`` argument), allocated once per
     stepper by the Python caller: it owns them for the loops' whole run, which is what lets
     the loops borrow them (``_jit_borrow``: no reference counting in the inner calls).
     ``kp`` (3, 5) the kernels' rows, ``kk`` the kernel's outputs before the right-hand side,
