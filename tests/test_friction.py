@@ -87,3 +87,34 @@ def test_spherical_joint_friction_3d():
     np.testing.assert_allclose(Mspin[:, 2], mu * r * W, rtol=1e-8)
     F, _ = sol.reaction("ball", "ball")
     np.testing.assert_allclose(F, np.tile([0, 0, W], (4, 1)), atol=1e-8)
+
+
+def test_joint_addressed_by_name_or_number():
+    """``JointFriction("pin")`` (or the constraint's Mech number) is the friction of that
+    joint, its kind inferred when the load is added; an unknown name and a bad ``kind`` are
+    refused with a clear error. (Before, a name raised "cannot tell whether str is a
+    rotational or translational joint".)"""
+    def wheel(spec, **kw):
+        m = ms.Model2D()
+        w = m.add_body("wheel", mass=0.0)
+        pin = m.add(ms.Revolute2(m.ground.point((0, 0)), w.point(0)), name="pin")
+        m.add(ms.RotationLock1(w, 3.0 * T), name="motor")
+        m.add_load(ms.Force(w.point(0), (0, -1), 300.0))
+        load = ms.JointFriction(pin.number if spec == "number" else spec, mu=0.2, radius=0.05,
+                                v_eps=1e-6, **kw)
+        m.add_load(load)
+        _, torque = m.solve(np.linspace(0, 1, 3), solution="kinematic").reaction("motor", "wheel")
+        return load, torque
+
+    for spec in ("pin", "number"):
+        load, torque = wheel(spec)
+        assert load.kind == "rotational"
+        np.testing.assert_allclose(torque, 0.2 * 0.05 * 300.0, rtol=1e-9)
+    with pytest.raises(ms.UnknownConstraintError, match="no constraint named 'hinge'"):
+        wheel("hinge")
+    with pytest.raises(ms.ModelError, match="kind must be 'rotational' or 'translational'"):
+        ms.JointFriction("pin", mu=0.2, kind="rotary")
+    with pytest.raises(ms.ModelError, match="cannot tell whether Constraint is a rotational"):
+        m = ms.Model2D()
+        b = m.add_body("b")
+        ms.JointFriction(ms.Constraint([b.q[0]]), mu=0.1)

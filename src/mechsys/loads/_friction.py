@@ -21,6 +21,8 @@ equations become nonlinear in the multipliers: statics and inverse dynamics then
 
 from __future__ import annotations
 
+import numbers
+
 import sympy as sp
 
 from .._errors import ModelError
@@ -32,26 +34,31 @@ _TRANSLATIONAL = {"Translate2", "Translate5", "Cylindrical4"}
 
 class JointFriction(LoadBase):
     """Coulomb (``mu``, and ``radius`` for rotational joints) plus viscous (``viscous``)
-    friction in a joint. ``kind`` is ``"rotational"`` or ``"translational"`` (default from
-    the constraint type)."""
+    friction in a joint: the constraint object, or its name or Mech number (resolved when the
+    load is added to the model). ``kind`` is ``"rotational"`` or ``"translational"``
+    (default from the constraint type)."""
 
     def __init__(self, constraint, mu=0.0, radius=0.0, viscous=0.0, kind=None,
                  v_eps=1e-3, eps_reaction=1e-30):
         super().__init__()
         self.constraint = constraint
         self.mu, self.radius, self.viscous = (sp.sympify(x) for x in (mu, radius, viscous))
-        name = type(constraint).__name__
-        if kind is None:
-            kind = "rotational" if name in _ROTATIONAL else (
-                "translational" if name in _TRANSLATIONAL else None)
-        if kind not in ("rotational", "translational"):
-            raise ModelError(f"JointFriction: cannot tell whether {name} is a rotational or "
-                             "translational joint; pass kind='rotational' or 'translational'")
-        self.kind = kind
+        if kind is not None and kind not in ("rotational", "translational"):
+            raise ModelError(f"JointFriction: kind must be 'rotational' or 'translational', "
+                             f"got {kind!r}")
+        # a name or number is resolved by check(), when the load is added to a model
+        self.kind = kind if kind is not None or _addressed(constraint) else _kind_of(constraint)
         self.v_eps, self.eps_reaction = v_eps, eps_reaction
 
     def bodies(self):
-        return self.constraint.bodies()
+        # (addressed by name or number: the model resolves the constraint in check())
+        return [] if _addressed(self.constraint) else self.constraint.bodies()
+
+    def check(self, model) -> None:
+        c = model.constraint(self.constraint)     # an unknown name or number raises here
+        if self.kind is None:
+            self.kind = _kind_of(c)
+        super().check(model)
 
     def _pair(self, model):
         c = model.constraint(self.constraint)
@@ -103,3 +110,19 @@ class JointFriction(LoadBase):
             out.append(PointForce(b2.point(0), -F))
             out.append(BodyMoment(b2, sp_.moment_about(P - b2.r, -F)))
         return out
+
+
+def _addressed(constraint) -> bool:
+    """A constraint given by name or Mech number rather than as the object."""
+    return isinstance(constraint, str) or (isinstance(constraint, numbers.Integral)
+                                           and not isinstance(constraint, bool))
+
+
+def _kind_of(constraint) -> str:
+    name = type(constraint).__name__
+    kind = "rotational" if name in _ROTATIONAL else (
+        "translational" if name in _TRANSLATIONAL else None)
+    if kind is None:
+        raise ModelError(f"JointFriction: cannot tell whether {name} is a rotational or "
+                         "translational joint; pass kind='rotational' or 'translational'")
+    return kind
