@@ -128,6 +128,34 @@ def test_sparse_free_acceleration_agrees_with_dense(monkeypatch, band_work):
     np.testing.assert_allclose(sp_lam, de_lam, rtol=0, atol=1e-10 * np.abs(de_lam).max())
 
 
+def test_large_friction_newton_through_its_pattern(monkeypatch):
+    """A 32-link chain with Coulomb friction in every joint (160 unknowns): the Newton
+    matrix ``[[M, Phi_q^T - dQ/dlambda], [Phi_q, 0]]`` is factorised through its fixed
+    pattern (banded), no sparse matrices per iteration: accelerations and multipliers as
+    the dense Newton's, and the equations of motion hold at them."""
+    m = models.pendulum_chain(32)
+    for k in range(32):
+        m.add_load(ms.JointFriction(f"j{k}", mu=0.3, radius=0.02, v_eps=1e-3))
+    m.solve(0.0)
+    free = m.free(drop=[f"lock{k}" for k in range(32)])
+    s = free.system
+    assert s.n + s.m > _linalg.SPARSE_THRESHOLD and s.dynamics.depends_on_lambda
+    rng = np.random.default_rng(5)
+    q, qd, p = _state(free, rng)
+    qdd, lam, its = _free.free_acceleration(s, 0.0, q, qd, p)
+    rows, cols, pattern = _free._newton_pattern(s)
+    assert pattern.banded and pattern.kl + pattern.ku < 40 and its >= 1
+    monkeypatch.setattr(_free, "SPARSE_THRESHOLD", 10**6)
+    de_qdd, de_lam, _ = _free.free_acceleration(s, 0.0, q, qd, p)
+    np.testing.assert_allclose(qdd, de_qdd, rtol=0, atol=1e-10 * np.abs(de_qdd).max())
+    np.testing.assert_allclose(lam, de_lam, rtol=0, atol=1e-10 * np.abs(de_lam).max())
+    # the converged equations of motion, evaluated independently
+    M, Q, Qv = s.dynamics.terms(0.0, q, qd, lam, p, qdd)
+    J = s.jacobian(0.0, q, p)
+    res = M @ qdd + J.T @ lam - Q - Qv
+    assert np.abs(res).max() <= 1e-9 * (np.abs(Q).max() + np.abs(J.T @ lam).max())
+
+
 def test_sparse_free_system_with_a_massless_link_is_diagnosed():
     """A massless, inertia-free last link leaves its rotation free of mass: the banded
     factorisation meets a zero pivot and the error names the link, as on the dense path."""

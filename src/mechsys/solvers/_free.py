@@ -26,15 +26,15 @@ import scipy.sparse as sps
 from scipy.linalg.lapack import dgesv as _dgesv
 
 from .._errors import ConvergenceError, SingularJacobianError, SingularMassError
-from ._linalg import SPARSE_THRESHOLD, Scaling, Singular, dependent_rows, factor
+from ._linalg import SPARSE_THRESHOLD, FixedPattern, Scaling, Singular, dependent_rows, factor
 from ._position import describe_singular
 from ._rank import ZONE, InZone, kkt_rank_tolerant
 
 
-def _augmented(M, J, D=None):
+def _augmented(M, J, D=None, dense=False):
     n, m = M.shape[0], J.shape[0]
     JT = J.T if D is None else J.T - D
-    if n + m > SPARSE_THRESHOLD:
+    if n + m > SPARSE_THRESHOLD and not dense:
         return sps.bmat([[sps.csc_matrix(M), sps.csc_matrix(JT)],
                          [sps.csc_matrix(J), None]], format="csc")
     K = np.zeros((n + m, n + m))
@@ -116,11 +116,17 @@ def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterat
         mu = (c[:, None] * np.abs(Meff) * c[None, :]).max(initial=0.0) or 1.0
         dr = np.concatenate((c / mu, 1.0 / rho))
         dc = np.concatenate((c, mu / rho))
-        K = _augmented(Meff, J, D)
-        K = (sps.diags(dr) @ K @ sps.diags(dc)).tocsc() if sps.issparse(K) else \
-            dr[:, None] * K * dc[None, :]
+        pat = _newton_pattern(system) if n + m > SPARSE_THRESHOLD else None
+        K = _augmented(Meff, J, D, dense=pat is not None)
         try:
-            dx = dc * factor(K).solve(-dr * np.concatenate((r1, r2)))
+            if pat is not None:
+                # the matrix's fixed pattern, analysed once (banded LU for chains): no sparse
+                # matrix objects per iteration (they cost 10-20 times the factorisation)
+                rows, cols, pattern = pat
+                fac = pattern.factor((dr[rows] * K[rows, cols]) * dc[cols])
+            else:
+                fac = factor(dr[:, None] * K * dc[None, :])
+            dx = dc * fac.solve(-dr * np.concatenate((r1, r2)))
         except Singular:
             raise _singular_free(system, t, q, qd, p) from None
         qdd, lam = qdd + dx[:n], lam + dx[n:]
@@ -130,6 +136,34 @@ def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterat
         f"accelerations did not converge in {max_iterations} iterations (residual {err:.3e}); "
         "try lambda_guess=.",
         time=t)
+
+
+def _newton_pattern(system):
+    """``(rows, cols, FixedPattern)`` of the Newton matrix ``[[M - dQ/dqdd, Phi_q^T -
+    dQ/dlambda], [Phi_q, 0]]`` of a large system: every entry the dense matrix can hold
+    (the mass matrix's, ``dQ/dqdd``'s, the Jacobian's and ``dQ/dlambda``'s nonzeros, the
+    positions the dense blocks are filled from), in CSC order, made once per dynamics."""
+    dyn = system.dynamics
+    got = dyn.__dict__.get("_newton_pattern")
+    if got is not None and got[0] is system:
+        return got[1]
+    n, m = system.n, system.m
+    jr, jc = np.asarray(system.jac_rows, dtype=np.int64), np.asarray(system.jac_cols, dtype=np.int64)
+    r = [np.asarray(dyn.M_rows, dtype=np.int64), jc, n + jr]
+    c = [np.asarray(dyn.M_cols, dtype=np.int64), n + jr, jc]
+    if dyn.depends_on_qdd:
+        r.append(np.asarray(dyn.dA_rows, dtype=np.int64))
+        c.append(np.asarray(dyn.dA_cols, dtype=np.int64))
+    if dyn.depends_on_lambda:
+        r.append(np.asarray(dyn.dQ_rows, dtype=np.int64))
+        c.append(n + np.asarray(dyn.dQ_cols, dtype=np.int64))
+    N = n + m
+    key = np.unique(np.concatenate(c) * N + np.concatenate(r))     # CSC order
+    rows, cols = key % N, key // N
+    indptr = np.searchsorted(cols, np.arange(N + 1))
+    got = (rows, cols, FixedPattern(indptr, rows, N))
+    dyn.__dict__["_newton_pattern"] = (system, got)
+    return got
 
 
 def _rank_tolerant(system, t, q, qd, p, K, rhs):
