@@ -131,3 +131,34 @@ def test_large_model_multipliers_solve_sparse(solution):
                                     sol.p, qdd)
         b = Q if solution == "static" else Q + Qv - M @ qdd
         np.testing.assert_allclose(J.T @ sol.lam[k], b, atol=1e-9 * np.abs(b).max())
+
+
+def test_large_model_with_friction_newton_through_its_pattern(monkeypatch):
+    """Above ``SPARSE_THRESHOLD`` coordinates the multiplier Newton of loads that depend on
+    the multipliers (joint friction) factorises ``Phi_q^T - dQ/dlambda`` through its fixed
+    pattern (rows matched, banded LU): the multipliers of the dense Newton, and the load
+    balance with the friction loads at those multipliers."""
+    from mechsys.solvers import _statics
+    from mechsys.solvers._linalg import SPARSE_THRESHOLD
+
+    m = models.four_bar_chain(30)
+    for b in m.bodies:
+        if not b.is_ground:
+            m.set_mass_properties(b.name, mass=1.0, centroid=(0.5, 0), inertia=0.1)
+    m.add_load(ms.Gravity((0, -1), 9.81))
+    for k in range(31):
+        m.add_load(ms.JointFriction(f"pivot{k}", mu=0.2, radius=0.05, v_eps=1e-3))
+    s = m.compile()
+    assert s.n > SPARSE_THRESHOLD and s.dynamics.depends_on_lambda
+    t = np.linspace(0.1, 0.5, 3)
+    sol = m.solve(t, solution="dynamic")
+    rows, cols, pattern = _statics._newton_pattern(s)
+    assert pattern.banded
+    monkeypatch.setattr(_statics, "SPARSE_THRESHOLD", 10**6)
+    dense = m.solve(t, solution="dynamic")
+    np.testing.assert_allclose(sol.lam, dense.lam, rtol=0, atol=1e-9 * np.abs(dense.lam).max())
+    for k in range(len(t)):
+        M, Q, Qv = s.dynamics.terms(t[k], sol.q[k], sol.qd[k], sol.lam[k], sol.p, sol.qdd[k])
+        J = s.jacobian(t[k], sol.q[k], sol.p)
+        res = J.T @ sol.lam[k] - (Q + Qv - M @ sol.qdd[k])
+        assert np.abs(res).max() <= 1e-8 * np.abs(J.T @ sol.lam[k]).max()

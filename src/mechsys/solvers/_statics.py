@@ -29,7 +29,7 @@ import scipy.sparse as sps
 
 from .._errors import ConvergenceError, ModelError
 from . import _jit
-from ._linalg import SPARSE_THRESHOLD, Scaling, Singular, factor
+from ._linalg import SPARSE_THRESHOLD, FixedPattern, Scaling, Singular, factor
 from ._position import describe_singular
 
 MODES = ("static", "kinematic", "dynamic")
@@ -113,7 +113,14 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
         K = JT - dyn.dQ_dlam(t, q, qd_eff, lam, p, qdd_eff)
         try:
             # (unit-free as the linear solve: D K R^-1 (R dlambda) = D R)
-            lam = lam - factor((sc.columns[:, None] * K) / r[None, :]).solve(sc.columns * R) / r
+            if n > SPARSE_THRESHOLD and m == n:
+                # large models: through the matrix's fixed pattern, analysed once (banded LU
+                # for chains) instead of a dense LU per iteration
+                rows, cols, pattern = _newton_pattern(system)
+                fac = pattern.factor((c[rows] * K[rows, cols]) / r[cols])
+            else:
+                fac = factor((sc.columns[:, None] * K) / r[None, :])
+            lam = lam - fac.solve(sc.columns * R) / r
         except Singular:
             raise ConvergenceError(
                 f"{mode} load solve at t = {t:.6g}: the multiplier Newton matrix "
@@ -126,6 +133,28 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
         "mechanism self-locks here (no finite reaction can drive it with this friction), or "
         "the start is poor: give lambda_guess= closer to the expected multipliers "
         "(Mech's LambdaGuess).", time=t, residuals=R, history=tuple(history))
+
+
+def _newton_pattern(system):
+    """``(rows, cols, FixedPattern)`` of the multiplier Newton matrix ``Phi_q^T -
+    dQ/dlambda`` (n, m) of a square system: the transposed Jacobian's and ``dQ/dlambda``'s
+    nonzeros in CSC order, rows matched to columns (decision 0030), made once per
+    dynamics."""
+    dyn = system.dynamics
+    got = dyn.__dict__.get("_multiplier_pattern")
+    if got is not None and got[0] is system:
+        return got[1]
+    n = system.n
+    r = np.concatenate((np.asarray(system.jac_cols, dtype=np.int64),
+                        np.asarray(dyn.dQ_rows, dtype=np.int64)))
+    c = np.concatenate((np.asarray(system.jac_rows, dtype=np.int64),
+                        np.asarray(dyn.dQ_cols, dtype=np.int64)))
+    key = np.unique(c * n + r)                       # CSC order
+    rows, cols = key % n, key // n
+    got = (rows, cols, FixedPattern(np.searchsorted(cols, np.arange(n + 1)), rows, n,
+                                    match_rows=True))
+    dyn.__dict__["_multiplier_pattern"] = (system, got)
+    return got
 
 
 def multipliers_over(system, times, Q, QD, QDD, p, mode: str = "dynamic", lambda_guess=1.0,
