@@ -10,6 +10,9 @@ operations, so that both give the same numbers:
 * ``_factor``        ``Scaling.factor`` -> ``Factor`` (LAPACK dgetrf + dgecon on ``R^-1 J D``;
                      up to ``SMALL`` unknowns their algorithms from ``_jit_lapack``)
 * ``_solve``         ``ScaledFactor.solve``
+* ``_band_*``        the same, above ``SPARSE_THRESHOLD`` unknowns, through the Jacobian's
+                     ``FixedPattern`` (``System.assemble``'s CSC values, ``Scaling.rows``,
+                     LAPACK ``dgbtrf``/``dgbtrs`` on the band, the pivot ratio; decision 0030)
 * ``_newton``        ``solve_position`` with a given scaling and the previous point's
                      velocity factorisation as its chord (kept in ``B``, ``ipiv``, ``nz``
                      with its row scales ``rprev``)
