@@ -59,6 +59,10 @@ SMALL = 24
 PAUSE_STEPS = 8
 #: compiled steps per call (progress and Ctrl-C are handled between calls)
 CHUNK_STEPS = 2000
+#: Mech's Adams steps cost about a tenth of a DOP853 step: their runs return every ten times
+#: as many steps (the Python between two runs was a tenth of the double pendulum's time),
+#: up to about 16 MB of state rows a run
+ADAMS_CHUNK_VALUES = 2_000_000
 #: the methods with a compiled loop (``integration_options`` names; Adams: Mech's three)
 METHODS = ("dop853", "rk45", "automatic", "predictor", "corrector")
 RK = ("dop853", "rk45")
@@ -564,7 +568,8 @@ class FreeStepper:
         [t, h, history length, recent count, rejected]``, arrays updated in place. Returns
         ``(status, T, Y, H, E, QDD, LAM, evaluations, projections)``."""
         n, m = self.n, self.m
-        max_steps = CHUNK_STEPS if max_steps is None else max_steps
+        if max_steps is None:
+            max_steps = max(CHUNK_STEPS, min(10 * CHUNK_STEPS, ADAMS_CHUNK_VALUES // self.ny))
         T, H, E = np.empty(max_steps), np.empty(max_steps), np.empty(max_steps)
         Y = np.empty((max_steps, self.ny))
         QDD, LAM = np.empty((max_steps, n)), np.empty((max_steps, m))

@@ -901,15 +901,16 @@ def runge_kutta(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, off
 
 
 @leaf
-def _adams_weights(times, cnt, t_from, h, V, w, cache, piv):
-    """``w[:cnt]``: ``solvers._integrators._adams_weights`` (the nodes rounded to 1e-9 as
-    there, so that constant steps give the same weights). ``cache`` (13,): the last call's
-    node count, nodes and unscaled weights (``cache[0]`` count, nodes at 1..6, weights at
-    7..12): while the step is constant the nodes repeat."""
+def _adams_weights(times, off, cnt, t_from, h, V, w, cache, piv):
+    """``w[:cnt]``: ``solvers._integrators._adams_weights`` of the nodes ``times[off:off +
+    cnt]`` (rounded to 1e-9 as there, so that constant steps give the same weights; an
+    offset rather than a slice: a view per call cost a sixth of the step). ``cache`` (13,):
+    the last call's node count, nodes and unscaled weights (``cache[0]`` count, nodes at
+    1..6, weights at 7..12): while the step is constant the nodes repeat."""
     same = cache[0] == cnt
     for i in range(cnt):
         # np.round(v, 9) as Numba computes it (v * 1e9, rint, / 1e9), without its pow call
-        x = np.rint((times[i] - t_from) / h * 1e9) / 1e9
+        x = np.rint((times[off + i] - t_from) / h * 1e9) / 1e9
         if x != cache[1 + i]:
             same = False
             cache[1 + i] = x
@@ -964,7 +965,6 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
     w = np.empty(6)
     wc = np.empty(6)
     ct = np.empty(6)
-    cf = np.empty((6, N2))
     y_pred = np.empty(N2)
     f_pred = np.empty(N2)
     y_corr = np.empty(N2)
@@ -986,7 +986,7 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
         deg = min(k, nh - 1)
         # predictor: the last deg + 1 derivative values
         p0 = nh - (deg + 1)
-        if not _adams_weights(hist_t[p0:nh], deg + 1, t, h_try, V, w, cache_p, vpiv):
+        if not _adams_weights(hist_t, p0, deg + 1, t, h_try, V, w, cache_p, vpiv):
             return HANDOVER, steps, evals, projections
         for j in range(N2):
             acc = 0.0
@@ -999,28 +999,21 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
                     blocks, blk_i, blk_w, t + h_try, y_pred,
                     f_pred):
             return HANDOVER, steps, evals, projections
-        # corrector: the new point and the last deg values (two points at the start)
-        if deg > 0:
-            for i in range(deg):
-                ct[i] = hist_t[nh - deg + i]
-                for j in range(N2):
-                    cf[i, j] = hist_f[nh - deg + i, j]
-            nc = deg + 1
-        else:
-            ct[0] = hist_t[nh - 1]
-            for j in range(N2):
-                cf[0, j] = hist_f[nh - 1, j]
-            nc = 2
+        # corrector: the new point and the last deg values (two points at the start): the
+        # history rows from c0 on, then the prediction's derivative (summed in that order)
+        nc = deg + 1 if deg > 0 else 2
+        c0 = nh - (nc - 1)
+        for i in range(nc - 1):
+            ct[i] = hist_t[c0 + i]
         ct[nc - 1] = t + h_try
-        for j in range(N2):
-            cf[nc - 1, j] = f_pred[j]
-        if not _adams_weights(ct, nc, t, h_try, V, wc, cache_c, vpiv):
+        if not _adams_weights(ct, 0, nc, t, h_try, V, wc, cache_c, vpiv):
             return HANDOVER, steps, evals, projections
         err = 0.0
         for j in range(N2):
             acc = 0.0
-            for i in range(nc):
-                acc += wc[i] * cf[i, j]
+            for i in range(nc - 1):
+                acc += wc[i] * hist_f[c0 + i, j]
+            acc += wc[nc - 1] * f_pred[j]
             y_corr[j] = y[j] + acc
             v = abs(y_corr[j] - y_pred[j]) * inv_scale[j]
             if not v <= err:
