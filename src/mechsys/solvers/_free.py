@@ -26,7 +26,7 @@ import scipy.sparse as sps
 from scipy.linalg.lapack import dgesv as _dgesv
 
 from .._errors import ConvergenceError, SingularJacobianError, SingularMassError
-from ._linalg import SPARSE_THRESHOLD, FixedPattern, Scaling, Singular, dependent_rows, factor
+from ._linalg import SPARSE_THRESHOLD, Scaling, Singular, dependent_rows, factor, pattern_of
 from ._position import describe_singular
 from ._rank import ZONE, InZone, kkt_rank_tolerant
 
@@ -157,11 +157,7 @@ def _newton_pattern(system):
     if dyn.depends_on_lambda:
         r.append(np.asarray(dyn.dQ_rows, dtype=np.int64))
         c.append(n + np.asarray(dyn.dQ_cols, dtype=np.int64))
-    N = n + m
-    key = np.unique(np.concatenate(c) * N + np.concatenate(r))     # CSC order
-    rows, cols = key % N, key // N
-    indptr = np.searchsorted(cols, np.arange(N + 1))
-    got = (rows, cols, FixedPattern(indptr, rows, N))
+    got = pattern_of(np.concatenate(r), np.concatenate(c), n + m)
     dyn.__dict__["_newton_pattern"] = (system, got)
     return got
 

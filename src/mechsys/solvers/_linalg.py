@@ -184,6 +184,16 @@ class FixedPattern:
         return _PermutedFactor(A[:, self._permc], self._permc)
 
 
+def pattern_of(rows, cols, size: int, match_rows: bool = False):
+    """``(rows, cols, FixedPattern)`` of a square matrix whose entries can be nonzero at
+    ``(rows[k], cols[k])`` (duplicates merged): the entries' rows and columns in CSC order
+    (gather a dense matrix's values as ``A[rows, cols]``) and their pattern."""
+    key = np.unique(np.asarray(cols, dtype=np.int64) * size + np.asarray(rows, dtype=np.int64))
+    r, c = key % size, key // size
+    return r, c, FixedPattern(np.searchsorted(c, np.arange(size + 1)), r, size,
+                              match_rows=match_rows)
+
+
 class _BandFactor:
     """LAPACK banded LU of a :class:`FixedPattern` matrix; ``solve(b)``."""
 

@@ -29,7 +29,7 @@ import scipy.sparse as sps
 
 from .._errors import ConvergenceError, ModelError
 from . import _jit
-from ._linalg import SPARSE_THRESHOLD, FixedPattern, Scaling, Singular, factor
+from ._linalg import SPARSE_THRESHOLD, Scaling, Singular, factor, pattern_of
 from ._position import describe_singular
 
 MODES = ("static", "kinematic", "dynamic")
@@ -149,10 +149,7 @@ def _newton_pattern(system):
                         np.asarray(dyn.dQ_rows, dtype=np.int64)))
     c = np.concatenate((np.asarray(system.jac_rows, dtype=np.int64),
                         np.asarray(dyn.dQ_cols, dtype=np.int64)))
-    key = np.unique(c * n + r)                       # CSC order
-    rows, cols = key % n, key // n
-    got = (rows, cols, FixedPattern(np.searchsorted(cols, np.arange(n + 1)), rows, n,
-                                    match_rows=True))
+    got = pattern_of(r, c, n, match_rows=True)
     dyn.__dict__["_multiplier_pattern"] = (system, got)
     return got
 
