@@ -12,12 +12,13 @@ nothing, e.g. a pendulum that swings freely (stage 1 dropped) until it latches (
 **Events.** Every relation in the switches' tests (constraints and loads), written
 ``g = lhs - rhs``, is an event function of ``(T, q, qd, p)``. After each accepted
 Runge-Kutta step the signs of all ``g`` are compared with the previous ones; where one
-changed, its first zero in the step is located by bisection on the step's dense output down
-to a few ulps in time, so the event time has the integrator's accuracy (the dense output's
-error). A ``g`` within rounding of zero (``16 eps (|lhs| + |rhs|)``) has no sign: a
-configuration held on a boundary (a latched stop) makes no events, and the event is where
-``g`` is first strictly on the far side. After an event the event's relation is expected on
-the far side, or back on the near side after a rebound, so a crossing within the first step
+changed, its first zero in the step is located on the step's dense output (regula falsi
+with the Anderson-Björck weight, :meth:`SwitchedFreeSystem._bracket`) down to a few ulps in
+time, so the event time has the integrator's accuracy (the dense output's error). A ``g``
+within rounding of zero (``16 eps (|lhs| + |rhs|)``) has no sign: a configuration held on a
+boundary (a latched stop) makes no events, and the event is where ``g`` is first strictly on
+the far side. After an event the event's relation is expected on the far side, or back on
+the near side after a rebound, so a crossing within the first step
 after the restart is not missed. The integration stops there, the tests are evaluated just past the zero, and
 
 * a switched load only changes its force: the integration restarts at the event;
@@ -75,8 +76,13 @@ COMPATIBLE = 1e-6
 #: a rebound whose approach speed is below this fraction of the first impact's latches
 LATCH_FRACTION = 1e-6
 #: the compiled stepper takes at most this many steps between two looks at the events (the
-#: steps after one with an event are taken in vain)
+#: steps after one with an event are taken in vain) ...
 RUN_STEPS = 64
+#: ... and this many in its first run after an event, twice as many in each next run: the
+#: rebounds of a body settling on a stop come a step or two apart
+RUN_FIRST = 4
+#: a relation within this fraction of ``|lhs| + |rhs|`` of its boundary has no sign
+_BAND = 16 * np.finfo(float).eps
 
 
 def _policy(at_switch):
@@ -133,6 +139,12 @@ class _Events:
             return np.zeros(0)
         return _signs(np.array(self.f(t, *y, *p), dtype=float).reshape(-1, 2))
 
+    def phi(self, t, y, p, i, s0) -> float:
+        """``-s0 g_i - 16 eps (|lhs_i| + |rhs_i|)``: positive exactly where the sign of
+        relation ``i`` (as :meth:`__call__`) is ``-s0``; continuous in the state."""
+        v = np.array(self.f(t, *y, *p), dtype=float).reshape(-1, 2)[i]
+        return float(-s0 * (v[0] - v[1]) - _BAND * (abs(v[0]) + abs(v[1])))
+
     def signs_over(self, t, Y, p) -> np.ndarray:
         """The signs (as :meth:`__call__`) at the states ``Y`` (K, 2n) at times ``t`` (K,),
         evaluated on all at once: ``(K, number of relations)``."""
@@ -151,7 +163,7 @@ def _signs(v: np.ndarray) -> np.ndarray:
     """``sign(lhs - rhs)`` of the pairs ``v[..., 0], v[..., 1]``, zero within
     ``16 eps (|lhs| + |rhs|)``."""
     g = v[..., 0] - v[..., 1]
-    band = 16 * np.finfo(float).eps * (np.abs(v[..., 0]) + np.abs(v[..., 1]))
+    band = _BAND * (np.abs(v[..., 0]) + np.abs(v[..., 1]))
     return np.where(np.abs(g) > band, np.sign(g), 0.0)
 
 
@@ -293,29 +305,37 @@ class SwitchedFreeSystem(FreeSystem):
                 g_ref[i] = side
             hit = None
             pause = 0
+            run = RUN_FIRST if log else RUN_STEPS
             while solver.status == "running":
                 if fast is not None and pause == 0:
                     status, kept, g_ref, ie, crossing = self._compiled_steps(
                         fast, solver, events, p, g_ref, ie, t_eval, d, out_t, out_y, out_c,
-                        combo)
+                        combo, run)
+                    run = min(2 * run, RUN_STEPS)
                     steps += kept
                     compiled_steps += kept
-                    if crossing or status == 2:
-                        # the step with the event (or one the loop handed over) in Python
-                        pause = PAUSE_STEPS
-                    continue
-                pause = max(pause - 1, 0)
-                t_old = solver.t
-                msg = solver.step()
-                if solver.status == "failed":
-                    raise MechError(f"integration failed at t = {solver.t:.6g}: {msg}")
-                steps += 1
-                dense = solver.dense_output()
-                # the events at the projected state (the state the motion goes on from; the
-                # compiled steps are projected in the loop)
-                yp = np.concatenate(project(S, solver.t, solver.y[:n], solver.y[n:], p,
-                                            scaling=sc))
-                g_new = events(solver.t, yp, p)
+                    if crossing is None or crossing == "python":
+                        if crossing or status == 2:
+                            # the step with the event (or one the loop handed over) in Python
+                            pause = PAUSE_STEPS
+                        continue
+                    # the step with the event, taken again compiled with its dense output
+                    t_old, dense, yp, g_new = crossing
+                    steps += 1
+                    compiled_steps += 1
+                else:
+                    pause = max(pause - 1, 0)
+                    t_old = solver.t
+                    msg = solver.step()
+                    if solver.status == "failed":
+                        raise MechError(f"integration failed at t = {solver.t:.6g}: {msg}")
+                    steps += 1
+                    dense = solver.dense_output()
+                    # the events at the projected state (the state the motion goes on from;
+                    # the compiled steps are projected in the loop)
+                    yp = np.concatenate(project(S, solver.t, solver.y[:n], solver.y[n:], p,
+                                                scaling=sc))
+                    g_new = events(solver.t, yp, p)
                 crossed = [i for i in range(len(g_new)) if g_ref[i] != 0 and g_new[i] == -g_ref[i]]
                 g_ref = np.where(g_ref == 0, g_new, g_ref)
                 t_end = solver.t
@@ -398,15 +418,18 @@ class SwitchedFreeSystem(FreeSystem):
 
     @staticmethod
     def _compiled_steps(fast, solver, events, p, g_ref, ie, t_eval, d, out_t, out_y, out_c,
-                        combo):
-        """Up to ``RUN_STEPS`` compiled steps (each projected), kept up to the first whose
+                        combo, run=RUN_STEPS):
+        """Up to ``run`` compiled steps (each projected), kept up to the first whose
         end state has an event relation on the other side (the Python loop's test, the
-        signs of all steps evaluated at once). The solver is put back to the start of that
-        step, with its size, for the Python loop to take it again and locate the event on
-        its dense output. Returns ``(status, steps kept, g_ref, next output index,
-        crossing)``."""
+        signs of all steps evaluated at once). That step is taken again compiled, with its
+        dense output (:meth:`FreeStepper.step_again`), and returned as ``crossing = (t_old,
+        dense, y_end, signs at y_end)`` with the solver at its end, for the Python loop to
+        locate the event; where the loop cannot take it again, the solver is put back to
+        the start of that step, with its size, for the Python loop to take it
+        (``crossing = "python"``). ``crossing`` is None without an event. Returns
+        ``(status, steps kept, g_ref, next output index, crossing)``."""
         t0, y0, f0 = solver.t, solver.y.copy(), solver.f.copy()
-        status, T, Y, H, _, _, ie_new, _, _ = fast.advance(solver, ie, RUN_STEPS)
+        status, T, Y, H, QDD, _, ie_new, _, _ = fast.advance(solver, ie, run)
         signs = events.signs_over(T, Y, p)
         crossing = None
         for j in range(len(T)):
@@ -428,31 +451,81 @@ class SwitchedFreeSystem(FreeSystem):
                 out_t.append(float(T[j]))
                 out_y.append(Y[j].copy())
                 out_c.append(combo)
-        if crossing is not None:
-            if kept:
-                solver.t, solver.y = float(T[kept - 1]), Y[kept - 1].copy()
-                got = fast.derivative(solver.t, solver.y)
-                solver.f = solver.fun(solver.t, solver.y) if got is None else got[0]
-            else:
-                solver.t, solver.y, solver.f = t0, y0, f0
-            solver.h_abs = abs(float(H[crossing]))
+        if crossing is None:
+            return status, kept, g_ref, ie, None
+        if kept:
+            ts, ys = float(T[kept - 1]), Y[kept - 1].copy()
+            fs = fast.rate(ys, QDD[kept - 1])
+        else:
+            ts, ys, fs = t0, y0, f0
+        again = fast.step_again(solver, ts, ys, fs, abs(float(H[crossing])))
+        if again is not None and again[0] == T[crossing] and np.array_equal(again[1],
+                                                                              Y[crossing]):
+            solver.t, solver.y = again[0], again[1]
+            solver.f = fast.rate(again[1], QDD[crossing])
             solver.status = "running"
-        return status, kept, g_ref, ie, crossing is not None
+            return status, kept, g_ref, ie, (ts, again[2], again[1].copy(), signs[crossing])
+        solver.t, solver.y, solver.f = ts, ys, fs
+        solver.h_abs = abs(float(H[crossing]))
+        solver.status = "running"
+        return status, kept, g_ref, ie, "python"
 
     @staticmethod
     def _bracket(events, dense, p, i, ta, tb, s0):
-        """``(i, b, a, s0)``: the first crossing of event ``i`` in ``[ta, tb]`` by bisection on
-        the dense output to a few ulps: ``b`` the first time strictly on the far side (sign
-        ``-s0`` beyond the rounding band), ``a`` the last time before it."""
+        """``(i, b, a, s0)``: the first crossing of event ``i`` in ``[ta, tb]`` on the dense
+        output, to a few ulps: ``b`` the first time strictly on the far side (sign ``-s0``
+        beyond the rounding band), ``a`` the last time before it.
+
+        The root of ``phi(t) = -s0 g(t) - band(t)``, positive exactly where the sign is
+        ``-s0`` (:meth:`_Events.phi`), by regula falsi with the Anderson-Bjorck weight:
+        ``c = b - phi_b (b - a) / (phi_b - phi_a)``; when the same end moves twice in a row
+        the value kept at the other end is scaled by ``1 - phi_c / phi_old`` (by 1/2 when
+        that is not positive), which keeps the bracket closing from both sides on curved
+        ``phi``. Each trial is at least ``1.5 eps |t|`` inside the bracket, so once ``c``
+        is at the root the next trial closes the bracket from the other side; a bracket
+        that has not halved in three trials is bisected. A start not on the near side as
+        evaluated (a restart on the boundary after a rebound: ``phi`` starts at zero and
+        dips below it) is searched for the dip at 1/16 of the bracket from the start until
+        a near point is found. About ten evaluations of the dense output instead of
+        bisection's fifty."""
+        eps = np.finfo(float).eps
         a, b = ta, tb
+        fa, fb = events.phi(a, dense(a), p, i, s0), events.phi(b, dense(b), p, i, s0)
+        # the far end: the crossing was seen at the projected state; where the dense output
+        # does not show it there, bisection on the signs as seen (the start counts as near)
+        far_ok = fb > 0
+        side, width, stalled = 0, abs(b - a), 0
         for _ in range(200):
-            if abs(b - a) <= 4 * np.finfo(float).eps * max(abs(a), abs(b), 1e-300):
+            span = max(abs(a), abs(b), 1e-300)
+            if abs(b - a) <= 4 * eps * span:
                 break
-            c = 0.5 * (a + b)
-            if events(c, dense(c), p)[i] == -s0:
-                b = c
+            tol = 1.5 * eps * span
+            if far_ok and fa <= 0 and stalled < 3:
+                c = b - fb * (b - a) / (fb - fa)
+                lo, hi = min(a, b) + tol, max(a, b) - tol
+                c = min(max(c, lo), hi) if np.isfinite(c) and lo < hi else 0.5 * (a + b)
+            elif far_ok and fa > 0 and stalled < 3:
+                # the start sits on the boundary (a restart after a rebound): the near side
+                # is a dip just after it; look for it close to the start
+                c = a + max((b - a) / 16, tol if b > a else -tol)
             else:
-                a = c
+                c = 0.5 * (a + b)
+                stalled = 0
+            fc = events.phi(c, dense(c), p, i, s0)
+            if fc > 0:
+                if side == 1 and fb != 0:
+                    m = 1.0 - fc / fb
+                    fa *= m if m > 0 else 0.5
+                b, fb, far_ok, side = c, fc, True, 1
+            else:
+                if side == -1 and fa != 0:
+                    m = 1.0 - fc / fa
+                    fb *= m if m > 0 else 0.5
+                a, fa, side = c, fc, -1
+            if abs(b - a) <= 0.5 * width:
+                width, stalled = abs(b - a), 0
+            else:
+                stalled += 1
         return i, b, a, s0
 
     def _switch(self, old, new, te, ye, p, sc, policy, first_speed):

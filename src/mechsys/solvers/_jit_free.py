@@ -278,6 +278,37 @@ def _workspace(stepper, system):
     return ws
 
 
+class StepDense:
+    """The dense output of one compiled Runge-Kutta step from ``t_old`` to ``t``: ``FD``
+    (8, N2) as ``_jit_free_loop.runge_kutta`` leaves it (the coefficients ``F``, the state
+    at the start in row 7), the polynomials the loop evaluates at output times (SciPy's
+    ``Dop853DenseOutput``; ``RkDenseOutput``), to rounding. With ``x = (s - t_old) / h``:
+
+    * DOP853: ``y(s) = y_old + ((((((F_6 x + F_5) (1-x) + F_4) x + F_3) (1-x) + F_2) x
+      + F_1) (1-x) + F_0) x``;
+    * RK45: ``y(s) = y_old + h (Q_0 x + Q_1 x^2 + Q_2 x^3 + Q_3 x^4)``.
+
+    Example: ``dense = StepDense(0.0, 0.1, FD, DOP853); y_mid = dense(0.05)``."""
+
+    def __init__(self, t_old: float, t: float, FD: np.ndarray, method: int):
+        from ._jit_free_loop import RK45 as RK45_CODE
+
+        self.t_old, self.t, self.h = t_old, t, t - t_old
+        self.F, self.y_old = FD[:7].copy(), FD[7].copy()
+        self.rk45 = method == RK45_CODE
+
+    def __call__(self, s: float) -> np.ndarray:
+        # the nested forms expanded into one weight per row, applied in one product
+        x = (s - self.t_old) / self.h
+        if self.rk45:
+            w = np.array([x, x * x, x ** 3, x ** 4]) * self.h
+            return w @ self.F[:4] + self.y_old
+        u = 1.0 - x
+        w = np.array([x, x * u, x * x * u, (x * u) ** 2, x ** 3 * u * u, (x * u) ** 3,
+                      x ** 4 * u ** 3])
+        return w @ self.F + self.y_old
+
+
 class FreeStepper:
     """The compiled stepper of one free-motion run (see the module docstring).
 
@@ -514,7 +545,8 @@ class FreeStepper:
             self.blk_i, self.ws, self.correction, 1e-12, 8, method, A, B, C, E3, E5, D,
             float(solver.rtol), atol, float(solver.max_step),
             float(solver.t_bound), float(solver.direction), state, y, f, self.t_eval, int(ie),
-            int(max_steps), T, Y, H, QDD, LAM, self.ET, self.EY, self.EQDD, self.ELAM)
+            int(max_steps), T, Y, H, QDD, LAM, self.ET, self.EY, self.EQDD, self.ELAM,
+            np.zeros((0, self.ny)))
         solver.nfev += int(evals)
         if steps:
             solver.t_old = float(T[steps - 2]) if steps >= 2 else t_prev
@@ -527,6 +559,37 @@ class FreeStepper:
         return (int(status), T[:steps], Y[:steps], H[:steps], QDD[:steps], LAM[:steps], int(ie),
                 int(rejected), int(projections))
 
+
+    def step_again(self, solver, t: float, y: np.ndarray, f: np.ndarray, h_abs: float):
+        """One compiled step of ``solver``'s method from ``(t, y, f)`` with the step size
+        ``h_abs`` of an accepted step of an earlier run (so accepted again, with the same
+        numbers), with its dense output: ``(t_new, y_new, StepDense)``, ``y_new`` the
+        (projected) state at its end; or None where the loop hands the step over. The
+        compiled runs of free motion with events find the step with an event after the run;
+        this takes it again for the event's location, instead of a Python step."""
+        n, m = self.n, self.m
+        method, A, B, C, E3, E5, D = _coefficients(solver)
+        T, H = np.empty(1), np.empty(1)
+        Y = np.empty((1, self.ny))
+        QDD, LAM = np.empty((1, n)), np.empty((1, m))
+        FD = np.empty((8, self.ny))
+        state = np.array([t, h_abs], dtype=float)
+        yy = np.array(y, dtype=float)
+        ff = np.array(f, dtype=float)
+        atol = np.broadcast_to(np.asarray(solver.atol, dtype=float), (self.ny,)).copy()
+        none = np.zeros(0)
+        status, steps, _, evals, _, _ = _state["loop"](
+            self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr, self.jc,
+            self.rows0, self.columns, self.offset, self.robust, self.mode,
+            self.blk_i, self.ws, self.correction, 1e-12, 8, method, A, B, C, E3, E5, D,
+            float(solver.rtol), atol, float(solver.max_step),
+            float(solver.t_bound), float(solver.direction), state, yy, ff, none, 0, 1,
+            T, Y, H, QDD, LAM, none, np.zeros((0, self.ny)), np.zeros((0, n)),
+            np.zeros((0, m)), FD)
+        solver.nfev += int(evals)
+        if steps != 1:
+            return None
+        return float(T[0]), Y[0].copy(), StepDense(t, float(T[0]), FD, method)
 
     def derivative(self, t: float, y: np.ndarray):
         """``(f, lam)``: the derivative ``f = (qd, qdd)`` (2n,) and the multipliers (m,) at

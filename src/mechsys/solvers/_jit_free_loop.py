@@ -660,12 +660,15 @@ def runge_kutta(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, off
                 blocks, blk_i, ws, correction, ptol, pmaxit, method, Acoef, Bcoef, Ccoef, E3,
                 E5, Dcoef, rtol, atol, max_step,
                 t_bound, direction, state, y, f, t_eval, ie0, max_steps,
-                T, Y, H, QDD, LAM, ET, EY, EQDD, ELAM):
+                T, Y, H, QDD, LAM, ET, EY, EQDD, ELAM, FD):
     """Accepted DOP853 or RK45 (``method``) steps from ``(state[0] = t, y, f, state[1] =
     h_abs)``; see the module docstring. The method's coefficients: DOP853's ``A`` (16, 16),
     ``B``, ``C``, ``E3``, ``E5``, ``D`` (its dense output's); RK45's ``A``, ``B``, ``C``,
-    ``E`` (in ``E5``; ``E3`` unused) and ``P`` (in ``Dcoef``). Returns ``(status, steps,
-    ie, evaluations, rejected, projections)``; the state arrays hold the last accepted
+    ``E`` (in ``E5``; ``E3`` unused) and ``P`` (in ``Dcoef``). ``FD`` (8, N2) or (0, N2):
+    when it has rows, every step computes its dense output and leaves it there, ``F``
+    (DOP853: 7 rows; RK45: ``Q^T``, 4 rows) and the state at the step's start in the last
+    row (:class:`._jit_free.StepDense` evaluates it). Returns ``(status, steps, ie,
+    evaluations, rejected, projections)``; the state arrays hold the last accepted
     (projected) state and its derivative."""
     N2 = n if blocks == PATH else 2 * n
     npar = p.size
@@ -788,7 +791,8 @@ def runge_kutta(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, off
                 rejected += 1
         # -- output times inside the step: the method's dense output, then projection --
         ie_step = ie
-        if ie < n_eval and (t_eval[ie] - t_new) * direction <= 0 and rk45:
+        dense = FD.shape[0] > 0 or (ie < n_eval and (t_eval[ie] - t_new) * direction <= 0)
+        if dense and rk45:
             # RK45._dense_output_impl: Q = K^T P (rows 0-3 of F)
             for j in range(N2):
                 for i in range(4):
@@ -796,7 +800,7 @@ def runge_kutta(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, off
                     for k in range(n_stages + 1):
                         acc += K[k, j] * Dcoef[k, i]
                     F[i, j] = acc
-        elif ie < n_eval and (t_eval[ie] - t_new) * direction <= 0:
+        elif dense:
             for s in range(n_stages + 1, 16):
                 for j in range(N2):
                     acc = 0.0
@@ -819,6 +823,11 @@ def runge_kutta(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, off
                     for k in range(16):
                         acc += Dcoef[i, k] * K[k, j]
                     F[3 + i, j] = h * acc
+        if FD.shape[0] > 0:
+            for j in range(N2):
+                for i in range(4 if rk45 else 7):
+                    FD[i, j] = F[i, j]
+                FD[7, j] = y[j]
         if ie < n_eval and (t_eval[ie] - t_new) * direction <= 0:
             while ie < n_eval and (t_eval[ie] - t_new) * direction <= 0:
                 xi = (t_eval[ie] - t) / h
