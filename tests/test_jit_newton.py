@@ -75,6 +75,12 @@ def test_compiled_newton_satisfies_the_equations_of_motion(monkeypatch, name):
     build, kw = CASES[name]
     monkeypatch.setenv("MECHSYS_JIT", "1")
     sol = build().simulate(np.linspace(0.0, 1.0, 6), **kw)
+    _assert_equations_of_motion(sol, 1e-9)
+
+
+def _assert_equations_of_motion(sol, tol):
+    """``M qdd + J^T lambda = Q + Qv`` (the loads at the solution's multipliers and
+    accelerations) and ``J qdd = gamma`` at every output, by the Python kernels."""
     s = sol.system
     for k in range(len(sol.t)):
         t, q, qd, qdd, lam = sol.t[k], sol.q[k], sol.qd[k], sol.qdd[k], sol.lam[k]
@@ -82,8 +88,8 @@ def test_compiled_newton_satisfies_the_equations_of_motion(monkeypatch, name):
         J = s.jacobian(t, q, sol.p)
         r1 = M @ qdd + J.T @ lam - Q - Qv
         r2 = J @ qdd - s.gamma_values(t, q, qd, sol.p)
-        assert np.abs(r1).max() <= 1e-9 * (1 + np.abs(Q).max())
-        assert np.abs(r2).max() <= 1e-9 * (1 + np.abs(qdd).max())
+        assert np.abs(r1).max() <= tol * (1 + np.abs(Q).max() + np.abs(J.T @ lam).max())
+        assert np.abs(r2).max() <= tol * (1 + np.abs(qdd).max())
 
 
 def test_added_mass_energy_of_the_equivalent_system(monkeypatch):
@@ -126,3 +132,54 @@ def test_newton_tolerance_is_the_loops(monkeypatch):
     assert fast.solver == "newton"
     assert fast.ws[16][0][7][0] == 1e-3
     assert fast.blk_i[0][0][2] == 7
+
+
+def friction_chain(n_links=32):
+    """A chain of ``n_links`` pendulums with Coulomb friction in every joint: ``5 n_links``
+    unknowns (coordinates and multipliers), above the dense loop's ``SMALL_LU`` = 150 from
+    31 links."""
+    from mechsys import models
+
+    m = models.pendulum_chain(n_links)
+    for k in range(n_links):
+        m.add_load(ms.JointFriction(f"j{k}", mu=0.1, radius=0.01, v_eps=1e-3))
+    m.solve(0.0)
+    return m.free(drop=[f"lock{k}" for k in range(n_links)])
+
+
+@pytest.mark.parametrize("rtol", [1e-6, 1e-3])
+def test_large_friction_chain_runs_compiled_through_the_band(monkeypatch, rtol):
+    """Above 150 unknowns the loop's Newton and projections go through the Newton matrix's
+    banded pattern (``_newton_accel_band``, ``_min_norm_band``). With the same steps in both
+    loops and a Newton converged to rounding, the two agree to rounding; ``rtol = 1e-3``
+    leaves a drift that the projections correct (their minimum-norm corrections, by an
+    augmented system here, by ``J^ J^T`` in Python)."""
+    free = friction_chain(32)
+    assert free.system.n + free.system.m == 160
+    t = np.linspace(0.0, 0.1, 6)
+    kw = dict(rtol=1e6, atol=1e6, max_step=0.1 / 60, tolerance=1e-14)
+    fast, slow = _both(monkeypatch, lambda: free, t, **kw)
+    assert fast.extra["compiled_solver"] == "newton"
+    assert fast.extra["compiled_steps"] == fast.extra["steps"] >= 60
+    for a, b in ((fast.q, slow.q), (fast.qd, slow.qd), (fast.qdd, slow.qdd), (fast.lam, slow.lam)):
+        scale = np.maximum(1.0, np.abs(b).max(axis=0))
+        assert (np.abs(a - b) / scale).max() <= 1e-12
+    # adaptive, with drift to project away
+    fast, slow = _both(monkeypatch, lambda: free, t, rtol=rtol, atol=rtol / 100)
+    assert fast.extra["compiled_steps"] == fast.extra["steps"]
+    s = fast.system
+    for k in range(len(t)):
+        assert np.abs(s.residual(t[k], fast.q[k])).max() <= 1e-10
+    for a, b in ((fast.q, slow.q), (fast.qd, slow.qd)):
+        assert np.abs(a - b).max() <= 1e-7 * max(1.0, np.abs(b).max())
+
+
+def test_large_friction_chain_satisfies_the_equations_of_motion(monkeypatch):
+    """The banded loop's accelerations and multipliers against the Python kernels:
+    ``M qdd + J^T lambda = Q + Qv`` with the friction evaluated at the loop's multipliers,
+    ``J qdd = gamma``."""
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    free = friction_chain(32)
+    sol = free.simulate(np.linspace(0.0, 0.1, 4), rtol=1e-8, atol=1e-10)
+    assert sol.extra["compiled_steps"] == sol.extra["steps"]
+    _assert_equations_of_motion(sol, 1e-8)

@@ -94,12 +94,13 @@ def _coefficients(solver):
 
 
 def _lapack() -> np.ndarray:
-    """Addresses of dgetrf, dgecon, dgetrs (as the sweep) and dgesv."""
+    """Addresses of dgetrf, dgecon, dgetrs (as the sweep), dgesv, dgbtrf and dgbtrs."""
     if _state["gesv"] is None:
         from scipy.linalg import cython_lapack
 
         gesv = _jit._capsule_address(cython_lapack.__pyx_capi__["dgesv"])
-        _state["gesv"] = np.concatenate((_jit._lapack(), [gesv])).astype(np.int64)
+        _state["gesv"] = np.concatenate((_jit._lapack(), [gesv],
+                                         _jit._band_lapack())).astype(np.int64)
     return _state["gesv"]
 
 
@@ -278,6 +279,48 @@ def _workspace(stepper, system):
     return ws
 
 
+def _newton_band(system):
+    """The structure array of ``_jit_free_loop._newton_accel_band`` (see there): the Newton
+    matrix's ``FixedPattern`` (``solvers._free._newton_pattern``, the Python path's) and where
+    each term's values go in it; None when the pattern is not banded."""
+    from ._free import _newton_pattern
+    from ._jit_free_loop import BAND_HEAD
+
+    rows, cols, pat = _newton_pattern(system)
+    if not pat.banded:
+        return None
+    dyn = system.dynamics
+    n, m = system.n, system.m
+    N = n + m
+    key = cols * N + rows                          # sorted: the pattern is in CSC order
+
+    def slot(r, c):
+        want = np.asarray(c, dtype=np.int64) * N + np.asarray(r, dtype=np.int64)
+        k = np.searchsorted(key, want)
+        if not np.array_equal(key[np.minimum(k, key.size - 1)], want):
+            raise AssertionError("the Newton pattern misses an entry")  # (built from them)
+        return k
+
+    z = np.zeros(0, dtype=np.int64)
+    jr, jc = np.asarray(system.jac_rows, dtype=np.int64), np.asarray(system.jac_cols, dtype=np.int64)
+    uniq, uid = np.unique(jr * n + jc, return_inverse=True)
+    urow, ucol = uniq // n, uniq % n
+    sM = slot(dyn.M_rows, dyn.M_cols)
+    sA = slot(dyn.dA_rows, dyn.dA_cols) if dyn.depends_on_qdd else z
+    sD = slot(dyn.dQ_rows, n + np.asarray(dyn.dQ_cols, dtype=np.int64)) if dyn.depends_on_lambda \
+        else z
+    diag = np.arange(n)
+    dkey = diag * N + diag
+    k = np.searchsorted(key, dkey)
+    if not np.array_equal(key[np.minimum(k, key.size - 1)], dkey):
+        return None          # (a coordinate without mass: the projection needs the diagonal)
+    head = [pat.kl, pat.ku, pat._ld, rows.size, uniq.size, sM.size, sA.size, sD.size, n]
+    assert len(head) == BAND_HEAD
+    return np.concatenate([np.array(head), pat._pos, rows, cols, pat.row_perm, pat.perm, sM, sA,
+                           sD, uid.ravel(), urow, ucol, slot(n + urow, ucol),
+                           slot(ucol, n + urow), k]).astype(np.int64)
+
+
 class StepDense:
     """The dense output of one compiled Runge-Kutta step from ``t_old`` to ``t``: ``FD``
     (8, N2) as ``_jit_free_loop.runge_kutta`` leaves it (the coefficients ``F``, the state
@@ -449,13 +492,20 @@ class FreeStepper:
         ``NEWTON``: ``free_acceleration``'s Newton in the loop), or None: at most
         ``SMALL_LU`` unknowns, a ``Dynamics`` (not the recursive one), LLVM kernels whose
         outputs are all distinct and whose derivatives of the loads have no Piecewise stage.
-        ``newton``: ``free_acceleration``'s keyword options (``tol``, ``max_iterations``)."""
+        ``newton``: ``free_acceleration``'s keyword options (``tol``, ``max_iterations``).
+        Above ``SMALL_LU`` unknowns the Newton matrix goes by its fixed pattern when that is
+        banded (``_newton_band``; else None: the Python path's SuperLU)."""
         from ._jit_loop import SMALL as SMALL_LU
 
         dyn = system.dynamics
         n, m = system.n, system.m
-        if getattr(dyn, "recursive", False) or n + m > SMALL_LU:
+        if getattr(dyn, "recursive", False):
             return None
+        band = np.zeros(1, dtype=np.int64)
+        if n + m > SMALL_LU:
+            band = _newton_band(system)
+            if band is None:
+                return None
         kw = dict(newton or {})
         tol, maxit = float(kw.get("tol", 1e-10)), int(kw.get("max_iterations", 30))
         main = [_entry(dyn.f_terms)] + _constraint_entries(system, system.f_position,
@@ -475,7 +525,7 @@ class FreeStepper:
             info += list(e[0])
         i64 = lambda a: np.ascontiguousarray(a, dtype=np.int64)   # noqa: E731
         blk = (np.array(info, dtype=np.int64), i64(dyn.M_rows), i64(dyn.M_cols), i64(dr),
-               i64(dc), i64(ar), i64(ac), z, np.zeros((1, 5), dtype=np.int64))
+               i64(dc), i64(ar), i64(ac), band, np.zeros((1, 5), dtype=np.int64))
         return cls(system, p, scaling, None, False, correction, t_eval, [e[0] for e in main],
                    None, expand=[e[1] for e in main], newton=blk, newton_tol=tol)
 

@@ -44,6 +44,8 @@ from ._jit_cache import check as _check_cache
 from ._jit_lapack import gecon1, getrf, getrs, leaf
 from ._jit_loop import SMALL as SMALL_LU
 from ._jit_loop import _assemble, _ccall, _eval, _norm1, _rows, _rows_nz
+from ._jit_loop import _band_factor as _gb_factor
+from ._jit_loop import _band_solve as _gb_solve
 from ._jit_tree import articulated as _articulated
 from ._jit_tree import assemble as _gen_assemble
 from ._jit_tree import forward as _gen_forward
@@ -189,7 +191,8 @@ def _rhs(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, 
     if blocks >= PATH:
         # (one call site for both kinds: the loops inline _rhs, and a smaller body here kept
         # them as fast as before the two kinds existed)
-        return _other_rhs(blocks, kp, x, nin, out, KT, n, m, jr, jc, columns, ipiv, rhs, b,
+        return _other_rhs(blocks, kp, lapack, ibuf, x, nin, out, KT, n, m, jr, jc, columns,
+                          ipiv, rhs, b,
                           qdd, lam, blk_i, blk_w, t, y, f)
     x[0] = t
     for j in range(2 * n):
@@ -216,14 +219,19 @@ def _rhs(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, 
 
 
 @leaf
-def _other_rhs(blocks, kp, x, nin, out, KT, n, m, jr, jc, columns, ipiv, rhs, b, qdd, lam,
-               blk_i, blk_w, t, y, f):
-    """``_rhs`` of the kinds ``PATH`` (``f = qd``) and ``NEWTON`` (``f = (qd, qdd)``)."""
+def _other_rhs(blocks, kp, lapack, ibuf, x, nin, out, KT, n, m, jr, jc, columns, ipiv, rhs, b,
+               qdd, lam, blk_i, blk_w, t, y, f):
+    """``_rhs`` of the kinds ``PATH`` (``f = qd``) and ``NEWTON`` (``f = (qd, qdd)``; above
+    ``SMALL_LU`` unknowns through the Newton matrix's banded pattern, ``_newton_accel_band``)."""
     if blocks == PATH:
         return _path_velocity(kp, x, out, KT, n, m, jr, jc, columns, ipiv, rhs, b, qdd,
                               blk_i[0][0], blk_w[0], blk_i[2][0], blk_w[2][0], blk_i[2][2],
                               blk_w[2][2], t, y, f)
     bi = blk_i[0]
+    if bi[7].size > 1:
+        return _newton_accel_band(kp, lapack, ibuf, x, nin, out, n, m, jr, jc, ipiv, qdd, lam,
+                                  bi[0], bi[1], bi[2], bi[3], bi[4], bi[5], bi[6], bi[7],
+                                  blk_w[0], blk_i[2][0], blk_w[2][0], t, y, f)
     return _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, rhs, b, qdd, lam, bi[0], bi[1],
                          bi[2], bi[3], bi[4], bi[5], bi[6], blk_w[0], blk_i[2][0], blk_w[2][0],
                          t, y, f)
@@ -238,6 +246,42 @@ def _factor_checked(AT, n, ipiv, w1, w2):
     if getrf(AT, n, ipiv) > 0 or anorm == 0:
         return False
     return gecon1(AT, n, anorm, w1, w2) >= RCOND_MIN
+
+
+@leaf
+def _newton_args(x, xk, t, y, n, m, npar):
+    """The arguments of the Newton's kernels at ``(t, y = (q, qd))``: ``x = [t, q, qd, ...]``
+    (the multipliers, parameters and accelerations left), ``xk = [t, q, 0, p]`` (the
+    constraint kernels; the parameters from ``x``)."""
+    x[0] = t
+    for j in range(2 * n):
+        x[1 + j] = y[j]
+    xk[0] = t
+    for j in range(n):
+        xk[1 + j] = y[j]
+        xk[1 + n + j] = 0.0
+    for j in range(npar):
+        xk[1 + 2 * n + j] = x[1 + 2 * n + m + j]
+
+
+@leaf
+def _newton_verdict(res, N, n, it, small, y, qdd, f):
+    """After the residuals ``res`` (N) of Newton iteration ``it``: -1 (hand over) when one
+    is not finite; 1 when converged (after at least one step, ``small``: each residual
+    within the tolerance of its terms), with ``f = (qd, qdd)``; else 0."""
+    err = 0.0
+    for i in range(N):
+        v = abs(res[i])
+        if not v <= err:             # NaN too
+            err = v
+    if not np.isfinite(err):
+        return -1
+    if it > 1 and small:
+        for j in range(n):
+            f[j] = y[n + j]
+            f[n + j] = qdd[j]
+        return 1
+    return 0
 
 
 @leaf
@@ -268,15 +312,7 @@ def _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, w1, w2, qdd, lam, inf
     N = n + m
     nin_k = 1 + 2 * n + npar
     tol = tolv[0]
-    x[0] = t
-    for j in range(2 * n):
-        x[1 + j] = y[j]
-    xk[0] = t
-    for j in range(n):
-        xk[1 + j] = y[j]
-        xk[1 + n + j] = 0.0
-    for j in range(npar):
-        xk[1 + 2 * n + j] = x[1 + 2 * n + m + j]
+    _newton_args(x, xk, t, y, n, m, npar)
     if m > 0:
         _eval(info[6:11], xk, nin_k, out_pos)
         _assemble(out_pos, m, jr, jc, J)
@@ -293,7 +329,6 @@ def _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, w1, w2, qdd, lam, inf
     _evalx(kp, x, nin, out, ex, ph)
     for it in range(1, maxit + 1):
         # the residuals and the sizes of their terms, unit-free (free_acceleration's test)
-        err = 0.0
         e1 = 0.0
         e2 = 0.0
         size1 = 0.0
@@ -326,17 +361,9 @@ def _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, w1, w2, qdd, lam, inf
             res[n + i] = acc - g[i]
             e2 = max(e2, abs(res[n + i]) / rho)
             size2 = max(size2, abs(g[i]) / rho)
-        for i in range(N):
-            v = abs(res[i])
-            if not v <= err:             # NaN too
-                err = v
-        if not np.isfinite(err):
-            return False
-        if it > 1 and e1 <= tol * size1 and e2 <= tol * size2:
-            for j in range(n):
-                f[j] = y[n + j]
-                f[n + j] = qdd[j]
-            return True
+        done = _newton_verdict(res, N, n, it, e1 <= tol * size1 and e2 <= tol * size2, y, qdd, f)
+        if done != 0:
+            return done > 0
         if nD > 0:
             _eval(info[16:21], x, nin, od)
         if nA > 0:
@@ -376,6 +403,237 @@ def _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, w1, w2, qdd, lam, inf
             x[1 + 2 * n + m + npar + j] = qdd[j]
         for i in range(m):
             lam[i] += res[n + i]
+            x[1 + 2 * n + i] = lam[i]
+        _evalx(kp, x, nin, out, ex, ph)
+    return False
+
+
+#: the header of ``_newton_accel_band``'s structure array: kl, ku, ld, the pattern's
+#: entries, the Jacobian's distinct positions, the mass matrix's, dQ/dqdd's and
+#: dQ/dlambda's entries, n
+BAND_HEAD = 9
+
+
+@leaf
+def _band_jmap(bnd, nj, N):
+    """Where ``_newton_accel_band``'s structure array ``bnd`` holds the Jacobian's map: the
+    offset ``o`` of ``uid`` (``nj``), followed by ``urow``, ``ucol``, ``sJ``, ``sJT`` (``U``
+    each) and the diagonal's slots ``sdiag`` (``n``)."""
+    return BAND_HEAD + 3 * bnd[3] + 2 * N + bnd[5] + bnd[6] + bnd[7]
+
+
+@leaf
+def _band_rows_of(vals, off, jr, columns, r, bnd, w):
+    """The Jacobian's distinct values ``Jv`` (the first ``U`` entries of ``w``) from the
+    kernel's values ``vals[off:]`` (duplicates summed, as ``_assemble``), and the row scales
+    ``r_i = max_j |J_ij| c_j`` from them (``_rows``: the same maxima)."""
+    m = r.size
+    n = columns.size
+    U = bnd[4]
+    o = _band_jmap(bnd, jr.size, n + m)
+    uid = bnd[o:o + jr.size]
+    o += jr.size
+    urow, ucol = bnd[o:o + U], bnd[o + U:o + 2 * U]
+    Jv = w[0:U]
+    for u in range(U):
+        Jv[u] = 0.0
+    for k in range(jr.size):
+        Jv[uid[k]] += vals[off + k]
+    _rows_nz(Jv, urow, ucol, columns, r)
+
+
+@leaf
+def _min_norm_band(lapack, bi, ipiv, r, columns, bvec, out, n, m, jr, bnd, w):
+    """``_min_norm`` through the Newton matrix's banded pattern: the smallest ``z`` (``out =
+    D z``) with ``J^ z = bvec``, ``J^ = R^-1 J D``, from the augmented system ``[[I, J^T],
+    [J^, 0]] [z; -nu] = [0; bvec]`` (its entries are among the pattern's: the mass matrix's
+    diagonal, ``Phi_q``, ``Phi_q^T``), factorised by ``dgbtrf``. The Jacobian's distinct
+    values ``Jv`` are in ``w`` (``_band_rows_of``). False (hand over) at a pivot ratio below
+    ``RCOND_MIN`` (``J`` without full rank)."""
+    N = n + m
+    P, U, ld = bnd[3], bnd[4], bnd[2]
+    o = BAND_HEAD
+    pos, prow, pcol = bnd[o:o + P], bnd[o + P:o + 2 * P], bnd[o + 2 * P:o + 3 * P]
+    o += 3 * P
+    row_perm, perm = bnd[o:o + N], bnd[o + N:o + 2 * N]
+    o = _band_jmap(bnd, jr.size, N) + jr.size
+    urow, ucol, sJ, sJT = bnd[o:o + U], bnd[o + U:o + 2 * U], bnd[o + 2 * U:o + 3 * U], \
+        bnd[o + 3 * U:o + 4 * U]
+    sdiag = bnd[o + 4 * U:o + 4 * U + n]
+    Jv, data, AB = w[0:U], w[U:U + P], w[U + P:U + P + ld * N]
+    o2 = U + P + ld * N
+    ones, tmp, sol, tmp2 = (w[o2:o2 + N], w[o2 + N:o2 + 2 * N], w[o2 + 2 * N:o2 + 3 * N],
+                            w[o2 + 3 * N:o2 + 4 * N])
+    for k in range(P):
+        data[k] = 0.0
+    for j in range(n):
+        data[sdiag[j]] = 1.0
+    for u in range(U):
+        v = (Jv[u] * columns[ucol[u]]) / r[urow[u]]
+        data[sJ[u]] += v
+        data[sJT[u]] += v
+    for i in range(N):
+        ones[i] = 1.0
+    if _gb_factor(lapack[4:6], data, prow, pcol, pos, ones, ones, AB, bnd[0:3], ipiv,
+                  bi) < 0:
+        return False
+    for j in range(n):
+        tmp[j] = 0.0
+    for i in range(m):
+        tmp[n + i] = bvec[i]
+    _gb_solve(lapack[4:6], AB, bnd[0:3], ipiv, row_perm, perm, ones, ones, tmp, sol, tmp2,
+              bi, bi[7:8].view(np.uint8))
+    for j in range(n):
+        out[j] = columns[j] * sol[j]
+    return True
+
+
+@leaf
+def _newton_accel_band(kp, lapack, bi, x, nin, out, n, m, jr, jc, ipiv, qdd, lam, info, Mr, Mc,
+                       Dr, Dc, Ar, Ac, bnd, nw, ex, ph, t, y, f):
+    """``_newton_accel`` for large systems: the same Newton on ``(qdd, lambda)`` and the same
+    unit-free convergence test, with the Jacobian held by its distinct nonzeros and the
+    Newton matrix by its fixed pattern (``solvers._free._newton_pattern``: reverse
+    Cuthill-McKee, banded), factorised by LAPACK's ``dgbtrf`` as the Python path's
+    ``FixedPattern.factor`` does: no dense ``(n + m)^2`` array, work linear in the number of
+    bodies for chains. ``bnd`` (int64): ``[kl, ku, ld, P, U, kM, nA, nD, n]``, then the
+    pattern's band
+    positions, rows and columns (P each), ``row_perm`` and ``perm`` (n + m each), the
+    pattern slots of the mass-matrix, ``dQ/dqdd`` and ``dQ/dlambda`` entries, the distinct
+    Jacobian position of each Jacobian value (``jr.size``), the distinct positions' rows,
+    columns, and slots in the ``Phi_q`` and ``Phi_q^T`` blocks (U each), the slots of the
+    diagonal of the first block (n; ``_min_norm_band``). ``nw[3]`` (1, U +
+    P + ld (n + m) + 4 (n + m)) holds the Jacobian's values, the pattern's values, the
+    band storage and four vectors. ``bi``: int32 work (8: LAPACK's integer arguments,
+    the last one's bytes its character argument); ``lapack[4:6]``: ``dgbtrf``,
+    ``dgbtrs``. False: hand over (as ``_newton_accel``)."""
+    xk, out_pos, g, W, od, oa, res, tolv = nw
+    mag = res[n + m:]
+    kM, chain, maxit, nD, nA, npar = info[0], info[1], info[2], info[3], info[4], info[5]
+    N = n + m
+    nin_k = 1 + 2 * n + npar
+    tol = tolv[0]
+    P, U = bnd[3], bnd[4]
+    o = BAND_HEAD
+    pos, prow, pcol = bnd[o:o + P], bnd[o + P:o + 2 * P], bnd[o + 2 * P:o + 3 * P]
+    o += 3 * P
+    row_perm, perm = bnd[o:o + N], bnd[o + N:o + 2 * N]
+    o += 2 * N
+    sM, sA, sD = bnd[o:o + kM], bnd[o + kM:o + kM + nA], bnd[o + kM + nA:o + kM + nA + nD]
+    o = _band_jmap(bnd, jr.size, N)
+    uid = bnd[o:o + jr.size]
+    o += jr.size
+    urow, ucol, sJ, sJT = bnd[o:o + U], bnd[o + U:o + 2 * U], bnd[o + 2 * U:o + 3 * U], \
+        bnd[o + 3 * U:o + 4 * U]
+    ld = bnd[2]
+    w = W[0]
+    Jv, data, AB = w[0:U], w[U:U + P], w[U + P:U + P + ld * N]
+    o2 = U + P + ld * N
+    ones, tmp, sol = w[o2:o2 + N], w[o2 + N:o2 + 2 * N], w[o2 + 2 * N:o2 + 3 * N]
+    blapack = lapack[4:6]
+    cbuf = bi[7:8].view(np.uint8)        # (dgbtrs's character argument, in bi's last entry)
+    _newton_args(x, xk, t, y, n, m, npar)
+    for u in range(U):
+        Jv[u] = 0.0
+    if m > 0:
+        _eval(info[6:11], xk, nin_k, out_pos)
+        for k in range(jr.size):
+            Jv[uid[k]] += out_pos[m + k]
+        for j in range(n):
+            xk[1 + n + j] = y[n + j]
+        _eval(info[11:16], xk, nin_k, g)
+    for i in range(N):
+        ones[i] = 1.0
+    for i in range(m):
+        if chain == 0:
+            lam[i] = 1.0
+        x[1 + 2 * n + i] = lam[i]
+    for j in range(n):
+        qdd[j] = 0.0
+        x[1 + 2 * n + m + npar + j] = 0.0
+    # the rows' scales rho_i = max_j |Phi_ij| c_j (the constraint rows' test and scaling)
+    for i in range(m):
+        tolv[1 + n + i] = 0.0
+    for u in range(U):
+        v = abs(Jv[u]) * tolv[1 + ucol[u]]
+        if v > tolv[1 + n + urow[u]]:
+            tolv[1 + n + urow[u]] = v
+    for i in range(m):
+        if tolv[1 + n + i] == 0.0:
+            tolv[1 + n + i] = 1.0
+    _evalx(kp, x, nin, out, ex, ph)
+    for it in range(1, maxit + 1):
+        for i in range(N):
+            res[i] = 0.0
+        for i in range(n):
+            mag[i] = 0.0
+        for e in range(kM):
+            res[Mr[e]] += out[e] * qdd[Mc[e]]
+            mag[Mr[e]] += abs(out[e] * qdd[Mc[e]])
+        for i in range(n):
+            tmp[i] = 0.0
+        for u in range(U):
+            a = Jv[u] * lam[urow[u]]
+            tmp[ucol[u]] += a
+            mag[ucol[u]] += abs(a)
+            res[n + urow[u]] += Jv[u] * qdd[ucol[u]]
+        e1 = 0.0
+        size1 = 0.0
+        size2 = 0.0
+        for i in range(n):
+            res[i] = ((res[i] + tmp[i]) - out[kM + i]) - out[kM + n + i]
+            c = tolv[1 + i]
+            e1 = max(e1, c * abs(res[i]))
+            size1 = max(size1, c * (mag[i] + abs(out[kM + i]) + abs(out[kM + n + i])))
+            size2 = max(size2, abs(qdd[i]) / c)
+        e2 = 0.0
+        for i in range(m):
+            rho = tolv[1 + n + i]
+            res[n + i] = res[n + i] - g[i]
+            e2 = max(e2, abs(res[n + i]) / rho)
+            size2 = max(size2, abs(g[i]) / rho)
+        done = _newton_verdict(res, N, n, it, e1 <= tol * size1 and e2 <= tol * size2, y, qdd, f)
+        if done != 0:
+            return done > 0
+        if nD > 0:
+            _eval(info[16:21], x, nin, od)
+        if nA > 0:
+            _eval(info[21:26], x, nin, oa)
+        # K = [[M - A, J^T - D], [J, 0]] at its pattern's entries
+        for k in range(P):
+            data[k] = 0.0
+        for e in range(kM):
+            data[sM[e]] += out[e]
+        for e in range(nA):
+            data[sA[e]] -= oa[e]
+        for u in range(U):
+            data[sJ[u]] += Jv[u]
+            data[sJT[u]] += Jv[u]
+        for e in range(nD):
+            data[sD[e]] -= od[e]
+        # unit-free as free_acceleration: rows diag(c/mu, 1/rho), columns diag(c, mu/rho)
+        mu = 0.0
+        for k in range(P):
+            if prow[k] < n and pcol[k] < n:
+                mu = max(mu, abs(tolv[1 + prow[k]] * data[k] * tolv[1 + pcol[k]]))
+        if mu == 0.0:
+            mu = 1.0
+        for k in range(P):
+            r_, c_ = prow[k], pcol[k]
+            dr = tolv[1 + r_] / mu if r_ < n else 1.0 / tolv[1 + r_]
+            dc = tolv[1 + c_] if c_ < n else mu / tolv[1 + c_]
+            data[k] = (dr * data[k]) * dc
+        if _gb_factor(blapack, data, prow, pcol, pos, ones, ones, AB, bnd[0:3], ipiv, bi) < 0:
+            return False
+        for i in range(N):
+            tmp[i] = -((tolv[1 + i] / mu if i < n else 1.0 / tolv[1 + i]) * res[i])
+        _gb_solve(blapack, AB, bnd[0:3], ipiv, row_perm, perm, ones, ones, tmp, sol, res, bi,
+                  cbuf)
+        for j in range(n):
+            qdd[j] += tolv[1 + j] * sol[j]
+            x[1 + 2 * n + m + npar + j] = qdd[j]
+        for i in range(m):
+            lam[i] += (mu / tolv[1 + n + i]) * sol[n + i]
             x[1 + 2 * n + i] = lam[i]
         _evalx(kp, x, nin, out, ex, ph)
     return False
@@ -592,6 +850,9 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
         return _project_blocks(pp, pv, xk, nin_k, out_pos, out_vel, jr, jc, columns, offset,
                                tol, maxit, robust, n, m, t, y, r, Fs, dq, blk_i[0], blk_w[0][5],
                                blk_w[0][3], ex, ph)
+    # a large NEWTON system: the Jacobian by its distinct nonzeros, the minimum-norm
+    # correction through the Newton matrix's banded pattern (_min_norm_band)
+    band = blocks == NEWTON and blk_i[0][7].size > 1
     xk[0] = t
     for j in range(n):
         xk[1 + n + j] = 0.0
@@ -600,8 +861,11 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
         for j in range(n):
             xk[1 + j] = y[j]
         _evalx(pp, xk, nin_k, out_pos, ex[1], ph[1])
-        _assemble(out_pos, m, jr, jc, J)
-        _rows(J, columns, r)
+        if band:
+            _band_rows_of(out_pos, m, jr, columns, r, blk_i[0][7], blk_w[0][3][0])
+        else:
+            _assemble(out_pos, m, jr, jc, J)
+            _rows(J, columns, r)
         big = 0.0
         for i in range(m):
             Fs[i] = out_pos[i] / r[i]
@@ -610,8 +874,12 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
                 big = v
         if big <= lim:
             break
-        if not _min_norm(lapack, J, r, columns, Fs, dq, Js, A, ipiv, ibuf, cbuf, dbuf, work,
-                         iwork, ybuf, robust):
+        if band:
+            if not _min_norm_band(lapack, ibuf, ipiv, r, columns, Fs, dq, n, m, jr,
+                                  blk_i[0][7], blk_w[0][3][0]):
+                return False
+        elif not _min_norm(lapack, J, r, columns, Fs, dq, Js, A, ipiv, ibuf, cbuf, dbuf, work,
+                           iwork, ybuf, robust):
             return False
         for j in range(n):
             y[j] -= dq[j]
@@ -624,16 +892,31 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
         xk[1 + j] = y[j]
     _evalx(pv, xk, nin_k, out_vel, ex[2], ph[2])
     nnz = jr.size
-    _assemble(out_vel, 0, jr, jc, J)
-    _rows(J, columns, r)
-    for i in range(m):
-        s = 0.0
-        for j in range(n):
-            s += J[i, j] * y[n + j]
-        Fs[i] = (s - (-out_vel[nnz + i])) / r[i]
-    if not _min_norm(lapack, J, r, columns, Fs, dq, Js, A, ipiv, ibuf, cbuf, dbuf, work, iwork,
-                     ybuf, robust):
-        return False
+    if band:
+        w = blk_w[0][3][0]
+        bnd = blk_i[0][7]
+        _band_rows_of(out_vel, 0, jr, columns, r, bnd, w)
+        U = bnd[4]
+        o = _band_jmap(bnd, jr.size, n + m) + jr.size
+        for i in range(m):
+            Fs[i] = 0.0
+        for u in range(U):
+            Fs[bnd[o + u]] += w[u] * y[n + bnd[o + U + u]]
+        for i in range(m):
+            Fs[i] = (Fs[i] - (-out_vel[nnz + i])) / r[i]
+        if not _min_norm_band(lapack, ibuf, ipiv, r, columns, Fs, dq, n, m, jr, blk_i[0][7], w):
+            return False
+    else:
+        _assemble(out_vel, 0, jr, jc, J)
+        _rows(J, columns, r)
+        for i in range(m):
+            s = 0.0
+            for j in range(n):
+                s += J[i, j] * y[n + j]
+            Fs[i] = (s - (-out_vel[nnz + i])) / r[i]
+        if not _min_norm(lapack, J, r, columns, Fs, dq, Js, A, ipiv, ibuf, cbuf, dbuf, work,
+                         iwork, ybuf, robust):
+            return False
     for j in range(n):
         y[n + j] = y[n + j] - dq[j]
     for j in range(2 * n):
@@ -1139,16 +1422,21 @@ def workspace(kp, n, m, npar, kk, nnz, blocks, blk_i, bw):
     NN = n + m
     # the dense matrix: the augmented system, a path's velocity system (n x n), else unused
     side = NN if blocks == AUGMENTED or blocks == NEWTON else (n if blocks == PATH else 1)
+    banded = blocks == NEWTON and blk_i[0][7].size > 1
+    if banded:
+        side = 1                      # (the Newton matrix and projections by its pattern)
     KTf = np.empty(side * side)
     # (a path evaluates its two kernels at [t, q, qd, p] in the first array)
     first = max(nin + max(kp[0, 4], 0), nin_k + max(kp[0, 4], kp[2, 4], 0))
     return (np.zeros(first), np.zeros(nin_k + max(kp[1, 4], kp[2, 4])),
             np.empty(kk + n + m), np.empty(m + nnz), np.empty(nnz + m),
             KTf.reshape((side, side)), KTf,
-            np.empty(max(NN, 1), dtype=np.int32), np.zeros(5, dtype=np.int32),
+            np.empty(max(NN, 1), dtype=np.int32), np.zeros(8, dtype=np.int32),
             np.zeros(2, dtype=np.uint8), np.zeros(2), np.empty(NN), np.empty(NN), np.zeros(n),
-            np.empty(m), np.empty(n), _block_work(blocks, blk_i, n, m, bw, nnz), np.empty((m, n)),
-            np.empty(m), np.empty(m), np.empty(n), np.empty((m, n)), np.empty((m, m)),
+            np.empty(m), np.empty(n), _block_work(blocks, blk_i, n, m, bw, nnz),
+            np.empty((1, 1) if banded else (m, n)),
+            np.empty(m), np.empty(m), np.empty(n), np.empty((1, 1) if banded else (m, n)),
+            np.empty((1, 1) if banded else (m, m)),
             np.empty(4 * max(m, 1)), np.empty(max(m, 1), dtype=np.int32), np.empty(m))
 
 
@@ -1164,8 +1452,13 @@ def _block_work(blocks, blk_i, n, m, bw, nnz):
     elif blocks == NEWTON:
         info = blk_i[0][0]
         pieces = max(info[10], info[15], 0)
+        bnd = blk_i[0][7]
+        # the Jacobian dense, or (banded) its values, the pattern's, the band storage and
+        # three vectors (_newton_accel_band)
+        J = np.zeros((m, n)) if bnd.size <= 1 else np.zeros(
+            (1, bnd[4] + bnd[3] + (bnd[2] + 4) * (n + m)))
         bw_ = (np.zeros(1 + 2 * n + info[5] + pieces), np.zeros(m + nnz), np.zeros(m),
-               np.zeros((m, n)), np.zeros(max(info[3], 1)), np.zeros(max(info[4], 1)),
+               J, np.zeros(max(info[3], 1)), np.zeros(max(info[4], 1)),
                np.zeros(2 * n + m), np.zeros(1 + n + m))
     elif blocks == BLOCK:
         boff, roff, bsize = blk_i[0][1], blk_i[0][4], blk_i[0][6]
