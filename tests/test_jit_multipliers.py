@@ -219,18 +219,37 @@ def test_when_the_compiled_loop_runs(monkeypatch):
     assert _jit.multipliers(s, t, sol.q, None, None, sol.p, "kinematic", lam, **kw) == 0
 
 
-def test_large_model_with_friction_keeps_the_python_path(monkeypatch):
-    """Above SPARSE_THRESHOLD coordinates loads that depend on the multipliers take the
-    Python path's dense Newton: the compiled loop declines them (returns 0)."""
-    monkeypatch.setenv("MECHSYS_JIT", "1")
+def _friction_chain():
+    """The 183-coordinate chain of ``_loaded_chain`` with Coulomb friction in every ground
+    pivot, driven by the joint reactions."""
     m = _loaded_chain()
-    t = np.linspace(0.0, 1.0, 3)
-    sol = m.solve(t, solution="dynamic")
-    s = sol.system
-    columns = Scaling.of(s, sol.q[0], s.jacobian(t[0], sol.q[0], sol.p)).columns
-    lam = np.empty((len(t), s.m))
-    args = (s, t, sol.q, sol.qd, sol.qdd, sol.p, "dynamic", lam)
-    assert _jit.multipliers(*args, columns=columns) == len(t)
-    np.testing.assert_allclose(lam, sol.lam, rtol=1e-13, atol=1e-12)
-    monkeypatch.setattr(s.dynamics, "depends_on_lambda", True)
-    assert _jit.multipliers(*args, columns=columns) == 0
+    for k in range(31):
+        m.add_load(ms.JointFriction(f"pivot{k}", mu=0.2, radius=0.05, v_eps=1e-3))
+    return m
+
+
+@pytest.mark.parametrize("mode", ["kinematic", "dynamic"])
+def test_large_model_with_friction_runs_compiled_through_the_band(monkeypatch, mode):
+    """Above SPARSE_THRESHOLD coordinates, loads that depend on the multipliers: the loop's
+    Newton factorises ``Phi_q^T - dQ/dlambda`` through the Python path's banded pattern
+    (``_statics._newton_pattern``) and forms the residual from the Jacobian's CSC values.
+    Both stop on the same tolerance (1e-10 of the terms), so they agree to it; the friction
+    is active (the multipliers differ from those without it), and the compiled multipliers
+    balance the loads evaluated separately in Python."""
+    t = np.linspace(0.1, 1.0, 12)
+    fast, slow, taken = _solve_both(monkeypatch, _friction_chain, t, mode)
+    assert fast.system.n == 183 and taken[0] == len(t)
+    scale = np.maximum(1.0, np.abs(slow.lam).max(axis=0))
+    assert (np.abs(fast.lam - slow.lam) / scale).max() <= 1e-8
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    plain = _loaded_chain().solve(t, solution=mode)
+    assert np.abs(plain.lam - fast.lam).max() > 1e-3 * np.abs(plain.lam).max()
+    s, dyn = fast.system, fast.system.dynamics
+    for k in range(len(t)):
+        J = s.jacobian(t[k], fast.q[k], fast.p)
+        qdd = fast.qdd[k] if mode == "dynamic" else None
+        M, Q, Qv = dyn.terms(t[k], fast.q[k], fast.qd[k], fast.lam[k], fast.p, qdd)
+        rhs = Q + Qv - M @ qdd if mode == "dynamic" else Q
+        res = J.T @ fast.lam[k] - rhs
+        assert np.abs(res).max() <= 1e-9 * (1 + np.abs(rhs).max() + np.abs(J).max()
+                                             * np.abs(fast.lam[k]).max())

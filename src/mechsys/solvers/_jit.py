@@ -127,7 +127,8 @@ def _wanted(system, points: int, banded_ok: bool = False) -> bool:
     """Whether a compiled loop should run for ``points`` points of this system (the
     ``MECHSYS_JIT`` rule of the module docstring; Numba importable). ``banded_ok``: the loop
     also takes systems above ``SPARSE_THRESHOLD`` unknowns whose Jacobian is banded (the
-    sweep, and the multiplier solves of loads that do not depend on the multipliers)."""
+    sweep, and the multiplier solves; with friction, when its Newton matrix's pattern is
+    banded too)."""
     m = mode()
     if m == "off" or system.n == 0 or system.m != system.n:
         return False
@@ -153,9 +154,11 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
     N = len(times)
     dyn = system.dynamics
     # (the recursive dynamics of generalized coordinates has no f_terms kernel)
+    large = system.n > SPARSE_THRESHOLD
+    kband = _multiplier_band(system) if large and dyn.depends_on_lambda else _NO_KBAND
     if not N or columns is None or getattr(dyn, "recursive", False) \
             or not _wanted(system, N if points is None else points,
-                           banded_ok=not dyn.depends_on_lambda):
+                           banded_ok=not dyn.depends_on_lambda or kband is not None):
         return 0
     code = {"static": 0, "kinematic": 1, "dynamic": 2}[mode_name]
     if (code >= 1 and QD is None) or (code == 2 and QDD is None):
@@ -186,7 +189,7 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
         _index(dyn.M_cols), len(dyn.M_rows), code, LAM, dr, dc,
         np.broadcast_to(np.asarray(guess, dtype=float), (system.m,)).copy(), float(tol),
         int(max_iterations), np.ascontiguousarray(columns, dtype=float), _band_lapack(), bw,
-        band))
+        band, kband))
 
 
 def _index(a) -> np.ndarray:
@@ -211,6 +214,44 @@ def _banded(system) -> bool:
 
 #: the dense sweep's (unused) band arguments
 _NO_BAND = (np.array([-1, 0, 1], dtype=np.int64), (np.zeros(0, dtype=np.int64),) * 6)
+
+
+#: the multiplier loop's (unused) Newton band arguments
+_NO_KBAND = (np.array([-1, 0, 1], dtype=np.int64), (np.zeros(0, dtype=np.int64),) * 7)
+
+
+def _multiplier_band(system):
+    """``(kbw, (pos, rows, cols, row_perm, perm, sJT, sD))`` of the multiplier Newton matrix
+    ``Phi_q^T - dQ/dlambda`` of a large square system (friction): its ``FixedPattern``
+    (``_statics._newton_pattern``, the Python path's), and the slot in it of each of the
+    Jacobian's CSC entries (transposed) and each ``dQ/dlambda`` entry; None when the pattern
+    is not banded or the Jacobian's is not (the loop reads the Jacobian through it)."""
+    from ._statics import _newton_pattern
+
+    if not _banded(system):
+        return None
+    rows, cols, pat = _newton_pattern(system)
+    if not pat.banded:
+        return None
+    got = getattr(pat, "_jit_kband", None)
+    if got is None:
+        n = system.n
+        key = cols * n + rows
+        _, (_, jrows, jcols, _, _, _) = _band_args(system)
+
+        def slot(r, c):
+            want = np.asarray(c, dtype=np.int64) * n + np.asarray(r, dtype=np.int64)
+            k = np.searchsorted(key, want)
+            if not np.array_equal(key[np.minimum(k, key.size - 1)], want):
+                raise AssertionError("the multiplier Newton pattern misses an entry")
+            return k
+
+        dyn = system.dynamics
+        got = (np.array([pat.kl, pat.ku, pat._ld], dtype=np.int64),
+               tuple(_index(a) for a in (pat._pos, rows, cols, pat.row_perm, pat.perm,
+                                         slot(jcols, jrows), slot(dyn.dQ_rows, dyn.dQ_cols))))
+        pat._jit_kband = got
+    return got
 
 
 def _band_args(system):

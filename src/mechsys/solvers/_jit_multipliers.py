@@ -20,10 +20,13 @@ Python path), in the same order:
   multipliers (friction), Newton with ``D (Phi_q^T - dQ/dlambda) R^-1`` from the previous
   point's multipliers.
 
-Above ``SPARSE_THRESHOLD`` unknowns (loads that do not depend on the multipliers, a
-banded Jacobian pattern) the Python path factorises ``R^-1 Phi_q D`` itself through the
-Jacobian's ``FixedPattern`` and solves it transposed; so does this loop, with the same
-operations and SciPy's ``dgbtrf``/``dgbtrs`` (``_jit_loop._band_factor``, ``_band_solve_t``).
+Above ``SPARSE_THRESHOLD`` unknowns (a banded Jacobian pattern) the Python path factorises
+``R^-1 Phi_q D`` itself through the Jacobian's ``FixedPattern`` and solves it transposed;
+so does this loop, with the same operations and SciPy's ``dgbtrf``/``dgbtrs``
+(``_jit_loop._band_factor``, ``_band_solve_t``). With friction, the Newton matrix goes
+through its own banded pattern (the Python path's ``_statics._newton_pattern``) and the
+residual ``Phi_q^T lambda - rhs`` is formed from the Jacobian's CSC values (the Python
+path: a dense ``Phi_q``; the same to rounding, and both stop on the same tolerance).
 
 A point that the Python path would refuse (an exactly zero pivot, a reciprocal condition
 below ``RCOND_MIN``) or whose multipliers come out non-finite ends the loop there: the
@@ -41,6 +44,7 @@ from ._jit_loop import (
     _assemble,
     _band_factor,
     _band_rows,
+    _band_solve,
     _band_solve_t,
     _band_values,
     _eval_row,
@@ -82,7 +86,7 @@ def _loads(ptrs, xd, nin_d, out_dyn, mode, QDD, k, mr, mc, kM, n, Mq, rhs):
 
 @nb.njit(cache=True)
 def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LAM, dr, dc,
-                guess, tol, maxit, cols, blapack, bw, band):
+                guess, tol, maxit, cols, blapack, bw, band, kband):
     """``LAM[k]`` (m,) at each point ``k`` from 0 on; returns the first point left to the
     Python path (``len(times)`` when all are done).
 
@@ -105,7 +109,11 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
     apart at the tolerance: they agree to it, not to rounding.
 
     ``bw[0] >= 0``: a large system through its Jacobian's pattern (``bw``, ``band`` as in
-    ``_jit_loop.sweep_dense``; loads that do not depend on the multipliers only)."""
+    ``_jit_loop.sweep_dense``): the Jacobian's values in its CSC order. With loads that
+    depend on the multipliers, the Newton matrix through its own pattern (the Python path's
+    ``_statics._newton_pattern``): ``kband = (kbw, (pos, rows, cols, row_perm, perm, sJT,
+    sD))``, ``sJT`` the slot of each Jacobian CSC entry (transposed), ``sD`` of each
+    ``dQ/dlambda`` entry; the residual from the Jacobian's CSC values."""
     N = times.size
     n = Q.shape[1]
     m = n
@@ -123,9 +131,14 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
     out_dyn = np.empty(kM + 2 * n)
     out_d = np.empty(max(dr.size, 1))
     banded = bw[0] >= 0
-    if banded and newton:
+    kbw = kband[0]
+    if banded and newton and kbw[0] < 0:
         return 0                     # (not taken: _jit.multipliers sends these to Python)
     slot, cr, cc, pos, row_perm, perm = band
+    kpos, krow, kcol, krow_perm, kperm, sJT, sD = kband[1]
+    Kd = np.empty(krow.size)
+    AB2 = np.zeros(n * kbw[2] if banded and newton else 1)
+    mag = np.empty(n)
     nd = 1 if banded else n          # the dense matrices are not used when banded
     J, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, r = _factor_work(m, n, nd)
     # Newton's matrix Phi_q^T - dQ/dlambda: its own factors and structure (both terms')
@@ -200,19 +213,52 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
                     return k
                 err = 0.0
                 size = 0.0
+                if banded:
+                    for i in range(n):
+                        R[i] = 0.0
+                        mag[i] = 0.0
+                    for e in range(cr.size):       # R = Phi_q^T lambda from the CSC values
+                        v = data[e] * lam[cr[e]]
+                        R[cc[e]] += v
+                        mag[cc[e]] += abs(v)
                 for i in range(n):
-                    acc = 0.0
-                    mag = 0.0
-                    for j in range(m):
-                        acc += J[j, i] * lam[j]
-                        mag += abs(J[j, i] * lam[j])
+                    if banded:
+                        acc = R[i]
+                        mi = mag[i]
+                    else:
+                        acc = 0.0
+                        mi = 0.0
+                        for j in range(m):
+                            acc += J[j, i] * lam[j]
+                            mi += abs(J[j, i] * lam[j])
                     R[i] = acc - rhs[i]
                     err = max(err, cols[i] * abs(R[i]))
-                    size = max(size, cols[i] * (mag + abs(rhs[i])))
+                    size = max(size, cols[i] * (mi + abs(rhs[i])))
                 if err <= tol * size:
                     done = True
                     break
                 _eval_row(ptrs, 2, xd, nin_d, out_d)
+                if banded:
+                    # Phi_q^T - dQ/dlambda at its pattern's entries, unit-free as the Python
+                    # path: (c_row K) / r_col
+                    for e in range(Kd.size):
+                        Kd[e] = 0.0
+                    for e in range(cr.size):
+                        Kd[sJT[e]] += data[e]
+                    for e in range(dr.size):
+                        Kd[sD[e]] -= out_d[e]
+                    for e in range(Kd.size):
+                        Kd[e] = (cols[krow[e]] * Kd[e]) / r[kcol[e]]
+                    if _band_factor(blapack, Kd, krow, kcol, kpos, ones, ones, AB2, kbw, ipiv2,
+                                    bi) < 0:
+                        return k
+                    for j in range(n):
+                        R[j] = cols[j] * R[j]
+                    _band_solve(blapack, AB2, kbw, ipiv2, krow_perm, kperm, ones, ones, R, dl,
+                                tmp, bi, cbuf)
+                    for i in range(m):
+                        lam[i] = lam[i] - dl[i] / r[i]
+                    continue
                 for i in range(m):                   # K^T = Phi_q - (dQ/dlambda)^T
                     for j in range(n):
                         K[i, j] = J[i, j]
