@@ -253,3 +253,40 @@ def test_large_banded_sweep_is_the_same_in_any_unit(monkeypatch, jit):
         np.testing.assert_allclose(ang, out[0][0], rtol=0, atol=1e-12)
         np.testing.assert_allclose(rc, out[0][1], rtol=1e-12)
         np.testing.assert_array_equal(its, out[0][2])
+
+
+def _friction_chain_at_scale(links, s):
+    """``links`` rods of length ``s`` pinned end to end, hanging from the origin, with Coulomb
+    friction of radius ``0.01 s`` in every pin (its turning regularised below 1e-3 rad/s)
+    under gravity ``9.81 s``: the same angles at any ``s``."""
+    m = ms.Model2D()
+    prev = m.ground.point((0, 0))
+    for k in range(links):
+        b = m.add_body(f"l{k}", points={"a": (0, 0), "b": (s, 0)}, mass=1.0, centroid=(s / 2, 0),
+                       inertia=s * s / 12, guess=((k * s, 0), 0.0))
+        m.add(ms.Revolute2(prev, b.point("a")), name=f"j{k}")
+        m.add(ms.RotationLock1(b, 0.0), name=f"lock{k}")
+        m.add_load(ms.JointFriction(f"j{k}", mu=0.1, radius=0.01 * s, v_eps=1e-3))
+        prev = b.point("b")
+    m.add_load(ms.Gravity((0, -1), 9.81 * s))
+    m.solve(0.0)
+    return m.free(drop=[f"lock{k}" for k in range(links)])
+
+
+@pytest.mark.parametrize("jit", ["0", "1"])
+def test_large_friction_free_motion_is_the_same_in_any_unit(monkeypatch, jit):
+    """The banded Newton of free motion with friction (160 unknowns, decision 0028) works on
+    the unit-free Newton matrix and projections: the chain in millimetres, metres or
+    kilometres swings through the same angles, in the Python and the compiled loop."""
+    monkeypatch.setenv("MECHSYS_JIT", jit)
+    t = np.linspace(0.0, 0.2, 5)
+    out = []
+    for s in (1e-3, 1.0, 1e3):
+        free = _friction_chain_at_scale(32, s)
+        assert free.system.n + free.system.m == 160
+        sol = free.simulate(t, rtol=1e-10, atol=1e-12)
+        assert (sol.extra["compiled_steps"] == sol.extra["steps"]) == (jit == "1")
+        out.append(np.array([sol[f"l{k}.th"] for k in range(32)]))
+    assert np.abs(out[1]).max() > 0.1                 # it swings
+    for ang in out[::2]:
+        np.testing.assert_allclose(ang, out[1], rtol=0, atol=1e-12)

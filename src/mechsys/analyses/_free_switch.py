@@ -18,8 +18,8 @@ time, so the event time has the integrator's accuracy (the dense output's error)
 within rounding of zero (``16 eps (|lhs| + |rhs|)``) has no sign: a configuration held on a
 boundary (a latched stop) makes no events, and the event is where ``g`` is first strictly on
 the far side. After an event the event's relation is expected on the far side, or back on
-the near side after a rebound, so a crossing within the first step
-after the restart is not missed. The integration stops there, the tests are evaluated just past the zero, and
+the near side after a rebound, so a crossing within the first step after the restart is
+not missed. The integration stops there, the tests are evaluated just past the zero, and
 
 * a switched load only changes its force: the integration restarts at the event;
 * a constraint stage change restarts in the new stage's free system, with positions
