@@ -1,0 +1,113 @@
+"""Friction at scale: loads that depend on the multipliers, Python and compiled loops.
+
+* Free motion: a chain of N uniform rods (``models.pendulum_chain``) with Coulomb friction
+  in every joint (``JointFriction``, mu 0.1, radius 0.01, 1e-3 rad/s regularisation),
+  released horizontal, 0.1 s at rtol 1e-6. Each evaluation is a Newton on ``(qdd,
+  lambda)``; above 150 unknowns the compiled loop goes through the Newton matrix's banded
+  pattern (decision 0028).
+* Inverse dynamics: the four-bar chain of ``models.four_bar_chain(L)`` (``3 (2 L + 1)``
+  coordinates) with unit masses, gravity and friction in its ``L + 1`` ground pivots, 40
+  points; the multipliers' Newton at every point (decision 0030).
+
+Each row: CPU time (median of interleaved repetitions, after a warm-up run that compiles),
+per evaluation (free motion) or per point (sweep and multipliers), for ``MECHSYS_JIT=0``
+and ``1``, and the largest difference of the two results relative to their size.
+
+Run: ``.venv/bin/python benchmarks/friction.py`` (prints the tables; about a minute).
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")  # before NumPy loads: CPU time of one thread
+
+import statistics  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+import warnings  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+import mechsys as ms  # noqa: E402
+from mechsys import models  # noqa: E402
+
+clock = time.process_time
+LINKS = (8, 32, 64, 128)
+LOOPS = (10, 30, 60)
+
+
+def _chain(links):
+    m = models.pendulum_chain(links)
+    for k in range(links):
+        m.add_load(ms.JointFriction(f"j{k}", mu=0.1, radius=0.01, v_eps=1e-3))
+    m.solve(0.0)
+    return m.free(drop=[f"lock{k}" for k in range(links)])
+
+
+def _loops(loops):
+    m = models.four_bar_chain(loops)
+    for b in m.bodies:
+        if not b.is_ground:
+            m.set_mass_properties(b.name, mass=1.0, centroid=(0.5, 0), inertia=0.1)
+    m.add_load(ms.Gravity((0, -1), 9.81))
+    for k in range(loops + 1):
+        m.add_load(ms.JointFriction(f"pivot{k}", mu=0.2, radius=0.05, v_eps=1e-3))
+    return m
+
+
+def _timed(run, rounds):
+    """``{mode: (median CPU time, result)}`` over interleaved rounds of both loops."""
+    times = {"0": [], "1": []}
+    out = {}
+    for mode in ("0", "1"):                     # warm-up: compile, fill the caches
+        os.environ["MECHSYS_JIT"] = mode
+        run()
+    for _ in range(rounds):
+        for mode in ("0", "1"):
+            os.environ["MECHSYS_JIT"] = mode
+            t0 = clock()
+            out[mode] = run()
+            times[mode].append(clock() - t0)
+    os.environ.pop("MECHSYS_JIT", None)
+    return {mode: (statistics.median(times[mode]), out[mode]) for mode in times}
+
+
+def _difference(a, b) -> float:
+    return float(np.abs(a - b).max() / max(1.0, np.abs(b).max()))
+
+
+def main(rounds: int = 3) -> int:
+    warnings.simplefilter("ignore")
+    print("Free motion of a chain with friction in every joint, 0.1 s, rtol 1e-6\n")
+    print("| links | unknowns | Python / evaluation | compiled / evaluation | ratio | "
+          "difference (q) |")
+    print("| ---: | ---: | ---: | ---: | ---: | ---: |")
+    for links in LINKS:
+        free = _chain(links)
+        got = _timed(lambda free=free: free.simulate((0.0, 0.1), rtol=1e-6, atol=1e-8), rounds)
+        (tp, py), (tc, jit) = got["0"], got["1"]
+        ep, ec = tp / py.extra["evaluations"], tc / jit.extra["evaluations"]
+        assert jit.extra["compiled_steps"] == jit.extra["steps"]
+        print(f"| {links} | {free.system.n + free.system.m} | {ep * 1e6:.0f} µs | "
+              f"{ec * 1e6:.0f} µs | {ep / ec:.1f} | {_difference(jit.q[-1], py.q[-1]):.1e} |",
+              flush=True)
+    print("\nInverse dynamics of the four-bar chain with friction in its ground pivots, "
+          "40 points\n")
+    print("| loops | coordinates | Python / point | compiled / point | ratio | "
+          "difference (lambda) |")
+    print("| ---: | ---: | ---: | ---: | ---: | ---: |")
+    t = np.linspace(0.1, 1.0, 40)
+    for loops in LOOPS:
+        m = _loops(loops)
+        got = _timed(lambda m=m: m.solve(t, solution="dynamic"), rounds)
+        (tp, py), (tc, jit) = got["0"], got["1"]
+        print(f"| {loops} | {py.system.n} | {tp / len(t) * 1e3:.2f} ms | "
+              f"{tc / len(t) * 1e3:.2f} ms | {tp / tc:.0f} | "
+              f"{_difference(jit.lam, py.lam):.1e} |", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
