@@ -90,7 +90,8 @@ def test_bracket_after_a_rebound_finds_the_return_not_the_start():
     assert ev.events(b, dense(b), p)[0] == -1.0 and ev.events(a, dense(a), p)[0] != -1.0
 
 
-def test_compiled_runs_take_the_event_steps_compiled_with_the_same_events():
+@pytest.mark.parametrize("method", ["dop853", "rk45"])
+def test_compiled_runs_take_the_event_steps_compiled_with_the_same_events(method):
     m = lp.build()
     m.solve(0.0, solution="location")
     fs = m.free(drop=[("latch", 1)])
@@ -99,7 +100,7 @@ def test_compiled_runs_take_the_event_steps_compiled_with_the_same_events():
         os.environ["MECHSYS_JIT"] = mode
         try:
             out[mode] = fs.simulate((0.0, 2.0), at_switch=("restitution", 0.5), rtol=1e-10,
-                                    atol=1e-12)
+                                    atol=1e-12, method=method)
         finally:
             os.environ.pop("MECHSYS_JIT", None)
     py, jit = out["0"], out["1"]
