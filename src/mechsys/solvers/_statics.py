@@ -58,8 +58,9 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
     n, m = system.n, system.m
     if J is None:
         # large models: the sparse Jacobian, as their sweeps (a dense LU of a chain of 363
-        # coordinates cost 5 ms a point); friction's Newton stays dense
-        J = system.jacobian(t, q, p, n > SPARSE_THRESHOLD and not dyn.depends_on_lambda)
+        # coordinates cost 5 ms a point); friction's Newton then goes through its matrix's
+        # pattern too (_newton_values)
+        J = system.jacobian(t, q, p, n > SPARSE_THRESHOLD)
     if not np.all(np.isfinite(J.data if sps.issparse(J) else J)):
         raise ModelError(f"{mode} load solve at t = {t:.6g}: the constraint Jacobian is not "
                          "finite at this state (a coordinate or parameter is NaN or inf)")
@@ -101,24 +102,28 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
     # (not tol (1 + max |b|): for loads far below one unit of force that was an absolute test
     # and ended Newton on a wrong answer, e.g. a part of a few micrograms)
     c = sc.columns
-    JT = np.ascontiguousarray(J.T)
+    sparse = sps.issparse(J)
+    JT = J.T.tocsr() if sparse else np.ascontiguousarray(J.T)
+    absJT = abs(JT) if sparse else None
     history = []
     for it in range(1, opt.max_iterations + 1):
         b = rhs(lam)
         R = JT @ lam - b
         err = np.abs(c * R).max()
         history.append(err)
-        if err <= opt.tol * (c * (np.abs(JT * lam).sum(axis=1) + np.abs(b))).max():
+        terms = absJT @ np.abs(lam) if sparse else np.abs(JT * lam).sum(axis=1)
+        if err <= opt.tol * (c * (terms + np.abs(b))).max():
             return lam, it - 1
-        K = JT - dyn.dQ_dlam(t, q, qd_eff, lam, p, qdd_eff)
         try:
             # (unit-free as the linear solve: D K R^-1 (R dlambda) = D R)
             if n > SPARSE_THRESHOLD and m == n:
                 # large models: through the matrix's fixed pattern, analysed once (banded LU
                 # for chains) instead of a dense LU per iteration
                 rows, cols, pattern = _newton_pattern(system)
-                fac = pattern.factor((c[rows] * K[rows, cols]) / r[cols])
+                K = _newton_values(system, dyn, J, t, q, qd_eff, lam, p, qdd_eff)
+                fac = pattern.factor((c[rows] * K) / r[cols])
             else:
+                K = JT - dyn.dQ_dlam(t, q, qd_eff, lam, p, qdd_eff)
                 fac = factor((sc.columns[:, None] * K) / r[None, :])
             lam = lam - fac.solve(sc.columns * R) / r
         except Singular:
@@ -133,6 +138,42 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
         "mechanism self-locks here (no finite reaction can drive it with this friction), or "
         "the start is poor: give lambda_guess= closer to the expected multipliers "
         "(Mech's LambdaGuess).", time=t, residuals=R, history=tuple(history))
+
+
+def _newton_values(system, dyn, J, t, q, qd, lam, p, qdd):
+    """The values of ``Phi_q^T - dQ/dlambda`` at the entries of its pattern
+    (:func:`_newton_pattern`, CSC order), from ``J`` (sparse CSC: its stored entries placed
+    through slots found once; dense: gathered) and ``dQ/dlambda``'s nonzero values."""
+    rows, cols, _ = _newton_pattern(system)
+    dvals = dyn.f_dQ_dlam(dyn.pack(t, q, qd, lam, p, qdd))
+    if not sps.issparse(J):
+        K = np.ascontiguousarray(J.T)[rows, cols]
+        D = np.zeros(rows.size)
+        np.add.at(D, _slots(system, rows, cols, dyn.dQ_rows, dyn.dQ_cols), dvals)
+        return K - D
+    key = (J.indptr.tobytes(), J.indices.tobytes())
+    got = dyn.__dict__.get("_multiplier_slots")
+    if got is None or got[0] is not system or got[1] != key:
+        jcols = np.repeat(np.arange(J.shape[1]), np.diff(J.indptr))
+        got = (system, key, _slots(system, rows, cols, jcols, J.indices),
+               _slots(system, rows, cols, dyn.dQ_rows, dyn.dQ_cols))
+        dyn.__dict__["_multiplier_slots"] = got
+    K = np.zeros(rows.size)
+    np.add.at(K, got[2], J.data)
+    D = np.zeros(rows.size)
+    np.add.at(D, got[3], dvals)
+    return K - D
+
+
+def _slots(system, rows, cols, r, c) -> np.ndarray:
+    """The positions of the entries ``(r, c)`` among the pattern's ``(rows, cols)``."""
+    n = system.n
+    key = cols * n + rows
+    want = np.asarray(c, dtype=np.int64) * n + np.asarray(r, dtype=np.int64)
+    k = np.searchsorted(key, want)
+    if not np.array_equal(key[np.minimum(k, key.size - 1)], want):
+        raise AssertionError("the multiplier Newton pattern misses an entry")
+    return k
 
 
 def _newton_pattern(system):
