@@ -26,7 +26,15 @@ import scipy.sparse as sps
 from scipy.linalg.lapack import dgesv as _dgesv
 
 from .._errors import ConvergenceError, SingularJacobianError, SingularMassError
-from ._linalg import SPARSE_THRESHOLD, Scaling, Singular, dependent_rows, factor, pattern_of
+from ._linalg import (
+    SPARSE_THRESHOLD,
+    Scaling,
+    Singular,
+    dependent_rows,
+    factor,
+    pattern_of,
+    pattern_slots,
+)
 from ._position import describe_singular
 from ._rank import ZONE, InZone, kkt_rank_tolerant
 
@@ -89,48 +97,77 @@ def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterat
             if y is not None:
                 return (*y, 0)
         return x[:n], x[n:], 0
-    J = system.jacobian(t, q, p)
+    # large systems: the Jacobian's and the mass matrix's nonzeros (products by bincount, no
+    # sparse-matrix objects per iteration), the Newton matrix's values straight into its
+    # fixed pattern (_newton_values): no dense (n + m)^2 arrays
+    pat = _newton_pattern(system) if n + m > SPARSE_THRESHOLD else None
+    J = system.jacobian(t, q, p, pat is not None)
     g = system.gamma_values(t, q, qd, p)
     c = Scaling.of(system, q, J).columns if columns is None else np.asarray(columns, dtype=float)
-    rho = (np.abs(J) * c).max(axis=1, initial=0.0)
+    if pat is not None:
+        Jd, Jr, Jc = J.data, J.indices, np.repeat(np.arange(n), np.diff(J.indptr))
+        Mr, Mc = dyn.M_rows, dyn.M_cols
+        rho = np.zeros(m)
+        np.maximum.at(rho, Jr, np.abs(Jd) * c[Jc])
+    else:
+        rho = (np.abs(J) * c).max(axis=1, initial=0.0)
     rho[rho == 0] = 1.0
     lam = np.ones(m) if lam_guess is None else np.array(lam_guess, dtype=float)
     qdd = np.zeros(n)
-    Mm, Q, Qv = dyn.terms(t, q, qd, lam, p, qdd)
+
+    def terms(lam, qdd):
+        if pat is None:
+            return dyn.terms(t, q, qd, lam, p, qdd)
+        out = dyn.f_terms(dyn.pack(t, q, qd, lam, p, qdd))
+        k = len(Mr)
+        return out[:k], out[k:k + n], out[k + n:]
+
+    Mm, Q, Qv = terms(lam, qdd)
     for it in range(1, max_iterations + 1):
-        r1 = Mm @ qdd + J.T @ lam - Q - Qv
-        r2 = J @ qdd - g
+        if pat is not None:
+            Mq, JTl = Mm * qdd[Mc], Jd * lam[Jr]
+            r1 = (np.bincount(Mr, Mq, n) + np.bincount(Jc, JTl, n)) - Q - Qv
+            r2 = np.bincount(Jr, Jd * qdd[Jc], m) - g
+        else:
+            r1 = Mm @ qdd + J.T @ lam - Q - Qv
+            r2 = J @ qdd - g
         e1, e2 = np.abs(c * r1).max(initial=0.0), np.abs(r2 / rho).max(initial=0.0)
         err = max(e1, e2)
         if it > 1:
-            size1 = (c * (np.abs(Mm * qdd).sum(axis=1) + np.abs(J.T * lam).sum(axis=1)
-                          + np.abs(Q) + np.abs(Qv))).max(initial=0.0)
+            if pat is not None:
+                mass = np.bincount(Mr, np.abs(Mq), n) + np.bincount(Jc, np.abs(JTl), n)
+            else:
+                mass = np.abs(Mm * qdd).sum(axis=1) + np.abs(J.T * lam).sum(axis=1)
+            size1 = (c * (mass + np.abs(Q) + np.abs(Qv))).max(initial=0.0)
             size2 = max(np.abs(qdd / c).max(initial=0.0), np.abs(g / rho).max(initial=0.0))
             if e1 <= tol * size1 and e2 <= tol * size2:
                 return qdd, lam, it - 1
-        D = dyn.dQ_dlam(t, q, qd, lam, p, qdd)
-        Meff = Mm - dyn.dQ_dqdd(t, q, qd, lam, p, qdd)
         # the Newton matrix unit-free (its singularity test then does not depend on the units
         # of length and mass): rows diag(c/mu, 1/rho), columns diag(c, mu/rho), mu the size
         # of C Meff C; its blocks are C Meff C / mu, B^T, B (B = rho^-1 Phi_q C, entries <= 1)
-        mu = (c[:, None] * np.abs(Meff) * c[None, :]).max(initial=0.0) or 1.0
+        if pat is not None:
+            rows, cols, pattern = pat
+            K = _newton_values(system, dyn, Mm, J, t, q, qd, lam, p, qdd)
+            first = (rows < n) & (cols < n)
+            mu = np.abs(c[rows[first]] * K[first] * c[cols[first]]).max(initial=0.0) or 1.0
+        else:
+            D = dyn.dQ_dlam(t, q, qd, lam, p, qdd)
+            Meff = Mm - dyn.dQ_dqdd(t, q, qd, lam, p, qdd)
+            mu = (c[:, None] * np.abs(Meff) * c[None, :]).max(initial=0.0) or 1.0
         dr = np.concatenate((c / mu, 1.0 / rho))
         dc = np.concatenate((c, mu / rho))
-        pat = _newton_pattern(system) if n + m > SPARSE_THRESHOLD else None
-        K = _augmented(Meff, J, D, dense=pat is not None)
         try:
             if pat is not None:
                 # the matrix's fixed pattern, analysed once (banded LU for chains): no sparse
                 # matrix objects per iteration (they cost 10-20 times the factorisation)
-                rows, cols, pattern = pat
-                fac = pattern.factor((dr[rows] * K[rows, cols]) * dc[cols])
+                fac = pattern.factor((dr[rows] * K) * dc[cols])
             else:
-                fac = factor(dr[:, None] * K * dc[None, :])
+                fac = factor(dr[:, None] * _augmented(Meff, J, D) * dc[None, :])
             dx = dc * fac.solve(-dr * np.concatenate((r1, r2)))
         except Singular:
             raise _singular_free(system, t, q, qd, p) from None
         qdd, lam = qdd + dx[:n], lam + dx[n:]
-        Mm, Q, Qv = dyn.terms(t, q, qd, lam, p, qdd)
+        Mm, Q, Qv = terms(lam, qdd)
     raise ConvergenceError(
         f"free acceleration at t = {t:.6g}: the loads that depend on multipliers (friction) or "
         f"accelerations did not converge in {max_iterations} iterations (residual {err:.3e}); "
@@ -160,6 +197,34 @@ def _newton_pattern(system):
     got = pattern_of(np.concatenate(r), np.concatenate(c), n + m)
     dyn.__dict__["_newton_pattern"] = (system, got)
     return got
+
+
+def _newton_values(system, dyn, Mv, J, t, q, qd, lam, p, qdd):
+    """The values of ``[[M - dQ/dqdd, Phi_q^T - dQ/dlambda], [Phi_q, 0]]`` at the entries of
+    its pattern (:func:`_newton_pattern`, CSC order) from the mass matrix's nonzero values
+    ``Mv`` (at ``dyn.M_rows``, ``dyn.M_cols``), the sparse Jacobian ``J`` (its stored entries
+    placed through slots found once per structure) and the derivatives' nonzero values."""
+    n = system.n
+    rows, cols, _ = _newton_pattern(system)
+    key = (J.indptr.tobytes(), J.indices.tobytes())
+    got = dyn.__dict__.get("_newton_slots")
+    if got is None or got[0] is not system or got[1] != key:
+        jcols = np.repeat(np.arange(n), np.diff(J.indptr))
+        slot = lambda r, c: pattern_slots(rows, cols, n + system.m, r, c)    # noqa: E731
+        got = (system, key, slot(dyn.M_rows, dyn.M_cols), slot(n + J.indices, jcols),
+               slot(jcols, n + J.indices),
+               slot(dyn.dA_rows, dyn.dA_cols) if dyn.depends_on_qdd else None,
+               slot(dyn.dQ_rows, n + np.asarray(dyn.dQ_cols)) if dyn.depends_on_lambda else None)
+        dyn.__dict__["_newton_slots"] = got
+    _, _, sM, sJ, sJT, sA, sD = got
+    K = np.bincount(sM, Mv, rows.size) + np.bincount(sJ, J.data, rows.size) \
+        + np.bincount(sJT, J.data, rows.size)
+    x = dyn.pack(t, q, qd, lam, p, qdd)
+    if sA is not None:
+        K -= np.bincount(sA, dyn.f_dQ_dqdd(x), rows.size)
+    if sD is not None:
+        K -= np.bincount(sD, dyn.f_dQ_dlam(x), rows.size)
+    return K
 
 
 def _rank_tolerant(system, t, q, qd, p, K, rhs):

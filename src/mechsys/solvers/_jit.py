@@ -226,6 +226,7 @@ def _multiplier_band(system):
     (``_statics._newton_pattern``, the Python path's), and the slot in it of each of the
     Jacobian's CSC entries (transposed) and each ``dQ/dlambda`` entry; None when the pattern
     is not banded or the Jacobian's is not (the loop reads the Jacobian through it)."""
+    from ._linalg import pattern_slots
     from ._statics import _newton_pattern
 
     if not _banded(system):
@@ -236,15 +237,10 @@ def _multiplier_band(system):
     got = getattr(pat, "_jit_kband", None)
     if got is None:
         n = system.n
-        key = cols * n + rows
         _, (_, jrows, jcols, _, _, _) = _band_args(system)
 
         def slot(r, c):
-            want = np.asarray(c, dtype=np.int64) * n + np.asarray(r, dtype=np.int64)
-            k = np.searchsorted(key, want)
-            if not np.array_equal(key[np.minimum(k, key.size - 1)], want):
-                raise AssertionError("the multiplier Newton pattern misses an entry")
-            return k
+            return pattern_slots(rows, cols, n, r, c)
 
         dyn = system.dynamics
         got = (np.array([pat.kl, pat.ku, pat._ld], dtype=np.int64),

@@ -285,6 +285,7 @@ def _newton_band(system):
     each term's values go in it; None when the pattern is not banded."""
     from ._free import _newton_pattern
     from ._jit_free_loop import BAND_HEAD
+    from ._linalg import pattern_slots
 
     rows, cols, pat = _newton_pattern(system)
     if not pat.banded:
@@ -292,14 +293,9 @@ def _newton_band(system):
     dyn = system.dynamics
     n, m = system.n, system.m
     N = n + m
-    key = cols * N + rows                          # sorted: the pattern is in CSC order
 
     def slot(r, c):
-        want = np.asarray(c, dtype=np.int64) * N + np.asarray(r, dtype=np.int64)
-        k = np.searchsorted(key, want)
-        if not np.array_equal(key[np.minimum(k, key.size - 1)], want):
-            raise AssertionError("the Newton pattern misses an entry")  # (built from them)
-        return k
+        return pattern_slots(rows, cols, N, r, c)
 
     z = np.zeros(0, dtype=np.int64)
     jr, jc = np.asarray(system.jac_rows, dtype=np.int64), np.asarray(system.jac_cols, dtype=np.int64)
@@ -310,10 +306,10 @@ def _newton_band(system):
     sD = slot(dyn.dQ_rows, n + np.asarray(dyn.dQ_cols, dtype=np.int64)) if dyn.depends_on_lambda \
         else z
     diag = np.arange(n)
-    dkey = diag * N + diag
-    k = np.searchsorted(key, dkey)
-    if not np.array_equal(key[np.minimum(k, key.size - 1)], dkey):
+    present = np.isin(diag * N + diag, cols * N + rows)
+    if not present.all():
         return None          # (a coordinate without mass: the projection needs the diagonal)
+    k = slot(diag, diag)
     head = [pat.kl, pat.ku, pat._ld, rows.size, uniq.size, sM.size, sA.size, sD.size, n]
     assert len(head) == BAND_HEAD
     return np.concatenate([np.array(head), pat._pos, rows, cols, pat.row_perm, pat.perm, sM, sA,

@@ -184,6 +184,18 @@ class FixedPattern:
         return _PermutedFactor(A[:, self._permc], self._permc)
 
 
+def pattern_slots(rows, cols, size: int, r, c) -> np.ndarray:
+    """The positions of the entries ``(r[k], c[k])`` among a pattern's entries ``(rows,
+    cols)`` in CSC order (as :func:`pattern_of` returns them): where to add each term's
+    values into the pattern's. Every entry must be in the pattern."""
+    key = np.asarray(cols, dtype=np.int64) * size + np.asarray(rows, dtype=np.int64)
+    want = np.asarray(c, dtype=np.int64) * size + np.asarray(r, dtype=np.int64)
+    k = np.searchsorted(key, want)
+    if not np.array_equal(key[np.minimum(k, key.size - 1)], want):
+        raise AssertionError("an entry is missing from the pattern it was built from")
+    return k
+
+
 def pattern_of(rows, cols, size: int, match_rows: bool = False):
     """``(rows, cols, FixedPattern)`` of a square matrix whose entries can be nonzero at
     ``(rows[k], cols[k])`` (duplicates merged): the entries' rows and columns in CSC order

@@ -29,7 +29,7 @@ import scipy.sparse as sps
 
 from .._errors import ConvergenceError, ModelError
 from . import _jit
-from ._linalg import SPARSE_THRESHOLD, Scaling, Singular, factor, pattern_of
+from ._linalg import SPARSE_THRESHOLD, Scaling, Singular, factor, pattern_of, pattern_slots
 from ._position import describe_singular
 
 MODES = ("static", "kinematic", "dynamic")
@@ -147,33 +147,16 @@ def _newton_values(system, dyn, J, t, q, qd, lam, p, qdd):
     rows, cols, _ = _newton_pattern(system)
     dvals = dyn.f_dQ_dlam(dyn.pack(t, q, qd, lam, p, qdd))
     if not sps.issparse(J):
-        K = np.ascontiguousarray(J.T)[rows, cols]
-        D = np.zeros(rows.size)
-        np.add.at(D, _slots(system, rows, cols, dyn.dQ_rows, dyn.dQ_cols), dvals)
-        return K - D
+        sD = pattern_slots(rows, cols, system.n, dyn.dQ_rows, dyn.dQ_cols)
+        return np.ascontiguousarray(J.T)[rows, cols] - np.bincount(sD, dvals, rows.size)
     key = (J.indptr.tobytes(), J.indices.tobytes())
     got = dyn.__dict__.get("_multiplier_slots")
     if got is None or got[0] is not system or got[1] != key:
         jcols = np.repeat(np.arange(J.shape[1]), np.diff(J.indptr))
-        got = (system, key, _slots(system, rows, cols, jcols, J.indices),
-               _slots(system, rows, cols, dyn.dQ_rows, dyn.dQ_cols))
+        got = (system, key, pattern_slots(rows, cols, system.n, jcols, J.indices),
+               pattern_slots(rows, cols, system.n, dyn.dQ_rows, dyn.dQ_cols))
         dyn.__dict__["_multiplier_slots"] = got
-    K = np.zeros(rows.size)
-    np.add.at(K, got[2], J.data)
-    D = np.zeros(rows.size)
-    np.add.at(D, got[3], dvals)
-    return K - D
-
-
-def _slots(system, rows, cols, r, c) -> np.ndarray:
-    """The positions of the entries ``(r, c)`` among the pattern's ``(rows, cols)``."""
-    n = system.n
-    key = cols * n + rows
-    want = np.asarray(c, dtype=np.int64) * n + np.asarray(r, dtype=np.int64)
-    k = np.searchsorted(key, want)
-    if not np.array_equal(key[np.minimum(k, key.size - 1)], want):
-        raise AssertionError("the multiplier Newton pattern misses an entry")
-    return k
+    return np.bincount(got[2], J.data, rows.size) - np.bincount(got[3], dvals, rows.size)
 
 
 def _newton_pattern(system):
