@@ -5,7 +5,9 @@ The reaction force a joint applies to its first body is, from the multipliers,
 = ``eps_reaction``, 1e-30 units of force: it only keeps the Newton on the multipliers
 differentiable at zero load, and must stay far below any reaction of the model: at 1e-9 it
 dominated the reactions of a part of a few picograms in SI units). The sign of the
-sliding or turning velocity is regularised: ``s(v) = v / sqrt(v.v + v_eps^2)``.
+sliding or turning velocity is regularised: ``s(v) = v / sqrt(v.v + v_eps^2)``, ``v_eps``
+in the units of that rate (rad per unit time for rotational joints, whatever the unit of
+length; length per unit time for translational ones).
 
 * rotational joints (``Revolute2``, ``Spherical3``, ``Revolute5``): moment on body 1
   ``-mu r |R| s(omega_1 - omega_2)`` (``r`` the pin radius), opposite on body 2;
