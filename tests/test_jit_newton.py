@@ -184,3 +184,32 @@ def test_large_friction_chain_satisfies_the_equations_of_motion(monkeypatch, jit
     sol = free.simulate(np.linspace(0.0, 0.1, 4), rtol=1e-8, atol=1e-10)
     assert sol.extra["compiled_steps"] == (sol.extra["steps"] if jit == "1" else 0)
     _assert_equations_of_motion(sol, 1e-8)
+
+
+def added_mass_chain(n_links=32):
+    """``n_links`` pendulums, each tip carrying the load ``-0.3 a`` of an added mass (its own
+    acceleration): loads that depend on the accelerations, 160 unknowns."""
+    from mechsys import models
+
+    m = models.pendulum_chain(n_links)
+    for k in range(n_links):
+        tip = m.body(f"l{k}").point((1.0, 0))
+        m.add_load(ms.Force(tip, -0.3 * m.acceleration(tip), mode="relative"))
+    m.solve(0.0)
+    return m.free(drop=[f"lock{k}" for k in range(n_links)])
+
+
+def test_large_added_mass_chain_runs_compiled_through_the_band(monkeypatch):
+    """``dQ/dqdd`` in the banded Newton matrix (its first block ``M - dQ/dqdd``), both loops:
+    the same steps give the same motion to rounding, and both satisfy the equations of
+    motion with the loads at their own accelerations."""
+    free = added_mass_chain(32)
+    assert free.system.dynamics.depends_on_qdd and free.system.n + free.system.m == 160
+    t = np.linspace(0.0, 0.2, 5)
+    kw = dict(rtol=1e6, atol=1e6, max_step=0.2 / 100, tolerance=1e-14)
+    fast, slow = _both(monkeypatch, lambda: free, t, **kw)
+    assert fast.extra["compiled_steps"] == fast.extra["steps"] >= 100
+    for a, b in ((fast.q, slow.q), (fast.qd, slow.qd), (fast.qdd, slow.qdd), (fast.lam, slow.lam)):
+        assert np.abs(a - b).max() <= 1e-13 * max(1.0, np.abs(b).max())
+    _assert_equations_of_motion(fast, 1e-10)
+    _assert_equations_of_motion(slow, 1e-10)
