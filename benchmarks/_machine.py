@@ -32,3 +32,16 @@ def machine() -> str:
             f"(shared with other jobs); {platform.system()} {platform.release()}; "
             f"Python {platform.python_version()}, NumPy {numpy.__version__}, "
             f"SciPy {scipy.__version__}, SymPy {sympy.__version__}, SymEngine {se}")
+
+
+def write_block(path: Path, begin: str, end: str, text: str) -> None:
+    """Put ``text`` (which starts with ``begin`` and ends with ``end``) into the page at
+    ``path`` in place of the block between those markers, or at its end when the page has
+    none (the pages' other blocks and the rest are kept)."""
+    old = path.read_text() if path.exists() else ""
+    if begin in old and end in old:
+        head, rest = old.split(begin, 1)
+        new = head + text + rest.split(end, 1)[1]
+    else:
+        new = old.rstrip("\n") + "\n\n" + text + "\n"
+    path.write_text(new)

@@ -15,7 +15,8 @@ dropped: the rod swings freely over the same span, in the same loop; its angle s
 the switch's test, events of kind "relation" that change no stage). Both loops locate the same events
 (times within 1e-9; the tests check it).
 
-Run: ``.venv/bin/python benchmarks/events.py`` (prints the table).
+Run: ``.venv/bin/python benchmarks/events.py`` prints the table; ``--write
+docs/performance-free.md`` also puts it in that page (its ``events`` block).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ import os
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")  # before NumPy loads: CPU time of one thread
 
+import argparse  # noqa: E402
 import statistics  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
@@ -33,10 +35,13 @@ from pathlib import Path  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples"))
 
 import latching_pendulum as lp  # noqa: E402
+from _machine import machine, write_block  # noqa: E402  (sibling module: run as a script)
 
 clock = time.process_time
 TOL = {"rtol": 1e-10, "atol": 1e-12}
 CASES = (("project", (0.0, 1.0), "project"), ("restitution 0.5", (0.0, 3.0), ("restitution", 0.5)))
+BEGIN = "<!-- events: begin (written by benchmarks/events.py --write; rerun it) -->"
+END = "<!-- events: end -->"
 
 
 def _systems():
@@ -56,7 +61,7 @@ def _run(fs, span, policy, mode):
         os.environ.pop("MECHSYS_JIT", None)
 
 
-def main(rounds: int = 9) -> int:
+def table(rounds: int = 9) -> str:
     with_events, without = _systems()
     rows = []
     for name, span, policy in CASES:
@@ -74,12 +79,34 @@ def main(rounds: int = 9) -> int:
             rows.append((name, loop, t, ev, steps, sol.extra["compiled_steps"],
                          statistics.median(base), free.extra["steps"],
                          len(free.extra["events"])))
-    print("| run | loop | CPU | events | steps | compiled steps | CPU / event | "
-          "without the stop (steps, events) |")
-    print("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |")
+    lines = ["| run | loop | CPU | events | steps | compiled steps | CPU / event | "
+             "without the stop (steps, events) |",
+             "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for name, loop, t, ev, steps, comp, tb, sb, eb in rows:
-        print(f"| {name} | {loop} | {t * 1e3:.1f} ms | {ev} | {steps} | {comp} | "
-              f"{t / ev * 1e3:.2f} ms | {tb * 1e3:.1f} ms ({sb}, {eb}) |")
+        lines.append(f"| {name} | {loop} | {t * 1e3:.1f} ms | {ev} | {steps} | {comp} | "
+                     f"{t / ev * 1e3:.2f} ms | {tb * 1e3:.1f} ms ({sb}, {eb}) |")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--write", metavar="PATH", help="also put the table into this page")
+    args = ap.parse_args(argv)
+    text = table()
+    print(text)
+    if args.write:
+        block = "\n".join([
+            BEGIN, "", "## Events of free motion through stage changes", "",
+            f"Measured on: {machine()}.", "",
+            "The latching pendulum of `examples/latching_pendulum.py` (rtol 1e-10): latching "
+            "at the first impact (1 s), and rebounding with restitution 0.5 until it latches "
+            "(3 s). CPU time is the median of interleaved repetitions; \"CPU / event\" is the "
+            "run's time over its events (an upper bound). For scale, the same rod without the "
+            "stop (its angle still crosses the switch's test: events that change no stage). "
+            "Command: `python benchmarks/events.py --write docs/performance-free.md`.", "",
+            text, "", END])
+        write_block(Path(args.write), BEGIN, END, block)
+        print(f"wrote {args.write}")
     return 0
 
 

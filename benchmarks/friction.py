@@ -13,7 +13,8 @@ Each row: CPU time (median of interleaved repetitions, after a warm-up run that 
 per evaluation (free motion) or per point (sweep and multipliers), for ``MECHSYS_JIT=0``
 and ``1``, and the largest difference of the two results relative to their size.
 
-Run: ``.venv/bin/python benchmarks/friction.py`` (prints the tables; about a minute).
+Run: ``.venv/bin/python benchmarks/friction.py`` prints the tables (about a minute);
+``--write docs/performance-free.md`` also puts them in that page (its ``friction`` block).
 """
 
 from __future__ import annotations
@@ -23,12 +24,15 @@ import os
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")  # before NumPy loads: CPU time of one thread
 
+import argparse  # noqa: E402
 import statistics  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
+from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
+from _machine import machine, write_block  # noqa: E402  (sibling module: run as a script)
 
 import mechsys as ms  # noqa: E402
 from mechsys import models  # noqa: E402
@@ -36,6 +40,8 @@ from mechsys import models  # noqa: E402
 clock = time.process_time
 LINKS = (8, 32, 64, 128)
 LOOPS = (10, 30, 60)
+BEGIN = "<!-- friction: begin (written by benchmarks/friction.py --write; rerun it) -->"
+END = "<!-- friction: end -->"
 
 
 def _chain(links):
@@ -78,34 +84,55 @@ def _difference(a, b) -> float:
     return float(np.abs(a - b).max() / max(1.0, np.abs(b).max()))
 
 
-def main(rounds: int = 3) -> int:
+def tables(rounds: int = 3) -> str:
     warnings.simplefilter("ignore")
-    print("Free motion of a chain with friction in every joint, 0.1 s, rtol 1e-6\n")
-    print("| links | unknowns | Python / evaluation | compiled / evaluation | ratio | "
-          "difference (q) |")
-    print("| ---: | ---: | ---: | ---: | ---: | ---: |")
+    out = ["Free motion of a chain with friction in every joint, 0.1 s, rtol 1e-6:", "",
+           "| links | unknowns | Python / evaluation | compiled / evaluation | ratio | "
+           "difference (q) |",
+           "| ---: | ---: | ---: | ---: | ---: | ---: |"]
     for links in LINKS:
         free = _chain(links)
         got = _timed(lambda free=free: free.simulate((0.0, 0.1), rtol=1e-6, atol=1e-8), rounds)
         (tp, py), (tc, jit) = got["0"], got["1"]
         ep, ec = tp / py.extra["evaluations"], tc / jit.extra["evaluations"]
         assert jit.extra["compiled_steps"] == jit.extra["steps"]
-        print(f"| {links} | {free.system.n + free.system.m} | {ep * 1e6:.0f} µs | "
-              f"{ec * 1e6:.0f} µs | {ep / ec:.1f} | {_difference(jit.q[-1], py.q[-1]):.1e} |",
-              flush=True)
-    print("\nInverse dynamics of the four-bar chain with friction in its ground pivots, "
-          "40 points\n")
-    print("| loops | coordinates | Python / point | compiled / point | ratio | "
-          "difference (lambda) |")
-    print("| ---: | ---: | ---: | ---: | ---: | ---: |")
+        out.append(f"| {links} | {free.system.n + free.system.m} | {ep * 1e6:.0f} µs | "
+                   f"{ec * 1e6:.0f} µs | {ep / ec:.1f} | "
+                   f"{_difference(jit.q[-1], py.q[-1]):.1e} |")
+    out += ["", "Inverse dynamics of the four-bar chain with friction in its ground pivots, "
+            "40 points (sweep included):", "",
+            "| loops | coordinates | Python / point | compiled / point | ratio | "
+            "difference (lambda) |",
+            "| ---: | ---: | ---: | ---: | ---: | ---: |"]
     t = np.linspace(0.1, 1.0, 40)
     for loops in LOOPS:
         m = _loops(loops)
         got = _timed(lambda m=m: m.solve(t, solution="dynamic"), rounds)
         (tp, py), (tc, jit) = got["0"], got["1"]
-        print(f"| {loops} | {py.system.n} | {tp / len(t) * 1e3:.2f} ms | "
-              f"{tc / len(t) * 1e3:.2f} ms | {tp / tc:.0f} | "
-              f"{_difference(jit.lam, py.lam):.1e} |", flush=True)
+        out.append(f"| {loops} | {py.system.n} | {tp / len(t) * 1e3:.2f} ms | "
+                   f"{tc / len(t) * 1e3:.2f} ms | {tp / tc:.0f} | "
+                   f"{_difference(jit.lam, py.lam):.1e} |")
+    return "\n".join(out)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--write", metavar="PATH", help="also put the tables into this page")
+    args = ap.parse_args(argv)
+    text = tables()
+    print(text)
+    if args.write:
+        block = "\n".join([
+            BEGIN, "", "## Friction at scale (loads that depend on the multipliers)", "",
+            f"Measured on: {machine()}.", "",
+            "`MECHSYS_JIT=0` (the Python path) and `1` (the compiled loops) side by side, "
+            "CPU time with one BLAS thread, the median of interleaved repetitions after a "
+            "warm-up run. Above 150 unknowns both go through the Newton matrix's banded "
+            "pattern (decisions 0028 and 0030). "
+            "Command: `python benchmarks/friction.py --write docs/performance-free.md`.", "",
+            text, "", END])
+        write_block(Path(args.write), BEGIN, END, block)
+        print(f"wrote {args.write}")
     return 0
 
 

@@ -26,7 +26,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _machine import machine  # noqa: E402
+from _machine import machine, write_block  # noqa: E402
 
 G = 9.81
 T_END = 2.0
@@ -244,17 +244,6 @@ def report(rows) -> str:
     return "\n".join(L)
 
 
-def write(path: Path, text: str) -> None:
-    old = path.read_text() if path.exists() else ""
-    if BEGIN in old and END in old:
-        head, rest = old.split(BEGIN, 1)
-        tail = rest.split(END, 1)[1]
-        new = head + text + tail
-    else:
-        new = old.rstrip("\n") + "\n\n" + text + "\n"
-    path.write_text(new)
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[4, 16, 64, 256])
@@ -270,7 +259,7 @@ def main(argv=None) -> int:
     text = report(rows)
     print(text)
     if args.write:
-        write(Path(args.write), text)
+        write_block(Path(args.write), BEGIN, END, text)
     return 0
 
 
