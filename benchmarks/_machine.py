@@ -45,3 +45,25 @@ def write_block(path: Path, begin: str, end: str, text: str) -> None:
     else:
         new = old.rstrip("\n") + "\n\n" + text + "\n"
     path.write_text(new)
+
+
+def table_main(doc: str, name: str, title: str, intro: str, make, argv=None) -> int:
+    """The ``main`` of a benchmark script that prints Markdown tables (``make()``) and, with
+    ``--write PATH``, puts them into that page as its block ``name`` (a ``## title``
+    heading, the machine, ``intro``, the tables; :func:`write_block`)."""
+    import argparse
+
+    ap = argparse.ArgumentParser(description=doc.split("\n\n")[0])
+    ap.add_argument("--write", metavar="PATH", help="also put the tables into this page")
+    args = ap.parse_args(argv)
+    text = make()
+    print(text)
+    if args.write:
+        begin = f"<!-- {name}: begin (written by benchmarks/{name}.py --write; rerun it) -->"
+        end = f"<!-- {name}: end -->"
+        block = "\n".join([begin, "", f"## {title}", "", f"Measured on: {machine()}.", "",
+                           intro + f" Command: `python benchmarks/{name}.py --write "
+                           f"{args.write}`.", "", text, "", end])
+        write_block(Path(args.write), begin, end, block)
+        print(f"wrote {args.write}")
+    return 0

@@ -26,7 +26,6 @@ import os
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")  # before NumPy loads: CPU time of one thread
 
-import argparse  # noqa: E402
 import statistics  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
@@ -35,13 +34,11 @@ from pathlib import Path  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples"))
 
 import latching_pendulum as lp  # noqa: E402
-from _machine import machine, write_block  # noqa: E402  (sibling module: run as a script)
+from _machine import table_main  # noqa: E402  (sibling module: run as a script)
 
 clock = time.process_time
 TOL = {"rtol": 1e-10, "atol": 1e-12}
 CASES = (("project", (0.0, 1.0), "project"), ("restitution 0.5", (0.0, 3.0), ("restitution", 0.5)))
-BEGIN = "<!-- events: begin (written by benchmarks/events.py --write; rerun it) -->"
-END = "<!-- events: end -->"
 
 
 def _systems():
@@ -88,26 +85,16 @@ def table(rounds: int = 9) -> str:
     return "\n".join(lines)
 
 
+INTRO = ("The latching pendulum of `examples/latching_pendulum.py` (rtol 1e-10): latching at "
+         "the first impact (1 s), and rebounding with restitution 0.5 until it latches (3 s). "
+         "CPU time is the median of interleaved repetitions; \"CPU / event\" is the run's time "
+         "over its events (an upper bound). For scale, the same rod without the stop (its "
+         "angle still crosses the switch's test: events that change no stage).")
+
+
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--write", metavar="PATH", help="also put the table into this page")
-    args = ap.parse_args(argv)
-    text = table()
-    print(text)
-    if args.write:
-        block = "\n".join([
-            BEGIN, "", "## Events of free motion through stage changes", "",
-            f"Measured on: {machine()}.", "",
-            "The latching pendulum of `examples/latching_pendulum.py` (rtol 1e-10): latching "
-            "at the first impact (1 s), and rebounding with restitution 0.5 until it latches "
-            "(3 s). CPU time is the median of interleaved repetitions; \"CPU / event\" is the "
-            "run's time over its events (an upper bound). For scale, the same rod without the "
-            "stop (its angle still crosses the switch's test: events that change no stage). "
-            "Command: `python benchmarks/events.py --write docs/performance-free.md`.", "",
-            text, "", END])
-        write_block(Path(args.write), BEGIN, END, block)
-        print(f"wrote {args.write}")
-    return 0
+    return table_main(__doc__, "events", "Events of free motion through stage changes", INTRO,
+                      table, argv)
 
 
 if __name__ == "__main__":

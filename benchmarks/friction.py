@@ -24,15 +24,13 @@ import os
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")  # before NumPy loads: CPU time of one thread
 
-import argparse  # noqa: E402
 import statistics  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
-from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
-from _machine import machine, write_block  # noqa: E402  (sibling module: run as a script)
+from _machine import table_main  # noqa: E402  (sibling module: run as a script)
 
 import mechsys as ms  # noqa: E402
 from mechsys import models  # noqa: E402
@@ -40,8 +38,6 @@ from mechsys import models  # noqa: E402
 clock = time.process_time
 LINKS = (8, 32, 64, 128)
 LOOPS = (10, 30, 60)
-BEGIN = "<!-- friction: begin (written by benchmarks/friction.py --write; rerun it) -->"
-END = "<!-- friction: end -->"
 
 
 def _chain(links):
@@ -115,25 +111,15 @@ def tables(rounds: int = 3) -> str:
     return "\n".join(out)
 
 
+INTRO = ("`MECHSYS_JIT=0` (the Python path) and `1` (the compiled loops) side by side, CPU "
+         "time with one BLAS thread, the median of interleaved repetitions after a warm-up "
+         "run. Above 150 unknowns both go through the Newton matrix's banded pattern "
+         "(decisions 0028 and 0030).")
+
+
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--write", metavar="PATH", help="also put the tables into this page")
-    args = ap.parse_args(argv)
-    text = tables()
-    print(text)
-    if args.write:
-        block = "\n".join([
-            BEGIN, "", "## Friction at scale (loads that depend on the multipliers)", "",
-            f"Measured on: {machine()}.", "",
-            "`MECHSYS_JIT=0` (the Python path) and `1` (the compiled loops) side by side, "
-            "CPU time with one BLAS thread, the median of interleaved repetitions after a "
-            "warm-up run. Above 150 unknowns both go through the Newton matrix's banded "
-            "pattern (decisions 0028 and 0030). "
-            "Command: `python benchmarks/friction.py --write docs/performance-free.md`.", "",
-            text, "", END])
-        write_block(Path(args.write), BEGIN, END, block)
-        print(f"wrote {args.write}")
-    return 0
+    return table_main(__doc__, "friction", "Friction at scale (loads that depend on the "
+                      "multipliers)", INTRO, tables, argv)
 
 
 if __name__ == "__main__":
