@@ -111,3 +111,33 @@ def test_compiled_runs_take_the_event_steps_compiled_with_the_same_events(method
     te_py = np.array([e["t"] for e in py.extra["events"]])
     te_jit = np.array([e["t"] for e in jit.extra["events"]])
     np.testing.assert_allclose(te_jit, te_py, rtol=0, atol=1e-9)
+
+
+def test_compiled_outputs_keep_the_loops_accelerations_and_multipliers(monkeypatch):
+    """The solution's accelerations and multipliers at the rows the compiled loop produced
+    are the loop's own (computed at the same states): the assembly evaluates only the other
+    rows (events, steps taken in Python), and the numbers equal the Python path's."""
+    from mechsys.analyses import _free_switch
+
+    calls = []
+    real = _free_switch.free_acceleration
+
+    def counting(*a, **k):
+        calls.append(1)
+        return real(*a, **k)
+
+    monkeypatch.setattr(_free_switch, "free_acceleration", counting)
+    m = lp.build()
+    m.solve(0.0, solution="location")
+    fs = m.free(drop=[("latch", 1)])
+    t = np.linspace(0.0, 1.2, 241)
+    out = {}
+    for mode in ("0", "1"):
+        monkeypatch.setenv("MECHSYS_JIT", mode)
+        calls.clear()
+        out[mode] = (fs.simulate(t, at_switch=("restitution", 0.5), rtol=1e-10, atol=1e-12),
+                     len(calls))
+    (py, n_py), (jit, n_jit) = out["0"], out["1"]
+    assert n_jit < 0.2 * len(t) < n_py
+    np.testing.assert_allclose(jit.qdd, py.qdd, rtol=0, atol=1e-8 * np.abs(py.qdd).max())
+    np.testing.assert_allclose(jit.lam, py.lam, rtol=0, atol=1e-8 * np.abs(py.lam).max())

@@ -287,6 +287,7 @@ class SwitchedFreeSystem(FreeSystem):
         fresh: dict = {}
         t_now, evals, steps, compiled_steps = t0, 0, 0, 0
         plans: dict = {}
+        known: dict = {}            # row -> (qdd, lambda) from the compiled loop
         while (t1 - t_now) * d > 0:
             S = self._free_system(combo)
 
@@ -310,7 +311,7 @@ class SwitchedFreeSystem(FreeSystem):
                 if fast is not None and pause == 0:
                     status, kept, g_ref, ie, crossing = self._compiled_steps(
                         fast, solver, events, p, g_ref, ie, t_eval, d, out_t, out_y, out_c,
-                        combo, run)
+                        combo, run, known)
                     run = min(2 * run, RUN_STEPS)
                     steps += kept
                     compiled_steps += kept
@@ -402,7 +403,7 @@ class SwitchedFreeSystem(FreeSystem):
             ie += 1
         info = {"events": log, "evaluations": evals, "steps": steps, "method": opt.method,
                 "rtol": opt.rtol, "atol": opt.atol, "compiled_steps": compiled_steps}
-        return self._assemble(out_t, out_y, out_c, p, kw, info, sc)
+        return self._assemble(out_t, out_y, out_c, p, kw, info, sc, known=known)
 
     @staticmethod
     def _stepper(plans, combo, S, opt, p, sc, t_eval, t_now, y, kw):
@@ -418,7 +419,7 @@ class SwitchedFreeSystem(FreeSystem):
 
     @staticmethod
     def _compiled_steps(fast, solver, events, p, g_ref, ie, t_eval, d, out_t, out_y, out_c,
-                        combo, run=RUN_STEPS):
+                        combo, run=RUN_STEPS, known=None):
         """Up to ``run`` compiled steps (each projected), kept up to the first whose
         end state has an event relation on the other side (the Python loop's test, the
         signs of all steps evaluated at once). That step is taken again compiled, with its
@@ -426,10 +427,12 @@ class SwitchedFreeSystem(FreeSystem):
         dense, y_end, signs at y_end)`` with the solver at its end, for the Python loop to
         locate the event; where the loop cannot take it again, the solver is put back to
         the start of that step, with its size, for the Python loop to take it
-        (``crossing = "python"``). ``crossing`` is None without an event. Returns
+        (``crossing = "python"``). ``crossing`` is None without an event. ``known`` (dict):
+        the accelerations and multipliers the loop computed at the rows it adds, by row
+        (the solution's assembly reuses them). Returns
         ``(status, steps kept, g_ref, next output index, crossing)``."""
         t0, y0, f0 = solver.t, solver.y.copy(), solver.f.copy()
-        status, T, Y, H, QDD, _, ie_new, _, _ = fast.advance(solver, ie, run)
+        status, T, Y, H, QDD, LAM, ie_new, _, _ = fast.advance(solver, ie, run)
         signs = events.signs_over(T, Y, p)
         crossing = None
         for j in range(len(T)):
@@ -442,12 +445,16 @@ class SwitchedFreeSystem(FreeSystem):
         t_last = T[kept - 1] if kept else t0
         if t_eval is not None:
             while ie < ie_new and (t_eval[ie] - t_last) * d <= 0:
+                if known is not None:
+                    known[len(out_t)] = (fast.EQDD[ie].copy(), fast.ELAM[ie].copy())
                 out_t.append(float(t_eval[ie]))
                 out_y.append(fast.EY[ie].copy())
                 out_c.append(combo)
                 ie += 1
         else:
             for j in range(kept):
+                if known is not None:
+                    known[len(out_t)] = (QDD[j].copy(), LAM[j].copy())
                 out_t.append(float(T[j]))
                 out_y.append(Y[j].copy())
                 out_c.append(combo)
@@ -581,9 +588,12 @@ class SwitchedFreeSystem(FreeSystem):
         entry.update(kinetic_energy_after=ke1, energy_lost=ke0 - ke1, stage_after=[k + 1 for k in target])
         return target, np.concatenate((q, qd_new)), entry
 
-    def _assemble(self, out_t, out_y, out_c, p, kw, info, sc, scalar=False) -> Solution:
+    def _assemble(self, out_t, out_y, out_c, p, kw, info, sc, scalar=False,
+                  known=None) -> Solution:
         """The Solution: accelerations and multipliers per point in its stage's free system,
-        the multipliers placed in the rows of the full stage system (dropped rows zero)."""
+        the multipliers placed in the rows of the full stage system (dropped rows zero).
+        ``known`` ({row: (qdd, lambda)}): those the compiled loop computed at the same states
+        (the same numbers to rounding; rows with a NaN are computed here)."""
         model = self.model
         base = stage_system(model, None)
         n, N = base.n, len(out_t)
@@ -591,9 +601,18 @@ class SwitchedFreeSystem(FreeSystem):
         QDD = np.empty((N, n))
         LAM = np.zeros((N, base.m))
         rows: dict = {}
+        known = known or {}
+        systems: dict = {}
         for k, (tk, yk, ck) in enumerate(zip(out_t, Y, out_c)):
-            S = self._free_system(ck)
-            qdd, lam, _ = free_acceleration(S, tk, yk[:n], yk[n:], p, columns=sc.columns, **kw)
+            S = systems.get(ck)
+            if S is None:
+                S = systems[ck] = self._free_system(ck)
+            got = known.get(k)
+            if got is not None and np.isfinite(got[0]).all() and np.isfinite(got[1]).all():
+                qdd, lam = got
+            else:
+                qdd, lam, _ = free_acceleration(S, tk, yk[:n], yk[n:], p, columns=sc.columns,
+                                                **kw)
             QDD[k] = qdd
             if ck not in rows:
                 rows[ck] = _row_map(S, stage_system(model, ck))
