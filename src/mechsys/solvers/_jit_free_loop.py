@@ -265,18 +265,36 @@ def _newton_args(x, xk, t, y, n, m, npar):
 
 
 @leaf
-def _newton_verdict(res, N, n, it, small, y, qdd, f):
-    """After the residuals ``res`` (N) of Newton iteration ``it``: -1 (hand over) when one
-    is not finite; 1 when converged (after at least one step, ``small``: each residual
-    within the tolerance of its terms), with ``f = (qd, qdd)``; else 0."""
+def _newton_check(res, tmp, mag, out, kM, n, m, g, tolv, qdd, it, y, f):
+    """The residuals of Newton iteration ``it`` finished and judged (``free_acceleration``'s
+    unit-free test; both Newton loops). On entry ``res[:n]`` holds ``M qdd``, ``tmp[:n]``
+    ``Phi_q^T lambda``, ``mag`` the sums of their terms' sizes, ``res[n:]`` ``Phi_q qdd``,
+    ``tolv = [tol, c (n), rho (m)]``. Returns -1 (hand over) when a residual is not finite;
+    1 when converged (after at least one step, each residual within ``tol`` of the size of
+    its terms), with ``f = (qd, qdd)``; else 0."""
+    e1 = 0.0
+    e2 = 0.0
+    size1 = 0.0
+    size2 = 0.0
+    for i in range(n):
+        res[i] = ((res[i] + tmp[i]) - out[kM + i]) - out[kM + n + i]
+        c = tolv[1 + i]
+        e1 = max(e1, c * abs(res[i]))
+        size1 = max(size1, c * (mag[i] + abs(out[kM + i]) + abs(out[kM + n + i])))
+        size2 = max(size2, abs(qdd[i]) / c)
+    for i in range(m):
+        rho = tolv[1 + n + i]
+        res[n + i] = res[n + i] - g[i]
+        e2 = max(e2, abs(res[n + i]) / rho)
+        size2 = max(size2, abs(g[i]) / rho)
     err = 0.0
-    for i in range(N):
+    for i in range(n + m):
         v = abs(res[i])
         if not v <= err:             # NaN too
             err = v
     if not np.isfinite(err):
         return -1
-    if it > 1 and small:
+    if it > 1 and e1 <= tolv[0] * size1 and e2 <= tolv[0] * size2:
         for j in range(n):
             f[j] = y[n + j]
             f[n + j] = qdd[j]
@@ -311,7 +329,6 @@ def _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, w1, w2, qdd, lam, inf
     kM, chain, maxit, nD, nA, npar = info[0], info[1], info[2], info[3], info[4], info[5]
     N = n + m
     nin_k = 1 + 2 * n + npar
-    tol = tolv[0]
     _newton_args(x, xk, t, y, n, m, npar)
     if m > 0:
         _eval(info[6:11], xk, nin_k, out_pos)
@@ -328,11 +345,8 @@ def _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, w1, w2, qdd, lam, inf
         x[1 + 2 * n + m + npar + j] = 0.0
     _evalx(kp, x, nin, out, ex, ph)
     for it in range(1, maxit + 1):
-        # the residuals and the sizes of their terms, unit-free (free_acceleration's test)
-        e1 = 0.0
-        e2 = 0.0
-        size1 = 0.0
-        size2 = 0.0
+        # the residuals' sums and the sizes of their terms (w1: Phi_q^T lambda), then
+        # free_acceleration's unit-free test (_newton_check)
         for i in range(n):
             res[i] = 0.0
             mag[i] = 0.0
@@ -344,11 +358,7 @@ def _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, w1, w2, qdd, lam, inf
             for j in range(m):
                 acc += J[j, i] * lam[j]
                 mag[i] += abs(J[j, i] * lam[j])
-            res[i] = ((res[i] + acc) - out[kM + i]) - out[kM + n + i]
-            c = tolv[1 + i]
-            e1 = max(e1, c * abs(res[i]))
-            size1 = max(size1, c * (mag[i] + abs(out[kM + i]) + abs(out[kM + n + i])))
-            size2 = max(size2, abs(qdd[i]) / c)
+            w1[i] = acc
         for i in range(m):
             acc = 0.0
             rho = 0.0
@@ -358,10 +368,8 @@ def _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, w1, w2, qdd, lam, inf
             if rho == 0.0:
                 rho = 1.0
             tolv[1 + n + i] = rho            # (the Newton matrix's row scales below)
-            res[n + i] = acc - g[i]
-            e2 = max(e2, abs(res[n + i]) / rho)
-            size2 = max(size2, abs(g[i]) / rho)
-        done = _newton_verdict(res, N, n, it, e1 <= tol * size1 and e2 <= tol * size2, y, qdd, f)
+            res[n + i] = acc
+        done = _newton_check(res, w1, mag, out, kM, n, m, g, tolv, qdd, it, y, f)
         if done != 0:
             return done > 0
         if nD > 0:
@@ -512,7 +520,6 @@ def _newton_accel_band(kp, lapack, bi, x, nin, out, n, m, jr, jc, ipiv, qdd, lam
     kM, chain, maxit, nD, nA, npar = info[0], info[1], info[2], info[3], info[4], info[5]
     N = n + m
     nin_k = 1 + 2 * n + npar
-    tol = tolv[0]
     P, U = bnd[3], bnd[4]
     o = BAND_HEAD
     pos, prow, pcol = bnd[o:o + P], bnd[o + P:o + 2 * P], bnd[o + 2 * P:o + 3 * P]
@@ -577,22 +584,7 @@ def _newton_accel_band(kp, lapack, bi, x, nin, out, n, m, jr, jc, ipiv, qdd, lam
             tmp[ucol[u]] += a
             mag[ucol[u]] += abs(a)
             res[n + urow[u]] += Jv[u] * qdd[ucol[u]]
-        e1 = 0.0
-        size1 = 0.0
-        size2 = 0.0
-        for i in range(n):
-            res[i] = ((res[i] + tmp[i]) - out[kM + i]) - out[kM + n + i]
-            c = tolv[1 + i]
-            e1 = max(e1, c * abs(res[i]))
-            size1 = max(size1, c * (mag[i] + abs(out[kM + i]) + abs(out[kM + n + i])))
-            size2 = max(size2, abs(qdd[i]) / c)
-        e2 = 0.0
-        for i in range(m):
-            rho = tolv[1 + n + i]
-            res[n + i] = res[n + i] - g[i]
-            e2 = max(e2, abs(res[n + i]) / rho)
-            size2 = max(size2, abs(g[i]) / rho)
-        done = _newton_verdict(res, N, n, it, e1 <= tol * size1 and e2 <= tol * size2, y, qdd, f)
+        done = _newton_check(res, tmp, mag, out, kM, n, m, g, tolv, qdd, it, y, f)
         if done != 0:
             return done > 0
         if nD > 0:
