@@ -3,8 +3,10 @@ and the cost of one evaluation of the compiled equations, for both numeric backe
 
 Models: the planar slider-crank (``mechsys.models.slider_crank``) over one revolution, and the
 chain of four-bar loops ``mechsys.models.four_bar_chain(N)`` (``3 (2N + 1)`` coordinates) for
-N = 1, 10, 100; the Geneva drive (``models.geneva_drive``: a ``StageSwitch`` of five stages)
-over two crank turns. Each sweep solves position, velocity and acceleration at every point.
+N = 1, 10, 100; radial engines ``models.radial_engine(N)`` (every rod on the crank pin: a
+star, ``3 (2N + 1)`` coordinates) for N = 30, 60, 120 over one revolution; the Geneva drive
+(``models.geneva_drive``: a ``StageSwitch`` of five stages) over two crank turns. Each sweep
+solves position, velocity and acceleration at every point.
 Loads over a sweep: the slider-crank with masses, gravity and a gas force
 (``models.slider_crank_dynamic``) solved for its multipliers (statics, kinematic loads,
 inverse dynamics) at 1000 points, Python and compiled loops.
@@ -48,6 +50,8 @@ def _model(case: str, n_loops: int | None):
         return models.slider_crank()
     if case == "geneva drive":
         return models.geneva_drive()
+    if case == "radial engine":
+        return models.radial_engine(n_loops)
     return models.four_bar_chain(n_loops)
 
 
@@ -56,6 +60,8 @@ def _times(case: str, points: int) -> np.ndarray:
         return np.linspace(0.0, 1.0, points)  # one crank revolution
     if case == "geneva drive":
         return np.linspace(0.0, 4 * np.pi, points)  # two engagements, five stages
+    if case == "radial engine":
+        return np.linspace(0.0, 1.0, points)  # one crank revolution
     return np.linspace(0.0, 2 * np.pi, points)  # one period of the chain's driver
 
 
@@ -84,7 +90,7 @@ def sweep_case(case: str, n_loops: int | None, points: int, backend: str,
         os.environ.pop("MECHSYS_JIT", None)
     t2 = t1 + best
     return {
-        "case": case if n_loops is None else f"four_bar_chain({n_loops})",
+        "case": _name(case, n_loops),
         "backend": system.f_position.backend,
         "loop": loop,
         "n": system.n,
@@ -97,6 +103,12 @@ def sweep_case(case: str, n_loops: int | None, points: int, backend: str,
         "iterations": float(sol.iterations.mean()),
         "evaluations": sol.evaluations / points,
     }
+
+
+def _name(case: str, n: int | None) -> str:
+    if n is None:
+        return case
+    return f"radial_engine({n})" if case == "radial engine" else f"four_bar_chain({n})"
 
 
 def loads_case(solution: str, loop: str, points: int, repeat: int = 3) -> dict:
@@ -159,7 +171,7 @@ def eval_case(case: str, n_loops: int | None, backend: str) -> dict:
     number, _ = timer.autorange()
     per_call = min(timer.repeat(repeat=5, number=number)) / number
     return {
-        "case": case if n_loops is None else f"four_bar_chain({n_loops})",
+        "case": _name(case, n_loops),
         "backend": f.backend,
         "n": system.n,
         "outputs": len(exprs),
@@ -174,9 +186,10 @@ def _jit_available() -> bool:
     return _jit.available()
 
 
-def _growth(rows: list[dict], key: str, loop: str = "python") -> str:
-    """Exponent k of cost ~ n^k between consecutive chain sizes of one loop."""
-    chain = [r for r in rows if r["case"].startswith("four_bar_chain") and r.get("loop") == loop]
+def _growth(rows: list[dict], key: str, loop: str = "python",
+            model: str = "four_bar_chain") -> str:
+    """Exponent k of cost ~ n^k between consecutive sizes of one model and loop."""
+    chain = [r for r in rows if r["case"].startswith(model) and r.get("loop") == loop]
     out = []
     for a, b in zip(chain, chain[1:], strict=False):
         if a["backend"] != b["backend"]:
@@ -255,10 +268,11 @@ of that function (no symbolic derivation).
   [0019](decisions/0019-sweep-lu-structure-and-guard.md); the same numbers as the Python loop
   to 1e-12 and the same decisions).
   The compiled loop runs by default for sweeps of 1000 points or more (`MECHSYS_JIT`, see the
-  [guide](guide.md#compiled-sweeps-and-the-kernel-cache)); above 150 coordinates it takes
-  models whose Jacobian pattern is banded (chains), with the banded LU of the Python loop
-  ([decision 0030](decisions/0030-banded-kinematic-sweeps.md)); the growth exponents below
-  the table are given for each loop.
+  [guide](guide.md#compiled-sweeps-and-the-kernel-cache)); above 150 coordinates it
+  factorises the Jacobian with the sparse LU the Python loop calls
+  ([decisions 0030](decisions/0030-banded-kinematic-sweeps.md) and
+  [0031](decisions/0031-sparse-lu-for-trees.md)); the growth exponents below the table are
+  given for each loop.
 * A sweep needs about one iteration per point: the predictor (the Taylor step
   `q + qd dt + qdd dt^2/2` from the previous point with third- and fourth-derivative terms
   from the last accelerations) lands within the tolerance at fine sampling, and the position
@@ -270,10 +284,11 @@ of that function (no symbolic derivation).
   factorising and solving with NumPy/SciPy), not equation evaluation, which is a few µs of it;
   the two backends are then equally fast.
 * Above 150 coordinates both loops factorise the Jacobian through its sparsity pattern,
-  analysed once per model: rows matched to columns, a reverse Cuthill-McKee ordering, then
-  LAPACK's banded LU (decision 0030); the cost per point grows about linearly with `n`
-  (exponents above). There the evaluation cost shows: SymPy's per-call time grows linearly
-  with the number of outputs, SymEngine's LLVM code hardly at all.
+  analysed once per model: rows matched to columns, a minimum-degree ordering, then a
+  compiled sparse LU (decisions 0030, 0031); the cost per point grows about linearly with
+  `n` (exponents above), for chains and for the radial engines' star alike. There the
+  evaluation cost shows: SymPy's per-call time grows linearly with the number of outputs,
+  SymEngine's LLVM code hardly at all.
 * Compiling happens once per model change (`m.compile()` is cached), and changing parameter
   values does not recompile. For large models most of it is the numeric compile of the
   solver's three functions rather than the symbolic derivation.
@@ -292,12 +307,15 @@ def main(argv: list[str] | None = None) -> int:
 
     backends = [b for b in args.backends.split(",") if b in available_backends()]
     chain_sizes = (1, 10) if args.quick else (1, 10, 100)
+    radial_sizes = () if args.quick else (30, 60, 120)
     sc_points, chain_points = (100, 50) if args.quick else (1000, 200)
 
     sweeps, evals = [], []
     for backend in backends:
         runs = [("slider-crank", None, sc_points), ("geneva drive", None, sc_points)] + [
             ("chain", k, chain_points) for k in chain_sizes]
+        if backend == "symengine":
+            runs += [("radial engine", k, chain_points) for k in radial_sizes]
         loops = ["python"]
         if backend == "symengine" and _jit_available():
             loops.append("compiled")
@@ -328,6 +346,10 @@ def main(argv: list[str] | None = None) -> int:
     compiled = _growth(sweeps, "per_point_us", "compiled")
     if compiled:
         growth += f"; compiled loop: {compiled}"
+    for loop in ("python", "compiled"):
+        star = _growth(sweeps, "per_point_us", loop, "radial_engine")
+        if star:
+            growth += f"; radial engines, {loop} loop: {star}"
     print()
     print(sweep_table(sweeps))
     print()

@@ -47,8 +47,11 @@ def _arrow(N, rng):
     return A
 
 
-@pytest.mark.parametrize("kind", ["banded", "superlu"])
-def test_fixed_pattern_solves_like_dense_lu(kind):
+@pytest.mark.parametrize("kind", ["banded", "sparse", "superlu"])
+def test_fixed_pattern_solves_like_dense_lu(monkeypatch, kind):
+    """Banded LU for a chain's pattern; for a wide one the sparse LU in a minimum-degree
+    ordering, compiled or (without Numba) SuperLU's with the same ordering and pivoting."""
+    monkeypatch.setattr(_linalg, "COMPILED_LU", kind != "superlu")
     rng = np.random.default_rng(3)
     A = _banded_kkt(40, rng) if kind == "banded" else _arrow(400, rng)
     K = _csc(A)
@@ -64,16 +67,22 @@ def test_fixed_pattern_solves_like_dense_lu(kind):
         ref = np.linalg.solve(B, b)
         np.testing.assert_allclose(x, ref, rtol=0, atol=1e-11 * np.abs(ref).max())
         assert np.abs(B @ x - b).max() < 1e-11 * np.abs(b).max() * np.abs(B).max()
-    if kind == "superlu":
-        # the reused column ordering is the one SuperLU chose (no more fill than a fresh
-        # factorisation with its own ordering)
+        if kind != "banded":
+            np.testing.assert_allclose(B.T @ pat.factor(data).solve_transposed(b), b,
+                                       atol=1e-11 * np.abs(b).max() * np.abs(B).max())
+    if kind != "banded":
+        # the minimum-degree ordering eliminates the arrow's hub last: no fill, where a fresh
+        # SuperLU (COLAMD) fills more; L's unit diagonal not counted
         fresh = _linalg.factor(K)._lu
-        reused = pat.factor(K.data)._lu
-        assert reused.L.nnz + reused.U.nnz <= fresh.L.nnz + fresh.U.nnz
+        fac = pat.factor(K.data)
+        assert type(fac).__name__ == {"sparse": "_SparseFactor", "superlu": "_SuperFactor"}[kind]
+        assert fac.fill == K.nnz
+        assert K.nnz <= fresh.L.nnz + fresh.U.nnz - K.shape[0]
 
 
-@pytest.mark.parametrize("kind", ["banded", "superlu"])
-def test_fixed_pattern_detects_singular_matrices(kind):
+@pytest.mark.parametrize("kind", ["banded", "sparse", "superlu"])
+def test_fixed_pattern_detects_singular_matrices(monkeypatch, kind):
+    monkeypatch.setattr(_linalg, "COMPILED_LU", kind != "superlu")
     rng = np.random.default_rng(5)
     A = _banded_kkt(30, rng) if kind == "banded" else _arrow(400, rng)
     K = _csc(A)
@@ -168,23 +177,30 @@ def test_sparse_free_system_with_a_massless_link_is_diagnosed():
         free.solve(0.0)
 
 
-def test_jacobian_pattern_matches_rows_to_columns():
+@pytest.mark.parametrize("compiled", [True, False])
+def test_jacobian_pattern_matches_rows_to_columns(monkeypatch, compiled):
     """A constraint Jacobian's row i has nothing to do with coordinate i: the rows are
     matched to the columns (a zero-free diagonal) before the symmetric ordering. On a chain
     the band is then as narrow as for 3 loops, where the symmetric ordering alone spans the
-    chain; the solves are those of dense LU."""
+    chain; the solves are those of dense LU. A system's Jacobian is then factorised by the
+    sparse LU in a minimum-degree ordering (little fill on a chain): compiled, or SuperLU's
+    where Numba is missing."""
+    monkeypatch.setattr(_linalg, "COMPILED_LU", compiled)
     rng = np.random.default_rng(7)
     s = models.four_bar_chain(40).compile()
     pat = s.jacobian_pattern()
-    assert pat is s.jacobian_pattern() and pat.banded and pat.kl + pat.ku <= 10
+    assert pat is s.jacobian_pattern() and pat.kl + pat.ku <= 10
+    assert not pat.banded
     _, indices, indptr = s._csc_structure()
     assert FixedPattern(indptr, indices, s.n).kl > 50       # without the matching
     J = s.jacobian(0.4, s.guess + 0.01 * rng.normal(size=s.n), None, sparse=True)
     assert J.mechsys_pattern is pat
     b = rng.normal(size=s.n)
     fac = _linalg.factor(J)
-    assert type(fac).__name__ == "_BandFactor"
+    assert type(fac).__name__ == ("_SparseFactor" if compiled else "_SuperFactor")
+    assert fac.fill <= len(indices) + s.n
     np.testing.assert_allclose(J.toarray() @ fac.solve(b), b, atol=1e-10)
+    np.testing.assert_allclose(J.toarray().T @ fac.solve_transposed(b), b, atol=1e-10)
     # a matrix with rows shuffled: the matching finds its diagonal again
     A = _banded_kkt(30, rng)
     P = rng.permutation(A.shape[0])
@@ -207,3 +223,36 @@ def test_structurally_singular_jacobian_pattern_still_raises():
     np.testing.assert_array_equal(np.sort(pat.row_perm), np.arange(6))
     with pytest.raises(Singular):
         pat.factor(K.data)
+
+
+def test_wide_free_system_solves_through_the_sparse_lu(monkeypatch):
+    """A radial engine coasting under gravity (its driver dropped; every rod on the crank pin,
+    so the augmented matrix's band is as wide as the engine): the pattern takes the sparse LU
+    (rows matched to columns first: the multipliers' zero block then pivots on the diagonal
+    with little fill), which gives the dense path's accelerations and multipliers; the
+    compiled loop leaves this band to it (``BLOCK_WORK``), and the motion conserves energy."""
+    from mechsys.solvers import _jit_free
+
+    m = models.radial_engine(20, g=9.81)
+    m.solve(0.0)
+    free = m.free(drop=["drive"])
+    s = free.system
+    kern = s.dynamics.free_kernel(True)
+    assert s.n + s.m > _linalg.SPARSE_THRESHOLD and not kern.pattern.banded
+    sol0 = free.solve(0.0, initial_condition={"crank.th_d": 3.0})
+    q, qd, p = sol0.q[0], sol0.qd[0], sol0.p
+    fac = kern.pattern.factor(kern(0.0, q, qd, np.zeros(s.m), p)[0].data)
+    assert fac.fill < 2 * kern.pattern.indices.size
+    sp_qdd, sp_lam, _ = _free.free_acceleration(s, 0.0, q, qd, p)
+    monkeypatch.setattr(_free, "SPARSE_THRESHOLD", 10**6)
+    de_qdd, de_lam, _ = _free.free_acceleration(s, 0.0, q, qd, p)
+    np.testing.assert_allclose(sp_qdd, de_qdd, rtol=0, atol=1e-10 * np.abs(de_qdd).max())
+    np.testing.assert_allclose(sp_lam, de_lam, rtol=0, atol=1e-10 * np.abs(de_lam).max())
+    monkeypatch.undo()
+    if _jit_free._jit.available():
+        monkeypatch.setenv("MECHSYS_JIT", "1")
+    run = free.simulate((0.0, 0.3), initial_condition={"crank.th_d": 3.0}, method="DOP853",
+                        rtol=1e-10, atol=1e-12)
+    assert run.extra["compiled_steps"] == 0
+    energy = run.body_energy() + run.potential_energy()
+    assert np.abs(energy - energy[0]).max() < 1e-7 * np.abs(energy[0])

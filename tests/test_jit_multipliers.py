@@ -64,7 +64,9 @@ def _loaded_chain():
 
 
 BUILDS = {"slider-crank": _gas_crank, "n-four-bar": lambda: models.n_four_bar(3),
-          "rotor-3d": _rotor, "spline-cam": _loaded_spline_cam, "chain-183": _loaded_chain}
+          "rotor-3d": _rotor, "spline-cam": _loaded_spline_cam, "chain-183": _loaded_chain,
+          # a star: the sparse LU of a wide pattern
+          "radial-183": lambda: models.radial_engine(30, g=9.81)}
 
 
 def _solve_both(monkeypatch, build, t, mode):

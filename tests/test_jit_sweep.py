@@ -320,8 +320,9 @@ def _runs(monkeypatch):
 @pytest.mark.parametrize("loops", [30, 60])
 def test_large_banded_sweep_is_compiled_with_the_same_numbers(monkeypatch, loops):
     """Above SPARSE_THRESHOLD coordinates (a chain of 183 and 363) the compiled loop takes
-    the sweep through the Jacobian's FixedPattern (the banded LU both paths call): the
-    Python loop's numbers bit for bit, with its iterations, evaluations and pivot ratios."""
+    the sweep through the Jacobian's FixedPattern (the compiled sparse LU both paths call):
+    the Python loop's numbers bit for bit, with its iterations, evaluations and pivot
+    ratios."""
     from mechsys.solvers._linalg import SPARSE_THRESHOLD
 
     runs = _runs(monkeypatch)
@@ -368,13 +369,53 @@ def test_large_banded_sweep_hands_over_and_continues(monkeypatch):
         np.testing.assert_array_equal(a, b)
 
 
-def test_wide_pattern_keeps_the_python_loop(monkeypatch):
-    """A large system whose Jacobian has no narrow band is left to the Python loop (SuperLU
-    with the ordering found once); so are the multiplier solves of every large system."""
+def _piston_travel(c, r, angle):
+    """The slider-crank's closed form: the piston's distance from the crank's axis when the
+    crank is at ``angle`` from the cylinder's axis."""
+    return c * np.cos(angle) + np.sqrt(r**2 - (c * np.sin(angle)) ** 2)
+
+
+@pytest.mark.parametrize("cylinders", [30, 60])
+def test_wide_pattern_sweep_is_compiled_with_the_same_numbers(monkeypatch, cylinders):
+    """A radial engine (every rod on the crank pin: a star, whose band is as wide as the
+    engine; 183 and 363 coordinates) runs compiled through the sparse LU both loops call:
+    the Python loop's numbers bit for bit. Against the closed form of each cylinder's
+    slider-crank, and against SuperLU (no Numba: the same ordering and pivoting) to
+    rounding."""
+    from mechsys.solvers import _linalg
+
+    runs = _runs(monkeypatch)
+    t = np.linspace(0.0, 0.5, 26)
+    fast, slow = _both(monkeypatch, lambda: models.radial_engine(cylinders), t)
+    s = fast.system
+    assert not s.jacobian_pattern().banded and runs and runs[0][0] == len(t)
+    for x, y in ((fast.q, slow.q), (fast.qd, slow.qd), (fast.qdd, slow.qdd),
+                 (fast.extra["rcond"], slow.extra["rcond"])):
+        np.testing.assert_array_equal(x, y)
+    np.testing.assert_array_equal(fast.iterations, slow.iterations)
+    assert fast.evaluations == slow.evaluations
+    theta = 2 * np.pi * t
+    for k in (0, cylinders // 3, cylinders - 1):
+        a = 2 * np.pi * k / cylinders
+        want = _piston_travel(1.0, 4.0, theta - a)
+        x = fast.coordinate(f"piston{k}.x")
+        y = fast.coordinate(f"piston{k}.y")
+        np.testing.assert_allclose(np.hypot(x, y), want, rtol=0, atol=1e-10)
+    # without Numba: SuperLU, with the same ordering and pivoting (the same pivot ratios)
+    monkeypatch.setattr(_linalg, "COMPILED_LU", False)
+    runs.clear()
+    ref = models.radial_engine(cylinders).solve(t)
+    assert not runs
+    assert type(ref.system.jacobian_pattern().factor(
+        ref.system.jacobian(0.1, ref.q[3], ref.p, True).data)).__name__ == "_SuperFactor"
+    for x, y in ((fast.q, ref.q), (fast.qd, ref.qd), (fast.qdd, ref.qdd)):
+        np.testing.assert_allclose(x, y, rtol=0, atol=1e-12 * np.abs(y).max())
+    np.testing.assert_allclose(fast.extra["rcond"], ref.extra["rcond"], rtol=1e-9)
+
+
+def test_large_loop_needs_the_pattern(monkeypatch):
+    """Above SPARSE_THRESHOLD the loops run only where they were asked to take a pattern."""
     monkeypatch.setenv("MECHSYS_JIT", "1")
     s = models.four_bar_chain(30).compile()
     assert _jit.plan(s, 10, 2) is not None
-    monkeypatch.setattr(s.jacobian_pattern(), "banded", False)
-    assert _jit.plan(s, 10, 2) is None
-    monkeypatch.setattr(s.jacobian_pattern(), "banded", True)
     assert not _jit._wanted(s, 10)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
+from ._errors import ModelError
 from ._symbols import T
 from .constraints import RelativeDistance1, Revolute2, RotationLock1, Translate2
 from .model import Model2D
@@ -104,6 +105,60 @@ def four_bar_chain(n_loops: int, speed: float = 1.0) -> Model2D:
         m.add(Revolute2(a.point("tip"), cp.point(0)), name=f"left{k}")
         m.add(Revolute2(cp.point("end"), cranks[k + 1].point("tip")), name=f"right{k}")
     m.add(RotationLock1(cranks[0], th0 + 0.3 * sp.sin(speed * T)), name="drive")
+    return m
+
+
+def radial_engine(cylinders: int = 9, crank: float = 1.0, rod: float = 4.0,
+                  speed: float = 2 * np.pi, g: float = 0.0) -> Model2D:
+    """A planar radial engine: one crank pinned to ground at the origin and driven at
+    ``speed`` rad/s (``theta = speed T``), and ``cylinders`` cylinders whose axes are spaced
+    evenly around it (cylinder ``k`` at ``2 pi k / cylinders`` from the crank's zero). Each
+    rod (length ``rod``) is pinned to the crank pin, as if the master and articulated rods were
+    one pin, and its piston slides along its cylinder's axis. Bodies: ``crank`` (point
+    ``pin``), ``rod{k}`` (points ``a``, ``b``), ``piston{k}``; joints ``pin{k}``, ``wrist{k}``,
+    ``cylinder{k}``; the driver ``drive``. ``3 (2 cylinders + 1)`` coordinates.
+
+    Uniform links (crank 2, rods 1 with centroids at mid-length, pistons 0.5) for inverse
+    dynamics, and gravity ``g`` along -Y when ``g`` is not zero. Every rod hangs on
+    the crank pin: the Jacobian's pattern is a star, whose band is as wide as the engine
+    (the sparse LU of ``FixedPattern`` solves it in time linear in the cylinders)::
+
+        m = models.radial_engine(9)
+        sol = m.solve(np.linspace(0, 1, 50))
+    """
+    from .loads import Gravity
+
+    if isinstance(cylinders, bool) or not isinstance(cylinders, (int, np.integer)) \
+            or cylinders < 1:
+        raise ModelError(f"radial_engine: cylinders must be an integer >= 1, got {cylinders!r}")
+    if not (0 < crank < rod):     # (also NaN)
+        raise ModelError(f"radial_engine: need 0 < crank < rod (got crank={crank!r}, "
+                         f"rod={rod!r}): a rod no longer than the crank locks the engine")
+    m = Model2D()
+    gnd = m.ground
+    cr = m.add_body("crank", points={"pin": (crank, 0)}, guess=((0, 0), 0.0))
+    m.add(Revolute2(gnd.point((0, 0)), cr.point(0)), name="crank pin")
+    m.add(RotationLock1(cr, speed * T), name="drive")
+    masses = {"crank": (2.0, (crank / 2, 0), 2.0 * crank**2 / 12)}
+    for k in range(cylinders):
+        a = 2 * np.pi * k / cylinders
+        u = np.array([np.cos(a), np.sin(a)])
+        # the piston's distance s along the axis: |s u - (crank, 0)| = rod
+        s = crank * u[0] + np.sqrt(rod**2 - (crank * u[1]) ** 2)
+        tip = s * u
+        rd = m.add_body(f"rod{k}", points={"a": (0, 0), "b": (rod, 0)},
+                        guess=((crank, 0.0), float(np.arctan2(tip[1], tip[0] - crank))))
+        pi = m.add_body(f"piston{k}", guess=(tuple(tip), a))
+        m.add(Revolute2(cr.point("pin"), rd.point("a")), name=f"pin{k}")
+        m.add(Revolute2(rd.point("b"), pi.point(0)), name=f"wrist{k}")
+        m.add(Translate2(gnd.axis((0, 0), tuple(u)), pi.axis((0, 0), (1, 0))),
+              name=f"cylinder{k}")
+        masses[f"rod{k}"] = (1.0, (rod / 2, 0), rod**2 / 12)
+        masses[f"piston{k}"] = (0.5, (0, 0), 0.01)
+    for name, (mass, c, J) in masses.items():
+        m.set_mass_properties(name, mass=mass, centroid=c, inertia=J)
+    if g:
+        m.add_load(Gravity((0, -1), g))
     return m
 
 

@@ -262,15 +262,17 @@ class System:
     def jacobian_pattern(self):
         """The :class:`~mechsys.solvers._linalg.FixedPattern` of the square Jacobian's CSC
         structure (None when ``m != n``), made once: its factorisations reuse the ordering
-        (reverse Cuthill-McKee) and band widths found here. Shared with the compiled sweep
-        (``_jit.run``), which performs the same banded LU."""
+        found here: a sparse LU in a minimum-degree ordering (compiled when Numba is
+        installed, else SuperLU's with the same ordering and pivoting). Shared with the
+        compiled sweep and multiplier loops (``_jit.run``), which call the same LU."""
         if self.m != self.n:
             return None
         got = self.__dict__.get("_jac_pattern")
         if got is None:
             _, indices, indptr = self._csc_structure()
             got = self.__dict__["_jac_pattern"] = FixedPattern(indptr, indices, self.n,
-                                                                 match_rows=True)
+                                                                 match_rows=True,
+                                                                 sparse=True)
         return got
 
     def _csc_structure(self):

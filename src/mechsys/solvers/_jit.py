@@ -10,9 +10,9 @@ kernels are SymEngine's LLVM functions, called through their C entry points
 ``dgetrf``/``dgecon``/``dgetrs``, the routines the Python path calls, their algorithms
 written out in the loop (``_jit_lapack``). Above ``SPARSE_THRESHOLD`` unknowns both paths
 factorise the Jacobian through its :class:`~mechsys.solvers._linalg.FixedPattern` (a row
-matching and reverse Cuthill-McKee ordering analysed once per system, then LAPACK's banded
-``dgbtrf``/``dgbtrs``: SciPy's own, through ``scipy.linalg.cython_lapack``, in the loop).
-Both paths give the same numbers to rounding.
+matching and minimum-degree ordering analysed once per system, then the sparse LU of
+``_jit_sparse``, the same compiled function in both paths; decision 0031). Both paths give
+the same numbers to rounding.
 
 The compiled loop handles the regular points. At the first point that needs the Python
 path's care (Newton not converging, a singular or nearly singular Jacobian, a branch jump)
@@ -28,8 +28,8 @@ costs about 0.7 s CPU once per process, which a short sweep would not recover. (
 depends on the sweep alone, never on what ran before in the process.) Possible means: Numba installed (the
 ``fast`` extra), the SymEngine LLVM backend (two-stage ``Piecewise`` kernels of spline
 profiles included), as many equations as coordinates, and a dense system (``n <=
-SPARSE_THRESHOLD``) or a larger one whose Jacobian's pattern is banded (chains and other
-mechanisms whose loops follow each other; ``FixedPattern.banded``).
+SPARSE_THRESHOLD``) or a larger one through its Jacobian's pattern (chains, trees, any
+branching).
 
 Measured (slider-crank, 1000 points with velocities and accelerations): see
 ``docs/performance.md``, ``docs/decisions/0013-compiled-sweep.md`` and
@@ -91,7 +91,7 @@ def _pointer(kernel):
 
 def plan(system, points: int, order: int):
     """The kernels' C entry points when the compiled loop should run this sweep, else None."""
-    if not _wanted(system, points, banded_ok=True):
+    if not _wanted(system, points, large_ok=True):
         return None
     kernels = [system.f_position]
     if order >= 1:
@@ -123,16 +123,16 @@ def _table(kernels):
     return table
 
 
-def _wanted(system, points: int, banded_ok: bool = False) -> bool:
+def _wanted(system, points: int, large_ok: bool = False) -> bool:
     """Whether a compiled loop should run for ``points`` points of this system (the
-    ``MECHSYS_JIT`` rule of the module docstring; Numba importable). ``banded_ok``: the loop
-    also takes systems above ``SPARSE_THRESHOLD`` unknowns whose Jacobian is banded (the
-    sweep, and the multiplier solves; with friction, when its Newton matrix's pattern is
-    banded too)."""
+    ``MECHSYS_JIT`` rule of the module docstring; Numba importable). ``large_ok``: the loop
+    also takes systems above ``SPARSE_THRESHOLD`` unknowns through their Jacobian's
+    ``FixedPattern`` (the sweep, and the multiplier solves; with friction, when its Newton
+    matrix's pattern is banded)."""
     m = mode()
     if m == "off" or system.n == 0 or system.m != system.n:
         return False
-    if system.n > SPARSE_THRESHOLD and not (banded_ok and _banded(system)):
+    if system.n > SPARSE_THRESHOLD and not (large_ok and _patterned(system)):
         return False
     if m == "auto" and points < AUTO_POINTS:
         return False
@@ -158,7 +158,7 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
     kband = _multiplier_band(system) if large and dyn.depends_on_lambda else _NO_KBAND
     if not N or columns is None or getattr(dyn, "recursive", False) \
             or not _wanted(system, N if points is None else points,
-                           banded_ok=not dyn.depends_on_lambda or kband is not None):
+                           large_ok=not dyn.depends_on_lambda or kband is not None):
         return 0
     code = {"static": 0, "kinematic": 1, "dynamic": 2}[mode_name]
     if (code >= 1 and QD is None) or (code == 2 and QDD is None):
@@ -206,14 +206,22 @@ def _capsule_address(capsule) -> int:
     return api.PyCapsule_GetPointer(capsule, api.PyCapsule_GetName(capsule))
 
 
-def _banded(system) -> bool:
+def _jacobian_pattern(system):
     pattern = getattr(system, "jacobian_pattern", None)
-    pat = pattern() if pattern is not None else None
-    return pat is not None and pat.banded
+    return pattern() if pattern is not None else None
 
 
-#: the dense sweep's (unused) band arguments
-_NO_BAND = (np.array([-1, 0, 1], dtype=np.int64), (np.zeros(0, dtype=np.int64),) * 6)
+def _patterned(system) -> bool:
+    """The system's Jacobian has a ``FixedPattern`` whose sparse LU the loops call (the
+    compiled one, ``_jit_sparse``: also the Python path's)."""
+    from ._linalg import _sparse_lu
+
+    pat = _jacobian_pattern(system)
+    return pat is not None and pat.size > 0 and not pat.banded and _sparse_lu() is not None
+
+
+#: the dense sweep's (unused) sparse-LU arguments
+_NO_BAND = (np.array([-1, 0, 0, 0], dtype=np.int64), (np.zeros(0, dtype=np.int64),) * 7)
 
 
 #: the multiplier loop's (unused) Newton band arguments
@@ -225,11 +233,11 @@ def _multiplier_band(system):
     ``Phi_q^T - dQ/dlambda`` of a large square system (friction): its ``FixedPattern``
     (``_statics._newton_pattern``, the Python path's), and the slot in it of each of the
     Jacobian's CSC entries (transposed) and each ``dQ/dlambda`` entry; None when the pattern
-    is not banded or the Jacobian's is not (the loop reads the Jacobian through it)."""
+    is not banded (the Jacobian is read through its own pattern, banded or sparse)."""
     from ._linalg import pattern_slots
     from ._statics import _newton_pattern
 
-    if not _banded(system):
+    if not _patterned(system):
         return None
     rows, cols, pat = _newton_pattern(system)
     if not pat.banded:
@@ -237,7 +245,7 @@ def _multiplier_band(system):
     got = getattr(pat, "_jit_kband", None)
     if got is None:
         n = system.n
-        _, (_, jrows, jcols, _, _, _) = _band_args(system)
+        _, (_, jrows, jcols, _, _, _, _) = _band_args(system)
 
         def slot(r, c):
             return pattern_slots(rows, cols, n, r, c)
@@ -252,16 +260,22 @@ def _multiplier_band(system):
 
 def _band_args(system):
     """``(bw, band)`` of ``_jit_loop.sweep_dense`` for a system above ``SPARSE_THRESHOLD``
-    unknowns: its Jacobian's ``FixedPattern`` (kept on the pattern, made once)."""
+    unknowns: its Jacobian's ``FixedPattern`` (the arrays kept on the pattern, made once):
+    ``bw = (SPARSE, nnz, capL, capU)`` (the factors' storage as the Python path has grown it
+    so far) and ``band = (slot, rows, cols, pos, row_perm, perm, head)``, ``head`` the CSC
+    structure of ``B = P Q A P^T``."""
+    from ._jit_loop import SPARSE
+
     pat = system.jacobian_pattern()
     got = getattr(pat, "_jit_band", None)
     if got is None:
         slot, rows, indptr = system._csc_structure()
         cols = np.repeat(np.arange(system.n), np.diff(indptr))
-        got = (np.array([pat.kl, pat.ku, pat._ld], dtype=np.int64),
-               tuple(_index(a) for a in (slot, rows, cols, pat._pos, pat.row_perm, pat.perm)))
+        head = np.concatenate([pat.s_indptr, pat.s_indices])
+        got = tuple(_index(a) for a in (slot, rows, cols, pat._pos, pat.row_perm, pat.perm,
+                                        head))
         pat._jit_band = got
-    return got
+    return np.array([SPARSE, pat.s_indices.size, *pat._cap], dtype=np.int64), got
 
 
 def _band_lapack() -> np.ndarray:
@@ -333,7 +347,7 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
                     float(options.ftol), int(options.max_iterations), bool(options.damping),
                     int(order), _index(rot), trans, _index(body), length_hint(system), Q,
                     qd_out, qdd_out, its, rc, rprev, lazy, R if lazy else dummy, int(first),
-                    bool(chord_start), _band_lapack(), bw, band)
+                    bool(chord_start), bw, band)
     if scaling is None:
         scaling = Scaling(float(scale[0]), columns, float(scale[1]))
     return int(k), int(evals), scaling

@@ -27,8 +27,9 @@ Ctrl-C is honoured.
 When it runs (``MECHSYS_JIT``, as for the kinematic sweep): ``0`` never; ``1`` or unset
 whenever possible. Possible means: Numba installed (the ``fast`` extra); DOP853, RK45 or
 one of Mech's Adams methods; a dense augmented system (``n + m <= SPARSE_THRESHOLD``) or the block
-path; every kernel SymEngine LLVM code (CSE kernels included: their repeated outputs are
-expanded in the loop). Loads that depend on the multipliers (friction) or accelerations
+path (above it, while its band is narrow enough: :data:`BLOCK_WORK`); every kernel
+SymEngine LLVM code (CSE kernels included: their repeated outputs are expanded in the
+loop). Loads that depend on the multipliers (friction) or accelerations
 (added mass) take ``free_acceleration``'s Newton in the loop (``"newton"``, decision 0028).
 Generalized coordinates with the recursive dynamics (decision 0018) run in the same loops:
 the joint kernels, the articulated-body recursion (a tree of Gen joints, no constraint
@@ -51,6 +52,13 @@ import numpy as np
 
 from . import _jit
 from ._linalg import SPARSE_THRESHOLD
+
+#: above ``SPARSE_THRESHOLD`` unknowns the block path runs while its banded Cholesky's work
+#: ``m bw^2`` is at most this; a wider band (a star of branches on one body) goes to the Python
+#: path, whose sparse LU of the augmented matrix is compiled and costs less there (radial
+#: engines: ``m bw^2`` = 0.56e6, 17.8 ms compiled, 16.6 ms Python; 1.7e6: 43.6 ms, 21.5 ms;
+#: 5.7e6: 141 ms, 40 ms; decision 0031)
+BLOCK_WORK = 1e6
 
 #: augmented systems with more unknowns take the block path when the mass matrix allows it
 SMALL = 24
@@ -466,7 +474,8 @@ class FreeStepper:
         else:
             if N > SMALL:
                 blocks = _Blocks.of(system, p, start)
-                if blocks is None and N > SPARSE_THRESHOLD:
+                if N > SPARSE_THRESHOLD and (
+                        blocks is None or system.m * blocks.bandwidth**2 > BLOCK_WORK):
                     return None
             # the kernel the Python path uses (sparse above the threshold): compiled once
             fk = dyn.free_kernel(N > SPARSE_THRESHOLD)

@@ -10,9 +10,12 @@ operations, so that both give the same numbers:
 * ``_factor``        ``Scaling.factor`` -> ``Factor`` (LAPACK dgetrf + dgecon on ``R^-1 J D``;
                      up to ``SMALL`` unknowns their algorithms from ``_jit_lapack``)
 * ``_solve``         ``ScaledFactor.solve``
-* ``_band_*``        the same, above ``SPARSE_THRESHOLD`` unknowns, through the Jacobian's
-                     ``FixedPattern`` (``System.assemble``'s CSC values, ``Scaling.rows``,
-                     LAPACK ``dgbtrf``/``dgbtrs`` on the band, the pivot ratio; decision 0030)
+* ``_band_*``,      the same, above ``SPARSE_THRESHOLD`` unknowns, through the Jacobian's
+  ``_sparse_*``      ``FixedPattern`` (``System.assemble``'s CSC values, ``Scaling.rows``,
+                     the compiled sparse LU, the pivot ratio; decisions 0030, 0031);
+                     ``_band_factor``/``_band_solve``: LAPACK ``dgbtrf``/``dgbtrs`` on a
+                     band, for the banded patterns of free motion's and the multipliers'
+                     Newton matrices
 * ``_newton``        ``solve_position`` with a given scaling and the previous point's
                      velocity factorisation as its chord (kept in ``B``, ``ipiv``, ``nz``
                      with its row scales ``rprev``)
@@ -36,8 +39,9 @@ from numba.extending import intrinsic
 
 from ._jit_cache import check as _check_cache
 from ._jit_lapack import GUARD_MARGIN, gecon1, getrf, inv_norm_bound, leaf, pattern_size, symbolic_pattern
+from ._jit_sparse import IWORK, lu_factor, lu_pivot_ratio, lu_solve, lu_solve_t
 from ._kinematics import RCOND_PENDING, RCOND_WARN, ROTATION_JUMP, ROTATION_SLACK, ROTATION_START
-from ._linalg import ARM_ROUNDOFF, RCOND_MIN, SPARSE_THRESHOLD
+from ._linalg import ARM_ROUNDOFF, PIVOT_TOL, RCOND_MIN, SPARSE_THRESHOLD
 from ._position import CHORD_RATE
 
 _check_cache()   # stale cached loops go before anything here compiles (see _jit_cache)
@@ -402,17 +406,110 @@ def _band_solve(blapack, AB, bw, ipiv, row_perm, perm, r, columns, b, out, tmp, 
         out[i] = columns[i] * out[i]
 
 
+#: ``bw[0]`` of a pattern factorised by the sparse LU (``_jit_sparse``, a wide band: trees);
+#: ``bw = (SPARSE, nnz, capL, capU)`` with ``nnz`` the pattern's entries and ``capL``,
+#: ``capU`` the storage of the factors. The factors and work arrays live in the float array
+#: ``AB = [Bx (nnz) | Lx (capL) | Ux (capU) | 3 work (n)]`` and the int array
+#: ``SI = [Bp (n + 1) | Bi (nnz) | Lp (n + 1) | Up (n + 1) | pinv (n) | iw (IWORK n) |
+#: Li (capL) | Ui (capU)]``, whose head is ``B = P Q A P^T``'s CSC structure
+SPARSE = -2
+
+
 @leaf
-def _band_solve_t(blapack, AB, bw, ipiv, row_perm, perm, r, columns, b, out, tmp, bi, cbuf):
-    """``ScaledFactor.solve_transposed`` of :func:`_band_factor`'s factors: ``lambda`` with
-    ``J^T lambda = b``, i.e. ``dgbtrs`` transposed on ``c b`` in the pattern's column order,
-    back in the rows' order, over ``r``."""
+def big_sizes(bw, n):
+    """The sizes of ``AB`` and ``SI`` for the sparse LU that ``bw`` describes (``bw[0] ==
+    SPARSE``), else 1 and 1 (a dense loop)."""
+    if bw[0] == SPARSE:
+        return bw[1] + bw[2] + bw[3] + 3 * n, bw[1] + (IWORK + 4) * n + 3 + bw[2] + bw[3]
+    return 1, 1
+
+
+
+@leaf
+def _sparse_factor(data, cr, cc, pos, r, columns, AB, bw, SI):
+    """:func:`_band_factor` through the sparse LU (``_linalg._SparseFactor``, the Python
+    path's: the same function): the scaled values ``data * (c / r)`` at their positions in
+    ``B = P Q A P^T``, ``lu_factor``, the pivot ratio of ``U``'s diagonal."""
+    n = r.size
+    nb_, capL, capU = bw[1], bw[2], bw[3]
+    Bx = AB[:nb_]
+    Lx = AB[nb_:nb_ + capL]
+    Ux = AB[nb_ + capL:nb_ + capL + capU]
+    xw = AB[nb_ + capL + capU:nb_ + capL + capU + n]
+    o = n + 1 + nb_
+    Bp = SI[:n + 1]
+    Bi = SI[n + 1:o]
+    Lp = SI[o:o + n + 1]
+    Up = SI[o + n + 1:o + 2 * n + 2]
+    pinv = SI[o + 2 * n + 2:o + 3 * n + 2]
+    o2 = o + (3 + IWORK) * n + 2
+    iw = SI[o + 3 * n + 2:o2]
+    Li = SI[o2:o2 + capL]
+    Ui = SI[o2 + capL:o2 + capL + capU]
+    for i in range(nb_):
+        Bx[i] = 0.0
+    for s in range(data.size):
+        Bx[pos[s]] += data[s] * (columns[cc[s]] / r[cr[s]])
+    if lu_factor(n, Bp, Bi, Bx, PIVOT_TOL, Lp, Li, Lx, Up, Ui, Ux, pinv, iw, xw) != 0:
+        return -1.0
+    ratio = lu_pivot_ratio(n, Up, Ux)
+    if not ratio > RCOND_MIN:
+        return -1.0
+    return ratio
+
+
+@leaf
+def _sparse_solve(AB, bw, SI, x, trans):
+    """``B x = x`` (``trans``: ``B^T x = x``) in place with :func:`_sparse_factor`'s factors."""
+    n = x.size
+    nb_, capL, capU = bw[1], bw[2], bw[3]
+    o = nb_ + capL + capU
+    Lx = AB[nb_:nb_ + capL]
+    Ux = AB[nb_ + capL:o]
+    y = AB[o + n:o + 2 * n]
+    w = AB[o + 2 * n:o + 3 * n]
+    o = n + 1 + nb_
+    Lp = SI[o:o + n + 1]
+    Up = SI[o + n + 1:o + 2 * n + 2]
+    pinv = SI[o + 2 * n + 2:o + 3 * n + 2]
+    o2 = o + (3 + IWORK) * n + 2
+    Li = SI[o2:o2 + capL]
+    Ui = SI[o2 + capL:o2 + capL + capU]
+    if trans:
+        lu_solve_t(n, pinv, Lp, Li, Lx, Up, Ui, Ux, x, y, w)
+    else:
+        lu_solve(n, pinv, Lp, Li, Lx, Up, Ui, Ux, x, y, w)
+    for i in range(n):
+        x[i] = y[i]
+
+
+@leaf
+def _sparse_solve_scaled(AB, bw, SI, row_perm, perm, r, columns, b, out, tmp):
+    """``ScaledFactor.solve`` of :func:`_sparse_factor`'s factors: ``b / r`` in the pattern's
+    row order, the sparse LU's solve, back to the coordinates' order, times ``c``."""
+    n = r.size
+    for i in range(n):
+        out[i] = b[i] / r[i]
+    for i in range(n):
+        tmp[i] = out[row_perm[i]]
+    _sparse_solve(AB, bw, SI, tmp, False)
+    for i in range(n):
+        out[perm[i]] = tmp[i]
+    for i in range(n):
+        out[i] = columns[i] * out[i]
+
+
+@leaf
+def _sparse_solve_t_scaled(AB, bw, SI, row_perm, perm, r, columns, b, out, tmp):
+    """``ScaledFactor.solve_transposed`` of :func:`_sparse_factor`'s factors: ``lambda`` with
+    ``J^T lambda = b``: the transposed solve of ``c b`` in the pattern's column order, back
+    in the rows' order, over ``r``."""
     n = r.size
     for i in range(n):
         out[i] = columns[i] * b[i]
     for i in range(n):
         tmp[i] = out[perm[i]]
-    _dgbtrs(blapack, AB, bw, ipiv, tmp, n, 84, bi, cbuf)
+    _sparse_solve(AB, bw, SI, tmp, True)
     for i in range(n):
         out[row_perm[i]] = tmp[i]
     for i in range(n):
@@ -556,7 +653,7 @@ def _unique(jr, jc, m, n):
 @nb.njit(cache=True)
 def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit, damping, order,
                 rot, trans, body, hint, Q, QD, QDD, its, rconds, rprev, lazy, R, first,
-                chord_start, blapack, bw, band):
+                chord_start, bw, band):
     """The sweep's regular points (see the module docstring); returns ``(k, evaluations)``
     with ``k`` the first point left to the Python loop. ``rprev`` (n,) receives the row
     scales of the last solved point's velocity factorisation (the chord of the next point:
@@ -575,12 +672,13 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
     ``chord_start``: point ``first - 1`` had the chord (its velocity factorisation, made again
     here from ``Q[first - 1]`` and its row scales ``rprev``), as in one long sweep.
 
-    ``bw[0] >= 0``: a large system (above ``SPARSE_THRESHOLD`` unknowns) solved as the
-    Python path solves it, through the Jacobian's ``FixedPattern`` (banded LU, LAPACK
-    ``dgbtrf``/``dgbtrs`` at ``blapack``): ``bw = (kl, ku, ld)``, ``band = (slot, cr, cc,
-    pos, row_perm, perm)`` (each nonzero value's CSC entry; each entry's row, column and
-    band position; the pattern's row and column orders). Its condition estimate is the
-    pivot ratio, always computed (never pending); ``scale`` must be given."""
+    ``bw[0] == SPARSE``: a large system (above ``SPARSE_THRESHOLD`` unknowns) solved as the
+    Python path solves it, through the Jacobian's ``FixedPattern`` (the compiled sparse LU of
+    ``_jit_sparse`` in the pattern's minimum-degree ordering, the function the Python path
+    calls): ``bw = (SPARSE, nnz, capL, capU)``, ``band = (slot, cr, cc, pos, row_perm, perm,
+    head)`` (each nonzero value's CSC entry; each entry's row, column and position in ``B =
+    P Q A P^T``; the pattern's row and column orders; ``B``'s CSC structure). Its condition
+    estimate is the pivot ratio, always computed (never pending); ``scale`` must be given."""
     n = q0.size
     m = n
     nnz = jr.size
@@ -593,18 +691,21 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
     out_pos = np.empty(m + nnz)
     out_vel = np.empty(nnz + m)
     out_gam = np.empty(m)
-    banded = bw[0] >= 0
-    slot, cr, cc, pos, row_perm, perm = band
-    nd = 1 if banded else n          # the dense matrices are not used when banded
+    large = bw[0] == SPARSE          # (through the FixedPattern's sparse LU)
+    slot, cr, cc, pos, row_perm, perm, si0 = band
+    nd = 1 if large else n          # the dense matrices are not used when large
     J, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, r = _factor_work(m, n, nd)
-    if banded:
+    if large:
         S, W, seen = np.empty((1, 1)), np.empty((1, 1)), np.full(1, -1, dtype=np.int32)
     else:
         S, W, seen = _structure(jr, jc, n)
-    AB = np.zeros(n * bw[2] if banded else 1)
+    fsize, isize = big_sizes(bw, n)
+    AB = np.zeros(fsize)
+    SI = np.zeros(isize, dtype=np.int64)
+    for i in range(si0.size):
+        SI[i] = si0[i]
     data = np.empty(cr.size)
     tmp = np.empty(n)
-    bi = np.zeros(8, dtype=np.int32)
     F = np.empty(m)
     q = np.empty(n)
     g = np.empty(n)
@@ -613,7 +714,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
     sec = np.empty(n)
     rhs = np.empty(m)
     jv = np.empty(nnz)
-    unique = not banded and _unique(jr, jc, m, n)
+    unique = not large and _unique(jr, jc, m, n)
     nbody = 0
     for j in range(n):
         if body[j] + 1 > nbody:
@@ -633,10 +734,9 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
             x[1 + n + j] = 0.0
             r[j] = rprev[j]
         _eval_row(ptrs, 1, x, nin, out_vel)
-        if banded:
+        if large:
             _band_values(out_vel, 0, slot, data)
-            have_chord = _band_factor(blapack, data, cr, cc, pos, r, columns, AB, bw, ipiv,
-                                      bi) >= RCOND_WARN
+            have_chord = _sparse_factor(data, cr, cc, pos, r, columns, AB, bw, SI) >= RCOND_WARN
         else:
             if unique:
                 anorm = _fill_nz(out_vel, jr, jc, r, columns, B)
@@ -672,7 +772,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
             _assemble(jv, 0, jr, jc, J)
             scale[0], scale[1] = _scaling(J, g, trans, body, nbody, hint, columns)
             tol = ftol * (1.0 + scale[1])
-        if banded:
+        if large:
             _band_values(jv, 0, slot, data)
             _band_rows(data, cr, cc, columns, r)
         elif unique:
@@ -700,12 +800,10 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                     # one more step with the last factorisation, kept while within tol
                     # (the step is the chord step's below, written twice on purpose: a shared
                     # helper, inlined by Numba, made the sweep 7-9 % slower, measured)
-                    if banded and last_chord:
-                        _band_solve(blapack, AB, bw, ipiv, row_perm, perm, rprev, columns, F,
-                                    dq, tmp, bi, cbuf)
-                    elif banded:
-                        _band_solve(blapack, AB, bw, ipiv, row_perm, perm, r, columns, F, dq,
-                                    tmp, bi, cbuf)
+                    if large and last_chord:
+                        _sparse_solve_scaled(AB, bw, SI, row_perm, perm, rprev, columns, F, dq, tmp)
+                    elif large:
+                        _sparse_solve_scaled(AB, bw, SI, row_perm, perm, r, columns, F, dq, tmp)
                     elif last_chord:
                         _solve(lapack, B, ipiv, nz, rprev, columns, F, dq, ibuf, cbuf)
                     else:
@@ -734,9 +832,8 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                 break
             if chord:
                 # chord step with the previous point's factorisation (_position.solve_position)
-                if banded:
-                    _band_solve(blapack, AB, bw, ipiv, row_perm, perm, rprev, columns, F, dq,
-                                tmp, bi, cbuf)
+                if large:
+                    _sparse_solve_scaled(AB, bw, SI, row_perm, perm, rprev, columns, F, dq, tmp)
                 else:
                     _solve(lapack, B, ipiv, nz, rprev, columns, F, dq, ibuf, cbuf)
                 for j in range(n):
@@ -765,12 +862,11 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                 chord = False            # too slow: a Newton step from q with its own Jacobian
                 have_chord = False       # (B is overwritten)
             last_chord = False
-            if banded:
+            if large:
                 _band_values(jv, 0, slot, data)
-                if _band_factor(blapack, data, cr, cc, pos, r, columns, AB, bw, ipiv, bi) < 0:
+                if _sparse_factor(data, cr, cc, pos, r, columns, AB, bw, SI) < 0:
                     break
-                _band_solve(blapack, AB, bw, ipiv, row_perm, perm, r, columns, F, dq, tmp, bi,
-                            cbuf)
+                _sparse_solve_scaled(AB, bw, SI, row_perm, perm, r, columns, F, dq, tmp)
             else:
                 if stale:
                     _assemble(jv, 0, jr, jc, J)
@@ -800,7 +896,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                 q[j] = qn[j]
             for i in range(m):
                 F[i] = out_pos[i]
-            if banded:                            # (a Newton step: J is current)
+            if large:                            # (a Newton step: J is current)
                 for i in range(nnz):
                     jv[i] = out_pos[m + i]
             else:
@@ -817,9 +913,9 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
             for j in range(n):
                 x[1 + j] = q[j]
             _eval_row(ptrs, 1, x, nin, out_vel)
-            if banded:
+            if large:
                 _band_values(out_vel, 0, slot, data)
-                rc = _band_factor(blapack, data, cr, cc, pos, r, columns, AB, bw, ipiv, bi)
+                rc = _sparse_factor(data, cr, cc, pos, r, columns, AB, bw, SI)
             else:
                 if unique:   # (B straight from the values: assembling J first cost 4 %)
                     anorm = _fill_nz(out_vel, jr, jc, r, columns, B)
@@ -840,9 +936,8 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                 rprev[i] = r[i]
             for i in range(m):
                 rhs[i] = -out_vel[nnz + i]
-            if banded:
-                _band_solve(blapack, AB, bw, ipiv, row_perm, perm, r, columns, rhs, dq, tmp, bi,
-                            cbuf)
+            if large:
+                _sparse_solve_scaled(AB, bw, SI, row_perm, perm, r, columns, rhs, dq, tmp)
             else:
                 _solve(lapack, B, ipiv, nz, r, columns, rhs, dq, ibuf, cbuf)
             for j in range(n):
@@ -853,9 +948,8 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                 for j in range(n):
                     x[1 + n + j] = dq[j]
                 _eval_row(ptrs, 2, x, nin, out_gam)
-                if banded:
-                    _band_solve(blapack, AB, bw, ipiv, row_perm, perm, r, columns, out_gam, dq,
-                                tmp, bi, cbuf)
+                if large:
+                    _sparse_solve_scaled(AB, bw, SI, row_perm, perm, r, columns, out_gam, dq, tmp)
                 else:
                     _solve(lapack, B, ipiv, nz, r, columns, out_gam, dq, ibuf, cbuf)
                 for j in range(n):

@@ -20,13 +20,13 @@ Python path), in the same order:
   multipliers (friction), Newton with ``D (Phi_q^T - dQ/dlambda) R^-1`` from the previous
   point's multipliers.
 
-Above ``SPARSE_THRESHOLD`` unknowns (a banded Jacobian pattern) the Python path factorises
-``R^-1 Phi_q D`` itself through the Jacobian's ``FixedPattern`` and solves it transposed;
-so does this loop, with the same operations and SciPy's ``dgbtrf``/``dgbtrs``
-(``_jit_loop._band_factor``, ``_band_solve_t``). With friction, the Newton matrix goes
-through its own banded pattern (the Python path's ``_statics._newton_pattern``) and the
-residual ``Phi_q^T lambda - rhs`` is formed from the Jacobian's CSC values (the Python
-path: a dense ``Phi_q``; the same to rounding, and both stop on the same tolerance).
+Above ``SPARSE_THRESHOLD`` unknowns the Python path factorises ``R^-1 Phi_q D`` itself
+through the Jacobian's ``FixedPattern`` and solves it transposed; so does this loop, with
+the same operations: the sparse LU of ``_jit_sparse`` (``_jit_loop._sparse_factor``,
+``_sparse_solve_t_scaled``). With friction, the Newton matrix goes through its own
+pattern, when banded (the Python path's ``_statics._newton_pattern``), and the residual
+``Phi_q^T lambda - rhs`` is formed from the Jacobian's CSC values (the Python path: a dense
+``Phi_q``; the same to rounding, and both stop on the same tolerance).
 
 A point that the Python path would refuse (an exactly zero pivot, a reciprocal condition
 below ``RCOND_MIN``) or whose multipliers come out non-finite ends the loop there: the
@@ -41,11 +41,11 @@ import numpy as np
 from ._jit_cache import check as _check_cache
 from ._jit_lapack import leaf
 from ._jit_loop import (
+    SPARSE,
     _assemble,
     _band_factor,
     _band_rows,
     _band_solve,
-    _band_solve_t,
     _band_values,
     _eval_row,
     _factor_filled,
@@ -53,7 +53,10 @@ from ._jit_loop import (
     _norm1,
     _rows,
     _solve,
+    _sparse_factor,
+    _sparse_solve_t_scaled,
     _structure,
+    big_sizes,
 )
 
 _check_cache()   # stale cached loops go before anything here compiles (see _jit_cache)
@@ -130,11 +133,11 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
     out_pos = np.empty(m + nnz)
     out_dyn = np.empty(kM + 2 * n)
     out_d = np.empty(max(dr.size, 1))
-    banded = bw[0] >= 0
+    banded = bw[0] == SPARSE          # (through the FixedPattern's sparse LU)
     kbw = kband[0]
     if banded and newton and kbw[0] < 0:
         return 0                     # (not taken: _jit.multipliers sends these to Python)
-    slot, cr, cc, pos, row_perm, perm = band
+    slot, cr, cc, pos, row_perm, perm, si0 = band
     kpos, krow, kcol, krow_perm, kperm, sJT, sD = kband[1]
     Kd = np.empty(krow.size)
     AB2 = np.zeros(n * kbw[2] if banded and newton else 1)
@@ -151,7 +154,11 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
         S2, W2, seen2 = _structure(jc, jr, n)
         for e in range(dr.size):
             S2[dc[e], dr[e]] = 1.0
-    AB = np.zeros(n * bw[2] if banded else 1)
+    fsize, isize = big_sizes(bw, n)
+    AB = np.zeros(fsize)
+    SI = np.zeros(isize, dtype=np.int64)
+    for i in range(si0.size):
+        SI[i] = si0[i]
     data = np.empty(cr.size)
     tmp = np.empty(n)
     bi = np.zeros(8, dtype=np.int32)
@@ -174,7 +181,7 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
         if banded:
             _band_values(out_pos, m, slot, data)
             _band_rows(data, cr, cc, cols, r)
-            if _band_factor(blapack, data, cr, cc, pos, r, cols, AB, bw, ipiv, bi) < 0:
+            if _sparse_factor(data, cr, cc, pos, r, cols, AB, bw, SI) < 0:
                 return k
         else:
             _assemble(out_pos, m, jr, jc, J)
@@ -196,8 +203,7 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
             if not _loads(ptrs, xd, nin_d, out_dyn, mode, QDD, k, mr, mc, kM, n, Mq, rhs):
                 return k
             if banded:
-                _band_solve_t(blapack, AB, bw, ipiv, row_perm, perm, r, cols, rhs, lam, tmp, bi,
-                              cbuf)
+                _sparse_solve_t_scaled(AB, bw, SI, row_perm, perm, r, cols, rhs, lam, tmp)
             else:
                 for j in range(n):
                     rhs[j] = cols[j] * rhs[j]

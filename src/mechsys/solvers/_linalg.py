@@ -3,8 +3,9 @@ rank-revealing diagnosis of dependent equations.
 
 Small systems (``n <= SPARSE_THRESHOLD``) use dense LU with LAPACK's reciprocal condition
 estimate; larger ones sparse SuperLU, or, for matrices of one fixed pattern factorised again
-and again (free motion's augmented matrix), :class:`FixedPattern`: the pattern analysed once,
-banded LU for chains. A matrix whose reciprocal condition number falls
+and again (free motion's augmented matrix, a system's Jacobian), :class:`FixedPattern`: the
+pattern analysed once, banded LU for chains, a sparse LU in a minimum-degree ordering for
+trees. A matrix whose reciprocal condition number falls
 below ``RCOND_MIN`` is treated as singular and diagnosed with a pivoted QR of ``Phi_q^T``:
 its last ``m - rank`` pivots are the dependent equations.
 """
@@ -29,6 +30,11 @@ ARM_ROUNDOFF = 1e-9
 #: work, is at most this, else with SuperLU: the two cost the same near it (measured on
 #: chains, grids and trees: ``docs/decisions/0017-fixed-pattern-sparse-solve.md``)
 BAND_WORK = 8e6
+#: the same bound when the compiled sparse LU is there (``_jit_sparse``): it overtakes LAPACK's
+#: banded LU much earlier (free motion of radial engines, Python path: ``N (kl + ku)^2`` =
+#: 1.05e6, banded 29.5 ms, sparse 16.6 ms; chains, 8e4: banded 34 ms, sparse 37 ms;
+#: decision 0031)
+BAND_WORK_SPARSE = 2e5
 
 
 class Singular(Exception):
@@ -121,10 +127,21 @@ class FixedPattern:
 
         (P A P^T) (P x) = P b,    AB[kl + ku + i - j, j] = (P A P^T)_ij
 
-    Patterns with wide bands (trees with many branches; ``N (kl + ku)^2 > BAND_WORK``)
-    keep SuperLU, with the column
-    ordering of the first factorisation reused (``permc_spec="NATURAL"`` on the permuted
-    matrix): the ordering is not recomputed per evaluation.
+    Patterns with wide bands (trees with many branches; ``N (kl + ku)^2 > BAND_WORK``, or
+    ``BAND_WORK_SPARSE`` when the compiled sparse LU is available) take
+    a fill-reducing symmetric ordering instead (multiple minimum degree of ``Q A + (Q
+    A)^T``, :func:`_minimum_degree`; ``perm`` and ``row_perm`` are then that ordering's, and
+    ``kl``, ``ku`` still the reverse Cuthill-McKee band's) and a sparse LU of ``B = P Q A
+    P^T`` with threshold partial pivoting that keeps the diagonal while ``|b_kk| >=
+    PIVOT_TOL max_i |b_ik|``: the compiled Gilbert-Peierls LU of ``_jit_sparse`` when Numba
+    can be imported (the compiled loops call the same function, so both give the same
+    numbers), else SuperLU with the same ordering and pivoting rule. A tree eliminated leaves
+    first has no fill: the cost per factorisation is linear in the number of bodies whatever
+    the branching. ``B``'s CSC structure is ``s_indptr``, ``s_indices``, and ``_pos`` the
+    position in it of each stored value. ``sparse`` (a system's Jacobian): the sparse LU
+    whatever the band; the compiled one beats LAPACK's banded LU on chains too, and one
+    ordering for every installation keeps the pivot ratio (the condition estimate of large
+    sweeps, which depends on the ordering) the same with and without Numba (decision 0031).
 
     Singular matrices raise :class:`Singular` as :class:`Factor` does for sparse ones: an
     exact zero pivot, or a pivot ratio ``min |u_ii| / max |u_ii| <= RCOND_MIN`` (also for
@@ -137,7 +154,7 @@ class FixedPattern:
     """
 
     def __init__(self, indptr: np.ndarray, indices: np.ndarray, size: int,
-                 match_rows: bool = False):
+                 match_rows: bool = False, sparse: bool = False):
         self.indptr = np.asarray(indptr, dtype=np.int32)
         self.indices = np.asarray(indices, dtype=np.int32)
         self.size = N = int(size)
@@ -163,25 +180,44 @@ class FixedPattern:
         self.kl = kl = int((pr - pc).max(initial=0))
         self.ku = ku = int((pc - pr).max(initial=0))
         self.perm = perm
-        self.banded = N > 0 and N * (kl + ku) ** 2 <= BAND_WORK
+        limit = BAND_WORK if _sparse_lu() is None else min(BAND_WORK, BAND_WORK_SPARSE)
+        self.banded = N > 0 and N * (kl + ku) ** 2 <= limit and not sparse
         if self.banded:
             self._ld = 2 * kl + ku + 1
             # flat position in the Fortran-ordered (ld, N) band storage of each stored value
             self._pos = (kl + ku + pr - pc) + pc * self._ld
-        self._permc = None    # SuperLU: the column ordering found by the first factorisation
+        elif N:
+            # a wide band (trees): a fill-reducing symmetric ordering instead, sparse LU. Its
+            # diagonal pivots need a zero-free diagonal: rows matched to columns for every
+            # pattern (free motion's augmented matrix has a zero block, whose columns would
+            # otherwise pivot off the diagonal and fill: 7.7 nonzeros per entry on a chain)
+            if not match_rows:
+                got = maximum_bipartite_matching(pat, perm_type="row").astype(np.int64)
+                if (got >= 0).all():
+                    row_of = got
+                    pat_q = pat[row_of]
+                    qinv[row_of] = np.arange(N)
+            perm, fill = _minimum_degree(pat_q)
+            inv[perm] = np.arange(N)
+            pr, pc = inv[qinv[rows]], inv[cols]
+            self.perm, self.row_perm = perm, row_of[perm]
+            # P Q A P^T in CSC: each stored value's position in it (``_pos``), its structure
+            order = np.lexsort((pr, pc))
+            self._pos = np.empty(rows.size, dtype=np.int64)
+            self._pos[order] = np.arange(rows.size)
+            self.s_indptr = np.searchsorted(pc[order], np.arange(N + 1)).astype(np.int64)
+            self.s_indices = pr[order].astype(np.int64)
+            #: the sizes of L's and U's storage the next factorisation starts from: twice
+            #: the fill of diagonal pivots (more is rare; the storage grows when it happens)
+            self._cap = [2 * fill + N, 2 * fill + N]
 
     def factor(self, data: np.ndarray):
         """Factorise the matrix with these values (in the pattern's order)."""
         if self.banded:
             return _BandFactor(self, data)
-        A = sps.csc_matrix((data, self.indices, self.indptr), shape=(self.size, self.size))
-        if self._permc is None:
-            fac = Factor(A)
-            # SuperLU's perm_c[j] is the new position of column j: the columns in their
-            # factorisation order are its inverse
-            self._permc = np.argsort(fac._lu.perm_c)
-            return fac
-        return _PermutedFactor(A[:, self._permc], self._permc)
+        if _sparse_lu() is not None:
+            return _SparseFactor(self, data)
+        return _SuperFactor(self, data)
 
 
 def pattern_slots(rows, cols, size: int, r, c) -> np.ndarray:
@@ -239,29 +275,136 @@ class _BandFactor:
         return y
 
 
-class _PermutedFactor:
-    """SuperLU of ``A P_c`` with a fixed column ordering ``P_c``; ``solve(b)`` of ``A x = b``."""
-
-    def __init__(self, Ap, permc: np.ndarray):
-        try:
-            lu = spla.splu(Ap, permc_spec="NATURAL")
-        except RuntimeError as exc:  # "Factor is exactly singular"
-            raise Singular(str(exc)) from None
-        d = np.abs(lu.U.diagonal())
-        if not d.min() > RCOND_MIN * d.max():
-            raise Singular("tiny pivot")
-        self.rcond = float(d.min() / d.max())
-        self._lu, self._permc = lu, permc
+class _Permuted:
+    """``solve``/``solve_transposed`` of a factorisation of ``B = P Q A P^T`` (a
+    :class:`FixedPattern`'s ordering) by the subclass's ``_solve(b, trans)`` of ``B``."""
 
     def solve(self, b: np.ndarray) -> np.ndarray:
-        y = self._lu.solve(np.asarray(b, dtype=float))
+        pat = self._pat
+        y = self._solve(np.asarray(b, dtype=float)[pat.row_perm], False)
         x = np.empty_like(y)
-        x[self._permc] = y
+        x[pat.perm] = y
         return x
 
     def solve_transposed(self, b: np.ndarray) -> np.ndarray:
-        """``A^T y = b``: ``(A P_c)^T y = P_c^T b``."""
-        return self._lu.solve(np.asarray(b, dtype=float)[self._permc], trans="T")
+        """``A^T y = b`` from the same factors: ``B^T (P Q y) = P b``."""
+        pat = self._pat
+        z = self._solve(np.asarray(b, dtype=float)[pat.perm], True)
+        y = np.empty_like(z)
+        y[pat.row_perm] = z
+        return y
+
+    def _check(self, d: np.ndarray) -> None:
+        """The pivot ratio of ``U``'s diagonal ``d`` as :class:`_BandFactor` judges it."""
+        d = np.abs(d)
+        if not d.min() > RCOND_MIN * d.max():        # also NaN
+            raise Singular("tiny pivot")
+        self.rcond = float(d.min() / d.max())
+
+
+class _SparseFactor(_Permuted):
+    """The compiled sparse LU (``_jit_sparse``: left-looking, threshold partial pivoting
+    that keeps the diagonal while ``|b_kk| >= PIVOT_TOL max_i |b_ik|``) of ``B = P Q A P^T``
+    in the :class:`FixedPattern`'s minimum-degree ordering."""
+
+    def __init__(self, pat: FixedPattern, data: np.ndarray):
+        lu = _sparse_lu()
+        N = pat.size
+        Bx = np.zeros(pat.s_indices.size)
+        Bx[pat._pos] = data
+        Lp, Up = np.empty(N + 1, dtype=np.int64), np.empty(N + 1, dtype=np.int64)
+        pinv = np.empty(N, dtype=np.int64)
+        iw, xw = np.empty(lu.IWORK * N, dtype=np.int64), np.empty(N)
+        while True:
+            capL, capU = pat._cap
+            Li, Ui = np.empty(capL, dtype=np.int64), np.empty(capU, dtype=np.int64)
+            Lx, Ux = np.empty(capL), np.empty(capU)
+            info = lu.lu_factor(N, pat.s_indptr, pat.s_indices, Bx, PIVOT_TOL, Lp, Li, Lx, Up,
+                                Ui, Ux, pinv, iw, xw)
+            if info != -1:
+                break
+            pat._cap = [2 * capL, 2 * capU]            # fill beyond the storage: grow, again
+        if info > 0:
+            raise Singular("exact zero pivot")
+        if info < 0:
+            raise Singular("non-finite values")
+        self._f = (N, pinv, Lp, Li, Lx, Up, Ui, Ux)
+        self._pat = pat
+        #: entries of L (without its unit diagonal) and U
+        self.fill = int(Lp[N] + Up[N])
+        # the pivot ratio as the compiled loops take it (the same function)
+        self.rcond = float(lu.lu_pivot_ratio(N, Up, Ux))
+        if not self.rcond > RCOND_MIN:
+            raise Singular("tiny pivot")
+
+    def _solve(self, b: np.ndarray, trans: bool) -> np.ndarray:
+        lu = _sparse_lu()
+        x, w = np.empty_like(b), np.empty_like(b)
+        (lu.lu_solve_t if trans else lu.lu_solve)(*self._f, b, x, w)
+        return x
+
+
+class _SuperFactor(_Permuted):
+    """SuperLU of ``B = P Q A P^T`` (the :class:`FixedPattern`'s minimum-degree ordering,
+    kept: ``permc_spec="NATURAL"``) with the same threshold pivoting as :class:`_SparseFactor`:
+    the solve where Numba is missing."""
+
+    def __init__(self, pat: FixedPattern, data: np.ndarray):
+        N = pat.size
+        Bx = np.zeros(pat.s_indices.size)
+        Bx[pat._pos] = data
+        B = sps.csc_matrix((Bx, pat.s_indices, pat.s_indptr), shape=(N, N))
+        try:
+            self._lu = spla.splu(B, permc_spec="NATURAL", diag_pivot_thresh=PIVOT_TOL)
+        except RuntimeError as exc:  # "Factor is exactly singular"
+            raise Singular(str(exc)) from None
+        self._pat = pat
+        #: entries of L (without its unit diagonal) and U
+        self.fill = int(self._lu.L.nnz + self._lu.U.nnz - N)
+        self._check(self._lu.U.diagonal())
+
+    def _solve(self, b: np.ndarray, trans: bool) -> np.ndarray:
+        return self._lu.solve(b, trans="T" if trans else "N")
+
+
+#: threshold partial pivoting of the sparse LU: the fill-reducing order's diagonal entry is
+#: the pivot while ``|b_kk| >= PIVOT_TOL max_i |b_ik|`` (the fill the ordering planned)
+PIVOT_TOL = 0.1
+#: whether :class:`FixedPattern` may use the compiled sparse LU (tests switch it off to check
+#: the SuperLU fallback)
+COMPILED_LU = True
+_LU: dict = {}
+
+
+def _sparse_lu():
+    """The compiled sparse LU module (``_jit_sparse``) when Numba can be imported (and
+    :data:`COMPILED_LU`), else None."""
+    if not COMPILED_LU:
+        return None
+    if "mod" not in _LU:
+        try:
+            from . import _jit_sparse
+        except ImportError:
+            _jit_sparse = None
+        _LU["mod"] = _jit_sparse
+    return _LU["mod"]
+
+
+def _minimum_degree(pat) -> tuple[np.ndarray, int]:
+    """A fill-reducing symmetric ordering of the pattern ``pat + pat^T`` (``pat``: N x N
+    sparse): SuperLU's multiple minimum degree, postordered, as SuperLU computes it for
+    ``permc_spec="MMD_AT_PLUS_A"``. SciPy exposes that ordering only through a
+    factorisation, so a matrix of the pattern made strictly diagonally dominant is factorised
+    once (its diagonal pivots keep the order symmetric). Returns ``perm``: the rows and
+    columns in their new order, and the number of entries of the factors' triangles with the
+    diagonal pivots of that factorisation (the larger of ``L``'s and ``U``'s). For a tree the
+    elimination of its leaves first makes no fill, so the LU costs ``O(N)`` where the band of
+    a star of branches is as wide as the star."""
+    S = (abs(pat) + abs(pat).T).tocsc()
+    S.data[:] = 1.0
+    S = (S + sps.diags(np.asarray(S.sum(axis=0)).ravel() + 1.0)).tocsc()
+    lu = spla.splu(S, permc_spec="MMD_AT_PLUS_A")
+    return np.argsort(lu.perm_c).astype(np.int64), max(lu.L.nnz, lu.U.nnz)
 
 
 #: from this many rows on, :func:`dependent_rows` first tries the sparse certificate
