@@ -34,6 +34,36 @@ def machine() -> str:
             f"SciPy {scipy.__version__}, SymPy {sympy.__version__}, SymEngine {se}")
 
 
+def both_loops(run, rounds: int, clock=None) -> dict:
+    """``{mode: (median CPU time, result)}`` of ``run()`` with ``MECHSYS_JIT=0`` (the Python
+    path) and ``1`` (the compiled loops), over interleaved rounds after a warm-up run of each
+    (it compiles and fills the caches)."""
+    import statistics
+    import time
+
+    clock = clock or time.process_time
+    times = {"0": [], "1": []}
+    out = {}
+    for mode in ("0", "1"):
+        os.environ["MECHSYS_JIT"] = mode
+        run()
+    for _ in range(rounds):
+        for mode in ("0", "1"):
+            os.environ["MECHSYS_JIT"] = mode
+            t0 = clock()
+            out[mode] = run()
+            times[mode].append(clock() - t0)
+    os.environ.pop("MECHSYS_JIT", None)
+    return {mode: (statistics.median(times[mode]), out[mode]) for mode in times}
+
+
+def relative_difference(a, b) -> float:
+    """``max |a - b| / max(1, max |b|)``: two loops' results against each other."""
+    import numpy as np
+
+    return float(np.abs(a - b).max() / max(1.0, np.abs(b).max()))
+
+
 def write_block(path: Path, begin: str, end: str, text: str) -> None:
     """Put ``text`` (which starts with ``begin`` and ends with ``end``) into the page at
     ``path`` in place of the block between those markers, or at its end when the page has

@@ -24,18 +24,15 @@ import os
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")  # before NumPy loads: CPU time of one thread
 
-import statistics  # noqa: E402
 import sys  # noqa: E402
-import time  # noqa: E402
 import warnings  # noqa: E402
 
 import numpy as np  # noqa: E402
-from _machine import table_main  # noqa: E402  (sibling module: run as a script)
+from _machine import both_loops, relative_difference, table_main  # noqa: E402  (sibling module)
 
 import mechsys as ms  # noqa: E402
 from mechsys import models  # noqa: E402
 
-clock = time.process_time
 LINKS = (8, 32, 64, 128)
 LOOPS = (10, 30, 60)
 
@@ -59,27 +56,6 @@ def _loops(loops):
     return m
 
 
-def _timed(run, rounds):
-    """``{mode: (median CPU time, result)}`` over interleaved rounds of both loops."""
-    times = {"0": [], "1": []}
-    out = {}
-    for mode in ("0", "1"):                     # warm-up: compile, fill the caches
-        os.environ["MECHSYS_JIT"] = mode
-        run()
-    for _ in range(rounds):
-        for mode in ("0", "1"):
-            os.environ["MECHSYS_JIT"] = mode
-            t0 = clock()
-            out[mode] = run()
-            times[mode].append(clock() - t0)
-    os.environ.pop("MECHSYS_JIT", None)
-    return {mode: (statistics.median(times[mode]), out[mode]) for mode in times}
-
-
-def _difference(a, b) -> float:
-    return float(np.abs(a - b).max() / max(1.0, np.abs(b).max()))
-
-
 def tables(rounds: int = 3) -> str:
     warnings.simplefilter("ignore")
     out = ["Free motion of a chain with friction in every joint, 0.1 s, rtol 1e-6:", "",
@@ -88,13 +64,13 @@ def tables(rounds: int = 3) -> str:
            "| ---: | ---: | ---: | ---: | ---: | ---: |"]
     for links in LINKS:
         free = _chain(links)
-        got = _timed(lambda free=free: free.simulate((0.0, 0.1), rtol=1e-6, atol=1e-8), rounds)
+        got = both_loops(lambda free=free: free.simulate((0.0, 0.1), rtol=1e-6, atol=1e-8), rounds)
         (tp, py), (tc, jit) = got["0"], got["1"]
         ep, ec = tp / py.extra["evaluations"], tc / jit.extra["evaluations"]
         assert jit.extra["compiled_steps"] == jit.extra["steps"]
         out.append(f"| {links} | {free.system.n + free.system.m} | {ep * 1e6:.0f} µs | "
                    f"{ec * 1e6:.0f} µs | {ep / ec:.1f} | "
-                   f"{_difference(jit.q[-1], py.q[-1]):.1e} |")
+                   f"{relative_difference(jit.q[-1], py.q[-1]):.1e} |")
     out += ["", "Inverse dynamics of the four-bar chain with friction in its ground pivots, "
             "40 points (sweep included):", "",
             "| loops | coordinates | Python / point | compiled / point | ratio | "
@@ -103,11 +79,11 @@ def tables(rounds: int = 3) -> str:
     t = np.linspace(0.1, 1.0, 40)
     for loops in LOOPS:
         m = _loops(loops)
-        got = _timed(lambda m=m: m.solve(t, solution="dynamic"), rounds)
+        got = both_loops(lambda m=m: m.solve(t, solution="dynamic"), rounds)
         (tp, py), (tc, jit) = got["0"], got["1"]
         out.append(f"| {loops} | {py.system.n} | {tp / len(t) * 1e3:.2f} ms | "
                    f"{tc / len(t) * 1e3:.2f} ms | {tp / tc:.0f} | "
-                   f"{_difference(jit.lam, py.lam):.1e} |")
+                   f"{relative_difference(jit.lam, py.lam):.1e} |")
     return "\n".join(out)
 
 

@@ -229,10 +229,8 @@ def test_wide_free_system_solves_through_the_sparse_lu(monkeypatch):
     """A radial engine coasting under gravity (its driver dropped; every rod on the crank pin,
     so the augmented matrix's band is as wide as the engine): the pattern takes the sparse LU
     (rows matched to columns first: the multipliers' zero block then pivots on the diagonal
-    with little fill), which gives the dense path's accelerations and multipliers; the
-    compiled loop leaves this band to it (``BLOCK_WORK``), and the motion conserves energy."""
-    from mechsys.solvers import _jit_free
-
+    with little fill), which gives the dense path's accelerations and multipliers, and the
+    motion conserves energy."""
     m = models.radial_engine(20, g=9.81)
     m.solve(0.0)
     free = m.free(drop=["drive"])
@@ -249,10 +247,8 @@ def test_wide_free_system_solves_through_the_sparse_lu(monkeypatch):
     np.testing.assert_allclose(sp_qdd, de_qdd, rtol=0, atol=1e-10 * np.abs(de_qdd).max())
     np.testing.assert_allclose(sp_lam, de_lam, rtol=0, atol=1e-10 * np.abs(de_lam).max())
     monkeypatch.undo()
-    if _jit_free._jit.available():
-        monkeypatch.setenv("MECHSYS_JIT", "1")
+    monkeypatch.setenv("MECHSYS_JIT", "0")
     run = free.simulate((0.0, 0.3), initial_condition={"crank.th_d": 3.0}, method="DOP853",
                         rtol=1e-10, atol=1e-12)
-    assert run.extra["compiled_steps"] == 0
     energy = run.body_energy() + run.potential_energy()
     assert np.abs(energy - energy[0]).max() < 1e-7 * np.abs(energy[0])

@@ -27,7 +27,9 @@ Ctrl-C is honoured.
 When it runs (``MECHSYS_JIT``, as for the kinematic sweep): ``0`` never; ``1`` or unset
 whenever possible. Possible means: Numba installed (the ``fast`` extra); DOP853, RK45 or
 one of Mech's Adams methods; a dense augmented system (``n + m <= SPARSE_THRESHOLD``) or the block
-path (above it, while its band is narrow enough: :data:`BLOCK_WORK`); every kernel
+path (above it, while its band is narrow enough: :data:`BLOCK_WORK`), or above it the
+augmented matrix's pattern by the compiled sparse LU when that pattern is not banded
+(``"sparse"``: trees of many branches); every kernel
 SymEngine LLVM code (CSE kernels included: their repeated outputs are expanded in the
 loop). Loads that depend on the multipliers (friction) or accelerations
 (added mass) take ``free_acceleration``'s Newton in the loop (``"newton"``, decision 0028).
@@ -36,8 +38,8 @@ the joint kernels, the articulated-body recursion (a tree of Gen joints, no cons
 equation) or the composite-body mass matrix in the augmented system, at any size. Loading
 Numba and the cached machine code costs about 0.7 s CPU once per process.
 ``sol.extra["compiled_steps"]`` tells how many steps ran compiled and
-``sol.extra["compiled_solver"]`` how (``"augmented"``, ``"block"``, ``"recursive"``,
-``"recursive+augmented"``, ``"path"``, ``"newton"``).
+``sol.extra["compiled_solver"]`` how (``"augmented"``, ``"block"``, ``"sparse"``,
+``"recursive"``, ``"recursive+augmented"``, ``"path"``, ``"newton"``).
 
 Nonholonomic paths (:class:`~mechsys.analyses._path.PathSystem`, Mech's ``SolvePath``) run
 in the same loops (:meth:`FreeStepper.plan_path`, decision 0027): the state is ``q``, its
@@ -54,10 +56,10 @@ from . import _jit
 from ._linalg import SPARSE_THRESHOLD
 
 #: above ``SPARSE_THRESHOLD`` unknowns the block path runs while its banded Cholesky's work
-#: ``m bw^2`` is at most this; a wider band (a star of branches on one body) goes to the Python
-#: path, whose sparse LU of the augmented matrix is compiled and costs less there (radial
-#: engines: ``m bw^2`` = 0.56e6, 17.8 ms compiled, 16.6 ms Python; 1.7e6: 43.6 ms, 21.5 ms;
-#: 5.7e6: 141 ms, 40 ms; decision 0031)
+#: ``m bw^2`` is at most this (else the Python path). Systems whose augmented matrix is not
+#: banded (``FixedPattern.banded``: trees of many branches) take the sparse kind before that
+#: (radial engines, 3 s: 14 cylinders, ``m bw^2`` = 0.56e6, block path 90 ms, sparse 25 ms;
+#: decision 0031)
 BLOCK_WORK = 1e6
 
 #: augmented systems with more unknowns take the block path when the mass matrix allows it
@@ -287,6 +289,49 @@ def _workspace(stepper, system):
     return ws
 
 
+def _sparse_structure(system, fk):
+    """The structure of ``_jit_free_loop._accel_sparse`` (see there) for a large system whose
+    augmented matrix the Python path factorises by the compiled sparse LU (its
+    ``FixedPattern`` is not banded), or None: a banded pattern, a mass matrix without a
+    diagonal entry for every coordinate (the projection's ``[[I, J^T], [J^, 0]]`` puts its
+    ones there), or a Jacobian with a repeated entry. The arrays that never change are made
+    once per pattern; the sparse LU's integer storage (the last but one) anew per stepper."""
+    from ._jit_sparse import IWORK
+
+    pat = fk.pattern
+    n, m = system.n, system.m
+    N = n + m
+    if pat.banded or not hasattr(pat, "s_indptr"):
+        return None
+    got = getattr(pat, "_jit_free_sparse", None)
+    if got is None:
+        jr, jc = np.asarray(system.jac_rows), np.asarray(system.jac_cols)
+        dyn = system.dynamics
+        Mr, Mc = np.asarray(dyn.M_rows), np.asarray(dyn.M_cols)
+        diag = np.unique(Mr[Mr == Mc])
+        if diag.size != n or np.unique(jr * max(n, 1) + jc).size != jr.size:
+            got = ()
+        else:
+            # each stored entry's place in B = P Q K P^T, and the diagonal's (the mass
+            # matrix's own entries: the first k_M kernel values)
+            rows = np.asarray(fk._indices, dtype=np.int64)
+            cols = np.repeat(np.arange(N), np.diff(fk._indptr))
+            on_diag = (rows == cols) & (fk._perm < fk.k_M)
+            dpos = np.empty(n, dtype=np.int64)
+            dpos[rows[on_diag]] = pat._pos[on_diag]
+            info = np.array([N, rows.size, pat.s_indices.size, fk.k_M, fk.k_J], dtype=np.int64)
+            got = (info, pat._pos.astype(np.int64), np.asarray(fk._perm, dtype=np.int64),
+                   pat.s_indptr, pat.s_indices,
+                   np.concatenate([pat.row_perm, pat.perm]).astype(np.int64), dpos)
+        pat._jit_free_sparse = got
+    if not got:
+        return None
+    capL, capU = pat._cap
+    info = np.concatenate([got[0], [capL, capU]])
+    work = np.zeros(2 * (N + 1) + (IWORK + 1) * N + capL + capU, dtype=np.int64)
+    return (info, *got[1:], work, np.zeros((1, 5), dtype=np.int64))
+
+
 def _newton_band(system):
     """The structure array of ``_jit_free_loop._newton_accel_band`` (see there): the Newton
     matrix's ``FixedPattern`` (``solvers._free._newton_pattern``, the Python path's) and where
@@ -366,8 +411,8 @@ class FreeStepper:
 
     def __init__(self, system, p, scaling, rows0, robust, correction, t_eval, kernels, fk,
                  blocks=None, expand=(_NO_EXPAND,) * 3, gen=None, path=None, newton=None,
-                 newton_tol=1e-10):
-        from ._jit_free_loop import AUGMENTED, BLOCK, GEN_AUGMENTED, GEN_TREE, NEWTON, PATH
+                 newton_tol=1e-10, sparse=None):
+        from ._jit_free_loop import AUGMENTED, BLOCK, GEN_AUGMENTED, GEN_TREE, NEWTON, PATH, SPARSE
 
         kern, fpos, fvel = kernels
         n, m = system.n, system.m
@@ -381,9 +426,12 @@ class FreeStepper:
         #: the block-diagonal mass matrix, banded), "augmented" (the whole system, dense),
         #: "recursive" (Gen joints: the articulated-body recursion) or "recursive+augmented"
         #: (Gen joints with constraint equations: the composite-body mass matrix in the
-        #: augmented system)
+        #: augmented system), "sparse" (the augmented system by the compiled sparse LU of its
+        #: fixed pattern: trees whose band is wide)
         if path is not None:
             self.mode, self.solver = PATH, "path"
+        elif sparse is not None:
+            self.mode, self.solver = SPARSE, "sparse"
         elif newton is not None:
             self.mode, self.solver = NEWTON, "newton"
         elif gen is not None:
@@ -403,6 +451,9 @@ class FreeStepper:
         elif newton is not None:
             self.flat_t = self.mp = np.zeros(0, dtype=np.int64)
             blk, self.bw = newton, 0
+        elif sparse is not None:
+            self.flat_t = self.mp = np.zeros(0, dtype=np.int64)
+            blk, self.bw = sparse, 0
         elif blocks is None and gen is None:
             flat = np.asarray(fk._flat, dtype=np.int64)
             self.flat_t = (flat % N) * N + flat // N      # K^T in C order = K in Fortran order
@@ -464,7 +515,7 @@ class FreeStepper:
         if dyn.depends_on_lambda or dyn.depends_on_qdd:
             return cls._plan_newton(system, p, scaling, correction, t_eval, newton)
         N = system.n + system.m
-        blocks = gen = None
+        blocks = gen = sparse = None
         if getattr(dyn, "recursive", False):
             # generalized coordinates, recursive dynamics (decision 0018): the joint kernels
             # and the kernel of the rest, the recursion in the loop (dense at any size, as
@@ -472,13 +523,19 @@ class FreeStepper:
             fk = None
             entries = [_entry(dyn._main)]
         else:
-            if N > SMALL:
+            # the kernel the Python path uses (sparse above the threshold): compiled once
+            fk = dyn.free_kernel(N > SPARSE_THRESHOLD)
+            if N > SPARSE_THRESHOLD and not fk.pattern.banded:
+                # a wide band (a tree of many branches): the Python path's pattern and its
+                # sparse LU, in the loop
+                sparse = _sparse_structure(system, fk)
+                if sparse is None:
+                    return None
+            elif N > SMALL:
                 blocks = _Blocks.of(system, p, start)
                 if N > SPARSE_THRESHOLD and (
                         blocks is None or system.m * blocks.bandwidth**2 > BLOCK_WORK):
                     return None
-            # the kernel the Python path uses (sparse above the threshold): compiled once
-            fk = dyn.free_kernel(N > SPARSE_THRESHOLD)
             entries = [_entry(fk.f)]
         entries += _constraint_entries(system, system.f_position, system.f_velocity)
         if any(e is None for e in entries):
@@ -489,7 +546,7 @@ class FreeStepper:
             if gen is None:
                 return None
         return cls(system, p, scaling, rows0, robust, correction, t_eval, rows, fk, blocks,
-                   [e[1] for e in entries], gen)
+                   [e[1] for e in entries], gen, sparse=sparse)
 
     @classmethod
     def _plan_newton(cls, system, p, scaling, correction, t_eval, newton):

@@ -46,10 +46,11 @@ from ._jit_loop import SMALL as SMALL_LU
 from ._jit_loop import _assemble, _ccall, _eval, _norm1, _rows, _rows_nz
 from ._jit_loop import _band_factor as _gb_factor
 from ._jit_loop import _band_solve as _gb_solve
+from ._jit_sparse import IWORK, lu_factor, lu_pivot_ratio, lu_solve
 from ._jit_tree import articulated as _articulated
 from ._jit_tree import assemble as _gen_assemble
 from ._jit_tree import forward as _gen_forward
-from ._linalg import RCOND_MIN
+from ._linalg import PIVOT_TOL, RCOND_MIN
 from ._rank import ZONE
 
 _check_cache()   # stale cached loops go before anything here compiles (see _jit_cache)
@@ -68,6 +69,10 @@ PATH = 4
 #: loads that depend on the multipliers (friction) or on the accelerations (added masses):
 #: ``solvers._free.free_acceleration``'s Newton on ``(qdd, lambda)`` (``_newton_accel``)
 NEWTON = 5
+#: a large system whose augmented matrix has a wide band (a tree of many branches): the
+#: Python path's ``FixedPattern`` of it, factorised by the compiled sparse LU it calls
+#: (``_accel_sparse``), the projection through the same pattern (``_min_norm_sparse``)
+SPARSE = 6
 
 #: augmented systems up to this size are solved by the loop's own elimination (``_lu_solve``);
 #: larger ones by LAPACK ``dgesv``, whose call overhead no longer matters there
@@ -158,26 +163,33 @@ def _solve_augmented(lapack, KT, rv, r0, jv, j0, n, m, jr, jc, rows0, columns, r
         qdd[j] = b[j]
     for i in range(m):
         lam[i] = b[n + i]
-    if robust and m > 0:
-        # zone_guard's cheap test: multipliers large against the constraint forces they
-        # make (J^T lam, from the Jacobian values of the kernel) mean a singular instant near
-        bl = 0.0
-        for i in range(m):
-            v = abs(rows0[i] * lam[i])
-            if v > bl:
-                bl = v
-        if bl != 0.0:
-            force[:] = 0.0
-            for k in range(jr.size):
-                force[jc[k]] += jv[j0 + k] * lam[jr[k]]
-            fmax = 0.0
-            for j in range(n):
-                v = abs(columns[j] * force[j])
-                if v > fmax:
-                    fmax = v
-            if not (bl < fmax / ZONE and np.isfinite(bl)):
-                return False
-    return True
+    return not robust or _zone_ok(rows0, lam, jv, j0, jr, jc, columns, force)
+
+
+@leaf
+def _zone_ok(rows0, lam, jv, j0, jr, jc, columns, force):
+    """zone_guard's cheap test: multipliers large against the constraint forces they make
+    (``J^T lam``, from the Jacobian values ``jv[j0:]`` of the kernel) mean a singular instant
+    near. False: hand over."""
+    m = lam.size
+    if m == 0:
+        return True
+    bl = 0.0
+    for i in range(m):
+        v = abs(rows0[i] * lam[i])
+        if v > bl:
+            bl = v
+    if bl == 0.0:
+        return True
+    force[:] = 0.0
+    for k in range(jr.size):
+        force[jc[k]] += jv[j0 + k] * lam[jr[k]]
+    fmax = 0.0
+    for j in range(columns.size):
+        v = abs(columns[j] * force[j])
+        if v > fmax:
+            fmax = v
+    return bl < fmax / ZONE and np.isfinite(bl)
 
 
 @nb.njit(cache=True, inline='always')
@@ -193,7 +205,7 @@ def _rhs(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, 
         # them as fast as before the two kinds existed)
         return _other_rhs(blocks, kp, lapack, ibuf, x, nin, out, KT, n, m, jr, jc, columns,
                           ipiv, rhs, b,
-                          qdd, lam, blk_i, blk_w, t, y, f)
+                          qdd, lam, blk_i, blk_w, t, y, f, rows0, robust, force)
     x[0] = t
     for j in range(2 * n):
         x[1 + j] = y[j]
@@ -220,13 +232,17 @@ def _rhs(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, 
 
 @leaf
 def _other_rhs(blocks, kp, lapack, ibuf, x, nin, out, KT, n, m, jr, jc, columns, ipiv, rhs, b,
-               qdd, lam, blk_i, blk_w, t, y, f):
-    """``_rhs`` of the kinds ``PATH`` (``f = qd``) and ``NEWTON`` (``f = (qd, qdd)``; above
-    ``SMALL_LU`` unknowns through the Newton matrix's banded pattern, ``_newton_accel_band``)."""
+               qdd, lam, blk_i, blk_w, t, y, f, rows0, robust, force):
+    """``_rhs`` of the kinds ``PATH`` (``f = qd``), ``SPARSE`` and ``NEWTON`` (``f = (qd,
+    qdd)``; above ``SMALL_LU`` unknowns through the Newton matrix's banded pattern,
+    ``_newton_accel_band``)."""
     if blocks == PATH:
         return _path_velocity(kp, x, out, KT, n, m, jr, jc, columns, ipiv, rhs, b, qdd,
                               blk_i[0][0], blk_w[0], blk_i[2][0], blk_w[2][0], blk_i[2][2],
                               blk_w[2][2], t, y, f)
+    if blocks == SPARSE:
+        return _accel_sparse(kp, x, nin, out, n, m, jr, jc, rows0, columns, robust, qdd, lam,
+                             force, blk_i[0], blk_w[0], blk_i[2][0], blk_w[2][0], t, y, f)
     bi = blk_i[0]
     if bi[7].size > 1:
         return _newton_accel_band(kp, lapack, ibuf, x, nin, out, n, m, jr, jc, ipiv, qdd, lam,
@@ -631,6 +647,134 @@ def _newton_accel_band(kp, lapack, bi, x, nin, out, n, m, jr, jc, ipiv, qdd, lam
     return False
 
 
+# -- the sparse kind: the augmented matrix by the compiled sparse LU of its fixed pattern ----
+#
+# ``bi = (info, pos, kperm, Bp, Bi, perms, dpos, LUi, -)``: ``info = [N, nK, nB, k_M, k_J,
+# capL, capU]``; stored entry ``s`` of the free kernel's CSC matrix holds kernel value
+# ``kperm[s]`` (``FreeKernel._perm``) and goes to ``Bx[pos[s]]`` of ``B = P Q K P^T``
+# (``FixedPattern._pos``), whose CSC structure is ``Bp``, ``Bi``; ``perms = [row_perm,
+# perm]``; ``dpos`` (n,) the diagonal's places in ``Bx`` (the projection puts its ones there);
+# ``LUi`` the sparse LU's integer storage ``[Lp | Up | pinv | iw | Li | Ui]`` (the stepper's
+# own). ``bw = (Bx, Lx, Ux, -, xw, sol, wv, tmp)``.
+
+
+@leaf
+def _slu_factor(bi, bw):
+    """``lu_factor`` of ``Bx`` (``_linalg._SparseFactor``: the same function and tolerance);
+    returns the pivot ratio, or -1 (a status, storage too small, or a ratio not above
+    ``RCOND_MIN``: the Python path raises ``Singular`` or grows the storage)."""
+    info = bi[0]
+    N, nB, capL, capU = info[0], info[2], info[5], info[6]
+    LUi = bi[7]
+    o = 2 * (N + 1) + (IWORK + 1) * N
+    st = lu_factor(N, bi[3], bi[4], bw[0][:nB], PIVOT_TOL, LUi[:N + 1], LUi[o:o + capL],
+                   bw[1], LUi[N + 1:2 * N + 2], LUi[o + capL:o + capL + capU], bw[2],
+                   LUi[2 * N + 2:3 * N + 2], LUi[3 * N + 2:o], bw[4])
+    if st != 0:
+        return -1.0
+    ratio = lu_pivot_ratio(N, LUi[N + 1:2 * N + 2], bw[2])
+    return ratio if ratio > RCOND_MIN else -1.0
+
+
+@leaf
+def _slu_solve(bi, bw, rhs, x):
+    """``K x = rhs`` with :func:`_slu_factor`'s factors (``_linalg._Permuted.solve``):
+    ``rhs`` in the pattern's row order, the sparse solve, back in the unknowns' order."""
+    info = bi[0]
+    N, capL, capU = info[0], info[5], info[6]
+    LUi, perms = bi[7], bi[5]
+    o = 2 * (N + 1) + (IWORK + 1) * N
+    sol, wv, tmp = bw[5], bw[6], bw[7]
+    for i in range(N):
+        tmp[i] = rhs[perms[i]]
+    lu_solve(N, LUi[2 * N + 2:3 * N + 2], LUi[:N + 1], LUi[o:o + capL], bw[1],
+             LUi[N + 1:2 * N + 2], LUi[o + capL:o + capL + capU], bw[2], tmp, sol, wv)
+    for i in range(N):
+        x[perms[N + i]] = sol[i]
+
+
+@leaf
+def _accel_sparse(kp, x, nin, out, n, m, jr, jc, rows0, columns, robust, qdd, lam, force, bi,
+                  bw, ex, ph, t, y, f):
+    """``f = (qd, qdd)`` at ``(t, y)`` by the sparse kind (``_free.free_acceleration`` for a
+    large system: the kernel's CSC values into ``B``, its sparse LU, the solve); False: hand
+    over (a singular or non-finite system, an answer the Python path would refuse, or,
+    ``robust``, the zone guard's test of ``_solve_augmented``)."""
+    info = bi[0]
+    N, nK, nB, kM, kJ = info[0], info[1], info[2], info[3], info[4]
+    pos, kperm = bi[1], bi[2]
+    kk = kM + kJ
+    x[0] = t
+    for j in range(2 * n):
+        x[1 + j] = y[j]
+    _evalx(kp, x, nin, out, ex, ph)
+    Bx = bw[0]
+    for i in range(nB):
+        Bx[i] = 0.0
+    for s in range(nK):
+        Bx[pos[s]] += out[kperm[s]]
+    if _slu_factor(bi, bw) < 0:
+        return False
+    big_rhs = 0.0
+    for i in range(N):
+        v = abs(out[kk + i])
+        if not v <= big_rhs:
+            big_rhs = v
+    sol = bw[4]                       # (the factorisation's work vector, free again)
+    _slu_solve(bi, bw, out[kk:kk + N], sol)
+    big = 0.0
+    for i in range(N):
+        v = abs(sol[i])
+        if not v <= big:              # NaN too
+            big = v
+    if not big < 1e15 * (1.0 + big_rhs):
+        return False
+    for j in range(n):
+        qdd[j] = sol[j]
+        f[j] = y[n + j]
+        f[n + j] = sol[j]
+    for i in range(m):
+        lam[i] = sol[n + i]
+    return not robust or _zone_ok(rows0, lam, out, kM, jr, jc, columns, force)
+
+
+@leaf
+def _min_norm_sparse(r, columns, bvec, out, n, m, jr, jc, jv, bi, bw, robust):
+    """``_min_norm`` through the augmented matrix's pattern: the smallest ``z`` (``out = D
+    z``) with ``J^ z = bvec``, ``J^ = R^-1 J D`` (``jv`` the Jacobian's values, each entry
+    once), from ``[[I, J^T], [J^, 0]] [z; -nu] = [0; bvec]`` (its entries are among the
+    pattern's: the mass matrix's diagonal, ``Phi_q``, ``Phi_q^T``). False (hand over) at a
+    pivot ratio below ``RCOND_MIN``, or, ``robust``, below ``ZONE^2``: the Python path's test
+    (``_free._min_norm``: the pivot ratio of ``J^ J^T`` below ``ZONE^2``), on this matrix's
+    pivots, which are the identity's, the Jacobian's and the Schur complements' of ``J^
+    J^T``: it hands over before the zone of a singular Jacobian."""
+    info = bi[0]
+    nK, nB, kM, kJ = info[1], info[2], info[3], info[4]
+    pos, kperm, dpos = bi[1], bi[2], bi[6]
+    Bx = bw[0]
+    for i in range(nB):
+        Bx[i] = 0.0
+    for s in range(nK):
+        k = kperm[s] - kM
+        if k >= 0 and k < kJ:
+            Bx[pos[s]] += (jv[k] * columns[jc[k]]) / r[jr[k]]
+    for j in range(n):
+        Bx[dpos[j]] += 1.0
+    ratio = _slu_factor(bi, bw)
+    if ratio < 0 or (robust and ratio < ZONE * ZONE):
+        return False
+    rhs = bw[4]
+    for j in range(n):
+        rhs[j] = 0.0
+    for i in range(m):
+        rhs[n + i] = bvec[i]
+    sol = bw[3][0]
+    _slu_solve(bi, bw, rhs, sol)
+    for j in range(n):
+        out[j] = columns[j] * sol[j]
+    return True
+
+
 @leaf
 def _path_velocity(kp, x, out, KT, n, m, jr, jc, columns, ipiv, w1, w2, last, info, pw, ex_psi,
                    ph_psi, ex_vel, ph_vel, t, q, f):
@@ -842,6 +986,10 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
         return _project_blocks(pp, pv, xk, nin_k, out_pos, out_vel, jr, jc, columns, offset,
                                tol, maxit, robust, n, m, t, y, r, Fs, dq, blk_i[0], blk_w[0][5],
                                blk_w[0][3], ex, ph)
+    if blocks == SPARSE:
+        return _project_sparse(pp, pv, xk, nin_k, out_pos, out_vel, jr, jc, columns, offset,
+                               tol, maxit, robust, n, m, t, y, r, Fs, dq, blk_i[0], blk_w[0],
+                               ex, ph)
     # a large NEWTON system: the Jacobian by its distinct nonzeros, the minimum-norm
     # correction through the Newton matrix's banded pattern (_min_norm_band)
     band = blocks == NEWTON and blk_i[0][7].size > 1
@@ -909,6 +1057,55 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
         if not _min_norm(lapack, J, r, columns, Fs, dq, Js, A, ipiv, ibuf, cbuf, dbuf, work,
                          iwork, ybuf, robust):
             return False
+    for j in range(n):
+        y[n + j] = y[n + j] - dq[j]
+    for j in range(2 * n):
+        if not np.isfinite(y[j]):
+            return False
+    return True
+
+
+@leaf
+def _project_sparse(pp, pv, xk, nin_k, out_pos, out_vel, jr, jc, columns, offset, tol, maxit,
+                    robust, n, m, t, y, r, Fs, dq, bi, bw, ex, ph):
+    """``_project`` of the sparse kind: the positions by minimum-norm Newton corrections, then
+    the velocities, each through ``_min_norm_sparse`` (the Jacobian's values straight from
+    the kernels: each entry once)."""
+    nnz = jr.size
+    xk[0] = t
+    for j in range(n):
+        xk[1 + n + j] = 0.0
+    lim = tol * (1.0 + offset)
+    for _ in range(maxit):
+        for j in range(n):
+            xk[1 + j] = y[j]
+        _evalx(pp, xk, nin_k, out_pos, ex[1], ph[1])
+        _rows_nz(out_pos[m:m + nnz], jr, jc, columns, r)
+        big = 0.0
+        for i in range(m):
+            Fs[i] = out_pos[i] / r[i]
+            v = abs(Fs[i])
+            if not v <= big:
+                big = v
+        if big <= lim:
+            break
+        if not _min_norm_sparse(r, columns, Fs, dq, n, m, jr, jc, out_pos[m:m + nnz], bi, bw,
+                                robust):
+            return False
+        for j in range(n):
+            y[j] -= dq[j]
+    for j in range(n):
+        xk[1 + j] = y[j]
+    _evalx(pv, xk, nin_k, out_vel, ex[2], ph[2])
+    _rows_nz(out_vel[:nnz], jr, jc, columns, r)
+    for i in range(m):
+        Fs[i] = 0.0
+    for k in range(nnz):
+        Fs[jr[k]] += out_vel[k] * y[n + jc[k]]
+    for i in range(m):
+        Fs[i] = (Fs[i] - (-out_vel[nnz + i])) / r[i]
+    if not _min_norm_sparse(r, columns, Fs, dq, n, m, jr, jc, out_vel[:nnz], bi, bw, robust):
+        return False
     for j in range(n):
         y[n + j] = y[n + j] - dq[j]
     for j in range(2 * n):
@@ -1414,7 +1611,7 @@ def workspace(kp, n, m, npar, kk, nnz, blocks, blk_i, bw):
     NN = n + m
     # the dense matrix: the augmented system, a path's velocity system (n x n), else unused
     side = NN if blocks == AUGMENTED or blocks == NEWTON else (n if blocks == PATH else 1)
-    banded = blocks == NEWTON and blk_i[0][7].size > 1
+    banded = (blocks == NEWTON and blk_i[0][7].size > 1) or blocks == SPARSE
     if banded:
         side = 1                      # (the Newton matrix and projections by its pattern)
     KTf = np.empty(side * side)
@@ -1452,6 +1649,11 @@ def _block_work(blocks, blk_i, n, m, bw, nnz):
         bw_ = (np.zeros(1 + 2 * n + info[5] + pieces), np.zeros(m + nnz), np.zeros(m),
                J, np.zeros(max(info[3], 1)), np.zeros(max(info[4], 1)),
                np.zeros(2 * n + m), np.zeros(1 + n + m))
+    elif blocks == SPARSE:
+        info = blk_i[0][0]
+        N = info[0]
+        bw_ = (np.zeros(info[2]), np.zeros(info[5]), np.zeros(info[6]), np.zeros((1, N)),
+               np.zeros(N), np.zeros(N), np.zeros(N), np.zeros(N))
     elif blocks == BLOCK:
         boff, roff, bsize = blk_i[0][1], blk_i[0][4], blk_i[0][6]
         big = bsize.max() if bsize.size else 1
@@ -1778,20 +1980,7 @@ def _accel_blocks(kp, x, nin, out, kk, kM, n, m, jr, jc, rows0, columns, robust,
             big = v
     if not big < 1e15 * (1.0 + big_rhs):
         return False
-    if robust and m > 0:
-        bl = 0.0
-        for i in range(m):
-            bl = max(bl, abs(rows0[i] * lam[i]))
-        if bl != 0.0:
-            force[:] = 0.0
-            for k in range(jr.size):
-                force[jc[k]] += out[kM + k] * lam[jr[k]]
-            fmax = 0.0
-            for j in range(n):
-                fmax = max(fmax, abs(columns[j] * force[j]))
-            if not (bl < fmax / ZONE and np.isfinite(bl)):
-                return False
-    return True
+    return not robust or _zone_ok(rows0, lam, out, kM, jr, jc, columns, force)
 
 
 @leaf
