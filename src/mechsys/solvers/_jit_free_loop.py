@@ -152,17 +152,25 @@ def _solve_augmented(lapack, KT, rv, r0, jv, j0, n, m, jr, jc, rows0, columns, r
         _ccall(lapack[3], (ibuf[0:1], ibuf[1:2], KT, ibuf[2:3], ipiv, b, ibuf[2:3], ibuf[3:4]))
         if ibuf[3] != 0:
             return False
+    return _accepted(b, big_rhs, n, m, qdd, lam, robust, rows0, jv, j0, jr, jc, columns, force)
+
+
+@nb.njit(cache=True, inline='always')
+def _accepted(x, big_rhs, n, m, qdd, lam, robust, rows0, jv, j0, jr, jc, columns, force):
+    """The augmented system's solution ``x = [qdd; lam]`` as the Python path accepts it: not
+    far beyond its right-hand side (``|x| < 1e15 (1 + max |rhs|)``, NaN refused), split into
+    ``qdd`` and ``lam``, and, ``robust``, passing :func:`_zone_ok`. False: hand over."""
     big = 0.0
-    for i in range(N):
-        v = abs(b[i])
+    for i in range(n + m):
+        v = abs(x[i])
         if not v <= big:          # NaN too
             big = v
     if not big < 1e15 * (1.0 + big_rhs):
         return False
     for j in range(n):
-        qdd[j] = b[j]
+        qdd[j] = x[j]
     for i in range(m):
-        lam[i] = b[n + i]
+        lam[i] = x[n + i]
     return not robust or _zone_ok(rows0, lam, jv, j0, jr, jc, columns, force)
 
 
@@ -722,20 +730,13 @@ def _accel_sparse(kp, x, nin, out, n, m, jr, jc, rows0, columns, robust, qdd, la
             big_rhs = v
     sol = bw[4]                       # (the factorisation's work vector, free again)
     _slu_solve(bi, bw, out[kk:kk + N], sol)
-    big = 0.0
-    for i in range(N):
-        v = abs(sol[i])
-        if not v <= big:              # NaN too
-            big = v
-    if not big < 1e15 * (1.0 + big_rhs):
+    if not _accepted(sol, big_rhs, n, m, qdd, lam, robust, rows0, out, kM, jr, jc, columns,
+                     force):
         return False
     for j in range(n):
-        qdd[j] = sol[j]
         f[j] = y[n + j]
-        f[n + j] = sol[j]
-    for i in range(m):
-        lam[i] = sol[n + i]
-    return not robust or _zone_ok(rows0, lam, out, kM, jr, jc, columns, force)
+        f[n + j] = qdd[j]
+    return True
 
 
 @leaf
