@@ -252,3 +252,35 @@ def test_wide_free_system_solves_through_the_sparse_lu(monkeypatch):
                         rtol=1e-10, atol=1e-12)
     energy = run.body_energy() + run.potential_energy()
     assert np.abs(energy - energy[0]).max() < 1e-7 * np.abs(energy[0])
+
+
+def test_large_initial_condition_projection_is_sparse(monkeypatch):
+    """Initial values given for some coordinates of a large system (183 coordinates): the
+    others take the minimum-norm correction from the sparse ``J^ J^T`` with the held columns
+    removed, the dense least squares' answer (which cost O(n^3) at every start); values the
+    constraints cannot meet still raise, through the least squares."""
+    from mechsys.solvers._linalg import Scaling
+
+    m = models.radial_engine(30, g=9.81)
+    m.solve(0.0)
+    free = m.free(drop=["drive"])
+    s = free.system
+    q0 = s.guess + 0.01 * np.random.default_rng(2).normal(size=s.n)
+    qd0 = np.zeros(s.n)
+    crank = s.layout.index("crank.th")
+    qd0[crank] = 3.0
+    sc = Scaling.of(s, q0, s.jacobian(0.0, q0, s.p_values))
+    got = _free.project_holding(s, 0.0, q0, qd0, s.p_values, sc, [crank], [crank])
+    monkeypatch.setattr(_free, "HOLDING_RCOND", np.inf)          # the dense least squares
+    ref = _free.project_holding(s, 0.0, q0, qd0, s.p_values, sc, [crank], [crank])
+    for a, b in zip(got, ref):
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-10)
+    assert got[0][crank] == q0[crank] and got[1][crank] == 3.0
+    assert np.abs(s.residual(0.0, got[0])).max() < 1e-10
+    monkeypatch.undo()
+    # a piston held where its rod cannot reach
+    far = s.layout.index("piston0.x")
+    bad = got[0].copy()
+    bad[far] += 10.0
+    with pytest.raises(_free.ConsistencyError):
+        _free.project_holding(s, 0.0, bad, got[1], s.p_values, sc, [crank, far], [crank])

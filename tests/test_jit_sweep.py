@@ -419,3 +419,25 @@ def test_large_loop_needs_the_pattern(monkeypatch):
     s = models.four_bar_chain(30).compile()
     assert _jit.plan(s, 10, 2) is not None
     assert not _jit._wanted(s, 10)
+
+
+def test_sparse_lu_storage_too_small_hands_over_and_grows(monkeypatch):
+    """The compiled loop's factors live in storage sized from the pattern's estimate: when the
+    fill exceeds it the loop hands the point to the Python path, whose factorisation grows
+    the storage (and keeps it for the next run); the sweep is the same as with room enough."""
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    t = np.linspace(0.0, 0.2, 12)
+    plain = models.radial_engine(30).solve(t)
+    m = models.radial_engine(30)
+    pat = m.compile().jacobian_pattern()
+    monkeypatch.setattr(pat, "_cap", [8, 8])
+    runs = _runs(monkeypatch)
+    tight = m.solve(t)
+    assert runs and runs[0][0] == 0                # the first point already handed over
+    assert min(pat._cap) > 8                        # grown by the Python path
+    for x, y in ((tight.q, plain.q), (tight.qd, plain.qd), (tight.qdd, plain.qdd)):
+        np.testing.assert_array_equal(x, y)
+    runs.clear()
+    again = m.solve(t)
+    assert runs and runs[0][0] == len(t)            # the next run has the room
+    np.testing.assert_array_equal(again.q, plain.q)
