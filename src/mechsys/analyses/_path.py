@@ -25,6 +25,7 @@ from collections.abc import Mapping
 from numbers import Real
 
 import numpy as np
+import scipy.sparse as sps
 import sympy as sp
 
 from .._errors import MechError, ModelError, SingularJacobianError
@@ -44,7 +45,16 @@ from ..solvers._integrators import (
     output_times,
 )
 from ..solvers._jit_free import FreeStepper
-from ..solvers._linalg import Scaling, Singular, dependent_rows, factor, involved_rows
+from ..solvers._linalg import (
+    SPARSE_THRESHOLD,
+    Scaling,
+    Singular,
+    dependent_rows,
+    factor,
+    involved_rows,
+    pattern_of,
+    pattern_slots,
+)
 from ._free import _reject_unknown
 
 
@@ -102,10 +112,27 @@ class PathSystem:
                 if a in e.free_symbols:
                     r += sp.diff(e, a) * b
             rest.append(r)
-        self.linear = all(sp.diff(x, v) == 0 for x in self.psi_qd for v in qd)
+        # (each entry only against the velocities it contains: k n^2 derivatives of zeros took
+        # minutes for a few hundred coordinates)
+        qd_set = set(qd)
+        self.linear = all(sp.diff(x, v) == 0 for x in self.psi_qd if x != 0
+                          for v in x.free_symbols & qd_set)
         args = lay.args()
-        self._f = compile_exprs(args, list(psi) + list(self.psi_qd) + rest, self.system.backend)
         self._k = len(psi)
+        n = self.system.n
+        #: above SPARSE_THRESHOLD coordinates the kernel returns psi_qd's structural nonzeros
+        #: only (at ``_b_rows``, ``_b_cols``) and the velocity system is solved sparse: a
+        #: velocity constraint involves the few coordinates of its bodies, and a dense ``k x
+        #: n`` block with a dense LU made each evaluation cost O(n^3)
+        self._sparse = n > SPARSE_THRESHOLD
+        if self._sparse:
+            nz = [(i, j) for i in range(self._k) for j in range(n) if self.psi_qd[i, j] != 0]
+            self._b_rows = np.array([i for i, _ in nz], dtype=np.int64)
+            self._b_cols = np.array([j for _, j in nz], dtype=np.int64)
+            block = [self.psi_qd[i, j] for i, j in nz]
+        else:
+            block = list(self.psi_qd)
+        self._f = compile_exprs(args, list(psi) + block + rest, self.system.backend)
         self._p_given: dict[int, float] = {}
         self._q0 = model.guess()
         base = model.last_solution
@@ -169,9 +196,43 @@ class PathSystem:
 
     # -- the velocity solve -----------------------------------------------------------------
     def _psi(self, t, q, qd, p):
+        """``(psi (k,), psi_qd (k, n), rest (k,))`` (up to ``SPARSE_THRESHOLD`` coordinates;
+        above, :meth:`_sparse_factor`)."""
         out = self._f(self.system.pack(t, q, qd, p))
         k, n = self._k, self.system.n
         return out[:k], out[k : k + k * n].reshape(k, n), out[k + k * n :]
+
+    def _pattern(self):
+        """``(rows, cols, FixedPattern, slots)`` of the large velocity system ``K = [Phi_q;
+        psi_qd]``: its entries in CSC order (rows matched to columns), analysed once, and
+        where each of the Jacobian's then ``psi_qd``'s kernel values goes among them."""
+        got = self.__dict__.get("_vpattern")
+        if got is None:
+            s = self.system
+            rows = np.concatenate((np.asarray(s.jac_rows, dtype=np.int64), s.m + self._b_rows))
+            cols = np.concatenate((np.asarray(s.jac_cols, dtype=np.int64), self._b_cols))
+            r, c, pat = pattern_of(rows, cols, s.n, match_rows=True)
+            got = self._vpattern = (r, c, pat, pattern_slots(r, c, s.n, rows, cols))
+        return got
+
+    def _sparse_factor(self, t, q, qd, p, jv, columns):
+        """``K``'s values at ``(t, q, qd)`` (``jv`` the Jacobian's kernel values) through its
+        fixed pattern: ``(psi, rest, r, factor of R^-1 K D)``, ``r`` the row scales of
+        :meth:`Scaling.rows` (the same maxima). Singular: the diagnosis of the dense path."""
+        k, nb = self._k, self._b_rows.size
+        r_, c_, pat, slots = self._pattern()
+        out = self._f(self.system.pack(t, q, qd, p))
+        data = np.bincount(slots, weights=np.concatenate((jv, out[k:k + nb])),
+                           minlength=r_.size)
+        r = np.zeros(self.system.n)
+        np.maximum.at(r, r_, np.abs(data) * columns[c_])
+        r[~(r > 0)] = 1.0
+        try:
+            fac = pat.factor(data * (columns[c_] / r[r_]))
+        except Singular:
+            K = sps.csc_matrix((data, (r_, c_)), shape=(self.system.n,) * 2)
+            raise self._singular(K, t) from None
+        return out[:k], out[k + nb:], r, fac
 
     def velocities(self, t, q, qd_guess=None, tol=1e-12, max_iterations=20, p=None,
                    scaling=None):
@@ -183,22 +244,43 @@ class PathSystem:
         s = self.system
         n = s.n
         p = self._p if p is None else p
-        J, rhs = s.velocity_rhs(t, q, p)
+        J, rhs = s.velocity_rhs(t, q, p, self._sparse)
         if scaling is None:
             scaling = Scaling.of(s, q, J)
         qd = np.zeros(n) if qd_guess is None else np.array(qd_guess, dtype=float)
+        if self._sparse:
+            return self._velocities_sparse(t, q, qd, p, tol, max_iterations, scaling)
         for _ in range(max_iterations):
             psi, B, _ = self._psi(t, q, qd, p)
             R = np.concatenate((J @ qd - rhs, psi))
-            r = scaling.rows(np.vstack((J, B)))
+            K = np.vstack((J, B))
+            r = scaling.rows(K)
             if np.abs(R / r).max(initial=0.0) <= tol * (
                     1 + np.abs(qd / scaling.columns).max(initial=0.0)):
                 return qd
-            K = np.vstack((J, B))
             try:
                 qd = qd - factor(K).solve(R)
             except Singular:
                 raise self._singular(K, t) from None
+            if self.linear:
+                return qd
+        raise MechError(f"path: the velocity constraints did not converge at t = {t:.6g}")
+
+    def _velocities_sparse(self, t, q, qd, p, tol, max_iterations, scaling):
+        """:meth:`velocities` above ``SPARSE_THRESHOLD`` coordinates: the same Newton, with
+        ``K`` gathered into its fixed pattern (no sparse-matrix objects per evaluation) and
+        factorised by the pattern's LU."""
+        s = self.system
+        out = s.f_velocity(s.pack(t, q, None, p))
+        jv, rhs = out[:s.nnz], -out[s.nnz:]
+        jr, jc = s.jac_rows, s.jac_cols
+        c = scaling.columns
+        for _ in range(max_iterations):
+            psi, _, r, fac = self._sparse_factor(t, q, qd, p, jv, c)
+            R = np.concatenate((np.bincount(jr, weights=jv * qd[jc], minlength=s.m) - rhs, psi))
+            if np.abs(R / r).max(initial=0.0) <= tol * (1 + np.abs(qd / c).max(initial=0.0)):
+                return qd
+            qd = qd - c * fac.solve(R / r)
             if self.linear:
                 return qd
         raise MechError(f"path: the velocity constraints did not converge at t = {t:.6g}")
@@ -222,13 +304,19 @@ class PathSystem:
         """Accelerations ``qdd`` (n,) at ``(t, q, qd)`` (parameters as :meth:`velocities`)."""
         s = self.system
         p = self._p if p is None else p
-        J = s.jacobian(t, q, p)
         g = s.gamma_values(t, q, qd, p)
+        if self._sparse:
+            jv = s.f_velocity(s.pack(t, q, None, p))[:s.nnz]
+            c = np.ones(s.n)             # (any positive column scales: the same solution)
+            _, rest, r, fac = self._sparse_factor(t, q, qd, p, jv, c)
+            return c * fac.solve(np.concatenate((g, -rest)) / r)
+        J = s.jacobian(t, q, p)
         _, B, rest = self._psi(t, q, qd, p)
+        K = np.vstack((J, B))
         try:
-            return factor(np.vstack((J, B))).solve(np.concatenate((g, -rest)))
+            return factor(K).solve(np.concatenate((g, -rest)))
         except Singular:
-            raise self._singular(np.vstack((J, B)), t) from None
+            raise self._singular(K, t) from None
 
     # -- integration -------------------------------------------------------------------------
     def simulate(self, t, initial_condition=None, method: str = "dop853", rtol: float = RTOL,
