@@ -987,13 +987,13 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
         return _project_blocks(pp, pv, xk, nin_k, out_pos, out_vel, jr, jc, columns, offset,
                                tol, maxit, robust, n, m, t, y, r, Fs, dq, blk_i[0], blk_w[0][5],
                                blk_w[0][3], ex, ph)
-    if blocks == SPARSE:
-        return _project_sparse(pp, pv, xk, nin_k, out_pos, out_vel, jr, jc, columns, offset,
-                               tol, maxit, robust, n, m, t, y, r, Fs, dq, blk_i[0], blk_w[0],
-                               ex, ph)
     # a large NEWTON system: the Jacobian by its distinct nonzeros, the minimum-norm
-    # correction through the Newton matrix's banded pattern (_min_norm_band)
+    # correction through the Newton matrix's banded pattern (_min_norm_band); the sparse kind:
+    # the Jacobian's values straight from the kernels (each entry once), the correction
+    # through the augmented matrix's pattern (_min_norm_sparse)
     band = blocks == NEWTON and blk_i[0][7].size > 1
+    sparse = blocks == SPARSE
+    nnz = jr.size
     xk[0] = t
     for j in range(n):
         xk[1 + n + j] = 0.0
@@ -1004,6 +1004,8 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
         _evalx(pp, xk, nin_k, out_pos, ex[1], ph[1])
         if band:
             _band_rows_of(out_pos, m, jr, columns, r, blk_i[0][7], blk_w[0][3][0])
+        elif sparse:
+            _rows_nz(out_pos[m:m + nnz], jr, jc, columns, r)
         else:
             _assemble(out_pos, m, jr, jc, J)
             _rows(J, columns, r)
@@ -1019,6 +1021,10 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
             if not _min_norm_band(lapack, ibuf, ipiv, r, columns, Fs, dq, n, m, jr,
                                   blk_i[0][7], blk_w[0][3][0]):
                 return False
+        elif sparse:
+            if not _min_norm_sparse(r, columns, Fs, dq, n, m, jr, jc, out_pos[m:m + nnz],
+                                    blk_i[0], blk_w[0], robust):
+                return False
         elif not _min_norm(lapack, J, r, columns, Fs, dq, Js, A, ipiv, ibuf, cbuf, dbuf, work,
                            iwork, ybuf, robust):
             return False
@@ -1032,8 +1038,18 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
     for j in range(n):
         xk[1 + j] = y[j]
     _evalx(pv, xk, nin_k, out_vel, ex[2], ph[2])
-    nnz = jr.size
-    if band:
+    if sparse:
+        _rows_nz(out_vel[:nnz], jr, jc, columns, r)
+        for i in range(m):
+            Fs[i] = 0.0
+        for k in range(nnz):
+            Fs[jr[k]] += out_vel[k] * y[n + jc[k]]
+        for i in range(m):
+            Fs[i] = (Fs[i] - (-out_vel[nnz + i])) / r[i]
+        if not _min_norm_sparse(r, columns, Fs, dq, n, m, jr, jc, out_vel[:nnz], blk_i[0],
+                                blk_w[0], robust):
+            return False
+    elif band:
         w = blk_w[0][3][0]
         bnd = blk_i[0][7]
         _band_rows_of(out_vel, 0, jr, columns, r, bnd, w)
@@ -1058,55 +1074,6 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
         if not _min_norm(lapack, J, r, columns, Fs, dq, Js, A, ipiv, ibuf, cbuf, dbuf, work,
                          iwork, ybuf, robust):
             return False
-    for j in range(n):
-        y[n + j] = y[n + j] - dq[j]
-    for j in range(2 * n):
-        if not np.isfinite(y[j]):
-            return False
-    return True
-
-
-@leaf
-def _project_sparse(pp, pv, xk, nin_k, out_pos, out_vel, jr, jc, columns, offset, tol, maxit,
-                    robust, n, m, t, y, r, Fs, dq, bi, bw, ex, ph):
-    """``_project`` of the sparse kind: the positions by minimum-norm Newton corrections, then
-    the velocities, each through ``_min_norm_sparse`` (the Jacobian's values straight from
-    the kernels: each entry once)."""
-    nnz = jr.size
-    xk[0] = t
-    for j in range(n):
-        xk[1 + n + j] = 0.0
-    lim = tol * (1.0 + offset)
-    for _ in range(maxit):
-        for j in range(n):
-            xk[1 + j] = y[j]
-        _evalx(pp, xk, nin_k, out_pos, ex[1], ph[1])
-        _rows_nz(out_pos[m:m + nnz], jr, jc, columns, r)
-        big = 0.0
-        for i in range(m):
-            Fs[i] = out_pos[i] / r[i]
-            v = abs(Fs[i])
-            if not v <= big:
-                big = v
-        if big <= lim:
-            break
-        if not _min_norm_sparse(r, columns, Fs, dq, n, m, jr, jc, out_pos[m:m + nnz], bi, bw,
-                                robust):
-            return False
-        for j in range(n):
-            y[j] -= dq[j]
-    for j in range(n):
-        xk[1 + j] = y[j]
-    _evalx(pv, xk, nin_k, out_vel, ex[2], ph[2])
-    _rows_nz(out_vel[:nnz], jr, jc, columns, r)
-    for i in range(m):
-        Fs[i] = 0.0
-    for k in range(nnz):
-        Fs[jr[k]] += out_vel[k] * y[n + jc[k]]
-    for i in range(m):
-        Fs[i] = (Fs[i] - (-out_vel[nnz + i])) / r[i]
-    if not _min_norm_sparse(r, columns, Fs, dq, n, m, jr, jc, out_vel[:nnz], bi, bw, robust):
-        return False
     for j in range(n):
         y[n + j] = y[n + j] - dq[j]
     for j in range(2 * n):

@@ -484,36 +484,22 @@ def _sparse_solve(AB, bw, SI, x, trans):
 
 
 @leaf
-def _sparse_solve_scaled(AB, bw, SI, row_perm, perm, r, columns, b, out, tmp):
+def _sparse_solve_scaled(AB, bw, SI, row_perm, perm, r, columns, b, out, tmp, trans):
     """``ScaledFactor.solve`` of :func:`_sparse_factor`'s factors: ``b / r`` in the pattern's
-    row order, the sparse LU's solve, back to the coordinates' order, times ``c``."""
+    row order, the sparse LU's solve, back to the coordinates' order, times ``c``; ``trans``:
+    ``solve_transposed``, ``lambda`` with ``J^T lambda = b``: ``c b`` in the pattern's column
+    order, the transposed solve, back in the rows' order, over ``r``."""
     n = r.size
+    first, second = (perm, row_perm) if trans else (row_perm, perm)
     for i in range(n):
-        out[i] = b[i] / r[i]
+        out[i] = columns[i] * b[i] if trans else b[i] / r[i]
     for i in range(n):
-        tmp[i] = out[row_perm[i]]
-    _sparse_solve(AB, bw, SI, tmp, False)
+        tmp[i] = out[first[i]]
+    _sparse_solve(AB, bw, SI, tmp, trans)
     for i in range(n):
-        out[perm[i]] = tmp[i]
+        out[second[i]] = tmp[i]
     for i in range(n):
-        out[i] = columns[i] * out[i]
-
-
-@leaf
-def _sparse_solve_t_scaled(AB, bw, SI, row_perm, perm, r, columns, b, out, tmp):
-    """``ScaledFactor.solve_transposed`` of :func:`_sparse_factor`'s factors: ``lambda`` with
-    ``J^T lambda = b``: the transposed solve of ``c b`` in the pattern's column order, back
-    in the rows' order, over ``r``."""
-    n = r.size
-    for i in range(n):
-        out[i] = columns[i] * b[i]
-    for i in range(n):
-        tmp[i] = out[perm[i]]
-    _sparse_solve(AB, bw, SI, tmp, True)
-    for i in range(n):
-        out[row_perm[i]] = tmp[i]
-    for i in range(n):
-        out[i] = out[i] / r[i]
+        out[i] = out[i] / r[i] if trans else columns[i] * out[i]
 
 
 @leaf
@@ -801,9 +787,9 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                     # (the step is the chord step's below, written twice on purpose: a shared
                     # helper, inlined by Numba, made the sweep 7-9 % slower, measured)
                     if large and last_chord:
-                        _sparse_solve_scaled(AB, bw, SI, row_perm, perm, rprev, columns, F, dq, tmp)
+                        _sparse_solve_scaled(AB, bw, SI, row_perm, perm, rprev, columns, F, dq, tmp, False)
                     elif large:
-                        _sparse_solve_scaled(AB, bw, SI, row_perm, perm, r, columns, F, dq, tmp)
+                        _sparse_solve_scaled(AB, bw, SI, row_perm, perm, r, columns, F, dq, tmp, False)
                     elif last_chord:
                         _solve(lapack, B, ipiv, nz, rprev, columns, F, dq, ibuf, cbuf)
                     else:
@@ -833,7 +819,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
             if chord:
                 # chord step with the previous point's factorisation (_position.solve_position)
                 if large:
-                    _sparse_solve_scaled(AB, bw, SI, row_perm, perm, rprev, columns, F, dq, tmp)
+                    _sparse_solve_scaled(AB, bw, SI, row_perm, perm, rprev, columns, F, dq, tmp, False)
                 else:
                     _solve(lapack, B, ipiv, nz, rprev, columns, F, dq, ibuf, cbuf)
                 for j in range(n):
@@ -866,7 +852,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                 _band_values(jv, 0, slot, data)
                 if _sparse_factor(data, cr, cc, pos, r, columns, AB, bw, SI) < 0:
                     break
-                _sparse_solve_scaled(AB, bw, SI, row_perm, perm, r, columns, F, dq, tmp)
+                _sparse_solve_scaled(AB, bw, SI, row_perm, perm, r, columns, F, dq, tmp, False)
             else:
                 if stale:
                     _assemble(jv, 0, jr, jc, J)
@@ -937,7 +923,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
             for i in range(m):
                 rhs[i] = -out_vel[nnz + i]
             if large:
-                _sparse_solve_scaled(AB, bw, SI, row_perm, perm, r, columns, rhs, dq, tmp)
+                _sparse_solve_scaled(AB, bw, SI, row_perm, perm, r, columns, rhs, dq, tmp, False)
             else:
                 _solve(lapack, B, ipiv, nz, r, columns, rhs, dq, ibuf, cbuf)
             for j in range(n):
@@ -949,7 +935,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                     x[1 + n + j] = dq[j]
                 _eval_row(ptrs, 2, x, nin, out_gam)
                 if large:
-                    _sparse_solve_scaled(AB, bw, SI, row_perm, perm, r, columns, out_gam, dq, tmp)
+                    _sparse_solve_scaled(AB, bw, SI, row_perm, perm, r, columns, out_gam, dq, tmp, False)
                 else:
                     _solve(lapack, B, ipiv, nz, r, columns, out_gam, dq, ibuf, cbuf)
                 for j in range(n):

@@ -23,7 +23,7 @@ Python path), in the same order:
 Above ``SPARSE_THRESHOLD`` unknowns the Python path factorises ``R^-1 Phi_q D`` itself
 through the Jacobian's ``FixedPattern`` and solves it transposed; so does this loop, with
 the same operations: the sparse LU of ``_jit_sparse`` (``_jit_loop._sparse_factor``,
-``_sparse_solve_t_scaled``). With friction, the Newton matrix goes through its own
+``_sparse_solve_scaled``). With friction, the Newton matrix goes through its own
 pattern, when banded (the Python path's ``_statics._newton_pattern``), and the residual
 ``Phi_q^T lambda - rhs`` is formed from the Jacobian's CSC values (the Python path: a dense
 ``Phi_q``; the same to rounding, and both stop on the same tolerance).
@@ -54,7 +54,7 @@ from ._jit_loop import (
     _rows,
     _solve,
     _sparse_factor,
-    _sparse_solve_t_scaled,
+    _sparse_solve_scaled,
     _structure,
     big_sizes,
 )
@@ -203,7 +203,7 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
             if not _loads(ptrs, xd, nin_d, out_dyn, mode, QDD, k, mr, mc, kM, n, Mq, rhs):
                 return k
             if banded:
-                _sparse_solve_t_scaled(AB, bw, SI, row_perm, perm, r, cols, rhs, lam, tmp)
+                _sparse_solve_scaled(AB, bw, SI, row_perm, perm, r, cols, rhs, lam, tmp, True)
             else:
                 for j in range(n):
                     rhs[j] = cols[j] * rhs[j]
