@@ -35,3 +35,29 @@ def test_radial_engine_refuses_what_cannot_be_an_engine(kw):
     args = dict(cylinders=5, crank=1.0, rod=4.0) | kw
     with pytest.raises(ModelError, match="radial_engine"):
         models.radial_engine(**args)
+
+
+def test_trailer_train_rolls_its_tractor_on_the_closed_form_circle():
+    """Three trailers behind a tractor steered at 0.5 rad/s at speed 1: the tractor's blade
+    on the circle of radius 2, every trailer's blade without side slip, pins closed."""
+    path = models.trailer_train(3, speed=1.0, rate=0.5, reach=2.0)
+    m = path.model
+    assert path.system.n == 12 and len(path.psi) == 5 and path.linear
+    t = np.linspace(0.0, 4.0, 9)
+    sol = path.simulate(t, rtol=1e-11, atol=1e-12)
+    np.testing.assert_allclose(sol.location(m.body("tractor").point("blade")),
+                               np.c_[2 * np.sin(0.5 * t), 2 * (1 - np.cos(0.5 * t))], atol=1e-9)
+    for k in range(3):
+        v = sol.velocity(m.body(f"trailer{k}").point("blade"))
+        th = sol.coordinate(f"trailer{k}.th")
+        np.testing.assert_allclose(-v[:, 0] * np.sin(th) + v[:, 1] * np.cos(th), 0.0,
+                                   atol=1e-9)
+    assert sol.extra["drift"] < 1e-10
+
+
+@pytest.mark.parametrize("kw", [{"trailers": -1}, {"trailers": 2.5}, {"trailers": True},
+                                {"trailers": "3"}, {"speed": float("nan")}, {"rate": "fast"},
+                                {"reach": 0.0}, {"reach": -1.0}, {"reach": float("inf")}])
+def test_trailer_train_refuses_bad_input(kw):
+    with pytest.raises(ModelError, match="trailer_train"):
+        models.trailer_train(**({"trailers": 2} | kw))

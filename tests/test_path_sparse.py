@@ -8,42 +8,30 @@ import pytest
 import sympy as sp
 
 import mechsys as ms
-from mechsys import T
+from mechsys import models
 from mechsys.analyses import _path
 
 SPEED, RATE = 2.0, 0.4
 
 
-def _train(trailers: int, repeat_pin: bool = False):
-    """A tractor steered at ``RATE`` rad/s, its blade moving forward at ``SPEED`` without side
-    slip, towing ``trailers`` trailers, each pinned to the hitch ahead and rolling on a blade
-    that cannot slip sideways: ``3 (trailers + 1)`` coordinates, one velocity constraint per
-    trailer. Each hitch is half a trailer's reach behind its blade, so a swing halves from
-    trailer to trailer (with the hitch further back than the front it would double: 2^50
-    down a train of 50, an ill-posed motion)."""
-    m = ms.Model2D()
-    tractor = m.add_body("tractor", points={"blade": (0.0, 0.0), "hitch": (-0.5, 0.0)})
-    m.add(ms.RelativeX1(tractor.point("blade"), 0.0), name="dummy x")
-    m.add(ms.RelativeY1(tractor.point("blade"), 0.0), name="dummy y")
-    m.add(ms.RotationLock1(tractor, RATE * T), name="steering")
-    prev, bodies = tractor, []
-    for k in range(trailers):
-        b = m.add_body(f"trailer{k}", points={"front": (1.0, 0.0), "blade": (0.0, 0.0),
-                                              "hitch": (-0.5, 0.0)},
-                       guess=((-1.5 * (k + 1), 0.0), 0.0))
-        m.add(ms.Revolute2(prev.point("hitch"), b.point("front")), name=f"pin{k}")
-        m.add(ms.RotationLock1(b, 0.0), name=f"dummy{k}")
-        bodies.append(b)
-        prev = b
-    m.solve(0.0)
-    v = m.velocity(tractor.point("blade"))
-    ahead = tractor.A * sp.Matrix([1, 0])
-    replace = {"dummy x": ms.Orthogonal1(v, tractor.vector((0, 1))),
-               "dummy y": ms.Constraint([(v.T * ahead)[0, 0] - SPEED])}
-    for k, b in enumerate(bodies):
-        replace[f"dummy{k}"] = ms.Orthogonal1(m.velocity(b.point("blade")), b.vector((0, 1)))
+def _train(trailers: int, repeat_pin: bool = False, cubic: bool = False):
+    """``models.trailer_train(trailers)`` (its tractor at ``SPEED``, steered at ``RATE``):
+    ``(model, path)``. ``repeat_pin``: the first trailer's blade replaced by a velocity
+    constraint that repeats its pin; ``cubic``: the tractor's speed ``u`` given by ``u + u^3 /
+    10``, a velocity constraint nonlinear in the velocities (the same motion)."""
+    path = models.trailer_train(trailers, speed=SPEED, rate=RATE)
+    m = path.model
+    if not (repeat_pin or cubic):
+        return m, path
+    replace = {d.name: vc for d, vc in path.replaced.items()}
+    tractor = m.body("tractor")
+    if cubic:
+        v = m.velocity(tractor.point("blade"))
+        u = (v.T * (tractor.A * sp.Matrix([1, 0])))[0, 0]
+        replace["dummy y"] = ms.Constraint([u + u**3 / 10 - (SPEED + SPEED**3 / 10)])
     if repeat_pin:
-        front = m.velocity(bodies[0].point("front")) - m.velocity(tractor.point("hitch"))
+        first = m.body("trailer0")
+        front = m.velocity(first.point("front")) - m.velocity(tractor.point("hitch"))
         replace["dummy0"] = ms.Constraint([front[0]])
     return m, m.path(replace=replace)
 
@@ -89,3 +77,61 @@ def test_large_singular_path_is_diagnosed():
     assert path._sparse
     with pytest.raises(ms.SingularJacobianError, match="pin0"):
         path.simulate(np.linspace(0.0, 1.0, 3))
+
+
+def _both(monkeypatch, build, t, **kw):
+    out = {}
+    for jit in ("1", "0"):
+        monkeypatch.setenv("MECHSYS_JIT", jit)
+        m, path = build()
+        out[jit] = (m, path, path.simulate(t, **kw))
+    return out["1"], out["0"]
+
+
+@pytest.mark.parametrize("method,kw", [("dop853", {"rtol": 1e-10, "atol": 1e-12}),
+                                       ("adams", {"max_error": 1e-9})])
+def test_large_path_runs_compiled_with_the_python_numbers(monkeypatch, method, kw):
+    """Above SMALL_LU coordinates the compiled stepper solves the velocity system by the
+    Python path's pattern and the same sparse LU, and projects through ``[[I, J^T], [J^,
+    0]]``: every step compiled, the Python stepper's motion to rounding, the circle."""
+    pytest.importorskip("numba")
+    t = np.linspace(0.0, 3.0, 7)
+    (m, path, fast), (_, _, slow) = _both(monkeypatch, lambda: _train(50), t, method=method,
+                                          **kw)
+    assert path.system.n > _path.SPARSE_THRESHOLD
+    assert fast.extra["compiled_solver"] == "path"
+    assert fast.extra["compiled_steps"] == fast.extra["steps"] > 10
+    assert slow.extra["compiled_steps"] == 0
+    assert fast.extra["steps"] == slow.extra["steps"]
+    for a, b in ((fast.q, slow.q), (fast.qd, slow.qd), (fast.qdd, slow.qdd)):
+        scale = np.maximum(1.0, np.abs(b).max(axis=0))
+        assert (np.abs(a - b) / scale).max() <= 1e-12
+    R = SPEED / RATE
+    p = fast.location(m.body("tractor").point("blade"))
+    np.testing.assert_allclose(p, np.c_[R * np.sin(RATE * t), R * (1 - np.cos(RATE * t))],
+                               rtol=0, atol=1e-7)
+    assert fast.extra["drift"] < 1e-10
+    # the accelerations at the outputs are the Python path's own, bit for bit (the same
+    # kernels, pattern, scaling and LU)
+    for k in (0, 3, 6):
+        np.testing.assert_array_equal(
+            fast.qdd[k], path.accelerations(fast.t[k], fast.q[k], fast.qd[k], p=fast.p))
+
+
+def test_large_nonlinear_path_runs_compiled(monkeypatch):
+    """Velocity constraints nonlinear in the velocities: Newton in every evaluation, in the
+    loop as in the Python stepper."""
+    pytest.importorskip("numba")
+    t = np.linspace(0.0, 2.0, 5)
+    (m, path, fast), (_, _, slow) = _both(monkeypatch, lambda: _train(50, cubic=True), t,
+                                          rtol=1e-10, atol=1e-12)
+    assert not path.linear
+    assert fast.extra["compiled_steps"] == fast.extra["steps"] > 10
+    for a, b in ((fast.q, slow.q), (fast.qd, slow.qd)):
+        scale = np.maximum(1.0, np.abs(b).max(axis=0))
+        assert (np.abs(a - b) / scale).max() <= 1e-12
+    R = SPEED / RATE
+    np.testing.assert_allclose(fast.location(m.body("tractor").point("blade")),
+                               np.c_[R * np.sin(RATE * t), R * (1 - np.cos(RATE * t))],
+                               rtol=0, atol=1e-7)
+

@@ -162,6 +162,61 @@ def radial_engine(cylinders: int = 9, crank: float = 1.0, rod: float = 4.0,
     return m
 
 
+def trailer_train(trailers: int = 10, speed: float = 2.0, rate: float = 0.4,
+                  reach: float = 1.0):
+    """A nonholonomic path (Mech's ``SetPath``, manual 10.5): a tractor steered at ``rate``
+    rad/s (its heading ``rate T``), whose blade at the origin of its frame moves forward at
+    ``speed`` without slipping sideways, towing ``trailers`` trailers. Each trailer's front
+    (at ``reach`` ahead of its blade) is pinned to the hitch of the body ahead (at ``reach /
+    2`` behind that body's blade), and its blade cannot slip sideways either. Returns the
+    :class:`~mechsys.analyses.PathSystem` (its model is ``path.model``): ``3 (trailers + 1)``
+    coordinates, one velocity constraint per trailer and two for the tractor; bodies
+    ``tractor``, ``trailer{k}`` (points ``blade``, ``hitch``, and ``front`` on trailers).
+
+    The tractor's blade runs on the circle of radius ``speed / rate`` (closed form). With
+    the hitch behind the blade, a trailer's swing is halved down the train; a hitch further
+    back than the trailer's reach would double it from trailer to trailer (an ill-posed
+    motion for long trains)::
+
+        path = models.trailer_train(50)
+        sol = path.simulate(np.linspace(0, 3, 31))
+    """
+    from .constraints import Constraint, Orthogonal1, RelativeX1, RelativeY1
+
+    if isinstance(trailers, bool) or not isinstance(trailers, (int, np.integer)) \
+            or trailers < 0:
+        raise ModelError(f"trailer_train: trailers must be an integer >= 0, got {trailers!r}")
+    for name, v in (("speed", speed), ("rate", rate), ("reach", reach)):
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)) \
+                or not np.isfinite(v):
+            raise ModelError(f"trailer_train: {name} must be a finite number, got {v!r}")
+    if not reach > 0:
+        raise ModelError(f"trailer_train: reach must be positive, got {reach!r}")
+    m = Model2D()
+    hitch = (-reach / 2, 0.0)
+    tractor = m.add_body("tractor", points={"blade": (0.0, 0.0), "hitch": hitch})
+    m.add(RelativeX1(tractor.point("blade"), 0.0), name="dummy x")
+    m.add(RelativeY1(tractor.point("blade"), 0.0), name="dummy y")
+    m.add(RotationLock1(tractor, rate * T), name="steering")
+    prev, bodies = tractor, []
+    for k in range(trailers):
+        b = m.add_body(f"trailer{k}", points={"front": (reach, 0.0), "blade": (0.0, 0.0),
+                                              "hitch": hitch},
+                       guess=((-1.5 * reach * (k + 1), 0.0), 0.0))
+        m.add(Revolute2(prev.point("hitch"), b.point("front")), name=f"pin{k}")
+        m.add(RotationLock1(b, 0.0), name=f"dummy{k}")
+        bodies.append(b)
+        prev = b
+    m.solve(0.0)
+    v = m.velocity(tractor.point("blade"))
+    ahead = tractor.A * sp.Matrix([1, 0])
+    replace = {"dummy x": Orthogonal1(v, tractor.vector((0, 1))),
+               "dummy y": Constraint([(v.T * ahead)[0, 0] - speed])}
+    for k, b in enumerate(bodies):
+        replace[f"dummy{k}"] = Orthogonal1(m.velocity(b.point("blade")), b.vector((0, 1)))
+    return m.path(replace=replace)
+
+
 def pendulum_chain(n_links: int, g: float = 9.81) -> Model2D:
     """``n_links`` uniform rods (length 1, mass 1, centroidal inertia 1/12) pinned end to end,
     the first to the ground at the origin, all horizontal along +x, under gravity ``g``

@@ -204,35 +204,42 @@ class PathSystem:
 
     def _pattern(self):
         """``(rows, cols, FixedPattern, slots)`` of the large velocity system ``K = [Phi_q;
-        psi_qd]``: its entries in CSC order (rows matched to columns), analysed once, and
-        where each of the Jacobian's then ``psi_qd``'s kernel values goes among them."""
+        psi_qd]``: its entries in CSC order (rows matched to columns), analysed once (the
+        compiled sparse LU's ordering whatever the band, as a system's Jacobian: the
+        compiled stepper factorises the same matrices with the same function), and where
+        each of the Jacobian's then ``psi_qd``'s kernel values goes among them."""
         got = self.__dict__.get("_vpattern")
         if got is None:
             s = self.system
             rows = np.concatenate((np.asarray(s.jac_rows, dtype=np.int64), s.m + self._b_rows))
             cols = np.concatenate((np.asarray(s.jac_cols, dtype=np.int64), self._b_cols))
-            r, c, pat = pattern_of(rows, cols, s.n, match_rows=True)
+            r, c, pat = pattern_of(rows, cols, s.n, match_rows=True, sparse=True)
             got = self._vpattern = (r, c, pat, pattern_slots(r, c, s.n, rows, cols))
         return got
 
-    def _sparse_factor(self, t, q, qd, p, jv, columns):
-        """``K``'s values at ``(t, q, qd)`` (``jv`` the Jacobian's kernel values) through its
-        fixed pattern: ``(psi, rest, r, factor of R^-1 K D)``, ``r`` the row scales of
-        :meth:`Scaling.rows` (the same maxima). Singular: the diagnosis of the dense path."""
+    def _sparse_values(self, t, q, qd, p, jv, columns):
+        """``K``'s values at ``(t, q, qd)`` (``jv`` the Jacobian's kernel values) gathered into
+        its fixed pattern: ``(psi, rest, r, values of R^-1 K D)``, ``r`` the row scales of
+        :meth:`Scaling.rows` (the same maxima)."""
         k, nb = self._k, self._b_rows.size
-        r_, c_, pat, slots = self._pattern()
+        r_, c_, _, slots = self._pattern()
         out = self._f(self.system.pack(t, q, qd, p))
         data = np.bincount(slots, weights=np.concatenate((jv, out[k:k + nb])),
                            minlength=r_.size)
         r = np.zeros(self.system.n)
         np.maximum.at(r, r_, np.abs(data) * columns[c_])
         r[~(r > 0)] = 1.0
+        return out[:k], out[k + nb:], r, data * (columns[c_] / r[r_])
+
+    def _sparse_factor(self, values, t):
+        """The factorisation of :meth:`_sparse_values`' scaled ``K``; singular: the diagnosis
+        of the dense path."""
+        r_, c_, pat, _ = self._pattern()
         try:
-            fac = pat.factor(data * (columns[c_] / r[r_]))
+            return pat.factor(values)
         except Singular:
-            K = sps.csc_matrix((data, (r_, c_)), shape=(self.system.n,) * 2)
+            K = sps.csc_matrix((values, (r_, c_)), shape=(self.system.n,) * 2)
             raise self._singular(K, t) from None
-        return out[:k], out[k + nb:], r, fac
 
     def velocities(self, t, q, qd_guess=None, tol=1e-12, max_iterations=20, p=None,
                    scaling=None):
@@ -244,12 +251,14 @@ class PathSystem:
         s = self.system
         n = s.n
         p = self._p if p is None else p
-        J, rhs = s.velocity_rhs(t, q, p, self._sparse)
-        if scaling is None:
-            scaling = Scaling.of(s, q, J)
         qd = np.zeros(n) if qd_guess is None else np.array(qd_guess, dtype=float)
         if self._sparse:
+            if scaling is None:
+                scaling = Scaling.of(s, q, s.velocity_rhs(t, q, p, True)[0])
             return self._velocities_sparse(t, q, qd, p, tol, max_iterations, scaling)
+        J, rhs = s.velocity_rhs(t, q, p, False)
+        if scaling is None:
+            scaling = Scaling.of(s, q, J)
         for _ in range(max_iterations):
             psi, B, _ = self._psi(t, q, qd, p)
             R = np.concatenate((J @ qd - rhs, psi))
@@ -276,11 +285,11 @@ class PathSystem:
         jr, jc = s.jac_rows, s.jac_cols
         c = scaling.columns
         for _ in range(max_iterations):
-            psi, _, r, fac = self._sparse_factor(t, q, qd, p, jv, c)
+            psi, _, r, values = self._sparse_values(t, q, qd, p, jv, c)
             R = np.concatenate((np.bincount(jr, weights=jv * qd[jc], minlength=s.m) - rhs, psi))
             if np.abs(R / r).max(initial=0.0) <= tol * (1 + np.abs(qd / c).max(initial=0.0)):
                 return qd
-            qd = qd - c * fac.solve(R / r)
+            qd = qd - c * self._sparse_factor(values, t).solve(R / r)
             if self.linear:
                 return qd
         raise MechError(f"path: the velocity constraints did not converge at t = {t:.6g}")
@@ -308,8 +317,8 @@ class PathSystem:
         if self._sparse:
             jv = s.f_velocity(s.pack(t, q, None, p))[:s.nnz]
             c = np.ones(s.n)             # (any positive column scales: the same solution)
-            _, rest, r, fac = self._sparse_factor(t, q, qd, p, jv, c)
-            return c * fac.solve(np.concatenate((g, -rest)) / r)
+            _, rest, r, values = self._sparse_values(t, q, qd, p, jv, c)
+            return c * self._sparse_factor(values, t).solve(np.concatenate((g, -rest)) / r)
         J = s.jacobian(t, q, p)
         _, B, rest = self._psi(t, q, qd, p)
         K = np.vstack((J, B))

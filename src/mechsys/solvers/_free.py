@@ -384,16 +384,68 @@ def project_positions(system, t, q, p, tol=1e-12, max_iterations=8, scaling=None
     return q
 
 
+def projection_pattern(system):
+    """``(FixedPattern, slots)`` of the projection's matrix ``[[I, J^T], [J, 0]]`` (``n + m``)
+    of a system's sparse Jacobian, analysed once per system (the compiled sparse LU's
+    minimum-degree ordering): ``slots`` (n + 2 nnz,) the places among the pattern's entries
+    of the identity's diagonal, then of ``J``'s entries in its CSC order
+    (``System._csc_structure``), then of ``J^T``'s. The compiled steppers project through
+    the same pattern (``_jit_free_loop._min_norm_sparse``)."""
+    got = system.__dict__.get("_projection_pattern")
+    if got is None:
+        n, m = system.n, system.m
+        _, indices, indptr = system._csc_structure()
+        jr = indices.astype(np.int64)
+        jc = np.repeat(np.arange(n, dtype=np.int64), np.diff(indptr))
+        d = np.arange(n, dtype=np.int64)
+        rows = np.concatenate((d, n + jr, jc))
+        cols = np.concatenate((d, jc, n + jr))
+        r, c, pat = pattern_of(rows, cols, n + m, sparse=True)
+        got = system.__dict__["_projection_pattern"] = (
+            pat, pattern_slots(r, c, n + m, rows, cols))
+    return got
+
+
+def _system_structure(system, J) -> bool:
+    """Whether the CSC matrix ``J`` has the structure of the system's Jacobian (as
+    ``System.assemble`` makes it)."""
+    _, indices, indptr = system._csc_structure()
+    return (J.shape == (system.m, system.n) and J.indices.size == indices.size
+            and np.array_equal(J.indptr, indptr) and np.array_equal(J.indices, indices))
+
+
 def _min_norm(system, J, r, scaling, b, t, q, rank_tolerant=False):
-    """``D J^T (J^ J^T)^-1 b`` with ``J^ = R^-1 J D``: the smallest correction (in scaled
+    r"""``D J^T (J^ J^T)^-1 b`` with ``J^ = R^-1 J D``: the smallest correction (in scaled
     coordinates) that changes the scaled residual by ``b``. ``rank_tolerant``: at or near a
-    singular ``J^`` (reciprocal condition of ``J^ J^T`` below ``ZONE^2``) raise the internal
-    :class:`._rank.InZone` instead, for the caller's regularised projection."""
+    singular ``J^`` (reciprocal condition below ``ZONE^2``) raise the internal
+    :class:`._rank.InZone` instead, for the caller's regularised projection.
+
+    A sparse ``J`` (large systems) solves instead, through :func:`projection_pattern`,
+
+    .. math::  \begin{bmatrix} I & \hat J^T \\ \hat J & 0 \end{bmatrix}
+               \begin{bmatrix} z \\ -\nu \end{bmatrix} =
+               \begin{bmatrix} 0 \\ b \end{bmatrix}, \qquad dq = D z
+
+    (the same ``z = J^T (J^ J^T)^-1 b``; its pivots are the identity's and those of ``J^
+    J^T``'s elimination, whose pivot ratio is the condition measure): no product ``J^
+    J^T`` and no ordering per call, and the compiled steppers' numbers bit for bit."""
     Js = scaling.scaled(J, r)
+    big = sps.issparse(Js) and _system_structure(system, Js)
     try:
-        fac = factor(Js @ Js.T)
+        if big:
+            pat, slots = projection_pattern(system)
+            n, nz = system.n, Js.data.size
+            data = np.zeros(slots.size)
+            data[slots[:n]] = 1.0
+            data[slots[n:n + nz]] = Js.data
+            data[slots[n + nz:]] = Js.data
+            fac = pat.factor(data)
+        else:
+            fac = factor(Js @ Js.T)
         if rank_tolerant and fac.rcond < ZONE**2:
             raise InZone
+        if big:
+            return scaling.columns * fac.solve(np.concatenate((np.zeros(n), b)))[:n]
         y = fac.solve(b)
     except Singular:
         if rank_tolerant:

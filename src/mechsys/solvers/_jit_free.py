@@ -45,7 +45,9 @@ Nonholonomic paths (:class:`~mechsys.analyses._path.PathSystem`, Mech's ``SolveP
 in the same loops (:meth:`FreeStepper.plan_path`, decision 0027): the state is ``q``, its
 derivative the velocities of the holonomic and velocity constraints (Newton on ``qd`` with
 ``[Phi_q; psi_qd]``: one step when the velocity constraints are linear in the velocities),
-the projection onto the positions only.
+the projection onto the positions only. Above ``SMALL_LU`` coordinates the velocity system
+goes through the Python path's fixed pattern and the same compiled sparse LU, and the
+projection through ``[[I, J^T], [J^, 0]]`` (``_free.projection_pattern``).
 """
 
 from __future__ import annotations
@@ -332,6 +334,58 @@ def _sparse_structure(system, fk):
     return (info, *got[1:], work, np.zeros((1, 5), dtype=np.int64))
 
 
+def _path_sparse_structure(path):
+    """The structure of ``_jit_free_loop._path_velocity_sparse`` (see ``PATH_HEAD`` there) for
+    a path above ``SMALL_LU`` coordinates, or None (a Jacobian with a repeated entry: the
+    projection's row scales are taken entry by entry). Both patterns are the Python path's:
+    the projection's ``[[I, J^T], [J^, 0]]`` (``_free.projection_pattern``; in the sparse
+    kind's layout: kernel values the Jacobian's, each twice, the identity at ``dpos``) and
+    the velocity system's (``PathSystem._pattern``). Made once per path; the sparse LU's
+    integer storage anew per stepper."""
+    from ._free import projection_pattern
+    from ._jit_free_loop import PATH_HEAD
+    from ._jit_sparse import IWORK
+
+    got = path.__dict__.get("_jit_sparse")
+    if got is None:
+        system = path.system
+        n, m = system.n, system.m
+        jr = np.asarray(system.jac_rows, dtype=np.int64)
+        jc = np.asarray(system.jac_cols, dtype=np.int64)
+        if np.unique(jr * max(n, 1) + jc).size != jr.size:
+            got = path._jit_sparse = ()
+            return None
+        N = n + m
+        # the Python path's projection pattern; each kernel value's CSC place (unique)
+        patP, slotsP = projection_pattern(system)
+        inv = system._csc_structure()[0]
+        at = patP._pos[np.concatenate((slotsP[:n], slotsP[n + inv], slotsP[n + jr.size + inv]))]
+        rK, cK, patK, slotsK = path._pattern()
+        nnz, nb, nE = jr.size, path._b_rows.size, rK.size
+        nKP = 2 * nnz
+        head = [N, nKP, patP.s_indices.size, 0, nnz, 0, 0,
+                n, 0, patK.s_indices.size, 0, 0, 0, 0]
+        assert len(head) == PATH_HEAD
+        tail = [len(path.psi), 0, 0, 0, 0, 0, 0, int(path.linear), nE, nb,
+                nKP, N + 1, patP.s_indices.size, 2 * N, n]
+        i64 = lambda a: np.ascontiguousarray(a, dtype=np.int64)   # noqa: E731
+        got = path._jit_sparse = (
+            (patP, patK), np.array(head + tail, dtype=np.int64),
+            i64(np.concatenate((at[n:], patK._pos))),
+            i64(np.concatenate((np.arange(nnz), np.arange(nnz), slotsK))),
+            i64(np.concatenate((patP.s_indptr, patK.s_indptr))),
+            i64(np.concatenate((patP.s_indices, patK.s_indices))),
+            i64(np.concatenate((patP.row_perm, patP.perm, patK.row_perm, patK.perm))),
+            i64(np.concatenate((at[:n], rK, cK))))
+    if not got:
+        return None
+    (patP, patK), info = got[0], got[1].copy()
+    info[5:7], info[12:14] = patP._cap, patK._cap
+    size = max(2 * (M + 1) + (IWORK + 1) * M + sum(pat._cap)
+               for M, pat in ((patP.size, patP), (patK.size, patK)))
+    return (info, *got[2:], np.zeros(size, dtype=np.int64), np.zeros((1, 5), dtype=np.int64))
+
+
 def _newton_band(system):
     """The structure array of ``_jit_free_loop._newton_accel_band`` (see there): the Newton
     matrix's ``FixedPattern`` (``solvers._free._newton_pattern``, the Python path's) and where
@@ -412,7 +466,16 @@ class FreeStepper:
     def __init__(self, system, p, scaling, rows0, robust, correction, t_eval, kernels, fk,
                  blocks=None, expand=(_NO_EXPAND,) * 3, gen=None, path=None, newton=None,
                  newton_tol=1e-10, sparse=None):
-        from ._jit_free_loop import AUGMENTED, BLOCK, GEN_AUGMENTED, GEN_TREE, NEWTON, PATH, SPARSE
+        from ._jit_free_loop import (
+            AUGMENTED,
+            BLOCK,
+            GEN_AUGMENTED,
+            GEN_TREE,
+            NEWTON,
+            PATH,
+            PATH_HEAD,
+            SPARSE,
+        )
 
         kern, fpos, fvel = kernels
         n, m = system.n, system.m
@@ -442,11 +505,19 @@ class FreeStepper:
             self.solver = "augmented" if blocks is None else "block"
         if path is not None:
             # the path's numbers in the block structure's first array: [k, npar, the
-            # holonomic velocity kernel's row] (the loops hand the derivative one kernel row)
+            # holonomic velocity kernel's row] (the loops hand the derivative one kernel row);
+            # a large path's sparse structure with them (_path_sparse_structure)
             self.flat_t = self.mp = np.zeros(0, dtype=np.int64)
-            k, linear = path
-            blk = (np.array([k, len(p), *fvel, int(linear)], dtype=np.int64),
-                   *_Blocks.none()[1:])
+            k, linear, big = path
+            if big is None:
+                blk = (np.array([k, len(p), *fvel, int(linear)], dtype=np.int64),
+                       *_Blocks.none()[1:])
+            else:
+                from ._jit_free_loop import PATH_HEAD
+
+                blk = big
+                blk[0][PATH_HEAD + 1] = len(p)
+                blk[0][PATH_HEAD + 2:PATH_HEAD + 7] = fvel
             self.bw = 0
         elif newton is not None:
             self.flat_t = self.mp = np.zeros(0, dtype=np.int64)
@@ -468,7 +539,9 @@ class FreeStepper:
         # the loop's structure argument: (block path, Gen tree, the kernels' output maps)
         self.blk_i = (blk, _Gen.none() if gen is None else gen.arrays, tuple(expand))
         if path is not None:
-            self.kk = int(2 * path[0] + path[0] * n)    # the velocity constraints' outputs
+            # the velocity constraints' outputs: [psi, psi_qd (dense, or its nonzeros), rest]
+            self.kk = int(2 * path[0] + (path[0] * n if path[2] is None
+                                         else path[2][0][PATH_HEAD + 9]))
         elif newton is not None:
             self.kk = int(newton[0][0]) + 2 * n           # [M values, Q, Qv]
         else:
@@ -594,15 +667,25 @@ class FreeStepper:
     @classmethod
     def plan_path(cls, path, method, p, scaling, correction, t_eval):
         """The stepper of a nonholonomic path (:class:`~mechsys.analyses._path.PathSystem`)
-        when the compiled loop can run it, else None: at most ``SMALL_LU`` coordinates (the
-        derivative's LU is the written-out one), LLVM kernels."""
+        when the compiled loop can run it, else None: LLVM kernels; up to ``SMALL_LU``
+        coordinates the velocity system dense (the written-out LU), above it (where the
+        Python path solves it sparse) by the Python path's pattern and the compiled sparse
+        LU, the projection through ``[[I, J^T], [J^, 0]]`` (``_path_sparse_structure``)."""
         from ._jit_loop import SMALL as SMALL_LU
 
         system = path.system
         n = system.n
-        if (_jit.mode() == "off" or method not in METHODS or n == 0 or n > SMALL_LU
-                or not _jit.available()):
+        if _jit.mode() == "off" or method not in METHODS or n == 0 or not _jit.available():
             return None
+        big = None
+        if n > SMALL_LU:
+            from ._linalg import _sparse_lu
+
+            if not path._sparse or _sparse_lu() is None:
+                return None
+            big = _path_sparse_structure(path)
+            if big is None:
+                return None
         if method not in RK:
             t_eval = None
         entries = [_entry(path._f)] + _constraint_entries(system, system.f_position,
@@ -610,14 +693,18 @@ class FreeStepper:
         if any(e is None for e in entries):
             return None
         return cls(system, p, scaling, None, False, correction, t_eval, [e[0] for e in entries],
-                   None, expand=[e[1] for e in entries], path=(len(path.psi), path.linear))
+                   None, expand=[e[1] for e in entries],
+                   path=(len(path.psi), path.linear, big))
 
     def path_accelerations(self, path, times, Q, QD, QDD) -> int:
         """A path's accelerations at the rows of ``times``, ``Q``, ``QD`` into ``QDD`` (N, n)
         in compiled code (``_jit_free_loop.path_accelerations``); returns the first row left
         to the Python path (0 when a kernel has no C entry point)."""
         system = path.system
-        entries = _constraint_entries(system, system.f_position, system.f_gamma)
+        sparse = self.blk_i[0][7].size > 1
+        # (a large path's Jacobian from the velocity kernel, as its Python path takes it)
+        entries = _constraint_entries(
+            system, system.f_velocity if sparse else system.f_position, system.f_gamma)
         entries.append(_entry(path._f))
         if any(e is None for e in entries):
             return 0
@@ -628,7 +715,8 @@ class FreeStepper:
         return int(_state["path_acc"](
             np.array([e[0] for e in entries], dtype=np.int64), tuple(e[1] for e in entries),
             np.ascontiguousarray(times, dtype=float), np.ascontiguousarray(Q, dtype=float),
-            np.ascontiguousarray(QD, dtype=float), self.p, self.jr, self.jc, len(path.psi), QDD))
+            np.ascontiguousarray(QD, dtype=float), self.p, self.jr, self.jc, len(path.psi),
+            self.blk_i[0], self.ws[16][0], QDD))
 
     def rate(self, y, row):
         """The state's derivative at ``y`` from a row the loop returned (its ``QDD``):

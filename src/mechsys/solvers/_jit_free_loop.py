@@ -16,7 +16,9 @@ the Python path fixes one:
                  (``Dop853DenseOutput``; ``RkDenseOutput`` with ``Q = K^T P``)
 * ``_path_velocity`` ``analyses._path.PathSystem.velocities`` (a nonholonomic path's
                  derivative, velocity constraints linear in the velocities; decision 0027),
-                 and ``path_accelerations`` its ``accelerations`` at the outputs
+                 and ``path_accelerations`` its ``accelerations`` at the outputs; above
+                 ``SMALL_LU`` coordinates ``_path_velocity_sparse`` (its ``_velocities_sparse``:
+                 the fixed pattern and the compiled sparse LU)
 * ``_newton_accel`` ``solvers._free.free_acceleration`` when the loads depend on the
                  multipliers or accelerations (its Newton on ``(qdd, lambda)``)
 * ``_accel_gen`` ``compile._generalized.RecursiveDynamics`` (generalized coordinates,
@@ -244,6 +246,10 @@ def _other_rhs(blocks, kp, lapack, ibuf, x, nin, out, KT, n, m, jr, jc, columns,
     """``_rhs`` of the kinds ``PATH`` (``f = qd``), ``SPARSE`` and ``NEWTON`` (``f = (qd,
     qdd)``; above ``SMALL_LU`` unknowns through the Newton matrix's banded pattern,
     ``_newton_accel_band``)."""
+    if blocks == PATH and blk_i[0][7].size > 1:
+        return _path_velocity_sparse(kp, x, out, n, m, jr, jc, columns, qdd, blk_i[0],
+                                     blk_w[0], blk_i[2][0], blk_w[2][0], blk_i[2][2],
+                                     blk_w[2][2], t, y, f)
     if blocks == PATH:
         return _path_velocity(kp, x, out, KT, n, m, jr, jc, columns, ipiv, rhs, b, qdd,
                               blk_i[0][0], blk_w[0], blk_i[2][0], blk_w[2][0], blk_i[2][2],
@@ -758,7 +764,7 @@ def _min_norm_sparse(r, columns, bvec, out, n, m, jr, jc, jv, bi, bw, robust):
     for s in range(nK):
         k = kperm[s] - kM
         if k >= 0 and k < kJ:
-            Bx[pos[s]] += (jv[k] * columns[jc[k]]) / r[jr[k]]
+            Bx[pos[s]] += jv[k] * (columns[jc[k]] / r[jr[k]])   # (Scaling.scaled's)
     for j in range(n):
         Bx[dpos[j]] += 1.0
     ratio = _slu_factor(bi, bw)
@@ -774,6 +780,50 @@ def _min_norm_sparse(r, columns, bvec, out, n, m, jr, jc, jv, bi, bw, robust):
     for j in range(n):
         out[j] = columns[j] * sol[j]
     return True
+
+
+@leaf
+def _path_converged(R, r, out, last, columns, n, m, k, f):
+    """The velocity Newton's test (``PathSystem.velocities``): ``R``'s last ``k`` entries from
+    the velocity constraints' values ``out[:k]``; 1 (``f = last``) when every scaled residual
+    ``|R_i| / r_i`` is within ``1e-12 (1 + max |qd_j| / c_j)``, -1 when one is not finite
+    (hand over), else 0."""
+    for i in range(k):
+        R[m + i] = out[i]
+    big = 0.0
+    qmax = 0.0
+    for i in range(n):
+        v = abs(R[i] / r[i])
+        if not v <= big:             # NaN too
+            big = v
+        v = abs(last[i] / columns[i])
+        if v > qmax:
+            qmax = v
+    if not np.isfinite(big):
+        return -1
+    if big <= 1e-12 * (1.0 + qmax):
+        for j in range(n):
+            f[j] = last[j]
+        return 1
+    return 0
+
+
+@leaf
+def _path_step(dq, last, f, n, linear):
+    """The Newton step ``last <- last - dq``: -1 (hand over) at a value not finite; 1 (``f =
+    last``) when the velocity constraints are linear in the velocities (one step solves
+    them), else 0."""
+    for j in range(n):
+        dq[j] = last[j] - dq[j]
+        if not np.isfinite(dq[j]):
+            return -1
+    for j in range(n):
+        last[j] = dq[j]
+    if linear:
+        for j in range(n):
+            f[j] = last[j]
+        return 1
+    return 0
 
 
 @leaf
@@ -828,91 +878,201 @@ def _path_velocity(kp, x, out, KT, n, m, jr, jc, columns, ipiv, w1, w2, last, in
             for j in range(n):
                 acc += J[i, j] * last[j]
             R[i] = acc - (-out_vel[nnz + i])
-        for i in range(k):
-            R[m + i] = out[i]
-        big = 0.0
-        qmax = 0.0
-        for i in range(n):
-            v = abs(R[i] / r[i])
-            if not v <= big:             # NaN too
-                big = v
-            v = abs(last[i] / columns[i])
-            if v > qmax:
-                qmax = v
-        if not np.isfinite(big):
-            return False
-        if big <= 1e-12 * (1.0 + qmax):
-            for j in range(n):
-                f[j] = last[j]
-            return True
+        done = _path_converged(R, r, out, last, columns, n, m, k, f)
+        if done != 0:
+            return done > 0
         if not _factor_checked(KT, n, ipiv, w1, w2):
             return False
         for i in range(n):
             dq[i] = R[i]
         getrs(KT, n, ipiv, dq)
+        done = _path_step(dq, last, f, n, linear)
+        if done != 0:
+            return done > 0
+    return False                         # not converged: the Python path says so
+
+
+# The sparse path (a path above ``SMALL_LU`` coordinates, ``FreeStepper.plan_path``): its
+# structure is the sparse kind's ``bi`` of the projection's matrix ``[[I, J^T], [J^, 0]]``
+# (``_min_norm_sparse`` reads it unchanged), with the velocity system ``K = [Phi_q; psi_qd]``'s
+# pattern appended to each array: ``info[7:14]`` is ``K``'s ``bi`` head, ``info[14:]`` = [k,
+# npar, the holonomic velocity kernel's row (5), linear, nE (K's entries), nb (psi_qd's
+# kernel nonzeros), and the offsets of K's part in pos (its slots in kperm), Bp, Bi, perms,
+# dpos (K's entries' rows, then columns)]; ``_jit_free._path_sparse_structure``. The
+# sparse LU's storage ``LUi`` and the float work serve both (each sized for the larger).
+PATH_HEAD = 14
+
+
+@nb.njit(cache=True, inline='always')
+def _path_k(bi):
+    """``(K's sparse-LU structure in the layout of bi (see above), nb, the columns of its
+    entries)``. (Inlined: it returns array views, which a leaf, compiled without reference
+    counting, must not hand to a caller that counts them.)"""
+    info = bi[0]
+    n, nBK = info[7], info[9]
+    nE, nb = info[PATH_HEAD + 8], info[PATH_HEAD + 9]
+    oPos, oBp, oBi = info[PATH_HEAD + 10], info[PATH_HEAD + 11], info[PATH_HEAD + 12]
+    oPerm, oRC = info[PATH_HEAD + 13], info[PATH_HEAD + 14]
+    nnz_nb = bi[2].size - oPos
+    rk = bi[6][oRC:oRC + nE]
+    biK = (info[7:PATH_HEAD], bi[1][oPos:oPos + nE], bi[2][oPos:oPos + nnz_nb],
+           bi[3][oBp:oBp + n + 1], bi[4][oBi:oBi + nBK], bi[5][oPerm:oPerm + 2 * n], rk, bi[7])
+    return biK, nb, bi[6][oRC + nE:oRC + 2 * nE]
+
+
+@leaf
+def _path_k_values(biK, nb, ck, jv, nnz, psi_qd, columns, data, r):
+    """``K``'s values in its pattern's entry order and its row scales (``analyses._path.
+    PathSystem._sparse_values``, operation for operation): ``data`` (nE,) the sums of the
+    Jacobian's values ``jv`` and ``psi_qd``'s nonzeros at their slots, ``r`` (n,) the largest
+    ``|K_ij| c_j`` of each row (1 for an empty one)."""
+    slots, rk = biK[2], biK[6]
+    nE = rk.size
+    for e in range(nE):
+        data[e] = 0.0
+    for s in range(nnz):
+        data[slots[s]] += jv[s]
+    for s in range(nb):
+        data[slots[nnz + s]] += psi_qd[s]
+    _rows_nz(data[:nE], rk, ck, columns, r)
+
+
+@leaf
+def _path_k_factor(biK, bw, ck, data, columns, r):
+    """``_slu_factor`` of ``R^-1 K D`` from :func:`_path_k_values`' ``data`` and ``r``
+    (``PathSystem._sparse_values``' scaled values, ``_linalg._SparseFactor``'s placement):
+    the pivot ratio, or -1 (hand over)."""
+    pos, rk = biK[1], biK[6]
+    Bx = bw[0]
+    for e in range(rk.size):
+        Bx[pos[e]] = data[e] * (columns[ck[e]] / r[rk[e]])
+    return _slu_factor(biK, bw)
+
+
+@leaf
+def _path_velocity_sparse(kp, x, out, n, m, jr, jc, columns, last, bi, bw, ex_psi, ph_psi,
+                          ex_vel, ph_vel, t, q, f):
+    """:func:`_path_velocity` above ``SMALL_LU`` coordinates (``PathSystem.
+    _velocities_sparse``, operation for operation): ``K`` gathered into its fixed pattern and
+    factorised by the compiled sparse LU, as the Python path does. ``bw[3]`` holds the
+    vectors ``(-, velocity kernel outputs, R, r, K's values, dq)`` in its rows."""
+    info = bi[0]
+    k, npar = info[PATH_HEAD], info[PATH_HEAD + 1]
+    linear = info[PATH_HEAD + 7] != 0
+    biK, nb, ck = _path_k(bi)
+    W = bw[3]
+    out_vel, R, r, data, dq = W[1], W[2], W[3], W[4], W[5]
+    rhs = bw[4]
+    nnz = jr.size
+    nin_k = 1 + 2 * n + npar
+    x[0] = t
+    for j in range(n):
+        x[1 + j] = q[j]
+        x[1 + n + j] = 0.0
+    if m > 0:
+        _evalx(info[PATH_HEAD + 2:PATH_HEAD + 7], x, nin_k, out_vel, ex_vel, ph_vel)
+    for _ in range(20):
         for j in range(n):
-            dq[j] = last[j] - dq[j]
-            if not np.isfinite(dq[j]):
-                return False
+            x[1 + n + j] = last[j]
+        _evalx(kp, x, nin_k, out, ex_psi, ph_psi)
+        _path_k_values(biK, nb, ck, out_vel, nnz, out[k:k + nb], columns, data, r[:n])
+        for i in range(m):
+            R[i] = 0.0
+        for s in range(nnz):
+            R[jr[s]] += out_vel[s] * last[jc[s]]
+        for i in range(m):
+            R[i] = R[i] - (-out_vel[nnz + i])
+        done = _path_converged(R, r, out, last, columns, n, m, k, f)
+        if done != 0:
+            return done > 0
+        if _path_k_factor(biK, bw, ck, data, columns, r) < 0:
+            return False
+        for i in range(n):
+            rhs[i] = R[i] / r[i]
+        _slu_solve(biK, bw, rhs, dq)
         for j in range(n):
-            last[j] = dq[j]
-        if linear:
-            for j in range(n):
-                f[j] = last[j]
-            return True
+            dq[j] = columns[j] * dq[j]       # (the step in the unknowns' units)
+        done = _path_step(dq, last, f, n, linear)
+        if done != 0:
+            return done > 0
     return False                         # not converged: the Python path says so
 
 
 @nb.njit(cache=True)
-def path_accelerations(kp, ex, times, Q, QD, p, jr, jc, k, QDD):
+def path_accelerations(kp, ex, times, Q, QD, p, jr, jc, k, bi, bw, QDD):
     """A path's accelerations at each output row (``analyses._path.PathSystem.accelerations``,
     operation for operation): ``[Phi_q; psi_qd] qdd = [gamma; -rest]``. ``kp`` (3, 5) the
-    position, gamma and velocity-constraint kernels' rows, ``ex`` their output maps (CSE
-    kernels). Returns the first row left to the Python path (a singular or nearly singular
-    matrix: it raises the diagnosis), ``len(times)`` when all are done."""
+    Jacobian's (position kernel; above ``SMALL_LU`` coordinates the velocity kernel, as the
+    Python path), gamma and velocity-constraint kernels' rows, ``ex`` their output maps (CSE
+    kernels); ``bi``, ``bw`` the stepper's structure and float work (above ``SMALL_LU``
+    coordinates ``K`` by its pattern and the compiled sparse LU, unit column scales).
+    Returns the first row left to the Python path (a singular or nearly singular matrix: it
+    raises the diagnosis), ``len(times)`` when all are done."""
     N, n = Q.shape
     m = n - k
     nnz = jr.size
     npar = p.size
     nin = 1 + 2 * n + npar
+    sparse = bi[7].size > 1
     x = np.zeros(nin + max(kp[0, 4], kp[1, 4], kp[2, 4], 0))
     for j in range(npar):
         x[1 + 2 * n + j] = p[j]
-    out_pos = np.empty(m + nnz)
+    nb = bi[0][PATH_HEAD + 9] if sparse else 0
+    out_J = np.empty(m + nnz)
     g = np.empty(m)
-    out = np.empty(2 * k + k * n)
+    out = np.empty(2 * k + (nb if sparse else k * n))
     ph = (np.zeros(ex[0].max() + 1 if ex[0].size else 1),
           np.zeros(ex[1].max() + 1 if ex[1].size else 1),
           np.zeros(ex[2].max() + 1 if ex[2].size else 1))
-    J = np.zeros((m, n))
-    KT = np.empty((n, n))
-    ipiv = np.empty(n, dtype=np.int32)
-    w = np.empty(2 * n)
+    side = 1 if sparse else n
+    J = np.zeros((side if m else 0, side))
+    KT = np.empty((side, side))
+    ipiv = np.empty(side, dtype=np.int32)
+    w = np.empty(2 * side)
+    ones = np.ones(n)
+    data = np.empty(bi[0][PATH_HEAD + 8] if sparse else 1)
+    r = np.empty(n)
     b = np.empty(n)
+    sol = np.empty(n)
+    tail = k + (nb if sparse else k * n)      # where ``rest`` starts in ``out``
     for row in range(N):
         x[0] = times[row]
         for j in range(n):
             x[1 + j] = Q[row, j]
             x[1 + n + j] = 0.0
         if m > 0:
-            _evalx(kp[0], x, nin, out_pos, ex[0], ph[0])
-            _assemble(out_pos, m, jr, jc, J)
+            _evalx(kp[0], x, nin, out_J, ex[0], ph[0])
+            if not sparse:
+                _assemble(out_J, m, jr, jc, J)
         for j in range(n):
             x[1 + n + j] = QD[row, j]
         if m > 0:
             _evalx(kp[1], x, nin, g, ex[1], ph[1])
         _evalx(kp[2], x, nin, out, ex[2], ph[2])
-        for i in range(m):
+        if sparse:
+            biK, _, ck = _path_k(bi)
+            _path_k_values(biK, nb, ck, out_J, nnz, out[k:k + nb], ones, data, r)
+            if _path_k_factor(biK, bw, ck, data, ones, r) < 0:
+                return row
+            for i in range(m):
+                b[i] = g[i] / r[i]
+            for i in range(k):
+                b[m + i] = -out[tail + i] / r[m + i]
+            _slu_solve(biK, bw, b, sol)
             for j in range(n):
-                KT[j, i] = J[i, j]
-            b[i] = g[i]
-        for i in range(k):
-            for j in range(n):
-                KT[j, m + i] = out[k + i * n + j]
-            b[m + i] = -out[k + k * n + i]
-        if not _factor_checked(KT, n, ipiv, w, w[n:]):
-            return row
-        getrs(KT, n, ipiv, b)
+                b[j] = ones[j] * sol[j]
+        else:
+            for i in range(m):
+                for j in range(n):
+                    KT[j, i] = J[i, j]
+                b[i] = g[i]
+            for i in range(k):
+                for j in range(n):
+                    KT[j, m + i] = out[k + i * n + j]
+                b[m + i] = -out[tail + i]
+            if not _factor_checked(KT, n, ipiv, w, w[n:]):
+                return row
+            getrs(KT, n, ipiv, b)
         for j in range(n):
             if not np.isfinite(b[j]):
                 return row
@@ -992,7 +1152,7 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
     # the Jacobian's values straight from the kernels (each entry once), the correction
     # through the augmented matrix's pattern (_min_norm_sparse)
     band = blocks == NEWTON and blk_i[0][7].size > 1
-    sparse = blocks == SPARSE
+    sparse = blocks == SPARSE or (blocks == PATH and blk_i[0][7].size > 1)
     nnz = jr.size
     xk[0] = t
     for j in range(n):
@@ -1579,7 +1739,8 @@ def workspace(kp, n, m, npar, kk, nnz, blocks, blk_i, bw):
     NN = n + m
     # the dense matrix: the augmented system, a path's velocity system (n x n), else unused
     side = NN if blocks == AUGMENTED or blocks == NEWTON else (n if blocks == PATH else 1)
-    banded = (blocks == NEWTON and blk_i[0][7].size > 1) or blocks == SPARSE
+    banded = ((blocks == NEWTON or blocks == PATH) and blk_i[0][7].size > 1) \
+        or blocks == SPARSE
     if banded:
         side = 1                      # (the Newton matrix and projections by its pattern)
     KTf = np.empty(side * side)
@@ -1603,7 +1764,16 @@ def _block_work(blocks, blk_i, n, m, bw, nnz):
     ``((Mst, Jst, Wst, Sb, u, Pst, Minv, Li), Gen work (_gen_work), (the three kernels'
     distinct outputs))``; a path's ``(velocity kernel outputs, R, r, J, dq, -, -, -)`` in the
     first (``_path_velocity``)."""
-    if blocks == PATH:
+    if blocks == PATH and blk_i[0][7].size > 1:
+        # the projection's and the velocity system's sparse LU (each array for the larger),
+        # and the vectors of _path_velocity_sparse in the rows of the fourth
+        info = blk_i[0][0]
+        N, nE = info[0], info[PATH_HEAD + 8]
+        L = max(N, nnz + m, nE)
+        bw_ = (np.zeros(max(info[2], info[9])), np.zeros(max(info[5], info[12])),
+               np.zeros(max(info[6], info[13])), np.zeros((6, L)), np.zeros(N), np.zeros(N),
+               np.zeros(N), np.zeros(N))
+    elif blocks == PATH:
         bw_ = (np.zeros(nnz + m), np.zeros(n), np.zeros(n), np.zeros((m, n)), np.zeros(n),
                np.zeros(1), np.zeros(1), np.zeros(1))
     elif blocks == NEWTON:

@@ -232,14 +232,15 @@ def pattern_slots(rows, cols, size: int, r, c) -> np.ndarray:
     return k
 
 
-def pattern_of(rows, cols, size: int, match_rows: bool = False):
+def pattern_of(rows, cols, size: int, match_rows: bool = False, sparse: bool = False):
     """``(rows, cols, FixedPattern)`` of a square matrix whose entries can be nonzero at
     ``(rows[k], cols[k])`` (duplicates merged): the entries' rows and columns in CSC order
-    (gather a dense matrix's values as ``A[rows, cols]``) and their pattern."""
+    (gather a dense matrix's values as ``A[rows, cols]``) and their pattern (``match_rows``,
+    ``sparse``: :class:`FixedPattern`'s)."""
     key = np.unique(np.asarray(cols, dtype=np.int64) * size + np.asarray(rows, dtype=np.int64))
     r, c = key % size, key // size
     return r, c, FixedPattern(np.searchsorted(c, np.arange(size + 1)), r, size,
-                              match_rows=match_rows)
+                              match_rows=match_rows, sparse=sparse)
 
 
 class _BandFactor:

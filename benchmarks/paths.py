@@ -1,0 +1,69 @@
+"""Nonholonomic paths at scale: a tractor towing trailers (``models.trailer_train``), every
+blade rolling without side slip, Python and compiled steppers side by side.
+
+Each row: 3 s at rtol 1e-10 (DOP853), 31 outputs; CPU time per evaluation (median of
+interleaved repetitions, after a warm-up run that compiles) for ``MECHSYS_JIT=0`` and
+``1``, the run's time compiled, the largest difference of the two results relative to
+their size, and the compiled run's distance of the tractor's blade from its closed-form
+circle. Up to 150 coordinates the velocity system is dense (the written-out LU); above,
+both steppers gather it into its fixed pattern and factorise it by the same compiled sparse
+LU, and project through ``[[I, J^T], [J^, 0]]`` (decision 0027).
+
+Run: ``.venv/bin/python benchmarks/paths.py`` prints the table (about a minute);
+``--write docs/performance-free.md`` also puts it in that page (its ``paths`` block).
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")  # before NumPy loads: CPU time of one thread
+
+import sys  # noqa: E402
+import warnings  # noqa: E402
+
+import numpy as np  # noqa: E402
+from _machine import both_loops, relative_difference, table_main  # noqa: E402  (sibling module)
+
+from mechsys import models  # noqa: E402
+
+TRAILERS = (10, 50, 100, 200)
+SPEED, RATE = 2.0, 0.4
+
+
+def tables(rounds: int = 3) -> str:
+    warnings.simplefilter("ignore")
+    t = np.linspace(0.0, 3.0, 31)
+    R = SPEED / RATE
+    circle = np.c_[R * np.sin(RATE * t), R * (1 - np.cos(RATE * t))]
+    out = ["Tractor and trailers, 3 s, DOP853 rtol 1e-10:", "",
+           "| trailers | coordinates | Python / evaluation | compiled / evaluation | ratio | "
+           "compiled run | difference (q) | blade off its circle |",
+           "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    for k in TRAILERS:
+        path = models.trailer_train(k, speed=SPEED, rate=RATE)
+        got = both_loops(lambda path=path: path.simulate(t, rtol=1e-10, atol=1e-12), rounds)
+        (tp, py), (tc, jit) = got["0"], got["1"]
+        ep, ec = tp / py.extra["evaluations"], tc / jit.extra["evaluations"]
+        assert jit.extra["compiled_steps"] == jit.extra["steps"]
+        off = np.abs(jit.location(path.model.body("tractor").point("blade")) - circle).max()
+        out.append(f"| {k} | {path.system.n} | {ep * 1e6:.0f} µs | {ec * 1e6:.0f} µs | "
+                   f"{ep / ec:.1f} | {tc * 1e3:.1f} ms | "
+                   f"{relative_difference(jit.q, py.q):.1e} | {off:.1e} |")
+    return "\n".join(out)
+
+
+INTRO = ("`MECHSYS_JIT=0` (the Python stepper) and `1` (the compiled loop) side by side, CPU "
+         "time with one BLAS thread, the median of interleaved repetitions after a warm-up "
+         "run. Above 150 coordinates both solve the velocity system `[Phi_q; psi_qd]` through "
+         "its fixed pattern by the same compiled sparse LU (decision 0027).")
+
+
+def main(argv=None) -> int:
+    return table_main(__doc__, "paths", "Nonholonomic paths (tractor and trailers)", INTRO,
+                      tables, argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
