@@ -389,13 +389,18 @@ def _path_sparse_structure(path):
 def _newton_band(system):
     """The structure array of ``_jit_free_loop._newton_accel_band`` (see there): the Newton
     matrix's ``FixedPattern`` (``solvers._free._newton_pattern``, the Python path's) and where
-    each term's values go in it; None when the pattern is not banded."""
+    each term's values go in it, and for a pattern that is not banded (trees of many
+    branches) the compiled sparse LU's integer store; None when such a pattern has no
+    compiled LU (the Python path's SuperLU)."""
     from ._free import _newton_pattern
     from ._jit_free_loop import BAND_HEAD
-    from ._linalg import pattern_slots
+    from ._jit_loop import SPARSE as SPARSE_BW
+    from ._jit_sparse import IWORK
+    from ._linalg import _sparse_lu, pattern_slots
 
     rows, cols, pat = _newton_pattern(system)
-    if not pat.banded:
+    sparse = not pat.banded
+    if sparse and (_sparse_lu() is None or not hasattr(pat, "s_indptr")):
         return None
     dyn = system.dynamics
     n, m = system.n, system.m
@@ -417,11 +422,21 @@ def _newton_band(system):
     if not present.all():
         return None          # (a coordinate without mass: the projection needs the diagonal)
     k = slot(diag, diag)
-    head = [pat.kl, pat.ku, pat._ld, rows.size, uniq.size, sM.size, sA.size, sD.size, n]
+    P = rows.size
+    if sparse:
+        # (the sizes of _jit_loop.big_sizes; the integer store starts with B's structure)
+        capL, capU = pat._cap
+        bw, store = [SPARSE_BW, P, capL, capU], P + capL + capU + 3 * N
+        SI = np.concatenate([pat.s_indptr, pat.s_indices,
+                             np.zeros((IWORK + 3) * N + 2 + capL + capU, dtype=np.int64)])
+    else:
+        bw, store, SI = [0, 0, 0, 0], pat._ld * N, z
+    head = [pat.kl, pat.ku, 0 if sparse else pat._ld, P, uniq.size, sM.size, sA.size, sD.size,
+            n, *bw, store]
     assert len(head) == BAND_HEAD
     return np.concatenate([np.array(head), pat._pos, rows, cols, pat.row_perm, pat.perm, sM, sA,
                            sD, uid.ravel(), urow, ucol, slot(n + urow, ucol),
-                           slot(ucol, n + urow), k]).astype(np.int64)
+                           slot(ucol, n + urow), k, SI]).astype(np.int64)
 
 
 class StepDense:
@@ -628,8 +643,10 @@ class FreeStepper:
         ``SMALL_LU`` unknowns, a ``Dynamics`` (not the recursive one), LLVM kernels whose
         outputs are all distinct and whose derivatives of the loads have no Piecewise stage.
         ``newton``: ``free_acceleration``'s keyword options (``tol``, ``max_iterations``).
-        Above ``SMALL_LU`` unknowns the Newton matrix goes by its fixed pattern when that is
-        banded (``_newton_band``; else None: the Python path's SuperLU)."""
+        Above ``SMALL_LU`` unknowns the Newton matrix goes by the Python path's fixed pattern
+        (``_newton_band``): banded (chains) by LAPACK's band LU, else (trees of many
+        branches) by the compiled sparse LU; None only where the Python path has no
+        compiled LU either (no Numba: SuperLU)."""
         from ._jit_loop import SMALL as SMALL_LU
 
         dyn = system.dynamics

@@ -45,9 +45,12 @@ from ._jit_borrow import borrow
 from ._jit_cache import check as _check_cache
 from ._jit_lapack import gecon1, getrf, getrs, leaf
 from ._jit_loop import SMALL as SMALL_LU
+from ._jit_loop import SPARSE as SPARSE_BW
 from ._jit_loop import _assemble, _ccall, _eval, _norm1, _rows, _rows_nz
 from ._jit_loop import _band_factor as _gb_factor
 from ._jit_loop import _band_solve as _gb_solve
+from ._jit_loop import _sparse_factor as _sp_factor
+from ._jit_loop import _sparse_solve_scaled as _sp_solve_scaled
 from ._jit_sparse import IWORK, lu_factor, lu_pivot_ratio, lu_solve
 from ._jit_tree import articulated as _articulated
 from ._jit_tree import assemble as _gen_assemble
@@ -448,8 +451,39 @@ def _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, w1, w2, qdd, lam, inf
 
 #: the header of ``_newton_accel_band``'s structure array: kl, ku, ld, the pattern's
 #: entries, the Jacobian's distinct positions, the mass matrix's, dQ/dqdd's and
-#: dQ/dlambda's entries, n
-BAND_HEAD = 9
+#: dQ/dlambda's entries, n; then the sparse LU's ``bw`` (``_jit_loop.big_sizes``: ``SPARSE``,
+#: the pattern's entries, capL, capU; zeros for a banded pattern) and the length of the
+#: factors' float store (``ld (n + m)`` banded, ``big_sizes``' first size sparse)
+BAND_HEAD = 14
+
+
+@nb.njit(cache=True, inline='always')
+def _nb_sparse(bnd, nj, N):
+    """``(sparse, SI)`` of ``_newton_accel_band``'s structure ``bnd``: whether its pattern goes
+    by the compiled sparse LU (a wide band: trees), and that LU's integer store (``_jit_loop.
+    _sparse_factor``'s ``SI``, after the diagonal's slots). (Inlined: it returns a view.)"""
+    return bnd[9] == SPARSE_BW, bnd[_band_jmap(bnd, nj, N) + nj + 4 * bnd[4] + bnd[8]:]
+
+
+@leaf
+def _nb_factor(blapack, bnd, data, prow, pcol, pos, ones, AB, ipiv, bi, sparse, SI):
+    """The Newton matrix's factorisation as the Python path's ``FixedPattern.factor`` makes
+    it: LAPACK's ``dgbtrf`` for a banded pattern, else the compiled sparse LU (the same
+    function); the pivot ratio or -1."""
+    if sparse:
+        return _sp_factor(data, prow, pcol, pos, ones, ones, AB, bnd[9:13], SI)
+    return _gb_factor(blapack, data, prow, pcol, pos, ones, ones, AB, bnd[0:3], ipiv, bi)
+
+
+@leaf
+def _nb_solve(blapack, AB, bnd, ipiv, row_perm, perm, ones, b, out, tmp, bi, cbuf, sparse, SI):
+    """Solve with :func:`_nb_factor`'s factors (``_BandFactor.solve``, ``_Permuted.solve``)."""
+    if sparse:
+        # (``tmp`` may be longer than the system: the sparse solve takes its size from it)
+        _sp_solve_scaled(AB, bnd[9:13], SI, row_perm, perm, ones, ones, b, out,
+                         tmp[:ones.size], False)
+    else:
+        _gb_solve(blapack, AB, bnd[0:3], ipiv, row_perm, perm, ones, ones, b, out, tmp, bi, cbuf)
 
 
 @leaf
@@ -489,7 +523,7 @@ def _min_norm_band(lapack, bi, ipiv, r, columns, bvec, out, n, m, jr, bnd, w):
     values ``Jv`` are in ``w`` (``_band_rows_of``). False (hand over) at a pivot ratio below
     ``RCOND_MIN`` (``J`` without full rank)."""
     N = n + m
-    P, U, ld = bnd[3], bnd[4], bnd[2]
+    P, U = bnd[3], bnd[4]
     o = BAND_HEAD
     pos, prow, pcol = bnd[o:o + P], bnd[o + P:o + 2 * P], bnd[o + 2 * P:o + 3 * P]
     o += 3 * P
@@ -498,8 +532,8 @@ def _min_norm_band(lapack, bi, ipiv, r, columns, bvec, out, n, m, jr, bnd, w):
     urow, ucol, sJ, sJT = bnd[o:o + U], bnd[o + U:o + 2 * U], bnd[o + 2 * U:o + 3 * U], \
         bnd[o + 3 * U:o + 4 * U]
     sdiag = bnd[o + 4 * U:o + 4 * U + n]
-    Jv, data, AB = w[0:U], w[U:U + P], w[U + P:U + P + ld * N]
-    o2 = U + P + ld * N
+    Jv, data, AB = w[0:U], w[U:U + P], w[U + P:U + P + bnd[13]]
+    o2 = U + P + bnd[13]
     ones, tmp, sol, tmp2 = (w[o2:o2 + N], w[o2 + N:o2 + 2 * N], w[o2 + 2 * N:o2 + 3 * N],
                             w[o2 + 3 * N:o2 + 4 * N])
     for k in range(P):
@@ -512,15 +546,15 @@ def _min_norm_band(lapack, bi, ipiv, r, columns, bvec, out, n, m, jr, bnd, w):
         data[sJT[u]] += v
     for i in range(N):
         ones[i] = 1.0
-    if _gb_factor(lapack[4:6], data, prow, pcol, pos, ones, ones, AB, bnd[0:3], ipiv,
-                  bi) < 0:
+    sparse, SI = _nb_sparse(bnd, jr.size, N)
+    if _nb_factor(lapack[4:6], bnd, data, prow, pcol, pos, ones, AB, ipiv, bi, sparse, SI) < 0:
         return False
     for j in range(n):
         tmp[j] = 0.0
     for i in range(m):
         tmp[n + i] = bvec[i]
-    _gb_solve(lapack[4:6], AB, bnd[0:3], ipiv, row_perm, perm, ones, ones, tmp, sol, tmp2,
-              bi, bi[7:8].view(np.uint8))
+    _nb_solve(lapack[4:6], AB, bnd, ipiv, row_perm, perm, ones, tmp, sol, tmp2, bi,
+              bi[7:8].view(np.uint8), sparse, SI)
     for j in range(n):
         out[j] = columns[j] * sol[j]
     return True
@@ -531,18 +565,20 @@ def _newton_accel_band(kp, lapack, bi, x, nin, out, n, m, jr, jc, ipiv, qdd, lam
                        Dr, Dc, Ar, Ac, bnd, nw, ex, ph, t, y, f):
     """``_newton_accel`` for large systems: the same Newton on ``(qdd, lambda)`` and the same
     unit-free convergence test, with the Jacobian held by its distinct nonzeros and the
-    Newton matrix by its fixed pattern (``solvers._free._newton_pattern``: reverse
-    Cuthill-McKee, banded), factorised by LAPACK's ``dgbtrf`` as the Python path's
-    ``FixedPattern.factor`` does: no dense ``(n + m)^2`` array, work linear in the number of
-    bodies for chains. ``bnd`` (int64): ``[kl, ku, ld, P, U, kM, nA, nD, n]``, then the
-    pattern's band
+    Newton matrix by its fixed pattern (``solvers._free._newton_pattern``), factorised as the
+    Python path's ``FixedPattern.factor`` does: LAPACK's ``dgbtrf`` in the reverse
+    Cuthill-McKee band (chains), or the compiled sparse LU in the minimum-degree ordering
+    (trees of many branches, ``_nb_factor``): no dense ``(n + m)^2`` array, work linear in
+    the number of bodies. ``bnd`` (int64): the head ``[kl, ku, ld, P, U, kM, nA, nD, n,
+    sparse LU's bw (4), S]`` (``BAND_HEAD``), then the pattern's band (or sparse)
     positions, rows and columns (P each), ``row_perm`` and ``perm`` (n + m each), the
     pattern slots of the mass-matrix, ``dQ/dqdd`` and ``dQ/dlambda`` entries, the distinct
     Jacobian position of each Jacobian value (``jr.size``), the distinct positions' rows,
     columns, and slots in the ``Phi_q`` and ``Phi_q^T`` blocks (U each), the slots of the
-    diagonal of the first block (n; ``_min_norm_band``). ``nw[3]`` (1, U +
-    P + ld (n + m) + 4 (n + m)) holds the Jacobian's values, the pattern's values, the
-    band storage and four vectors. ``bi``: int32 work (8: LAPACK's integer arguments,
+    diagonal of the first block (n; ``_min_norm_band``), and for the sparse LU its integer
+    store. ``nw[3]`` (1, U + P + S + 4 (n + m)) holds the Jacobian's values, the pattern's
+    values, the factors' store (``S``: the band, or ``_jit_loop.big_sizes``' float store)
+    and four vectors. ``bi``: int32 work (8: LAPACK's integer arguments,
     the last one's bytes its character argument); ``lapack[4:6]``: ``dgbtrf``,
     ``dgbtrs``. False: hand over (as ``_newton_accel``)."""
     xk, out_pos, g, W, od, oa, res, tolv = nw
@@ -562,10 +598,10 @@ def _newton_accel_band(kp, lapack, bi, x, nin, out, n, m, jr, jc, ipiv, qdd, lam
     o += jr.size
     urow, ucol, sJ, sJT = bnd[o:o + U], bnd[o + U:o + 2 * U], bnd[o + 2 * U:o + 3 * U], \
         bnd[o + 3 * U:o + 4 * U]
-    ld = bnd[2]
     w = W[0]
-    Jv, data, AB = w[0:U], w[U:U + P], w[U + P:U + P + ld * N]
-    o2 = U + P + ld * N
+    Jv, data, AB = w[0:U], w[U:U + P], w[U + P:U + P + bnd[13]]
+    o2 = U + P + bnd[13]
+    sparse, SI = _nb_sparse(bnd, jr.size, N)
     ones, tmp, sol = w[o2:o2 + N], w[o2 + N:o2 + 2 * N], w[o2 + 2 * N:o2 + 3 * N]
     blapack = lapack[4:6]
     cbuf = bi[7:8].view(np.uint8)        # (dgbtrs's character argument, in bi's last entry)
@@ -645,12 +681,12 @@ def _newton_accel_band(kp, lapack, bi, x, nin, out, n, m, jr, jc, ipiv, qdd, lam
             dr = tolv[1 + r_] / mu if r_ < n else 1.0 / tolv[1 + r_]
             dc = tolv[1 + c_] if c_ < n else mu / tolv[1 + c_]
             data[k] = (dr * data[k]) * dc
-        if _gb_factor(blapack, data, prow, pcol, pos, ones, ones, AB, bnd[0:3], ipiv, bi) < 0:
+        if _nb_factor(blapack, bnd, data, prow, pcol, pos, ones, AB, ipiv, bi, sparse, SI) < 0:
             return False
         for i in range(N):
             tmp[i] = -((tolv[1 + i] / mu if i < n else 1.0 / tolv[1 + i]) * res[i])
-        _gb_solve(blapack, AB, bnd[0:3], ipiv, row_perm, perm, ones, ones, tmp, sol, res, bi,
-                  cbuf)
+        _nb_solve(blapack, AB, bnd, ipiv, row_perm, perm, ones, tmp, sol, res, bi, cbuf, sparse,
+                  SI)
         for j in range(n):
             qdd[j] += tolv[1 + j] * sol[j]
             x[1 + 2 * n + m + npar + j] = qdd[j]
@@ -1783,7 +1819,7 @@ def _block_work(blocks, blk_i, n, m, bw, nnz):
         # the Jacobian dense, or (banded) its values, the pattern's, the band storage and
         # three vectors (_newton_accel_band)
         J = np.zeros((m, n)) if bnd.size <= 1 else np.zeros(
-            (1, bnd[4] + bnd[3] + (bnd[2] + 4) * (n + m)))
+            (1, bnd[4] + bnd[3] + bnd[13] + 4 * (n + m)))
         bw_ = (np.zeros(1 + 2 * n + info[5] + pieces), np.zeros(m + nnz), np.zeros(m),
                J, np.zeros(max(info[3], 1)), np.zeros(max(info[4], 1)),
                np.zeros(2 * n + m), np.zeros(1 + n + m))
