@@ -230,21 +230,38 @@ def _friction_chain():
     return m
 
 
+def _friction_radial():
+    """``models.radial_engine(30)`` (183 coordinates, every rod on the crank pin) with
+    friction in every rod's crank-pin bearing: a Newton matrix whose pattern is a star."""
+    m = models.radial_engine(30, g=9.81)
+    for k in range(30):
+        m.add_load(ms.JointFriction(f"pin{k}", mu=0.2, radius=0.05, v_eps=1e-3))
+    return m
+
+
 @pytest.mark.parametrize("mode", ["kinematic", "dynamic"])
-def test_large_model_with_friction_runs_compiled_through_the_band(monkeypatch, mode):
+@pytest.mark.parametrize("build,plain", [(_friction_chain, _loaded_chain),
+                                         (_friction_radial, lambda: models.radial_engine(
+                                             30, g=9.81))], ids=["chain", "radial"])
+def test_large_model_with_friction_runs_compiled_through_the_band(monkeypatch, mode, build,
+                                                                   plain):
     """Above SPARSE_THRESHOLD coordinates, loads that depend on the multipliers: the loop's
-    Newton factorises ``Phi_q^T - dQ/dlambda`` through the Python path's banded pattern
-    (``_statics._newton_pattern``) and forms the residual from the Jacobian's CSC values.
-    Both stop on the same tolerance (1e-10 of the terms), so they agree to it; the friction
-    is active (the multipliers differ from those without it), and the compiled multipliers
-    balance the loads evaluated separately in Python."""
+    Newton factorises ``Phi_q^T - dQ/dlambda`` through the Python path's pattern
+    (``_statics._newton_pattern``: banded for the chain, the compiled sparse LU for the
+    radial engine's star) and forms the residual from the Jacobian's CSC values. Both stop
+    on the same tolerance (1e-10 of the terms), so they agree to it; the friction is active
+    (the multipliers differ from those without it), and the compiled multipliers balance
+    the loads evaluated separately in Python."""
+    from mechsys.solvers._statics import _newton_pattern
+
     t = np.linspace(0.1, 1.0, 12)
-    fast, slow, taken = _solve_both(monkeypatch, _friction_chain, t, mode)
+    fast, slow, taken = _solve_both(monkeypatch, build, t, mode)
     assert fast.system.n == 183 and taken[0] == len(t)
+    assert _newton_pattern(fast.system)[2].banded == (build is _friction_chain)
     scale = np.maximum(1.0, np.abs(slow.lam).max(axis=0))
     assert (np.abs(fast.lam - slow.lam) / scale).max() <= 1e-8
     monkeypatch.setenv("MECHSYS_JIT", "1")
-    plain = _loaded_chain().solve(t, solution=mode)
+    plain = plain().solve(t, solution=mode)
     assert np.abs(plain.lam - fast.lam).max() > 1e-3 * np.abs(plain.lam).max()
     s, dyn = fast.system, fast.system.dynamics
     for k in range(len(t)):

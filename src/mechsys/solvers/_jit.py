@@ -225,22 +225,26 @@ _NO_BAND = (np.array([-1, 0, 0, 0], dtype=np.int64), (np.zeros(0, dtype=np.int64
 
 
 #: the multiplier loop's (unused) Newton band arguments
-_NO_KBAND = (np.array([-1, 0, 1], dtype=np.int64), (np.zeros(0, dtype=np.int64),) * 7)
+_NO_KBAND = (np.array([-1, 0, 1, 0], dtype=np.int64), (np.zeros(0, dtype=np.int64),) * 8)
 
 
 def _multiplier_band(system):
-    """``(kbw, (pos, rows, cols, row_perm, perm, sJT, sD))`` of the multiplier Newton matrix
-    ``Phi_q^T - dQ/dlambda`` of a large square system (friction): its ``FixedPattern``
-    (``_statics._newton_pattern``, the Python path's), and the slot in it of each of the
-    Jacobian's CSC entries (transposed) and each ``dQ/dlambda`` entry; None when the pattern
-    is not banded (the Jacobian is read through its own pattern, banded or sparse)."""
-    from ._linalg import pattern_slots
+    """``(kbw, (pos, rows, cols, row_perm, perm, sJT, sD, head))`` of the multiplier Newton
+    matrix ``Phi_q^T - dQ/dlambda`` of a large square system (friction): its
+    ``FixedPattern`` (``_statics._newton_pattern``, the Python path's), and the slot in it of
+    each of the Jacobian's CSC entries (transposed) and each ``dQ/dlambda`` entry. Banded:
+    ``kbw = (kl, ku, ld, 0)`` (LAPACK's band LU); else (trees of many branches) ``kbw =
+    (SPARSE, entries, capL, capU)`` (the factors' storage as the Python path has grown it so
+    far) and ``head`` the CSC structure of ``B = P Q K P^T`` (the compiled sparse LU, the
+    Python path's). None when the Jacobian has no compiled pattern, or the Newton
+    matrix's pattern is not banded and there is no compiled LU."""
+    from ._linalg import _sparse_lu, pattern_slots
     from ._statics import _newton_pattern
 
     if not _patterned(system):
         return None
     rows, cols, pat = _newton_pattern(system)
-    if not pat.banded:
+    if not pat.banded and (_sparse_lu() is None or not hasattr(pat, "s_indptr")):
         return None
     got = getattr(pat, "_jit_kband", None)
     if got is None:
@@ -251,11 +255,15 @@ def _multiplier_band(system):
             return pattern_slots(rows, cols, n, r, c)
 
         dyn = system.dynamics
-        got = (np.array([pat.kl, pat.ku, pat._ld], dtype=np.int64),
-               tuple(_index(a) for a in (pat._pos, rows, cols, pat.row_perm, pat.perm,
-                                         slot(jcols, jrows), slot(dyn.dQ_rows, dyn.dQ_cols))))
-        pat._jit_kband = got
-    return got
+        head = (np.zeros(0) if pat.banded
+                else np.concatenate((pat.s_indptr, pat.s_indices)))
+        got = pat._jit_kband = tuple(_index(a) for a in (
+            pat._pos, rows, cols, pat.row_perm, pat.perm, slot(jcols, jrows),
+            slot(dyn.dQ_rows, dyn.dQ_cols), head))
+    from ._jit_loop import SPARSE
+
+    kbw = [pat.kl, pat.ku, pat._ld, 0] if pat.banded else [SPARSE, rows.size, *pat._cap]
+    return np.array(kbw, dtype=np.int64), got
 
 
 def _band_args(system):

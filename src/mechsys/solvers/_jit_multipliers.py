@@ -24,7 +24,8 @@ Above ``SPARSE_THRESHOLD`` unknowns the Python path factorises ``R^-1 Phi_q D`` 
 through the Jacobian's ``FixedPattern`` and solves it transposed; so does this loop, with
 the same operations: the sparse LU of ``_jit_sparse`` (``_jit_loop._sparse_factor``,
 ``_sparse_solve_scaled``). With friction, the Newton matrix goes through its own
-pattern, when banded (the Python path's ``_statics._newton_pattern``), and the residual
+pattern (the Python path's ``_statics._newton_pattern``: LAPACK's band LU when banded,
+else the same compiled sparse LU), and the residual
 ``Phi_q^T lambda - rhs`` is formed from the Jacobian's CSC values (the Python path: a dense
 ``Phi_q``; the same to rounding, and both stop on the same tolerance).
 
@@ -115,8 +116,10 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
     ``_jit_loop.sweep_dense``): the Jacobian's values in its CSC order. With loads that
     depend on the multipliers, the Newton matrix through its own pattern (the Python path's
     ``_statics._newton_pattern``): ``kband = (kbw, (pos, rows, cols, row_perm, perm, sJT,
-    sD))``, ``sJT`` the slot of each Jacobian CSC entry (transposed), ``sD`` of each
-    ``dQ/dlambda`` entry; the residual from the Jacobian's CSC values."""
+    sD, head))``, ``sJT`` the slot of each Jacobian CSC entry (transposed), ``sD`` of each
+    ``dQ/dlambda`` entry, ``kbw`` a band's ``(kl, ku, ld, 0)`` or the sparse LU's ``bw``
+    (``big_sizes``) with ``head`` its ``B``'s CSC structure; the residual from the
+    Jacobian's CSC values."""
     N = times.size
     n = Q.shape[1]
     m = n
@@ -135,12 +138,17 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
     out_d = np.empty(max(dr.size, 1))
     banded = bw[0] == SPARSE          # (through the FixedPattern's sparse LU)
     kbw = kband[0]
-    if banded and newton and kbw[0] < 0:
+    if banded and newton and kbw[0] == -1:
         return 0                     # (not taken: _jit.multipliers sends these to Python)
     slot, cr, cc, pos, row_perm, perm, si0 = band
-    kpos, krow, kcol, krow_perm, kperm, sJT, sD = kband[1]
+    kpos, krow, kcol, krow_perm, kperm, sJT, sD, khead = kband[1]
     Kd = np.empty(krow.size)
-    AB2 = np.zeros(n * kbw[2] if banded and newton else 1)
+    ksparse = kbw[0] == SPARSE       # (the Newton matrix by the sparse LU: trees)
+    ksize, kisize = big_sizes(kbw, n)
+    AB2 = np.zeros(ksize if ksparse else (n * kbw[2] if banded and newton else 1))
+    SI2 = np.zeros(kisize, dtype=np.int64)
+    for i in range(khead.size):
+        SI2[i] = khead[i]
     mag = np.empty(n)
     nd = 1 if banded else n          # the dense matrices are not used when banded
     J, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, r = _factor_work(m, n, nd)
@@ -255,13 +263,20 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
                         Kd[sD[e]] -= out_d[e]
                     for e in range(Kd.size):
                         Kd[e] = (cols[krow[e]] * Kd[e]) / r[kcol[e]]
-                    if _band_factor(blapack, Kd, krow, kcol, kpos, ones, ones, AB2, kbw, ipiv2,
-                                    bi) < 0:
+                    if ksparse:
+                        if _sparse_factor(Kd, krow, kcol, kpos, ones, ones, AB2, kbw, SI2) < 0:
+                            return k
+                    elif _band_factor(blapack, Kd, krow, kcol, kpos, ones, ones, AB2, kbw,
+                                      ipiv2, bi) < 0:
                         return k
                     for j in range(n):
                         R[j] = cols[j] * R[j]
-                    _band_solve(blapack, AB2, kbw, ipiv2, krow_perm, kperm, ones, ones, R, dl,
-                                tmp, bi, cbuf)
+                    if ksparse:
+                        _sparse_solve_scaled(AB2, kbw, SI2, krow_perm, kperm, ones, ones, R,
+                                             dl, tmp, False)
+                    else:
+                        _band_solve(blapack, AB2, kbw, ipiv2, krow_perm, kperm, ones, ones, R,
+                                    dl, tmp, bi, cbuf)
                     for i in range(m):
                         lam[i] = lam[i] - dl[i] / r[i]
                     continue
