@@ -132,7 +132,8 @@ def test_wide_trees_take_the_sparse_lu(monkeypatch, method):
     """A radial engine coasting under gravity (40 cylinders: 243 coordinates, every rod on
     the crank pin, so the augmented matrix's band spans the engine) solves its augmented
     system in the loop by the compiled sparse LU of the Python path's pattern, and projects
-    through the same pattern: the Python path's accelerations bit for bit, every step
+    through the Python path's pattern of ``[[I, J^T], [J^, 0]]`` with the same LU: the Python
+    path's accelerations bit for bit, every step
     compiled, the same motion to the tolerance (both within it of a tight reference), the
     loops closed and the energy kept."""
     from mechsys import models

@@ -29,7 +29,8 @@ whenever possible. Possible means: Numba installed (the ``fast`` extra); DOP853,
 one of Mech's Adams methods; a dense augmented system (``n + m <= SPARSE_THRESHOLD``) or the block
 path (above it, while its band is narrow enough: :data:`BLOCK_WORK`), or above it the
 augmented matrix's pattern by the compiled sparse LU when that pattern is not banded
-(``"sparse"``: trees of many branches); every kernel
+(``"sparse"``: trees of many branches; its projections through the Python path's pattern
+of ``[[I, J^T], [J^, 0]]``, the same numbers); every kernel
 SymEngine LLVM code (CSE kernels included: their repeated outputs are expanded in the
 loop). Loads that depend on the multipliers (friction) or accelerations
 (added mass) take ``free_acceleration``'s Newton in the loop (``"newton"``, decision 0028).
@@ -291,99 +292,96 @@ def _workspace(stepper, system):
     return ws
 
 
+def _projection_part(system):
+    """The projection's structure for :func:`_two_structures`: ``(FixedPattern, head, pos,
+    kperm, dpos)`` of ``[[I, J^T], [J^, 0]]`` (``_free.projection_pattern``, the Python
+    path's; kernel values the Jacobian's, each twice, the identity at ``dpos``), or None when
+    the Jacobian has a repeated entry (the row scales are taken entry by entry)."""
+    from ._free import projection_pattern
+
+    n, m = system.n, system.m
+    jr = np.asarray(system.jac_rows, dtype=np.int64)
+    jc = np.asarray(system.jac_cols, dtype=np.int64)
+    nnz = jr.size
+    if np.unique(jr * max(n, 1) + jc).size != nnz:
+        return None
+    pat, slots = projection_pattern(system)
+    inv = system._csc_structure()[0]
+    at = pat._pos[np.concatenate((slots[:n], slots[n + inv], slots[n + nnz + inv]))]
+    return (pat, [n + m, 2 * nnz, pat.s_indices.size, 0, nnz, 0, 0], at[n:],
+            np.concatenate((np.arange(nnz), np.arange(nnz))), at[:n])
+
+
+def _two_structures(first, second, extra=()):
+    """The arrays that never change of ``_jit_free_loop``'s two-matrix structure (see above
+    its ``_slu_factor``): ``first``, ``second`` as :func:`_projection_part` returns them,
+    ``extra`` the kind's numbers after the offsets."""
+    from ._jit_free_loop import SECOND
+
+    pat1, head1, pos1, kperm1, dpos1 = first
+    pat2, head2, pos2, kperm2, dpos2 = second
+    N = pat1.size
+    offsets = [pos1.size, N + 1, pat1.s_indices.size, 2 * N, dpos1.size]
+    assert len(head1) + len(head2) == SECOND and pos1.size == kperm1.size
+    i64 = lambda a: np.ascontiguousarray(a, dtype=np.int64)   # noqa: E731
+    return ((pat1, pat2), np.array(head1 + head2 + offsets + list(extra), dtype=np.int64),
+            *(i64(np.concatenate(ab)) for ab in (
+                (pos1, pos2), (kperm1, kperm2), (pat1.s_indptr, pat2.s_indptr),
+                (pat1.s_indices, pat2.s_indices),
+                (pat1.row_perm, pat1.perm, pat2.row_perm, pat2.perm), (dpos1, dpos2))))
+
+
+def _with_storage(got):
+    """``got`` (:func:`_two_structures`) with the factors' capacities as the Python path has
+    grown them so far and the sparse LU's integer store (one per stepper)."""
+    from ._jit_sparse import IWORK
+
+    (pat1, pat2), info = got[0], got[1].copy()
+    info[5:7], info[12:14] = pat1._cap, pat2._cap
+    size = max(2 * (p.size + 1) + (IWORK + 1) * p.size + sum(p._cap) for p in (pat1, pat2))
+    return (info, *got[2:], np.zeros(size, dtype=np.int64), np.zeros((1, 5), dtype=np.int64))
+
+
 def _sparse_structure(system, fk):
     """The structure of ``_jit_free_loop._accel_sparse`` (see there) for a large system whose
     augmented matrix the Python path factorises by the compiled sparse LU (its
-    ``FixedPattern`` is not banded), or None: a banded pattern, a mass matrix without a
-    diagonal entry for every coordinate (the projection's ``[[I, J^T], [J^, 0]]`` puts its
-    ones there), or a Jacobian with a repeated entry. The arrays that never change are made
-    once per pattern; the sparse LU's integer storage (the last but one) anew per stepper."""
-    from ._jit_sparse import IWORK
-
+    ``FixedPattern`` is not banded): the projection's matrix first, then the augmented one
+    (:func:`_two_structures`); None for a banded pattern, or a Jacobian with a repeated
+    entry. Made once per pattern; the sparse LU's integer storage anew per stepper."""
     pat = fk.pattern
-    n, m = system.n, system.m
-    N = n + m
     if pat.banded or not hasattr(pat, "s_indptr"):
         return None
     got = getattr(pat, "_jit_free_sparse", None)
     if got is None:
-        jr, jc = np.asarray(system.jac_rows), np.asarray(system.jac_cols)
-        dyn = system.dynamics
-        Mr, Mc = np.asarray(dyn.M_rows), np.asarray(dyn.M_cols)
-        diag = np.unique(Mr[Mr == Mc])
-        if diag.size != n or np.unique(jr * max(n, 1) + jc).size != jr.size:
-            got = ()
-        else:
-            # each stored entry's place in B = P Q K P^T, and the diagonal's (the mass
-            # matrix's own entries: the first k_M kernel values)
-            rows = np.asarray(fk._indices, dtype=np.int64)
-            cols = np.repeat(np.arange(N), np.diff(fk._indptr))
-            on_diag = (rows == cols) & (fk._perm < fk.k_M)
-            dpos = np.empty(n, dtype=np.int64)
-            dpos[rows[on_diag]] = pat._pos[on_diag]
-            info = np.array([N, rows.size, pat.s_indices.size, fk.k_M, fk.k_J], dtype=np.int64)
-            got = (info, pat._pos.astype(np.int64), np.asarray(fk._perm, dtype=np.int64),
-                   pat.s_indptr, pat.s_indices,
-                   np.concatenate([pat.row_perm, pat.perm]).astype(np.int64), dpos)
+        first = _projection_part(system)
+        got = () if first is None else _two_structures(first, (
+            pat, [pat.size, len(fk._perm), pat.s_indices.size, fk.k_M, fk.k_J, 0, 0],
+            pat._pos, np.asarray(fk._perm, dtype=np.int64), np.zeros(0, dtype=np.int64)))
         pat._jit_free_sparse = got
-    if not got:
-        return None
-    capL, capU = pat._cap
-    info = np.concatenate([got[0], [capL, capU]])
-    work = np.zeros(2 * (N + 1) + (IWORK + 1) * N + capL + capU, dtype=np.int64)
-    return (info, *got[1:], work, np.zeros((1, 5), dtype=np.int64))
+    return _with_storage(got) if got else None
 
 
 def _path_sparse_structure(path):
-    """The structure of ``_jit_free_loop._path_velocity_sparse`` (see ``PATH_HEAD`` there) for
-    a path above ``SMALL_LU`` coordinates, or None (a Jacobian with a repeated entry: the
-    projection's row scales are taken entry by entry). Both patterns are the Python path's:
-    the projection's ``[[I, J^T], [J^, 0]]`` (``_free.projection_pattern``; in the sparse
-    kind's layout: kernel values the Jacobian's, each twice, the identity at ``dpos``) and
-    the velocity system's (``PathSystem._pattern``). Made once per path; the sparse LU's
+    """The structure of ``_jit_free_loop._path_velocity_sparse`` (see ``PATH_EXTRA`` there)
+    for a path above ``SMALL_LU`` coordinates, or None (a Jacobian with a repeated entry).
+    Both patterns are the Python path's: the projection's (:func:`_projection_part`) and the
+    velocity system's (``PathSystem._pattern``). Made once per path; the sparse LU's
     integer storage anew per stepper."""
-    from ._free import projection_pattern
-    from ._jit_free_loop import PATH_HEAD
-    from ._jit_sparse import IWORK
-
     got = path.__dict__.get("_jit_sparse")
     if got is None:
-        system = path.system
-        n, m = system.n, system.m
-        jr = np.asarray(system.jac_rows, dtype=np.int64)
-        jc = np.asarray(system.jac_cols, dtype=np.int64)
-        if np.unique(jr * max(n, 1) + jc).size != jr.size:
-            got = path._jit_sparse = ()
-            return None
-        N = n + m
-        # the Python path's projection pattern; each kernel value's CSC place (unique)
-        patP, slotsP = projection_pattern(system)
-        inv = system._csc_structure()[0]
-        at = patP._pos[np.concatenate((slotsP[:n], slotsP[n + inv], slotsP[n + jr.size + inv]))]
-        rK, cK, patK, slotsK = path._pattern()
-        nnz, nb, nE = jr.size, path._b_rows.size, rK.size
-        nKP = 2 * nnz
-        head = [N, nKP, patP.s_indices.size, 0, nnz, 0, 0,
-                n, 0, patK.s_indices.size, 0, 0, 0, 0]
-        assert len(head) == PATH_HEAD
-        tail = [len(path.psi), 0, 0, 0, 0, 0, 0, int(path.linear), nE, nb,
-                nKP, N + 1, patP.s_indices.size, 2 * N, n]
-        i64 = lambda a: np.ascontiguousarray(a, dtype=np.int64)   # noqa: E731
-        got = path._jit_sparse = (
-            (patP, patK), np.array(head + tail, dtype=np.int64),
-            i64(np.concatenate((at[n:], patK._pos))),
-            i64(np.concatenate((np.arange(nnz), np.arange(nnz), slotsK))),
-            i64(np.concatenate((patP.s_indptr, patK.s_indptr))),
-            i64(np.concatenate((patP.s_indices, patK.s_indices))),
-            i64(np.concatenate((patP.row_perm, patP.perm, patK.row_perm, patK.perm))),
-            i64(np.concatenate((at[:n], rK, cK))))
-    if not got:
-        return None
-    (patP, patK), info = got[0], got[1].copy()
-    info[5:7], info[12:14] = patP._cap, patK._cap
-    size = max(2 * (M + 1) + (IWORK + 1) * M + sum(pat._cap)
-               for M, pat in ((patP.size, patP), (patK.size, patK)))
-    return (info, *got[2:], np.zeros(size, dtype=np.int64), np.zeros((1, 5), dtype=np.int64))
+        first = _projection_part(path.system)
+        if first is None:
+            got = ()
+        else:
+            rK, cK, patK, slotsK = path._pattern()
+            n = path.system.n
+            got = _two_structures(first, (
+                patK, [n, 0, patK.s_indices.size, 0, 0, 0, 0], patK._pos, slotsK,
+                np.concatenate((rK, cK))),
+                extra=[len(path.psi), 0, 0, 0, 0, 0, 0, int(path.linear), rK.size,
+                       path._b_rows.size])
+        path._jit_sparse = got
+    return _with_storage(got) if got else None
 
 
 def _newton_band(system):
@@ -488,7 +486,7 @@ class FreeStepper:
             GEN_TREE,
             NEWTON,
             PATH,
-            PATH_HEAD,
+            PATH_EXTRA,
             SPARSE,
         )
 
@@ -528,11 +526,9 @@ class FreeStepper:
                 blk = (np.array([k, len(p), *fvel, int(linear)], dtype=np.int64),
                        *_Blocks.none()[1:])
             else:
-                from ._jit_free_loop import PATH_HEAD
-
                 blk = big
-                blk[0][PATH_HEAD + 1] = len(p)
-                blk[0][PATH_HEAD + 2:PATH_HEAD + 7] = fvel
+                blk[0][PATH_EXTRA + 1] = len(p)
+                blk[0][PATH_EXTRA + 2:PATH_EXTRA + 7] = fvel
             self.bw = 0
         elif newton is not None:
             self.flat_t = self.mp = np.zeros(0, dtype=np.int64)
@@ -556,7 +552,7 @@ class FreeStepper:
         if path is not None:
             # the velocity constraints' outputs: [psi, psi_qd (dense, or its nonzeros), rest]
             self.kk = int(2 * path[0] + (path[0] * n if path[2] is None
-                                         else path[2][0][PATH_HEAD + 9]))
+                                         else path[2][0][PATH_EXTRA + 9]))
         elif newton is not None:
             self.kk = int(newton[0][0]) + 2 * n           # [M values, Q, Qv]
         else:

@@ -76,7 +76,8 @@ PATH = 4
 NEWTON = 5
 #: a large system whose augmented matrix has a wide band (a tree of many branches): the
 #: Python path's ``FixedPattern`` of it, factorised by the compiled sparse LU it calls
-#: (``_accel_sparse``), the projection through the same pattern (``_min_norm_sparse``)
+#: (``_accel_sparse``), the projection through the Python path's pattern of ``[[I, J^T],
+#: [J^, 0]]`` (``_min_norm_sparse``)
 SPARSE = 6
 
 #: augmented systems up to this size are solved by the loop's own elimination (``_lu_solve``);
@@ -699,13 +700,29 @@ def _newton_accel_band(kp, lapack, bi, x, nin, out, n, m, jr, jc, ipiv, qdd, lam
 
 # -- the sparse kind: the augmented matrix by the compiled sparse LU of its fixed pattern ----
 #
-# ``bi = (info, pos, kperm, Bp, Bi, perms, dpos, LUi, -)``: ``info = [N, nK, nB, k_M, k_J,
-# capL, capU]``; stored entry ``s`` of the free kernel's CSC matrix holds kernel value
-# ``kperm[s]`` (``FreeKernel._perm``) and goes to ``Bx[pos[s]]`` of ``B = P Q K P^T``
-# (``FixedPattern._pos``), whose CSC structure is ``Bp``, ``Bi``; ``perms = [row_perm,
-# perm]``; ``dpos`` (n,) the diagonal's places in ``Bx`` (the projection puts its ones there);
-# ``LUi`` the sparse LU's integer storage ``[Lp | Up | pinv | iw | Li | Ui]`` (the stepper's
-# own). ``bw = (Bx, Lx, Ux, -, xw, sol, wv, tmp)``.
+# ``bi = (info, pos, kperm, Bp, Bi, perms, dpos, LUi, -)`` holds two matrices' structures.
+# The first is the projection's ``[[I, J^T], [J^, 0]]`` (``_free.projection_pattern``, the
+# Python path's): ``info[:7] = [N, nK, nB, k_M, k_J, capL, capU]``; stored entry ``s`` holds
+# kernel value ``kperm[s] - k_M`` (the Jacobian's; ``k_M = 0``) and goes to ``Bx[pos[s]]``
+# of ``B = P Q K P^T`` (``FixedPattern._pos``), whose CSC structure is ``Bp``, ``Bi``;
+# ``perms = [row_perm, perm]``; ``dpos`` (n,) the identity's places in ``Bx``. The second
+# (``_second``: free motion's augmented matrix, a path's velocity system) is appended to each
+# array at the offsets ``info[SECOND:SECOND + 5]`` (pos and kperm, Bp, Bi, perms, dpos), its
+# head at ``info[7:14]`` (for the augmented matrix: kernel value ``kperm[s]``,
+# ``FreeKernel._perm``). ``LUi`` the sparse LU's integer storage ``[Lp | Up | pinv | iw | Li
+# | Ui]`` (the stepper's own, sized for the larger). ``bw = (Bx, Lx, Ux, -, xw, sol, wv,
+# tmp)``, each for the larger.
+SECOND = 14
+
+
+@nb.njit(cache=True, inline='always')
+def _second(bi):
+    """The second structure of ``bi`` (see above) in the same layout. (Inlined: it returns
+    array views.)"""
+    info = bi[0]
+    o = info[SECOND:SECOND + 5]
+    return (info[7:SECOND], bi[1][o[0]:], bi[2][o[0]:], bi[3][o[1]:], bi[4][o[2]:],
+            bi[5][o[3]:], bi[6][o[4]:], bi[7])
 
 
 @leaf
@@ -750,9 +767,10 @@ def _accel_sparse(kp, x, nin, out, n, m, jr, jc, rows0, columns, robust, qdd, la
     large system: the kernel's CSC values into ``B``, its sparse LU, the solve); False: hand
     over (a singular or non-finite system, an answer the Python path would refuse, or,
     ``robust``, the zone guard's test of ``_solve_augmented``)."""
-    info = bi[0]
+    b2 = _second(bi)                  # (the augmented matrix; the projection's comes first)
+    info = b2[0]
     N, nK, nB, kM, kJ = info[0], info[1], info[2], info[3], info[4]
-    pos, kperm = bi[1], bi[2]
+    pos, kperm = b2[1], b2[2]
     kk = kM + kJ
     x[0] = t
     for j in range(2 * n):
@@ -763,7 +781,7 @@ def _accel_sparse(kp, x, nin, out, n, m, jr, jc, rows0, columns, robust, qdd, la
         Bx[i] = 0.0
     for s in range(nK):
         Bx[pos[s]] += out[kperm[s]]
-    if _slu_factor(bi, bw) < 0:
+    if _slu_factor(b2, bw) < 0:
         return False
     big_rhs = 0.0
     for i in range(N):
@@ -771,7 +789,7 @@ def _accel_sparse(kp, x, nin, out, n, m, jr, jc, rows0, columns, robust, qdd, la
         if not v <= big_rhs:
             big_rhs = v
     sol = bw[4]                       # (the factorisation's work vector, free again)
-    _slu_solve(bi, bw, out[kk:kk + N], sol)
+    _slu_solve(b2, bw, out[kk:kk + N], sol)
     if not _accepted(sol, big_rhs, n, m, qdd, lam, robust, rows0, out, kM, jr, jc, columns,
                      force):
         return False
@@ -783,14 +801,14 @@ def _accel_sparse(kp, x, nin, out, n, m, jr, jc, rows0, columns, robust, qdd, la
 
 @leaf
 def _min_norm_sparse(r, columns, bvec, out, n, m, jr, jc, jv, bi, bw, robust):
-    """``_min_norm`` through the augmented matrix's pattern: the smallest ``z`` (``out = D
-    z``) with ``J^ z = bvec``, ``J^ = R^-1 J D`` (``jv`` the Jacobian's values, each entry
-    once), from ``[[I, J^T], [J^, 0]] [z; -nu] = [0; bvec]`` (its entries are among the
-    pattern's: the mass matrix's diagonal, ``Phi_q``, ``Phi_q^T``). False (hand over) at a
-    pivot ratio below ``RCOND_MIN``, or, ``robust``, below ``ZONE^2``: the Python path's test
-    (``_free._min_norm``: the pivot ratio of ``J^ J^T`` below ``ZONE^2``), on this matrix's
-    pivots, which are the identity's, the Jacobian's and the Schur complements' of ``J^
-    J^T``: it hands over before the zone of a singular Jacobian."""
+    """``_free._min_norm`` of a large system, operation for operation: the smallest ``z``
+    (``out = D z``) with ``J^ z = bvec``, ``J^ = R^-1 J D`` (``jv`` the Jacobian's values,
+    each entry once), from ``[[I, J^T], [J^, 0]] [z; -nu] = [0; bvec]`` through that
+    matrix's pattern (``_free.projection_pattern``: the first structure of ``bi``) and the
+    same sparse LU. False (hand over) at a pivot ratio below ``RCOND_MIN``, or, ``robust``,
+    below ``ZONE^2``: the Python path's tests on the same pivots (the identity's and the
+    Schur complements' of ``J^ J^T``): it hands over before the zone of a singular
+    Jacobian."""
     info = bi[0]
     nK, nB, kM, kJ = info[1], info[2], info[3], info[4]
     pos, kperm, dpos = bi[1], bi[2], bi[6]
@@ -929,31 +947,23 @@ def _path_velocity(kp, x, out, KT, n, m, jr, jc, columns, ipiv, w1, w2, last, in
 
 
 # The sparse path (a path above ``SMALL_LU`` coordinates, ``FreeStepper.plan_path``): its
-# structure is the sparse kind's ``bi`` of the projection's matrix ``[[I, J^T], [J^, 0]]``
-# (``_min_norm_sparse`` reads it unchanged), with the velocity system ``K = [Phi_q; psi_qd]``'s
-# pattern appended to each array: ``info[7:14]`` is ``K``'s ``bi`` head, ``info[14:]`` = [k,
-# npar, the holonomic velocity kernel's row (5), linear, nE (K's entries), nb (psi_qd's
-# kernel nonzeros), and the offsets of K's part in pos (its slots in kperm), Bp, Bi, perms,
-# dpos (K's entries' rows, then columns)]; ``_jit_free._path_sparse_structure``. The
-# sparse LU's storage ``LUi`` and the float work serve both (each sized for the larger).
-PATH_HEAD = 14
+# velocity system ``K = [Phi_q; psi_qd]`` is the second structure of ``bi`` (see above
+# ``_slu_factor``; ``_second``): ``K``'s entries' slots in ``kperm``, their rows then
+# columns in ``dpos``; ``info[PATH_EXTRA:]`` = [k, npar, the holonomic velocity kernel's row
+# (5), linear, nE (K's entries), nb (psi_qd's kernel nonzeros)];
+# ``_jit_free._path_sparse_structure``.
+PATH_EXTRA = 19
 
 
 @nb.njit(cache=True, inline='always')
 def _path_k(bi):
-    """``(K's sparse-LU structure in the layout of bi (see above), nb, the columns of its
-    entries)``. (Inlined: it returns array views, which a leaf, compiled without reference
-    counting, must not hand to a caller that counts them.)"""
-    info = bi[0]
-    n, nBK = info[7], info[9]
-    nE, nb = info[PATH_HEAD + 8], info[PATH_HEAD + 9]
-    oPos, oBp, oBi = info[PATH_HEAD + 10], info[PATH_HEAD + 11], info[PATH_HEAD + 12]
-    oPerm, oRC = info[PATH_HEAD + 13], info[PATH_HEAD + 14]
-    nnz_nb = bi[2].size - oPos
-    rk = bi[6][oRC:oRC + nE]
-    biK = (info[7:PATH_HEAD], bi[1][oPos:oPos + nE], bi[2][oPos:oPos + nnz_nb],
-           bi[3][oBp:oBp + n + 1], bi[4][oBi:oBi + nBK], bi[5][oPerm:oPerm + 2 * n], rk, bi[7])
-    return biK, nb, bi[6][oRC + nE:oRC + 2 * nE]
+    """``(K's sparse-LU structure (_second, its entries' rows in the seventh place), nb, the
+    columns of its entries)``. (Inlined: it returns array views, which a leaf, compiled
+    without reference counting, must not hand to a caller that counts them.)"""
+    s = _second(bi)
+    nE, nb = bi[0][PATH_EXTRA + 8], bi[0][PATH_EXTRA + 9]
+    biK = (s[0], s[1], s[2], s[3], s[4], s[5], s[6][:nE], s[7])
+    return biK, nb, s[6][nE:2 * nE]
 
 
 @leaf
@@ -993,8 +1003,8 @@ def _path_velocity_sparse(kp, x, out, n, m, jr, jc, columns, last, bi, bw, ex_ps
     factorised by the compiled sparse LU, as the Python path does. ``bw[3]`` holds the
     vectors ``(-, velocity kernel outputs, R, r, K's values, dq)`` in its rows."""
     info = bi[0]
-    k, npar = info[PATH_HEAD], info[PATH_HEAD + 1]
-    linear = info[PATH_HEAD + 7] != 0
+    k, npar = info[PATH_EXTRA], info[PATH_EXTRA + 1]
+    linear = info[PATH_EXTRA + 7] != 0
     biK, nb, ck = _path_k(bi)
     W = bw[3]
     out_vel, R, r, data, dq = W[1], W[2], W[3], W[4], W[5]
@@ -1006,7 +1016,7 @@ def _path_velocity_sparse(kp, x, out, n, m, jr, jc, columns, last, bi, bw, ex_ps
         x[1 + j] = q[j]
         x[1 + n + j] = 0.0
     if m > 0:
-        _evalx(info[PATH_HEAD + 2:PATH_HEAD + 7], x, nin_k, out_vel, ex_vel, ph_vel)
+        _evalx(info[PATH_EXTRA + 2:PATH_EXTRA + 7], x, nin_k, out_vel, ex_vel, ph_vel)
     for _ in range(20):
         for j in range(n):
             x[1 + n + j] = last[j]
@@ -1053,7 +1063,7 @@ def path_accelerations(kp, ex, times, Q, QD, p, jr, jc, k, bi, bw, QDD):
     x = np.zeros(nin + max(kp[0, 4], kp[1, 4], kp[2, 4], 0))
     for j in range(npar):
         x[1 + 2 * n + j] = p[j]
-    nb = bi[0][PATH_HEAD + 9] if sparse else 0
+    nb = bi[0][PATH_EXTRA + 9] if sparse else 0
     out_J = np.empty(m + nnz)
     g = np.empty(m)
     out = np.empty(2 * k + (nb if sparse else k * n))
@@ -1066,7 +1076,7 @@ def path_accelerations(kp, ex, times, Q, QD, p, jr, jc, k, bi, bw, QDD):
     ipiv = np.empty(side, dtype=np.int32)
     w = np.empty(2 * side)
     ones = np.ones(n)
-    data = np.empty(bi[0][PATH_HEAD + 8] if sparse else 1)
+    data = np.empty(bi[0][PATH_EXTRA + 8] if sparse else 1)
     r = np.empty(n)
     b = np.empty(n)
     sol = np.empty(n)
@@ -1186,7 +1196,7 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
     # a large NEWTON system: the Jacobian by its distinct nonzeros, the minimum-norm
     # correction through the Newton matrix's banded pattern (_min_norm_band); the sparse kind:
     # the Jacobian's values straight from the kernels (each entry once), the correction
-    # through the augmented matrix's pattern (_min_norm_sparse)
+    # through the projection's pattern (_min_norm_sparse; also a large path's)
     band = blocks == NEWTON and blk_i[0][7].size > 1
     sparse = blocks == SPARSE or (blocks == PATH and blk_i[0][7].size > 1)
     nnz = jr.size
@@ -1804,7 +1814,7 @@ def _block_work(blocks, blk_i, n, m, bw, nnz):
         # the projection's and the velocity system's sparse LU (each array for the larger),
         # and the vectors of _path_velocity_sparse in the rows of the fourth
         info = blk_i[0][0]
-        N, nE = info[0], info[PATH_HEAD + 8]
+        N, nE = info[0], info[PATH_EXTRA + 8]
         L = max(N, nnz + m, nE)
         bw_ = (np.zeros(max(info[2], info[9])), np.zeros(max(info[5], info[12])),
                np.zeros(max(info[6], info[13])), np.zeros((6, L)), np.zeros(N), np.zeros(N),
@@ -1826,8 +1836,9 @@ def _block_work(blocks, blk_i, n, m, bw, nnz):
     elif blocks == SPARSE:
         info = blk_i[0][0]
         N = info[0]
-        bw_ = (np.zeros(info[2]), np.zeros(info[5]), np.zeros(info[6]), np.zeros((1, N)),
-               np.zeros(N), np.zeros(N), np.zeros(N), np.zeros(N))
+        bw_ = (np.zeros(max(info[2], info[9])), np.zeros(max(info[5], info[12])),
+               np.zeros(max(info[6], info[13])), np.zeros((1, N)), np.zeros(N), np.zeros(N),
+               np.zeros(N), np.zeros(N))
     elif blocks == BLOCK:
         boff, roff, bsize = blk_i[0][1], blk_i[0][4], blk_i[0][6]
         big = bsize.max() if bsize.size else 1
