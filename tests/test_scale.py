@@ -311,3 +311,23 @@ def test_wide_tree_free_motion_is_the_same_in_any_unit(monkeypatch, jit):
     assert np.abs(out[1][0] - out[1][0][0]).max() > 0.3    # it turns
     for ang in out[::2]:
         np.testing.assert_allclose(ang, out[1], rtol=0, atol=1e-10)
+
+
+@pytest.mark.parametrize("jit", ["0", "1"])
+def test_large_path_is_the_same_in_any_unit(monkeypatch, jit):
+    """A tractor towing 60 trailers (183 coordinates: the sparse velocity system and
+    projection, decision 0027) in millimetres, metres or kilometres (reach and speed scaled)
+    steers every trailer through the same angles, and its blade along the same circle in
+    units of the reach, in the Python and the compiled stepper."""
+    monkeypatch.setenv("MECHSYS_JIT", jit)
+    t = np.linspace(0.0, 3.0, 4)
+    out = []
+    for s in (1e-3, 1.0, 1e3):
+        path = models.trailer_train(60, speed=2.0 * s, rate=0.4, reach=s)
+        sol = path.simulate(t, rtol=1e-10, atol=1e-12)
+        assert (sol.extra["compiled_solver"] == "path") == (jit == "1")
+        blade = sol.location(path.model.body("tractor").point("blade")) / s
+        out.append(np.vstack([blade.T] + [sol[f"trailer{k}.th"] for k in range(60)]))
+    assert np.abs(out[1][2:]).max() > 0.1                 # the trailers swing
+    for got in out[::2]:
+        np.testing.assert_allclose(got, out[1], rtol=0, atol=1e-10)
