@@ -57,6 +57,24 @@ def both_loops(run, rounds: int, clock=None) -> dict:
     return {mode: (statistics.median(times[mode]), out[mode]) for mode in times}
 
 
+def per_evaluation(run, rounds: int):
+    """``(Python CPU s per evaluation, compiled CPU s per evaluation, Python result, compiled
+    result, compiled run's CPU s)`` of a simulation ``run()`` in both loops
+    (:func:`both_loops`); every step of the compiled run must have run compiled."""
+    got = both_loops(run, rounds)
+    (tp, py), (tc, jit) = got["0"], got["1"]
+    assert jit.extra["compiled_steps"] == jit.extra["steps"], "a step ran in Python"
+    return tp / py.extra["evaluations"], tc / jit.extra["evaluations"], py, jit, tc
+
+
+def per_point(model, t, rounds: int):
+    """``(Python CPU s per point, compiled CPU s per point, Python result, compiled result)``
+    of the inverse dynamics ``model.solve(t, solution="dynamic")`` in both loops."""
+    got = both_loops(lambda: model.solve(t, solution="dynamic"), rounds)
+    (tp, py), (tc, jit) = got["0"], got["1"]
+    return tp / len(t), tc / len(t), py, jit
+
+
 def relative_difference(a, b) -> float:
     """``max |a - b| / max(1, max |b|)``: two loops' results against each other."""
     import numpy as np

@@ -38,7 +38,7 @@ import sys  # noqa: E402
 import warnings  # noqa: E402
 
 import numpy as np  # noqa: E402
-from _machine import both_loops, relative_difference, table_main  # noqa: E402  (sibling module)
+from _machine import per_evaluation, per_point, relative_difference, table_main  # noqa: E402  (sibling module)
 
 import mechsys as ms  # noqa: E402
 from mechsys import models  # noqa: E402
@@ -83,10 +83,8 @@ def tables(rounds: int = 3) -> str:
            "| ---: | ---: | ---: | ---: | ---: | ---: |"]
     for links in LINKS:
         free = _chain(links)
-        got = both_loops(lambda free=free: free.simulate((0.0, 0.1), rtol=1e-6, atol=1e-8), rounds)
-        (tp, py), (tc, jit) = got["0"], got["1"]
-        ep, ec = tp / py.extra["evaluations"], tc / jit.extra["evaluations"]
-        assert jit.extra["compiled_steps"] == jit.extra["steps"]
+        ep, ec, py, jit, _ = per_evaluation(
+            lambda free=free: free.simulate((0.0, 0.1), rtol=1e-6, atol=1e-8), rounds)
         out.append(f"| {links} | {free.system.n + free.system.m} | {ep * 1e6:.0f} µs | "
                    f"{ec * 1e6:.0f} µs | {ep / ec:.1f} | "
                    f"{relative_difference(jit.q[-1], py.q[-1]):.1e} |")
@@ -97,11 +95,8 @@ def tables(rounds: int = 3) -> str:
             "| ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for c in CYLINDERS:
         free = _engine(c)
-        got = both_loops(lambda free=free: free.simulate(
+        ep, ec, py, jit, _ = per_evaluation(lambda free=free: free.simulate(
             (0.0, 1.0), initial_condition={"crank.th_d": 3.0}, rtol=1e-8), rounds)
-        (tp, py), (tc, jit) = got["0"], got["1"]
-        ep, ec = tp / py.extra["evaluations"], tc / jit.extra["evaluations"]
-        assert jit.extra["compiled_steps"] == jit.extra["steps"]
         out.append(f"| {c} | {free.system.n + free.system.m} | {ep * 1e6:.0f} µs | "
                    f"{ec * 1e6:.0f} µs | {ep / ec:.1f} | {py.extra['steps']}, "
                    f"{jit.extra['steps']} | {relative_difference(jit.q[-1], py.q[-1]):.1e} |")
@@ -113,10 +108,9 @@ def tables(rounds: int = 3) -> str:
     t = np.linspace(0.1, 1.0, 40)
     for loops in LOOPS:
         m = _loops(loops)
-        got = both_loops(lambda m=m: m.solve(t, solution="dynamic"), rounds)
-        (tp, py), (tc, jit) = got["0"], got["1"]
-        out.append(f"| {loops} | {py.system.n} | {tp / len(t) * 1e3:.2f} ms | "
-                   f"{tc / len(t) * 1e3:.2f} ms | {tp / tc:.0f} | "
+        pp, pc, py, jit = per_point(m, t, rounds)
+        out.append(f"| {loops} | {py.system.n} | {pp * 1e3:.2f} ms | "
+                   f"{pc * 1e3:.2f} ms | {pp / pc:.0f} | "
                    f"{relative_difference(jit.lam, py.lam):.1e} |")
     out += ["", "Inverse dynamics of the radial engine driven at one revolution a second, "
             "friction in every crank-pin bearing (a star: the sparse LU), 40 points (sweep "
@@ -128,10 +122,9 @@ def tables(rounds: int = 3) -> str:
         m = models.radial_engine(c, speed=2 * np.pi, g=9.81)
         for k in range(c):
             m.add_load(ms.JointFriction(f"pin{k}", mu=0.2, radius=0.05, v_eps=1e-3))
-        got = both_loops(lambda m=m: m.solve(t, solution="dynamic"), rounds)
-        (tp, py), (tc, jit) = got["0"], got["1"]
-        out.append(f"| {c} | {py.system.n} | {tp / len(t) * 1e3:.2f} ms | "
-                   f"{tc / len(t) * 1e3:.2f} ms | {tp / tc:.0f} | "
+        pp, pc, py, jit = per_point(m, t, rounds)
+        out.append(f"| {c} | {py.system.n} | {pp * 1e3:.2f} ms | "
+                   f"{pc * 1e3:.2f} ms | {pp / pc:.0f} | "
                    f"{relative_difference(jit.lam, py.lam):.1e} |")
     return "\n".join(out)
 

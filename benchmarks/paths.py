@@ -24,7 +24,7 @@ import sys  # noqa: E402
 import warnings  # noqa: E402
 
 import numpy as np  # noqa: E402
-from _machine import both_loops, relative_difference, table_main  # noqa: E402  (sibling module)
+from _machine import per_evaluation, relative_difference, table_main  # noqa: E402  (sibling module)
 
 from mechsys import models  # noqa: E402
 
@@ -43,10 +43,8 @@ def tables(rounds: int = 3) -> str:
            "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for k in TRAILERS:
         path = models.trailer_train(k, speed=SPEED, rate=RATE)
-        got = both_loops(lambda path=path: path.simulate(t, rtol=1e-10, atol=1e-12), rounds)
-        (tp, py), (tc, jit) = got["0"], got["1"]
-        ep, ec = tp / py.extra["evaluations"], tc / jit.extra["evaluations"]
-        assert jit.extra["compiled_steps"] == jit.extra["steps"]
+        ep, ec, py, jit, tc = per_evaluation(
+            lambda path=path: path.simulate(t, rtol=1e-10, atol=1e-12), rounds)
         off = np.abs(jit.location(path.model.body("tractor").point("blade")) - circle).max()
         out.append(f"| {k} | {path.system.n} | {ep * 1e6:.0f} µs | {ec * 1e6:.0f} µs | "
                    f"{ep / ec:.1f} | {tc * 1e3:.1f} ms | "

@@ -27,7 +27,7 @@ import sys  # noqa: E402
 import warnings  # noqa: E402
 
 import numpy as np  # noqa: E402
-from _machine import both_loops, relative_difference, table_main  # noqa: E402  (sibling module)
+from _machine import per_evaluation, per_point, relative_difference, table_main  # noqa: E402  (sibling module)
 
 from mechsys import models  # noqa: E402
 
@@ -48,11 +48,8 @@ def tables(rounds: int = 3) -> str:
            "| ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for c in CYLINDERS:
         free = _coasting(c)
-        got = both_loops(lambda free=free: free.simulate(
+        ep, ec, py, jit, tc = per_evaluation(lambda free=free: free.simulate(
             (0.0, 3.0), initial_condition={"crank.th_d": 3.0}, rtol=1e-8), rounds)
-        (tp, py), (tc, jit) = got["0"], got["1"]
-        ep, ec = tp / py.extra["evaluations"], tc / jit.extra["evaluations"]
-        assert jit.extra["compiled_steps"] == jit.extra["steps"]
         out.append(f"| {c} | {free.system.n + free.system.m} | {ep * 1e6:.0f} µs | "
                    f"{ec * 1e6:.0f} µs | {ep / ec:.1f} | {tc * 1e3:.0f} ms "
                    f"({jit.extra['compiled_solver']}) | "
@@ -65,10 +62,9 @@ def tables(rounds: int = 3) -> str:
     t = np.linspace(0.0, 1.0, 200)
     for c in CYLINDERS:
         m = models.radial_engine(c, speed=2 * np.pi, g=9.81)
-        got = both_loops(lambda m=m: m.solve(t, solution="dynamic"), rounds)
-        (tp, py), (tc, jit) = got["0"], got["1"]
-        out.append(f"| {c} | {py.system.n} | {tp / len(t) * 1e6:.0f} µs | "
-                   f"{tc / len(t) * 1e6:.0f} µs | {tp / tc:.1f} | "
+        pp, pc, py, jit = per_point(m, t, rounds)
+        out.append(f"| {c} | {py.system.n} | {pp * 1e6:.0f} µs | "
+                   f"{pc * 1e6:.0f} µs | {pp / pc:.1f} | "
                    f"{relative_difference(jit.lam, py.lam):.1e} |")
     return "\n".join(out)
 
