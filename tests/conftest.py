@@ -12,3 +12,13 @@ def load_example(name: str):
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod
+
+
+def simulate_both(monkeypatch, free, t, **options):
+    """``free.simulate(t, **options)`` with ``MECHSYS_JIT=0`` (the Python stepper), then
+    ``1`` (the compiled loop): ``(python, compiled)``."""
+    out = {}
+    for mode in ("0", "1"):
+        monkeypatch.setenv("MECHSYS_JIT", mode)
+        out[mode] = free.simulate(t, **options)
+    return out["0"], out["1"]

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import mechsys as ms
+from conftest import simulate_both
 from mechsys.solvers._free import free_acceleration
 
 pytest.importorskip("numba")
@@ -33,12 +34,7 @@ def _example(name):
     return mod
 
 
-def _both(monkeypatch, free, t, **options):
-    out = {}
-    for mode in ("0", "1"):
-        monkeypatch.setenv("MECHSYS_JIT", mode)
-        out[mode] = free.simulate(t, **options)
-    return out["0"], out["1"]
+_both = simulate_both
 
 
 def _check_derivatives(free, sol, rows):

@@ -241,6 +241,46 @@ def pendulum_chain(n_links: int, g: float = 9.81) -> Model2D:
     return m
 
 
+def spatial_chain(n_links: int, g: float = 9.81, zigzag: float = 0.0):
+    """``n_links`` rods in space (length 1, mass 1, centroidal inertia ``diag(1e-3, 1/12,
+    1/12)`` in its frame, x along the rod), joined end to end by ball joints
+    (``Spherical3``), the first to the ground at the origin, under gravity ``g`` along -Z.
+    Every rod lies in the horizontal XY plane, turned about Z by ``+zigzag`` (even links) or
+    ``-zigzag`` (odd links) from +X: with ``zigzag = 0`` the chain is straight along X and
+    swings in the XZ plane exactly as :func:`pendulum_chain` (X, Z for its x, y); otherwise
+    it falls out of any plane. Euler-parameter coordinates: ``7 n_links`` of them. Bodies
+    ``l0 ... l{N-1}`` (point ``tip``), joints ``j{k}``; the constraints ``lock{k}``
+    (``RotationLock3``) hold the rods' orientations for assembly and are the ones to drop::
+
+        m = models.spatial_chain(24, zigzag=0.3)
+        free = m.free(drop=[f"lock{k}" for k in range(24)])
+    """
+    from .constraints import RotationLock3, Spherical3
+    from .loads import Gravity
+    from .model import Model3D
+
+    if isinstance(n_links, bool) or not isinstance(n_links, (int, np.integer)) or n_links < 1:
+        raise ModelError(f"spatial_chain: n_links must be an integer >= 1, got {n_links!r}")
+    for name, v in (("g", g), ("zigzag", zigzag)):
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)) \
+                or not np.isfinite(v):
+            raise ModelError(f"spatial_chain: {name} must be a finite number, got {v!r}")
+    m = Model3D()
+    prev, at = None, np.zeros(3)
+    for k in range(n_links):
+        angle = zigzag if k % 2 == 0 else -zigzag
+        turn = (float(angle), (0, 0, 1))
+        b = m.add_body(f"l{k}", points={"tip": (1, 0, 0)}, mass=1.0, centroid=(0.5, 0, 0),
+                       inertia=(1e-3, 1 / 12, 1 / 12, 0, 0, 0), guess=(tuple(at), turn))
+        joint = m.ground.point((0, 0, 0)) if prev is None else prev.point("tip")
+        m.add(Spherical3(joint, b.point(0)), name=f"j{k}")
+        m.add(RotationLock3(b, turn), name=f"lock{k}")
+        at = at + (np.cos(angle), np.sin(angle), 0.0)
+        prev = b
+    m.add_load(Gravity((0, 0, -1), g))
+    return m
+
+
 def n_four_bar(n_loops: int, g: float = 9.81, length: float = 1.0) -> Model2D:
     """The IFToMM multibody benchmark's N-four-bar mechanism (problem A02): ``n_loops``
     parallelogram loops of ``2 N + 1`` uniform links (length 1, mass 1, centroidal inertia

@@ -27,10 +27,12 @@ Ctrl-C is honoured.
 When it runs (``MECHSYS_JIT``, as for the kinematic sweep): ``0`` never; ``1`` or unset
 whenever possible. Possible means: Numba installed (the ``fast`` extra); DOP853, RK45 or
 one of Mech's Adams methods; a dense augmented system (``n + m <= SPARSE_THRESHOLD``) or the block
-path (above it, while its band is narrow enough: :data:`BLOCK_WORK`), or above it the
-augmented matrix's pattern by the compiled sparse LU when that pattern is not banded
-(``"sparse"``: trees of many branches; its projections through the Python path's pattern
-of ``[[I, J^T], [J^, 0]]``, the same numbers); every kernel
+path (above it, while its band is narrow enough: :data:`BLOCK_WORK`, and every body's mass
+block regular: :data:`BLOCK_PIVOT`), or above it the augmented matrix's pattern by the
+compiled sparse LU (``"sparse"``: trees of many branches, whose pattern is not banded, with
+the Python path's pattern and LU; spatial models, whose Euler-parameter blocks are singular,
+and chains too wide for the block path, with the banded pattern's sparse twin, decision
+0032; its projections through the Python path's pattern of ``[[I, J^T], [J^, 0]]``); every kernel
 SymEngine LLVM code (CSE kernels included: their repeated outputs are expanded in the
 loop). Loads that depend on the multipliers (friction) or accelerations
 (added mass) take ``free_acceleration``'s Newton in the loop (``"newton"``, decision 0028).
@@ -67,6 +69,11 @@ BLOCK_WORK = 1e6
 
 #: augmented systems with more unknowns take the block path when the mass matrix allows it
 SMALL = 24
+
+#: the block path needs each body's mass block positive definite: the smallest pivot of
+#: its unit-diagonal form's Cholesky factor, squared, above this (a slender rod pinned at
+#: its end: 0.25; an Euler-parameter block, singular: ~1e-16)
+BLOCK_PIVOT = 1e-8
 
 #: Python steps after a handover before the compiled loop resumes
 PAUSE_STEPS = 8
@@ -190,13 +197,23 @@ class _Blocks:
         pairs = [(i, i - k, oi, ok, int(bsize[b])) for b, rows in on.items()
                  for i, oi in rows for k, ok in rows if k <= i]
         pairs = np.array(sorted(pairs), dtype=np.int64).reshape(-1, 5)
-        # positive definite blocks at the start (else: the whole augmented system)
+        # positive definite blocks at the start (else: the whole augmented system). Tested
+        # on the unit-diagonal form D^-1/2 B D^-1/2 (free of the units of the coordinates): a
+        # block singular in exact arithmetic (Euler parameters: M e = 0) can pass a plain
+        # Cholesky with a pivot at the rounding level, and its inverse is then noise
         t0, q0 = start
         M = dyn.terms(t0, q0, np.zeros(n), np.zeros(m), p, np.zeros(n))[0]
         for a, z in zip(bstart[:-1], bsize):
+            B = M[a:a + z, a:a + z]
+            d = np.diag(B).copy()
+            if not (d > 0).all():
+                return None
+            w = 1.0 / np.sqrt(d)
             try:
-                np.linalg.cholesky(M[a:a + z, a:a + z])
+                L = np.linalg.cholesky(B * w[:, None] * w[None, :])
             except np.linalg.LinAlgError:
+                return None
+            if not np.diag(L).min() ** 2 > BLOCK_PIVOT:
                 return None
         return cls((bstart, boff, rptr, rblk, roff, jpos, bsize, mpos.astype(np.int64), pairs),
                    bw)
@@ -342,14 +359,18 @@ def _with_storage(got):
     return (info, *got[2:], np.zeros(size, dtype=np.int64), np.zeros((1, 5), dtype=np.int64))
 
 
-def _sparse_structure(system, fk):
-    """The structure of ``_jit_free_loop._accel_sparse`` (see there) for a large system whose
-    augmented matrix the Python path factorises by the compiled sparse LU (its
-    ``FixedPattern`` is not banded): the projection's matrix first, then the augmented one
-    (:func:`_two_structures`); None for a banded pattern, or a Jacobian with a repeated
-    entry. Made once per pattern; the sparse LU's integer storage anew per stepper."""
+def _sparse_structure(system, fk, start=None):
+    """The structure of ``_jit_free_loop._accel_sparse`` (see there) for a large system's
+    augmented matrix by the compiled sparse LU: the projection's matrix first, then the
+    augmented one (:func:`_two_structures`); None for a Jacobian with a repeated entry. The
+    pattern is the Python path's when that one is not banded (trees of many branches: the
+    same LU, the same numbers), else its sparse twin (:func:`_sparse_twin`: a chain the block
+    path cannot take; ``start = (t0, q0, p)`` sizes its storage). Made once per pattern; the
+    sparse LU's integer storage anew per stepper."""
     pat = fk.pattern
-    if pat.banded or not hasattr(pat, "s_indptr"):
+    if pat.banded:
+        pat = _sparse_twin(system, fk, start)
+    if not hasattr(pat, "s_indptr"):
         return None
     got = getattr(pat, "_jit_free_sparse", None)
     if got is None:
@@ -359,6 +380,31 @@ def _sparse_structure(system, fk):
             pat._pos, np.asarray(fk._perm, dtype=np.int64), np.zeros(0, dtype=np.int64)))
         pat._jit_free_sparse = got
     return _with_storage(got) if got else None
+
+
+def _sparse_twin(system, fk, start):
+    """The augmented matrix's pattern for the compiled sparse LU (``FixedPattern(...,
+    sparse=True)``: minimum-degree ordering) beside the banded one the Python path factorises
+    by LAPACK (kept: the Python path's band LU is the faster of the two from Python, and the
+    two loops then solve by independent factorisations). Made once per kernel. The Python
+    path never factorises it, so it cannot grow its storage when a run outgrows it: one
+    factorisation at ``start`` (``(t0, q0, p)``, at rest) sizes it here."""
+    from ._linalg import FixedPattern, Singular
+
+    pat = fk.pattern
+    twin = getattr(pat, "_sparse_twin", None)
+    if twin is None:
+        twin = FixedPattern(pat.indptr, pat.indices, pat.size, sparse=True)
+        pat._sparse_twin = twin
+    if start is not None and hasattr(twin, "s_indptr"):
+        t0, q0, p = start
+        n, m = system.n, system.m
+        K, _ = fk(float(t0), np.asarray(q0, dtype=float), np.zeros(n), np.zeros(m), p)
+        try:
+            twin.factor(K.data)
+        except Singular:
+            pass                  # (the run hands over where the Python path decides)
+    return twin
 
 
 def _path_sparse_structure(path):
@@ -619,7 +665,13 @@ class FreeStepper:
                 blocks = _Blocks.of(system, p, start)
                 if N > SPARSE_THRESHOLD and (
                         blocks is None or system.m * blocks.bandwidth**2 > BLOCK_WORK):
-                    return None
+                    # no block path (Euler parameters: the mass matrix's blocks are singular;
+                    # or a band too wide for it): the compiled sparse LU of the same pattern
+                    # in the loop (the Python path keeps LAPACK's band LU)
+                    blocks = None
+                    sparse = _sparse_structure(system, fk, (*start, p))
+                    if sparse is None:
+                        return None
             entries = [_entry(fk.f)]
         entries += _constraint_entries(system, system.f_position, system.f_velocity)
         if any(e is None for e in entries):

@@ -1,0 +1,76 @@
+"""Spatial chains at scale (Euler parameters), Python and compiled loops.
+
+``models.spatial_chain(L, zigzag=0.3)``: ``L`` rods joined by ball joints, turned
+alternately by +-0.3 rad about the vertical so that the chain falls out of any plane; 1 s
+from rest, DOP853 rtol 1e-8. Each rod has 7 coordinates and 4 equations (its ball joint
+and its Euler parameters' norm), so ``11 L`` unknowns.
+
+The mass matrix of a rod in Euler parameters is singular (``M e = 0``), so the block path
+(``M^-1`` by bodies) cannot take these chains. Up to 150 unknowns both loops solve the
+dense augmented system (LAPACK); above, the Python path factorises its banded pattern by
+LAPACK's band LU and the compiled loop the same pattern by the compiled sparse LU
+(``compiled_solver == "sparse"``, decision 0032).
+
+Each row: CPU time (median of interleaved repetitions, after a warm-up run that compiles)
+per evaluation, for ``MECHSYS_JIT=0`` and ``1``, and the largest difference of the final
+coordinates of the two runs relative to their size (each run adaptive: the two loops'
+steps differ by rounding, so the difference is of the order of the tolerance).
+
+Run: ``.venv/bin/python benchmarks/spatial.py`` prints the table (about a minute);
+``--write docs/performance-free.md`` also puts it in that page (its ``spatial`` block).
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")  # before NumPy loads: CPU time of one thread
+
+import sys  # noqa: E402
+import warnings  # noqa: E402
+
+from _machine import per_evaluation, relative_difference, table_main  # noqa: E402  (sibling module)
+
+from mechsys import models  # noqa: E402
+
+LINKS = (6, 12, 24, 48, 96)
+
+
+def _falling(links):
+    m = models.spatial_chain(links, zigzag=0.3)
+    m.solve(0.0)
+    return m.free(drop=[f"lock{k}" for k in range(links)])
+
+
+def tables(rounds: int = 3) -> str:
+    warnings.simplefilter("ignore")
+    out = ["Free fall of a zigzag spatial chain, 1 s, DOP853 rtol 1e-8:", "",
+           "| links | unknowns | Python / evaluation | compiled / evaluation | ratio | "
+           "compiled run | difference (q) |",
+           "| ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    for links in LINKS:
+        free = _falling(links)
+        ep, ec, py, jit, tc = per_evaluation(
+            lambda free=free: free.simulate((0.0, 1.0), rtol=1e-8), rounds)
+        out.append(f"| {links} | {free.system.n + free.system.m} | {ep * 1e6:.0f} µs | "
+                   f"{ec * 1e6:.0f} µs | {ep / ec:.1f} | {tc * 1e3:.0f} ms "
+                   f"({jit.extra['compiled_solver']}) | "
+                   f"{relative_difference(jit.q[-1], py.q[-1]):.1e} |")
+    return "\n".join(out)
+
+
+INTRO = ("`MECHSYS_JIT=0` (the Python path) and `1` (the compiled loops) side by side, CPU "
+         "time with one BLAS thread, the median of interleaved repetitions after a warm-up "
+         "run. Euler-parameter bodies have singular mass blocks, so no block path: dense "
+         "augmented system up to 150 unknowns, then the sparse LU in the loop against the "
+         "band LU in Python (decision 0032).")
+
+
+def main(argv=None) -> int:
+    return table_main(__doc__, "spatial", "Spatial chains (Euler parameters)", INTRO,
+                      tables, argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
