@@ -1,21 +1,25 @@
 """Large spatial models (Euler parameters) in the compiled free-motion loop.
 
 Their mass matrix has a singular 4 x 4 block per body (``M e = 0`` along the Euler
-parameters), so the block path (Schur complement on ``M^-1``) cannot take them. Above 150
-unknowns the loop factorises the augmented matrix by the compiled sparse LU of its pattern
-(the sparse kind), while the Python path keeps LAPACK's band LU: two independent
-factorisations of the same equations. Checks: every step compiled, the 2D chain's motion
-when the spatial chain swings in a plane, energy and constraints kept out of the plane,
-the Python path's motion (same steps: to rounding; adaptive: to the tolerance) and the
-model's accelerations at the outputs."""
+parameters). The block path makes each such block regular with the rows of the Jacobian on
+that body alone (the normalisation row among them: ``M_b + w J_i^T J_i``, loads ``+ w J_i^T
+gamma_i``, the same solution since ``J_i qdd = gamma_i``) and takes the rows in an order
+that keeps ``J M^-1 J^T`` banded (the system lists the normalisation rows last). Where the
+block path cannot run (here forced by ``BLOCK_WORK = 0``), the loop factorises the
+augmented matrix by the compiled sparse LU of its pattern's sparse twin, while the Python
+path keeps LAPACK's band LU. Checks: every step compiled, the 2D chain's motion when the
+spatial chain swings in a plane, energy and constraints kept out of the plane, the Python
+path's motion (same steps: to rounding; adaptive: to the tolerance) and the model's
+accelerations at the outputs (decision 0032)."""
 
 import numpy as np
 import pytest
 
 from conftest import simulate_both
 from mechsys import ModelError, models
+from mechsys.solvers import _jit_free
 from mechsys.solvers._free import free_acceleration
-from mechsys.solvers._jit_free import _Blocks
+from mechsys.solvers._jit_free import _Blocks, _regular
 
 pytest.importorskip("numba")
 
@@ -41,7 +45,7 @@ def test_planar_swing_is_the_planar_chain():
     rods (block path), X and Z for x and y, to the tolerance; no motion along Y."""
     grid = np.linspace(0.0, 0.5, 6)
     sol = _free().simulate(grid, rtol=1e-10, atol=1e-12)
-    assert sol.extra["compiled_solver"] == "sparse"
+    assert sol.extra["compiled_solver"] == "block"
     assert sol.extra["compiled_steps"] == sol.extra["steps"] > 5
     m2 = models.pendulum_chain(LINKS)
     m2.solve(0.0)
@@ -55,16 +59,24 @@ def test_planar_swing_is_the_planar_chain():
     assert np.abs(sol.q[-1] - sol.q[0]).max() > 0.1          # it did move
 
 
+def _kind(monkeypatch, kind):
+    """``"sparse"``: no block path (its work limit set to zero), the sparse twin instead."""
+    if kind == "sparse":
+        monkeypatch.setattr(_jit_free, "BLOCK_WORK", 0.0)
+
+
+@pytest.mark.parametrize("kind", ["block", "sparse"])
 @pytest.mark.parametrize("method", ["dop853", "adams"])
-def test_out_of_plane_fall_compiled(monkeypatch, method):
+def test_out_of_plane_fall_compiled(monkeypatch, method, kind):
     """A zigzag chain falls out of any plane: every step compiled, loops closed, Euler
     parameters of unit norm, the energy kept, the Python path's motion within the tolerance
     and the model's accelerations and multipliers at the loop's outputs."""
     free = _free(zigzag=0.3)
     grid = np.linspace(0.0, 0.5, 6)
     opts = dict(rtol=1e-10, atol=1e-12) if method == "dop853" else dict(max_error=1e-10)
+    _kind(monkeypatch, kind)
     py, jit = _both(monkeypatch, free, grid, method=method, **opts)
-    assert jit.extra["compiled_solver"] == "sparse" and py.extra["compiled_steps"] == 0
+    assert jit.extra["compiled_solver"] == kind and py.extra["compiled_steps"] == 0
     assert jit.extra["compiled_steps"] == jit.extra["steps"] > 5
     np.testing.assert_allclose(jit.q, py.q, rtol=0, atol=1e-9)
     np.testing.assert_allclose(jit.qd, py.qd, rtol=0, atol=1e-7)
@@ -83,38 +95,56 @@ def test_out_of_plane_fall_compiled(monkeypatch, method):
         np.testing.assert_allclose(jit.lam[k], lam, rtol=0, atol=1e-10 * np.abs(lam).max())
 
 
-def test_same_steps_agree_to_rounding(monkeypatch):
-    """Every step accepted at ``max_step`` in both loops: the two factorisations (sparse LU
-    in the loop, band LU in Python) give the same motion to 1e-12."""
+@pytest.mark.parametrize("kind", ["block", "sparse"])
+def test_same_steps_agree_to_rounding(monkeypatch, kind):
+    """Every step accepted at ``max_step`` in both loops: the loop's solve (regularised
+    blocks, or the sparse LU) and the Python path's band LU give the same motion to 1e-12."""
     free = _free(zigzag=0.3)
     grid = np.linspace(0.0, 0.2, 3)
+    _kind(monkeypatch, kind)
     py, jit = _both(monkeypatch, free, grid, rtol=1e6, atol=1e6, max_step=2e-3)
+    assert jit.extra["compiled_solver"] == kind
     assert jit.extra["compiled_steps"] == jit.extra["steps"] == py.extra["steps"] >= 100
     scale = np.abs(py.q).max(axis=0) + 1.0
     assert (np.abs(jit.q - py.q) / scale).max() <= 1e-12
     assert (np.abs(jit.qd - py.qd) / (np.abs(py.qd).max(axis=0) + 1.0)).max() <= 1e-12
 
 
-def test_mid_size_spatial_model_runs_dense_not_block(monkeypatch):
-    """Between 24 and 150 unknowns a spatial chain takes the dense augmented system. Its
-    Euler-parameter blocks can pass a plain Cholesky with a pivot at the rounding level
-    (turned rods): the block path's test reads the unit-diagonal form, so they do not
-    select it (before, they did, and the loop handed every step back to Python)."""
+def test_euler_blocks_made_regular_and_rows_reordered(monkeypatch):
+    """A turned rod's Euler-parameter block is singular; the block path's test (on its
+    unit-diagonal form) says so, its own rows make it regular, and the rows are reordered
+    to a band of 6 whatever the length (the system's order: as wide as the chain). A
+    mid-size chain (110 unknowns) then runs the block path, every step compiled (before:
+    "block" chosen on a plain Cholesky that passed at the rounding level, every step handed
+    back to Python). A planar chain keeps its structure: no regularised block, its rows in
+    their order."""
     free = _free(links=10, zigzag=0.3)
     s = free.system
-    assert 24 < s.n + s.m <= 150
     q0 = free.solve(0.0).q[0]
-    assert _Blocks.of(s, s.p_values, (0.0, q0)) is None
+    M = s.dynamics.terms(0.0, q0, np.zeros(s.n), np.zeros(s.m), s.p_values)[0]
+    # every rod's block (x, y, z, e0..e3) is singular (rank 6 of 7)
+    for k in range(10):
+        B = M[7 * k:7 * k + 7, 7 * k:7 * k + 7]
+        ev = np.linalg.eigvalsh(B)
+        assert abs(ev[0]) < 1e-12 * ev[-1] and ev[1] > 1e-4 * ev[-1]
+        assert not _regular(B)
+    blocks = _Blocks.of(s, s.p_values, (0.0, q0))
+    kM = len(s.dynamics.M_rows)
+    assert blocks.arrays[7].size > kM                 # regularising rows listed
+    assert blocks.arrays[2].size == 2 * s.m + 1       # a row order
+    assert blocks.bandwidth == 6
     monkeypatch.setenv("MECHSYS_JIT", "1")
     sol = free.simulate(np.linspace(0.0, 0.3, 4), rtol=1e-9, atol=1e-11)
-    assert sol.extra["compiled_solver"] == "augmented"
+    assert sol.extra["compiled_solver"] == "block"
     assert sol.extra["compiled_steps"] == sol.extra["steps"] > 5
-    # planar chains still take the block path
+    assert _gap(free, sol) < 1e-10
     m2 = models.pendulum_chain(10)
     m2.solve(0.0)
     f2 = m2.free(drop=[f"lock{k}" for k in range(10)])
     q2 = f2.solve(0.0).q[0]
-    assert _Blocks.of(f2.system, f2.system.p_values, (0.0, q2)) is not None
+    b2 = _Blocks.of(f2.system, f2.system.p_values, (0.0, q2))
+    assert b2.arrays[7].size == len(f2.system.dynamics.M_rows)
+    assert b2.arrays[2].size == f2.system.m + 1
 
 
 @pytest.mark.parametrize("bad", [dict(n_links=0), dict(n_links=2.0), dict(n_links=True),

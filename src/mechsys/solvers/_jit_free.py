@@ -27,12 +27,13 @@ Ctrl-C is honoured.
 When it runs (``MECHSYS_JIT``, as for the kinematic sweep): ``0`` never; ``1`` or unset
 whenever possible. Possible means: Numba installed (the ``fast`` extra); DOP853, RK45 or
 one of Mech's Adams methods; a dense augmented system (``n + m <= SPARSE_THRESHOLD``) or the block
-path (above it, while its band is narrow enough: :data:`BLOCK_WORK`, and every body's mass
-block regular: :data:`BLOCK_PIVOT`), or above it the augmented matrix's pattern by the
-compiled sparse LU (``"sparse"``: trees of many branches, whose pattern is not banded, with
-the Python path's pattern and LU; spatial models, whose Euler-parameter blocks are singular,
-and chains too wide for the block path, with the banded pattern's sparse twin, decision
-0032; its projections through the Python path's pattern of ``[[I, J^T], [J^, 0]]``); every kernel
+path (above it, while its band is narrow enough: :data:`BLOCK_WORK`; every body's mass
+block regular, :data:`BLOCK_PIVOT`, or made so by the rows on that body alone: Euler
+parameters, decision 0032), or above it the augmented matrix's pattern by the compiled
+sparse LU (``"sparse"``: trees of many branches, whose pattern is not banded and whose
+block band exceeds :data:`BLOCK_BAND`, with the Python path's pattern and LU; systems the
+block path cannot take, with the banded pattern's sparse twin; its projections through the
+Python path's pattern of ``[[I, J^T], [J^, 0]]``); every kernel
 SymEngine LLVM code (CSE kernels included: their repeated outputs are expanded in the
 loop). Loads that depend on the multipliers (friction) or accelerations
 (added mass) take ``free_acceleration``'s Newton in the loop (``"newton"``, decision 0028).
@@ -69,6 +70,12 @@ BLOCK_WORK = 1e6
 
 #: augmented systems with more unknowns take the block path when the mass matrix allows it
 SMALL = 24
+
+#: a system whose pattern is not banded for the Python path's LU (above ``SPARSE_THRESHOLD``)
+#: still takes the block path when the band of ``J M^-1 J^T`` in its row order is at most
+#: this (spatial chains: 6, whatever their length), else the sparse kind (trees of many
+#: branches: a star's hub couples every branch)
+BLOCK_BAND = 8
 
 #: the block path needs each body's mass block positive definite: the smallest pivot of
 #: its unit-diagonal form's Cholesky factor, squared, above this (a slender rod pinned at
@@ -127,17 +134,21 @@ def _lapack() -> np.ndarray:
 class _Blocks:
     """The block path's structure (``_jit_free_loop._accel_blocks``): the mass matrix is
     block-diagonal, one block per body (model variables: one each), positive definite at the
-    start; the Jacobian's rows couple through common blocks, so ``S = J M^-1 J^T`` and the
-    projection's ``J^ J^T`` are banded with ``bandwidth`` (the largest distance of two rows
-    that share a block).
+    start or made so by the Jacobian's rows on that block alone (Euler parameters: the
+    normalisation row; decision 0032); the Jacobian's rows couple through common blocks,
+    so ``S = J M^-1 J^T`` and the projection's ``J^ J^T`` are banded with ``bandwidth``
+    (the largest distance of two rows that share a block).
 
     ``arrays``: ``bstart`` (blocks + 1) first coordinate of each block; ``boff`` (blocks + 1)
     offsets of the blocks in the packed ``M`` store; ``rptr`` (m + 1), ``rblk`` the blocks
-    each row touches; ``roff`` (len(rblk) + 1) offsets of the (row, block) segments;
+    each row touches, the rows in the structure's order: the system's, or (``rptr`` then
+    (2 m + 1,)) the order ``rptr[m + 1:]`` that narrows the band (:func:`_row_order`);
+    ``roff`` (len(rblk) + 1) offsets of the (row, block) segments;
     ``jpos`` (nnz,) segment position of each Jacobian value; ``bsize`` (blocks,); ``mpos``
-    (M nonzeros,) packed position of each mass-matrix value; ``pairs`` (couplings, 5): row,
-    band offset, the two segment offsets and the block size of every pair of rows
-    (``i >= k``) that share a block."""
+    (M nonzeros + A,) packed position of each mass-matrix value, then the ``A`` rows of
+    ``J`` that regularise singular blocks (Euler parameters; ``_jit_free_loop._regularise``);
+    ``pairs`` (couplings, 5): row, band offset, the two segment offsets and the block size
+    of every pair of rows (``i >= k``) that share a block."""
 
     def __init__(self, arrays, bandwidth):
         self.arrays, self.bandwidth = arrays, int(bandwidth)
@@ -150,73 +161,188 @@ class _Blocks:
     @classmethod
     def of(cls, system, p, start):
         """The structure, or None when the mass matrix is not block-diagonal by bodies or a
-        block is not positive definite at the start (then the augmented system is solved
-        whole)."""
-        n, m = system.n, system.m
-        spans = sorted((sl.start, sl.stop) for sl in system.layout.body_slices.values())
-        bstart, j = [], 0
-        for a, b in spans + [(n, n)]:
-            while j < a:                  # model variables between bodies: one block each
-                bstart.append(j)
-                j += 1
-            if a < n:
-                bstart.append(a)
-                j = b
-        bstart.append(n)
-        bstart = np.array(bstart, dtype=np.int64)
-        bsize = np.diff(bstart)
-        block_of = np.repeat(np.arange(len(bsize)), bsize)
-        dyn = system.dynamics
-        Mr, Mc = np.asarray(dyn.M_rows, dtype=np.int64), np.asarray(dyn.M_cols, dtype=np.int64)
-        if np.any(block_of[Mr] != block_of[Mc]):
+        block is neither regular at the start (:func:`_regular`) nor made so by the rows on
+        it alone (then the augmented system is solved whole)."""
+        got = _block_structure(system)
+        if got is None:
             return None
-        boff = np.concatenate(([0], np.cumsum(bsize**2))).astype(np.int64)
-        b = block_of[Mr]
-        mpos = boff[b] + (Mr - bstart[b]) * bsize[b] + (Mc - bstart[b])
-        jr = np.asarray(system.jac_rows, dtype=np.int64)
-        jc = np.asarray(system.jac_cols, dtype=np.int64)
-        rows_blocks = [sorted(set(block_of[jc[jr == i]].tolist())) for i in range(m)]
-        rptr = np.concatenate(([0], np.cumsum([len(r) for r in rows_blocks]))).astype(np.int64)
-        rblk = np.array([b for r in rows_blocks for b in r], dtype=np.int64)
-        roff = np.concatenate(([0], np.cumsum(bsize[rblk]))).astype(np.int64)
-        where = {(i, b): roff[rptr[i] + k] for i, r in enumerate(rows_blocks)
-                 for k, b in enumerate(r)}
-        jpos = np.array([where[(i, block_of[c])] + c - bstart[block_of[c]]
-                         for i, c in zip(jr.tolist(), jc.tolist())], dtype=np.int64)
-        touching: dict = {}
-        for i, r in enumerate(rows_blocks):
-            for b in r:
-                lo, hi = touching.get(b, (i, i))
-                touching[b] = (min(lo, i), max(hi, i))
-        bw = max((hi - lo for lo, hi in touching.values()), default=0)
-        # every coupling of two rows through a block, for the band of J W and J^ J^T
-        on = {}
-        for i, r in enumerate(rows_blocks):
-            for k, b in enumerate(r):
-                on.setdefault(b, []).append((i, int(roff[rptr[i] + k])))
-        pairs = [(i, i - k, oi, ok, int(bsize[b])) for b, rows in on.items()
-                 for i, oi in rows for k, ok in rows if k <= i]
-        pairs = np.array(sorted(pairs), dtype=np.int64).reshape(-1, 5)
-        # positive definite blocks at the start (else: the whole augmented system). Tested
-        # on the unit-diagonal form D^-1/2 B D^-1/2 (free of the units of the coordinates): a
-        # block singular in exact arithmetic (Euler parameters: M e = 0) can pass a plain
-        # Cholesky with a pivot at the rounding level, and its inverse is then noise
+        (bstart, boff, rptr, rblk, roff, jpos, bsize, mpos, pairs), bw, rows_blocks, order = got
+        n, m = system.n, system.m
         t0, q0 = start
-        M = dyn.terms(t0, q0, np.zeros(n), np.zeros(m), p, np.zeros(n))[0]
-        for a, z in zip(bstart[:-1], bsize):
-            B = M[a:a + z, a:a + z]
-            d = np.diag(B).copy()
-            if not (d > 0).all():
+        M = system.dynamics.terms(t0, q0, np.zeros(n), np.zeros(m), p, np.zeros(n))[0]
+        J, own = None, []
+        for b in _irregular(M, bstart, bsize):
+            # a singular block (Euler parameters): regularised by the rows on it alone, as
+            # the loop does it (_jit_free_loop._regularise)
+            a, z = bstart[b], bsize[b]
+            B = M[a:a + z, a:a + z].copy()
+            rows = [i for i, r in enumerate(rows_blocks) if r == [b]]
+            if J is None:
+                J = system.jacobian(t0, q0, p)
+            if not rows or not all(_regularise(B, J[i if order is None else order[i], a:a + z])
+                                   for i in rows) or not _regular(B):
                 return None
-            w = 1.0 / np.sqrt(d)
-            try:
-                L = np.linalg.cholesky(B * w[:, None] * w[None, :])
-            except np.linalg.LinAlgError:
-                return None
-            if not np.diag(L).min() ** 2 > BLOCK_PIVOT:
-                return None
-        return cls((bstart, boff, rptr, rblk, roff, jpos, bsize, mpos.astype(np.int64), pairs),
-                   bw)
+            own += rows
+        mpos = np.concatenate((mpos, np.array(own, dtype=np.int64)))
+        return cls((bstart, boff, rptr, rblk, roff, jpos, bsize, mpos, pairs), bw)
+
+
+def _block_structure(system):
+    """The block path's arrays that depend only on the system (``_Blocks``' layout, ``mpos``
+    without regularising rows), its bandwidth, the rows' blocks in the structure's order and
+    that order (None: the system's); None when the mass matrix is not block-diagonal by
+    bodies, or above ``SPARSE_THRESHOLD`` unknowns when ``m bw^2`` exceeds ``BLOCK_WORK``.
+    Made once per system (a 256-link chain: 10 ms) and ``BLOCK_WORK``."""
+    key, got = system.__dict__.get("_jit_block_structure", (None, None))
+    if key == BLOCK_WORK:
+        return got
+    got = _make_block_structure(system)
+    system.__dict__["_jit_block_structure"] = (BLOCK_WORK, got)
+    return got
+
+
+def _make_block_structure(system):
+    """:func:`_block_structure`, made."""
+    n, m = system.n, system.m
+    spans = sorted((sl.start, sl.stop) for sl in system.layout.body_slices.values())
+    bstart, j = [], 0
+    for a, b in spans + [(n, n)]:
+        while j < a:                  # model variables between bodies: one block each
+            bstart.append(j)
+            j += 1
+        if a < n:
+            bstart.append(a)
+            j = b
+    bstart.append(n)
+    bstart = np.array(bstart, dtype=np.int64)
+    bsize = np.diff(bstart)
+    block_of = np.repeat(np.arange(len(bsize)), bsize)
+    dyn = system.dynamics
+    Mr, Mc = np.asarray(dyn.M_rows, dtype=np.int64), np.asarray(dyn.M_cols, dtype=np.int64)
+    if np.any(block_of[Mr] != block_of[Mc]):
+        return None
+    boff = np.concatenate(([0], np.cumsum(bsize**2))).astype(np.int64)
+    b = block_of[Mr]
+    mpos = (boff[b] + (Mr - bstart[b]) * bsize[b] + (Mc - bstart[b])).astype(np.int64)
+    jr = np.asarray(system.jac_rows, dtype=np.int64)
+    jc = np.asarray(system.jac_cols, dtype=np.int64)
+    on_row: list = [set() for _ in range(m)]
+    for i, c in zip(jr.tolist(), block_of[jc].tolist()):
+        on_row[i].add(c)
+    blocks_of_row = [sorted(r) for r in on_row]
+    # the rows in the structure's order (``order[r]``: the system's row at place r)
+    order = _row_order(blocks_of_row, len(bsize)) if m <= n else None
+    place = np.arange(m, dtype=np.int64)
+    if order is not None:
+        place[order] = np.arange(m)
+    rows_blocks = blocks_of_row if order is None else [blocks_of_row[i] for i in order]
+    rptr = np.concatenate(([0], np.cumsum([len(r) for r in rows_blocks]))).astype(np.int64)
+    rblk = np.array([b for r in rows_blocks for b in r], dtype=np.int64)
+    roff = np.concatenate(([0], np.cumsum(bsize[rblk]))).astype(np.int64)
+    where = {(i, b): roff[rptr[i] + k] for i, r in enumerate(rows_blocks)
+             for k, b in enumerate(r)}
+    jpos = np.array([where[(i, block_of[c])] + c - bstart[block_of[c]]
+                     for i, c in zip(place[jr].tolist(), jc.tolist())], dtype=np.int64)
+    bw = _bandwidth(rows_blocks)
+    if n + m > SPARSE_THRESHOLD and m * bw**2 > BLOCK_WORK:
+        # (never the block path: its couplings grow with the band's square; a star's hub)
+        return None
+    if order is not None:
+        # (the loop reads the order after rptr's m + 1 entries: rptr.size > m + 1)
+        rptr = np.concatenate((rptr, order)).astype(np.int64)
+    # every coupling of two rows through a block, for the band of J W and J^ J^T
+    on = {}
+    for i, r in enumerate(rows_blocks):
+        for k, b in enumerate(r):
+            on.setdefault(b, []).append((i, int(roff[rptr[i] + k])))
+    pairs = [(i, i - k, oi, ok, int(bsize[b])) for b, rows in on.items()
+             for i, oi in rows for k, ok in rows if k <= i]
+    pairs = np.array(sorted(pairs), dtype=np.int64).reshape(-1, 5)
+    return ((bstart, boff, rptr, rblk, roff, jpos, bsize, mpos, pairs), bw, rows_blocks, order)
+
+
+def _irregular(M, bstart, bsize) -> list:
+    """The blocks of ``M`` that are not regular (:func:`_regular`), tested a stack of blocks
+    of one size at a time."""
+    bad = []
+    for z in np.unique(bsize):
+        which = np.flatnonzero(bsize == z)
+        idx = bstart[which][:, None] + np.arange(z)
+        B = M[idx[:, :, None], idx[:, None, :]]                 # (blocks, z, z)
+        d = np.diagonal(B, axis1=1, axis2=2)
+        ok = (d > 0).all(axis=1)
+        w = 1.0 / np.sqrt(np.where(d > 0, d, 1.0))
+        try:
+            L = np.linalg.cholesky(B * w[:, :, None] * w[:, None, :])
+            piv = np.diagonal(L, axis1=1, axis2=2).min(axis=1)
+            ok &= piv**2 > BLOCK_PIVOT
+        except np.linalg.LinAlgError:
+            ok &= np.array([_regular(M[a:a + z, a:a + z]) for a in bstart[which]], dtype=bool)
+        bad += which[~ok].tolist()
+    return sorted(bad)
+
+
+def _bandwidth(rows_blocks) -> int:
+    """The largest distance of two rows that share a block (the band of ``J M^-1 J^T``)."""
+    touching: dict = {}
+    for i, r in enumerate(rows_blocks):
+        for b in r:
+            lo, hi = touching.get(b, (i, i))
+            touching[b] = (min(lo, i), max(hi, i))
+    return max((hi - lo for lo, hi in touching.values()), default=0)
+
+
+def _row_order(rows_blocks, nblk):
+    """A reverse Cuthill-McKee order of the rows (rows adjacent when they share a block)
+    when it narrows the band of ``J M^-1 J^T`` (``order[r]``: the row at place ``r``), else
+    None: the rows keep their order. A spatial model lists each body's Euler-parameter
+    normalisation after every joint, which makes the band as wide as the model; planar
+    chains and trees in their natural order are already narrow and keep it (and their
+    numbers)."""
+    import scipy.sparse as sps
+    from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+    m = len(rows_blocks)
+    if m < 3:
+        return None
+    rows = [i for i, r in enumerate(rows_blocks) for _ in r]
+    cols = [b for r in rows_blocks for b in r]
+    inc = sps.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(m, max(nblk, 1)))
+    order = reverse_cuthill_mckee((inc @ inc.T).tocsr(), symmetric_mode=True).astype(np.int64)
+    if _bandwidth([rows_blocks[i] for i in order]) >= _bandwidth(rows_blocks):
+        return None
+    return order
+
+
+def _regular(B) -> bool:
+    """A mass block the block path can invert: positive diagonal and its unit-diagonal form
+    ``D^-1/2 B D^-1/2`` (free of the units of the coordinates) positive definite with
+    Cholesky pivots above ``sqrt(BLOCK_PIVOT)``. A block singular in exact arithmetic (Euler
+    parameters: ``M e = 0``) can pass a plain Cholesky with a pivot at the rounding level,
+    and its inverse is then noise."""
+    d = np.diag(B)
+    if not (d > 0).all():
+        return False
+    w = 1.0 / np.sqrt(d)
+    try:
+        L = np.linalg.cholesky(B * w[:, None] * w[None, :])
+    except np.linalg.LinAlgError:
+        return False
+    return bool(np.diag(L).min() ** 2 > BLOCK_PIVOT)
+
+
+def _regularise(B, j) -> bool:
+    """``B += w j^T j`` in place, ``w = 1 / sum_t j_t^2 / B_tt`` (the term has unit size in
+    the unit-diagonal form); nothing for a row that is zero on the block. False: a diagonal
+    entry is not positive (a massless body: the loop would hand over). The Python twin of
+    ``_jit_free_loop._regularise``, for the test at the start."""
+    diag = np.diag(B)
+    if not (diag > 0).all():
+        return False
+    d = float(np.sum(j * j / diag))
+    if d > 0:
+        B += np.outer(j / d, j)
+    return True
 
 
 def _entry(kernel):
@@ -655,23 +781,25 @@ class FreeStepper:
         else:
             # the kernel the Python path uses (sparse above the threshold): compiled once
             fk = dyn.free_kernel(N > SPARSE_THRESHOLD)
-            if N > SPARSE_THRESHOLD and not fk.pattern.banded:
+            if N > SMALL:
+                blocks = _Blocks.of(system, p, start)
+            if N > SPARSE_THRESHOLD and not fk.pattern.banded and (
+                    blocks is None or blocks.bandwidth > BLOCK_BAND):
                 # a wide band (a tree of many branches): the Python path's pattern and its
                 # sparse LU, in the loop
+                blocks = None
                 sparse = _sparse_structure(system, fk)
                 if sparse is None:
                     return None
-            elif N > SMALL:
-                blocks = _Blocks.of(system, p, start)
-                if N > SPARSE_THRESHOLD and (
-                        blocks is None or system.m * blocks.bandwidth**2 > BLOCK_WORK):
-                    # no block path (Euler parameters: the mass matrix's blocks are singular;
-                    # or a band too wide for it): the compiled sparse LU of the same pattern
-                    # in the loop (the Python path keeps LAPACK's band LU)
-                    blocks = None
-                    sparse = _sparse_structure(system, fk, (*start, p))
-                    if sparse is None:
-                        return None
+            elif N > SPARSE_THRESHOLD and (
+                    blocks is None or system.m * blocks.bandwidth**2 > BLOCK_WORK):
+                # no block path (a mass block that its own rows do not make regular, or a
+                # band too wide for it): the compiled sparse LU of the same pattern in the
+                # loop (the Python path keeps LAPACK's band LU)
+                blocks = None
+                sparse = _sparse_structure(system, fk, (*start, p))
+                if sparse is None:
+                    return None
             entries = [_entry(fk.f)]
         entries += _constraint_entries(system, system.f_position, system.f_velocity)
         if any(e is None for e in entries):

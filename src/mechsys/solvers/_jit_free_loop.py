@@ -1843,7 +1843,7 @@ def _block_work(blocks, blk_i, n, m, bw, nnz):
         boff, roff, bsize = blk_i[0][1], blk_i[0][4], blk_i[0][6]
         big = bsize.max() if bsize.size else 1
         bw_ = (np.zeros(boff[-1]), np.zeros(roff[-1]), np.zeros(roff[-1]),
-               np.zeros((m, bw + 1)), np.zeros(n), np.zeros(roff[-1]), np.zeros(boff[-1]),
+               np.zeros((m, bw + 1)), np.zeros(n + m), np.zeros(roff[-1]), np.zeros(boff[-1]),
                np.zeros(big * big))
     else:
         bw_ = (np.zeros(1), np.zeros(1), np.zeros(1), np.zeros((1, 1)), np.zeros(1), np.zeros(1),
@@ -1956,6 +1956,47 @@ def _accel_gen(kp, lapack, x, nin, n, m, jr, jc, rows0, columns, robust, ipiv, i
 # through a common block, so S is banded (bandwidth ``bw``, fixed per model: chains and trees
 # in their natural order give a few). Cost per evaluation: linear in the number of bodies.
 # ``blk``: int64 arrays packed by ``_jit_free._Blocks`` (see there).
+#
+# A singular block (a body in Euler parameters: M_b e = 0) is made regular by the rows of J
+# on that block alone (its normalisation row 2 e^T among them), listed after the mass
+# matrix's positions in ``mpos``:
+#     M_b += w J_i^T J_i,   f_b += w J_i^T gamma_i,   w = 1 / sum_t J_it^2 / (M_b)_tt
+# Since J_i qdd = gamma_i, the exact solution (qdd, lam) of the augmented system solves the
+# changed one too, which is regular: the same solution, a different route (_regularise).
+# The structure's rows may be in another order than the system's (``rptr[m + 1:]``: the
+# system's row at each place; a spatial model's normalisation rows come last in the system):
+# S is banded in the structure's order, and lam and gamma are taken through the order.
+
+
+@leaf
+def _regularise(Mst, out, kk, n, m, Jst, mpos, kM, rptr, rblk, roff, bstart, boff, bsize):
+    """The singular blocks made regular (see above): for each row ``i = mpos[kM:]`` (on one
+    block ``b`` only; in the structure's order), ``M_b += w J_i^T J_i`` in ``Mst`` and ``w
+    J_i^T gamma_i`` added to the block's loads ``out[kk + bstart[b]:]``, with ``J_i`` its
+    segment in ``Jst``. A row that is zero on the block adds nothing. False (hand over): a
+    diagonal entry not positive."""
+    for a in range(kM, mpos.size):
+        i = mpos[a]
+        gi = rptr[m + 1 + i] if rptr.size > m + 1 else i
+        p = rptr[i]
+        b = rblk[p]
+        o, z, s0, c0 = boff[b], bsize[b], roff[p], bstart[b]
+        d = 0.0
+        for t in range(z):
+            mt = Mst[o + t * z + t]
+            if not mt > 0.0:
+                return False
+            d += Jst[s0 + t] * Jst[s0 + t] / mt
+        if d == 0.0:
+            continue
+        w = 1.0 / d
+        g = w * out[kk + n + gi]
+        for t in range(z):
+            jt = w * Jst[s0 + t]
+            for v in range(z):
+                Mst[o + t * z + v] += jt * Jst[s0 + v]
+            out[kk + c0 + t] += Jst[s0 + t] * g
+    return True
 
 
 @leaf
@@ -2123,17 +2164,20 @@ def _accel_blocks(kp, x, nin, out, kk, kM, n, m, jr, jc, rows0, columns, robust,
     Mst[:] = 0.0
     for k in range(kM):
         Mst[mpos[k]] = out[k]
-    if not _chol_blocks(Mst, bstart, boff, nblk):
-        return False
     big_rhs = 0.0
     for j in range(n):
         big_rhs = max(big_rhs, abs(out[kk + j]))
     for i in range(m):
         big_rhs = max(big_rhs, abs(out[kk + n + i]))
+    _fill_rows(out, kM, jpos, Jst, False, lam, columns, jc, jr)
+    if mpos.size > kM and not _regularise(Mst, out, kk, n, m, Jst, mpos, kM, rptr, rblk,
+                                          roff, bstart, boff, bsize):
+        return False
+    if not _chol_blocks(Mst, bstart, boff, nblk):
+        return False
     _invert_blocks(Mst, Minv, bstart, boff, nblk, Li)
     for b in range(nblk):
         _block_mul(Minv, boff[b], bsize[b], out, kk + bstart[b], u, bstart[b])
-    _fill_rows(out, kM, jpos, Jst, False, lam, columns, jc, jr)
     for i in range(m):                       # W = M^-1 J^T, segment by segment
         for p in range(rptr[i], rptr[i + 1]):
             b = rblk[p]
@@ -2145,7 +2189,13 @@ def _accel_blocks(kp, x, nin, out, kk, kM, n, m, jr, jc, rows0, columns, robust,
         lam[jr[k]] += out[kM + k] * u[jc[k]]
     if _band_chol(Sb, m, bw) < 0:
         return False
-    _band_solve(Sb, m, bw, lam)
+    ordered = rptr.size > m + 1
+    sol = lam
+    if ordered:                      # the right-hand side in the structure's order
+        sol = u[n:n + m]
+        for i in range(m):
+            sol[i] = lam[rptr[m + 1 + i]]
+    _band_solve(Sb, m, bw, sol)
     for j in range(n):
         qdd[j] = u[j]
     for i in range(m):
@@ -2153,7 +2203,10 @@ def _accel_blocks(kp, x, nin, out, kk, kM, n, m, jr, jc, rows0, columns, robust,
             b = rblk[p]
             o = bstart[b]
             for t in range(bsize[b]):
-                qdd[o + t] -= Wst[roff[p] + t] * lam[i]
+                qdd[o + t] -= Wst[roff[p] + t] * sol[i]
+    if ordered:
+        for i in range(m):
+            lam[rptr[m + 1 + i]] = sol[i]
     big = 0.0
     for j in range(n):
         v = abs(qdd[j])
@@ -2183,6 +2236,11 @@ def _min_norm_blocks(vals, j0, jr, jc, columns, m, n, bvec, r, blk_i, Pst, Sb, r
     if ratio < 0 or (robust and ratio * ratio < ZONE):
         return False
     y = bvec                      # (overwritten: the callers compute it again before use)
+    if rptr.size > m + 1:         # in the structure's row order (dq: free until below)
+        for i in range(m):
+            dq[i] = y[rptr[m + 1 + i]]
+        for i in range(m):
+            y[i] = dq[i]
     _band_solve(Sb, m, bw, y)
     for j in range(n):
         dq[j] = 0.0
