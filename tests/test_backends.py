@@ -85,4 +85,15 @@ def test_cse_kernels_repeated_outputs_are_right():
     exact = [math.sin(0.4), -math.cos(0.4), 1.5 * math.cos(0.4) - 0.7 * math.sin(0.4), -math.cos(0.4)]
     np.testing.assert_allclose(f(x), exact, rtol=1e-14)
     np.testing.assert_allclose(f.batch(np.vstack([x, x])), [exact, exact], rtol=1e-14)
-    assert f.c_function() is None       # the compiled sweep needs the kernel's own outputs
+    # the compiled loops without an expansion map (sweep, multipliers) get the kernel
+    # compiled again without CSE: its C function writes every output, the right ones
+    import ctypes
+
+    row = f.c_function()
+    assert row is not None and row[2] == 0 and f.c_entry()[1] is not None
+    cfun = ctypes.CFUNCTYPE(None, ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_double),
+                            ctypes.c_void_p)(row[0])
+    out = np.full(4, np.nan)
+    cfun(out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+         x.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), row[1])
+    np.testing.assert_allclose(out, exact, rtol=1e-14)

@@ -84,6 +84,54 @@ def test_spline_cam_two_stage_kernels(monkeypatch):
                                rtol=1e-8, atol=1e-8)
 
 
+def _gen_arm(links=4):
+    """A planar arm in generalized coordinates (``GenRevolute2`` joints: CSE kernels) driven
+    at its joints. Its Jacobian's entries are all 1: repeated outputs, which the CSE kernel
+    computes once."""
+    m = ms.Model2D()
+    master = m.ground.axis((0, 0))
+    for k in range(links):
+        link = m.add_body(f"link{k}", points={"o": (0, 0), "e": (1.0, 0)}, mass=1.0,
+                          centroid=(0.5, 0), inertia=1 / 12)
+        m.add(ms.GenRevolute2(link.axis("o"), master, (f"q{k}", 0.0)), name=f"joint{k}")
+        master = link.axis("e")
+    q = sp.symbols(f"q0:{links}")
+    for k in range(links):
+        m.add(ms.Constraint([q[k] - 0.3 * sp.sin((k + 1) * T)]), name=f"drive{k}")
+    return m
+
+
+def test_generalized_coordinates_sweep_compiled(monkeypatch):
+    """Generalized coordinates compile their kernels with CSE, whose repeated outputs (here
+    the Jacobian's ones) are computed once. The compiled sweep, which reads every output,
+    gets the kernel compiled once more without CSE (``c_function``): the sweep runs compiled,
+    with the Python loop's numbers and the drivers' closed form."""
+    t = np.linspace(0.0, 2.0, 81)
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    system = _gen_arm().compile()
+    assert system.f_position.c_entry()[1] is not None          # repeated outputs
+    assert _jit.plan(system, len(t), 2) is not None
+    fast, slow = _both(monkeypatch, _gen_arm, t)
+    _same(fast, slow)
+    for k in range(4):
+        w = k + 1
+        np.testing.assert_allclose(fast[f"q{k}"], 0.3 * np.sin(w * t), rtol=0, atol=1e-12)
+        np.testing.assert_allclose(fast.coordinate(f"q{k}", 2), -0.3 * w**2 * np.sin(w * t),
+                                   rtol=0, atol=1e-10)
+    calls = []
+    real = _jit.run
+
+    def spy(*a, **k):
+        out = real(*a, **k)
+        calls.append(out)
+        return out
+
+    monkeypatch.setattr(_jit, "run", spy)
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    sol = _gen_arm().solve(t)
+    assert calls and calls[0][0] == len(t) and calls[0][1] == sol.evaluations
+
+
 def test_compiled_path_ran(monkeypatch):
     """The agreement above is not two runs of the Python loop: the compiled loop is entered
     and finishes the sweep itself."""

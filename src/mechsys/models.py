@@ -241,9 +241,9 @@ def pendulum_chain(n_links: int, g: float = 9.81) -> Model2D:
     return m
 
 
-def spatial_chain(n_links: int, g: float = 9.81, zigzag: float = 0.0):
-    """``n_links`` rods in space (length 1, mass 1, centroidal inertia ``diag(1e-3, 1/12,
-    1/12)`` in its frame, x along the rod), joined end to end by ball joints
+def spatial_chain(n_links: int, g: float = 9.81, zigzag: float = 0.0, length: float = 1.0):
+    """``n_links`` rods in space (``length``, mass 1, centroidal inertia ``diag(1e-3, 1/12,
+    1/12) length^2`` in its frame, x along the rod), joined end to end by ball joints
     (``Spherical3``), the first to the ground at the origin, under gravity ``g`` along -Z.
     Every rod lies in the horizontal XY plane, turned about Z by ``+zigzag`` (even links) or
     ``-zigzag`` (odd links) from +X: with ``zigzag = 0`` the chain is straight along X and
@@ -261,21 +261,25 @@ def spatial_chain(n_links: int, g: float = 9.81, zigzag: float = 0.0):
 
     if isinstance(n_links, bool) or not isinstance(n_links, (int, np.integer)) or n_links < 1:
         raise ModelError(f"spatial_chain: n_links must be an integer >= 1, got {n_links!r}")
-    for name, v in (("g", g), ("zigzag", zigzag)):
+    for name, v in (("g", g), ("zigzag", zigzag), ("length", length)):
         if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)) \
                 or not np.isfinite(v):
             raise ModelError(f"spatial_chain: {name} must be a finite number, got {v!r}")
+    if not length > 0:
+        raise ModelError(f"spatial_chain: length must be positive, got {length!r}")
+    L = float(length)
     m = Model3D()
     prev, at = None, np.zeros(3)
     for k in range(n_links):
         angle = zigzag if k % 2 == 0 else -zigzag
         turn = (float(angle), (0, 0, 1))
-        b = m.add_body(f"l{k}", points={"tip": (1, 0, 0)}, mass=1.0, centroid=(0.5, 0, 0),
-                       inertia=(1e-3, 1 / 12, 1 / 12, 0, 0, 0), guess=(tuple(at), turn))
+        b = m.add_body(f"l{k}", points={"tip": (L, 0, 0)}, mass=1.0, centroid=(L / 2, 0, 0),
+                       inertia=(1e-3 * L**2, L**2 / 12, L**2 / 12, 0, 0, 0),
+                       guess=(tuple(at), turn))
         joint = m.ground.point((0, 0, 0)) if prev is None else prev.point("tip")
         m.add(Spherical3(joint, b.point(0)), name=f"j{k}")
         m.add(RotationLock3(b, turn), name=f"lock{k}")
-        at = at + (np.cos(angle), np.sin(angle), 0.0)
+        at = at + L * np.array([np.cos(angle), np.sin(angle), 0.0])
         prev = b
     m.add_load(Gravity((0, 0, -1), g))
     return m

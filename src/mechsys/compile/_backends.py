@@ -228,6 +228,15 @@ def _cache_store(path: Path, f) -> None:
             os.unlink(tmp)
 
 
+def _entry_point(f):
+    """``(owners, (address, context))`` of a SymEngine LLVM ``Lambdify``'s C function (the
+    owners keep the ctypes objects, and so the addresses, alive)."""
+    import ctypes
+
+    fn, ctx = f.as_ctypes()
+    return (fn, ctx), (ctypes.cast(fn, ctypes.c_void_p).value, ctx.value or 0)
+
+
 class _SymengineCompiled(Compiled):
     """SymEngine ``Lambdify``; expressions with ``Piecewise`` in two stages: the distinct
     ``Piecewise`` first (``_pre``), then the rest with their values as extra arguments."""
@@ -265,6 +274,9 @@ class _SymengineCompiled(Compiled):
             if len(distinct) < len(exprs):
                 where = {e: i for i, e in enumerate(distinct)}
                 self._expand = np.array([where[e] for e in exprs], dtype=np.intp)
+                # (every output, for the compiled loops that take no expansion map:
+                # :meth:`c_function` compiles them without CSE when first asked)
+                self._plain_src = (list(args), list(exprs), opt_level)
                 exprs = distinct
         self._nf = len(exprs)
         self._f, self.backend = _lambdify(args, exprs, opt_level, cse)
@@ -299,6 +311,7 @@ class _SymengineCompiled(Compiled):
         on first use."""
         state = dict(self.__dict__)
         state.pop("_cfun", None)
+        state.pop("_pfun", None)
         return state
 
     def c_function(self):
@@ -307,12 +320,25 @@ class _SymengineCompiled(Compiled):
         pre_context, pieces)``. With ``Piecewise`` (two stages, see the class) the first stage
         at ``pre_address`` writes the ``pieces`` values after the ``x`` arguments and the
         kernel reads ``[x, pieces]``; otherwise ``pre_address`` is 0. None when a stage is not
-        LLVM code or the kernel has repeated outputs (see :meth:`c_entry`). Valid while this
-        object lives."""
-        if self._expand is not None:
-            return None
+        LLVM code. Valid while this object lives.
+
+        A CSE kernel with repeated outputs (``_expand``, see :meth:`c_entry`) computes each
+        distinct value once, which a loop without the expansion map cannot read: for those
+        loops (the kinematic sweep, the multiplier solves) its outputs are compiled once more
+        without SymEngine's CSE (LLVM's optimiser still removes the repeated work), every
+        output written, on the first call (and kept in the on-disk kernel cache)."""
         entry = self.c_entry()
-        return None if entry is None else entry[0]
+        if entry is None or self._expand is None:
+            return None if entry is None else entry[0]
+        if not hasattr(self, "_pfun"):
+            args, exprs, opt_level = self._plain_src
+            f, backend = _lambdify(args, exprs, opt_level, False)
+            if backend != "symengine-llvm":
+                self._pfun = None
+            else:
+                keep, main = _entry_point(f)
+                self._pfun = (f, keep, (*main, *entry[0][2:]))   # owners kept alive
+        return None if self._pfun is None else self._pfun[2]
 
     def c_entry(self):
         """``(row, expand)``: the C entry points of :meth:`c_function` and, for a CSE kernel
@@ -324,15 +350,9 @@ class _SymengineCompiled(Compiled):
         if self.backend != "symengine-llvm" or (
                 self._pre is not None and self._pre_backend != "symengine-llvm"):
             return None
-        import ctypes
-
-        def entry(f):
-            fn, ctx = f.as_ctypes()
-            return (fn, ctx), (ctypes.cast(fn, ctypes.c_void_p).value, ctx.value or 0)
-
         if not hasattr(self, "_cfun"):
-            keep, main = entry(self._f)
-            keep_pre, pre = entry(self._pre) if self._pre is not None else (None, (0, 0))
+            keep, main = _entry_point(self._f)
+            keep_pre, pre = _entry_point(self._pre) if self._pre is not None else (None, (0, 0))
             self._cfun = (keep, keep_pre, (*main, *pre, self._npieces))  # owners kept alive
         return self._cfun[2], self._expand
 
