@@ -118,6 +118,12 @@ def test_generalized_coordinates_sweep_compiled(monkeypatch):
         np.testing.assert_allclose(fast[f"q{k}"], 0.3 * np.sin(w * t), rtol=0, atol=1e-12)
         np.testing.assert_allclose(fast.coordinate(f"q{k}", 2), -0.3 * w**2 * np.sin(w * t),
                                    rtol=0, atol=1e-10)
+    _assert_compiled_sweep(monkeypatch, _gen_arm, t)
+
+
+def _assert_compiled_sweep(monkeypatch, build, t):
+    """The compiled loop is entered and finishes the sweep itself: every evaluation is the
+    loop's (the scaling comes from its first one)."""
     calls = []
     real = _jit.run
 
@@ -128,26 +134,14 @@ def test_generalized_coordinates_sweep_compiled(monkeypatch):
 
     monkeypatch.setattr(_jit, "run", spy)
     monkeypatch.setenv("MECHSYS_JIT", "1")
-    sol = _gen_arm().solve(t)
+    sol = build().solve(t)
     assert calls and calls[0][0] == len(t) and calls[0][1] == sol.evaluations
 
 
 def test_compiled_path_ran(monkeypatch):
     """The agreement above is not two runs of the Python loop: the compiled loop is entered
     and finishes the sweep itself."""
-    calls = []
-    real = _jit.run
-
-    def spy(*a, **k):
-        out = real(*a, **k)
-        calls.append(out)
-        return out
-
-    monkeypatch.setattr(_jit, "run", spy)
-    monkeypatch.setenv("MECHSYS_JIT", "1")
-    sol = models.slider_crank().solve(np.linspace(0, 1, 50))
-    # every evaluation is the loop's: the scaling comes from its first one
-    assert calls and calls[0][0] == 50 and calls[0][1] == sol.evaluations
+    _assert_compiled_sweep(monkeypatch, models.slider_crank, np.linspace(0, 1, 50))
 
 
 @pytest.mark.parametrize("order", ["location", "velocity", "acceleration"])
