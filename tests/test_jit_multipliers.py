@@ -63,7 +63,18 @@ def _loaded_chain():
     return m
 
 
-BUILDS = {"slider-crank": _gas_crank, "n-four-bar": lambda: models.n_four_bar(3),
+def _gen_arm():
+    """The driven arm in generalized coordinates of tests/test_jit_sweep.py under gravity:
+    short, so its dynamics is symbolic (a CSE kernel whose repeated outputs the compiled
+    loop reads through the kernel compiled again without CSE)."""
+    from test_jit_sweep import _gen_arm as arm
+
+    m = arm(4)
+    m.add_load(ms.Gravity((0, -1), 9.81))
+    return m
+
+
+BUILDS = {"gen-arm": _gen_arm, "slider-crank": _gas_crank, "n-four-bar": lambda: models.n_four_bar(3),
           "rotor-3d": _rotor, "spline-cam": _loaded_spline_cam, "chain-183": _loaded_chain,
           # a star: the sparse LU of a wide pattern
           "radial-183": lambda: models.radial_engine(30, g=9.81)}
