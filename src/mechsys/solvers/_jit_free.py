@@ -781,10 +781,14 @@ class FreeStepper:
         else:
             # the kernel the Python path uses (sparse above the threshold): compiled once
             fk = dyn.free_kernel(N > SPARSE_THRESHOLD)
+            wide = N > SPARSE_THRESHOLD and not fk.pattern.banded
             if N > SMALL:
-                blocks = _Blocks.of(system, p, start)
-            if N > SPARSE_THRESHOLD and not fk.pattern.banded and (
-                    blocks is None or blocks.bandwidth > BLOCK_BAND):
+                # (the band from the structure, made once per system, before the test at
+                # the start, made at every plan)
+                got = _block_structure(system)
+                if got is not None and not (wide and got[1] > BLOCK_BAND):
+                    blocks = _Blocks.of(system, p, start)
+            if wide and (blocks is None or blocks.bandwidth > BLOCK_BAND):
                 # a wide band (a tree of many branches): the Python path's pattern and its
                 # sparse LU, in the loop
                 blocks = None
