@@ -110,14 +110,14 @@ def test_same_steps_agree_to_rounding(monkeypatch, kind):
     assert (np.abs(jit.qd - py.qd) / (np.abs(py.qd).max(axis=0) + 1.0)).max() <= 1e-12
 
 
-def test_euler_blocks_made_regular_and_rows_reordered(monkeypatch):
+def test_euler_blocks_made_regular(monkeypatch):
     """A turned rod's Euler-parameter block is singular; the block path's test (on its
-    unit-diagonal form) says so, its own rows make it regular, and the rows are reordered
-    to a band of 6 whatever the length (the system's order: as wide as the chain). A
-    mid-size chain (110 unknowns) then runs the block path, every step compiled (before:
-    "block" chosen on a plain Cholesky that passed at the rounding level, every step handed
-    back to Python). A planar chain keeps its structure: no regularised block, its rows in
-    their order."""
+    unit-diagonal form) says so, and its own rows make it regular. A mid-size chain (110
+    unknowns: its rows in the system's order) then runs the block path, every step compiled
+    (before: "block" chosen on a plain Cholesky that passed at the rounding level, every
+    step handed back to Python). Above 150 unknowns the rows are reordered to a band of 6
+    whatever the length. A planar chain keeps its structure: no regularised block, its rows
+    in their order."""
     free = _free(links=10, zigzag=0.3)
     s = free.system
     q0 = free.solve(0.0).q[0]
@@ -131,8 +131,10 @@ def test_euler_blocks_made_regular_and_rows_reordered(monkeypatch):
     blocks = _Blocks.of(s, s.p_values, (0.0, q0))
     kM = len(s.dynamics.M_rows)
     assert blocks.arrays[7].size > kM                 # regularising rows listed
-    assert blocks.arrays[2].size == 2 * s.m + 1       # a row order
-    assert blocks.bandwidth == 6
+    assert blocks.arrays[2].size == s.m + 1           # the system's row order
+    big = _free(links=LINKS, zigzag=0.3)
+    b24 = _Blocks.of(big.system, big.system.p_values, (0.0, big.solve(0.0).q[0]))
+    assert b24.arrays[2].size == 2 * big.system.m + 1 and b24.bandwidth == 6
     monkeypatch.setenv("MECHSYS_JIT", "1")
     sol = free.simulate(np.linspace(0.0, 0.3, 4), rtol=1e-9, atol=1e-11)
     assert sol.extra["compiled_solver"] == "block"
@@ -145,6 +147,23 @@ def test_euler_blocks_made_regular_and_rows_reordered(monkeypatch):
     b2 = _Blocks.of(f2.system, f2.system.p_values, (0.0, q2))
     assert b2.arrays[7].size == len(f2.system.dynamics.M_rows)
     assert b2.arrays[2].size == f2.system.m + 1
+
+
+@pytest.mark.parametrize("loops,ordered,band", [(2, False, 9), (10, False, 41), (15, True, 5)])
+def test_rows_reordered_only_for_wide_bands(loops, ordered, band):
+    """The block path reorders the rows only above 150 unknowns, when their own band exceeds
+    16 and the order halves it: the n-four-bar lists its equations by kind (band 61 at 15
+    loops, 185 unknowns; 5 in order). Smaller ones keep the system's order (2 loops: band 9;
+    10 loops, 125 unknowns: band 41), and with it the hand-over test near their singular
+    instants, on which the examples' comparison of the two loops and the robustness table
+    rely."""
+    m = models.n_four_bar(loops, 9.81)
+    m.solve(0.0)
+    free = m.free(drop=["hold"])
+    s = free.system
+    blocks = _Blocks.of(s, s.p_values, (0.0, free.solve(0.0).q[0]))
+    assert (blocks.arrays[2].size > s.m + 1) == ordered
+    assert blocks.bandwidth == band
 
 
 def test_units_of_length_do_not_change_the_motion():

@@ -231,7 +231,8 @@ def _make_block_structure(system):
         on_row[i].add(c)
     blocks_of_row = [sorted(r) for r in on_row]
     # the rows in the structure's order (``order[r]``: the system's row at place r)
-    order = _row_order(blocks_of_row, len(bsize)) if m <= n else None
+    order = _row_order(blocks_of_row, len(bsize)) if m <= n and n + m > SPARSE_THRESHOLD \
+        else None
     place = np.arange(m, dtype=np.int64)
     if order is not None:
         place[order] = np.arange(m)
@@ -294,22 +295,26 @@ def _bandwidth(rows_blocks) -> int:
 
 def _row_order(rows_blocks, nblk):
     """A reverse Cuthill-McKee order of the rows (rows adjacent when they share a block)
-    when it narrows the band of ``J M^-1 J^T`` (``order[r]``: the row at place ``r``), else
-    None: the rows keep their order. A spatial model lists each body's Euler-parameter
-    normalisation after every joint, which makes the band as wide as the model; planar
-    chains and trees in their natural order are already narrow and keep it (and their
-    numbers)."""
+    when the rows' own band is wider than ``2 BLOCK_BAND`` and the order at least halves it
+    (``order[r]``: the row at place ``r``), else None: the rows keep their order. Asked only
+    above ``SPARSE_THRESHOLD`` unknowns, where the band decides whether the block path runs
+    at all. A spatial model lists each body's Euler-parameter normalisation after every
+    joint, and the n-four-bar its loops' equations by kind, which makes the band as wide as
+    the model (24 rods: 72; 40 loops: 161; 6 and 5 in this order). Smaller systems and
+    narrow bands keep their order, and so their numbers: near a singular instant the block
+    path's hand-over test (the spread of the Cholesky diagonal) depends on the order."""
     import scipy.sparse as sps
     from scipy.sparse.csgraph import reverse_cuthill_mckee
 
     m = len(rows_blocks)
-    if m < 3:
+    natural = _bandwidth(rows_blocks)
+    if m < 3 or natural <= 2 * BLOCK_BAND:
         return None
     rows = [i for i, r in enumerate(rows_blocks) for _ in r]
     cols = [b for r in rows_blocks for b in r]
     inc = sps.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(m, max(nblk, 1)))
     order = reverse_cuthill_mckee((inc @ inc.T).tocsr(), symmetric_mode=True).astype(np.int64)
-    if _bandwidth([rows_blocks[i] for i in order]) >= _bandwidth(rows_blocks):
+    if 2 * _bandwidth([rows_blocks[i] for i in order]) > natural:
         return None
     return order
 
