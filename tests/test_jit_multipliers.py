@@ -63,18 +63,27 @@ def _loaded_chain():
     return m
 
 
-def _gen_arm():
-    """The driven arm in generalized coordinates of tests/test_jit_sweep.py under gravity:
-    short, so its dynamics is symbolic (a CSE kernel whose repeated outputs the compiled
-    loop reads through the kernel compiled again without CSE)."""
+def _gen_arm(links=4):
+    """The driven arm in generalized coordinates of tests/test_jit_sweep.py under gravity.
+    Short (4 links), its dynamics is symbolic (a CSE kernel whose repeated outputs the
+    compiled loop reads through the kernel compiled again without CSE); long (12 links), it
+    is the recursion (composite bodies), whose right-hand sides the compiled loop gets from
+    ``_jit_free_loop.gen_loads``."""
     from test_jit_sweep import _gen_arm as arm
 
-    m = arm(4)
+    m = arm(links)
     m.add_load(ms.Gravity((0, -1), 9.81))
     return m
 
 
-BUILDS = {"gen-arm": _gen_arm, "slider-crank": _gas_crank, "n-four-bar": lambda: models.n_four_bar(3),
+def test_long_gen_arm_has_the_recursive_dynamics():
+    """(So that the build "gen-arm-12" below covers the recursion.)"""
+    assert getattr(_gen_arm(12).compile().dynamics, "recursive", False)
+    assert not getattr(_gen_arm(4).compile().dynamics, "recursive", False)
+
+
+BUILDS = {"gen-arm": _gen_arm, "gen-arm-12": lambda: _gen_arm(12), "slider-crank": _gas_crank,
+          "n-four-bar": lambda: models.n_four_bar(3),
           "rotor-3d": _rotor, "spline-cam": _loaded_spline_cam, "chain-183": _loaded_chain,
           # a star: the sparse LU of a wide pattern
           "radial-183": lambda: models.radial_engine(30, g=9.81)}

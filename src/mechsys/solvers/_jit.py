@@ -144,26 +144,42 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
     """Fill ``LAM`` (N, m) with the multipliers of the solved sweep ``Q``, ``QD``, ``QDD``
     (N, n) in compiled code (``_jit_multipliers``) from point 0 on; return the first point
     left to the Python path (``len(times)`` when all are done, 0 when the compiled loop
-    cannot run: a dynamics without C entry points (generalized-coordinate recursions, SymPy
-    fallbacks), or the ``MECHSYS_JIT`` rule). ``mode_name``: ``"static"``, ``"kinematic"`` or
-    ``"dynamic"``. Loads that depend on the multipliers (friction): Newton from ``guess``
-    (scalar or (m,)) at the first point, with ``tol`` and ``max_iterations`` of
-    :class:`~mechsys.solvers.MultiplierOptions`. ``columns`` (n,): the unit-free form's column
-    scales (``Scaling.columns``; None: 0 is returned, the Python path scales itself).
+    cannot run: a dynamics without C entry points (SymPy fallbacks), a recursive Gen
+    dynamics with loads that depend on the multipliers, or the ``MECHSYS_JIT`` rule). The
+    recursive Gen dynamics' right-hand sides come from :func:`_recursive_loads` first.
+    ``mode_name``: ``"static"``, ``"kinematic"`` or ``"dynamic"``. Loads that depend on the
+    multipliers (friction): Newton from ``guess`` (scalar or (m,)) at the first point,
+    with ``tol`` and ``max_iterations`` of :class:`~mechsys.solvers.MultiplierOptions`.
+    ``columns`` (n,): the unit-free form's column scales (``Scaling.columns``; None: 0 is
+    returned, the Python path scales itself).
     ``points``: the size of the whole job, for the ``auto`` rule (default ``len(times)``)."""
     N = len(times)
     dyn = system.dynamics
-    # (the recursive dynamics of generalized coordinates has no f_terms kernel)
+    recursive = getattr(dyn, "recursive", False)
     large = system.n > SPARSE_THRESHOLD
     kband = _multiplier_band(system) if large and dyn.depends_on_lambda else _NO_KBAND
-    if not N or columns is None or getattr(dyn, "recursive", False) \
+    # (the recursive dynamics of generalized coordinates has no f_terms kernel: its
+    # right-hand sides come first, from the recursion in compiled code; not with loads that
+    # depend on the multipliers, whose Newton re-evaluates them)
+    if not N or columns is None or (recursive and dyn.depends_on_lambda) \
             or not _wanted(system, N if points is None else points,
                            large_ok=not dyn.depends_on_lambda or kband is not None):
         return 0
     code = {"static": 0, "kinematic": 1, "dynamic": 2}[mode_name]
     if (code >= 1 and QD is None) or (code == 2 and QDD is None):
         return 0
-    kernels = [system.f_position, dyn.f_terms]
+    Rpre = np.zeros((0, system.n))
+    if recursive:
+        got = _recursive_loads(system, times, Q, QD, QDD, p, code)
+        if got is None:
+            return 0
+        Rpre, N = got
+        if N == 0:
+            return 0
+        times, Q = times[:N], Q[:N]
+        QD = None if QD is None else QD[:N]
+        QDD = None if QDD is None else QDD[:N]
+    kernels = [system.f_position] if recursive else [system.f_position, dyn.f_terms]
     if dyn.depends_on_lambda:
         kernels.append(dyn.f_dQ_dlam)
         dr, dc = _index(dyn.dQ_rows), _index(dyn.dQ_cols)
@@ -189,7 +205,38 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
         _index(dyn.M_cols), len(dyn.M_rows), code, LAM, dr, dc,
         np.broadcast_to(np.asarray(guess, dtype=float), (system.m,)).copy(), float(tol),
         int(max_iterations), np.ascontiguousarray(columns, dtype=float), _band_lapack(), bw,
-        band, kband))
+        band, kband, Rpre))
+
+
+def _recursive_loads(system, times, Q, QD, QDD, p, code):
+    """``(R (N', n), N')``: the right-hand sides of the multiplier solves of a system with
+    recursive Gen dynamics at the first ``N'`` points (up to the first whose values are not
+    finite, which the Python path reports), by ``_jit_free_loop.gen_loads``; None when its
+    kernels have no C entry points."""
+    from ._jit_free import _entry, _Gen
+
+    dyn = system.dynamics
+    entry = _entry(dyn._main)
+    if entry is None:
+        return None
+    gen = _Gen.of(system, dyn, entry[0])
+    if gen is None:
+        return None
+    if _state.get("gen_loads") is None:
+        from ._jit_free_loop import gen_loads
+
+        _state["gen_loads"] = gen_loads
+    N, n = len(times), system.n
+    R = np.empty((N, n))
+    dummy = np.zeros((1, n))
+    k = _state["gen_loads"](
+        np.asarray(entry[0], dtype=np.int64), gen.arrays, entry[1],
+        np.ascontiguousarray(times, dtype=float), np.ascontiguousarray(Q, dtype=float),
+        dummy if code == 0 else np.ascontiguousarray(QD, dtype=float),
+        dummy if code < 2 else np.ascontiguousarray(QDD, dtype=float),
+        np.ascontiguousarray(system.p_values if p is None else p, dtype=float), system.m,
+        code, R)
+    return R[:k], int(k)
 
 
 def _index(a) -> np.ndarray:

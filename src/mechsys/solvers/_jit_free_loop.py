@@ -1877,17 +1877,12 @@ def _gen_work(blocks, gi, n, m):
 
 
 @leaf
-def _accel_gen(kp, lapack, x, nin, n, m, jr, jc, rows0, columns, robust, ipiv, ibuf, rhs, b,
-               qdd, lam, force, gi, gw, ex, ph, tree, y):
-    """Free acceleration of a system with recursive Gen dynamics
-    (``compile._generalized.RecursiveDynamics``, decision 0016) at ``x = [t, q, qd, 0, p,
-    0]``, ``y = (q, qd)``: the joint kernels masters first (``forward``), then the kernel of
-    the rest (``kp``: absolute bodies' mass entries, Jacobian, ``Q``, ``Qv``, ``gamma`` and
-    the loads on the slaves' poses, with the slaves' poses and velocities as extra
-    arguments); ``tree``: ``qdd`` by the articulated-body recursion (no constraint
-    equation), else the composite-body mass matrix in the augmented system, solved as
-    ``_accel`` does. False: hand over (a joint whose motion carries no mass, a singular or
-    non-finite system)."""
+def _gen_forward_main(kp, x, nin, n, m, gi, gw, ex, ph, y):
+    """The recursive Gen dynamics' evaluations at ``x = [t, q, qd, lambda, p, qdd]``, ``y =
+    (q, qd)``: the joint kernels masters first (``forward``), then the kernel of the rest
+    (``kp``: absolute bodies' mass entries, Jacobian, ``Q``, ``Qv``, ``gamma`` and the loads
+    on the slaves' poses, with the slaves' poses and velocities as extra arguments) into
+    ``og`` of ``gw``, the slaves' loads into ``Qp``. False: a value that is not finite."""
     ptrs, kid, par, root, nqm, goff, gcols, Mr, Mc, sc = gi
     (P, Pd, FP, Fg, H, HL, Mb, Qvb, C, BQ, BV, X, Y, U, L, Z, W, Qp, xj, oj, xg, og, Q, Qv, Qd,
      M, KT) = gw
@@ -1896,7 +1891,7 @@ def _accel_gen(kp, lapack, x, nin, n, m, jr, jc, rows0, columns, robust, ipiv, i
     p0 = 1 + 2 * n + m
     _gen_forward(ptrs, kid, par, root, nqm, goff, gcols, nq, x[0], y[:n], y[n:2 * n],
                  x[p0:p0 + npar], xj, oj, P, Pd, FP, Fg, H, HL, Mb, Qvb)
-    for i in range(nin):                 # [t, q, qd, lambda = 0, p, qdd = 0, P, Pd]
+    for i in range(nin):                 # [t, q, qd, lambda, p, qdd, P, Pd]
         xg[i] = x[i]
     for s in range(S):
         for i in range(nq):
@@ -1906,11 +1901,48 @@ def _accel_gen(kp, lapack, x, nin, n, m, jr, jc, rows0, columns, robust, ipiv, i
     for k in range(kM + kJ + 2 * n + kg + S * nq):
         if not np.isfinite(og[k]):
             return False
-    o = kM + kJ
-    oq = o + 2 * n + kg
+    oq = kM + kJ + 2 * n + kg
     for s in range(S):
         for i in range(nq):
             Qp[s, i] = og[oq + s * nq + i]
+    return True
+
+
+@leaf
+def _gen_mass(gi, gw, n):
+    """``M``, ``Q``, ``Qv`` of ``gw`` by the composite bodies (``_gen_assemble``) after
+    :func:`_gen_forward_main`."""
+    ptrs, kid, par, root, nqm, goff, gcols, Mr, Mc, sc = gi
+    (P, Pd, FP, Fg, H, HL, Mb, Qvb, C, BQ, BV, X, Y, U, L, Z, W, Qp, xj, oj, xg, og, Q, Qv, Qd,
+     M, KT) = gw
+    nq, kM, kJ = sc[0], sc[1], sc[2]
+    o = kM + kJ
+    M[:, :] = 0.0
+    for k in range(kM):
+        M[Mr[k], Mc[k]] = og[k]
+    for j in range(n):
+        Q[j] = og[o + j]
+        Qv[j] = og[o + n + j]
+    _gen_assemble(par, root, nqm, goff, gcols, nq, FP, Fg, H, Mb, Qvb, Qp, C, BQ, BV, X, Y, M,
+                  Q, Qv)
+
+
+@leaf
+def _accel_gen(kp, lapack, x, nin, n, m, jr, jc, rows0, columns, robust, ipiv, ibuf, rhs, b,
+               qdd, lam, force, gi, gw, ex, ph, tree, y):
+    """Free acceleration of a system with recursive Gen dynamics
+    (``compile._generalized.RecursiveDynamics``, decision 0016) at ``x = [t, q, qd, 0, p,
+    0]``, ``y = (q, qd)``: :func:`_gen_forward_main`; ``tree``: ``qdd`` by the
+    articulated-body recursion (no constraint equation), else the composite-body mass matrix
+    in the augmented system, solved as ``_accel`` does. False: hand over (a joint whose
+    motion carries no mass, a singular or non-finite system)."""
+    ptrs, kid, par, root, nqm, goff, gcols, Mr, Mc, sc = gi
+    (P, Pd, FP, Fg, H, HL, Mb, Qvb, C, BQ, BV, X, Y, U, L, Z, W, Qp, xj, oj, xg, og, Q, Qv, Qd,
+     M, KT) = gw
+    nq, kM, kJ = sc[0], sc[1], sc[2]
+    if not _gen_forward_main(kp, x, nin, n, m, gi, gw, ex, ph, y):
+        return False
+    o = kM + kJ
     if tree:
         for j in range(n):
             Qd[j] = og[o + j] + og[o + n + j]
@@ -1921,14 +1953,7 @@ def _accel_gen(kp, lapack, x, nin, n, m, jr, jc, rows0, columns, robust, ipiv, i
             if not np.isfinite(qdd[j]):
                 return False
         return True
-    M[:, :] = 0.0
-    for k in range(kM):
-        M[Mr[k], Mc[k]] = og[k]
-    for j in range(n):
-        Q[j] = og[o + j]
-        Qv[j] = og[o + n + j]
-    _gen_assemble(par, root, nqm, goff, gcols, nq, FP, Fg, H, Mb, Qvb, Qp, C, BQ, BV, X, Y, M,
-                  Q, Qv)
+    _gen_mass(gi, gw, n)
     KT[:, :] = 0.0
     for i in range(n):                   # K transposed (M is symmetric only to rounding)
         for j in range(n):
@@ -1945,6 +1970,49 @@ def _accel_gen(kp, lapack, x, nin, n, m, jr, jc, rows0, columns, robust, ipiv, i
         og[o + n + i] = og[o + 2 * n + i]
     return _solve_augmented(lapack, KT, og, o, og, kM, n, m, jr, jc, rows0, columns, robust,
                             ipiv, ibuf, rhs, b, qdd, lam, force)
+
+
+@nb.njit(cache=True)
+def gen_loads(kp, gi, ex, times, Q, QD, QDD, p, m, mode, R):
+    """The right-hand sides of the multiplier solves of a system with recursive Gen dynamics
+    (``_jit_multipliers``: ``R[k]`` (n,) at each point of the solved sweep ``Q``, ``QD``,
+    ``QDD`` (N, n)): ``Q`` (``mode`` 0, static: velocities taken zero; 1, kinematic) or ``Q
+    + Qv - M qdd`` (2, dynamic), by the recursion as :func:`_accel_gen` evaluates it (the
+    Python path's ``RecursiveDynamics.terms``). Returns the first point whose values are not
+    finite (``len(times)``: all done)."""
+    N = times.size
+    n = Q.shape[1]
+    npar = p.size
+    nin = 1 + 3 * n + m + npar
+    gw = _gen_work(GEN_AUGMENTED, gi, n, m)
+    M, Qg, Qv = gw[25], gw[22], gw[23]
+    ph = np.zeros(ex.max() + 1 if ex.size else 1)
+    x = np.zeros(nin)
+    y = np.zeros(2 * n)
+    for j in range(npar):
+        x[1 + 2 * n + m + j] = p[j]
+    for k in range(N):
+        x[0] = times[k]
+        for j in range(n):
+            x[1 + j] = Q[k, j]
+            y[j] = Q[k, j]
+            v = QD[k, j] if mode >= 1 else 0.0
+            x[1 + n + j] = v
+            y[n + j] = v
+        if not _gen_forward_main(kp, x, nin, n, m, gi, gw, ex, ph, y):
+            return k
+        _gen_mass(gi, gw, n)
+        for i in range(n):
+            if mode == 2:
+                s = 0.0
+                for j in range(n):
+                    s += M[i, j] * QDD[k, j]
+                R[k, i] = (Qg[i] + Qv[i]) - s
+            else:
+                R[k, i] = Qg[i]
+            if not np.isfinite(R[k, i]):
+                return k
+    return N
 
 
 # -- block path: M block-diagonal (one block per body), the Schur complement banded --------

@@ -90,7 +90,7 @@ def _loads(ptrs, xd, nin_d, out_dyn, mode, QDD, k, mr, mc, kM, n, Mq, rhs):
 
 @nb.njit(cache=True)
 def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LAM, dr, dc,
-                guess, tol, maxit, cols, blapack, bw, band, kband):
+                guess, tol, maxit, cols, blapack, bw, band, kband, Rpre):
     """``LAM[k]`` (m,) at each point ``k`` from 0 on; returns the first point left to the
     Python path (``len(times)`` when all are done).
 
@@ -119,7 +119,11 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
     sD, head))``, ``sJT`` the slot of each Jacobian CSC entry (transposed), ``sD`` of each
     ``dQ/dlambda`` entry, ``kbw`` a band's ``(kl, ku, ld, 0)`` or the sparse LU's ``bw``
     (``big_sizes``) with ``head`` its ``B``'s CSC structure; the residual from the
-    Jacobian's CSC values."""
+    Jacobian's CSC values.
+
+    ``Rpre`` (N, n): the right-hand sides given (the recursive Gen dynamics, which has no
+    dynamics kernel: ``_jit_free_loop.gen_loads``; ``ptrs[1]`` is then zeros and never
+    called), or (0, n): from the dynamics kernel."""
     N = times.size
     n = Q.shape[1]
     m = n
@@ -208,7 +212,10 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
             for j in range(n):
                 xd[1 + 2 * n + m + npar + j] = QDD[k, j]
         if not newton:
-            if not _loads(ptrs, xd, nin_d, out_dyn, mode, QDD, k, mr, mc, kM, n, Mq, rhs):
+            if Rpre.shape[0] > 0:
+                for i in range(n):
+                    rhs[i] = Rpre[k, i]
+            elif not _loads(ptrs, xd, nin_d, out_dyn, mode, QDD, k, mr, mc, kM, n, Mq, rhs):
                 return k
             if banded:
                 _sparse_solve_scaled(AB, bw, SI, row_perm, perm, r, cols, rhs, lam, tmp, True)
