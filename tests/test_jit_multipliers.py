@@ -64,16 +64,12 @@ def _loaded_chain():
 
 
 def _gen_arm(links=4):
-    """The driven arm in generalized coordinates of tests/test_jit_sweep.py under gravity.
+    """``models.driven_gen_arm``: a driven arm in generalized coordinates under gravity.
     Short (4 links), its dynamics is symbolic (a CSE kernel whose repeated outputs the
     compiled loop reads through the kernel compiled again without CSE); long (12 links), it
     is the recursion (composite bodies), whose right-hand sides the compiled loop gets from
     ``_jit_free_loop.gen_loads``."""
-    from test_jit_sweep import _gen_arm as arm
-
-    m = arm(links)
-    m.add_load(ms.Gravity((0, -1), 9.81))
-    return m
+    return models.driven_gen_arm(links)
 
 
 def test_long_gen_arm_has_the_recursive_dynamics():

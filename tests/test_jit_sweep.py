@@ -88,17 +88,7 @@ def _gen_arm(links=4):
     """A planar arm in generalized coordinates (``GenRevolute2`` joints: CSE kernels) driven
     at its joints. Its Jacobian's entries are all 1: repeated outputs, which the CSE kernel
     computes once."""
-    m = ms.Model2D()
-    master = m.ground.axis((0, 0))
-    for k in range(links):
-        link = m.add_body(f"link{k}", points={"o": (0, 0), "e": (1.0, 0)}, mass=1.0,
-                          centroid=(0.5, 0), inertia=1 / 12)
-        m.add(ms.GenRevolute2(link.axis("o"), master, (f"q{k}", 0.0)), name=f"joint{k}")
-        master = link.axis("e")
-    q = sp.symbols(f"q0:{links}")
-    for k in range(links):
-        m.add(ms.Constraint([q[k] - 0.3 * sp.sin((k + 1) * T)]), name=f"drive{k}")
-    return m
+    return models.driven_gen_arm(links, g=0.0)
 
 
 def test_generalized_coordinates_sweep_compiled(monkeypatch):

@@ -61,3 +61,19 @@ def test_trailer_train_rolls_its_tractor_on_the_closed_form_circle():
 def test_trailer_train_refuses_bad_input(kw):
     with pytest.raises(ModelError, match="trailer_train"):
         models.trailer_train(**({"trailers": 2} | kw))
+
+
+@pytest.mark.parametrize("bad", [dict(links=0), dict(links=2.0), dict(links=True),
+                                 dict(links=2, g=float("nan")), dict(links=2, g="9.81")])
+def test_driven_gen_arm_refuses_bad_input(bad):
+    with pytest.raises(ModelError, match="driven_gen_arm"):
+        models.driven_gen_arm(**bad)
+
+
+def test_driven_gen_arm_follows_its_drivers():
+    """The joint angles are the drivers' closed form; the coordinates are the joint angles."""
+    t = np.linspace(0.0, 1.0, 11)
+    sol = models.driven_gen_arm(3).solve(t)
+    assert sol.system.n == 3
+    for k in range(3):
+        np.testing.assert_allclose(sol[f"q{k}"], 0.3 * np.sin((k + 1) * t), rtol=0, atol=1e-12)

@@ -285,6 +285,41 @@ def spatial_chain(n_links: int, g: float = 9.81, zigzag: float = 0.0, length: fl
     return m
 
 
+def driven_gen_arm(links: int, g: float = 9.81) -> Model2D:
+    """A planar arm of ``links`` rods (1 m, 1 kg, centroidal inertia 1/12) in generalized
+    coordinates: rod ``k`` (body ``link{k}``, points ``o`` and ``e``) is a ``GenRevolute2``
+    slave of the previous rod's end (the first of the ground at the origin) through the
+    joint angle ``q{k}`` (constraint ``joint{k}``), and every joint is driven,
+    ``q_k = 0.3 sin((k + 1) t)`` (constraints ``drive{k}``), under gravity ``g`` along -y. The
+    coordinates are the ``links`` joint angles; short arms get the symbolic dynamics, longer
+    ones the recursive one (decision 0016). For kinematic sweeps and inverse dynamics::
+
+        m = models.driven_gen_arm(12)
+        sol = m.solve(np.linspace(0, 2, 400), solution="dynamic")   # joint torques: sol.lam
+    """
+    from .constraints import Constraint, GenRevolute2
+    from .loads import Gravity
+
+    if isinstance(links, bool) or not isinstance(links, (int, np.integer)) or links < 1:
+        raise ModelError(f"driven_gen_arm: links must be an integer >= 1, got {links!r}")
+    if isinstance(g, bool) or not isinstance(g, (int, float, np.floating, np.integer)) \
+            or not np.isfinite(g):
+        raise ModelError(f"driven_gen_arm: g must be a finite number, got {g!r}")
+    m = Model2D()
+    master = m.ground.axis((0, 0))
+    for k in range(links):
+        link = m.add_body(f"link{k}", points={"o": (0, 0), "e": (1.0, 0)}, mass=1.0,
+                          centroid=(0.5, 0), inertia=1 / 12)
+        m.add(GenRevolute2(link.axis("o"), master, (f"q{k}", 0.0)), name=f"joint{k}")
+        master = link.axis("e")
+    q = sp.symbols(f"q0:{links}")
+    for k in range(links):
+        m.add(Constraint([q[k] - 0.3 * sp.sin((k + 1) * T)]), name=f"drive{k}")
+    if g:
+        m.add_load(Gravity((0, -1), g))
+    return m
+
+
 def n_four_bar(n_loops: int, g: float = 9.81, length: float = 1.0) -> Model2D:
     """The IFToMM multibody benchmark's N-four-bar mechanism (problem A02): ``n_loops``
     parallelogram loops of ``2 N + 1`` uniform links (length 1, mass 1, centroidal inertia
