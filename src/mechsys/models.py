@@ -11,6 +11,21 @@ from .constraints import RelativeDistance1, Revolute2, RotationLock1, Translate2
 from .model import Model2D
 
 
+def _count(factory: str, name: str, value, least: int) -> None:
+    """A factory's integer argument of at least ``least`` (bool refused), else ModelError."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
+        raise ModelError(f"{factory}: {name} must be an integer >= {least}, got {value!r}")
+
+
+def _finite(factory: str, **values) -> None:
+    """A factory's real arguments: finite numbers (bool and strings refused), else
+    ModelError naming the first that is not."""
+    for name, v in values.items():
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)) \
+                or not np.isfinite(v):
+            raise ModelError(f"{factory}: {name} must be a finite number, got {v!r}")
+
+
 def slider_crank(crank: float = 2.0, rod: float = 6.0, offset: float = 0.0,
                  speed: float = 2 * np.pi, drive=None) -> Model2D:
     """The planar slider-crank of Mech's section 1.2.
@@ -128,9 +143,7 @@ def radial_engine(cylinders: int = 9, crank: float = 1.0, rod: float = 4.0,
     """
     from .loads import Gravity
 
-    if isinstance(cylinders, bool) or not isinstance(cylinders, (int, np.integer)) \
-            or cylinders < 1:
-        raise ModelError(f"radial_engine: cylinders must be an integer >= 1, got {cylinders!r}")
+    _count("radial_engine", "cylinders", cylinders, 1)
     if not (0 < crank < rod):     # (also NaN)
         raise ModelError(f"radial_engine: need 0 < crank < rod (got crank={crank!r}, "
                          f"rod={rod!r}): a rod no longer than the crank locks the engine")
@@ -183,13 +196,8 @@ def trailer_train(trailers: int = 10, speed: float = 2.0, rate: float = 0.4,
     """
     from .constraints import Constraint, Orthogonal1, RelativeX1, RelativeY1
 
-    if isinstance(trailers, bool) or not isinstance(trailers, (int, np.integer)) \
-            or trailers < 0:
-        raise ModelError(f"trailer_train: trailers must be an integer >= 0, got {trailers!r}")
-    for name, v in (("speed", speed), ("rate", rate), ("reach", reach)):
-        if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)) \
-                or not np.isfinite(v):
-            raise ModelError(f"trailer_train: {name} must be a finite number, got {v!r}")
+    _count("trailer_train", "trailers", trailers, 0)
+    _finite("trailer_train", speed=speed, rate=rate, reach=reach)
     if not reach > 0:
         raise ModelError(f"trailer_train: reach must be positive, got {reach!r}")
     m = Model2D()
@@ -259,12 +267,8 @@ def spatial_chain(n_links: int, g: float = 9.81, zigzag: float = 0.0, length: fl
     from .loads import Gravity
     from .model import Model3D
 
-    if isinstance(n_links, bool) or not isinstance(n_links, (int, np.integer)) or n_links < 1:
-        raise ModelError(f"spatial_chain: n_links must be an integer >= 1, got {n_links!r}")
-    for name, v in (("g", g), ("zigzag", zigzag), ("length", length)):
-        if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)) \
-                or not np.isfinite(v):
-            raise ModelError(f"spatial_chain: {name} must be a finite number, got {v!r}")
+    _count("spatial_chain", "n_links", n_links, 1)
+    _finite("spatial_chain", g=g, zigzag=zigzag, length=length)
     if not length > 0:
         raise ModelError(f"spatial_chain: length must be positive, got {length!r}")
     L = float(length)
@@ -300,11 +304,8 @@ def driven_gen_arm(links: int, g: float = 9.81) -> Model2D:
     from .constraints import Constraint, GenRevolute2
     from .loads import Gravity
 
-    if isinstance(links, bool) or not isinstance(links, (int, np.integer)) or links < 1:
-        raise ModelError(f"driven_gen_arm: links must be an integer >= 1, got {links!r}")
-    if isinstance(g, bool) or not isinstance(g, (int, float, np.floating, np.integer)) \
-            or not np.isfinite(g):
-        raise ModelError(f"driven_gen_arm: g must be a finite number, got {g!r}")
+    _count("driven_gen_arm", "links", links, 1)
+    _finite("driven_gen_arm", g=g)
     m = Model2D()
     master = m.ground.axis((0, 0))
     for k in range(links):
@@ -471,10 +472,8 @@ def geneva_drive(slots: int = 4, center_distance: float = 2.0, turns: int = 2) -
     from ._errors import ModelError
     from .constraints import PointOnLine1, StageSwitch
 
-    if isinstance(slots, bool) or not isinstance(slots, (int, np.integer)) or slots < 3:
-        raise ModelError(f"geneva_drive: slots must be an integer >= 3, got {slots!r}")
-    if isinstance(turns, bool) or not isinstance(turns, (int, np.integer)) or turns < 1:
-        raise ModelError(f"geneva_drive: turns must be an integer >= 1, got {turns!r}")
+    _count("geneva_drive", "slots", slots, 3)
+    _count("geneva_drive", "turns", turns, 1)
     try:
         c = float(center_distance)
     except (TypeError, ValueError):

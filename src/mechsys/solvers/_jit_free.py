@@ -269,18 +269,23 @@ def _irregular(M, bstart, bsize) -> list:
     for z in np.unique(bsize):
         which = np.flatnonzero(bsize == z)
         idx = bstart[which][:, None] + np.arange(z)
-        B = M[idx[:, :, None], idx[:, None, :]]                 # (blocks, z, z)
-        d = np.diagonal(B, axis1=1, axis2=2)
-        ok = (d > 0).all(axis=1)
-        w = 1.0 / np.sqrt(np.where(d > 0, d, 1.0))
-        try:
-            L = np.linalg.cholesky(B * w[:, :, None] * w[:, None, :])
-            piv = np.diagonal(L, axis1=1, axis2=2).min(axis=1)
-            ok &= piv**2 > BLOCK_PIVOT
-        except np.linalg.LinAlgError:
-            ok &= np.array([_regular(M[a:a + z, a:a + z]) for a in bstart[which]], dtype=bool)
-        bad += which[~ok].tolist()
+        bad += which[~_pivots_ok(M[idx[:, :, None], idx[:, None, :]])].tolist()
     return sorted(bad)
+
+
+def _pivots_ok(B) -> np.ndarray:
+    """(k,) bool for a stack ``B`` (k, z, z) of blocks: :func:`_regular`'s test of each."""
+    d = np.diagonal(B, axis1=1, axis2=2)
+    ok = (d > 0).all(axis=1)
+    w = 1.0 / np.sqrt(np.where(d > 0, d, 1.0))
+    try:
+        L = np.linalg.cholesky(B * w[:, :, None] * w[:, None, :])
+    except np.linalg.LinAlgError:
+        # (one block of the stack is not positive definite: each on its own)
+        if len(B) == 1:
+            return np.zeros(1, dtype=bool)
+        return np.concatenate([_pivots_ok(b[None]) for b in B])
+    return ok & (np.diagonal(L, axis1=1, axis2=2).min(axis=1) ** 2 > BLOCK_PIVOT)
 
 
 def _bandwidth(rows_blocks) -> int:
@@ -325,15 +330,7 @@ def _regular(B) -> bool:
     Cholesky pivots above ``sqrt(BLOCK_PIVOT)``. A block singular in exact arithmetic (Euler
     parameters: ``M e = 0``) can pass a plain Cholesky with a pivot at the rounding level,
     and its inverse is then noise."""
-    d = np.diag(B)
-    if not (d > 0).all():
-        return False
-    w = 1.0 / np.sqrt(d)
-    try:
-        L = np.linalg.cholesky(B * w[:, None] * w[None, :])
-    except np.linalg.LinAlgError:
-        return False
-    return bool(np.diag(L).min() ** 2 > BLOCK_PIVOT)
+    return bool(_pivots_ok(np.asarray(B)[None])[0])
 
 
 def _regularise(B, j) -> bool:
