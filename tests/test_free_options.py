@@ -145,6 +145,17 @@ def test_options_that_do_not_apply_raise(which, kw, msg, free, path):
     ({"method": "adams", "step_size": -0.01}, "step_size must be positive"),
     ({"method": "adams", "step_size": 0}, "step_size must be positive"),
     ({"constraint_correction": "yes"}, "constraint_correction must be True or False"),
+    ({"starting_step_size": 0}, "starting_step_size must be a positive"),
+    ({"starting_step_size": -0.01}, "starting_step_size must be a positive"),
+    ({"starting_step_size": np.nan}, "starting_step_size must be a positive"),
+    ({"starting_step_size": np.inf}, "starting_step_size must be a positive"),
+    ({"starting_step_size": "0.01"}, "starting_step_size must be a positive"),
+    ({"starting_step_size": True}, "starting_step_size must be a positive"),
+    ({"starting_step_size": 0.2}, "longer than the interval"),
+    ({"method": "adams", "starting_step_size": 0.2}, "longer than the interval"),
+    ({"starting_step_size": 0.05, "max_step": 0.01}, "exceeds max_step=0.01"),
+    ({"method": "adams", "step_size": 0.01, "starting_step_size": 0.01},
+     "step_size=0.01 fixes every step"),
 ])
 def test_bad_option_values_raise_model_errors(kw, msg, free):
     # fit_degree="sextic" was a KeyError, max_step=0 a SciPy ValueError, a negative Adams
@@ -159,6 +170,66 @@ def test_adams_constant_step_size_is_used(free):
     assert sol.extra["steps"] == 50
     back = free.simulate((0.0, -0.5), method="adams", step_size=0.01, diagnostics=True)
     np.testing.assert_allclose(back.extra["diagnostics"]["step_size"], -0.01)
+
+
+# -- starting_step_size (Mech's StartingStepSize) ------------------------------------------------
+@pytest.mark.parametrize("method,kw", [("dop853", {}), ("rk45", {}),
+                                       ("adams", {"max_error": 1e-8})])
+def test_starting_step_size_is_the_first_step_in_both_loops(monkeypatch, method, kw, free):
+    from conftest import simulate_both
+
+    # small enough that every method accepts it as it is: the first accepted step equals it
+    for h0 in (1e-5, 3e-5):
+        for sol in simulate_both(monkeypatch, free, (0.0, 0.5), method=method,
+                                 starting_step_size=h0, diagnostics=True, **kw):
+            assert sol.extra["diagnostics"]["step_size"][0] == pytest.approx(h0, rel=1e-15)
+        back = free.simulate((0.0, -0.5), method=method, starting_step_size=h0,
+                             diagnostics=True, **kw)
+        # (SciPy reports the size of a step, Adams its signed length)
+        assert abs(back.extra["diagnostics"]["step_size"][0]) == pytest.approx(h0, rel=1e-15)
+    python, compiled = simulate_both(monkeypatch, free, (0.0, 0.5), method=method,
+                                     starting_step_size=1e-5, **kw)
+    assert compiled.extra["compiled_steps"] > 0 and python.extra["compiled_steps"] == 0
+    assert abs(python["bar.th"][-1] - compiled["bar.th"][-1]) < 1e-11
+    default = free.simulate((0.0, 0.5), method=method, diagnostics=True, **kw)
+    assert default.extra["diagnostics"]["step_size"][0] != pytest.approx(1e-5)
+    # the same motion: each run within its tolerance of the other
+    tol = 1e-6 if method == "rk45" else 1e-7
+    assert abs(compiled["bar.th"][-1] - default["bar.th"][-1]) < tol
+
+
+def test_adams_steps_follow_the_starting_step_by_halving_and_doubling(free):
+    # Mech's rule: the step only halves or doubles, so every step is h0 * 2^k
+    h0 = 0.0123
+    sol = free.simulate((0.0, 2.0), method="adams", max_error=1e-7, starting_step_size=h0,
+                        diagnostics=True)
+    h = sol.extra["diagnostics"]["step_size"][:-1]        # (the last step ends at t1)
+    k = np.log2(h / h0)
+    np.testing.assert_allclose(k, np.round(k), atol=1e-9)
+    assert len(np.unique(np.round(k))) > 1                # it did adapt
+    assert sol.extra["diagnostics"]["step_size"][0] < h0  # the first try was rejected
+
+
+def test_too_large_starting_step_is_shrunk_by_the_runge_kutta_control(free):
+    sol = free.simulate((0.0, 1.0), rtol=1e-10, atol=1e-12, starting_step_size=0.5,
+                        diagnostics=True)
+    assert sol.extra["diagnostics"]["step_size"][0] < 0.5
+    assert sol.extra["rejected"] >= 1
+    ref = free.simulate((0.0, 1.0), rtol=1e-10, atol=1e-12)
+    assert abs(sol["bar.th"][-1] - ref["bar.th"][-1]) < 1e-8
+
+
+def test_starting_step_size_with_path_systems(path):
+    for method in ("dop853", "adams"):
+        sol = path.simulate((0.0, 1.0), method=method, starting_step_size=2e-4,
+                            diagnostics=True)
+        assert sol.extra["diagnostics"]["step_size"][0] == pytest.approx(2e-4, rel=1e-15)
+        t = np.linspace(0.0, 1.0, 5)
+        np.testing.assert_allclose(path.simulate(t, method=method, starting_step_size=2e-4,
+                                                 max_error=1e-10)["caster.th"],
+                                   caster.closed_form(t), atol=1e-7)
+    with pytest.raises(ms.ModelError, match="longer than the interval"):
+        path.simulate((0.0, 0.1), starting_step_size=1.0)
 
 
 # -- Newton options of free solves --------------------------------------------------------------

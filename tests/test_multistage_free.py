@@ -195,3 +195,19 @@ def test_free_acceleration_at_one_state_uses_the_stage_in_effect():
     np.testing.assert_allclose(latched.qdd, 0.0, atol=1e-12)
     assert latched.reaction("latch", "rod")[1] == pytest.approx(
         lp.MASS * 9.81 * lp.C * np.cos(lp.BETA), rel=1e-8)   # the given angle is held
+
+
+def test_starting_step_size_through_stage_changes():
+    # Mech's StartingStepSize: the run's first step; after the event the integrator chooses
+    m, fs = _free()
+    sol = fs.simulate((0.0, 0.8), at_switch="project", starting_step_size=1e-4, **TOL)
+    assert sol.t[1] - sol.t[0] == pytest.approx(1e-4, rel=1e-12)
+    ref = fs.simulate((0.0, 0.8), at_switch="project", **TOL)
+    assert ref.t[1] - ref.t[0] != pytest.approx(1e-4, rel=1e-3)
+    (ev,) = sol.extra["events"]
+    assert ev["t"] == pytest.approx(ref.extra["events"][0]["t"], abs=1e-10)
+    assert ev["t"] == pytest.approx(_elliptic_time(lp.BETA), abs=1e-9)
+    with pytest.raises(ms.ModelError, match="longer than the interval"):
+        fs.simulate((0.0, 0.8), at_switch="project", starting_step_size=1.0)
+    with pytest.raises(ms.ModelError, match="starting_step_size must be a positive"):
+        fs.simulate((0.0, 0.8), at_switch="project", starting_step_size=-1e-3)

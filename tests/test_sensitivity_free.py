@@ -116,3 +116,18 @@ def test_free_sensitivity_bad_input():
     sol = m.free(drop=["hold"]).simulate((0, 0.1))
     with pytest.raises(ms.ModelError, match="free-dynamic solution"):
         m.sensitivity("L").of(sol)
+
+
+def test_free_sensitivity_takes_the_starting_step_size():
+    m = pendulum()
+    sens = m.sensitivity("L", free=m.free(drop=["hold"]))
+    ic = {"bob.th": -1.0, "bob.th_d": 0.0}
+    got = sens.simulate((0, 0.5), initial_condition=ic, starting_step_size=2e-5, rtol=1e-10,
+                        atol=1e-12)
+    assert got.solution.t[1] - got.solution.t[0] == pytest.approx(2e-5, rel=1e-12)
+    ref = sens.simulate((0, 0.5), initial_condition=ic, rtol=1e-10, atol=1e-12)
+    assert ref.solution.t[1] - ref.solution.t[0] != pytest.approx(2e-5, rel=1e-3)
+    np.testing.assert_allclose(got["L"].coordinate("bob.th")[-1],
+                               ref["L"].coordinate("bob.th")[-1], rtol=1e-7)
+    with pytest.raises(ms.ModelError, match="longer than the interval"):
+        sens.simulate((0, 0.5), starting_step_size=1.0)

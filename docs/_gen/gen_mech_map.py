@@ -143,6 +143,12 @@ ENTRIES: tuple[Entry, ...] = (
     _e("MaxError", FREE, "mechsys.FreeSystem.simulate(max_error=)"),
     _e("Linear", FREE, "mechsys.FreeSystem.simulate(fit_degree=)", 'fit_degree="linear"'),
     _e("ConstraintCorrection", FREE, "mechsys.FreeSystem.simulate(constraint_correction=)"),
+    _e("StepSize", FREE, "mechsys.FreeSystem.simulate(step_size=)",
+       "a constant Adams step; adaptive when not given (Mech's Automatic)"),
+    _e("StartingStepSize", FREE, "mechsys.FreeSystem.simulate(starting_step_size=)",
+       "the first step of an adaptive run, every method"),
+    _e("Diagnostics", FREE, "mechsys.FreeSystem.simulate(diagnostics=)",
+       'per-step step_size (and Adams max_error) in sol.extra["diagnostics"]'),
     # -- multistage ---------------------------------------------------------------------------
     _e("StageSwitch", STAGES, "mechsys.StageSwitch"),
     _e("TimeSwitch", STAGES, "mechsys.TimeSwitch"),

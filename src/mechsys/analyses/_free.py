@@ -45,6 +45,7 @@ from ..solvers._integrators import (
     MAX_ERROR,
     MAX_STEP,
     RTOL,
+    checked_first_step,
     integrate,
     integration_options,
     output_times,
@@ -385,7 +386,8 @@ class FreeSystem:
                  atol: float = ATOL, max_step: float = MAX_STEP, fit_degree=FIT_DEGREE,
                  max_error=MAX_ERROR, step_size=None, constraint_correction: bool = True,
                  diagnostics: bool = False, tolerance: float | None = None,
-                 max_iterations: int | None = None, progress=None, **unknown) -> Solution:
+                 max_iterations: int | None = None, progress=None,
+                 starting_step_size: float | None = None, **unknown) -> Solution:
         """Integrate the free motion (Mech's ``SolveFree[fs, {t0, t1}]``).
 
         ``t``: ``(t0, t1)`` returns every accepted step; an array of strictly increasing (or,
@@ -400,7 +402,9 @@ class FreeSystem:
         methods it sets ``rtol = atol = max_error``, so the local error of each coordinate
         and velocity per step stays below about ``max_error (1 + |y|)``; for Adams it is the
         step threshold ``a`` (or ``(a, b, c)``). An option that does not apply to the chosen
-        method, or an unknown one, raises :class:`ModelError`. ``tolerance``/
+        method, or an unknown one, raises :class:`ModelError`. ``starting_step_size`` (Mech's
+        ``StartingStepSize``): the first step an adaptive run tries (every method; not with a
+        constant ``step_size``). ``tolerance``/
         ``max_iterations``: Newton options of the free acceleration (as :meth:`solve`).
         The initial state is projected onto the constraints first. See
         ``solvers/_integrators.py``.
@@ -412,7 +416,7 @@ class FreeSystem:
         _reject_unknown("FreeSystem.simulate", unknown, (
             "initial_condition", "method", "rtol", "atol", "max_step", "fit_degree", "max_error",
             "step_size", "constraint_correction", "diagnostics", "tolerance", "max_iterations",
-            "progress"))
+            "progress", "starting_step_size"))
         if progress is not None and not isinstance(progress, (bool, np.bool_)):
             raise ModelError(f"FreeSystem.simulate: progress must be True, False or None, got "
                              f"{progress!r}")
@@ -420,8 +424,9 @@ class FreeSystem:
             raise MechError("simulate() integrates the free motion: build the FreeSystem with "
                             "solution='dynamic'")
         opt = integration_options(method, rtol, atol, max_step, fit_degree, max_error,
-                                  step_size, constraint_correction)
+                                  step_size, constraint_correction, starting_step_size)
         t0, t_stop, t_eval = output_times(t)      # (checked once)
+        checked_first_step(opt, t0, t_stop)
         kw = self._newton(tolerance, max_iterations, "FreeSystem.simulate")
         s = self.system
         n = s.n

@@ -65,7 +65,15 @@ from ..loads._switched import check_switched_loads
 from ..results._load_outputs import lambda_guess_vector
 from ..results._solution import Solution
 from ..solvers._free import free_acceleration, project, project_positions, scaling_at
-from ..solvers._integrators import ATOL, MAX_ERROR, MAX_STEP, RTOL, integration_options, output_times
+from ..solvers._integrators import (
+    ATOL,
+    MAX_ERROR,
+    MAX_STEP,
+    RTOL,
+    checked_first_step,
+    integration_options,
+    output_times,
+)
 from ..solvers._jit_free import PAUSE_STEPS, FreeStepper
 from ..solvers._linalg import factor
 from ._free import FreeSystem, _reject_unknown
@@ -238,28 +246,32 @@ class SwitchedFreeSystem(FreeSystem):
     def simulate(self, t, initial_condition=None, at_switch=None, method: str = "dop853",
                  rtol: float = RTOL, atol: float = ATOL, max_step: float = MAX_STEP,
                  max_error=MAX_ERROR, max_events: int = 1000, tolerance: float | None = None,
-                 max_iterations: int | None = None, **unknown) -> Solution:
+                 max_iterations: int | None = None, starting_step_size: float | None = None,
+                 **unknown) -> Solution:
         """Integrate the free motion through stage changes (see the module docstring).
 
         ``t``, ``initial_condition``, ``method`` (``"dop853"`` or ``"rk45"``: events need their
-        dense output), ``rtol``/``atol``/``max_step``/``max_error``, ``tolerance``/
+        dense output), ``rtol``/``atol``/``max_step``/``max_error``, ``starting_step_size``
+        (the run's first step; after each event SciPy's own choice), ``tolerance``/
         ``max_iterations`` as :meth:`FreeSystem.simulate`; ``at_switch`` the velocity policy at a
         constraint stage change (``None``, ``"project"``, ``("restitution", e)``);
         ``max_events`` the number of events after which a :class:`ConvergenceError` is raised
         (e.g. a motion chattering on a switch boundary)."""
         _reject_unknown("FreeSystem.simulate (with switches)", unknown, (
             "initial_condition", "at_switch", "method", "rtol", "atol", "max_step", "max_error",
-            "max_events", "tolerance", "max_iterations"))
+            "max_events", "tolerance", "max_iterations", "starting_step_size"))
         if not (isinstance(method, str) and method.lower() in ("dop853", "rk45")):
             raise ModelError(f"simulate(method={method!r}) with switches: events are located on the "
                              "Runge-Kutta dense output; use method='dop853' or 'rk45'")
-        opt = integration_options(method, rtol, atol, max_step, max_error=max_error)
+        opt = integration_options(method, rtol, atol, max_step, max_error=max_error,
+                                  starting_step_size=starting_step_size)
         policy = _policy(at_switch)
         if isinstance(max_events, bool) or not isinstance(max_events, (int, np.integer)) or \
                 max_events < 1:
             raise ModelError(f"max_events must be a positive integer, got {max_events!r}")
         kw = self._newton(tolerance, max_iterations, "FreeSystem.simulate")
         t0, t1, t_eval = output_times(t)
+        checked_first_step(opt, t0, t1)
         _check_times(self.model)
         model = self.model
         base = stage_system(model, None)
@@ -298,8 +310,11 @@ class SwitchedFreeSystem(FreeSystem):
             # the compiled stepper of this stage takes the steps between events where it can
             fast = self._stepper(plans, combo, S, opt, p, sc, t_eval, t_now, y, kw)
             setup = [fast is not None]
+            # the starting step is the run's first (Mech's StartingStepSize); after an event
+            # SciPy chooses from the new stage's derivatives
             solver = cls(rhs if fast is None else fast.fun(rhs, setup), t_now, y, t1,
-                         rtol=opt.rtol, atol=opt.atol * scale, max_step=opt.max_step)
+                         rtol=opt.rtol, atol=opt.atol * scale, max_step=opt.max_step,
+                         first_step=None if log else opt.first_step)
             setup[0] = False
             g_ref = events(t_now, y, p)
             for i, side in fresh.items():   # the event just handled: the side the motion takes

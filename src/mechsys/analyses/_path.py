@@ -40,6 +40,7 @@ from ..solvers._integrators import (
     MAX_ERROR,
     MAX_STEP,
     RTOL,
+    checked_first_step,
     integrate,
     integration_options,
     output_times,
@@ -331,7 +332,8 @@ class PathSystem:
     def simulate(self, t, initial_condition=None, method: str = "dop853", rtol: float = RTOL,
                  atol: float = ATOL, max_step: float = MAX_STEP, fit_degree=FIT_DEGREE,
                  max_error=MAX_ERROR, step_size=None, constraint_correction: bool = True,
-                 diagnostics: bool = False, **unknown) -> Solution:
+                 diagnostics: bool = False, starting_step_size: float | None = None,
+                 **unknown) -> Solution:
         """Integrate the path (Mech's ``SolvePath``); times and options as
         ``FreeSystem.simulate`` (checked the same way: unsorted or non-finite times, options
         that do not apply to ``method`` and unknown options raise :class:`ModelError`;
@@ -340,10 +342,11 @@ class PathSystem:
         the largest holonomic residual met."""
         _reject_unknown("PathSystem.simulate", unknown, (
             "initial_condition", "method", "rtol", "atol", "max_step", "fit_degree", "max_error",
-            "step_size", "constraint_correction", "diagnostics"))
+            "step_size", "constraint_correction", "diagnostics", "starting_step_size"))
         opt = integration_options(method, rtol, atol, max_step, fit_degree, max_error,
-                                  step_size, constraint_correction)
-        t0, _, t_eval = output_times(t)
+                                  step_size, constraint_correction, starting_step_size)
+        t0, t1, t_eval = output_times(t)
+        checked_first_step(opt, t0, t1)
         s = self.system
         if initial_condition is None:
             q0, p = self._q0.copy(), self._params()

@@ -179,7 +179,7 @@ class SensitivitySystem:
     def simulate(self, t, initial_condition=None, method: str = "dop853", rtol: float = RTOL,
                  atol: float = ATOL, max_step: float = MAX_STEP, fit_degree=FIT_DEGREE,
                  max_error=MAX_ERROR, step_size=None, constraint_correction: bool = True,
-                 **unknown) -> Sensitivity:
+                 starting_step_size: float | None = None, **unknown) -> Sensitivity:
         r"""Integrate the free motion of ``free`` and its forward sensitivities together:
         the state ``(q, qd)`` and, per parameter, ``(s_q, s_qd) = d(q, qd)/dp`` with
 
@@ -207,7 +207,7 @@ class SensitivitySystem:
         if unknown:
             raise ModelError(f"SensitivitySystem.simulate: unknown option(s) {sorted(unknown)}")
         opt = integration_options(method, rtol, atol, max_step, fit_degree, max_error,
-                                  step_size, constraint_correction)
+                                  step_size, constraint_correction, starting_step_size)
         from ..solvers._integrators import output_times
 
         t0 = output_times(t)[0]

@@ -24,6 +24,12 @@ Two families, selected by ``method``:
   ``method_adams`` ``"predictor"`` never corrects, ``"corrector"`` always does; a constant
   ``step_size`` turns the adaptation off. ``constraint_correction`` projects after each step.
 
+``starting_step_size`` (Mech's ``StartingStepSize``, "effective only if StepSize ->
+Automatic") is the first step an adaptive run tries: the Adams step starts there and halves
+or doubles by the rule above (default ``min(|t1 - t0| / 100, 1e-3)``); the Runge-Kutta
+methods try it first and shrink it if its error is too large (default: SciPy's estimate from
+the first derivatives). With a constant Adams ``step_size`` it is refused rather than ignored.
+
 Options are checked up front by :func:`integration_options` (one place for free and path
 systems): every option must apply to the chosen method, and ``max_error`` (Mech's accuracy
 option) is honoured by every method. With the Runge-Kutta methods it becomes
@@ -425,7 +431,8 @@ class IntegrationOptions:
     """Checked integration options. ``method`` is ``"dop853"``, ``"rk45"``, or an Adams mode
     (``"automatic"``, ``"predictor"``, ``"corrector"``; ``name`` keeps the caller's spelling);
     ``rtol``/``atol``/``max_step`` for Runge-Kutta; ``degree``/``max_error`` ``(a, b, c)``/
-    ``step_size`` for Adams; ``correction`` the projection after each step."""
+    ``step_size`` for Adams; ``correction`` the projection after each step; ``first_step``
+    the adaptive run's first step (``starting_step_size``; None: the method's own choice)."""
 
     name: str
     method: str
@@ -436,6 +443,7 @@ class IntegrationOptions:
     max_error: tuple = (1e-4, 1e-5, 1e-6)
     step_size: float | None = None
     correction: bool = True
+    first_step: float | None = None
 
     @property
     def runge_kutta(self) -> bool:
@@ -471,13 +479,18 @@ def _max_error(value, runge_kutta: bool) -> tuple:
 
 def integration_options(method="dop853", rtol=RTOL, atol=ATOL, max_step=MAX_STEP,
                         fit_degree=FIT_DEGREE, max_error=MAX_ERROR, step_size=None,
-                        constraint_correction=True) -> IntegrationOptions:
+                        constraint_correction=True,
+                        starting_step_size=None) -> IntegrationOptions:
     """Check the options of ``simulate`` against ``method`` and resolve them.
 
     Raises :class:`ModelError` for an unknown method, a value out of range, or an option
     that the method does not use (``fit_degree``/``step_size`` with Runge-Kutta;
     ``rtol``/``atol``/``max_step`` with Adams; ``max_error`` together with ``rtol``/``atol``).
-    ``max_error`` with Runge-Kutta gives ``rtol = atol = max_error`` (module doc)."""
+    ``max_error`` with Runge-Kutta gives ``rtol = atol = max_error`` (module doc).
+    ``starting_step_size``: positive and finite, refused with a constant Adams ``step_size``
+    (it would be ignored); checked against the interval by :func:`integrate`."""
+    first = None if starting_step_size is None else _positive("starting_step_size",
+                                                                starting_step_size)
     if not isinstance(method, str) or method.lower() not in RK_METHODS + ADAMS_METHODS:
         raise ModelError(f"unknown method {method!r}; choose from {RK_METHODS + ADAMS_METHODS}")
     m = method.lower()
@@ -503,7 +516,7 @@ def integration_options(method="dop853", rtol=RTOL, atol=ATOL, max_step=MAX_STEP
                              f"({_RTOL_MIN:.1e}); use a larger rtol")
         return IntegrationOptions(method, m, rtol=rtol, atol=atol,
                                   max_step=_positive("max_step", max_step, allow_inf=True),
-                                  correction=bool(constraint_correction))
+                                  correction=bool(constraint_correction), first_step=first)
     wrong = [k for k, v, d in (("rtol", rtol, RTOL), ("atol", atol, ATOL),
                                ("max_step", max_step, MAX_STEP)) if _given(v, d)]
     if wrong:
@@ -523,9 +536,13 @@ def integration_options(method="dop853", rtol=RTOL, atol=ATOL, max_step=MAX_STEP
             raise ModelError(f"step_size must be positive (the direction of integration comes "
                              f"from the times), got {step_size!r}")
         step_size = _positive("step_size", step_size)
+        if first is not None:
+            raise ModelError("starting_step_size is the first step of an adaptive run (Mech's "
+                             "StartingStepSize, effective only with StepSize -> Automatic); "
+                             f"step_size={step_size:g} fixes every step: give one of the two")
     return IntegrationOptions(method, "automatic" if m == "adams" else m, degree=degree,
                               max_error=_max_error(max_error, False), step_size=step_size,
-                              correction=bool(constraint_correction))
+                              correction=bool(constraint_correction), first_step=first)
 
 
 def output_times(t) -> tuple[float, float, np.ndarray | None]:
@@ -559,6 +576,23 @@ def output_times(t) -> tuple[float, float, np.ndarray | None]:
     return float(tt[0]), float(tt[-1]), tt
 
 
+def checked_first_step(opt: IntegrationOptions, t0: float, t1: float) -> float | None:
+    """The checked first step of a run over ``[t0, t1]``: ``opt.first_step`` (None: the
+    method's own choice). A first step longer than the interval raises :class:`ModelError`
+    (the run could not take it; SciPy would stop with a ValueError); one longer than
+    ``max_step`` too (the Runge-Kutta step would be cut at once)."""
+    h = opt.first_step
+    if h is None:
+        return None
+    if h > abs(t1 - t0):
+        raise ModelError(f"starting_step_size={h:g} is longer than the interval "
+                         f"[{t0:g}, {t1:g}] ({abs(t1 - t0):g}); give a smaller first step")
+    if opt.runge_kutta and h > opt.max_step:
+        raise ModelError(f"starting_step_size={h:g} exceeds max_step={opt.max_step:g}; give a "
+                         "first step within max_step")
+    return h
+
+
 def integrate(fun, project, t, y0, opt: IntegrationOptions, scale=None, kinked=None, monitor=None,
               fast=None):
     """Integrate ``y' = fun(t, y)`` with checked options ``opt`` (the dispatch shared by free
@@ -572,15 +606,17 @@ def integrate(fun, project, t, y0, opt: IntegrationOptions, scale=None, kinked=N
     KeyboardInterrupt ends the integration with the steps so far (``result.message`` is
     ``"interrupted"``)."""
     t0, t1, t_eval = output_times(t)
+    checked_first_step(opt, t0, t1)
     if opt.runge_kutta:
         res = integrate_rk(fun, project, t0, t1, y0, opt.method, opt.rtol, opt.atol,
-                           opt.max_step, correction=opt.correction, t_eval=t_eval, scale=scale,
-                           kinked=kinked, monitor=monitor, fast=fast)
+                           opt.max_step, opt.first_step, correction=opt.correction,
+                           t_eval=t_eval, scale=scale, kinked=kinked, monitor=monitor,
+                           fast=fast)
         times, Y = res.diagnostics["t_eval"] if t_eval is not None else (res.t, res.y)
     else:
         res = integrate_adams(fun, project, t0, t1, y0, opt.degree, opt.max_error, opt.method,
-                              opt.step_size, opt.correction, scale=scale, monitor=monitor,
-                              fast=fast)
+                              opt.step_size, opt.correction, first_step=opt.first_step,
+                              scale=scale, monitor=monitor, fast=fast)
         times, Y = res.t, res.y
         if t_eval is not None and res.message == "interrupted":
             # only the output times the integration reached
