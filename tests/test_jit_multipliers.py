@@ -203,6 +203,32 @@ def test_friction_newton_in_the_loop(monkeypatch, mode):
     np.testing.assert_allclose(fast.lam, slow.lam, rtol=1e-9, atol=1e-9)
 
 
+def _gen_arm_with_friction():
+    """The 8-link driven Gen arm (the recursive dynamics' size) with a slider on a rail that
+    has Coulomb and viscous friction, pushed along the rail and loaded across it."""
+    m = _gen_arm(8)
+    sl = m.add_body("slider", points={"p": (0, 0)}, mass=2.0, inertia=0.1, guess=((0, -3), 0))
+    m.add(ms.Translate2(m.ground.axis((0, -3)), sl.axis("p")), name="rail")
+    m.add(ms.RelativeX1(sl.point("p"), 0.5 * sp.sin(T)), name="push")
+    m.add_load(ms.JointFriction("rail", mu=0.3, viscous=0.1))
+    m.add_load(ms.Force(sl.point("p"), (1, -1), 10.0))
+    return m
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_long_gen_arm_with_friction_runs_compiled(monkeypatch, mode):
+    """Loads that depend on the multipliers make a long Gen chain take the symbolic dynamics
+    (the recursion refuses them), whose multipliers the compiled loop solves by Newton: no
+    Gen model is left to the Python path for its multipliers."""
+    dyn = _gen_arm_with_friction().compile().dynamics
+    assert dyn.depends_on_lambda and not getattr(dyn, "recursive", False)
+    t = np.linspace(0.1, 1.0, 12)
+    fast, slow, taken = _solve_both(monkeypatch, _gen_arm_with_friction, t, mode)
+    assert taken[0] == len(t) and taken[1] == 0
+    assert np.abs(slow.lam).max() > 1.0
+    np.testing.assert_allclose(fast.lam, slow.lam, rtol=1e-9, atol=1e-9)
+
+
 def test_friction_too_large_hands_over_with_the_python_error(monkeypatch):
     """Friction that locks the joint: the compiled Newton does not converge at the first
     point, and the Python path raises its ConvergenceError there (as without the loop)."""

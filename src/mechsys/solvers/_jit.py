@@ -144,9 +144,10 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
     """Fill ``LAM`` (N, m) with the multipliers of the solved sweep ``Q``, ``QD``, ``QDD``
     (N, n) in compiled code (``_jit_multipliers``) from point 0 on; return the first point
     left to the Python path (``len(times)`` when all are done, 0 when the compiled loop
-    cannot run: a dynamics without C entry points (SymPy fallbacks), a recursive Gen
-    dynamics with loads that depend on the multipliers, or the ``MECHSYS_JIT`` rule). The
-    recursive Gen dynamics' right-hand sides come from :func:`_recursive_loads` first.
+    cannot run: a dynamics without C entry points (SymPy fallbacks), or the ``MECHSYS_JIT``
+    rule). The recursive Gen dynamics' right-hand sides come from :func:`_recursive_loads`
+    first (that dynamics never has loads that depend on the multipliers: a model with them
+    gets the symbolic Gen dynamics, ``compile/_generalized.make_dynamics``).
     ``mode_name``: ``"static"``, ``"kinematic"`` or ``"dynamic"``. Loads that depend on the
     multipliers (friction): Newton from ``guess`` (scalar or (m,)) at the first point,
     with ``tol`` and ``max_iterations`` of :class:`~mechsys.solvers.MultiplierOptions`.
@@ -159,11 +160,10 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
     large = system.n > SPARSE_THRESHOLD
     kband = _multiplier_band(system) if large and dyn.depends_on_lambda else _NO_KBAND
     # (the recursive dynamics of generalized coordinates has no f_terms kernel: its
-    # right-hand sides come first, from the recursion in compiled code; not with loads that
-    # depend on the multipliers, whose Newton re-evaluates them)
-    if not N or columns is None or (recursive and dyn.depends_on_lambda) \
-            or not _wanted(system, N if points is None else points,
-                           large_ok=not dyn.depends_on_lambda or kband is not None):
+    # right-hand sides come first, from the recursion in compiled code)
+    if not N or columns is None or not _wanted(
+            system, N if points is None else points,
+            large_ok=not dyn.depends_on_lambda or kband is not None):
         return 0
     code = {"static": 0, "kinematic": 1, "dynamic": 2}[mode_name]
     if (code >= 1 and QD is None) or (code == 2 and QDD is None):
