@@ -78,3 +78,23 @@ def test_missing_peer_is_reported_not_silently_dropped(package, monkeypatch):
     monkeypatch.setattr(peer_sides, "exudyn_cases", lambda *a: [])
     _, notes = peers_run.build_cases(set(), (), full=False)
     assert any(package.lower() in n.lower() for n in notes)
+
+
+def test_adams_line_reports_the_evaluation_counts(tmp_path, monkeypatch):
+    """The Adams target's line carries both methods' evaluation counts (the reason for its
+    ratio, decision 0022), taken from the runs themselves."""
+    import re
+
+    import peer_sides
+
+    monkeypatch.setattr(peer_sides, "available", lambda name: False)   # mechsys only: quick
+    page = tmp_path / "performance.md"
+    page.write_text("# Performance\n")
+    assert peers_run.main(["--quick", "--problems", "A", "--write", str(page)]) == 0
+    line = next(ln for ln in page.read_text().splitlines()
+                if ln.startswith("**Mech's Adams integrator**"))
+    got = re.search(r"Evaluations of the equations of motion: ([\d,]+) against ([\d,]+) "
+                    r"\(([\d.]+) x\)", line)
+    assert got, line
+    ea, ed = (int(g.replace(",", "")) for g in got.groups()[:2])
+    assert ea > ed > 1000 and float(got.group(3)) == pytest.approx(ea / ed, abs=0.006)

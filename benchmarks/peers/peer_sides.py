@@ -57,8 +57,11 @@ def _mechsys_case(problem, free, t_end, names, method, opts, setting, gap):
     box = {}
     s = free.system
 
+    case = None
+
     def run():
         box["sol"] = free.simulate((0.0, t_end), method=method, **opts)
+        case.extra["evaluations"] = box["sol"].extra["evaluations"]
 
     def result():
         sol = box["sol"]
@@ -67,7 +70,8 @@ def _mechsys_case(problem, free, t_end, names, method, opts, setting, gap):
             return angles, None
         return angles, max(float(np.abs(s.residual(tk, qk)).max()) for tk, qk in zip(sol.t, sol.q))
 
-    return Case(problem, "mechsys", setting, lambda: None, run, result)
+    case = Case(problem, "mechsys", setting, lambda: None, run, result)
+    return case
 
 
 def mechsys_cases(problems: set[str], sizes) -> list[Case]:
