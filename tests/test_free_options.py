@@ -7,6 +7,7 @@ import sympy as sp
 
 import mechsys as ms
 from conftest import load_example as load
+from conftest import simulate_both
 
 caster = load("caster")
 
@@ -176,8 +177,6 @@ def test_adams_constant_step_size_is_used(free):
 @pytest.mark.parametrize("method,kw", [("dop853", {}), ("rk45", {}),
                                        ("adams", {"max_error": 1e-8})])
 def test_starting_step_size_is_the_first_step_in_both_loops(monkeypatch, method, kw, free):
-    from conftest import simulate_both
-
     # small enough that every method accepts it as it is: the first accepted step equals it
     for h0 in (1e-5, 3e-5):
         for sol in simulate_both(monkeypatch, free, (0.0, 0.5), method=method,
@@ -217,6 +216,35 @@ def test_too_large_starting_step_is_shrunk_by_the_runge_kutta_control(free):
     assert sol.extra["rejected"] >= 1
     ref = free.simulate((0.0, 1.0), rtol=1e-10, atol=1e-12)
     assert abs(sol["bar.th"][-1] - ref["bar.th"][-1]) < 1e-8
+
+
+@pytest.mark.parametrize("t0", [1e6, 1e9, 1e10])
+def test_adams_far_from_time_zero_integrates_the_steps_it_takes(monkeypatch, t0, free):
+    # far from t = 0 the sum t + h rounds; the fits must integrate over the step the stored
+    # time takes (it integrated over h: 3e-5 off at t0 = 1e9, 1e-2 at 1e12, silently)
+    ref = free.simulate((0.0, 1.0), method="adams", max_error=1e-7)["bar.th"][-1]
+    for sol in simulate_both(monkeypatch, free, (t0, t0 + 1.0), method="adams",
+                             max_error=1e-7):
+        assert abs(sol["bar.th"][-1] - ref) < 1e-8
+        assert sol.t[-1] == t0 + 1.0
+
+
+def test_adams_error_that_no_step_can_meet_raises(monkeypatch, free):
+    # at t = 1e11 a step below 1.5e-4 does not advance the time: the start (degree 0) cannot
+    # meet 1e-9, and accepting the step anyway would break max_error silently
+    for jit in ("0", "1"):
+        monkeypatch.setenv("MECHSYS_JIT", jit)
+        with pytest.raises(ms.MechError, match=r"at t = 1e\+11 the error .* exceeds max_error "
+                                               r"1e-09.*time's resolution"):
+            free.simulate((1e11, 1e11 + 1.0), method="adams", max_error=1e-9)
+
+
+@pytest.mark.parametrize("kw", [{"starting_step_size": 1e-17}, {"step_size": 1e-13},
+                                {"method": "adams", "starting_step_size": 1e-300}])
+def test_steps_that_do_not_advance_the_time_are_refused(kw, free):
+    kw = {"method": "adams", **kw} if "step_size" in kw else kw
+    with pytest.raises(ms.ModelError, match="does not advance the time"):
+        free.simulate((100.0, 101.0), **kw)
 
 
 def test_starting_step_size_with_path_systems(path):

@@ -45,7 +45,7 @@ from ..solvers._integrators import (
     MAX_ERROR,
     MAX_STEP,
     RTOL,
-    checked_first_step,
+    checked_steps,
     integrate,
     integration_options,
     output_times,
@@ -426,7 +426,7 @@ class FreeSystem:
         opt = integration_options(method, rtol, atol, max_step, fit_degree, max_error,
                                   step_size, constraint_correction, starting_step_size)
         t0, t_stop, t_eval = output_times(t)      # (checked once)
-        checked_first_step(opt, t0, t_stop)
+        checked_steps(opt, t0, t_stop)
         kw = self._newton(tolerance, max_iterations, "FreeSystem.simulate")
         s = self.system
         n = s.n

@@ -70,7 +70,7 @@ from ..solvers._integrators import (
     MAX_ERROR,
     MAX_STEP,
     RTOL,
-    checked_first_step,
+    checked_steps,
     integration_options,
     output_times,
 )
@@ -271,7 +271,7 @@ class SwitchedFreeSystem(FreeSystem):
             raise ModelError(f"max_events must be a positive integer, got {max_events!r}")
         kw = self._newton(tolerance, max_iterations, "FreeSystem.simulate")
         t0, t1, t_eval = output_times(t)
-        checked_first_step(opt, t0, t1)
+        checked_steps(opt, t0, t1)
         _check_times(self.model)
         model = self.model
         base = stage_system(model, None)

@@ -40,7 +40,7 @@ from ..solvers._integrators import (
     MAX_ERROR,
     MAX_STEP,
     RTOL,
-    checked_first_step,
+    checked_steps,
     integrate,
     integration_options,
     output_times,
@@ -346,7 +346,7 @@ class PathSystem:
         opt = integration_options(method, rtol, atol, max_step, fit_degree, max_error,
                                   step_size, constraint_correction, starting_step_size)
         t0, t1, t_eval = output_times(t)
-        checked_first_step(opt, t0, t1)
+        checked_steps(opt, t0, t1)
         s = self.system
         if initial_condition is None:
             q0, p = self._q0.copy(), self._params()

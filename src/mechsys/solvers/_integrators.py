@@ -271,6 +271,13 @@ def _adams_weights(times, t_from, h):
 _WEIGHTS: dict = {}
 
 
+def least_step(t: float) -> float:
+    """The shortest step Mech's Adams integrator takes at time ``t``: ten units of the last
+    place of ``max(|t|, 1)`` (SciPy's least step, with a floor near t = 0). Both loops use it."""
+    m = max(abs(t), 1.0)
+    return 10.0 * (np.nextafter(m, np.inf) - m)
+
+
 def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4,
                     method="automatic", step_size=None, correction=False,
                     first_step=None, max_steps=2_000_000, scale=None,
@@ -345,6 +352,13 @@ def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4
                 continue
             pause = max(pause - 1, 0)
             h_try = h if (t + h - t1) * np.sign(span) <= 0 else t1 - t
+            # the step the stored time takes: far from t = 0 the sum t + h rounds, and the
+            # fits must integrate over the interval the new time closes (as SciPy's steppers)
+            h_try = (t + h_try) - t
+            if h_try == 0:
+                raise ModelError(f"adams: at t = {t:g} a step of {h:g} does not advance the "
+                                 "time; give a larger starting_step_size or step_size, or "
+                                 "measure time from a nearer origin")
             deg = min(k, len(hist_t) - 1)
             # predictor: fit through the last deg+1 derivative values
             pt, pf = hist_t[-(deg + 1):], hist_f[-(deg + 1):]
@@ -358,10 +372,17 @@ def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4
             wc = _adams_weights(ct, t, h_try)
             y_corr = y + sum(wi * fi for wi, fi in zip(wc, cf))
             err = float((np.abs(y_corr - y_pred) * inv_scale).max())
-            if step_size is None and err > a and abs(h_try) > 1e-14 * max(1.0, abs(t)):
-                h = h_try / 2
-                rejected += 1
-                continue
+            if step_size is None and err > a:
+                least = least_step(t)
+                if abs(h_try) / 2 >= least:
+                    h = h_try / 2
+                    rejected += 1
+                    continue
+                # (the step cannot shrink further: accepting it would break max_error silently)
+                raise MechError(f"adams: at t = {t:.10g} the error {err:.3g} of a step of "
+                                f"{abs(h_try):.3g} exceeds max_error {a:g}, and half that step "
+                                f"would be below the time's resolution there ({least:.3g}); "
+                                "loosen max_error, or measure time from a nearer origin")
             if method == "corrector" or (method == "automatic" and err > b):
                 y_new = y_corr
                 f_new = fun(t + h_try, y_new)
@@ -576,21 +597,28 @@ def output_times(t) -> tuple[float, float, np.ndarray | None]:
     return float(tt[0]), float(tt[-1]), tt
 
 
-def checked_first_step(opt: IntegrationOptions, t0: float, t1: float) -> float | None:
-    """The checked first step of a run over ``[t0, t1]``: ``opt.first_step`` (None: the
-    method's own choice). A first step longer than the interval raises :class:`ModelError`
-    (the run could not take it; SciPy would stop with a ValueError); one longer than
-    ``max_step`` too (the Runge-Kutta step would be cut at once)."""
+def checked_steps(opt: IntegrationOptions, t0: float, t1: float) -> None:
+    """Check the given step lengths against the run's times ``[t0, t1]``: the first step
+    (``starting_step_size``) and Adams' constant ``step_size`` must advance the time at
+    ``t0`` and ``t1`` (at least :func:`least_step`: a shorter one leaves ``t + h == t`` and
+    the Adams fit through equal times is singular), and the first step must fit in the
+    interval and within ``max_step``. Raises :class:`ModelError`."""
+    least = least_step(max(abs(t0), abs(t1)))
+    for name, h in (("starting_step_size", opt.first_step), ("step_size", opt.step_size)):
+        if h is not None and h < least:
+            raise ModelError(f"{name}={h:g} does not advance the time: at t = "
+                             f"{max(abs(t0), abs(t1)):g} a step must be at least {least:.3g} "
+                             "(ten units of the last place of the time); give a longer step or "
+                             "measure time from a nearer origin")
     h = opt.first_step
     if h is None:
-        return None
+        return
     if h > abs(t1 - t0):
         raise ModelError(f"starting_step_size={h:g} is longer than the interval "
                          f"[{t0:g}, {t1:g}] ({abs(t1 - t0):g}); give a smaller first step")
     if opt.runge_kutta and h > opt.max_step:
         raise ModelError(f"starting_step_size={h:g} exceeds max_step={opt.max_step:g}; give a "
                          "first step within max_step")
-    return h
 
 
 def integrate(fun, project, t, y0, opt: IntegrationOptions, scale=None, kinked=None, monitor=None,
@@ -606,7 +634,7 @@ def integrate(fun, project, t, y0, opt: IntegrationOptions, scale=None, kinked=N
     KeyboardInterrupt ends the integration with the steps so far (``result.message`` is
     ``"interrupted"``)."""
     t0, t1, t_eval = output_times(t)
-    checked_first_step(opt, t0, t1)
+    checked_steps(opt, t0, t1)
     if opt.runge_kutta:
         res = integrate_rk(fun, project, t0, t1, y0, opt.method, opt.rtol, opt.atol,
                            opt.max_step, opt.first_step, correction=opt.correction,

@@ -1638,6 +1638,9 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
         if steps >= max_steps:
             break
         h_try = h if (t + h - t1) * sign <= 0 else t1 - t
+        h_try = (t + h_try) - t          # the step the stored time takes (the Python loop's)
+        if h_try == 0:
+            return HANDOVER, steps, evals, projections
         deg = min(k, nh - 1)
         # predictor: the last deg + 1 derivative values
         p0 = nh - (deg + 1)
@@ -1675,7 +1678,12 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
                 err = v
         if not np.isfinite(err):
             return HANDOVER, steps, evals, projections
-        if not fixed and err > a and abs(h_try) > 1e-14 * max(1.0, abs(t)):
+        if not fixed and err > a:
+            # (_integrators.least_step: halve while the step stays above the time's
+            # resolution, else the Python loop takes the step and raises)
+            big = max(abs(t), 1.0)
+            if abs(h_try) / 2 < 10.0 * (np.nextafter(big, np.inf) - big):
+                return HANDOVER, steps, evals, projections
             h = h_try / 2
             rejected += 1
             continue
