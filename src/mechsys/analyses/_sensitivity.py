@@ -208,9 +208,10 @@ class SensitivitySystem:
             raise ModelError(f"SensitivitySystem.simulate: unknown option(s) {sorted(unknown)}")
         opt = integration_options(method, rtol, atol, max_step, fit_degree, max_error,
                                   step_size, constraint_correction, starting_step_size)
-        from ..solvers._integrators import output_times
+        from ..solvers._integrators import checked_steps, output_times
 
-        t0 = output_times(t)[0]
+        t0, t1, _ = output_times(t)
+        checked_steps(opt, t0, t1)
         s = fs.system
         tan = self._tangent(s)
         n, m, k = s.n, s.m, tan.k

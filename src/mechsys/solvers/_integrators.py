@@ -509,7 +509,8 @@ def integration_options(method="dop853", rtol=RTOL, atol=ATOL, max_step=MAX_STEP
     ``rtol``/``atol``/``max_step`` with Adams; ``max_error`` together with ``rtol``/``atol``).
     ``max_error`` with Runge-Kutta gives ``rtol = atol = max_error`` (module doc).
     ``starting_step_size``: positive and finite, refused with a constant Adams ``step_size``
-    (it would be ignored); checked against the interval by :func:`integrate`."""
+    (it would be ignored); checked against the run's times by :func:`checked_steps`, which
+    every ``simulate`` calls before it computes anything."""
     first = None if starting_step_size is None else _positive("starting_step_size",
                                                                 starting_step_size)
     if not isinstance(method, str) or method.lower() not in RK_METHODS + ADAMS_METHODS:
@@ -634,7 +635,6 @@ def integrate(fun, project, t, y0, opt: IntegrationOptions, scale=None, kinked=N
     KeyboardInterrupt ends the integration with the steps so far (``result.message`` is
     ``"interrupted"``)."""
     t0, t1, t_eval = output_times(t)
-    checked_steps(opt, t0, t1)
     if opt.runge_kutta:
         res = integrate_rk(fun, project, t0, t1, y0, opt.method, opt.rtol, opt.atol,
                            opt.max_step, opt.first_step, correction=opt.correction,
