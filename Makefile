@@ -4,6 +4,7 @@ PYTHON ?= python3
 VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
+CORE   := $(VENV)/.installed-core
 
 .PHONY: demo test lint bench docs clean
 
@@ -11,11 +12,16 @@ $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 
-$(STAMP): pyproject.toml $(VENV)/bin/python
-	$(PY) -m pip install --quiet -e ".[test,fast]"
-	touch $(STAMP)
+# the demo needs the library alone; the tests, docs and lint need the test extra
+$(CORE): pyproject.toml $(VENV)/bin/python
+	$(PY) -m pip install --quiet -e .
+	touch $(CORE)
 
-demo: $(STAMP)
+$(STAMP): pyproject.toml $(VENV)/bin/python
+	$(PY) -m pip install --quiet -e ".[test]"
+	touch $(CORE) $(STAMP)
+
+demo: $(CORE)
 	$(VENV)/bin/mechsys demo --out out
 
 test: $(STAMP)

@@ -55,7 +55,8 @@ def build(kind: str = "rotor", freq: float = FREQ) -> ms.Model3D:
 def initial_condition(kind: str, base_rate=0.0, gimbal_rate=0.0, freq: float = FREQ) -> dict:
     """Angular velocities: every body shares the base's Z rate; gimbal and rotor add the
     gimbal's X rate; the spinning rotor adds its spin about Y."""
-    cond = {("omega", "base"): (0, 0, base_rate), ("omega", "gimbal"): (gimbal_rate, 0, base_rate)}
+    cond: dict[tuple[str, str], tuple[float, float, float]] = {
+        ("omega", "base"): (0, 0, base_rate), ("omega", "gimbal"): (gimbal_rate, 0, base_rate)}
     if kind != "gyrofilter":
         spin = freq if kind == "rotor" else 0.0
         cond[("omega", "rotor")] = (gimbal_rate, spin, base_rate)

@@ -22,11 +22,13 @@ from ._errors import (
     RedundantConstraintWarning,
     SingularJacobianError,
     SingularMassError,
+    SlowPathWarning,
     UnknownBodyError,
     UnknownConstraintError,
     UnknownPointError,
 )
 from ._symbols import T
+from ._version import __version__
 from .analyses import (
     Configuration,
     CoupleSolution,
@@ -176,8 +178,6 @@ from .results._solution import Solution, State
 from .solvers import PositionOptions
 from .solvers._diagnostics import ConvergenceDiagnosis, Iteration, SingularityReport
 
-__version__ = "0.1.0"
-
 __all__ = [
     "All",
     "Axis",
@@ -280,6 +280,7 @@ __all__ = [
     "RackAndPinion4",
     "RackAndPinion5",
     "RedundantConstraintWarning",
+    "SlowPathWarning",
     "RelativeAngle1",
     "RelativeDistance1",
     "RelativeX1",

@@ -93,6 +93,12 @@ class NearSingularWarning(UserWarning):
     velocities and accelerations there are large and sensitive."""
 
 
+class SlowPathWarning(UserWarning):
+    """Numba or SymEngine, core dependencies of mechsys, cannot be imported (an install with
+    ``--no-deps``, or a platform without their wheels): every result is the same, but the
+    hot loops run in Python, 10 to 100 times slower. Said once per process."""
+
+
 class RedundantConstraintWarning(UserWarning):
     """Redundant but consistent constraints (as in Adams): the dependent equations, found by
     a rank-revealing factorisation at the start, are left out of the solution; their
@@ -104,6 +110,23 @@ class RedundantConstraintWarning(UserWarning):
         super().__init__(message)
         self.redundant = redundant or []
         self.mobility = mobility
+
+
+_warned: set[str] = set()
+
+
+def slow_path_warning(package: str, exc: BaseException) -> None:
+    """Say once per package and process that a core dependency cannot be imported (decision
+    0041): the answers are the same, the hot loops run in Python."""
+    if package in _warned:
+        return
+    _warned.add(package)
+    import warnings
+
+    warnings.warn(f"{package} cannot be imported ({exc}); it is a core dependency of mechsys: "
+                  f"results are unchanged but the hot loops run in Python, 10 to 100 times "
+                  f"slower. Install it with `pip install {package}`.", SlowPathWarning,
+                  stacklevel=3)
 
 
 def parameter_value(name: str, value) -> float:

@@ -22,10 +22,13 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 
-try:  # optional
+from .._errors import slow_path_warning
+
+try:  # a core dependency (decision 0041); SymPy's lambdify serves where it cannot be imported
     import symengine as _se
-except ImportError:  # pragma: no cover - depends on environment
+except ImportError as _exc:  # pragma: no cover - depends on environment
     _se = None
+    _se_error = _exc
 
 
 class Compiled:
@@ -382,6 +385,8 @@ def default_backend() -> str:
     env = os.environ.get("MECHSYS_BACKEND")
     if env:
         return env
+    if _se is None:
+        slow_path_warning("symengine", _se_error)
     return available_backends()[0]
 
 
@@ -406,7 +411,8 @@ def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
     backend = backend or default_backend()
     if backend == "symengine":
         if _se is None:
-            raise ImportError("the symengine backend needs `pip install mechsys[fast]`")
+            raise ImportError("the symengine backend needs SymEngine, a core dependency of mechsys: "
+                              "`pip install symengine`")
         from ._derive import symengine_safe
 
         sympy_exprs = [e for e in exprs if isinstance(e, sp.Basic)]

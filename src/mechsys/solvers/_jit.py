@@ -25,10 +25,10 @@ ran.
 When it runs (``MECHSYS_JIT``): ``0`` never, ``1`` whenever possible, unset (``auto``) when
 the sweep has at least :data:`AUTO_POINTS` points: loading Numba and the cached machine code
 costs about 0.7 s CPU once per process, which a short sweep would not recover. (The choice
-depends on the sweep alone, never on what ran before in the process.) Possible means: Numba installed (the
-``fast`` extra), the SymEngine LLVM backend (two-stage ``Piecewise`` kernels of spline
-profiles included), as many equations as coordinates, and a dense system (``n <=
-SPARSE_THRESHOLD``) or a larger one through its Jacobian's pattern (chains, trees, any
+depends on the sweep alone, never on what ran before in the process.) Possible means: Numba
+importable (a core dependency since decision 0041), the SymEngine LLVM backend (two-stage
+``Piecewise`` kernels of spline profiles included), as many equations as coordinates, and a
+dense system (``n <= SPARSE_THRESHOLD``) or a larger one through its Jacobian's pattern (chains, trees, any
 branching).
 
 Measured (slider-crank, 1000 points with velocities and accelerations): see
@@ -44,7 +44,7 @@ import os
 
 import numpy as np
 
-from .._errors import MechError, ModelError
+from .._errors import MechError, ModelError, slow_path_warning
 from ._linalg import RCOND_MIN, SPARSE_THRESHOLD, Scaling, _column_kinds, length_hint
 
 #: ``auto``: the compiled loop is used for sweeps of at least this many points
@@ -78,9 +78,11 @@ def available() -> bool:
             import numba  # noqa: F401
 
             _state["failed"] = False
-        except ImportError:
+        except ImportError as exc:
             _state["failed"] = True
+            slow_path_warning("numba", exc)
     return not _state["failed"]
+
 
 
 def _pointer(kernel):
