@@ -236,21 +236,36 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Lin
 
         return draw.plot(self, outputs, **kw)
 
-    def to_dataframe(self):
-        """A pandas DataFrame: ``t``, each coordinate, ``<name>_d`` and ``<name>_dd``.
-        Needs pandas (optional)."""
-        try:
-            import pandas as pd
-        except ImportError as exc:  # pragma: no cover
-            raise MechError("to_dataframe needs pandas: pip install pandas") from exc
-        data = {"t": self.t}
-        for j, name in enumerate(self.names):
-            data[name] = self.q[:, j]
-            if self.qd is not None:
-                data[name + "_d"] = self.qd[:, j]
-            if self.qdd is not None:
-                data[name + "_dd"] = self.qdd[:, j]
-        return pd.DataFrame(data)
+    def to_dataframe(self, reactions: bool = False, loads: bool = False, energies: bool = False):
+        """A pandas DataFrame: ``t``, each coordinate with ``<name>_d`` and ``<name>_dd``; with
+        ``reactions=True`` every constraint's force and moment on each of its bodies
+        (``<constraint>.<body>.Fx`` ...; needs multipliers), ``loads=True`` the applied loads
+        on each body, ``energies=True`` kinetic energies per body, total kinetic and potential
+        energy. ``df.attrs["units"]`` gives each column's unit in the model's declared units
+        (``m.set_units``; None where not declared or not known), ``df.attrs["dimensions"]``
+        its dimension (``"M*L/T^2"``). Needs pandas. See :mod:`mechsys.results._tables`.
+
+        Example: ``sol.to_dataframe(reactions=True)["pivot.crank.Fx"]``."""
+        from ._tables import to_dataframe
+
+        return to_dataframe(self, reactions=reactions, loads=loads, energies=energies)
+
+    def to_xarray(self, reactions: bool = False, loads: bool = False, energies: bool = False):
+        """The table of :meth:`to_dataframe` as an xarray ``Dataset`` over ``t``, each
+        variable with ``units`` (when known), ``dimension`` and ``long_name`` attributes.
+        Needs xarray."""
+        from ._tables import to_xarray
+
+        return to_xarray(self, reactions=reactions, loads=loads, energies=energies)
+
+    def save(self, path, reactions: bool = False, loads: bool = False, energies: bool = False):
+        """Write the table of :meth:`to_dataframe` to ``path``: ``.csv`` (header
+        ``name [unit]``, repr-exact floats), ``.parquet`` (pyarrow), ``.h5``/``.hdf5``
+        (h5py) or ``.nc`` (netCDF via xarray), units in each format's metadata. Returns the
+        path; the optional writer is named when it is missing."""
+        from ._tables import save
+
+        return save(self, path, reactions=reactions, loads=loads, energies=energies)
 
     def table(self) -> str:
         """A plain-text table of all coordinates over time."""
