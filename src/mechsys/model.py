@@ -35,7 +35,17 @@ from .geometry._bodies import Body
 from .geometry._planar_euler import PLANAR_EULER
 from .geometry._points import Axis, Point, Vector, as_point, as_vector
 from .geometry._space import PLANAR, SPATIAL, Space
-from .geometry._units import check_units, to_units
+from .geometry._units import (
+    INERTIA,
+    LENGTH,
+    MASS,
+    TIME,
+    check_units,
+    convert,
+    has_quantity,
+    resolve,
+    to_units,
+)
 from .results._linkage import LinkageOutputs
 from .results._load_outputs import LoadOutputs, lambda_guess_vector
 from .results._momentum import MomentumOutputs
@@ -130,6 +140,9 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
                 if sym in taken:  # a symbol declared before the naming rules saw it
                     raise ModelError(f"body {name!r} (number {number}) would get the symbol "
                                      f"{sym!r}, which is already a parameter or variable")
+        if has_quantity((points, guess, mass, centroid, inertia)):
+            points, guess, mass, centroid, inertia = self._body_numbers(
+                name, points, guess, mass, centroid, inertia)
         b = Body(self.space, name, number, points=points, guess=guess, mass=mass,
                  centroid=centroid, inertia=inertia)
         b.model = self
@@ -189,12 +202,27 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
             scene.attach(new, *_copy.deepcopy(scene.attached(self), memo))
         return new
 
+    def _body_numbers(self, name, points, guess, mass, centroid, inertia):
+        """``add_body``'s inputs with pint quantities in the model's units, each checked for
+        its dimension (decision 0043)."""
+        what = f"body {name!r}"
+        u = self.units
+        if isinstance(guess, (list, tuple)) and len(guess) == 2:
+            guess = (convert(guess[0], u, f"{what} guess position", LENGTH),
+                     convert(guess[1], u, f"{what} guess rotation"))
+        return (convert(points, u, f"{what} points", LENGTH), guess,
+                convert(mass, u, f"{what} mass", MASS), convert(centroid, u, f"{what} centroid", LENGTH),
+                convert(inertia, u, f"{what} inertia", INERTIA))
+
     def set_mass_properties(self, body, mass=None, centroid=None, inertia=None) -> None:
         """Change a body's mass, centroid (local) or inertia (about the centroid, body axes)
         after it was added (Mech's ``SetBodies[Body[b, Mass -> ...]]``)."""
         from .geometry._points import _as_matrix
 
         b = self.body(body)
+        if has_quantity((mass, centroid, inertia)):
+            _, _, mass, centroid, inertia = self._body_numbers(b.name, None, None, mass, centroid,
+                                                               inertia)
         if b.is_ground:
             raise ModelError("ground has no mass properties")
         old = (b.mass, b.centroid, b.inertia)
@@ -363,6 +391,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
             raise ModelError(f"add() takes a constraint object, got {constraint!r}")
         if constraint.model is not None:
             raise ModelError(f"{constraint.label()} is already in a model; create a new one")
+        resolve(constraint, self.units, f"constraint {name or type(constraint).__name__!r}")
         name = name or f"c{len(self._constraints) + 1}"
         if any(c.name == name for c in self._constraints):
             raise ModelError(f"a constraint named {name!r} already exists")
@@ -486,6 +515,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
                     self.body(b)
                 elif b.model is not self:
                     raise ModelError(f"{ld.label()} uses body {b.name!r} of another model")
+            resolve(ld, self.units, ld.label())
             ld.check(self)
             ld.name = name if (name and len(loads) == 1) else f"load{len(self._loads) + 1}"
             ld.model = self
@@ -988,7 +1018,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         if not isinstance(solution, str) or (solution not in ORDERS and solution not in modes):
             raise ModelError(f"solution must be one of {list(ORDERS) + list(modes)}, "
                              f"got {solution!r}")
-        times = self._check_times(t)
+        times = self._check_times(convert(t, self.units, "solve: t", TIME))
         if self._loads:  # TimeSwitch loads with parameter times: increasing (issue 14)
             from .loads._switched import check_switched_loads
 

@@ -21,6 +21,7 @@ import sympy as sp
 
 from .._errors import GeometryError, ModelError
 from ..geometry._points import Axis, Geometry, Point, Vector, as_vector
+from ..geometry._units import is_quantity, placeholder
 
 
 class Variable:
@@ -160,6 +161,8 @@ def _describe(side) -> str:
 
 
 def as_expr(value, what: str) -> sp.Expr:
+    if is_quantity(value):  # converted to the model's units when the constraint is added
+        return placeholder(value, what)
     try:
         return sp.sympify(value)
     except (sp.SympifyError, TypeError, ValueError, AttributeError, SyntaxError, NameError) as exc:

@@ -11,6 +11,7 @@ from .._errors import GeometryError, ModelError, UnknownPointError
 from .._symbols import coord_symbol
 from ._points import Axis, BodyRef, Line, Point, Vector, _as_matrix
 from ._space import Space
+from ._units import LENGTH, convert, has_quantity
 
 
 class Body(BodyRef):
@@ -131,9 +132,15 @@ class Body(BodyRef):
                 )
             key = self._order[spec - 1]
             return Point(self, self._points[key], label=key)
+        if has_quantity(spec):  # coordinates in the model's units (decision 0043)
+            spec = convert(spec, self._units(), f"point of body {self.name!r}", LENGTH)
         p = Point(self, spec)
         p.check_dim(self.space.dim)
         return p
+
+    def _units(self):
+        model = getattr(self, "model", None)
+        return getattr(model, "units", None)
 
     def vector(self, spec, to=None) -> Vector:
         """A vector fixed in this body: local components, or from the origin to a named point,
@@ -147,6 +154,8 @@ class Body(BodyRef):
             return Vector(self.point(spec), self.point(to))
         if isinstance(spec, (str, int)) and not isinstance(spec, bool):
             return Vector(self, self.point(spec).local)
+        if has_quantity(spec):  # a direction keeps its own dimension (a length or none)
+            spec = convert(spec, self._units(), f"vector of body {self.name!r}")
         v = Vector(self, spec)
         v.check_dim(self.space.dim)
         return v

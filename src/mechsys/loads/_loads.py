@@ -25,6 +25,7 @@ import sympy as sp
 
 from .._errors import ModelError
 from ..geometry._points import Axis, BodyRef, Point, Vector, as_point, as_vector
+from ..geometry._units import is_quantity, placeholder
 
 
 @dataclass
@@ -86,6 +87,8 @@ class LoadBase:
 
 def _magnitude(value, what: str) -> sp.Expr:
     """A load magnitude: an expression, finite and real when it is a number."""
+    if is_quantity(value):  # converted to the model's units when the load is added
+        return placeholder(value, what)
     try:
         v = sp.sympify(value)
     except (sp.SympifyError, TypeError, ValueError, AttributeError, SyntaxError, NameError):
