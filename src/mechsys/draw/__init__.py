@@ -29,6 +29,7 @@ import numpy as np
 from ._animate import Animation, ffmpeg_available
 from ._default import Skeleton
 from ._eval import STYLE_KEYS, Item
+from ._explore import Explorer, explore
 from ._jupyter import ViewerHTML
 from ._plots import phase_plot, plot
 from ._primitives import (
@@ -107,6 +108,8 @@ def viewer(solution, path=None, graphics=None, default="auto", **kw):
 
 
 __all__ = [
+    "Explorer",
+    "explore",
     "ReactionArrow",
     "STYLE_KEYS",
     "Animation",
