@@ -474,6 +474,23 @@ def cylindrical_to_xyz(point, coordinates: str = "XYZ"):
     return _pack(out, sym)
 
 
+def polar_to_xy(point):
+    """Planar polar ``(radius, angle)`` to Cartesian ``(x, y)`` (Mech's ``PolarToXY``):
+    ``x = r cos(angle)``, ``y = r sin(angle)``, the angle counterclockwise from +X in
+    radians. Numeric input of shape ``(..., 2)`` gives an array ``(..., 2)``; symbolic input
+    a SymPy column. Inverse of ``(hypot(x, y), atan2(y, x))``."""
+    if _is_symbolic(point):
+        p = list(point)
+        if len(p) != 2:
+            raise ModelError(f"polar_to_xy: expected (radius, angle), got {point!r}")
+        return sp.Matrix([p[0] * sp.cos(p[1]), p[0] * sp.sin(p[1])])
+    a = np.asarray(point, dtype=float)
+    if a.shape[-1:] != (2,):
+        raise ModelError(f"polar_to_xy: expected (radius, angle) pairs with shape (..., 2), "
+                         f"got shape {a.shape}")
+    return np.stack((a[..., 0] * np.cos(a[..., 1]), a[..., 0] * np.sin(a[..., 1])), axis=-1)
+
+
 def xyz_to_spherical(point, coordinates: str = "XYZ"):
     """Cartesian to spherical ``(radius, base angle, altitude angle)``.
 
@@ -555,6 +572,7 @@ ProjectedAngle = projected_angle
 IntersectionPoint = intersection_point
 XYZToCylindrical = xyz_to_cylindrical
 CylindricalToXYZ = cylindrical_to_xyz
+PolarToXY = polar_to_xy
 XYZToSpherical = xyz_to_spherical
 SphericalToXYZ = spherical_to_xyz
 Magnitude = magnitude
