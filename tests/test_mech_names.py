@@ -173,3 +173,35 @@ def test_centrifugal_sign_against_the_dynamic_loads():
                 for k in ("applied", "reaction", "dynamic"))
     np.testing.assert_allclose(total, 0.0, atol=1e-8)
     assert np.abs(C).max() > 1.0      # the rod's and crank's spin matter here
+
+
+def test_rotation_planar_forms():
+    th = 2.5
+    assert abs(ms.rotation((np.cos(th), np.sin(th))) - th) < 1e-15
+    assert abs(ms.Rotation((3 * np.cos(th), 3 * np.sin(th))) - th) < 1e-15     # any scale
+    A = np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+    assert abs(ms.rotation(A) - th) < 1e-15
+    assert abs(float(ms.rotation(sp.Matrix(A))) - th) < 1e-15
+    with pytest.raises(ms.GeometryError, match="not a 2 x 2 rotation"):
+        ms.rotation(np.diag([1.0, -1.0]))                  # a reflection
+    m = slider_crank(R, L)
+    crank = m.body("crank")
+    assert ms.rotation(crank) == crank.q[2]                # the planar body's angle symbol
+    # the 3D forms are unchanged
+    ang, axis = ms.rotation((np.pi / 2, (0, 0, 1)))
+    assert abs(ang - np.pi / 2) < 1e-15 and np.allclose(axis, [0, 0, 1])
+
+
+def test_composite_inertia_rotation_element():
+    # a slender rod (m = 3, length 2) along the body's Y axis, given in its own axes (along x)
+    m_, l_ = 3.0, 2.0
+    own = (0.0, m_ * l_**2 / 12, m_ * l_**2 / 12)
+    M, c, J = ms.composite_inertia([(m_, (0.0, 0.0, 0.0), own, (np.pi / 2, (0, 0, 1)))])
+    np.testing.assert_allclose(J, [1.0, 0.0, 1.0, 0.0, 0.0, 0.0], atol=1e-12)
+    # two such rods crossing at (1, 0, 0) and (-1, 0, 0): the parallel-axis sum by hand
+    M, c, J = ms.CompositeInertia([(m_, (1.0, 0, 0), own), (m_, (-1.0, 0, 0), own, (0, 0, np.pi / 2))])
+    assert M == 6.0 and np.allclose(c, 0.0)
+    # Ixx: rod 1 (along x) 0 + 0; rod 2 (along y) 1 + 0; Iyy: 1 + 3 + 0 + 3; Izz: 1 + 3 + 1 + 3
+    np.testing.assert_allclose(J, [1.0, 7.0, 8.0, 0.0, 0.0, 0.0], atol=1e-12)
+    with pytest.raises(ValueError, match="planar part has no rotation"):
+        ms.composite_inertia([(1.0, (0.0, 0.0), 0.5, 0.3)])
