@@ -299,7 +299,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         symbols), or every parameter when none is named. A parameter that a constraint,
         load or body of the model still uses is refused (``ModelError`` naming its users),
         since the model could no longer be evaluated; all or nothing."""
-        from ._param_use import parameter_users
+        from .compile._param_use import parameter_users
 
         if names:
             syms = [n if isinstance(n, sp.Symbol) else sp.Symbol(str(n)) for n in names]
