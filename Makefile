@@ -34,6 +34,7 @@ bench: $(STAMP)
 	$(PY) -m pip install --quiet -e ".[bench]"
 	$(PY) benchmarks/kinematic_sweep.py --write docs/performance.md
 	$(PY) benchmarks/peers/run.py --write docs/performance.md
+	$(PY) benchmarks/energy_drift.py --write docs/free_motion.md
 
 # The documentation site: regenerated reference pages, the gallery (examples run only when
 # changed, pictures cached in docs/gallery/_media), then Sphinx with warnings as errors.

@@ -184,3 +184,11 @@ def test_cam_names_exported():
     assert REQUIRED_CAMS <= set(mechsys.__all__)
     assert REQUIRED_CAMS <= set(C.__all__)
     assert {n for n in REQUIRED_CAMS if n[0].isupper()} <= set(C.REGISTRY)
+
+#: Mech's names completed for issue 34 (docs/mech_to_mechsys.md): PolarToXY, PointToLocal,
+#: VectorToLocal, VelocityTerms, AccelerationTerms, TimeInterpolate, ArcLength, ClearParameters.
+REQUIRED_TOP_LEVEL |= {"PolarToXY", "polar_to_xy"}
+REQUIRED_MEMBERS["Model"] |= {"point_to_local", "vector_to_local", "velocity_terms",
+                              "acceleration_terms", "clear_parameters"}
+REQUIRED_MEMBERS["Solution"] |= {"point_to_local", "vector_to_local", "velocity_terms",
+                                 "acceleration_terms", "time_interpolate", "arc_length"}

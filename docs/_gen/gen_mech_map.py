@@ -105,7 +105,27 @@ ENTRIES: tuple[Entry, ...] = (
     _e("Omega", OUT, ("mechsys.Model.omega", "mechsys.Solution.omega")),
     _e("Alpha", OUT, ("mechsys.Model.alpha", "mechsys.Solution.alpha")),
     _e("Origin", OUT, "mechsys.Model.location", "`location(body.point(0))`"),
-    _e("Rotation", OUT, "mechsys.Rotation"),
+    _e("Rotation", OUT, ("mechsys.Rotation", "mechsys.Model.angle", "mechsys.Solution.angle"),
+       "3D: (angle, axis) of a body or any rotation format; 2D: the angle of a planar body, of "
+       "(ei, ej) or of a 2 x 2 rotation matrix (`rotation(body)`, `m.angle(body)`)"),
+    _e("PointToLocal", OUT, ("mechsys.Model.point_to_local", "mechsys.Solution.point_to_local"),
+       "a point's coordinates in a body's frame, A^T (r_P - r_b)"),
+    _e("VectorToLocal", OUT, ("mechsys.Model.vector_to_local", "mechsys.Solution.vector_to_local"),
+       "online manual; a vector's components in a body's axes"),
+    _e("ArcLength", OUT, "mechsys.Solution.arc_length",
+       "the distance a point travels over a solution, cumulative from the first time"),
+    _e("TimeInterpolate", OUT, ("mechsys.Solution.time_interpolate", "mechsys.Solution.interpolate"),
+       "an expression at other times, cubic Hermite from the solved velocities"),
+    _e("InterpolationOrder", OUT, "mechsys.Solution.interpolate",
+       "online manual (TimeInterpolate's option); the order is fixed: cubic Hermite on positions "
+       "with velocities, linear without"),
+    _e("Interpolation", OUT, ("mechsys.Solution.interpolate", "mechsys.Solution.time_interpolate"),
+       "results are arrays over the solved times; interpolate them at others"),
+    _e("VelocityTerms", BUILD, ("mechsys.Model.velocity_terms", "mechsys.Solution.velocity_terms"),
+       "online manual; Phi_t, so that `jacobian(c) @ qd + velocity_terms(c) == 0`"),
+    _e("AccelerationTerms", BUILD, ("mechsys.Model.acceleration_terms",
+                                    "mechsys.Solution.acceleration_terms"),
+       "online manual; -gamma, so that `jacobian(c) @ qdd + acceleration_terms(c) == 0`"),
     _e("Direction", OUT, ("mechsys.Direction", "mechsys.Model.direction")),
     _e("Distance", OUT, ("mechsys.Distance", "mechsys.Model.distance")),
     _e("ProjectedAngle", OUT, "mechsys.ProjectedAngle"),
@@ -115,7 +135,12 @@ ENTRIES: tuple[Entry, ...] = (
     _e("RelativeVelocity", OUT, ("mechsys.Model.relative_velocity",
                                  "mechsys.Solution.relative_velocity")),
     _e("IntersectionPoint", OUT, "mechsys.IntersectionPoint"),
-    _e("Centrifugal", OUT, ("mechsys.Model.centrifugal", "mechsys.Solution.centrifugal")),
+    _e("Centrifugal", OUT, ("mechsys.Model.centrifugal", "mechsys.Solution.centrifugal"),
+       "the velocity-dependent inertial forces Q_v on the right of M qdd = Q + Q_v + reactions; "
+       "sign: `centrifugal(All) - mass_matrix(All) @ qdd == loads(All, type=\"dynamic\")` (so "
+       "that applied + reaction + dynamic = 0, Mech's Loads identity); the manual's MassMatrix "
+       "page writes Centrifugal[All] + MassMatrix[All] . Acceleration[All], which agrees only "
+       "with the opposite sign of Centrifugal"),
     # -- loads ------------------------------------------------------------------------------
     _e("SetLoads", LOADS, "mechsys.Model.add_load"),
     _e("Force", LOADS, "mechsys.Force"),
@@ -124,7 +149,17 @@ ENTRIES: tuple[Entry, ...] = (
     _e("Gravity", LOADS, "mechsys.Gravity"),
     _e("SysLoad", LOADS, "mechsys.LoadBase", "the load object"),
     _e("Loads", LOADS, ("mechsys.Model.loads", "mechsys.Solution.loads")),
-    _e("Reaction", LOADS, ("mechsys.Model.reaction", "mechsys.Solution.reaction")),
+    _e("Reaction", LOADS, ("mechsys.Model.reaction", "mechsys.Solution.reaction"),
+       "forms: `reaction(c, body, at=point)`; `reaction(c, body.point(p))` (Point); "
+       "`reaction(All, body)` (total); `reaction([c1, c2], body)` (summed); "
+       "`reaction(c or All, sym)` for a coordinate or a parameter symbol (a link's tension)"),
+    _e("Applied", LOADS, "mechsys.Solution.loads(type=)", 'type="applied"'),
+    _e("CutOff", LOADS, ("mechsys.Force(cutoff=)", "mechsys.Moment(cutoff=)")),
+    _e("Absolute", LOADS, "mechsys.Force(mode=)", 'mode="absolute" (Magnitude -> Absolute)'),
+    _e("Relative", LOADS, ("mechsys.Force(mode=)", "mechsys.Moment(mode=)"),
+       'mode="relative" (Magnitude -> Relative)'),
+    _e("CompositeInertia", LOADS, ("mechsys.CompositeInertia", "mechsys.composite_inertia"),
+       "parts (mass, centroid, inertia) and in 3D an optional rotation of the part's axes"),
     _e("Generalized", LOADS, ("mechsys.Model.generalized", "mechsys.Solution.generalized")),
     _e("MassMatrix", LOADS, ("mechsys.Model.mass_matrix", "mechsys.Solution.mass_matrix")),
     _e("BodyEnergy", LOADS, ("mechsys.Model.body_energy", "mechsys.Solution.body_energy")),
@@ -147,13 +182,39 @@ ENTRIES: tuple[Entry, ...] = (
        "a constant Adams step; adaptive when not given (Mech's Automatic)"),
     _e("StartingStepSize", FREE, "mechsys.FreeSystem.simulate(starting_step_size=)",
        "the first step of an adaptive run, every method"),
+    _e("Cubic", FREE, "mechsys.FreeSystem.simulate(fit_degree=)", 'fit_degree="cubic"'),
+    _e("Quadratic", FREE, "mechsys.FreeSystem.simulate(fit_degree=)", 'fit_degree="quadratic"'),
+    _e("Quartic", FREE, "mechsys.FreeSystem.simulate(fit_degree=)", 'fit_degree="quartic"'),
+    _e("Predictor", FREE, "mechsys.FreeSystem.simulate(method=)", 'method="predictor"'),
+    _e("Corrector", FREE, "mechsys.FreeSystem.simulate(method=)", 'method="corrector"'),
+    _e("MaxIterations", OPTS, ("mechsys.PositionOptions(max_iterations=)",
+                               "mechsys.FreeSystem.solve(max_iterations=)"),
+       "SolveMech's and SolveFree's Newton; FindSwitchTime's has none (see FindSwitchTime)"),
+    _e("ZeroTest", OPTS, ("mechsys.PositionOptions(ftol=)", "mechsys.FreeSystem.solve(tolerance=)"),
+       "SolveMech's convergence test; FindSwitchTime's has none (see FindSwitchTime)"),
+    _e("DampingFactor", OPTS, "mechsys.PositionOptions(damping=)",
+       "SolveMech's Newton damping (a line search, on or off); FindSwitchTime's has none"),
+    _e("CheckRules", OPTS, note="SolveMech(..., Solution -> Velocity, CheckRules -> False) skips "
+       "the position solve for given rules; `solve` always solves positions (one Newton step "
+       "from a valid guess)"),
+    _e("StepMech", OPTS, note="online manual; `solve(post_iterate=)` shows each Newton step"),
     _e("Diagnostics", FREE, "mechsys.FreeSystem.simulate(diagnostics=)",
        'per-step step_size (and Adams max_error) in sol.extra["diagnostics"]'),
     # -- multistage ---------------------------------------------------------------------------
     _e("StageSwitch", STAGES, "mechsys.StageSwitch"),
     _e("TimeSwitch", STAGES, "mechsys.TimeSwitch"),
-    _e("FindSwitchTime", STAGES, ("mechsys.FindSwitchTime", "mechsys.find_switch_time")),
-    _e("FindTime", STAGES, ("mechsys.FindTime", "mechsys.find_time")),
+    _e("FindSwitchTime", STAGES, ("mechsys.FindSwitchTime", "mechsys.find_switch_time"),
+       "Mech iterates Newton (DampingFactor, MaxIterations, ZeroTest) from the last solution; "
+       "mechsys brackets the first sign change over `t_range` (default: the last solution's "
+       "span) and refines it by Brent's method to 1e-13, so it needs none of those options and "
+       "finds the first switch in the range rather than the one nearest the last solution "
+       "(narrow `t_range` to pick another); `guess=` gives the coordinates to start from"),
+    _e("FindTime", STAGES, ("mechsys.FindTime", "mechsys.find_time"),
+       "as FindSwitchTime: the first root in `t_range` (default: the last solution's span), "
+       "bracketed and refined by Brent's method, where Mech starts Newton from the last "
+       "solution's time; `guess=` gives the coordinates to start from"),
+    _e("Sum", STAGES, "mechsys.find_switch_time(required_equations=)",
+       'RequiredEquations -> {All, Sum}: required_equations=("all", "sum")'),
     _e("RequiredEquations", STAGES, "mechsys.find_switch_time"),
     _e("TangentConstraint", STAGES, "mechsys.find_switch_time"),
     # -- cams and gears -----------------------------------------------------------------------
@@ -197,9 +258,16 @@ ENTRIES: tuple[Entry, ...] = (
     _e("CylindricalToXYZ", GEOM, "mechsys.CylindricalToXYZ"),
     _e("SphericalToXYZ", GEOM, "mechsys.SphericalToXYZ"),
     _e("Normalized", GEOM, "mechsys.Rotation"),
-    _e("XYZ", GEOM, "mechsys.EulerParameters", "rotation sequences are given by axis names"),
-    _e("YZX", GEOM, "mechsys.EulerParameters"),
-    _e("ZXY", GEOM, "mechsys.EulerParameters"),
+    _e("XYZ", GEOM, ("mechsys.XYZToCylindrical(coordinates=)", "mechsys.XYZToSpherical(coordinates=)"),
+       'coordinates="XYZ" (default) of the coordinate conversions'),
+    _e("YZX", GEOM, ("mechsys.XYZToCylindrical(coordinates=)", "mechsys.XYZToSpherical(coordinates=)"),
+       'coordinates="YZX": altitude along X'),
+    _e("ZXY", GEOM, ("mechsys.XYZToCylindrical(coordinates=)", "mechsys.XYZToSpherical(coordinates=)"),
+       'coordinates="ZXY": altitude along Y'),
+    _e("PolarToXY", GEOM, ("mechsys.PolarToXY", "mechsys.polar_to_xy"), "(radius, angle) to (x, y)"),
+    _e("Assumptions", GEOM, "mechsys.euler_parameters(normalized=)",
+       "Assumptions -> Normalized: normalized=True"),
+    _e("Closed", CAMS, "mechsys.SplineFit(end_conditions=)", 'end_conditions="closed"'),
     # -- options and settings -----------------------------------------------------------------
     _e("Solution", OPTS, "mechsys.Model.solve(solution=)"),
     _e("Kinematic", OPTS, "mechsys.Model.solve(solution=)", 'solution="kinematic"'),
@@ -210,9 +278,18 @@ ENTRIES: tuple[Entry, ...] = (
     _e("Local", OPTS, "mechsys.Solution.loads(coordinates=)", 'coordinates="local"'),
     _e("Type", OPTS, "mechsys.Solution.loads(type=)", '"applied", "reaction", "dynamic"'),
     _e("Free", COUPLE, "mechsys.Free", "time as an unknown of a couple"),
-    _e("Method", OPTS, ("mechsys.Model2D(orientation=)", "mechsys.Model3D(velocity=)"),
-       "2D: orientation=\"euler\" builds in degenerate Euler parameters (decision 0015); "
-       "3D: a view of one formulation (decision 0006)"),
+    _e("Method", OPTS, ("mechsys.Model2D(orientation=)", "mechsys.Model3D(velocity=)",
+                        "mechsys.FreeSystem.simulate(method=)"),
+       "SetSymbols' Method: 2D orientation=\"euler\" builds in degenerate Euler parameters "
+       "(decision 0015), 3D a view of one formulation (decision 0006); SolveFree's and "
+       "SolvePath's Method: method=\"adams\" (Automatic), \"predictor\", \"corrector\""),
+    _e("SetSymbols", OPTS, ("mechsys.Model2D(orientation=)", "mechsys.Model3D(velocity=)",
+                            "mechsys.Model3D(coordinates=)", "mechsys.Solution.velocities(representation=)"),
+       "Method and Coordinates per model; the time symbol is always `mechsys.T` (no renaming)"),
+    _e("Rest", OPTS, "mechsys.Rest", "the model variables' part of a selection"),
+    _e("Time", COUPLE, "mechsys.Model.couple(t=)", "Time -> Free: put `mechsys.Free` among the "
+       "unknowns"),
+    _e("Angle", DRAW, "mechsys.draw.Revolve(angle=)", "the swept angle of a solid of revolution"),
     _e("Euler", OPTS, "mechsys.Model2D(orientation=)",
        'orientation="euler": bodies (x, y, ei, ej), manual 12.4'),
     _e("Angular", OPTS, "mechsys.Model2D(orientation=)", 'orientation="angle" (default)'),
@@ -229,7 +306,18 @@ ENTRIES: tuple[Entry, ...] = (
     _e("ClearMech", SESSION, status="n/a", note="make a new Model; there is no global model"),
     _e("ResetMech", SESSION, status="n/a", note="make a new Model; there is no global model"),
     _e("KillMech", SESSION, status="n/a", note="Python modules need no unloading"),
-    _e("HelpModel2D", SESSION, "mechsys.models.slider_crank", "ready-made models"),
+    _e("HelpModel2D", SESSION, note="the model of Mech's online help examples (a crank and a "
+       "link); mechsys.models has the manual's chapter models instead (slider_crank, ...)"),
+    _e("HelpModel3D", SESSION, note="online manual; as HelpModel2D"),
+    _e("ClearParameters", BUILD, "mechsys.Model.clear_parameters",
+       "refuses parameters still used, naming their users"),
+    _e("LineToCylinder1", "Constraints", "mechsys.LineToLine1",
+       "the manual's other name for LineToLine1 with a distance"),
+    _e("ParaRevolute", "Constraints", "mechsys.ParaRevolute4",
+       "the manual's shorthand on the ParaRevolute4 page"),
+    _e("X2", SESSION, "mechsys.Solution.names",
+       "Mech's coordinate symbols X2, Y3d, Ei2, ... are x2, y3_d, ei2, ... (`body.q`, "
+       "`sol.names`); the completeness test maps every such name here"),
     _e("JoinRows", SESSION, "numpy.hstack", "NumPy does it"),
     _e("Mech", SESSION, "mechsys.MechError", "the messages are exceptions"),
     _e("MechBodyList", SESSION, "mechsys.Model.bodies"),
@@ -247,6 +335,96 @@ ENTRIES: tuple[Entry, ...] = (
     _e("MechUseMinimalRotation", SESSION, status="n/a",
        note="one angular-velocity representation (decision 0006)"),
 )
+
+
+#: Symbols in the manual's text that are not Mech's: Mathematica's own, and page furniture.
+NOT_MECH = {
+    "Abs": "Mathematica", "Chop": "Mathematica", "Derivative": "Mathematica",
+    "False": "Mathematica", "General": "Mathematica (message group)", "Get": "Mathematica",
+    "Indeterminate": "Mathematica", "InterpolatingFunction": "Mathematica",
+    "Join": "Mathematica", "MapThread": "Mathematica", "Needs": "Mathematica",
+    "None": "Mathematica", "Polygon": "Mathematica", "Print": "Mathematica",
+    "Step": "Mathematica", "Transpose": "Mathematica", "True": "Mathematica",
+    "Automatic": "Mathematica (a default setting)",
+    "MechanicalSystems": "the package's name (page headers)",
+}
+
+#: Names of Mech's online function index (reference.wolfram.com/applications/mechsystems)
+#: met while completing the table that the seed's excerpt of the manual does not contain.
+ONLINE_NAMES = ("AccelerationTerms", "ArcLength", "HelpModel3D", "InterpolationOrder",
+                "StepMech", "VectorToLocal", "VelocityTerms")
+
+#: Mech's coordinate symbols (X2, Y3d, Ei2 ...): all covered by the "X2" row.
+COORDINATE_SYMBOL = re.compile(r"(?:X|Y|Z|Ei|Ej|Ek|Eo)\d+d{0,2}")
+#: Words the manual's text breaks across lines ("Parame ters").
+SPLIT_WORDS = {"Parame ters": "Parameters", "Reac tion": "Reaction"}
+_ID = r"\$?[A-Z][A-Za-z0-9]*"
+_LIST = rf"((?:{_ID})(?:,? (?:and |or )?(?:{_ID}))*)"
+_ID_ARG = rf"({_ID})"
+
+
+def _placeholder(name: str) -> bool:
+    """Argument names of the manual's templates (``C``, ``G``, ``Ixx`` ...), not symbols."""
+    return len(name) == 1 or re.fullmatch(r"I[xyz]{2}", name) is not None
+
+
+def manual_names(text: str) -> dict:
+    """Every Mech symbol the manual's function reference text uses, with how it was found:
+    entry headings (``Name 2D/3D †``), calls ``Name[``, options and settings
+    (``Name -> Setting``), "See also" lists, option tables, "option/setting for A, B and C",
+    "the Name option", lists of alternatives and valid settings, symbol arguments
+    (``Loads[Rest]``) and symbol lists (``{All, Sum}``). Template placeholders are dropped."""
+    for a, b in SPLIT_WORDS.items():
+        text = text.replace(a, b)
+    found: dict = {}
+
+    def add(name, how):
+        if not _placeholder(name.lstrip("$")):
+            found.setdefault(name, set()).add(how)
+
+    for m in re.finditer(rf"({_ID}) (?:2D/3D|2D|3D) \u2020", text):
+        add(m.group(1), "heading")
+    for m in re.finditer(rf"(?<![\w$])({_ID})\[", text):
+        add(m.group(1), "call")
+    for m in re.finditer(rf"(?<![\w$])({_ID})\s*->\s*\{{?\s*({_ID})?", text):
+        add(m.group(1), "option")
+        if m.group(2):
+            add(m.group(2), "setting")
+    for m in re.finditer(r"See also: ([^\u2020]+?)\.(?:\s|$)", text):
+        for n in re.split(r",\s*", m.group(1)):
+            if re.fullmatch(_ID, n.strip()):
+                add(n.strip(), "see also")
+    for m in re.finditer(rf"can be givens?: ({_ID})", text):
+        add(m.group(1), "option table")
+    for m in re.finditer(rf"^({_ID})$", text, re.M):
+        add(m.group(1), "option table")
+    for m in re.finditer(rf"(?:option|setting|settings) for {_LIST}", text):
+        for n in re.findall(_ID, m.group(1)):
+            add(n, "option for")
+    for m in re.finditer(rf"the ({_ID}) (?:option|setting)", text):
+        add(m.group(1), "the X option")
+    for m in re.finditer(rf"(?:alternatives? to (?:the )?{_ID}(?: setting)?|Valid settings for "
+                         rf"{_ID}) (?:is|are) {_LIST}", text):
+        for n in re.findall(_ID, m.group(1)):
+            add(n, "alternatives")
+    for m in re.finditer(rf"(?<![\w$])(?:{_ID})\[([^\[\]]*)\]", text):
+        for n in re.findall(rf"(?:^|[\s,{{]){_ID_ARG}(?=\s*(?:,|\]|\}}|$))", m.group(1)):
+            add(n, "argument")
+    for m in re.finditer(r"\{([^{}]*)\}", text):
+        items = [x.strip() for x in m.group(1).split(",") if x.strip()]
+        if items and all(re.fullmatch(_ID, x) for x in items):
+            for x in items:
+                add(x, "list")
+    return found
+
+
+
+def uncovered(names) -> list:
+    """The names that are neither a row of the table, nor a coordinate symbol (the ``X2``
+    row), nor one of :data:`NOT_MECH`."""
+    rows = {e.mech for e in entries()}
+    return sorted(n for n in names if n not in rows and n.lstrip("$") not in rows
+                  and n not in NOT_MECH and not COORDINATE_SYMBOL.fullmatch(n))
 
 
 def _instance_attr(cls: type, name: str) -> bool:
@@ -359,7 +537,12 @@ def render() -> str:
     rows = entries()
     counts = {s: sum(_status(r) == s for r in rows) for s in ("yes", NOT_YET, "n/a")}
     out = [HEADER, f"{len(rows)} names: {counts['yes']} with a counterpart, "
-           f"{counts[NOT_YET]} not yet, {counts['n/a']} not needed.", ""]
+           f"{counts[NOT_YET]} not yet, {counts['n/a']} not needed.", "",
+           "The manual's text also uses symbols that are not Mech's: "
+           + ", ".join(f"`{k}`" for k in sorted(NOT_MECH)) + " (Mathematica's own, and the "
+           "package name in page headers). A test reads every symbol of the manual's function "
+           "reference (calls, options, settings, See-also lists, option tables) and checks that "
+           "each is a row here or one of these.", ""]
     groups = []
     for r in rows:
         if r.group not in groups:

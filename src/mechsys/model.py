@@ -322,6 +322,30 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
     def parameters(self) -> dict[str, float]:
         return {s.name: v for s, v in self._params.items()}
 
+    def clear_parameters(self, *names) -> None:
+        """Remove parameters (Mech's ``ClearParameters``): the named ones (names or
+        symbols), or every parameter when none is named. A parameter that a constraint,
+        load or body of the model still uses is refused (``ModelError`` naming its users),
+        since the model could no longer be evaluated; all or nothing."""
+        from .compile._param_use import parameter_users
+
+        if names:
+            syms = [n if isinstance(n, sp.Symbol) else sp.Symbol(str(n)) for n in names]
+            unknown = [str(x) for x in syms if x not in self._params]
+            if unknown:
+                raise ModelError(f"clear_parameters: unknown parameter(s) {unknown}; parameters "
+                                 f"are {[p.name for p in self._params]}")
+        else:
+            syms = list(self._params)
+        used = parameter_users(self, syms)
+        if used:
+            which = "; ".join(f"{p} by {', '.join(u)}" for p, u in used.items())
+            raise ModelError(f"clear_parameters: parameter(s) still used ({which}); remove or "
+                             "replace those first, or change the value with set_parameters")
+        for x in syms:
+            del self._params[x]
+        self._touch()
+
     def variable(self, name: str, guess: float = 0.0) -> sp.Symbol:
         """Declare a new model variable (Mech's ``{s, guess}``) for use in constraints."""
         if not isinstance(name, str) or not name:

@@ -75,18 +75,33 @@ def principal_axes(inertia):
 
 def composite_inertia(parts):
     """Combine parts ``[(mass, centroid, inertia), ...]`` (each inertia centroidal, all in
-    one body frame) into ``(mass, centroid, inertia about the composite centroid)``."""
-    parts = list(parts)
-    M = sum(float(m) for m, _, _ in parts)
+    one body frame) into ``(mass, centroid, inertia about the composite centroid)``.
+
+    In 3D a part may carry a fourth element, the rotation of its own centroidal frame
+    relative to the body frame (Mech's ``CompositeInertia`` element ``{mass, centroid,
+    inertia, rotation}``), in any of :func:`parallel_axis`'s formats: its inertia, given in
+    its own axes, enters as ``R J R^T``. Returns ``(M, centroid, J)``: ``J`` a scalar in 2D,
+    ``(Ixx, Iyy, Izz, Ixy, Iyz, Izx)`` in 3D."""
+    parts = [tuple(p) for p in parts]
+    for p in parts:
+        if len(p) not in (3, 4):
+            raise ValueError(f"composite_inertia: a part is (mass, centroid, inertia) or, in 3D, "
+                             f"(mass, centroid, inertia, rotation); got {p!r}")
+    M = sum(float(p[0]) for p in parts)
     if M == 0:
         raise ValueError("composite_inertia: total mass is zero")
-    c = sum(float(m) * np.asarray(r, dtype=float) for m, r, _ in parts) / M
+    c = sum(float(p[0]) * np.asarray(p[1], dtype=float) for p in parts) / M
     if c.shape == (2,):
+        if any(len(p) == 4 for p in parts):
+            raise ValueError("composite_inertia: a planar part has no rotation element (its "
+                             "inertia is a scalar about the normal axis)")
         J = sum(parallel_axis(np.asarray(r) - c, m, I) for m, r, I in parts)
         return M, tuple(c), J
     J = np.zeros((3, 3))
-    for m, r, I in parts:
-        J += _as_matrix3(parallel_axis(np.asarray(r, dtype=float) - c, m, I))
+    for p in parts:
+        m, r, I = p[:3]
+        rot = p[3] if len(p) == 4 else None
+        J += _as_matrix3(parallel_axis(np.asarray(r, dtype=float) - c, m, I, rot))
     return M, tuple(c), _as_list6(J)
 
 

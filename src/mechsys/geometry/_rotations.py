@@ -307,7 +307,16 @@ def rotation(rot, normalized: bool = True):
     undefined; ``(1, 0, 0)`` is returned. ``normalized=False`` returns the vector part
     ``(e1, e2, e3)`` (length ``sin(angle/2)``) as the axis, unnormalised. Symbolic input
     (a body) gives the angle in ``[0, 2 pi)`` without the sign choice.
+
+    Planar forms (Mech's ``Rotation`` in Modeler2D) return the scalar angle ``theta``
+    (radians, counterclockwise): a planar body (its angle coordinate, symbolic), the
+    degenerate Euler parameters ``(ei, ej) = (cos theta, sin theta)`` (any positive scale;
+    ``atan2(ej, ei)``, as ``Model2D(orientation="euler")``), or a 2 x 2 rotation matrix
+    (``atan2(A[1, 0], A[0, 0])``; a matrix that is not a rotation raises ``GeometryError``).
     """
+    planar = _planar_angle(rot)
+    if planar is not None:
+        return planar
     e = _parse(rot)
     if _is_symbolic(e):
         s = sp.sqrt(e[1] ** 2 + e[2] ** 2 + e[3] ** 2)
@@ -323,6 +332,32 @@ def rotation(rot, normalized: bool = True):
         return ang, e[1:].copy()
     axis = e[1:] / s if s > 0 else np.array([1.0, 0.0, 0.0])
     return ang, axis
+
+
+def _planar_angle(rot):
+    """The angle of a planar rotation format, or None when ``rot`` is not one."""
+    if isinstance(rot, BodyRef):
+        if rot.space.dim != 2:
+            return None
+        return sp.S.Zero if rot.is_ground else rot.space.angle(rot.q[2:])
+    if isinstance(rot, (np.ndarray, sp.MatrixBase)) and getattr(rot, "shape", None) == (2, 2):
+        if isinstance(rot, sp.MatrixBase) and rot.free_symbols:
+            return sp.atan2(rot[1, 0], rot[0, 0])
+        A = np.array(rot.tolist() if isinstance(rot, sp.MatrixBase) else rot, dtype=float)
+        if not np.allclose(A.T @ A, np.eye(2), atol=1e-9) or np.linalg.det(A) < 0:
+            raise GeometryError(f"rotation: {A.tolist()} is not a 2 x 2 rotation matrix "
+                                "(orthonormal columns, determinant +1)")
+        return float(np.arctan2(A[1, 0], A[0, 0]))
+    if isinstance(rot, Sequence) and not isinstance(rot, str) and len(rot) == 2 and \
+            all(_is_scalar(c) for c in rot):
+        ei, ej = rot
+        if any(isinstance(c, sp.Basic) and c.free_symbols for c in rot):
+            return sp.atan2(ej, ei)
+        ei, ej = float(ei), float(ej)
+        if ei == 0.0 and ej == 0.0:
+            raise GeometryError("rotation: planar Euler parameters (0, 0) do not define an angle")
+        return float(np.arctan2(ej, ei))
+    return None
 
 
 def virtual_rotation(rot):
@@ -474,6 +509,23 @@ def cylindrical_to_xyz(point, coordinates: str = "XYZ"):
     return _pack(out, sym)
 
 
+def polar_to_xy(point):
+    """Planar polar ``(radius, angle)`` to Cartesian ``(x, y)`` (Mech's ``PolarToXY``):
+    ``x = r cos(angle)``, ``y = r sin(angle)``, the angle counterclockwise from +X in
+    radians. Numeric input of shape ``(..., 2)`` gives an array ``(..., 2)``; symbolic input
+    a SymPy column. Inverse of ``(hypot(x, y), atan2(y, x))``."""
+    if _is_symbolic(point):
+        p = list(point)
+        if len(p) != 2:
+            raise ModelError(f"polar_to_xy: expected (radius, angle), got {point!r}")
+        return sp.Matrix([p[0] * sp.cos(p[1]), p[0] * sp.sin(p[1])])
+    a = np.asarray(point, dtype=float)
+    if a.shape[-1:] != (2,):
+        raise ModelError(f"polar_to_xy: expected (radius, angle) pairs with shape (..., 2), "
+                         f"got shape {a.shape}")
+    return np.stack((a[..., 0] * np.cos(a[..., 1]), a[..., 0] * np.sin(a[..., 1])), axis=-1)
+
+
 def xyz_to_spherical(point, coordinates: str = "XYZ"):
     """Cartesian to spherical ``(radius, base angle, altitude angle)``.
 
@@ -555,6 +607,7 @@ ProjectedAngle = projected_angle
 IntersectionPoint = intersection_point
 XYZToCylindrical = xyz_to_cylindrical
 CylindricalToXYZ = cylindrical_to_xyz
+PolarToXY = polar_to_xy
 XYZToSpherical = xyz_to_spherical
 SphericalToXYZ = spherical_to_xyz
 Magnitude = magnitude

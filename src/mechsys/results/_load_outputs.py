@@ -123,6 +123,19 @@ class LoadOutputs:
         """``(force, moment)`` that ``constraint`` applies *to* ``body``, the moment about
         ``at`` (default the body origin), in global or body-local axes.
 
+        Mech's forms (``Reaction[cnum, bnum]``, ``Reaction[cnum, bnum, point]``,
+        ``Reaction[cnum, Point[bnum, lpnt]]``, ``Reaction[cnum, sym]``):
+
+        * ``body`` may be a point of a body, ``body.point("pin")``: the reaction on that
+          body with the moment about that point;
+        * ``constraint`` may be ``All`` (every constraint of the system: the total reaction
+          on the body, ``loads(body, "reaction")`` as a force and moment) or a list of
+          constraints (their reactions summed);
+        * ``body`` may be a coordinate symbol (a generalized coordinate, Mech 11.2) or a
+          **parameter** symbol: the generalized load the constraints apply to it,
+          ``-sum_c (dPhi_c/dp)^T lambda_c`` (for a parameter that is a link's length, the
+          link's tension, positive when the link pulls; Mech: ``Reaction[All, len]``), a scalar.
+
         On ground, the reaction is the opposite of that on the constraint's other body
         (the constraint must join ground to exactly one body)."""
         if _staged(self):  # a multistage solution: each point with its stage's rows
@@ -130,6 +143,21 @@ class LoadOutputs:
 
             return stagewise(self, lambda s: s.reaction(constraint, body, at, coordinates))
         m = self._model()
+        from ..geometry._points import Point
+
+        if isinstance(body, Point):
+            if at is not None:
+                raise ModelError(f"reaction({constraint!r}, {body!r}, at={at!r}): a point already "
+                                 "names where the moment is taken; give the body and at=, or "
+                                 "the point alone")
+            if body.body is None:
+                raise ModelError(f"reaction: {body!r} is not a point of a moving body; give a "
+                                 "point of the body the reaction acts on")
+            body, at = body.body, body
+        if isinstance(body, sp.Symbol) and body in m._params:
+            return self._finish(self._parameter_reaction(constraint, body))
+        if constraint is All or isinstance(constraint, (list, tuple)):
+            return self._reaction_sum(constraint, body, at, coordinates)
         c = m.constraint(constraint)
         if getattr(c, "slave", None) is not None or isinstance(body, sp.Symbol):
             from ..constraints._generalized import generalized_reaction
@@ -146,6 +174,56 @@ class LoadOutputs:
             return self._finish_pair(-F, -M)
         F, M = self._reaction_expr(c, b, at, coordinates)
         return self._finish_pair(F, M)
+
+    def _reaction_constraints(self, constraint) -> list:
+        """The constraints of ``All`` (those with multipliers in this system) or a list."""
+        m = self._model()
+        if constraint is All:
+            owners = self._sys().layout.eq_owner
+            out = []
+            for o in owners:
+                if not isinstance(o, str) and all(o is not x for x in out):
+                    out.append(o)
+            return out
+        if not constraint:
+            raise ModelError("reaction([] , ...): the list of constraints is empty")
+        return [m.constraint(c) for c in constraint]
+
+    def _reaction_sum(self, constraint, body, at, coordinates):
+        """Reaction of several constraints (``All`` or a list) on one body or coordinate."""
+        m = self._model()
+        cs = self._reaction_constraints(constraint)
+        if isinstance(body, sp.Symbol):
+            from ..constraints._generalized import generalized_reaction
+
+            return self._finish(sp.Add(*(generalized_reaction(m, c, body, self._lams)
+                                         for c in cs)))
+        b = m.body(body)
+        if b.is_ground:
+            raise ModelError(f"reaction({constraint!r}, ground): ask for the reaction of each "
+                             "constraint on ground, or on the moving bodies")
+        if b.gen_joint is not None:
+            from ..constraints._generalized import slave_refused
+
+            raise slave_refused(b, "reaction")
+        G = sp.zeros(len(b.q), 1)
+        for c in cs:
+            lam = sp.Matrix(self._lams(c))
+            eqs = sp.Matrix(c.equations(m.space))
+            G -= eqs.jacobian(list(b.q)).T * lam
+        F, M = self._wrench(b, G, at, coordinates)
+        return self._finish_pair(F, M)
+
+    def _parameter_reaction(self, constraint, p):
+        """``-sum_c (dPhi_c/dp)^T lambda_c`` over ``All`` or the given constraints."""
+        m = self._model()
+        cs = (self._reaction_constraints(constraint) if constraint is All
+              or isinstance(constraint, (list, tuple)) else [m.constraint(constraint)])
+        out = sp.S.Zero
+        for c in cs:
+            eqs = c.equations(m.space)
+            out -= sp.Add(*(e.diff(p) * la for e, la in zip(eqs, self._lams(c))))
+        return out
 
     def joint_reaction(self, joint, at=None, coordinates: str = "global"):
         """``(force, moment)`` the master applies to the slave through a generalized-coordinate

@@ -193,6 +193,20 @@ class OutputFunctions:
         d = m._point(point1).location() - m._point(point2).location()
         return self._finish(sp.sqrt((d.T * d)[0, 0]))
 
+    def point_to_local(self, body, point):
+        """Coordinates of ``point`` in the frame of ``body`` (Mech's ``PointToLocal``):
+        ``A_b^T (r_P - r_b)``, the inverse of :meth:`location` for a point of ``body``.
+        ``point`` is a point of any body (or global coordinates, a ground point)."""
+        m = self._model()
+        b = m.body(body)
+        return self._finish(b.A.T * (m._point(point).location() - b.r))
+
+    def vector_to_local(self, body, vector):
+        """Components of ``vector`` in the axes of ``body`` (Mech's ``VectorToLocal``):
+        ``A_b^T d``, the inverse of :meth:`direction`."""
+        m = self._model()
+        return self._finish(m.body(body).A.T * m._vector(vector).direction())
+
     # -- constraints ----------------------------------------------------------------------
     def constraint_equations(self, constraint=None):
         """The equations of one constraint (all when omitted) as a column."""
@@ -222,6 +236,30 @@ class OutputFunctions:
         syms = (m._coordinate_symbols() if body is None
                 else selected_coordinates(m, body) if is_selection(body) else list(m.body(body).q))
         return self._finish(eqs.jacobian(syms) if syms else sp.zeros(len(eqs), 0))
+
+    def velocity_terms(self, constraint=None):
+        """Mech's ``VelocityTerms``: the explicit time derivative ``Phi_t`` of a constraint's
+        equations (all when omitted or ``All``; a list stacks), so that the velocity
+        equations read ``jacobian(c) @ qd + velocity_terms(c) == 0``. Only equations that
+        depend on ``T`` (drivers) have nonzero terms."""
+        from .._symbols import T
+
+        eqs = sp.Matrix(self._equation_rows(constraint))
+        return self._finish(eqs.diff(T) if len(eqs) else eqs)
+
+    def acceleration_terms(self, constraint=None):
+        """Mech's ``AccelerationTerms``: the part of the second time derivative of a
+        constraint's equations that is not linear in the accelerations,
+        ``(Phi_q qd)_q qd + 2 Phi_qt qd + Phi_tt = -gamma``, so that the acceleration
+        equations read ``jacobian(c) @ qdd + acceleration_terms(c) == 0``."""
+        m = self._model()
+        eqs = sp.Matrix(self._equation_rows(constraint))
+        if not len(eqs):
+            return self._finish(eqs)
+        acc = m.time_derivative(m.time_derivative(eqs))
+        # the accelerations are the rates of the velocity symbols; their terms are J qdd
+        zero = {m.time_derivative(v): 0 for v in m.velocity_symbols().values()}
+        return self._finish(acc.xreplace(zero))
 
     def _equation_rows(self, constraint) -> list:
         """Equations of a constraint selection; on a solution, those of its own system (a

@@ -230,6 +230,45 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Lin
                         model=self.model, iterations=np.zeros(len(tt), dtype=int),
                         scalar=np.ndim(t) == 0, message="interpolated")
 
+    def time_interpolate(self, expr, t):
+        """Mech's ``TimeInterpolate``: the values of a SymPy expression (of ``T``,
+        coordinates, velocities, parameters) at times ``t`` inside the solved range, from
+        the solution interpolated there (:meth:`interpolate`: cubic Hermite on the positions
+        when velocities were solved, so an expression of positions is third-order accurate
+        between the solved times). Equivalent to ``self.interpolate(t).eval(expr)``."""
+        return self.interpolate(t).eval(expr)
+
+    def arc_length(self, point) -> np.ndarray:
+        r"""Length of the path a point travels over the solution (Mech's ``ArcLength``), from
+        the first time to each solved time: an array ``(N,)`` starting at 0.
+
+        .. math:: s(t_k) = \int_{t_0}^{t_k} \lVert \dot r_P(t) \rVert \, dt
+
+        With solved velocities, each interval's path is the cubic Hermite curve through the
+        two locations with their velocities, and its speed is integrated by five-point
+        Gauss-Legendre quadrature (error ``O(h^4)`` per unit time); without them, the chords
+        between the solved locations are summed (a lower bound). A point that moves back
+        along its path adds the way back: this is distance travelled, not displacement."""
+        P = np.asarray(self.location(point), dtype=float).reshape(len(self.t), -1)
+        if len(self.t) < 2:
+            return np.zeros(len(self.t))
+        if self.qd is None:
+            seg = np.linalg.norm(np.diff(P, axis=0), axis=1)
+        else:
+            V = np.asarray(self.velocity(point), dtype=float).reshape(len(self.t), -1)
+            h = np.diff(self.t)[:, None]
+            x, w = np.polynomial.legendre.leggauss(5)
+            s = (x + 1) / 2
+            seg = np.zeros(len(h))
+            dP = P[1:] - P[:-1]
+            for sk, wk in zip(s, w):
+                # derivative of the cubic Hermite basis on [0, 1], times 1/h for d/dt
+                d00, d10 = 6 * sk**2 - 6 * sk, 3 * sk**2 - 4 * sk + 1
+                d11 = 3 * sk**2 - 2 * sk
+                vel = -d00 * dP / h + d10 * V[:-1] + d11 * V[1:]
+                seg += wk / 2 * np.linalg.norm(vel, axis=1) * np.abs(h[:, 0])
+        return np.concatenate(([0.0], np.cumsum(seg)))
+
     def plot(self, outputs, **kw):
         """Time histories of outputs (see :func:`mechsys.draw.plot`)."""
         from .. import draw
