@@ -27,7 +27,8 @@ from numbers import Integral, Real
 
 import numpy as np
 
-from .._errors import MechError, ModelError
+from .._errors import MechError, ModelError, choice
+from ..loads._loads import check_load_values
 from ..results._load_outputs import lambda_guess_vector
 from ..results._solution import Solution, State
 from ..solvers._free import (
@@ -106,8 +107,7 @@ class FreeSystem:
 
     def __init__(self, model, drop=(), solution: str = "dynamic", initial_guess=None,
                  initial_condition=None):
-        if solution not in KINDS:
-            raise ModelError(f"free(solution=...) must be one of {KINDS}, got {solution!r}")
+        choice(solution, KINDS, "free(solution=...)")
         self.model = model
         drop = drop if isinstance(drop, (list, tuple)) else [drop]
         self.dropped = [model.constraint(c) for c in drop]
@@ -270,12 +270,17 @@ class FreeSystem:
 
     def _start(self, initial_condition):
         """``(q, qd, p)`` of a call: the FreeSystem's start, ``initial_condition`` on top, and
-        the parameters as they are now."""
+        the parameters as they are now (the loads' stiffnesses, damping and friction
+        coefficients checked with them: :func:`~mechsys.loads._loads.check_load_values`)."""
         held = {k: set(v) for k, v in self._held0.items()}
         if initial_condition is None:
-            return self._q0.copy(), self._qd0.copy(), self._params(), held
-        q, qd, given = self._apply_condition(initial_condition, self._q0, self._qd0, held)
-        return q, qd, self._params(given), held
+            q, qd, p = self._q0.copy(), self._qd0.copy(), self._params()
+        else:
+            q, qd, given = self._apply_condition(initial_condition, self._q0, self._qd0, held)
+            p = self._params(given)
+        if self.model._loads:
+            check_load_values(self.model._loads, dict(zip(self.system.layout.p_symbols, p)))
+        return q, qd, p, held
 
     def _project_start(self, t, q, qd, p, held, scaling):
         """The start state on the constraints, keeping the values the user gave (the rest

@@ -36,6 +36,7 @@ import numpy as np
 import sympy as sp
 
 from .._errors import ModelError
+from ._backends import real_expression
 
 #: relative size below which ``process="chop"`` drops a number
 CHOP_RELATIVE = 1e-12
@@ -90,6 +91,7 @@ def chop(expr: sp.Expr, relative: float = CHOP_RELATIVE) -> sp.Expr:
 
 def process_equation(opts: CompileOptions, expr: sp.Expr, owner: str) -> sp.Expr:
     """Apply the ``process`` option to one equation of ``owner`` (a constraint's label)."""
+    expr = real_expression(expr, owner)   # complex constants, huge exponents (issue 34)
     f = opts.process
     if f is None:
         return expr
@@ -103,7 +105,7 @@ def process_equation(opts: CompileOptions, expr: sp.Expr, owner: str) -> sp.Expr
     if not isinstance(out, sp.Expr):
         raise ModelError(f"compile option process returned {out!r} for an equation of {owner}; "
                          "it must return a SymPy expression")
-    return out
+    return real_expression(out, owner)
 
 
 class Backend(str):
