@@ -139,17 +139,22 @@ class DegradedAccuracyWarning(UserWarning):
         self.threshold = threshold
 
 
-def close_match(value, allowed) -> str:
-    """`` (did you mean 'x'?)`` for the accepted value closest to ``value`` (case-insensitive
-    ``difflib`` ratio of at least 0.6), or ``""``."""
+def closest(value, allowed):
+    """The accepted value closest to ``value`` (case-insensitive ``difflib`` ratio of at least
+    0.6), or None."""
     import difflib
 
     if not isinstance(value, str):
-        return ""
-    names = [a for a in allowed if isinstance(a, str)]
-    lower = {a.lower(): a for a in names}
+        return None
+    lower = {a.lower(): a for a in allowed if isinstance(a, str)}
     hit = difflib.get_close_matches(value.lower(), list(lower), n=1, cutoff=0.6)
-    return f" (did you mean {lower[hit[0]]!r}?)" if hit else ""
+    return lower[hit[0]] if hit else None
+
+
+def close_match(value, allowed) -> str:
+    """`` (did you mean 'x'?)`` for the accepted value closest to ``value``, or ``""``."""
+    hit = closest(value, allowed)
+    return f" (did you mean {hit!r}?)" if hit is not None else ""
 
 
 def choice(value, allowed, what: str, hint: str = ""):
@@ -195,3 +200,17 @@ def option_fields(cls):
 
     cls.__init__ = __init__
     return cls
+
+
+def unknown_options(what: str, unknown, known) -> None:
+    """Raise an :class:`OptionError` for the ``unknown`` option names given to ``what``,
+    listing the ``known`` ones and the closest to each misspelt name; nothing if none."""
+    unknown = sorted(map(str, unknown))
+    if not unknown:
+        return
+    known = list(known)
+    hints = [f"{u!r}: did you mean {closest(u, known)!r}?" for u in unknown
+             if closest(u, known) is not None]
+    raise OptionError(f"{what}: unknown option(s) {unknown}"
+                      + (f" ({'; '.join(hints)})" if hints else "")
+                      + f"; the options are {', '.join(known)}")

@@ -24,6 +24,7 @@ from ._errors import (
     UnknownConstraintError,
     choice,
     parameter_value,
+    unknown_options,
 )
 from ._symbols import T, velocity_symbol
 from .compile import System, make_layout, time_derivative
@@ -736,9 +737,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
 
         Example: ``m.set_compile_options(process="chop", opt_level=1)``
         """
-        if unknown:
-            raise ModelError(f"unknown compile option(s) {sorted(unknown)}; the options are "
-                             "process, opt_level and cse")
+        unknown_options("set_compile_options", unknown, ("process", "opt_level", "cse"))
         new = _updated_options(self._compile_opts, process, opt_level, cse)
         if new != self._compile_opts:
             self._compile_opts = new
@@ -1003,11 +1002,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
             # parameters: not negative with the values of this run (issue 34)
             check_load_values(self._loads, dict(zip(self._params, self._p())))
         if isinstance(options, Mapping):
-            fields = set(PositionOptions.__dataclass_fields__)
-            unknown = sorted(map(str, set(options) - fields))
-            if unknown:
-                raise ModelError(f"options: unknown field(s) {unknown}; PositionOptions has "
-                                 f"{sorted(fields)}")
+            fields = PositionOptions.__dataclass_fields__
+            unknown_options("options (PositionOptions)", set(options) - set(fields), fields)
             options = PositionOptions(**options)
         if options is not None and not isinstance(options, PositionOptions):
             raise ModelError(f"options must be a PositionOptions(ftol=..., max_iterations=..., "

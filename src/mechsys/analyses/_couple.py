@@ -70,6 +70,7 @@ from .._errors import (
     MechError,
     ModelError,
     SingularJacobianError,
+    unknown_options,
 )
 from .._symbols import T
 from ..compile._backends import compile_exprs
@@ -646,11 +647,8 @@ class CoupleSystem:
         if options is None:
             return PositionOptions()
         if isinstance(options, Mapping):
-            fields = set(PositionOptions.__dataclass_fields__)
-            unknown = sorted(map(str, set(options) - fields))
-            if unknown:
-                raise ModelError(f"options: unknown field(s) {unknown}; PositionOptions has "
-                                 f"{sorted(fields)}")
+            fields = PositionOptions.__dataclass_fields__
+            unknown_options("options (PositionOptions)", set(options) - set(fields), fields)
             return PositionOptions(**options)
         if not isinstance(options, PositionOptions):
             raise ModelError(f"options must be a PositionOptions or a mapping of its fields, got "

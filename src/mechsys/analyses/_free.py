@@ -27,7 +27,7 @@ from numbers import Integral, Real
 
 import numpy as np
 
-from .._errors import MechError, ModelError, choice
+from .._errors import MechError, ModelError, choice, unknown_options
 from ..loads._loads import check_load_values
 from ..results._load_outputs import lambda_guess_vector
 from ..results._solution import Solution, State
@@ -78,9 +78,7 @@ def newton_options(tolerance, max_iterations, what: str) -> dict:
 
 
 def _reject_unknown(what: str, unknown: dict, known) -> None:
-    if unknown:
-        raise ModelError(f"{what}: unknown option(s) {sorted(unknown)}; the options are "
-                         f"{', '.join(known)}")
+    unknown_options(what, unknown, known)
 
 
 def _flag(box, value):

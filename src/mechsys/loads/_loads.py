@@ -78,7 +78,7 @@ class LoadBase:
         for what, v, hint in getattr(self, "_bounds", ()):
             if v.is_number or not v.free_symbols <= set(params):
                 continue
-            _check_nonnegative(v.xreplace(params), f"{self.label()}: {what} = {v}", hint,
+            _check_nonnegative(sp.sympify(v.xreplace(params)), f"{self.label()}: {what} = {v}", hint,
                                " with the current parameter values")
 
     def contributions(self, model) -> list:  # pragma: no cover - interface
