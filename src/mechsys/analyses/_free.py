@@ -81,6 +81,72 @@ def _reject_unknown(what: str, unknown: dict, known) -> None:
     unknown_options(what, unknown, known)
 
 
+#: a free-motion run warns (:class:`~mechsys.DegradedAccuracyWarning`) when the kept
+#: constraints' residual at its end -- positions in units of the model's length scale ``L``
+#: (or radians), velocities relative to the run's largest rate -- exceeds this or the run's
+#: own tolerance (``rtol``, or Adams' ``max_error``), whichever is larger
+DRIFT_WARNING = 1e-6
+
+
+def accuracy_report(s, sc, t, Y, p, tol: float, what: str) -> dict:
+    r"""The run's own measure of its accuracy (issue 34), recorded in ``sol.extra["accuracy"]``
+    and warned about (:class:`~mechsys.DegradedAccuracyWarning`) when degraded. Computed once,
+    after the run, from the states it returns (so the Python and the compiled steppers are
+    judged alike):
+
+    * ``position``: :math:`\max_i |\Phi_i| / r_i` at the last state, ``r_i`` the row scale of
+      the unit-free Jacobian (an error in units of ``L``, or radians);
+    * ``velocity``: :math:`\max_i |(\Phi_q \dot q + \Phi_t)_i| / r_i` over the run's
+      largest rate :math:`\max_{k,j} |\dot q_{kj}| / c_j` (relative);
+    * ``offset``: the largest position coordinate of the run over ``L``. Double precision
+      resolves positions to :math:`\varepsilon \cdot` offset (units of ``L``); above the run's
+      tolerance ``tol`` the tolerance cannot be met (a mechanism of unit size 1e11 from the
+      origin: 2e-5).
+
+    Warns when ``position`` or ``velocity`` exceeds ``max(DRIFT_WARNING, tol)``, or when
+    ``eps * offset`` exceeds ``tol``."""
+    import warnings
+
+    from .._errors import DegradedAccuracyWarning
+    from ..solvers._linalg import _column_kinds
+
+    n = s.n
+    Q, QD = Y[:, :n], Y[:, n:]
+    trans, _ = _column_kinds(s)
+    L = sc.length
+    offset = float(np.abs(Q[:, trans]).max(initial=0.0)) / L if n else 0.0
+    rate = float(np.abs(QD / sc.columns).max(initial=0.0)) if n else 0.0
+    pos = vel = 0.0
+    if s.m and len(t) and np.all(np.isfinite(Y[-1])):
+        q, qd = Q[-1], QD[-1]
+        J, rhs = s.velocity_rhs(t[-1], q, p)
+        r = sc.rows(J)
+        pos = float(np.abs(s.residual(t[-1], q, p) / r).max(initial=0.0))
+        v = np.abs((J @ qd - rhs) / r).max(initial=0.0)
+        vel = float(v / rate) if rate > 0 else float(v)
+    report = {"position": pos, "velocity": vel, "offset": offset}
+    bound = max(DRIFT_WARNING, tol)
+    eps = float(np.finfo(float).eps)
+    if max(pos, vel) > bound:
+        worst = "position" if pos >= vel else "velocity"
+        warnings.warn(DegradedAccuracyWarning(
+            f"{what}: the kept constraints have drifted by the end of the run (t = {t[-1]:.6g}): "
+            f"position residual {pos:.2e} (units of the length scale L = {L:.3g}), velocity "
+            f"residual {vel:.2e} (relative to the largest rate), above {bound:.0e}; keep "
+            "constraint_correction=True (the default) or tighten rtol/max_error "
+            "(sol.extra['accuracy'])", measure=max(pos, vel), threshold=bound), stacklevel=3)
+        report["warned"] = worst
+    if eps * offset > tol:
+        warnings.warn(DegradedAccuracyWarning(
+            f"{what}: coordinates reach {offset:.3g} times the model's length scale L = "
+            f"{L:.3g} from the origin; double precision resolves positions there only to "
+            f"{eps * offset:.1e} L, above the run's tolerance {tol:.0e}: place the mechanism "
+            "near the origin of its coordinates (subtract a constant offset)",
+            measure=eps * offset, threshold=tol), stacklevel=3)
+        report["range"] = True
+    return report
+
+
 def _flag(box, value):
     """``value``, noting in ``box[0]`` that it is not ``None``."""
     if value is not None:
@@ -515,6 +581,9 @@ class FreeSystem:
             extra["rtol"], extra["atol"] = opt.rtol, opt.atol
         else:
             extra["max_error"] = opt.max_error
+        # the run's own measure of its accuracy: constraint drift, coordinates' range
+        extra["accuracy"] = accuracy_report(s, sc, times, Y, p, opt.rtol if opt.runge_kutta
+                                         else opt.max_error[0], "FreeSystem.simulate")
         if diagnostics:
             extra["diagnostics"] = res.diagnostics
         if res.message == "interrupted":

@@ -56,7 +56,7 @@ from ..solvers._linalg import (
     pattern_of,
     pattern_slots,
 )
-from ._free import _reject_unknown
+from ._free import _reject_unknown, accuracy_report
 
 
 def _check_own(model, dummy, vc) -> None:
@@ -398,6 +398,10 @@ class PathSystem:
                  "length_scale": sc.length,
                  "compiled_steps": res.diagnostics.get("compiled_steps", 0),
                  "compiled_solver": None if fast is None else fast.solver}
+        # the run's own measure of its accuracy (holonomic drift, coordinates' range)
+        extra["accuracy"] = accuracy_report(s, sc, times, np.hstack((Q, QD)), p,
+                                            opt.rtol if opt.runge_kutta else opt.max_error[0],
+                                            "PathSystem.simulate")
         if diagnostics:
             extra["diagnostics"] = res.diagnostics
         return Solution(t=times, q=Q, qd=QD, qdd=QDD, p=p, system=s, model=self.model,
