@@ -70,10 +70,10 @@ def real_expression(expr, owner: str | None = None):
       its real part with only a NumPy warning: it raises :class:`~mechsys.ModelError` showing
       the expression (and ``owner``, the constraint or load, when given).
     * An integer exponent ``n`` with ``|n| >= 2**53`` is rewritten with a float exponent:
-      ``b**n = b**float(n)`` for even ``n``, ``b * b**float(n - 1)`` for odd ``n`` (every
-      double at or above ``2**53`` is an even integer, so ``|b|**float(..)`` is positive and
-      the odd power keeps the sign of ``b``); exact to double precision, where the integer
-      would wrap modulo ``2**64`` in compiled code.
+      ``b**n = b**float(n)`` for even ``n``, ``b * |b|**float(n - 1)`` for odd ``n`` (every
+      double at or above ``2**53`` is an even integer, so the odd power keeps the sign of
+      ``b`` through its first factor); exact to double precision (``|b|**n`` is 0, 1 or
+      infinite there), where the integer would wrap modulo ``2**64`` in compiled code.
     """
     if not isinstance(expr, sp.Basic) and not (_se is not None and isinstance(expr, _se.Basic)):
         return expr
@@ -91,10 +91,13 @@ def real_expression(expr, owner: str | None = None):
         sym = isinstance(expr, sp.Basic)
         F = sp.Float if sym else _se.RealDouble
         P = (lambda b, e: sp.Pow(b, e, evaluate=False)) if sym else _se.Pow
+        A = sp.Abs if sym else _se.Abs
         rep = {}
         for a in big:
             b, n = a.args[0], int(a.args[1])
-            rep[a] = P(b, F(float(n))) if n % 2 == 0 else b * P(b, F(float(n - 1)))
+            # (the odd power as b |b|**(n - 1): b * b**float(n - 1) would merge back into
+            # b**float(n), and the float exponent has lost the parity)
+            rep[a] = P(b, F(float(n))) if n % 2 == 0 else b * P(A(b), F(float(n - 1)))
         expr = expr.xreplace(rep)
         big = _big_powers(expr)
     return expr
