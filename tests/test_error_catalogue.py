@@ -126,7 +126,7 @@ CATALOGUE = [
     ("model", 'crank().set_guess({"crank.th": "up"})', "ModelError", "'th2'"),
     ("model", "crank().set_guess(np.zeros(5))", "ModelError", "shape"),
     ("model", 'crank().equations("slider")', "UnknownConstraintError", "'slider'"),
-    ("model", 'crank().equations().pretty("lagrangian")', "ModelError", "'lagrangian'"),
+    ("model", 'crank().equations().pretty("lagrangian")', "OptionError", "'lagrangian'"),
     # options
     ("options", "ms.PositionOptions(ftol=-1.0)", "ModelError", "ftol"),
     ("options", "ms.PositionOptions(max_iterations=0)", "ModelError", "max_iterations"),
@@ -139,7 +139,7 @@ CATALOGUE = [
     ("options", "crank().singularity(threshold=2.0)", "ModelError", "threshold"),
     ("options", "crank().set_compile_options(optlevel=1)", "OptionError", "'optlevel'"),
     ("options", "crank().set_compile_options(opt_level=7)", "ModelError", "opt_level"),
-    ("options", 'crank().set_compile_options(process="Chop")', "ModelError", "'Chop'"),
+    ("options", 'crank().set_compile_options(process="Chop")', "OptionError", "'Chop'"),
     ("options", 'ms.Model2D(orientation="Euler")', "OptionError", "'Euler'"),
     # solving
     ("solve", 'crank().solve(float("nan"))', "ModelError", "nan"),

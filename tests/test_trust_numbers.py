@@ -146,19 +146,19 @@ def test_drift_without_correction_is_reported_and_warned(jit, monkeypatch):
     m = four_bar()
     free = m.free(drop=["drive"])
     with pytest.warns(ms.DegradedAccuracyWarning, match="drifted") as rec:
-        sol = free.simulate((0.0, 5.0), initial_condition={"crank.th_d": 3.0}, method="adams",
-                            constraint_correction=False)
+        sol = free.simulate((0.0, 20.0), initial_condition={"crank.th_d": 3.0},
+                            method="adams", constraint_correction=False)
     acc = sol.extra["accuracy"]
     gap = joint_gap(m, sol)
     # each revolute row's scale is L (the x coefficient 1 times L, above every lever arm)
     L = sol.extra["length_scale"]
     np.testing.assert_allclose(acc["position"] * L, gap, rtol=1e-9)
-    assert gap > 1e-4                       # the drift is real: joints open by > 1e-4
+    assert gap > 1e-3                       # the drift is real: joints open by > 1e-3
     assert rec[0].message.measure == pytest.approx(acc["position"])
     # the same run with correction: on the constraints, and nothing to report
     with warnings.catch_warnings():
         warnings.simplefilter("error", ms.DegradedAccuracyWarning)
-        good = free.simulate((0.0, 5.0), initial_condition={"crank.th_d": 3.0}, method="adams")
+        good = free.simulate((0.0, 20.0), initial_condition={"crank.th_d": 3.0}, method="adams")
     assert joint_gap(m, good) < 1e-12
     assert good.extra["accuracy"]["position"] < 1e-12
 

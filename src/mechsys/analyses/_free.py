@@ -83,9 +83,12 @@ def _reject_unknown(what: str, unknown: dict, known) -> None:
 
 #: a free-motion run warns (:class:`~mechsys.DegradedAccuracyWarning`) when the kept
 #: constraints' residual at its end -- positions in units of the model's length scale ``L``
-#: (or radians), velocities relative to the run's largest rate -- exceeds this or the run's
-#: own tolerance (``rtol``, or Adams' ``max_error``), whichever is larger
+#: (or radians), velocities relative to the run's largest rate -- exceeds this or
+#: ``DRIFT_FACTOR`` times the run's own tolerance (``rtol``, or Adams' ``max_error``),
+#: whichever is larger: a per-step tolerance accumulates over the steps, so a residual of a
+#: few tolerances is the integration's normal error, ten times it is not
 DRIFT_WARNING = 1e-6
+DRIFT_FACTOR = 10.0
 
 
 def accuracy_report(s, sc, t, Y, p, tol: float, what: str) -> dict:
@@ -103,8 +106,8 @@ def accuracy_report(s, sc, t, Y, p, tol: float, what: str) -> dict:
       tolerance ``tol`` the tolerance cannot be met (a mechanism of unit size 1e11 from the
       origin: 2e-5).
 
-    Warns when ``position`` or ``velocity`` exceeds ``max(DRIFT_WARNING, tol)``, or when
-    ``eps * offset`` exceeds ``tol``."""
+    Warns when ``position`` or ``velocity`` exceeds ``max(DRIFT_WARNING, DRIFT_FACTOR tol)``,
+    or when ``eps * offset`` exceeds ``tol``."""
     import warnings
 
     from .._errors import DegradedAccuracyWarning
@@ -125,7 +128,7 @@ def accuracy_report(s, sc, t, Y, p, tol: float, what: str) -> dict:
         v = np.abs((J @ qd - rhs) / r).max(initial=0.0)
         vel = float(v / rate) if rate > 0 else float(v)
     report = {"position": pos, "velocity": vel, "offset": offset}
-    bound = max(DRIFT_WARNING, tol)
+    bound = max(DRIFT_WARNING, DRIFT_FACTOR * tol)
     eps = float(np.finfo(float).eps)
     if max(pos, vel) > bound:
         worst = "position" if pos >= vel else "velocity"

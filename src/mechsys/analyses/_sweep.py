@@ -302,8 +302,8 @@ def sweep(model, params, analysis="acceleration", outputs=None, *, t=0.0, grid: 
         if isinstance(executor, str) and executor == "processes":
             results, kind = _on_pool(payload, names, indexed, on_error, workers, chunks, tick)
         elif isinstance(executor, str):
-            raise ModelError(f"sweep: executor must be 'serial', 'processes' or a "
-                             f"dask.distributed.Client, got {executor!r}")
+            choice(executor, ("serial", "processes"), "sweep: executor",
+                   "or a dask.distributed.Client")
         else:
             results, kind = _on_dask(executor, payload, names, indexed, on_error, chunks, tick)
         rows = [r for _, _, part in results for r in part]

@@ -35,7 +35,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import sympy as sp
 
-from .._errors import ModelError
+from .._errors import ModelError, OptionError, close_match, option_fields
 from ._backends import real_expression
 
 #: relative size below which ``process="chop"`` drops a number
@@ -43,6 +43,7 @@ CHOP_RELATIVE = 1e-12
 _UNSET = object()
 
 
+@option_fields
 @dataclass(frozen=True)
 class CompileOptions:
     process: object = None
@@ -59,8 +60,9 @@ def updated(opts: CompileOptions, process=_UNSET, opt_level=_UNSET, cse=_UNSET) 
     new = {}
     if process is not _UNSET:
         if not (process is None or process == "chop" or callable(process)):
-            raise ModelError(f"compile option process must be None, 'chop' or a function "
-                             f"f(expr) -> expr (Mech's $MechProcessFunction), got {process!r}")
+            raise OptionError(f"compile option process must be None, 'chop' or a function "
+                              f"f(expr) -> expr (Mech's $MechProcessFunction), got {process!r}"
+                              f"{close_match(process, ('chop',))}")
         new["process"] = process
     if opt_level is not _UNSET:
         # NumPy integers too (a value read from an array); bools are not levels
