@@ -172,6 +172,10 @@ MISSPELT = [
     ("options mapping", lambda: crank().solve(0.0, options={"ftl": 1e-9}), "'ftol'"),
     ("cardan joint", lambda: __import__("mechsys.models").models.cardan_joint(joint="universl"),
      "'universal'"),
+    ("equations part", lambda: crank().equations().pretty("jacobain"), "'jacobian'"),
+    ("compile process", lambda: crank().set_compile_options(process="Chop"), "'chop'"),
+    ("spline ends", lambda: ms.SplineFit([[0, 0], [1, 1], [2, 0]], end_conditions="natual"),
+     "'natural'"),
 ]
 
 

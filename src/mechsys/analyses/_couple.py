@@ -70,6 +70,7 @@ from .._errors import (
     MechError,
     ModelError,
     SingularJacobianError,
+    choice,
     unknown_options,
 )
 from .._symbols import T
@@ -292,9 +293,7 @@ class CoupleSystem:
                 (0, True): "static", (1, True): "kinematic", (2, True): "dynamic"}[(order, loads)]
         if solution is None:
             return auto
-        if solution not in LEVELS:
-            raise ModelError(f"couple: solution must be None (automatic) or one of "
-                             f"{list(LEVELS)}, got {solution!r}")
+        choice(solution, list(LEVELS), "couple: solution", "or None (automatic)")
         o, ld = LEVELS[solution]
         if o < order or (loads and not ld):
             need = ("accelerations" if order == 2 else "velocities" if order == 1 else "") + (

@@ -281,7 +281,8 @@ class Axis(Geometry):
         if isinstance(reference, str):
             if reference not in REFERENCE_RULES:
                 raise GeometryError(f"Axis reference must be a vector or one of "
-                                    f"{REFERENCE_RULES}; got {reference!r}")
+                                    f"{REFERENCE_RULES}; got {reference!r}"
+                                    f"{close_match(reference, REFERENCE_RULES)}")
             self.reference_rule = reference
             reference = None
         self.reference = as_vector(reference) if reference is not None else None

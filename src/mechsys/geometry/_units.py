@@ -14,7 +14,7 @@ temperature ...) is a :class:`ModelError`. pint is optional (``pip install mechs
 
 from __future__ import annotations
 
-from .._errors import ModelError
+from .._errors import ModelError, choice
 
 BASE = ("length", "mass", "time")
 
@@ -39,8 +39,7 @@ def check_units(units: dict) -> dict:
     ureg = _registry()
     out = {}
     for key, name in units.items():
-        if key not in BASE:
-            raise ModelError(f"set_units: unknown base quantity {key!r}; give {BASE}")
+        choice(key, BASE, "set_units: base quantity")
         try:
             u = ureg.Unit(name)
         except Exception as exc:  # pint raises its own UndefinedUnitError, ValueError, ...
