@@ -210,6 +210,18 @@ CATALOGUE = [
     ("drawing", "ms.draw.plot(sol(), [])", "ModelError", "no outputs"),
     ("drawing", 'ms.draw.animate(sol(), rate=-1.0)', "ModelError", "rate"),
     ("drawing", "ms.draw.snapshot(3.0)", "ModelError", "3.0"),
+    # issue 34: non-physical loads, misspelt options, foreign objects, complex numbers
+    ("model", 'm = pend(); b = m.body("bar"); m.add_load(ms.Spring(b.point("tip"), '
+     'm.ground.point((2, 0)), 10.0, free_length=-1.0))', "ModelError", "free_length"),
+    ("model", 'pend().add_load(ms.JointFriction("pivot", mu=-0.1, radius=0.05))', "ModelError",
+     "mu"),
+    ("options", 'ms.Model2D(backend="symengin")', "OptionError", "did you mean 'symengine'"),
+    ("options", "ms.PositionOptions(tol=1e-9)", "OptionError", "'ftol'"),
+    ("path", 'm = caster(); o = caster(); m.path({"dummy": ms.Orthogonal1(m.velocity('
+     'm.body("caster").point("wheel")), o.body("caster").vector((0, 1)))})', "ModelError",
+     "another model"),
+    ("solve", "m = crank(); m.replace(\"drive\", ms.RotationLock1(m.body(\"crank\"), sp.sqrt(-1) * T));"
+     " m.solve(0.0)", "ModelError", "complex constant"),
 ]
 
 

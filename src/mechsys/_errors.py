@@ -163,8 +163,8 @@ def choice(value, allowed, what: str, hint: str = ""):
     sentence appended to the message (what the values mean)."""
     allowed = tuple(allowed)
     try:
-        ok = value in allowed
-    except TypeError:  # an unhashable or uncomparable value
+        ok = bool(value in allowed)
+    except (TypeError, ValueError):  # an array (ambiguous truth) or an uncomparable value
         ok = False
     if ok:
         return value
