@@ -109,6 +109,19 @@ def test_negative_parameter_value_is_refused_when_the_run_starts(kind):
             free.simulate((0.0, 0.1))
 
 
+def test_negative_parameter_value_is_refused_in_a_locked_load_case():
+    """``m.lock(...).solve(parameters=...)`` runs load cases with other parameter values."""
+    m = pend()
+    tip, anchor = _tip(m)
+    k = m.parameter("k", 10.0)
+    m.add_load(ms.Spring(tip, anchor, k, free_length=0.5), name="spring")
+    locked = m.lock(0.0)
+    ok = locked.solve("static", parameters={"k": 20.0})
+    assert np.all(np.isfinite(ok.lam))
+    with pytest.raises(ms.ModelError, match=r"load 'spring'.*stiffness = k.*-20"):
+        locked.solve("static", parameters={"k": -20.0})
+
+
 def test_law_is_the_way_to_another_force_law():
     """A spring that pushes where a linear one would pull (``law=``) is accepted, and its
     static answer is the law's: block held at x = 2 by the driver, spring to the origin with

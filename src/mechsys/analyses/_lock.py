@@ -92,6 +92,10 @@ class LockedModel:
             raise ModelError("locked solve: the model changed after m.lock(...) (bodies, constraints "
                              "or loads); lock it again")
         p, changed = self._parameter_vector(parameters)
+        if model._loads:   # stiffnesses, damping, friction given as parameters: not negative
+            from ..loads._loads import check_load_values
+
+            check_load_values(model._loads, dict(zip(system.layout.p_symbols, p)))
         t, q = self.t, self.q
         self._check(system.residual(t, q, p), changed, "location")
         need = _ORDERS.get(solution, _MODES.get(solution))
