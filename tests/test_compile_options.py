@@ -39,7 +39,7 @@ def floats(m):
 
 def test_options_are_validated_by_name():
     m = four_bar()
-    with pytest.raises(ModelError, match="unknown compile option.*'optlevel'.*process, opt_level"):
+    with pytest.raises(ModelError, match="compile_options: unknown option.*'optlevel'.*process, opt_level"):
         m.set_compile_options(optlevel=1)
     with pytest.raises(ModelError, match="process must be None, 'chop' or a function"):
         m.set_compile_options(process="chopp")

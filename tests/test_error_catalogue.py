@@ -121,26 +121,26 @@ CATALOGUE = [
     ("model", "crank().add_load(3.0)", "ModelError", "3.0"),
     ("model", "crank().add_load(ms.Gravity((0, 0), 9.81))", "GeometryError", "Gravity"),
     ("model", "m = crank(); m.remove_load(ms.Gravity((0, -1), 9.81))", "ModelError", "Gravity"),
-    ("model", 'ms.Model3D(velocity="fast")', "ModelError", "'fast'"),
+    ("model", 'ms.Model3D(velocity="fast")', "OptionError", "'fast'"),
     ("model", "crank().set_guess(zz=1.0)", "ModelError", "'zz'"),
     ("model", 'crank().set_guess({"crank.th": "up"})', "ModelError", "'th2'"),
     ("model", "crank().set_guess(np.zeros(5))", "ModelError", "shape"),
     ("model", 'crank().equations("slider")', "UnknownConstraintError", "'slider'"),
-    ("model", 'crank().equations().pretty("lagrangian")', "ModelError", "'lagrangian'"),
+    ("model", 'crank().equations().pretty("lagrangian")', "OptionError", "'lagrangian'"),
     # options
     ("options", "ms.PositionOptions(ftol=-1.0)", "ModelError", "ftol"),
     ("options", "ms.PositionOptions(max_iterations=0)", "ModelError", "max_iterations"),
     ("options", 'ms.PositionOptions(damping="yes")', "ModelError", "damping"),
-    ("options", 'crank().solve(0.0, options={"tol": 1e-9})', "ModelError", "'tol'"),
+    ("options", 'crank().solve(0.0, options={"tol": 1e-9})', "OptionError", "'tol'"),
     ("options", "crank().solve(0.0, options=5)", "ModelError", "options"),
-    ("options", 'crank().solve(0.0, solution="position")', "ModelError", "'position'"),
+    ("options", 'crank().solve(0.0, solution="position")', "OptionError", "'position'"),
     ("options", "crank().solve(0.0, pre_solve=1)", "ModelError", "pre_solve"),
     ("options", 'crank().solve(0.0, post_iterate="print")', "ModelError", "post_iterate"),
     ("options", "crank().singularity(threshold=2.0)", "ModelError", "threshold"),
-    ("options", "crank().set_compile_options(optlevel=1)", "ModelError", "'optlevel'"),
+    ("options", "crank().set_compile_options(optlevel=1)", "OptionError", "'optlevel'"),
     ("options", "crank().set_compile_options(opt_level=7)", "ModelError", "opt_level"),
-    ("options", 'crank().set_compile_options(process="Chop")', "ModelError", "'Chop'"),
-    ("options", 'ms.Model2D(orientation="Euler")', "ModelError", "'Euler'"),
+    ("options", 'crank().set_compile_options(process="Chop")', "OptionError", "'Chop'"),
+    ("options", 'ms.Model2D(orientation="Euler")', "OptionError", "'Euler'"),
     # solving
     ("solve", 'crank().solve(float("nan"))', "ModelError", "nan"),
     ("solve", "crank().solve([])", "ModelError", "empty"),
@@ -164,14 +164,14 @@ CATALOGUE = [
     ("solve", 'ms.Model2D().add_body("a", inertia=-1.0)', "ModelError", "'a'"),
     # free motion
     ("free", 'pend().free(drop=["brake"])', "UnknownConstraintError", "'brake'"),
-    ("free", 'pend().free(drop=["hold"], solution="fast")', "ModelError", "'fast'"),
+    ("free", 'pend().free(drop=["hold"], solution="fast")', "OptionError", "'fast'"),
     ("free", "free().simulate(1.0)", "ModelError", "t=1.0"),
     ("free", "free().simulate((0.0, 0.0))", "ModelError", "equal"),
     ("free", "free().simulate([0.0, 2.0, 1.0])", "ModelError", "t[1]"),
-    ("free", 'free().simulate((0.0, 1.0), method="euler")', "ModelError", "'euler'"),
+    ("free", 'free().simulate((0.0, 1.0), method="euler")', "OptionError", "'euler'"),
     ("free", "free().simulate((0.0, 1.0), rtol=-1.0)", "ModelError", "rtol"),
     ("free", 'free().simulate((0.0, 1.0), fit_degree="cubic")', "ModelError", "fit_degree"),
-    ("free", "free().simulate((0.0, 1.0), bogus=1)", "ModelError", "bogus"),
+    ("free", "free().simulate((0.0, 1.0), bogus=1)", "OptionError", "bogus"),
     ("free", 'free().simulate((0.0, 1.0), progress="yes")', "ModelError", "progress"),
     ("free", "free().simulate((0.0, 1.0), starting_step_size=2.0)", "ModelError",
      "starting_step_size=2"),
@@ -196,7 +196,7 @@ CATALOGUE = [
     ("path", 'caster().path({"dummy": "rolling"})', "ModelError", "'dummy'"),
     ("path", 'm = caster(); m.path({"dummy": rolling(m)}).simulate(2.0)', "ModelError", "t=2.0"),
     ("path", 'm = caster(); m.path({"dummy": rolling(m)}).simulate((0.0, 1.0), method="euler")',
-     "ModelError", "'euler'"),
+     "OptionError", "'euler'"),
     ("path", 'm = caster(); m.path({"dummy": rolling(m)}, initial_condition={"zz": 0.0})'
      '.simulate((0.0, 1.0))', "ModelError", "'zz'"),
     # outputs and drawing
@@ -210,6 +210,18 @@ CATALOGUE = [
     ("drawing", "ms.draw.plot(sol(), [])", "ModelError", "no outputs"),
     ("drawing", 'ms.draw.animate(sol(), rate=-1.0)', "ModelError", "rate"),
     ("drawing", "ms.draw.snapshot(3.0)", "ModelError", "3.0"),
+    # issue 34: non-physical loads, misspelt options, foreign objects, complex numbers
+    ("model", 'm = pend(); b = m.body("bar"); m.add_load(ms.Spring(b.point("tip"), '
+     'm.ground.point((2, 0)), 10.0, free_length=-1.0))', "ModelError", "free_length"),
+    ("model", 'pend().add_load(ms.JointFriction("pivot", mu=-0.1, radius=0.05))', "ModelError",
+     "mu"),
+    ("options", 'ms.Model2D(backend="symengin")', "OptionError", "did you mean 'symengine'"),
+    ("options", "ms.PositionOptions(tol=1e-9)", "OptionError", "'ftol'"),
+    ("path", 'm = caster(); o = caster(); m.path({"dummy": ms.Orthogonal1(m.velocity('
+     'm.body("caster").point("wheel")), o.body("caster").vector((0, 1)))})', "ModelError",
+     "another model"),
+    ("solve", "m = crank(); m.replace(\"drive\", ms.RotationLock1(m.body(\"crank\"), sp.sqrt(-1) * T));"
+     " m.solve(0.0)", "ModelError", "complex constant"),
 ]
 
 

@@ -112,7 +112,7 @@ def test_joint_addressed_by_name_or_number():
         np.testing.assert_allclose(torque, 0.2 * 0.05 * 300.0, rtol=1e-9)
     with pytest.raises(ms.UnknownConstraintError, match="no constraint named 'hinge'"):
         wheel("hinge")
-    with pytest.raises(ms.ModelError, match="kind must be 'rotational' or 'translational'"):
+    with pytest.raises(ms.ModelError, match="kind must be one of 'rotational', 'translational'"):
         ms.JointFriction("pin", mu=0.2, kind="rotary")
     with pytest.raises(ms.ModelError, match="cannot tell whether Constraint is a rotational"):
         m = ms.Model2D()

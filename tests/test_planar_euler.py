@@ -148,7 +148,7 @@ def test_torsion_spring_equilibrium_matches():
 
 
 def test_bad_orientation():
-    with pytest.raises(ModelError, match="orientation must be 'angle' or 'euler'"):
+    with pytest.raises(ModelError, match="orientation must be one of 'angle', 'euler'"):
         ms.Model2D(orientation="eulr")
 
 

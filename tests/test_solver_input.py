@@ -25,7 +25,7 @@ def test_valid_position_options_and_mapping():
     a = m.solve(0.1, options=ms.PositionOptions(ftol=1e-8, max_iterations=20, damping=False))
     b = m.solve(0.1, options={"ftol": 1e-8})
     assert abs(a["piston.x"] - b["piston.x"]) < 1e-8
-    with pytest.raises(ms.ModelError, match=r"unknown field\(s\) \['maxiter'\]"):
+    with pytest.raises(ms.ModelError, match=r"unknown option\(s\) \['maxiter'\]"):
         m.solve(0.1, options={"maxiter": 3})
     with pytest.raises(ms.ModelError, match=r"options must be a PositionOptions"):
         m.solve(0.1, options=1e-8)

@@ -142,3 +142,98 @@ def parameter_value(name: str, value) -> float:
     if not math.isfinite(v):
         raise ModelError(f"parameter {name!r} must be finite, got {v}")
     return v
+
+
+class OptionError(ModelError):
+    """An option or an enumerated keyword has a value outside its accepted set (a misspelt
+    backend, method or solution kind), or an option class got a field it does not have. The
+    message names the option, lists the accepted values and suggests the closest one."""
+
+
+class DegradedAccuracyWarning(UserWarning):
+    """A run's own measure says its answer is less accurate than asked: the constraint drift
+    of a free motion without correction, or coordinates so far from the origin (against the
+    model's length scale) that double precision cannot meet the residual tolerance.
+    ``measure`` holds the figure that triggered it, ``threshold`` the bound it passed."""
+
+    def __init__(self, message: str, *, measure=None, threshold=None):
+        super().__init__(message)
+        self.measure = measure
+        self.threshold = threshold
+
+
+def closest(value, allowed):
+    """The accepted value closest to ``value`` (case-insensitive ``difflib`` ratio of at least
+    0.6), or None."""
+    import difflib
+
+    if not isinstance(value, str):
+        return None
+    lower = {a.lower(): a for a in allowed if isinstance(a, str)}
+    hit = difflib.get_close_matches(value.lower(), list(lower), n=1, cutoff=0.6)
+    return lower[hit[0]] if hit else None
+
+
+def close_match(value, allowed) -> str:
+    """`` (did you mean 'x'?)`` for the accepted value closest to ``value``, or ``""``."""
+    hit = closest(value, allowed)
+    return f" (did you mean {hit!r}?)" if hit is not None else ""
+
+
+def choice(value, allowed, what: str, hint: str = ""):
+    """``value`` if it is one of ``allowed``; else an :class:`OptionError` naming ``what``
+    (the option or keyword), the accepted values and the closest of them. ``hint``: a
+    sentence appended to the message (what the values mean)."""
+    allowed = tuple(allowed)
+    try:
+        ok = bool(value in allowed)
+    except (TypeError, ValueError):  # an array (ambiguous truth) or an uncomparable value
+        ok = False
+    if ok:
+        return value
+    listed = ", ".join(repr(a) for a in allowed)
+    raise OptionError(f"{what} must be one of {listed}, got {value!r}{close_match(value, allowed)}"
+                      + (f"; {hint}" if hint else ""))
+
+
+def option_fields(cls):
+    """Class decorator for an options dataclass: an unknown keyword or too many positional
+    arguments raise an :class:`OptionError` naming the option class and its fields, instead
+    of the bare ``TypeError`` of the generated ``__init__``."""
+    import functools
+
+    init = cls.__init__
+    fields = tuple(cls.__dataclass_fields__)
+
+    @functools.wraps(init)
+    def __init__(self, *args, **kwargs):
+        unknown = [k for k in kwargs if k not in fields]
+        if unknown:
+            hints = "".join(close_match(k, fields) for k in unknown[:1])
+            raise OptionError(f"{cls.__name__}: unknown option(s) {unknown}{hints}; its options are "
+                              f"{list(fields)}")
+        if len(args) > len(fields):
+            raise OptionError(f"{cls.__name__} takes at most {len(fields)} options "
+                              f"({list(fields)}), got {len(args)} positional arguments")
+        twice = [f for f in fields[:len(args)] if f in kwargs]
+        if twice:
+            raise OptionError(f"{cls.__name__}: option(s) {twice} given twice (by position and "
+                              "by name)")
+        init(self, *args, **kwargs)
+
+    cls.__init__ = __init__
+    return cls
+
+
+def unknown_options(what: str, unknown, known) -> None:
+    """Raise an :class:`OptionError` for the ``unknown`` option names given to ``what``,
+    listing the ``known`` ones and the closest to each misspelt name; nothing if none."""
+    unknown = sorted(map(str, unknown))
+    if not unknown:
+        return
+    known = list(known)
+    hints = [f"{u!r}: did you mean {closest(u, known)!r}?" for u in unknown
+             if closest(u, known) is not None]
+    raise OptionError(f"{what}: unknown option(s) {unknown}"
+                      + (f" ({'; '.join(hints)})" if hints else "")
+                      + f"; the options are {', '.join(known)}")

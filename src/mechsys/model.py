@@ -22,7 +22,9 @@ from ._errors import (
     SingularJacobianError,
     UnknownBodyError,
     UnknownConstraintError,
+    choice,
     parameter_value,
+    unknown_options,
 )
 from ._symbols import T, velocity_symbol
 from .compile import System, make_layout, time_derivative
@@ -103,6 +105,12 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         self._version = 0
         self._system: System | None = None
         self._guess_override: dict[sp.Symbol, float] = {}
+        if backend is not None:
+            from .compile._backends import available_backends
+
+            # a misspelt name used to pass here and fail (or not) at the first compile
+            choice(backend, available_backends(), "backend",
+                   "None (the default) picks the fastest installed one")
         self._backend = backend
         self._compile_opts = CompileOptions()
         self.last_solution = None
@@ -783,9 +791,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
 
         Example: ``m.set_compile_options(process="chop", opt_level=1)``
         """
-        if unknown:
-            raise ModelError(f"unknown compile option(s) {sorted(unknown)}; the options are "
-                             "process, opt_level and cse")
+        unknown_options("set_compile_options", unknown, ("process", "opt_level", "cse"))
         new = _updated_options(self._compile_opts, process, opt_level, cse)
         if new != self._compile_opts:
             self._compile_opts = new
@@ -1039,20 +1045,19 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         from .results._solution import Solution
 
         modes = {"static": 0, "kinematic": 1, "dynamic": 2}
-        if not isinstance(solution, str) or (solution not in ORDERS and solution not in modes):
-            raise ModelError(f"solution must be one of {list(ORDERS) + list(modes)}, "
-                             f"got {solution!r}")
+        choice(solution, [*ORDERS, *modes], "solve: solution")
         times = self._check_times(convert(t, self.units, "solve: t", TIME))
         if self._loads:  # TimeSwitch loads with parameter times: increasing (issue 14)
+            from .loads._loads import check_load_values
             from .loads._switched import check_switched_loads
 
             check_switched_loads(self)
+            # stiffnesses, free lengths, damping and friction coefficients given as
+            # parameters: not negative with the values of this run (issue 34)
+            check_load_values(self._loads, dict(zip(self._params, self._p())))
         if isinstance(options, Mapping):
-            fields = set(PositionOptions.__dataclass_fields__)
-            unknown = sorted(map(str, set(options) - fields))
-            if unknown:
-                raise ModelError(f"options: unknown field(s) {unknown}; PositionOptions has "
-                                 f"{sorted(fields)}")
+            fields = PositionOptions.__dataclass_fields__
+            unknown_options("options (PositionOptions)", set(options) - set(fields), fields)
             options = PositionOptions(**options)
         if options is not None and not isinstance(options, PositionOptions):
             raise ModelError(f"options must be a PositionOptions(ftol=..., max_iterations=..., "
@@ -1286,9 +1291,8 @@ class Model2D(Model):
     space = PLANAR
 
     def __init__(self, backend: str | None = None, orientation: str = "angle"):
-        if orientation not in ("angle", "euler"):
-            raise ModelError(f"orientation must be 'angle' or 'euler' (Mech's Method -> Angular "
-                             f"or Euler), got {orientation!r}")
+        choice(orientation, ("angle", "euler"), "Model2D: orientation",
+               "Mech's Method -> Angular or Euler")
         self.orientation = orientation
         if orientation == "euler":
             self.space = PLANAR_EULER
@@ -1309,10 +1313,8 @@ class Model3D(Model):
 
     def __init__(self, backend: str | None = None, velocity: str = "euler",
                  coordinates: str = "global"):
-        if velocity not in ("euler", "angular"):
-            raise ModelError(f"velocity must be 'euler' or 'angular', got {velocity!r}")
-        if coordinates not in ("global", "local"):
-            raise ModelError(f"coordinates must be 'global' or 'local', got {coordinates!r}")
+        choice(velocity, ("euler", "angular"), "Model3D: velocity")
+        choice(coordinates, ("global", "local"), "Model3D: coordinates")
         # not ``self.velocity``: that name is the output method ``m.velocity(point)``
         self.velocity_representation, self.coordinates = velocity, coordinates
         super().__init__(backend)

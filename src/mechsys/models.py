@@ -422,13 +422,11 @@ def cardan_joint(bend: float = 0.5, speed: float = 2 * np.pi, joint: str = "univ
     ``drive``. For the universal joint the output speed is
     ``w2 / w1 = cos(bend) / (1 - sin(bend)^2 cos(th1)^2)`` with ``th1`` the drive angle.
     """
+    from ._errors import choice
     from .constraints import ConstantVelocity4, Parallel2, Revolute5, Universal4
     from .model import Model3D
 
-    if joint not in ("universal", "cv"):
-        from ._errors import ModelError
-
-        raise ModelError(f"cardan_joint: joint must be 'universal' or 'cv', got {joint!r}")
+    choice(joint, ("universal", "cv"), "cardan_joint: joint")
     m = Model3D()
     g = m.ground
     x, y = (1, 0, 0), (0, 1, 0)

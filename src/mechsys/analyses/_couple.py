@@ -70,6 +70,8 @@ from .._errors import (
     MechError,
     ModelError,
     SingularJacobianError,
+    choice,
+    unknown_options,
 )
 from .._symbols import T
 from ..compile._backends import compile_exprs
@@ -291,9 +293,7 @@ class CoupleSystem:
                 (0, True): "static", (1, True): "kinematic", (2, True): "dynamic"}[(order, loads)]
         if solution is None:
             return auto
-        if solution not in LEVELS:
-            raise ModelError(f"couple: solution must be None (automatic) or one of "
-                             f"{list(LEVELS)}, got {solution!r}")
+        choice(solution, list(LEVELS), "couple: solution", "or None (automatic)")
         o, ld = LEVELS[solution]
         if o < order or (loads and not ld):
             need = ("accelerations" if order == 2 else "velocities" if order == 1 else "") + (
@@ -646,11 +646,8 @@ class CoupleSystem:
         if options is None:
             return PositionOptions()
         if isinstance(options, Mapping):
-            fields = set(PositionOptions.__dataclass_fields__)
-            unknown = sorted(map(str, set(options) - fields))
-            if unknown:
-                raise ModelError(f"options: unknown field(s) {unknown}; PositionOptions has "
-                                 f"{sorted(fields)}")
+            fields = PositionOptions.__dataclass_fields__
+            unknown_options("options (PositionOptions)", set(options) - set(fields), fields)
             return PositionOptions(**options)
         if not isinstance(options, PositionOptions):
             raise ModelError(f"options must be a PositionOptions or a mapping of its fields, got "

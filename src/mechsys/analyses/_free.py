@@ -27,7 +27,8 @@ from numbers import Integral, Real
 
 import numpy as np
 
-from .._errors import MechError, ModelError
+from .._errors import MechError, ModelError, choice, unknown_options
+from ..loads._loads import check_load_values
 from ..results._load_outputs import lambda_guess_vector
 from ..results._solution import Solution, State
 from ..solvers._free import (
@@ -77,9 +78,76 @@ def newton_options(tolerance, max_iterations, what: str) -> dict:
 
 
 def _reject_unknown(what: str, unknown: dict, known) -> None:
-    if unknown:
-        raise ModelError(f"{what}: unknown option(s) {sorted(unknown)}; the options are "
-                         f"{', '.join(known)}")
+    unknown_options(what, unknown, known)
+
+
+#: a free-motion run warns (:class:`~mechsys.DegradedAccuracyWarning`) when the kept
+#: constraints' residual at its end -- positions in units of the model's length scale ``L``
+#: (or radians), velocities relative to the run's largest rate -- exceeds this or
+#: ``DRIFT_FACTOR`` times the run's own tolerance (``rtol``, or Adams' ``max_error``),
+#: whichever is larger: a per-step tolerance accumulates over the steps, so a residual of a
+#: few tolerances is the integration's normal error, ten times it is not
+DRIFT_WARNING = 1e-6
+DRIFT_FACTOR = 10.0
+
+
+def accuracy_report(s, sc, t, Y, p, tol: float, what: str) -> dict:
+    r"""The run's own measure of its accuracy (issue 34), recorded in ``sol.extra["accuracy"]``
+    and warned about (:class:`~mechsys.DegradedAccuracyWarning`) when degraded. Computed once,
+    after the run, from the states it returns (so the Python and the compiled steppers are
+    judged alike):
+
+    * ``position``: :math:`\max_i |\Phi_i| / r_i` at the last state, ``r_i`` the row scale of
+      the unit-free Jacobian (an error in units of ``L``, or radians);
+    * ``velocity``: :math:`\max_i |(\Phi_q \dot q + \Phi_t)_i| / r_i` over the run's
+      largest rate :math:`\max_{k,j} |\dot q_{kj}| / c_j` (relative);
+    * ``offset``: the largest position coordinate of the run over ``L``. Double precision
+      resolves positions to :math:`\varepsilon \cdot` offset (units of ``L``); above the run's
+      tolerance ``tol`` the tolerance cannot be met (a mechanism of unit size 1e11 from the
+      origin: 2e-5).
+
+    Warns when ``position`` or ``velocity`` exceeds ``max(DRIFT_WARNING, DRIFT_FACTOR tol)``,
+    or when ``eps * offset`` exceeds ``tol``."""
+    import warnings
+
+    from .._errors import DegradedAccuracyWarning
+    from ..solvers._linalg import _column_kinds
+
+    n = s.n
+    Q, QD = Y[:, :n], Y[:, n:]
+    trans, _ = _column_kinds(s)
+    L = sc.length
+    offset = float(np.abs(Q[:, trans]).max(initial=0.0)) / L if n else 0.0
+    rate = float(np.abs(QD / sc.columns).max(initial=0.0)) if n else 0.0
+    pos = vel = 0.0
+    if s.m and len(t) and np.all(np.isfinite(Y[-1])):
+        q, qd = Q[-1], QD[-1]
+        J, rhs = s.velocity_rhs(t[-1], q, p)
+        r = sc.rows(J)
+        pos = float(np.abs(s.residual(t[-1], q, p) / r).max(initial=0.0))
+        v = np.abs((J @ qd - rhs) / r).max(initial=0.0)
+        vel = float(v / rate) if rate > 0 else float(v)
+    report = {"position": pos, "velocity": vel, "offset": offset}
+    bound = max(DRIFT_WARNING, DRIFT_FACTOR * tol)
+    eps = float(np.finfo(float).eps)
+    if max(pos, vel) > bound:
+        worst = "position" if pos >= vel else "velocity"
+        warnings.warn(DegradedAccuracyWarning(
+            f"{what}: the kept constraints have drifted by the end of the run (t = {t[-1]:.6g}): "
+            f"position residual {pos:.2e} (units of the length scale L = {L:.3g}), velocity "
+            f"residual {vel:.2e} (relative to the largest rate), above {bound:.0e}; keep "
+            "constraint_correction=True (the default) or tighten rtol/max_error "
+            "(sol.extra['accuracy'])", measure=max(pos, vel), threshold=bound), stacklevel=3)
+        report["warned"] = worst
+    if eps * offset > tol:
+        warnings.warn(DegradedAccuracyWarning(
+            f"{what}: coordinates reach {offset:.3g} times the model's length scale L = "
+            f"{L:.3g} from the origin; double precision resolves positions there only to "
+            f"{eps * offset:.1e} L, above the run's tolerance {tol:.0e}: place the mechanism "
+            "near the origin of its coordinates (subtract a constant offset)",
+            measure=eps * offset, threshold=tol), stacklevel=3)
+        report["range"] = True
+    return report
 
 
 def _flag(box, value):
@@ -106,8 +174,7 @@ class FreeSystem:
 
     def __init__(self, model, drop=(), solution: str = "dynamic", initial_guess=None,
                  initial_condition=None):
-        if solution not in KINDS:
-            raise ModelError(f"free(solution=...) must be one of {KINDS}, got {solution!r}")
+        choice(solution, KINDS, "free(solution=...)")
         self.model = model
         drop = drop if isinstance(drop, (list, tuple)) else [drop]
         self.dropped = [model.constraint(c) for c in drop]
@@ -270,12 +337,17 @@ class FreeSystem:
 
     def _start(self, initial_condition):
         """``(q, qd, p)`` of a call: the FreeSystem's start, ``initial_condition`` on top, and
-        the parameters as they are now."""
+        the parameters as they are now (the loads' stiffnesses, damping and friction
+        coefficients checked with them: :func:`~mechsys.loads._loads.check_load_values`)."""
         held = {k: set(v) for k, v in self._held0.items()}
         if initial_condition is None:
-            return self._q0.copy(), self._qd0.copy(), self._params(), held
-        q, qd, given = self._apply_condition(initial_condition, self._q0, self._qd0, held)
-        return q, qd, self._params(given), held
+            q, qd, p = self._q0.copy(), self._qd0.copy(), self._params()
+        else:
+            q, qd, given = self._apply_condition(initial_condition, self._q0, self._qd0, held)
+            p = self._params(given)
+        if self.model._loads:
+            check_load_values(self.model._loads, dict(zip(self.system.layout.p_symbols, p)))
+        return q, qd, p, held
 
     def _project_start(self, t, q, qd, p, held, scaling):
         """The start state on the constraints, keeping the values the user gave (the rest
@@ -512,6 +584,9 @@ class FreeSystem:
             extra["rtol"], extra["atol"] = opt.rtol, opt.atol
         else:
             extra["max_error"] = opt.max_error
+        # the run's own measure of its accuracy: constraint drift, coordinates' range
+        extra["accuracy"] = accuracy_report(s, sc, times, Y, p, opt.rtol if opt.runge_kutta
+                                         else opt.max_error[0], "FreeSystem.simulate")
         if diagnostics:
             extra["diagnostics"] = res.diagnostics
         if res.message == "interrupted":

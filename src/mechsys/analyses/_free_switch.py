@@ -76,7 +76,7 @@ from ..solvers._integrators import (
 )
 from ..solvers._jit_free import PAUSE_STEPS, FreeStepper
 from ..solvers._linalg import factor
-from ._free import FreeSystem, _reject_unknown
+from ._free import FreeSystem, _reject_unknown, accuracy_report
 from ._multistage import _HeldValues, cached_tests, lambdify_exact, stage_system
 
 #: velocities are compatible with a stage when its scaled velocity residual is below this
@@ -418,7 +418,11 @@ class SwitchedFreeSystem(FreeSystem):
             ie += 1
         info = {"events": log, "evaluations": evals, "steps": steps, "method": opt.method,
                 "rtol": opt.rtol, "atol": opt.atol, "compiled_steps": compiled_steps}
-        return self._assemble(out_t, out_y, out_c, p, kw, info, sc, known=known)
+        sol = self._assemble(out_t, out_y, out_c, p, kw, info, sc, known=known)
+        # the run's own measure of its accuracy, in the last stage's kept constraints
+        sol.extra["accuracy"] = accuracy_report(self.system, sc, sol.t, np.hstack((sol.q, sol.qd)),
+                                                p, opt.rtol, "FreeSystem.simulate (with switches)")
+        return sol
 
     @staticmethod
     def _stepper(plans, combo, S, opt, p, sc, t_eval, t_now, y, kw):

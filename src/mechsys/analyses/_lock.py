@@ -36,7 +36,7 @@ from collections.abc import Mapping
 import numpy as np
 import sympy as sp
 
-from .._errors import ModelError, parameter_value
+from .._errors import ModelError, choice, parameter_value
 
 #: largest scaled violation of a locked order by new parameter values (the position
 #: solve converges to 1e-12; a geometry change of a part in 1e9 is a real change)
@@ -55,9 +55,7 @@ class LockedModel:
     """
 
     def __init__(self, model, at=0.0, solution: str = "location", guess=None):
-        if solution not in _ORDERS:
-            raise ModelError(f"lock: solution must be one of {list(_ORDERS)} (the highest order "
-                             f"to lock), got {solution!r}")
+        choice(solution, list(_ORDERS), "lock: solution", "the highest order to lock")
         if model._switches():
             raise ModelError("lock: models with StageSwitch/TimeSwitch constraints cannot be "
                              "locked (the stage would be frozen with the coordinates); solve "
@@ -88,14 +86,16 @@ class LockedModel:
         from ..solvers import MultiplierOptions, solve_multipliers
         from ..solvers._kinematics import SweepResult, solve_acceleration, solve_velocity
 
-        if solution not in _ORDERS and solution not in _MODES:
-            raise ModelError(f"locked solve: solution must be one of {list(_ORDERS) + list(_MODES)}, "
-                             f"got {solution!r}")
+        choice(solution, [*_ORDERS, *_MODES], "locked solve: solution")
         model, system = self._model, self.system
         if model._version != self._version:
             raise ModelError("locked solve: the model changed after m.lock(...) (bodies, constraints "
                              "or loads); lock it again")
         p, changed = self._parameter_vector(parameters)
+        if model._loads:   # stiffnesses, damping, friction given as parameters: not negative
+            from ..loads._loads import check_load_values
+
+            check_load_values(model._loads, dict(zip(system.layout.p_symbols, p)))
         t, q = self.t, self.q
         self._check(system.residual(t, q, p), changed, "location")
         need = _ORDERS.get(solution, _MODES.get(solution))

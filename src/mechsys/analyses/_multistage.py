@@ -35,7 +35,7 @@ import sympy as sp
 from scipy.optimize import brentq
 from sympy.printing.numpy import NumPyPrinter
 
-from .._errors import ConvergenceError, MechError, ModelError
+from .._errors import ConvergenceError, MechError, ModelError, choice
 from .._symbols import T
 from ..compile import System
 from ..compile._stages import _cache, stage_system
@@ -187,9 +187,8 @@ def solve_stages(model, times, guess, solution: str, options: PositionOptions | 
     point are those of the stage combination in effect there (its Jacobian rows)."""
     from ..results._solution import Solution
 
+    choice(solution, [*ORDERS, *MODES], "solution")
     order = ORDERS.get(solution, MODES.get(solution))
-    if order is None:
-        raise ModelError(f"solution must be one of {list(ORDERS) + list(MODES)}, got {solution!r}")
     res, stages, scalings = _sweep_stages(model, np.atleast_1d(times), guess, order, options,
                                           forced or {})
     lam = None

@@ -56,7 +56,22 @@ from ..solvers._linalg import (
     pattern_of,
     pattern_slots,
 )
-from ._free import _reject_unknown
+from ._free import _reject_unknown, accuracy_report
+
+
+def _check_own(model, dummy, vc) -> None:
+    """A velocity constraint replacing ``dummy`` must be new and built of ``model``'s bodies:
+    the coordinate symbols of another model's bodies have the same names (``x2``, ``th2``), so
+    a constraint on them would silently act on this model's body of the same number."""
+    if vc.model is not None:
+        where = "this model" if vc.model is model else "another model"
+        raise ModelError(f"the replacement for {dummy.label()}: {vc.label()} is already a "
+                         f"constraint of {where}; give a new velocity constraint object")
+    for b in vc.bodies():
+        if getattr(b, "model", None) is not model:
+            raise ModelError(f"the replacement for {dummy.label()}: {vc.label()} uses body "
+                             f"{getattr(b, 'name', b)!r} of another model; build it from this "
+                             "model's bodies (m.body(...), m.velocity(...))")
 
 
 class PathSystem:
@@ -77,6 +92,7 @@ class PathSystem:
             if not isinstance(vc, ConstraintBase):
                 raise ModelError(f"the replacement for {d.label()} must be a constraint object, "
                                  f"got {vc!r}")
+            _check_own(model, d, vc)
             vc.name = vc.name or f"velocity constraint replacing {d.name!r}"
             vc.number = vc.number if vc.number is not None else d.number
             self.replaced[d] = vc
@@ -382,6 +398,10 @@ class PathSystem:
                  "length_scale": sc.length,
                  "compiled_steps": res.diagnostics.get("compiled_steps", 0),
                  "compiled_solver": None if fast is None else fast.solver}
+        # the run's own measure of its accuracy (holonomic drift, coordinates' range)
+        extra["accuracy"] = accuracy_report(s, sc, times, np.hstack((Q, QD)), p,
+                                            opt.rtol if opt.runge_kutta else opt.max_error[0],
+                                            "PathSystem.simulate")
         if diagnostics:
             extra["diagnostics"] = res.diagnostics
         return Solution(t=times, q=Q, qd=QD, qdd=QDD, p=p, system=s, model=self.model,

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from .._errors import ModelError
+from .._errors import ModelError, unknown_options
 from ..results._sensitivity import Sensitivity
 from ..results._solution import Solution, State
 from ..solvers._integrators import ATOL, FIT_DEGREE, MAX_ERROR, MAX_STEP, RTOL
@@ -204,8 +204,9 @@ class SensitivitySystem:
         if fs is None:
             raise ModelError("simulate() integrates free motion: build the system with "
                              "m.sensitivity([...], free=m.free(drop=[...]))")
-        if unknown:
-            raise ModelError(f"SensitivitySystem.simulate: unknown option(s) {sorted(unknown)}")
+        unknown_options("SensitivitySystem.simulate", unknown, (
+            "initial_condition", "method", "rtol", "atol", "max_step", "fit_degree", "max_error",
+            "step_size", "constraint_correction", "starting_step_size"))
         opt = integration_options(method, rtol, atol, max_step, fit_degree, max_error,
                                   step_size, constraint_correction, starting_step_size)
         from ..solvers._integrators import checked_steps, output_times

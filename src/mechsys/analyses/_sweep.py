@@ -34,7 +34,7 @@ from numbers import Integral
 import numpy as np
 import sympy as sp
 
-from .._errors import MechError, ModelError
+from .._errors import MechError, ModelError, choice
 
 #: analysis names that mean ``model.solve(t, solution=name)``
 SOLVE_KINDS = ("location", "velocity", "acceleration", "static", "kinematic", "dynamic")
@@ -264,12 +264,9 @@ def sweep(model, params, analysis="acceleration", outputs=None, *, t=0.0, grid: 
     except ImportError:
         raise MechError("sweep returns a pandas DataFrame: pip install pandas (or "
                         "mechsys[sweep])") from None
-    if on_error not in ("raise", "nan"):
-        raise ModelError(f"sweep: on_error must be 'raise' or 'nan', got {on_error!r}")
+    choice(on_error, ("raise", "nan"), "sweep: on_error")
     if isinstance(analysis, str):
-        if analysis not in SOLVE_KINDS:
-            raise ModelError(f"sweep: analysis must be a callable f(model) or one of "
-                             f"{list(SOLVE_KINDS)}, got {analysis!r}")
+        choice(analysis, SOLVE_KINDS, "sweep: analysis", "or a callable f(model)")
         analysis = _Solve(analysis, t)
     elif not callable(analysis):
         raise ModelError(f"sweep: analysis must be a callable f(model) or one of "
@@ -305,8 +302,8 @@ def sweep(model, params, analysis="acceleration", outputs=None, *, t=0.0, grid: 
         if isinstance(executor, str) and executor == "processes":
             results, kind = _on_pool(payload, names, indexed, on_error, workers, chunks, tick)
         elif isinstance(executor, str):
-            raise ModelError(f"sweep: executor must be 'serial', 'processes' or a "
-                             f"dask.distributed.Client, got {executor!r}")
+            choice(executor, ("serial", "processes"), "sweep: executor",
+                   "or a dask.distributed.Client")
         else:
             results, kind = _on_dask(executor, payload, names, indexed, on_error, chunks, tick)
         rows = [r for _, _, part in results for r in part]

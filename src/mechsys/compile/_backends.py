@@ -22,13 +22,86 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 
-from .._errors import slow_path_warning
+from .._errors import choice, slow_path_warning
 
 try:  # a core dependency (decision 0041); SymPy's lambdify serves where it cannot be imported
     import symengine as _se
 except ImportError as _exc:  # pragma: no cover - depends on environment
     _se = None
     _se_error = _exc
+
+
+# -- the numbers an expression may hold ------------------------------------------------------
+#: integer exponents at or above this magnitude are not exact in a double (2**53); SymEngine's
+#: LLVM code reads them as 64-bit integers and wraps them modulo 2**64 (issue 34: a driver
+#: ``T**(2**64 + 1)`` ran as ``T``), so they are rewritten with float exponents
+BIG_EXPONENT = 2**53
+
+
+def _complex_constant(expr):
+    """The first complex constant of a SymPy or SymEngine ``expr`` (``I``, ``zoo``, a number
+    valued function such as ``asin(2)`` or ``(-2)**(1/3)`` that is not real), or None."""
+    if isinstance(expr, sp.Basic):
+        if expr.has(sp.I):
+            return sp.I
+        if expr.has(sp.zoo):
+            return sp.zoo
+        for a in expr.atoms(sp.Function, sp.Pow):
+            if a.is_number and a.is_real is False:
+                return a
+        return None
+    if _se is not None and isinstance(expr, _se.Basic):
+        if expr.has(_se.I):
+            return _se.I
+        if expr.has(_se.zoo):
+            return _se.zoo
+    return None
+
+
+def _big_powers(expr) -> list:
+    atoms = expr.atoms(sp.Pow) if isinstance(expr, sp.Basic) else expr.atoms(_se.Pow)
+    return [a for a in atoms if a.args[1].is_Integer and abs(int(a.args[1])) >= BIG_EXPONENT]
+
+
+def real_expression(expr, owner: str | None = None):
+    """``expr`` ready for real double-precision code (the one check at the boundary where
+    SymPy or SymEngine expressions become numbers).
+
+    * A complex constant (``sqrt(-1)``, ``log(-1) = I pi``, ``"I"``, ``asin(2)``) was dropped to
+      its real part with only a NumPy warning: it raises :class:`~mechsys.ModelError` showing
+      the expression (and ``owner``, the constraint or load, when given).
+    * An integer exponent ``n`` with ``|n| >= 2**53`` is rewritten with a float exponent:
+      ``b**n = b**float(n)`` for even ``n``, ``b * |b|**float(n - 1)`` for odd ``n`` (every
+      double at or above ``2**53`` is an even integer, so the odd power keeps the sign of
+      ``b`` through its first factor); exact to double precision (``|b|**n`` is 0, 1 or
+      infinite there), where the integer would wrap modulo ``2**64`` in compiled code.
+    """
+    if not isinstance(expr, sp.Basic) and not (_se is not None and isinstance(expr, _se.Basic)):
+        return expr
+    c = _complex_constant(expr)
+    if c is not None:
+        from .._errors import ModelError
+
+        who = f"{owner}: " if owner else ""
+        raise ModelError(f"{who}the expression {expr} holds the complex constant {c}; mechsys "
+                         "computes in real numbers (a complex value would be cut to its real "
+                         "part): write the real expression meant (sqrt(-1), log(-1), 'I' are "
+                         "complex)")
+    big = _big_powers(expr)
+    while big:
+        sym = isinstance(expr, sp.Basic)
+        F = sp.Float if sym else _se.RealDouble
+        P = (lambda b, e: sp.Pow(b, e, evaluate=False)) if sym else _se.Pow
+        A = sp.Abs if sym else _se.Abs
+        rep = {}
+        for a in big:
+            b, n = a.args[0], int(a.args[1])
+            # (the odd power as b |b|**(n - 1): b * b**float(n - 1) would merge back into
+            # b**float(n), and the float exponent has lost the parity)
+            rep[a] = P(b, F(float(n))) if n % 2 == 0 else b * P(A(b), F(float(n - 1)))
+        expr = expr.xreplace(rep)
+        big = _big_powers(expr)
+    return expr
 
 
 class Compiled:
@@ -384,7 +457,7 @@ def default_backend() -> str:
     """``MECHSYS_BACKEND`` if set, else SymEngine when installed, else SymPy."""
     env = os.environ.get("MECHSYS_BACKEND")
     if env:
-        return env
+        return choice(env, available_backends(), "the environment variable MECHSYS_BACKEND")
     if _se is None:
         slow_path_warning("symengine", _se_error)
     return available_backends()[0]
@@ -408,6 +481,10 @@ def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
     poses share most of their subexpressions (decision 0010: 10 times faster compiles)."""
     if not exprs:
         return _Empty()
+    # every expression that becomes numeric code passes here: complex constants refused,
+    # huge integer exponents made floats (the constraints and loads were checked with their
+    # names already, this catches what was derived from them or built elsewhere)
+    exprs = [real_expression(e) for e in exprs]
     backend = backend or default_backend()
     if backend == "symengine":
         if _se is None:
@@ -432,4 +509,5 @@ def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
             return _SympyCompiled(args, [sp.sympify(e) for e in exprs])
     if backend == "sympy":
         return _SympyCompiled(args, exprs)
-    raise ValueError(f"unknown backend {backend!r}; choose from {available_backends()}")
+    choice(backend, available_backends(), "backend")
+    raise AssertionError("unreachable")  # pragma: no cover - choice raised

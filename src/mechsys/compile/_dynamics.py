@@ -28,7 +28,7 @@ import sympy as sp
 
 from .._symbols import T, velocity_symbol
 from ..solvers._linalg import FixedPattern
-from ._backends import compile_exprs
+from ._backends import compile_exprs, real_expression
 from ._derive import hessian_terms, time_derivative, to_sympy_list
 
 try:  # optional
@@ -130,6 +130,25 @@ def body_terms(space, q: tuple, qd: tuple, mass, centroid: tuple, inertia: tuple
     return rep(T), [[rep(e) for e in row] for row in M], [rep(e) for e in Qv]
 
 
+def _real_contribution(c, owner: str):
+    """A load's contribution with its expressions checked for real double-precision code
+    (:func:`~mechsys.compile._backends.real_expression`, naming the load)."""
+    from dataclasses import replace
+
+    from ..loads._loads import BodyMoment, DirectLoad, PointForce
+
+    if isinstance(c, DirectLoad):
+        return replace(c, magnitude=real_expression(sp.sympify(c.magnitude), owner))
+    if isinstance(c, PointForce):
+        return replace(c, force=c.force.applyfunc(lambda e: real_expression(e, owner)))
+    if isinstance(c, BodyMoment):
+        M = c.moment
+        M = M.applyfunc(lambda e: real_expression(e, owner)) if isinstance(M, sp.MatrixBase) \
+            else real_expression(sp.sympify(M), owner)
+        return replace(c, moment=M)
+    return c
+
+
 def generalized_forces(model, loads, layout, slaves: dict | None = None) -> list:
     """Applied generalized forces ``Q`` (n,) of ``loads`` by virtual work. With ``slaves``
     (a dict, recursive Gen dynamics: ``compile/_generalized.py``) the forces on slave bodies
@@ -145,6 +164,7 @@ def generalized_forces(model, loads, layout, slaves: dict | None = None) -> list
     Q = [sp.S.Zero] * n
     for load in loads:
         for c in load.contributions(model):
+            c = _real_contribution(c, load.label())
             if isinstance(c, DirectLoad):
                 if c.symbol not in index:
                     raise KeyError(c.symbol)

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from .._errors import ModelError
+from .._errors import ModelError, choice
 from .._symbols import acceleration_symbol, velocity_symbol
 from ..solvers._tree import _articulated, _assemble, _forward_py
 
@@ -138,7 +138,8 @@ def gen_dynamics_mode() -> str:
         return "auto"
     if v in ("symbolic", "recursive"):
         return v
-    raise ModelError(f"MECHSYS_GEN_DYNAMICS={v!r}: choose 'auto', 'symbolic' or 'recursive'")
+    choice(v, ("auto", "symbolic", "recursive"), "the environment variable MECHSYS_GEN_DYNAMICS")
+    raise AssertionError("unreachable")  # pragma: no cover - choice raised
 
 
 class _Unsupported(Exception):

@@ -35,13 +35,15 @@ from dataclasses import dataclass, replace
 import numpy as np
 import sympy as sp
 
-from .._errors import ModelError
+from .._errors import ModelError, OptionError, close_match, option_fields
+from ._backends import real_expression
 
 #: relative size below which ``process="chop"`` drops a number
 CHOP_RELATIVE = 1e-12
 _UNSET = object()
 
 
+@option_fields
 @dataclass(frozen=True)
 class CompileOptions:
     process: object = None
@@ -58,8 +60,9 @@ def updated(opts: CompileOptions, process=_UNSET, opt_level=_UNSET, cse=_UNSET) 
     new = {}
     if process is not _UNSET:
         if not (process is None or process == "chop" or callable(process)):
-            raise ModelError(f"compile option process must be None, 'chop' or a function "
-                             f"f(expr) -> expr (Mech's $MechProcessFunction), got {process!r}")
+            raise OptionError(f"compile option process must be None, 'chop' or a function "
+                              f"f(expr) -> expr (Mech's $MechProcessFunction), got {process!r}"
+                              f"{close_match(process, ('chop',))}")
         new["process"] = process
     if opt_level is not _UNSET:
         # NumPy integers too (a value read from an array); bools are not levels
@@ -90,6 +93,7 @@ def chop(expr: sp.Expr, relative: float = CHOP_RELATIVE) -> sp.Expr:
 
 def process_equation(opts: CompileOptions, expr: sp.Expr, owner: str) -> sp.Expr:
     """Apply the ``process`` option to one equation of ``owner`` (a constraint's label)."""
+    expr = real_expression(expr, owner)   # complex constants, huge exponents (issue 34)
     f = opts.process
     if f is None:
         return expr
@@ -103,7 +107,7 @@ def process_equation(opts: CompileOptions, expr: sp.Expr, owner: str) -> sp.Expr
     if not isinstance(out, sp.Expr):
         raise ModelError(f"compile option process returned {out!r} for an equation of {owner}; "
                          "it must return a SymPy expression")
-    return out
+    return real_expression(out, owner)
 
 
 class Backend(str):

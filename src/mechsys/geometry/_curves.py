@@ -23,7 +23,7 @@ import numpy as np
 import scipy.linalg as sla
 import sympy as sp
 
-from .._errors import ModelError
+from .._errors import ModelError, choice
 
 #: Mech's ``EndConditions`` settings (``Natural``, ``Closed``) and the strict periodic one.
 END_CONDITIONS = ("natural", "closed", "periodic")
@@ -156,8 +156,8 @@ class SplineFunction:
         if isinstance(end_conditions, str):
             key = end_conditions.lower()
             if key not in END_CONDITIONS:
-                raise ModelError(f"SplineFit: end_conditions must be one of {END_CONDITIONS} or two "
-                                 f"direction vectors, got {end_conditions!r}")
+                choice(end_conditions, END_CONDITIONS, "SplineFit: end_conditions",
+                       "or two direction vectors")
             return key != "natural", None
         v = _as_float_array(end_conditions, "the end direction vectors")
         d = y.shape[1]

@@ -18,7 +18,7 @@ from collections.abc import Sequence
 import numpy as np
 import sympy as sp
 
-from .._errors import GeometryError, ModelError
+from .._errors import GeometryError, ModelError, close_match
 
 
 class BodyRef:
@@ -229,7 +229,8 @@ def reference_direction(direction, rule: str = "default"):
     default rule).
     """
     if rule not in REFERENCE_RULES:
-        raise GeometryError(f"reference rule must be one of {REFERENCE_RULES}, got {rule!r}")
+        raise GeometryError(f"reference rule must be one of {REFERENCE_RULES}, got {rule!r}"
+                            f"{close_match(rule, REFERENCE_RULES)}")
     vals = list(direction)
     symbolic = any(isinstance(c, sp.Basic) and not c.is_number for c in vals)
     if not symbolic:
@@ -280,7 +281,8 @@ class Axis(Geometry):
         if isinstance(reference, str):
             if reference not in REFERENCE_RULES:
                 raise GeometryError(f"Axis reference must be a vector or one of "
-                                    f"{REFERENCE_RULES}; got {reference!r}")
+                                    f"{REFERENCE_RULES}; got {reference!r}"
+                                    f"{close_match(reference, REFERENCE_RULES)}")
             self.reference_rule = reference
             reference = None
         self.reference = as_vector(reference) if reference is not None else None

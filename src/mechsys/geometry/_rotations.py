@@ -37,7 +37,7 @@ from collections.abc import Sequence
 import numpy as np
 import sympy as sp
 
-from .._errors import GeometryError, ModelError
+from .._errors import GeometryError, ModelError, choice
 from ._points import Axis, BodyRef, Point, Vector, as_axis, as_point, as_vector
 
 # ---------------------------------------------------------------------------------------
@@ -463,8 +463,8 @@ def _order(coordinates: str):
     try:
         return _ORDERS[str(coordinates).upper()]
     except KeyError:
-        raise ModelError(
-            f"coordinates must be one of {list(_ORDERS)}, got {coordinates!r}") from None
+        choice(coordinates, list(_ORDERS), "coordinates")
+        raise  # pragma: no cover - choice raised
 
 
 def _components(p):

@@ -22,7 +22,7 @@ hold a unit. pint is optional (``pip install mechsys[units]``).
 
 from __future__ import annotations
 
-from .._errors import ModelError
+from .._errors import ModelError, choice
 
 BASE = ("length", "mass", "time")
 
@@ -47,8 +47,7 @@ def check_units(units: dict) -> dict:
     ureg = _registry()
     out = {}
     for key, name in units.items():
-        if key not in BASE:
-            raise ModelError(f"set_units: unknown base quantity {key!r}; give {BASE}")
+        choice(key, BASE, "set_units: base quantity")
         try:
             u = ureg.Unit(name)
         except Exception as exc:  # pint raises its own UndefinedUnitError, ValueError, ...

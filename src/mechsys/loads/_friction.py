@@ -23,11 +23,12 @@ equations become nonlinear in the multipliers: statics and inverse dynamics then
 
 from __future__ import annotations
 
+import math
 import numbers
 
 import sympy as sp
 
-from .._errors import ModelError
+from .._errors import ModelError, choice
 from ._loads import BodyMoment, LoadBase, PointForce
 
 _ROTATIONAL = {"Revolute2", "Spherical3", "Revolute5"}
@@ -44,13 +45,19 @@ class JointFriction(LoadBase):
                  v_eps=1e-3, eps_reaction=1e-30):
         super().__init__()
         self.constraint = constraint
-        self.mu, self.radius, self.viscous = (sp.sympify(x) for x in (mu, radius, viscous))
-        if kind is not None and kind not in ("rotational", "translational"):
-            raise ModelError(f"JointFriction: kind must be 'rotational' or 'translational', "
-                             f"got {kind!r}")
+        self.mu = self._nonnegative(mu, "JointFriction mu",
+                                    "a friction coefficient is never negative")
+        self.radius = self._nonnegative(radius, "JointFriction radius")
+        self.viscous = self._nonnegative(viscous, "JointFriction viscous",
+                                         "a negative viscous coefficient feeds energy in")
+        if kind is not None:
+            choice(kind, ("rotational", "translational"), "JointFriction: kind")
         # a name or number is resolved by check(), when the load is added to a model
         self.kind = kind if kind is not None or _addressed(constraint) else _kind_of(constraint)
-        self.v_eps, self.eps_reaction = v_eps, eps_reaction
+        # the regularisations must be positive: at 0 the sign function is 0/0 at rest
+        self.v_eps, self.eps_reaction = (
+            _positive_number(v_eps, "JointFriction v_eps"),
+            _positive_number(eps_reaction, "JointFriction eps_reaction"))
 
     def bodies(self):
         # (addressed by name or number: the model resolves the constraint in check())
@@ -112,6 +119,13 @@ class JointFriction(LoadBase):
             out.append(PointForce(b2.point(0), -F))
             out.append(BodyMoment(b2, sp_.moment_about(P - b2.r, -F)))
         return out
+
+
+def _positive_number(value, what: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (
+            math.isfinite(value) and value > 0):
+        raise ModelError(f"{what} must be a positive finite number, got {value!r}")
+    return float(value)
 
 
 def _addressed(constraint) -> bool:

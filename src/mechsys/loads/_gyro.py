@@ -24,7 +24,7 @@ import sympy as sp
 
 from .._errors import ModelError
 from ..geometry._points import Vector, as_vector
-from ._loads import BodyMoment, LoadBase
+from ._loads import BodyMoment, LoadBase, _magnitude
 
 
 class GyroMoment(LoadBase):
@@ -42,8 +42,9 @@ class GyroMoment(LoadBase):
         self.body = body
         self.axis = axis if isinstance(axis, Vector) else None
         self._axis_local = None if self.axis is not None else axis
-        self.omega = sp.sympify(omega)
-        self.inertia = None if inertia is None else sp.sympify(inertia)
+        self.omega = _magnitude(omega, "GyroMoment omega")
+        self.inertia = None if inertia is None else self._nonnegative(
+            inertia, "GyroMoment inertia", "a spin inertia is never negative")
 
     def bodies(self):
         return [self.body]

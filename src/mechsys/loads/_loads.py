@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from .._errors import ModelError
+from .._errors import ModelError, choice
 from ..geometry._points import Axis, BodyRef, Point, Vector, as_point, as_vector
 from ..geometry._units import is_quantity, placeholder
 
@@ -58,6 +58,29 @@ class LoadBase:
     def __init__(self) -> None:
         self.name: str | None = None
         self.model = None
+        #: ``(what, expression, hint)`` of the quantities that must not be negative (a
+        #: stiffness, a free length, a damping or friction coefficient); a number is checked
+        #: when given, an expression of parameters by :meth:`check_values` when a run starts
+        self._bounds: list = []
+
+    def _nonnegative(self, value, what: str, hint: str = "") -> sp.Expr:
+        """``value`` as a load magnitude that must be zero or positive (physical: a negative
+        stiffness, free length, damping or friction coefficient feeds energy in or has no
+        meaning); a negative number is a :class:`ModelError` naming ``what``."""
+        v = _magnitude(value, what)
+        _check_nonnegative(v, what, hint, "")
+        self._bounds.append((what, v, hint))
+        return v
+
+    def check_values(self, params: dict) -> None:
+        """Check the quantities that must not be negative with the parameter values
+        ``params`` ({symbol: value}) of a run. An expression of ``T``, coordinates or
+        velocities cannot be checked before the run and is not."""
+        for what, v, hint in getattr(self, "_bounds", ()):
+            if v.is_number or not v.free_symbols <= set(params):
+                continue
+            _check_nonnegative(sp.sympify(v.xreplace(params)), f"{self.label()}: {what} = {v}", hint,
+                               " with the current parameter values")
 
     def contributions(self, model) -> list:  # pragma: no cover - interface
         raise NotImplementedError
@@ -98,6 +121,20 @@ def _magnitude(value, what: str) -> sp.Expr:
     return v
 
 
+def _check_nonnegative(v: sp.Expr, what: str, hint: str, when: str) -> None:
+    if v.is_number and v.is_real and bool(v < 0):
+        raise ModelError(f"{what} must be zero or positive, got {float(v):g}{when}"
+                         + (f"; {hint}" if hint else ""))
+
+
+def check_load_values(loads, params: dict) -> None:
+    """:meth:`LoadBase.check_values` of every load (and every load inside a switch) with the
+    parameter values ``params`` ({symbol: value}) of a run."""
+    for ld in loads:
+        for inner in [ld, *(x for s in getattr(ld, "sets", ()) for x in s)]:
+            inner.check_values(params)
+
+
 def _unit(d: sp.Matrix, cutoff=0):
     n2 = (d.T * d)[0, 0]
     if cutoff:
@@ -130,10 +167,9 @@ class Force(LoadBase):
             if direction is None:
                 raise ModelError("Force needs a direction (a vector, axis or tuple)")
             self.point, self.direction = as_point(point), as_vector(direction)
-        if mode not in ("absolute", "relative"):
-            raise ModelError(f"Force mode must be 'absolute' or 'relative', got {mode!r}")
+        choice(mode, ("absolute", "relative"), "Force: mode")
         self.magnitude = _magnitude(magnitude, "Force magnitude")
-        self.mode, self.cutoff = mode, cutoff
+        self.mode, self.cutoff = mode, self._nonnegative(cutoff, "Force cutoff")
         self.reaction = as_point(reaction) if reaction is not None else None
         if mode == "absolute" and not cutoff:  # u/|u| of a zero vector is 0/0
             self.direction.check_nonzero("Force direction")
@@ -170,7 +206,8 @@ class Moment(LoadBase):
         else:
             self.vector, self.magnitude = as_vector(a), _magnitude(b, "Moment magnitude")
         self.reaction = reaction
-        self.mode, self.cutoff = mode, cutoff
+        choice(mode, ("absolute", "relative"), "Moment: mode")
+        self.mode, self.cutoff = mode, self._nonnegative(cutoff, "Moment cutoff")
         if self.vector is not None and mode == "absolute" and not cutoff:
             self.vector.check_nonzero("Moment direction")
 
@@ -221,8 +258,7 @@ class Gravity(LoadBase):
         self.g = _magnitude(g, "Gravity g")
         # one body (a handle or name) or a list of them
         self.only = [bodies] if isinstance(bodies, (str, int, BodyRef)) else bodies
-        if mode not in ("absolute", "relative"):
-            raise ModelError(f"Gravity mode must be 'absolute' or 'relative', got {mode!r}")
+        choice(mode, ("absolute", "relative"), "Gravity: mode")
         self.mode = mode
 
     def geometry(self):
@@ -284,8 +320,14 @@ class Spring(LoadBase):
     def __init__(self, point1, point2, stiffness=0, free_length=0, law=None):
         super().__init__()
         self.p1, self.p2 = as_point(point1), as_point(point2)
-        self.k = _magnitude(stiffness, "Spring stiffness")
-        self.L0, self.law = _magnitude(free_length, "Spring free_length"), law
+        law_hint = "for another force law give law=f(L), the tension as a function of the length"
+        self.k = self._nonnegative(stiffness, "Spring stiffness", law_hint)
+        self.L0 = self._nonnegative(free_length, "Spring free_length",
+                                    "a length is never negative (the spring pushes at lengths "
+                                    "below free_length, pulls above it)")
+        if law is not None and not callable(law):
+            raise ModelError(f"Spring law must be a function of the length, got {law!r}")
+        self.law = law
 
     def bodies(self):
         return self.p1.bodies() + self.p2.bodies()
@@ -317,7 +359,12 @@ class Damper(Spring):
 
     def __init__(self, point1, point2, damping=0, law=None):
         super().__init__(point1, point2)
-        self.c, self.dlaw = _magnitude(damping, "Damper damping"), law
+        self.c = self._nonnegative(damping, "Damper damping",
+                                   "a negative damping coefficient feeds energy in; for another "
+                                   "force law give law=f(L, dL/dt)")
+        if law is not None and not callable(law):
+            raise ModelError(f"Damper law must be a function (L, dL/dt), got {law!r}")
+        self.dlaw = law
 
     def tension(self, model):
         L = self.length()

@@ -64,7 +64,8 @@ class TorsionSpring(LoadBase):
                                  f"(body.axis(origin, direction, reference)), got {first!r} and "
                                  f"{second!r}") from None
             self.b1 = self.b2 = None
-        self.k = _magnitude(stiffness, f"{self.kind} stiffness")
+        self.k = self._nonnegative(stiffness, f"{self.kind} stiffness",
+                                   "for another torque law give law=f(phi)")
         self.phi0 = _magnitude(free_angle, f"{self.kind} free_angle")
         self.law = law
         if law is not None and not callable(law):
@@ -134,7 +135,9 @@ class TorsionDamper(TorsionSpring):
 
     def __init__(self, first, second, damping=0, law=None):
         super().__init__(first, second, 0, 0)
-        self.c = _magnitude(damping, "TorsionDamper damping")
+        self.c = self._nonnegative(damping, "TorsionDamper damping",
+                                   "a negative damping coefficient feeds energy in; for another "
+                                   "torque law give law=f(phi, dphi/dt)")
         if law is not None and not callable(law):
             raise ModelError(f"TorsionDamper law must be a function (phi, phidot), got {law!r}")
         self.dlaw = law

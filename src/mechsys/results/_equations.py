@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .._errors import ModelError
+from .._errors import ModelError, choice
 
 #: the parts of an Equations object, in display order, with their symbols
 PARTS = (
@@ -79,8 +79,7 @@ class Equations:
         self.centrifugal = model.centrifugal() if system.n else sp.zeros(0, 1)
 
     def _part(self, name: str):
-        if name not in dict(PARTS):
-            raise ModelError(f"equations: no part {name!r}; parts are {[p for p, _ in PARTS]}")
+        choice(name, [p for p, _ in PARTS], "equations: part")
         return getattr(self, name)
 
     def pretty(self, part: str | None = None) -> str:

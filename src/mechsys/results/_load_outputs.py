@@ -26,7 +26,7 @@ from collections.abc import Mapping
 import numpy as np
 import sympy as sp
 
-from .._errors import ModelError
+from .._errors import ModelError, choice
 from ._outputs import All, Rest, is_selection, selected_coordinates
 from ._stagewise import is_staged as _staged
 
@@ -81,8 +81,8 @@ class LoadOutputs:
             F = b.A.T * F
             if sp_.dim == 3:
                 M = b.A.T * M
-        elif coordinates != "global":
-            raise ModelError(f"coordinates must be 'global' or 'local', got {coordinates!r}")
+        else:
+            choice(coordinates, ("global", "local"), "coordinates")
         return F, M
 
     def _finish_pair(self, F, M):
@@ -296,7 +296,7 @@ class LoadOutputs:
                 if rows.start <= r < rows.stop:
                     G[r - rows.start] -= e * qdd[cidx]
         else:
-            raise ModelError(f"type must be 'applied', 'reaction' or 'dynamic', got {type!r}")
+            choice(type, ("applied", "reaction", "dynamic"), "loads: type")
         if coordinates is None:
             return self._finish(G)
         F, M = self._wrench(b, G, None, coordinates)

@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from .._errors import ModelError
+from .._errors import ModelError, choice
 from ..geometry._points import Axis, Point, Vector, as_point, as_vector
 
 
@@ -160,8 +160,7 @@ class OutputFunctions:
         """
         m = self._model()
         b = m.body(body)
-        if coordinates not in ("global", "local"):
-            raise ModelError(f"coordinates must be 'global' or 'local', got {coordinates!r}")
+        choice(coordinates, ("global", "local"), "instant_center: coordinates")
         v = m.time_derivative(b.r)
         w = m._omega(b, False)
         if m.space.dim == 3:
@@ -317,8 +316,7 @@ class VelocityViews:
         m = self._model()
         rep = representation or getattr(m, "velocity_representation", "euler")
         coords = coordinates or getattr(m, "coordinates", "global")
-        if rep not in ("euler", "angular"):
-            raise ModelError(f"representation must be 'euler' or 'angular', got {rep!r}")
+        choice(rep, ("euler", "angular"), "representation")
         bodies = [m.body(body)] if body is not None else m.bodies[1:]
         parts = []
         for b in bodies:

@@ -47,7 +47,7 @@ from numbers import Integral, Real
 import numpy as np
 from scipy.integrate import DOP853, RK45
 
-from .._errors import MechError, ModelError
+from .._errors import MechError, ModelError, choice
 from ._jit_free import PAUSE_STEPS
 
 FIT_DEGREES = {"linear": 1, "quadratic": 2, "cubic": 3, "quartic": 4}
@@ -514,7 +514,7 @@ def integration_options(method="dop853", rtol=RTOL, atol=ATOL, max_step=MAX_STEP
     first = None if starting_step_size is None else _positive("starting_step_size",
                                                                 starting_step_size)
     if not isinstance(method, str) or method.lower() not in RK_METHODS + ADAMS_METHODS:
-        raise ModelError(f"unknown method {method!r}; choose from {RK_METHODS + ADAMS_METHODS}")
+        choice(method, RK_METHODS + ADAMS_METHODS, "simulate: method")
     m = method.lower()
     if not isinstance(constraint_correction, (bool, np.bool_)):
         raise ModelError(f"constraint_correction must be True or False, got "

@@ -22,10 +22,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._errors import ConvergenceError, ModelError, SingularJacobianError
+from .._errors import ConvergenceError, ModelError, SingularJacobianError, option_fields
 from ._linalg import RCOND_MIN, SPARSE_THRESHOLD, Scaling, Singular
 
 
+@option_fields
 @dataclass(frozen=True)
 class PositionOptions:
     """Options of the position Newton solver.

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sps
 
-from .._errors import ConvergenceError, ModelError
+from .._errors import ConvergenceError, ModelError, OptionError, option_fields
 from . import _jit
 from ._linalg import SPARSE_THRESHOLD, Scaling, Singular, factor, pattern_of, pattern_slots
 from ._position import describe_singular
@@ -35,15 +35,34 @@ from ._position import describe_singular
 MODES = ("static", "kinematic", "dynamic")
 
 
+@option_fields
 @dataclass(frozen=True)
 class MultiplierOptions:
     """tol: residual tolerance of the multiplier Newton (relative to the size of the terms of
-    the residual, unit-free: see :func:`solve_multipliers`);
-    max_iterations; lambda_guess: scalar or (m,) starting values (nonlinear case)."""
+    the residual, unit-free: see :func:`solve_multipliers`), positive and finite;
+    max_iterations: positive int; lambda_guess: scalar or (m,) finite starting values
+    (nonlinear case)."""
 
     tol: float = 1e-10
     max_iterations: int = 50
     lambda_guess: object = 1.0
+
+    def __post_init__(self):
+        f = self.tol
+        if isinstance(f, bool) or not isinstance(f, (int, float, np.integer, np.floating)) \
+                or not np.isfinite(f) or f <= 0:
+            raise OptionError(f"MultiplierOptions: tol must be a positive finite number, got {f!r}")
+        k = self.max_iterations
+        if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
+            raise OptionError("MultiplierOptions: max_iterations must be a positive integer, "
+                              f"got {k!r}")
+        try:
+            g = np.asarray(self.lambda_guess, dtype=float)
+        except (TypeError, ValueError):
+            g = np.array([np.nan])
+        if g.ndim > 1 or not np.all(np.isfinite(g)):
+            raise OptionError("MultiplierOptions: lambda_guess must be a finite number or a vector "
+                              f"of finite numbers, got {self.lambda_guess!r}")
 
 
 def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
