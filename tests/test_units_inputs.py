@@ -71,6 +71,8 @@ def test_driver_angle_in_degrees_and_a_point_in_metres():
     (lambda m, b: m.add(ms.RotationLock1(b, Q(1, "m"))), "RotationLock1 angle"),
     (lambda m, b: m.solve(Q(1, "m")), "solve: t"),
     (lambda m, b: m.add_body("c", points={"p": (Q(1, "A"), 0)}), "current"),
+    (lambda m, b: m.add_load(ms.Spring(b.point(0), m.ground.point((0, 0)), Q(5, "N/m"),
+                                       Q(-1, "m"))), "free_length"),
 ])
 def test_a_quantity_of_the_wrong_dimension_is_refused(make, culprit):
     m = ms.Model2D()

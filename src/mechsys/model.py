@@ -548,6 +548,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
                 elif b.model is not self:
                     raise ModelError(f"{ld.label()} uses body {b.name!r} of another model")
             resolve(ld, self.units, ld.label())
+            ld.check_values({})  # the quantities just converted (decision 0043)
             ld.check(self)
             ld.name = name if (name and len(loads) == 1) else f"load{len(self._loads) + 1}"
             ld.model = self

@@ -77,7 +77,7 @@ class LoadBase:
         ``params`` ({symbol: value}) of a run. An expression of ``T``, coordinates or
         velocities cannot be checked before the run and is not."""
         for what, v, hint in getattr(self, "_bounds", ()):
-            if v.is_number or not v.free_symbols <= set(params):
+            if not v.free_symbols <= set(params):  # (a number: a quantity converted on add)
                 continue
             _check_nonnegative(sp.sympify(v.xreplace(params)), f"{self.label()}: {what} = {v}", hint,
                                " with the current parameter values")
