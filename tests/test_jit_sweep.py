@@ -26,12 +26,12 @@ def _both(monkeypatch, build, t, **solve):
     return out["1"], out["0"]
 
 
-def _same(a, b):
+def _same(a, b, rtol=0.0):
     for x, y in ((a.q, b.q), (a.qd, b.qd), (a.qdd, b.qdd)):
         if x is None:
             assert y is None
             continue
-        np.testing.assert_allclose(x, y, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(x, y, rtol=rtol, atol=1e-12)
     np.testing.assert_array_equal(a.iterations, b.iterations)
     assert a.evaluations == b.evaluations
 
@@ -179,7 +179,10 @@ def test_through_dead_centres_like_the_python_loop(monkeypatch):
     predictor rules."""
     t = np.linspace(0.05, 1.05, 101)
     fast, slow = _both(monkeypatch, dead_centre_crank, t)
-    _same(fast, slow)
+    # the same iterations and evaluations; values to 1e-9 relative: at the dead centres
+    # (velocities ~ 1e10, rcond ~ 1e-11) the last bits of the two LU factorisations, which
+    # differ with the CPU's LAPACK kernels, are amplified by the condition number
+    _same(fast, slow, rtol=1e-9)
     np.testing.assert_allclose(fast.angle("crank"), 2 * np.pi * t, atol=1e-5)
 
 

@@ -54,9 +54,12 @@ def test_deferred_estimates_are_the_loops_own(monkeypatch, build):
     if build is _dead_centres:
         assert (got < RCOND_WARN).any() and (got >= RCOND_WARN).any()
     np.testing.assert_array_equal(lazy.q, eager.q)
-    # and the Python loop's estimates (LAPACK's dgecon) agree to rounding
+    # and the Python loop's estimates (LAPACK's dgecon) agree to rounding; at a dead centre
+    # (rcond ~ 1e-11) the two LU factorisations' last bits, which differ with the CPU's
+    # LAPACK kernels, are amplified by the condition number
     monkeypatch.setenv("MECHSYS_JIT", "0")
-    np.testing.assert_allclose(got, build().solve(t).extra["rcond"], rtol=1e-12)
+    rtol = 1e-8 if build is _dead_centres else 1e-12
+    np.testing.assert_allclose(got, build().solve(t).extra["rcond"], rtol=rtol)
 
 
 @pytest.mark.parametrize("read", [
