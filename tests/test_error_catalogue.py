@@ -210,6 +210,12 @@ CATALOGUE = [
     ("drawing", "ms.draw.plot(sol(), [])", "ModelError", "no outputs"),
     ("drawing", 'ms.draw.animate(sol(), rate=-1.0)', "ModelError", "rate"),
     ("drawing", "ms.draw.snapshot(3.0)", "ModelError", "3.0"),
+    ("model", 'm = crank(); m.add(ms.RotationLock1(m.body("crank"), 0.0), name=1)', "ModelError",
+     "name must be a non-empty string"),
+    ("model", 'ms.Model3D().add_body("b", guess=((0, 0, 0), np.diag([1.0, 1.0, -1.0])))',
+     "GeometryError", "'b'"),
+    ("model", "ms.euler_parameters(2 * np.eye(3))", "GeometryError", "not a rotation"),
+    ("model", "ms.rotation_matrix([[1, 0, 0], [0, 1, 0], [0, 0, 1]])", "ModelError", "ambiguous"),
 ]
 
 

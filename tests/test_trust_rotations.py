@@ -102,3 +102,98 @@ def test_a_guess_given_as_a_state_far_from_the_driver():
     first = m.solve(0.0)
     sol = m.solve(0.55, guess=first)       # 198 deg from the guess
     assert _same_angle(_angle_of(sol.location(c.point("pin"))), 2 * np.pi * 0.55)
+
+
+# -- matrices that are not rotations, and the one rule for nested lists ----------------------
+
+ROT = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])     # 90 deg about z
+NOT_ROTATIONS = {
+    "reflection": np.diag([1.0, 1.0, -1.0]),
+    "reflected rotation": -ROT,
+    "shear": np.array([[1.0, 0.3, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]),
+    "2 I": 2 * np.eye(3),
+    "NaN": np.array([[np.nan, 0, 0], [0, 1, 0], [0, 0, 1]]),
+    "rounded to 3 digits": np.round(ms.rotation_matrix((0.7, (1, 2, 3))), 3),
+}
+
+
+def _rotation_uses(R):
+    """Every entry point that takes a rotation, given ``R``."""
+    def guess():
+        ms.Model3D().add_body("b", guess=((0, 0, 0), R))
+
+    def lock3():
+        m = ms.Model3D()
+        m.add(ms.RotationLock3(m.add_body("b"), R))
+
+    def lock3_in_sequence():
+        m = ms.Model3D()
+        m.add(ms.RotationLock3(m.add_body("b"), (0.3, (0, 0, 1)), R))
+
+    return {"euler_parameters": lambda: ms.euler_parameters(R),
+            "rotation_matrix": lambda: ms.rotation_matrix(R),
+            "rotation": lambda: ms.rotation(R),
+            "virtual_rotation": lambda: ms.virtual_rotation(R),
+            "parallel_axis": lambda: ms.parallel_axis((0, 0, 0), 1.0, (1, 2, 3), R),
+            "body guess": guess, "RotationLock3": lock3, "RotationLock3 sequence": lock3_in_sequence}
+
+
+@pytest.mark.parametrize("kind", list(NOT_ROTATIONS))
+@pytest.mark.parametrize("use", list(_rotation_uses(None)))
+def test_matrices_that_are_not_rotations_are_refused(kind, use):
+    R = NOT_ROTATIONS[kind]
+    for given in (R, sp.Matrix(R)) if kind != "NaN" else (R,):
+        with pytest.raises(ms.GeometryError, match="not a rotation|reflection|not finite") as e:
+            _rotation_uses(given)[use]()
+        if use == "body guess":
+            assert "'b'" in str(e.value)
+
+
+def test_rotation_matrices_are_still_taken_everywhere():
+    R = ms.rotation_matrix((0.7, (1, 2, 3)))
+    e = ms.euler_parameters(R)
+    np.testing.assert_allclose(ms.rotation_matrix(e), R, atol=1e-14)
+    # printed to 8 digits is still a rotation (within the documented 1e-6)
+    np.testing.assert_allclose(ms.euler_parameters(np.round(R, 8)), e, atol=1e-7)
+    m = ms.Model3D()
+    b = m.add_body("b", guess=((0, 0, 0), sp.Matrix(R)))
+    np.testing.assert_allclose(m.guess()[3:], e, atol=1e-14)
+    # a RotationLock3 given the matrix holds the body at it
+    m.add(ms.OriginLock3(b))
+    m.add(ms.RotationLock3(b, R))
+    m.set_guess(np.array([0, 0, 0, 1.0, 0, 0, 0]))
+    sol = m.solve(solution="location")
+    np.testing.assert_allclose(ms.rotation_matrix(np.ravel(sol.q)[3:]), R, atol=1e-12)
+
+
+@pytest.mark.parametrize("bad", [(np.nan, 0, 0, 0), (0, 0, 0, 0), (np.inf, (0, 0, 1)),
+                                 (0.0, np.nan, 0.0)])
+def test_non_finite_or_zero_rotations_are_refused(bad):
+    with pytest.raises(ms.GeometryError):
+        ms.euler_parameters(bad)
+    with pytest.raises(ms.GeometryError, match="'b'"):
+        ms.Model3D().add_body("b", guess=((0, 0, 0), bad))
+
+
+@pytest.mark.parametrize("nested", [ROT.tolist(), tuple(map(tuple, ROT)), np.eye(3).tolist(),
+                                    [list(r) for r in np.round(ms.rotation_matrix((1, (1, 1, 0))), 4)],
+                                    [np.array([1.0, 0, 0]), np.array([0, 1.0, 0]), np.array([0, 0, 1.0])]])
+def test_a_nested_3x3_list_is_refused_the_same_way_everywhere(nested):
+    # the same text could be a matrix (loads.md's old rule) or three rotation vectors
+    # (spatial.md's): one rule, a refusal saying how to write each
+    for use, call in _rotation_uses(nested).items():
+        with pytest.raises(ms.ModelError, match="ambiguous") as e:
+            call()
+        assert "np.array" in str(e.value) and "(angle, (x, y, z))" in str(e.value), use
+
+
+def test_the_two_unambiguous_spellings_mean_what_they_say():
+    R = ROT
+    np.testing.assert_allclose(ms.rotation_matrix(np.array(R)), R, atol=1e-15)
+    seq = [(1.0, (1, 0, 0)), (1.0, (0, 1, 0)), (1.0, (0, 0, 1))]   # three rotations of 1 rad
+    expect = (ms.rotation_matrix((1.0, (1, 0, 0))) @ ms.rotation_matrix((1.0, (0, 1, 0)))
+              @ ms.rotation_matrix((1.0, (0, 0, 1))))
+    np.testing.assert_allclose(ms.rotation_matrix(seq), expect, atol=1e-14)
+    # parallel_axis reads the matrix as the inertia transformation R J R^T
+    J = ms.parallel_axis((0, 0, 0), 1.0, (1.0, 2.0, 3.0), np.array(R))
+    np.testing.assert_allclose(J[:3], [2.0, 1.0, 3.0], atol=1e-14)
