@@ -197,3 +197,13 @@ def test_the_two_unambiguous_spellings_mean_what_they_say():
     # parallel_axis reads the matrix as the inertia transformation R J R^T
     J = ms.parallel_axis((0, 0, 0), 1.0, (1.0, 2.0, 3.0), np.array(R))
     np.testing.assert_allclose(J[:3], [2.0, 1.0, 3.0], atol=1e-14)
+
+
+def test_free_motion_starts_on_the_driven_angle():
+    # a driver kept in free motion: the initial positions are projected onto the
+    # constraints from the guess (0), half a turn from the asked 200 degrees
+    m, c = crank3d(2 * sp.pi * T + sp.rad(200))
+    c.mass, c.inertia = 1.0, (1.0, 1.0, 1.0)
+    sol = m.free().simulate(t=(0, 0.25))
+    a = _angle_of(sol.location(c.point("pin")))
+    assert _same_angle(a, 2 * np.pi * np.asarray(sol.t) + np.radians(200))
