@@ -58,3 +58,30 @@ def test_copy_copy_is_independent():
     # the original still solves as before, and so does an unedited copy
     for mm in (m, copy.copy(m), copy.deepcopy(m)):
         assert mm.solve(solution="location").location(mm.body("b").point(0))[0] == pytest.approx(1.5)
+
+
+def test_a_default_name_taken_by_a_given_one_is_not_a_clash():
+    m = ms.Model2D()
+    b = m.add_body("b", guess=((1, 0), 0))
+    m.add(ms.Translate2(m.ground.axis((0, 0), (1, 0)), b.axis((0, 0), (1, 0))), name="c2")
+    second = m.add(ms.RelativeX1(b.point(0), 1.5))      # its default name would be "c2"
+    assert second.number == 2 and second.name != "c2"
+    assert m.constraint(second.name) is second and m.constraint("c2").number == 1
+    assert m.solve(solution="location").location(b.point(0))[0] == pytest.approx(1.5)
+
+
+def test_copy_of_a_model_with_redundant_constraints_after_a_solve():
+    # the model caches the reduced systems of redundant constraints: not copied, rebuilt
+    m = ms.Model2D()
+    b = m.add_body("b", guess=((1, 0), 0))
+    m.add(ms.Translate2(m.ground.axis((0, 0), (1, 0)), b.axis((0, 0), (1, 0))))
+    m.add(ms.RelativeY1(b.point(0), 0.0))                 # redundant with the guide
+    m.add(ms.RelativeX1(b.point(0), 1.5))
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m.solve(solution="location")
+        cp = copy.copy(m)
+        assert "_reduced" not in cp.__dict__
+        assert cp.solve(solution="location").location(cp.body("b").point(0))[0] == pytest.approx(1.5)

@@ -193,6 +193,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         new = type(self).__new__(type(self))
         memo[id(self)] = new
         for key, value in self.__dict__.items():
+            if key == "_reduced":    # compiled systems of redundant models: made again on use
+                continue
             skip = key in ("_system", "last_solution")
             new.__dict__[key] = None if skip else _copy.deepcopy(value, memo)
         scene = sys.modules.get("mechsys.draw._scene")  # graphics, if any were attached
@@ -374,7 +376,10 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
             raise ModelError(f"add() takes a constraint object, got {constraint!r}")
         if constraint.model is not None:
             raise ModelError(f"{constraint.label()} is already in a model; create a new one")
-        name = _checked_name(name, "constraint", f"c{len(self._constraints) + 1}")
+        default = len(self._constraints) + 1
+        while any(c.name == f"c{default}" for c in self._constraints):
+            default += 1     # a name given earlier took the default one: not a clash of the user's
+        name = _checked_name(name, "constraint", f"c{default}")
         if any(c.name == name for c in self._constraints):
             raise ModelError(f"a constraint named {name!r} already exists")
         for v in constraint.new_variables():
