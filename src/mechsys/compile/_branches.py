@@ -15,8 +15,8 @@ even number of zeros per turn), so the solvers test the root instead: with
   by pi) and solved again, and a solution still on the wrong branch raises
   :class:`~mechsys.ConvergenceError` naming the constraint (decision 0033).
 
-The guard is numeric (NumPy functions of ``t, q, p`` lambdified once per system) and holds
-no SymPy after it is built, so the solvers use it through ``system.branch_guard``.
+The guard is numeric (compiled once per system, like the kinematic kernels, as a function of
+``[t, q, qd, p]``), so the solvers use it through ``system.branch_guard``.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ import math
 import numpy as np
 import sympy as sp
 
-from .._symbols import T
+from ._backends import compile_exprs
 
 #: ``cos_err / hypot(cos_err, sin_err)`` below this is the wrong branch (a quarter turn off
 #: and more); the margin keeps rounding at a right angle from flipping a regular guess
@@ -60,18 +60,19 @@ class BranchGuard:
             exprs += [sp.sympify(e).xreplace(sub) if sub else sp.sympify(e) for e in parts]
         self.size = [2 + (0 if sl is None else self.dim + (3 if self.dim == 3 else 0))
                      for sl in self.slices]
-        args = [T, *lay.q_symbols, *lay.p_symbols]
-        self._f = sp.lambdify(args, exprs, modules="numpy")
-        self._p = system.p_values
+        # compiled like the kinematic kernels (a few evaluations per solve: unoptimised LLVM,
+        # cheap to build; a lambdified NumPy function cost ~0.3 ms a call)
+        self._f = compile_exprs(lay.args(), exprs, system.backend, once=True, cse=True)
+        self._pack = system.pack
 
     def _values(self, t, Q, p) -> list:
         """The expressions at the rows of ``Q`` ((N, n)) and times ``t`` ((N,)): a list of
         (N,) arrays."""
         Q = np.atleast_2d(np.asarray(Q, dtype=float))
         t = np.broadcast_to(np.asarray(t, dtype=float), (len(Q),))
-        pv = self._p if p is None else np.asarray(p, dtype=float)
-        out = self._f(t, *Q.T, *pv)
-        return [np.broadcast_to(np.asarray(v, dtype=float), (len(Q),)) for v in out]
+        out = np.array([np.asarray(self._f(self._pack(ti, qi, None, p)), dtype=float).ravel()
+                        for ti, qi in zip(t, Q)])
+        return list(out.T)
 
     def wrong_rows(self, t, Q, p=None) -> np.ndarray:
         """(N, items) bool: row ``i`` is on the wrong branch of item ``j``."""
