@@ -207,3 +207,27 @@ def test_free_motion_starts_on_the_driven_angle():
     sol = m.free().simulate(t=(0, 0.25))
     a = _angle_of(sol.location(c.point("pin")))
     assert _same_angle(a, 2 * np.pi * np.asarray(sol.t) + np.radians(200))
+
+
+@pytest.mark.parametrize("deg", [100, 180, 200, -170])
+def test_one_axis_form_measured_from_rest(deg):
+    # RotationLock1(axis, angle): from the same axis on ground at rest
+    m = ms.Model3D()
+    c = m.add_body("crank", points={"pin": (0, 1, 0)})
+    m.add(ms.Revolute5(m.ground.axis((0, 0, 0), (1, 0, 0)), c.axis((0, 0, 0), (1, 0, 0))))
+    m.add(ms.RotationLock1(c.axis((0, 0, 0), (1, 0, 0), (0, 1, 0)), sp.rad(deg)), name="drive")
+    pin = m.solve(solution="location").location(c.point("pin"))
+    a = np.radians(deg)       # about +x, y turns towards z
+    assert np.allclose(pin, [0, np.cos(a), np.sin(a)], atol=1e-9)
+
+
+@pytest.mark.parametrize("jit", ["0", "1"])
+def test_three_turns_at_coarse_steps_in_a_location_sweep(monkeypatch, jit):
+    monkeypatch.setenv("MECHSYS_JIT", jit)
+    t = np.linspace(0, 3, 13)                 # quarter and more of a turn per step
+    m, c, s = slider_crank2d(2 * sp.pi * T * 1.1 + 1.0)
+    sol = m.solve(t, solution="location")
+    a = 2 * np.pi * 1.1 * t + 1.0
+    assert _same_angle(_angle_of(sol.location(c.point("pin"))), a)
+    x = np.cos(a) + np.sqrt(9 - np.sin(a) ** 2)
+    np.testing.assert_allclose(sol.location(s.point(0))[:, 0], x, atol=1e-9)
