@@ -26,6 +26,7 @@ import math
 import numpy as np
 import sympy as sp
 
+from .._errors import MechError
 from ._backends import compile_exprs
 
 #: ``cos_err / hypot(cos_err, sin_err)`` below this is the wrong branch (a quarter turn off
@@ -163,8 +164,8 @@ def make_guard(system) -> BranchGuard | None:
         seen.add(id(owner))
         try:
             it = owner.branch(system.space)
-        except Exception:   # a constraint whose geometry the test cannot take: no test
-            it = None
+        except (MechError, TypeError, ValueError, AttributeError):
+            it = None       # geometry the test cannot take (the equations were built): no test
         if it is not None:
             items.append(it)
     return BranchGuard(system, items) if items else None
