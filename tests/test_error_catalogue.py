@@ -222,6 +222,12 @@ CATALOGUE = [
      "another model"),
     ("solve", "m = crank(); m.replace(\"drive\", ms.RotationLock1(m.body(\"crank\"), sp.sqrt(-1) * T));"
      " m.solve(0.0)", "ModelError", "complex constant"),
+    ("model", 'm = crank(); m.add(ms.RotationLock1(m.body("crank"), 0.0), name=1)', "ModelError",
+     "name must be a non-empty string"),
+    ("model", 'ms.Model3D().add_body("b", guess=((0, 0, 0), np.diag([1.0, 1.0, -1.0])))',
+     "GeometryError", "'b'"),
+    ("model", "ms.euler_parameters(2 * np.eye(3))", "GeometryError", "not a rotation"),
+    ("model", "ms.rotation_matrix([[1, 0, 0], [0, 1, 0], [0, 0, 1]])", "ModelError", "ambiguous"),
 ]
 
 

@@ -136,9 +136,13 @@ def test_parallel_axis_rotation_formats_against_scipy():
     euler = (q[3], q[0], q[1], q[2])
     d, mass = np.array([0.3, -0.2, 0.7]), 2.5
     expected = R @ _matrix(J_C) @ R.T + mass * (d @ d * np.eye(3) - np.outer(d, d))
-    for rot in ((angle, tuple(axis)), tuple(rv), euler, R, R.tolist()):
+    for rot in ((angle, tuple(axis)), tuple(rv), euler, R, sp.Matrix(R)):
         got = _matrix(ms.parallel_axis(d, mass, J_C, rot))
         np.testing.assert_allclose(got, expected, atol=1e-12)
+    # a nested list is ambiguous (a matrix, or three rotation vectors?): refused, as by every
+    # function taking a rotation (issue 34)
+    with pytest.raises(ms.ModelError, match="ambiguous"):
+        ms.parallel_axis(d, mass, J_C, R.tolist())
 
 
 def test_parallel_axis_rotation_round_trip_with_negative_mass():

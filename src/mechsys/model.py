@@ -193,18 +193,31 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         """An independent copy of the model: bodies, points, constraints, loads,
         parameters, variables, guesses and attached graphics, all rebound to the copy
         (editing one does not change the other). The compiled system and the last solution
-        are not copied (the copy compiles on first use)."""
+        are not copied (the copy compiles on first use). ``copy.copy(m)`` and
+        ``copy.deepcopy(m)`` do the same."""
+        return self.__deepcopy__({})
+
+    def __copy__(self) -> Model:
+        """``copy.copy(m)`` is :meth:`copy`: a shallow copy would share the lists of bodies,
+        constraints and loads, so editing one model would change the other."""
+        return self.copy()
+
+    def __deepcopy__(self, memo) -> Model:
+        """``copy.deepcopy(m)`` is :meth:`copy` (the shared singletons stay shared; the
+        compiled system and the last solution are not copied)."""
         import copy as _copy
         import sys
 
         # shared singletons stay shared: the spaces (compared by identity) and the time symbol
-        memo = {id(PLANAR): PLANAR, id(SPATIAL): SPATIAL, id(PLANAR_EULER): PLANAR_EULER, id(T): T}
-        saved = (self._system, self.last_solution)
-        self._system = self.last_solution = None
-        try:
-            new = _copy.deepcopy(self, memo)
-        finally:
-            self._system, self.last_solution = saved
+        for single in (PLANAR, SPATIAL, PLANAR_EULER, T):
+            memo.setdefault(id(single), single)
+        new = type(self).__new__(type(self))
+        memo[id(self)] = new
+        for key, value in self.__dict__.items():
+            if key == "_reduced":    # compiled systems of redundant models: made again on use
+                continue
+            skip = key in ("_system", "last_solution")
+            new.__dict__[key] = None if skip else _copy.deepcopy(value, memo)
         scene = sys.modules.get("mechsys.draw._scene")  # graphics, if any were attached
         if scene is not None and scene.attached(self):
             scene.attach(new, *_copy.deepcopy(scene.attached(self), memo))
@@ -423,8 +436,11 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
             raise ModelError(f"add() takes a constraint object, got {constraint!r}")
         if constraint.model is not None:
             raise ModelError(f"{constraint.label()} is already in a model; create a new one")
-        resolve(constraint, self.units, f"constraint {name or type(constraint).__name__!r}")
-        name = name or f"c{len(self._constraints) + 1}"
+        default = len(self._constraints) + 1
+        while any(c.name == f"c{default}" for c in self._constraints):
+            default += 1     # a name given earlier took the default one: not a clash of the user's
+        name = _checked_name(name, "constraint", f"c{default}")
+        resolve(constraint, self.units, f"constraint {name!r}")
         if any(c.name == name for c in self._constraints):
             raise ModelError(f"a constraint named {name!r} already exists")
         for v in constraint.new_variables():
@@ -537,6 +553,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         from .loads._loads import LoadBase
 
         loads = load if isinstance(load, (list, tuple)) else [load]
+        name = _checked_name(name, "load", None)
         for ld in loads:
             if not isinstance(ld, LoadBase):
                 raise ModelError(f"add_load() takes load objects, got {ld!r}")
@@ -1245,6 +1262,22 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         from .results._repr import model_latex
 
         return model_latex(self)
+
+
+def _checked_name(name, what: str, default):
+    """The name given to a new constraint or load, or ``default`` when none is given.
+
+    Constraints and loads are addressed by name (a string) or by number (an int), so a name
+    must be a non-empty string: a name ``1`` would make ``m.remove(1)`` ambiguous, and a bool
+    or a NumPy integer is a number too."""
+    if name is None:
+        return default
+    if not isinstance(name, str) or not name.strip():
+        raise ModelError(f"{what} name must be a non-empty string, got {name!r} "
+                         f"({type(name).__name__}); {what}s are addressed by name (a string) or "
+                         "by Mech number (an int), so a name cannot be a number: write it as "
+                         "text, e.g. name='drive'")
+    return name
 
 
 def _owner_name(owner) -> str:

@@ -120,8 +120,14 @@ class VibrationModes:
     undamped conservative system; else complex with the largest unit-free component 1);
     ``coordinates`` the coordinate names; ``t``, ``q``, ``qd`` the reference state;
     ``mass``, ``damping``, ``stiffness`` the reduced ``M_r, C_r, K_r`` (f, f) and
-    ``basis`` ``P`` (n, f) with ``dq = P z``; ``stable`` whether no eigenvalue has a positive
-    real part (above rounding).
+    ``basis`` ``P`` (n, f) with ``dq = P z``; ``stability`` (k,) each mode's class,
+    ``"stable"`` (``Re s < 0``: decays), ``"neutral"`` (``Re s = 0`` within the mode's own
+    accuracy: an undamped oscillation, or a zero eigenvalue -- a rigid-body motion or a
+    neutral equilibrium, which the linearisation cannot decide) or ``"unstable"``
+    (``Re s > 0``: grows); ``stable`` whether no mode is unstable. Each eigenvalue is judged
+    on its own scale: ``|Re s| <= 1e-7 s_own`` or ``<= 1e-12 max |s|`` is neutral, with
+    ``s_own = sqrt(|z|^T |K_r| |z| / |z^H M_r z|) + |z|^T |C_r| |z| / |z^H M_r z|`` the size
+    of the terms the mode's eigenvalue comes from (not the stiffest mode's).
     """
 
     eigenvalues: np.ndarray
@@ -139,6 +145,7 @@ class VibrationModes:
     stiffness: np.ndarray
     basis: np.ndarray
     stable: bool
+    stability: tuple
     system: object = field(repr=False)
     model: object = field(repr=False)
     p: np.ndarray = field(repr=False)
@@ -202,9 +209,10 @@ class VibrationModes:
 
     def table(self) -> str:
         """A text table: mode, natural frequency [Hz, rad/s], damping ratio."""
-        lines = [f"{'mode':>4} {'f [Hz]':>14} {'omega [rad/s]':>14} {'zeta':>10}"]
-        for i, (h, w, z) in enumerate(zip(self.hz, self.omega, self.damping_ratio)):
-            lines.append(f"{i:>4} {h:>14.6g} {w:>14.6g} {z:>10.4g}")
+        lines = [f"{'mode':>4} {'f [Hz]':>14} {'omega [rad/s]':>14} {'zeta':>10} {'':>8}"]
+        for i, (h, w, z, c) in enumerate(zip(self.hz, self.omega, self.damping_ratio,
+                                             self.stability)):
+            lines.append(f"{i:>4} {h:>14.6g} {w:>14.6g} {z:>10.4g} {c:>8}")
         return "\n".join(lines)
 
     def __repr__(self) -> str:
@@ -389,15 +397,43 @@ def vibration(model, at=None, drop=(), t=None, tolerance: float = 1e-6,
     omega = np.abs(s)
     with np.errstate(invalid="ignore", divide="ignore"):
         zeta = np.where(omega > 0, -s.real / np.where(omega > 0, omega, 1.0), np.nan) + 0.0
-    scale_s = max(float(omega.max(initial=0.0)), 1e-300)
-    stable = bool(np.all(s.real <= 1e-9 * scale_s))
+    floor = _neutral_floor(Mr, Cr, Kr, Z, s)
+    stability = tuple("neutral" if abs(x.real) <= fl else "unstable" if x.real > 0 else "stable"
+                      for x, fl in zip(s, floor))
     for a in (s, omega, zeta, shapes, Mr, Cr, Kr, P):
         a.setflags(write=False)
     return VibrationModes(
         eigenvalues=s, omega=omega, hz=omega / (2 * np.pi), damped_omega=np.abs(s.imag),
         damping_ratio=zeta, shapes=shapes, coordinates=tuple(system.layout.q_names), t=t0,
-        q=q, qd=qd, mass=Mr, damping=Cr, stiffness=Kr, basis=P, stable=stable,
+        q=q, qd=qd, mass=Mr, damping=Cr, stiffness=Kr, basis=P,
+        stable="unstable" not in stability, stability=stability,
         system=system, model=model, p=p, columns=unit)
+
+
+#: a mode is neutral when ``|Re s| <= NEUTRAL * (its own frequency scale)``: the double zero
+#: eigenvalue of a rigid-body motion is computed to about the square root of the rounding
+NEUTRAL = 1e-7
+#: and, whatever its own scale, when ``|Re s| <= ROUNDING * max |s|``: the eigensolver's
+#: absolute accuracy, below which no sign is known
+ROUNDING = 1e-12
+
+
+def _mode_scale(M, C, K, Z) -> np.ndarray:
+    """Each mode's own frequency scale ``sqrt(|z|^T |K| |z| / m) + |z|^T |C| |z| / m`` with
+    ``m = |z^H M z|`` [1/s]: the size of the terms its eigenvalue comes from (a mode of a
+    soft spring is judged against that spring, not against the stiffest one of the model)."""
+    a = np.abs(Z)
+    m = np.abs(np.einsum("ik,ij,jk->k", Z.conj(), M, Z))
+    m = np.maximum(m, 1e-14 * np.einsum("ik,ij,jk->k", a, np.abs(M), a) + 1e-300)
+    k = np.einsum("ik,ij,jk->k", a, np.abs(K), a)
+    c = np.einsum("ik,ij,jk->k", a, np.abs(C), a)
+    return np.sqrt(k / m) + c / m
+
+
+def _neutral_floor(M, C, K, Z, s) -> np.ndarray:
+    """Per mode, the ``|Re s|`` at or below which the mode is neutral (see ``NEUTRAL``)."""
+    big = float(np.abs(s).max(initial=0.0))
+    return np.maximum(NEUTRAL * _mode_scale(M, C, K, Z), ROUNDING * big)
 
 
 def _coordinate_translation(system) -> np.ndarray:
@@ -530,7 +566,13 @@ def _eigen(M, C, K):
         except np.linalg.LinAlgError:
             w2 = None
         if w2 is not None:
-            w2 = np.where(np.abs(w2) <= 1e-13 * np.abs(w2).max(initial=0.0), 0.0, w2)
+            # each mode on its own scale (issue 34): the Rayleigh quotient z^T K z (z^T M z = 1)
+            # is accurate to the rounding of the terms it sums, |z|^T |K| |z|, which for a soft
+            # mode beside a stiff one is far below the stiffest eigenvalue
+            Ks = (K + K.T) / 2
+            w2 = np.einsum("ik,ij,jk->k", Z, Ks, Z)
+            own = np.einsum("ik,ij,jk->k", np.abs(Z), np.abs(Ks), np.abs(Z))
+            w2 = np.where(np.abs(w2) <= 1e-13 * own, 0.0, w2)
             s = np.where(w2 >= 0, 1j * np.sqrt(np.abs(w2)), np.sqrt(np.abs(w2)) + 0j)
             order = np.argsort(np.abs(s), kind="stable")
             return s[order], Z[:, order], True
@@ -544,8 +586,11 @@ def _eigen(M, C, K):
     keep = (w.imag > 1e-12 * scale) | (np.abs(w.imag) <= 1e-12 * scale)
     w, V = w[keep], V[:f, keep]
     w = np.where(np.abs(w.imag) <= 1e-12 * scale, w.real + 0j, w)
-    # a rigid-body motion gives a double zero eigenvalue (position and velocity): one mode
-    zero = np.flatnonzero(np.abs(w) <= 1e-9 * scale)
+    # a rigid-body motion gives a double zero eigenvalue (position and velocity): one mode.
+    # Zero on the mode's own scale (issue 34): against the largest eigenvalue, a slightly
+    # unstable soft mode beside a stiff one was taken for one and could be dropped
+    own = _mode_scale(M, C, K, V)
+    zero = np.flatnonzero(np.abs(w) <= np.maximum(NEUTRAL * own, ROUNDING * scale))
     drop = zero[(len(zero) + 1) // 2 :]
     w, V = np.delete(w, drop), np.delete(V, drop, axis=1)
     order = np.lexsort((w.real, np.abs(w)))

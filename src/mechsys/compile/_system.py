@@ -163,6 +163,17 @@ class System:
         return k
 
     @property
+    def branch_guard(self):
+        """The :class:`~mechsys.compile._branches.BranchGuard` of the angle equations that
+        also hold half a turn off (None when there are none): the solvers test their roots
+        with it (decision 0033). Built on first use."""
+        if not hasattr(self, "_branch_guard"):
+            from ._branches import make_guard
+
+            self._branch_guard = make_guard(self)
+        return self._branch_guard
+
+    @property
     def length_hint(self) -> float:
         """The largest numeric local coordinate of the bodies' points and centroids (0 when
         none): a length of the model's geometry, for the unit-free scaling of the solvers when

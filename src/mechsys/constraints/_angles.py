@@ -10,11 +10,14 @@ the projection of a vector ``f`` is ``a`` when::
 
     cos(a) (k . f) - sin(a) (g . f) = 0
 
-which is regular at the solution for every ``a`` (it also holds at ``a + pi``; the guess
-picks the branch, as for ``Parallel1``).
+which is regular at the solution for every ``a``. It also holds at ``a + pi``; for the
+drivers (``RotationLock1``, ``RelativeAngle1`` in 2D) the solvers tell the two apart by
+:class:`Branch` (decision 0033); elsewhere the guess picks the branch, as for ``Parallel1``.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import sympy as sp
 
@@ -56,6 +59,50 @@ def angle_equation(frame, f: sp.Matrix, angle) -> sp.Expr:
     g, k = frame
     a = sp.sympify(angle)
     return sp.cos(a) * k.dot(f) - sp.sin(a) * g.dot(f)
+
+
+@dataclass(frozen=True)
+class Branch:
+    r"""The branch test of an angle equation ``cos(a) (k . f) - sin(a) (g . f) = 0``.
+
+    The equation is ``|f_p| sin(phi - a) = 0`` with ``phi`` the angle of ``f``'s projection
+    ``f_p``: it holds at ``phi = a`` and at ``phi = a + pi``. ``cos_err = |f_p| cos(phi - a)``
+    (``cos(a) (g . f) + sin(a) (k . f)``) tells them apart: positive on the asked branch,
+    negative on the other; ``sin_err`` is the equation itself, so
+    ``phi - a = atan2(sin_err, cos_err)``. To move a configuration onto the asked angle,
+    ``body`` (moving) is turned by ``sign * (phi - a)`` about the global unit direction
+    ``axis`` (None in 2D: about the plane's normal) through the global point ``origin``;
+    ``body`` is None when no single body carries ``f`` (the branch is then only tested).
+    """
+
+    owner: object
+    cos_err: sp.Expr
+    sin_err: sp.Expr
+    body: object
+    sign: int
+    axis: sp.Matrix | None
+    origin: sp.Matrix | None
+
+
+def _turnable(vec):
+    """The moving body a vector is fixed in, or None (ground, global, or between points)."""
+    if vec.points is not None or isinstance(vec, GlobalVector):
+        return None
+    b = vec.body
+    return None if b is None or b.is_ground else b
+
+
+def angle_branch(owner, frame, f: sp.Matrix, angle, turn1, turn2, axis, origin1, origin2):
+    """The :class:`Branch` of ``angle_equation(frame, f, angle)``: ``turn1`` is the body of
+    ``f`` (turned by ``-(phi - a)`` about ``axis`` through ``origin1``), ``turn2`` the body of
+    the frame (turned by ``+(phi - a)`` through ``origin2``), used when ``turn1`` is None."""
+    g, k = frame
+    a = sp.sympify(angle)
+    cos_err = sp.cos(a) * g.dot(f) + sp.sin(a) * k.dot(f)
+    sin_err = sp.cos(a) * k.dot(f) - sp.sin(a) * g.dot(f)
+    if turn1 is not None:
+        return Branch(owner, cos_err, sin_err, turn1, -1, axis, origin1)
+    return Branch(owner, cos_err, sin_err, turn2, 1, axis, origin2 if turn2 is not None else None)
 
 
 def _body_of(obj):
@@ -100,7 +147,11 @@ class RotationLock1(ConstraintBase):
     (in 2D ``g_i`` are the unit axis directions and ``k_2`` the left normal of ``u_2``).
     ``RotationLock1(axis, angle)`` measures from the same axis on ground at rest. ``angle``
     may be an expression of ``T`` (a rotational driver). The equation is regular for every
-    angle; it also holds at ``angle + pi``, so start from a guess near the intended branch.
+    angle; it also holds at ``angle + pi``, and the solvers tell the two apart by the sign
+    of ``cos(angle) (g_2 . g_1) + sin(angle) (k_2 . g_1)`` (positive at the asked angle): a
+    guess or prediction more than a quarter turn off is first turned onto the asked angle,
+    and a solution half a turn off is turned and solved again (decision 0033). The same
+    holds for the 2D body form in Euler-parameter coordinates (``orientation="euler"``).
     In 3D a body's whole orientation is locked with ``RotationLock3``.
     """
 
@@ -159,6 +210,29 @@ class RotationLock1(ConstraintBase):
         g1 = angle_frame(space, self.axis1)[0]
         return [angle_equation(angle_frame(space, self.axis2), g1, self.angle)]
 
+    def branch(self, space) -> Branch | None:
+        """The :class:`Branch` that tells the asked angle from ``angle + pi`` (None for the
+        2D body form in angle coordinates, linear in the angle: it has one root)."""
+        if self.b1 is not None:
+            if not hasattr(space, "relative_rotation"):
+                return None
+            rot = [None if b is None or b.is_ground else b.q[2:] for b in (self.b1, self.b2)]
+            c, s = space.relative_rotation(*rot)
+            a = self.angle
+            cos_err, sin_err = c * sp.cos(a) + s * sp.sin(a), s * sp.cos(a) - c * sp.sin(a)
+            if not self.b1.is_ground:
+                return Branch(self, cos_err, sin_err, self.b1, -1, None, self.b1.r)
+            b2 = self.b2 if self.b2 is not None and not self.b2.is_ground else None
+            return Branch(self, cos_err, sin_err, b2, 1, None, None if b2 is None else b2.r)
+        frame = angle_frame(space, self.axis2)
+        axis = None
+        if space.dim == 3:
+            d = self.axis2.dir
+            axis = d.direction() / vector_norm(d)
+        return angle_branch(self, frame, angle_frame(space, self.axis1)[0], self.angle,
+                            _turnable(self.axis1.dir), _turnable(self.axis2.dir), axis,
+                            self.axis1.origin.location(), self.axis2.origin.location())
+
 
 class RelativeAngle1(TwoVectors):
     r"""The angle between two vectors. Removes 1 DOF (2D/3D).
@@ -171,8 +245,8 @@ class RelativeAngle1(TwoVectors):
 
         cos(angle) (n_2 . u_1) - sin(angle) (u_2 . u_1) = 0
 
-    (regular for every angle; also admits ``angle + pi``, so start near the intended
-    branch).
+    (regular for every angle; it also admits ``angle + pi``, which the solvers refuse by the
+    sign of ``cos(angle) (u_2 . u_1) + sin(angle) (n_2 . u_1)``, as for ``RotationLock1``).
 
     3D (unsigned, Mech's): the included angle between the vectors is ``|angle|``::
 
@@ -187,6 +261,18 @@ class RelativeAngle1(TwoVectors):
     def __init__(self, vector1, vector2, angle):
         super().__init__(vector1, vector2)
         self.angle = as_expr(angle, "RelativeAngle1 angle")
+
+    def branch(self, space) -> Branch | None:
+        """2D: the :class:`Branch` that tells the asked angle from ``angle + pi`` (3D: None,
+        the included angle has one root in ``[0, pi]``)."""
+        if space.dim != 2:
+            return None
+        u1 = self.v1.direction()
+        frame = (self.v2.direction(), P.normals(space, self.v2)[0])
+        # a relative angle fixes orientations only: turn a body about its own origin
+        b1, b2 = _turnable(self.v1), _turnable(self.v2)
+        return angle_branch(self, frame, u1, self.angle, b1, b2, None,
+                            None if b1 is None else b1.r, None if b2 is None else b2.r)
 
     def _build(self, space):
         u1, u2 = self.v1.direction(), self.v2.direction()

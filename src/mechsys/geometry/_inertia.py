@@ -28,9 +28,9 @@ def _as_list6(J: np.ndarray):
 
 
 def _rotation_matrix(rotation) -> np.ndarray:
-    """3x3 matrix of a rotation given as a matrix or in any of Mech's rotation formats."""
-    if np.asarray(rotation, dtype=object).shape == (3, 3):
-        return np.asarray(rotation, dtype=float)
+    """3x3 matrix of a rotation in any of Mech's formats, read by the one rule of
+    :mod:`mechsys.geometry._rotations` (a matrix is checked to be a rotation; a nested 3x3
+    list is refused as ambiguous)."""
     return np.asarray(rotation_matrix(rotation), dtype=float)
 
 
@@ -45,8 +45,9 @@ def parallel_axis(vector, mass: float, inertia, rotation=None):
     ``rotation`` (3D) is the rotation of the centroidal frame relative to the new frame,
     ``R`` its matrix (columns: the centroidal axes in new-frame components). As in Mech it
     may be given as ``(angle, (x, y, z))``, a virtual rotation vector ``(vx, vy, vz)``
-    (axis times angle), Euler parameters ``(e0, e1, e2, e3)``, or a 3x3 rotation matrix
-    (here a nested 3x3 list is a matrix, not a sequence of rotations).
+    (axis times angle), Euler parameters ``(e0, e1, e2, e3)``, or a 3x3 rotation matrix as
+    a NumPy array or SymPy ``Matrix`` (checked to be a rotation; a nested 3x3 Python list is
+    refused as ambiguous, as everywhere: see docs/spatial.md).
     Negative ``mass`` goes the other way (non-centroidal to centroidal), as in Mech: then
     ``vector`` runs from the centroid to the other origin and ``rotation`` is that of the
     other frame, both in centroidal axes.

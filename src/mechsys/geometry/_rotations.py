@@ -18,8 +18,10 @@ A *rotation specification* is any of Mech's formats:
 * a virtual rotation ``(vx, vy, vz)`` -- the axis times the angle (radians);
 * an angle and axis ``(angle, (x, y, z))`` (the axis need not be unit; it may be a mechsys
   :class:`~mechsys.Vector`, ``Axis``, ``Line`` or ``Plane``);
-* a rotation matrix, given as a 2-D ``numpy`` array or a SymPy ``Matrix`` (a nested Python
-  list is read as a *sequence*, never as a matrix);
+* a rotation matrix, given as a 2-D ``numpy`` array or a SymPy ``Matrix``; it must be a
+  proper rotation (``max |R^T R - I| <= 1e-6``, ``det R > 0``), else :class:`GeometryError`;
+* a nested Python list or tuple of three rows of three numbers is refused as ambiguous (a
+  matrix, or three virtual rotations?) by every function that takes a rotation;
 * a sequence of the above, ``[rot1, rot2, ...]``: rotate by ``rot1``, then by ``rot2`` about
   axes expressed in the frame already rotated by ``rot1``, and so on (Mech's
   ``RotationLock3`` convention; intrinsic, so ``A = A1 A2 ... An``). Equivalently, rotate by
@@ -186,15 +188,45 @@ def _from_virtual(v) -> list:
     return [float(np.cos(phi / 2)), *(k * v)]
 
 
-def _from_matrix(R) -> list:
-    """Shepperd's method: pick the largest of (e0^2, e1^2, e2^2, e3^2) to divide by, so the
-    result is accurate for every rotation, including those near 180 degrees."""
+#: a matrix is a rotation when ``max |R^T R - I| <= ORTHO_TOL`` and ``det R > 0``. Rotation
+#: matrices are dimensionless, so the bound is absolute: it takes matrices computed in double
+#: precision or printed to seven digits or more (float32 round trips), and refuses a shear,
+#: a scaling or a matrix rounded to a few digits, whose rotation would be a guess.
+ORTHO_TOL = 1e-6
+
+
+def check_rotation_matrix(R, what: str = "rotation matrix") -> np.ndarray:
+    """``R`` as a (3, 3) float array when it is a proper rotation, else :class:`GeometryError`
+    saying what it is instead (not finite, not orthonormal, a reflection). The test is
+    ``max |R^T R - I| <= ORTHO_TOL`` and ``det R > 0``."""
     try:
-        R = np.asarray(R, dtype=float)
+        R = np.array(R.tolist() if isinstance(R, sp.MatrixBase) else R, dtype=float)
     except (TypeError, ValueError):
-        raise ModelError("euler_parameters: a rotation matrix must be numeric") from None
+        raise ModelError(f"{what}: a rotation matrix must be numeric, got {R!r}; give symbolic "
+                         "rotations as (angle, (x, y, z)) or Euler parameters") from None
     if R.shape != (3, 3):
-        raise ModelError(f"euler_parameters: a rotation matrix must be 3 x 3, got shape {R.shape}")
+        raise ModelError(f"{what}: a rotation matrix must be 3 x 3, got shape {R.shape}")
+    if not np.all(np.isfinite(R)):
+        raise GeometryError(f"{what} has entries that are not finite (NaN or inf): {R.tolist()}")
+    dev = float(np.abs(R.T @ R - np.eye(3)).max())
+    if dev > ORTHO_TOL:
+        raise GeometryError(
+            f"{what} is not a rotation: its columns are not orthonormal (max |R^T R - I| = "
+            f"{dev:.3g} > {ORTHO_TOL:g}; a shear, a scaling or a matrix rounded to few digits). "
+            "Give a rotation matrix to about seven digits or better; to take the nearest "
+            "rotation of a rounded one, U, _, Vt = np.linalg.svd(R); R = U @ Vt")
+    if np.linalg.det(R) < 0:
+        raise GeometryError(f"{what} is a reflection (det R = {np.linalg.det(R):.3g}), not a "
+                            "rotation: a right-handed frame turns into a left-handed one; "
+                            "change the sign of one column")
+    return R
+
+
+def _from_matrix(R, what: str = "rotation matrix") -> list:
+    """Shepperd's method: pick the largest of (e0^2, e1^2, e2^2, e3^2) to divide by, so the
+    result is accurate for every rotation, including those near 180 degrees. ``R`` must be a
+    proper rotation (:func:`check_rotation_matrix`)."""
+    R = check_rotation_matrix(R, what)
     tr = R[0, 0] + R[1, 1] + R[2, 2]
     k = int(np.argmax([tr, R[0, 0], R[1, 1], R[2, 2]]))
     if k == 0:
@@ -229,7 +261,7 @@ def _parse(rot, assume_unit: bool = False) -> list:
     if isinstance(rot, np.ndarray) and rot.ndim == 2:
         return _from_matrix(rot)
     if isinstance(rot, sp.MatrixBase) and rot.shape == (3, 3):
-        return _from_matrix(np.array(rot.tolist(), dtype=float))
+        return _from_matrix(rot)
     d = _geometry_direction(rot)
     if d is not None:
         return _from_virtual(d)
@@ -239,12 +271,18 @@ def _parse(rot, assume_unit: bool = False) -> list:
     if not isinstance(rot, Sequence) or isinstance(rot, str) or len(rot) == 0:
         raise ModelError(_FORMATS.format(rot=rot))
     if all(_is_scalar(c) for c in rot):
+        _check_finite(rot)
         if len(rot) == 4:
+            if not _is_symbolic(rot) and not any(float(c) for c in rot):
+                raise GeometryError("Euler parameters (0, 0, 0, 0) do not define a rotation")
             return list(rot)
         if len(rot) == 3:
             return _from_virtual(rot)
         raise ModelError(_FORMATS.format(rot=rot))
+    if len(rot) == 3 and all(_is_row3(r) for r in rot):
+        raise ModelError(_AMBIGUOUS.format(rot=rot))
     if len(rot) == 2 and _is_scalar(rot[0]):
+        _check_finite([rot[0]])
         return _from_angle_axis(rot[0], rot[1], assume_unit)
     # a sequence of rotations, each in the frame rotated by the ones before it
     e = None
@@ -253,6 +291,30 @@ def _parse(rot, assume_unit: bool = False) -> list:
         e = q if e is None else quaternion_product(e, q)
     return e
 
+
+def _is_row3(r) -> bool:
+    """A plain row of three numbers or expressions (a list, tuple or 1-D array)."""
+    if isinstance(r, np.ndarray):
+        return r.ndim == 1 and r.shape == (3,)
+    return (isinstance(r, Sequence) and not isinstance(r, str) and len(r) == 3
+            and all(_is_scalar(c) for c in r))
+
+
+def _check_finite(values) -> None:
+    """:class:`GeometryError` when a numeric value of a rotation is NaN or infinite."""
+    for c in values:
+        if not _is_symbolic(c) and not np.isfinite(complex(c)):
+            raise GeometryError(f"a rotation has a value that is not finite ({c}): {values!r}")
+
+
+#: the one rule for nested lists (docs/spatial.md): three rows of three numbers could be a
+#: matrix or three virtual rotations, and the two readings give different rotations
+_AMBIGUOUS = (
+    "{rot!r} is ambiguous: three rows of three numbers could be a rotation matrix or a "
+    "sequence of three virtual rotations (axis times angle). Write a matrix as "
+    "np.array([[...], [...], [...]]) (or sp.Matrix), and a sequence of rotations with "
+    "each one as (angle, (x, y, z)) or Euler parameters (e0, e1, e2, e3)"
+)
 
 _FORMATS = (
     "cannot read {rot!r} as a rotation: give Euler parameters (e0, e1, e2, e3), a virtual "

@@ -21,7 +21,7 @@ import math
 
 import sympy as sp
 
-from .._errors import MechError, ModelError
+from .._errors import GeometryError, MechError, ModelError
 from ._rotations import euler_parameters, matrix_elements
 
 
@@ -165,16 +165,25 @@ class Spatial(Space):
             e = np.asarray(euler_parameters(rot), dtype=float).ravel()
             if e.shape != (4,):
                 raise ValueError
+        except GeometryError as exc:   # not a rotation (a reflection, a shear, NaN): say so
+            raise GeometryError(f"rotation guess of body {who!r}: {exc}") from None
+        except ModelError as exc:
+            if "ambiguous" not in str(exc):
+                raise self._format_error(who, rot) from None
+            raise ModelError(f"rotation guess of body {who!r}: {exc}") from None
         except (MechError, TypeError, ValueError, ZeroDivisionError):
-            raise ModelError(
-                f"rotation guess of body {who!r}: give Euler parameters (e0, e1, e2, e3), a "
-                "virtual rotation (vx, vy, vz), (angle, (ux, uy, uz)), a 3 x 3 numpy rotation "
-                f"matrix or a list of these (successive rotations); got {rot!r}"
-            ) from None
+            raise self._format_error(who, rot) from None
         n = np.linalg.norm(e)
         if n == 0:
             raise ModelError(f"rotation guess of body {who!r}: Euler parameters are all zero")
         return tuple(e / n)
+
+    @staticmethod
+    def _format_error(who: str, rot) -> ModelError:
+        return ModelError(
+            f"rotation guess of body {who!r}: give Euler parameters (e0, e1, e2, e3), a "
+            "virtual rotation (vx, vy, vz), (angle, (ux, uy, uz)), a 3 x 3 numpy rotation "
+            f"matrix or a list of these (successive rotations); got {rot!r}")
 
     def omega(self, rot, rot_d, local: bool = False) -> sp.Matrix:
         """Angular velocity (3,) from Euler-parameter rates::

@@ -371,6 +371,22 @@ def project_positions(system, t, q, p, tol=1e-12, max_iterations=8, scaling=None
     q = np.array(q, dtype=float)
     if system.m == 0:
         return q
+    guard = getattr(system, "branch_guard", None)
+    if guard is None:
+        return _project_positions(system, t, q, p, tol, max_iterations, scaling, rank_tolerant)
+    for _ in range(2):
+        if np.all(np.isfinite(q)):
+            # a driven angle more than a quarter turn off (an initial condition far from the
+            # driver) starts on the asked angle, not on its root half a turn off (0033)
+            aligned = guard.align(t, q, p)
+            q = q if aligned is None else aligned
+        q = _project_positions(system, t, q, p, tol, max_iterations, scaling, rank_tolerant)
+        if not guard.wrong(t, q, p):
+            break
+    return q
+
+
+def _project_positions(system, t, q, p, tol, max_iterations, scaling, rank_tolerant):
     sparse = system.n > SPARSE_THRESHOLD
     for k in range(max_iterations):
         F, J = system.residual_and_jacobian(t, q, p, sparse)

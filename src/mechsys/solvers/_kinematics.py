@@ -175,6 +175,10 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
             if X is not None:
                 X[:P] = Xp
     q0 = np.asarray(guess, dtype=float) if P == 0 else Q[P - 1]
+    guard = getattr(system, "branch_guard", None)   # angle equations with a root at + pi
+    if guard is not None and P == 0 and N and np.all(np.isfinite(q0)):
+        aligned = guard.align(times[0], q0, p)
+        q0 = q0 if aligned is None else aligned
     sc = scaling
     evals = 0
     rot = rotation_indices(system)  # indices of angles / Euler parameters
@@ -198,6 +202,11 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
         k0, done, sc = _jit.run(system, pointers, times, q0, p, order, options or PositionOptions(),
                                 sc, rot, Q, QD, QDD, its, rconds, rprev, R, P,
                                 prior_rows is not None)
+        if guard is not None and k0 > P:
+            # a compiled row on the wrong root of an angle equation (a prediction more than a
+            # quarter turn off): it and the rows after it are solved again below
+            bad = np.flatnonzero(guard.wrong_rows(times[P:k0], Q[P:k0], p).any(axis=1))
+            k0 = k0 if not bad.size else P + int(bad[0])
         if k0 > P:
             rows_last = rprev.copy() if order >= 1 and rconds[k0 - 1] >= RCOND_WARN else None
         if order >= 1 and (rconds[P:k0] == RCOND_PENDING).any():
@@ -225,6 +234,10 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
                 if hooks is not None and hooks.pre_solve is not None and hooks.pre_solve(float(t)) is False:
                     raise Stopped("pre_solve", float(t))
                 g = q0 if k == 0 else _predict(Q, QD, QDD, rconds, times, k, rot)
+                if guard is not None and k > 0:
+                    # a prediction more than a quarter turn from a driven angle starts on it
+                    aligned = guard.align(t, g, p)
+                    g = g if aligned is None else aligned
                 res = _solve_point(system, t, g, Q[k - 1] if k else None, options, p, sc, rot,
                                    times[k - 1] if k else None, hooks, chord,
                                    start if k == 0 else None)
@@ -295,6 +308,13 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
         if not partial:
             raise
         end, stopped = k, exc     # (the points before k are complete)
+    if guard is not None and end > P:
+        # every path above tests its roots; this states the result's contract once more
+        wrong = guard.wrong_rows(times[P:end], Q[P:end], p)
+        if wrong.any():
+            i = int(np.flatnonzero(wrong.any(axis=1))[0])
+            raise ConvergenceError(guard.describe(list(np.flatnonzero(wrong[i])), times[P + i]),
+                                   time=times[P + i])
     if P or end < N:
         times, Q, its = times[P:end], Q[P:end], its[P:end]
         QD, QDD, rconds = (None if X is None else X[P:end] for X in (QD, QDD, rconds))

@@ -165,7 +165,7 @@ def _checked_start(system, start):
 
 def solve_position(system, t: float, guess, options: PositionOptions | None = None,
                    p=None, scaling: Scaling | None = None, hooks=None,
-                   chord=None, start=None) -> PositionResult:
+                   chord=None, start=None, _again: bool = False) -> PositionResult:
     """Solve ``Phi(q, t) = 0`` for ``q`` by damped Newton from ``guess`` (shape ``(n,)``).
 
     ``chord``: a factorisation (:class:`~mechsys.solvers._linalg.ScaledFactor`) of a nearby
@@ -193,10 +193,22 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
     :class:`SingularJacobianError` (naming dependent constraints). ``hooks`` (a
     :class:`~mechsys.solvers._diagnostics.Hooks`): ``post_iterate`` is called after each
     iteration; returning False stops the solve (``Stopped``).
+
+    Angle equations that also hold half a turn off (``system.branch_guard``, decision 0033):
+    a guess more than a quarter turn from an asked angle is first turned onto it, and a
+    solution on the wrong root is turned by pi and solved again (the counts add up); one
+    still on it raises :class:`ConvergenceError` naming the constraint.
     """
     opt = options or _DEFAULT
     sparse = system.n > SPARSE_THRESHOLD
     q = np.array(guess, dtype=float)
+    guard = getattr(system, "branch_guard", None)
+    if guard is not None and np.all(np.isfinite(q)):
+        # an angle equation holds at the asked angle and half a turn off: a guess more than a
+        # quarter turn from the asked angle starts from that angle instead (decision 0033)
+        aligned = guard.align(t, q, p)
+        if aligned is not None:
+            q, start = aligned, None
     q_start = q.copy()
     post = hooks.post_iterate if hooks is not None else None
     if start is None:
@@ -249,7 +261,9 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
                     history.append(norm)
                     if post is not None:
                         _post(post, system, t, it, q, norm, dq)
-            return PositionResult(q, True, 0, "converged", it, evals, norm, tuple(history), rows)
+            res = PositionResult(q, True, 0, "converged", it, evals, norm, tuple(history), rows)
+            return res if guard is None else _on_branch(system, guard, t, res, opt, p, scaling,
+                                                        hooks, _again)
         if it >= opt.max_iterations:
             break
         if chord is not None:
@@ -295,6 +309,21 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
         "Give a better initial guess (add_body(..., guess=...) or guess=), or check that the "
         "mechanism can assemble at this time.",
         time=t, residuals=F.copy(), history=tuple(history), diagnosis=diag)
+
+
+def _on_branch(system, guard, t, res, opt, p, scaling, hooks, again) -> PositionResult:
+    """``res`` when every angle equation converged to its asked angle; else the solve again
+    from the solution turned onto it (once), or a :class:`ConvergenceError`."""
+    bad = guard.wrong(t, res.q, p)
+    if not bad:
+        return res
+    turned = None if again else guard.align(t, res.q, p)
+    if turned is None:
+        raise ConvergenceError(guard.describe(bad, t), time=t, history=res.history)
+    got = solve_position(system, t, turned, opt, p, scaling, hooks, _again=True)
+    return PositionResult(got.q, True, 0, "converged", res.iterations + got.iterations,
+                          res.evaluations + got.evaluations, got.residual,
+                          res.history + got.history, got.rows)
 
 
 def _post(post, system, t, it, q, norm, step) -> None:
