@@ -143,7 +143,9 @@ def _on_branch(model, base: dict, q_a, sign: int):
             if _det_sign(model, q) != sign:
                 break
     except MechError as exc:
-        why = f"the continuation from the model's parameters failed ({exc})"
+        why = (f"the mechanism does not assemble at t = {T_ASSEMBLY:g} at (or on the way to) "
+               "these parameters, so the branch cannot be followed from the model's assembly "
+               f"to them ({type(exc).__name__}: {str(exc)[:200]})")
     else:
         if _det_sign(model, q) == sign:
             return q
@@ -153,8 +155,9 @@ def _on_branch(model, base: dict, q_a, sign: int):
         model._params.update(row)
     changed = ", ".join(f"{getattr(k, 'name', k)}={row[k]!r}" for k in row if row[k] != base[k])
     raise ConvergenceError(
-        f"{OFF_BRANCH}: at {changed} the mechanism does not assemble on the branch of the "
-        f"model's assembly at t = {T_ASSEMBLY:g} (the sign of det Phi_q differs): {why}. "
+        f"{OFF_BRANCH}: at {changed} the row cannot be put on the branch of the model's "
+        f"assembly at t = {T_ASSEMBLY:g} (the configuration where det Phi_q has the assembly's "
+        f"sign): {why}. "
         "Rows past a toggle position belong to another assembly mode; sweep them from a model "
         "whose guesses describe that mode, or narrow the parameter range.")
 

@@ -160,7 +160,8 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
     ``STEP_CHECK`` Newton may land on another assembly branch (a four-bar's rocker mirrored)
     that is still within ``ROTATION_JUMP`` of the prediction, or a driven coordinate may move
     by more than ``ROTATION_JUMP`` in one step (a crank driven at coarse times, which the
-    position-only sweep cannot predict). Each such step, solved or failed, is done again by
+    position-only sweep cannot predict). Each such step, solved or failed by that jump, is
+    done again by
     continuation from the point before it in ``S`` substeps
     (``S = ceil(rotation / SUBSTEP)``, at most ``SPLIT_MAX``; 4 for a failed step, divided
     again when a substep fails, ``SPLIT_DEPTH`` levels), which follows the drivers' motion
@@ -198,9 +199,9 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
         evals += res.evaluations
         sc = res.scaling if res.scaling is not None else scaling
         k, step = (None, None) if _depth >= SPLIT_DEPTH else _first_coarse(parts, res.q, rot)
-        if k is None and res.stopped is not None and isinstance(res.stopped, ConvergenceError) \
-                and _depth < SPLIT_DEPTH and (len(res.t) or any(len(pt[0]) for pt in parts)):
-            k, step = len(res.t), None        # a failed step after a solved point: divide it
+        if k is None and getattr(res.stopped, "lost_branch", False) and _depth < SPLIT_DEPTH \
+                and (len(res.t) or any(len(pt[0]) for pt in parts)):
+            k, step = len(res.t), None        # a step that jumped after a solved point: divide it
         if k is None:
             if first:                         # the loops' result, untouched
                 if res.stopped is not None and not partial:
@@ -629,13 +630,15 @@ def _solve_point(system, t, g, q_prev, options, p, sc, rot, t_prev=None, hooks=N
     jump = _jump(res.q, q_prev, rot)
     if jump > ROTATION_JUMP:
         i = rot[np.argmax(np.abs(res.q[rot] - q_prev[rot]))]
-        raise ConvergenceError(
+        err = ConvergenceError(
             f"kinematic sweep at t = {t:.6g}: a rotational coordinate "
             f"({system.layout.q_names[i]}) jumped by {jump:.3g} rad from the previous point, so "
             "the sweep lost its assembly branch (near a lock-up or toggle position, or too "
             "coarse sampling). Sample more finely, or stop the sweep before this time.",
             time=t, residuals=system.residual(t, res.q, p),
             history=res.history)
+        err.lost_branch = True     # (sweep divides such a step: a coarse step, not a lock-up)
+        raise err
     return res
 
 
