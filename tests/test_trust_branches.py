@@ -139,3 +139,69 @@ def test_a_crank_turning_back_at_coarse_times():
     th = 2.5 * np.sin(t)
     np.testing.assert_allclose(sol.q[:, 2], th, atol=1e-12)
     assert wrapped(sol.q[:, -1] - rocker_angle(1.0, 4.0, th)).max() < 1e-9
+
+
+def bricard(rough: float, seed: int = 1):
+    """A line-symmetric Bricard linkage: six revolute axes, the last three the half turn about
+    the z axis of the first three, six links in a loop (ground the one between axes 6 and 1;
+    Gruebler count 6 * 5 - 6 * 5 = 0, mobility 1). The bodies' frames are the ground's at the
+    assembled configuration; ``rough`` perturbs their guesses (positions and Euler
+    parameters) away from it."""
+    rng = np.random.default_rng(seed)
+    R = np.diag([-1.0, -1.0, 1.0])
+    P = [np.array([1.0, 0.3, 0.2]), np.array([0.8, 1.1, -0.4]), np.array([-0.5, 1.2, 0.5])]
+    D = [np.array([0.2, 1.0, 0.4]), np.array([1.0, -0.3, 0.6]), np.array([0.3, 0.5, 1.0])]
+    P += [R @ p for p in P]
+    D = [d / np.linalg.norm(d) for d in D + [R @ d for d in D]]
+    m = ms.Model3D()
+    links = [m.ground]
+    for i in range(1, 6):
+        e = np.r_[1.0, rng.normal(size=3) * rough]
+        links.append(m.add_body(f"link{i}", guess=(tuple(rng.normal(size=3) * rough),
+                                                   tuple(e / np.linalg.norm(e)))))
+    links.append(m.ground)
+    for i in range(6):
+        ax = (tuple(P[i]), tuple(D[i]))
+        m.add(ms.Revolute5(links[i].axis(*ax), links[i + 1].axis(*ax)), name=f"R{i + 1}")
+    return m
+
+
+def _dense(J):
+    return J.toarray() if hasattr(J, "toarray") else np.asarray(J)
+
+
+def test_bricard_mobility_is_taken_where_it_assembles():
+    """From rough guesses the rank was taken at the guess (full: m.dof() = 0); the mobility is
+    1 at the assembled configuration, which dof finds and reports."""
+    m = bricard(rough=0.05)
+    s = m.compile()
+    p = m._p()
+    g = m.guess()
+    assert np.abs(s.residual(0.0, g, p)).max() > 1e-2             # rough: not assembled
+    assert np.linalg.matrix_rank(_dense(s.jacobian(0.0, g, p))) == s.n   # full rank there
+    d = m.dof()
+    assert d.gruebler == 0 and int(d) == 1 and d.at == "assembled"
+    assert "assembled configuration" in repr(d)
+    q = d.configuration
+    assert np.abs(s.residual(0.0, q, p)).max() < 1e-10
+    # independently: the SVD of Phi_q there has one zero singular value ...
+    sv = np.linalg.svd(_dense(s.jacobian(0.0, q, p)), compute_uv=False)
+    assert sv[-1] < 1e-12 * sv[0] and sv[-2] > 1e-3 * sv[0]
+    # ... and it is a finite motion, not an instantaneous one: a step along the null direction
+    # projected back onto Phi = 0 stays away from q (an isolated assembly would pull it back)
+    from mechsys.solvers._linalg import Scaling
+    from mechsys.solvers._rank import continue_position
+
+    v = np.linalg.svd(_dense(s.jacobian(0.0, q, p)))[2][-1]
+    q1 = q + 0.05 * v / np.abs(v).max()
+    got = continue_position(s, 0.0, q1, p, Scaling.of(s, q1, _dense(s.jacobian(0.0, q1, p))))
+    assert got is not None and np.abs(got[0] - q).max() > 0.04
+    assert int(bricard(rough=0.0).dof()) == 1                    # exact guesses: as before
+
+
+def test_dof_says_when_the_figure_holds_at_the_guess_only():
+    """A loop that cannot close (a four-bar whose coupler is longer than the other three
+    together), Gruebler count 0: no assembly, and the report says the figure is the guess's."""
+    m = four_bar(coupler=9.0)
+    d = m.dof()
+    assert d.at == "unassembled guess" and "holds at the guess only" in repr(d)

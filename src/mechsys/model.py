@@ -53,7 +53,11 @@ class DOF(int):
     guess) carrying a report.
 
     Attributes: ``coordinates`` (n), ``equations`` (m), ``gruebler`` (n - m, the count),
-    ``rank`` (of Phi_q at the guess), ``redundant`` (constraints with dependent equations).
+    ``rank`` (of Phi_q at ``configuration``), ``redundant`` (constraints with dependent
+    equations), ``at``: where the rank is taken — ``"guess"`` (the guess, assembled or with a
+    positive Gruebler count), ``"assembled"`` (the assembled configuration nearest a guess
+    that does not assemble) or ``"unassembled guess"`` (no assembly found: the figure holds
+    at the guess only).
     """
 
     def __new__(cls, value, **info):
@@ -66,15 +70,28 @@ class DOF(int):
             f"{int(self)} degree(s) of freedom",
             f"  coordinates: {self.coordinates}, equations: {self.equations}",
             f"  Gruebler count (coordinates - equations): {self.gruebler}",
-            f"  Jacobian rank {'near' if getattr(self, 'singular_guess', '') else 'at'} the "
-            f"current guess: {self.rank} -> {int(self)} DOF",
+            f"  Jacobian rank {self._where()}: {self.rank} -> {int(self)} DOF",
         ]
         if self.redundant:
             lines.append("  redundant (dependent) constraints: "
                          + ", ".join(c.label() for c in self.redundant))
         if getattr(self, "singular_guess", ""):
             lines.append("  " + self.singular_guess)
+        if getattr(self, "at", "guess") == "unassembled guess":
+            lines.append("  the guesses do not assemble the mechanism and no assembled "
+                         "configuration was found from them, so this figure holds at the guess "
+                         "only: a paradoxical linkage (mobile although the Gruebler count says "
+                         "otherwise) shows its mobility only where it is assembled; give guesses "
+                         "near an assembled position")
         return "\n".join(lines)
+
+    def _where(self) -> str:
+        at = getattr(self, "at", "guess")
+        if at == "assembled":
+            return "at the assembled configuration nearest the guess (t = 0)"
+        if getattr(self, "singular_guess", ""):
+            return "near the current guess"
+        return "at the current guess" + (" (not assembled)" if at == "unassembled guess" else "")
 
     __str__ = __repr__
 
@@ -825,15 +842,24 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
     def dof(self) -> DOF:
         """Degrees of freedom: the Gruebler count and the Jacobian rank at the current guess
         (on the unit-free scaled Jacobian, so the report does not depend on the unit of
-        length). When the guess is a singular configuration only because bodies were left at
+        length). With a Gruebler count of 0 or less and guesses that do not assemble the
+        mechanism, the rank is taken at the nearest assembled configuration (minimum-norm
+        Gauss-Newton from the guesses at t = 0), where a paradoxical linkage (Bricard's,
+        Bennett's) shows its mobility; ``DOF.at`` says where it was taken.
+        When the guess is a singular configuration only because bodies were left at
         the default guess, the rank is taken at a nearby configuration and ``singular_guess``
         says which bodies need guesses."""
         system = self.compile()
         g, p = self.guess(), self._p()
-        J = system.jacobian_once(0.0, g, p)
-        d = dependency(system, J, Scaling.of(system, g, J))
+        q, where = g, "guess"
+        if system.m >= system.n:
+            # a Gruebler count <= 0 says nothing of a paradoxical linkage (Bricard's, Bennett's):
+            # its mobility shows only where it is assembled, which rough guesses are not
+            q, where = self._assembled_for_dof(system, g, p)
+        J = system.jacobian_once(0.0, q, p)
+        d = dependency(system, J, Scaling.of(system, q, J))
         rank, redundant, note = d.rank, d.owners, ""
-        if d.deficiency:
+        if d.deficiency and where != "assembled":
             better = self._singular_guess(system, 0.0, g, d.rank)
             if better is not None:
                 rank, note = better
@@ -841,7 +867,25 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         owners = [o for o in redundant if isinstance(o, ConstraintBase)]
         return DOF(system.n - rank, coordinates=system.n, equations=system.m,
                    gruebler=system.n - system.m, rank=rank, redundant=owners,
-                   singular_guess=note)
+                   singular_guess=note, at=where, configuration=q)
+
+    def _assembled_for_dof(self, system, g, p):
+        r"""``(q, where)``: the configuration ``dof`` takes the rank at. The guess when it
+        assembles the mechanism (``"guess"``); else the nearest assembled configuration,
+        Gauss-Newton with minimum-norm steps from the guess (``dq = -D pinv(J^) R^-1 Phi``, at
+        t = 0, drivers included: :func:`~mechsys.solvers._rank.continue_position`),
+        ``"assembled"``; the guess again when that fails, ``"unassembled guess"`` (the figure
+        then holds at the guess only, and the report says so)."""
+        from .solvers._rank import continue_position
+
+        F, J = system.residual_and_jacobian(0.0, g, p)
+        sc = Scaling.of(system, g, J)
+        if np.abs(F / sc.rows(J)).max(initial=0.0) <= 1e-9:
+            return g, "guess"
+        got = continue_position(system, 0.0, g, p, sc, 1e-12, 100)
+        if got is None:
+            return g, "unassembled guess"
+        return got[0], "assembled"
 
     def equations(self, constraints=None):
         """The model's equations as SymPy matrices (Mech 13.4): constraints ``phi``, Jacobian
