@@ -24,7 +24,7 @@ from ._errors import (
     UnknownConstraintError,
     parameter_value,
 )
-from ._symbols import T, velocity_symbol
+from ._symbols import T, acceleration_symbol, same_name_advice, velocity_symbol
 from .compile import System, make_layout, time_derivative
 from .compile._options import _UNSET, CompileOptions, process_equation
 from .compile._options import updated as _updated_options
@@ -46,6 +46,11 @@ from .solvers._position import dependency
 from .solvers._rank import constraint_names as _constraint_names
 
 _parameter_value = parameter_value   # the validation lives with the errors it raises
+
+
+#: names SymPy and model files read as constants: not parameter or variable names
+_CONSTANT_NAMES = {"pi": "the constant pi", "E": "Euler's number e", "I": "the imaginary unit",
+                   "oo": "infinity", "zoo": "complex infinity", "nan": "not-a-number"}
 
 
 class DOF(int):
@@ -257,7 +262,9 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         """Declare a parameter with a value; returns its symbol for use in expressions.
         Changing values later (:meth:`set_parameters`) needs no recompilation.
 
-        The name must not be one the model uses for something else: the time ``T``, a body
+        The name must not be one the model uses for something else, nor a name SymPy and model
+        files read as a constant (``pi``, ``E``, ``I``, ``oo``, ``zoo``, ``nan``): the time
+        ``T``, a body
         coordinate present or future (``x2``, ``th3``, ``e04`` ...), a velocity or
         acceleration symbol (``<coordinate or variable>_d``, ``_dd``), a multiplier
         (``lam<c>_<k>``, ``lamN_<body>``), a variable or another parameter."""
@@ -330,6 +337,10 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         velocities and accelerations, multipliers) and the names already taken."""
         if name == T.name:
             return "it is the time symbol T"
+        if name in _CONSTANT_NAMES:
+            return (f"it is SymPy's name of {_CONSTANT_NAMES[name]}, which expressions given as "
+                    "text and model files read as that constant (a model with it cannot be "
+                    "saved)")
         for suffix, what in (("_dd", "acceleration"), ("_d", "velocity")):
             if name.endswith(suffix):
                 base = name[: -len(suffix)]
@@ -346,6 +357,15 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         if any(p.name == name for p in self._params):
             return "it is a parameter of the model"
         return None
+
+    def _coordinate_text(self, name: str) -> str:
+        """``"'x3' (coordinate x of body 'rod')"``: a coordinate or variable named for a user."""
+        owner = self._coordinate_owner(name)
+        if owner:
+            return f"{name!r} ({owner.replace('it is the symbol of ', '')})"
+        if any(v.symbol.name == name for v in self._variables):
+            return f"{name!r} (a variable of the model)"
+        return repr(name)
 
     def _coordinate_owner(self, name: str) -> str | None:
         """``"it is coordinate th of body 2 ..."`` when ``name`` has the form of a body
@@ -562,7 +582,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
                 raise ModelError(f"set_guess: the guess of {s.name!r} must be a number, "
                                  f"got {v!r}") from None
             if not np.isfinite(new[s]):
-                raise ModelError(f"set_guess: the guess of {s.name!r} must be finite, got {v!r}")
+                raise ModelError(f"set_guess: the guess of {self._coordinate_text(s.name)} must "
+                                 f"be finite, got {v!r}")
         self._guess_override.update(new)
 
     def _guess_vector(self, state, syms) -> np.ndarray:
@@ -648,13 +669,30 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         return eqs, owners, index
 
     def _check_symbols(self, eqs, owners) -> None:
-        known = set(self._coordinate_symbols()) | set(self._params) | {T}
+        coords = set(self._coordinate_symbols())
+        known = coords | set(self._params) | {T}
+        rates = {velocity_symbol(q.name) for q in coords} | {acceleration_symbol(q.name)
+                                                              for q in coords}
         for e, o in zip(eqs, owners):
             extra = e.free_symbols - known
             if extra:
                 lab = o.label() if hasattr(o, "label") else str(o)
+                names = sorted(map(str, extra))
+                if extra & rates:
+                    raise ModelError(
+                        f"{lab} is a velocity constraint (it uses the rates "
+                        f"{sorted(map(str, extra & rates))}), which the position equations of "
+                        "a model (solve, free, couple) cannot hold. For the first-order motion "
+                        "of a nonholonomic system keep a dummy constraint in the model in its "
+                        "place and give the velocity constraint to m.path(replace={dummy: "
+                        "velocity_constraint}) (docs/nonholonomic.md); free motion (dynamics) "
+                        "with velocity constraints is not supported yet")
+                same = same_name_advice(extra, known)
+                if same:
+                    raise ModelError(f"{lab} uses symbol(s) {names} that are not the model's: "
+                                     f"{same}")
                 raise ModelError(
-                    f"{lab} uses unknown symbol(s) {sorted(map(str, extra))}: declare them with "
+                    f"{lab} uses unknown symbol(s) {names}: declare them with "
                     "m.parameter(name, value) or m.variable(name, guess), or pass "
                     "variables={sym: guess} to Constraint")
 
@@ -961,9 +999,14 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
     def _require_square(self, system: System) -> None:
         n, m = system.n, system.m
         if m < n:
+            loose = self._unconstrained_bodies(system)
             raise ConstraintCountError(
                 f"the model has {n - m} degree(s) of freedom ({n} coordinates, {m} equations); "
-                f"a kinematic solution needs 0. Add {n - m} driving constraint(s), e.g. "
+                f"a kinematic solution needs 0. "
+                + (f"No constraint uses the coordinates of bod{'ies' if len(loose) > 1 else 'y'} "
+                   f"{', '.join(map(repr, loose))}: connect {'them' if len(loose) > 1 else 'it'}"
+                   " to the mechanism with a joint (or remove it). " if loose else "")
+                + f"Add {n - m} driving constraint(s), e.g. "
                 "RotationLock1(crank, 2*pi*T), or drop constraints with m.free(...) for dynamics.")
         if m > n:
             g = self.guess()
@@ -980,6 +1023,18 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
                 msg += (f" Even then {n - d.rank} degree(s) of freedom would remain at this guess: "
                         "add drivers, or check the guess.")
             raise ConstraintCountError(msg)
+
+    def _unconstrained_bodies(self, system) -> list[str]:
+        """Names of the moving bodies none of whose coordinates any equation uses, apart from
+        their own Euler-parameter normalisation."""
+        used = set()
+        for e, o in zip(*self._all_equations()[:2]):
+            if not (isinstance(o, str) and o.startswith("Euler-parameter")):
+                used |= e.free_symbols
+        lay = system.layout
+        return [b.name for b in self._bodies[1:] if b.name in lay.body_slices
+                and not used & {lay.q_symbols[i] for i in range(*lay.body_slices[b.name].indices(
+                    system.n))}]
 
     @staticmethod
     def _check_times(t) -> np.ndarray:
@@ -1208,6 +1263,13 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         if g.shape != (system.n,):
             raise ModelError(f"guess must have shape ({system.n},) (coordinates "
                              f"{list(system.layout.q_names)}); got {g.shape}")
+        bad = np.flatnonzero(~np.isfinite(g))
+        if bad.size:
+            raise ModelError(
+                f"guess: the value {g[bad[0]]} given for "
+                f"{self._coordinate_text(system.layout.q_names[bad[0]])} is not finite"
+                + (f" (and {bad.size - 1} more)" if bad.size > 1 else "")
+                + "; give finite numbers")
         return g
 
     def __repr__(self) -> str:
