@@ -85,9 +85,11 @@ class _Solve:
     def prepare(self, model):
         """The model's assembly at its own parameters (see the class): ``ref``."""
         self.ref = None
+        if getattr(model, "_switches", lambda: ())():
+            return        # (stage switches: the stage at t = 0 need not be the row's)
         try:
             q = np.ravel(model.solve(T_ASSEMBLY, solution="location").q)
-            sign = _det_sign(model, q)
+            sign = _det_sign(model, q) if q.size == model.compile().n else 0
         except MechError:
             return
         if sign:
@@ -445,8 +447,9 @@ def _warn_branches(df, analysis, serial: bool) -> None:
     if analysis.ref is None and serial:      # (workers prepare their own copies)
         warnings.warn(
             f"sweep: the model does not assemble at t = {T_ASSEMBLY:g} from its guesses at its "
-            "own parameters (or its Jacobian is singular or not square there), so the rows were "
-            "solved from the guesses without checking that they stay on one assembly branch",
+            "own parameters (or its Jacobian is singular or not square there, or it has stage "
+            "switches), so the rows were solved from the guesses without checking that they "
+            "stay on one assembly branch",
             stacklevel=3)
 
 
