@@ -30,6 +30,7 @@ import threading
 import time
 from collections.abc import Mapping, Sequence
 from numbers import Integral
+from types import SimpleNamespace
 
 import numpy as np
 import sympy as sp
@@ -71,8 +72,10 @@ class _Solve:
        of the other sign is not solved: a :class:`ConvergenceError` (``on_error``: raised, or
        NaN outputs and the reason).
     3. Then a kinematic sweep from ``T_ASSEMBLY`` to the row's first time (its coarse steps
-       are continued in substeps, :func:`~mechsys.solvers._kinematics.sweep`), and the asked
-       solution from there.
+       are continued in substeps, :func:`~mechsys.solvers._kinematics.sweep`): the row's
+       point on the branch. The asked solution from the model's guesses is returned when its
+       first point is that point (to 1e-6: the numbers of a sweep without the check), else
+       the solution started from it.
 
     Without an assembly at the model's parameters (guesses that do not assemble at
     ``T_ASSEMBLY``) or with a non-square Jacobian the rows are solved from the guesses as
@@ -98,10 +101,24 @@ class _Solve:
     def __call__(self, model):
         if self.ref is None:
             return model.solve(self.t, solution=self.kind)
+        from ..solvers._kinematics import _same_point
+        from ..solvers._linalg import rotation_indices
+
         q0 = _on_branch(model, *self.ref)
         t0 = float(np.atleast_1d(np.asarray(self.t, dtype=float))[0])
         if t0 != T_ASSEMBLY:
             q0 = model.solve([T_ASSEMBLY, t0], solution="location", guess=q0).q[-1]
+        try:
+            # the solve from the guesses, as without the check, when it is on the branch: a
+            # right answer keeps its numbers to the last bit
+            sol = model.solve(self.t, solution=self.kind)
+            system = model.compile()
+            scale = SimpleNamespace(length=max(1.0, float(np.abs(q0).max(initial=0.0))))
+            if sol.q.shape[-1] == q0.size and _same_point(
+                    np.atleast_2d(sol.q)[0], q0, rotation_indices(system), scale):
+                return sol
+        except MechError:
+            pass
         return model.solve(self.t, solution=self.kind, guess=q0)
 
     def __repr__(self) -> str:
