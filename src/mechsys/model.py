@@ -902,6 +902,14 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
             if better is not None:
                 rank, note = better
                 redundant = []
+        elif where == "assembled":
+            # the rank is the assembly's; still say when the guesses were singular only
+            # because bodies were left at the default guess (a solve from them fails)
+            Jg = system.jacobian_once(0.0, g, p)
+            dg = dependency(system, Jg, Scaling.of(system, g, Jg))
+            if dg.deficiency:
+                better = self._singular_guess(system, 0.0, g, dg.rank)
+                note = "" if better is None else better[1]
         owners = [o for o in redundant if isinstance(o, ConstraintBase)]
         return DOF(system.n - rank, coordinates=system.n, equations=system.m,
                    gruebler=system.n - system.m, rank=rank, redundant=owners,
@@ -916,11 +924,15 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         then holds at the guess only, and the report says so)."""
         from .solvers._rank import continue_position
 
-        F, J = system.residual_and_jacobian(0.0, g, p)
+        class Once:       # (the quickly compiled kernel: dof stays cheap to compile)
+            def residual_and_jacobian(self, t, q, p=None, sparse=False):
+                return system.position_once(t, q, p)
+
+        F, J = system.position_once(0.0, g, p)
         sc = Scaling.of(system, g, J)
         if np.abs(F / sc.rows(J)).max(initial=0.0) <= 1e-9:
             return g, "guess"
-        got = continue_position(system, 0.0, g, p, sc, 1e-12, 100)
+        got = continue_position(Once(), 0.0, g, p, sc, 1e-12, 100)
         if got is None:
             return g, "unassembled guess"
         return got[0], "assembled"
