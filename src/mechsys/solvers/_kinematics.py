@@ -185,8 +185,14 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
     * ``points``: the size of the whole job, for the compiled loop's ``auto`` rule
       (default ``len(times)``)."""
     times = np.atleast_1d(np.asarray(times, dtype=float))
-    res = _sweep_loop(system, times, guess, order, options, p, scaling, hooks, prior, True,
-                      points)
+    halted = None       # a hook's stop in the first run: its points are checked, then it goes on
+    try:
+        res = _sweep_loop(system, times, guess, order, options, p, scaling, hooks, prior, True,
+                          points)
+    except Stopped as exc:
+        if exc.k == 0 or prior is not None:
+            raise
+        halted, res, times = exc, exc.partial, times[:exc.k]
     rot = rotation_indices(system)
     if prior is not None:
         prior = _check_prior(prior, system.n, order)
@@ -203,7 +209,7 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
                 and (len(res.t) or any(len(pt[0]) for pt in parts)):
             k, step = len(res.t), None        # a step that jumped after a solved point: divide it
         if k is None:
-            if first:                         # the loops' result, untouched
+            if first and halted is None:     # the loops' result, untouched
                 if res.stopped is not None and not partial:
                     raise res.stopped
                 return res
@@ -245,17 +251,37 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
         at += k + 1
         if at >= len(times):
             break
-        res = _sweep_loop(system, times[at:], None, order, options, p, sc, hooks,
-                          _tail(parts, 3), True, points)
+        try:
+            res = _sweep_loop(system, times[at:], None, order, options, p, sc, hooks,
+                              _tail(parts, 3), True, points)
+        except Stopped as exc:
+            # a hook stopped the sweep again from a point: the partial result holds every
+            # point before the stop, not only those of this run
+            got = exc.partial
+            kept = [pt for pt in parts[n_prior:] if len(pt[0])]
+            exc.partial = _from_parts(kept + [_as_part(got, order)], system.n, order,
+                                      evals + got.evaluations, sc, None, None)
+            exc.k = len(exc.partial.t)
+            raise
     if stop is not None and not partial:
         raise stop
-    parts = [pt for pt in parts[n_prior:] if len(pt[0])]
-    cat = [None if not parts or parts[0][i] is None else np.concatenate([pt[i] for pt in parts])
-           for i in range(6)]
+    out = _from_parts([pt for pt in parts[n_prior:] if len(pt[0])], system.n, order, evals,
+                      sc, stop, rows)
+    if halted is not None:
+        halted.partial, halted.k = out, len(out.t)
+        raise halted
+    return out
+
+
+def _from_parts(parts, n: int, order: int, evals: int, sc, stop, rows) -> SweepResult:
+    """One :class:`SweepResult` of the solved parts ``[t, Q, QD, QDD, rconds, its]``."""
     if not parts:
-        empty = np.empty((0, system.n))
+        empty = np.empty((0, n))
         cat = [np.empty(0), empty, empty if order >= 1 else None, empty if order >= 2 else None,
                np.empty(0) if order >= 1 else None, np.empty(0, dtype=int)]
+    else:
+        cat = [None if parts[0][i] is None else np.concatenate([pt[i] for pt in parts])
+               for i in range(6)]
     t, Q, QD, QDD, rc, its = cat
     return SweepResult(t, Q, QD, QDD, its, evals, order, rc, None, sc, stop, rows)
 
@@ -419,7 +445,8 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
                                    times[k - 1] if k else None, hooks, chord,
                                    start if k == 0 else None)
             except Stopped as exc:
-                raise _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds, fill) from None
+                raise _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds, fill,
+                               sc) from None
             q = res.q
             had_chord, chord = chord is not None, None
             its[k] = res.iterations
@@ -441,7 +468,7 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
                                            hooks)
                     except Stopped as exc:
                         raise _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds,
-                                       fill) from None
+                                       fill, sc) from None
                     q = res.q
                     its[k] = res.iterations
                     evals += res.evaluations
@@ -547,12 +574,12 @@ def _check_prior(prior, n: int, order: int) -> tuple:
     return (t, out["Q"], out.get("QD"), out.get("QDD"), out.get("rconds"), rows)
 
 
-def _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds, fill=None):
+def _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds, fill=None, sc=None):
     """``exc`` (a ``Stopped``) carrying the ``k`` points solved so far."""
     exc.k = k
     exc.partial = SweepResult(times[:k], Q[:k], None if QD is None else QD[:k],
                               None if QDD is None else QDD[:k], its[:k], evals,
-                              order, None if rconds is None else rconds[:k], fill)
+                              order, None if rconds is None else rconds[:k], fill, sc)
     return exc
 
 
