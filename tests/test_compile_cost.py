@@ -20,7 +20,9 @@ def test_dof_compiles_only_a_quick_jacobian():
     m = chain(5)
     m.dof()
     kernels = set(m.compile()._kernels)
-    assert kernels == {"jac_once"}, kernels
+    # (a Gruebler count <= 0 and guesses not assembled: dof assembles them first, with the
+    # quickly compiled position kernel, decision 0035)
+    assert kernels in ({"jac_once"}, {"pos_once"}), kernels
     m.solve(0.0)
     assert {"position", "velocity", "gamma"} <= set(m.compile()._kernels)
 

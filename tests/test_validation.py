@@ -250,7 +250,8 @@ def test_set_guess_accepts_a_full_coordinate_array():
         m.set_guess(np.zeros((1, 9)))
     with pytest.raises(ms.ModelError, match="set_guess takes"):
         m.set_guess("zeros")
-    with pytest.raises(ms.ModelError, match="the guess of 'x2' must be finite"):
+    with pytest.raises(ms.ModelError,
+                       match=r"the guess of 'x2' \(coordinate x of body 'crank'\) must be finite"):
         m.set_guess(x2=np.nan)
     assert np.allclose(m.guess(), g)
 

@@ -37,6 +37,38 @@ def acceleration_symbol(name: str) -> sp.Symbol:
     return _real(name + "_dd")
 
 
+def same_name_advice(extra, known) -> str:
+    """What to say of the symbols of ``extra`` that share a name with a symbol of ``known``
+    but not its assumptions (``sp.Symbol("T")``, a string such as ``"2*pi*T"``, a parameter
+    made again with ``positive=True``): they are different symbols to SymPy, so the model
+    does not know them, and declaring them again is impossible. ``""`` when there are none."""
+    by_name = {k.name: k for k in known}
+    hints = []
+    for s in sorted(extra, key=str):
+        k = by_name.get(s.name)
+        if k is None:
+            continue
+        if k == T:
+            use = ("use mechsys.T (from mechsys import T), e.g. 2*sp.pi*ms.T; a string "
+                   "expression such as '2*pi*T' or sp.Symbol('T') makes a symbol T of its own")
+        elif k.name.endswith("_d") or k.name.endswith("_dd") or k.is_real:
+            use = "use the model's own symbol (a body's coordinate symbols are body.q)"
+        else:
+            use = (f"use the symbol that m.parameter({k.name!r}, ...) or m.variable returned "
+                   f"(sp.Symbol({k.name!r}) without assumptions)")
+        mine = {a: v for a, v in s.assumptions0.items() if v}
+        theirs = {a: v for a, v in k.assumptions0.items() if v}
+        hints.append(f"a symbol named {s.name!r} exists in the model with other assumptions "
+                     f"({_assumed(theirs)}, this one {_assumed(mine)}): {use}")
+    return "; ".join(hints)
+
+
+def _assumed(a: dict) -> str:
+    keys = [k for k in ("real", "positive", "negative", "nonnegative", "integer")
+            if a.get(k)]
+    return ", ".join(f"{k}=True" for k in keys) if keys else "no assumptions"
+
+
 def restore_assumptions(expr):
     """``expr`` with every assumption-free symbol named like a time, coordinate, velocity or
     acceleration symbol replaced by that (real) symbol: undoes SymEngine's round trip."""

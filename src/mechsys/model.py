@@ -26,7 +26,7 @@ from ._errors import (
     parameter_value,
     unknown_options,
 )
-from ._symbols import T, velocity_symbol
+from ._symbols import T, acceleration_symbol, same_name_advice, velocity_symbol
 from .compile import System, make_layout, time_derivative
 from .compile._options import _UNSET, CompileOptions, process_equation
 from .compile._options import updated as _updated_options
@@ -60,12 +60,21 @@ from .solvers._rank import constraint_names as _constraint_names
 _parameter_value = parameter_value   # the validation lives with the errors it raises
 
 
+#: names SymPy and model files read as constants: not parameter or variable names
+_CONSTANT_NAMES = {"pi": "the constant pi", "E": "Euler's number e", "I": "the imaginary unit",
+                   "oo": "infinity", "zoo": "complex infinity", "nan": "not-a-number"}
+
+
 class DOF(int):
     """Degrees of freedom of a model: an ``int`` (from the Jacobian rank at the current
     guess) carrying a report.
 
     Attributes: ``coordinates`` (n), ``equations`` (m), ``gruebler`` (n - m, the count),
-    ``rank`` (of Phi_q at the guess), ``redundant`` (constraints with dependent equations).
+    ``rank`` (of Phi_q at ``configuration``), ``redundant`` (constraints with dependent
+    equations), ``at``: where the rank is taken — ``"guess"`` (the guess, assembled or with a
+    positive Gruebler count), ``"assembled"`` (the assembled configuration nearest a guess
+    that does not assemble) or ``"unassembled guess"`` (no assembly found: the figure holds
+    at the guess only).
     """
 
     def __new__(cls, value, **info):
@@ -78,15 +87,28 @@ class DOF(int):
             f"{int(self)} degree(s) of freedom",
             f"  coordinates: {self.coordinates}, equations: {self.equations}",
             f"  Gruebler count (coordinates - equations): {self.gruebler}",
-            f"  Jacobian rank {'near' if getattr(self, 'singular_guess', '') else 'at'} the "
-            f"current guess: {self.rank} -> {int(self)} DOF",
+            f"  Jacobian rank {self._where()}: {self.rank} -> {int(self)} DOF",
         ]
         if self.redundant:
             lines.append("  redundant (dependent) constraints: "
                          + ", ".join(c.label() for c in self.redundant))
         if getattr(self, "singular_guess", ""):
             lines.append("  " + self.singular_guess)
+        if getattr(self, "at", "guess") == "unassembled guess":
+            lines.append("  the guesses do not assemble the mechanism and no assembled "
+                         "configuration was found from them, so this figure holds at the guess "
+                         "only: a paradoxical linkage (mobile although the Gruebler count says "
+                         "otherwise) shows its mobility only where it is assembled; give guesses "
+                         "near an assembled position")
         return "\n".join(lines)
+
+    def _where(self) -> str:
+        at = getattr(self, "at", "guess")
+        if at == "assembled":
+            return "at the assembled configuration nearest the guess (t = 0)"
+        if getattr(self, "singular_guess", ""):
+            return "near the current guess"
+        return "at the current guess" + (" (not assembled)" if at == "unassembled guess" else "")
 
     __str__ = __repr__
 
@@ -289,7 +311,9 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         """Declare a parameter with a value; returns its symbol for use in expressions.
         Changing values later (:meth:`set_parameters`) needs no recompilation.
 
-        The name must not be one the model uses for something else: the time ``T``, a body
+        The name must not be one the model uses for something else, nor a name SymPy and model
+        files read as a constant (``pi``, ``E``, ``I``, ``oo``, ``zoo``, ``nan``): the time
+        ``T``, a body
         coordinate present or future (``x2``, ``th3``, ``e04`` ...), a velocity or
         acceleration symbol (``<coordinate or variable>_d``, ``_dd``), a multiplier
         (``lam<c>_<k>``, ``lamN_<body>``), a variable or another parameter."""
@@ -386,6 +410,10 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         velocities and accelerations, multipliers) and the names already taken."""
         if name == T.name:
             return "it is the time symbol T"
+        if name in _CONSTANT_NAMES:
+            return (f"it is SymPy's name of {_CONSTANT_NAMES[name]}, which expressions given as "
+                    "text and model files read as that constant (a model with it cannot be "
+                    "saved)")
         for suffix, what in (("_dd", "acceleration"), ("_d", "velocity")):
             if name.endswith(suffix):
                 base = name[: -len(suffix)]
@@ -402,6 +430,15 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         if any(p.name == name for p in self._params):
             return "it is a parameter of the model"
         return None
+
+    def _coordinate_text(self, name: str) -> str:
+        """``"'x3' (coordinate x of body 'rod')"``: a coordinate or variable named for a user."""
+        owner = self._coordinate_owner(name)
+        if owner:
+            return f"{name!r} ({owner.replace('it is the symbol of ', '')})"
+        if any(v.symbol.name == name for v in self._variables):
+            return f"{name!r} (a variable of the model)"
+        return repr(name)
 
     def _coordinate_owner(self, name: str) -> str | None:
         """``"it is coordinate th of body 2 ..."`` when ``name`` has the form of a body
@@ -625,7 +662,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
                 raise ModelError(f"set_guess: the guess of {s.name!r} must be a number, "
                                  f"got {v!r}") from None
             if not np.isfinite(new[s]):
-                raise ModelError(f"set_guess: the guess of {s.name!r} must be finite, got {v!r}")
+                raise ModelError(f"set_guess: the guess of {self._coordinate_text(s.name)} must "
+                                 f"be finite, got {v!r}")
         self._guess_override.update(new)
 
     def _guess_vector(self, state, syms) -> np.ndarray:
@@ -711,13 +749,30 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         return eqs, owners, index
 
     def _check_symbols(self, eqs, owners) -> None:
-        known = set(self._coordinate_symbols()) | set(self._params) | {T}
+        coords = set(self._coordinate_symbols())
+        known = coords | set(self._params) | {T}
+        rates = {velocity_symbol(q.name) for q in coords} | {acceleration_symbol(q.name)
+                                                              for q in coords}
         for e, o in zip(eqs, owners):
             extra = e.free_symbols - known
             if extra:
                 lab = o.label() if hasattr(o, "label") else str(o)
+                names = sorted(map(str, extra))
+                if extra & rates:
+                    raise ModelError(
+                        f"{lab} is a velocity constraint (it uses the rates "
+                        f"{sorted(map(str, extra & rates))}), which the position equations of "
+                        "a model (solve, free, couple) cannot hold. For the first-order motion "
+                        "of a nonholonomic system keep a dummy constraint in the model in its "
+                        "place and give the velocity constraint to m.path(replace={dummy: "
+                        "velocity_constraint}) (docs/nonholonomic.md); free motion (dynamics) "
+                        "with velocity constraints is not supported yet")
+                same = same_name_advice(extra, known)
+                if same:
+                    raise ModelError(f"{lab} uses symbol(s) {names} that are not the model's: "
+                                     f"{same}")
                 raise ModelError(
-                    f"{lab} uses unknown symbol(s) {sorted(map(str, extra))}: declare them with "
+                    f"{lab} uses unknown symbol(s) {names}: declare them with "
                     "m.parameter(name, value) or m.variable(name, guess), or pass "
                     "variables={sym: guess} to Constraint")
 
@@ -903,23 +958,62 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
     def dof(self) -> DOF:
         """Degrees of freedom: the Gruebler count and the Jacobian rank at the current guess
         (on the unit-free scaled Jacobian, so the report does not depend on the unit of
-        length). When the guess is a singular configuration only because bodies were left at
+        length). With a Gruebler count of 0 or less and guesses that do not assemble the
+        mechanism, the rank is taken at the nearest assembled configuration (minimum-norm
+        Gauss-Newton from the guesses at t = 0), where a paradoxical linkage (Bricard's,
+        Bennett's) shows its mobility; ``DOF.at`` says where it was taken.
+        When the guess is a singular configuration only because bodies were left at
         the default guess, the rank is taken at a nearby configuration and ``singular_guess``
         says which bodies need guesses."""
         system = self.compile()
         g, p = self.guess(), self._p()
-        J = system.jacobian_once(0.0, g, p)
-        d = dependency(system, J, Scaling.of(system, g, J))
+        q, where = g, "guess"
+        if system.m >= system.n:
+            # a Gruebler count <= 0 says nothing of a paradoxical linkage (Bricard's, Bennett's):
+            # its mobility shows only where it is assembled, which rough guesses are not
+            q, where = self._assembled_for_dof(system, g, p)
+        J = system.jacobian_once(0.0, q, p)
+        d = dependency(system, J, Scaling.of(system, q, J))
         rank, redundant, note = d.rank, d.owners, ""
-        if d.deficiency:
+        if d.deficiency and where != "assembled":
             better = self._singular_guess(system, 0.0, g, d.rank)
             if better is not None:
                 rank, note = better
                 redundant = []
+        elif where == "assembled":
+            # the rank is the assembly's; still say when the guesses were singular only
+            # because bodies were left at the default guess (a solve from them fails)
+            Jg = system.jacobian_once(0.0, g, p)
+            dg = dependency(system, Jg, Scaling.of(system, g, Jg))
+            if dg.deficiency:
+                better = self._singular_guess(system, 0.0, g, dg.rank)
+                note = "" if better is None else better[1]
         owners = [o for o in redundant if isinstance(o, ConstraintBase)]
         return DOF(system.n - rank, coordinates=system.n, equations=system.m,
                    gruebler=system.n - system.m, rank=rank, redundant=owners,
-                   singular_guess=note)
+                   singular_guess=note, at=where, configuration=q)
+
+    def _assembled_for_dof(self, system, g, p):
+        r"""``(q, where)``: the configuration ``dof`` takes the rank at. The guess when it
+        assembles the mechanism (``"guess"``); else the nearest assembled configuration,
+        Gauss-Newton with minimum-norm steps from the guess (``dq = -D pinv(J^) R^-1 Phi``, at
+        t = 0, drivers included: :func:`~mechsys.solvers._rank.continue_position`),
+        ``"assembled"``; the guess again when that fails, ``"unassembled guess"`` (the figure
+        then holds at the guess only, and the report says so)."""
+        from .solvers._rank import continue_position
+
+        class Once:       # (the quickly compiled kernel: dof stays cheap to compile)
+            def residual_and_jacobian(self, t, q, p=None, sparse=False):
+                return system.position_once(t, q, p)
+
+        F, J = system.position_once(0.0, g, p)
+        sc = Scaling.of(system, g, J)
+        if np.abs(F / sc.rows(J)).max(initial=0.0) <= 1e-9:
+            return g, "guess"
+        got = continue_position(Once(), 0.0, g, p, sc, 1e-12, 100)
+        if got is None:
+            return g, "unassembled guess"
+        return got[0], "assembled"
 
     def equations(self, constraints=None):
         """The model's equations as SymPy matrices (Mech 13.4): constraints ``phi``, Jacobian
@@ -995,9 +1089,14 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
     def _require_square(self, system: System) -> None:
         n, m = system.n, system.m
         if m < n:
+            loose = self._unconstrained_bodies(system)
             raise ConstraintCountError(
                 f"the model has {n - m} degree(s) of freedom ({n} coordinates, {m} equations); "
-                f"a kinematic solution needs 0. Add {n - m} driving constraint(s), e.g. "
+                f"a kinematic solution needs 0. "
+                + (f"No constraint uses the coordinates of bod{'ies' if len(loose) > 1 else 'y'} "
+                   f"{', '.join(map(repr, loose))}: connect {'them' if len(loose) > 1 else 'it'}"
+                   " to the mechanism with a joint (or remove it). " if loose else "")
+                + f"Add {n - m} driving constraint(s), e.g. "
                 "RotationLock1(crank, 2*pi*T), or drop constraints with m.free(...) for dynamics.")
         if m > n:
             g = self.guess()
@@ -1014,6 +1113,18 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
                 msg += (f" Even then {n - d.rank} degree(s) of freedom would remain at this guess: "
                         "add drivers, or check the guess.")
             raise ConstraintCountError(msg)
+
+    def _unconstrained_bodies(self, system) -> list[str]:
+        """Names of the moving bodies none of whose coordinates any equation uses, apart from
+        their own Euler-parameter normalisation."""
+        used = set()
+        for e, o in zip(*self._all_equations()[:2]):
+            if not (isinstance(o, str) and o.startswith("Euler-parameter")):
+                used |= e.free_symbols
+        lay = system.layout
+        return [b.name for b in self._bodies[1:] if b.name in lay.body_slices
+                and not used & {lay.q_symbols[i] for i in range(*lay.body_slices[b.name].indices(
+                    system.n))}]
 
     @staticmethod
     def _check_times(t) -> np.ndarray:
@@ -1241,6 +1352,13 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         if g.shape != (system.n,):
             raise ModelError(f"guess must have shape ({system.n},) (coordinates "
                              f"{list(system.layout.q_names)}); got {g.shape}")
+        bad = np.flatnonzero(~np.isfinite(g))
+        if bad.size:
+            raise ModelError(
+                f"guess: the value {g[bad[0]]} given for "
+                f"{self._coordinate_text(system.layout.q_names[bad[0]])} is not finite"
+                + (f" (and {bad.size - 1} more)" if bad.size > 1 else "")
+                + "; give finite numbers")
         return g
 
     def __repr__(self) -> str:

@@ -30,11 +30,12 @@ import threading
 import time
 from collections.abc import Mapping, Sequence
 from numbers import Integral
+from types import SimpleNamespace
 
 import numpy as np
 import sympy as sp
 
-from .._errors import MechError, ModelError, choice
+from .._errors import ConvergenceError, MechError, ModelError, choice
 
 #: analysis names that mean ``model.solve(t, solution=name)``
 SOLVE_KINDS = ("location", "velocity", "acceleration", "static", "kinematic", "dynamic")
@@ -46,17 +47,138 @@ _CACHE_SIZE = 8
 _BUILD_LOCK = threading.Lock()
 
 
+#: the time at which a model's guesses describe its assembly (as ``Model.dof`` takes them)
+T_ASSEMBLY = 0.0
+#: substeps of the parameter continuation of a row that does not assemble on the branch of
+#: the model's assembly directly
+ROW_STEPS = 8
+#: the message of a row that could not be kept on the branch (the sweep's warning finds them)
+OFF_BRANCH = "sweep row left the assembly branch"
+
+
 class _Solve:
-    """The analysis ``model.solve(t, solution=kind)`` (picklable, unlike a lambda)."""
+    """The analysis ``model.solve(t, solution=kind)`` (picklable, unlike a lambda), each row
+    kept on the branch of the model's assembly (decision 0035):
+
+    1. ``prepare`` (once per worker, at the model's own parameters): the assembly ``q_a`` at
+       ``T_ASSEMBLY`` from the model's guesses, and the sign of ``det Phi_q(q_a)`` — it changes
+       only through a singular configuration, so two assemblies of opposite sign lie on
+       different branches (the two closures of a four-bar loop are mirror images with
+       opposite signs).
+    2. Each row: the position at ``T_ASSEMBLY`` at the row's parameters, Newton from ``q_a``;
+       when it turns a rotational coordinate by more than ``STEP_CHECK`` from ``q_a`` or its
+       determinant has the other sign, by continuation in ``ROW_STEPS`` substeps of the
+       parameters from the model's values to the row's, each from the one before. A row still
+       of the other sign is not solved: a :class:`ConvergenceError` (``on_error``: raised, or
+       NaN outputs and the reason).
+    3. Then a kinematic sweep from ``T_ASSEMBLY`` to the row's first time (its coarse steps
+       are continued in substeps, :func:`~mechsys.solvers._kinematics.sweep`): the row's
+       point on the branch. The asked solution from the model's guesses is returned when its
+       first point is that point (to 1e-6: the numbers of a sweep without the check), else
+       the solution started from it.
+
+    Without an assembly at the model's parameters (guesses that do not assemble at
+    ``T_ASSEMBLY``) or with a non-square Jacobian the rows are solved from the guesses as
+    before, and the sweep says so in a warning."""
 
     def __init__(self, kind: str, t):
         self.kind, self.t = kind, t
+        self.ref = None
+
+    def prepare(self, model):
+        """The model's assembly at its own parameters (see the class): ``ref``."""
+        self.ref = None
+        if getattr(model, "_switches", lambda: ())():
+            return        # (stage switches: the stage at t = 0 need not be the row's)
+        try:
+            q = np.ravel(model.solve(T_ASSEMBLY, solution="location").q)
+            sign = _det_sign(model, q) if q.size == model.compile().n else 0
+        except MechError:
+            return
+        if sign:
+            self.ref = (dict(model._params), q, sign)
 
     def __call__(self, model):
-        return model.solve(self.t, solution=self.kind)
+        if self.ref is None:
+            return model.solve(self.t, solution=self.kind)
+        from ..solvers._kinematics import _same_point
+        from ..solvers._linalg import rotation_indices
+
+        q0 = _on_branch(model, *self.ref)
+        t0 = float(np.atleast_1d(np.asarray(self.t, dtype=float))[0])
+        if t0 != T_ASSEMBLY:
+            q0 = model.solve([T_ASSEMBLY, t0], solution="location", guess=q0).q[-1]
+        try:
+            # the solve from the guesses, as without the check, when it is on the branch: a
+            # right answer keeps its numbers to the last bit
+            sol = model.solve(self.t, solution=self.kind)
+            system = model.compile()
+            scale = SimpleNamespace(length=max(1.0, float(np.abs(q0).max(initial=0.0))))
+            if sol.q.shape[-1] == q0.size and _same_point(
+                    np.atleast_2d(sol.q)[0], q0, rotation_indices(system), scale):
+                return sol
+        except MechError:
+            pass
+        return model.solve(self.t, solution=self.kind, guess=q0)
 
     def __repr__(self) -> str:
         return f"solve(t={self.t!r}, solution={self.kind!r})"
+
+
+def _det_sign(model, q) -> int:
+    """The sign of ``det Phi_q`` at ``(T_ASSEMBLY, q)`` (0: singular or not square)."""
+    system = model.compile()
+    J = system.jacobian(T_ASSEMBLY, q, model._p())
+    J = J.toarray() if hasattr(J, "toarray") else np.asarray(J)
+    if J.shape[0] != J.shape[1]:
+        return 0
+    return int(np.linalg.slogdet(J)[0])
+
+
+def _on_branch(model, base: dict, q_a, sign: int):
+    """The row's position at ``T_ASSEMBLY`` on the branch of the assembly ``q_a`` (at the
+    parameters ``base``), or a :class:`ConvergenceError` (see :class:`_Solve`)."""
+    from ..solvers._kinematics import STEP_CHECK
+    from ..solvers._linalg import rotation_indices
+
+    rot = rotation_indices(model.compile())
+    row = dict(model._params)
+
+    def turned(q):
+        return float(np.abs(q[rot] - q_a[rot]).max()) if rot.size else 0.0
+
+    try:
+        q = np.ravel(model.solve(T_ASSEMBLY, solution="location", guess=q_a).q)
+        if _det_sign(model, q) == sign and turned(q) <= STEP_CHECK:
+            return q
+    except MechError:
+        pass
+    q = q_a
+    try:
+        for s in np.arange(1, ROW_STEPS + 1) / ROW_STEPS:
+            model._params.update({k: base[k] + s * (row[k] - base[k]) for k in row
+                                  if row[k] != base[k]})
+            q = np.ravel(model.solve(T_ASSEMBLY, solution="location", guess=q).q)
+            if _det_sign(model, q) != sign:
+                break
+    except MechError as exc:
+        why = (f"the mechanism does not assemble at t = {T_ASSEMBLY:g} at (or on the way to) "
+               "these parameters, so the branch cannot be followed from the model's assembly "
+               f"to them ({type(exc).__name__}: {str(exc)[:200]})")
+    else:
+        if _det_sign(model, q) == sign:
+            return q
+        why = ("its configuration crosses a singular (toggle) position on the way from the "
+               "model's parameters, where the assembly branch ends")
+    finally:
+        model._params.update(row)
+    changed = ", ".join(f"{getattr(k, 'name', k)}={row[k]!r}" for k in row if row[k] != base[k])
+    raise ConvergenceError(
+        f"{OFF_BRANCH}: at {changed} the row cannot be put on the branch of the model's "
+        f"assembly at t = {T_ASSEMBLY:g} (the configuration where det Phi_q has the assembly's "
+        f"sign): {why}. "
+        "Rows past a toggle position belong to another assembly mode; sweep them from a model "
+        "whose guesses describe that mode, or narrow the parameter range.")
 
 
 def _dumps(obj) -> bytes:
@@ -156,6 +278,8 @@ def _run_points(model, analysis, outputs, names, points, on_error, report=None) 
     saved_p, saved_last = dict(model._params), model.last_solution
     rows = []
     try:
+        if hasattr(analysis, "prepare"):       # the model's own assembly (_Solve)
+            analysis.prepare(model)
         for idx, pt in points:
             try:
                 model.set_parameters(pt)
@@ -317,7 +441,30 @@ def sweep(model, params, analysis="acceleration", outputs=None, *, t=0.0, grid: 
         df = df[[c for c in df.columns if c != "error"] + ["error"]]
     df.attrs.update(executor=kind, workers=used, builds=builds,
                     seconds=time.monotonic() - start)
+    if isinstance(analysis, _Solve):
+        _warn_branches(df, analysis, kind == "serial")
     return df
+
+
+def _warn_branches(df, analysis, serial: bool) -> None:
+    """A warning naming the rows not kept on the assembly branch (``on_error="nan"``), or
+    saying that the rows could not be checked (no assembly of the model to check against)."""
+    import warnings
+
+    if "error" in df:
+        bad = [i for i, e in enumerate(df["error"]) if isinstance(e, str) and OFF_BRANCH in e]
+        if bad:
+            warnings.warn(
+                f"sweep: {len(bad)} row(s) could not be kept on the branch of the model's "
+                f"assembly and have NaN outputs: rows {bad[:20]}{' ...' if len(bad) > 20 else ''}"
+                " (the error column says why)", stacklevel=3)
+    if analysis.ref is None and serial:      # (workers prepare their own copies)
+        warnings.warn(
+            f"sweep: the model does not assemble at t = {T_ASSEMBLY:g} from its guesses at its "
+            "own parameters (or its Jacobian is singular or not square there, or it has stage "
+            "switches), so the rows were solved from the guesses without checking that they "
+            "stay on one assembly branch",
+            stacklevel=3)
 
 
 def _check_count(value, what):

@@ -307,12 +307,30 @@ class System:
         kernel when it exists, else a quickly compiled, unoptimised Jacobian-only kernel."""
         if "position" in self._kernels:
             return self.jacobian(t, q, p)
+        if "pos_once" in self._kernels:
+            return self.position_once(t, q, p)[1]
         k = self._kernels.get("jac_once")
         if k is None:
             k = self._kernels["jac_once"] = compile_exprs(
                 self.layout.args(), self.kinematic_exprs("jac", for_compile=True), self.backend,
                 once=True, cse=self.cse)
         return self.assemble(k(self.pack(t, q, None, p)))
+
+    def position_once(self, t: float, q, p=None):
+        """``(Phi, Phi_q)`` (dense) for a few evaluations (``m.dof()``'s assembly of a guess):
+        the compiled position kernel when it exists, else a quickly compiled, unoptimised one
+        (as :meth:`jacobian_once`)."""
+        if "position" in self._kernels:
+            return self.residual_and_jacobian(t, q, p)
+        k = self._kernels.get("pos_once")
+        if k is None:
+            native = self._native is not None and self.backend == "symengine"
+            parts = list(self._native["phi"] if native else self.phi)
+            parts += self.kinematic_exprs("jac", for_compile=True)
+            k = self._kernels["pos_once"] = compile_exprs(self.layout.args(), parts, self.backend,
+                                                          once=True, cse=self.cse)
+        out = k(self.pack(t, q, None, p))
+        return out[: self.m], self.assemble(out[self.m:])
 
     def jacobian(self, t: float, q, p=None, sparse: bool = False):
         vals = self.f_position(self.pack(t, q, None, p))[self.m :]

@@ -53,7 +53,7 @@ from ..geometry._points import Axis, GlobalVector, Line, Plane, Point, Vector
 from ..loads._loads import LoadBase
 from ..loads._switched import StageSwitchedLoad, TimeSwitchedLoad
 from ..model import Model2D, Model3D
-from ._expr import condition_text, parse, parse_condition, to_text
+from ._expr import CONSTANTS, condition_text, parse, parse_condition, to_text
 
 FORMAT = "mechsys-model"
 VERSION = 1
@@ -139,6 +139,7 @@ class _Writer:
             if not _IDENT.fullmatch(s.name):
                 raise ModelError(f"{where}: the symbol name {s.name!r} cannot be written to a "
                                  "model file; use names of letters, digits and _")
+            _constant_name(s, where)
         text = to_text(e)
         back = parse(text, self.names, where)  # everything written must read back
         if back != e and sp.simplify(back - e) != 0:
@@ -151,6 +152,7 @@ class _Writer:
             if not _IDENT.fullmatch(sym.name):
                 raise ModelError(f"{where}: the symbol name {sym.name!r} cannot be written to a "
                                  "model file; use names of letters, digits and _")
+            _constant_name(sym, where)
         try:
             text = condition_text(c)
         except ModelError as exc:
@@ -304,6 +306,17 @@ def model_to_dict(m) -> dict:
         "guesses": [[s.name, float(v)] for s, v in m._guess_override.items()],
         "graphics": graphics,
     }
+
+
+def _constant_name(sym, where: str) -> None:
+    """A :class:`ModelError` naming a symbol (a parameter or variable) whose name a model file
+    reads as a constant (``pi``, ``E``): it would come back as the constant."""
+    if sym.name in CONSTANTS:
+        raise ModelError(
+            f"{where}: the symbol {sym.name!r} (a parameter or variable of the model) has the "
+            f"name of the constant {sym.name}, which a model file reads as that constant, so "
+            f"the model cannot be saved: rename it (e.g. {sym.name + '_'!r}); m.parameter "
+            "refuses such names")
 
 
 def save(m, path) -> Path:

@@ -131,12 +131,228 @@ class SweepResult:
         return self.fill is not None
 
 
+#: a step between two solved points that turns a rotational coordinate by more than this (rad)
+#: is coarse: the sweep checks it by continuation in substeps (decision 0035)
+STEP_CHECK = np.pi / 6
+#: the substeps of that check turn a rotational coordinate by about this much (rad) at most
+SUBSTEP = np.pi / 12
+#: a step is divided into at most this many substeps at once, and divided again at most
+#: ``SPLIT_DEPTH`` times
+SPLIT_MAX = 64
+SPLIT_DEPTH = 4
+#: two solutions of one point are the same assembly when no rotational coordinate differs by
+#: more than this (rad) and no other by more than this times the model's length
+SAME_BRANCH = 1e-6
+
+
 def sweep(system, times, guess, order: int = 2, options: PositionOptions | None = None,
           p=None, scaling: Scaling | None = None, hooks=None, prior=None, partial: bool = False,
-          points: int | None = None) -> SweepResult:
-    """Kinematic solution at each of ``times`` (1D, any order; continuation follows the
+          points: int | None = None, _depth: int = 0) -> SweepResult:
+    r"""Kinematic solution at each of ``times`` (1D, any order; continuation follows the
     given order). ``order`` 0 = location, 1 = + velocity, 2 = + acceleration. ``scaling``
     defaults to the one of ``guess`` at the first time. ``hooks``
+    (:class:`~mechsys.solvers._diagnostics.Hooks`): ``pre_solve(t)`` before each point's
+    position solve; a hook returning False raises ``Stopped`` carrying the points solved so
+    far (``partial``, a :class:`SweepResult`).
+
+    **Coarse steps keep the branch** (decision 0035). The predictor of the loops is exact
+    only for small steps; over a step that turns a rotational coordinate by more than
+    ``STEP_CHECK`` Newton may land on another assembly branch (a four-bar's rocker mirrored)
+    that is still within ``ROTATION_JUMP`` of the prediction, or a driven coordinate may move
+    by more than ``ROTATION_JUMP`` in one step (a crank driven at coarse times, which the
+    position-only sweep cannot predict). Each such step, solved or failed by that jump, is
+    done again by
+    continuation from the point before it in ``S`` substeps
+    (``S = ceil(rotation / SUBSTEP)``, at most ``SPLIT_MAX``; 4 for a failed step, divided
+    again when a substep fails, ``SPLIT_DEPTH`` levels), which follows the drivers' motion
+    on the branch of the previous point. When the continuation ends on another configuration
+    (no rotational coordinate within ``SAME_BRANCH`` rad, or another coordinate within
+    ``SAME_BRANCH L``) the sweep takes the continuation's point and solves the times after it
+    again from there. The substeps are not part of the result; the points of fine sweeps
+    (every step below ``STEP_CHECK``) are those of the loops alone.
+
+    For a sweep that continues another (the runs of a multistage sweep):
+
+    * ``prior``: ``(times, Q, QD, QDD, rconds[, rows])`` of the points solved just before
+      ``times[0]`` (``QD``/``QDD``/``rconds`` None where ``order`` has none; three points
+      are all the predictor uses; ``rows`` the ``SweepResult.rows`` of the sweep they end,
+      or None). The first point is predicted from them, and starts Newton with the last
+      one's chord when ``rows`` is given, exactly as in one long sweep; ``guess`` is not
+      used, ``scaling`` must be given.
+    * ``partial``: a point whose position solve fails (:class:`ConvergenceError`,
+      :class:`SingularJacobianError`) ends the sweep: the result holds the points before it,
+      ``stopped`` the error.
+    * ``points``: the size of the whole job, for the compiled loop's ``auto`` rule
+      (default ``len(times)``)."""
+    times = np.atleast_1d(np.asarray(times, dtype=float))
+    halted = None       # a hook's stop in the first run: its points are checked, then it goes on
+    try:
+        res = _sweep_loop(system, times, guess, order, options, p, scaling, hooks, prior, True,
+                          points)
+    except Stopped as exc:
+        if exc.k == 0 or prior is not None:
+            raise
+        halted, res, times = exc, exc.partial, times[:exc.k]
+    rot = rotation_indices(system)
+    if prior is not None:
+        prior = _check_prior(prior, system.n, order)
+    # the solved points so far, prior ones first (not part of the result): lists of arrays
+    parts = [] if prior is None else [_as_part(prior, order)]
+    n_prior = 0 if prior is None else 1
+    evals, at, first = 0, 0, True       # ``at``: index in ``times`` of res's first point
+    stop, rows = None, None
+    while True:
+        evals += res.evaluations
+        sc = res.scaling if res.scaling is not None else scaling
+        k, step = (None, None) if _depth >= SPLIT_DEPTH else _first_coarse(parts, res.q, rot)
+        if k is None and getattr(res.stopped, "lost_branch", False) and _depth < SPLIT_DEPTH \
+                and (len(res.t) or any(len(pt[0]) for pt in parts)):
+            k, step = len(res.t), None        # a step that jumped after a solved point: divide it
+        if k is None:
+            if first and halted is None:     # the loops' result, untouched
+                if res.stopped is not None and not partial:
+                    raise res.stopped
+                return res
+            parts.append(_as_part(res, order))
+            stop, rows = res.stopped, res.rows
+            break
+        first = False
+        part = _as_part(res, order)           # (computes the pending estimates)
+        t_k = times[at + k]
+        head = _cut(part, k)
+        before = _tail([pt for pt in parts + [head] if len(pt[0])], 3)
+        S = 4 if step is None else int(min(SPLIT_MAX, max(2, np.ceil(step / SUBSTEP))))
+        t0 = before[0][-1]
+        sub_t = t0 + (t_k - t0) * np.arange(1, S + 1) / S
+        sub_t[-1] = t_k
+        try:
+            sub = sweep(system, sub_t, None, order, options, p, sc, None, before, True,
+                        None, _depth + 1)
+        except ModelError:
+            sub = None
+        evals += 0 if sub is None else sub.evaluations
+        if sub is None or sub.stopped is not None:
+            if step is None:                   # the step cannot be done in substeps either
+                parts.append(part)
+                stop = res.stopped
+                break
+            # the check could not be made (the substeps stopped): keep the loop's point
+            parts.append(_cut(part, k + 1))
+            at += k + 1
+            res = _sliced(res, k + 1, order)
+            continue
+        got = _cut(_as_part(sub, order), S - 1, S)
+        if step is not None and _same_point(got[1][0], part[1][k], rot, sc):
+            parts.append(_cut(part, k + 1))   # the loop's point was on the branch
+            at += k + 1
+            res = _sliced(res, k + 1, order)
+            continue
+        parts += [head, got]                   # the continuation's point replaces it
+        at += k + 1
+        if at >= len(times):
+            break
+        try:
+            res = _sweep_loop(system, times[at:], None, order, options, p, sc, hooks,
+                              _tail(parts, 3), True, points)
+        except Stopped as exc:
+            # a hook stopped the sweep again from a point: the partial result holds every
+            # point before the stop, not only those of this run
+            got = exc.partial
+            kept = [pt for pt in parts[n_prior:] if len(pt[0])]
+            exc.partial = _from_parts(kept + [_as_part(got, order)], system.n, order,
+                                      evals + got.evaluations, sc, None, None)
+            exc.k = len(exc.partial.t)
+            raise
+    if stop is not None and not partial:
+        raise stop
+    out = _from_parts([pt for pt in parts[n_prior:] if len(pt[0])], system.n, order, evals,
+                      sc, stop, rows)
+    if halted is not None:
+        halted.partial, halted.k = out, len(out.t)
+        raise halted
+    return out
+
+
+def _from_parts(parts, n: int, order: int, evals: int, sc, stop, rows) -> SweepResult:
+    """One :class:`SweepResult` of the solved parts ``[t, Q, QD, QDD, rconds, its]``."""
+    if not parts:
+        empty = np.empty((0, n))
+        cat = [np.empty(0), empty, empty if order >= 1 else None, empty if order >= 2 else None,
+               np.empty(0) if order >= 1 else None, np.empty(0, dtype=int)]
+    else:
+        cat = [None if parts[0][i] is None else np.concatenate([pt[i] for pt in parts])
+               for i in range(6)]
+    t, Q, QD, QDD, rc, its = cat
+    return SweepResult(t, Q, QD, QDD, its, evals, order, rc, None, sc, stop, rows)
+
+
+def _as_part(src, order: int) -> list:
+    """``[t, Q, QD, QDD, rconds, its]`` of a SweepResult (its estimates computed) or a
+    ``prior`` tuple (copies)."""
+    if isinstance(src, SweepResult):
+        rc = None if src.rcond_raw is None else np.array(src.rcond)
+        return [np.array(src.t), np.array(src.q), None if src.qd is None else np.array(src.qd),
+                None if src.qdd is None else np.array(src.qdd), rc, np.array(src.iterations)]
+    t, Q, QD, QDD, rc = src[:5]
+    return [np.array(t), np.array(Q), None if order < 1 else np.array(QD),
+            None if order < 2 else np.array(QDD), None if order < 1 else np.array(rc),
+            np.zeros(len(t), dtype=int)]
+
+
+def _cut(part, a, b=None) -> list:
+    """Rows ``[:a]`` (or ``[a:b]``) of a part."""
+    sl = slice(None, a) if b is None else slice(a, b)
+    return [None if X is None else X[sl] for X in part]
+
+
+def _tail(parts, m: int):
+    """The last ``m`` points of ``parts`` as a ``prior`` tuple."""
+    X = [None if parts[0][i] is None else np.concatenate([pt[i] for pt in parts])[-m:]
+         for i in range(5)]
+    return tuple(X)
+
+
+def _first_coarse(parts, Q, rot):
+    """``(k, rotation)`` of the first point of ``Q`` reached from the point before it (the
+    last of ``parts``, or the previous one of ``part``) by a step turning a rotational
+    coordinate by more than ``STEP_CHECK``; ``(None, None)`` if none."""
+    if not rot.size or not len(Q):
+        return None, None
+    prev = [pt[1][-1:] for pt in parts if len(pt[1])][-1:]
+    seq = np.concatenate(prev + [Q])[:, rot]
+    steps = np.abs(np.diff(seq, axis=0)).max(axis=1)
+    off = 1 - len(prev)       # index in part of steps[0]'s end point
+    big = np.flatnonzero(steps > STEP_CHECK)
+    if not big.size:
+        return None, None
+    return int(big[0]) + off, float(steps[big[0]])
+
+
+def _same_point(a, b, rot, sc) -> bool:
+    d = np.abs(np.asarray(a) - np.asarray(b))
+    other = np.ones(len(d), dtype=bool)
+    other[rot] = False
+    length = sc.length if sc is not None else 1.0
+    return bool(d[rot].max(initial=0.0) <= SAME_BRANCH
+                and d[other].max(initial=0.0) <= SAME_BRANCH * max(length, 1e-300))
+
+
+def _sliced(res: SweepResult, a: int, order: int) -> SweepResult:
+    """The points ``a:`` of ``res`` (its estimates computed), same stop and scaling."""
+    rc = None if res.rcond_raw is None else np.array(res.rcond)[a:]
+    return SweepResult(res.t[a:], res.q[a:], None if res.qd is None else res.qd[a:],
+                       None if res.qdd is None else res.qdd[a:], res.iterations[a:], 0, order,
+                       rc, None, res.scaling, res.stopped, res.rows)
+
+
+def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions | None = None,
+                p=None, scaling: Scaling | None = None, hooks=None, prior=None,
+                partial: bool = False, points: int | None = None) -> SweepResult:
+    """The sweep's loops (compiled, then Python) without the coarse-step checks of
+    :func:`sweep`, which calls it. Kinematic solution at each of ``times`` (1D, any order;
+    continuation follows the given order). ``order`` 0 = location, 1 = + velocity,
+    2 = + acceleration. ``scaling`` defaults to the one of ``guess`` at the first time.
+    ``hooks``
     (:class:`~mechsys.solvers._diagnostics.Hooks`): ``pre_solve(t)`` before each point's
     position solve; a hook returning False raises ``Stopped`` carrying the points solved so
     far (``partial``, a :class:`SweepResult`).
@@ -242,7 +458,8 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
                                    times[k - 1] if k else None, hooks, chord,
                                    start if k == 0 else None)
             except Stopped as exc:
-                raise _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds, fill) from None
+                raise _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds, fill,
+                               sc) from None
             q = res.q
             had_chord, chord = chord is not None, None
             its[k] = res.iterations
@@ -264,7 +481,7 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
                                            hooks)
                     except Stopped as exc:
                         raise _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds,
-                                       fill) from None
+                                       fill, sc) from None
                     q = res.q
                     its[k] = res.iterations
                     evals += res.evaluations
@@ -377,12 +594,12 @@ def _check_prior(prior, n: int, order: int) -> tuple:
     return (t, out["Q"], out.get("QD"), out.get("QDD"), out.get("rconds"), rows)
 
 
-def _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds, fill=None):
+def _stopped(exc, k, times, Q, QD, QDD, its, evals, order, rconds, fill=None, sc=None):
     """``exc`` (a ``Stopped``) carrying the ``k`` points solved so far."""
     exc.k = k
     exc.partial = SweepResult(times[:k], Q[:k], None if QD is None else QD[:k],
                               None if QDD is None else QDD[:k], its[:k], evals,
-                              order, None if rconds is None else rconds[:k], fill)
+                              order, None if rconds is None else rconds[:k], fill, sc)
     return exc
 
 
@@ -460,13 +677,15 @@ def _solve_point(system, t, g, q_prev, options, p, sc, rot, t_prev=None, hooks=N
     jump = _jump(res.q, q_prev, rot)
     if jump > ROTATION_JUMP:
         i = rot[np.argmax(np.abs(res.q[rot] - q_prev[rot]))]
-        raise ConvergenceError(
+        err = ConvergenceError(
             f"kinematic sweep at t = {t:.6g}: a rotational coordinate "
             f"({system.layout.q_names[i]}) jumped by {jump:.3g} rad from the previous point, so "
             "the sweep lost its assembly branch (near a lock-up or toggle position, or too "
             "coarse sampling). Sample more finely, or stop the sweep before this time.",
             time=t, residuals=system.residual(t, res.q, p),
             history=res.history)
+        err.lost_branch = True     # (sweep divides such a step: a coarse step, not a lock-up)
+        raise err
     return res
 
 
