@@ -27,13 +27,15 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.napoleon",
     "sphinx.ext.viewcode",
+    "sphinx.ext.mathjax",
 ]
 
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
 root_doc = "index"
-exclude_patterns = ["_build", "_gen", "gallery/_media/**"]
+exclude_patterns = ["_build", "_gen", "_static", "gallery/_media/**"]
 myst_heading_anchors = 4
-myst_enable_extensions = ["deflist"]
+# $...$ and $$...$$ in the Markdown pages, and amsmath environments (align, cases) as maths
+myst_enable_extensions = ["deflist", "dollarmath", "amsmath"]
 
 autodoc_member_order = "bysource"
 autodoc_typehints = "description"
@@ -42,11 +44,24 @@ napoleon_numpy_docstring = True
 napoleon_google_docstring = False
 napoleon_use_ivar = True
 
-html_theme = "alabaster"
+# Furo: a maintained theme with a sidebar of the whole table of contents, a search box on
+# every page, light and dark modes, and no resource loaded from another site
+html_theme = "furo"
 html_title = "mechsys"
-html_static_path = []
-html_theme_options = {"description": "Kinematics and dynamics of mechanisms, the Python Mech",
-                      "fixed_sidebar": True}
+html_static_path = ["_static"]
+html_css_files = ["mechsys.css"]
+html_theme_options = {"sidebar_hide_name": False, "navigation_with_keys": True}
+
+# MathJax served with the site, never from a CDN: the files come with the pip package
+# sphinx-mathjax-offline (MathJax 3, CommonHTML output); _copy_mathjax copies the parts the
+# pages use (about 3 MB) into _static/mathjax after the build.
+MATHJAX_DIR = "mathjax"
+mathjax_path = f"{MATHJAX_DIR}/tex-chtml.js"
+mathjax3_config = {"tex": {"tags": "ams"}, "options": {"enableMenu": True}}
+MATHJAX_PARTS = ("tex-chtml.js", "output/chtml", "input/tex", "ui", "a11y")
+
+# the decision records stay searchable but sink below every guide and API page
+html_search_scorer = str(Path(__file__).resolve().parent / "_static" / "search_scorer.js")
 
 myst_enable_extensions.append("html_image")
 
@@ -84,7 +99,36 @@ def _copy_viewers(app, exception):
         shutil.copyfile(f, dest)
 
 
+def _mathjax_source() -> Path:
+    """The MathJax files of the sphinx-mathjax-offline package (its module name has dashes,
+    so it is found through importlib)."""
+    import importlib.util
+
+    spec = importlib.util.find_spec("sphinx-mathjax-offline")
+    if spec is None or spec.origin is None:
+        raise RuntimeError("the documentation needs MathJax shipped with the site: "
+                           "pip install sphinx-mathjax-offline (the docs extra)")
+    return Path(spec.origin).parent / "static" / "mathjax"
+
+
+def _copy_mathjax(app, exception):
+    """MathJax beside the pages, so that equations render with no network."""
+    if exception is not None or app.builder.format != "html":
+        return
+    src = _mathjax_source()
+    dest = Path(app.outdir) / "_static" / MATHJAX_DIR
+    for part in MATHJAX_PARTS:
+        s, d = src / part, dest / part
+        if s.is_dir():
+            shutil.copytree(s, d, dirs_exist_ok=True)
+        else:
+            d.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(s, d)
+
+
 def setup(app):
+    _mathjax_source()                       # fail early, naming the package, when it is absent
     app.connect("source-read", _guides_in_toctree)
     app.connect("build-finished", _copy_viewers)
+    app.connect("build-finished", _copy_mathjax)
     return {"parallel_read_safe": True}
