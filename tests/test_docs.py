@@ -72,24 +72,40 @@ def test_rst_literal_blocks_become_fenced_code():
 
     ``F(a, b)``::
 
-        a - b = 0
+        m.add(c)
 
     After :class:`~mechsys.Point`.
     """)
-    assert md == "Title `x`.\n\n`F(a, b)`:\n\n```text\na - b = 0\n```\n\nAfter `Point`.\n"
+    assert md == "Title `x`.\n\n`F(a, b)`:\n\n```text\nm.add(c)\n```\n\nAfter `Point`.\n"
 
 
+def test_equation_blocks_become_typeset_maths():
+    """A literal block of equations becomes a displayed ``aligned`` block of LaTeX."""
+    from mechsys._docgen import equation_to_latex, rst_to_markdown
 
-def test_relative_links_resolve():
-    """Links between the Markdown pages point at files that exist."""
-    pages = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
-    broken = []
-    for page in pages:
-        text = page.read_text(encoding="utf-8")
-        for target in re.findall(r"\]\(([^)\s]+)\)", text):
-            if re.match(r"[a-z]+:", target) or target.startswith("#"):
-                continue
-            path = target.split("#", 1)[0]
-            if not (page.parent / path).exists():
-                broken.append(f"{page.relative_to(ROOT)} -> {target}")
-    assert not broken, f"broken links: {broken}"
+    md = rst_to_markdown("""Equations::
+
+        u_1 . (r_2 - r_1) = 0
+        u x d - dist |u| = 0      (three equations)
+
+    End.
+    """)
+    assert md == ("Equations:\n\n$$\n\\begin{aligned}\n"
+                  "u_{1} \\cdot (r_{2} - r_{1}) &= 0 \\\\\n"
+                  "u \\times d - \\mathit{dist} \\lvert u \\rvert &= 0 \\qquad "
+                  "\\text{(three equations)}\n\\end{aligned}\n$$\n\nEnd.\n")
+    assert equation_to_latex("theta_1 - theta_2 - angle = 0") == (
+        r"\theta_{1} - \theta_{2} - \mathit{angle} &= 0")
+    assert equation_to_latex("k_1 . g_2' - u_2^ . d = 0") == (
+        r"k_{1} \cdot g_{2}^{\prime} - \hat{u}_{2} \cdot d &= 0")
+    assert equation_to_latex("s = sp.Symbol('s')") is None          # code stays code
+
+
+def test_constraint_page_typesets_every_equation_block():
+    """Every block of equations of the constraint reference is displayed maths (no plain
+    ``= 0`` line is left in a code block), and its dollars pair up."""
+    page = (ROOT / "docs" / "constraints.md").read_text(encoding="utf-8")
+    code = re.findall(r"^```text\n(.*?)^```", page, flags=re.M | re.S)
+    assert not [c for c in code if re.search(r"=\s*0\b", c)], code
+    fences = re.findall(r"^\$\$$", page, flags=re.M)
+    assert len(fences) >= 100 and len(fences) % 2 == 0
