@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import sympy as sp
 
 from .._errors import ModelError
+from .._signature import InitSignature
 from ..geometry._points import Axis, BodyRef, Point, Vector, as_point, as_vector
 
 
@@ -47,6 +48,9 @@ class DirectLoad:
 
 class LoadBase:
     """A load: ``contributions(model)`` and, when conservative, ``potential(model)``."""
+
+    # the signature shown by help() and the API reference is __init__'s, not __new__'s
+    __signature__ = InitSignature()
 
     def __new__(cls, *args, **kwargs):
         # the constructor's arguments, kept for model files (mechsys.io)
