@@ -1,0 +1,70 @@
+"""Pictures fit to print (issue 38.5): plot axes carry units (time and position coordinates in
+the model's declared units, planar angles in rad; nothing invented where the unit is not known);
+the animation player works offline (no Font Awesome from a CDN)."""
+
+import numpy as np
+
+from mechsys import models
+from mechsys.draw import phase_plot, plot
+
+
+def _solution(units: dict | None):
+    m = models.slider_crank()
+    if units:
+        m.set_units(**units)
+    return m.solve(np.linspace(0, 1, 9))
+
+
+def _labels(fig):
+    return [a.get_ylabel() for a in fig.axes], fig.axes[-1].get_xlabel()
+
+
+def test_axes_show_the_declared_units(monkeypatch):
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    import matplotlib.pyplot as plt
+
+    sol = _solution({"length": "mm", "time": "s"})
+    names = list(sol.names)
+    x_name = next(n for n in names if n.startswith("piston.") and n.endswith(".x"))
+    fig = plot(sol, {"crank angle": "crank.th", "piston": x_name})
+    ylabels, xlabel = _labels(fig)
+    assert ylabels == ["crank angle [rad]", "piston [mm]"]
+    assert xlabel == "t [s]"
+    fig2 = phase_plot(sol, "crank.th", x_name)
+    assert fig2.axes[0].get_xlabel() == "crank.th [rad]"
+    assert fig2.axes[0].get_ylabel() == f"{x_name} [mm]"
+    # an expression or callable has no known unit: its label is kept as given
+    fig3 = plot(sol, {"speed": lambda s: s.coordinate(x_name, 1)}, x="crank.th",
+                xlabel="crank")
+    assert _labels(fig3) == (["speed"], "crank [rad]")
+    plt.close("all")
+
+
+def test_no_unit_is_invented_without_declared_units(monkeypatch):
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    import matplotlib.pyplot as plt
+
+    sol = _solution(None)
+    x_name = next(n for n in sol.names if n.startswith("piston.") and n.endswith(".x"))
+    ylabels, xlabel = _labels(plot(sol, {"crank angle": "crank.th", "piston": x_name}))
+    assert ylabels == ["crank angle [rad]", "piston"]       # an angle is in rad regardless
+    assert xlabel == "t"
+    plt.close("all")
+
+
+def test_animation_player_needs_no_network(monkeypatch):
+    """matplotlib's player loads Font Awesome from a CDN for its buttons (blank offline):
+    the player mechsys writes has no remote link and shows its buttons as text."""
+    import re
+
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    import mechsys as ms
+
+    sol = _solution(None)
+    anim = ms.draw.animate(sol, frames=3)
+    html = anim.to_jshtml()
+    anim.close()
+    assert "font-awesome" not in html and 'class="fa ' not in html
+    assert not re.search(r'<(?:link|script)[^>]+(?:href|src)="(?:https?:)?//', html)
+    assert "\u25b6" in html and "\u23f8" in html                   # play and pause buttons
+    assert html.count("<button") >= 9
