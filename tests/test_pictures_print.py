@@ -68,3 +68,25 @@ def test_animation_player_needs_no_network(monkeypatch):
     assert not re.search(r'<(?:link|script)[^>]+(?:href|src)="(?:https?:)?//', html)
     assert "\u25b6" in html and "\u23f8" in html                   # play and pause buttons
     assert html.count("<button") >= 9
+
+
+def test_3d_tick_labels_do_not_overlap(monkeypatch):
+    """A 3D snapshot of the Cardan joint had 16 pairs of overlapping tick labels (11 labels
+    on each axis, whatever its drawn length): none now, on any axis."""
+    import itertools
+
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    import matplotlib.pyplot as plt
+
+    m = models.cardan_joint()
+    sol = m.solve(np.linspace(0, 1, 5))
+    fig = __import__("mechsys").draw.snapshot(sol)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    ax = fig.axes[0]
+    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+        boxes = [t.get_window_extent(renderer) for t in axis.get_ticklabels()
+                 if t.get_visible() and t.get_text()]
+        assert 2 <= len(boxes) <= 6
+        assert not [1 for a, b in itertools.combinations(boxes, 2) if a.overlaps(b)]
+    plt.close("all")
