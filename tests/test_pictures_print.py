@@ -3,6 +3,7 @@ the model's declared units, planar angles in rad; nothing invented where the uni
 the animation player works offline (no Font Awesome from a CDN)."""
 
 import numpy as np
+import pytest
 
 from mechsys import models
 from mechsys.draw import phase_plot, plot
@@ -90,3 +91,24 @@ def test_3d_tick_labels_do_not_overlap(monkeypatch):
         assert 2 <= len(boxes) <= 6
         assert not [1 for a, b in itertools.combinations(boxes, 2) if a.overlaps(b)]
     plt.close("all")
+
+
+def test_mode_animation_is_titled(monkeypatch):
+    """A vibration mode's animation says which mode and at what frequency (it was
+    untitled): the title's frequency is the mode's own, f = omega / (2 pi)."""
+    import re
+
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    import mechsys as ms
+
+    m = ms.Model2D()
+    k, mass = 40.0, 2.0
+    b = m.add_body("block", mass=mass, inertia=1.0, guess=((1, 0), 0))
+    m.add(ms.Translate2(m.ground.axis((0, 0), (1, 0)), b.axis((0, 0), (1, 0))))
+    m.add_load(ms.Spring(m.ground.point((0, 0)), b.point(0), stiffness=k, free_length=1.0))
+    modes = m.vibration(at=m.guess())
+    anim = modes.animate(0, frames=3)
+    title = anim.figure.axes[0].get_title()
+    anim.close()
+    hz = float(re.fullmatch(r"mode 0: (\S+) Hz", title).group(1))
+    assert hz == pytest.approx(np.sqrt(k / mass) / (2 * np.pi), rel=1e-3)
