@@ -55,6 +55,9 @@ def _dof(cls) -> str:
 
 
 def _signature(name: str, cls) -> str:
+    call = getattr(cls, "_call", None)        # cams parse Mech's variable argument list
+    if isinstance(call, str) and call.startswith("("):
+        return f"{name}{call}"
     sig = inspect.signature(cls.__init__)
     params = [p for p in sig.parameters.values() if p.name != "self"]
     return f"{name}{sig.replace(parameters=params, return_annotation=inspect.Signature.empty)}"
@@ -84,6 +87,7 @@ def _inline(text: str) -> str:
 _GREEK = {"alpha", "beta", "gamma", "delta", "theta", "Theta", "phi", "Phi", "psi", "omega",
           "pi", "lambda", "mu", "rho", "sigma", "tau"}
 _FUNCS = {"cos", "sin", "tan", "sqrt", "atan2"}
+_OPERATORS = {"+", "-", "/", "=", r"\cdot", r"\times"}
 _EQUATION = re.compile(r"^(?P<eq>.*?=\s*0)(?P<note>\s+\(.*\))?\s*$")
 _NAME = re.compile(r"(?<![A-Za-z0-9_])(?P<base>[A-Za-z]+)(?P<digits>\d*)"
                    r"(?:_(?P<sub>[A-Za-z0-9]+))?(?P<hat>\^(?![\d(]))?")
@@ -127,7 +131,16 @@ def equation_to_latex(line: str) -> str | None:
     parts = tex.split("|")
     if len(parts) % 2 == 1:                        # |a| pairs: lengths
         tex = "".join(p if k % 2 == 0 else rf"\lvert {p} \rvert" for k, p in enumerate(parts))
-    tex = re.sub(r"\s+", " ", tex).strip() + " &= 0"
+    tex = re.sub(r"\s+", " ", tex).strip()
+    # a product written with a space (``rad alpha``, ``dist |u|``): LaTeX ignores spaces,
+    # so a thin space keeps ``\mathit{rad}\,\alpha`` from reading as one word
+    words = tex.split(" ")
+    tex = words[0]
+    for a, b in zip(words, words[1:]):
+        product = not (a in _OPERATORS or a.endswith("(") or b in _OPERATORS
+                       or b.startswith((")", "/", "^", "\\rvert")) or a.endswith("\\lvert"))
+        tex += (r"\, " if product else " ") + b
+    tex += " &= 0"
     note = m.group("note")
     if note:
         tex += rf" \qquad \text{{{note.strip()}}}"
