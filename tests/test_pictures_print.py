@@ -112,3 +112,28 @@ def test_mode_animation_is_titled(monkeypatch):
     anim.close()
     hz = float(re.fullmatch(r"mode 0: (\S+) Hz", title).group(1))
     assert hz == pytest.approx(np.sqrt(k / mass) / (2 * np.pi), rel=1e-3)
+
+
+def test_tall_mechanism_picture_is_cropped(monkeypatch):
+    """A hanging double pendulum is eight times taller than wide: its figure was 6.4 in wide
+    around axes of a quarter of that (mostly white); the figure now hugs the axes."""
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    import matplotlib.pyplot as plt
+
+    import mechsys as ms
+
+    m = ms.Model2D()
+    a = m.add_body("a", points={"tip": (1.0, 0)}, guess=((0, 0), -np.pi / 2 + 0.05))
+    b = m.add_body("b", points={"tip": (1.0, 0)}, guess=((0.05, -1.0), -np.pi / 2 + 0.1))
+    m.add(ms.Revolute2(m.ground.point((0, 0)), a.point(0)))
+    m.add(ms.Revolute2(a.point("tip"), b.point(0)))
+    m.add(ms.RotationLock1(a, -np.pi / 2 + 0.05))
+    m.add(ms.RotationLock1(b, -np.pi / 2 + 0.1))
+    fig = ms.draw.snapshot(m.solve(0.0))
+    fig.canvas.draw()
+    ax = fig.axes[0]
+    box = ax.get_window_extent()
+    width_px = fig.get_figwidth() * fig.dpi
+    assert box.width / width_px > 0.45, (box.width, width_px)      # was about 0.2
+    assert fig.get_figheight() >= 7.9
+    plt.close("all")

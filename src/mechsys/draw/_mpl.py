@@ -174,7 +174,13 @@ def _figsize_2d(fr: Frames, width=6.4):
     lo, hi = fr.bounds
     span = np.maximum(hi - lo, 1e-9)
     ratio = float(span[1] / span[0])
-    return (width, float(np.clip(width * ratio * 0.92 + 0.9, 2.6, 8.0)))
+    tall = width * ratio * 0.92 + 0.9
+    height = float(np.clip(tall, 2.6, 8.0))
+    if tall > 8.0:
+        # a tall mechanism (a hanging pendulum): the equal-aspect axes are narrower than the
+        # figure, which was mostly white; narrow the figure to them (1.3 in for the y labels)
+        width = float(np.clip((height - 0.9) / (ratio * 0.92) + 1.3, 2.6, width))
+    return (width, height)
 
 
 # ----------------------------------------------------------------------------------------
