@@ -175,13 +175,84 @@ def site(tmp_path_factory):
     return out
 
 
+API_PAGES = ("model", "constraints", "loads", "geometry", "analyses", "results", "errors")
+
+
+def _api_entries(site: Path) -> dict[str, tuple[str, str]]:
+    """``{id: (page, signature text)}`` of every top-level entry of the API pages."""
+    out = {}
+    for page in API_PAGES:
+        html = (site / "api" / f"{page}.html").read_text(encoding="utf-8")
+        for m in re.finditer(r'<dt class="sig sig-object py" id="(mechsys\.[^"]+)">(.*?)</dt>',
+                             html, flags=re.S):
+            text = _html_unescape(re.sub(r"<[^>]+>", "", m.group(2)))
+            out[m.group(1)] = (page, " ".join(text.split()))
+    return out
+
+
+def _html_unescape(text: str) -> str:
+    import html as _html
+
+    return _html.unescape(text)
+
+
 def test_site_has_guides_api_gallery_and_mech_table(site):
-    for page in ("index", "guide", "constraints", "drawing", "jupyter", "mech_to_mechsys",
-                 "api/mechsys", "api/draw", "gallery/index", "decisions/index"):
+    for page in ("index", "install", "tutorial", "changelog", "guide", "constraints", "drawing",
+                 "jupyter", "mech_to_mechsys", "api/index", "api/draw", "gallery/index",
+                 "decisions/index", *(f"api/{p}" for p in API_PAGES)):
         assert (site / f"{page}.html").exists(), page
-    api = (site / "api" / "mechsys.html").read_text(encoding="utf-8")
-    for name in ("mechsys.Model2D", "mechsys.Solution", "mechsys.Revolute2"):
-        assert f'id="{name}"' in api, name                          # from the docstrings
+    entries = _api_entries(site)
+    for name, page in (("Model2D", "model"), ("Solution", "results"), ("Revolute2", "constraints"),
+                       ("Spring", "loads"), ("FreeSystem", "analyses"), ("ModelError", "errors"),
+                       ("Point", "geometry")):
+        assert entries[f"mechsys.{name}"][0] == page, name      # from the docstrings
+    # every public name is on exactly one page, and no page is the old 860 KB one
+    import mechsys
+
+    public = {f"mechsys.{n}" for n in mechsys.__all__} - {"mechsys.__version__", "mechsys.REGISTRY"}
+    assert public <= set(entries), sorted(public - set(entries))
+    for page in API_PAGES:
+        assert (site / "api" / f"{page}.html").stat().st_size < 600_000, page
+
+
+def test_api_shows_real_signatures(site):
+    """Every public constraint and load class shows its own arguments, not the
+    ``(*args, **kwargs)`` of the base class's ``__new__`` (78 entries did)."""
+    import mechsys
+    from mechsys.constraints import ConstraintBase
+    from mechsys.loads._loads import LoadBase
+
+    entries = _api_entries(site)
+    checked = 0
+    for name in mechsys.__all__:
+        obj = getattr(mechsys, name)
+        if not (isinstance(obj, type) and issubclass(obj, (ConstraintBase, LoadBase))):
+            continue
+        if obj in (ConstraintBase, LoadBase):
+            continue
+        page, sig = entries[f"mechsys.{name}"]
+        assert "*args" not in sig and "**kwargs" not in sig, (name, sig)
+        assert "(" in sig, (name, sig)
+        checked += 1
+    assert checked > 75
+    assert "Revolute2(point1, point2)" in entries["mechsys.Revolute2"][1]
+    assert "CamToPoint1(locuspoint, (sym, guess)..., point)" in entries["mechsys.CamToPoint1"][1]
+
+
+def test_site_loads_nothing_from_other_sites(site):
+    """No script, style sheet or font from a CDN: the site works offline (MathJax is
+    shipped in _static/mathjax)."""
+    assert (site / "_static" / "mathjax" / "tex-chtml.js").is_file()
+    assert list((site / "_static" / "mathjax" / "output" / "chtml" / "fonts").rglob("*.woff"))
+    remote = re.compile(r'<(?:script|link|img|iframe)\b[^>]*\b(?:src|href)="(?:https?:)?//', re.I)
+    for page in site.rglob("*.html"):
+        if "_media" in page.parts or "_modules" in page.parts:
+            continue
+        html = page.read_text(encoding="utf-8")
+        m = remote.search(html)
+        assert m is None, (page.relative_to(site), html[m.start():m.start() + 200])
+        if 'class="math' in html:
+            assert "_static/mathjax/tex-chtml.js" in html, page.relative_to(site)
     table = (site / "mech_to_mechsys.html").read_text(encoding="utf-8")
     assert "SolveMech" in table and "Model.solve" in table
 
@@ -215,7 +286,10 @@ def test_every_example_has_a_page_with_its_pictures(site):
 # -- in a browser ---------------------------------------------------------------------------
 
 HANG_GUARD_S = 900      # only guards against a hung browser; not a speed requirement
+# the network is closed: every host name but the loopback address fails to resolve, so a
+# resource fetched from a CDN would be missing (and is listed by the probe)
 BROWSER_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+                 "--host-resolver-rules=MAP * ~NOTFOUND , EXCLUDE 127.0.0.1",
                  "--no-first-run", "--disable-background-networking",
                  "--disable-component-update", "--disable-sync", "--disable-dev-shm-usage"]
 
@@ -230,6 +304,27 @@ async function probe(url) {
   f.style.width = "1200px"; f.style.height = "900px";
   await new Promise(res => { f.onload = res; f.src = url; document.body.appendChild(f); });
   const d = f.contentDocument;
+  const w = f.contentWindow;
+  // typeset maths: wait for MathJax's first pass, then count what it produced
+  if (w.MathJax && w.MathJax.startup && w.MathJax.startup.promise) {
+    try { await w.MathJax.startup.promise; } catch (e) { out.mathjax_error = String(e); }
+  }
+  out.math = {sources: d.querySelectorAll(".math").length,
+              rendered: d.querySelectorAll("mjx-container").length,
+              errors: d.querySelectorAll("mjx-merror, [data-mjx-error]").length,
+              glyphs: d.querySelectorAll("mjx-c").length,
+              fonts: Array.from(d.fonts || []).filter(x => x.family.startsWith("MJX")
+                                                     && x.status === "loaded").length};
+  out.resources = w.performance.getEntriesByType("resource").map(e => e.name)
+      .filter(n => !n.startsWith(location.origin));
+  if (url.startsWith("search.html")) {
+    // the search runs after the index loads: wait for its summary line
+    for (let i = 0; i < 200 && !(d.querySelector(".search-summary") &&
+         d.querySelector(".search-summary").textContent.trim()); i++)
+      await new Promise(res => setTimeout(res, 100));
+    out.hits = Array.from(d.querySelectorAll("#search-results ul.search li a"))
+        .map(a => a.getAttribute("href"));
+  }
   const imgs = Array.from(d.images);
   await Promise.all(imgs.map(i => i.complete ? null :
       new Promise(res => { i.onload = res; i.onerror = res; })));
@@ -297,8 +392,10 @@ def test_gallery_pages_open_in_headless_chromium(site, served, tmp_path):
                         "before `make test`")
         pytest.skip("chromium is not installed (apt-get install -y chromium): the gallery's "
                     "browser check did not run")
-    pages = ["gallery/index.html", "mech_to_mechsys.html", "index.html", "jupyter.html"] + [
-        f"gallery/{e.name}.html" for e in _gallery.examples()]
+    maths = ["constraints.html", "loads.html", "free_motion.html", "guide.html"]
+    search = "search.html?q=reaction+force"
+    pages = ["gallery/index.html", "mech_to_mechsys.html", "index.html", "jupyter.html",
+             *maths, search] + [f"gallery/{e.name}.html" for e in _gallery.examples()]
     (site / "probe.html").write_text(CHECKER % json.dumps(pages), encoding="utf-8")
     profile = tmp_path / "profile"
     proc = subprocess.run([browser, *BROWSER_FLAGS, f"--user-data-dir={profile}",
@@ -314,7 +411,7 @@ def test_gallery_pages_open_in_headless_chromium(site, served, tmp_path):
     for page, r in results.items():
         assert "error" not in r, (page, r)
         assert r["status"] == 200, (page, r)
-        assert r["h1"], (page, r)
+        assert r["h1"] or page == search, (page, r)       # Furo's search page has no h1
         for src, w, h in r["images"]:
             assert w > 0 and h > 0, f"{page}: picture {src} did not load"
         for src, status, canvas in r["frames"]:
@@ -329,6 +426,23 @@ def test_gallery_pages_open_in_headless_chromium(site, served, tmp_path):
         assert len(r["frames"]) == n_view, (ex.name, r["frames"])
     thumbs = results["gallery/index.html"]["images"]
     assert len(thumbs) == len(_gallery.examples())
+    # nothing came from another site (the resolver fails every other host)
+    for page, r in results.items():
+        assert not r["resources"], (page, r["resources"])
+    # the front page shows pictures: the animation and the gallery strip, each loaded
+    front = results["index.html"]["images"]
+    assert len(front) >= 9 and any(src.endswith(".gif") for src, _, _ in front), front
+    # equations are typeset offline: MathJax turned every maths source into its output,
+    # with its own fonts loaded from the site, and reported no error
+    for page in [*maths, "index.html"]:
+        m = results[page]["math"]
+        assert m["sources"] > 0 and m["rendered"] >= m["sources"], (page, m)
+        assert m["errors"] == 0 and m["glyphs"] > 0 and m["fonts"] > 0, (page, m)
+    assert results["constraints.html"]["math"]["rendered"] > 60     # one per equation block
+    # a search for "reaction force" lists guides and API first, the decision records last
+    hits = results[search]["hits"]
+    assert len(hits) >= 10, hits
+    assert not [h for h in hits[:10] if "decisions/" in h], hits[:10]
 
 
 def test_docs_tools_are_ruff_clean():

@@ -370,7 +370,7 @@ def test_plot_time_histories_and_phase_plot(slider):
                  x="crank.th", title="slider-crank")
     axes = fig.axes
     assert [a.get_ylabel() for a in axes] == ["piston x", "piston v", "pin"]
-    assert axes[-1].get_xlabel() == "crank.th"
+    assert axes[-1].get_xlabel() == "crank.th [rad]"      # a planar angle: its unit
     np.testing.assert_allclose(axes[0].lines[0].get_ydata(), sol.location(p)[:, 0])
     np.testing.assert_allclose(axes[0].lines[0].get_xdata(), sol["crank.th"])
     assert [ln.get_label() for ln in axes[2].lines] == ["pin [x]", "pin [y]"]

@@ -6,6 +6,11 @@ argument the page is printed. The page lists every type in
 ``cls.spaces``), the degrees of freedom it removes, its call signature (from ``__init__``)
 and its docstring, which carries the equations. A test compares the committed page with
 freshly generated output, so a new constraint type shows up in the docs by registering it.
+
+The docstrings write their equations in a plain-text notation (``u_1 . (r_2 - r_1) = 0``,
+``u x d - dist |u| = 0``) that reads well in ``help()``; :func:`equation_to_latex` typesets
+that notation, so that the page shows each block of equations as displayed maths
+(``$$ ... $$``, rendered by MathJax on the site and by GitHub).
 """
 
 from __future__ import annotations
@@ -18,21 +23,22 @@ from pathlib import Path
 
 _KINDS = {"planar": "2D", "spatial": "3D"}
 
-HEADER = """\
-# Constraint reference
+HEADER = r"""# Constraint reference
 
 <!-- Generated from mechsys.constraints.REGISTRY by `python -m mechsys._docgen
 docs/constraints.md` (`make docs`). Do not edit by hand: edit the docstrings. -->
 
 Every constraint type of mechsys, under its Mech name. Each is a small set of scalar
-equations `Phi(q, T, p) = 0` built from the geometry of (usually) two bodies, listed in
+equations $\Phi(q, T, p) = 0$ built from the geometry of (usually) two bodies, listed in
 Mech's order. Add one to a model with `m.add(constraint, name=...)`; see the
 [user guide](guide.md#constraints) for how points, vectors and axes are given.
 
-Notation in the equations: `r_1`, `r_2` global positions of the points, `u_1`, `u_2` global
-directions of the vectors or axes, `d` a difference of positions, `a x b = a_x b_y - a_y b_x`
-the scalar cross product in 2D, `theta` a planar body angle. A plain coordinate tuple where a
-point is expected is a point on ground; where a vector is expected, a global direction.
+Notation in the equations: $r_1$, $r_2$ global positions of the points, $u_1$, $u_2$ global
+directions of the vectors or axes, $d$ a difference of positions, $a \cdot b$ the dot
+product, $a \times b$ the cross product ($a_x b_y - a_y b_x$, a scalar, in 2D), $\lvert u \rvert$
+a length, $\hat u$ a unit vector, $\theta$ a planar body angle. A plain coordinate tuple
+where a point is expected is a point on ground; where a vector is expected, a global
+direction. The docstrings (`help(ms.Revolute2)`) carry the same equations in plain text.
 
 "DOF removed" is the number of equations minus the number of new variables the constraint
 introduces; a driver (an expression of `T` in any scalar argument) removes the same number.
@@ -49,6 +55,9 @@ def _dof(cls) -> str:
 
 
 def _signature(name: str, cls) -> str:
+    call = getattr(cls, "_call", None)        # cams parse Mech's variable argument list
+    if isinstance(call, str) and call.startswith("("):
+        return f"{name}{call}"
     sig = inspect.signature(cls.__init__)
     params = [p for p in sig.parameters.values() if p.name != "self"]
     return f"{name}{sig.replace(parameters=params, return_annotation=inspect.Signature.empty)}"
@@ -75,6 +84,79 @@ def _inline(text: str) -> str:
     return text.replace("``", "`")
 
 
+_GREEK = {"alpha", "beta", "gamma", "delta", "theta", "Theta", "phi", "Phi", "psi", "omega",
+          "pi", "lambda", "mu", "rho", "sigma", "tau"}
+_FUNCS = {"cos", "sin", "tan", "sqrt", "atan2"}
+_OPERATORS = {"+", "-", "/", "=", r"\cdot", r"\times"}
+_EQUATION = re.compile(r"^(?P<eq>.*?=\s*0)(?P<note>\s+\(.*\))?\s*$")
+_NAME = re.compile(r"(?<![A-Za-z0-9_])(?P<base>[A-Za-z]+)(?P<digits>\d*)"
+                   r"(?:_(?P<sub>[A-Za-z0-9]+))?(?P<hat>\^(?![\d(]))?")
+
+
+def _name_to_latex(m: re.Match) -> str:
+    base, digits, sub, hat = m.group("base", "digits", "sub", "hat")
+    if base == "x" and not (digits or sub):
+        return r"\times"                  # the cross product: ``u x d``
+    if base in _GREEK:
+        tex = "\\" + base
+    elif base in _FUNCS:
+        tex = "\\" + base
+    elif len(base) == 1:
+        tex = base
+    else:
+        tex = rf"\mathit{{{base}}}"
+    if hat:
+        tex = rf"\hat{{{tex}}}"
+    subs = "".join(x for x in (digits, sub) if x)
+    if digits and sub:
+        subs = f"{digits},{sub}"
+    return tex + (f"_{{{subs}}}" if subs else "")
+
+
+def equation_to_latex(line: str) -> str | None:
+    """One equation of the docstring notation (``lhs = 0``, optionally followed by a
+    parenthesised note) as LaTeX, for an ``aligned`` environment (``&= 0``); ``None`` when the
+    line is not such an equation.
+
+    Dots between spaces are dot products, a lone ``x`` a cross product, ``|a|`` a length,
+    ``u^`` a unit vector, ``name_sub`` a subscript, Greek names Greek letters, and longer
+    names (``dist``, ``rad1``) italic words."""
+    m = _EQUATION.match(line.strip())
+    if m is None:
+        return None
+    eq = m.group("eq")
+    lhs = re.sub(r"\s*=\s*0$", "", eq)
+    tex = _NAME.sub(_name_to_latex, lhs)
+    tex = tex.replace(" . ", r" \cdot ").replace("'", "^{\\prime}")
+    parts = tex.split("|")
+    if len(parts) % 2 == 1:                        # |a| pairs: lengths
+        tex = "".join(p if k % 2 == 0 else rf"\lvert {p} \rvert" for k, p in enumerate(parts))
+    tex = re.sub(r"\s+", " ", tex).strip()
+    # a product written with a space (``rad alpha``, ``dist |u|``): LaTeX ignores spaces,
+    # so a thin space keeps ``\mathit{rad}\,\alpha`` from reading as one word
+    words = tex.split(" ")
+    tex = words[0]
+    for a, b in zip(words, words[1:]):
+        product = not (a in _OPERATORS or a.endswith("(") or b in _OPERATORS
+                       or b.startswith((")", "/", "^", "\\rvert")) or a.endswith("\\lvert"))
+        tex += (r"\, " if product else " ") + b
+    tex += " &= 0"
+    note = m.group("note")
+    if note:
+        tex += rf" \qquad \text{{{note.strip()}}}"
+    return tex
+
+
+def _math_block(block: list[str]) -> list[str] | None:
+    """A literal block whose every line is an equation, as a displayed ``aligned`` block."""
+    lines = [ln for ln in block if ln.strip()]
+    tex = [equation_to_latex(ln) for ln in lines]
+    if not lines or any(t is None for t in tex):
+        return None
+    return ["$$", r"\begin{aligned}", *(t + r" \\" for t in tex[:-1]), tex[-1],
+            r"\end{aligned}", "$$"]
+
+
 def rst_to_markdown(doc: str) -> str:
     """Convert a docstring's reStructuredText subset (paragraphs, ``::`` literal blocks,
     inline literals and roles) to Markdown."""
@@ -94,6 +176,10 @@ def rst_to_markdown(doc: str) -> str:
                 i += 1
             while block and not block[-1].strip():
                 block.pop()
+            maths = _math_block(block)
+            if maths is not None:
+                out += ["", *maths, ""]
+                continue
             out += ["", "```text", *textwrap.dedent("\n".join(block)).strip("\n").splitlines(),
                     "```", ""]
             continue

@@ -903,8 +903,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         return [c for c in self._constraints if isinstance(c, StageSwitch)]
 
     def time_derivative(self, expr):
-        """Total time derivative of a SymPy expression (or matrix) of coordinates, velocities
-        and ``T``: ``f_q qd + f_qd qdd + f_t``."""
+        r"""Total time derivative of a SymPy expression (or matrix) of coordinates, velocities
+        and ``T``: :math:`\dot f = f_q \dot q + f_{\dot q} \ddot q + f_T`."""
         lay = make_layout(self._bodies[1:], self._variables, [], [], [])
         sub = self._gen_substitution()
         if sub:
@@ -1150,15 +1150,22 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
     def solve(self, t=0.0, solution: str = "acceleration", guess=None,
               options: PositionOptions | None = None, lambda_guess=None, pre_solve=None,
               post_iterate=None):
-        """Kinematic solution at time(s) ``t`` (Mech's ``SolveMech``).
+        r"""Kinematic solution at time(s) ``t`` (Mech's ``SolveMech``).
 
         ``solution``: ``"location"``, ``"velocity"`` or ``"acceleration"`` (default), or with
-        loads ``"static"`` (positions, then ``Phi_q^T lambda = Q`` with zero velocities),
-        ``"kinematic"`` (positions, velocities, velocity-dependent loads) or ``"dynamic"``
-        (inverse dynamics ``M qdd + Phi_q^T lambda = Q + Qv``). ``lambda_guess`` starts the
-        multiplier Newton when loads depend on reactions (friction): a number, ``m`` numbers
-        or a mapping ``{constraint or multiplier symbol: value(s)}`` (Mech's ``LambdaGuess``;
-        see :func:`~mechsys.results._load_outputs.lambda_guess_vector`).
+        loads ``"static"`` (positions, then :math:`\Phi_q^{\mathsf T} \lambda = Q` with zero
+        velocities), ``"kinematic"`` (positions, velocities, velocity-dependent loads) or
+        ``"dynamic"`` (inverse dynamics
+        :math:`M \ddot q + \Phi_q^{\mathsf T} \lambda = Q + Q_v`). The kinematic levels solve
+
+        .. math::
+
+            \Phi(q, T) = 0, \qquad \Phi_q \dot q = -\Phi_t, \qquad \Phi_q \ddot q = \gamma .
+
+        ``lambda_guess`` starts the multiplier Newton when loads depend on reactions
+        (friction): a number, ``m`` numbers or a mapping
+        ``{constraint or multiplier symbol: value(s)}`` (Mech's ``LambdaGuess``; see
+        :func:`~mechsys.results._load_outputs.lambda_guess_vector`).
         ``guess``: starting coordinates (array (n,), a ``State``/``Solution`` or a mapping);
         default the model's guesses. A sweep continues each point from the previous one.
         Returns a :class:`~mechsys.Solution` and stores it as ``last_solution``.

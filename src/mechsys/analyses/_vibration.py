@@ -202,9 +202,12 @@ class VibrationModes:
     def animate(self, k: int, path=None, amplitude: float | None = None, cycles: float = 1.0,
                 frames: int = 40, **kw):
         """Animate mode ``k`` (:meth:`motion` drawn with :func:`mechsys.draw.animate`; ``path``
-        ``.gif``/``.mp4``/``.html`` writes a file, other keywords go to the animation)."""
+        ``.gif``/``.mp4``/``.html`` writes a file, other keywords go to the animation). The
+        title says which mode and its natural frequency (``title=`` replaces it), numbered
+        as in :meth:`table`."""
         from .. import draw
 
+        kw.setdefault("title", f"mode {k}: {self.hz[k]:.4g} Hz")
         return draw.animate(self.motion(k, amplitude, cycles, frames), path=path, **kw)
 
     def table(self) -> str:

@@ -20,6 +20,7 @@ from typing import ClassVar
 import sympy as sp
 
 from .._errors import GeometryError, ModelError
+from .._signature import InitSignature
 from ..geometry._points import Axis, Geometry, Point, Vector, as_vector
 from ..geometry._units import is_quantity, placeholder
 
@@ -50,6 +51,9 @@ class ConstraintBase:
     spaces: ClassVar[tuple[str, ...]] = ("planar", "spatial")
     #: Mech's name; the registry is keyed by it.
     mech_name: ClassVar[str] = ""
+
+    # the signature shown by help() and the API reference is __init__'s, not __new__'s
+    __signature__ = InitSignature()
 
     def __new__(cls, *args, **kwargs):
         # the constructor's arguments, kept for model files (mechsys.io): a constraint is

@@ -195,12 +195,12 @@ class TimeSwitch(StageSwitch):
 
     mech_name = "TimeSwitch"
 
-    def __init__(self, *args):
-        if len(args) < 3 or len(args) % 2 == 0:
+    def __init__(self, *stages_and_times):
+        if len(stages_and_times) < 3 or len(stages_and_times) % 2 == 0:
             raise ModelError("TimeSwitch takes stage_1, t_1, stage_2, ..., t_(k-1), stage_k: an "
-                             f"odd number (at least 3) of arguments, got {len(args)}")
+                             f"odd number (at least 3) of arguments, got {len(stages_and_times)}")
         times = []
-        for j, t in enumerate(args[1::2], 1):
+        for j, t in enumerate(stages_and_times[1::2], 1):
             try:
                 te = sp.sympify(t)
             except (sp.SympifyError, TypeError):
@@ -211,7 +211,7 @@ class TimeSwitch(StageSwitch):
             times.append(te)
         self.times = tuple(times)
         tests = [T < tj for tj in times] + [sp.true]
-        super().__init__(*zip(tests, args[0::2]))
+        super().__init__(*zip(tests, stages_and_times[0::2]))
         if all(t.is_number for t in times):
             self.check_times({})
 

@@ -3,6 +3,7 @@ and plots of outputs.
 
 Nothing here imports matplotlib until a picture is actually drawn. Quick start::
 
+    import numpy as np
     import mechsys as ms
     from mechsys import models
 

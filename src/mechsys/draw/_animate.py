@@ -5,6 +5,7 @@ available with matplotlib), MP4 (when ffmpeg is installed) or a JavaScript playe
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -82,7 +83,7 @@ class Animation:
         anim = self._funcanimation()
         limit = max(float(mpl.rcParams["animation.embed_limit"]), 200.0)
         with mpl.rc_context({"animation.embed_limit": limit}):
-            return anim.to_jshtml(fps=self.fps, default_mode=default_mode)
+            return offline_player(anim.to_jshtml(fps=self.fps, default_mode=default_mode))
 
     def _repr_html_(self) -> str:
         return self.to_jshtml()
@@ -94,3 +95,24 @@ class Animation:
     def __repr__(self) -> str:
         return (f"<Animation: {self.frames} frames at {self.fps:.3g} fps, "
                 f"t = {self.times[0]:g} ... {self.times[-1]:g}>")
+
+
+# matplotlib's player draws its buttons with Font Awesome icons loaded from a CDN: offline
+# (or behind a firewall) the buttons are blank. The same symbols as text need no font file.
+_FA_LINK = re.compile(r'<link rel="stylesheet"\s+href="https?://[^"]*font-awesome[^"]*">\s*')
+_FA_ICONS = {
+    "fa fa-minus": "\u2212", "fa fa-fast-backward": "\u23ee", "fa fa-step-backward": "\u23f4\u2759",
+    "fa fa-play fa-flip-horizontal": "\u25c0", "fa fa-pause": "\u23f8", "fa fa-play": "\u25b6",
+    "fa fa-step-forward": "\u2759\u23f5", "fa fa-fast-forward": "\u23ed", "fa fa-plus": "+",
+}
+
+
+def offline_player(html: str) -> str:
+    """matplotlib's ``to_jshtml`` player without its Font Awesome style sheet (a CDN): each
+    icon becomes the Unicode symbol it shows, so the buttons read the same with no network."""
+    html = _FA_LINK.sub("", html)
+
+    def icon(m: re.Match) -> str:
+        return f'<span aria-hidden="true">{_FA_ICONS.get(m.group(1), "?")}</span>'
+
+    return re.sub(r'<i class="(fa [^"]+)"></i>', icon, html)

@@ -174,7 +174,13 @@ def _figsize_2d(fr: Frames, width=6.4):
     lo, hi = fr.bounds
     span = np.maximum(hi - lo, 1e-9)
     ratio = float(span[1] / span[0])
-    return (width, float(np.clip(width * ratio * 0.92 + 0.9, 2.6, 8.0)))
+    tall = width * ratio * 0.92 + 0.9
+    height = float(np.clip(tall, 2.6, 8.0))
+    if tall > 8.0:
+        # a tall mechanism (a hanging pendulum): the equal-aspect axes are narrower than the
+        # figure, which was mostly white; narrow the figure to them (1.3 in for the y labels)
+        width = float(np.clip((height - 0.9) / (ratio * 0.92) + 1.3, 2.6, width))
+    return (width, height)
 
 
 # ----------------------------------------------------------------------------------------
@@ -256,6 +262,14 @@ def setup_3d(ax, fr: Frames, view=None, grid=True):
     ax.set_ylim(c[1] - half[1], c[1] + half[1])
     ax.set_zlim(c[2] - half[2], c[2] + half[2])
     ax.set_box_aspect(tuple(half / half.max()))
+    # legible ticks: matplotlib puts up to 11 labels on each 3D axis whatever its drawn
+    # length, and they overlap on short or foreshortened axes; a few per axis, in
+    # proportion to its length in the box, at a smaller size
+    from matplotlib.ticker import MaxNLocator
+
+    for axis, frac in zip((ax.xaxis, ax.yaxis, ax.zaxis), half / half.max(), strict=True):
+        axis.set_major_locator(MaxNLocator(nbins=max(2, int(round(4 * frac))), steps=[1, 2, 2.5, 5, 10]))
+    ax.tick_params(labelsize=7, pad=0)
     ax.set_xlabel("x")
     ax.set_ylabel("y")
     ax.set_zlabel("z")

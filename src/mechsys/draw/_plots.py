@@ -10,6 +10,11 @@ An *output* is any of:
 * an array of ``N`` values.
 
 Outputs are passed as one output, a list, or a ``{label: output}`` dict.
+
+Axis labels carry the unit of what they show when mechsys knows it: time and position
+coordinates in the model's declared units (``m.set_units(length="mm", time="s")``), planar
+angles in rad (``crank.th [rad]``, ``t [s]``). An explicit ``xlabel``/dict label is kept
+as given, with the unit added when known.
 """
 
 from __future__ import annotations
@@ -60,6 +65,34 @@ def _values(sol, spec, label: str) -> list[tuple[str, np.ndarray]]:
     return [(f"{label} [{names[i]}]", v[:, i]) for i in range(v.shape[1])]
 
 
+def _unit(sol, spec) -> str | None:
+    """The unit of a time or coordinate output (``"t"``, ``"crank.th"``): from the model's
+    declared units, ``rad`` for a planar angle; ``None`` when not known (an expression, a
+    callable, an array, a model variable, or no declared unit)."""
+    from ..results._tables import LENGTH, _translational, unit_text
+
+    if not isinstance(spec, str):
+        return None
+    units = getattr(sol.model, "units", None)
+    if spec == "t":
+        return unit_text((0, 0, 1), units)
+    try:
+        j = sol.system.layout.index(spec)
+    except (KeyError, ValueError, IndexError, ModelError):
+        return None
+    dim = sol.model.space.dim
+    kind = _translational(sol.system, len(sol.names), dim)[j]
+    if kind is None:
+        return None
+    if kind:
+        return unit_text(LENGTH, units)
+    return "rad" if dim == 2 else None        # a 3D Euler parameter has no unit
+
+
+def _with_unit(label: str, unit: str | None) -> str:
+    return f"{label} [{unit}]" if unit and not label.endswith("]") else label
+
+
 def _outputs(outputs) -> list[tuple[str, object]]:
     if isinstance(outputs, Mapping):
         return [(str(k), v) for k, v in outputs.items()]
@@ -87,6 +120,7 @@ def plot(solution, outputs, x=None, ax=None, overlay=False, title=None, xlabel=N
         (xl, xv), *rest = _values(sol, x, _label_of(x))
         if rest:
             raise ModelError("plot: x must be a scalar output")
+    xl = _with_unit(xlabel or xl, _unit(sol, "t" if x is None else x))
     groups = [_values(sol, s, lab) for lab, s in specs]
     n = 1 if overlay or ax is not None else len(groups)
     if ax is not None:
@@ -101,12 +135,12 @@ def plot(solution, outputs, x=None, ax=None, overlay=False, title=None, xlabel=N
         for lab, v in group:
             a.plot(xv, v, label=lab)
         if n > 1 or len(groups) == 1:
-            a.set_ylabel(specs[i][0] if len(group) == 1 else specs[i][0])
+            a.set_ylabel(_with_unit(specs[i][0], _unit(sol, specs[i][1])))
         if len(group) > 1 or (n == 1 and len(groups) > 1):
             a.legend(fontsize=8, loc="best")
         if grid:
             a.grid(True, alpha=0.3)
-    axes[-1].set_xlabel(xlabel or xl)
+    axes[-1].set_xlabel(xl)
     if title:
         (axes[0].set_title if n == 1 else fig.suptitle)(title)
     if ax is None:
@@ -135,8 +169,8 @@ def phase_plot(solution, x, y, ax=None, arrows=6, title=None, figsize=(5.5, 5.0)
         for k in np.linspace(0, n - 2, int(arrows) + 2)[1:-1].astype(int):
             ax.annotate("", xy=(xv[k + 1], yv[k + 1]), xytext=(xv[k], yv[k]),
                         arrowprops=dict(arrowstyle="->", color=line.get_color(), lw=1.5))
-    ax.set_xlabel(xl)
-    ax.set_ylabel(yl)
+    ax.set_xlabel(_with_unit(xl, _unit(sol, x)))
+    ax.set_ylabel(_with_unit(yl, _unit(sol, y)))
     if title:
         ax.set_title(title)
     if grid:

@@ -46,6 +46,7 @@ import numpy as np
 import sympy as sp
 
 from .._errors import GeometryError, ModelError
+from .._signature import InitSignature
 from ..geometry._points import Axis, Point, Vector, as_point
 from . import _shapes as sh
 from ._eval import Evaluator, Item, check_style, resolve_points
@@ -79,6 +80,9 @@ class Primitive:
 
     #: the model dimensions a primitive works in
     dims: tuple[int, ...] = (2, 3)
+
+    # the signature shown by help() and the API reference is __init__'s, not __new__'s
+    __signature__ = InitSignature()
 
     def __new__(cls, *args, **kwargs):
         # the constructor's arguments, kept for model files (mechsys.io)

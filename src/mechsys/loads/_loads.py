@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import sympy as sp
 
 from .._errors import ModelError, choice
+from .._signature import InitSignature
 from ..geometry._points import Axis, BodyRef, Point, Vector, as_point, as_vector
 from ..geometry._units import is_quantity, placeholder
 
@@ -48,6 +49,9 @@ class DirectLoad:
 
 class LoadBase:
     """A load: ``contributions(model)`` and, when conservative, ``potential(model)``."""
+
+    # the signature shown by help() and the API reference is __init__'s, not __new__'s
+    __signature__ = InitSignature()
 
     def __new__(cls, *args, **kwargs):
         # the constructor's arguments, kept for model files (mechsys.io)
@@ -242,13 +246,16 @@ class Moment(LoadBase):
 class Gravity(LoadBase):
     r"""Weight at the centroid of each body (all, or ``bodies``).
 
-    ``Gravity(vector, g, bodies=None, mode="absolute")``::
+    ``Gravity(vector, g, bodies=None, mode="absolute")``: on each body of mass :math:`m`
 
-        F = m g u/|u|        (mode="absolute", the default: the force is m g)
-        F = m g u            (mode="relative", Mech's Magnitude -> Relative: the force
-                              is m g |u|, so ``u`` carries the field strength too)
+    .. math::
 
-    Potential energy ``-(F . r_c)`` summed over the bodies.
+        F = m g \, \frac{u}{\lVert u \rVert} \quad (\text{mode="absolute", the default}),
+        \qquad F = m g \, u \quad (\text{mode="relative"}),
+
+    the relative mode being Mech's ``Magnitude -> Relative``: the force is
+    :math:`m g \lVert u \rVert`, so ``u`` carries the field strength too. Potential energy
+    :math:`V = -\sum F \cdot r_c` over the bodies (:math:`r_c` the centroids).
     """
 
     def __init__(self, vector=(0, -1), g=9.81, bodies=None, *, mode: str = "absolute"):
@@ -311,10 +318,13 @@ class Load(LoadBase):
 
 
 class Spring(LoadBase):
-    r"""Spring between two points: tension ``k (L - L0)`` (or ``law(L)``) pulls them together.
+    r"""Spring between two points: tension :math:`k (L - L_0)` (or ``law(L)``) pulls them
+    together.
 
-    ``Spring(point1, point2, stiffness, free_length=0, law=None)``; force on point 1
-    ``-tension (r_1 - r_2)/L``, opposite on point 2; potential ``k (L - L0)^2 / 2`` (linear).
+    ``Spring(point1, point2, stiffness, free_length=0, law=None)``; with
+    :math:`L = \lVert r_1 - r_2 \rVert` the force on point 1 is
+    :math:`-\,\mathit{tension}\, (r_1 - r_2)/L`, opposite on point 2; the potential of the
+    linear spring is :math:`V = \tfrac12 k (L - L_0)^2`.
     """
 
     def __init__(self, point1, point2, stiffness=0, free_length=0, law=None):
@@ -355,7 +365,8 @@ class Spring(LoadBase):
 
 
 class Damper(Spring):
-    r"""Linear damper between two points: tension ``c dL/dt`` (or ``law(L, dL/dt)``)."""
+    r"""Linear damper between two points: tension :math:`c\, \dot L` (or ``law(L, dL/dt)``),
+    with :math:`L` the distance between them."""
 
     def __init__(self, point1, point2, damping=0, law=None):
         super().__init__(point1, point2)
