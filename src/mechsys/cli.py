@@ -1,6 +1,7 @@
-"""Command line: ``mechsys demo`` (also ``python -m mechsys demo``), and
+"""Command line: ``mechsys demo`` (also ``python -m mechsys demo``),
 ``mechsys run model.json --t 0:1:101 --out results.csv`` (solve a model file over time, write
-a table; ``.parquet`` with pyarrow)."""
+a table; ``.parquet`` with pyarrow), and ``mechsys cache info`` / ``mechsys cache clear``
+(the compiled-kernel cache)."""
 
 from __future__ import annotations
 
@@ -200,6 +201,30 @@ def run(model_file: Path, times: str, out: Path, solution: str = "acceleration",
     return 0
 
 
+def cache(action: str) -> int:
+    """``mechsys cache info``: the kernel cache's directory, entries, size and bounds;
+    ``mechsys cache clear``: delete its entries (and its key)."""
+    from .compile import _cache
+
+    if action == "clear":
+        d, n = _cache.clear()
+        if d is None:
+            print("the kernel cache is off (MECHSYS_CACHE=off); nothing to clear")
+        else:
+            print(f"deleted {n} files from the kernel cache {d} (and its key)")
+        return 0
+    info = _cache.info()
+    if not info["enabled"]:
+        print("kernel cache: off (MECHSYS_CACHE=off)")
+    else:
+        print(f"kernel cache: {info['directory']}")
+        print(f"entries: {info['entries']}, {info['bytes'] / 1e6:.1f} MB (bound "
+              f"{info['max_bytes'] / 1e6:.0f} MB, MECHSYS_CACHE_MAX_MB; entries unused for "
+              f"{info['max_age_days']} days are deleted)")
+    print(f"Numba's compiled loops: {info['numba_cache_dir']}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="mechsys", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -213,9 +238,20 @@ def main(argv: list[str] | None = None) -> int:
                    help="highest order solved (default acceleration)")
     r.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="show a progress bar (default: on a terminal, 60 points or more)")
+    c = sub.add_parser("cache", help="the kernel cache (MECHSYS_CACHE): info or clear")
+    c.add_argument("action", choices=["info", "clear"],
+                   help="info: where it is and its size; clear: delete every entry")
     args = parser.parse_args(sys.argv[1:] if argv is None else argv)
     if args.command == "demo":
         return demo(Path(args.out))
+    if args.command == "cache":
+        from ._errors import MechError
+
+        try:
+            return cache(args.action)
+        except (MechError, OSError) as exc:
+            print(f"mechsys cache: {exc}", file=sys.stderr)
+            return 1
     if args.command == "run":
         from ._errors import MechError
 
