@@ -210,6 +210,11 @@ CATALOGUE = [
     ("drawing", "ms.draw.plot(sol(), [])", "ModelError", "no outputs"),
     ("drawing", 'ms.draw.animate(sol(), rate=-1.0)', "ModelError", "rate"),
     ("drawing", "ms.draw.snapshot(3.0)", "ModelError", "3.0"),
+    # model files (issue 39: every failure of ms.load a MechError naming the field)
+    ("file", 'ms.load("/nonexistent/crank.json")', "ModelError", "No such file"),
+    ("file", 'ms.load("/dev/null")', "ModelError", "not a regular file"),
+    ("file", 'ms.io._expr.parse("log(0)*T", {"T": T}, "drive")', "ModelError", "not finite"),
+    ("file", 'ms.io._expr.parse("T/0.0", {"T": T}, "drive")', "ModelError", "division by zero"),
 ]
 
 

@@ -197,7 +197,7 @@ def run(model_file: Path, times: str, out: Path, solution: str = "acceleration",
         data = np.column_stack(list(cols.values()))
         # repr-exact floats (17 significant digits): the table reads back to the same doubles
         np.savetxt(out, data, delimiter=",", header=",".join(cols), comments="", fmt="%.17g")
-    print(f"solved {len(t)} points of {model_file}; wrote {out} ({len(cols)} columns)")
+    _say(f"solved {len(t)} points of {model_file}; wrote {out} ({len(cols)} columns)", sys.stdout)
     return 0
 
 
@@ -244,20 +244,36 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(sys.argv[1:] if argv is None else argv)
     if args.command == "demo":
         return demo(Path(args.out))
-    if args.command == "cache":
-        from ._errors import MechError
-
-        try:
+    try:
+        if args.command == "cache":
             return cache(args.action)
-        except (MechError, OSError) as exc:
-            print(f"mechsys cache: {exc}", file=sys.stderr)
-            return 1
-    if args.command == "run":
+        return run(Path(args.model), args.t, Path(args.out), args.solution, args.progress)
+    except KeyboardInterrupt:
+        _say(f"mechsys {args.command}: interrupted")
+        return 1
+    except Exception as exc:  # noqa: BLE001 - the command line's contract: one line, exit 1
         from ._errors import MechError
 
-        try:
-            return run(Path(args.model), args.t, Path(args.out), args.solution, args.progress)
-        except (MechError, OSError) as exc:
-            print(f"mechsys run: {exc}", file=sys.stderr)
-            return 1
-    return 2  # pragma: no cover
+        if isinstance(exc, MechError):
+            _say(f"mechsys {args.command}: {exc}")
+        elif isinstance(exc, OSError):
+            _say(f"mechsys {args.command}: {exc.filename or ''}: {exc.strerror or exc}")
+        else:
+            # not a MechError: a bug of mechsys, still one line (MECHSYS_DEBUG=1: traceback)
+            import os
+
+            if os.environ.get("MECHSYS_DEBUG"):
+                raise
+            _say(f"mechsys {args.command}: internal error {type(exc).__name__}: {exc} (please "
+                 "report it; MECHSYS_DEBUG=1 shows the traceback)")
+        return 1
+
+
+def _say(message: str, stream=None) -> None:
+    """One line on stderr, whatever it holds: newlines shown as ``\\n``, characters the
+    terminal cannot encode (a lone surrogate of a name) escaped, never an exception."""
+    line = message.replace("\r", "\\r").replace("\n", "\\n")
+    stream = sys.stderr if stream is None else stream
+    enc = getattr(stream, "encoding", None) or "utf-8"
+    line = line.encode(enc, "backslashreplace").decode(enc, "replace")
+    print(line, file=stream)

@@ -371,4 +371,8 @@ def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
             return _SympyCompiled(args, [sp.sympify(e) for e in exprs])
     if backend == "sympy":
         return _SympyCompiled(args, exprs)
-    raise ValueError(f"unknown backend {backend!r}; choose from {available_backends()}")
+    from .._errors import ModelError
+
+    # (a ModelError is a ValueError: callers that caught that still do)
+    raise ModelError(f"unknown backend {backend!r}; choose from {available_backends()} "
+                     "(Model2D/Model3D(backend=...) or MECHSYS_BACKEND)")

@@ -52,6 +52,7 @@ FUNCTIONS: dict[str, tuple[object, tuple[int, ...]]] = {
     "Min": (sp.Min, (2, 3, 4)), "Max": (sp.Max, (2, 3, 4)),
 }
 CONSTANTS = {"pi": sp.pi, "E": sp.E}
+_NOT_FINITE = (sp.zoo, sp.oo, -sp.oo, sp.nan)
 
 _TOKEN = re.compile(r"""
     (?P<ws>\s+)
@@ -152,6 +153,10 @@ class _Parser:
 
     def checked(self, value, pos: int):
         """Numbers SymPy folded (``10**400``) are held to the same magnitude limit."""
+        if value in _NOT_FINITE:
+            # log(0), 1/0.0 (SymPy's zoo, oo, nan are not Numbers): stopped here, where every
+            # operation's result passes, so no later expression can hold one
+            raise self.fail("the expression is not finite (a division by zero, log(0), ...)", pos)
         if isinstance(value, sp.Number):
             if value.is_finite is False or value.has(sp.nan, sp.zoo):
                 raise self.fail("the expression is not finite", pos)
@@ -175,7 +180,7 @@ class _Parser:
         while self.peek()[1] in ("*", "/") and self.peek()[0] == "op":
             _, op, pos = self.take()
             rhs = self.unary()
-            if op == "/" and rhs == 0:
+            if op == "/" and rhs.is_Number and rhs.is_zero:       # Float(0.0) != 0 in SymPy 1.13
                 raise self.fail("division by zero", pos)
             value = self.checked(value * rhs if op == "*" else value / rhs, pos)
         return value

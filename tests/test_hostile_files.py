@@ -1,0 +1,154 @@
+"""Model files and the command line against hostile input (issue 39): every failure is a
+MechError naming the field at fault (the CLI: one line on stderr, exit code 1, no
+traceback); nothing reads without bound, blocks, or runs code."""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+
+import pytest
+
+import mechsys as ms
+from mechsys import models
+from mechsys.cli import main
+
+
+@pytest.fixture(scope="module")
+def base() -> dict:
+    return ms.io.model_to_dict(models.slider_crank())
+
+
+def _write(tmp_path, data, name="m.json") -> str:
+    p = tmp_path / name
+    p.write_text(json.dumps(data), encoding="utf-8")
+    return str(p)
+
+
+def _with_drive(base, text):
+    d = json.loads(json.dumps(base))
+    d["constraints"][-1]["args"][1] = {"expr": text}
+    return d
+
+
+def _cli(argv, capsys) -> tuple[int, str]:
+    rc = main(argv)
+    err = capsys.readouterr().err
+    return rc, err
+
+
+def _one_line_error(rc, err, *culprits):
+    assert rc == 1
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    for c in culprits:
+        assert c in err, err
+
+
+@pytest.mark.parametrize("text,why", [
+    ("log(0)*T", "not finite"),
+    ("T/0.0", "division by zero"),
+    ("1/0.0 + T", "division by zero"),
+    ("T/(0.0*T)", "division by zero"),
+    ("zoo*T", "unknown name 'zoo'"),
+    ("oo*T", "unknown name 'oo'"),
+    ("T*log(0.0)", "not finite"),
+    ("atan2(0, 0)*T", "not finite"),
+])
+def test_non_finite_drive_is_a_model_error(base, tmp_path, capsys, text, why):
+    """log(0), 1/0.0 (float zero: SymPy 1.13's Float(0.0) != 0 slipped past the guard) and
+    zoo gave a KeyError 'ComplexInfinity' at the first solve."""
+    path = _write(tmp_path, _with_drive(base, text))
+    with pytest.raises(ms.ModelError, match=why) as err:
+        ms.load(path)
+    assert "constraint 'drive'" in str(err.value)
+    rc, out = _cli(["run", path, "--t", "0:1:3", "--out", str(tmp_path / "o.csv")], capsys)
+    _one_line_error(rc, out, why)
+
+
+def test_unknown_backend_in_a_file(base, tmp_path, capsys):
+    d = json.loads(json.dumps(base))
+    d["options"]["backend"] = "fortran"
+    path = _write(tmp_path, d)
+    with pytest.raises(ms.ModelError, match="options.backend 'fortran'"):
+        ms.load(path)
+    # and through the API: a ModelError (also a ValueError), not a bare ValueError
+    import sympy as sp
+
+    from mechsys.compile._backends import compile_exprs
+
+    with pytest.raises(ms.ModelError, match="'fortran'"):
+        compile_exprs([sp.Symbol("x")], [sp.Symbol("x") ** 2], backend="fortran")
+
+
+def test_abstract_load_type_is_unknown(base, tmp_path):
+    d = json.loads(json.dumps(base))
+    d["loads"] = [{"name": "l", "type": "LoadBase", "args": [], "kwargs": {}}]
+    with pytest.raises(ms.ModelError, match="unknown load type 'LoadBase'"):
+        ms.load(_write(tmp_path, d))
+
+
+def test_not_utf8(base, tmp_path, capsys):
+    p = tmp_path / "latin1.json"
+    p.write_bytes(json.dumps(base).replace("piston", "pist\u00f6n").encode("latin-1"))
+    with pytest.raises(ms.ModelError, match="not UTF-8"):
+        ms.load(p)
+    _one_line_error(*_cli(["run", str(p)], capsys), "not UTF-8")
+
+
+@pytest.mark.parametrize("name", ["pist\udcff", "pis\nton", "pis\x00ton", "pis\u2028ton"])
+def test_names_must_be_printable(base, tmp_path, capsys, name):
+    """A lone surrogate in a name (legal in JSON) ended the CLI with a UnicodeEncodeError."""
+    p = tmp_path / "n.json"
+    p.write_text(json.dumps(base).replace("piston", json.dumps(name)[1:-1]), encoding="utf-8")
+    with pytest.raises(ms.ModelError, match="printable"):
+        ms.load(p)
+    _one_line_error(*_cli(["run", str(p)], capsys), "printable")
+
+
+def test_directory_missing_fifo_and_device(tmp_path, capsys):
+    cases = [(tmp_path, "a directory"), (tmp_path / "nothere.json", "No such file")]
+    if hasattr(os, "mkfifo"):
+        fifo = tmp_path / "fifo"
+        os.mkfifo(fifo)
+        cases.append((fifo, "not a regular file"))      # did block forever
+    if os.path.exists("/dev/zero"):
+        cases.append(("/dev/zero", "not a regular file"))   # was read past 3 GB
+    for path, why in cases:
+        with pytest.raises(ms.ModelError, match=why) as err:
+            ms.load(path)
+        assert str(path) in str(err.value)
+        _one_line_error(*_cli(["run", str(path)], capsys), why)
+
+
+def test_file_larger_than_the_cap_is_not_read_whole(tmp_path, monkeypatch):
+    from mechsys.io import _files
+
+    p = tmp_path / "big.json"
+    p.write_bytes(b" " * 2000)
+    monkeypatch.setattr(_files, "MAX_FILE_BYTES", 1000)
+    with pytest.raises(ms.ModelError, match="more than 1000 bytes; at most 1000"):
+        ms.load(p)
+
+
+def test_cli_internal_error_is_one_line(monkeypatch, capsys, tmp_path):
+    """Whatever escapes (a bug), the command line prints one line and exits 1."""
+    from mechsys import cli
+
+    def boom(*a, **k):
+        raise KeyError("ComplexInfinity")
+
+    monkeypatch.setattr(cli, "run", boom)
+    monkeypatch.delenv("MECHSYS_DEBUG", raising=False)
+    _one_line_error(*_cli(["run", "x.json"], capsys), "internal error KeyError")
+
+
+def test_cli_message_with_unencodable_text(monkeypatch):
+    """A lone surrogate in a message (a path from the shell) prints escaped, never raises."""
+    from mechsys import cli
+
+    buf = io.BytesIO()
+    stream = io.TextIOWrapper(buf, encoding="ascii")
+    cli._say("bad \udcff name\nsecond", stream)
+    stream.flush()
+    assert buf.getvalue() == b"bad \\udcff name\\nsecond\n"
