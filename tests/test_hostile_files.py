@@ -152,3 +152,77 @@ def test_cli_message_with_unencodable_text(monkeypatch):
     cli._say("bad \udcff name\nsecond", stream)
     stream.flush()
     assert buf.getvalue() == b"bad \\udcff name\\nsecond\n"
+
+
+def test_loading_is_linear_in_the_constraints(monkeypatch):
+    """The reader rebuilt every name of the model after each constraint (and looked bodies
+    up by scanning the list): quadratic, 2,000 jointed bodies took 100 s. Now the names are
+    gathered a fixed number of times, however many constraints there are (20 s, linear)."""
+    from mechsys.io import _files
+
+    m = ms.Model2D()
+    prev = m.ground.point((0, 0))
+    for i in range(40):
+        b = m.add_body(f"b{i}", points={"p": (1, 0)}, guess=((i, 0), 0))
+        m.add(ms.Revolute2(prev, b.point(0)))
+        prev = b.point("p")
+    data = _files.model_to_dict(m)
+    calls = []
+    real = _files._all_names
+    monkeypatch.setattr(_files, "_all_names", lambda mm: calls.append(1) or real(mm))
+    lookups = []
+    real_body = type(m).body
+    monkeypatch.setattr(type(m), "body", lambda self, spec: lookups.append(spec) or real_body(self, spec))
+    back = _files.model_from_dict(data)
+    assert len(back.constraints) == 40
+    assert len(calls) <= 3 and len(lookups) == 0
+
+
+# -- budgets (issue 39): each exceeded budget a ModelError naming the limit, before SymPy
+# computes anything large -----------------------------------------------------------------
+_PRODUCT_160 = "*".join(f"(1+T/{i + 1})" for i in range(160))
+
+
+@pytest.mark.parametrize("text,limit", [
+    ("sqrt(2)**(10**299)", "MAX_EXPONENT"),             # grew past 3 GB inside ms.load
+    ("(2*T)**(10**9)", "MAX_EXPONENT"),
+    ("((2*T)**1000)**1000", "grow past"),
+    ("pi**(10**10)", "MAX_EXPONENT"),
+    ("exp(10**9*log(2))", "MAX_EXP_ARGUMENT"),          # hung (SymPy computes 2**(10**9))
+    ("exp(T + 10**9*log(2))", "MAX_EXP_ARGUMENT"),
+    ("exp(1000)", "MAX_EXP_ARGUMENT"),
+    (_PRODUCT_160, "MAX_FACTORS"),                      # 3.2 KB: 240 s and 2.4 GB at solve
+    ("+".join(["T"] * 2500), "MAX_OPERATIONS"),
+])
+def test_expression_budgets(base, tmp_path, text, limit):
+    with pytest.raises(ms.ModelError, match=limit) as err:
+        ms.load(_write(tmp_path, _with_drive(base, text)))
+    assert "constraint 'drive'" in str(err.value)
+
+
+def test_within_the_budgets_still_reads(base, tmp_path):
+    import sympy as sp
+
+    m = ms.load(_write(tmp_path, _with_drive(base, "*".join(f"(1+T/{i + 1})" for i in range(32)))))
+    drive = m.constraint("drive")
+    t = sp.Symbol("t")
+    # the product, exactly (an independent product of the same factors)
+    expected = sp.prod([1 + t / (i + 1) for i in range(32)])
+    got = drive.equations(m.space)[0]
+    assert got.free_symbols >= {ms.T}
+    v = float(got.subs({ms.T: 0.3, **{s: 0 for s in got.free_symbols - {ms.T}}}))
+    assert v == pytest.approx(-float(expected.subs(t, 0.3)), rel=1e-12) or \
+        v == pytest.approx(float(expected.subs(t, 0.3)), rel=1e-12)
+
+
+@pytest.mark.parametrize("prim,kwargs,field", [
+    ("Wheel", {"spokes": 1e9}, "spokes"),
+    ("PitchCircle", {"teeth": 1000000000}, "teeth"),
+    ("Sphere", {"n": 100000}, "n"),
+])
+def test_drawing_counts_are_bounded(base, tmp_path, prim, kwargs, field):
+    """spokes=1e9 or teeth=1e9 in a file went past 3 GB when drawn."""
+    d = json.loads(json.dumps(base))
+    d["graphics"] = [{"type": prim, "args": [{"body": "crank"}], "kwargs": kwargs}]
+    with pytest.raises(ms.ModelError, match=f"{field} must be a whole number from .* to 1000"):
+        ms.load(_write(tmp_path, d))

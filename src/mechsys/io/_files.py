@@ -320,6 +320,8 @@ class _Reader:
     def __init__(self, m, source: str):
         self.m, self.source = m, source
         self.names = _all_names(m)
+        self._nvars = len(m._variables)
+        self._bodies: dict = {}
         self.texts = _IDENT
 
     def err(self, where: str, why: str) -> ModelError:
@@ -327,6 +329,20 @@ class _Reader:
 
     def refresh(self) -> None:
         self.names = _all_names(self.m)
+        self._nvars = len(self.m._variables)
+
+    def add_variables(self) -> None:
+        """The names of the variables added to the model since the last call (a constraint's
+        new variables, and their rates): only these, so that loading stays linear in the
+        number of constraints (:meth:`refresh` after each made it quadratic)."""
+        new = self.m._variables[self._nvars:]
+        self._nvars = len(self.m._variables)
+        for v in new:
+            s = v.symbol
+            self.names[s.name] = s
+            for f in (velocity_symbol, acceleration_symbol):
+                d = f(s.name)
+                self.names[d.name] = d
 
     def expr(self, text, where: str):
         return parse(text, self.names, f"{self.source}: {where}")
@@ -359,10 +375,12 @@ class _Reader:
             return None
         if not isinstance(name, str):
             raise self.err(where, f"expected a body name, got {name!r}")
-        try:
-            return self.m.body(name)
-        except ModelError:
-            raise self.err(where, f"unknown body {name!r}") from None
+        if len(self._bodies) != len(self.m.bodies):     # a dict: Model.body(name) scans the list
+            self._bodies = {b.name: b for b in self.m.bodies}
+        b = self._bodies.get(name)
+        if b is None:
+            raise self.err(where, f"unknown body {_shown(name)}")
+        return b
 
     def one_key(self, v, where: str) -> tuple[str, object]:
         if len(v) != 1:
@@ -625,7 +643,7 @@ def _model_from_dict(data: dict, source: str):
             m.add(con, name=r.label(name, where) if name is not None else None)
         except ModelError as exc:
             raise r.err(where, str(exc)) from None
-        r.refresh()
+        r.add_variables()
     for i, ld in enumerate(_list(data, "loads", source)):
         if not isinstance(ld, dict):
             raise r.err(f"loads[{i}]", "expected an object")
