@@ -51,7 +51,7 @@ MAX_EXPONENT = 1000
 #: the largest number ``exp`` may be taken of (exp(709.8) is the largest double)
 MAX_EXP_ARGUMENT = math.log(MAX_MAGNITUDE)
 #: the most operations (+ - * / ** and function calls) of one expression
-MAX_OPERATIONS = 2000
+MAX_OPERATIONS = 500
 #: the most factors of one product: the time derivatives a driver needs (gamma: the second)
 #: of a product of k factors hold ~k**3/2 factors (160 factors: 2 million, minutes to compile)
 MAX_FACTORS = 32
