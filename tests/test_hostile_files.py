@@ -8,6 +8,7 @@ import io
 import json
 import os
 
+import numpy as np
 import pytest
 
 import mechsys as ms
@@ -226,3 +227,40 @@ def test_drawing_counts_are_bounded(base, tmp_path, prim, kwargs, field):
     d["graphics"] = [{"type": prim, "args": [{"body": "crank"}], "kwargs": kwargs}]
     with pytest.raises(ms.ModelError, match=f"{field} must be a whole number from .* to 1000"):
         ms.load(_write(tmp_path, d))
+
+
+# -- outputs that survive their names (issue 39 item 4) -----------------------------------
+@pytest.mark.parametrize("name", ["pis,ton", 'pis"ton', "=HYPERLINK(1)", "+1", "-x", "@a", "a b"])
+def test_cli_csv_survives_names(base, tmp_path, capsys, name):
+    """A comma shifted every column (read back without error, piston.x NaN); '=' made a
+    spreadsheet formula. Read back with the csv module: the header is the names (formula-like
+    ones behind an apostrophe), each column the solution's numbers, exactly."""
+    import csv
+
+    d = json.loads(json.dumps(base).replace('"piston"', json.dumps(name)))
+    path = _write(tmp_path, d)
+    out = tmp_path / "o.csv"
+    assert main(["run", path, "--t", "0:1:5", "--out", str(out)]) == 0
+    with open(out, newline="", encoding="utf-8") as fh:
+        rows = list(csv.reader(fh))
+    header = rows[0]
+    shown = ("'" + name) if name[0] in "=+-@" else name
+    assert f"{shown}.x" in header and len(set(map(len, rows))) == 1
+    sol = ms.load(path).solve(np.linspace(0, 1, 5))
+    col = header.index(f"{shown}.x")
+    got = np.array([float(r[col]) for r in rows[1:]])
+    j = sol.names.index(f"{name}.x")
+    np.testing.assert_array_equal(got, sol.q[:, j])
+
+
+def test_viewer_html_escapes_names():
+    """Nothing a title or a label holds can close the viewer's script block or open a tag."""
+    m = models.slider_crank_3d()
+    sol = m.solve(np.linspace(0, 1, 3))
+    evil = "</script><script>alert(1)</script><!--&"
+    html = str(ms.draw.Scene(m, [], default=True).viewer(sol, title=evil))
+    assert "<script>alert" not in html and "<!--&" not in html
+    start = html.index('id="mechsys-data"')
+    block = html[start:html.index("</script>", start)]
+    data = json.loads(block[block.index(">") + 1:])
+    assert data["title"] == evil

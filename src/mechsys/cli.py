@@ -182,11 +182,13 @@ def run(model_file: Path, times: str, out: Path, solution: str = "acceleration",
         bar.close()
     cols = {"t": np.asarray(sol.t, dtype=float)}
     for j, name in enumerate(sol.names):
-        cols[name] = sol.q[:, j]
-        if sol.qd is not None:
-            cols[name + "_d"] = sol.qd[:, j]
-        if sol.qdd is not None:
-            cols[name + "_dd"] = sol.qdd[:, j]
+        for col, arr in ((name, sol.q), (name + "_d", sol.qd), (name + "_dd", sol.qdd)):
+            if arr is None:
+                continue
+            if col in cols:   # a dict would silently keep the last: names must not collide
+                raise MechError(f"two columns of the table would be named {col!r}; rename the "
+                                "body or variable")
+            cols[col] = arr[:, j]
     out.parent.mkdir(parents=True, exist_ok=True)
     if suffix == ".parquet":
         import pyarrow as pa
@@ -194,9 +196,7 @@ def run(model_file: Path, times: str, out: Path, solution: str = "acceleration",
 
         pq.write_table(pa.table(cols), out)
     else:
-        data = np.column_stack(list(cols.values()))
-        # repr-exact floats (17 significant digits): the table reads back to the same doubles
-        np.savetxt(out, data, delimiter=",", header=",".join(cols), comments="", fmt="%.17g")
+        write_csv(out, cols)
     _say(f"solved {len(t)} points of {model_file}; wrote {out} ({len(cols)} columns)", sys.stdout)
     return 0
 
@@ -223,6 +223,32 @@ def cache(action: str) -> int:
               f"{info['max_age_days']} days are deleted)")
     print(f"Numba's compiled loops: {info['numba_cache_dir']}")
     return 0
+
+
+#: first characters that make a spreadsheet read a cell as a formula (CSV injection)
+FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+
+
+def csv_cell(name: str) -> str:
+    """A text cell for a CSV table: a name starting like a formula (``=``, ``+``, ``-``,
+    ``@``, tab, carriage return) gets a leading apostrophe, which spreadsheets show as text
+    and never evaluate. Quoting of commas, quotes and newlines is the csv module's."""
+    return "'" + name if name.startswith(FORMULA_START) else name
+
+
+def write_csv(path: Path, cols: dict) -> None:
+    """``cols`` (name -> column of floats) as CSV through the csv module: the header row
+    quoted where a name holds a comma, quote or newline and neutralised where it starts
+    like a formula (:func:`csv_cell`); numbers repr-exact (17 significant digits: the table
+    reads back to the same doubles)."""
+    import csv
+
+    data = np.column_stack(list(cols.values()))
+    with open(path, "w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow([csv_cell(c) for c in cols])
+        for row in data:
+            w.writerow([format(float(v), ".17g") for v in row])
 
 
 def main(argv: list[str] | None = None) -> int:
