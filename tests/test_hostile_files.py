@@ -264,3 +264,83 @@ def test_viewer_html_escapes_names():
     block = html[start:html.index("</script>", start)]
     data = json.loads(block[block.index(">") + 1:])
     assert data["title"] == evil
+
+
+# -- the generated hostile-input suite (issue 39 item 6) ----------------------------------
+_HOSTILE_VALUES = [
+    None, True, 0, -1, 1e300, -1e300, 10 ** 39, "", "x" * 300, "__import__('os').system('id')",
+    "a\nb", "\udcff", "=cmd|' /C calc'!A0", "pis,ton", [], {}, [[[[[]]]]], {"a": 1, "b": 2},
+    {"expr": "sqrt(2)**(10**299)"}, {"expr": "exp(10**9*log(2))"}, {"expr": "log(0)"},
+    {"expr": "1/0.0"}, {"expr": "zoo"}, {"expr": "T" + "*T" * 40}, {"expr": "(" * 150 + "T" + ")" * 150},
+    {"expr": "9" * 45}, {"expr": "T.__class__"}, {"expr": 5}, {"body": "nobody"}, {"body": 3},
+    {"point": {"body": "crank", "local": ["1e400", 0]}}, {"tuple": [{"expr": "log(0)"}]},
+    {"constraint": {"type": "Popen", "args": []}}, {"constraint_ref": "nothing"},
+    {"load": {"type": "LoadBase"}}, {"matrix": [[1], [2, 3]]}, {"array": ["a"]},
+    {"dict": [[1]]}, {"condition": "T > log(0)"}, {"vector": {"from": 1}},
+    {"axis": {"origin": None}}, {"plane": [1, 2]}, {"line": [None, None]},
+]
+
+
+def _paths(obj, path=()):
+    """Every place in the JSON tree (containers and leaves)."""
+    yield path
+    if isinstance(obj, dict):
+        for k, v in obj.items():
+            yield from _paths(v, (*path, k))
+    elif isinstance(obj, list):
+        for i, v in enumerate(obj):
+            yield from _paths(v, (*path, i))
+
+
+def _replace(obj, path, value):
+    out = json.loads(json.dumps(obj))
+    if not path:
+        return value
+    node = out
+    for p in path[:-1]:
+        node = node[p]
+    node[path[-1]] = value
+    return out
+
+
+@pytest.fixture(scope="module")
+def rich_base() -> dict:
+    """A model file with every field in use: parameters, masses, loads, a driver, graphics."""
+    m = models.slider_crank_dynamic(piston_force=-10.0)
+    m.parameter("k", 2.0)
+    m.variable("s", 0.5)
+    ms.draw.attach(m, ms.draw.Wheel(m.body("crank"), spokes=4))
+    return ms.io.model_to_dict(m)
+
+
+def test_generated_hostile_inputs_only_raise_mecherrors(rich_base):
+    """A few hundred hostile values, each put in one place of a model file (a fixed seed
+    chooses the places; every top-level field is hit): loading either works or raises a
+    MechError; never another exception, never a hang (each budget stops it early)."""
+    import random
+
+    from mechsys.io import _files
+
+    rng = random.Random(39)
+    paths = list(_paths(rich_base))
+    by_field: dict = {}
+    for p in paths:
+        by_field.setdefault(p[0] if p else None, []).append(p)
+    cases = []
+    for ps in by_field.values():          # every field, then random places
+        for v in rng.sample(_HOSTILE_VALUES, 6):
+            cases.append((rng.choice(ps), v))
+    while len(cases) < 300:
+        cases.append((rng.choice(paths), rng.choice(_HOSTILE_VALUES)))
+    escaped, loaded = [], 0
+    for path, value in cases:
+        data = _replace(rich_base, path, value)
+        try:
+            _files.model_from_dict(data, "hostile.json")
+            loaded += 1
+        except ms.MechError as exc:
+            assert str(exc)
+        except Exception as exc:  # noqa: BLE001 - the point of the test
+            escaped.append((path, repr(value)[:60], f"{type(exc).__name__}: {str(exc)[:120]}"))
+    assert not escaped, escaped[:10]
+    assert len(cases) >= 300 and loaded < len(cases)
