@@ -332,15 +332,20 @@ def test_generated_hostile_inputs_only_raise_mecherrors(rich_base):
             cases.append((rng.choice(ps), v))
     while len(cases) < 300:
         cases.append((rng.choice(paths), rng.choice(_HOSTILE_VALUES)))
-    escaped, loaded = [], 0
+    escaped, loaded, solved = [], 0, set()
     for path, value in cases:
         data = _replace(rich_base, path, value)
         try:
-            _files.model_from_dict(data, "hostile.json")
+            m = _files.model_from_dict(data, "hostile.json")
             loaded += 1
+            # an analysis of what loaded: one per kind of hostile value (the compile is the
+            # costly part), each a result or a MechError too
+            if repr(value) not in solved and len(solved) < 8:
+                solved.add(repr(value))
+                m.solve(np.array([0.0, 0.1]), solution="dynamic")
         except ms.MechError as exc:
             assert str(exc)
         except Exception as exc:  # noqa: BLE001 - the point of the test
             escaped.append((path, repr(value)[:60], f"{type(exc).__name__}: {str(exc)[:120]}"))
     assert not escaped, escaped[:10]
-    assert len(cases) >= 300 and loaded < len(cases)
+    assert len(cases) >= 300 and loaded < len(cases) and solved
