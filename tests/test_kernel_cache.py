@@ -272,3 +272,16 @@ def test_numba_cache_dir_must_be_private(tmp_path, monkeypatch):
     os.chmod(pyc, 0o777)
     with pytest.raises(ms.CacheError, match="__pycache__"):
         _jit_cache.check_safe(tmp_path)
+
+
+def test_group_write_refused_unless_the_users_private_group(cache, monkeypatch):
+    """umask 002 (user private groups) makes 775 directories: group write is then the
+    user's own; any other group's write is refused."""
+    models.slider_crank().solve(T)
+    os.chmod(cache, 0o770)
+    monkeypatch.setattr(_private, "private_group", lambda st: False)
+    with pytest.raises(ms.CacheError, match="writable by others"):
+        models.slider_crank().solve(T)
+    monkeypatch.setattr(_private, "private_group", lambda st: True)
+    _no_compiler(monkeypatch)
+    models.slider_crank().solve(T)

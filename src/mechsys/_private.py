@@ -36,9 +36,24 @@ def _owner_name(uid: int) -> str:
         return f"uid {uid}"
 
 
+def private_group(st: os.stat_result) -> bool:
+    """The group of ``st`` is its owner's private group (named like the owner, no other
+    members): group write is then no one else's write (the umask 002 of systems with user
+    private groups makes such directories)."""
+    try:
+        import grp
+        import pwd
+
+        g = grp.getgrgid(st.st_gid)
+        return not g.gr_mem and g.gr_name == pwd.getpwuid(st.st_uid).pw_name
+    except (ImportError, KeyError):
+        return False
+
+
 def check_private(path: Path, st: os.stat_result, what: str, hint: str) -> None:
     """Raise :class:`~mechsys.CacheError` unless ``st`` (of ``path``) is owned by this user and
-    writable by nobody else (no group or other write bit). ``what`` names the object in the
+    writable by nobody else (no other write bit; no group write bit unless the group is the
+    user's private group, :func:`private_group`). ``what`` names the object in the
     message, ``hint`` says what to do."""
     uid = my_uid()
     if uid is None:
@@ -46,7 +61,7 @@ def check_private(path: Path, st: os.stat_result, what: str, hint: str) -> None:
     if st.st_uid != uid:
         raise CacheError(f"{what} {path} is owned by {_owner_name(st.st_uid)}, not by you "
                          f"({_owner_name(uid)}); mechsys reads nothing from it. {hint}")
-    if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+    if st.st_mode & stat.S_IWOTH or (st.st_mode & stat.S_IWGRP and not private_group(st)):
         raise CacheError(f"{what} {path} is writable by others (mode {stat.S_IMODE(st.st_mode):o}); "
                          f"mechsys reads nothing from it. {hint}")
 

@@ -64,7 +64,7 @@ def check_safe(directory: Path) -> None:
     import stat
 
     from .._errors import CacheError
-    from .._private import my_uid, private_dir
+    from .._private import my_uid, private_dir, private_group
 
     hint = ("Point NUMBA_CACHE_DIR at a directory only you can write (or unset it), or "
             "MECHSYS_JIT=0 to run without compiled loops.")
@@ -83,7 +83,8 @@ def check_safe(directory: Path) -> None:
         return
     if uid is None:
         return
-    if st.st_uid not in (uid, owner) or st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+    if st.st_uid not in (uid, owner) or st.st_mode & stat.S_IWOTH or (
+            st.st_mode & stat.S_IWGRP and not private_group(st)):
         raise CacheError(f"Numba's cache of mechsys's compiled loops, {cache}, is owned by uid "
                          f"{st.st_uid} (mode {stat.S_IMODE(st.st_mode):o}): it must be owned by you "
                          "or by the owner of the installed package and writable by nobody else; "
