@@ -241,6 +241,11 @@ CATALOGUE = [
      "GeometryError", "'b'"),
     ("model", "ms.euler_parameters(2 * np.eye(3))", "GeometryError", "not a rotation"),
     ("model", "ms.rotation_matrix([[1, 0, 0], [0, 1, 0], [0, 0, 1]])", "ModelError", "ambiguous"),
+    # model files (issue 39: every failure of ms.load a MechError naming the field)
+    ("file", 'ms.load("/nonexistent/crank.json")', "ModelError", "No such file"),
+    ("file", 'ms.load("/dev/null")', "ModelError", "not a regular file"),
+    ("file", 'ms.io._expr.parse("log(0)*T", {"T": T}, "drive")', "ModelError", "not finite"),
+    ("file", 'ms.io._expr.parse("T/0.0", {"T": T}, "drive")', "ModelError", "division by zero"),
 ]
 
 

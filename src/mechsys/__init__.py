@@ -13,6 +13,7 @@ Quick start::
 """
 
 from ._errors import (
+    CacheError,
     ConstraintCountError,
     ConvergenceError,
     DegradedAccuracyWarning,
@@ -186,6 +187,7 @@ __all__ = [
     "All",
     "Axis",
     "Body",
+    "CacheError",
     "CamToCam1",
     "CamToCircle1",
     "CamToLine1",

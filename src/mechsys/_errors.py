@@ -88,6 +88,12 @@ class SingularMassError(SingularJacobianError):
         self.bodies = bodies or []
 
 
+class CacheError(MechError):
+    """An on-disk cache mechsys would read (compiled kernels, ``MECHSYS_CACHE``) is not private
+    to the user running it: the directory, its key file or an entry is owned by someone else
+    or writable by others. Nothing in it is read; the message names the path and what to do."""
+
+
 class NearSingularWarning(UserWarning):
     """The constraint Jacobian is nearly singular (close to a lock-up or toggle position):
     velocities and accelerations there are large and sensitive."""

@@ -1,6 +1,7 @@
-"""Command line: ``mechsys demo`` (also ``python -m mechsys demo``), and
+"""Command line: ``mechsys demo`` (also ``python -m mechsys demo``),
 ``mechsys run model.json --t 0:1:101 --out results.csv`` (solve a model file over time, write
-a table; ``.parquet`` with pyarrow)."""
+a table; ``.parquet`` with pyarrow), and ``mechsys cache info`` / ``mechsys cache clear``
+(the compiled-kernel cache)."""
 
 from __future__ import annotations
 
@@ -181,11 +182,13 @@ def run(model_file: Path, times: str, out: Path, solution: str = "acceleration",
         bar.close()
     cols = {"t": np.asarray(sol.t, dtype=float)}
     for j, name in enumerate(sol.names):
-        cols[name] = sol.q[:, j]
-        if sol.qd is not None:
-            cols[name + "_d"] = sol.qd[:, j]
-        if sol.qdd is not None:
-            cols[name + "_dd"] = sol.qdd[:, j]
+        for col, arr in ((name, sol.q), (name + "_d", sol.qd), (name + "_dd", sol.qdd)):
+            if arr is None:
+                continue
+            if col in cols:   # a dict would silently keep the last: names must not collide
+                raise MechError(f"two columns of the table would be named {col!r}; rename the "
+                                "body or variable")
+            cols[col] = arr[:, j]
     out.parent.mkdir(parents=True, exist_ok=True)
     if suffix == ".parquet":
         import pyarrow as pa
@@ -193,11 +196,59 @@ def run(model_file: Path, times: str, out: Path, solution: str = "acceleration",
 
         pq.write_table(pa.table(cols), out)
     else:
-        data = np.column_stack(list(cols.values()))
-        # repr-exact floats (17 significant digits): the table reads back to the same doubles
-        np.savetxt(out, data, delimiter=",", header=",".join(cols), comments="", fmt="%.17g")
-    print(f"solved {len(t)} points of {model_file}; wrote {out} ({len(cols)} columns)")
+        write_csv(out, cols)
+    _say(f"solved {len(t)} points of {model_file}; wrote {out} ({len(cols)} columns)", sys.stdout)
     return 0
+
+
+def cache(action: str) -> int:
+    """``mechsys cache info``: the kernel cache's directory, entries, size and bounds;
+    ``mechsys cache clear``: delete its entries (and its key)."""
+    from .compile import _cache
+
+    if action == "clear":
+        d, n = _cache.clear()
+        if d is None:
+            print("the kernel cache is off (MECHSYS_CACHE=off); nothing to clear")
+        else:
+            print(f"deleted {n} files from the kernel cache {d} (and its key)")
+        return 0
+    info = _cache.info()
+    if not info["enabled"]:
+        print("kernel cache: off (MECHSYS_CACHE=off)")
+    else:
+        print(f"kernel cache: {info['directory']}")
+        print(f"entries: {info['entries']}, {info['bytes'] / 1e6:.1f} MB (bound "
+              f"{info['max_bytes'] / 1e6:.0f} MB, MECHSYS_CACHE_MAX_MB; entries unused for "
+              f"{info['max_age_days']} days are deleted)")
+    print(f"Numba's compiled loops: {info['numba_cache_dir']}")
+    return 0
+
+
+#: first characters that make a spreadsheet read a cell as a formula (CSV injection)
+FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+
+
+def csv_cell(name: str) -> str:
+    """A text cell for a CSV table: a name starting like a formula (``=``, ``+``, ``-``,
+    ``@``, tab, carriage return) gets a leading apostrophe, which spreadsheets show as text
+    and never evaluate. Quoting of commas, quotes and newlines is the csv module's."""
+    return "'" + name if name.startswith(FORMULA_START) else name
+
+
+def write_csv(path: Path, cols: dict) -> None:
+    """``cols`` (name -> column of floats) as CSV through the csv module: the header row
+    quoted where a name holds a comma, quote or newline and neutralised where it starts
+    like a formula (:func:`csv_cell`); numbers repr-exact (17 significant digits: the table
+    reads back to the same doubles)."""
+    import csv
+
+    data = np.column_stack(list(cols.values()))
+    with open(path, "w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow([csv_cell(c) for c in cols])
+        for row in data:
+            w.writerow([format(float(v), ".17g") for v in row])
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -213,15 +264,42 @@ def main(argv: list[str] | None = None) -> int:
                    help="highest order solved (default acceleration)")
     r.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="show a progress bar (default: on a terminal, 60 points or more)")
+    c = sub.add_parser("cache", help="the kernel cache (MECHSYS_CACHE): info or clear")
+    c.add_argument("action", choices=["info", "clear"],
+                   help="info: where it is and its size; clear: delete every entry")
     args = parser.parse_args(sys.argv[1:] if argv is None else argv)
     if args.command == "demo":
         return demo(Path(args.out))
-    if args.command == "run":
+    try:
+        if args.command == "cache":
+            return cache(args.action)
+        return run(Path(args.model), args.t, Path(args.out), args.solution, args.progress)
+    except KeyboardInterrupt:
+        _say(f"mechsys {args.command}: interrupted")
+        return 1
+    except Exception as exc:  # noqa: BLE001 - the command line's contract: one line, exit 1
         from ._errors import MechError
 
-        try:
-            return run(Path(args.model), args.t, Path(args.out), args.solution, args.progress)
-        except (MechError, OSError) as exc:
-            print(f"mechsys run: {exc}", file=sys.stderr)
-            return 1
-    return 2  # pragma: no cover
+        if isinstance(exc, MechError):
+            _say(f"mechsys {args.command}: {exc}")
+        elif isinstance(exc, OSError):
+            _say(f"mechsys {args.command}: {exc.filename or ''}: {exc.strerror or exc}")
+        else:
+            # not a MechError: a bug of mechsys, still one line (MECHSYS_DEBUG=1: traceback)
+            import os
+
+            if os.environ.get("MECHSYS_DEBUG"):
+                raise
+            _say(f"mechsys {args.command}: internal error {type(exc).__name__}: {exc} (please "
+                 "report it; MECHSYS_DEBUG=1 shows the traceback)")
+        return 1
+
+
+def _say(message: str, stream=None) -> None:
+    """One line on stderr, whatever it holds: newlines shown as ``\\n``, characters the
+    terminal cannot encode (a lone surrogate of a name) escaped, never an exception."""
+    line = message.replace("\r", "\\r").replace("\n", "\\n")
+    stream = sys.stderr if stream is None else stream
+    enc = getattr(stream, "encoding", None) or "utf-8"
+    line = line.encode(enc, "backslashreplace").decode(enc, "replace")
+    print(line, file=stream)

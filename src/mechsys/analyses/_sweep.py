@@ -181,6 +181,50 @@ def _on_branch(model, base: dict, q_a, sign: int):
         "whose guesses describe that mode, or narrow the parameter range.")
 
 
+class _UserCall:
+    """A user's analysis or output function (executor layer): an exception of its own that
+    is not a mechsys error becomes a :class:`~mechsys.MechError` naming the function, so that
+    it is the failure of its row (``on_error="nan"``: NaN and the message) instead of the end
+    of the sweep. Picklable when the function is."""
+
+    def __init__(self, what: str, fn):
+        self.what, self.fn = what, fn
+
+    def __call__(self, *args):
+        try:
+            return self.fn(*args)
+        except MechError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - any failure of user code is this row's
+            raise MechError(f"{self.what} raised {type(exc).__name__}: {exc}") from exc
+
+    def __repr__(self) -> str:
+        return repr(self.fn)
+
+
+#: how many more times the points of tasks lost with their worker (a process that died, a
+#: Dask KilledWorker) are tried, one point a task, before they are reported lost
+MAX_RETRIES = 2
+#: how long a Dask retry waits for the cluster to have a worker again
+DASK_WAIT_SECONDS = 60.0
+#: the worker id of rows reported lost (no worker finished them)
+_NO_WORKER = ("lost",)
+
+
+def _lost_rows(points, attempts: int, on_error: str, why: str) -> list:
+    """The rows of ``points`` whose worker died ``attempts`` times: NaN and the reason
+    (``on_error="nan"``), or a :class:`~mechsys.MechError` naming them (``"raise"``)."""
+    if on_error == "raise":
+        which = ", ".join(f"{i} ({', '.join(f'{k}={v!r}' for k, v in pt.items())})"
+                          for i, pt in points[:5])
+        more = f" and {len(points) - 5} more" if len(points) > 5 else ""
+        raise MechError(f"sweep: the worker computing point(s) {which}{more} died {attempts} "
+                        f"times ({why}); on_error='nan' keeps the finished points and reports "
+                        "these as failed")
+    return [(i, {"error": f"WorkerLost: the worker died computing this point, {attempts} "
+                          f"times ({why})"}) for i, _ in points]
+
+
 def _dumps(obj) -> bytes:
     try:
         import cloudpickle
@@ -406,6 +450,12 @@ def sweep(model, params, analysis="acceleration", outputs=None, *, t=0.0, grid: 
     for n in names:
         if n in ("error",):
             raise ModelError(f"sweep: {n!r} is reserved for the error column")
+    if not isinstance(analysis, _Solve):
+        analysis = _UserCall("sweep: the analysis function", analysis)
+    if outputs is not None:
+        outputs = {k: (_UserCall(f"sweep: output {k!r}", v)
+                       if callable(v) and not isinstance(v, (sp.Basic, sp.MatrixBase)) else v)
+                   for k, v in outputs.items()}
     indexed = list(enumerate(pts))
     start = time.monotonic()
     from ..draw._progress import Progress
@@ -431,7 +481,7 @@ def sweep(model, params, analysis="acceleration", outputs=None, *, t=0.0, grid: 
         else:
             results, kind = _on_dask(executor, payload, names, indexed, on_error, chunks, tick)
         rows = [r for _, _, part in results for r in part]
-        used = len({w for w, _, _ in results})
+        used = len({w for w, _, _ in results if w != _NO_WORKER})
         builds = sum(b for _, b, _ in results)
     bar.close()
     rows.sort(key=lambda r: r[0])
@@ -474,27 +524,60 @@ def _check_count(value, what):
 
 
 def _on_pool(payload, names, indexed, on_error, workers, chunks, tick):
-    import multiprocessing as mp
-    from concurrent.futures import ProcessPoolExecutor, as_completed
-
+    """The points on a local process pool. A worker process that dies (killed, out of
+    memory, ``os._exit`` in user code) breaks the whole pool: the finished tasks are kept,
+    the lost ones run again in a new pool, one point a task (so a point that kills its
+    worker takes only itself and the points running beside it), at most
+    :data:`MAX_RETRIES` times; then they are reported lost (:func:`_lost_rows`)."""
     _check_count(workers, "workers")
     _check_count(chunks, "chunks")
     workers = workers or os.cpu_count() or 1
     parts = _chunks(indexed, chunks or 4 * workers)
-    results = []
+    results: list = []
+    attempt = 0
+    while parts:
+        lost, why = _pool_round(payload, names, parts, on_error, workers, results, tick)
+        if not lost:
+            break
+        attempt += 1
+        points = [p for part in lost for p in part]
+        if attempt > MAX_RETRIES:
+            rows = _lost_rows(points, attempt, on_error, why)
+            results.append((_NO_WORKER, 0, rows))
+            tick(len(rows))
+            break
+        parts = [[p] for p in points]
+    return results, "processes"
+
+
+def _pool_round(payload, names, parts, on_error, workers, results, tick):
+    """One pool over ``parts``; appends the finished tasks' results to ``results`` and
+    returns ``(lost parts, why)``."""
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from concurrent.futures.process import BrokenProcessPool
+
+    lost, why = [], ""
     # spawn, not fork: forking a process that runs threads (a Dask client, BLAS) can deadlock
     with ProcessPoolExecutor(max_workers=min(workers, len(parts)),
                              mp_context=mp.get_context("spawn")) as pool:
-        futs = [pool.submit(_run_chunk, payload, names, part, on_error) for part in parts]
+        futs = {pool.submit(_run_chunk, payload, names, part, on_error): k
+                for k, part in enumerate(parts)}
         for f in as_completed(futs):
-            results.append(f.result())
-            tick(len(results[-1][2]))
-    return results, "processes"
+            try:
+                res = f.result()
+            except BrokenProcessPool as exc:
+                lost.append(parts[futs[f]])
+                why = f"{type(exc).__name__}: a worker process ended abruptly"
+                continue
+            results.append(res)
+            tick(len(res[2]))
+    return lost, why
 
 
 def _on_dask(client, payload, names, indexed, on_error, chunks, tick):
     try:
-        from distributed import Client, as_completed
+        from distributed import Client
     except ImportError:
         raise MechError("sweep on a Dask cluster needs dask.distributed: pip install "
                         "'mechsys[dask]'") from None
@@ -505,11 +588,54 @@ def _on_dask(client, payload, names, indexed, on_error, chunks, tick):
     threads = sum(client.nthreads().values()) or 1
     parts = _chunks(indexed, chunks or 4 * threads)
     data = client.scatter(payload, broadcast=True)
-    futs = client.map(_run_chunk, [data] * len(parts), [names] * len(parts), parts,
-                      [on_error] * len(parts), pure=False)
-    results = []
-    for f in as_completed(futs):
-        results.append(f.result())
-        tick(len(results[-1][2]))
+    results: list = []
+    attempt = 0
+    while parts:
+        lost, why = _dask_round(client, data, names, parts, on_error, results, tick)
+        if not lost:
+            break
+        attempt += 1
+        points = [p for part in lost for p in part]
+        if attempt > MAX_RETRIES:
+            rows = _lost_rows(points, attempt, on_error, why)
+            results.append((_NO_WORKER, 0, rows))
+            tick(len(rows))
+            break
+        try:
+            # the cluster may have no workers left (their nannies did not restart them): a
+            # retry would then wait forever, so it waits a bounded time for one
+            client.wait_for_workers(1, timeout=DASK_WAIT_SECONDS)
+        except Exception:  # noqa: BLE001 - distributed raises TimeoutError (several kinds)
+            rows = _lost_rows(points, attempt, on_error, why + "; no worker left to retry on")
+            results.append((_NO_WORKER, 0, rows))
+            tick(len(rows))
+            break
+        parts = [[p] for p in points]       # one point a task, as on the process pool
+        # the scattered payload dies with the workers that held it ("lost dependencies"):
+        # the retries carry it in their tasks, which the scheduler keeps
+        data = payload
     return results, "dask"
 
+
+def _dask_round(client, data, names, parts, on_error, results, tick):
+    """One map of ``parts`` on the cluster; a task Dask gave up on after its own retries
+    (``KilledWorker``: its workers died) or cancelled is lost, not the end of the sweep.
+    Returns ``(lost parts, why)``; finished results are appended to ``results``."""
+    from concurrent.futures import CancelledError
+
+    from distributed import KilledWorker, as_completed
+
+    futs = client.map(_run_chunk, [data] * len(parts), [names] * len(parts), parts,
+                      [on_error] * len(parts), pure=False)
+    index = {f.key: k for k, f in enumerate(futs)}
+    lost, why = [], ""
+    for f in as_completed(futs):
+        try:
+            res = f.result()
+        except (KilledWorker, CancelledError) as exc:
+            lost.append(parts[index[f.key]])
+            why = f"{type(exc).__name__}: {str(exc)[:200]}"
+            continue
+        results.append(res)
+        tick(len(res[2]))
+    return lost, why

@@ -23,6 +23,7 @@ import numpy as np
 import sympy as sp
 
 from .._errors import choice, slow_path_warning
+from . import _cache
 
 try:  # a core dependency (decision 0041); SymPy's lambdify serves where it cannot be imported
     import symengine as _se
@@ -175,43 +176,22 @@ def _split_piecewise(exprs):
 
 
 def _lambdify(args, exprs, opt_level, cse=False):
-    path = _cache_path(args, exprs, opt_level, cse)
-    if path is not None:
-        f = _cache_load(path)
+    key = _cache_key(args, exprs, opt_level, cse)
+    if key is not None:
+        f = _cache.load(key)
         if f is not None:
             return f, "symengine-llvm"
     try:
         f = _se.Lambdify(list(args), list(exprs), backend="llvm", cse=cse, opt_level=opt_level)
     except (ValueError, TypeError, RuntimeError):  # built without LLVM, or unsupported
         return _se.Lambdify(list(args), list(exprs), cse=cse), "symengine-lambda"
-    if path is not None:
-        _cache_store(path, f)
+    if key is not None:
+        _cache.store(key, f)
     return f, "symengine-llvm"
 
 
-# -- on-disk cache of compiled kernels ------------------------------------------------------
-#: bump when the layout of cached kernels changes
-_CACHE_FORMAT = 1
-
-
-def cache_dir() -> Path | None:
-    """Where compiled LLVM kernels are kept between runs, or None when caching is off.
-
-    ``MECHSYS_CACHE``: ``0``/``off`` disables the cache, a path chooses the directory;
-    default ``$XDG_CACHE_HOME/mechsys/kernels`` (``~/.cache/mechsys/kernels``). A kernel is
-    stored under a hash of its argument list, its expressions, the optimisation level, the
-    SymEngine version and this machine's CPU (LLVM compiles for the host CPU), so a second
-    run of the same script compiles nothing, and any change of the model's equations makes a
-    new entry. The files are pickles of SymEngine's ``Lambdify`` (machine code): the
-    directory must be writable by you alone, like the rest of your home directory.
-    """
-    env = os.environ.get("MECHSYS_CACHE", "").strip()
-    if env.lower() in ("0", "off", "false", "no"):
-        return None
-    if env and env.lower() not in ("1", "on", "true", "yes"):
-        return Path(env).expanduser()
-    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    return Path(base) / "mechsys" / "kernels"
+# -- on-disk cache of compiled kernels (compile/_cache.py: private, authenticated, no pickle) --
+cache_dir = _cache.cache_dir
 
 
 def _host() -> str:
@@ -227,18 +207,15 @@ def _host() -> str:
     return cpu
 
 
-def _cache_path(args, exprs, opt_level, cse=False) -> Path | None:
-    d = cache_dir()
-    if d is None:
+def _cache_key(args, exprs, opt_level, cse=False) -> str | None:
+    """The cache key of a kernel: its exact equations (:func:`_fingerprint`), argument names,
+    optimisation options and this machine's CPU (LLVM compiles for the host CPU); the cache
+    adds the library versions (:func:`mechsys.compile._cache.entry_key`). None when caching
+    is off."""
+    if _cache.cache_dir() is None:
         return None
-    import hashlib
-
-    h = hashlib.sha256()
-    for part in (str(_CACHE_FORMAT), _se.__version__, str(opt_level), f"cse={bool(cse)}", _host(),
-                 repr([str(a) for a in args]), _fingerprint(exprs)):
-        h.update(part.encode())
-        h.update(b"\0")
-    return d / f"{h.hexdigest()}.pkl"
+    return _cache.entry_key((str(opt_level), f"cse={bool(cse)}", _host(),
+                             repr([str(a) for a in args]), _fingerprint(exprs)))
 
 
 def _fingerprint(exprs) -> str:
@@ -269,39 +246,6 @@ def _fingerprint(exprs) -> str:
         return r
 
     return hashlib.sha256("|".join(node(e) for e in exprs).encode()).hexdigest()
-
-
-def _cache_load(path: Path):
-    import pickle
-
-    try:
-        with open(path, "rb") as fh:
-            return pickle.load(fh)
-    except FileNotFoundError:
-        return None
-    except Exception:  # a truncated or foreign file: compile again and replace it
-        try:
-            path.unlink()
-        except OSError:
-            pass
-        return None
-
-
-def _cache_store(path: Path, f) -> None:
-    import pickle
-    import tempfile
-
-    tmp = None
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile(dir=path.parent, suffix=".tmp", delete=False) as fh:
-            tmp = fh.name
-            pickle.dump(f, fh)
-        os.replace(tmp, path)     # atomic: a parallel run never reads half a file
-    except (OSError, pickle.PicklingError, TypeError):
-        # an unwritable cache costs compile time, nothing else
-        if tmp is not None and os.path.exists(tmp):
-            os.unlink(tmp)
 
 
 def _entry_point(f):

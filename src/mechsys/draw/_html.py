@@ -134,7 +134,10 @@ def viewer_data(fr: Frames, title: str = "mechsys", rate: float = 1.0,
 def viewer_html(fr: Frames, title: str = "mechsys", rate: float = 1.0,
                 autoplay: bool = False, size=None) -> str:
     data = viewer_data(fr, title, rate, autoplay, size)
-    blob = json.dumps(data, separators=(",", ":")).replace("</", "<\\/")
+    # no "<", ">" or "&" in the script block, whatever a name holds ("</script>", "<!--"):
+    # JSON's own escapes, which JSON.parse reads back as the same characters
+    blob = (json.dumps(data, separators=(",", ":")).replace("<", "\\u003c")
+            .replace(">", "\\u003e").replace("&", "\\u0026"))
     esc = (str(title).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;"))
     return f"""<!DOCTYPE html>
 <html lang="en">

@@ -123,7 +123,7 @@ class Artists2D:
                               markeredgewidth=1.5)
                 (art,) = ax.plot(a[:, 0], a[:, 1], **kw)
             elif it.kind == "text":
-                art = [ax.text(p[0], p[1], s, color=st.get("color", "black"),
+                art = [ax.text(p[0], p[1], _plain(s), color=st.get("color", "black"),
                                fontsize=st.get("fontsize", 9), zorder=z, clip_on=True,
                                alpha=alpha_it, ha="left", va="bottom")
                        for p, s in zip(a, it.texts or [])]
@@ -225,7 +225,7 @@ class Artists3D:
                 (art,) = ax.plot(a[:, 0], a[:, 1], a[:, 2], **kw)
                 self.entries.append((it, art))
             elif it.kind == "text":
-                arts = [ax.text(p[0], p[1], p[2], s, color=st.get("color", "black"),
+                arts = [ax.text(p[0], p[1], p[2], _plain(s), color=st.get("color", "black"),
                                 fontsize=st.get("fontsize", 9), alpha=alpha_it)
                         for p, s in zip(a, it.texts or [])]
                 self.entries.append((it, arts))
@@ -369,3 +369,9 @@ def animation_figure(fr: Frames, dpi=None, figsize=None, title=None, show_time=T
         return out
 
     return fig, update
+
+
+def _plain(text) -> str:
+    """``text`` drawn as written: matplotlib reads ``$...$`` as mathematics (an odd ``$`` in
+    a name is an error), so dollars are escaped."""
+    return str(text).replace("$", r"\$")

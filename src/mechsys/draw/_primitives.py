@@ -51,6 +51,21 @@ from ..geometry._points import Axis, Point, Vector, as_point
 from . import _shapes as sh
 from ._eval import Evaluator, Item, check_style, resolve_points
 
+#: the most segments, spokes or teeth of one primitive: a picture needs no more, and a model
+#: file from a stranger must not make one of a billion (issue 39)
+MAX_SEGMENTS = 1000
+#: the most samples of a plotted curve or surface parameter
+MAX_SAMPLES = 10_000
+
+
+def _count(value, what: str, low: int, high: int = MAX_SEGMENTS) -> int:
+    """``value`` as an integer count in ``[low, high]``, else :class:`~mechsys.ModelError`
+    naming ``what`` and the limit."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
+            or not np.isfinite(value) or value != int(value) or not low <= value <= high:
+        raise ModelError(f"{what} must be a whole number from {low} to {high}, got {value!r}")
+    return int(value)
+
 PALETTE = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
            "#17becf", "#bcbd22", "#7f7f7f")
 GROUND_COLOR = "#4d4d4d"
@@ -346,7 +361,8 @@ class Wheel(Primitive):
     def __init__(self, body, center=0, radius=1.0, spokes=6, axis=(0, 0, 1), width=None, **style):
         super().__init__(**style)
         self.body, self.center, self.radius = body, center, float(radius)
-        self.spokes, self.axis, self.width = int(spokes), axis, width
+        self.spokes = _count(spokes, "Wheel: spokes", 0)
+        self.axis, self.width = axis, width
 
     def _request(self, ev):
         b = _body(ev, self.body)
@@ -405,7 +421,7 @@ class PitchCircle(Primitive):
         if teeth is not None and (isinstance(teeth, bool) or not isinstance(teeth, int)
                                   or teeth < 3):
             raise ModelError(f"PitchCircle: teeth must be an integer >= 3, got {teeth!r}")
-        self.teeth = teeth
+        self.teeth = None if teeth is None else _count(teeth, "PitchCircle: teeth", 3)
 
     def _request(self, ev):
         b = _body(ev, self.body)
@@ -606,6 +622,9 @@ class CamPlot(Edge):
                                  f"({lo}, {hi})")
         if isinstance(samples, bool) or not isinstance(samples, int) or samples < 3:
             raise ModelError(f"CamPlot: samples must be an integer >= 3, got {samples!r}")
+        # a surface (two parameters) samples its grid: samples**2 points
+        samples = _count(samples, "CamPlot: samples", 3,
+                         MAX_SAMPLES if len(ranges) == 1 else MAX_SEGMENTS)
         self.locus, self.ranges, self.samples = locus_point, list(ranges), samples
         self._closed = closed
         self.body, self.points, self.closed = locus_point.body, [], False
@@ -785,7 +804,8 @@ class Sphere(_Mesh3D):
 
     def __init__(self, body, center=0, radius=1.0, n=16, **style):
         super().__init__(**style)
-        self.body, self.center, self.radius, self.n = body, center, float(radius), int(n)
+        self.body, self.center, self.radius = body, center, float(radius)
+        self.n = _count(n, "Sphere: n", 3)
 
     def _mesh(self, ev, b):
         c = _locals_on(ev, b, [self.center], "Sphere")[0]
@@ -798,7 +818,7 @@ class Cylinder(_Mesh3D):
     def __init__(self, body, point1, point2, radius=1.0, n=20, caps=True, **style):
         super().__init__(**style)
         self.body, self.ends, self.radius = body, (point1, point2), float(radius)
-        self.n, self.caps = int(n), caps
+        self.n, self.caps = _count(n, "Cylinder: n", 3), caps
 
     def _mesh(self, ev, b):
         e = _locals_on(ev, b, list(self.ends), "Cylinder")
@@ -814,7 +834,7 @@ class Torus(_Mesh3D):
                  **style):
         super().__init__(**style)
         self.body, self.center, self.major, self.minor = body, center, float(major), float(minor)
-        self.axis, self.n, self.m = axis, int(n), int(m)
+        self.axis, self.n, self.m = axis, _count(n, "Torus: n", 3), _count(m, "Torus: m", 3)
 
     def _mesh(self, ev, b):
         c = _locals_on(ev, b, [self.center], "Torus")[0]
@@ -830,7 +850,7 @@ class Revolve(_Mesh3D):
     def __init__(self, body, profile, axis=None, n=24, angle=2 * np.pi, **style):
         super().__init__(**style)
         self.body, self.profile, self.axis = body, profile, axis
-        self.n, self.angle = int(n), float(angle)
+        self.n, self.angle = _count(n, "Revolve: n", 2), float(angle)
 
     def _mesh(self, ev, b):
         if self.axis is None:

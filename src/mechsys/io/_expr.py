@@ -12,9 +12,14 @@ recursive-descent parser and builds SymPy objects directly. The grammar::
 
 ``NAME`` is a constant (``pi``, ``E``), a whitelisted function (:data:`FUNCTIONS`) or a
 symbol the caller supplies (the model's time, parameters, variables and coordinates);
-anything else is an error. Limits: :data:`MAX_LENGTH` characters, :data:`MAX_DEPTH`
-nesting levels, number literals of at most :data:`MAX_DIGITS` digits and every number
-(literal or folded by SymPy, e.g. ``10**400``) at most :data:`MAX_MAGNITUDE` in size.
+anything else is an error. Limits, each checked before SymPy
+computes the step that would exceed it: :data:`MAX_LENGTH` characters, :data:`MAX_DEPTH`
+nesting levels, :data:`MAX_OPERATIONS` operations, :data:`MAX_FACTORS` factors in a product,
+number literals of at most :data:`MAX_DIGITS` digits, every number (literal or folded by
+SymPy, e.g. ``10**400``) at most :data:`MAX_MAGNITUDE` in size, exponents of non-numeric
+bases at most :data:`MAX_EXPONENT` and numbers in their base kept below
+:data:`MAX_MAGNITUDE` by the power, and ``exp`` of numbers at most :data:`MAX_EXP_ARGUMENT`
+(SymPy turns ``exp(10**9*log(2))`` into ``2**(10**9)``).
 
 Writing uses :func:`to_text` (SymPy's ``str`` with floats printed exactly, shortest
 round-tripping ``repr``), and :func:`parse` reads back everything it writes:
@@ -40,6 +45,16 @@ MAX_LENGTH = 20_000
 MAX_DEPTH = 100
 MAX_DIGITS = 40
 MAX_MAGNITUDE = 1e300
+#: the largest exponent of a power whose base is not a plain number (``sqrt(2)**(10**299)``
+#: made SymPy compute 2**(5*10**298)); numbers to a power are held to :data:`MAX_MAGNITUDE`
+MAX_EXPONENT = 1000
+#: the largest number ``exp`` may be taken of (exp(709.8) is the largest double)
+MAX_EXP_ARGUMENT = math.log(MAX_MAGNITUDE)
+#: the most operations (+ - * / ** and function calls) of one expression
+MAX_OPERATIONS = 500
+#: the most factors of one product: the time derivatives a driver needs (gamma: the second)
+#: of a product of k factors hold ~k**3/2 factors (160 factors: 2 million, minutes to compile)
+MAX_FACTORS = 32
 
 #: name -> (SymPy function, allowed argument counts)
 FUNCTIONS: dict[str, tuple[object, tuple[int, ...]]] = {
@@ -52,6 +67,7 @@ FUNCTIONS: dict[str, tuple[object, tuple[int, ...]]] = {
     "Min": (sp.Min, (2, 3, 4)), "Max": (sp.Max, (2, 3, 4)),
 }
 CONSTANTS = {"pi": sp.pi, "E": sp.E}
+_NOT_FINITE = (sp.zoo, sp.oo, -sp.oo, sp.nan)
 
 _TOKEN = re.compile(r"""
     (?P<ws>\s+)
@@ -127,6 +143,7 @@ class _Parser:
         self.toks = _tokens(text, where)
         self.i = 0
         self.depth = 0
+        self.ops = 0
 
     # -- helpers ----------------------------------------------------------------------
     def peek(self) -> tuple[str, str, int]:
@@ -150,8 +167,19 @@ class _Parser:
         if self.depth > MAX_DEPTH:
             raise self.fail(f"nesting deeper than {MAX_DEPTH} levels")
 
+    def op(self, pos: int) -> None:
+        """Count one operation against :data:`MAX_OPERATIONS` (before SymPy performs it)."""
+        self.ops += 1
+        if self.ops > MAX_OPERATIONS:
+            raise self.fail(f"more than {MAX_OPERATIONS} operations in one expression (the limit "
+                            "MAX_OPERATIONS)", pos)
+
     def checked(self, value, pos: int):
         """Numbers SymPy folded (``10**400``) are held to the same magnitude limit."""
+        if value in _NOT_FINITE:
+            # log(0), 1/0.0 (SymPy's zoo, oo, nan are not Numbers): stopped here, where every
+            # operation's result passes, so no later expression can hold one
+            raise self.fail("the expression is not finite (a division by zero, log(0), ...)", pos)
         if isinstance(value, sp.Number):
             if value.is_finite is False or value.has(sp.nan, sp.zoo):
                 raise self.fail("the expression is not finite", pos)
@@ -161,24 +189,63 @@ class _Parser:
 
     # -- grammar ----------------------------------------------------------------------
     def expr(self):
+        """A sum, built in one step (``Add`` of all terms): adding terms one by one makes
+        SymPy merge each into the growing sum, quadratic in the number of terms. The numbers
+        are folded as they come, each partial result held to the limits."""
         self.enter()
-        value = self.term()
-        while self.peek()[1] in ("+", "-") and self.peek()[0] == "op":
-            _, op, pos = self.take()
-            rhs = self.term()
-            value = self.checked(value + rhs if op == "+" else value - rhs, pos)
+        first = self.term()
+        terms, number = [], None
+        for t, pos in [(first, None)] + list(self._more(("+", "-"), self.term)):
+            if t.is_Number:
+                number = t if number is None else self.checked(number + t, pos)
+            else:
+                terms.append(t)
         self.depth -= 1
-        return value
+        if not terms:
+            return number
+        if number is None and len(terms) == 1:
+            return terms[0]
+        return self.checked(sp.Add(*([] if number is None else [number]), *terms), 0)
+
+    def _more(self, ops, operand):
+        """``(signed operand, position)`` of each ``op operand`` that follows (``-x`` for a
+        subtraction, ``1/x`` for a division), counted against :data:`MAX_OPERATIONS`."""
+        while self.peek()[1] in ops and self.peek()[0] == "op":
+            _, op, pos = self.take()
+            self.op(pos)
+            rhs = operand()
+            if op == "-":
+                yield -rhs, pos
+            elif op == "/":
+                if rhs.is_Number and rhs.is_zero:       # Float(0.0) != 0 in SymPy 1.13
+                    raise self.fail("division by zero", pos)
+                # a number stays a divisor (one rounding, as SymPy divides two numbers)
+                yield (_Divisor(rhs) if rhs.is_Number else self.checked(1 / rhs, pos)), pos
+            else:
+                yield rhs, pos
 
     def term(self):
-        value = self.unary()
-        while self.peek()[1] in ("*", "/") and self.peek()[0] == "op":
-            _, op, pos = self.take()
-            rhs = self.unary()
-            if op == "/" and rhs == 0:
-                raise self.fail("division by zero", pos)
-            value = self.checked(value * rhs if op == "*" else value / rhs, pos)
-        return value
+        """A product, built in one step like a sum (:meth:`expr`), at most
+        :data:`MAX_FACTORS` factors."""
+        first = self.unary()
+        factors, number, n = [], None, 0
+        for f, pos in [(first, None)] + list(self._more(("*", "/"), self.unary)):
+            if isinstance(f, _Divisor):
+                number = self.checked((sp.Integer(1) if number is None else number) / f.value, pos)
+                continue
+            if f.is_Number:
+                number = f if number is None else self.checked(number * f, pos)
+                continue
+            n += _factors(f)
+            if n > MAX_FACTORS:
+                raise self.fail(f"a product of more than {MAX_FACTORS} factors (the limit "
+                                "MAX_FACTORS)", pos)
+            factors.append(f)
+        if not factors:
+            return number
+        if number is None and len(factors) == 1:
+            return factors[0]
+        return self.checked(sp.Mul(*([] if number is None else [number]), *factors), 0)
 
     def unary(self):
         kind, v, pos = self.peek()
@@ -198,6 +265,7 @@ class _Parser:
             self.enter()
             exponent = self.unary()
             self.depth -= 1
+            self.op(pos)
             if base.is_Number and exponent.is_Number:
                 # fold only what stays small: 10**10**10 must not be computed
                 b, e = abs(float(base)), float(exponent)
@@ -206,6 +274,15 @@ class _Parser:
                 if b not in (0.0, 1.0) and abs(e * math.log10(b)) > math.log10(MAX_MAGNITUDE):
                     raise self.fail(f"a power larger than {MAX_MAGNITUDE:g} (or smaller than its "
                                     "inverse)", pos)
+            elif exponent.is_Number:
+                # whatever the base: SymPy multiplies out the numbers in it (sqrt(2)**(10**299)
+                # is 2**(5*10**298), (2*T)**n holds 2**n)
+                e = abs(float(exponent))
+                if e > MAX_EXPONENT:
+                    raise self.fail(f"an exponent of {float(exponent):g}; at most {MAX_EXPONENT} "
+                                    "(the limit MAX_EXPONENT) unless the base is a number", pos)
+                if e * _log10_numbers(base) > math.log10(MAX_MAGNITUDE):
+                    raise self.fail(f"a power whose numbers grow past {MAX_MAGNITUDE:g}", pos)
             return self.checked(base ** exponent, pos)
         return base
 
@@ -298,7 +375,48 @@ class _Parser:
         if len(args) not in counts:
             raise self.fail(f"{name} takes {' or '.join(map(str, counts))} arguments, got "
                             f"{len(args)}", pos)
+        self.op(pos)
+        if name == "exp":
+            # SymPy rewrites exp(n*log(2)) as 2**n and computes it: bound the numbers first
+            for term in sp.Add.make_args(args[0]):
+                if not term.free_symbols and _float(term) > MAX_EXP_ARGUMENT:
+                    raise self.fail(f"exp of more than {MAX_EXP_ARGUMENT:.1f} (the limit "
+                                    "MAX_EXP_ARGUMENT: exp(709.8) is the largest double)", pos)
         return self.checked(fn(*args), pos)
+
+
+class _Divisor:
+    """A number a product divides by (:meth:`_Parser.term`)."""
+
+    __slots__ = ("value",)
+
+    def __init__(self, value):
+        self.value = value
+
+
+def _factors(e) -> int:
+    """The number of factors SymPy's product of ``e`` with something keeps (a Mul's args)."""
+    return len(e.args) if isinstance(e, sp.Mul) else 1
+
+
+def _float(term) -> float:
+    """``term`` (no free symbols) as a float, for a bound (inf when too large to say)."""
+    try:
+        return float(abs(term.evalf(15)))
+    except (TypeError, ValueError, OverflowError):
+        return math.inf
+
+
+def _log10_numbers(e) -> float:
+    """The largest ``|log10|`` of the numbers in ``e`` (numerators and denominators)."""
+    out = 0.0
+    for n in e.atoms(sp.Number):
+        for part in ((n.p, n.q) if isinstance(n, sp.Rational) else (float(n),)):
+            a = abs(part)
+            if a not in (0, 1):
+                out = max(out, abs(math.log10(a)) if not isinstance(a, int) or a < 10**300
+                          else len(str(a)))
+    return out
 
 
 def parse_condition(text: str, names: Mapping[str, sp.Basic] | None = None,

@@ -69,7 +69,8 @@ _GRAPHIC_TEXT = re.compile(r"[A-Za-z0-9_#: +-]{0,100}")
 
 #: load class name -> class: the only load classes a file may name
 LOAD_TYPES = {name: obj for name in _loads_pkg.__all__
-              if isinstance(obj := getattr(_loads_pkg, name), type) and issubclass(obj, LoadBase)}
+              if isinstance(obj := getattr(_loads_pkg, name), type) and issubclass(obj, LoadBase)
+              and obj is not LoadBase}      # (the abstract base builds nothing)
 # switched loads (Mech 7.4.1) are built by StageSwitch/TimeSwitch of loads: saved by their class
 LOAD_TYPES.update({cls.__name__: cls for cls in (StageSwitchedLoad, TimeSwitchedLoad)})
 GEN_JOINTS = (GenRevolute2, GenTranslate2, GenRevolute5, GenTranslate5, GenCylindrical4,
@@ -332,6 +333,8 @@ class _Reader:
     def __init__(self, m, source: str):
         self.m, self.source = m, source
         self.names = _all_names(m)
+        self._nvars = len(m._variables)
+        self._bodies: dict = {}
         self.texts = _IDENT
 
     def err(self, where: str, why: str) -> ModelError:
@@ -339,6 +342,20 @@ class _Reader:
 
     def refresh(self) -> None:
         self.names = _all_names(self.m)
+        self._nvars = len(self.m._variables)
+
+    def add_variables(self) -> None:
+        """The names of the variables added to the model since the last call (a constraint's
+        new variables, and their rates): only these, so that loading stays linear in the
+        number of constraints (:meth:`refresh` after each made it quadratic)."""
+        new = self.m._variables[self._nvars:]
+        self._nvars = len(self.m._variables)
+        for v in new:
+            s = v.symbol
+            self.names[s.name] = s
+            for f in (velocity_symbol, acceleration_symbol):
+                d = f(s.name)
+                self.names[d.name] = d
 
     def expr(self, text, where: str):
         return parse(text, self.names, f"{self.source}: {where}")
@@ -355,9 +372,15 @@ class _Reader:
         return v
 
     def label(self, v, where: str) -> str:
-        """A constraint or load name: any short text (it is only ever compared)."""
+        """A body, point, constraint or load name: a short printable text (it is only ever
+        compared, and written to tables and pictures: no control characters, no lone
+        surrogates that no file encoding can hold)."""
         if not isinstance(v, str) or not 0 < len(v) <= 200:
-            raise self.err(where, f"a name must be a text of 1 to 200 characters, got {str(v)[:80]!r}")
+            raise self.err(where, f"a name must be a text of 1 to 200 characters, got "
+                                  f"{_shown(v)}")
+        if not _printable(v):
+            raise self.err(where, f"the name {_shown(v)} has control characters or lone "
+                                  "surrogates; names must be printable text")
         return v
 
     def body(self, name, where: str):
@@ -365,10 +388,12 @@ class _Reader:
             return None
         if not isinstance(name, str):
             raise self.err(where, f"expected a body name, got {name!r}")
-        try:
-            return self.m.body(name)
-        except ModelError:
-            raise self.err(where, f"unknown body {name!r}") from None
+        if len(self._bodies) != len(self.m.bodies):     # a dict: Model.body(name) scans the list
+            self._bodies = {b.name: b for b in self.m.bodies}
+        b = self._bodies.get(name)
+        if b is None:
+            raise self.err(where, f"unknown body {_shown(name)}")
+        return b
 
     def one_key(self, v, where: str) -> tuple[str, object]:
         if len(v) != 1:
@@ -381,8 +406,10 @@ class _Reader:
             raise self.err(where, f"expected a point, got {str(v)[:80]}")
         d = v["point"]
         label = d.get("label")
-        if label is not None and not isinstance(label, str):
-            raise self.err(where, "a point label must be a string")
+        if label is not None:
+            if not isinstance(label, str):
+                raise self.err(where, "a point label must be a string")
+            label = self.label(label, where)
         local = d.get("local")
         if not isinstance(local, list) or len(local) != self.m.space.dim:
             raise self.err(where, f"a point needs {self.m.space.dim} local coordinates")
@@ -468,7 +495,8 @@ class _Reader:
             return types[kind](*a, **kw)
         except ModelError as exc:
             raise self.err(where, str(exc)) from None
-        except (TypeError, ValueError, AttributeError, IndexError, KeyError) as exc:
+        except (TypeError, ValueError, AttributeError, IndexError, KeyError, NotImplementedError,
+                ArithmeticError) as exc:
             raise self.err(where, f"bad arguments for {kind}: {exc}") from None
 
     def constraint(self, d, where: str):
@@ -533,7 +561,7 @@ def model_from_dict(data: dict, source: str = "model file"):
     except MechError:
         raise
     except (TypeError, ValueError, AttributeError, IndexError, KeyError, RecursionError,
-            ZeroDivisionError, OverflowError) as exc:
+            ZeroDivisionError, OverflowError, ArithmeticError, NotImplementedError) as exc:
         # malformed data that slipped past the checks into a constructor: still our error
         raise ModelError(f"{source}: malformed model file ({type(exc).__name__}: {exc})") from None
 
@@ -553,6 +581,13 @@ def _model_from_dict(data: dict, source: str):
     unknown = sorted(set(opts) - {"velocity", "coordinates", "backend", "orientation"})
     if unknown:
         raise ModelError(f"{source}: unknown options {unknown}")
+    if "backend" in opts:
+        from ..compile._backends import available_backends
+
+        if opts["backend"] not in available_backends():
+            raise ModelError(f"{source}: options.backend {opts['backend']!r} is not a backend of "
+                             f"this installation; choose from {available_backends()} (or leave "
+                             "it out)")
     if space == "planar":
         if set(opts) - {"backend", "orientation"}:
             raise ModelError(f"{source}: velocity and coordinates options are for spatial models")
@@ -586,13 +621,17 @@ def _model_from_dict(data: dict, source: str):
             raise r.err(where, "expected an object")
         name = b.get("name")
         if not isinstance(name, str) or not name or len(name) > 200:
-            raise r.err(where, f"a body needs a name, got {name!r}")
+            raise r.err(where, f"a body needs a name, got {_shown(name)}")
+        name = r.label(name, where)
         where = f"body {name!r}"
         pts = {}
-        for k in b.get("points", []):
+        points = b.get("points", [])
+        if not isinstance(points, list):
+            raise r.err(where, "points must be a list of [name, [coordinates]] pairs")
+        for k in points:
             if not isinstance(k, list) or len(k) != 2 or not isinstance(k[0], str):
                 raise r.err(where, "points must be [name, [coordinates]] pairs")
-            pts[k[0]] = r.exprs(k[1], f"{where}, point {k[0]!r}")
+            pts[r.label(k[0], f"{where}, points")] = r.exprs(k[1], f"{where}, point {k[0]!r}")
         inertia = b.get("inertia")
         inertia = None if inertia is None else r.value(inertia, f"{where}, inertia")
         centroid = b.get("centroid")
@@ -617,7 +656,7 @@ def _model_from_dict(data: dict, source: str):
             m.add(con, name=r.label(name, where) if name is not None else None)
         except ModelError as exc:
             raise r.err(where, str(exc)) from None
-        r.refresh()
+        r.add_variables()
     for i, ld in enumerate(_list(data, "loads", source)):
         if not isinstance(ld, dict):
             raise r.err(f"loads[{i}]", "expected an object")
@@ -654,6 +693,22 @@ def _model_from_dict(data: dict, source: str):
     return m
 
 
+def _printable(text: str) -> bool:
+    """``text`` is printable and encodable (no control characters, no lone surrogates)."""
+    if not text.isprintable():
+        return False
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        return False
+    return True
+
+
+def _shown(v) -> str:
+    """``v`` in a message: its ``repr`` (ASCII, so that a lone surrogate prints), shortened."""
+    return ascii(v if not isinstance(v, str) else v[:80])
+
+
 def _list(data: dict, key: str, source: str) -> list:
     v = data.get(key, [])
     if v is None:
@@ -667,10 +722,7 @@ def load(path):
     """Read a model file written by :meth:`Model.save` (safe for files from strangers: see
     the module docstring). Bad or malicious files raise :class:`~mechsys.ModelError`."""
     path = Path(path)
-    size = path.stat().st_size
-    if size > MAX_FILE_BYTES:
-        raise ModelError(f"{path}: model file of {size} bytes; at most {MAX_FILE_BYTES} are read")
-    text = path.read_text(encoding="utf-8")
+    text = read_text_bounded(path, MAX_FILE_BYTES, "model file")
     if not _json_depth_ok(text):
         raise ModelError(f"{path}: model file nests deeper than {MAX_NESTING} levels")
     try:
@@ -679,7 +731,42 @@ def load(path):
         if isinstance(exc, ModelError):
             raise ModelError(f"{path}: {exc}") from None
         raise ModelError(f"{path}: not valid JSON ({exc})") from None
+    except RecursionError:                                   # pragma: no cover - depth checked
+        raise ModelError(f"{path}: model file nests deeper than {MAX_NESTING} levels") from None
     return model_from_dict(data, str(path))
+
+
+def read_text_bounded(path: Path, limit: int, what: str) -> str:
+    """The UTF-8 text of the regular file ``path``, read with a byte cap: at most ``limit``
+    bytes are ever read (the size ``stat`` reports is not trusted: ``/dev/zero`` reports 0),
+    and only regular files are opened for reading (a FIFO would block, a device never end).
+    Every failure is a :class:`~mechsys.ModelError` naming the path."""
+    import os
+    import stat
+
+    try:
+        # O_NONBLOCK: opening a FIFO must not wait for a writer before we can refuse it
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
+    except OSError as exc:
+        raise ModelError(f"{path}: cannot open the {what} ({exc.strerror or exc})") from None
+    st = os.fstat(fd)
+    if not stat.S_ISREG(st.st_mode):
+        os.close(fd)
+        kind = "a directory" if stat.S_ISDIR(st.st_mode) else "not a regular file"
+        raise ModelError(f"{path}: {kind}; a {what} is a regular file")
+    with os.fdopen(fd, "rb") as fh:
+        try:
+            raw = fh.read(limit + 1)
+        except OSError as exc:
+            raise ModelError(f"{path}: cannot read the {what} ({exc.strerror or exc})") from None
+    if len(raw) > limit:
+        raise ModelError(f"{path}: {what} of more than {limit} bytes; at most {limit} are read "
+                         "(the limit MAX_FILE_BYTES)")
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ModelError(f"{path}: the {what} is not UTF-8 text (byte {raw[exc.start]:#04x} at "
+                         f"offset {exc.start}); model files are written in UTF-8") from None
 
 
 def _int(text: str) -> int:

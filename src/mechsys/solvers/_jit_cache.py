@@ -53,10 +53,51 @@ def sync(directory: Path) -> bool:
         return False
 
 
+def check_safe(directory: Path) -> None:
+    """Refuse (:class:`~mechsys.CacheError`) a Numba cache that someone else could have
+    written: Numba reads its index files (``*.nbi``) with ``pickle``, so whoever can write
+    them runs code as the user. ``NUMBA_CACHE_DIR``, when set, must be a directory private to
+    the user (created 0700 when missing); the cache beside the sources
+    (``directory/__pycache__``) must be writable by nobody but its owner, and owned by the
+    user or by the owner of the sources (whoever installed mechsys)."""
+    import os
+    import stat
+
+    from .._errors import CacheError
+    from .._private import my_uid, private_dir, private_group
+
+    hint = ("Point NUMBA_CACHE_DIR at a directory only you can write (or unset it), or "
+            "MECHSYS_JIT=0 to run without compiled loops.")
+    env = os.environ.get("NUMBA_CACHE_DIR", "").strip()
+    if env:
+        try:
+            private_dir(Path(env).expanduser(), "Numba's cache directory (NUMBA_CACHE_DIR)", hint)
+        except OSError:
+            pass                     # cannot be made: Numba caches nothing there
+    cache = directory / "__pycache__"
+    uid = my_uid()
+    try:
+        st = os.stat(cache)
+        owner = os.stat(directory).st_uid
+    except OSError:
+        return
+    if uid is None:
+        return
+    if st.st_uid not in (uid, owner) or st.st_mode & stat.S_IWOTH or (
+            st.st_mode & stat.S_IWGRP and not private_group(st)):
+        raise CacheError(f"Numba's cache of mechsys's compiled loops, {cache}, is owned by uid "
+                         f"{st.st_uid} (mode {stat.S_IMODE(st.st_mode):o}): it must be owned by you "
+                         "or by the owner of the installed package and writable by nobody else; "
+                         f"mechsys reads nothing from it. Remove it (it is made again) and {hint[0].lower()}"
+                         f"{hint[1:]}")
+
+
 def check() -> None:
-    """:func:`sync` of the ``solvers`` package, once per process (before any loop compiles)."""
+    """:func:`check_safe` and :func:`sync` of the ``solvers`` package, once per process (before
+    any loop compiles)."""
     if not _done:
+        check_safe(_HERE)
         _done["deleted"] = sync(_HERE)
 
 
-__all__ = ["check", "sources_digest", "sync"]
+__all__ = ["check", "check_safe", "sources_digest", "sync"]
