@@ -1120,6 +1120,22 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
 
         return save(self, path)
 
+    def inverse_dynamics(self, q, qd, qdd, t: float = 0.0):
+        """Joint forces ``tau = M(q) qdd - Q - Qv`` of a model in generalized coordinates
+        without constraint equations (a robot from ``ms.from_urdf``), at one point or ``(N,
+        n)`` points: a :class:`~mechsys.JointValues` named by coordinate
+        (``m.inverse_dynamics(q, qd, qdd)["elbow_joint"]``). Decision 0040."""
+        from .analyses._robot import inverse_dynamics
+
+        return inverse_dynamics(self, q, qd, qdd, t)
+
+    def forward_dynamics(self, q, qd, tau, t: float = 0.0):
+        """Joint accelerations ``qdd = M(q)^-1 (Q + Qv + tau)`` (the inverse of
+        :meth:`inverse_dynamics`) at one point or ``(N, n)`` points."""
+        from .analyses._robot import forward_dynamics
+
+        return forward_dynamics(self, q, qd, tau, t)
+
     def lock(self, at=0.0, solution: str = "location", guess=None):
         """Freeze the mechanism at one configuration (Mech's ``LockMech``): ``at`` is a time
         (solved now), a one-point :class:`~mechsys.Solution` or a ``State``; ``solution``
