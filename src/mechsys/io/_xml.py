@@ -21,6 +21,8 @@ from .._errors import ModelError
 MAX_XML_BYTES = 20_000_000
 MAX_DEPTH = 256
 MAX_ELEMENTS = 500_000
+#: refused before parsing (lower case; the scan is case-insensitive)
+REFUSED = (b"<!doctype", b"<!entity")
 
 
 @dataclass
@@ -77,7 +79,7 @@ def read_xml(path) -> tuple[Element, str]:
 def parse_xml(data: bytes, source: str = "<string>") -> Element:
     """The root :class:`Element` of ``data``; refuses declarations (module doc)."""
     low = data.lower()
-    for token in (b"<!doctype", b"<!entity"):
+    for token in REFUSED:
         k = low.find(token)
         if k >= 0:
             line = data.count(b"\n", 0, k) + 1
