@@ -127,7 +127,7 @@ def frame_poses(m, q) -> dict:
     out = {}
     rep = m.import_report
     bodies = {name for name, _, _ in rep.frames.values()}
-    x = np.concatenate(([0.0], q, np.zeros(2 * s.n), s.p_values))
+    x = np.concatenate(([0.0], q, np.zeros(2 * s.n + s.m), s.p_values))
     pose = {}
     for name in bodies:
         b = m.body(name)
@@ -362,3 +362,42 @@ def test_real_robot_against_mujoco(rel):
         md.qfrc_applied[:] = ref
         mujoco.mj_forward(mm, md)
         np.testing.assert_allclose(qdd[k], md.qacc, rtol=0, atol=1e-9 * (1 + np.abs(md.qacc).max()))
+
+
+def _qmul(a, b):
+    w1, v1, w2, v2 = a[0], np.asarray(a[1:]), b[0], np.asarray(b[1:])
+    return np.concatenate(([w1 * w2 - v1 @ v2], w1 * v2 + w2 * v1 + np.cross(v1, v2)))
+
+
+@needs_robots
+def test_floating_base_quadruped_against_pinocchio():
+    """Solo-12 with a free base (``floating_base=True``: the base an absolute body, x y z and
+    Euler parameters): frame poses against Pinocchio's free-flyer model (1e-12), and the joint
+    accelerations of the unactuated free fall (the augmented free-motion system, the
+    normalisation constraint included) against ABA with zero torques (1e-9 relative)."""
+    path = ROBOTS / "solo_description/robots/solo12.urdf"
+    pin = pytest.importorskip("pinocchio")
+    pm = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
+    pd = pm.createData()
+    m = ms.from_urdf(path, floating_base=True)
+    s = m.compile()
+    assert s.layout.q_names[7:] == tuple(pm.names[i] for i in range(2, pm.njoints)) and s.m == 1
+    nj = pm.nv - 6
+    for _ in range(2):
+        e = RNG.normal(size=4)
+        e /= np.linalg.norm(e)
+        r, qj = RNG.normal(size=3), RNG.uniform(-1.5, 1.5, size=nj)
+        q = np.concatenate((r, e, qj))
+        q_pin = np.concatenate((r, e[1:], e[:1], qj))
+        pin.framesForwardKinematics(pm, pd, q_pin)
+        for link, M in frame_poses(m, q).items():
+            if pm.existFrame(link):
+                np.testing.assert_allclose(M, pd.oMf[pm.getFrameId(link)].homogeneous, atol=1e-12,
+                                           err_msg=link)
+        v_loc, w_loc, qdj = RNG.normal(size=3), RNG.normal(size=3), RNG.normal(size=nj)
+        R = pd.oMf[pm.getFrameId("base_link")].rotation
+        qd = np.concatenate((R @ v_loc, 0.5 * _qmul(e, np.concatenate(([0.0], w_loc))), qdj))
+        a = pin.aba(pm, pd, q_pin, np.concatenate((v_loc, w_loc, qdj)), np.zeros(pm.nv))
+        K, rhs = s.dynamics.free_kernel()(0.0, q, qd, np.zeros(s.m), s.p_values)
+        qdd = np.linalg.solve(np.asarray(K.todense() if hasattr(K, "todense") else K), rhs)[:s.n]
+        np.testing.assert_allclose(qdd[7:], a[6:], rtol=0, atol=1e-9 * np.abs(a[6:]).max())

@@ -254,22 +254,24 @@ def from_urdf(path, *, floating_base: bool = False, gravity: float = 9.81,
     frames: dict = {root: (None, np.zeros(3), np.eye(3))}     # link -> (segment link, p, R)
     seg_links: dict = {root: [root]}
     movable: list[_Joint] = []
-    order = [root]
-    k = 0
-    while k < len(order):
-        n = order[k]
-        k += 1
-        for j in children[n]:
-            seg, p, R = frames[n]
-            seg = n if seg is None else seg
+    # depth first, children in file order: the coordinates come in the order Pinocchio and
+    # MuJoCo give them (each joint's subtree before its next sibling)
+    order: list = []
+    stack: list = [(root, None)]
+    while stack:
+        n, j = stack.pop()
+        order.append(n)
+        if j is not None:
+            seg, p, R = frames[j.parent]
+            seg = j.parent if seg is None else seg
             if j.type == "fixed":
-                frames[j.child] = (seg, p + R @ j.xyz, R @ j.R)
-                seg_links[seg].append(j.child)
+                frames[n] = (seg, p + R @ j.xyz, R @ j.R)
+                seg_links[seg].append(n)
             else:
-                frames[j.child] = (None, np.zeros(3), np.eye(3))
-                seg_links[j.child] = [j.child]
+                frames[n] = (None, np.zeros(3), np.eye(3))
+                seg_links[n] = [n]
                 movable.append(j)
-            order.append(j.child)
+        stack += [(jj.child, jj) for jj in reversed(children[n])]
     frames[root] = (root, np.zeros(3), np.eye(3))
     for n in order:
         if frames[n][0] is None:
