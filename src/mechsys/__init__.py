@@ -164,7 +164,7 @@ from .geometry._rotations import (
     xyz_to_spherical,
 )
 from .geometry._tabulated import tabulated
-from .io import from_urdf, load
+from .io import from_mjcf, from_urdf, load
 from .loads._friction import JointFriction
 from .loads._gyro import GyroFilter, GyroMoment, gyro_filter
 from .loads._loads import Damper, Force, Gravity, Load, LoadBase, Moment, Spring
@@ -338,6 +338,7 @@ __all__ = [
     "euler_parameters",
     "find_switch_time",
     "find_time",
+    "from_mjcf",
     "from_urdf",
     "gyro_filter",
     "intersection_point",
