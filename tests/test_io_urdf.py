@@ -311,6 +311,12 @@ def test_real_robot_against_pinocchio(rel):
                 continue
             ref = pd.oMf[pm.getFrameId(link)].homogeneous
             np.testing.assert_allclose(M, ref, atol=1e-12, rtol=0, err_msg=link)
+    last = pm.frames[len(pm.frames) - 1].name                  # the tool frame
+    ref = []
+    for q in Q:
+        pin.framesForwardKinematics(pm, pd, q)
+        ref.append(pd.oMf[pm.getFrameId(last)].translation.copy())
+    np.testing.assert_allclose(m.forward_kinematics(Q, last), ref, atol=1e-12, rtol=0)
     tau = m.inverse_dynamics(Q, QD, QDD).values
     qdd = m.forward_dynamics(Q, QD, tau).values
     for k in range(len(Q)):
@@ -394,6 +400,9 @@ def test_floating_base_quadruped_against_pinocchio():
             if pm.existFrame(link):
                 np.testing.assert_allclose(M, pd.oMf[pm.getFrameId(link)].homogeneous, atol=1e-12,
                                            err_msg=link)
+        feet = [f for f in ("FL_FOOT", "HR_FOOT") if pm.existFrame(f)]
+        np.testing.assert_allclose(m.forward_kinematics(q, feet),
+                                   [pd.oMf[pm.getFrameId(f)].translation for f in feet], atol=1e-12)
         v_loc, w_loc, qdj = RNG.normal(size=3), RNG.normal(size=3), RNG.normal(size=nj)
         R = pd.oMf[pm.getFrameId("base_link")].rotation
         qd = np.concatenate((R @ v_loc, 0.5 * _qmul(e, np.concatenate(([0.0], w_loc))), qdj))

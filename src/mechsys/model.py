@@ -1136,6 +1136,13 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
 
         return forward_dynamics(self, q, qd, tau, t)
 
+    def forward_kinematics(self, q, point, t: float = 0.0):
+        """Global location of ``point`` (a body point, or a link name of an imported robot) at
+        joint coordinates ``q`` (one point or ``(N, n)``) of a generalized-coordinate model."""
+        from .analyses._robot import forward_kinematics
+
+        return forward_kinematics(self, q, point, t)
+
     def lock(self, at=0.0, solution: str = "location", guess=None):
         """Freeze the mechanism at one configuration (Mech's ``LockMech``): ``at`` is a time
         (solved now), a one-point :class:`~mechsys.Solution` or a ``State``; ``solution``
