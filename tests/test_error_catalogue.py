@@ -210,6 +210,10 @@ CATALOGUE = [
     ("drawing", "ms.draw.plot(sol(), [])", "ModelError", "no outputs"),
     ("drawing", 'ms.draw.animate(sol(), rate=-1.0)', "ModelError", "rate"),
     ("drawing", "ms.draw.snapshot(3.0)", "ModelError", "3.0"),
+    # robot description files and robot-style dynamics (docs/import.md)
+    ("import", 'ms.from_urdf("no_such_robot.urdf")', "ModelError", "no_such_robot.urdf"),
+    ("import", 'ms.from_mjcf(".")', "ModelError", "not a regular file"),
+    ("import", 'crank().inverse_dynamics([0.0], [0.0], [0.0])', "ModelError", "inverse_dynamics"),
 ]
 
 

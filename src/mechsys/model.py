@@ -1143,6 +1143,20 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
 
         return forward_kinematics(self, q, point, t)
 
+    def to_urdf(self, path, robot: str = "mechsys"):
+        """Write a tree of ``GenRevolute5``/``GenTranslate5`` joints on ground as a URDF file
+        (docs/import.md); what URDF cannot hold raises ``ModelError`` naming it."""
+        from .io._export import to_urdf
+
+        return to_urdf(self, path, robot)
+
+    def to_mjcf(self, path, model: str = "mechsys"):
+        """Write a tree of ``GenRevolute5``/``GenTranslate5`` joints on ground as an MJCF
+        (MuJoCo) file (docs/import.md); what it cannot hold raises ``ModelError`` naming it."""
+        from .io._export import to_mjcf
+
+        return to_mjcf(self, path, model)
+
     def lock(self, at=0.0, solution: str = "location", guess=None):
         """Freeze the mechanism at one configuration (Mech's ``LockMech``): ``at`` is a time
         (solved now), a one-point :class:`~mechsys.Solution` or a ``State``; ``solution``
