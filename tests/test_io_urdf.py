@@ -123,26 +123,8 @@ def _arm_fk(q) -> dict:
 
 def frame_poses(m, q) -> dict:
     """World 4x4 pose of every link frame of an imported model at coordinates q."""
-    s = m.compile()
-    out = {}
-    rep = m.import_report
-    bodies = {name for name, _, _ in rep.frames.values()}
-    x = np.concatenate(([0.0], q, np.zeros(2 * s.n + s.m), s.p_values))
-    pose = {}
-    for name in bodies:
-        b = m.body(name)
-        if b.is_ground:
-            pose[name] = (np.zeros(3), np.eye(3))
-            continue
-        v = np.asarray(s.compile_expression([*b.r, *b.A])(x), dtype=float)
-        pose[name] = (v[:3], v[3:].reshape(3, 3))
-    for link, (name, p, R) in rep.frames.items():
-        r, A = pose[name]
-        M = np.eye(4)
-        M[:3, :3] = A @ R
-        M[:3, 3] = r + A @ p
-        out[link] = M
-    return out
+    links = list(m.import_report.frames)
+    return dict(zip(links, m.forward_kinematics(q, links, frame=True)))
 
 
 # -- rotations -------------------------------------------------------------------------------------
@@ -376,37 +358,50 @@ def _qmul(a, b):
 
 
 @needs_robots
-def test_floating_base_quadruped_against_pinocchio():
-    """Solo-12 with a free base (``floating_base=True``: the base an absolute body, x y z and
-    Euler parameters): frame poses against Pinocchio's free-flyer model (1e-12), and the joint
-    accelerations of the unactuated free fall (the augmented free-motion system, the
-    normalisation constraint included) against ABA with zero torques (1e-9 relative)."""
-    path = ROBOTS / "solo_description/robots/solo12.urdf"
+@pytest.mark.parametrize("rel", ["solo_description/robots/solo12.urdf",
+                                 "simple_humanoid_description/urdf/simple_humanoid.urdf"])
+def test_floating_base_against_pinocchio(rel):
+    """A quadruped (Solo-12) and a humanoid (29 joints) with a free base
+    (``floating_base=True``: the base an absolute body, x y z and Euler parameters): frame
+    poses against Pinocchio's free-flyer model (1e-12), and the joint accelerations of the
+    unactuated free fall (the augmented free-motion system, the normalisation constraint
+    included) against ABA with zero torques (1e-9 relative). Joints are matched by name
+    (Pinocchio's URDF parser orders siblings by name, mechsys as the file does)."""
+    path = ROBOTS / rel
     pin = pytest.importorskip("pinocchio")
     pm = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
     pd = pm.createData()
     m = ms.from_urdf(path, floating_base=True)
     s = m.compile()
-    assert s.layout.q_names[7:] == tuple(pm.names[i] for i in range(2, pm.njoints)) and s.m == 1
-    nj = pm.nv - 6
+    names = s.layout.q_names[7:]
+    assert sorted(names) == sorted(pm.names[i] for i in range(2, pm.njoints)) and s.m == 1
+    assert all(pm.joints[pm.getJointId(n)].nq == 1 for n in names)
+    iq = np.array([pm.joints[pm.getJointId(n)].idx_q for n in names])   # ours -> Pinocchio's
+    iv = np.array([pm.joints[pm.getJointId(n)].idx_v for n in names])
+    nj = len(names)
     for _ in range(2):
         e = RNG.normal(size=4)
         e /= np.linalg.norm(e)
         r, qj = RNG.normal(size=3), RNG.uniform(-1.5, 1.5, size=nj)
         q = np.concatenate((r, e, qj))
-        q_pin = np.concatenate((r, e[1:], e[:1], qj))
+        q_pin = np.zeros(pm.nq)
+        q_pin[:7] = np.concatenate((r, e[1:], e[:1]))
+        q_pin[iq] = qj
         pin.framesForwardKinematics(pm, pd, q_pin)
         for link, M in frame_poses(m, q).items():
             if pm.existFrame(link):
                 np.testing.assert_allclose(M, pd.oMf[pm.getFrameId(link)].homogeneous, atol=1e-12,
                                            err_msg=link)
-        feet = [f for f in ("FL_FOOT", "HR_FOOT") if pm.existFrame(f)]
+        feet = [f for f in m.import_report.frames if pm.existFrame(f)][-3:]
         np.testing.assert_allclose(m.forward_kinematics(q, feet),
                                    [pd.oMf[pm.getFrameId(f)].translation for f in feet], atol=1e-12)
         v_loc, w_loc, qdj = RNG.normal(size=3), RNG.normal(size=3), RNG.normal(size=nj)
-        R = pd.oMf[pm.getFrameId("base_link")].rotation
+        R = pd.oMf[pm.getFrameId(m.bodies[1].name)].rotation
         qd = np.concatenate((R @ v_loc, 0.5 * _qmul(e, np.concatenate(([0.0], w_loc))), qdj))
-        a = pin.aba(pm, pd, q_pin, np.concatenate((v_loc, w_loc, qdj)), np.zeros(pm.nv))
+        v_pin = np.zeros(pm.nv)
+        v_pin[:6] = np.concatenate((v_loc, w_loc))
+        v_pin[iv] = qdj
+        a = pin.aba(pm, pd, q_pin, v_pin, np.zeros(pm.nv))[iv]
         K, rhs = s.dynamics.free_kernel()(0.0, q, qd, np.zeros(s.m), s.p_values)
         qdd = np.linalg.solve(np.asarray(K.todense() if hasattr(K, "todense") else K), rhs)[:s.n]
-        np.testing.assert_allclose(qdd[7:], a[6:], rtol=0, atol=1e-9 * np.abs(a[6:]).max())
+        np.testing.assert_allclose(qdd[7:], a, rtol=0, atol=1e-9 * np.abs(a).max())

@@ -1136,12 +1136,12 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
 
         return forward_dynamics(self, q, qd, tau, t)
 
-    def forward_kinematics(self, q, point, t: float = 0.0):
-        """Global location of ``point`` (a body point, or a link name of an imported robot) at
-        joint coordinates ``q`` (one point or ``(N, n)``) of a generalized-coordinate model."""
+    def forward_kinematics(self, q, point, t: float = 0.0, frame: bool = False):
+        """Global location of ``point`` (a body point, or a link name of an imported robot; or
+        a list) at coordinates ``q`` (one point or ``(N, n)``); ``frame=True``: 4x4 poses."""
         from .analyses._robot import forward_kinematics
 
-        return forward_kinematics(self, q, point, t)
+        return forward_kinematics(self, q, point, t, frame)
 
     def to_urdf(self, path, robot: str = "mechsys"):
         """Write a tree of ``GenRevolute5``/``GenTranslate5`` joints on ground as a URDF file

@@ -149,38 +149,47 @@ def forward_dynamics(m, q, qd, tau, t: float = 0.0) -> JointValues:
     return JointValues(names, out[0] if single else out)
 
 
-def forward_kinematics(m, q, point, t: float = 0.0) -> np.ndarray:
+def forward_kinematics(m, q, point, t: float = 0.0, frame: bool = False) -> np.ndarray:
     r"""Global location ``r_b + A_b s'`` of ``point`` (a point of a body, ``body.point(...)``,
-    or a link frame's name after ``from_urdf``/``from_mjcf``; or a list of them, compiled
-    together) at the joint coordinates ``q`` (``(n,)`` -> ``(3,)``, ``(N, n)`` -> ``(N, 3)``,
-    or ``{name: values}``; a list of ``k`` points adds an axis: ``(k, 3)``, ``(N, k, 3)``).
-    The slaves' poses are those the model's outputs compute."""
+    or a link frame's name after ``from_urdf``/``from_mjcf``; or a list of them, evaluated
+    together) at the coordinates ``q`` (``(n,)`` -> ``(3,)``, ``(N, n)`` -> ``(N, 3)``, or
+    ``{name: values}``; a list of ``k`` points adds an axis: ``(k, 3)``, ``(N, k, 3)``).
+    ``frame=True``: the 4x4 homogeneous pose instead (``[A_b R_f, r_b + A_b s']``, ``R_f`` a
+    link frame's rotation on its body, identity for a body point). Poses of slave bodies come
+    from the recursive dynamics' forward pass when the model uses it (no nested expression
+    compiled), else from the compiled body coordinates."""
     s = m.compile()          # constraint equations allowed: q gives every coordinate
     many = isinstance(point, (list, tuple)) and not (len(point) == 3 and all(
         isinstance(v, (int, float)) for v in point))
-    pts = list(point) if many else [point]
+    items = list(point) if many else [point]
     rep = getattr(m, "import_report", None)
-    for i, p_ in enumerate(pts):
+    spec = []                                   # (body, local point, local rotation)
+    for p_ in items:
         if isinstance(p_, str):
             if rep is None or p_ not in rep.frames:
                 raise ModelError(f"forward_kinematics: {p_!r} is not a link frame of the imported "
                                  "model; give a body point (body.point(...))")
-            bname, loc, _ = rep.frames[p_]
-            pts[i] = m.body(bname).point(tuple(float(v) for v in loc))
+            bname, loc, R = rep.frames[p_]
+            spec.append((m.body(bname), np.asarray(loc, float), np.asarray(R, float)))
+        else:
+            try:
+                loc = np.array([float(v) for v in p_.local], dtype=float)
+            except (AttributeError, TypeError):
+                raise ModelError(f"forward_kinematics: {p_!r} is not a body point with numeric "
+                                 "local coordinates, nor a link name") from None
+            spec.append((p_.body if p_.body is not None else m.ground, loc, np.eye(3)))
     Q, single = _points(s, q, "forward_kinematics: q")
-    d = s.dynamics
-    if getattr(d, "recursive", False):
-        out = _recursive_locations(s, d, Q, pts, t)
-        if not many:
-            out = out[:, 0]
-        return out[0] if single else out
-    expr = [e for p_ in pts for e in m.location(p_)]
-    f = s.compile_expression(expr)
-    X = np.zeros((len(Q), 1 + 3 * s.n + s.m + len(s.p_values)))
-    X[:, 0] = t
-    X[:, 1:1 + s.n] = Q
-    X[:, 1 + 3 * s.n + s.m:] = s.p_values
-    out = np.asarray(f.batch(X), dtype=float).reshape(len(Q), len(pts), 3)
+    bodies = list(dict.fromkeys(b for b, _, _ in spec))
+    poses = _body_poses(s, Q, bodies, t)        # (N, nb, 4, 4)
+    col = {b: i for i, b in enumerate(bodies)}
+    out = np.empty((len(Q), len(spec), 4, 4))
+    for i, (b, loc, R) in enumerate(spec):
+        P = poses[:, col[b]]
+        out[:, i] = np.eye(4)
+        out[:, i, :3, :3] = P[:, :3, :3] @ R
+        out[:, i, :3, 3] = P[:, :3, 3] + np.einsum("nij,j->ni", P[:, :3, :3], loc)
+    if not frame:
+        out = out[:, :, :3, 3]
     if not many:
         out = out[:, 0]
     return out[0] if single else out
@@ -193,32 +202,40 @@ def _euler_matrix(e) -> np.ndarray:
                          [e1 * e3 - e0 * e2, e2 * e3 + e0 * e1, e0 * e0 + e3 * e3 - 0.5]])
 
 
-def _recursive_locations(s, d, Q, pts, t) -> np.ndarray:
-    """Point locations from the slaves' poses of the recursive dynamics' forward pass (its
-    compiled joint kernels, decision 0016): no expression of the nested chain is compiled."""
+def _body_poses(s, Q, bodies, t) -> np.ndarray:
+    """``(N, k, 4, 4)`` homogeneous poses of ``bodies`` at the coordinates ``Q``."""
     from ..compile._generalized import _slave_order
 
-    order = {b: i for i, b in enumerate(_slave_order(s._bodies))}
+    d = s.dynamics
+    recursive = getattr(d, "recursive", False)
+    order = {b: i for i, b in enumerate(_slave_order(s._bodies))} if recursive else {}
     lay = s.layout
-    where_ = []
-    for p_ in pts:
-        b = p_.body
-        loc = np.array([float(v) for v in p_.local], dtype=float)
-        if b is None or b.is_ground:
-            where_.append(("ground", None, loc))
-        elif b in order:
-            where_.append(("slave", order[b], loc))
-        else:
-            where_.append(("absolute", lay.body_slices[b.name], loc))
-    out = np.empty((len(Q), len(pts), 3))
+    out = np.zeros((len(Q), len(bodies), 4, 4))
+    out[:, :, 3, 3] = 1.0
+    symbolic = [b for b in bodies if not b.is_ground and not (recursive and b in order)
+                and b.name not in lay.body_slices]
+    f = None
+    if symbolic:
+        f = s.compile_expression([e for b in symbolic for e in (*b.r, *b.A)])
     zero, lam = np.zeros(s.n), np.zeros(s.m)
     for k, q in enumerate(Q):
-        _, _, w = d._forward(float(t), q, zero, lam, s.p_values)
-        P = w["P"]
-        for i, (kind, ix, loc) in enumerate(where_):
-            if kind == "ground":
-                out[k, i] = loc
+        P = d._forward(float(t), q, zero, lam, s.p_values)[2]["P"] if recursive else None
+        vals = None
+        if f is not None:
+            vals = np.asarray(f(np.concatenate(([t], q, np.zeros(2 * s.n + s.m), s.p_values))),
+                              dtype=float).reshape(len(symbolic), 12)
+        for i, b in enumerate(bodies):
+            if b.is_ground:
+                out[k, i, :3, :3] = np.eye(3)
                 continue
-            pose = P[ix] if kind == "slave" else q[ix]
-            out[k, i] = pose[:3] + _euler_matrix(pose[3:7]) @ loc
+            if recursive and b in order:
+                pose = P[order[b]]
+            elif b.name in lay.body_slices:
+                pose = q[lay.body_slices[b.name]]
+            else:
+                v = vals[symbolic.index(b)]
+                out[k, i, :3, 3], out[k, i, :3, :3] = v[:3], v[3:].reshape(3, 3)
+                continue
+            out[k, i, :3, 3] = pose[:3]
+            out[k, i, :3, :3] = _euler_matrix(pose[3:7])
     return out
