@@ -405,3 +405,31 @@ def test_floating_base_against_pinocchio(rel):
         K, rhs = s.dynamics.free_kernel()(0.0, q, qd, np.zeros(s.m), s.p_values)
         qdd = np.linalg.solve(np.asarray(K.todense() if hasattr(K, "todense") else K), rhs)[:s.n]
         np.testing.assert_allclose(qdd[7:], a, rtol=0, atol=1e-9 * np.abs(a).max())
+
+
+def test_geometry_kept_for_drawing(arm_file, tmp_path):
+    """The arm's visuals: a rotated box (six facets), a cylinder, a sphere; a picture draws;
+    a mesh that cannot be read is noted, one that can (STL) becomes its bounding box."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from mechsys import draw
+
+    m = ms.from_urdf(arm_file)
+    kinds = [type(p).__name__ for p in draw.attached(m)]
+    assert kinds.count("Facet") == 6 and kinds.count("Cylinder") == 1 and kinds.count("Sphere") == 1
+    sol = m.free().simulate([0.0, 0.01], initial_condition={"j1": 0.3})
+    draw.snapshot(sol, index=0)
+    # meshes: an ASCII STL beside the file is read as its bounding box, a missing one noted
+    (tmp_path / "part.stl").write_text("solid p\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n"
+                                       "vertex 0.2 0 0\nvertex 0 0.1 0.05\nendloop\nendfacet\n"
+                                       "endsolid p\n")
+    text = ARM.replace('<cylinder radius="0.03" length="0.4"/>', '<mesh filename="part.stl"/>').replace(
+        '<sphere radius="0.04"/>', '<mesh filename="package://nowhere/x.dae"/>')
+    p = tmp_path / "mesh.urdf"
+    p.write_text(text)
+    mm = ms.from_urdf(p)
+    boxes = [q for q in draw.attached(mm) if type(q).__name__ == "Box"]
+    assert len(boxes) == 1
+    np.testing.assert_allclose(np.ravel(boxes[0].corners), [0, 0, 0, 0.2, 0.1, 0.05], atol=1e-7)
+    assert any("x.dae" in n and "not drawn" in n for n in mm.import_report.not_mapped)

@@ -88,6 +88,7 @@ class _Link:
     com: np.ndarray = field(default_factory=lambda: np.zeros(3))
     inertia: np.ndarray = field(default_factory=lambda: np.zeros((3, 3)))
     visuals: list = field(default_factory=list)
+    collisions: list = field(default_factory=list)
 
 
 @dataclass
@@ -133,12 +134,13 @@ def _read_link(source, el: Element) -> _Link:
                        [v["ixz"], v["iyz"], v["izz"]]])
         link.com = c
         link.inertia = R @ Ii @ R.T
-    for vis in el.findall("visual"):
-        geo = vis.find("geometry")
-        if geo is None or not geo.children:
-            continue
-        xyz, R = _origin(source, vis)
-        link.visuals.append((geo.children[0], xyz, R))
+    for tag, out in (("visual", link.visuals), ("collision", link.collisions)):
+        for vis in el.findall(tag):
+            geo = vis.find("geometry")
+            if geo is None or not geo.children:
+                continue
+            xyz, R = _origin(source, vis)
+            out.append((geo.children[0], xyz, R))
     return link
 
 
@@ -411,6 +413,11 @@ def _mesh_bounds(path: Path) -> np.ndarray | None:
     return np.array([pts.min(axis=0), pts.max(axis=0)])
 
 
+def _mesh_bounds_of(source: str, geo) -> np.ndarray | None:
+    path = _resolve(source, geo.get("filename", ""))
+    return _mesh_bounds(path) if path is not None else None
+
+
 def _resolve(source: str, filename: str) -> Path | None:
     """A mesh file name (``package://pkg/rest``, ``file://...``, relative) as a path beside
     the URDF, searching the URDF's folder and its parents for ``pkg``."""
@@ -440,7 +447,19 @@ def _attach_geometry(m, source, links, frames, bodies) -> list[str]:
     for name, lk in links.items():
         seg, p, R = frames[name]
         b = bodies[seg]
-        for geo, xyz, Rv in lk.visuals:
+        shapes = list(lk.visuals)
+        unread = [g for g, _, _ in shapes if g.tag == "mesh"
+                  and _mesh_bounds_of(source, g) is None]
+        if unread:
+            # a visual mesh this reader cannot open (COLLADA, ...): the link's collision
+            # meshes (usually STL) give its bounding box instead
+            coll = [c for c in lk.collisions
+                    if c[0].tag == "mesh" and _mesh_bounds_of(source, c[0]) is not None]
+            if coll:
+                shapes = [v for v in shapes if v[0] not in unread] + coll
+                notes.append(f"line {unread[0].line}: visual mesh of link {name!r} drawn from its "
+                             "collision mesh's bounding box")
+        for geo, xyz, Rv in shapes:
             c = p + R @ xyz
             Rt = R @ Rv
             if geo.tag == "sphere":
