@@ -189,3 +189,78 @@ def test_closed_loop_four_bar(tmp_path):
 def test_bad_files_name_element_and_line(tmp_path, text, match):
     with pytest.raises(ms.ModelError, match=match):
         ms.from_mjcf(_write(tmp_path, text))
+
+
+BALL_FREE = """<mujoco model="ball_free">
+  <compiler angle="radian"/>
+  <worldbody>
+    <body name="base" pos="0.1 0.2 1.0">
+      <freejoint name="root"/>
+      <geom type="box" size="0.2 0.1 0.05"/>
+      <body name="arm" pos="0.2 0 0">
+        <joint name="shoulder" type="ball" pos="0.05 0 0"/>
+        <geom type="capsule" fromto="0.05 0 0 0.35 0 0.1" size="0.03"/>
+        <body name="hand" pos="0.35 0 0.1">
+          <joint name="wrist" axis="0 1 0.3"/>
+          <geom type="ellipsoid" size="0.05 0.03 0.08" pos="0.05 0 0"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def _qmul(a, b):
+    w1, v1, w2, v2 = a[0], np.asarray(a[1:]), b[0], np.asarray(b[1:])
+    return np.concatenate(([w1 * w2 - v1 @ v2], w1 * v2 + w2 * v1 + np.cross(v1, v2)))
+
+
+def _qrot(e):
+    from mechsys.io._mjcf import quat_matrix
+
+    return quat_matrix(e)
+
+
+def test_free_and_ball_joints_against_mujoco(tmp_path):
+    """A free base carrying a ball-jointed arm and a hinged hand: both absolute bodies (the
+    ball a Spherical3), the hand a Gen joint. From MuJoCo's state (qpos: position and
+    quaternions, qvel: world linear and local angular velocities) the hinge's free-fall
+    acceleration of the augmented system equals MuJoCo's (1e-9)."""
+    path = _write(tmp_path, BALL_FREE)
+    m = ms.from_mjcf(path)
+    rep = m.import_report
+    assert rep.joints["root"][0] == "free" and rep.joints["shoulder"][0] == "ball"
+    s = m.compile()
+    mm = mujoco.MjModel.from_xml_path(str(path))
+    md = mujoco.MjData(mm)
+    lay = s.layout
+    for _ in range(2):
+        eb, ea = RNG.normal(size=4), RNG.normal(size=4)
+        eb, ea = eb / np.linalg.norm(eb), ea / np.linalg.norm(ea)
+        rb, wb_loc, vb = RNG.normal(size=3), RNG.normal(size=3), RNG.normal(size=3)
+        wa_rel, wrist, wrist_d = RNG.normal(size=3), RNG.normal(), RNG.normal()
+        md.qpos[:] = np.concatenate((rb, eb, ea, [wrist]))
+        md.qvel[:] = np.concatenate((vb, wb_loc, wa_rel, [wrist_d]))
+        mujoco.mj_forward(mm, md)
+        # the same state in mechsys coordinates: base absolute, arm absolute (global pose)
+        Rb = _qrot(eb)
+        e_arm = _qmul(eb, ea)                                  # arm frame = base * (0.2, 0, 0) * ball
+        Ra = _qrot(e_arm)
+        jp = np.array([0.05, 0, 0])
+        r_arm = rb + Rb @ (np.array([0.2, 0, 0]) + jp) - Ra @ jp
+        w_b = Rb @ wb_loc                                      # world angular velocities
+        w_a = w_b + Ra @ wa_rel
+        v_arm = vb + np.cross(w_b, Rb @ (np.array([0.2, 0, 0]) + jp)) - np.cross(w_a, Ra @ jp)
+        q = np.zeros(s.n)
+        qd = np.zeros(s.n)
+        for body, r, e, v, w in (("base", rb, eb, vb, w_b), ("arm", r_arm, e_arm, v_arm, w_a)):
+            sl = lay.body_slices[body]
+            q[sl] = np.concatenate((r, e))
+            qd[sl] = np.concatenate((v, 0.5 * _qmul(np.concatenate(([0.0], w)), e)))
+        iw = lay.q_names.index("wrist")
+        q[iw], qd[iw] = wrist, wrist_d
+        K, rhs = s.dynamics.free_kernel()(0.0, q, qd, np.zeros(s.m), s.p_values)
+        qdd = np.linalg.solve(np.asarray(K.todense() if hasattr(K, "todense") else K), rhs)[:s.n]
+        ref = md.qacc[-1]
+        assert abs(qdd[iw] - ref) <= 1e-9 * max(1.0, np.abs(md.qacc).max()), (qdd[iw], ref)
