@@ -433,3 +433,21 @@ def test_geometry_kept_for_drawing(arm_file, tmp_path):
     assert len(boxes) == 1
     np.testing.assert_allclose(np.ravel(boxes[0].corners), [0, 0, 0, 0.2, 0.1, 0.05], atol=1e-7)
     assert any("x.dae" in n and "not drawn" in n for n in mm.import_report.not_mapped)
+
+
+def test_floating_joint_on_world_and_refused_joints(tmp_path):
+    """A ``floating`` joint from the root makes an absolute body placed at the joint's origin;
+    ``planar`` joints and floating joints below the root are refused by name and line."""
+    text = ('<robot name="f">\n <link name="world"/>\n <link name="base"><inertial><mass value="2"/>'
+            '<inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>\n'
+            ' <joint name="float" type="floating"><parent link="world"/><child link="base"/>'
+            '<origin xyz="0 0 1" rpy="0 0 0.5"/></joint>\n</robot>')
+    p = tmp_path / "f.urdf"
+    p.write_text(text)
+    m = ms.from_urdf(p)
+    s = m.compile()
+    assert s.n == 7 and s.m == 1 and m.import_report.joints["float"][0] == "floating"
+    np.testing.assert_allclose(s.guess, [0, 0, 1, np.cos(0.25), 0, 0, np.sin(0.25)], atol=1e-15)
+    p.write_text(text.replace('type="floating"', 'type="planar"'))
+    with pytest.raises(ms.ModelError, match=r"line 4, <joint name='float'>: planar joints"):
+        ms.from_urdf(p)
