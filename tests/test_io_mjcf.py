@@ -185,6 +185,9 @@ def test_closed_loop_four_bar(tmp_path):
     ('<mujoco>\n <worldbody>\n  <body name="a"><joint name="j"/><geom size="0.1"/></body>\n </worldbody>\n'
      ' <equality><connect body1="b" anchor="0 0 0"/></equality>\n</mujoco>', r"line 5, <connect>: body1='b'"),
     ('<robot name="r"/>', r"line 1, <robot name='r'>: an MJCF's root element is <mujoco>"),
+    ('<mujoco>\n <worldbody>\n  <body name="a"><joint name="j"/>\n'
+     '   <inertial mass="1" diaginertia="1 1 3"/></body>\n </worldbody>\n</mujoco>',
+     r"line 3, <body name='a'>: inertia of body 'a'.*triangle"),
 ])
 def test_bad_files_name_element_and_line(tmp_path, text, match):
     with pytest.raises(ms.ModelError, match=match):

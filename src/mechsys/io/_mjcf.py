@@ -344,6 +344,7 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, geometry: bool
     # merged into its parent's mechsys body (as URDF's fixed joints), ground included
     frame_of: dict = {"world": (m.ground, np.zeros(3), np.eye(3))}
     mass_parts: dict = {}
+    body_line: dict = {}
 
     def visit(el: Element, parent: str, cls: str | None, fp, fR):
         name = el.get("name")
@@ -422,6 +423,7 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, geometry: bool
         except ModelError as exc:
             raise ModelError(f"{where(source, el)}: {exc}") from None
         mass_parts[name] = [(mass, c, I)]
+        body_line[name] = el.line
         frame_of[name] = (b, np.zeros(3), np.eye(3))
         holders = [*chain, b]
         master, m_origin, m_R = pb, P, RR               # the body frame in the master's
@@ -493,8 +495,11 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, geometry: bool
         for pm, pc, pI in parts_:
             d = pc - c
             I = I + pI + pm * (d @ d * np.eye(3) - np.outer(d, d))
-        m.set_mass_properties(bname, mass=float(mass), centroid=tuple(float(v) for v in c),
-                              inertia=(0.5 * (I + I.T)).tolist())
+        try:
+            m.set_mass_properties(bname, mass=float(mass), centroid=tuple(float(v) for v in c),
+                                  inertia=(0.5 * (I + I.T)).tolist())
+        except ModelError as exc:
+            raise ModelError(f"{source}, line {body_line[bname]}, <body name={bname!r}>: {exc}") from None
     # geoms and sites on the world body
     for st, sfp, sfR, _ in _flatten(ctx, wb, "site", None):
         if st.get("name"):
