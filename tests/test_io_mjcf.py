@@ -42,12 +42,12 @@ ZOO = """<mujoco model="zoo">
         <geom fromto="0 0 0 0 0 0.4"/>
         <geom class="heavy" type="sphere" size="0.05" pos="0 0 0.4"/>
         <body name="fore" pos="0 0 0.4" xyaxes="0 1 0 -1 0.2 0">
-          <joint name="elbow"/>
+          <joint name="elbow" ref="25"/>
           <joint name="twist" type="hinge" axis="0 0 1" pos="0.01 0 0"/>
           <inertial pos="0.02 0.01 0.15" mass="1.2" fullinertia="0.02 0.025 0.015 0.001 -0.002 0.0005"/>
           <frame pos="0 0 0.3" euler="0 0 90">
             <body name="slider" zaxis="1 1 1">
-              <joint name="slide" type="slide" axis="1 0 0" pos="0.1 0 0"/>
+              <joint name="slide" type="slide" axis="1 0 0" pos="0.1 0 0" ref="0.03"/>
               <geom type="cylinder" size="0.02 0.05" class="heavy"/>
               <geom type="ellipsoid" size="0.03 0.02 0.04" pos="0.05 0 0" euler="30 0 0"/>
               <body name="tip" pos="0.05 0.05 0">

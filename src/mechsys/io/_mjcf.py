@@ -455,7 +455,15 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, geometry: bool
             g = normal_to(ax)
             slave = holders[k]
             a1 = slave.axis(tuple(float(v) for v in jp), tuple(ax), tuple(g))
-            a2 = master.axis(tuple(float(v) for v in m_origin + m_R @ jp), tuple(m_R @ ax), tuple(m_R @ g))
+            # ``ref``: the file's pose is at q = ref, so the joint moves by q - ref: the master's
+            # reference direction turned by -ref (hinge) or its origin moved by -ref (slide)
+            ref = ctx.num(j, ja, "ref", 1, [0.0])[0]
+            g2, o2 = m_R @ g, m_origin + m_R @ jp
+            if typ == "hinge" and ref:
+                g2 = m_R @ _axis_angle(ax, -ctx.angle(ref)) @ g
+            elif ref:
+                o2 = o2 - ref * (m_R @ ax)
+            a2 = master.axis(tuple(float(v) for v in o2), tuple(m_R @ ax), tuple(float(v) for v in g2))
             cls_ = C.GenRevolute5 if typ == "hinge" else C.GenTranslate5
             try:
                 m.add(cls_(a1, a2, (jname, 0.0)), name=jname)
@@ -466,7 +474,7 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, geometry: bool
             rng = ctx.num(j, ja, "range", 2)
             if rng is not None:
                 limits[jname] = tuple(ctx.angle(v) if typ == "hinge" else v for v in rng) + (None, None)
-            for key in ("ref", "springref", "stiffness", "armature", "frictionloss"):
+            for key in ("springref", "stiffness", "armature", "frictionloss"):
                 v = ctx.num(j, ja, key, 1)
                 if v is not None and v[0] != 0:
                     if key == "frictionloss":
