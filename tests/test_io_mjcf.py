@@ -42,7 +42,7 @@ ZOO = """<mujoco model="zoo">
         <geom fromto="0 0 0 0 0 0.4"/>
         <geom class="heavy" type="sphere" size="0.05" pos="0 0 0.4"/>
         <body name="fore" pos="0 0 0.4" xyaxes="0 1 0 -1 0.2 0">
-          <joint name="elbow" ref="25"/>
+          <joint name="elbow" ref="25" stiffness="3" springref="10"/>
           <joint name="twist" type="hinge" axis="0 0 1" pos="0.01 0 0"/>
           <inertial pos="0.02 0.01 0.15" mass="1.2" fullinertia="0.02 0.025 0.015 0.001 -0.002 0.0005"/>
           <frame pos="0 0 0.3" euler="0 0 90">
@@ -95,6 +95,7 @@ def _reference(path):
     mm.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT)
     mm.dof_damping[:] = 0
     mm.dof_armature[:] = 0
+    mm.jnt_stiffness[:] = 0
     return mm, mujoco.MjData(mm)
 
 
@@ -134,6 +135,16 @@ def test_format_features_against_mujoco(tmp_path):
     q, qd, qdd = RNG.normal(size=(3, 4))
     diff = md2.inverse_dynamics(q, qd, qdd).values - m.inverse_dynamics(q, qd, qdd).values
     np.testing.assert_allclose(diff, 0.2 * qd, atol=1e-12)
+    # with the springs too: MuJoCo's passive forces (damping, the elbow's spring) in mj_inverse
+    mp = ms.from_mjcf(path, joint_damping=True, joint_springs=True)
+    mm2 = mujoco.MjModel.from_xml_path(str(path))
+    mm2.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT)
+    mm2.dof_armature[:] = 0
+    d2 = mujoco.MjData(mm2)
+    d2.qpos[:], d2.qvel[:], d2.qacc[:] = q, qd, qdd
+    mujoco.mj_inverse(mm2, d2)
+    np.testing.assert_allclose(mp.inverse_dynamics(q, qd, qdd).values, d2.qfrc_inverse, rtol=0,
+                               atol=1e-9 * np.abs(d2.qfrc_inverse).max())
 
 
 @needs_robots

@@ -234,7 +234,8 @@ def _flatten(ctx, el: Element, tag: str, cls):
 
 
 # -- the import ------------------------------------------------------------------------------------
-def from_mjcf(path, *, gravity=None, joint_damping: bool = False, geometry: bool = True,
+def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs: bool = False,
+              geometry: bool = True,
               backend: str | None = None):
     r"""A :class:`~mechsys.Model3D` of the MJCF (MuJoCo) model ``path``.
 
@@ -245,7 +246,8 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, geometry: bool
     equality constraints ``connect``, ``weld`` and ``joint`` become mechsys constraints (so
     closed-loop models work). ``gravity``: a number overrides the file's magnitude (along
     the file's direction; default ``<option gravity>`` or 9.81 down ``z``).
-    ``joint_damping`` adds ``damping`` as ``-d q_dot`` loads; ranges, armature, friction
+    ``joint_damping`` adds ``damping`` as ``-d q_dot`` loads, ``joint_springs`` the hinge and
+    slide springs ``-k (q - springref)`` (MuJoCo's passive forces); ranges, armature, friction
     loss, springs, actuators, sensors, contacts and everything else without a counterpart
     are listed in ``m.import_report``. Read safely, as ``from_urdf``.
     """
@@ -474,7 +476,17 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, geometry: bool
             rng = ctx.num(j, ja, "range", 2)
             if rng is not None:
                 limits[jname] = tuple(ctx.angle(v) if typ == "hinge" else v for v in rng) + (None, None)
-            for key in ("springref", "stiffness", "armature", "frictionloss"):
+            k_ = ctx.num(j, ja, "stiffness", 1, [0.0])[0]
+            if k_:
+                sref = ctx.num(j, ja, "springref", 1, [0.0])[0]
+                sref = ctx.angle(sref) if typ == "hinge" else sref
+                if joint_springs:
+                    m.add_load(L.Load(sp.Symbol(jname), -k_ * (sp.Symbol(jname) - sref)),
+                               name=f"{jname}_spring")
+                else:
+                    notes.append(f"line {j.line}: joint {jname!r} stiffness {k_} (reported; "
+                                 "joint_springs=True adds it as a load)")
+            for key in ("armature", "frictionloss"):
                 v = ctx.num(j, ja, key, 1)
                 if v is not None and v[0] != 0:
                     if key == "frictionloss":
