@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import sympy as sp
 
 import mechsys as ms
 from mechsys.io import _xml
@@ -451,3 +452,17 @@ def test_floating_joint_on_world_and_refused_joints(tmp_path):
     p.write_text(text.replace('type="floating"', 'type="planar"'))
     with pytest.raises(ms.ModelError, match=r"line 4, <joint name='float'>: planar joints"):
         ms.from_urdf(p)
+
+
+@needs_robots
+def test_mimic_reported_or_a_constraint():
+    """The Panda's second finger mimics the first: reported by default (the model stays a
+    tree, as Pinocchio reads it), a constraint finger2 - finger1 = 0 with ``mimic=True``."""
+    path = ROBOTS / PANDA
+    m = ms.from_urdf(path)
+    assert any("<mimic>" in n and "panda_finger_joint2" in n for n in m.import_report.not_mapped)
+    mm = ms.from_urdf(path, mimic=True, geometry=False)
+    (eq,) = mm.constraint("panda_finger_joint2_mimic").equations(mm.space)
+    f1, f2 = sp.Symbol("panda_finger_joint1"), sp.Symbol("panda_finger_joint2")
+    assert sp.simplify(eq - (f2 - f1)) == 0
+    assert mm.compile().m == 1

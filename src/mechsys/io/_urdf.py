@@ -198,7 +198,8 @@ def _tree(source, robot: Element, links: dict, joints: list):
 
 
 def from_urdf(path, *, floating_base: bool = False, gravity: float = 9.81,
-              joint_damping: bool = False, geometry: bool = True, backend: str | None = None):
+              joint_damping: bool = False, mimic: bool = False, geometry: bool = True,
+              backend: str | None = None):
     r"""A :class:`~mechsys.Model3D` of the URDF robot description ``path``.
 
     Every joint that moves becomes a generalized-coordinate joint named after it (revolute
@@ -207,7 +208,8 @@ def from_urdf(path, *, floating_base: bool = False, gravity: float = 9.81,
     body named after the link), gravity ``-gravity`` along ``z``. The root link is fixed to
     ground, or with ``floating_base=True`` a free body with its own (absolute) coordinates
     ``x, y, z, e0..e3``, as is the child of a ``floating`` joint on the root. ``joint_damping``
-    adds the joints' ``<dynamics damping>`` as loads ``-d q_dot``; limits, friction and
+    adds the joints' ``<dynamics damping>`` as loads ``-d q_dot``, ``mimic`` the ``<mimic>``
+    relations as constraints ``q = multiplier q_other + offset``; limits, friction and
     everything else without a counterpart are listed in ``m.import_report`` (an
     :class:`ImportReport`). ``geometry``: attach the visual shapes for drawing (boxes,
     cylinders, spheres; meshes as their bounding box when the file is STL or OBJ and found,
@@ -313,6 +315,7 @@ def from_urdf(path, *, floating_base: bool = False, gravity: float = 9.81,
     limits: dict = {}
     damping: dict = {}
     friction: dict = {}
+    mimics: list = []
     for j in movable:
         pseg, pp, pR = frames[j.parent]
         master = bodies[pseg]
@@ -364,10 +367,25 @@ def from_urdf(path, *, floating_base: bool = False, gravity: float = 9.81,
             if f:
                 friction[j.name] = f
                 notes.append(f"line {dyn.line}: joint {j.name!r} friction {f} (no counterpart; ignored)")
-        for tag in ("mimic", "safety_controller", "calibration"):
+        for tag in ("safety_controller", "calibration"):
             e = j.el.find(tag)
             if e is not None:
                 notes.append(f"line {e.line}: joint {j.name!r} <{tag}> (no counterpart; ignored)")
+        e = j.el.find("mimic")
+        if e is not None:
+            if mimic:
+                mimics.append((j, e))
+            else:
+                notes.append(f"line {e.line}: joint {j.name!r} <mimic> (reported; mimic=True adds "
+                             "it as a constraint)")
+    for j, e in mimics:        # q = multiplier q_other + offset, once every joint exists
+        other = e.get("joint")
+        if other not in report_joints or report_joints[other][0] not in ("revolute", "continuous",
+                                                                         "prismatic"):
+            raise ModelError(f"{where(source, e)}: mimic joint {other!r} is not a moving joint of the file")
+        k_ = floats(source, e, "multiplier", 1, [1.0])[0]
+        off = floats(source, e, "offset", 1, [0.0])[0]
+        m.add(C.Constraint(sp.Symbol(j.name) - k_ * sp.Symbol(other) - off), name=f"{j.name}_mimic")
     # link frames on their bodies
     for n in order:
         seg, p, R = frames[n]
