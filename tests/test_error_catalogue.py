@@ -246,6 +246,10 @@ CATALOGUE = [
     ("file", 'ms.load("/dev/null")', "ModelError", "not a regular file"),
     ("file", 'ms.io._expr.parse("log(0)*T", {"T": T}, "drive")', "ModelError", "not finite"),
     ("file", 'ms.io._expr.parse("T/0.0", {"T": T}, "drive")', "ModelError", "division by zero"),
+    # robot description files and robot-style dynamics (docs/import.md)
+    ("import", 'ms.from_urdf("no_such_robot.urdf")', "ModelError", "no_such_robot.urdf"),
+    ("import", 'ms.from_mjcf(".")', "ModelError", "not a regular file"),
+    ("import", 'crank().inverse_dynamics([0.0], [0.0], [0.0])', "ModelError", "inverse_dynamics"),
 ]
 
 

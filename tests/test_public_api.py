@@ -90,6 +90,11 @@ REQUIRED_MEMBERS["VibrationModes"] = {"shape", "motion", "animate", "table"}
 REQUIRED_TOP_LEVEL |= {"load"}
 REQUIRED_MEMBERS["Model"] |= {"save"}
 REQUIRED_IN_MODULE["mechsys.io"] = {"load", "save", "parse_expression", "expression_text"}
+#: Issue 37: robot description files and robot-style dynamics (decision 0040).
+REQUIRED_TOP_LEVEL |= {"from_urdf", "from_mjcf", "JointValues"}
+REQUIRED_MEMBERS["Model"] |= {"inverse_dynamics", "forward_dynamics", "forward_kinematics", "to_urdf",
+                              "to_mjcf"}
+REQUIRED_IN_MODULE["mechsys.io"] |= {"from_urdf", "from_mjcf", "ImportReport"}
 
 def test_all_contains_the_required_names():
     missing = REQUIRED_TOP_LEVEL - set(mechsys.__all__)

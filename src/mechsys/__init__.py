@@ -46,6 +46,7 @@ from .analyses import (
     find_time,
     sweep,
 )
+from .analyses._robot import JointValues
 from .analyses._sensitivity import SensitivitySystem
 from .constraints import (
     REGISTRY,
@@ -170,7 +171,7 @@ from .geometry._rotations import (
     xyz_to_spherical,
 )
 from .geometry._tabulated import tabulated
-from .io import load
+from .io import from_mjcf, from_urdf, load
 from .loads._friction import JointFriction
 from .loads._gyro import GyroFilter, GyroMoment, gyro_filter
 from .loads._loads import Damper, Force, Gravity, Load, LoadBase, Moment, Spring
@@ -239,6 +240,7 @@ __all__ = [
     "Iteration",
     "Involute",
     "JointFriction",
+    "JointValues",
     "LeadScrew5",
     "Line",
     "LineOnCylinder3",
@@ -346,6 +348,8 @@ __all__ = [
     "euler_parameters",
     "find_switch_time",
     "find_time",
+    "from_mjcf",
+    "from_urdf",
     "gyro_filter",
     "intersection_point",
     "load",

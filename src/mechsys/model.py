@@ -1315,6 +1315,43 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
 
         return save(self, path)
 
+    def inverse_dynamics(self, q, qd, qdd, t: float = 0.0):
+        """Joint forces ``tau = M(q) qdd - Q - Qv`` of a model in generalized coordinates
+        without constraint equations (a robot from ``ms.from_urdf``), at one point or ``(N,
+        n)`` points: a :class:`~mechsys.JointValues` named by coordinate
+        (``m.inverse_dynamics(q, qd, qdd)["elbow_joint"]``). Decision 0040."""
+        from .analyses._robot import inverse_dynamics
+
+        return inverse_dynamics(self, q, qd, qdd, t)
+
+    def forward_dynamics(self, q, qd, tau, t: float = 0.0):
+        """Joint accelerations ``qdd = M(q)^-1 (Q + Qv + tau)`` (the inverse of
+        :meth:`inverse_dynamics`) at one point or ``(N, n)`` points."""
+        from .analyses._robot import forward_dynamics
+
+        return forward_dynamics(self, q, qd, tau, t)
+
+    def forward_kinematics(self, q, point, t: float = 0.0, frame: bool = False):
+        """Global location of ``point`` (a body point, or a link name of an imported robot; or
+        a list) at coordinates ``q`` (one point or ``(N, n)``); ``frame=True``: 4x4 poses."""
+        from .analyses._robot import forward_kinematics
+
+        return forward_kinematics(self, q, point, t, frame)
+
+    def to_urdf(self, path, robot: str = "mechsys"):
+        """Write a tree of ``GenRevolute5``/``GenTranslate5`` joints on ground as a URDF file
+        (docs/import.md); what URDF cannot hold raises ``ModelError`` naming it."""
+        from .io._export import to_urdf
+
+        return to_urdf(self, path, robot)
+
+    def to_mjcf(self, path, model: str = "mechsys"):
+        """Write a tree of ``GenRevolute5``/``GenTranslate5`` joints on ground as an MJCF
+        (MuJoCo) file (docs/import.md); what it cannot hold raises ``ModelError`` naming it."""
+        from .io._export import to_mjcf
+
+        return to_mjcf(self, path, model)
+
     def lock(self, at=0.0, solution: str = "location", guess=None):
         """Freeze the mechanism at one configuration (Mech's ``LockMech``): ``at`` is a time
         (solved now), a one-point :class:`~mechsys.Solution` or a ``State``; ``solution``

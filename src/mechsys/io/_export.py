@@ -1,0 +1,213 @@
+r"""Export of tree models to URDF and MJCF: ``m.to_urdf(path)``, ``m.to_mjcf(path)``
+(decision 0040).
+
+What the formats can express: a tree of ``GenRevolute5`` and ``GenTranslate5`` joints on
+ground, bodies with mass, centroid and inertia, gravity (URDF: only 9.81 down ``z``, which
+URDF consumers assume). Anything else (absolute bodies, constraint equations, other Gen
+joints, loads other than gravity, symbolic values) is refused with ``ModelError`` naming it.
+
+With a Gen joint's frames ``(o_1, R_1)`` on the slave and ``(o_2, R_2)`` on the master
+(``constraints/_generalized.py``) the slave's pose is ``A_s = A_m R_0 Rot(u_1, q)``,
+``R_0 = R_2 R_1^T``, ``u_1`` the slave's axis direction, and ``r_s = r_m + A_m o_2 - A_s
+o_1``. Hence
+
+* MJCF: ``<body pos="o_2 - R_0 o_1" quat="R_0">`` with ``<joint pos="o_1" axis="u_1">``
+  (MuJoCo turns the body about the joint's point), the body frame being mechsys's;
+* URDF: a joint turns its child about the child frame's origin, so each link frame is the
+  body frame moved to its joint's point ``o_1`` (same axes): ``<origin xyz="o_2 - o_1^m"
+  rpy="R_0">`` (``o_1^m`` the master's shift), ``<axis xyz="u_1">``; the centroid and the
+  drawn points shift by ``-o_1``. ``rpy`` from ``R = Rz(y) Ry(p) Rx(r)``.
+
+Numbers are written with ``repr`` (shortest round-trip), so a file read back gives the
+same doubles.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+
+from .._errors import ModelError
+
+
+def matrix_rpy(R) -> tuple[float, float, float]:
+    """``(r, p, y)`` with ``R = Rz(y) Ry(p) Rx(r)`` (``p`` in [-pi/2, pi/2]; at ``|p| = pi/2``
+    the yaw is set to 0)."""
+    R = np.asarray(R, float)
+    cp = math.hypot(R[0, 0], R[1, 0])
+    p = math.atan2(-R[2, 0], cp)
+    if cp > 1e-12:
+        return math.atan2(R[2, 1], R[2, 2]), p, math.atan2(R[1, 0], R[0, 0])
+    return math.atan2(-R[1, 2], R[1, 1]), p, 0.0
+
+
+def _num(v) -> str:
+    return repr(float(v))
+
+
+def _vec(v) -> str:
+    return " ".join(_num(x) for x in np.ravel(v))
+
+
+def _float(value, what: str) -> float:
+    try:
+        return float(value)
+    except TypeError:
+        raise ModelError(f"{what} is symbolic ({value}); give numbers before exporting") from None
+
+
+def _tree(m, fmt: str):
+    """``(joints by slave in tree order, {body: (mass, c, I)})`` or ModelError naming what
+    the format cannot hold."""
+    from ..constraints._generalized import GenJoint, GenRevolute5, GenTranslate5
+    from ..loads._loads import Gravity
+
+    if m.space.dim != 3:
+        raise ModelError(f"to_{fmt}: only spatial models (Model3D) can be exported")
+    joints = {}
+    for c in m.constraints:
+        if isinstance(c, GenJoint):
+            if not isinstance(c, (GenRevolute5, GenTranslate5)):
+                raise ModelError(f"to_{fmt}: joint {c.label()} ({type(c).__name__}) has no "
+                                 f"{fmt.upper()} counterpart; only GenRevolute5 and GenTranslate5")
+            joints[c.slave] = c
+        else:
+            raise ModelError(f"to_{fmt}: constraint {c.label()} makes equations, which "
+                             f"{fmt.upper()} export does not hold (a tree of Gen joints only)")
+    for b in m.bodies[1:]:
+        if b not in joints:
+            raise ModelError(f"to_{fmt}: body {b.name!r} has its own (absolute) coordinates; export "
+                             "holds bodies moved by GenRevolute5/GenTranslate5 joints only")
+    gravity = None
+    for ld in m.load_list:
+        if isinstance(ld, Gravity) and ld.only is None:
+            v = np.array([_float(x, "gravity direction") for x in np.ravel(ld.vector.local)])
+            gmag = _float(ld.g, "gravity magnitude")
+            gravity = v / np.linalg.norm(v) * gmag if ld.mode == "absolute" else v * gmag
+            continue
+        raise ModelError(f"to_{fmt}: load {getattr(ld, 'name', None) or type(ld).__name__} has no "
+                         f"{fmt.upper()} counterpart (only gravity on every body); remove it first")
+    order, seen = [], set()
+
+    def visit(b):
+        if b in seen:
+            return
+        mst = joints[b].master
+        if mst is not None and not mst.is_ground:
+            visit(mst)
+        seen.add(b)
+        order.append(b)
+
+    for b in m.bodies[1:]:
+        visit(b)
+    props = {}
+    for b in order:
+        mass = _float(b.mass, f"mass of body {b.name!r}")
+        c = np.array([_float(x, f"centroid of body {b.name!r}") for x in np.ravel(b.centroid)]) \
+            if b.centroid is not None else np.zeros(3)
+        Iraw = np.asarray(m.space.inertia_matrix(b.inertia)) if b.inertia is not None else np.zeros((3, 3))
+        I = np.array([[_float(x, f"inertia of body {b.name!r}") for x in row] for row in Iraw])
+        props[b] = (mass, c, I)
+    return [joints[b] for b in order], props, gravity
+
+
+def _frames(j, space):
+    from ..geometry._rotations import rotation_matrix
+
+    o1, R1, o2, R2 = j._frames(space)
+    o1 = np.array([float(v) for v in o1])
+    o2 = np.array([float(v) for v in o2])
+    R1 = np.asarray(rotation_matrix([float(v) for v in R1]), float)
+    R2 = np.asarray(rotation_matrix([float(v) for v in R2]), float)
+    return o1, R1, o2, R2
+
+
+def _inertia_attrs_urdf(I) -> str:
+    return (f'ixx="{_num(I[0, 0])}" ixy="{_num(I[0, 1])}" ixz="{_num(I[0, 2])}" '
+            f'iyy="{_num(I[1, 1])}" iyz="{_num(I[1, 2])}" izz="{_num(I[2, 2])}"')
+
+
+def to_urdf(m, path, robot: str = "mechsys") -> Path:
+    r"""Write the tree model ``m`` as a URDF file (module doc); returns the path."""
+    from ..constraints._generalized import GenTranslate5
+
+    joints, props, gravity = _tree(m, "urdf")
+    if gravity is not None and not np.allclose(gravity, (0, 0, -9.81), rtol=0, atol=1e-12):
+        raise ModelError(f"to_urdf: gravity {gravity.tolist()} cannot be written (URDF has no gravity; "
+                         "its users assume 9.81 down z)")
+    shift = {}
+    root = m.ground.name
+    lines = [f"<robot name={quoteattr(robot)}>", f"  <link name={quoteattr(root)}/>"]
+    for j in joints:
+        b = j.slave
+        o1, R1, o2, R2 = _frames(j, m.space)
+        shift[b] = o1
+        mass, c, I = props[b]
+        lines.append(f"  <link name={quoteattr(b.name)}>")
+        lines.append(f'    <inertial><origin xyz="{_vec(c - o1)}" rpy="0.0 0.0 0.0"/>'
+                     f'<mass value="{_num(mass)}"/><inertia {_inertia_attrs_urdf(I)}/></inertial>')
+        lines.append("  </link>")
+    for j in joints:
+        b = j.slave
+        o1, R1, o2, R2 = _frames(j, m.space)
+        mst = j.master
+        parent = root if mst is None or mst.is_ground else mst.name
+        ps = shift.get(mst, np.zeros(3))
+        R0 = R2 @ R1.T
+        kind = "prismatic" if isinstance(j, GenTranslate5) else "continuous"
+        name = j.coordinates[0].name
+        lines.append(f"  <joint name={quoteattr(name)} type=\"{kind}\">")
+        lines.append(f"    <parent link={quoteattr(parent)}/><child link={quoteattr(b.name)}/>")
+        lines.append(f'    <origin xyz="{_vec(o2 - ps)}" rpy="{_vec(matrix_rpy(R0))}"/>')
+        lines.append(f'    <axis xyz="{_vec(R1[:, 2])}"/>')
+        if kind == "prismatic":
+            lines.append('    <limit lower="-1e9" upper="1e9" effort="1e9" velocity="1e9"/>')
+        lines.append("  </joint>")
+    lines.append("</robot>")
+    p = Path(path)
+    p.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return p
+
+
+def to_mjcf(m, path, model: str = "mechsys") -> Path:
+    r"""Write the tree model ``m`` as an MJCF (MuJoCo) file (module doc); returns the path."""
+    from ..constraints._generalized import GenTranslate5
+    from ..geometry._rotations import _from_matrix
+
+    joints, props, gravity = _tree(m, "mjcf")
+    g = gravity if gravity is not None else np.zeros(3)
+    children: dict = {}
+    for j in joints:
+        mst = j.master
+        children.setdefault(None if mst is None or mst.is_ground else mst, []).append(j)
+    out = [f"<mujoco model={quoteattr(model)}>", '  <compiler angle="radian" autolimits="true"/>',
+           f'  <option gravity="{_vec(g)}"/>', "  <worldbody>"]
+
+    def body(j, depth):
+        b = j.slave
+        pad = "  " * depth
+        o1, R1, o2, R2 = _frames(j, m.space)
+        R0 = R2 @ R1.T
+        mass, c, I = props[b]
+        out.append(f"{pad}<body name={quoteattr(b.name)} pos=\"{_vec(o2 - R0 @ o1)}\" "
+                   f"quat=\"{_vec(_from_matrix(R0))}\">")
+        kind = "slide" if isinstance(j, GenTranslate5) else "hinge"
+        out.append(f"{pad}  <joint name={quoteattr(j.coordinates[0].name)} type=\"{kind}\" "
+                   f"pos=\"{_vec(o1)}\" axis=\"{_vec(R1[:, 2])}\"/>")
+        if mass > 0:
+            full = (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])
+            out.append(f"{pad}  <inertial pos=\"{_vec(c)}\" mass=\"{_num(mass)}\" "
+                       f"fullinertia=\"{_vec(full)}\"/>")
+        for k in children.get(b, []):
+            body(k, depth + 1)
+        out.append(f"{pad}</body>")
+
+    for j in children.get(None, []):
+        body(j, 2)
+    out += ["  </worldbody>", "</mujoco>"]
+    p = Path(path)
+    p.write_text("\n".join(out) + "\n", encoding="utf-8")
+    return p

@@ -1,0 +1,626 @@
+r"""MJCF import: ``ms.from_mjcf(path)`` builds a :class:`~mechsys.Model3D` of a MuJoCo model.
+
+Frames (decision 0040). A ``<body pos quat>`` places the body's frame in its parent's; its
+joints act in the body's frame, in the order written, about (hinge) or along (slide) their
+``axis`` through their ``pos``::
+
+    T_body = T_parent * (pos, R) * J_1(q_1) * J_2(q_2) ...
+    J(q) = Trans(p_j) Rot(a, q) Trans(-p_j)      (hinge)      J(q) = Trans(q a)   (slide)
+
+A hinge becomes ``GenRevolute5(body.axis(p_j, a, g), parent.axis(pos + R p_j, R a, R g))``,
+a slide ``GenTranslate5`` with the same axes (``g`` normal to ``a``), each coordinate named
+after its joint; a body with several joints gets a massless intermediate body per extra
+joint. A ``ball`` or ``free`` joint makes the body an absolute body (``x, y, z, e0..e3``),
+a ball joint adding ``Spherical3`` at its point. Orientations: ``quat`` (w x y z),
+``axisangle``, ``euler`` (``compiler eulerseq``, lower case intrinsic, upper case extrinsic),
+``xyaxes``, ``zaxis``; angles in degrees unless ``<compiler angle="radian">``.
+``<inertial pos quat mass diaginertia | fullinertia>`` gives the centroid and the inertia
+``R diag(I) R^T`` (``fullinertia = Ixx Iyy Izz Ixy Ixz Iyz``); without it the body's mass
+comes from its geoms (sphere, box, cylinder, capsule, ellipsoid; ``mass`` or ``density``,
+default 1000) as MuJoCo's ``inertiafromgeom="auto"`` does. Equalities: ``connect`` ->
+``Spherical3``, ``weld`` -> ``Spherical3`` + ``RotationLock3``, ``joint`` -> ``Constraint(q1
+- poly(q2))`` (hard constraints here; MuJoCo's are soft, ``solref``/``solimp`` reported).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._errors import ModelError
+from .._symbols import velocity_symbol
+from ._urdf import ImportReport, normal_to
+from ._xml import Element, floats, read_xml, where
+
+
+def quat_matrix(q) -> np.ndarray:
+    w, x, y, z = np.asarray(q, float) / np.linalg.norm(q)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def _axis_angle(a, angle) -> np.ndarray:
+    a = np.asarray(a, float) / np.linalg.norm(a)
+    K = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
+
+
+class _Ctx:
+    def __init__(self, source, root: Element):
+        self.source = source
+        self.degree = True
+        self.eulerseq = "xyz"
+        self.notes: list[str] = []
+        for c in root.findall("compiler"):
+            ang = c.get("angle")
+            if ang is not None:
+                if ang not in ("degree", "radian"):
+                    raise ModelError(f"{where(source, c)}: angle={ang!r} is 'degree' or 'radian'")
+                self.degree = ang == "degree"
+            seq = c.get("eulerseq")
+            if seq is not None:
+                if len(seq) != 3 or any(ch not in "xyzXYZ" for ch in seq):
+                    raise ModelError(f"{where(source, c)}: eulerseq={seq!r} is three of x y z X Y Z")
+                self.eulerseq = seq
+            ifg = c.get("inertiafromgeom")
+            if ifg == "true":
+                self.notes.append(f"line {c.line}: inertiafromgeom='true' (inertials from geoms only "
+                                  "where a body has none)")
+        # default classes: name -> (parent name, {tag: attrs})
+        self.defaults: dict = {}
+        for d in root.findall("default"):
+            self._read_default(d, None)
+
+    def _read_default(self, d: Element, parent):
+        name = d.get("class", "main" if parent is None else None)
+        if name is None:
+            raise ModelError(f"{where(self.source, d)}: a nested <default> needs class=...")
+        if name in self.defaults:
+            raise ModelError(f"{where(self.source, d)}: default class {name!r} defined twice")
+        own = {c.tag: dict(c.attrib) for c in d.children if c.tag != "default"}
+        self.defaults[name] = (parent, own)
+        for c in d.findall("default"):
+            self._read_default(c, name)
+
+    def attrs(self, el: Element, cls: str | None) -> dict:
+        """``el``'s attributes over those of its default class chain."""
+        name = el.get("class", cls) or "main"
+        if name not in self.defaults and name != "main":
+            raise ModelError(f"{where(self.source, el)}: default class {name!r} is not defined")
+        chain = []
+        while name is not None and name in self.defaults:
+            chain.append(name)
+            name = self.defaults[name][0]
+        out: dict = {}
+        for n in reversed(chain):
+            out.update(self.defaults[n][1].get(el.tag, {}))
+        out.update(el.attrib)
+        return out
+
+    def num(self, el, attrs, key, n, default=None):
+        if key not in attrs:
+            return default
+        tmp = Element(el.tag, {key: attrs[key]}, el.line)
+        tmp.attrib["name"] = el.get("name")
+        if tmp.attrib["name"] is None:
+            del tmp.attrib["name"]
+        return floats(self.source, tmp, key, n)
+
+    def angle(self, v: float) -> float:
+        return math.radians(v) if self.degree else v
+
+    def orientation(self, el, attrs) -> np.ndarray:
+        given = [k for k in ("quat", "axisangle", "euler", "xyaxes", "zaxis") if k in attrs]
+        if len(given) > 1:
+            raise ModelError(f"{where(self.source, el)}: give one orientation, not {given}")
+        if not given:
+            return np.eye(3)
+        k = given[0]
+        if k == "quat":
+            q = self.num(el, attrs, "quat", 4)
+            if np.linalg.norm(q) < 1e-12:
+                raise ModelError(f"{where(self.source, el)}: quat is zero")
+            return quat_matrix(q)
+        if k == "axisangle":
+            v = self.num(el, attrs, "axisangle", 4)
+            if np.linalg.norm(v[:3]) < 1e-12:
+                raise ModelError(f"{where(self.source, el)}: axisangle has a zero axis")
+            return _axis_angle(v[:3], self.angle(v[3]))
+        if k == "euler":
+            v = self.num(el, attrs, "euler", 3)
+            R = np.eye(3)
+            for ch, a in zip(self.eulerseq, v):
+                E = _axis_angle(np.eye(3)["xyz".index(ch.lower())], self.angle(a))
+                R = R @ E if ch.islower() else E @ R
+            return R
+        if k == "xyaxes":
+            v = np.array(self.num(el, attrs, "xyaxes", 6))
+            x = v[:3] / np.linalg.norm(v[:3])
+            y = v[3:] - (v[3:] @ x) * x
+            y /= np.linalg.norm(y)
+            return np.column_stack([x, y, np.cross(x, y)])
+        z = np.array(self.num(el, attrs, "zaxis", 3))
+        z /= np.linalg.norm(z)
+        c = z[2]
+        axis = np.cross([0.0, 0.0, 1.0], z)
+        s = np.linalg.norm(axis)
+        if s < 1e-12:
+            return np.eye(3) if c > 0 else _axis_angle((1, 0, 0), math.pi)
+        return _axis_angle(axis / s, math.atan2(s, c))
+
+
+# -- geom mass properties (MuJoCo's inertiafromgeom) ---------------------------------------------
+def _geom_frame(ctx, el, a):
+    """``(pos, R, size list)`` of a geom; ``fromto`` for capsule/cylinder/box/ellipsoid."""
+    size = ctx.num(el, a, "size", None, [])
+    if "fromto" in a:
+        ft = np.array(ctx.num(el, a, "fromto", 6))
+        p0, p1 = ft[:3], ft[3:]
+        d = p1 - p0
+        L = np.linalg.norm(d)
+        if L < 1e-12:
+            raise ModelError(f"{where(ctx.source, el)}: fromto has coincident ends")
+        z = d / L
+        axis = np.cross([0.0, 0.0, 1.0], z)
+        s = np.linalg.norm(axis)
+        R = np.eye(3) if s < 1e-12 and z[2] > 0 else (_axis_angle((1, 0, 0), math.pi) if s < 1e-12
+                                                      else _axis_angle(axis / s, math.atan2(s, z[2])))
+        size = [size[0] if size else 0.0, L / 2] + (
+            [size[0]] if a.get("type") in ("box", "ellipsoid") else [])
+        return (p0 + p1) / 2, R, size
+    return np.array(ctx.num(el, a, "pos", 3, [0.0, 0.0, 0.0])), ctx.orientation(el, a), size
+
+
+def _geom_inertia(ctx, el, a, typ, size):
+    """``(mass, diagonal inertia)`` about the geom's centre in its frame, or None."""
+    need = {"sphere": 1, "capsule": 2, "cylinder": 2, "box": 3, "ellipsoid": 3}
+    if typ not in need:
+        return None
+    if len(size) < need[typ]:
+        raise ModelError(f"{where(ctx.source, el)}: a {typ} needs {need[typ]} size values")
+    if typ == "sphere":
+        r = size[0]
+        vol = 4 / 3 * math.pi * r**3
+        I = lambda m: [2 / 5 * m * r * r] * 3  # noqa: E731
+    elif typ == "box":
+        x, y, z = size[:3]
+        vol = 8 * x * y * z
+        I = lambda m: [m / 3 * (y * y + z * z), m / 3 * (x * x + z * z), m / 3 * (x * x + y * y)]  # noqa: E731
+    elif typ == "ellipsoid":
+        x, y, z = size[:3]
+        vol = 4 / 3 * math.pi * x * y * z
+        I = lambda m: [m / 5 * (y * y + z * z), m / 5 * (x * x + z * z), m / 5 * (x * x + y * y)]  # noqa: E731
+    elif typ == "cylinder":
+        r, h = size[:2]
+        vol = math.pi * r * r * 2 * h
+        I = lambda m: [m * (3 * r * r + 4 * h * h) / 12] * 2 + [m * r * r / 2]  # noqa: E731
+    else:  # capsule: a cylinder of half-length h and two hemispheres
+        r, h = size[:2]
+        vc, vs = math.pi * r * r * 2 * h, 4 / 3 * math.pi * r**3
+        vol = vc + vs
+
+        def I(m):  # noqa: E743
+            mc, ms_ = m * vc / vol, m * vs / vol
+            # hemispheres: own inertia 83/320 m r^2 about their centroid (3r/8 from the base)
+            # moved to the capsule's centre (h + 3r/8 away)
+            d = h + 3 * r / 8
+            perp = mc * (3 * r * r + 4 * h * h) / 12 + ms_ * (83 / 320 * r * r + d * d)
+            return [perp, perp, mc * r * r / 2 + ms_ * 2 / 5 * r * r]
+    if "mass" in a:
+        mass = ctx.num(el, a, "mass", 1)[0]
+    else:
+        mass = ctx.num(el, a, "density", 1, [1000.0])[0] * vol
+    return mass, np.array(I(mass))
+
+
+def _flatten(ctx, el: Element, tag: str, cls):
+    """The ``tag`` children of ``el``, through nested ``<frame pos quat childclass>``
+    elements: ``(child, frame origin, frame rotation, default class)``."""
+    out = []
+
+    def walk(e, p, R, c):
+        for ch in e.children:
+            if ch.tag == tag:
+                out.append((ch, p, R, c))
+            elif ch.tag == "frame":
+                fa = dict(ch.attrib)
+                fp = np.array(ctx.num(ch, fa, "pos", 3, [0.0, 0.0, 0.0]))
+                walk(ch, p + R @ fp, R @ ctx.orientation(ch, fa), ch.get("childclass", c))
+
+    walk(el, np.zeros(3), np.eye(3), cls)
+    return out
+
+
+# -- the import ------------------------------------------------------------------------------------
+def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs: bool = False,
+              geometry: bool = True,
+              backend: str | None = None):
+    r"""A :class:`~mechsys.Model3D` of the MJCF (MuJoCo) model ``path``.
+
+    Hinge and slide joints become generalized-coordinate joints named after them
+    (``sol["elbow"]``), ball and free joints absolute bodies (see the module doc); bodies take
+    their ``<inertial>`` (or their geoms' mass as MuJoCo computes it); default classes,
+    ``childclass``, ``<compiler angle eulerseq>`` and ``<option gravity>`` are read;
+    equality constraints ``connect``, ``weld`` and ``joint`` become mechsys constraints (so
+    closed-loop models work). ``gravity``: a number overrides the file's magnitude (along
+    the file's direction; default ``<option gravity>`` or 9.81 down ``z``).
+    ``joint_damping`` adds ``damping`` as ``-d q_dot`` loads, ``joint_springs`` the hinge and
+    slide springs ``-k (q - springref)`` (MuJoCo's passive forces); ranges, armature, friction
+    loss, springs, actuators, sensors, contacts and everything else without a counterpart
+    are listed in ``m.import_report``. Read safely, as ``from_urdf``.
+    """
+    import sympy as sp
+
+    from .. import constraints as C
+    from .. import loads as L
+    from ..model import Model3D
+
+    root, source = read_xml(path)
+    if root.tag != "mujoco":
+        raise ModelError(f"{where(source, root)}: an MJCF's root element is <mujoco>, not <{root.tag}>")
+    ctx = _Ctx(source, root)
+    notes = ctx.notes
+    m = Model3D(backend=backend)
+    g_vec = np.array([0.0, 0.0, -9.81])
+    for el in root.children:
+        if el.tag == "option":
+            g_vec = np.array(floats(source, el, "gravity", 3, list(g_vec)))
+        elif el.tag == "include":
+            raise ModelError(f"{where(source, el)}: <include> is not read (files name no other files "
+                             "here); merge the included file into this one")
+        elif el.tag in ("actuator", "sensor", "contact", "tendon", "keyframe", "visual", "statistic",
+                        "extension", "custom", "deformable", "size"):
+            notes.append(f"line {el.line}: {el.label()} (no counterpart; ignored)")
+    wb = root.find("worldbody")
+    if wb is None:
+        raise ModelError(f"{where(source, root)}: the model has no <worldbody>")
+
+    world_pose: dict = {"world": (np.zeros(3), np.eye(3))}   # at qpos0, for equalities
+    sites: dict = {}
+    joints_rep: dict = {}
+    limits, damping, friction = {}, {}, {}
+    prims: list = []
+    count = [0]
+
+    def add_geoms(el, body_name, cls):
+        """Mass properties from the geoms (when needed) and drawing primitives."""
+        parts = []
+        for gel, fp, fR, gcls in _flatten(ctx, el, "geom", cls):
+            a = ctx.attrs(gel, gcls)
+            typ = a.get("type", "sphere")
+            pos, R, size = _geom_frame(ctx, gel, a)
+            parts.append((gel, a, typ, fp + fR @ pos, fR @ R, size))
+        return parts
+
+    def mass_from_geoms(parts, body_el):
+        mass, cs, Is = 0.0, [], []
+        for gel, a, typ, pos, R, size in parts:
+            if typ in ("plane", "hfield"):
+                continue
+            if typ == "mesh":
+                notes.append(f"line {gel.line}: mesh geom of body {body_el.get('name')!r}: its mass is "
+                             "not computed here; give the body an <inertial>")
+                continue
+            got = _geom_inertia(ctx, gel, a, typ, size)
+            if got is None:
+                continue
+            gm, Id = got
+            if gm <= 0:
+                continue
+            mass += gm
+            cs.append((gm, pos))
+            Is.append((gm, pos, R @ np.diag(Id) @ R.T))
+        if mass <= 0:
+            return 0.0, np.zeros(3), np.zeros((3, 3))
+        c = sum(gm * p for gm, p in cs) / mass
+        I = np.zeros((3, 3))
+        for gm, p, Ig in Is:
+            d = p - c
+            I += Ig + gm * (d @ d * np.eye(3) - np.outer(d, d))
+        return mass, c, I
+
+    def draw(parts, b):
+        from .. import draw as D
+
+        for gel, _a, typ, pos, R, size in parts:
+            try:
+                if typ == "sphere":
+                    prims.append(D.Sphere(b, b.point(tuple(pos)), size[0]))
+                elif typ in ("cylinder", "capsule"):
+                    h = R[:, 2] * size[1]
+                    prims.append(D.Cylinder(b, b.point(tuple(pos - h)), b.point(tuple(pos + h)), size[0]))
+                elif typ in ("box", "ellipsoid"):
+                    hs = np.array(size[:3])
+                    corners = [pos + R @ (hs * np.array(s)) for s in
+                               [(-1, -1, -1), (-1, -1, 1), (-1, 1, -1), (-1, 1, 1),
+                                (1, -1, -1), (1, -1, 1), (1, 1, -1), (1, 1, 1)]]
+                    for f in ((0, 1, 3, 2), (4, 5, 7, 6), (0, 1, 5, 4), (2, 3, 7, 6), (0, 2, 6, 4),
+                              (1, 3, 7, 5)):
+                        prims.append(D.Facet([b.point(tuple(corners[i])) for i in f]))
+            except (ModelError, IndexError):
+                notes.append(f"line {gel.line}: geom of type {typ!r} not drawn")
+
+    # frame_of[MJCF body] = (mechsys body, origin, rotation): a body without joints is
+    # merged into its parent's mechsys body (as URDF's fixed joints), ground included
+    frame_of: dict = {"world": (m.ground, np.zeros(3), np.eye(3))}
+    mass_parts: dict = {}
+    body_line: dict = {}
+
+    def visit(el: Element, parent: str, cls: str | None, fp, fR):
+        name = el.get("name")
+        if not name:
+            count[0] += 1
+            name = f"body{count[0]}"
+        if name in world_pose:
+            raise ModelError(f"{where(source, el)}: a second body named {name!r}")
+        cls = el.get("childclass", cls)
+        a = dict(el.attrib)
+        pos = fp + fR @ np.array(ctx.num(el, a, "pos", 3, [0.0, 0.0, 0.0]))
+        R = fR @ ctx.orientation(el, a)
+        pr, pR = world_pose[parent]
+        world_pose[name] = (pr + pR @ pos, pR @ R)
+        parts = add_geoms(el, name, cls)
+        ine = el.find("inertial")
+        if ine is not None:
+            ia = dict(ine.attrib)
+            mass = ctx.num(ine, ia, "mass", 1)
+            if mass is None or mass[0] < 0:
+                raise ModelError(f"{where(source, ine)}: an <inertial> needs mass >= 0")
+            c = np.array(ctx.num(ine, ia, "pos", 3, [0.0, 0.0, 0.0]))
+            Ri = ctx.orientation(ine, ia)
+            if "fullinertia" in ia:
+                xx, yy, zz, xy, xz, yz = ctx.num(ine, ia, "fullinertia", 6)
+                I = Ri @ np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]]) @ Ri.T
+            elif "diaginertia" in ia:
+                I = Ri @ np.diag(ctx.num(ine, ia, "diaginertia", 3)) @ Ri.T
+            else:
+                raise ModelError(f"{where(source, ine)}: an <inertial> needs diaginertia or fullinertia")
+            mass = mass[0]
+        else:
+            mass, c, I = mass_from_geoms(parts, el)
+        pb, pp, pRm = frame_of[parent]
+        P, RR = pp + pRm @ pos, pRm @ R                 # this body's frame in pb's
+        kinds = []
+        for j in el.children:
+            if j.tag == "joint":
+                ja = ctx.attrs(j, cls)
+                kinds.append((j, ja, ja.get("type", "hinge")))
+            elif j.tag == "freejoint":
+                kinds.append((j, {}, "free"))
+        absolute = any(k in ("ball", "free") for _, _, k in kinds)
+        if absolute and len(kinds) > 1:
+            raise ModelError(f"{where(source, el)}: a ball or free joint with other joints in one body "
+                             "is not supported; give the body that joint alone")
+        if not kinds:                                   # merged into the parent's body
+            frame_of[name] = (pb, P, RR)
+            if pb is not m.ground:
+                mass_parts.setdefault(pb.name, []).append((mass, P + RR @ c, RR @ I @ RR.T))
+            for st, sfp, sfR, scls in _flatten(ctx, el, "site", cls):
+                if st.get("name"):
+                    sp_ = sfp + sfR @ np.array(ctx.num(st, ctx.attrs(st, scls), "pos", 3, [0.0, 0.0, 0.0]))
+                    sites[st.get("name")] = (name, sp_)
+            if geometry:
+                draw([(g_, a_, t_, P + RR @ p_, RR @ R_, s_) for g_, a_, t_, p_, R_, s_ in parts], pb)
+            for child, cfp, cfR, ccls in _flatten(ctx, el, "body", cls):
+                visit(child, name, ccls, cfp, cfR)
+            return
+        wr, wR = world_pose[name]
+        guess = None
+        if absolute:
+            from ..geometry._rotations import _from_matrix
+
+            guess = (tuple(float(v) for v in wr), tuple(float(v) for v in _from_matrix(wR)))
+        # massless intermediate bodies for all but the last of several joints
+        chain = [m.add_body(f"{name}/{kinds[k][0].get('name') or k}", mass=0) for k in range(len(kinds) - 1)]
+        pts = {}
+        for st, sfp, sfR, scls in _flatten(ctx, el, "site", cls):
+            if st.get("name"):
+                sp_ = sfp + sfR @ np.array(ctx.num(st, ctx.attrs(st, scls), "pos", 3, [0.0, 0.0, 0.0]))
+                sites[st.get("name")] = (name, sp_)
+                pts[st.get("name")] = tuple(float(v) for v in sp_)
+        try:
+            b = m.add_body(name, points=pts or None, guess=guess)
+        except ModelError as exc:
+            raise ModelError(f"{where(source, el)}: {exc}") from None
+        mass_parts[name] = [(mass, c, I)]
+        body_line[name] = el.line
+        frame_of[name] = (b, np.zeros(3), np.eye(3))
+        holders = [*chain, b]
+        master, m_origin, m_R = pb, P, RR               # the body frame in the master's
+        for k, (j, ja, typ) in enumerate(kinds):
+            jname = j.get("name")
+            if typ == "free":
+                if pb is not m.ground:
+                    notes.append(f"line {j.line}: free joint of body {name!r} on a moving body: "
+                                 "the body is absolute (its coordinates are global)")
+                joints_rep[jname or name] = ("free", tuple(s.name for s in b.q), name)
+                continue
+            if not jname:
+                raise ModelError(f"{where(source, j)}: a {typ} joint needs a name here (its "
+                                 "coordinate is named after it)")
+            jp = np.array(ctx.num(j, ja, "pos", 3, [0.0, 0.0, 0.0]))
+            if typ == "ball":
+                m.add(C.Spherical3(b.point(tuple(float(v) for v in jp)),
+                                   master.point(tuple(float(v) for v in m_origin + m_R @ jp))), name=jname)
+                joints_rep[jname] = ("ball", tuple(s.name for s in b.q), name)
+                notes.append(f"line {j.line}: ball joint {jname!r}: the body has absolute coordinates "
+                             "and a Spherical3 (MuJoCo's quaternion qpos has no named counterpart)")
+                continue
+            if typ not in ("hinge", "slide"):
+                raise ModelError(f"{where(source, j)}: joint type {typ!r} is not hinge, slide, ball or free")
+            ax = np.array(ctx.num(j, ja, "axis", 3, [0.0, 0.0, 1.0]))
+            if np.linalg.norm(ax) < 1e-12:
+                raise ModelError(f"{where(source, j)}: the joint axis is zero")
+            ax = ax / np.linalg.norm(ax)
+            g = normal_to(ax)
+            slave = holders[k]
+            a1 = slave.axis(tuple(float(v) for v in jp), tuple(ax), tuple(g))
+            # ``ref``: the file's pose is at q = ref, so the joint moves by q - ref: the master's
+            # reference direction turned by -ref (hinge) or its origin moved by -ref (slide)
+            ref = ctx.num(j, ja, "ref", 1, [0.0])[0]
+            g2, o2 = m_R @ g, m_origin + m_R @ jp
+            if typ == "hinge" and ref:
+                g2 = m_R @ _axis_angle(ax, -ctx.angle(ref)) @ g
+            elif ref:
+                o2 = o2 - ref * (m_R @ ax)
+            a2 = master.axis(tuple(float(v) for v in o2), tuple(m_R @ ax), tuple(float(v) for v in g2))
+            cls_ = C.GenRevolute5 if typ == "hinge" else C.GenTranslate5
+            try:
+                m.add(cls_(a1, a2, (jname, 0.0)), name=jname)
+            except ModelError as exc:
+                raise ModelError(f"{where(source, j)}: {exc}") from None
+            joints_rep[jname] = (typ, (jname,), name)
+            master, m_origin, m_R = slave, np.zeros(3), np.eye(3)
+            rng = ctx.num(j, ja, "range", 2)
+            if rng is not None:
+                limits[jname] = tuple(ctx.angle(v) if typ == "hinge" else v for v in rng) + (None, None)
+            k_ = ctx.num(j, ja, "stiffness", 1, [0.0])[0]
+            if k_:
+                sref = ctx.num(j, ja, "springref", 1, [0.0])[0]
+                sref = ctx.angle(sref) if typ == "hinge" else sref
+                if joint_springs:
+                    m.add_load(L.Load(sp.Symbol(jname), -k_ * (sp.Symbol(jname) - sref)),
+                               name=f"{jname}_spring")
+                else:
+                    notes.append(f"line {j.line}: joint {jname!r} stiffness {k_} (reported; "
+                                 "joint_springs=True adds it as a load)")
+            for key in ("armature", "frictionloss"):
+                v = ctx.num(j, ja, key, 1)
+                if v is not None and v[0] != 0:
+                    if key == "frictionloss":
+                        friction[jname] = v[0]
+                    notes.append(f"line {j.line}: joint {jname!r} {key}={v[0]} (no counterpart; ignored)")
+            d = ctx.num(j, ja, "damping", 1)
+            if d is not None and d[0]:
+                damping[jname] = d[0]
+                if joint_damping:
+                    m.add_load(L.Load(sp.Symbol(jname), -d[0] * velocity_symbol(jname)),
+                               name=f"{jname}_damping")
+                else:
+                    notes.append(f"line {j.line}: joint {jname!r} damping {d[0]} (reported; "
+                                 "joint_damping=True adds it as a load)")
+        if geometry:
+            draw(parts, b)
+        for child, cfp, cfR, ccls in _flatten(ctx, el, "body", cls):
+            visit(child, name, ccls, cfp, cfR)
+
+    for el, fp, fR, ccls in _flatten(ctx, wb, "body", wb.get("childclass")):
+        visit(el, "world", ccls, fp, fR)
+    for bname, parts_ in mass_parts.items():
+        mass = sum(pm for pm, _, _ in parts_)
+        c = sum(pm * pc for pm, pc, _ in parts_) / mass if mass > 0 else np.zeros(3)
+        I = np.zeros((3, 3))
+        for pm, pc, pI in parts_:
+            d = pc - c
+            I = I + pI + pm * (d @ d * np.eye(3) - np.outer(d, d))
+        try:
+            m.set_mass_properties(bname, mass=float(mass), centroid=tuple(float(v) for v in c),
+                                  inertia=(0.5 * (I + I.T)).tolist())
+        except ModelError as exc:
+            raise ModelError(f"{source}, line {body_line[bname]}, <body name={bname!r}>: {exc}") from None
+    # geoms and sites on the world body
+    for st, sfp, sfR, _ in _flatten(ctx, wb, "site", None):
+        if st.get("name"):
+            sites[st.get("name")] = ("world",
+                                     sfp + sfR @ np.array(floats(source, st, "pos", 3, [0.0, 0.0, 0.0])))
+    if geometry:
+        draw([p for p in add_geoms(wb, "world", None) if p[2] != "plane"], m.ground)
+    # equalities
+    for eq in root.findall("equality"):
+        for e in eq.children:
+            _equality(ctx, m, e, frame_of, world_pose, sites, C, notes)
+    gnorm = float(np.linalg.norm(g_vec))
+    if gravity is not None:
+        gnorm = float(gravity)
+    if gnorm:
+        m.add_load(L.Gravity(tuple(float(v) for v in g_vec) if np.linalg.norm(g_vec) else (0, 0, -1), gnorm),
+                   name="gravity")
+    if prims:
+        m.add_graphics(*prims)
+    frames = {n: (b.name, p.copy(), R.copy()) for n, (b, p, R) in frame_of.items()}
+    m.import_report = ImportReport(source, "MJCF", root.get("model", ""), joints_rep, frames, limits,
+                                   damping, friction, tuple(notes))
+    return m
+
+
+def _rot_spec(R):
+    from ..geometry._rotations import _from_matrix
+
+    return tuple(float(v) for v in _from_matrix(R))
+
+
+def _equality(ctx, m, e, frame_of, world_pose, sites, C, notes):
+    import sympy as sp
+
+    source = ctx.source
+    name = e.get("name")
+    if e.get("active", "true") == "false":
+        notes.append(f"line {e.line}: inactive equality {e.label()} (ignored)")
+        return
+    for key in ("solref", "solimp"):
+        if e.get(key) is not None:
+            notes.append(f"line {e.line}: {e.label()} {key} (MuJoCo's softness; here a hard constraint)")
+
+    def body(key):
+        n = e.get(key)
+        if n is None:
+            return None
+        if n not in frame_of:
+            raise ModelError(f"{where(source, e)}: {key}={n!r} is not a body of the model")
+        return n
+
+    def on(bname, p_local):
+        """The point ``p_local`` of MJCF body ``bname`` as a point of its mechsys body."""
+        mb, p, R = frame_of[bname]
+        return mb.point(tuple(float(v) for v in p + R @ p_local))
+
+    def world(bname, p_local):
+        r, R = world_pose[bname]
+        return r + R @ p_local
+
+    if e.tag in ("connect", "weld"):
+        if e.get("site1") is not None or e.get("site2") is not None:
+            s1, s2 = e.get("site1"), e.get("site2")
+            for s in (s1, s2):
+                if s not in sites:
+                    raise ModelError(f"{where(source, e)}: site {s!r} is not a site of the model")
+            (b1, p1), (b2, p2) = sites[s1], sites[s2]
+        else:
+            b1, b2 = body("body1"), body("body2") or "world"
+            if b1 is None:
+                raise ModelError(f"{where(source, e)}: a {e.tag} needs body1 (or site1 and site2)")
+            p1 = np.array(floats(source, e, "anchor", 3, [0.0, 0.0, 0.0]))
+            r2, R2 = world_pose[b2]
+            p2 = R2.T @ (world(b1, p1) - r2)            # where the anchor is at qpos0
+        mb1, mb2 = frame_of[b1][0], frame_of[b2][0]
+        if mb1 is mb2:
+            raise ModelError(f"{where(source, e)}: both sides are on one rigid body ({mb1.name!r})")
+        label = name or f"{e.tag}_{b1}_{b2}"
+        m.add(C.Spherical3(on(b1, p1), on(b2, p2)), name=label)
+        if e.tag == "weld":
+            if e.get("relpose") is not None:
+                notes.append(f"line {e.line}: weld relpose (the relative pose at qpos0 is used)")
+
+            def A(b):           # the mechsys body's rotation at qpos0
+                return world_pose[b][1] @ frame_of[b][2].T
+
+            Rrel = A(b2).T @ A(b1)
+            m.add(C.RotationLock3(mb1, None if mb2 is m.ground else mb2, _rot_spec(Rrel)),
+                  name=label + "_rotation")
+        return
+    if e.tag == "joint":
+        j1, j2 = e.get("joint1"), e.get("joint2")
+        coords = {v.symbol.name for c_ in m.constraints for v in c_.new_variables()}
+        for j in (j1, j2):
+            if j is not None and j not in coords:
+                raise ModelError(f"{where(source, e)}: joint {j!r} is not a hinge or slide of the model")
+        if j1 is None:
+            raise ModelError(f"{where(source, e)}: a joint equality needs joint1")
+        c = floats(source, e, "polycoef", 5, [0.0, 1.0, 0.0, 0.0, 0.0])
+        x = sp.Symbol(j2) if j2 else sp.S.Zero
+        rhs = sum(sp.Float(ck) * x**k for k, ck in enumerate(c)) if j2 else sp.Float(c[0])
+        m.add(C.Constraint(sp.Symbol(j1) - rhs), name=name or f"joint_{j1}")
+        return
+    notes.append(f"line {e.line}: equality {e.label()} (not mapped)")
