@@ -44,7 +44,7 @@ def robot_file() -> Path:
     try:
         share = importlib.metadata.distribution("example-robot-data").locate_file(
             "cmeel.prefix/share/example-robot-data/robots")
-        path = Path(share) / "ur_description" / "urdf" / "ur5_robot.urdf"
+        path = Path(str(share)) / "ur_description" / "urdf" / "ur5_robot.urdf"
         if path.is_file():
             return path
     except importlib.metadata.PackageNotFoundError:

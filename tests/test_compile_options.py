@@ -10,7 +10,7 @@ import sympy as sp
 
 import mechsys as ms
 from mechsys import ModelError, T, models
-from mechsys.compile import _backends
+from mechsys.compile import _backends, _cache
 from mechsys.compile._options import chop
 
 TIMES = np.linspace(0.0, 1.0, 11)
@@ -106,7 +106,7 @@ def test_opt_level_and_cse_reach_the_compiler_and_the_cache_key(tmp_path, monkey
     monkeypatch.setattr(_backends._se, "Lambdify", spy)
     m = models.slider_crank()
     ref = m.solve(TIMES)
-    n_default = len(list(tmp_path.glob("*.pkl")))
+    n_default = len(list(tmp_path.glob("*" + _cache.SUFFIX)))
     assert set(seen) == {(3, False)}
     for opts, expect in (({"opt_level": 0}, (0, False)), ({"opt_level": 3, "cse": True}, (3, True))):
         seen.clear()
@@ -115,7 +115,7 @@ def test_opt_level_and_cse_reach_the_compiler_and_the_cache_key(tmp_path, monkey
         sol = m.solve(TIMES)
         assert set(seen) == {expect}                    # every kernel compiled with them
         assert np.abs(sol.q - ref.q).max() < 1e-12 and np.abs(sol.qdd - ref.qdd).max() < 1e-10
-        n = len(list(tmp_path.glob("*.pkl")))
+        n = len(list(tmp_path.glob("*" + _cache.SUFFIX)))
         assert n == n_default + 3 * (1 + (expect[1] is True))   # new kernels: new keys
     # unchanged options keep the compiled system
     s = m.compile()

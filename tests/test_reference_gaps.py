@@ -182,7 +182,7 @@ def test_gravity_relative_scales_by_vector_length():
 
 
 def test_gravity_mode_is_checked():
-    with pytest.raises(ms.ModelError, match="'absolute' or 'relative'"):
+    with pytest.raises(ms.ModelError, match="'absolute', 'relative'"):
         ms.Gravity((0, -1), 9.81, mode="Relative")
 
 
