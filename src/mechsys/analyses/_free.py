@@ -45,10 +45,9 @@ from ..solvers._integrators import (
     MAX_ERROR,
     MAX_STEP,
     RTOL,
-    checked_steps,
     integrate,
-    integration_options,
-    output_times,
+    plan_run,
+    reject_unknown,
 )
 from ..solvers._jit_free import FreeStepper
 from ..solvers._linalg import Scaling
@@ -76,10 +75,7 @@ def newton_options(tolerance, max_iterations, what: str) -> dict:
     return out
 
 
-def _reject_unknown(what: str, unknown: dict, known) -> None:
-    if unknown:
-        raise ModelError(f"{what}: unknown option(s) {sorted(unknown)}; the options are "
-                         f"{', '.join(known)}")
+_reject_unknown = reject_unknown     # (the name the other analyses import)
 
 
 def _flag(box, value):
@@ -416,18 +412,16 @@ class FreeSystem:
         (KeyboardInterrupt, also one raised by the callable) during the integration returns the
         solution so far, with ``sol.extra["interrupted"] = True`` and a warning (see docs/robustness_fuzz.md).
         """
-        _reject_unknown("FreeSystem.simulate", unknown, (
+        run = plan_run("FreeSystem.simulate", t, unknown, (
             "initial_condition", "method", "rtol", "atol", "max_step", "fit_degree", "max_error",
             "step_size", "constraint_correction", "diagnostics", "tolerance", "max_iterations",
-            "progress", "starting_step_size"))
+            "progress", "starting_step_size"), method, rtol, atol, max_step, fit_degree,
+            max_error, step_size, constraint_correction, starting_step_size)
         check_progress(progress, "FreeSystem.simulate")
         if self.kind != "dynamic":
             raise MechError("simulate() integrates the free motion: build the FreeSystem with "
                             "solution='dynamic'")
-        opt = integration_options(method, rtol, atol, max_step, fit_degree, max_error,
-                                  step_size, constraint_correction, starting_step_size)
-        t0, t_stop, t_eval = output_times(t)      # (checked once)
-        checked_steps(opt, t0, t_stop)
+        opt, t0, t_stop, t_eval = run.options, run.t0, run.t1, run.t_eval
         kw = self._newton(tolerance, max_iterations, "FreeSystem.simulate")
         s = self.system
         n = s.n
@@ -485,7 +479,7 @@ class FreeSystem:
         fast = FreeStepper.plan(s, opt.method, p, sc, rows0, robust, opt.correction,
                                 t_eval, (t0, q0), newton=kw)
         try:
-            times, Y, res, m = integrate(rhs, proj, t, np.concatenate((q0, qd0)), opt,
+            times, Y, res, m = integrate(rhs, proj, run, np.concatenate((q0, qd0)),
                                          scale=np.concatenate((sc.columns, sc.columns)),
                                          monitor=monitor if report is not None else None,
                                          kinked=kinked if robust else None, fast=fast)
