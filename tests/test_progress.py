@@ -184,3 +184,23 @@ def test_simulate_progress_callback_keeps_the_compiled_stepper(monkeypatch):
     k = len(part.t)
     assert part.extra["interrupted"] is True and 1.0 < part.t[-1] < 4.0
     np.testing.assert_array_equal(part.q, full.q[:k])
+
+
+def test_a_long_compile_is_announced_once(monkeypatch, caplog):
+    """A loop missing from Numba's cache is announced (the first free-motion run compiles for
+    about a minute and used to look hung); once per process, and not when it is cached."""
+    import logging
+
+    from mechsys.solvers import _jit_cache
+
+    monkeypatch.setattr(_jit_cache, "_said", set())
+    with caplog.at_level(logging.INFO, logger="mechsys"):
+        assert _jit_cache.notice("a test loop", 12, ("_jit_loop", "no_such_loop"))
+        assert not _jit_cache.notice("a test loop", 12, ("_jit_loop", "no_such_loop"))
+    assert [r.getMessage() for r in caplog.records] == [
+        "mechsys: compiling a test loop (first run, about 12 s of CPU; cached for later runs)"]
+    # a loop in the cache (the compiled sweep, after one ran) is not announced
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    models.slider_crank().solve(np.linspace(0, 1, 20))
+    assert _jit_cache.cached("_jit_loop", "sweep_dense")
+    assert not _jit_cache.notice("the kinematic sweep", 25, ("_jit_loop", "sweep_dense"))

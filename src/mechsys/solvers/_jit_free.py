@@ -745,6 +745,10 @@ class FreeStepper:
         self.EQDD, self.ELAM = np.full((k, n), np.nan), np.full((k, m), np.nan)
         self.steps = 0
         if _state["loop"] is None:
+            from ._jit_cache import notice
+
+            # (a DOP853 run from empty caches: 123 s of CPU, the derivative and set-up included)
+            notice("the free-motion stepper", 120, ("_jit_free_loop", "derivative"))
             from ._jit_free_loop import adams, derivative, runge_kutta, workspace
 
             _state["loop"], _state["adams"], _state["workspace"] = runge_kutta, adams, workspace
@@ -1033,6 +1037,9 @@ class FreeStepper:
         [t, h, history length, recent count, rejected]``, arrays updated in place. Returns
         ``(status, T, Y, H, E, QDD, LAM, evaluations, projections)``."""
         n, m = self.n, self.m
+        from ._jit_cache import notice
+
+        notice("Mech's Adams integrator", None, ("_jit_free_loop", "adams"))
         if max_steps is None:
             max_steps = max(CHUNK_STEPS, min(10 * CHUNK_STEPS, ADAMS_CHUNK_VALUES // self.ny))
         T, H, E = np.empty(max_steps), np.empty(max_steps), np.empty(max_steps)
