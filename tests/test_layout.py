@@ -16,7 +16,8 @@ PKG = Path(mechsys.__file__).parent
 
 # lower number = lower layer; a part may import its own layer's parts or lower ones
 LAYER = {
-    "_errors": 0, "_symbols": 0, "_version": 0, "_private": 0, "_signature": 0, "solvers": 0,
+    "_errors": 0, "_symbols": 0, "_version": 0, "_private": 0, "_signature": 0, "_progress": 0,
+    "solvers": 0,
     "geometry": 1,
     "constraints": 2, "loads": 2, "results": 2, "compile": 2,
     "model": 3, "analyses": 3,
@@ -27,9 +28,7 @@ LAYER = {
 LAZY_UP = {
     ("mechsys.results._solution", "draw"),   # Solution.plot
     ("mechsys.model", "draw"),               # Model.add_graphics
-    ("mechsys.analyses._sweep", "draw"),     # sweep's progress bar (draw/_progress.py)
     ("mechsys.analyses._vibration", "draw"),  # VibrationModes.animate
-    ("mechsys.analyses._free", "draw"),      # FreeSystem.simulate's progress bar
     ("mechsys.model", "io"),                 # Model.save (model files)
 }
 
@@ -157,7 +156,8 @@ def test_top_level_has_only_the_tiers():
     """The package root holds the tiers as folders, the builder, and a few small modules."""
     loose = sorted(p.name for p in PKG.glob("*.py"))
     assert loose == ["__init__.py", "__main__.py", "_docgen.py", "_errors.py", "_private.py",
-                     "_signature.py", "_symbols.py", "_version.py", "cli.py", "model.py", "models.py"]
+                     "_progress.py", "_signature.py", "_symbols.py", "_version.py", "cli.py", "model.py",
+                     "models.py"]
     folders = sorted(p.name for p in PKG.iterdir() if p.is_dir() and (p / "__init__.py").exists())
     assert folders == ["analyses", "compile", "constraints", "draw", "geometry", "io", "loads",
                        "results", "solvers", "testing"]

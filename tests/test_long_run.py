@@ -96,13 +96,13 @@ def test_progress_bar_on_request(monkeypatch):
     monkeypatch.setattr(sys, "stderr", buf)
     free.simulate((0.0, 1.0), progress=True)
     text = buf.getvalue()
-    assert text.startswith("\rsimulate [") and "100 %" in text and text.endswith("\n")
+    assert text.startswith("\rsimulate:") and "100%" in text and text.endswith("\n")
     buf.truncate(0)
     buf.seek(0)
     free.simulate((0.0, 1.0), progress=False)
     free.simulate((0.0, 1.0))           # default: only on a terminal (a StringIO is not)
     assert buf.getvalue() == ""
-    with pytest.raises(ms.ModelError, match="progress must be True, False or None"):
+    with pytest.raises(ms.ModelError, match="progress must be True, False, None or a callable"):
         free.simulate((0.0, 1.0), progress=1)
 
 

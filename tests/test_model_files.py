@@ -283,7 +283,7 @@ def test_cli_run_writes_the_solution(tmp_path, capsys):
     out = tmp_path / "res" / "results.csv"
     assert main(["run", str(path), "--t", "0:1:21", "--out", str(out), "--progress"]) == 0
     err = capsys.readouterr().err
-    assert "21/21 points" in err  # the progress bar reached the end
+    assert "21/21" in err and "points/s" in err  # the progress bar (tqdm) reached the end
     with open(out) as f:
         header = f.readline().strip().split(",")
     table = np.loadtxt(out, delimiter=",", skiprows=1)

@@ -164,4 +164,4 @@ def test_failed_points_and_bad_input():
 def test_progress_bar_counts_points(capsys):
     ms.sweep(build_slider_crank, GRID, "location", {"x": X4}, progress=True)
     err = capsys.readouterr().err
-    assert "sweep [" in err and "6/6 points" in err
+    assert "sweep:" in err and "6/6" in err and "points/s" in err

@@ -1149,7 +1149,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
 
     def solve(self, t=0.0, solution: str = "acceleration", guess=None,
               options: PositionOptions | None = None, lambda_guess=None, pre_solve=None,
-              post_iterate=None):
+              post_iterate=None, progress=None):
         r"""Kinematic solution at time(s) ``t`` (Mech's ``SolveMech``).
 
         ``solution``: ``"location"``, ``"velocity"`` or ``"acceleration"`` (default), or with
@@ -1177,12 +1177,23 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         A hook returning ``False`` stops the solve: the points solved before are returned
         with ``sol.extra["stopped"]`` saying which hook stopped it where (a
         :class:`MechError` when no point was solved yet).
+
+        ``progress``: a progress bar over the points (tqdm: stderr or a Jupyter widget;
+        ``None``, the default: only on a terminal, once the solve has taken 2 s) or a callable
+        ``progress(done, total)``. Unlike the hooks it keeps the compiled loop: that runs in
+        chunks with the bar advanced between them (decision 0039). Ctrl-C (KeyboardInterrupt,
+        also one raised by the callable) returns the points solved before it, with
+        ``sol.extra["interrupted"] = True``, ``sol.extra["stopped"]`` and a warning (a
+        :class:`MechError` when no point was solved yet). ``sol.extra["compiled_points"]``:
+        how many points the compiled loop solved.
         """
+        from ._progress import check_progress, reporter
         from .results._solution import Solution
 
         modes = {"static": 0, "kinematic": 1, "dynamic": 2}
         choice(solution, [*ORDERS, *modes], "solve: solution")
         times = self._check_times(convert(t, self.units, "solve: t", TIME))
+        check_progress(progress, "solve")
         if self._loads:  # TimeSwitch loads with parameter times: increasing (issue 14)
             from .loads._loads import check_load_values
             from .loads._switched import check_switched_loads
@@ -1218,17 +1229,28 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
                 raise ModelError("solve: pre_solve/post_iterate hooks are not supported for "
                                  "models with stage or time switches yet; leave them out")
 
-            self.last_solution = solve_stages(self, times, g, solution, options, scalar,
-                                              lambda_guess=lambda_guess)
+            # (the stages' runs are not chunked: a bar or callable is advanced once, at the end)
+            report, close = reporter(progress, len(times), "solve", "points", "solve",
+                                     delay=2.0 if progress is None else 0.0)
+            try:
+                self.last_solution = solve_stages(self, times, g, solution, options, scalar,
+                                                  lambda_guess=lambda_guess)
+                if report is not None:
+                    report(len(times))
+            finally:
+                close()
             return self.last_solution
         stopped = None
+        report, close = reporter(progress, len(times), "solve", "points", "solve",
+                                 delay=2.0 if progress is None else 0.0)
         try:
-            res = sweep(system, times, g, order, options, self._p(), hooks=hooks)
+            res = sweep(system, times, g, order, options, self._p(), hooks=hooks,
+                        progress=report)
         except Stopped as stop:
             if stop.k == 0:
                 raise MechError(f"solve stopped before any point was solved: {stop.describe()}"
                                 ) from None
-            res, stopped = stop.partial, stop.describe()
+            res, stopped = stop.partial, stop
         except SingularJacobianError as err:
             # a singular first point may be the guess's fault, not the constraints'
             J = system.jacobian(times[0], g, self._p())
@@ -1239,6 +1261,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
                 raise
             raise SingularJacobianError(f"position solve at t = {times[0]:.6g}: {better[1]}",
                                         time=err.time, dependent=[], rank=err.rank) from None
+        finally:
+            close()
         lam = None
         if solution in modes:
             lam = self._multipliers_over(system, res, solution, lambda_guess)
@@ -1249,8 +1273,16 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         if red is not None:
             sol.extra["redundant"] = _constraint_names(red.owners)
             sol.extra["indeterminate"] = _constraint_names(red.involved)
+        sol.extra["compiled_points"] = res.compiled
         if stopped is not None:
-            sol.extra["stopped"] = stopped
+            sol.extra["stopped"] = stopped.describe()
+            if stopped.hook == "interrupted":
+                import warnings
+
+                sol.extra["interrupted"] = True
+                warnings.warn(f"solve: interrupted after {len(res.t)} of {len(times)} points "
+                              f"({stopped.describe()}); returning the points solved "
+                              "(sol.extra['interrupted'])", RuntimeWarning, stacklevel=2)
         self.last_solution = sol
         return sol
 

@@ -21,13 +21,13 @@ call of this FreeSystem).
 
 from __future__ import annotations
 
-import time
 from collections.abc import Mapping
 from numbers import Integral, Real
 
 import numpy as np
 
-from .._errors import MechError, ModelError, choice, unknown_options
+from .._errors import MechError, ModelError, choice
+from .._progress import check_progress, reporter
 from ..loads._loads import check_load_values
 from ..results._load_outputs import lambda_guess_vector
 from ..results._solution import Solution, State
@@ -46,10 +46,9 @@ from ..solvers._integrators import (
     MAX_ERROR,
     MAX_STEP,
     RTOL,
-    checked_steps,
     integrate,
-    integration_options,
-    output_times,
+    plan_run,
+    reject_unknown,
 )
 from ..solvers._jit_free import FreeStepper
 from ..solvers._linalg import Scaling
@@ -77,8 +76,7 @@ def newton_options(tolerance, max_iterations, what: str) -> dict:
     return out
 
 
-def _reject_unknown(what: str, unknown: dict, known) -> None:
-    unknown_options(what, unknown, known)
+_reject_unknown = reject_unknown     # (the name the other analyses import)
 
 
 #: a free-motion run warns (:class:`~mechsys.DegradedAccuracyWarning`) when the kept
@@ -481,24 +479,23 @@ class FreeSystem:
         The initial state is projected onto the constraints first. See
         ``solvers/_integrators.py``.
 
-        ``progress``: show a progress bar on stderr (``None``, the default: only on a
-        terminal); Ctrl-C (KeyboardInterrupt) during the integration returns the solution so
-        far, with ``sol.extra["interrupted"] = True`` and a warning (see docs/robustness_fuzz.md).
+        ``progress``: show a progress bar (tqdm: a text bar on stderr, a widget in Jupyter;
+        ``None``, the default: only on a terminal, once the run has taken 2 s), or a callable
+        ``progress(done, total)`` with the time span covered so far and the whole one. Either is
+        advanced between the compiled stepper's chunks, so it costs nothing measurable. Ctrl-C
+        (KeyboardInterrupt, also one raised by the callable) during the integration returns the
+        solution so far, with ``sol.extra["interrupted"] = True`` and a warning (see docs/robustness_fuzz.md).
         """
-        _reject_unknown("FreeSystem.simulate", unknown, (
+        run = plan_run("FreeSystem.simulate", t, unknown, (
             "initial_condition", "method", "rtol", "atol", "max_step", "fit_degree", "max_error",
             "step_size", "constraint_correction", "diagnostics", "tolerance", "max_iterations",
-            "progress", "starting_step_size"))
-        if progress is not None and not isinstance(progress, (bool, np.bool_)):
-            raise ModelError(f"FreeSystem.simulate: progress must be True, False or None, got "
-                             f"{progress!r}")
+            "progress", "starting_step_size"), method, rtol, atol, max_step, fit_degree,
+            max_error, step_size, constraint_correction, starting_step_size)
+        check_progress(progress, "FreeSystem.simulate")
         if self.kind != "dynamic":
             raise MechError("simulate() integrates the free motion: build the FreeSystem with "
                             "solution='dynamic'")
-        opt = integration_options(method, rtol, atol, max_step, fit_degree, max_error,
-                                  step_size, constraint_correction, starting_step_size)
-        t0, t_stop, t_eval = output_times(t)      # (checked once)
-        checked_steps(opt, t0, t_stop)
+        opt, t0, t_stop, t_eval = run.options, run.t0, run.t1, run.t_eval
         kw = self._newton(tolerance, max_iterations, "FreeSystem.simulate")
         s = self.system
         n = s.n
@@ -543,30 +540,25 @@ class FreeSystem:
             out, zone[0] = zone[0], False
             return out
 
-        from ..draw._progress import Progress
-
-        t_start = t0
-        bar = Progress(1000, "simulate", enabled=progress, unit="")
-        span = (t_stop - t_start) or 1.0
-
+        # the bar (or the user's callable) advances between the compiled stepper's chunks;
         # by default (progress=None, on a terminal) the bar appears once a run takes 2 s
-        delay = 2.0 if progress is None else 0.0
+        span = abs(t_stop - t0) or 1.0
+        report, close = reporter(progress, span, "simulate", "", "FreeSystem.simulate",
+                                 delay=2.0 if progress is None else 0.0, steps=1000)
 
         def monitor(tt):
-            if delay == 0.0 or time.monotonic() - bar.start > delay:
-                bar.update(int(1000 * (tt - t_start) / span))
+            report(min(abs(tt - t0), span))
 
         # the compiled stepper (solvers/_jit_free.py) takes the regular steps when it can
         fast = FreeStepper.plan(s, opt.method, p, sc, rows0, robust, opt.correction,
                                 t_eval, (t0, q0), newton=kw)
         try:
-            times, Y, res, m = integrate(rhs, proj, t, np.concatenate((q0, qd0)), opt,
+            times, Y, res, m = integrate(rhs, proj, run, np.concatenate((q0, qd0)),
                                          scale=np.concatenate((sc.columns, sc.columns)),
-                                         monitor=monitor if bar.enabled else None,
+                                         monitor=monitor if report is not None else None,
                                          kinked=kinked if robust else None, fast=fast)
         finally:
-            if bar._last >= 0:       # something was drawn: end its line
-                bar.close()
+            close()
         # accelerations and multipliers: from the compiled stepper where it ran, else here
         QDD, LAM = res.diagnostics.get("derivatives") or (np.full((len(times), n), np.nan),
                                                           np.full((len(times), s.m), np.nan))

@@ -55,7 +55,6 @@ from numbers import Real
 
 import numpy as np
 import sympy as sp
-from scipy.integrate import DOP853, RK45
 
 from .._errors import ConvergenceError, MechError, ModelError
 from .._symbols import T
@@ -70,13 +69,12 @@ from ..solvers._integrators import (
     MAX_ERROR,
     MAX_STEP,
     RTOL,
-    checked_steps,
-    integration_options,
-    output_times,
+    plan_run,
+    stepper_class,
 )
 from ..solvers._jit_free import PAUSE_STEPS, FreeStepper
 from ..solvers._linalg import factor
-from ._free import FreeSystem, _reject_unknown, accuracy_report
+from ._free import FreeSystem, accuracy_report
 from ._multistage import _HeldValues, cached_tests, lambdify_exact, stage_system
 
 #: velocities are compatible with a stage when its scaled velocity residual is below this
@@ -257,21 +255,17 @@ class SwitchedFreeSystem(FreeSystem):
         constraint stage change (``None``, ``"project"``, ``("restitution", e)``);
         ``max_events`` the number of events after which a :class:`ConvergenceError` is raised
         (e.g. a motion chattering on a switch boundary)."""
-        _reject_unknown("FreeSystem.simulate (with switches)", unknown, (
+        run = plan_run("FreeSystem.simulate (with switches)", t, unknown, (
             "initial_condition", "at_switch", "method", "rtol", "atol", "max_step", "max_error",
-            "max_events", "tolerance", "max_iterations", "starting_step_size"))
-        if not (isinstance(method, str) and method.lower() in ("dop853", "rk45")):
-            raise ModelError(f"simulate(method={method!r}) with switches: events are located on the "
-                             "Runge-Kutta dense output; use method='dop853' or 'rk45'")
-        opt = integration_options(method, rtol, atol, max_step, max_error=max_error,
-                                  starting_step_size=starting_step_size)
+            "max_events", "tolerance", "max_iterations", "starting_step_size"), method, rtol,
+            atol, max_step, max_error=max_error, starting_step_size=starting_step_size,
+            dense_output="with switches: events are located on the Runge-Kutta dense output")
+        opt, t0, t1, t_eval = run.options, run.t0, run.t1, run.t_eval
         policy = _policy(at_switch)
         if isinstance(max_events, bool) or not isinstance(max_events, (int, np.integer)) or \
                 max_events < 1:
             raise ModelError(f"max_events must be a positive integer, got {max_events!r}")
         kw = self._newton(tolerance, max_iterations, "FreeSystem.simulate")
-        t0, t1, t_eval = output_times(t)
-        checked_steps(opt, t0, t1)
         _check_times(self.model)
         model = self.model
         base = stage_system(model, None)
@@ -291,7 +285,7 @@ class SwitchedFreeSystem(FreeSystem):
         q, qd = self._project_start(t0, q, qd, p, held_ic, sc)
         y = np.concatenate((q, qd))
         scale = np.concatenate((sc.columns, sc.columns))
-        cls = DOP853 if opt.method == "dop853" else RK45
+        cls = stepper_class(opt.method)
         d = 1.0 if t1 > t0 else -1.0
         out_t, out_y, out_c = [t0], [y.copy()], [combo]
         ie = 1 if t_eval is not None else 0

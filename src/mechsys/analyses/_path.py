@@ -40,10 +40,8 @@ from ..solvers._integrators import (
     MAX_ERROR,
     MAX_STEP,
     RTOL,
-    checked_steps,
     integrate,
-    integration_options,
-    output_times,
+    plan_run,
 )
 from ..solvers._jit_free import FreeStepper
 from ..solvers._linalg import (
@@ -56,7 +54,7 @@ from ..solvers._linalg import (
     pattern_of,
     pattern_slots,
 )
-from ._free import _reject_unknown, accuracy_report
+from ._free import accuracy_report
 
 
 def _check_own(model, dummy, vc) -> None:
@@ -356,13 +354,12 @@ class PathSystem:
         ``max_error`` works with every method). Parameters are the model's at the call,
         overridden by those in ``initial_condition``. The solution's ``extra["drift"]`` holds
         the largest holonomic residual met."""
-        _reject_unknown("PathSystem.simulate", unknown, (
+        run = plan_run("PathSystem.simulate", t, unknown, (
             "initial_condition", "method", "rtol", "atol", "max_step", "fit_degree", "max_error",
-            "step_size", "constraint_correction", "diagnostics", "starting_step_size"))
-        opt = integration_options(method, rtol, atol, max_step, fit_degree, max_error,
-                                  step_size, constraint_correction, starting_step_size)
-        t0, t1, t_eval = output_times(t)
-        checked_steps(opt, t0, t1)
+            "step_size", "constraint_correction", "diagnostics", "starting_step_size"), method,
+            rtol, atol, max_step, fit_degree, max_error, step_size, constraint_correction,
+            starting_step_size)
+        opt, t0, t_eval = run.options, run.t0, run.t_eval
         s = self.system
         if initial_condition is None:
             q0, p = self._q0.copy(), self._params()
@@ -383,7 +380,7 @@ class PathSystem:
 
         # the compiled stepper (solvers/_jit_free.py, kind PATH) takes the regular steps
         fast = FreeStepper.plan_path(self, opt.method, p, sc, opt.correction, t_eval)
-        times, Q, res, m = integrate(rhs, proj, t, q0, opt, scale=sc.columns, fast=fast)
+        times, Q, res, m = integrate(rhs, proj, run, q0, scale=sc.columns, fast=fast)
         # velocities at the outputs: the compiled stepper's where it ran, else here
         known = res.diagnostics.get("derivatives")
         QD = np.array([known[0][k] if known is not None and np.all(np.isfinite(known[0][k]))

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from .._errors import ModelError, unknown_options
+from .._errors import ModelError
 from ..results._sensitivity import Sensitivity
 from ..results._solution import Solution, State
 from ..solvers._integrators import ATOL, FIT_DEGREE, MAX_ERROR, MAX_STEP, RTOL
@@ -197,22 +197,18 @@ class SensitivitySystem:
         unit-free change, as the start projection of free motion does. Returns a
         :class:`~mechsys.Sensitivity` whose ``solution`` is the free motion."""
         from ..solvers._free import free_acceleration, project, scaling_at
-        from ..solvers._integrators import integrate, integration_options
+        from ..solvers._integrators import integrate, plan_run
         from ..solvers._sensitivity import free_tangent, held_least_squares
 
         fs = self.free
         if fs is None:
             raise ModelError("simulate() integrates free motion: build the system with "
                              "m.sensitivity([...], free=m.free(drop=[...]))")
-        unknown_options("SensitivitySystem.simulate", unknown, (
+        run = plan_run("SensitivitySystem.simulate", t, unknown, (
             "initial_condition", "method", "rtol", "atol", "max_step", "fit_degree", "max_error",
-            "step_size", "constraint_correction", "starting_step_size"))
-        opt = integration_options(method, rtol, atol, max_step, fit_degree, max_error,
-                                  step_size, constraint_correction, starting_step_size)
-        from ..solvers._integrators import checked_steps, output_times
-
-        t0, t1, _ = output_times(t)
-        checked_steps(opt, t0, t1)
+            "step_size", "constraint_correction", "starting_step_size"), method, rtol, atol,
+            max_step, fit_degree, max_error, step_size, constraint_correction, starting_step_size)
+        t0 = run.t0
         s = fs.system
         tan = self._tangent(s)
         n, m, k = s.n, s.m, tan.k
@@ -260,7 +256,7 @@ class SensitivitySystem:
         sens_scale = np.concatenate([col / ps for ps in pscale])
         scale = np.concatenate((col, col, sens_scale, sens_scale))
         y0 = np.concatenate((q0, qd0, sq0.ravel(), sqd0.ravel()))
-        times, Y, res, mname = integrate(rhs, proj, t, y0, opt, scale=scale)
+        times, Y, res, mname = integrate(rhs, proj, run, y0, scale=scale)
         N = len(times)
         QDD, LAM = np.empty((N, n)), np.empty((N, m))
         SQ, SQD = np.empty((N, k, n)), np.empty((N, k, n))

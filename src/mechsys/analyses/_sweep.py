@@ -413,9 +413,9 @@ def sweep(model, params, analysis="acceleration", outputs=None, *, t=0.0, grid: 
     processes, default ``os.cpu_count()``, started with ``spawn``) or a
     ``dask.distributed.Client`` (optional extra ``mechsys[dask]``). The points are split
     into ``chunks`` tasks (default four per worker); each worker builds and compiles the model
-    once and reuses it for all its points. ``progress``: a text bar on stderr (``None``:
-    only on a terminal for 60 points or more). ``on_error``: ``"raise"`` (default: the first
-    failing point raises its mechsys error, prefixed with the point) or ``"nan"`` (failed
+    once and reuses it for all its points. ``progress``: a tqdm bar (stderr; a widget in
+    Jupyter; ``None``: only on a terminal for 60 points or more). ``on_error``: ``"raise"``
+    (default: the first failing point raises its mechsys error, prefixed with the point) or ``"nan"`` (failed
     points get NaN outputs and the message in an ``error`` column).
 
     Returns a pandas DataFrame, rows in the order of the points; ``df.attrs`` holds
@@ -458,7 +458,7 @@ def sweep(model, params, analysis="acceleration", outputs=None, *, t=0.0, grid: 
                    for k, v in outputs.items()}
     indexed = list(enumerate(pts))
     start = time.monotonic()
-    from ..draw._progress import Progress
+    from .._progress import Progress
 
     bar = Progress(len(pts), "sweep", progress, unit="points")
     done = [0]

@@ -327,5 +327,7 @@ class Stopped(Exception):
         self.k = 0  # points completed before the stop (set by the sweep)
 
     def describe(self) -> str:
+        if self.hook == "interrupted":       # (KeyboardInterrupt: Ctrl-C or a progress callback)
+            return f"interrupted (KeyboardInterrupt) before t = {self.t:.6g}"
         at = f" at iteration {self.iteration}" if self.iteration is not None else ""
         return f"{self.hook} returned False at t = {self.t:.6g}{at}"

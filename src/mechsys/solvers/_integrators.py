@@ -45,9 +45,10 @@ from dataclasses import dataclass, field
 from numbers import Integral, Real
 
 import numpy as np
-from scipy.integrate import DOP853, RK45
+import scipy.integrate
 
-from .._errors import MechError, ModelError, choice
+from .._errors import MechError, ModelError, unknown_options
+from . import _methods
 from ._jit_free import PAUSE_STEPS
 
 FIT_DEGREES = {"linear": 1, "quadratic": 2, "cubic": 3, "quartic": 4}
@@ -124,7 +125,7 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
     :data:`._jit_free.PAUSE_STEPS` steps itself. The accelerations and multipliers it
     computed come back in ``diagnostics["derivatives"]``: ``(qdd (rows, n), lam (rows, m))``
     per output row, NaN rows where the caller must evaluate them."""
-    cls = {"dop853": DOP853, "rk45": RK45}[method]
+    cls = stepper_class(method)
     if scale is not None:
         atol = atol * np.asarray(scale, dtype=float)
     # SciPy's set-up (first derivative, initial step) by the compiled derivative where it
@@ -424,8 +425,9 @@ def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4
                              diag)
 
 
-RK_METHODS = ("dop853", "rk45")
-ADAMS_METHODS = ("adams", "automatic", "predictor", "corrector")
+#: the spellings of each family (from the registry, ``_methods``)
+RK_METHODS = _methods.family_names("runge_kutta")
+ADAMS_METHODS = _methods.family_names("adams")
 _RTOL_MIN = 100 * np.finfo(float).eps         # SciPy raises smaller rtol to this silently
 
 
@@ -467,8 +469,19 @@ class IntegrationOptions:
     first_step: float | None = None
 
     @property
+    def spec(self) -> _methods.Method:
+        """The method's registry entry."""
+        return _methods.get(self.method)
+
+    @property
     def runge_kutta(self) -> bool:
-        return self.method in RK_METHODS
+        return self.spec.runge_kutta
+
+
+def stepper_class(method: str):
+    """The SciPy stepper class (public ``scipy.integrate``) of a Runge-Kutta method's Python
+    path, from the registry."""
+    return getattr(scipy.integrate, _methods.get(method).scipy)
 
 
 def _positive(name, value, allow_inf=False) -> float:
@@ -513,15 +526,16 @@ def integration_options(method="dop853", rtol=RTOL, atol=ATOL, max_step=MAX_STEP
     every ``simulate`` calls before it computes anything."""
     first = None if starting_step_size is None else _positive("starting_step_size",
                                                                 starting_step_size)
-    if not isinstance(method, str) or method.lower() not in RK_METHODS + ADAMS_METHODS:
-        choice(method, RK_METHODS + ADAMS_METHODS, "simulate: method")
+    spec = _methods.get(method)          # (unknown: OptionError naming the closest method)
     m = method.lower()
     if not isinstance(constraint_correction, (bool, np.bool_)):
         raise ModelError(f"constraint_correction must be True or False, got "
                          f"{constraint_correction!r}")
-    if m in RK_METHODS:
-        wrong = [k for k, v, d in (("fit_degree", fit_degree, FIT_DEGREE),
-                                   ("step_size", step_size, None)) if _given(v, d)]
+    given = {k for k, v, d in (("rtol", rtol, RTOL), ("atol", atol, ATOL),
+                               ("max_step", max_step, MAX_STEP), ("fit_degree", fit_degree, FIT_DEGREE),
+                               ("step_size", step_size, None)) if _given(v, d)}
+    if spec.runge_kutta:
+        wrong = [k for k in ("fit_degree", "step_size") if k in given and k not in spec.options]
         if wrong:
             raise ModelError(f"{' and '.join(wrong)} apply only to the Adams integrator "
                              f"(method='adams'); method={method!r} takes rtol, atol, max_step "
@@ -539,8 +553,7 @@ def integration_options(method="dop853", rtol=RTOL, atol=ATOL, max_step=MAX_STEP
         return IntegrationOptions(method, m, rtol=rtol, atol=atol,
                                   max_step=_positive("max_step", max_step, allow_inf=True),
                                   correction=bool(constraint_correction), first_step=first)
-    wrong = [k for k, v, d in (("rtol", rtol, RTOL), ("atol", atol, ATOL),
-                               ("max_step", max_step, MAX_STEP)) if _given(v, d)]
+    wrong = [k for k in ("rtol", "atol", "max_step") if k in given and k not in spec.options]
     if wrong:
         raise ModelError(f"{' and '.join(wrong)} apply only to the Runge-Kutta methods "
                          f"('dop853', 'rk45'); the Adams integrator takes max_error, fit_degree "
@@ -562,7 +575,7 @@ def integration_options(method="dop853", rtol=RTOL, atol=ATOL, max_step=MAX_STEP
             raise ModelError("starting_step_size is the first step of an adaptive run (Mech's "
                              "StartingStepSize, effective only with StepSize -> Automatic); "
                              f"step_size={step_size:g} fixes every step: give one of the two")
-    return IntegrationOptions(method, "automatic" if m == "adams" else m, degree=degree,
+    return IntegrationOptions(method, spec.name, degree=degree,
                               max_error=_max_error(max_error, False), step_size=step_size,
                               correction=bool(constraint_correction), first_step=first)
 
@@ -622,11 +635,53 @@ def checked_steps(opt: IntegrationOptions, t0: float, t1: float) -> None:
                          "first step within max_step")
 
 
-def integrate(fun, project, t, y0, opt: IntegrationOptions, scale=None, kinked=None, monitor=None,
-              fast=None):
-    """Integrate ``y' = fun(t, y)`` with checked options ``opt`` (the dispatch shared by free
-    and path systems). ``t``: a tuple ``(t0, t1)`` returns every accepted step; an array
-    returns those times (RK dense output, or cubic Hermite with ``fun`` at the Adams steps).
+@dataclass(frozen=True)
+class Run:
+    """One ``simulate`` request, parsed once by :func:`plan_run`: the checked ``options``,
+    the interval ``t0 -> t1`` and the output times ``t_eval`` (None: every accepted step)."""
+
+    options: IntegrationOptions
+    t0: float
+    t1: float
+    t_eval: np.ndarray | None
+
+
+def reject_unknown(where: str, unknown: dict, known) -> None:
+    """:class:`~mechsys.OptionError` naming the unknown options, the closest known one to
+    each and the known ones (none: nothing)."""
+    unknown_options(where, unknown, known)
+
+
+def plan_run(where: str, t, unknown: dict, known, method="dop853", rtol=RTOL, atol=ATOL,
+             max_step=MAX_STEP, fit_degree=FIT_DEGREE, max_error=MAX_ERROR, step_size=None,
+             constraint_correction=True, starting_step_size=None,
+             dense_output: str | None = None) -> Run:
+    """The protocol every ``simulate`` (free, switched, path, sensitivity) follows before it
+    computes anything, in one place and in this order: (1) options not in ``known`` are
+    refused (:func:`reject_unknown`); (2) ``method`` is looked up in the registry
+    (``_methods``) and the integration options checked against it
+    (:func:`integration_options`); ``dense_output``: the run needs a method with a dense
+    output, the text says why (events); (3) the times ``t`` are parsed (:func:`output_times`);
+    (4) the step lengths are checked against them (:func:`checked_steps`). Returns the
+    :class:`Run` that :func:`integrate` takes, so ``t`` and the options are parsed once."""
+    reject_unknown(where, unknown, known)
+    if dense_output is not None:
+        spec = _methods.find(method)
+        if spec is None or not spec.dense_output:
+            ok = " or ".join(repr(n) for n, m in _methods.METHODS.items() if m.dense_output)
+            raise ModelError(f"simulate(method={method!r}) {dense_output}; use method={ok}")
+    opt = integration_options(method, rtol, atol, max_step, fit_degree, max_error, step_size,
+                              constraint_correction, starting_step_size)
+    t0, t1, t_eval = output_times(t)
+    checked_steps(opt, t0, t1)
+    return Run(opt, t0, t1, t_eval)
+
+
+def integrate(fun, project, run: Run, y0, scale=None, kinked=None, monitor=None, fast=None):
+    """Integrate ``y' = fun(t, y)`` as the :class:`Run` ``run`` asks (the dispatch shared by
+    free, path and sensitivity runs, by the method's family in the registry). ``run.t_eval``
+    None returns every accepted step; output times return those times (RK dense output, or
+    cubic Hermite with ``fun`` at the Adams steps).
     ``scale`` (len(y0),): the unit of each component (the characteristic length for position
     coordinates and their rates, 1 for angles), so that absolute tolerances and
     ``max_error`` mean the same in any unit of length. Returns ``(times, Y, result,
@@ -634,7 +689,7 @@ def integrate(fun, project, t, y0, opt: IntegrationOptions, scale=None, kinked=N
     ``monitor(t)`` is called after each accepted step (progress); a
     KeyboardInterrupt ends the integration with the steps so far (``result.message`` is
     ``"interrupted"``)."""
-    t0, t1, t_eval = output_times(t)
+    opt, t0, t1, t_eval = run.options, run.t0, run.t1, run.t_eval
     if opt.runge_kutta:
         res = integrate_rk(fun, project, t0, t1, y0, opt.method, opt.rtol, opt.atol,
                            opt.max_step, opt.first_step, correction=opt.correction,

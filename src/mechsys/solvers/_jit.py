@@ -191,6 +191,9 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
     if table is None:
         return 0
     if _state.get("multipliers") is None:
+        from ._jit_cache import notice
+
+        notice("the multiplier solves", 8, ("_jit_multipliers", "multipliers"))
         from ._jit_multipliers import multipliers as loop
 
         _state["multipliers"] = loop
@@ -371,6 +374,9 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
     ``RCOND_WARN`` gets ``RCOND_PENDING`` in ``rconds`` and its row scales in ``R``, for
     :func:`rcond_filler` (decision 0023); None: every estimate is computed in the loop."""
     if _state["loop"] is None:
+        from ._jit_cache import notice
+
+        notice("the kinematic sweep", 30, ("_jit_loop", "sweep_dense"))
         from ._jit_loop import sweep_dense
 
         _state["loop"] = sweep_dense

@@ -16,11 +16,16 @@ timestamps when reinstalled, which Numba's own check sees.
 from __future__ import annotations
 
 import hashlib
+import logging
+import os
+import sys
 from pathlib import Path
 
 _HERE = Path(__file__).resolve().parent
 _STAMP = "mechsys-jit-sources.sha256"
 _done: dict = {}
+_said: set = set()
+_LOG = logging.getLogger("mechsys")
 
 
 def sources_digest(directory: Path) -> str:
@@ -100,4 +105,41 @@ def check() -> None:
         _done["deleted"] = sync(_HERE)
 
 
-__all__ = ["check", "check_safe", "sources_digest", "sync"]
+def cached(module: str, function: str) -> bool:
+    """Whether Numba's on-disk cache holds the compiled ``module.function`` of this package
+    (its index file ``module.function-LINE.pyXY.nbi``, beside the sources or under
+    ``NUMBA_CACHE_DIR``)."""
+    pattern = f"{module}.{function}-*.nbi"
+    try:
+        if any((_HERE / "__pycache__").glob(pattern)):
+            return True
+        root = os.environ.get("NUMBA_CACHE_DIR")
+        return bool(root) and any(Path(root).rglob(pattern))
+    except OSError:
+        return False
+
+
+def notice(what: str, seconds: float | None, *functions: tuple) -> bool:
+    """Say once per process that ``what`` is being compiled, when one of ``functions``
+    (``(module, function)`` pairs) is not in Numba's cache: the compile takes about
+    ``seconds`` of CPU (measured by ``benchmarks/cold_start.py``; None: not measured on its
+    own, the message gives no figure), and a silent wait of that
+    long looks like a hang. The message goes to the ``mechsys`` logger (INFO); when logging
+    is not configured and stderr is a terminal it is also printed there. Returns whether it
+    was said."""
+    key = (what,) + tuple(functions)
+    if key in _said:
+        return False
+    _said.add(key)
+    if all(cached(m, f) for m, f in functions):
+        return False
+    cost = "" if seconds is None else f", about {seconds:.0f} s of CPU"
+    msg = f"mechsys: compiling {what} (first run{cost}; cached for later runs)"
+    _LOG.info(msg)
+    isatty = getattr(sys.stderr, "isatty", lambda: False)
+    if not _LOG.hasHandlers() and isatty():
+        print(msg, file=sys.stderr, flush=True)
+    return True
+
+
+__all__ = ["cached", "check", "check_safe", "notice", "sources_digest", "sync"]

@@ -10,11 +10,12 @@ projections onto the constraints with no Python between the compiled equations.
 
 with SciPy's DOP853 (or RK45) and projects ``(q, qd)`` onto ``Phi = 0``, ``Phi_q qd = -Phi_t`` after
 every accepted step. The compiled loop (``_jit_free_loop.runge_kutta``) performs exactly these
-steps: SciPy's Runge-Kutta stages, error norm and step-size control (same coefficients,
-read from SciPy), the augmented system from the compiled SymEngine kernel solved by the
-LAPACK ``dgesv`` SciPy calls, the projection's unit-free minimum-norm Newton corrections,
-and the method's dense output at requested output times. Sums over stages are plain loops where
-SciPy calls BLAS, so the two paths agree to rounding (about 1e-15 per step), not bit for bit.
+steps: SciPy's Runge-Kutta stages, error norm and step-size control (the same coefficients,
+from our own tableaus: ``_tableaus``, decision 0038), the augmented system from the compiled
+SymEngine kernel solved by the LAPACK ``dgesv`` SciPy calls, the projection's unit-free
+minimum-norm Newton corrections, and the method's dense output at requested output times.
+Sums over stages are plain loops where SciPy calls BLAS, so the two paths agree to rounding
+(about 1e-15 per step), not bit for bit.
 
 The compiled loop takes the regular steps. Where the Python path needs its special
 handling (a singular instant: singular augmented matrix, or multipliers large against the
@@ -58,7 +59,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _jit
+from . import _jit, _methods
 from ._linalg import SPARSE_THRESHOLD
 
 #: above ``SPARSE_THRESHOLD`` unknowns the block path runs while its banded Cholesky's work
@@ -90,9 +91,8 @@ CHUNK_STEPS = 2000
 #: as many steps (the Python between two runs was a tenth of the double pendulum's time),
 #: up to about 16 MB of state rows a run
 ADAMS_CHUNK_VALUES = 2_000_000
-#: the methods with a compiled loop (``integration_options`` names; Adams: Mech's three)
-METHODS = ("dop853", "rk45", "automatic", "predictor", "corrector")
-RK = ("dop853", "rk45")
+#: the methods with a compiled loop: those of the registry (``_methods``) that name one
+METHODS = tuple(name for name, m in _methods.METHODS.items() if m.compiled is not None)
 
 _state: dict = {"loop": None, "adams": None, "workspace": None, "derivative": None, "coef": None,
                 "gesv": None, "path_acc": None}
@@ -100,23 +100,23 @@ _state: dict = {"loop": None, "adams": None, "workspace": None, "derivative": No
 
 def _coefficients(solver):
     """``(method, A, B, C, E3, E5, D)`` of ``_jit_free_loop.runge_kutta`` for the SciPy
-    ``solver`` (DOP853, or RK45: its ``E`` and ``P`` in the places of ``E5`` and ``D``)."""
-    from scipy.integrate import RK45
+    ``solver`` (DOP853, or RK45: its ``E`` and ``P`` in the places of ``E5`` and ``D``): the
+    registry's method of that stepper class (``_methods``) and its tableau, our own
+    (``_tableaus``, decision 0038), not SciPy's private modules."""
+    import scipy.integrate
 
-    from ._jit_free_loop import DOP853
-    from ._jit_free_loop import RK45 as RK45_CODE
+    from . import _jit_free_loop, _tableaus
 
-    key = "coef_rk45" if isinstance(solver, RK45) else "coef"
+    spec = next(m for m in _methods.METHODS.values()
+                if m.compiled == "runge_kutta" and isinstance(solver, getattr(scipy.integrate, m.scipy)))
+    key = "coef_" + spec.name
     if _state.get(key) is None:
-        if key == "coef_rk45":
-            arrays = (solver.A, solver.B, solver.C, np.zeros(1), solver.E, solver.P)
-            code = RK45_CODE
-        else:
-            from scipy.integrate._ivp import dop853_coefficients as c
-
-            arrays = (c.A, c.B, c.C, c.E3, c.E5, c.D)
-            code = DOP853
-        _state[key] = (code,) + tuple(np.ascontiguousarray(a, dtype=float) for a in arrays)
+        tableau = getattr(_tableaus, spec.tableau)
+        if len(tableau) == 5:          # one error estimator (RK45): in the place of E5
+            A, B, C, E, P = tableau
+            tableau = (A, B, C, np.zeros(1), E, P)
+        code = getattr(_jit_free_loop, spec.scipy)     # the loop's code of the method
+        _state[key] = (code,) + tuple(np.ascontiguousarray(a, dtype=float) for a in tableau)
     return _state[key]
 
 
@@ -745,6 +745,10 @@ class FreeStepper:
         self.EQDD, self.ELAM = np.full((k, n), np.nan), np.full((k, m), np.nan)
         self.steps = 0
         if _state["loop"] is None:
+            from ._jit_cache import notice
+
+            # (a DOP853 run from empty caches: 123 s of CPU, the derivative and set-up included)
+            notice("the free-motion stepper", 120, ("_jit_free_loop", "derivative"))
             from ._jit_free_loop import adams, derivative, runge_kutta, workspace
 
             _state["loop"], _state["adams"], _state["workspace"] = runge_kutta, adams, workspace
@@ -763,9 +767,10 @@ class FreeStepper:
              newton=None):
         """The stepper when the compiled loop can run this simulation (``method``: DOP853 or
         one of Mech's Adams methods; ``start``: ``(t0, q0)``), else None."""
-        if _jit.mode() == "off" or method not in METHODS or system.n == 0:
+        spec = _methods.find(method)
+        if _jit.mode() == "off" or spec is None or spec.compiled is None or system.n == 0:
             return None
-        if method not in RK:
+        if not spec.runge_kutta:
             t_eval = None              # Adams output times are interpolated afterwards
         dyn = system.dynamics
         if not _jit.available():
@@ -874,7 +879,9 @@ class FreeStepper:
 
         system = path.system
         n = system.n
-        if _jit.mode() == "off" or method not in METHODS or n == 0 or not _jit.available():
+        spec = _methods.find(method)
+        if _jit.mode() == "off" or spec is None or spec.compiled is None or n == 0 or \
+                not _jit.available():
             return None
         big = None
         if n > SMALL_LU:
@@ -885,7 +892,7 @@ class FreeStepper:
             big = _path_sparse_structure(path)
             if big is None:
                 return None
-        if method not in RK:
+        if not spec.runge_kutta:
             t_eval = None
         entries = [_entry(path._f)] + _constraint_entries(system, system.f_position,
                                                           system.f_velocity)
@@ -1030,6 +1037,9 @@ class FreeStepper:
         [t, h, history length, recent count, rejected]``, arrays updated in place. Returns
         ``(status, T, Y, H, E, QDD, LAM, evaluations, projections)``."""
         n, m = self.n, self.m
+        from ._jit_cache import notice
+
+        notice("Mech's Adams integrator", None, ("_jit_free_loop", "adams"))
         if max_steps is None:
             max_steps = max(CHUNK_STEPS, min(10 * CHUNK_STEPS, ADAMS_CHUNK_VALUES // self.ny))
         T, H, E = np.empty(max_steps), np.empty(max_steps), np.empty(max_steps)

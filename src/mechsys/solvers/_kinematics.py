@@ -36,6 +36,7 @@ turns. Points below ``RCOND_WARN`` raise one :class:`NearSingularWarning` naming
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -63,6 +64,10 @@ ROTATION_JUMP = np.pi / 2
 ROTATION_START = np.pi / 8
 #: a Taylor prediction may turn this much (rad) more than 4 x the secant step
 ROTATION_SLACK = 0.25
+#: with a ``progress`` callback the compiled loop runs in chunks of about this many seconds
+#: (the first of ``FIRST_CHUNK`` points), the callback called between them (decision 0039)
+CHUNK_SECONDS = 0.1
+FIRST_CHUNK = 64
 
 
 def solve_velocity(system, t: float, q, p=None, scaling: Scaling | None = None) -> np.ndarray:
@@ -117,6 +122,8 @@ class SweepResult:
     #: (n,) the row scales of the last point's velocity factorisation when it is the next
     #: point's chord (``rcond >= RCOND_WARN``), else None: what ``prior`` continues with
     rows: np.ndarray | None = field(default=None, repr=False, compare=False)
+    #: how many of the points the compiled loop solved (the rest: the Python loop)
+    compiled: int = field(default=0, compare=False)
 
     @property
     def rcond(self) -> np.ndarray | None:
@@ -147,7 +154,8 @@ SAME_BRANCH = 1e-6
 
 def sweep(system, times, guess, order: int = 2, options: PositionOptions | None = None,
           p=None, scaling: Scaling | None = None, hooks=None, prior=None, partial: bool = False,
-          points: int | None = None, _depth: int = 0) -> SweepResult:
+          points: int | None = None, progress: Callable[[int], None] | None = None,
+          _depth: int = 0) -> SweepResult:
     r"""Kinematic solution at each of ``times`` (1D, any order; continuation follows the
     given order). ``order`` 0 = location, 1 = + velocity, 2 = + acceleration. ``scaling``
     defaults to the one of ``guess`` at the first time. ``hooks``
@@ -188,7 +196,7 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
     halted = None       # a hook's stop in the first run: its points are checked, then it goes on
     try:
         res = _sweep_loop(system, times, guess, order, options, p, scaling, hooks, prior, True,
-                          points)
+                          points, progress)
     except Stopped as exc:
         if exc.k == 0 or prior is not None:
             raise
@@ -347,7 +355,8 @@ def _sliced(res: SweepResult, a: int, order: int) -> SweepResult:
 
 def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions | None = None,
                 p=None, scaling: Scaling | None = None, hooks=None, prior=None,
-                partial: bool = False, points: int | None = None) -> SweepResult:
+                partial: bool = False, points: int | None = None,
+                progress: Callable[[int], None] | None = None) -> SweepResult:
     """The sweep's loops (compiled, then Python) without the coarse-step checks of
     :func:`sweep`, which calls it. Kinematic solution at each of ``times`` (1D, any order;
     continuation follows the given order). ``order`` 0 = location, 1 = + velocity,
@@ -369,7 +378,14 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
       :class:`SingularJacobianError`) ends the sweep: the result holds the points before it,
       ``stopped`` the error.
     * ``points``: the size of the whole job, for the compiled loop's ``auto`` rule
-      (default ``len(times)``)."""
+      (default ``len(times)``).
+
+    ``progress(done)``: called with the number of points of ``times`` solved so far, between
+    chunks of the compiled loop (about ``CHUNK_SECONDS`` each: the loop is resumed where it
+    stopped, with the same chord, so the numbers are those of one call) and about as often
+    in the Python loop; unlike the hooks it keeps the compiled loop. A ``KeyboardInterrupt``
+    (Ctrl-C, or raised by ``progress``) stops the sweep: ``Stopped("interrupted")`` carries
+    the points solved before it (``partial``)."""
     times = np.atleast_1d(np.asarray(times, dtype=float))
     P = 0
     if prior is not None:
@@ -410,14 +426,18 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
     fill = None
     prior_rows = prior[5] if P and order >= 1 and rconds[P - 1] >= RCOND_WARN else None
     rows_last = prior_rows     # the chord's rows of the last point solved
+    interrupted, compiled = False, 0
     if pointers is not None:
         # the regular points in compiled code; the first one needing care is left to the loop
         # below (the loop takes the scaling from its first evaluation when none is given)
         rprev = np.ones(n) if prior_rows is None else np.array(prior_rows, dtype=float)
         R = np.empty((N, n)) if order >= 1 else None   # row scales of the pending estimates
-        k0, done, sc = _jit.run(system, pointers, times, q0, p, order, options or PositionOptions(),
-                                sc, rot, Q, QD, QDD, its, rconds, rprev, R, P,
-                                prior_rows is not None)
+        args = (system, pointers, times, q0, p, order, options or PositionOptions(), sc, rot, Q,
+                QD, QDD, its, rconds, rprev, R, P, prior_rows is not None)
+        if progress is None:
+            k0, done, sc = _jit.run(*args)
+        else:
+            k0, done, sc, interrupted = _run_chunks(args, progress)
         if guard is not None and k0 > P:
             # a compiled row on the wrong root of an angle equation (a prediction more than a
             # quarter turn off): it and the rows after it are solved again below
@@ -428,6 +448,9 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
         if order >= 1 and (rconds[P:k0] == RCOND_PENDING).any():
             fill = _jit.rcond_filler(system, pointers, times[P:], Q[P:], p, sc, R[P:])
         evals += done
+        compiled = k0 - P
+        if interrupted:
+            raise _interrupted(k0, P, times, Q, QD, QDD, its, evals, order, rconds, fill, compiled)
         if P < k0 < N and order >= 1 and rconds[k0 - 1] >= RCOND_WARN:
             # the chord the compiled loop had: the same matrix, factorised again (not counted
             # as an evaluation: the all-Python sweep has it at hand)
@@ -443,9 +466,14 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
         except Singular:
             chord = rows_last = None
     end, stopped = N, None
+    clock = time.perf_counter()
+    k = k0
     try:
         for k in range(k0, N):
             t = times[k]
+            if progress is not None and k > k0 and time.perf_counter() - clock > CHUNK_SECONDS:
+                progress(k - P)
+                clock = time.perf_counter()
             try:
                 if hooks is not None and hooks.pre_solve is not None and hooks.pre_solve(float(t)) is False:
                     raise Stopped("pre_solve", float(t))
@@ -525,6 +553,11 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
         if not partial:
             raise
         end, stopped = k, exc     # (the points before k are complete)
+    except KeyboardInterrupt:
+        raise _interrupted(k, P, times, Q, QD, QDD, its, evals, order, rconds, fill,
+                           compiled) from None
+    if progress is not None and N > k0:
+        progress(end - P)
     if guard is not None and end > P:
         # every path above tests its roots; this states the result's contract once more
         wrong = guard.wrong_rows(times[P:end], Q[P:end], p)
@@ -551,7 +584,51 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
     if end > P:       # (a last point near a singular instant has no chord)
         rows_last = rows_last if order >= 1 and rconds[-1] >= RCOND_WARN else None
     return SweepResult(times, Q, QD, QDD, its, evals, order, rconds, fill, sc, stopped,
-                       rows_last)
+                       rows_last, compiled)
+
+
+def _run_chunks(args, progress):
+    """``_jit.run(*args)`` in chunks of points, ``progress(done)`` between them; returns
+    ``(k, evaluations, scaling, interrupted)``. Each chunk resumes the loop at the point where
+    the last one ended (``first``), with that point's chord (``chord_start``) rebuilt from its
+    coordinates and row scales exactly as the loop builds it, so the numbers are those of one
+    call. Chunks grow (or shrink) toward ``CHUNK_SECONDS`` each, at most 4x per chunk; a
+    ``KeyboardInterrupt`` (Ctrl-C during a chunk, or from ``progress``) ends the run with
+    the points of the chunks before it (``interrupted`` True)."""
+    (system, pointers, times, q0, p, order, options, sc, rot, Q, QD, QDD, its, rconds, rprev,
+     R, first, chord_start) = args
+    N, k, evals, size = len(times), first, 0, FIRST_CHUNK
+    while k < N:
+        end = min(N, k + size)
+        clock = time.perf_counter()
+        try:
+            kk, done, sc = _jit.run(system, pointers, times[:end], q0, p, order, options, sc, rot,
+                                    Q, QD, QDD, its, rconds, rprev, R, k, chord_start)
+        except KeyboardInterrupt:
+            return k, evals, sc, True         # (the points of this chunk are not all known)
+        evals += done
+        if kk < end:                          # left to the Python loop
+            return kk, evals, sc, False
+        k = end
+        chord_start = order >= 1 and bool(rconds[k - 1] >= RCOND_WARN)
+        try:
+            progress(k - first)
+        except KeyboardInterrupt:
+            return k, evals, sc, True
+        took = max(time.perf_counter() - clock, 1e-6)
+        size = max(1, int(size * min(4.0, max(0.25, CHUNK_SECONDS / took))))
+    return k, evals, sc, False
+
+
+def _interrupted(k, P, times, Q, QD, QDD, its, evals, order, rconds, fill, compiled) -> Stopped:
+    """A ``Stopped("interrupted")`` carrying the points ``P .. k - 1`` (all complete)."""
+    exc = Stopped("interrupted", float(times[min(k, len(times) - 1)]))
+    exc.k = k - P
+    exc.partial = SweepResult(times[P:k], Q[P:k], None if QD is None else QD[P:k],
+                              None if QDD is None else QDD[P:k], its[P:k], evals, order,
+                              None if rconds is None else rconds[P:k], fill,
+                              compiled=min(compiled, k - P))
+    return exc
 
 
 def _check_prior(prior, n: int, order: int) -> tuple:
