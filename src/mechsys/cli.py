@@ -224,23 +224,14 @@ def cache(action: str) -> int:
     return 0
 
 
-#: first characters that make a spreadsheet read a cell as a formula (CSV injection)
-FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
-
-
-def csv_cell(name: str) -> str:
-    """A text cell for a CSV table: a name starting like a formula (``=``, ``+``, ``-``,
-    ``@``, tab, carriage return) gets a leading apostrophe, which spreadsheets show as text
-    and never evaluate. Quoting of commas, quotes and newlines is the csv module's."""
-    return "'" + name if name.startswith(FORMULA_START) else name
-
-
 def write_csv(path: Path, cols: dict) -> None:
     """``cols`` (name -> column of floats) as CSV through the csv module: the header row
     quoted where a name holds a comma, quote or newline and neutralised where it starts
     like a formula (:func:`csv_cell`); numbers repr-exact (17 significant digits: the table
     reads back to the same doubles)."""
     import csv
+
+    from .results._tables import csv_cell
 
     data = np.column_stack(list(cols.values()))
     with open(path, "w", newline="", encoding="utf-8") as fh:

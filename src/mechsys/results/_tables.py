@@ -231,8 +231,10 @@ _FORMULA = ("=", "+", "-", "@", "\t", "\r")
 
 
 def csv_cell(text: str) -> str:
-    """A header cell a spreadsheet shows as text: a leading formula character is quoted away
-    with an apostrophe (the CSV module quotes commas, quotes and newlines)."""
+    """A text cell a spreadsheet shows as text and never evaluates: a name starting like a
+    formula (``=``, ``+``, ``-``, ``@``, tab, carriage return) gets a leading apostrophe; the
+    csv module quotes commas, quotes and newlines. (One rule for every CSV mechsys writes:
+    ``sol.save`` and ``mechsys run``.)"""
     return "'" + text if text.startswith(_FORMULA) else text
 
 
