@@ -235,7 +235,7 @@ def sweep(system, times, guess, order: int = 2, options: PositionOptions | None 
         sub_t[-1] = t_k
         try:
             sub = sweep(system, sub_t, None, order, options, p, sc, None, before, True,
-                        None, _depth + 1)
+                        None, _depth=_depth + 1)
         except ModelError:
             sub = None
         evals += 0 if sub is None else sub.evaluations
