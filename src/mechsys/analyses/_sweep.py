@@ -527,8 +527,9 @@ def _on_pool(payload, names, indexed, on_error, workers, chunks, tick):
     """The points on a local process pool. A worker process that dies (killed, out of
     memory, ``os._exit`` in user code) breaks the whole pool: the finished tasks are kept,
     the lost ones run again in a new pool, one point a task (so a point that kills its
-    worker takes only itself and the points running beside it), at most
-    :data:`MAX_RETRIES` times; then they are reported lost (:func:`_lost_rows`)."""
+    worker takes only itself and the points running beside it), and on the last of the
+    :data:`MAX_RETRIES` tries each in a pool of its own (so that only the point that kills
+    its worker is lost); then they are reported lost (:func:`_lost_rows`)."""
     _check_count(workers, "workers")
     _check_count(chunks, "chunks")
     workers = workers or os.cpu_count() or 1
@@ -536,7 +537,14 @@ def _on_pool(payload, names, indexed, on_error, workers, chunks, tick):
     results: list = []
     attempt = 0
     while parts:
-        lost, why = _pool_round(payload, names, parts, on_error, workers, results, tick)
+        if attempt < MAX_RETRIES:
+            lost, why = _pool_round(payload, names, parts, on_error, workers, results, tick)
+        else:  # the last try: each point alone in a pool of its own, so that a point that
+            # kills its worker takes no other with it (beside it, an innocent one is lost too)
+            lost, why = [], ""
+            for part in parts:
+                more, reason = _pool_round(payload, names, [part], on_error, 1, results, tick)
+                lost, why = lost + more, reason or why
         if not lost:
             break
         attempt += 1
