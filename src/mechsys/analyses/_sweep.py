@@ -548,14 +548,23 @@ def _on_pool(payload, names, indexed, on_error, workers, chunks, tick):
         if not lost:
             break
         attempt += 1
-        points = [p for part in lost for p in part]
-        if attempt > MAX_RETRIES:
-            rows = _lost_rows(points, attempt, on_error, why)
-            results.append((_NO_WORKER, 0, rows))
-            tick(len(rows))
+        points = _retry_or_report(lost, attempt, on_error, why, results, tick)
+        if points is None:
             break
         parts = [[p] for p in points]
     return results, "processes"
+
+
+def _retry_or_report(lost, attempt: int, on_error: str, why: str, results: list, tick):
+    """The points of the ``lost`` parts to try again, or None once ``attempt`` is past
+    :data:`MAX_RETRIES`: then they are reported lost (:func:`_lost_rows`) into ``results``."""
+    points = [p for part in lost for p in part]
+    if attempt <= MAX_RETRIES:
+        return points
+    rows = _lost_rows(points, attempt, on_error, why)
+    results.append((_NO_WORKER, 0, rows))
+    tick(len(rows))
+    return None
 
 
 def _pool_round(payload, names, parts, on_error, workers, results, tick):
@@ -603,11 +612,8 @@ def _on_dask(client, payload, names, indexed, on_error, chunks, tick):
         if not lost:
             break
         attempt += 1
-        points = [p for part in lost for p in part]
-        if attempt > MAX_RETRIES:
-            rows = _lost_rows(points, attempt, on_error, why)
-            results.append((_NO_WORKER, 0, rows))
-            tick(len(rows))
+        points = _retry_or_report(lost, attempt, on_error, why, results, tick)
+        if points is None:
             break
         try:
             # the cluster may have no workers left (their nannies did not restart them): a

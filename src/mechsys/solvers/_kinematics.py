@@ -366,19 +366,7 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
     position solve; a hook returning False raises ``Stopped`` carrying the points solved so
     far (``partial``, a :class:`SweepResult`).
 
-    For a sweep that continues another (the runs of a multistage sweep):
-
-    * ``prior``: ``(times, Q, QD, QDD, rconds[, rows])`` of the points solved just before
-      ``times[0]`` (``QD``/``QDD``/``rconds`` None where ``order`` has none; three points
-      are all the predictor uses; ``rows`` the ``SweepResult.rows`` of the sweep they end,
-      or None). The first point is predicted from them, and starts Newton with the last
-      one's chord when ``rows`` is given, exactly as in one long sweep; ``guess`` is not
-      used, ``scaling`` must be given.
-    * ``partial``: a point whose position solve fails (:class:`ConvergenceError`,
-      :class:`SingularJacobianError`) ends the sweep: the result holds the points before it,
-      ``stopped`` the error.
-    * ``points``: the size of the whole job, for the compiled loop's ``auto`` rule
-      (default ``len(times)``).
+    ``prior``, ``partial`` and ``points`` as in :func:`sweep`.
 
     ``progress(done)``: called with the number of points of ``times`` solved so far, between
     chunks of the compiled loop (about ``CHUNK_SECONDS`` each: the loop is resumed where it
