@@ -96,7 +96,7 @@ def columns(sol, reactions: bool = False, loads: bool = False,
     dim = m.space.dim
     axes = "xyz"[:dim]
     maxes = "z" if dim == 2 else "xyz"
-    trans = _translational(sol.system, len(sol.names), dim)
+    trans = _translational(sol.system)
     out = [Column("t", np.asarray(sol.t, dtype=float), (0, 0, 1), "time")]
     for j, name in enumerate(sol.names):
         if trans[j] is None:
@@ -136,13 +136,13 @@ def columns(sol, reactions: bool = False, loads: bool = False,
     return out
 
 
-def _translational(system, n, dim):
-    """Per coordinate: True (position), False (rotation), None (a model variable)."""
-    kinds: list = [None] * n
-    for sl in system.layout.body_slices.values():
-        for j in range(sl.start, sl.stop):
-            kinds[j] = j < sl.start + dim
-    return kinds
+def _translational(system):
+    """Per coordinate: True (position), False (rotation), None (a model variable), from the
+    layout's column kinds (:func:`~mechsys.solvers._linalg._column_kinds`)."""
+    from ..solvers._linalg import _column_kinds
+
+    trans, body = _column_kinds(system)
+    return [None if b < 0 else bool(t) for t, b in zip(trans, body)]
 
 
 def _moving_bodies(m):
