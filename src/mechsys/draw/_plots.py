@@ -81,7 +81,7 @@ def _unit(sol, spec) -> str | None:
     except (KeyError, ValueError, IndexError, ModelError):
         return None
     dim = sol.model.space.dim
-    kind = _translational(sol.system, len(sol.names), dim)[j]
+    kind = _translational(sol.system)[j]
     if kind is None:
         return None
     if kind:
