@@ -70,3 +70,61 @@ def test_upright_pendulum_held_by_a_strong_spring_is_stable_and_neutral():
     modes = m.vibration(at=m.guess())
     assert modes.stable and modes.omega[0] == pytest.approx(np.sqrt(G / L), rel=1e-12)
     assert "neutral" in repr(modes)
+
+
+# -- a null-space basis that keeps a soft coordinate apart from a stiff one ---------------------
+
+K_SOFT, M_SLIDER, M_ROTOR, J_ROTOR, PIN = 3.0, 2.0, 1.5, 0.5, (0.7, 0.3)
+
+
+def slider_beside_stiff_rotor(k_stiff, c=0.0):
+    """A slider on a soft spring (``K_SOFT``, damper ``c``) beside a rotor pinned off its
+    centroid on a stiff torsion spring: the minimal-coordinate model is ``x`` and ``theta``,
+    ``M_SLIDER x'' + c x' + K_SOFT x = 0`` and ``J_pin theta'' + k_stiff theta = 0`` with
+    ``J_pin = J + m |pin|^2``. The constraints tie the rotor's position to its angle, so the
+    null space of the Jacobian has a slider direction and a rotor direction; the SVD's
+    orthonormal basis of it mixed them."""
+    m = ms.Model2D()
+    a = m.add_body("slider", mass=M_SLIDER, inertia=1.0, guess=((0, 0), 0))
+    m.add(ms.Translate2(m.ground.axis((0, 0), (1, 0)), a.axis((0, 0), (1, 0))))
+    m.add_load(ms.Spring(m.ground.point((-1, 0)), a.point(0), K_SOFT, 1.0))
+    if c:
+        m.add_load(ms.Damper(m.ground.point((-1, 0)), a.point(0), c))
+    b = m.add_body("rotor", mass=M_ROTOR, inertia=J_ROTOR, points={"pin": PIN},
+                   guess=((-PIN[0], 2 - PIN[1]), 0))
+    m.add(ms.Revolute2(m.ground.point((0, 2)), b.point("pin")))
+    m.add_load(ms.TorsionSpring(m.ground, b, k_stiff, free_angle=0))
+    return m
+
+
+def _rotor_omega2(k_stiff):
+    return k_stiff / (J_ROTOR + M_ROTOR * (PIN[0] ** 2 + PIN[1] ** 2))
+
+
+@pytest.mark.parametrize("k_stiff", [1e8, 1e12, 1e16])
+def test_soft_eigenvalue_beside_a_stiff_one_is_kept(k_stiff):
+    m = slider_beside_stiff_rotor(k_stiff)
+    modes = m.vibration(at=m.guess())
+    # closed forms of the minimal-coordinate model (the SVD basis gave 1 + 1.2e-9, 1 - 2e-5
+    # and 0 for the soft one at these ratios)
+    np.testing.assert_allclose(modes.omega ** 2, [K_SOFT / M_SLIDER, _rotor_omega2(k_stiff)],
+                               rtol=1e-13)
+    assert modes.stability == ("neutral", "neutral")
+    # the basis moves the slider alone in one column and the rotor alone in the other
+    P = modes.basis
+    x = modes.coordinates.index("slider.x")
+    col = np.flatnonzero(P[x])
+    assert len(col) == 1 and np.flatnonzero(P[:, col[0]]).tolist() == [x]
+
+
+@pytest.mark.parametrize("k_stiff", [1e8, 1e14])
+def test_damped_soft_mode_beside_a_stiff_one(k_stiff):
+    # the state-space path with the same basis: s = -c/2m +- i sqrt(k/m - (c/2m)^2)
+    c = 0.5
+    m = slider_beside_stiff_rotor(k_stiff, c=c)
+    modes = m.vibration(at=m.guess())
+    s_soft = complex(-c / (2 * M_SLIDER), np.sqrt(K_SOFT / M_SLIDER - (c / (2 * M_SLIDER)) ** 2))
+    s = modes.eigenvalues
+    assert abs(s[0] / s_soft - 1) < 1e-12
+    assert abs(s[1] / (1j * np.sqrt(_rotor_omega2(k_stiff))) - 1) < 1e-12
+    assert modes.stability == ("stable", "neutral")

@@ -363,9 +363,7 @@ def vibration(model, at=None, drop=(), t=None, tolerance: float = 1e-6,
     # rows scaled as the solvers scale Phi_q (a normalisation row of Phi_q B is zero only
     # up to rounding: scaling it by its own size would turn the rounding into a constraint)
     JB = (J @ B) * D / (sc.rows(J)[:, None] if J.shape[0] else 1.0)
-    _, sv, Vt = sla.svd(JB) if JB.size else (None, np.zeros(0), np.eye(B.shape[1]))
-    rank = int(np.sum(sv > 1e-10 * max(sv.max(initial=0.0), 1.0)))
-    N = D[:, None] * Vt[rank:].T
+    N = D[:, None] * _null_basis(JB)
     f = N.shape[1]
     if f == 0:
         raise ModelError("vibration: the kept constraints leave no degree of freedom at the "
@@ -411,6 +409,52 @@ def vibration(model, at=None, drop=(), t=None, tolerance: float = 1e-6,
         q=q, qd=qd, mass=Mr, damping=Cr, stiffness=Kr, basis=P,
         stable="unstable" not in stability, stability=stability,
         system=system, model=model, p=p, columns=unit)
+
+
+#: the null-space basis from independent coordinates is used while the dependent block's
+#: condition number (2-norm, column-pivoted QR's ``R_11``) stays below this, else the SVD's
+PARTITION_COND = 1e8
+
+
+def _null_basis(JB: np.ndarray) -> np.ndarray:
+    r"""A basis ``N`` (n, f) of the null space of ``JB`` (m, n) made of *independent
+    coordinates*: the rank ``r`` from the singular values (above ``1e-10`` of the largest),
+    the ``r`` dependent coordinates ``d`` from a column-pivoted QR, ``JB[:, piv] = Q R``,
+    and the others ``i`` independent:
+
+    .. math::  N_{i} = I, \qquad N_{d} = -R_{11}^{-1} R_{12}.
+
+    Each column of ``N`` moves one independent coordinate and only the coordinates the
+    constraints tie to it, so parts of the mechanism that the constraints do not couple
+    stay apart in ``z``, and ``K_r = P^T K P`` holds no sum of a stiff and a soft term that
+    cancels. The SVD's orthonormal basis is any rotation of the null space (its singular
+    values there are all zero): it mixed a soft coordinate with a stiff one, and the soft
+    eigenvalue was lost in the stiff one's rounding (issue 34: a slider on a spring of 1
+    beside a rotor on one of 1e14 gave 0 instead of 1). The SVD basis stays the fallback
+    when the dependent block is ill-conditioned (``PARTITION_COND``), where the partition
+    would amplify rounding instead.
+
+    Example: ``_null_basis(np.array([[1.0, -1.0, 0.0]]))`` is ``[[1, 0], [1, 0], [0, 1]]``
+    (up to the order of its columns)."""
+    n = JB.shape[1]
+    if not JB.size:
+        return np.eye(n)
+    _, sv, Vt = sla.svd(JB)
+    rank = int(np.sum(sv > 1e-10 * max(sv.max(initial=0.0), 1.0)))
+    if rank == 0:
+        return np.eye(n)
+    _, R, piv = sla.qr(JB, mode="economic", pivoting=True)
+    R11, R12 = R[:rank, :rank], R[:rank, rank:]
+    if np.linalg.cond(R11) < PARTITION_COND:
+        X = sla.solve_triangular(R11, R12)
+        if np.all(np.isfinite(X)):
+            N = np.zeros((n, n - rank))
+            N[piv[rank:], :] = np.eye(n - rank)
+            N[piv[:rank], :] = -X
+            # the independent coordinates in the model's order (the modes do not depend on
+            # it; a stable order keeps ``basis``, ``mass`` and ``stiffness`` readable)
+            return N[:, np.argsort(piv[rank:], kind="stable")]
+    return Vt[rank:].T
 
 
 #: a mode is neutral when ``|Re s| <= NEUTRAL * (its own frequency scale)``: the double zero

@@ -15,8 +15,17 @@ even number of zeros per turn), so the solvers test the root instead: with
   by pi) and solved again, and a solution still on the wrong branch raises
   :class:`~mechsys.ConvergenceError` naming the constraint (decision 0033).
 
+A body that is the slave of a Gen joint (Mech ch. 11) has no coordinates of its own: it is
+turned through the generalized coordinates of its joint (the body's own joint first, then up
+its chain of masters), by Newton's method on ``phi - a`` over those coordinates (one step for
+the revolute joints, where the angle is linear in the joint's angle); the first regular body
+up the chain is turned rigidly as above, carrying its slaves.
+
 The guard is numeric (compiled once per system, like the kinematic kernels, as a function of
-``[t, q, qd, p]``), so the solvers use it through ``system.branch_guard``.
+``[t, q, qd, p]``), so the solvers use it through ``system.branch_guard``. A stage system of
+a model with switches (``StageSwitch``/``TimeSwitch``, ``compile/_stages.py``) has the guard
+of the drivers of its own stages (``system.switch_stages``): each stage combination tests the
+angles it asks for.
 """
 
 from __future__ import annotations
@@ -33,26 +42,54 @@ from ._backends import compile_exprs
 #: and more); the margin keeps rounding at a right angle from flipping a regular guess
 WRONG = -1e-6
 
+#: a guess is turned onto the asked angle when ``cos_err / hypot`` is below this: the wrong
+#: side, and a quarter turn off to within 1e-6 rad, where the equation's derivative
+#: ``|f_p| cos(phi - a)`` vanishes and Newton cannot start (a sweep whose steps turn a crank
+#: by exactly a quarter turn predicted such guesses and stopped on a singular Jacobian)
+ALIGN = 1e-6
+
+#: turning a Gen joint's slave through the joint's coordinates (:meth:`BranchGuard.align`):
+#: at most this many Newton steps, to this angle error (rad), with central differences of
+#: this step (rad or length units); a squared gain below ``MIN_GAIN`` means the coordinates
+#: do not turn the angle (a sliding joint: its master is turned instead)
+TURN_STEPS = 8
+TURN_TOL = 1e-12
+DIFF_STEP = 1e-6
+MIN_GAIN = 1e-8
+
 
 class BranchGuard:
-    """The branch tests of one system's angle equations (see the module doc)."""
+    """The branch tests of one system's angle equations (see the module doc). ``labels``:
+    the name of each item's constraint in messages (default: its owner's label)."""
 
-    def __init__(self, system, items: list):
+    def __init__(self, system, items: list, labels: list | None = None):
         lay = system.layout
         sub = getattr(system, "gen_subs", None) or {}
         space = system.space
         self.items = items
-        self.labels = [it.owner.label() for it in items]
+        self.labels = list(labels) if labels is not None else [it.owner.label() for it in items]
         self.kind = ("spatial" if space.dim == 3 else
                      "euler" if getattr(space, "orientation", "angle") == "euler" else "planar")
         self.dim = space.dim
-        self.slices = []
+        self.slices = []      # the regular body turned rigidly (None: none)
+        self.gen_cols = []    # per item: the coordinate indices of each Gen joint up the chain
+        self.bodies = []      # per item: the name of the body carrying the angle (or None)
         exprs = []
         for it in items:
-            sl = None
-            if it.body is not None and it.origin is not None:
-                sl = lay.body_slices.get(it.body.name)
+            sl, cols, body = None, [], it.body
+            self.bodies.append(None if body is None else body.name)
+            # a Gen joint's slave is turned through its joint's coordinates, then its masters'
+            while body is not None and getattr(body, "gen_joint", None) is not None:
+                joint = body.gen_joint
+                cols.append((body, np.array([lay.index(c) for c in joint.coordinates],
+                                            dtype=int)))
+                body = joint.master
+                if body is not None and getattr(body, "is_ground", False):
+                    body = None
+            if body is not None and it.origin is not None:
+                sl = lay.body_slices.get(body.name)
             self.slices.append(sl)
+            self.gen_cols.append(cols)
             parts = [it.cos_err, it.sin_err]
             if sl is not None:
                 parts += list(it.origin)
@@ -61,10 +98,13 @@ class BranchGuard:
             exprs += [sp.sympify(e).xreplace(sub) if sub else sp.sympify(e) for e in parts]
         self.size = [2 + (0 if sl is None else self.dim + (3 if self.dim == 3 else 0))
                      for sl in self.slices]
+        self.offsets = list(np.cumsum([0, *self.size[:-1]]))
         # compiled like the kinematic kernels (a few evaluations per solve: unoptimised LLVM,
         # cheap to build; a lambdified NumPy function cost ~0.3 ms a call)
         self._f = compile_exprs(lay.args(), exprs, system.backend, once=True, cse=True)
         self._pack = system.pack
+        self._system = system
+        self._orient = None   # the slaves' rotation coordinates, compiled on first need
 
     def _values(self, t, Q, p) -> list:
         """The expressions at the rows of ``Q`` ((N, n)) and times ``t`` ((N,)): a list of
@@ -97,35 +137,167 @@ class BranchGuard:
         (a copy), or None when every test passes or no failing item can be turned."""
         q = np.array(q, dtype=float)
         vals = self._values(t, q, p)
-        at, turned = 0, False
+        turned = False
         for j, size in enumerate(self.size):
+            at = self.offsets[j]
             c, s = float(vals[at][0]), float(vals[at + 1][0])
             h = math.hypot(c, s)
+            if not (h > 0 and c < ALIGN * h):
+                continue
+            # later items are evaluated at the configuration before this turn: one pass
+            # serves independent drivers; a second (rare) is left to the converged check
+            moved = None
+            for body, cols in self.gen_cols[j]:
+                moved = self._turn_coordinates(t, q, p, j, cols)
+                if moved is not None:
+                    # the body's own slaves keep their orientations, as a rigid turn of a
+                    # body with coordinates of its own leaves the other bodies where they are
+                    moved = self._keep_descendants(t, q, moved, p, body)
+                    break
+            if moved is not None:
+                q, turned = moved, True
+                continue
             sl = self.slices[j]
-            if sl is not None and h > 0 and c < WRONG * h:
-                err = math.atan2(s, c)               # phi - a
-                o = np.array([float(v[0]) for v in vals[at + 2: at + 2 + self.dim]])
-                u = None
-                if self.dim == 3:
-                    u = np.array([float(v[0]) for v in vals[at + 2 + self.dim: at + size]])
-                    nu = np.linalg.norm(u)
-                    if not nu > 0:
-                        at += size
-                        continue
-                    u = u / nu
-                q[sl] = turn(self.kind, q[sl], self.items[j].sign * err, o, u)
-                turned = True
-                # later items are evaluated at the configuration before this turn: one pass
-                # serves independent drivers; a second (rare) is left to the converged check
-            at += size
+            if sl is None:
+                continue
+            err = math.atan2(s, c)               # phi - a
+            o = np.array([float(v[0]) for v in vals[at + 2: at + 2 + self.dim]])
+            u = None
+            if self.dim == 3:
+                u = np.array([float(v[0]) for v in vals[at + 2 + self.dim: at + size]])
+                nu = np.linalg.norm(u)
+                if not nu > 0:
+                    continue
+                u = u / nu
+            q[sl] = turn(self.kind, q[sl], self.items[j].sign * err, o, u)
+            turned = True
         return q if turned else None
+
+    def _error(self, t, q, p, j: int) -> float:
+        """``phi - a`` of item ``j`` at ``(t, q)`` (rad, in ``(-pi, pi]``; NaN when the
+        angle is undefined)."""
+        v = np.asarray(self._f(self._pack(t, q, None, p)), dtype=float).ravel()
+        c, s = v[self.offsets[j]], v[self.offsets[j] + 1]
+        return math.atan2(s, c) if math.hypot(c, s) > 0 else math.nan
+
+    def _turn_coordinates(self, t, q, p, j: int, cols: np.ndarray):
+        """``q`` with the generalized coordinates ``cols`` of one Gen joint moved so that item
+        ``j``'s angle reaches the asked one, or None when they do not turn it.
+
+        Newton on ``e(q) = phi - a`` with the minimum-norm step over ``cols``:
+        :math:`\\Delta q = -e\\, g / (g^T g)`, :math:`g = \\partial e / \\partial q_{cols}`
+        by central differences (``e`` is smooth near its root; a revolute joint's angle is
+        linear in ``phi``: one step)."""
+        q = q.copy()
+        e = self._error(t, q, p, j)
+        for _ in range(TURN_STEPS):
+            if not math.isfinite(e):
+                return None
+            if abs(e) <= TURN_TOL:
+                break
+            g = np.empty(len(cols))
+            for i, c in enumerate(cols):
+                hi, lo = q.copy(), q.copy()
+                hi[c] += DIFF_STEP
+                lo[c] -= DIFF_STEP
+                # differences of wrapped angles: the wrap at +-pi must not enter g
+                g[i] = math.remainder(self._error(t, hi, p, j) - self._error(t, lo, p, j),
+                                      2 * math.pi) / (2 * DIFF_STEP)
+            gg = float(g @ g)
+            if not gg > MIN_GAIN:   # these coordinates do not turn this angle
+                return None
+            q[cols] -= e * g / gg
+            e = self._error(t, q, p, j)
+        return q if math.isfinite(e) and abs(e) < math.pi / 2 else None
+
+    def _descendants(self, body) -> list:
+        """The Gen-joint slaves whose chain of masters passes through ``body``."""
+        out = []
+        for b in self._system._bodies:
+            m = b.gen_joint.master if getattr(b, "gen_joint", None) is not None else None
+            while m is not None and m is not body:
+                m = m.gen_joint.master if getattr(m, "gen_joint", None) is not None else None
+            if m is body:
+                out.append(b)
+        return out
+
+    def _orientations(self, t, q, p, bodies) -> list:
+        """The rotation coordinates of the slave ``bodies`` at ``(t, q)`` (one array each)."""
+        if self._orient is None:
+            sys_ = self._system
+            slaves = [b for b in sys_._bodies if getattr(b, "gen_joint", None) is not None]
+            exprs, at = [], {}
+            for b in slaves:
+                rot = list(b.q[self.dim:])
+                at[b.name] = slice(len(exprs), len(exprs) + len(rot))
+                exprs += [sp.sympify(sys_.gen_subs.get(c, c)) for c in rot]
+            self._orient = (compile_exprs(sys_.layout.args(), exprs, sys_.backend, once=True,
+                                          cse=True), at)
+        f, at = self._orient
+        v = np.asarray(f(self._pack(t, q, None, p)), dtype=float).ravel()
+        return [v[at[b.name]] for b in bodies]
+
+    def _turned_by(self, old, new) -> np.ndarray:
+        """The rotation from each ``old`` orientation to the ``new`` one, as a residual that
+        vanishes only when they are the same rotation: the angle (2D), the vector part of
+        ``old^-1 new`` with a non-negative scalar part (3D)."""
+        out = []
+        for o, n in zip(old, new):
+            if self.kind == "planar":
+                out.append([math.remainder(n[0] - o[0], 2 * math.pi)])
+            elif self.kind == "euler":
+                out.append([math.atan2(o[0] * n[1] - o[1] * n[0], o[0] * n[0] + o[1] * n[1])])
+            else:
+                w = o[0] * n[0] + o[1:] @ n[1:]
+                v = o[0] * n[1:] - n[0] * o[1:] - np.cross(o[1:], n[1:])
+                out.append(v if w >= 0 else -v)
+        return np.concatenate(out) if out else np.zeros(0)
+
+    def _keep_descendants(self, t, q_old, q, p, body):
+        """``q`` with the coordinates of ``body``'s Gen-joint descendants moved so that each
+        keeps its orientation at ``q_old``: Gauss-Newton, minimum-norm steps (``lstsq``),
+        central differences; what the joints cannot hold (a sliding joint) is left."""
+        desc = self._descendants(body)
+        if not desc:
+            return q
+        cols = np.unique(np.concatenate([[self._system.layout.index(c)
+                                          for c in b.gen_joint.coordinates] for b in desc]))
+        target = self._orientations(t, q_old, p, desc)
+        q = q.copy()
+        r = self._turned_by(target, self._orientations(t, q, p, desc))
+        for _ in range(TURN_STEPS):
+            if not np.all(np.isfinite(r)) or np.abs(r).max() <= TURN_TOL:
+                break
+            J = np.empty((len(r), len(cols)))
+            for i, c in enumerate(cols):
+                hi, lo = q.copy(), q.copy()
+                hi[c] += DIFF_STEP
+                lo[c] -= DIFF_STEP
+                J[:, i] = (self._turned_by(target, self._orientations(t, hi, p, desc))
+                           - self._turned_by(target, self._orientations(t, lo, p, desc))
+                           ) / (2 * DIFF_STEP)
+            step = np.linalg.lstsq(J, r, rcond=None)[0]
+            q_new = q.copy()
+            q_new[cols] -= step
+            r_new = self._turned_by(target, self._orientations(t, q_new, p, desc))
+            if not np.abs(r_new).max() < np.abs(r).max():
+                break           # held as far as the joints allow
+            q, r = q_new, r_new
+        return q
 
     def describe(self, bad, t) -> str:
         names = ", ".join(self.labels[j] for j in bad)
+        fixed = [j for j in bad if self.slices[j] is None and not self.gen_cols[j]]
+        why = ("turning the body onto the asked angle and solving again did not reach it"
+               if not fixed else
+               "no single moving body carries the angle of "
+               + ", ".join(self.labels[j] for j in fixed)
+               + " (its vectors are on ground, between points or global), so the solver "
+                 "cannot turn it onto the asked angle")
         return (f"position solve at t = {t:.6g}: {names} converged to the asked angle plus pi "
-                "(its equation also holds half a turn off), and turning the body onto the asked "
-                "angle and solving again did not reach it. Give a guess nearer the asked angle "
-                "(add_body(..., guess=...) or guess=), or, in a sweep, finer time steps.")
+                f"(its equation also holds half a turn off), and {why}. Give a guess nearer the "
+                "asked angle (add_body(..., guess=...) or guess=), or, in a sweep, finer time "
+                "steps.")
 
 
 def turn(kind: str, qb, angle: float, origin, axis=None) -> np.ndarray:
@@ -155,17 +327,37 @@ def turn(kind: str, qb, angle: float, origin, axis=None) -> np.ndarray:
     return qb
 
 
-def make_guard(system) -> BranchGuard | None:
-    """The :class:`BranchGuard` of a system's angle equations, or None when it has none."""
-    items, seen = [], set()
+def _constraints(system):
+    """``(constraint, label)`` of every constraint whose equations the system holds, once:
+    a switch (StageSwitch, TimeSwitch) gives the constraints of the stage its rows come from
+    (``system.switch_stages``; a model's own system holds every switch's first stage)."""
+    stages = getattr(system, "switch_stages", None) or {}
+    seen = set()
     for owner in system.layout.eq_owner:
-        if id(owner) in seen or not hasattr(owner, "branch"):
+        if id(owner) in seen:
             continue
         seen.add(id(owner))
+        if hasattr(owner, "stage_equations"):
+            k = stages.get(id(owner), 0)
+            if k is None:         # dropped in this stage (free motion): only its held rows
+                continue
+            for c in owner.stages[k]:
+                yield c, f"{owner.label()}, {owner.stage_label(k)}"
+        elif hasattr(owner, "branch"):
+            yield owner, owner.label()
+
+
+def make_guard(system) -> BranchGuard | None:
+    """The :class:`BranchGuard` of a system's angle equations, or None when it has none."""
+    items, labels = [], []
+    for c, label in _constraints(system):
+        if not hasattr(c, "branch"):
+            continue
         try:
-            it = owner.branch(system.space)
+            it = c.branch(system.space)
         except (MechError, TypeError, ValueError, AttributeError):
             it = None       # geometry the test cannot take (the equations were built): no test
         if it is not None:
             items.append(it)
-    return BranchGuard(system, items) if items else None
+            labels.append(label)
+    return BranchGuard(system, items, labels) if items else None

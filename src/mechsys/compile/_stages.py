@@ -64,6 +64,10 @@ def stage_system(model, stages, dropped=()) -> System:
                          index)
     system = System(model.space, layout, eqs, model._p(), model.guess(), backend=model._backend,
                     version=model._version, model=model, loads=list(model._loads))
+    # the stage each switch's rows come from (None: only its held rows), for the branch
+    # guard of the angle drivers inside the stages (compile/_branches.py, decision 0033)
+    system.switch_stages = {id(sw): None if (id(sw), k) in staged else k
+                            for sw, k in zip(switches, stages)}
     cache[key] = system
     return system
 
