@@ -13,7 +13,9 @@ parameters and, per 3D body, ``de = E(e)^T dphi / 2`` (``E`` of ``omega = 2 E(e)
 the Euler forms keep their normalisation to first order.
 The constrained perturbations are the null space of ``Phi_q B`` (computed on the unit-free
 scaled Jacobian, see :class:`~mechsys.solvers._linalg.Scaling`): ``dp = N z`` with ``f`` =
-number of degrees of freedom independent coordinates ``z``, and ``P = B N``.
+number of degrees of freedom independent coordinates ``z``, and ``P = B N``; ``N`` is chosen
+by a column-pivoted QR so that each ``z_k`` is one perturbation coordinate
+(:func:`_null_basis`: a soft coordinate is not mixed with a stiff one).
 
 **Linearisation.** With ``A_q = dR/dq``, ``A_v = dR/dqd``, ``A_a = dR/dqdd`` (derived
 symbolically, so the stiffness includes the *geometric stiffness* ``d(Phi_q^T lambda)/dq``
