@@ -357,3 +357,17 @@ def test_gen_joint_sweeps_at_quarter_turn_steps(monkeypatch, jit):
     assert _same_angle(_angle_of(sol.location(c.point("pin"))), a)
     np.testing.assert_allclose(sol.location(s.point(0))[:, 0],
                                np.cos(a) + np.sqrt(9 - np.sin(a) ** 2), atol=1e-9)
+
+
+def test_an_angle_no_body_carries_is_refused_saying_why():
+    # the angle of a vector between points of two bodies: nothing to turn onto the asked
+    # angle, so the wrong root is an error that says so (not "turning did not reach it")
+    from mechsys.geometry._points import Vector
+
+    m = ms.Model2D()
+    c = m.add_body("crank", points={"pin": (1, 0)}, guess=((0, 0), 0))
+    m.add(ms.Revolute2(m.ground.point((0, 0)), c.point(0)))
+    m.add(ms.RelativeAngle1(Vector(m.ground.point((0, 0)), c.point("pin")),
+                            m.ground.vector((1, 0)), sp.rad(200)), name="drive")
+    with pytest.raises(ms.ConvergenceError, match=r"'drive'.*no single moving body carries"):
+        m.solve(0.0, solution="location")

@@ -73,16 +73,16 @@ class BranchGuard:
         self.dim = space.dim
         self.slices = []      # the regular body turned rigidly (None: none)
         self.gen_cols = []    # per item: the coordinate indices of each Gen joint up the chain
-        self.bodies = []      # per item: the name of the body carrying the angle (or None)
         exprs = []
         for it in items:
             sl, cols, body = None, [], it.body
-            self.bodies.append(None if body is None else body.name)
             # a Gen joint's slave is turned through its joint's coordinates, then its masters'
             while body is not None and getattr(body, "gen_joint", None) is not None:
                 joint = body.gen_joint
-                cols.append((body, np.array([lay.index(c) for c in joint.coordinates],
-                                            dtype=int)))
+                idx = [lay.q_symbols.index(c) for c in joint.coordinates
+                       if c in lay.q_symbols]
+                if idx:       # (a system that fixed the joint's coordinates has none)
+                    cols.append((body, np.array(idx, dtype=int)))
                 body = joint.master
                 if body is not None and getattr(body, "is_ground", False):
                     body = None
@@ -260,8 +260,11 @@ class BranchGuard:
         desc = self._descendants(body)
         if not desc:
             return q
-        cols = np.unique(np.concatenate([[self._system.layout.index(c)
-                                          for c in b.gen_joint.coordinates] for b in desc]))
+        qs = self._system.layout.q_symbols
+        cols = np.array(sorted({qs.index(c) for b in desc for c in b.gen_joint.coordinates
+                                if c in qs}), dtype=int)
+        if not cols.size:
+            return q
         target = self._orientations(t, q_old, p, desc)
         q = q.copy()
         r = self._turned_by(target, self._orientations(t, q, p, desc))
