@@ -371,3 +371,12 @@ def test_an_angle_no_body_carries_is_refused_saying_why():
                             m.ground.vector((1, 0)), sp.rad(200)), name="drive")
     with pytest.raises(ms.ConvergenceError, match=r"'drive'.*no single moving body carries"):
         m.solve(0.0, solution="location")
+
+
+def test_free_motion_starts_on_a_stage_drivers_angle():
+    # a switch's driver kept in free motion: the initial projection uses the stage system's
+    # guard (stage 1 asks 200 deg, the guess is 0)
+    m, c = switched_crank3d()
+    c.mass, c.inertia = 1.0, (1.0, 1.0, 1.0)
+    sol = m.free().simulate(t=(0, 0.3))
+    assert _same_angle(_angle_of(sol.location(c.point("pin"))), _switched_angle(sol.t))
