@@ -379,34 +379,120 @@ def independent_coordinates(system, t, q, p, scaling) -> list:
     return sorted(int(i) for i in piv[m:])
 
 
-def _input_indices(system, inputs) -> tuple:
-    """Positions of the input parameters in ``layout.p_symbols`` (inputs enter the loads:
-    a parameter of the kept constraints would move the configuration itself)."""
+@dataclass(frozen=True)
+class _Inputs:
+    """The inputs by kind: ``params`` (positions in ``layout.p_symbols``), ``loads`` (load
+    objects with a magnitude), ``rows`` (the equation row of each driver); ``kinds`` and
+    ``names`` in the user's order, ``where`` each input's position in its kind's list."""
+
+    names: tuple
+    kinds: tuple
+    where: tuple
+    params: tuple
+    loads: tuple
+    rows: tuple
+
+
+def _inputs(free, inputs) -> _Inputs:
+    """Resolve the input names: a parameter of the loads, a named load with a magnitude
+    (``Force``, ``Moment``, ``Load``: the input adds to the magnitude) or a kept constraint
+    of one equation (a driver: the input is its equation's second time derivative, the
+    driven acceleration). A parameter of the kept constraints moves the configuration
+    itself and is refused."""
+    system = free.system
     lay = system.layout
     pnames = [s.name for s in lay.p_symbols]
-    out = []
     used = set()
     for e in system.phi:
         used |= {s.name for s in sp.sympify(e).free_symbols}
+    loads = {ld.name: ld for ld in system._loads if getattr(ld, "name", None)}
+    names, kinds, where, params, lds, rows = [], [], [], [], [], []
     for u in inputs:
         name = u.name if isinstance(u, sp.Symbol) else u
         if not isinstance(name, str):
-            raise ModelError(f"linearize inputs: name each input by its parameter (a string or "
-                             f"the symbol of m.parameter), got {u!r}")
-        if name not in pnames:
-            hint = ("; declare the input with p = m.parameter(name, 0.0) and use it in the "
-                    "load's magnitude" if pnames else "; the model has no parameters: declare "
-                    "the input with p = m.parameter(name, 0.0) and use it in a load")
-            raise ModelError(f"linearize inputs: {name!r} is not a parameter of this free "
-                             f"system (parameters {pnames}){hint}")
-        if name in used:
-            raise ModelError(f"linearize inputs: parameter {name!r} appears in the kept "
-                             "constraints, so changing it moves the configuration rather than "
-                             "forcing it; inputs are parameters of the loads")
-        if name in out:
+            raise ModelError(f"linearize inputs: name each input (a parameter, a named load or "
+                             f"a kept driver), got {u!r}")
+        if name in names:
             raise ModelError(f"linearize inputs: {name!r} is given twice")
-        out.append(name)
-    return tuple(pnames.index(s) for s in out)
+        if name in pnames:
+            if name in used:
+                raise ModelError(f"linearize inputs: parameter {name!r} appears in the kept "
+                                 "constraints, so changing it moves the configuration rather "
+                                 "than forcing it; inputs are parameters of the loads")
+            kinds.append("parameter")
+            where.append(len(params))
+            params.append(pnames.index(name))
+        elif name in loads:
+            ld = loads[name]
+            if not hasattr(ld, "magnitude"):
+                raise ModelError(f"linearize inputs: load {name!r} ({ld.label()}) has no "
+                                 "magnitude to vary (Force, Moment and Load have); make the "
+                                 "quantity a parameter (m.parameter) and name the parameter")
+            kinds.append("load")
+            where.append(len(lds))
+            lds.append(ld)
+        else:
+            row = _driver_row(free, name)
+            if row is None:
+                raise ModelError(
+                    f"linearize inputs: {name!r} is not a parameter {pnames}, a named load "
+                    f"{sorted(loads)} or a kept constraint of this free system; declare a "
+                    "load magnitude with F = m.parameter('F', 0.0), or name the load "
+                    "(m.add_load(load, name=...))")
+            kinds.append("driver")
+            where.append(len(rows))
+            rows.append(row)
+        names.append(name)
+    return _Inputs(tuple(names), tuple(kinds), tuple(where), tuple(params), tuple(lds),
+                   tuple(rows))
+
+
+def _driver_row(free, name: str):
+    """The equation row of the kept one-equation constraint ``name`` (None when no kept
+    constraint has that name)."""
+    lay = free.system.layout
+    try:
+        c = free.model.constraint(name)
+    except ModelError:
+        return None
+    rows = [i for i, o in enumerate(lay.eq_owner) if o is c]
+    if not rows:
+        if any(c is d for d in free.dropped):
+            raise ModelError(f"linearize inputs: constraint {name!r} is dropped from this free "
+                             "system; a driver input needs the driver kept (m.free(drop=...) "
+                             "without it)")
+        return None
+    if len(rows) != 1:
+        raise ModelError(f"linearize inputs: constraint {name!r} has {len(rows)} equations; a "
+                         "driver input prescribes one (a RotationLock1, a Distance1, ...): "
+                         "drive each motion by a constraint of its own")
+    return rows[0]
+
+
+class _LoadInputs:
+    """Compiled ``dQ/du`` (n, k) of loads whose magnitude is increased by ``u``."""
+
+    def __init__(self, system, model, loads):
+        import copy
+
+        from ..compile._dynamics import generalized_forces
+
+        u = sp.Symbol("_linearize_input")
+        exprs = []
+        for ld in loads:
+            varied = copy.copy(ld)
+            varied.magnitude = ld.magnitude + u
+            Q = generalized_forces(model, [varied], system.layout)
+            exprs += [sp.diff(sp.sympify(e), u).xreplace({u: 0}) for e in Q]
+        self.k, self.n = len(loads), system.n
+        self.dyn = system.dynamics
+        from ..compile._backends import compile_exprs
+
+        self.f = compile_exprs(self.dyn.args(), exprs, system.backend)
+
+    def __call__(self, t, q, qd, qdd, lam, p) -> np.ndarray:
+        v = self.f(self.dyn.pack(t, q, qd, lam, p, qdd))
+        return np.asarray(v, dtype=float).reshape(self.k, self.n).T
 
 
 # -- the linearisation --------------------------------------------------------------------------
@@ -492,8 +578,7 @@ def linearize(free, state=None, inputs: Sequence = (), outputs: Sequence = (),
                          f"({coord_names}); e.g. {_suggest(system, t0, q, p, sc)}")
     if len(set(coord_names)) != len(coord_names):
         raise ModelError(f"linearize coordinates: {coord_names} names one twice")
-    uidx = _input_indices(system, inputs)
-    input_names = tuple(lay.p_symbols[i].name for i in uidx)
+    ins = _inputs(free, inputs)
     out_pairs = [_as_expression(system, o, "outputs") for o in outputs]
     cyc = []
     for c in cyclic:
@@ -503,22 +588,40 @@ def linearize(free, state=None, inputs: Sequence = (), outputs: Sequence = (),
                              f"{coord_names}")
         cyc.append(coord_names.index(name))
 
-    key = (tuple(coord_exprs), tuple(e for _, e in out_pairs), uidx)
+    # compiled once per system and choice of coordinates, outputs and inputs
     cache = system.__dict__.setdefault("_linear_charts", {})
+    key = (tuple(coord_exprs), tuple(e for _, e in out_pairs), ins.params)
     chart = cache.get(key)
     if chart is None:
-        chart = cache[key] = _Chart(system, coord_exprs, [e for _, e in out_pairs], uidx)
+        chart = cache[key] = _Chart(system, coord_exprs, [e for _, e in out_pairs], ins.params)
+    load_kernel = None
+    if ins.loads:
+        lkey = ("loads", tuple(id(ld) for ld in ins.loads))
+        load_kernel = cache.get(lkey)
+        if load_kernel is None:
+            load_kernel = cache[lkey] = (_LoadInputs(system, free.model, ins.loads), ins.loads)
+        load_kernel = load_kernel[0]
     kernel = linear_kernel(system)
     Rq, Rv, Ra = kernel(t0, q, qd, qdd, lam, p)
     cq, cv = kernel.constraints(t0, q, qd, qdd, lam, p)
-    Ru = kernel.parameters(uidx, t0, q, qd, qdd, lam, p) if uidx else np.zeros((n, 0))
     ch = chart(t0, q, qd, qdd, lam, p)
+    # R_u, and S_u: the driver inputs' place in the acceleration constraints
+    nu = len(ins.names)
+    Ru, Su = np.zeros((n, nu)), np.zeros((m, nu))
+    Rp = kernel.parameters(ins.params, t0, q, qd, qdd, lam, p) if ins.params else None
+    Ql = load_kernel(t0, q, qd, qdd, lam, p) if load_kernel is not None else None
+    for j, (kind, w) in enumerate(zip(ins.kinds, ins.where)):
+        if kind == "parameter":
+            Ru[:, j] = Rp[:, w]
+        elif kind == "load":
+            Ru[:, j] = -Ql[:, w]
+        else:
+            Su[ins.rows[w], j] = 1.0
 
     # the chart: K = [Phi_q; h_q] must be nonsingular (judged unit-free)
-    H = ch["hq"].reshape(f, n)
+    H = ch["hq"]
     Kc = np.vstack([J, H])
-    cols = sc.columns
-    Ks = Kc * cols
+    Ks = Kc * sc.columns
     Ks = Ks / np.maximum(np.abs(Ks).max(axis=1), 1e-300)[:, None]
     sv = np.linalg.svd(Ks, compute_uv=False) if n else np.zeros(0)
     if n and not sv[-1] > 1e-10 * sv[0]:
@@ -528,39 +631,46 @@ def linearize(free, state=None, inputs: Sequence = (), outputs: Sequence = (),
             f"are singular, smallest singular value {sv[-1] / sv[0]:.1e} of the largest); "
             f"choose coordinates the constraints leave free, e.g. "
             f"{_suggest(system, t0, q, p, sc)}")
+    # the driven equations' deviations join the chosen coordinates (after them): a driver
+    # input turns its equation into a coordinate whose acceleration is the input
+    drows = list(ins.rows)
+    nd = len(drows)
+    g = f + nd
     lu = sla.lu_factor(Kc)
-    E = np.vstack([np.zeros((m, f)), np.eye(f)])
+    E = np.zeros((n, g))
+    E[m:, :f] = np.eye(f)
+    E[drows, f + np.arange(nd)] = 1.0
     P = sla.lu_solve(lu, E)
-    ydq = ch["ydq"].reshape(f, n)
-    W = -sla.lu_solve(lu, np.vstack([0.5 * cv @ P, ydq @ P]))
+    W = -sla.lu_solve(lu, np.vstack([0.5 * cv @ P, ch["ydq"] @ P]))
     # columns: (dy, dyd, du)
-    nu = len(uidx)
-    dq = np.hstack([P, np.zeros((n, f)), np.zeros((n, nu))])
+    dq = np.hstack([P, np.zeros((n, g)), np.zeros((n, nu))])
     dqd = np.hstack([W, P, np.zeros((n, nu))])
-    du = np.hstack([np.zeros((nu, 2 * f)), np.eye(nu)])
+    du = np.hstack([np.zeros((nu, 2 * g)), np.eye(nu)])
     Kkt = np.block([[Ra, J.T], [J, np.zeros((m, m))]])
-    rhs = -np.vstack([Rq @ dq + Rv @ dqd + Ru @ du, cq @ dq + cv @ dqd])
+    rhs = -np.vstack([Rq @ dq + Rv @ dqd + Ru @ du, cq @ dq + cv @ dqd - Su @ du])
     try:
         dqdd = np.linalg.solve(Kkt, rhs)[:n]
     except np.linalg.LinAlgError:
         raise ModelError("linearize: the mass matrix is singular on the free motions (a "
                          "massless body free to move); give it mass or constrain it") from None
-    G = ch["yddq"].reshape(f, n) @ dq + ch["yddv"].reshape(f, n) @ dqd + H @ dqdd
-    A = np.zeros((2 * f, 2 * f))
-    A[:f, f:] = np.eye(f)
-    A[f:] = G[:, : 2 * f]
-    Bm = np.vstack([np.zeros((f, nu)), G[:, 2 * f :]])
+    G = np.vstack([ch["yddq"] @ dq + ch["yddv"] @ dqd + H @ dqdd,
+                   J[drows] @ dqdd + cq[drows] @ dq + cv[drows] @ dqd])
+    A = np.zeros((2 * g, 2 * g))
+    A[:g, g:] = np.eye(g)
+    A[g:] = G[:, : 2 * g]
+    Bm = np.vstack([np.zeros((g, nu)), G[:, 2 * g :]])
     no = len(out_pairs)
-    if no:
-        O = (ch["oq"].reshape(no, n) @ dq + ch["ov"].reshape(no, n) @ dqd
-             + ch["oa"].reshape(no, n) @ dqdd + ch["op"].reshape(no, nu) @ du)
-    else:
-        O = np.zeros((0, 2 * f + nu))
-    Cm, Dm = O[:, : 2 * f], O[:, 2 * f :]
+    Op = np.zeros((no, nu))
+    for j, (kind, w) in enumerate(zip(ins.kinds, ins.where)):
+        if kind == "parameter":
+            Op[:, j] = ch["op"][:, w]
+    O = ch["oq"] @ dq + ch["ov"] @ dqd + ch["oa"] @ dqdd + Op @ du
+    Cm, Dm = O[:, : 2 * g], O[:, 2 * g :]
 
-    _check_steady(system, coord_names, P, Ra, G[:, :f], ch["yd"].reshape(f),
-                  ch["ydd"].reshape(f), cyc, q, qd, qdd, lam, p, t0, J, sc, tolerance)
-    states = [*coord_names, *(c + "_d" for c in coord_names)]
+    _check_steady(system, coord_names, P[:, :f], Ra, G[:f, :f], ch["yd"], ch["ydd"], cyc, q,
+                  qd, qdd, lam, p, t0, J, sc, tolerance)
+    names = [*coord_names, *(ins.names[k] for k in range(nu) if ins.kinds[k] == "driver")]
+    states = [*names, *(c + "_d" for c in names)]
     if cyc:
         for j in cyc:
             if no and np.abs(Cm[:, j]).max() > 1e-9 * max(np.abs(Cm).max(), 1e-300):
@@ -568,14 +678,14 @@ def linearize(free, state=None, inputs: Sequence = (), outputs: Sequence = (),
                 raise ModelError(f"linearize cyclic: output {out_pairs[k][0]!r} depends on the "
                                  f"position of {coord_names[j]!r}, which cyclic= drops from "
                                  "the state; leave it out of cyclic or of the outputs")
-        keep = [i for i in range(2 * f) if i not in cyc]
+        keep = [i for i in range(2 * g) if i not in cyc]
         A, Bm, Cm = A[np.ix_(keep, keep)], Bm[keep], Cm[:, keep]
         states = [states[i] for i in keep]
     s, stability = judge(A)
     for a in (A, Bm, Cm, Dm, P, s, q, qd, qdd, p):
         a.setflags(write=False)
-    return LinearSystem(A=A, B=Bm, C=Cm, D=Dm, states=tuple(states), inputs=input_names,
-                        outputs=tuple(a for a, _ in out_pairs), coordinates=tuple(coord_names),
+    return LinearSystem(A=A, B=Bm, C=Cm, D=Dm, states=tuple(states), inputs=ins.names,
+                        outputs=tuple(a for a, _ in out_pairs), coordinates=tuple(names),
                         t=t0, q=q, qd=qd, qdd=qdd, p=p, basis=P, eigenvalues=s,
                         stability=stability, stable="unstable" not in stability,
                         model=free.model)
