@@ -667,7 +667,7 @@ def linearize(free, state=None, inputs: Sequence = (), outputs: Sequence = (),
     O = ch["oq"] @ dq + ch["ov"] @ dqd + ch["oa"] @ dqdd + Op @ du
     Cm, Dm = O[:, : 2 * g], O[:, 2 * g :]
 
-    _check_steady(system, coord_names, P[:, :f], Ra, G[:f, :f], ch["yd"], ch["ydd"], cyc, q,
+    _check_steady(system, coord_names, P[:, :f], Rq, Ra, G[:f, :f], ch["yd"], ch["ydd"], cyc, q,
                   qd, qdd, lam, p, t0, J, sc, tolerance)
     names = [*coord_names, *(ins.names[k] for k in range(nu) if ins.kinds[k] == "driver")]
     states = [*names, *(c + "_d" for c in names)]
@@ -718,7 +718,7 @@ def judge(A: np.ndarray) -> tuple:
     return s, stability
 
 
-def _check_steady(system, names, P, Ra, Gy, yd, ydd, cyc, q, qd, qdd, lam, p, t, J, sc, tol):
+def _check_steady(system, names, P, Rq, Ra, Gy, yd, ydd, cyc, q, qd, qdd, lam, p, t, J, sc, tol):
     """The reference must be an equilibrium or a steady motion in the chosen coordinates:
     ``ydd = 0`` and ``d(ydd)/dt = G_y yd = 0``; a ``cyclic`` coordinate's position must not
     act (``G_y`` column zero). Each measured as the generalized force it needs
@@ -732,6 +732,9 @@ def _check_steady(system, names, P, Ra, Gy, yd, ydd, cyc, q, qd, qdd, lam, p, t,
     reach = np.abs(P / sc.columns[:, None]).max(axis=0, initial=0.0)
     unit = np.where(reach > 0, 1.0 / np.where(reach > 0, reach, 1.0), 1.0)
     rate = float(np.max(np.abs(yd) / unit, initial=0.0))
+    # and the forces a unit change of the coordinates brings (a pendulum hanging in a
+    # minimal coordinate has no force acting at all, only its stiffness m g l)
+    ref = max(ref, float(np.abs(Rq @ (P * unit)).max(initial=0.0)))
 
     def force(a):
         return float(np.abs(Ra @ (P @ a)).max(initial=0.0))
