@@ -228,6 +228,16 @@ def test_not_a_steady_motion_and_bad_input():
     # through the bottom with a speed: accelerations zero now, but the motion changes them
     with pytest.raises(ms.NotSteadyError, match="changes the accelerations"):
         free.linearize({"b.th_d": 1.0})
+    # a base shaken by a driver x = 0.1 sin(2 T), at T = 0: at rest relative to the base and
+    # no base acceleration now, but a jerk: the driver changes the accelerations
+    m = pendulum()
+    base = m.add_body("base", mass=1.0, inertia=0.1, guess=((0, 0), 0))
+    m.remove(m.constraints[0])
+    m.add(ms.Translate2(m.ground.axis((0, 0), (1, 0)), base.axis((0, 0), (1, 0))))
+    m.add(ms.RelativeX1(base.point(0), 0.1 * sp.sin(2 * T)), name="shake")
+    m.add(ms.Revolute2(base.point(0), m.body("b").point(0)))
+    with pytest.raises(ms.NotSteadyError, match="the time .* changes the accelerations"):
+        m.free().linearize({"base.x_d": 0.2})
     with pytest.raises(ms.ModelError, match="takes 1 coordinate"):
         free.linearize(coordinates=["b.th", "b.x"])
     with pytest.raises(ms.ModelError, match="not independent"):

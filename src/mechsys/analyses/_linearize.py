@@ -63,7 +63,7 @@ import sympy as sp
 
 from .._errors import MechError, ModelError, NotSteadyError
 from .._symbols import T
-from ..solvers._free import free_acceleration, scaling_at
+from ..solvers._free import free_acceleration, project, scaling_at
 
 try:  # optional
     import symengine as se
@@ -547,8 +547,6 @@ def linearize(free, state=None, inputs: Sequence = (), outputs: Sequence = (),
                          f"{type(state).__name__}")
     sc = scaling_at(system, t0, q, p)
     if isinstance(state, (Solution, State)):
-        from ..solvers._free import project
-
         q, qd = project(system, t0, q, qd, p, scaling=sc)
     else:
         q, qd = free._project_start(t0, q, qd, p, held, sc)
@@ -667,8 +665,22 @@ def linearize(free, state=None, inputs: Sequence = (), outputs: Sequence = (),
     O = ch["oq"] @ dq + ch["ov"] @ dqd + ch["oa"] @ dqdd + Op @ du
     Cm, Dm = O[:, : 2 * g], O[:, 2 * g :]
 
+    along = None
+    if _explicit_time(system):
+        # constraints or loads that change with time (a driver, a time-varying force): the
+        # accelerations' rate along the reference, d(ydd)/dt = G_y yd + d(ydd)/dt|_y, by a
+        # central difference of the reduced accelerations at t -+ h along the motion
+        def along(h):
+            out = []
+            for sgn in (1.0, -1.0):
+                th = t0 + sgn * h
+                qh, qdh = project(system, th, q + sgn * h * qd + 0.5 * h * h * qdd,
+                                  qd + sgn * h * qdd, p, scaling=sc)
+                qddh, lamh, _ = free_acceleration(system, th, qh, qdh, p)
+                out.append(chart(th, qh, qdh, qddh, lamh, p)["ydd"])
+            return (out[0] - out[1]) / (2 * h)
     _check_steady(system, coord_names, P[:, :f], Rq, Ra, G[:f, :f], ch["yd"], ch["ydd"], cyc, q,
-                  qd, qdd, lam, p, t0, J, sc, tolerance)
+                  qd, qdd, lam, p, t0, J, sc, tolerance, along)
     names = [*coord_names, *(ins.names[k] for k in range(nu) if ins.kinds[k] == "driver")]
     states = [*names, *(c + "_d" for c in names)]
     if cyc:
@@ -718,7 +730,18 @@ def judge(A: np.ndarray) -> tuple:
     return s, stability
 
 
-def _check_steady(system, names, P, Rq, Ra, Gy, yd, ydd, cyc, q, qd, qdd, lam, p, t, J, sc, tol):
+def _explicit_time(system) -> bool:
+    """Whether the kept constraints or the loads depend on the time ``T`` explicitly."""
+    flag = getattr(system, "_linear_explicit_time", None)
+    if flag is None:
+        flag = any(T in sp.sympify(e).free_symbols for e in system.phi) or any(
+            T in sp.sympify(e).free_symbols for e in system.dynamics.Q)
+        system._linear_explicit_time = flag
+    return flag
+
+
+def _check_steady(system, names, P, Rq, Ra, Gy, yd, ydd, cyc, q, qd, qdd, lam, p, t, J, sc, tol,
+                  along=None):
     """The reference must be an equilibrium or a steady motion in the chosen coordinates:
     ``ydd = 0`` and ``d(ydd)/dt = G_y yd = 0``; a ``cyclic`` coordinate's position must not
     act (``G_y`` column zero). Each measured as the generalized force it needs
@@ -749,17 +772,24 @@ def _check_steady(system, names, P, Rq, Ra, Gy, yd, ydd, cyc, q, qd, qdd, lam, p
             "about an equilibrium (eq = m.free(solution='static').solve()) or a motion whose "
             "chosen coordinates have constant velocities")
     drift = Gy @ yd
+    if along is not None:
+        # the time scale of the motion and of the linear dynamics sets the step
+        speed = max(rate, float(np.sqrt(np.abs(Gy).max(initial=0.0))), 1e-3)
+        drift = along(1e-4 / speed)
+        rate = speed
     bad = force(drift)
     if rate > 0 and bad > tol * ref * rate and bad > 0:
         worst = np.argsort(-np.abs(drift) / unit)[:3]
         moving = [names[j] for j in range(len(names)) if yd[j] != 0]
         listed = ", ".join(f"{names[i]} changes at {drift[i]:.3g}/s" for i in worst
                            if drift[i] != 0)
+        what = (f"the motion of {moving}" + (" or the time" if along else "") if moving
+                else "the time (a driver or load that depends on T)")
         raise NotSteadyError(
-            f"linearize: not a steady motion: the motion of {moving} changes the accelerations "
+            f"linearize: not a steady motion: {what} changes the accelerations "
             f"(acceleration of {listed}); the coordinates that move must be cyclic (the "
-            "motion must not depend on them). Choose coordinates in which the motion is "
-            "steady, or linearise about an equilibrium")
+            "motion must not depend on them) and drivers and loads steady. Choose "
+            "coordinates in which the motion is steady, or linearise about an equilibrium")
     for j in cyc:
         col = Gy[:, j] * unit[j]
         if force(col) > tol * max(ref, 1e-300) and force(col) > 0:
