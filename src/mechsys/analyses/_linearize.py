@@ -634,12 +634,12 @@ def linearize(free, state=None, inputs: Sequence = (), outputs: Sequence = (),
     drows = list(ins.rows)
     nd = len(drows)
     g = f + nd
-    lu = sla.lu_factor(Kc)
     E = np.zeros((n, g))
     E[m:, :f] = np.eye(f)
     E[drows, f + np.arange(nd)] = 1.0
-    P = sla.lu_solve(lu, E)
-    W = -sla.lu_solve(lu, np.vstack([0.5 * cv @ P, ch["ydq"] @ P]))
+    # (numpy's solve: SciPy's lu_solve costs 30 ms a call on this machine's BLAS set-up)
+    P = np.linalg.solve(Kc, E)
+    W = -np.linalg.solve(Kc, np.vstack([0.5 * cv @ P, ch["ydq"] @ P]))
     # columns: (dy, dyd, du)
     dq = np.hstack([P, np.zeros((n, g)), np.zeros((n, nu))])
     dqd = np.hstack([W, P, np.zeros((n, nu))])
