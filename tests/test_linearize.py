@@ -103,6 +103,7 @@ def test_constrained_model_matches_its_minimal_twin():
     a, b = full.model.body("a"), full.model.body("b")
     rel = full.linearize(absolute_state(full), coordinates=[a.q[2], ("q2", b.q[2] - a.q[2])])
     assert rel.A == pytest.approx(minimal.A, rel=1e-10, abs=1e-10)
+    assert rel.states == ("a.th", "q2", "a.th_d", "q2_d")
 
 
 def absolute_state(free):
@@ -150,8 +151,18 @@ def test_inverted_pendulum_on_a_cart_textbook():
     # controllable from the force; scipy's state space holds the same matrices
     Cm = lin.controllability()
     assert np.linalg.matrix_rank(Cm) == 4 and lin.controllable
-    sys = lin.to_scipy()
-    assert isinstance(sys, ss.StateSpace) and np.array_equal(sys.A, lin.A)
+    plant = lin.to_scipy()
+    assert isinstance(plant, ss.StateSpace) and np.array_equal(plant.A, lin.A)
+    # the step response of the linear plant from scipy: x'' = (J/p) F at the first instant
+    _, y, _ = ss.lsim(plant, U=np.column_stack([np.ones(3), np.zeros(3)]), T=[0, 1e-4, 2e-4])
+    assert y[-1, 0] == pytest.approx(0.5 * B[2] * (2e-4) ** 2, rel=1e-3)
+    try:
+        import control  # noqa: F401
+    except ImportError:  # python-control is optional: a named error says how to get it
+        with pytest.raises(ms.MechError, match="pip install control"):
+            lin.to_control()
+    else:  # pragma: no cover - not installed here
+        assert np.array_equal(lin.to_control().A, lin.A)
     # the pole's angle alone does not see the cart's position
     pole_only = free.linearize(coordinates=["cart.x", "pole.th"])
     assert pole_only.B.shape == (4, 0) and not pole_only.controllable

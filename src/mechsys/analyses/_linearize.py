@@ -320,6 +320,8 @@ def _as_expression(system, e, what: str):
         raise ModelError(f"linearize {what}: {e!r} is not a scalar expression")
     if system.gen_subs:
         expr = expr.xreplace(system.gen_subs)
+    if name is None and expr in lay.q_symbols:  # a coordinate's symbol: its "body.x" name
+        name = lay.q_names[lay.q_symbols.index(expr)]
     allowed = {*lay.q_symbols, *lay.qd_symbols, *lay.qdd_symbols, *lay.p_symbols, T}
     extra = expr.free_symbols - allowed
     if extra:
