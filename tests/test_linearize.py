@@ -261,3 +261,43 @@ def test_not_a_steady_motion_and_bad_input():
         free.linearize(tolerance=2)
     with pytest.raises(ms.ModelError, match="not coordinates"):
         free.linearize(outputs=[sp.Symbol("zz")])
+    # inputs that cannot be one: gravity has no magnitude, a joint of two equations, a
+    # dropped driver; an output that needs a dropped (cyclic) position
+    cp = cart_pole(driven=True)
+    cp.add_load(ms.Gravity((0, -1), 1.0), name="g2")
+    with pytest.raises(ms.ModelError, match="load 'g2' .* has no magnitude"):
+        cp.free().linearize({"cart.x_d": 1.5}, inputs=["g2"], coordinates=["pole.th"])
+    cp.constraints[1].name = "pin"
+    with pytest.raises(ms.ModelError, match="'pin' has 2 equations"):
+        cp.free().linearize({"cart.x_d": 1.5}, inputs=["pin"], coordinates=["pole.th"])
+    with pytest.raises(ms.ModelError, match="'drive' is dropped"):
+        cp.free(drop=["drive"]).linearize(inputs=["drive"])
+    with pytest.raises(ms.ModelError, match="output 'cart.x' depends on the position"):
+        cart_pole().free().linearize(coordinates=["cart.x", "pole.th"], cyclic=["cart.x"],
+                                     outputs=["cart.x"])
+
+
+@pytest.mark.parametrize("kb", [1e4, 1e12])
+def test_each_eigenvalue_judged_on_its_own_scale(kb):
+    """An upright pendulum on a torsion spring slightly too weak (s = +-0.012 1/s) beside a
+    slider on a stiff spring (s = +-i sqrt(kb)), the model of tests/test_trust_vibration.py:
+    the slow capsize is unstable whatever the stiff mode; with the spring just strong enough
+    the double zero is neutral; a damper makes the stiff pair stable."""
+    from test_trust_vibration import pendulum_beside_stiff_spring
+
+    m = pendulum_beside_stiff_spring(kb=kb)
+    lin = m.free().linearize(coordinates=["pend.th", "slider.x"])
+    s = lin.eigenvalues
+    by = {c: [x for x, k in zip(s, lin.stability) if k == c] for c in set(lin.stability)}
+    assert sorted(lin.stability) == ["neutral", "neutral", "stable", "unstable"]
+    assert by["unstable"][0].real == pytest.approx(0.012, rel=1e-6)
+    assert by["stable"][0].real == pytest.approx(-0.012, rel=1e-6)
+    assert sorted(abs(x.imag) for x in by["neutral"]) == pytest.approx([np.sqrt(kb)] * 2,
+                                                                       rel=1e-12)
+    assert not lin.stable
+    neutral = pendulum_beside_stiff_spring(s_up=0.0, kb=kb).free().linearize(
+        coordinates=["pend.th", "slider.x"])
+    assert neutral.stable and set(neutral.stability) == {"neutral"}
+    damped = pendulum_beside_stiff_spring(kb=kb, c=10.0).free().linearize(
+        coordinates=["pend.th", "slider.x"])
+    assert sorted(damped.stability) == ["stable", "stable", "stable", "unstable"]
