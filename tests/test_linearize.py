@@ -306,3 +306,39 @@ def test_each_eigenvalue_judged_on_its_own_scale(kb):
     damped = pendulum_beside_stiff_spring(kb=kb, c=10.0).free().linearize(
         coordinates=["pend.th", "slider.x"])
     assert sorted(damped.stability) == ["stable", "stable", "stable", "unstable"]
+
+
+@pytest.mark.parametrize("scale", [1.0, 1000.0])
+def test_closed_loop_parallelogram_closed_form(scale):
+    """A hanging parallelogram four-bar (crank and rocker of length L, a coupler body that
+    translates): one degree of freedom of a closed loop, the pendulum
+    w^2 = g (m1 c1 + m3 c3 + m2 L) / (I1o + I3o + m2 L^2) (I1o, I3o about the pivots).
+    QR picks the coordinate; the same in millimetres; vibration agrees."""
+    L, d = 1.0 * scale, 3.0 * scale
+    (m1, c1, i1), (m2, i2), (m3, c3, i3) = (1.0, 0.4, 0.05), (0.5, 0.3), (0.8, 0.6, 0.07)
+    c1, c3 = c1 * scale, c3 * scale
+    i1, i2, i3 = (i * scale**2 for i in (i1, i2, i3))
+    m = ms.Model2D()
+    cr = m.add_body("crank", points={"tip": (L, 0)}, mass=m1, centroid=(c1, 0), inertia=i1,
+                    guess=((0, 0), -np.pi / 2 + 0.1))
+    cp = m.add_body("coupler", points={"b": (d, 0)}, mass=m2, centroid=(d / 2, 0), inertia=i2,
+                    guess=((0.1 * L, -L), 0.0))
+    ro = m.add_body("rocker", points={"tip": (L, 0)}, mass=m3, centroid=(c3, 0), inertia=i3,
+                    guess=((d, 0), -np.pi / 2 + 0.1))
+    m.add(ms.Revolute2(m.ground.point((0, 0)), cr.point(0)))
+    m.add(ms.Revolute2(m.ground.point((d, 0)), ro.point(0)))
+    m.add(ms.Revolute2(cr.point("tip"), cp.point(0)))
+    m.add(ms.Revolute2(cp.point("b"), ro.point("tip")))
+    m.add_load(ms.Gravity((0, -1), G * scale))
+    eq = m.free(solution="static").solve()
+    lin = m.free().linearize(eq, outputs=["coupler.x"])
+    w2 = G * (m1 * c1 + m3 * c3 + m2 * L) / ((i1 + m1 * c1**2) + (i3 + m3 * c3**2) + m2 * L**2)
+    w2 *= scale  # g and lengths scaled together: the frequency is that of metres
+    assert lin.A.shape == (2, 2)
+    assert ordered(lin.eigenvalues) == pytest.approx([-1j * np.sqrt(w2), 1j * np.sqrt(w2)],
+                                                    rel=1e-9)
+    # the coupler's x moves with the crank angle: dx = L dth (at the hanging position)
+    k = lin.coordinates[0]
+    per_unit = {"crank.th": L, "rocker.th": L}.get(k, 1.0)
+    assert abs(lin.C[0, 0]) == pytest.approx(per_unit, rel=1e-9)
+    assert m.vibration(at=eq).omega == pytest.approx([np.sqrt(w2)], rel=1e-9)
