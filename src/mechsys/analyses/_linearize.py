@@ -507,8 +507,10 @@ def linearize(free, state=None, inputs: Sequence = (), outputs: Sequence = (),
     ``state``: a Solution/State (its last point), a mapping of coordinate, ``<name>_d``
     velocity and parameter values applied to the free system's start (as
     ``initial_condition``), or None (the free system's start); the state is projected on
-    the kept constraints, keeping the values given. ``inputs``: parameter names (the loads'
-    magnitudes: ``F = m.parameter("F", 0.0)``; the input is the parameter's change).
+    the kept constraints, keeping the values given. ``inputs``: names of parameters of the
+    loads (``F = m.parameter("F", 0.0)``; the input is the parameter's change), of named
+    loads with a magnitude (the input adds to it) or of kept one-equation drivers (the input
+    is the driven acceleration; the driver's deviation and rate become states).
     ``outputs``: coordinate names, ``<name>_d``/``<name>_dd`` names or SymPy expressions of
     ``T``, coordinates, velocities, accelerations and parameters (optionally ``(name,
     expression)`` pairs). ``coordinates``: ``f`` coordinate names or expressions of the
@@ -539,8 +541,7 @@ def linearize(free, state=None, inputs: Sequence = (), outputs: Sequence = (),
     # the reference state
     if isinstance(state, (Solution, State)):
         t0 = float(np.atleast_1d(state.t)[-1]) if t is None else float(t)
-        q, qd, p, held = free._start(state)
-        held = {"q": set(range(n)), "qd": set()}
+        q, qd, p, _ = free._start(state)
     elif state is None or isinstance(state, Mapping):
         t0 = 0.0 if t is None else float(t)
         q, qd, p, held = free._start(state)
