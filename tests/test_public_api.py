@@ -95,6 +95,11 @@ REQUIRED_TOP_LEVEL |= {"from_urdf", "from_mjcf", "JointValues"}
 REQUIRED_MEMBERS["Model"] |= {"inverse_dynamics", "forward_dynamics", "forward_kinematics", "to_urdf",
                               "to_mjcf"}
 REQUIRED_IN_MODULE["mechsys.io"] |= {"from_urdf", "from_mjcf", "ImportReport"}
+#: Issue 36: linearisation to state space (decision 0047).
+REQUIRED_TOP_LEVEL |= {"LinearSystem", "NotSteadyError"}
+REQUIRED_MEMBERS["FreeSystem"] = {"linearize", "solve", "simulate"}
+REQUIRED_MEMBERS["LinearSystem"] = {"A", "B", "C", "D", "eigenvalues", "stability", "stable",
+                                    "to_scipy", "to_control", "controllability", "controllable"}
 
 def test_all_contains_the_required_names():
     missing = REQUIRED_TOP_LEVEL - set(mechsys.__all__)
@@ -131,7 +136,7 @@ def test_public_modules_export_required_names(module):
 def test_required_members(cls):
     obj = getattr(mechsys, cls)
     missing = {m for m in REQUIRED_MEMBERS[cls] if not hasattr(obj, m)}
-    if cls == "Solution":  # dataclass fields are instance attributes
+    if cls in ("Solution", "LinearSystem"):  # dataclass fields are instance attributes
         missing -= {f for f in obj.__dataclass_fields__}
     assert not missing, f"mechsys.{cls} lost {sorted(missing)}"
 

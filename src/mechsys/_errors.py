@@ -36,6 +36,11 @@ class GeometryError(ModelError):
     """A geometric argument is degenerate or has the wrong dimension (zero-length axis, ...)."""
 
 
+class NotSteadyError(ModelError):
+    """A linearisation's reference state is not an equilibrium or a steady motion in the
+    chosen coordinates (an acceleration is not zero, or the motion changes them)."""
+
+
 class ConstraintCountError(MechError):
     """The model has the wrong number of degrees of freedom for the requested analysis."""
 

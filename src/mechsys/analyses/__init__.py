@@ -8,6 +8,7 @@ simulates, not when it is built.
 
 from ._couple import Configuration, CoupleSolution, CoupleSystem, Free, FreeTime
 from ._free import FreeSystem
+from ._linearize import LinearSystem
 from ._lock import LockedModel
 from ._multistage import FindSwitchTime, FindTime, find_switch_time, find_time
 from ._path import PathSystem
@@ -15,5 +16,5 @@ from ._sweep import sweep
 from ._vibration import VibrationModes
 
 __all__ = ["Configuration", "CoupleSolution", "CoupleSystem", "FindSwitchTime", "FindTime", "Free",
-           "FreeSystem", "FreeTime", "LockedModel", "PathSystem", "VibrationModes", "find_switch_time",
-           "find_time", "sweep"]
+           "FreeSystem", "FreeTime", "LinearSystem", "LockedModel", "PathSystem", "VibrationModes",
+           "find_switch_time", "find_time", "sweep"]

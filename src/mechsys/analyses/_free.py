@@ -226,6 +226,29 @@ class FreeSystem:
         return (f"<FreeSystem ({self.kind}): dropped {names}; {self.dof} DOF; "
                 f"{'linear' if self.linear else 'nonlinear'}>")
 
+    def linearize(self, state=None, inputs=(), outputs=(), coordinates=None, cyclic=(),
+                  t: float | None = None, tolerance: float = 1e-6):
+        r"""Linearise about an equilibrium or a steady motion to state space
+        :math:`\dot x = A x + B u`, :math:`y = C x + D u` (a :class:`~mechsys.LinearSystem`
+        with ``A, B, C, D``, ``eigenvalues``, per-eigenvalue ``stability`` and
+        ``to_scipy()``). ``state``: a Solution/State or a mapping of coordinate, velocity
+        and parameter values (the free system's start by default); ``inputs``: parameter
+        names (the loads' magnitudes); ``outputs``: names or expressions of the state;
+        ``coordinates``: the state's coordinates (names or expressions; default independent
+        coordinates chosen by column-pivoted QR); ``cyclic``: coordinates whose positions
+        leave the state. A state that is not steady raises :class:`~mechsys.NotSteadyError`.
+        See ``docs/vibration.md`` (state space) and decision 0047.
+
+        Example::
+
+            lin = m.free().linearize(eq, inputs=["F"], outputs=["cart.x"])
+            lin.eigenvalues, lin.stable, lin.to_scipy()
+        """
+        from ._linearize import linearize
+
+        return linearize(self, state, inputs=inputs, outputs=outputs, coordinates=coordinates,
+                         cyclic=cyclic, t=t, tolerance=tolerance)
+
     # -- initial conditions -----------------------------------------------------------------
     def _params(self, given=None) -> np.ndarray:
         """Parameter values now: the model's (by symbol, so parameters declared after

@@ -49,15 +49,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as sla
-import sympy as sp
 
 from .._errors import ModelError
 from ..solvers._free import free_acceleration, project, project_positions, scaling_at
-
-try:  # optional
-    import symengine as se
-except ImportError:  # pragma: no cover
-    se = None
+from ._linearize import linear_kernel
 
 
 def _E(e) -> np.ndarray:
@@ -225,61 +220,6 @@ class VibrationModes:
                 f"{'stable' if self.stable else 'UNSTABLE'}>\n" + self.table())
 
 
-class _Linearisation:
-    """Compiled ``A_q, A_v, A_a`` (sparse) of ``R = M qdd + Phi_q^T lambda - Q - Qv``."""
-
-    def __init__(self, system):
-        dyn = system.dynamics
-        lay = system.layout
-        if dyn.depends_on_lambda:
-            raise ModelError(
-                "vibration: a load depends on the constraint multipliers (joint friction); "
-                "Coulomb friction is not smooth at rest, so the motion has no linearisation. "
-                "Remove the friction loads (m.remove_load) or replace them by viscous dampers")
-        n = system.n
-        native = se is not None and system.backend == "symengine"
-        conv = se.sympify if native else sp.sympify
-        R = [conv(0)] * n
-        for r, c, e in zip(dyn.M_rows, dyn.M_cols, dyn.for_compile("M")):
-            R[r] = R[r] + conv(e) * conv(lay.qdd_symbols[c])
-        for r, c, e in zip(system.jac_rows, system.jac_cols,
-                           system.kinematic_exprs("jac", for_compile=native)):
-            R[c] = R[c] + conv(e) * conv(system.lam_symbols[r])
-        QQ = dyn.for_compile("Q+Qv") if native else [a + b for a, b in zip(dyn.Q, dyn.Qv)]
-        R = [a - conv(b) for a, b in zip(R, QQ)]
-        self.parts = {}
-        exprs = []
-        for key, wrt in (("q", lay.q_symbols), ("v", lay.qd_symbols), ("a", lay.qdd_symbols)):
-            rows, cols = [], []
-            wrt_c = [conv(w) for w in wrt]
-            for i, e in enumerate(R):
-                free = e.free_symbols
-                for j, w in enumerate(wrt_c):
-                    if w in free:
-                        d = e.diff(w)
-                        if d != 0:
-                            rows.append(i)
-                            cols.append(j)
-                            exprs.append(d)
-            self.parts[key] = (np.array(rows, dtype=int), np.array(cols, dtype=int))
-        from ..compile._backends import compile_exprs
-
-        self.f = compile_exprs(dyn.args(), exprs, system.backend)
-        self.n = n
-        self.dyn = dyn
-
-    def __call__(self, t, q, qd, qdd, lam, p):
-        vals = self.f(self.dyn.pack(t, q, qd, lam, p, qdd))
-        out, k = {}, 0
-        for key in ("q", "v", "a"):
-            rows, cols = self.parts[key]
-            A = np.zeros((self.n, self.n))
-            np.add.at(A, (rows, cols), vals[k : k + len(rows)])
-            out[key] = A
-            k += len(rows)
-        return out["q"], out["v"], out["a"]
-
-
 def _reference(model, system, at, t):
     """``(t, q, qd)`` of the reference state given as ``at``."""
     n = system.n
@@ -372,11 +312,8 @@ def vibration(model, at=None, drop=(), t=None, tolerance: float = 1e-6,
                          "reference state; drop the drivers (drop=[...]) whose motion should be free")
     P = B @ N
     # the perturbation frame turns with the bodies: B is linear in e, so P' = B(e_dot) N
-    lin = getattr(system, "_vibration_kernel", None)
-    if lin is None:
-        lin = _Linearisation(system)
-        system._vibration_kernel = lin
-    Aq, Av, Aa = lin(t0, q, qd, qdd, lam, p)
+    # the exact derivatives of the equations of motion: the same kernel as free.linearize
+    Aq, Av, Aa = linear_kernel(system)(t0, q, qd, qdd, lam, p)
     Pd = _rate(system, qd) @ N
     Pdd = _rate(system, qdd) @ N
     if W is not None:  # the perturbation frame turns with the rotating frame: R' = W R
@@ -387,7 +324,7 @@ def vibration(model, at=None, drop=(), t=None, tolerance: float = 1e-6,
     Cr = P.T @ (Av @ P + 2 * Aa @ Pd)
     Kr = P.T @ (Aq @ P + Av @ Pd + Aa @ Pdd)
 
-    _check_steady(system, B, P, q, qd, qdd, lam, p, t0, tolerance, W)
+    _check_steady(system, B, P, q, qd, qdd, lam, p, t0, tolerance, W, Aq)
     s, Z, real = _eigen(Mr, Cr, Kr)
     shapes = (P @ Z).T
     unit = np.where(_coordinate_translation(system), sc.length, 1.0)
@@ -560,7 +497,7 @@ def _rate(system, x) -> np.ndarray:
     return keep
 
 
-def _check_steady(system, B, P, q, qd, qdd, lam, p, t, tol, W=None):
+def _check_steady(system, B, P, q, qd, qdd, lam, p, t, tol, W=None, Aq=None):
     """The reference must be an equilibrium or a steady motion: the bodies' linear and
     global angular accelerations vanish (in a rotating frame ``W``: equal ``W rdot`` and
     ``W omega``, those of a motion carried by the frame). Measured as the generalized force
@@ -588,6 +525,9 @@ def _check_steady(system, B, P, q, qd, qdd, lam, p, t, tol, W=None):
     J = system.jacobian(t, q, p) if system.m else np.zeros((0, system.n))
     forces = np.abs(Q) + np.abs(Qv) + np.abs(Mm @ qdd) + np.abs(J.T @ lam)
     ref = float(forces.max(initial=0.0))
+    if Aq is not None:  # and the forces of a unit-free displacement (P's columns are unit
+        # steps): a pendulum hanging in a generalized coordinate has no force acting at all
+        ref = max(ref, float(np.abs(Aq @ P).max(initial=0.0)))
     bad = float(np.abs(unsteady).max(initial=0.0))
     if bad > tol * ref and bad > 0:
         names = system.layout.q_names
