@@ -24,8 +24,9 @@ $(STAMP): pyproject.toml $(VENV)/bin/python
 demo: $(CORE)
 	$(VENV)/bin/mechsys demo --out out
 
+# two workers (pytest-xdist): this project's machines have two cores (decision 0052)
 test: $(STAMP)
-	$(PY) -m pytest tests
+	$(PY) -m pytest -n 2 tests
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check src tests examples benchmarks docs/conf.py docs/_gen
