@@ -40,6 +40,8 @@ def build():
           name="attitude")
     m.add(ms.RelativeX1(disk.point(0), 0.0), name="dummy x")
     m.add(ms.RelativeY1(disk.point(0), R * np.sin(LEAN)), name="dummy y")
+    # a thin disk for the pictures: a short cylinder about the axis
+    ms.draw.attach(m, ms.draw.Cylinder(disk, (0, -0.01, 0), (0, 0.01, 0), radius=R))
     m.solve(0.0)
     return m, roll, m.path(replace={("dummy x", "dummy y"): roll})
 
