@@ -3,7 +3,8 @@ r"""Nonholonomic systems (Mech's ``SetPath`` / ``SolvePath``, manual 10.5).
 A fully constrained kinematic model carries *dummy* constraints that hold its place; ``path``
 replaces them by *velocity constraints* ``psi(q, qd, t) = 0`` (normal constraint objects
 whose geometry depends on velocities, e.g. ``Orthogonal1(m.velocity(p), body.vector(...))``,
-or a general ``Constraint`` with velocity terms). At each instant the velocities follow
+a general ``Constraint`` with velocity terms, or a rolling contact such as ``RollingDisk2``,
+which replaces a tuple of as many dummies as it has equations). At each instant the velocities follow
 from the kept holonomic constraints and the velocity constraints together::
 
     Phi_q(q, t) qd + Phi_t(q, t) = 0          (holonomic, m - k rows)
