@@ -162,3 +162,25 @@ def test_path_refuses_a_velocity_constraint_given_twice():
     m.add(ms.RelativeX1(w.point(0), 0.0), name="d1")
     with pytest.raises(ms.ModelError, match="replaces two entries"):
         m.path(replace={"d1": roll, "turn": roll})
+
+
+def test_radius_with_units_in_a_model_in_millimetres(python_stepper):
+    """A radius of 500 mm in a model in millimetres: the same motion as 500 in numbers."""
+    pint = pytest.importorskip("pint")
+    Q = pint.get_application_registry().Quantity
+    xs = []
+    for rad in (Q(0.5, "m"), 500.0):
+        m = ms.Model2D()
+        m.set_units(length="mm", mass="kg", time="s")
+        wheel = m.add_body("wheel", guess=((0.0, 500.0), 0.0))
+        roll = ms.RollingCircle1(wheel.point(0), rad, m.ground.axis((0, 0), (1, 0)))
+        m.add(roll.holonomic(), name="touch")
+        m.add(ms.RotationLock1(wheel, -T), name="turn")
+        m.add(ms.RelativeX1(wheel.point(0), 0.0), name="dummy")
+        m.solve(0.0)
+        sol = m.path(replace={"dummy": roll}).simulate(np.array([0.0, 1.0]), rtol=1e-10,
+                                                       atol=1e-12)
+        xs.append(sol.location(wheel.point(0))[-1, 0])
+    np.testing.assert_allclose(xs, [500.0, 500.0], rtol=1e-9)
+    with pytest.raises(ms.GeometryError, match="RollingCircle1 rad"):
+        ms.RollingCircle1(wheel.point(0), Q(-1.0, "mm"), m.ground.axis((0, 0), (1, 0)))

@@ -32,6 +32,7 @@ from .._errors import MechError, ModelError, SingularJacobianError
 from .._symbols import T
 from ..compile import compile_exprs
 from ..constraints import ConstraintBase, velocity_rows
+from ..geometry._units import resolve
 from ..results._solution import Solution, State
 from ..solvers._free import project_positions, scaling_at
 from ..solvers._integrators import (
@@ -102,6 +103,10 @@ class PathSystem:
                                  "it once, with a tuple of the dummies it replaces as the key")
             seen.append(vc)
             _check_own(model, d, vc)
+            # lengths given with units (a rolling radius of 300 mm) in the model's units, as
+            # m.add does for the constraints of the model
+            resolve(vc, model.units, vc.label())
+            vc._cache.clear()
             vc.name = vc.name or ("velocity constraint replacing "
                                   + ", ".join(repr(g.name) for g in group))
             vc.number = vc.number if vc.number is not None else d.number

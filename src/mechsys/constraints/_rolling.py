@@ -35,6 +35,7 @@ import sympy as sp
 from .._errors import GeometryError
 from .._symbols import T, velocity_symbol
 from ..geometry._points import Point, as_axis, as_point
+from ..geometry._units import is_quantity
 from . import _primitives as P
 from ._base import ConstraintBase, _local_symbols, as_expr
 from ._velocity import linear_velocity_form
@@ -43,6 +44,14 @@ from ._velocity import linear_velocity_form
 def positive_radius(value, what: str) -> sp.Expr:
     """A radius: a positive finite number, or an expression of parameters (checked when
     numeric); time-dependent radii are refused (the rolling equations treat it as fixed)."""
+    if is_quantity(value):      # a length with its unit: converted when the model is known
+        try:
+            x = float(value.magnitude)
+        except (TypeError, ValueError):
+            x = math.nan
+        if not (math.isfinite(x) and x > 0):
+            raise GeometryError(f"{what} must be a positive finite length, got {value!r}; "
+                                "give the radius of the rolling body (> 0)")
     r = as_expr(value, what)
     if r.is_number:
         try:
