@@ -253,6 +253,18 @@ CATALOGUE = [
     ("import", 'ms.from_urdf("no_such_robot.urdf")', "ModelError", "no_such_robot.urdf"),
     ("import", 'ms.from_mjcf(".")', "ModelError", "not a regular file"),
     ("import", 'crank().inverse_dynamics([0.0], [0.0], [0.0])', "ModelError", "inverse_dynamics"),
+    # rolling constraints (decision 0046)
+    ("path", 'm = ms.Model3D(); b = m.add_body("disk"); '
+     'ms.RollingDisk2(m.ground.axis((0, 0, 0), (0, 0, 1)), b.axis(0, (0, 1, 0)), 0)',
+     "GeometryError", "RollingDisk2 rad"),
+    ("path", 'm = ms.Model2D(); b = m.add_body("wheel"); '
+     'ms.RollingCircle1(b.point(0), float("nan"), m.ground.axis((0, 0), (1, 0)))',
+     "GeometryError", "RollingCircle1 rad"),
+    ("path", 'm = ms.Model3D(); ms.RollingSphere2(m.ground.axis((0, 0, 0), (0, 0, 1)), '
+     '(0, 0, 1), 0.2)', "GeometryError", "centre"),
+    ("path", 'm = ms.Model2D(); b = m.add_body("w"); '
+     'ms.linear_velocity_form(ms.Constraint([m.velocity_symbols()[b.q[0]] ** 2]), m)',
+     "ModelError", "not linear"),
 ]
 
 

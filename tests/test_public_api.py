@@ -49,13 +49,18 @@ REQUIRED_TOP_LEVEL |= {"Configuration", "CoupleSystem", "CoupleSolution", "Free"
 #: Vibration and the features users looked for at once (issue 17).
 REQUIRED_TOP_LEVEL |= {"VibrationModes", "TorsionSpring", "TorsionDamper", "tabulated"}
 
+#: Rolling without slip (issue 36 item 2, decision 0046): velocity constraints A(q) qd = 0.
+REQUIRED_TOP_LEVEL |= {"RollingDisk2", "RollingSphere2", "RollingCircle1", "RollingContact",
+                       "linear_velocity_form"}
+
 #: Public subpackages and modules; every other module is private (``_name.py``).
 PUBLIC_MODULES = {"constraints", "compile", "solvers", "testing", "draw", "models", "cli", "model",
                   "geometry", "loads", "analyses", "results", "io"}
 
 REQUIRED_IN_MODULE = {
     "mechsys.constraints": {"REGISTRY", "ConstraintBase", "Constraint", "Variable", "register",
-                            "constraint_types"},
+                            "constraint_types", "velocity_rows", "VelocityRows",
+                            "linear_velocity_form"},
     "mechsys.compile": {"System", "Layout", "compile_exprs", "available_backends",
                         "default_backend"},
     "mechsys.solvers": {"PositionOptions", "PositionResult", "solve_position",

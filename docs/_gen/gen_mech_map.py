@@ -490,7 +490,13 @@ def entries() -> list[Entry]:
 
     rows = []
     for name in sorted(set(MANUAL_CONSTRAINTS) | set(REGISTRY)):
-        if name in REGISTRY:
+        if name in REGISTRY and getattr(REGISTRY[name], "order", 0) == 1:
+            # the rolling contacts (decision 0046) have no Mech name: Mech writes them with
+            # Constraint and velocities (manual 10.5)
+            rows.append(Entry(name, "Constraints", (f"mechsys.{name}",),
+                              "mechsys's own, not a Mech name: rolling without slip, a "
+                              "velocity constraint for m.path (Mech: Constraint of velocities)"))
+        elif name in REGISTRY:
             rows.append(Entry(name, "Constraints", (f"mechsys.{name}",)))
         elif hasattr(mechsys, name):
             # joints that write no equations (the Gen joints of chapter 11) are not registered

@@ -42,6 +42,9 @@ direction. The docstrings (`help(ms.Revolute2)`) carry the same equations in pla
 
 "DOF removed" is the number of equations minus the number of new variables the constraint
 introduces; a driver (an expression of `T` in any scalar argument) removes the same number.
+The rolling constraints (`RollingDisk2`, `RollingSphere2`, `RollingCircle1`) are *velocity*
+constraints, linear in the velocities: their equations go to a path system
+([nonholonomic.md](nonholonomic.md)), and their position part is `roll.holonomic()`.
 """
 
 

@@ -1331,7 +1331,9 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
 
     def path(self, replace, initial_condition=None):
         """Replace dummy constraints by velocity constraints (Mech's ``SetPath``):
-        ``replace={dummy: velocity_constraint}``. Returns a :class:`PathSystem` whose
+        ``replace={dummy: velocity_constraint}``; a velocity constraint of ``k`` equations
+        (a rolling contact, ``RollingDisk2``) takes the places of a tuple of ``k`` dummies,
+        ``replace={("dummy x", "dummy y"): roll}``. Returns a :class:`PathSystem` whose
         ``simulate`` integrates the nonholonomic motion (``SolvePath``)."""
         from .analyses._path import PathSystem
 

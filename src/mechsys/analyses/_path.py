@@ -3,7 +3,8 @@ r"""Nonholonomic systems (Mech's ``SetPath`` / ``SolvePath``, manual 10.5).
 A fully constrained kinematic model carries *dummy* constraints that hold its place; ``path``
 replaces them by *velocity constraints* ``psi(q, qd, t) = 0`` (normal constraint objects
 whose geometry depends on velocities, e.g. ``Orthogonal1(m.velocity(p), body.vector(...))``,
-or a general ``Constraint`` with velocity terms). At each instant the velocities follow
+a general ``Constraint`` with velocity terms, or a rolling contact such as ``RollingDisk2``,
+which replaces a tuple of as many dummies as it has equations). At each instant the velocities follow
 from the kept holonomic constraints and the velocity constraints together::
 
     Phi_q(q, t) qd + Phi_t(q, t) = 0          (holonomic, m - k rows)
@@ -26,12 +27,12 @@ from numbers import Real
 
 import numpy as np
 import scipy.sparse as sps
-import sympy as sp
 
 from .._errors import MechError, ModelError, SingularJacobianError
 from .._symbols import T
 from ..compile import compile_exprs
-from ..constraints import ConstraintBase
+from ..constraints import ConstraintBase, velocity_rows
+from ..geometry._units import resolve
 from ..results._solution import Solution, State
 from ..solvers._free import project_positions, scaling_at
 from ..solvers._integrators import (
@@ -85,19 +86,38 @@ class PathSystem:
                              "least one replacement")
         self.model = model
         self.replaced = {}
+        seen = []
         for dummy, vc in replace.items():
-            d = model.constraint(dummy)          # raises UnknownConstraintError
+            # a tuple of dummies gives their places to one velocity constraint of as many
+            # equations (a rolling disk's two no-slip rows replace the dummies of x and y)
+            group = [model.constraint(d) for d in (dummy if isinstance(dummy, tuple) else
+                                                   (dummy,))]   # raises UnknownConstraintError
+            if not group:
+                raise ModelError("path(replace=...): an empty tuple of dummy constraints")
+            d = group[0]
             if not isinstance(vc, ConstraintBase):
                 raise ModelError(f"the replacement for {d.label()} must be a constraint object, "
                                  f"got {vc!r}")
+            if any(vc is v for v in seen):
+                raise ModelError(f"{vc.label()} replaces two entries of path(replace=...); give "
+                                 "it once, with a tuple of the dummies it replaces as the key")
+            seen.append(vc)
             _check_own(model, d, vc)
-            vc.name = vc.name or f"velocity constraint replacing {d.name!r}"
+            # lengths given with units (a rolling radius of 300 mm) in the model's units, as
+            # m.add does for the constraints of the model
+            resolve(vc, model.units, vc.label())
+            vc._cache.clear()
+            vc.name = vc.name or ("velocity constraint replacing "
+                                  + ", ".join(repr(g.name) for g in group))
             vc.number = vc.number if vc.number is not None else d.number
-            self.replaced[d] = vc
+            for g in group:
+                if g in self.replaced:
+                    raise ModelError(f"path(replace=...): {g.label()} is replaced twice")
+                self.replaced[g] = vc
         self.system = model._system_without(list(self.replaced), loads=[])
         layout = self.system.layout
         lay = layout
-        self.velocity_constraints = list(self.replaced.values())
+        self.velocity_constraints = list(dict.fromkeys(self.replaced.values()))
         psi, owners_psi = [], []
         allowed = set(lay.q_symbols) | set(lay.qd_symbols) | set(lay.p_symbols) | {T}
         gen = model._gen_substitution()  # slave bodies (Gen joints): their poses
@@ -117,21 +137,12 @@ class PathSystem:
                 "replace each dummy constraint by velocity constraints with as many equations")
         self.psi = psi
         self.psi_owners = owners_psi
-        qd = list(lay.qd_symbols)
-        q = list(lay.q_symbols)
-        self.psi_qd = sp.Matrix(psi).jacobian(qd)
-        rest = []
-        for e in psi:
-            r = sp.diff(e, T)
-            for a, b in zip(q, qd):
-                if a in e.free_symbols:
-                    r += sp.diff(e, a) * b
-            rest.append(r)
-        # (each entry only against the velocities it contains: k n^2 derivatives of zeros took
-        # minutes for a few hundred coordinates)
-        qd_set = set(qd)
-        self.linear = all(sp.diff(x, v) == 0 for x in self.psi_qd if x != 0
-                          for v in x.free_symbols & qd_set)
+        # psi_qd (the A of A qd + b), and rest = psi_q qd + psi_t of d psi/dt = A qdd + rest:
+        # the same derivatives as the velocity_form of the rolling constraints (decision 0046)
+        rows = velocity_rows(psi, list(lay.q_symbols), list(lay.qd_symbols))
+        self.psi_qd = rows.A
+        rest = list(rows.rho)
+        self.linear = rows.linear
         args = lay.args()
         self._k = len(psi)
         n = self.system.n

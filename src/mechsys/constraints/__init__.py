@@ -59,6 +59,13 @@ from ._planar import (
     Translate2,
 )
 from ._registry import REGISTRY, constraint_types, register
+from ._rolling import (
+    ROLLING_TYPES,
+    RollingCircle1,
+    RollingContact,
+    RollingDisk2,
+    RollingSphere2,
+)
 from ._spatial import (
     SPATIAL_TYPES,
     ConstantVelocity4,
@@ -86,6 +93,7 @@ from ._spatial import (
     Universal4,
 )
 from ._switches import StageSwitch, TimeSwitch
+from ._velocity import VelocityRows, linear_velocity_form, velocity_rows
 
 for _cls in (
     Revolute2,
@@ -103,6 +111,7 @@ for _cls in (
     *SPATIAL_TYPES,
     *CAM_TYPES,
     *GEAR_TYPES,
+    *ROLLING_TYPES,
 ):
     register(_cls)
 
@@ -156,6 +165,14 @@ __all__ = [
     "PointOnLine2",
     "PointOnPlane1",
     "REGISTRY",
+    "ROLLING_TYPES",
+    "RollingCircle1",
+    "RollingContact",
+    "RollingDisk2",
+    "RollingSphere2",
+    "VelocityRows",
+    "linear_velocity_form",
+    "velocity_rows",
     "RackAndPinion1",
     "RackAndPinion2",
     "RackAndPinion4",

@@ -51,6 +51,9 @@ class ConstraintBase:
     spaces: ClassVar[tuple[str, ...]] = ("planar", "spatial")
     #: Mech's name; the registry is keyed by it.
     mech_name: ClassVar[str] = ""
+    #: 0: position equations ``Phi(q, t) = 0``; 1: velocity equations linear in the rates,
+    #: ``A(q, t) qd + b(q, t) = 0`` (the rolling constraints; decision 0046)
+    order: ClassVar[int] = 0
 
     # the signature shown by help() and the API reference is __init__'s, not __new__'s
     __signature__ = InitSignature()

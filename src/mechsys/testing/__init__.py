@@ -9,6 +9,7 @@ from . import (
     _cases_cams,  # noqa: F401  (registers cases)
     _cases_gears,  # noqa: F401  (registers cases)
     _cases_planar,  # noqa: F401  (registers cases)
+    _cases_rolling,  # noqa: F401  (registers cases)
     _cases_spatial,  # noqa: F401  (registers cases)
 )
 from ._checks import (
@@ -20,6 +21,7 @@ from ._checks import (
     check_gamma,
     check_jacobian,
     check_residual,
+    check_velocity_case,
     iter_cases,
     pose_vector,
 )
@@ -33,6 +35,7 @@ __all__ = [
     "check_gamma",
     "check_jacobian",
     "check_residual",
+    "check_velocity_case",
     "iter_cases",
     "pose_vector",
 ]

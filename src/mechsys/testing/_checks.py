@@ -11,6 +11,18 @@ to satisfy it (not solved for). Checks:
 
    so ``gamma`` must equal ``Phi_q qdd - (Phi(t+h) - 2 Phi(t) + Phi(t-h)) / h^2``;
 4. DOF: ``len(equations) - len(new variables)`` equals the documented ``dof_removed``.
+
+A *velocity* constraint (``constraint.order == 1``: the rolling contacts) is not part of the
+case's model, which holds its holonomic part (``constraint.holonomic()``); the case adds
+rates ``qd`` built by hand so that the contact does not slip. Its checks (decision 0046):
+
+1. residual: ``psi(q, qd) = 0`` and the holonomic part's ``Phi(q) = 0``;
+2. Jacobians: ``A = psi_qd`` of :func:`~mechsys.linear_velocity_form` and ``psi_q`` (which
+   linearisation needs) equal central finite differences of ``psi``, and ``b = psi(q, 0)``;
+3. acceleration rows: along the same smooth path ``q(t)`` with ``qd = q'(t)``,
+   ``d psi / dt = A qdd + rho`` with ``rho`` of :func:`~mechsys.constraints.velocity_rows`
+   (what path systems integrate with);
+4. DOF: the number of velocity equations equals ``dof_removed``.
 """
 
 from __future__ import annotations
@@ -33,6 +45,8 @@ class Case:
     t: float = 0.3
     label: str = ""
     tolerances: dict = field(default_factory=dict)
+    #: rates at ``q`` for velocity constraints (the contact does not slip), else None
+    qd: np.ndarray | None = None
 
 
 def case(name: str):
@@ -121,9 +135,83 @@ def check_dof(c: Case) -> int:
     return removed
 
 
+def _velocity_functions(c: Case):
+    """Numeric ``psi(t, q, qd)``, ``A(t, q)``, ``b(t, q)``, ``rho(t, q, qd)`` and
+    ``psi_q(t, q, qd)`` of a velocity constraint, compiled as the path systems compile them
+    (SymPy's lambdify took minutes to print a disk's derivatives)."""
+    import sympy as sp
+
+    from .._symbols import T
+    from ..compile import compile_exprs
+    from ..constraints import velocity_rows
+
+    m = c.model
+    rates = m.velocity_symbols()
+    q = list(m._coordinate_symbols())
+    qd = [rates[s] for s in q]
+    psi = sp.Matrix(c.constraint.equations(m.space))
+    A, b = c.constraint.velocity_form(m)
+    rho = velocity_rows(list(psi), q, qd).rho
+    args = [T, *q, *qd]
+    fns = [compile_exprs(args, list(e), once=True) for e in (psi, A, b, rho, psi.jacobian(q))]
+
+    def call(f, t, qv, qdv):
+        return np.asarray(f(np.concatenate(([t], qv, qdv))), dtype=float)
+
+    return [lambda t, qv, qdv, f=f: call(f, t, qv, qdv) for f in fns]
+
+
+def check_velocity_case(c: Case, rng) -> dict:
+    """The four checks of a velocity constraint (see the module doc); returns the errors."""
+    psi, A, b, rho, psi_q = _velocity_functions(c)
+    n = len(c.q)
+    tol = c.tolerances.get("residual", 1e-10)
+    hol = c.model.compile().residual(c.t, c.q)
+    r = np.concatenate((psi(c.t, c.q, c.qd).ravel(), hol))
+    res = float(np.abs(r).max(initial=0.0))
+    assert res < tol, f"{c.label}: residual {r} at the built (q, qd)"
+    q, qd = _perturbed(c, rng), rng.standard_normal(n)
+    h = 1e-6
+    Afd, Qfd = np.empty((len(r) - len(hol), n)), np.empty((len(r) - len(hol), n))
+    for j in range(n):
+        e = np.zeros(n)
+        e[j] = h
+        Afd[:, j] = (psi(c.t, q, qd + e) - psi(c.t, q, qd - e)).ravel() / (2 * h)
+        Qfd[:, j] = (psi(c.t, q + e, qd) - psi(c.t, q - e, qd)).ravel() / (2 * h)
+    Av, Qv = A(c.t, q, qd).reshape(Afd.shape), psi_q(c.t, q, qd).reshape(Qfd.shape)
+    jac = max(float(np.abs(Av - Afd).max(initial=0.0)) / (1 + np.abs(Av).max(initial=0.0)),
+              float(np.abs(Qv - Qfd).max(initial=0.0)) / (1 + np.abs(Qv).max(initial=0.0)))
+    assert jac < 1e-6, f"{c.label}: A or psi_q differs from finite differences by {jac}"
+    lin = float(np.abs(Av @ qd + b(c.t, q, qd).ravel() - psi(c.t, q, qd).ravel()).max())
+    assert lin < 1e-10 * (1 + np.abs(Av).max() * np.abs(qd).max()), (
+        f"{c.label}: psi != A qd + b ({lin})")
+    v, a, bb, w = (rng.standard_normal(n) for _ in range(4))
+
+    def path(tau):
+        dt = tau - c.t
+        return q + v * dt + 0.5 * a * dt**2 + 0.2 * bb * np.sin(w * dt)
+
+    def rate(tau):
+        dt = tau - c.t
+        return v + a * dt + 0.2 * bb * w * np.cos(w * dt)
+
+    hh = 1e-5
+    d1 = (psi(c.t + hh, path(c.t + hh), rate(c.t + hh))
+          - psi(c.t - hh, path(c.t - hh), rate(c.t - hh))).ravel() / (2 * hh)
+    qdd = a                 # q''(c.t): the sine term's second derivative vanishes there
+    qd0 = rate(c.t)
+    pred = A(c.t, q, qd0).reshape(Afd.shape) @ qdd + rho(c.t, q, qd0).ravel()
+    gam = float(np.abs(pred - d1).max(initial=0.0))
+    assert gam < 1e-5 * (1 + np.abs(d1).max(initial=0.0)), (
+        f"{c.label}: d psi/dt = {d1}, A qdd + rho = {pred}")
+    return {"residual": res, "jacobian": jac, "gamma": gam, "dof": check_dof(c)}
+
+
 def check_constraint_case(c: Case, seed: int = 0) -> dict:
     """Run all four checks on one case; returns the measured errors."""
     rng = np.random.default_rng(seed)
+    if getattr(c.constraint, "order", 0) == 1:
+        return check_velocity_case(c, rng)
     return {
         "residual": check_residual(c, c.tolerances.get("residual", 1e-10)),
         "jacobian": check_jacobian(c, rng),
