@@ -123,7 +123,12 @@ def body_terms(space, q: tuple, qd: tuple, mass, centroid: tuple, inertia: tuple
     pairs = [*zip(gq, q), *zip(gqd, qd), (gm, mass), *zip(gc, centroid), *zip(gJ, inertia)]
     if se is not None:
         sub = {se.sympify(k): se.sympify(v) for k, v in pairs}
-        rep = lambda e: se.expand(e.xreplace(sub))
+        # one substitution of all the body's terms at once: SymEngine converts the Python
+        # dict on every xreplace call (13 calls a planar body, 57 a spatial one)
+        nq = len(q)
+        flat = [T, *(e for row in M for e in row), *Qv]
+        done = [se.expand(e) for e in se.DenseMatrix(len(flat), 1, flat).xreplace(sub)]
+        return done[0], [done[1 + i * nq: 1 + (i + 1) * nq] for i in range(nq)], done[1 + nq * nq:]
     else:
         sub = dict(pairs)
         rep = lambda e: sp.expand(e.xreplace(sub))
