@@ -163,7 +163,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         if name in self._names()[0]:
             raise ModelError(f"a body named {name!r} already exists; body names must be unique")
         # numbers are never reused: a removed body's successors keep theirs (and their symbols)
-        number = max(max(b.number for b in self._bodies), getattr(self, "_last_number", 1)) + 1
+        # (bodies are appended in the order of their numbers: the last has the largest)
+        number = max(self._bodies[-1].number, getattr(self, "_last_number", 1)) + 1
         taken = {s.name for s in self._params} | {v.symbol.name for v in self._variables}
         for c in self.space.coordinate_names:
             for sym in (f"{c}{number}", f"{c}{number}_d", f"{c}{number}_dd"):

@@ -38,7 +38,10 @@ def _as_matrix(coords, what: str) -> sp.Matrix:
     if isinstance(coords, np.ndarray):
         coords = coords.tolist()
     if isinstance(coords, sp.MatrixBase):
-        m = sp.Matrix(coords).reshape(len(coords), 1)
+        # a column already (a body's stored point): a copy of its entries, not a new Matrix
+        # built element by element (~0.5 ms: a fifth of a large chain's build)
+        m = (coords.copy() if type(coords) is sp.MutableDenseMatrix and coords.cols == 1
+             else sp.Matrix(coords).reshape(len(coords), 1))
     elif isinstance(coords, Sequence) and not isinstance(coords, str):
         try:
             m = sp.Matrix([sp.sympify(c) for c in coords])
