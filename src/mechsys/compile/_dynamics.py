@@ -239,7 +239,7 @@ def _rotation_derivatives(body) -> list:
     A = body.A
     dim = A.rows
     rot = body.q[dim:]
-    if dim == 2:
+    if dim == 2 and len(rot) == 1 and A[0, 0] == sp.cos(rot[0]):
         # A(th) = [[c, -s], [s, c]]: dA/dth = A [[0, -1], [1, 0]], no differentiation (SymPy's
         # diff costs ~1 ms an entry: 4 s of a 1024-link chain)
         out = [[[A[0, 1], -A[0, 0]], [A[1, 1], -A[1, 0]]]]
