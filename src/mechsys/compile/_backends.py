@@ -79,6 +79,8 @@ def real_expression(expr, owner: str | None = None):
     """
     if not isinstance(expr, sp.Basic) and not (_se is not None and isinstance(expr, _se.Basic)):
         return expr
+    if isinstance(expr, sp.Basic) and _plainly_real(expr):
+        return expr
     c = _complex_constant(expr)
     if c is not None:
         from .._errors import ModelError
@@ -103,6 +105,18 @@ def real_expression(expr, owner: str | None = None):
         expr = expr.xreplace(rep)
         big = _big_powers(expr)
     return expr
+
+
+def _plainly_real(expr: sp.Basic) -> bool:
+    """Whether the SymPy ``expr`` certainly holds nothing :func:`real_expression` acts on: one
+    traversal for all it looks for (``I``, ``zoo``, number-valued functions and powers,
+    powers with huge integer exponents) instead of four."""
+    for a in expr.atoms(sp.Pow, sp.Function, type(sp.I), type(sp.zoo)):
+        if not isinstance(a, (sp.Pow, sp.Function)) or a.is_number:
+            return False
+        if isinstance(a, sp.Pow) and a.args[1].is_Integer and abs(int(a.args[1])) >= BIG_EXPONENT:
+            return False
+    return True
 
 
 def real_expressions(exprs) -> list:
