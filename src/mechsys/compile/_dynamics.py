@@ -63,10 +63,11 @@ def _mass_key(space, body) -> tuple:
     """Hashable mass properties of a body: ``(m, centroid (dim,), inertia entries)`` with the
     inertia as ``J`` (2D) or its symmetric part ``(Jxx, Jyy, Jzz, Jxy, Jyz, Jzx)`` (3D): only
     the symmetric part enters ``w^T J w``."""
-    J = space.inertia_matrix(body.inertia)
     if space.dim == 2:
-        jkey = (J[0, 0],)
+        # the scalar itself (space.inertia_matrix would wrap it in a 1 x 1 SymPy Matrix)
+        jkey = (sp.sympify(0 if body.inertia is None else body.inertia),)
     else:
+        J = space.inertia_matrix(body.inertia)
         jkey = (J[0, 0], J[1, 1], J[2, 2], (J[0, 1] + J[1, 0]) / 2, (J[1, 2] + J[2, 1]) / 2,
                 (J[2, 0] + J[0, 2]) / 2)
     return sp.sympify(body.mass), tuple(body.centroid), jkey
@@ -239,7 +240,8 @@ def _rotation_derivatives(body) -> list:
     A = body.A
     dim = A.rows
     rot = body.q[dim:]
-    if dim == 2 and len(rot) == 1 and A[0, 0] == sp.cos(rot[0]):
+    # (compared with an unevaluated cos: SymPy's evaluation of cos(symbol) costs ~1 ms)
+    if dim == 2 and len(rot) == 1 and A[0, 0] == sp.cos(rot[0], evaluate=False):
         # A(th) = [[c, -s], [s, c]]: dA/dth = A [[0, -1], [1, 0]], no differentiation (SymPy's
         # diff costs ~1 ms an entry: 4 s of a 1024-link chain)
         out = [[[A[0, 1], -A[0, 0]], [A[1, 1], -A[1, 0]]]]
