@@ -41,10 +41,9 @@ def symengine_safe(exprs) -> bool:
         return False
     for e in exprs:
         e = sp.sympify(e)
-        if e.has(sp.Mod, sp.ceiling, sp.sign, sp.Abs, sp.Heaviside, sp.Max, sp.Min,
-                 sp.DiracDelta):
-            return False
-        for f in e.atoms(sp.Function):
+        # one traversal: every function application and Max/Min (not Functions in SymPy);
+        # the refused ones (Mod, ceiling, sign, Abs, Heaviside, DiracDelta) are not _SAFE_ALL
+        for f in e.atoms(sp.Function, sp.Max, sp.Min):
             if not isinstance(f, _SAFE_ALL):
                 return False
     return True

@@ -63,10 +63,11 @@ def _mass_key(space, body) -> tuple:
     """Hashable mass properties of a body: ``(m, centroid (dim,), inertia entries)`` with the
     inertia as ``J`` (2D) or its symmetric part ``(Jxx, Jyy, Jzz, Jxy, Jyz, Jzx)`` (3D): only
     the symmetric part enters ``w^T J w``."""
-    J = space.inertia_matrix(body.inertia)
     if space.dim == 2:
-        jkey = (J[0, 0],)
+        # the scalar itself (space.inertia_matrix would wrap it in a 1 x 1 SymPy Matrix)
+        jkey = (sp.sympify(0 if body.inertia is None else body.inertia),)
     else:
+        J = space.inertia_matrix(body.inertia)
         jkey = (J[0, 0], J[1, 1], J[2, 2], (J[0, 1] + J[1, 0]) / 2, (J[1, 2] + J[2, 1]) / 2,
                 (J[2, 0] + J[0, 2]) / 2)
     return sp.sympify(body.mass), tuple(body.centroid), jkey
@@ -123,7 +124,12 @@ def body_terms(space, q: tuple, qd: tuple, mass, centroid: tuple, inertia: tuple
     pairs = [*zip(gq, q), *zip(gqd, qd), (gm, mass), *zip(gc, centroid), *zip(gJ, inertia)]
     if se is not None:
         sub = {se.sympify(k): se.sympify(v) for k, v in pairs}
-        rep = lambda e: se.expand(e.xreplace(sub))
+        # one substitution of all the body's terms at once: SymEngine converts the Python
+        # dict on every xreplace call (13 calls a planar body, 57 a spatial one)
+        nq = len(q)
+        flat = [T, *(e for row in M for e in row), *Qv]
+        done = [se.expand(e) for e in se.DenseMatrix(len(flat), 1, flat).xreplace(sub)]
+        return done[0], [done[1 + i * nq: 1 + (i + 1) * nq] for i in range(nq)], done[1 + nq * nq:]
     else:
         sub = dict(pairs)
         rep = lambda e: sp.expand(e.xreplace(sub))
@@ -224,46 +230,63 @@ def generalized_forces(model, loads, layout, slaves: dict | None = None) -> list
     return Q
 
 
-@functools.lru_cache(maxsize=4)
-def _point_force_template(space) -> tuple:
-    """``(rot, c, F, Q_rot)``: generic rotational coordinates, local point coordinates and
-    force, and ``(dA/ds c)^T F`` for each rotational coordinate ``s``, derived once per
-    space."""
-    dim = space.dim
-    rot = tuple(sp.Symbol(f"_rot{i}", real=True) for i in range(space.ncoord - dim))
-    c = tuple(sp.Symbol(f"_c{i}", real=True) for i in range(dim))
-    F = tuple(sp.Symbol(f"_F{i}", real=True) for i in range(dim))
-    A = space.rotation_matrix(list(rot))
-    out = []
-    for s in rot:
-        # entry by entry: Matrix.diff goes through SymPy's array derivatives (slow)
-        out.append(sp.Add(*(A[i, j].diff(s) * c[j] * F[i] for i in range(dim)
-                            for j in range(dim))))
-    return rot, c, F, tuple(out)
+def _rotation_derivatives(body) -> list:
+    """``dA/ds`` (entries, nested lists) of ``body``'s rotation matrix for each of its
+    rotational coordinates ``s``, differentiated once per body and kept on it (every point
+    load on the body reuses them)."""
+    cached = body.__dict__.get("_dA_cache")
+    if cached is not None and cached[0] is body.A:
+        return cached[1]
+    A = body.A
+    dim = A.rows
+    rot = body.q[dim:]
+    # (compared with an unevaluated cos: SymPy's evaluation of cos(symbol) costs ~1 ms)
+    if dim == 2 and len(rot) == 1 and A[0, 0] == sp.cos(rot[0], evaluate=False):
+        # A(th) = [[c, -s], [s, c]]: dA/dth = A [[0, -1], [1, 0]], no differentiation (SymPy's
+        # diff costs ~1 ms an entry: 4 s of a 1024-link chain)
+        out = [[[A[0, 1], -A[0, 0]], [A[1, 1], -A[1, 0]]]]
+    elif se is not None:
+        # SymEngine differentiates ~100 times faster; the round trip drops the symbols' real
+        # assumption, which restore_assumptions puts back
+        from .._symbols import restore_assumptions
+
+        sA = [[se.sympify(A[i, j]) for j in range(dim)] for i in range(dim)]
+        out = [[[restore_assumptions(sp.sympify(sA[i][j].diff(se.sympify(s))))
+                 for j in range(dim)] for i in range(dim)] for s in rot]
+    else:
+        # entry by entry: Matrix.diff goes through SymPy's array derivatives (slower still)
+        out = [[[A[i, j].diff(s) for j in range(dim)] for i in range(dim)] for s in rot]
+    body._dA_cache = (A, out)
+    return out
 
 
 def _point_force_terms(space, body, point, F) -> list | None:
     r"""Virtual work of the force ``F`` (global) at a body-fixed point ``c'`` of ``body``
     (``r_P = r + A c'``) on the body's coordinates, in closed form::
 
-        Q_r = F,    Q_s = (dA/ds c')^T F   (s a rotational coordinate)
+        Q_r = F,    Q_s = (dA/ds c')^T F = sum_ij F_i (dA/ds)_ij c'_j   (s rotational)
 
-    derived once per space on generic symbols and substituted per point (instead of
-    differentiating every point's location expression); None when the point is not such a point (its local
-    coordinates depend on the body's coordinates), for the general path."""
+    with ``dA/ds`` differentiated once per body (:func:`_rotation_derivatives`) and the
+    products of zero coordinates or force components left out (gravity on a rod: two terms
+    of eight), instead of differentiating every point's location expression or substituting
+    into a generic template (10 ms a body in SymPy: 5 s of a 512-link chain's build); None
+    when the point is not such a point (its local coordinates depend on the body's
+    coordinates), for the general path."""
     from ..geometry._points import Point
 
     if type(point) is not Point or point.body is not body:
         return None
-    local = point.local
+    local = list(point.local)
     q = tuple(body.q)
     if any(e.free_symbols & set(q) for e in local):
         return None
     dim = space.dim
     out = [sp.sympify(f) for f in F[:dim]]
-    grot, gc, gF, Qrot = _point_force_template(space)
-    sub = {**dict(zip(grot, q[dim:])), **dict(zip(gc, local)), **dict(zip(gF, out))}
-    return out + [e.xreplace(sub) for e in Qrot]
+    pairs = [(i, j, out[i] * local[j]) for i in range(dim) for j in range(dim)
+             if out[i] != 0 and local[j] != 0]
+    for dA in _rotation_derivatives(body):
+        out.append(sp.Add(*(dA[i][j] * w for i, j, w in pairs)))
+    return out
 
 
 def _collect(out: dict, body, Qp) -> None:

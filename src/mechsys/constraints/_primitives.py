@@ -13,10 +13,11 @@ from ..geometry._points import Axis, Point, Vector
 
 def coincident(p1: Point, p2: Point, offset=None) -> list[sp.Expr]:
     """``r_1 - r_2 - d = 0`` componentwise (``d`` a global offset, default zero)."""
-    d = p1.location() - p2.location()
+    # entry by entry: a SymPy Matrix difference goes through its domain matrices (slow)
+    d = [a - b for a, b in zip(p1.location(), p2.location())]
     if offset is not None:
-        d = d - offset
-    return list(d)
+        d = [a - o for a, o in zip(d, offset)]
+    return d
 
 
 def dot(v1: Vector, v2: Vector) -> sp.Expr:

@@ -38,7 +38,10 @@ def _as_matrix(coords, what: str) -> sp.Matrix:
     if isinstance(coords, np.ndarray):
         coords = coords.tolist()
     if isinstance(coords, sp.MatrixBase):
-        m = sp.Matrix(coords).reshape(len(coords), 1)
+        # a column already (a body's stored point): a copy of its entries, not a new Matrix
+        # built element by element (~0.5 ms: a fifth of a large chain's build)
+        m = (coords.copy() if type(coords) is sp.MutableDenseMatrix and coords.cols == 1
+             else sp.Matrix(coords).reshape(len(coords), 1))
     elif isinstance(coords, Sequence) and not isinstance(coords, str):
         try:
             m = sp.Matrix([sp.sympify(c) for c in coords])
@@ -100,7 +103,13 @@ class Point(Geometry):
         """Global position, a column of SymPy expressions."""
         if self.body is None:
             return self.local
-        return self.body.r + self.body.A * self.local
+        r, A, c = self.body.r, self.body.A, self.local
+        dim = len(c)
+        # entry by entry, zero coordinates left out: SymPy's Matrix product and sum go through
+        # its domain matrices (~2 ms a point: 4 s of a 1024-link chain's build); the same
+        # expressions
+        return sp.Matrix([r[i] + sp.Add(*(A[i, j] * c[j] for j in range(dim) if c[j] != 0))
+                          for i in range(dim)])
 
     def __sub__(self, other: Point) -> Vector:
         return Vector(self, as_point(other))

@@ -58,7 +58,11 @@ class Planar(Space):
 
     def rotation_matrix(self, rot) -> sp.Matrix:
         (th,) = rot
-        c, s = sp.cos(th), sp.sin(th)
+        # of a coordinate symbol SymPy's evaluation finds nothing to simplify but costs ~1 ms
+        # a function (a third of a large planar chain's build): built unevaluated, the same
+        # expressions
+        plain = isinstance(th, sp.Symbol)
+        c, s = sp.cos(th, evaluate=not plain), sp.sin(th, evaluate=not plain)
         return sp.Matrix([[c, -s], [s, c]])
 
     def cross(self, a, b):
