@@ -4,10 +4,12 @@ A fully constrained kinematic model carries *dummy* constraints that hold its pl
 replaces them by *velocity constraints* ``psi(q, qd, t) = 0`` (normal constraint objects
 whose geometry depends on velocities, e.g. ``Orthogonal1(m.velocity(p), body.vector(...))``,
 or a general ``Constraint`` with velocity terms). At each instant the velocities follow
-from the kept holonomic constraints and the velocity constraints together::
+from the kept holonomic constraints and the velocity constraints together:
 
-    Phi_q(q, t) qd + Phi_t(q, t) = 0          (holonomic, m - k rows)
-    psi(q, qd, t)                = 0          (nonholonomic, k rows)
+.. math::
+
+    \Phi_q(q,\, t)\, \mathit{qd} + \Phi_t(q,\, t) &= 0 \qquad \text{(holonomic, m - k rows)} \\
+    \psi(q,\, \mathit{qd},\, t) &= 0 \qquad \text{(nonholonomic, k rows)}
 
 (Newton on ``qd``; one step when ``psi`` is linear in ``qd``), and ``q' = qd`` is integrated
 with the same integrators as free motion; ``constraint_correction`` projects ``q`` back onto

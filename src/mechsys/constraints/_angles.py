@@ -6,9 +6,11 @@ in which angles about it are measured, ``k`` being ``g`` turned +90 degrees abou
 axis. In 2D ``g`` is the unit axis direction and ``k`` its left normal; in 3D ``g`` is the
 unit reference direction (perpendicular to the direction ``u``) and ``k = u^ x g``. Both
 are fixed in the axis' body when the axis is. The counter-clockwise angle from ``g`` to
-the projection of a vector ``f`` is ``a`` when::
+the projection of a vector ``f`` is ``a`` when:
 
-    cos(a) (k . f) - sin(a) (g . f) = 0
+.. math::
+
+    \cos(a)\, (k \cdot f) - \sin(a)\, (g \cdot f) &= 0
 
 which is regular at the solution for every ``a``. It also holds at ``a + pi``; for the
 drivers (``RotationLock1``, ``RelativeAngle1`` in 2D) the solvers tell the two apart by
@@ -132,17 +134,21 @@ class RotationLock1(ConstraintBase):
 
     Body form (2D, Mech's): ``RotationLock1(body, angle)`` or
     ``RotationLock1(body1, body2, angle)`` -- the angle of ``body1`` is ``angle`` more than
-    that of ``body2`` (ground if omitted)::
+    that of ``body2`` (ground if omitted):
 
-        theta_1 - theta_2 - angle = 0
+    .. math::
+
+        \theta_1 - \theta_2 - \mathit{angle} &= 0
 
     Axis form (2D and 3D): ``RotationLock1(axis1, axis2, angle)`` -- the counter-clockwise
     angle (right-hand sense about the direction ``u_2`` of ``axis2``) from the reference
     direction ``g_2`` of ``axis2`` to the reference direction ``g_1`` of ``axis1``, projected
     on the plane normal to ``u_2``, is ``angle``; with ``k_2 = u_2^ x g_2`` (see
-    :func:`~mechsys.reference_direction` for references not given explicitly)::
+    :func:`~mechsys.reference_direction` for references not given explicitly):
 
-        cos(angle) (k_2 . g_1) - sin(angle) (g_2 . g_1) = 0
+    .. math::
+
+        \cos(\mathit{angle})\, (k_2 \cdot g_1) - \sin(\mathit{angle})\, (g_2 \cdot g_1) &= 0
 
     (in 2D ``g_i`` are the unit axis directions and ``k_2`` the left normal of ``u_2``).
     ``RotationLock1(axis, angle)`` measures from the same axis on ground at rest. ``angle``
@@ -241,16 +247,20 @@ class RelativeAngle1(TwoVectors):
     directions).
 
     2D (signed, Mech's): the counter-clockwise angle from ``vector2`` to ``vector1`` is
-    ``angle``; with ``n_2`` the left normal of ``u_2``::
+    ``angle``; with ``n_2`` the left normal of ``u_2``:
 
-        cos(angle) (n_2 . u_1) - sin(angle) (u_2 . u_1) = 0
+    .. math::
+
+        \cos(\mathit{angle})\, (n_2 \cdot u_1) - \sin(\mathit{angle})\, (u_2 \cdot u_1) &= 0
 
     (regular for every angle; it also admits ``angle + pi``, which the solvers refuse by the
     sign of ``cos(angle) (u_2 . u_1) + sin(angle) (n_2 . u_1)``, as for ``RotationLock1``).
 
-    3D (unsigned, Mech's): the included angle between the vectors is ``|angle|``::
+    3D (unsigned, Mech's): the included angle between the vectors is ``|angle|``:
 
-        u_1 . u_2 - |u_1| |u_2| cos(angle) = 0
+    .. math::
+
+        u_1 \cdot u_2 - \lvert u_1 \rvert\, \lvert u_2 \rvert\, \cos(\mathit{angle}) &= 0
 
     singular at 0 and pi (the vectors are then parallel): use ``Parallel2`` there.
     """

@@ -213,9 +213,11 @@ class CamToPoint1(_Cam):
 
     ``CamToPoint1(locuspoint, (a, guess), point)`` in 2D; in 3D the profile is a surface,
     ``CamToPoint1(locuspoint, (a, guess), (b, guess), point)``. New variables: the
-    parameters. Equations (2D: two, 3D: three)::
+    parameters. Equations (2D: two, 3D: three):
 
-        r_c(a) - r_p = 0
+    .. math::
+
+        r_c(a) - r_p &= 0
     """
 
     mech_name = "CamToPoint1"
@@ -239,9 +241,11 @@ class CamToPoint1(_Cam):
 class CurveToPoint2(CamToPoint1):
     r"""A point follower on a space curve (a point in a slot). Removes 2 DOF (3D).
 
-    ``CurveToPoint2(locuspoint, (a, guess), point)``; new variable ``a``::
+    ``CurveToPoint2(locuspoint, (a, guess), point)``; new variable ``a``:
 
-        r_c(a) - r_p = 0          (three equations)
+    .. math::
+
+        r_c(a) - r_p &= 0 \qquad \text{(three equations)}
     """
 
     mech_name = "CurveToPoint2"
@@ -256,9 +260,11 @@ class CamToCircle1(_Cam):
 
     ``CamToCircle1(locuspoint, (a, guess), point, radius)``; the roller lies on the left of
     the profile travelled with increasing ``a`` when ``radius > 0``, on the right when
-    ``radius < 0``. With ``n`` the profile's left normal::
+    ``radius < 0``. With ``n`` the profile's left normal:
 
-        r_c + radius n/|n| - r_p = 0      (two equations)
+    .. math::
+
+        r_c + \mathit{radius}\, n/\lvert n \rvert - r_p &= 0 \qquad \text{(two equations)}
     """
 
     mech_name = "CamToCircle1"
@@ -287,9 +293,11 @@ class CamToSphere1(CamToCircle1):
     Removes 1 DOF (3D).
 
     ``CamToSphere1(locuspoint, (a, guess), (b, guess), point, radius)``; the sphere lies on
-    the side of ``n = t_a x t_b`` when ``radius > 0``::
+    the side of ``n = t_a x t_b`` when ``radius > 0``:
 
-        r_c + radius n/|n| - r_p = 0      (three equations)
+    .. math::
+
+        r_c + \mathit{radius}\, n/\lvert n \rvert - r_p &= 0 \qquad \text{(three equations)}
     """
 
     mech_name = "CamToSphere1"
@@ -328,10 +336,12 @@ class CamToLine1(_CamToFlat):
     r"""A flat-faced follower: a cam profile tangent to a line. Removes 1 DOF (2D).
 
     ``CamToLine1(locuspoint, (a, guess), line)``; ``line`` an axis or line with origin
-    ``r_o`` and direction ``u``::
+    ``r_o`` and direction ``u``:
 
-        u x (r_c - r_o) = 0       (contact point on the line)
-        u x t = 0                 (profile tangent to the line)
+    .. math::
+
+        u \times (r_c - r_o) &= 0 \qquad \text{(contact point on the line)} \\
+        u \times t &= 0 \qquad \text{(profile tangent to the line)}
     """
 
     mech_name = "CamToLine1"
@@ -343,11 +353,13 @@ class CamToPlane1(_CamToFlat):
     r"""A cam surface tangent to a plane (a flat-faced follower in 3D). Removes 1 DOF (3D).
 
     ``CamToPlane1(locuspoint, (a, guess), (b, guess), plane)``; ``plane`` an axis or plane
-    with origin ``r_o`` and normal ``u``::
+    with origin ``r_o`` and normal ``u``:
 
-        u . (r_c - r_o) = 0       (contact point in the plane)
-        u . t_a = 0               (surface tangent to the plane)
-        u . t_b = 0
+    .. math::
+
+        u \cdot (r_c - r_o) &= 0 \qquad \text{(contact point in the plane)} \\
+        u \cdot t_a &= 0 \qquad \text{(surface tangent to the plane)} \\
+        u \cdot t_b &= 0
     """
 
     mech_name = "CamToPlane1"
@@ -359,10 +371,12 @@ class CurveToPlane1(_CamToFlat):
     r"""A space curve tangent to a plane. Removes 1 DOF (3D).
 
     ``CurveToPlane1(locuspoint, (a, guess), axis)``; the plane is normal to ``axis`` (origin
-    ``r_o``, direction ``u``) through its origin::
+    ``r_o``, direction ``u``) through its origin:
 
-        u . (r_c - r_o) = 0       (contact point in the plane)
-        u . t = 0                 (curve tangent to the plane)
+    .. math::
+
+        u \cdot (r_c - r_o) &= 0 \qquad \text{(contact point in the plane)} \\
+        u \cdot t &= 0 \qquad \text{(curve tangent to the plane)}
     """
 
     mech_name = "CurveToPlane1"
@@ -377,10 +391,12 @@ class CurveToCylinder1(_Cam):
 
     ``CurveToCylinder1(locuspoint, (a, guess), axis, radius)``; with ``d = r_c - r_o`` and
     ``w = d - (d . u) u / (u . u)`` its part normal to the axis (the cylinder's normal at
-    the contact)::
+    the contact):
 
-        w . w - radius^2 = 0      (contact point on the cylinder)
-        w . t = 0                 (curve tangent to it)
+    .. math::
+
+        w \cdot w - \mathit{radius}^2 &= 0 \qquad \text{(contact point on the cylinder)} \\
+        w \cdot t &= 0 \qquad \text{(curve tangent to it)}
     """
 
     mech_name = "CurveToCylinder1"
@@ -418,10 +434,12 @@ class CamToCam1(_Cam):
     ``CamToCam1(locuspoint1, (a, guess), locuspoint2, (b, guess))`` in 2D; in 3D both are
     surfaces: ``CamToCam1(locuspoint1, (a1, g), (a2, g), locuspoint2, (b1, g), (b2, g))``.
     New variables: the four (3D) or two (2D) parameters. With ``n_1`` the first profile's
-    normal and ``t2_k`` the second's tangents::
+    normal and ``t2_k`` the second's tangents:
 
-        r_c1 - r_c2 = 0           (two or three equations: the contact points coincide)
-        n_1 . t2_k = 0            (2D: t_1 x t_2 = 0; 3D: two equations, normals parallel)
+    .. math::
+
+        r_{c1} - r_{c2} &= 0 \qquad \text{(two or three equations: the contact points coincide)} \\
+        n_1 \cdot t_{2,k} &= 0 \qquad \text{(2D: t_1 x t_2 = 0; 3D: two equations, normals parallel)}
     """
 
     mech_name = "CamToCam1"
@@ -438,10 +456,12 @@ class CurveToCam1(_Cam):
 
     ``CurveToCam1(locuspoint1, (a, guess), locuspoint2, (g, guess), (d, guess))``: the curve
     ``r_1(a)`` touches the surface ``r_2(g, d)``. New variables ``a, g, d``; with
-    ``n_2 = t_g x t_d`` and ``t_1`` the curve's tangent::
+    ``n_2 = t_g x t_d`` and ``t_1`` the curve's tangent:
 
-        r_c1 - r_c2 = 0           (three equations)
-        n_2 . t_1 = 0
+    .. math::
+
+        r_{c1} - r_{c2} &= 0 \qquad \text{(three equations)} \\
+        n_2 \cdot t_1 &= 0
     """
 
     mech_name = "CurveToCam1"

@@ -257,14 +257,17 @@ class _TwoWheels(_WheelPair):
         return [mesh, d[0] * sp.sin(th) - d[1] * sp.cos(th)]
 
     def _build_euler(self):
-        """Planar Euler coordinates carry no turn-counting angle, so (as Mech's Euler method
+        r"""Planar Euler coordinates carry no turn-counting angle, so (as Mech's Euler method
         and the spatial gears do) the variable is ``a = e1``, the angle from ``d`` to wheel
         1's x axis, and ``e2 = (C - rad1 a) / (sign rad2)`` follows from the mesh; each is
-        imposed by a regular angle equation in its wheel's frame ``(g, k)``::
+        imposed by a regular angle equation in its wheel's frame ``(g, k)``:
 
-            cos(-a) (k1 . d) - sin(-a) (g1 . d) = 0        (TwoGears1: with the next one)
-            d - rho (cos(a) g1 - sin(a) k1) = 0            (TwoGears2: instead, 2 equations)
-            cos(-e2) (k2 . d) - sin(-e2) (g2 . d) = 0
+        .. math::
+
+            \cos(-a)\, (k_1 \cdot d) - \sin(-a)\, (g_1 \cdot d) &= 0
+            \qquad \text{(TwoGears1: with the next one)} \\
+            d - \rho\, (\cos(a)\, g_1 - \sin(a)\, k_1) &= 0 \qquad \text{(TwoGears2: instead, 2 equations)} \\
+            \cos(-e_2)\, (k_2 \cdot d) - \sin(-e_2)\, (g_2 \cdot d) &= 0
         """
         a = self.alpha
         d = self._d()
@@ -287,10 +290,12 @@ class TwoGears1(_TwoWheels):
     gear centres on the gear bodies, ``rad1``, ``rad2`` the pitch radii. ``C = rad1 e1 +
     rad2 e2`` where ``e_i`` is the angle from the vector ``point1 -> point2`` to gear i's local
     x axis, in any valid position (Mech's convention). With ``Theta`` the direction angle of
-    ``d = r_2 - r_1`` (the new variable) and ``theta_i`` the body angles::
+    ``d = r_2 - r_1`` (the new variable) and ``theta_i`` the body angles:
 
-        rad1 (theta_1 - Theta) + rad2 (theta_2 - Theta) - C = 0
-        d_x sin(Theta) - d_y cos(Theta) = 0
+    .. math::
+
+        \mathit{rad}_1\, (\theta_1 - \Theta) + \mathit{rad}_2\, (\theta_2 - \Theta) - C &= 0 \\
+        d_x\, \sin(\Theta) - d_y\, \cos(\Theta) &= 0
 
     Fixed centres give ``theta_2' = -(rad1/rad2) theta_1'``. The second equation also holds
     at ``Theta + pi``: the default guess is the direction at the bodies' guesses.
@@ -307,11 +312,13 @@ class TwoGears2(_TwoWheels):
 
     ``TwoGears2(point1, rad1[, (sym, guess)], point2, rad2, C)``; ``C`` as in
     :class:`TwoGears1`. A negative radius is an internal (ring) gear, ``|rad1 + rad2|`` the
-    centre distance. With ``Theta`` the direction angle of ``d = r_2 - r_1``::
+    centre distance. With ``Theta`` the direction angle of ``d = r_2 - r_1``:
 
-        d_x - |rad1 + rad2| cos(Theta) = 0
-        d_y - |rad1 + rad2| sin(Theta) = 0
-        rad1 (theta_1 - Theta) + rad2 (theta_2 - Theta) - C = 0
+    .. math::
+
+        d_x - \lvert \mathit{rad}_1 + \mathit{rad}_2 \rvert\, \cos(\Theta) &= 0 \\
+        d_y - \lvert \mathit{rad}_1 + \mathit{rad}_2 \rvert\, \sin(\Theta) &= 0 \\
+        \mathit{rad}_1\, (\theta_1 - \Theta) + \mathit{rad}_2\, (\theta_2 - \Theta) - C &= 0
 
     (Mech's first equation, the distance, is here the first two, which also give ``Theta``
     without a branch ambiguity.) A turning carrier obeys Willis' formula.
@@ -330,10 +337,12 @@ class TwoPulleys1(_TwoWheels):
     ``TwoPulleys1(point1, rad1[, (sym, guess)], point2, rad2, dist, C)``; ``C = rad1 e1 -
     rad2 e2`` with ``e_i`` as in :class:`TwoGears1`. The radii must differ (use
     ``RotationLock1`` for equal ones, as Mech says); ``dist`` is only used by
-    :class:`TwoPulleys2`. With ``Theta`` the direction angle of ``d = r_2 - r_1``::
+    :class:`TwoPulleys2`. With ``Theta`` the direction angle of ``d = r_2 - r_1``:
 
-        rad1 (theta_1 - Theta) - rad2 (theta_2 - Theta) - C = 0
-        d_x sin(Theta) - d_y cos(Theta) = 0
+    .. math::
+
+        \mathit{rad}_1\, (\theta_1 - \Theta) - \mathit{rad}_2\, (\theta_2 - \Theta) - C &= 0 \\
+        d_x\, \sin(\Theta) - d_y\, \cos(\Theta) &= 0
 
     Fixed centres: ``theta_2' = (rad1/rad2) theta_1'`` (same sense).
     """
@@ -349,11 +358,13 @@ class TwoPulleys2(_TwoWheels):
     r"""Chain and sprockets, or belt and pulleys, ``dist`` apart. Removes 2 DOF (2D).
 
     ``TwoPulleys2(point1, rad1[, (sym, guess)], point2, rad2, dist, C)``; ``C`` as in
-    :class:`TwoPulleys1`::
+    :class:`TwoPulleys1`:
 
-        d_x - |dist| cos(Theta) = 0
-        d_y - |dist| sin(Theta) = 0
-        rad1 (theta_1 - Theta) - rad2 (theta_2 - Theta) - C = 0
+    .. math::
+
+        d_x - \lvert \mathit{dist} \rvert\, \cos(\Theta) &= 0 \\
+        d_y - \lvert \mathit{dist} \rvert\, \sin(\Theta) &= 0 \\
+        \mathit{rad}_1\, (\theta_1 - \Theta) - \mathit{rad}_2\, (\theta_2 - \Theta) - C &= 0
     """
 
     mech_name = "TwoPulleys2"
@@ -427,15 +438,19 @@ class RackAndPinion1(_PlanarRack):
     rack body), ``point`` the pinion centre, ``rad`` its pitch radius. ``C`` is the distance
     along ``axis`` from its origin to ``point`` when the pinion's x axis is parallel to the
     rack. With ``s = u^ . (r_p - r_o)`` and ``alpha = theta_p - theta_rack`` (the angle from
-    the rack direction to the pinion's x axis)::
+    the rack direction to the pinion's x axis):
 
-        s - C + rad alpha = 0
+    .. math::
+
+        s - C + \mathit{rad}\, \alpha &= 0
 
     With ``(alpha, guess)`` (Mech's Euler form) ``alpha`` is a new variable and, with
-    ``(g, k)`` the rack's angle frame and ``x_p`` the pinion's x axis::
+    ``(g, k)`` the rack's angle frame and ``x_p`` the pinion's x axis:
 
-        s - C + rad alpha = 0
-        cos(alpha) (k . x_p) - sin(alpha) (g . x_p) = 0
+    .. math::
+
+        s - C + \mathit{rad}\, \alpha &= 0 \\
+        \cos(\alpha)\, (k \cdot x_p) - \sin(\alpha)\, (g \cdot x_p) &= 0
 
     The pinion (centre on the left of the rack) rolls: ``ds = -rad d alpha``.
     """
@@ -450,10 +465,12 @@ class RackAndPinion2(_PlanarRack):
     Removes 2 DOF (2D).
 
     ``RackAndPinion2(point, rad[, (alpha, guess)], axis, C)``; ``C``, ``s`` and ``alpha`` as in
-    :class:`RackAndPinion1`, ``d = r_p - r_o``::
+    :class:`RackAndPinion1`, ``d = r_p - r_o``:
 
-        u x d - rad |u| = 0
-        s - C + rad alpha = 0
+    .. math::
+
+        u \times d - \mathit{rad}\, \lvert u \rvert &= 0 \\
+        s - C + \mathit{rad}\, \alpha &= 0
 
     (plus ``cos(alpha) (k . x_p) - sin(alpha) (g . x_p) = 0`` with ``(alpha, guess)``).
     """
@@ -551,14 +568,16 @@ class ParallelGears5(_ParallelGears):
     variable) is the spin of ``axis1`` relative to ``d = r_2 - r_1``. ``C = rad1 e1 + rad2
     e2``, ``e_i`` the angle from ``d`` to the reference direction ``g_i`` of axis i, about
     ``u_i`` (Mech's convention); ``e_2 = (C - rad1 alpha) / rad2``. With ``(g_i, k_i)`` the
-    angle frames, ``h_2, f_2`` normals of axis 2 (Mech's order)::
+    angle frames, ``h_2, f_2`` normals of axis 2 (Mech's order):
 
-        h_2 . u_1 = 0
-        f_2 . u_1 = 0
-        u_1^ . d = 0
-        d . d - (rad1 + rad2)^2 = 0
-        cos(alpha) (k_1 . d) + sin(alpha) (g_1 . d) = 0
-        cos(e_2) (k_2 . d) + sin(e_2) (g_2 . d) = 0
+    .. math::
+
+        h_2 \cdot u_1 &= 0 \\
+        f_2 \cdot u_1 &= 0 \\
+        \hat{u}_1 \cdot d &= 0 \\
+        d \cdot d - (\mathit{rad}_1 + \mathit{rad}_2)^2 &= 0 \\
+        \cos(\alpha)\, (k_1 \cdot d) + \sin(\alpha)\, (g_1 \cdot d) &= 0 \\
+        \cos(e_2)\, (k_2 \cdot d) + \sin(e_2)\, (g_2 \cdot d) &= 0
 
     A negative radius is an internal gear. The angle equations also hold half a turn away:
     the default guess of ``alpha`` is its value at the bodies' guesses.
@@ -574,13 +593,15 @@ class ParallelGears4(_ParallelGears):
     slide along its axis (a wide pinion). Removes 4 DOF (3D).
 
     ``ParallelGears4(axis1, rad1[, (alpha, guess)], axis2, rad2, C)``; with ``d_p = d -
-    u_1^ (u_1^ . d)`` the part of ``d`` across the axes::
+    u_1^ (u_1^ . d)`` the part of ``d`` across the axes:
 
-        h_2 . u_1 = 0
-        f_2 . u_1 = 0
-        d_p . d_p - (rad1 + rad2)^2 = 0
-        cos(alpha) (k_1 . d) + sin(alpha) (g_1 . d) = 0
-        cos(e_2) (k_2 . d) + sin(e_2) (g_2 . d) = 0
+    .. math::
+
+        h_2 \cdot u_1 &= 0 \\
+        f_2 \cdot u_1 &= 0 \\
+        d_p \cdot d_p - (\mathit{rad}_1 + \mathit{rad}_2)^2 &= 0 \\
+        \cos(\alpha)\, (k_1 \cdot d) + \sin(\alpha)\, (g_1 \cdot d) &= 0 \\
+        \cos(e_2)\, (k_2 \cdot d) + \sin(e_2)\, (g_2 \cdot d) &= 0
 
     (The angle equations only see the part of ``d`` across the axes.)
     """
@@ -597,14 +618,16 @@ class TwoPulleys5(_ParallelGears):
 
     ``TwoPulleys5(axis1, rad1[, (alpha, guess)], axis2, rad2, dist, C)``; ``alpha`` as in
     :class:`ParallelGears5`; ``C = rad1 e1 - rad2 e2`` (Mech's convention), so ``e_2 = (rad1
-    alpha - C) / rad2`` and both pulleys turn the same way::
+    alpha - C) / rad2`` and both pulleys turn the same way:
 
-        h_2 . u_1 = 0
-        f_2 . u_1 = 0
-        u_1^ . d = 0
-        d . d - dist^2 = 0
-        cos(alpha) (k_1 . d) + sin(alpha) (g_1 . d) = 0
-        cos(e_2) (k_2 . d) + sin(e_2) (g_2 . d) = 0
+    .. math::
+
+        h_2 \cdot u_1 &= 0 \\
+        f_2 \cdot u_1 &= 0 \\
+        \hat{u}_1 \cdot d &= 0 \\
+        d \cdot d - \mathit{dist}^2 &= 0 \\
+        \cos(\alpha)\, (k_1 \cdot d) + \sin(\alpha)\, (g_1 \cdot d) &= 0 \\
+        \cos(e_2)\, (k_2 \cdot d) + \sin(e_2)\, (g_2 \cdot d) &= 0
     """
 
     mech_name = "TwoPulleys5"
@@ -618,13 +641,15 @@ class TwoPulleys4(_ParallelGears):
     their axes relative to each other. Removes 4 DOF (3D).
 
     ``TwoPulleys4(axis1, rad1[, (alpha, guess)], axis2, rad2, dist, C)``; with ``d_p`` the
-    part of ``d`` across the axes::
+    part of ``d`` across the axes:
 
-        h_2 . u_1 = 0
-        f_2 . u_1 = 0
-        d_p . d_p - dist^2 = 0
-        cos(alpha) (k_1 . d) + sin(alpha) (g_1 . d) = 0
-        cos(e_2) (k_2 . d) + sin(e_2) (g_2 . d) = 0
+    .. math::
+
+        h_2 \cdot u_1 &= 0 \\
+        f_2 \cdot u_1 &= 0 \\
+        d_p \cdot d_p - \mathit{dist}^2 &= 0 \\
+        \cos(\alpha)\, (k_1 \cdot d) + \sin(\alpha)\, (g_1 \cdot d) &= 0 \\
+        \cos(e_2)\, (k_2 \cdot d) + \sin(e_2)\, (g_2 \cdot d) &= 0
     """
 
     mech_name = "TwoPulleys4"
@@ -643,14 +668,16 @@ class OrthogonalGears5(_Gear):
     ``u_2`` to the reference direction ``g_1``. ``C = teeth1 e1 + teeth2 e2``, ``e1`` that
     angle, ``e2`` the angle about ``u_2`` from ``u_1`` to ``g_2`` (Mech's convention), so
     ``e2 = (C - teeth1 alpha) / teeth2`` and the speed ratio is ``-teeth1/teeth2``; negating
-    a tooth count reverses it. ``dist`` is signed along ``u_1^ x u_2^``; ``d = r_1 - r_2``::
+    a tooth count reverses it. ``dist`` is signed along ``u_1^ x u_2^``; ``d = r_1 - r_2``:
 
-        u_1 . u_2 = 0
-        u_1 . (r_2 - r_1) = 0
-        u_2 . d = 0
-        (u_1 x u_2) . d - dist |u_1| |u_2| = 0
-        cos(alpha) (k_1 . u_2) + sin(alpha) (g_1 . u_2) = 0
-        cos(e2) (k_2 . u_1) + sin(e2) (g_2 . u_1) = 0
+    .. math::
+
+        u_1 \cdot u_2 &= 0 \\
+        u_1 \cdot (r_2 - r_1) &= 0 \\
+        u_2 \cdot d &= 0 \\
+        (u_1 \times u_2) \cdot d - \mathit{dist}\, \lvert u_1 \rvert\, \lvert u_2 \rvert &= 0 \\
+        \cos(\alpha)\, (k_1 \cdot u_2) + \sin(\alpha)\, (g_1 \cdot u_2) &= 0 \\
+        \cos(e_2)\, (k_2 \cdot u_1) + \sin(e_2)\, (g_2 \cdot u_1) &= 0
     """
 
     mech_name = "OrthogonalGears5"
@@ -699,14 +726,16 @@ class LeadScrew5(_Gear):
     the spin of ``axis1`` relative to ``axis2``: the angle about ``u_2`` from ``g_2`` to ``g_1``.
     ``C`` is the distance from the origin of ``axis2`` to that of ``axis1`` at zero relative
     spin; a positive ``pitch`` (travel per turn) is a right-hand thread. With ``h_1, f_1``
-    normals of axis 1 and ``s = u_1^ . (r_1 - r_2)`` (Mech's order)::
+    normals of axis 1 and ``s = u_1^ . (r_1 - r_2)`` (Mech's order):
 
-        h_1 . (r_2 - r_1) = 0
-        f_1 . (r_2 - r_1) = 0
-        h_1 . u_2 = 0
-        f_1 . u_2 = 0
-        s - C - pitch alpha / (2 pi) = 0
-        cos(alpha) (k_2 . g_1) - sin(alpha) (g_2 . g_1) = 0
+    .. math::
+
+        h_1 \cdot (r_2 - r_1) &= 0 \\
+        f_1 \cdot (r_2 - r_1) &= 0 \\
+        h_1 \cdot u_2 &= 0 \\
+        f_1 \cdot u_2 &= 0 \\
+        s - C - \mathit{pitch}\, \alpha / (2\, \pi) &= 0 \\
+        \cos(\alpha)\, (k_2 \cdot g_1) - \sin(\alpha)\, (g_2 \cdot g_1) &= 0
     """
 
     mech_name = "LeadScrew5"
@@ -789,14 +818,16 @@ class RackAndPinion5(_SpatialRack):
     rack's pitch plane. The pinion axis lies ``rad`` from that plane on the side of
     ``k_2 = u_2^ x g_2``. ``alpha`` (the new variable) is the pinion's rotation: the angle
     about ``u_2`` from ``g_2`` to ``g_1``; ``C`` the travel ``g_2 . d`` at ``alpha = 0``.
-    With ``d = r_1 - r_2``, ``h_1, f_1`` normals of axis 1 (Mech's order)::
+    With ``d = r_1 - r_2``, ``h_1, f_1`` normals of axis 1 (Mech's order):
 
-        h_1 . u_2 = 0
-        f_1 . u_2 = 0
-        k_2 . d - rad = 0
-        u_2^ . d = 0
-        g_2 . d - C + rad alpha = 0
-        cos(alpha) (k_2 . g_1) - sin(alpha) (g_2 . g_1) = 0
+    .. math::
+
+        h_1 \cdot u_2 &= 0 \\
+        f_1 \cdot u_2 &= 0 \\
+        k_2 \cdot d - \mathit{rad} &= 0 \\
+        \hat{u}_2 \cdot d &= 0 \\
+        g_2 \cdot d - C + \mathit{rad}\, \alpha &= 0 \\
+        \cos(\alpha)\, (k_2 \cdot g_1) - \sin(\alpha)\, (g_2 \cdot g_1) &= 0
     """
 
     mech_name = "RackAndPinion5"
@@ -808,13 +839,15 @@ class RackAndPinion4(_SpatialRack):
     r""":class:`RackAndPinion5` without the adjacency equation: the pinion may slide along its
     axis. Removes 4 DOF (3D).
 
-    ``RackAndPinion4(axis1, rad[, (alpha, guess)], axis2, C)``::
+    ``RackAndPinion4(axis1, rad[, (alpha, guess)], axis2, C)``:
 
-        h_1 . u_2 = 0
-        f_1 . u_2 = 0
-        k_2 . d - rad = 0
-        g_2 . d - C + rad alpha = 0
-        cos(alpha) (k_2 . g_1) - sin(alpha) (g_2 . g_1) = 0
+    .. math::
+
+        h_1 \cdot u_2 &= 0 \\
+        f_1 \cdot u_2 &= 0 \\
+        k_2 \cdot d - \mathit{rad} &= 0 \\
+        g_2 \cdot d - C + \mathit{rad}\, \alpha &= 0 \\
+        \cos(\alpha)\, (k_2 \cdot g_1) - \sin(\alpha)\, (g_2 \cdot g_1) &= 0
     """
 
     mech_name = "RackAndPinion4"
