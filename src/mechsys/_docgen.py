@@ -164,7 +164,10 @@ def _math_block(block: list[str]) -> list[str] | None:
 def rst_to_markdown(doc: str) -> str:
     """Convert a docstring's reStructuredText subset (paragraphs, ``::`` literal blocks,
     inline literals and roles) to Markdown."""
-    lines = inspect.cleandoc(doc).splitlines()
+    # a :math: role may run over a line break; as Markdown it is kept on one line
+    doc = re.sub(r":math:`([^`]+)`", lambda m: "$" + " ".join(m.group(1).split()) + "$",
+                 inspect.cleandoc(doc))
+    lines = doc.splitlines()
     out: list[str] = []
     i = 0
     while i < len(lines):

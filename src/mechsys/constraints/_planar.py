@@ -1,7 +1,7 @@
 r"""Constraints of planar models (and those written once for 2D and 3D).
 
 Each docstring states the equations in Mech's order. ``r`` global points, ``u`` global
-directions, ``x`` the scalar cross product ``a x b = a_x b_y - a_y b_x`` in 2D.
+directions, ``x`` the scalar cross product :math:`a \times b = a_x\, b_y - a_y\, b_x` in 2D.
 """
 
 from __future__ import annotations
@@ -57,7 +57,7 @@ class Revolute2(Coincident):
 class Translate2(ConstraintBase):
     r"""Prismatic joint: ``axis1`` slides along ``axis2`` without rotating. Removes 2 DOF (2D).
 
-    ``Translate2(axis1, axis2)``; with ``d = r_o1 - r_o2``:
+    ``Translate2(axis1, axis2)``; with :math:`d = r_{o1} - r_{o2}`:
 
     .. math::
 
@@ -181,7 +181,7 @@ class RelativeY1(_RelativeCoordinate):
 class RelativeDistance1(ConstraintBase):
     r"""Distance between two points. Removes 1 DOF (2D/3D).
 
-    ``RelativeDistance1(point1, point2, dist)``; with ``d = r_1 - r_2``:
+    ``RelativeDistance1(point1, point2, dist)``; with :math:`d = r_1 - r_2`:
 
     .. math::
 
@@ -246,7 +246,7 @@ class Parallel1(TwoVectors):
 class PointOnLine1(ConstraintBase):
     r"""A point lies on a line (axis) of another body, or ``dist`` to its left. Removes 1 DOF (2D).
 
-    ``PointOnLine1(point, line, dist=0)``; with ``d = r_p - r_o`` and ``u`` the line's
+    ``PointOnLine1(point, line, dist=0)``; with :math:`d = r_p - r_o` and ``u`` the line's
     direction:
 
     .. math::

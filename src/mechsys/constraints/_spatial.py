@@ -1,10 +1,10 @@
 r"""Constraints of spatial (3D) models.
 
-Notation in the docstrings: an axis ``i`` has origin ``r_i``, direction ``u_i`` (global;
-``A u'`` when fixed in a body), reference direction ``g_i`` (unit, perpendicular to
-``u_i``; see :func:`~mechsys.reference_direction`) and two *normals* ``h_i, f_i``
-perpendicular to ``u_i`` and to each other, fixed in the axis' body (so the equations
-stay regular for every orientation). ``d = r_1 - r_2`` joins the origins; ``|u|`` is a
+Notation in the docstrings: an axis ``i`` has origin :math:`r_i`, direction :math:`u_i` (global;
+``A u'`` when fixed in a body), reference direction :math:`g_i` (unit, perpendicular to
+:math:`u_i`; see :func:`~mechsys.reference_direction`) and two *normals* :math:`h_i, f_i`
+perpendicular to :math:`u_i` and to each other, fixed in the axis' body (so the equations
+stay regular for every orientation). :math:`d = r_1 - r_2` joins the origins; :math:`\lvert u \rvert` is a
 length (constant for body-fixed vectors). Equations are listed in Mech's order where its
 reference gives one.
 
@@ -103,11 +103,11 @@ class RotationLock3(ConstraintBase):
     (``body2`` omitted or ``None``: ground). Each
     ``rot`` is ``(angle, (x, y, z))``, Euler parameters or a virtual rotation; angles may be
     expressions of ``T``. As in Mech, ``rot1``'s axis is in ``body2``'s coordinates,
-    ``rot2``'s in those coordinates turned by ``rot1``, and so on: ``A_1 = A_2 R_1 R_2 ...``.
+    ``rot2``'s in those coordinates turned by ``rot1``, and so on: :math:`A_1 = A_2\, R_1\, R_2\, ...`.
 
-    With ``p = e_2 * q_R`` (quaternion product; ``q_R`` the Euler parameters of
-    ``R_1 R_2 ...``) and ``e_1`` the Euler parameters of ``body1``, the equations are the
-    vector part of the relative rotation ``p^-1 * e_1``:
+    With :math:`p = e_2 * q_R` (quaternion product; :math:`q_R` the Euler parameters of
+    :math:`R_1\, R_2\, ...`) and :math:`e_1` the Euler parameters of ``body1``, the equations are the
+    vector part of the relative rotation :math:`p^{-1} * e_1`:
 
     .. math::
 
@@ -115,7 +115,7 @@ class RotationLock3(ConstraintBase):
         p_0\, e_{1,y} - e_{1,0}\, p_y - (p_v \times e_{1,v})_y &= 0 \\
         p_0\, e_{1,z} - e_{1,0}\, p_z - (p_v \times e_{1,v})_z &= 0
 
-    Regular at the solution, and satisfied only by the intended orientation (``e_1 = +-p``,
+    Regular at the solution, and satisfied only by the intended orientation (:math:`e_1 = \pm p`,
     one rotation).
     """
 
@@ -172,7 +172,7 @@ class RelativeZ1(_RelativeCoordinate):
 class Parallel2(Parallel1):
     r"""Two vectors are parallel (or anti-parallel). Removes 2 DOF (3D).
 
-    ``Parallel2(vector1, vector2)``; ``h_2, f_2`` normals of ``vector2``:
+    ``Parallel2(vector1, vector2)``; :math:`h_2, f_2` normals of ``vector2``:
 
     .. math::
 
@@ -191,7 +191,7 @@ class Parallel2(Parallel1):
 class PointOnLine2(ConstraintBase):
     r"""A point lies on a line (axis). Removes 2 DOF (3D).
 
-    ``PointOnLine2(point, line)``; with ``d = r_p - r_o`` and ``h, f`` the line's normals:
+    ``PointOnLine2(point, line)``; with :math:`d = r_p - r_o` and ``h, f`` the line's normals:
 
     .. math::
 
@@ -218,7 +218,7 @@ class PointOnPlane1(ConstraintBase):
     r"""A point lies in the plane normal to an axis through its origin, or ``dist`` from it
     on the side the axis points to. Removes 1 DOF (3D).
 
-    ``PointOnPlane1(point, axis_or_plane, dist=0)``; with ``d = r_p - r_o``:
+    ``PointOnPlane1(point, axis_or_plane, dist=0)``; with :math:`d = r_p - r_o`:
 
     .. math::
 
@@ -247,7 +247,7 @@ class PointOnCircle2(ConstraintBase):
     r"""A point lies on the circle of radius ``rad`` centred at the origin of an axis, in the
     plane normal to it. Removes 2 DOF (3D).
 
-    ``PointOnCircle2(point, axis, rad)``; with ``d = r_p - r_o``:
+    ``PointOnCircle2(point, axis, rad)``; with :math:`d = r_p - r_o`:
 
     .. math::
 
@@ -276,7 +276,7 @@ class PointAtIntersection3(ConstraintBase):
     r"""A point lies where ``axis1`` crosses the plane through the origin of ``axis2`` normal
     to it (``axis2`` is typically a :class:`Plane`). Removes 3 DOF (3D).
 
-    ``PointAtIntersection3(point, axis1, axis2)``; with ``h_1, f_1`` the normals of
+    ``PointAtIntersection3(point, axis1, axis2)``; with :math:`h_1, f_1` the normals of
     ``axis1``:
 
     .. math::
@@ -309,7 +309,7 @@ class PointAtIntersection3(ConstraintBase):
 class Revolute5(_TwoAxes):
     r"""Hinge: the origins coincide and the axes are parallel. Removes 5 DOF (3D).
 
-    ``Revolute5(axis1, axis2)``; ``h_2, f_2`` normals of ``axis2``:
+    ``Revolute5(axis1, axis2)``; :math:`h_2, f_2` normals of ``axis2``:
 
     .. math::
 
@@ -333,7 +333,7 @@ class Revolute5(_TwoAxes):
 class Cylindrical4(_TwoAxes):
     r"""The axes are colinear: they may slide along and turn about each other. Removes 4 DOF.
 
-    ``Cylindrical4(axis1, axis2)``; ``h_1, f_1`` normals of ``axis1`` (Mech's order: the
+    ``Cylindrical4(axis1, axis2)``; :math:`h_1, f_1` normals of ``axis1`` (Mech's order: the
     origin of ``axis2`` on ``axis1``, then parallel):
 
     .. math::
@@ -356,8 +356,8 @@ class Translate5(Cylindrical4):
     r"""Prismatic joint: the axes are colinear and their reference directions parallel, so
     they only slide. Removes 5 DOF (3D).
 
-    ``Translate5(axis1, axis2)``; the four ``Cylindrical4`` equations, then, with ``g_i`` the
-    reference directions and ``k_1 = u_1^ x g_1``:
+    ``Translate5(axis1, axis2)``; the four ``Cylindrical4`` equations, then, with :math:`g_i` the
+    reference directions and :math:`k_1 = \hat{u}_1 \times g_1`:
 
     .. math::
 
@@ -403,11 +403,13 @@ class ConstantVelocity4(_TwoAxes):
     equally. Removes 4 DOF (3D).
 
     ``ConstantVelocity4(axis1, axis2, C=0)``. The spin of shaft ``i`` is the angle about
-    ``u_i`` from ``n = u_1 x u_2`` to its reference direction ``g_i``; the joint keeps
-    ``spin_2 = spin_1 + C``. That holds exactly when the relative rotation from frame 1
-    ``(g_1, k_1, u_1^)`` (``k_i = u_i^ x g_i``) to frame 2 turned back by ``C``,
-    ``(g_2', k_2', u_2^)`` with ``g_2' = cos C g_2 - sin C k_2``, ``k_2' = sin C g_2 + cos C k_2``,
-    has its rotation axis perpendicular to ``u_1`` -- a pure bend about ``n``:
+    :math:`u_i` from :math:`n = u_1 \times u_2` to its reference direction :math:`g_i`; the
+    joint keeps :math:`\mathit{spin}_2 = \mathit{spin}_1 + C`. That holds exactly when the
+    relative rotation from frame 1 :math:`(g_1, k_1, \hat{u}_1)` (:math:`k_i = \hat{u}_i \times
+    g_i`) to frame 2 turned back by ``C``, :math:`(g_2^{\prime}, k_2^{\prime}, \hat{u}_2)` with
+    :math:`g_2^{\prime} = \cos C\, g_2 - \sin C\, k_2`, :math:`k_2^{\prime} = \sin C\, g_2 +
+    \cos C\, k_2`, has its rotation axis perpendicular to :math:`u_1` -- a pure bend about
+    ``n``:
 
     .. math::
 
@@ -449,7 +451,7 @@ class ParaRevolute4(_TwoAxes):
         u_2 \cdot d &= 0 \\
         d \cdot d - \mathit{dist}^2 &= 0
 
-    Singular for ``dist = 0``: use ``Revolute5``.
+    Singular for :math:`\mathit{dist} = 0`: use ``Revolute5``.
     """
 
     mech_name = "ParaRevolute4"
@@ -470,7 +472,7 @@ class OrthoRevolute4(_TwoAxes):
     Removes 4 DOF (3D).
 
     ``OrthoRevolute4(axis1, axis2, dist=0)``; ``dist`` is signed: the origin of ``axis1``
-    lies ``dist`` from that of ``axis2`` along ``u_1^ x u_2^`` (Mech's order: origin 2 next
+    lies ``dist`` from that of ``axis2`` along :math:`\hat{u}_1 \times \hat{u}_2` (Mech's order: origin 2 next
     to axis 1, origin 1 next to axis 2, separation, perpendicular):
 
     .. math::
@@ -509,7 +511,7 @@ class LineOnCylinder3(_TwoAxes):
         f_2 \cdot u_1 &= 0 \\
         d \cdot d - (u_2 \cdot d)^2 / \lvert u_2 \rvert^2 - \mathit{rad}^2 &= 0
 
-    Singular for ``rad = 0``: use ``Cylindrical4``.
+    Singular for :math:`\mathit{rad} = 0`: use ``Cylindrical4``.
     """
 
     mech_name = "LineOnCylinder3"
@@ -533,8 +535,8 @@ class LineToCircle1(_TwoAxes):
     1 DOF (3D).
 
     ``LineToCircle1(axis1, axis2, rad)``; the line meets the circle's plane at
-    ``p = r_1 + u_1 (u_2 . (r_2 - r_1)) / c`` with ``c = u_2 . u_1``; multiplied through by
-    ``c`` (no division), with ``w = c (r_1 - r_2) + (u_2 . (r_2 - r_1)) u_1 = c (p - r_2)``:
+    :math:`p = r_1 + u_1\, (u_2 \cdot (r_2 - r_1)) / c` with :math:`c = u_2 \cdot u_1`; multiplied through by
+    ``c`` (no division), with :math:`w = c\, (r_1 - r_2) + (u_2 \cdot (r_2 - r_1))\, u_1 = c\, (p - r_2)`:
 
     .. math::
 
@@ -562,7 +564,7 @@ class LineToLine1(_TwoAxes):
     r"""The shortest distance between two lines is ``dist``; without ``dist`` the lines
     intersect. Removes 1 DOF (3D).
 
-    ``LineToLine1(axis1, axis2, dist=0)``; with ``w = u_1 x u_2``:
+    ``LineToLine1(axis1, axis2, dist=0)``; with :math:`w = u_1 \times u_2`:
 
     .. math::
 
@@ -590,7 +592,7 @@ class LineToLine1(_TwoAxes):
 
 class LineToPlane2(_TwoAxes):
     r"""``axis1`` lies in the plane normal to ``axis2`` through its origin (typically a
-    :class:`Plane`), or in the parallel plane ``dist`` away along ``u_2``. Removes 2 DOF (3D).
+    :class:`Plane`), or in the parallel plane ``dist`` away along :math:`u_2`. Removes 2 DOF (3D).
 
     ``LineToPlane2(axis1, axis2, dist=0)``:
 
@@ -618,7 +620,7 @@ class PlaneToPlane3(_TwoAxes):
     ``dist``). Removes 3 DOF (3D).
 
     ``PlaneToPlane3(axis1, axis2, dist=0)``: the origin of ``axis1`` lies ``dist`` from that of
-    ``axis2`` along ``u_2``:
+    ``axis2`` along :math:`u_2`:
 
     .. math::
 
@@ -661,11 +663,11 @@ class PlaneToCircle1(_TwoAxes):
     ground), or a torus. Removes 1 DOF (3D).
 
     ``PlaneToCircle1(axis1, axis2, rad)``: circle of radius ``rad`` centred at the origin of
-    ``axis2``, in the plane normal to ``u_2``. ``PlaneToCircle1(axis1, axis2, majrad, minrad)``:
-    torus with that core circle and tube radius ``minrad``. The circle (torus) lies on the side
-    of the plane that ``u_1`` points to; its nearest point is at height
-    ``u_1^ . (r_2 - r_1) - majrad |u_1^ x u_2^|``, which must equal ``minrad`` (0 for a
-    circle):
+    ``axis2``, in the plane normal to :math:`u_2`. ``PlaneToCircle1(axis1, axis2, majrad,
+    minrad)``: torus with that core circle and tube radius ``minrad``. The circle (torus) lies
+    on the side of the plane that :math:`u_1` points to; its nearest point is at height
+    :math:`\hat{u}_1 \cdot (r_2 - r_1) - \mathit{majrad}\, \lvert \hat{u}_1 \times \hat{u}_2
+    \rvert`, which must equal ``minrad`` (0 for a circle):
 
     .. math::
 
