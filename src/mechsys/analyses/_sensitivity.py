@@ -3,9 +3,15 @@ and beyond Mech, sensitivities of free-motion trajectories.
 
 ``sens = m.sensitivity(["L", "r"])`` names the parameters; ``sens.solve(t, solution=...)``
 solves the model as ``m.solve`` does and differentiates the solution exactly, by implicit
-differentiation of the compiled equations (``solvers/_sensitivity.py``)::
+differentiation of the compiled equations (``solvers/_sensitivity.py``):
 
-    Phi_q dq/dp = -Phi_p,   Phi_q dqd/dp = -(V_q dq/dp + V_p),   ...
+.. math::
+
+    \Phi_q \frac{\partial q}{\partial p} = -\Phi_p, \qquad
+    \Phi_q \frac{\partial \dot q}{\partial p} = -\left(V_q \frac{\partial q}{\partial p}
+    + V_p\right), \qquad \dots
+
+(:math:`V = \Phi_q \dot q + \Phi_t`, the velocity equations)
 
 ``sens.of(solution)`` differentiates a solution already at hand (``sol.sensitivity([...])``
 says the same). ``m.sensitivity([...], free=fs).simulate(t, ...)`` integrates the forward
@@ -53,7 +59,19 @@ def _parameter_symbols(model, parameters) -> tuple:
 
 
 class SensitivitySystem:
-    """Sensitivities of a model's solutions to ``parameters`` (Mech's ``SensitivitySystem``).
+    r"""Sensitivities of a model's solutions to ``parameters`` (Mech's ``SensitivitySystem``).
+
+    The derivatives with respect to each parameter :math:`p` solve the differentiated
+    equations of the solution, with the Jacobian the solve already factorised:
+
+    .. math::
+
+        \Phi_q \frac{\partial q}{\partial p} &= -\Phi_p \\
+        \Phi_q \frac{\partial \dot q}{\partial p} &= -\left(V_q \frac{\partial q}{\partial p}
+        + V_p\right), \qquad V = \Phi_q \dot q + \Phi_t
+
+    and likewise for the accelerations and, for static and dynamic solutions, the
+    multipliers.
 
     ``solve(t, solution=..., guess=..., options=..., lambda_guess=...)`` solves the model
     like :meth:`Model.solve` and returns a :class:`~mechsys.Sensitivity`; ``of(solution)``
