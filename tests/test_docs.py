@@ -83,6 +83,65 @@ def test_constraint_page_typesets_every_equation_block():
     assert len(fences) >= 100 and len(fences) % 2 == 0
 
 
+def _api_docstrings() -> dict[str, str]:
+    """The docstrings the API pages show for the constraint, load and analysis groups: every
+    public name defined there, with its public methods and properties."""
+    import inspect
+
+    import mechsys
+
+    out = {}
+    for name in mechsys.__all__:
+        obj = getattr(mechsys, name)
+        if not (getattr(obj, "__module__", "") or "").startswith(
+                ("mechsys.constraints", "mechsys.loads", "mechsys.analyses")):
+            continue
+        out[name] = obj.__doc__ or ""           # as written: getdoc would expand a tab
+        if isinstance(obj, type):
+            for attr, member in vars(obj).items():
+                if not attr.startswith("_") and (inspect.isfunction(member)
+                                                 or isinstance(member, property)):
+                    out[f"{name}.{attr}"] = member.__doc__ or ""
+    return out
+
+
+def test_api_equations_are_typeset():
+    """Equations in the docstrings the API pages show are reST maths (``.. math::``,
+    ``:math:``), not plain literal blocks; their braces pair up; and a docstring with maths is a
+    raw string (else ``\\times`` would hold a tab and ``\\frac`` a form feed)."""
+    import inspect
+
+    from mechsys._docgen import _math_block
+
+    docs = _api_docstrings()
+    assert len(docs) > 150
+    plain, unbalanced, not_raw = [], [], []
+    for name, raw in docs.items():
+        doc = inspect.cleandoc(raw)
+        for block in _literal_blocks(doc):
+            if _math_block(block.splitlines()) is not None:
+                plain.append(name)
+        if ":math:" in doc or ".. math::" in doc:
+            if re.search(r"[\t\x07\x08\x0b\x0c\r]", raw):
+                not_raw.append(name)
+            pieces = re.findall(r":math:`([^`]+)`", doc)
+            pieces += re.findall(r"^\.\. math::\n\n((?:[ \t]+.*\n?|\n)+)", doc, flags=re.M)
+            for tex in pieces:
+                depth = 0
+                for ch in tex.replace(r"\{", "").replace(r"\}", ""):
+                    depth += {"{": 1, "}": -1}.get(ch, 0)
+                    if depth < 0:
+                        break
+                if depth != 0:
+                    unbalanced.append((name, tex))
+    assert plain == [], f"plain-text equation blocks (write .. math::): {plain}"
+    assert unbalanced == []
+    assert not_raw == []
+    typeset = [n for n, d in docs.items() if ".. math::" in d]
+    print(f"{len(docs)} docstrings, {len(typeset)} with displayed maths")
+    assert len(typeset) >= 70, len(typeset)      # every constraint type, loads, analyses
+
+
 def _public_classes():
     import mechsys
     import mechsys.draw
@@ -136,7 +195,8 @@ def _literal_blocks(doc: str) -> list[str]:
     lines = inspect.cleandoc(doc).splitlines()
     blocks, i = [], 0
     while i < len(lines):
-        if lines[i].rstrip().endswith("::"):
+        # a directive (``.. math::``) is not a literal block
+        if lines[i].rstrip().endswith("::") and not lines[i].lstrip().startswith(".. "):
             i += 1
             block = []
             while i < len(lines) and (not lines[i].strip() or lines[i].startswith(" ")):
