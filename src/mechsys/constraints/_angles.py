@@ -10,7 +10,7 @@ the projection of a vector ``f`` is ``a`` when:
 
 .. math::
 
-    \cos(a)\, (k \cdot f) - \sin(a)\, (g \cdot f) &= 0
+    \cos(a)\, (k \cdot f) - \sin(a)\, (g \cdot f) = 0
 
 which is regular at the solution for every ``a``. It also holds at :math:`a + \pi`; for the
 drivers (``RotationLock1``, ``RelativeAngle1`` in 2D) the solvers tell the two apart by
@@ -140,7 +140,7 @@ class RotationLock1(ConstraintBase):
 
     .. math::
 
-        \theta_1 - \theta_2 - \mathit{angle} &= 0
+        \theta_1 - \theta_2 - \mathit{angle} = 0
 
     Axis form (2D and 3D): ``RotationLock1(axis1, axis2, angle)`` -- the counter-clockwise
     angle (right-hand sense about the direction :math:`u_2` of ``axis2``) from the reference
@@ -150,7 +150,7 @@ class RotationLock1(ConstraintBase):
 
     .. math::
 
-        \cos(\mathit{angle})\, (k_2 \cdot g_1) - \sin(\mathit{angle})\, (g_2 \cdot g_1) &= 0
+        \cos(\mathit{angle})\, (k_2 \cdot g_1) - \sin(\mathit{angle})\, (g_2 \cdot g_1) = 0
 
     (in 2D :math:`g_i` are the unit axis directions and :math:`k_2` the left normal of
     :math:`u_2`). ``RotationLock1(axis, angle)`` measures from the same axis on ground at rest.
@@ -254,7 +254,7 @@ class RelativeAngle1(TwoVectors):
 
     .. math::
 
-        \cos(\mathit{angle})\, (n_2 \cdot u_1) - \sin(\mathit{angle})\, (u_2 \cdot u_1) &= 0
+        \cos(\mathit{angle})\, (n_2 \cdot u_1) - \sin(\mathit{angle})\, (u_2 \cdot u_1) = 0
 
     (regular for every angle; it also admits :math:`\mathit{angle} + \pi`, which the solvers
     refuse by the sign of :math:`\cos(\mathit{angle})\, (u_2 \cdot u_1) + \sin(\mathit{angle})\,
@@ -264,7 +264,7 @@ class RelativeAngle1(TwoVectors):
 
     .. math::
 
-        u_1 \cdot u_2 - \lvert u_1 \rvert\, \lvert u_2 \rvert\, \cos(\mathit{angle}) &= 0
+        u_1 \cdot u_2 - \lvert u_1 \rvert\, \lvert u_2 \rvert\, \cos(\mathit{angle}) = 0
 
     singular at 0 and pi (the vectors are then parallel): use ``Parallel2`` there.
     """

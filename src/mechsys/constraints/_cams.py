@@ -217,7 +217,7 @@ class CamToPoint1(_Cam):
 
     .. math::
 
-        r_c(a) - r_p &= 0
+        r_c(a) - r_p = 0
     """
 
     mech_name = "CamToPoint1"
@@ -245,7 +245,7 @@ class CurveToPoint2(CamToPoint1):
 
     .. math::
 
-        r_c(a) - r_p &= 0 \qquad \text{(three equations)}
+        r_c(a) - r_p = 0 \qquad \text{(three equations)}
     """
 
     mech_name = "CurveToPoint2"
@@ -264,7 +264,7 @@ class CamToCircle1(_Cam):
 
     .. math::
 
-        r_c + \mathit{radius}\, n/\lvert n \rvert - r_p &= 0 \qquad \text{(two equations)}
+        r_c + \mathit{radius}\, n/\lvert n \rvert - r_p = 0 \qquad \text{(two equations)}
     """
 
     mech_name = "CamToCircle1"
@@ -297,7 +297,7 @@ class CamToSphere1(CamToCircle1):
 
     .. math::
 
-        r_c + \mathit{radius}\, n/\lvert n \rvert - r_p &= 0 \qquad \text{(three equations)}
+        r_c + \mathit{radius}\, n/\lvert n \rvert - r_p = 0 \qquad \text{(three equations)}
     """
 
     mech_name = "CamToSphere1"

@@ -447,7 +447,7 @@ class RackAndPinion1(_PlanarRack):
 
     .. math::
 
-        s - C + \mathit{rad}\, \alpha &= 0
+        s - C + \mathit{rad}\, \alpha = 0
 
     With ``(alpha, guess)`` (Mech's Euler form) ``alpha`` is a new variable and, with
     ``(g, k)`` the rack's angle frame and :math:`x_p` the pinion's x axis:

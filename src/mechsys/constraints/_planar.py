@@ -156,7 +156,7 @@ class RelativeX1(_RelativeCoordinate):
 
     .. math::
 
-        x_1 - x_2 - \mathit{dist} &= 0
+        x_1 - x_2 - \mathit{dist} = 0
     """
 
     mech_name = "RelativeX1"
@@ -171,7 +171,7 @@ class RelativeY1(_RelativeCoordinate):
 
     .. math::
 
-        y_1 - y_2 - \mathit{dist} &= 0
+        y_1 - y_2 - \mathit{dist} = 0
     """
 
     mech_name = "RelativeY1"
@@ -185,7 +185,7 @@ class RelativeDistance1(ConstraintBase):
 
     .. math::
 
-        d \cdot d - \mathit{dist}^2 &= 0
+        d \cdot d - \mathit{dist}^2 = 0
 
     Singular when ``dist`` is zero: use a coincident constraint (``Revolute2``) instead.
     """
@@ -215,7 +215,7 @@ class Orthogonal1(TwoVectors):
 
     .. math::
 
-        u_1 \cdot u_2 &= 0
+        u_1 \cdot u_2 = 0
     """
 
     mech_name = "Orthogonal1"
@@ -232,7 +232,7 @@ class Parallel1(TwoVectors):
 
     .. math::
 
-        u_2 \times u_1 &= 0
+        u_2 \times u_1 = 0
     """
 
     mech_name = "Parallel1"
@@ -251,7 +251,7 @@ class PointOnLine1(ConstraintBase):
 
     .. math::
 
-        u \times d - \mathit{dist}\, \lvert u \rvert &= 0
+        u \times d - \mathit{dist}\, \lvert u \rvert = 0
     """
 
     mech_name = "PointOnLine1"

@@ -161,7 +161,7 @@ class RelativeZ1(_RelativeCoordinate):
 
     .. math::
 
-        z_1 - z_2 - \mathit{dist} &= 0
+        z_1 - z_2 - \mathit{dist} = 0
     """
 
     mech_name = "RelativeZ1"
@@ -222,7 +222,7 @@ class PointOnPlane1(ConstraintBase):
 
     .. math::
 
-        u \cdot d - \mathit{dist}\, \lvert u \rvert &= 0
+        u \cdot d - \mathit{dist}\, \lvert u \rvert = 0
     """
 
     mech_name = "PointOnPlane1"
@@ -540,7 +540,7 @@ class LineToCircle1(_TwoAxes):
 
     .. math::
 
-        w \cdot w - \mathit{rad}^2\, c^2 &= 0
+        w \cdot w - \mathit{rad}^2\, c^2 = 0
 
     (the line must not lie parallel to the circle's plane).
     """
@@ -672,7 +672,7 @@ class PlaneToCircle1(_TwoAxes):
     .. math::
 
         u_1 \cdot (r_2 - r_1) - \mathit{rad}\, \lvert u_1 \times u_2 \rvert / \lvert u_2 \rvert
-        - \mathit{minrad}\, \lvert u_1 \rvert &= 0
+        - \mathit{minrad}\, \lvert u_1 \rvert = 0
 
     Regular while the circle's plane is not parallel to the plane (then it would lie in it).
     """
