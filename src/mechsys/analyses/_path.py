@@ -276,11 +276,12 @@ class PathSystem:
 
     def velocities(self, t, q, qd_guess=None, tol=1e-12, max_iterations=20, p=None,
                    scaling=None):
-        """Velocities ``qd`` (n,) at ``(t, q)`` from the holonomic and velocity constraints
+        r"""Velocities ``qd`` (n,) at ``(t, q)`` from the holonomic and velocity constraints
         (parameters ``p``: default the model's current values). Converged when every
         equation's residual, divided by its row scale in the unit-free coordinates of
         ``scaling`` (:class:`~mechsys.solvers.Scaling`, default: at ``q``), is at most
-        ``tol (1 + max |qd_j| / c_j)``: the same relative accuracy in any unit of length."""
+        :math:`\mathit{tol}\, (1 + \max_j \lvert \dot q_j \rvert / c_j)`: the same relative
+        accuracy in any unit of length."""
         s = self.system
         n = s.n
         p = self._p if p is None else p

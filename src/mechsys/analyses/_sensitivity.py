@@ -199,7 +199,8 @@ class SensitivitySystem:
                  max_error=MAX_ERROR, step_size=None, constraint_correction: bool = True,
                  starting_step_size: float | None = None, **unknown) -> Sensitivity:
         r"""Integrate the free motion of ``free`` and its forward sensitivities together:
-        the state ``(q, qd)`` and, per parameter, ``(s_q, s_qd) = d(q, qd)/dp`` with
+        the state ``(q, qd)`` and, per parameter,
+        :math:`(s_q, s_{\dot q}) = \partial (q, \dot q) / \partial p` with
 
         .. math::  \dot s_q = s_{\dot q}, \qquad \dot s_{\dot q} = s_{\ddot q}(q, \dot q,
                    s_q, s_{\dot q})
@@ -208,7 +209,7 @@ class SensitivitySystem:
         The options are those of :meth:`FreeSystem.simulate`; the error control covers the
         sensitivities too (each in units of its coordinate per unit of the parameter's
         size), and after each step the sensitivities are projected, like the state, onto the
-        differentiated constraints ``Phi_q s_q = -Phi_p`` and its velocity form.
+        differentiated constraints :math:`\Phi_q s_q = -\Phi_p` and its velocity form.
 
         At the start, the coordinates and velocities given in ``initial_condition`` are held
         (their sensitivity is zero) and the others follow the constraints with the smallest

@@ -190,12 +190,13 @@ class VibrationModes:
 
     def motion(self, k: int, amplitude: float | None = None, cycles: float = 1.0,
                frames: int = 40):
-        """A :class:`~mechsys.Solution` of mode ``k`` over ``cycles`` periods (``frames``
-        points): ``q(t) = q_ref + a Re(shape e^{s t})`` with the decay/growth removed
-        (``e^{i omega_d t}``), each point projected onto the constraints. ``amplitude``
-        ``a`` is the largest unit-free coordinate change (positions in units of the
-        characteristic length, rotations in radians); default 0.1. A mode without
-        oscillation (``omega_d = 0``) is shown over a unit time as ``sin(2 pi t)``."""
+        r"""A :class:`~mechsys.Solution` of mode ``k`` over ``cycles`` periods (``frames``
+        points): :math:`q(t) = q_\text{ref} + a \operatorname{Re}(\text{shape}\; e^{s t})`
+        with the decay/growth removed (:math:`e^{i \omega_d t}`), each point projected onto
+        the constraints. ``amplitude`` :math:`a` is the largest unit-free coordinate change
+        (positions in units of the characteristic length, rotations in radians); default 0.1.
+        A mode without oscillation (:math:`\omega_d = 0`) is shown over a unit time as
+        :math:`\sin(2 \pi t)`."""
         from ..results._solution import Solution
 
         k = self._index(k)

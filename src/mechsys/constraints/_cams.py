@@ -416,7 +416,7 @@ class CurveToCylinder1(_Cam):
         return super().geometry() + [self.axis]
 
     def contact_normal(self, space):
-        """``w``: the part of ``r_c - r_o`` normal to the cylinder's axis."""
+        r"""``w``: the part of :math:`r_c - r_o` normal to the cylinder's axis."""
         u = self.axis.direction()
         d = self.profiles[0].location() - self.axis.location()
         return d - u * (u.dot(d) / vector_norm(self.axis.dir) ** 2)
@@ -439,7 +439,8 @@ class CamToCam1(_Cam):
     .. math::
 
         r_{c1} - r_{c2} &= 0 \qquad \text{(two or three equations: the contact points coincide)} \\
-        n_1 \cdot t_{2,k} &= 0 \qquad \text{(2D: t_1 x t_2 = 0; 3D: two equations, normals parallel)}
+        n_1 \cdot t_{2,k} &= 0 \qquad \text{(2D: } t_1 \times t_2 = 0 \text{; 3D: two equations,
+        normals parallel)}
     """
 
     mech_name = "CamToCam1"

@@ -569,7 +569,8 @@ class LineToLine1(_TwoAxes):
     .. math::
 
         w \cdot d &= 0 \qquad \text{(intersecting form)} \\
-        (w \cdot d)^2 - \mathit{dist}^2\, (w \cdot w) &= 0 \qquad \text{(distance form, dist != 0)}
+        (w \cdot d)^2 - \mathit{dist}^2\, (w \cdot w) &= 0
+        \qquad \text{(distance form, } \mathit{dist} \neq 0 \text{)}
 
     Both are regular at their solutions while the lines are not parallel. The distance form
     is a line tangent to a cylinder of radius ``dist`` about the other line.

@@ -73,7 +73,7 @@ class GyroMoment(LoadBase):
         return [BodyMoment(b, M)]
 
     def spin_inertia(self, model):
-        """The spin inertia used: ``inertia`` when given, else ``a^T J a`` from the body."""
+        r"""The spin inertia used: ``inertia`` when given, else :math:`a^T J a` from the body."""
         if self.inertia is not None:
             return self.inertia
         b = model.body(self.body)
