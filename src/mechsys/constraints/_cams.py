@@ -439,8 +439,8 @@ class CamToCam1(_Cam):
     .. math::
 
         r_{c1} - r_{c2} &= 0 \qquad \text{(two or three equations: the contact points coincide)} \\
-        n_1 \cdot t_{2,k} &= 0 \qquad \text{(2D: } t_1 \times t_2 = 0 \text{; 3D: two equations,
-        normals parallel)}
+        n_1 \cdot t_{2,k} &= 0 \qquad \text{(2D: } t_1 \times t_2 = 0 \text{; 3D: two}
+        \ \text{equations, normals parallel)}
     """
 
     mech_name = "CamToCam1"
