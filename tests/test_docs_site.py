@@ -392,7 +392,9 @@ def test_gallery_pages_open_in_headless_chromium(site, served, tmp_path):
                         "before `make test`")
         pytest.skip("chromium is not installed (apt-get install -y chromium): the gallery's "
                     "browser check did not run")
-    maths = ["constraints.html", "loads.html", "free_motion.html", "guide.html"]
+    # the guides' maths, and the API pages' (constraint, load and analysis docstrings)
+    maths = ["constraints.html", "loads.html", "free_motion.html", "guide.html",
+             "api/constraints.html", "api/loads.html", "api/analyses.html"]
     search = "search.html?q=reaction+force"
     pages = ["gallery/index.html", "mech_to_mechsys.html", "index.html", "jupyter.html",
              *maths, search] + [f"gallery/{e.name}.html" for e in _gallery.examples()]
@@ -439,6 +441,7 @@ def test_gallery_pages_open_in_headless_chromium(site, served, tmp_path):
         assert m["sources"] > 0 and m["rendered"] >= m["sources"], (page, m)
         assert m["errors"] == 0 and m["glyphs"] > 0 and m["fonts"] > 0, (page, m)
     assert results["constraints.html"]["math"]["rendered"] > 60     # one per equation block
+    assert results["api/constraints.html"]["math"]["rendered"] > 60   # the docstrings' too
     # a search for "reaction force" lists guides and API first, the decision records last
     hits = results[search]["hits"]
     assert len(hits) >= 10, hits

@@ -384,20 +384,3 @@ def test_plot_time_histories_and_phase_plot(slider):
     plt.close(fig)
     with pytest.raises(ms.ModelError, match="values"):
         d.plot(sol, np.zeros(3))
-
-
-def test_the_drawing_guide_runs(tmp_path, monkeypatch):
-    """Every ```python block of docs/drawing.md runs, in order, in one namespace."""
-    import re
-    from pathlib import Path
-
-    text = (Path(__file__).resolve().parents[1] / "docs" / "drawing.md").read_text()
-    blocks = re.findall(r"^```python[ \t]*\n(.*?)^```[ \t]*$", text, re.M | re.S)
-    assert len(blocks) >= 3
-    monkeypatch.chdir(tmp_path)
-    namespace: dict = {"__name__": "__docs__"}
-    for code in blocks:
-        exec(compile(code, "docs/drawing.md", "exec"), namespace)  # noqa: S102
-    plt.close("all")
-    with Image.open(tmp_path / "slider_crank.gif") as im:
-        assert im.n_frames == 11

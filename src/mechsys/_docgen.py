@@ -7,10 +7,13 @@ argument the page is printed. The page lists every type in
 and its docstring, which carries the equations. A test compares the committed page with
 freshly generated output, so a new constraint type shows up in the docs by registering it.
 
-The docstrings write their equations in a plain-text notation (``u_1 . (r_2 - r_1) = 0``,
-``u x d - dist |u| = 0``) that reads well in ``help()``; :func:`equation_to_latex` typesets
-that notation, so that the page shows each block of equations as displayed maths
-(``$$ ... $$``, rendered by MathJax on the site and by GitHub).
+The docstrings write their equations as reStructuredText maths (a ``.. math::`` block of
+LaTeX, one equation a line aligned on ``&=``, and ``:math:`` in sentences), which the API
+pages typeset (decision 0049); this page shows each block as displayed maths
+(``$$ \begin{aligned} ... $$``, rendered by MathJax on the site and by GitHub). A docstring
+still written in the older plain-text notation (``u_1 . (r_2 - r_1) = 0``, ``u x d - dist
+|u| = 0``: a constraint type registered by a user, say) is typeset by
+:func:`equation_to_latex`.
 """
 
 from __future__ import annotations
@@ -38,7 +41,7 @@ directions of the vectors or axes, $d$ a difference of positions, $a \cdot b$ th
 product, $a \times b$ the cross product ($a_x b_y - a_y b_x$, a scalar, in 2D), $\lvert u \rvert$
 a length, $\hat u$ a unit vector, $\theta$ a planar body angle. A plain coordinate tuple
 where a point is expected is a point on ground; where a vector is expected, a global
-direction. The docstrings (`help(ms.Revolute2)`) carry the same equations in plain text.
+direction. The docstrings (`help(ms.Revolute2)`) and the API pages carry the same equations.
 
 "DOF removed" is the number of equations minus the number of new variables the constraint
 introduces; a driver (an expression of `T` in any scalar argument) removes the same number.
@@ -81,7 +84,8 @@ def _public_path(cls) -> str:
 
 
 def _inline(text: str) -> str:
-    """reStructuredText inline markup -> Markdown."""
+    """reStructuredText inline markup -> Markdown (``:math:`x``` -> ``$x$``)."""
+    text = re.sub(r":math:`([^`]+)`", r"$\1$", text)
     text = re.sub(r":(?:class|func|meth|attr|data|mod):`~?([^`]+)`",
                   lambda m: f"`{m.group(1).split('.')[-1]}`", text)
     return text.replace("``", "`")
@@ -163,11 +167,29 @@ def _math_block(block: list[str]) -> list[str] | None:
 def rst_to_markdown(doc: str) -> str:
     """Convert a docstring's reStructuredText subset (paragraphs, ``::`` literal blocks,
     inline literals and roles) to Markdown."""
-    lines = inspect.cleandoc(doc).splitlines()
+    # a :math: role may run over a line break; as Markdown it is kept on one line
+    doc = re.sub(r":math:`([^`]+)`", lambda m: "$" + " ".join(m.group(1).split()) + "$",
+                 inspect.cleandoc(doc))
+    lines = doc.splitlines()
     out: list[str] = []
     i = 0
     while i < len(lines):
         line = lines[i]
+        if line.strip() == ".. math::":
+            i += 1
+            block = []
+            while i < len(lines) and (not lines[i].strip() or lines[i].startswith((" ", "\t"))):
+                block.append(lines[i])
+                i += 1
+            # Sphinx reads the block as one ``split`` environment: ``aligned`` is its
+            # displayed-maths twin, and a blank line inside ``$$`` would end the maths
+            # one equation a line (a docstring may break a long one after an operator, and
+            # Markdown would read a line starting with "- " inside the maths as a list item)
+            joined = " ".join(ln.strip() for ln in block if ln.strip())
+            eqs = [e.strip() for e in joined.split(r"\\")]
+            tex = [e + r" \\" for e in eqs[:-1]] + eqs[-1:]
+            out += ["", "$$", r"\begin{aligned}", *tex, r"\end{aligned}", "$$", ""]
+            continue
         if line.rstrip().endswith("::"):
             head = line.rstrip()[:-2].rstrip()
             if head:
@@ -210,7 +232,8 @@ def render(registry=None) -> str:
         parts.append(f"## {name}\n")
         parts.append(f"**Models:** {_kinds(cls)} · **DOF removed:** {_dof(cls)} · "
                      f"**Python:** `{_public_path(cls)}`\n")
-        parts.append(f"```python\n{_signature(cls.__name__, cls)}\n```\n")
+        # a call signature, not a program: the marker keeps the page's code test from running it
+        parts.append(f"```python fragment\n{_signature(cls.__name__, cls)}\n```\n")
         parts.append(rst_to_markdown(cls.__doc__ or "(undocumented)"))
     return "\n".join(parts).rstrip() + "\n"
 

@@ -1373,7 +1373,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         return save(self, path)
 
     def inverse_dynamics(self, q, qd, qdd, t: float = 0.0):
-        """Joint forces ``tau = M(q) qdd - Q - Qv`` of a model in generalized coordinates
+        r"""Joint forces :math:`\tau = M(q) \ddot q - Q - Q_v` of a model in generalized coordinates
         without constraint equations (a robot from ``ms.from_urdf``), at one point or ``(N,
         n)`` points: a :class:`~mechsys.JointValues` named by coordinate
         (``m.inverse_dynamics(q, qd, qdd)["elbow_joint"]``). Decision 0040."""
@@ -1382,7 +1382,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         return inverse_dynamics(self, q, qd, qdd, t)
 
     def forward_dynamics(self, q, qd, tau, t: float = 0.0):
-        """Joint accelerations ``qdd = M(q)^-1 (Q + Qv + tau)`` (the inverse of
+        r"""Joint accelerations :math:`\ddot q = M(q)^{-1} (Q + Q_v + \tau)` (the inverse of
         :meth:`inverse_dynamics`) at one point or ``(N, n)`` points."""
         from .analyses._robot import forward_dynamics
 

@@ -165,10 +165,29 @@ def _check_independent(system, t, q, p, scaling) -> None:
 
 
 class FreeSystem:
-    """A model with constraints dropped. Attributes: ``model``, ``dropped`` (constraints),
+    r"""A model with constraints dropped. Attributes: ``model``, ``dropped`` (constraints),
     ``system`` (the compiled System of the kept equations), ``kind``, ``linear`` (whether the
     highest-order unknowns enter linearly: no loads depending on multipliers, and for the
-    velocity equilibrium loads linear in velocities), ``dof``."""
+    velocity equilibrium loads linear in velocities), ``dof``.
+
+    With the kept constraints :math:`\Phi(q, t) = 0` (:math:`m < n` equations), their
+    Jacobian :math:`\Phi_q`, the mass matrix :math:`M`, the applied loads :math:`Q` and the
+    centrifugal and gyroscopic terms :math:`Q_v`, each kind solves:
+
+    .. math::
+
+        \Phi(q, t) &= 0, \quad \Phi_q^T \lambda - Q(t, q, 0, \lambda) = 0
+        \qquad \text{(static: unknowns } q, \lambda \text{)} \\
+        \Phi_q \dot q + \Phi_t &= 0, \quad \Phi_q^T \lambda - Q(t, q, \dot q, \lambda) = 0
+        \qquad \text{(kinematic: } \dot q, \lambda \text{ at fixed } q \text{)} \\
+        M \ddot q + \Phi_q^T \lambda &= Q(t, q, \dot q, \lambda) + Q_v(q, \dot q), \quad
+        \Phi_q \ddot q = \gamma \qquad \text{(dynamic: } \ddot q, \lambda \text{)}
+
+    with :math:`\gamma = -(v_q \dot q + v_t)`, :math:`v = \Phi_q \dot q + \Phi_t` (the
+    velocity equations, differentiated once more). The
+    dynamic system is linear in :math:`(\ddot q, \lambda)` unless a load depends on the
+    multipliers (friction: then Newton); ``simulate`` integrates it over time.
+    """
 
     def __init__(self, model, drop=(), solution: str = "dynamic", initial_guess=None,
                  initial_condition=None):

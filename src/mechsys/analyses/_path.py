@@ -1,20 +1,25 @@
 r"""Nonholonomic systems (Mech's ``SetPath`` / ``SolvePath``, manual 10.5).
 
 A fully constrained kinematic model carries *dummy* constraints that hold its place; ``path``
-replaces them by *velocity constraints* ``psi(q, qd, t) = 0`` (normal constraint objects
+replaces them by *velocity constraints* :math:`\psi(q, \dot q, t) = 0` (normal constraint objects
 whose geometry depends on velocities, e.g. ``Orthogonal1(m.velocity(p), body.vector(...))``,
 a general ``Constraint`` with velocity terms, or a rolling contact such as ``RollingDisk2``,
-which replaces a tuple of as many dummies as it has equations). At each instant the velocities follow
-from the kept holonomic constraints and the velocity constraints together::
+which replaces a tuple of as many dummies as it has equations). At each instant the velocities
+follow from the kept holonomic constraints and the velocity constraints together:
 
-    Phi_q(q, t) qd + Phi_t(q, t) = 0          (holonomic, m - k rows)
-    psi(q, qd, t)                = 0          (nonholonomic, k rows)
+.. math::
 
-(Newton on ``qd``; one step when ``psi`` is linear in ``qd``), and ``q' = qd`` is integrated
-with the same integrators as free motion; ``constraint_correction`` projects ``q`` back onto
-the holonomic constraints after each step. Accelerations come from the time derivative::
+    \Phi_q(q, t)\, \dot q + \Phi_t(q, t) &= 0 \qquad \text{(holonomic, } m - k \text{ rows)} \\
+    \psi(q, \dot q, t) &= 0 \qquad \text{(nonholonomic, } k \text{ rows)}
 
-    Phi_q qdd = gamma,      psi_qd qdd = -(psi_q qd + psi_t)
+(Newton on :math:`\dot q`; one step when :math:`\psi` is linear in :math:`\dot q`), and
+:math:`q' = \dot q` is integrated with the same integrators as free motion;
+``constraint_correction`` projects :math:`q` back onto the holonomic constraints after each
+step. Accelerations come from the time derivative:
+
+.. math::
+
+    \Phi_q \ddot q = \gamma, \qquad \psi_{\dot q}\, \ddot q = -(\psi_q \dot q + \psi_t)
 
 Parameters are read from the model when ``simulate`` runs (``m.set_parameters`` after
 ``m.path()`` takes effect); parameter values in ``initial_condition`` override them.
@@ -74,11 +79,24 @@ def _check_own(model, dummy, vc) -> None:
 
 
 class PathSystem:
-    """A kinematic model with dummy constraints replaced by velocity constraints.
+    r"""A kinematic model with dummy constraints replaced by velocity constraints.
 
     Attributes: ``model``, ``replaced`` (``{dummy: velocity constraint}``), ``system`` (the
     compiled holonomic part), ``velocity_constraints`` (list), ``linear`` (whether the
-    velocity constraints are linear in the velocities)."""
+    velocity constraints are linear in the velocities).
+
+    At each instant the velocities solve the kept holonomic constraints and the velocity
+    constraints :math:`\psi` together, and the accelerations their time derivatives:
+
+    .. math::
+
+        \Phi_q \dot q + \Phi_t &= 0, \qquad \psi(q, \dot q, t) = 0 \\
+        \Phi_q \ddot q &= \gamma, \qquad
+        \psi_{\dot q}\, \ddot q = -(\psi_q \dot q + \psi_t)
+
+    (Newton on :math:`\dot q`, one step when :math:`\psi` is linear in :math:`\dot q`);
+    ``simulate`` integrates :math:`q' = \dot q`.
+    """
 
     def __init__(self, model, replace: Mapping, initial_condition=None):
         if not isinstance(replace, Mapping) or not replace:
@@ -269,11 +287,12 @@ class PathSystem:
 
     def velocities(self, t, q, qd_guess=None, tol=1e-12, max_iterations=20, p=None,
                    scaling=None):
-        """Velocities ``qd`` (n,) at ``(t, q)`` from the holonomic and velocity constraints
+        r"""Velocities ``qd`` (n,) at ``(t, q)`` from the holonomic and velocity constraints
         (parameters ``p``: default the model's current values). Converged when every
         equation's residual, divided by its row scale in the unit-free coordinates of
         ``scaling`` (:class:`~mechsys.solvers.Scaling`, default: at ``q``), is at most
-        ``tol (1 + max |qd_j| / c_j)``: the same relative accuracy in any unit of length."""
+        :math:`\mathit{tol}\, (1 + \max_j \lvert \dot q_j \rvert / c_j)`: the same relative
+        accuracy in any unit of length."""
         s = self.system
         n = s.n
         p = self._p if p is None else p

@@ -1,15 +1,17 @@
 r"""Robot-style entry points on generalized-coordinate models (decision 0040):
 ``m.inverse_dynamics(q, qd, qdd)`` and ``m.forward_dynamics(q, qd, tau)``.
 
-Both evaluate the model's equations of motion in its coordinates, ``M(q) qdd = Q(q, qd, t)
-+ Qv(q, qd) + tau`` (``Q`` the model's loads, gravity included; ``Qv`` the velocity
-terms; ``tau`` the joint forces, a torque on an angle and a force on a slide), with the
-compiled terms the model already uses for free motion (the recursive composite-body
-dynamics of decision 0016 from 4 spatial Gen joints on, the symbolic projection below;
-no second algorithm)::
+Both evaluate the model's equations of motion in its coordinates,
+:math:`M(q) \ddot q = Q(q, \dot q, t) + Q_v(q, \dot q) + \tau` (:math:`Q` the model's loads,
+gravity included; :math:`Q_v` the velocity terms; :math:`\tau` the joint forces, a torque on
+an angle and a force on a slide), with the compiled terms the model already uses for free
+motion (the recursive composite-body dynamics of decision 0016 from 4 spatial Gen joints on,
+the symbolic projection below; no second algorithm):
 
-    tau = M qdd - Q - Qv                 (inverse dynamics)
-    qdd = M^-1 (Q + Qv + tau)            (forward dynamics, Cholesky)
+.. math::
+
+    \tau &= M \ddot q - Q - Q_v \qquad \text{(inverse dynamics)} \\
+    \ddot q &= M^{-1} (Q + Q_v + \tau) \qquad \text{(forward dynamics, Cholesky)}
 
 They apply to models whose coordinates are all generalized coordinates and which have no
 constraint equation (a tree of Gen joints on ground: what ``from_urdf`` builds for a

@@ -3,9 +3,15 @@ and beyond Mech, sensitivities of free-motion trajectories.
 
 ``sens = m.sensitivity(["L", "r"])`` names the parameters; ``sens.solve(t, solution=...)``
 solves the model as ``m.solve`` does and differentiates the solution exactly, by implicit
-differentiation of the compiled equations (``solvers/_sensitivity.py``)::
+differentiation of the compiled equations (``solvers/_sensitivity.py``):
 
-    Phi_q dq/dp = -Phi_p,   Phi_q dqd/dp = -(V_q dq/dp + V_p),   ...
+.. math::
+
+    \Phi_q \frac{\partial q}{\partial p} = -\Phi_p, \qquad
+    \Phi_q \frac{\partial \dot q}{\partial p} = -\left(V_q \frac{\partial q}{\partial p}
+    + V_p\right), \qquad \dots
+
+(:math:`V = \Phi_q \dot q + \Phi_t`, the velocity equations)
 
 ``sens.of(solution)`` differentiates a solution already at hand (``sol.sensitivity([...])``
 says the same). ``m.sensitivity([...], free=fs).simulate(t, ...)`` integrates the forward
@@ -53,7 +59,19 @@ def _parameter_symbols(model, parameters) -> tuple:
 
 
 class SensitivitySystem:
-    """Sensitivities of a model's solutions to ``parameters`` (Mech's ``SensitivitySystem``).
+    r"""Sensitivities of a model's solutions to ``parameters`` (Mech's ``SensitivitySystem``).
+
+    The derivatives with respect to each parameter :math:`p` solve the differentiated
+    equations of the solution, with the Jacobian the solve already factorised:
+
+    .. math::
+
+        \Phi_q \frac{\partial q}{\partial p} &= -\Phi_p \\
+        \Phi_q \frac{\partial \dot q}{\partial p} &= -\left(V_q \frac{\partial q}{\partial p}
+        + V_p\right), \qquad V = \Phi_q \dot q + \Phi_t
+
+    and likewise for the accelerations and, for static and dynamic solutions, the
+    multipliers.
 
     ``solve(t, solution=..., guess=..., options=..., lambda_guess=...)`` solves the model
     like :meth:`Model.solve` and returns a :class:`~mechsys.Sensitivity`; ``of(solution)``
@@ -181,7 +199,8 @@ class SensitivitySystem:
                  max_error=MAX_ERROR, step_size=None, constraint_correction: bool = True,
                  starting_step_size: float | None = None, **unknown) -> Sensitivity:
         r"""Integrate the free motion of ``free`` and its forward sensitivities together:
-        the state ``(q, qd)`` and, per parameter, ``(s_q, s_qd) = d(q, qd)/dp`` with
+        the state ``(q, qd)`` and, per parameter,
+        :math:`(s_q, s_{\dot q}) = \partial (q, \dot q) / \partial p` with
 
         .. math::  \dot s_q = s_{\dot q}, \qquad \dot s_{\dot q} = s_{\ddot q}(q, \dot q,
                    s_q, s_{\dot q})
@@ -190,7 +209,7 @@ class SensitivitySystem:
         The options are those of :meth:`FreeSystem.simulate`; the error control covers the
         sensitivities too (each in units of its coordinate per unit of the parameter's
         size), and after each step the sensitivities are projected, like the state, onto the
-        differentiated constraints ``Phi_q s_q = -Phi_p`` and its velocity form.
+        differentiated constraints :math:`\Phi_q s_q = -\Phi_p` and its velocity form.
 
         At the start, the coordinates and velocities given in ``initial_condition`` are held
         (their sensitivity is zero) and the others follow the constraints with the smallest

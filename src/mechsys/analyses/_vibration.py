@@ -23,10 +23,13 @@ of the multipliers and the load stiffness ``-dQ/dq``; the inertia terms
 ``d(M qdd)/dq`` and ``-dQv/dq, -dQv/dqd`` give the centrifugal and gyroscopic terms)
 and ``dq = P z``, ``dqd = P z' + P' z``, ``dqdd = P z'' + 2 P' z' + P'' z`` (``P' = B(e_dot)
 N``: the perturbation frame turns with a rotating body), projecting on ``P^T`` (which
-removes the multiplier changes, since ``Phi_q P = 0``)::
+removes the multiplier changes, since ``Phi_q P = 0``):
 
-    M_r z'' + C_r z' + K_r z = 0,
-    M_r = P^T A_a P,   C_r = P^T (A_v P + 2 A_a P'),   K_r = P^T (A_q P + A_v P' + A_a P'').
+.. math::
+
+    M_r z'' + C_r z' + K_r z &= 0, \\
+    M_r &= P^T A_a P, \quad C_r = P^T (A_v P + 2 A_a P'), \quad
+    K_r = P^T (A_q P + A_v P' + A_a P'').
 
 Its eigenvalues ``s`` (``det(s^2 M_r + s C_r + K_r) = 0``) give, per oscillatory mode, the
 natural frequency ``omega_n = |s|`` [rad/s], ``hz = omega_n / 2 pi`` [Hz], the damping ratio
@@ -106,25 +109,43 @@ def _frame_columns(system) -> np.ndarray:
 
 @dataclass(frozen=True)
 class VibrationModes:
-    """Modes of a linearised mechanism (see :mod:`mechsys.analyses._vibration`).
+    r"""Modes of a linearised mechanism (see :mod:`mechsys.analyses._vibration`).
 
-    ``eigenvalues`` (k,) complex ``s`` (one per oscillatory pair, ``Im s >= 0``; each real
-    eigenvalue -- overdamped or statically unstable motion -- is a mode of its own);
-    ``omega`` (k,) natural frequencies ``|s|`` [rad/s]; ``hz`` (k,) the same in Hz;
-    ``damped_omega`` (k,) ``|Im s|``; ``damping_ratio`` (k,) ``-Re(s)/|s|`` (``nan`` for a
-    zero eigenvalue: a rigid-body mode); ``shapes`` (k, n) the coordinate changes ``dq`` of
-    each mode in all the coordinates (real and mass-normalised, ``z^T M_r z = 1``, for an
-    undamped conservative system; else complex with the largest unit-free component 1);
+    The perturbations :math:`\delta q = P z` of the :math:`f` independent coordinates
+    :math:`z` obey the reduced linear equations, whose eigenvalues :math:`s` are the modes:
+
+    .. math::
+
+        M_r \ddot z + C_r \dot z + K_r z = 0, \qquad
+        \det(s^2 M_r + s C_r + K_r) = 0
+
+    ``eigenvalues`` (k,) complex :math:`s` (one per oscillatory pair, :math:`\operatorname{Im}
+    s \ge 0`; each real eigenvalue -- overdamped or statically unstable motion -- is a mode
+    of its own); ``omega`` (k,) natural frequencies :math:`\omega_n = \lvert s \rvert`
+    [rad/s]; ``hz`` (k,) the same in Hz, :math:`\omega_n / 2\pi`; ``damped_omega`` (k,)
+    :math:`\lvert \operatorname{Im} s \rvert`; ``damping_ratio`` (k,) :math:`\zeta =
+    -\operatorname{Re} s / \lvert s \rvert` (``nan`` for a zero eigenvalue: a rigid-body
+    mode); ``shapes`` (k, n) the coordinate changes :math:`\delta q` of each mode in all the
+    coordinates (real and mass-normalised, :math:`z^T M_r z = 1`, for an undamped
+    conservative system; else complex with the largest unit-free component 1);
     ``coordinates`` the coordinate names; ``t``, ``q``, ``qd`` the reference state;
-    ``mass``, ``damping``, ``stiffness`` the reduced ``M_r, C_r, K_r`` (f, f) and
-    ``basis`` ``P`` (n, f) with ``dq = P z``; ``stability`` (k,) each mode's class,
-    ``"stable"`` (``Re s < 0``: decays), ``"neutral"`` (``Re s = 0`` within the mode's own
-    accuracy: an undamped oscillation, or a zero eigenvalue -- a rigid-body motion or a
-    neutral equilibrium, which the linearisation cannot decide) or ``"unstable"``
-    (``Re s > 0``: grows); ``stable`` whether no mode is unstable. Each eigenvalue is judged
-    on its own scale: ``|Re s| <= 1e-7 s_own`` or ``<= 1e-12 max |s|`` is neutral, with
-    ``s_own = sqrt(|z|^T |K_r| |z| / |z^H M_r z|) + |z|^T |C_r| |z| / |z^H M_r z|`` the size
-    of the terms the mode's eigenvalue comes from (not the stiffest mode's).
+    ``mass``, ``damping``, ``stiffness`` the reduced :math:`M_r, C_r, K_r` (f, f) and
+    ``basis`` :math:`P` (n, f); ``stability`` (k,) each mode's class, ``"stable"``
+    (:math:`\operatorname{Re} s < 0`: decays), ``"neutral"`` (:math:`\operatorname{Re} s = 0`
+    within the mode's own accuracy: an undamped oscillation, or a zero eigenvalue -- a
+    rigid-body motion or a neutral equilibrium, which the linearisation cannot decide) or
+    ``"unstable"`` (:math:`\operatorname{Re} s > 0`: grows); ``stable`` whether no mode is
+    unstable. Each eigenvalue is judged on its own scale: :math:`\lvert \operatorname{Re} s
+    \rvert \le 10^{-7} s_\text{own}` or :math:`\le 10^{-12} \max \lvert s \rvert` is neutral,
+    with
+
+    .. math::
+
+        s_\text{own} = \sqrt{\frac{\lvert z \rvert^T \lvert K_r \rvert \lvert z \rvert}
+        {\lvert z^H M_r z \rvert}} + \frac{\lvert z \rvert^T \lvert C_r \rvert \lvert z
+        \rvert}{\lvert z^H M_r z \rvert}
+
+    the size of the terms the mode's eigenvalue comes from (not the stiffest mode's).
     """
 
     eigenvalues: np.ndarray
@@ -166,12 +187,13 @@ class VibrationModes:
 
     def motion(self, k: int, amplitude: float | None = None, cycles: float = 1.0,
                frames: int = 40):
-        """A :class:`~mechsys.Solution` of mode ``k`` over ``cycles`` periods (``frames``
-        points): ``q(t) = q_ref + a Re(shape e^{s t})`` with the decay/growth removed
-        (``e^{i omega_d t}``), each point projected onto the constraints. ``amplitude``
-        ``a`` is the largest unit-free coordinate change (positions in units of the
-        characteristic length, rotations in radians); default 0.1. A mode without
-        oscillation (``omega_d = 0``) is shown over a unit time as ``sin(2 pi t)``."""
+        r"""A :class:`~mechsys.Solution` of mode ``k`` over ``cycles`` periods (``frames``
+        points): :math:`q(t) = q_\text{ref} + a \operatorname{Re}(\text{shape}\; e^{s t})`
+        with the decay/growth removed (:math:`e^{i \omega_d t}`), each point projected onto
+        the constraints. ``amplitude`` :math:`a` is the largest unit-free coordinate change
+        (positions in units of the characteristic length, rotations in radians); default 0.1.
+        A mode without oscillation (:math:`\omega_d = 0`) is shown over a unit time as
+        :math:`\sin(2 \pi t)`."""
         from ..results._solution import Solution
 
         k = self._index(k)

@@ -4,13 +4,15 @@ and the shared equation builders for angles about an axis.
 An axis carries a right-handed *angle frame* ``(g, k)``: unit vectors spanning the plane
 in which angles about it are measured, ``k`` being ``g`` turned +90 degrees about the
 axis. In 2D ``g`` is the unit axis direction and ``k`` its left normal; in 3D ``g`` is the
-unit reference direction (perpendicular to the direction ``u``) and ``k = u^ x g``. Both
+unit reference direction (perpendicular to the direction ``u``) and :math:`k = \hat{u} \times g`. Both
 are fixed in the axis' body when the axis is. The counter-clockwise angle from ``g`` to
-the projection of a vector ``f`` is ``a`` when::
+the projection of a vector ``f`` is ``a`` when:
 
-    cos(a) (k . f) - sin(a) (g . f) = 0
+.. math::
 
-which is regular at the solution for every ``a``. It also holds at ``a + pi``; for the
+    \cos(a)\, (k \cdot f) - \sin(a)\, (g \cdot f) = 0
+
+which is regular at the solution for every ``a``. It also holds at :math:`a + \pi`; for the
 drivers (``RotationLock1``, ``RelativeAngle1`` in 2D) the solvers tell the two apart by
 :class:`Branch` (decision 0033); elsewhere the guess picks the branch, as for ``Parallel1``.
 """
@@ -63,16 +65,18 @@ def angle_equation(frame, f: sp.Matrix, angle) -> sp.Expr:
 
 @dataclass(frozen=True)
 class Branch:
-    r"""The branch test of an angle equation ``cos(a) (k . f) - sin(a) (g . f) = 0``.
+    r"""The branch test of an angle equation :math:`\cos(a)\, (k \cdot f) - \sin(a)\, (g \cdot f) = 0`.
 
-    The equation is ``|f_p| sin(phi - a) = 0`` with ``phi`` the angle of ``f``'s projection
-    ``f_p``: it holds at ``phi = a`` and at ``phi = a + pi``. ``cos_err = |f_p| cos(phi - a)``
-    (``cos(a) (g . f) + sin(a) (k . f)``) tells them apart: positive on the asked branch,
-    negative on the other; ``sin_err`` is the equation itself, so
-    ``phi - a = atan2(sin_err, cos_err)``. To move a configuration onto the asked angle,
-    ``body`` (moving) is turned by ``sign * (phi - a)`` about the global unit direction
-    ``axis`` (None in 2D: about the plane's normal) through the global point ``origin``;
-    ``body`` is None when no single body carries ``f`` (the branch is then only tested).
+    The equation is :math:`\lvert f_p \rvert\, \sin(\phi - a) = 0` with ``phi`` the angle of
+    ``f``'s projection :math:`f_p`: it holds at :math:`\phi = a` and at :math:`\phi = a + \pi`.
+    :math:`\mathit{cos\_err} = \lvert f_p \rvert \cos(\phi - a)` (:math:`\cos(a)\, (g \cdot f) +
+    \sin(a)\, (k \cdot f)`) tells them apart: positive on the asked branch, negative on the
+    other; :math:`\mathit{sin\_err}` is the equation itself, so :math:`\phi - a =
+    \operatorname{atan2}(\mathit{sin\_err}, \mathit{cos\_err})`. To move a configuration onto
+    the asked angle, ``body`` (moving) is turned by :math:`\mathit{sign}\, (\phi - a)` about the
+    global unit direction ``axis`` (None in 2D: about the plane's normal) through the global
+    point ``origin``; ``body`` is None when no single body carries ``f`` (the branch is then
+    only tested).
     """
 
     owner: object
@@ -132,27 +136,32 @@ class RotationLock1(ConstraintBase):
 
     Body form (2D, Mech's): ``RotationLock1(body, angle)`` or
     ``RotationLock1(body1, body2, angle)`` -- the angle of ``body1`` is ``angle`` more than
-    that of ``body2`` (ground if omitted)::
+    that of ``body2`` (ground if omitted):
 
-        theta_1 - theta_2 - angle = 0
+    .. math::
+
+        \theta_1 - \theta_2 - \mathit{angle} = 0
 
     Axis form (2D and 3D): ``RotationLock1(axis1, axis2, angle)`` -- the counter-clockwise
-    angle (right-hand sense about the direction ``u_2`` of ``axis2``) from the reference
-    direction ``g_2`` of ``axis2`` to the reference direction ``g_1`` of ``axis1``, projected
-    on the plane normal to ``u_2``, is ``angle``; with ``k_2 = u_2^ x g_2`` (see
-    :func:`~mechsys.reference_direction` for references not given explicitly)::
+    angle (right-hand sense about the direction :math:`u_2` of ``axis2``) from the reference
+    direction :math:`g_2` of ``axis2`` to the reference direction :math:`g_1` of ``axis1``, projected
+    on the plane normal to :math:`u_2`, is ``angle``; with :math:`k_2 = \hat{u}_2 \times g_2` (see
+    :func:`~mechsys.reference_direction` for references not given explicitly):
 
-        cos(angle) (k_2 . g_1) - sin(angle) (g_2 . g_1) = 0
+    .. math::
 
-    (in 2D ``g_i`` are the unit axis directions and ``k_2`` the left normal of ``u_2``).
-    ``RotationLock1(axis, angle)`` measures from the same axis on ground at rest. ``angle``
-    may be an expression of ``T`` (a rotational driver). The equation is regular for every
-    angle; it also holds at ``angle + pi``, and the solvers tell the two apart by the sign
-    of ``cos(angle) (g_2 . g_1) + sin(angle) (k_2 . g_1)`` (positive at the asked angle): a
-    guess or prediction more than a quarter turn off is first turned onto the asked angle,
-    and a solution half a turn off is turned and solved again (decision 0033). The same
-    holds for the 2D body form in Euler-parameter coordinates (``orientation="euler"``).
-    In 3D a body's whole orientation is locked with ``RotationLock3``.
+        \cos(\mathit{angle})\, (k_2 \cdot g_1) - \sin(\mathit{angle})\, (g_2 \cdot g_1) = 0
+
+    (in 2D :math:`g_i` are the unit axis directions and :math:`k_2` the left normal of
+    :math:`u_2`). ``RotationLock1(axis, angle)`` measures from the same axis on ground at rest.
+    ``angle`` may be an expression of ``T`` (a rotational driver). The equation is regular for
+    every angle; it also holds at :math:`\mathit{angle} + \pi`, and the solvers tell the two
+    apart by the sign of :math:`\cos(\mathit{angle})\, (g_2 \cdot g_1) + \sin(\mathit{angle})\,
+    (k_2 \cdot g_1)` (positive at the asked angle): a guess or prediction more than a quarter
+    turn off is first turned onto the asked angle, and a solution half a turn off is turned and
+    solved again (decision 0033). The same holds for the 2D body form in Euler-parameter
+    coordinates (``orientation="euler"``). In 3D a body's whole orientation is locked with
+    ``RotationLock3``.
     """
 
     mech_name = "RotationLock1"
@@ -241,16 +250,21 @@ class RelativeAngle1(TwoVectors):
     directions).
 
     2D (signed, Mech's): the counter-clockwise angle from ``vector2`` to ``vector1`` is
-    ``angle``; with ``n_2`` the left normal of ``u_2``::
+    ``angle``; with :math:`n_2` the left normal of :math:`u_2`:
 
-        cos(angle) (n_2 . u_1) - sin(angle) (u_2 . u_1) = 0
+    .. math::
 
-    (regular for every angle; it also admits ``angle + pi``, which the solvers refuse by the
-    sign of ``cos(angle) (u_2 . u_1) + sin(angle) (n_2 . u_1)``, as for ``RotationLock1``).
+        \cos(\mathit{angle})\, (n_2 \cdot u_1) - \sin(\mathit{angle})\, (u_2 \cdot u_1) = 0
 
-    3D (unsigned, Mech's): the included angle between the vectors is ``|angle|``::
+    (regular for every angle; it also admits :math:`\mathit{angle} + \pi`, which the solvers
+    refuse by the sign of :math:`\cos(\mathit{angle})\, (u_2 \cdot u_1) + \sin(\mathit{angle})\,
+    (n_2 \cdot u_1)`, as for ``RotationLock1``).
 
-        u_1 . u_2 - |u_1| |u_2| cos(angle) = 0
+    3D (unsigned, Mech's): the included angle between the vectors is :math:`\lvert \mathit{angle} \rvert`:
+
+    .. math::
+
+        u_1 \cdot u_2 - \lvert u_1 \rvert\, \lvert u_2 \rvert\, \cos(\mathit{angle}) = 0
 
     singular at 0 and pi (the vectors are then parallel): use ``Parallel2`` there.
     """

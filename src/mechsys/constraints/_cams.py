@@ -7,13 +7,13 @@ r(a) sin a))``. Each parameter is given as Mech's ``{sym, guess}`` pair, here a 
 guess)`` tuple, and becomes a model variable, so a cam constraint writes more equations
 than the degrees of freedom it removes (``len(equations) - len(parameters)``).
 
-Notation in the docstrings: ``r_c = r + A s'(a)`` the global contact point of a profile,
-``t_k = A ds'/da_k`` its tangents, ``n`` its normal: in 2D ``t`` turned by +90 degrees (the
-left of the profile travelled with increasing ``a``), in 3D ``t_1 x t_2`` (the side from
-which ``a_1`` turns to ``a_2`` counterclockwise). Normals are built in local coordinates
-and turned by ``A`` (rotations keep lengths and cross products), so ``|n|`` depends on the
-parameters only. ``r_p`` a global point, ``u`` the direction of a line or the normal of a
-plane, ``r_o`` its origin.
+Notation in the docstrings: :math:`r_c = r + A\, s^{\prime}(a)` the global contact point of a
+profile, :math:`t_k = A\, \partial s'/\partial a_k` its tangents, ``n`` its normal: in 2D ``t``
+turned by +90 degrees (the left of the profile travelled with increasing ``a``), in 3D
+:math:`t_1 \times t_2` (the side from which :math:`a_1` turns to :math:`a_2` counterclockwise).
+Normals are built in local coordinates and turned by ``A`` (rotations keep lengths and cross
+products), so :math:`\lvert n \rvert` depends on the parameters only. :math:`r_p` a global
+point, ``u`` the direction of a line or the normal of a plane, :math:`r_o` its origin.
 
 Outputs: the follower's lift, velocity and acceleration are those of its points; the
 contact point is ``solution.location(locuspoint)`` (at the solved parameter, which is
@@ -213,7 +213,9 @@ class CamToPoint1(_Cam):
 
     ``CamToPoint1(locuspoint, (a, guess), point)`` in 2D; in 3D the profile is a surface,
     ``CamToPoint1(locuspoint, (a, guess), (b, guess), point)``. New variables: the
-    parameters. Equations (2D: two, 3D: three)::
+    parameters. Equations (2D: two, 3D: three):
+
+    .. math::
 
         r_c(a) - r_p = 0
     """
@@ -239,9 +241,11 @@ class CamToPoint1(_Cam):
 class CurveToPoint2(CamToPoint1):
     r"""A point follower on a space curve (a point in a slot). Removes 2 DOF (3D).
 
-    ``CurveToPoint2(locuspoint, (a, guess), point)``; new variable ``a``::
+    ``CurveToPoint2(locuspoint, (a, guess), point)``; new variable ``a``:
 
-        r_c(a) - r_p = 0          (three equations)
+    .. math::
+
+        r_c(a) - r_p = 0 \qquad \text{(three equations)}
     """
 
     mech_name = "CurveToPoint2"
@@ -256,9 +260,11 @@ class CamToCircle1(_Cam):
 
     ``CamToCircle1(locuspoint, (a, guess), point, radius)``; the roller lies on the left of
     the profile travelled with increasing ``a`` when ``radius > 0``, on the right when
-    ``radius < 0``. With ``n`` the profile's left normal::
+    ``radius < 0``. With ``n`` the profile's left normal:
 
-        r_c + radius n/|n| - r_p = 0      (two equations)
+    .. math::
+
+        r_c + \mathit{radius}\, n/\lvert n \rvert - r_p = 0 \qquad \text{(two equations)}
     """
 
     mech_name = "CamToCircle1"
@@ -287,9 +293,11 @@ class CamToSphere1(CamToCircle1):
     Removes 1 DOF (3D).
 
     ``CamToSphere1(locuspoint, (a, guess), (b, guess), point, radius)``; the sphere lies on
-    the side of ``n = t_a x t_b`` when ``radius > 0``::
+    the side of :math:`n = t_a \times t_b` when ``radius > 0``:
 
-        r_c + radius n/|n| - r_p = 0      (three equations)
+    .. math::
+
+        r_c + \mathit{radius}\, n/\lvert n \rvert - r_p = 0 \qquad \text{(three equations)}
     """
 
     mech_name = "CamToSphere1"
@@ -328,10 +336,12 @@ class CamToLine1(_CamToFlat):
     r"""A flat-faced follower: a cam profile tangent to a line. Removes 1 DOF (2D).
 
     ``CamToLine1(locuspoint, (a, guess), line)``; ``line`` an axis or line with origin
-    ``r_o`` and direction ``u``::
+    :math:`r_o` and direction ``u``:
 
-        u x (r_c - r_o) = 0       (contact point on the line)
-        u x t = 0                 (profile tangent to the line)
+    .. math::
+
+        u \times (r_c - r_o) &= 0 \qquad \text{(contact point on the line)} \\
+        u \times t &= 0 \qquad \text{(profile tangent to the line)}
     """
 
     mech_name = "CamToLine1"
@@ -343,11 +353,13 @@ class CamToPlane1(_CamToFlat):
     r"""A cam surface tangent to a plane (a flat-faced follower in 3D). Removes 1 DOF (3D).
 
     ``CamToPlane1(locuspoint, (a, guess), (b, guess), plane)``; ``plane`` an axis or plane
-    with origin ``r_o`` and normal ``u``::
+    with origin :math:`r_o` and normal ``u``:
 
-        u . (r_c - r_o) = 0       (contact point in the plane)
-        u . t_a = 0               (surface tangent to the plane)
-        u . t_b = 0
+    .. math::
+
+        u \cdot (r_c - r_o) &= 0 \qquad \text{(contact point in the plane)} \\
+        u \cdot t_a &= 0 \qquad \text{(surface tangent to the plane)} \\
+        u \cdot t_b &= 0
     """
 
     mech_name = "CamToPlane1"
@@ -359,10 +371,12 @@ class CurveToPlane1(_CamToFlat):
     r"""A space curve tangent to a plane. Removes 1 DOF (3D).
 
     ``CurveToPlane1(locuspoint, (a, guess), axis)``; the plane is normal to ``axis`` (origin
-    ``r_o``, direction ``u``) through its origin::
+    :math:`r_o`, direction ``u``) through its origin:
 
-        u . (r_c - r_o) = 0       (contact point in the plane)
-        u . t = 0                 (curve tangent to the plane)
+    .. math::
+
+        u \cdot (r_c - r_o) &= 0 \qquad \text{(contact point in the plane)} \\
+        u \cdot t &= 0 \qquad \text{(curve tangent to the plane)}
     """
 
     mech_name = "CurveToPlane1"
@@ -375,12 +389,14 @@ class CurveToCylinder1(_Cam):
     r"""A space curve tangent to a cylinder of radius ``radius`` about ``axis``. Removes 1
     DOF (3D).
 
-    ``CurveToCylinder1(locuspoint, (a, guess), axis, radius)``; with ``d = r_c - r_o`` and
-    ``w = d - (d . u) u / (u . u)`` its part normal to the axis (the cylinder's normal at
-    the contact)::
+    ``CurveToCylinder1(locuspoint, (a, guess), axis, radius)``; with :math:`d = r_c - r_o` and
+    :math:`w = d - (d \cdot u)\, u / (u \cdot u)` its part normal to the axis (the cylinder's normal at
+    the contact):
 
-        w . w - radius^2 = 0      (contact point on the cylinder)
-        w . t = 0                 (curve tangent to it)
+    .. math::
+
+        w \cdot w - \mathit{radius}^2 &= 0 \qquad \text{(contact point on the cylinder)} \\
+        w \cdot t &= 0 \qquad \text{(curve tangent to it)}
     """
 
     mech_name = "CurveToCylinder1"
@@ -400,7 +416,7 @@ class CurveToCylinder1(_Cam):
         return super().geometry() + [self.axis]
 
     def contact_normal(self, space):
-        """``w``: the part of ``r_c - r_o`` normal to the cylinder's axis."""
+        r"""``w``: the part of :math:`r_c - r_o` normal to the cylinder's axis."""
         u = self.axis.direction()
         d = self.profiles[0].location() - self.axis.location()
         return d - u * (u.dot(d) / vector_norm(self.axis.dir) ** 2)
@@ -417,11 +433,14 @@ class CamToCam1(_Cam):
 
     ``CamToCam1(locuspoint1, (a, guess), locuspoint2, (b, guess))`` in 2D; in 3D both are
     surfaces: ``CamToCam1(locuspoint1, (a1, g), (a2, g), locuspoint2, (b1, g), (b2, g))``.
-    New variables: the four (3D) or two (2D) parameters. With ``n_1`` the first profile's
-    normal and ``t2_k`` the second's tangents::
+    New variables: the four (3D) or two (2D) parameters. With :math:`n_1` the first profile's
+    normal and :math:`t_{2,k}` the second's tangents:
 
-        r_c1 - r_c2 = 0           (two or three equations: the contact points coincide)
-        n_1 . t2_k = 0            (2D: t_1 x t_2 = 0; 3D: two equations, normals parallel)
+    .. math::
+
+        r_{c1} - r_{c2} &= 0 \qquad \text{(two or three equations: the contact points coincide)} \\
+        n_1 \cdot t_{2,k} &= 0 \qquad \text{(2D: } t_1 \times t_2 = 0 \text{; 3D: two}
+        \ \text{equations, normals parallel)}
     """
 
     mech_name = "CamToCam1"
@@ -437,11 +456,13 @@ class CurveToCam1(_Cam):
     r"""A space curve tangent to a cam surface. Removes 1 DOF (3D).
 
     ``CurveToCam1(locuspoint1, (a, guess), locuspoint2, (g, guess), (d, guess))``: the curve
-    ``r_1(a)`` touches the surface ``r_2(g, d)``. New variables ``a, g, d``; with
-    ``n_2 = t_g x t_d`` and ``t_1`` the curve's tangent::
+    :math:`r_1(a)` touches the surface :math:`r_2(g, d)`. New variables ``a, g, d``; with
+    :math:`n_2 = t_g \times t_d` and :math:`t_1` the curve's tangent:
 
-        r_c1 - r_c2 = 0           (three equations)
-        n_2 . t_1 = 0
+    .. math::
+
+        r_{c1} - r_{c2} &= 0 \qquad \text{(three equations)} \\
+        n_2 \cdot t_1 &= 0
     """
 
     mech_name = "CurveToCam1"
@@ -471,10 +492,13 @@ def _cam_of(result, constraint) -> _Cam:
 
 def pressure_angle(result, constraint, direction=None):
     r"""Pressure angle at the contact of a cam constraint: the angle between the common
-    normal ``n`` (the direction of the contact force without friction) and the direction
-    ``v`` in which the follower moves::
+    normal :math:`n` (the direction of the contact force without friction) and the direction
+    :math:`v` in which the follower moves:
 
-        phi = atan2(|n x v|, |n . v|)        in [0, pi/2]
+    .. math::
+
+        \phi = \operatorname{atan2}(\lvert n \times v \rvert, \lvert n \cdot v \rvert)
+        \in [0, \pi/2]
 
     ``result`` is a :class:`~mechsys.Solution` (an array over its times) or the model (a
     SymPy expression in its coordinates, velocities and the cam parameters).
@@ -509,12 +533,17 @@ def pressure_angle(result, constraint, direction=None):
 def profile_radius(result, constraint, profile: int = 1):
     r"""Radius of curvature of a cam profile at the contact (a 2D profile or a 3D space
     curve; ``profile`` 1 or 2 picks the profile of ``CamToCam1``/``CurveToCam1``). With
-    ``s'(a)`` the profile's local coordinates (rotation keeps curvature)::
+    :math:`s'(a)` the profile's local coordinates (rotation keeps curvature) and subscripts
+    derivatives in :math:`a`:
 
-        2D:  rho = |s'_a|^3 / (s'_a x s'_aa)       signed: > 0 where the profile turns left
-                                                   (its centre of curvature on the left, the
-                                                   side of a positive CamToCircle1 radius)
-        3D:  rho = |s'_a|^3 / |s'_a x s'_aa|       (a space curve)
+    .. math::
+
+        \rho &= \frac{\lvert s'_a \rvert^3}{s'_a \times s'_{aa}} \qquad \text{(2D, signed)} \\
+        \rho &= \frac{\lvert s'_a \rvert^3}{\lvert s'_a \times s'_{aa} \rvert}
+        \qquad \text{(3D: a space curve)}
+
+    In 2D :math:`\rho > 0` where the profile turns left (its centre of curvature on the
+    left, the side of a positive ``CamToCircle1`` radius).
 
     Infinite where the profile is straight. A surface has two principal curvatures, not one
     radius: a :class:`~mechsys.MechError`. Returns what ``result`` gives (see

@@ -9,12 +9,12 @@ guess)``. When it is omitted a variable named after the bodies is created
 (``Theta_gear1_gear2``, ``Theta_gear_ground``), its guess computed from the bodies' guesses;
 ``Model.add`` refuses a second such default on the same bodies: give that one explicitly.
 
-Angles about an axis use the axis' *angle frame* ``(g, k)`` (see ``_angles``):
-``ang(g -> f) = a`` is written ``cos(a) (k . f) - sin(a) (g . f) = 0``, regular for every
-``a`` and also satisfied at ``a + pi`` (the guess picks the branch).
+Angles about an axis use the axis' *angle frame* ``(g, k)`` (see ``_angles``): :math:`\angle(g
+\to f) = a` is written :math:`\cos(a)\, (k \cdot f) - \sin(a)\, (g \cdot f) = 0`, regular for
+every ``a`` and also satisfied at :math:`a + \pi` (the guess picks the branch).
 
 Sign conventions (Mech's formulas): a negative gear radius is an internal (ring) gear --
-``r_1 + r_2`` is then the signed centre distance and the pair turns the same way; a
+:math:`r_1 + r_2` is then the signed centre distance and the pair turns the same way; a
 negative tooth count in ``OrthogonalGears5`` reverses the sense; a negative ``pitch`` is a
 left-hand screw. Zero radii, tooth counts and pitches are rejected.
 """
@@ -200,9 +200,9 @@ class _WheelPair(_Gear):
 
 
 class _TwoWheels(_WheelPair):
-    """Planar gears and pulleys: ``point1, rad1[, (sym, guess)], point2, rad2[, dist], C``.
+    r"""Planar gears and pulleys: ``point1, rad1[, (sym, guess)], point2, rad2[, dist], C``.
 
-    The variable is the direction angle ``Theta`` of ``d = r_2 - r_1`` (the line of
+    The variable is the direction angle :math:`\Theta` of ``d = r_2 - r_1`` (the line of
     centres), which keeps the equations free of ``atan2`` and its branch cut: a carrier
     may turn any number of times.
     """
@@ -257,14 +257,18 @@ class _TwoWheels(_WheelPair):
         return [mesh, d[0] * sp.sin(th) - d[1] * sp.cos(th)]
 
     def _build_euler(self):
-        """Planar Euler coordinates carry no turn-counting angle, so (as Mech's Euler method
-        and the spatial gears do) the variable is ``a = e1``, the angle from ``d`` to wheel
-        1's x axis, and ``e2 = (C - rad1 a) / (sign rad2)`` follows from the mesh; each is
-        imposed by a regular angle equation in its wheel's frame ``(g, k)``::
+        r"""Planar Euler coordinates carry no turn-counting angle, so (as Mech's Euler method
+        and the spatial gears do) the variable is :math:`a = e_1`, the angle from ``d`` to wheel
+        1's x axis, and :math:`e_2 = (C - \mathit{rad}_1\, a) / (\mathit{sign}\,
+        \mathit{rad}_2)` follows from the mesh; each is imposed by a regular angle equation in
+        its wheel's frame ``(g, k)``:
 
-            cos(-a) (k1 . d) - sin(-a) (g1 . d) = 0        (TwoGears1: with the next one)
-            d - rho (cos(a) g1 - sin(a) k1) = 0            (TwoGears2: instead, 2 equations)
-            cos(-e2) (k2 . d) - sin(-e2) (g2 . d) = 0
+        .. math::
+
+            \cos(-a)\, (k_1 \cdot d) - \sin(-a)\, (g_1 \cdot d) &= 0
+            \qquad \text{(TwoGears1: with the next one)} \\
+            d - \rho\, (\cos(a)\, g_1 - \sin(a)\, k_1) &= 0 \qquad \text{(TwoGears2: instead, 2 equations)} \\
+            \cos(-e_2)\, (k_2 \cdot d) - \sin(-e_2)\, (g_2 \cdot d) &= 0
         """
         a = self.alpha
         d = self._d()
@@ -284,16 +288,20 @@ class TwoGears1(_TwoWheels):
     constraints place. Removes 1 DOF (2D).
 
     ``TwoGears1(point1, rad1[, (sym, guess)], point2, rad2, C)``: ``point1``, ``point2`` the
-    gear centres on the gear bodies, ``rad1``, ``rad2`` the pitch radii. ``C = rad1 e1 +
-    rad2 e2`` where ``e_i`` is the angle from the vector ``point1 -> point2`` to gear i's local
-    x axis, in any valid position (Mech's convention). With ``Theta`` the direction angle of
-    ``d = r_2 - r_1`` (the new variable) and ``theta_i`` the body angles::
+    gear centres on the gear bodies, ``rad1``, ``rad2`` the pitch radii. :math:`C =
+    \mathit{rad}_1\, e_1 + \mathit{rad}_2\, e_2` where :math:`e_i` is the angle from the vector
+    ``point1 -> point2`` to gear i's local x axis, in any valid position (Mech's convention).
+    With :math:`\Theta` the direction angle of :math:`d = r_2 - r_1` (the new variable) and
+    :math:`\theta_i` the body angles:
 
-        rad1 (theta_1 - Theta) + rad2 (theta_2 - Theta) - C = 0
-        d_x sin(Theta) - d_y cos(Theta) = 0
+    .. math::
 
-    Fixed centres give ``theta_2' = -(rad1/rad2) theta_1'``. The second equation also holds
-    at ``Theta + pi``: the default guess is the direction at the bodies' guesses.
+        \mathit{rad}_1\, (\theta_1 - \Theta) + \mathit{rad}_2\, (\theta_2 - \Theta) - C &= 0 \\
+        d_x\, \sin(\Theta) - d_y\, \cos(\Theta) &= 0
+
+    Fixed centres give :math:`\theta_2^{\prime} = -(\mathit{rad}_1/\mathit{rad}_2)\,
+    \theta_1^{\prime}`. The second equation also holds at :math:`\Theta + \pi`: the default
+    guess is the direction at the bodies' guesses.
     """
 
     mech_name = "TwoGears1"
@@ -302,18 +310,21 @@ class TwoGears1(_TwoWheels):
 
 @_signature("point1", "rad1", "point2", "rad2", "C")
 class TwoGears2(_TwoWheels):
-    r"""Two meshing gears: centres ``rad1 + rad2`` apart and the rotations related. Removes
-    2 DOF (2D).
+    r"""Two meshing gears: centres :math:`\mathit{rad}_1 + \mathit{rad}_2` apart and the rotations
+    related. Removes 2 DOF (2D).
 
     ``TwoGears2(point1, rad1[, (sym, guess)], point2, rad2, C)``; ``C`` as in
-    :class:`TwoGears1`. A negative radius is an internal (ring) gear, ``|rad1 + rad2|`` the
-    centre distance. With ``Theta`` the direction angle of ``d = r_2 - r_1``::
+    :class:`TwoGears1`. A negative radius is an internal (ring) gear, :math:`\lvert
+    \mathit{rad}_1 + \mathit{rad}_2 \rvert` the centre distance. With :math:`\Theta` the direction
+    angle of :math:`d = r_2 - r_1`:
 
-        d_x - |rad1 + rad2| cos(Theta) = 0
-        d_y - |rad1 + rad2| sin(Theta) = 0
-        rad1 (theta_1 - Theta) + rad2 (theta_2 - Theta) - C = 0
+    .. math::
 
-    (Mech's first equation, the distance, is here the first two, which also give ``Theta``
+        d_x - \lvert \mathit{rad}_1 + \mathit{rad}_2 \rvert\, \cos(\Theta) &= 0 \\
+        d_y - \lvert \mathit{rad}_1 + \mathit{rad}_2 \rvert\, \sin(\Theta) &= 0 \\
+        \mathit{rad}_1\, (\theta_1 - \Theta) + \mathit{rad}_2\, (\theta_2 - \Theta) - C &= 0
+
+    (Mech's first equation, the distance, is here the first two, which also give :math:`\Theta`
     without a branch ambiguity.) A turning carrier obeys Willis' formula.
     """
 
@@ -327,15 +338,18 @@ class TwoPulleys1(_TwoWheels):
     r"""Chain and sprockets, or belt and pulleys, with centres placed by other constraints.
     Removes 1 DOF (2D).
 
-    ``TwoPulleys1(point1, rad1[, (sym, guess)], point2, rad2, dist, C)``; ``C = rad1 e1 -
-    rad2 e2`` with ``e_i`` as in :class:`TwoGears1`. The radii must differ (use
+    ``TwoPulleys1(point1, rad1[, (sym, guess)], point2, rad2, dist, C)``; :math:`C = \mathit{rad}_1\, e_1 -
+    \mathit{rad}_2\, e_2` with :math:`e_i` as in :class:`TwoGears1`. The radii must differ (use
     ``RotationLock1`` for equal ones, as Mech says); ``dist`` is only used by
-    :class:`TwoPulleys2`. With ``Theta`` the direction angle of ``d = r_2 - r_1``::
+    :class:`TwoPulleys2`. With :math:`\Theta` the direction angle of :math:`d = r_2 - r_1`:
 
-        rad1 (theta_1 - Theta) - rad2 (theta_2 - Theta) - C = 0
-        d_x sin(Theta) - d_y cos(Theta) = 0
+    .. math::
 
-    Fixed centres: ``theta_2' = (rad1/rad2) theta_1'`` (same sense).
+        \mathit{rad}_1\, (\theta_1 - \Theta) - \mathit{rad}_2\, (\theta_2 - \Theta) - C &= 0 \\
+        d_x\, \sin(\Theta) - d_y\, \cos(\Theta) &= 0
+
+    Fixed centres: :math:`\theta_2^{\prime} = (\mathit{rad}_1/\mathit{rad}_2)\,
+    \theta_1^{\prime}` (same sense).
     """
 
     mech_name = "TwoPulleys1"
@@ -349,11 +363,13 @@ class TwoPulleys2(_TwoWheels):
     r"""Chain and sprockets, or belt and pulleys, ``dist`` apart. Removes 2 DOF (2D).
 
     ``TwoPulleys2(point1, rad1[, (sym, guess)], point2, rad2, dist, C)``; ``C`` as in
-    :class:`TwoPulleys1`::
+    :class:`TwoPulleys1`:
 
-        d_x - |dist| cos(Theta) = 0
-        d_y - |dist| sin(Theta) = 0
-        rad1 (theta_1 - Theta) - rad2 (theta_2 - Theta) - C = 0
+    .. math::
+
+        d_x - \lvert \mathit{dist} \rvert\, \cos(\Theta) &= 0 \\
+        d_y - \lvert \mathit{dist} \rvert\, \sin(\Theta) &= 0 \\
+        \mathit{rad}_1\, (\theta_1 - \Theta) - \mathit{rad}_2\, (\theta_2 - \Theta) - C &= 0
     """
 
     mech_name = "TwoPulleys2"
@@ -423,21 +439,25 @@ class _PlanarRack(_Gear):
 class RackAndPinion1(_PlanarRack):
     r"""Rack and pinion whose distance other constraints fix. Removes 1 DOF (2D).
 
-    ``RackAndPinion1(point, rad[, (alpha, guess)], axis, C)``: ``axis`` is the rack (on the
-    rack body), ``point`` the pinion centre, ``rad`` its pitch radius. ``C`` is the distance
-    along ``axis`` from its origin to ``point`` when the pinion's x axis is parallel to the
-    rack. With ``s = u^ . (r_p - r_o)`` and ``alpha = theta_p - theta_rack`` (the angle from
-    the rack direction to the pinion's x axis)::
+    ``RackAndPinion1(point, rad[, (alpha, guess)], axis, C)``: ``axis`` is the rack (on the rack
+    body), ``point`` the pinion centre, ``rad`` its pitch radius. ``C`` is the distance along
+    ``axis`` from its origin to ``point`` when the pinion's x axis is parallel to the rack. With
+    :math:`s = \hat{u} \cdot (r_p - r_o)` and :math:`\alpha = \theta_p - \theta_{rack}` (the
+    angle from the rack direction to the pinion's x axis):
 
-        s - C + rad alpha = 0
+    .. math::
+
+        s - C + \mathit{rad}\, \alpha = 0
 
     With ``(alpha, guess)`` (Mech's Euler form) ``alpha`` is a new variable and, with
-    ``(g, k)`` the rack's angle frame and ``x_p`` the pinion's x axis::
+    ``(g, k)`` the rack's angle frame and :math:`x_p` the pinion's x axis:
 
-        s - C + rad alpha = 0
-        cos(alpha) (k . x_p) - sin(alpha) (g . x_p) = 0
+    .. math::
 
-    The pinion (centre on the left of the rack) rolls: ``ds = -rad d alpha``.
+        s - C + \mathit{rad}\, \alpha &= 0 \\
+        \cos(\alpha)\, (k \cdot x_p) - \sin(\alpha)\, (g \cdot x_p) &= 0
+
+    The pinion (centre on the left of the rack) rolls: :math:`ds = -\mathit{rad}\, d\alpha`.
     """
 
     mech_name = "RackAndPinion1"
@@ -450,12 +470,14 @@ class RackAndPinion2(_PlanarRack):
     Removes 2 DOF (2D).
 
     ``RackAndPinion2(point, rad[, (alpha, guess)], axis, C)``; ``C``, ``s`` and ``alpha`` as in
-    :class:`RackAndPinion1`, ``d = r_p - r_o``::
+    :class:`RackAndPinion1`, :math:`d = r_p - r_o`:
 
-        u x d - rad |u| = 0
-        s - C + rad alpha = 0
+    .. math::
 
-    (plus ``cos(alpha) (k . x_p) - sin(alpha) (g . x_p) = 0`` with ``(alpha, guess)``).
+        u \times d - \mathit{rad}\, \lvert u \rvert &= 0 \\
+        s - C + \mathit{rad}\, \alpha &= 0
+
+    (plus :math:`\cos(\alpha)\, (k \cdot x_p) - \sin(\alpha)\, (g \cdot x_p) = 0` with ``(alpha, guess)``).
     """
 
     mech_name = "RackAndPinion2"
@@ -544,21 +566,24 @@ def _plain_frame(axis: Axis):
 
 @_signature("axis1", "rad1", "axis2", "rad2", "C")
 class ParallelGears5(_ParallelGears):
-    r"""Spur (or helical, or internal) gears on parallel axes ``rad1 + rad2`` apart, the
-    heads of the axes side by side. Removes 5 DOF (3D).
+    r"""Spur (or helical, or internal) gears on parallel axes :math:`\mathit{rad}_1 +
+    \mathit{rad}_2` apart, the heads of the axes side by side. Removes 5 DOF (3D).
 
     ``ParallelGears5(axis1, rad1[, (alpha, guess)], axis2, rad2, C)``; ``alpha`` (the new
-    variable) is the spin of ``axis1`` relative to ``d = r_2 - r_1``. ``C = rad1 e1 + rad2
-    e2``, ``e_i`` the angle from ``d`` to the reference direction ``g_i`` of axis i, about
-    ``u_i`` (Mech's convention); ``e_2 = (C - rad1 alpha) / rad2``. With ``(g_i, k_i)`` the
-    angle frames, ``h_2, f_2`` normals of axis 2 (Mech's order)::
+    variable) is the spin of ``axis1`` relative to :math:`d = r_2 - r_1`. :math:`C =
+    \mathit{rad}_1\, e_1 + \mathit{rad}_2 e_2`, :math:`e_i` the angle from ``d`` to the
+    reference direction :math:`g_i` of axis i, about :math:`u_i` (Mech's convention); :math:`e_2
+    = (C - \mathit{rad}_1\, \alpha) / \mathit{rad}_2`. With :math:`(g_i, k_i)` the angle frames,
+    :math:`h_2, f_2` normals of axis 2 (Mech's order):
 
-        h_2 . u_1 = 0
-        f_2 . u_1 = 0
-        u_1^ . d = 0
-        d . d - (rad1 + rad2)^2 = 0
-        cos(alpha) (k_1 . d) + sin(alpha) (g_1 . d) = 0
-        cos(e_2) (k_2 . d) + sin(e_2) (g_2 . d) = 0
+    .. math::
+
+        h_2 \cdot u_1 &= 0 \\
+        f_2 \cdot u_1 &= 0 \\
+        \hat{u}_1 \cdot d &= 0 \\
+        d \cdot d - (\mathit{rad}_1 + \mathit{rad}_2)^2 &= 0 \\
+        \cos(\alpha)\, (k_1 \cdot d) + \sin(\alpha)\, (g_1 \cdot d) &= 0 \\
+        \cos(e_2)\, (k_2 \cdot d) + \sin(e_2)\, (g_2 \cdot d) &= 0
 
     A negative radius is an internal gear. The angle equations also hold half a turn away:
     the default guess of ``alpha`` is its value at the bodies' guesses.
@@ -573,14 +598,16 @@ class ParallelGears4(_ParallelGears):
     r""":class:`ParallelGears5` without the adjacency equation: the gear of ``axis2`` may
     slide along its axis (a wide pinion). Removes 4 DOF (3D).
 
-    ``ParallelGears4(axis1, rad1[, (alpha, guess)], axis2, rad2, C)``; with ``d_p = d -
-    u_1^ (u_1^ . d)`` the part of ``d`` across the axes::
+    ``ParallelGears4(axis1, rad1[, (alpha, guess)], axis2, rad2, C)``; with :math:`d_p = d -
+    \hat{u}_1\, (\hat{u}_1 \cdot d)` the part of ``d`` across the axes:
 
-        h_2 . u_1 = 0
-        f_2 . u_1 = 0
-        d_p . d_p - (rad1 + rad2)^2 = 0
-        cos(alpha) (k_1 . d) + sin(alpha) (g_1 . d) = 0
-        cos(e_2) (k_2 . d) + sin(e_2) (g_2 . d) = 0
+    .. math::
+
+        h_2 \cdot u_1 &= 0 \\
+        f_2 \cdot u_1 &= 0 \\
+        d_p \cdot d_p - (\mathit{rad}_1 + \mathit{rad}_2)^2 &= 0 \\
+        \cos(\alpha)\, (k_1 \cdot d) + \sin(\alpha)\, (g_1 \cdot d) &= 0 \\
+        \cos(e_2)\, (k_2 \cdot d) + \sin(e_2)\, (g_2 \cdot d) &= 0
 
     (The angle equations only see the part of ``d`` across the axes.)
     """
@@ -596,15 +623,18 @@ class TwoPulleys5(_ParallelGears):
     of the axes side by side. Removes 5 DOF (3D).
 
     ``TwoPulleys5(axis1, rad1[, (alpha, guess)], axis2, rad2, dist, C)``; ``alpha`` as in
-    :class:`ParallelGears5`; ``C = rad1 e1 - rad2 e2`` (Mech's convention), so ``e_2 = (rad1
-    alpha - C) / rad2`` and both pulleys turn the same way::
+    :class:`ParallelGears5`; :math:`C = \mathit{rad}_1\, e_1 - \mathit{rad}_2\, e_2` (Mech's
+    convention), so :math:`e_2 = (\mathit{rad}_1 \alpha - C) / \mathit{rad}_2` and both pulleys
+    turn the same way:
 
-        h_2 . u_1 = 0
-        f_2 . u_1 = 0
-        u_1^ . d = 0
-        d . d - dist^2 = 0
-        cos(alpha) (k_1 . d) + sin(alpha) (g_1 . d) = 0
-        cos(e_2) (k_2 . d) + sin(e_2) (g_2 . d) = 0
+    .. math::
+
+        h_2 \cdot u_1 &= 0 \\
+        f_2 \cdot u_1 &= 0 \\
+        \hat{u}_1 \cdot d &= 0 \\
+        d \cdot d - \mathit{dist}^2 &= 0 \\
+        \cos(\alpha)\, (k_1 \cdot d) + \sin(\alpha)\, (g_1 \cdot d) &= 0 \\
+        \cos(e_2)\, (k_2 \cdot d) + \sin(e_2)\, (g_2 \cdot d) &= 0
     """
 
     mech_name = "TwoPulleys5"
@@ -617,14 +647,16 @@ class TwoPulleys4(_ParallelGears):
     r""":class:`TwoPulleys5` without the adjacency equation: the pulleys may slide along
     their axes relative to each other. Removes 4 DOF (3D).
 
-    ``TwoPulleys4(axis1, rad1[, (alpha, guess)], axis2, rad2, dist, C)``; with ``d_p`` the
-    part of ``d`` across the axes::
+    ``TwoPulleys4(axis1, rad1[, (alpha, guess)], axis2, rad2, dist, C)``; with :math:`d_p` the
+    part of ``d`` across the axes:
 
-        h_2 . u_1 = 0
-        f_2 . u_1 = 0
-        d_p . d_p - dist^2 = 0
-        cos(alpha) (k_1 . d) + sin(alpha) (g_1 . d) = 0
-        cos(e_2) (k_2 . d) + sin(e_2) (g_2 . d) = 0
+    .. math::
+
+        h_2 \cdot u_1 &= 0 \\
+        f_2 \cdot u_1 &= 0 \\
+        d_p \cdot d_p - \mathit{dist}^2 &= 0 \\
+        \cos(\alpha)\, (k_1 \cdot d) + \sin(\alpha)\, (g_1 \cdot d) &= 0 \\
+        \cos(e_2)\, (k_2 \cdot d) + \sin(e_2)\, (g_2 \cdot d) &= 0
     """
 
     mech_name = "TwoPulleys4"
@@ -638,19 +670,23 @@ class OrthogonalGears5(_Gear):
     r"""Gears on perpendicular axes: a bevel set (origins coincident) or, with ``dist``, a
     worm or spiral-bevel (hypoid) set with offset axes. Removes 5 DOF (3D).
 
-    ``OrthogonalGears5(axis1, teeth1[, (alpha, guess)], axis2, teeth2[, dist], C)``.
-    ``alpha`` (the new variable) tracks the spin of ``axis1``: the angle, about ``u_1``, from
-    ``u_2`` to the reference direction ``g_1``. ``C = teeth1 e1 + teeth2 e2``, ``e1`` that
-    angle, ``e2`` the angle about ``u_2`` from ``u_1`` to ``g_2`` (Mech's convention), so
-    ``e2 = (C - teeth1 alpha) / teeth2`` and the speed ratio is ``-teeth1/teeth2``; negating
-    a tooth count reverses it. ``dist`` is signed along ``u_1^ x u_2^``; ``d = r_1 - r_2``::
+    ``OrthogonalGears5(axis1, teeth1[, (alpha, guess)], axis2, teeth2[, dist], C)``. ``alpha``
+    (the new variable) tracks the spin of ``axis1``: the angle, about :math:`u_1`, from
+    :math:`u_2` to the reference direction :math:`g_1`. :math:`C = \mathit{teeth}_1\, e_1 +
+    \mathit{teeth}_2\, e_2`, ``e1`` that angle, ``e2`` the angle about :math:`u_2` from
+    :math:`u_1` to :math:`g_2` (Mech's convention), so :math:`e_2 = (C - \mathit{teeth}_1\,
+    \alpha) / \mathit{teeth}_2` and the speed ratio is
+    :math:`-\mathit{teeth}_1/\mathit{teeth}_2`; negating a tooth count reverses it. ``dist`` is
+    signed along :math:`\hat{u}_1 \times \hat{u}_2`; :math:`d = r_1 - r_2`:
 
-        u_1 . u_2 = 0
-        u_1 . (r_2 - r_1) = 0
-        u_2 . d = 0
-        (u_1 x u_2) . d - dist |u_1| |u_2| = 0
-        cos(alpha) (k_1 . u_2) + sin(alpha) (g_1 . u_2) = 0
-        cos(e2) (k_2 . u_1) + sin(e2) (g_2 . u_1) = 0
+    .. math::
+
+        u_1 \cdot u_2 &= 0 \\
+        u_1 \cdot (r_2 - r_1) &= 0 \\
+        u_2 \cdot d &= 0 \\
+        (u_1 \times u_2) \cdot d - \mathit{dist}\, \lvert u_1 \rvert\, \lvert u_2 \rvert &= 0 \\
+        \cos(\alpha)\, (k_1 \cdot u_2) + \sin(\alpha)\, (g_1 \cdot u_2) &= 0 \\
+        \cos(e_2)\, (k_2 \cdot u_1) + \sin(e_2)\, (g_2 \cdot u_1) &= 0
     """
 
     mech_name = "OrthogonalGears5"
@@ -696,17 +732,19 @@ class LeadScrew5(_Gear):
     travel tied to the relative spin by the pitch. Removes 5 DOF (3D).
 
     ``LeadScrew5(axis1[, (alpha, guess)], axis2, pitch, C)``; ``alpha`` (the new variable) is
-    the spin of ``axis1`` relative to ``axis2``: the angle about ``u_2`` from ``g_2`` to ``g_1``.
+    the spin of ``axis1`` relative to ``axis2``: the angle about :math:`u_2` from :math:`g_2` to :math:`g_1`.
     ``C`` is the distance from the origin of ``axis2`` to that of ``axis1`` at zero relative
-    spin; a positive ``pitch`` (travel per turn) is a right-hand thread. With ``h_1, f_1``
-    normals of axis 1 and ``s = u_1^ . (r_1 - r_2)`` (Mech's order)::
+    spin; a positive ``pitch`` (travel per turn) is a right-hand thread. With :math:`h_1, f_1`
+    normals of axis 1 and :math:`s = \hat{u}_1 \cdot (r_1 - r_2)` (Mech's order):
 
-        h_1 . (r_2 - r_1) = 0
-        f_1 . (r_2 - r_1) = 0
-        h_1 . u_2 = 0
-        f_1 . u_2 = 0
-        s - C - pitch alpha / (2 pi) = 0
-        cos(alpha) (k_2 . g_1) - sin(alpha) (g_2 . g_1) = 0
+    .. math::
+
+        h_1 \cdot (r_2 - r_1) &= 0 \\
+        f_1 \cdot (r_2 - r_1) &= 0 \\
+        h_1 \cdot u_2 &= 0 \\
+        f_1 \cdot u_2 &= 0 \\
+        s - C - \mathit{pitch}\, \alpha / (2\, \pi) &= 0 \\
+        \cos(\alpha)\, (k_2 \cdot g_1) - \sin(\alpha)\, (g_2 \cdot g_1) &= 0
     """
 
     mech_name = "LeadScrew5"
@@ -783,20 +821,23 @@ class _SpatialRack(_Gear):
 class RackAndPinion5(_SpatialRack):
     r"""Rack and pinion in 3D. Removes 5 DOF.
 
-    ``RackAndPinion5(axis1, rad[, (alpha, guess)], axis2, C)``: ``axis1`` the pinion's
-    rotation axis, ``axis2`` the rack: its direction along the cut of the teeth (parallel to
-    the pinion axis), its reference direction ``g_2`` along the rack's travel, both in the
-    rack's pitch plane. The pinion axis lies ``rad`` from that plane on the side of
-    ``k_2 = u_2^ x g_2``. ``alpha`` (the new variable) is the pinion's rotation: the angle
-    about ``u_2`` from ``g_2`` to ``g_1``; ``C`` the travel ``g_2 . d`` at ``alpha = 0``.
-    With ``d = r_1 - r_2``, ``h_1, f_1`` normals of axis 1 (Mech's order)::
+    ``RackAndPinion5(axis1, rad[, (alpha, guess)], axis2, C)``: ``axis1`` the pinion's rotation
+    axis, ``axis2`` the rack: its direction along the cut of the teeth (parallel to the pinion
+    axis), its reference direction :math:`g_2` along the rack's travel, both in the rack's pitch
+    plane. The pinion axis lies ``rad`` from that plane on the side of :math:`k_2 = \hat{u}_2
+    \times g_2`. ``alpha`` (the new variable) is the pinion's rotation: the angle about
+    :math:`u_2` from :math:`g_2` to :math:`g_1`; ``C`` the travel :math:`g_2 \cdot d` at
+    :math:`\alpha = 0`. With :math:`d = r_1 - r_2`, :math:`h_1, f_1` normals of axis 1 (Mech's
+    order):
 
-        h_1 . u_2 = 0
-        f_1 . u_2 = 0
-        k_2 . d - rad = 0
-        u_2^ . d = 0
-        g_2 . d - C + rad alpha = 0
-        cos(alpha) (k_2 . g_1) - sin(alpha) (g_2 . g_1) = 0
+    .. math::
+
+        h_1 \cdot u_2 &= 0 \\
+        f_1 \cdot u_2 &= 0 \\
+        k_2 \cdot d - \mathit{rad} &= 0 \\
+        \hat{u}_2 \cdot d &= 0 \\
+        g_2 \cdot d - C + \mathit{rad}\, \alpha &= 0 \\
+        \cos(\alpha)\, (k_2 \cdot g_1) - \sin(\alpha)\, (g_2 \cdot g_1) &= 0
     """
 
     mech_name = "RackAndPinion5"
@@ -808,13 +849,15 @@ class RackAndPinion4(_SpatialRack):
     r""":class:`RackAndPinion5` without the adjacency equation: the pinion may slide along its
     axis. Removes 4 DOF (3D).
 
-    ``RackAndPinion4(axis1, rad[, (alpha, guess)], axis2, C)``::
+    ``RackAndPinion4(axis1, rad[, (alpha, guess)], axis2, C)``:
 
-        h_1 . u_2 = 0
-        f_1 . u_2 = 0
-        k_2 . d - rad = 0
-        g_2 . d - C + rad alpha = 0
-        cos(alpha) (k_2 . g_1) - sin(alpha) (g_2 . g_1) = 0
+    .. math::
+
+        h_1 \cdot u_2 &= 0 \\
+        f_1 \cdot u_2 &= 0 \\
+        k_2 \cdot d - \mathit{rad} &= 0 \\
+        g_2 \cdot d - C + \mathit{rad}\, \alpha &= 0 \\
+        \cos(\alpha)\, (k_2 \cdot g_1) - \sin(\alpha)\, (g_2 \cdot g_1) &= 0
     """
 
     mech_name = "RackAndPinion4"

@@ -11,14 +11,14 @@ from ._base import ConstraintBase, Variable
 
 
 class Constraint(ConstraintBase):
-    r"""Any equations ``f_k(q, T, p, s) = 0`` in body coordinates, time, parameters and new
+    r"""Any equations :math:`f_k(q, T, p, s) = 0` in body coordinates, time, parameters and new
     variables. Removes ``len(equations) - len(variables)`` DOF.
 
     ``Constraint(equations, variables={s: guess})``; an equation may be an expression (``= 0``)
     or a SymPy ``Eq``. ``Constraint([], {s: guess})`` only introduces ``s`` (Mech's
     ``Constraint[cnum, {}, {s, guess}]``): it *adds* one degree of freedom.
 
-    Example, a point on the parabola ``y = x^2`` with its x as new variable::
+    Example, a point on the parabola :math:`y = x^2` with its x as new variable::
 
         s = sp.Symbol("s")
         p = body.point("pin")

@@ -5,12 +5,18 @@ r"""Generalized-coordinate joints (Mech ch. 11): ``GenRevolute2``, ``GenTranslat
 A Gen joint is not a constraint: it writes no equation. It makes its *slave* body's pose an
 explicit function of its *master*'s pose and of new generalized coordinates (added to the
 model as variables with their guesses), so it *adds* as many degrees of freedom as it has
-coordinates. With the joint frames ``(o_1, R_1)`` of the slave's axis and ``(o_2, R_2)`` of
-the master's (origin and rotation, local) and the joint's relative motion ``(t_j(g),
-R_j(g))`` (in the master's joint frame)::
+coordinates. With the joint frames :math:`(o_1, R_1)` of the slave's axis and
+:math:`(o_2, R_2)` of the master's (origin and rotation, local) and the joint's relative
+motion :math:`(t_j(g), R_j(g))` (in the master's joint frame):
 
-    A_s = A_m R_2 R_j R_1^T                      (3D: e_s = e_m * q_2 * q_j * q_1^-1)
-    r_s = r_m + A_m (o_2 + R_2 t_j) - A_s o_1    (2D: th_s = th_m + a_2 + phi_j - a_1)
+.. math::
+
+    A_s &= A_m R_2 R_j R_1^T
+    \qquad \text{(3D: } e_s = e_m * q_2 * q_j * q_1^{-1} \text{)} \\
+    r_s &= r_m + A_m (o_2 + R_2 t_j) - A_s o_1
+    \qquad \text{(2D: } \theta_s = \theta_m + a_2 + \phi_j - a_1 \text{)}
+
+(:math:`*` the quaternion product, :math:`a_1, a_2` the joint frames' angles in 2D)
 
 so the joint's axes meet as the standard joint would hold them. The model substitutes these
 expressions for the slave's coordinate symbols (chains: masters first) in every equation,
@@ -211,9 +217,11 @@ def _along(space, s):
 class GenRevolute2(GenJoint):
     r"""``GenRevolute2(axis1, axis2, (sym, guess))`` (2D): the body of ``axis1`` is a slave
     of that of ``axis2``, hinged at their origins; ``sym`` is the counterclockwise angle from
-    ``axis2`` to ``axis1``. Adds one DOF (Revolute2 removes two)::
+    ``axis2`` to ``axis1``. Adds one DOF (Revolute2 removes two):
 
-        th_s = th_m + a_2 + sym - a_1,   r_s = r_m + A_m o_2 - A_s o_1
+    .. math::
+
+        \theta_s = \theta_m + a_2 + \mathit{sym} - a_1, \qquad r_s = r_m + A_m o_2 - A_s o_1
 
     Example::
 
@@ -235,9 +243,12 @@ class GenTranslate2(GenJoint):
     r"""``GenTranslate2(axis1, axis2, (sym, guess))`` (2D): the slave (body of ``axis1``)
     slides along ``axis2``: the axes are colinear and parallel, ``sym`` is the distance from
     the origin of ``axis2`` to that of ``axis1`` along ``axis2``'s unit direction. Adds one
-    DOF::
+    DOF:
 
-        th_s = th_m + a_2 - a_1,   r_s = r_m + A_m (o_2 + sym u_2') - A_s o_1
+    .. math::
+
+        \theta_s = \theta_m + a_2 - a_1, \qquad
+        r_s = r_m + A_m (o_2 + \mathit{sym}\, u_2') - A_s o_1
     """
 
     mech_name = "GenTranslate2"
@@ -253,9 +264,12 @@ class GenTranslate2(GenJoint):
 class GenRevolute5(GenJoint):
     r"""``GenRevolute5(axis1, axis2, (sym, guess))`` (3D): hinge; the axes are parallel,
     their origins coincide, and ``sym`` is the right-handed angle about ``axis2`` from its
-    reference direction to that of ``axis1``. Adds one DOF (Revolute5 removes five)::
+    reference direction to that of ``axis1``. Adds one DOF (Revolute5 removes five):
 
-        e_s = e_m * q_2 * (cos sym/2, 0, 0, sin sym/2) * q_1^-1
+    .. math::
+
+        e_s = e_m * q_2 * \left(\cos\tfrac{\mathit{sym}}{2}, 0, 0,
+        \sin\tfrac{\mathit{sym}}{2}\right) * q_1^{-1}
     """
 
     mech_name = "GenRevolute5"
@@ -304,12 +318,14 @@ class GenOrthoRevolute4(GenJoint):
     r"""``GenOrthoRevolute4(axis1, axis2, (alpha, guess), (beta, guess))`` (3D): a universal
     joint; the origins coincide and the axes are orthogonal. ``alpha`` is the angle, about
     ``axis2``, from its reference direction to ``axis1``; ``beta`` the angle, about
-    ``axis1``, from its reference direction to ``axis2``. In ``axis2``'s frame::
+    ``axis1``, from its reference direction to ``axis2``. In ``axis2``'s frame:
 
-        R_j = R_z(alpha) R_y(pi/2) R_z(pi - beta)
+    .. math::
 
-    (then ``u_1 = cos(alpha) g_2 + sin(alpha) (u_2 x g_2)`` and ``u_2 = cos(beta) g_1 +
-    sin(beta) (u_1 x g_1)``). Adds two DOF."""
+        R_j = R_z(\alpha)\, R_y(\pi/2)\, R_z(\pi - \beta)
+
+    (then :math:`u_1 = \cos\alpha\, g_2 + \sin\alpha\, (u_2 \times g_2)` and
+    :math:`u_2 = \cos\beta\, g_1 + \sin\beta\, (u_1 \times g_1)`). Adds two DOF."""
 
     mech_name = "GenOrthoRevolute4"
     spaces = ("spatial",)
@@ -330,9 +346,11 @@ class GenConstraint(GenJoint):
     the master; its local coordinates may use the new symbols) and the slave's orientation
     relative to the master is ``rot``: an angle or degenerate Euler parameters ``(ei, ej)``
     in 2D, any rotation form of ``RotationLock3`` in 3D (``(angle, axis)``, a sequence of
-    them, ...), also in the new symbols. Adds one DOF per symbol::
+    them, ...), also in the new symbols. Adds one DOF per symbol:
 
-        A_s = A_m R(rot),   r_s = r_m + A_m p_2' - A_s p_1'
+    .. math::
+
+        A_s = A_m R(\mathit{rot}), \qquad r_s = r_m + A_m p_2' - A_s p_1'
 
     Example (a slider-pendulum on one body: slide ``s`` along master x, turn ``phi``)::
 
@@ -425,13 +443,16 @@ def check_new_joint(model, joint: GenJoint) -> None:
 class GenKinematics:
     r"""Poses, velocities, accelerations and pose Jacobians of every slave body in the
     layout's (independent) coordinates, derived *recursively* (masters first): with the
-    joint's local relation ``p_s = F(x, t)`` (``x`` = the master's pose symbols and the joint's
-    coordinates, ``x_dot`` their rates)::
+    joint's local relation :math:`p_s = F(x, t)` (:math:`x` the master's pose symbols and the
+    joint's coordinates, :math:`\dot x` their rates):
 
-        p_s_dot  = sum_x F_x x_dot                    J_s = sum_x F_x J_x
-        p_s_ddot = sum_x (V_x x_dot + V_xdot x_ddot)  (V = p_s_dot)
+    .. math::
 
-    then the master's own expressions replace ``x, x_dot, x_ddot``. Each derivative is of
+        \dot p_s &= \sum_x F_x\, \dot x, \qquad J_s = \sum_x F_x J_x \\
+        \ddot p_s &= \sum_x \left(V_x\, \dot x + V_{\dot x}\, \ddot x\right)
+        \qquad (V = \dot p_s)
+
+    then the master's own expressions replace :math:`x, \dot x, \ddot x`. Each derivative is of
     one joint's small expression, never of the nested chain (SymEngine when installed).
 
     ``pos``/``vel``/``acc`` map slave symbols to expressions, ``jac`` maps a slave's pose

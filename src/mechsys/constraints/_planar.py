@@ -1,7 +1,7 @@
 r"""Constraints of planar models (and those written once for 2D and 3D).
 
 Each docstring states the equations in Mech's order. ``r`` global points, ``u`` global
-directions, ``x`` the scalar cross product ``a x b = a_x b_y - a_y b_x`` in 2D.
+directions, ``x`` the scalar cross product :math:`a \times b = a_x\, b_y - a_y\, b_x` in 2D.
 """
 
 from __future__ import annotations
@@ -41,10 +41,12 @@ class Coincident(ConstraintBase):
 class Revolute2(Coincident):
     r"""Pin joint: two points coincide. Removes 2 DOF (2D).
 
-    ``Revolute2(point1, point2)``::
+    ``Revolute2(point1, point2)``:
 
-        x_1 - x_2 = 0
-        y_1 - y_2 = 0
+    .. math::
+
+        x_1 - x_2 &= 0 \\
+        y_1 - y_2 &= 0
     """
 
     mech_name = "Revolute2"
@@ -55,10 +57,12 @@ class Revolute2(Coincident):
 class Translate2(ConstraintBase):
     r"""Prismatic joint: ``axis1`` slides along ``axis2`` without rotating. Removes 2 DOF (2D).
 
-    ``Translate2(axis1, axis2)``; with ``d = r_o1 - r_o2``::
+    ``Translate2(axis1, axis2)``; with :math:`d = r_{o1} - r_{o2}`:
 
-        u_2 x d   = 0      (origin of axis1 on axis2)
-        u_2 x u_1 = 0      (axes parallel)
+    .. math::
+
+        u_2 \times d &= 0 \qquad \text{(origin of axis1 on axis2)} \\
+        u_2 \times u_1 &= 0 \qquad \text{(axes parallel)}
     """
 
     mech_name = "Translate2"
@@ -81,10 +85,12 @@ class OriginLock2(ConstraintBase):
     Removes 2 DOF (2D).
 
     ``OriginLock2(body1, body2=None, offset=None)``; ``offset`` is a :class:`Vector` (global
-    if a plain tuple)::
+    if a plain tuple):
 
-        x_1 - x_2 - d_x = 0
-        y_1 - y_2 - d_y = 0
+    .. math::
+
+        x_1 - x_2 - d_x &= 0 \\
+        y_1 - y_2 - d_y &= 0
     """
 
     mech_name = "OriginLock2"
@@ -146,9 +152,11 @@ class RelativeX1(_RelativeCoordinate):
     r"""X coordinate of ``point1`` equals ``x`` or is ``dist`` more than that of ``point2``.
     Removes 1 DOF (2D/3D).
 
-    ``RelativeX1(point, x)`` or ``RelativeX1(point1, point2, dist)``::
+    ``RelativeX1(point, x)`` or ``RelativeX1(point1, point2, dist)``:
 
-        x_1 - x_2 - dist = 0
+    .. math::
+
+        x_1 - x_2 - \mathit{dist} = 0
     """
 
     mech_name = "RelativeX1"
@@ -159,9 +167,11 @@ class RelativeY1(_RelativeCoordinate):
     r"""Y coordinate of ``point1`` equals ``y`` or is ``dist`` more than that of ``point2``.
     Removes 1 DOF (2D/3D).
 
-    ``RelativeY1(point, y)`` or ``RelativeY1(point1, point2, dist)``::
+    ``RelativeY1(point, y)`` or ``RelativeY1(point1, point2, dist)``:
 
-        y_1 - y_2 - dist = 0
+    .. math::
+
+        y_1 - y_2 - \mathit{dist} = 0
     """
 
     mech_name = "RelativeY1"
@@ -171,9 +181,11 @@ class RelativeY1(_RelativeCoordinate):
 class RelativeDistance1(ConstraintBase):
     r"""Distance between two points. Removes 1 DOF (2D/3D).
 
-    ``RelativeDistance1(point1, point2, dist)``; with ``d = r_1 - r_2``::
+    ``RelativeDistance1(point1, point2, dist)``; with :math:`d = r_1 - r_2`:
 
-        d . d - dist^2 = 0
+    .. math::
+
+        d \cdot d - \mathit{dist}^2 = 0
 
     Singular when ``dist`` is zero: use a coincident constraint (``Revolute2``) instead.
     """
@@ -199,9 +211,11 @@ class RelativeDistance1(ConstraintBase):
 class Orthogonal1(TwoVectors):
     r"""Two vectors are orthogonal. Removes 1 DOF (2D/3D).
 
-    ``Orthogonal1(vector1, vector2)``::
+    ``Orthogonal1(vector1, vector2)``:
 
-        u_1 . u_2 = 0
+    .. math::
+
+        u_1 \cdot u_2 = 0
     """
 
     mech_name = "Orthogonal1"
@@ -214,9 +228,11 @@ class Orthogonal1(TwoVectors):
 class Parallel1(TwoVectors):
     r"""Two vectors are parallel (or anti-parallel). Removes 1 DOF (2D).
 
-    ``Parallel1(vector1, vector2)``::
+    ``Parallel1(vector1, vector2)``:
 
-        u_2 x u_1 = 0
+    .. math::
+
+        u_2 \times u_1 = 0
     """
 
     mech_name = "Parallel1"
@@ -230,10 +246,12 @@ class Parallel1(TwoVectors):
 class PointOnLine1(ConstraintBase):
     r"""A point lies on a line (axis) of another body, or ``dist`` to its left. Removes 1 DOF (2D).
 
-    ``PointOnLine1(point, line, dist=0)``; with ``d = r_p - r_o`` and ``u`` the line's
-    direction::
+    ``PointOnLine1(point, line, dist=0)``; with :math:`d = r_p - r_o` and ``u`` the line's
+    direction:
 
-        u x d - dist |u| = 0
+    .. math::
+
+        u \times d - \mathit{dist}\, \lvert u \rvert = 0
     """
 
     mech_name = "PointOnLine1"

@@ -1,10 +1,10 @@
 r"""Constraints of spatial (3D) models.
 
-Notation in the docstrings: an axis ``i`` has origin ``r_i``, direction ``u_i`` (global;
-``A u'`` when fixed in a body), reference direction ``g_i`` (unit, perpendicular to
-``u_i``; see :func:`~mechsys.reference_direction`) and two *normals* ``h_i, f_i``
-perpendicular to ``u_i`` and to each other, fixed in the axis' body (so the equations
-stay regular for every orientation). ``d = r_1 - r_2`` joins the origins; ``|u|`` is a
+Notation in the docstrings: an axis ``i`` has origin :math:`r_i`, direction :math:`u_i` (global;
+``A u'`` when fixed in a body), reference direction :math:`g_i` (unit, perpendicular to
+:math:`u_i`; see :func:`~mechsys.reference_direction`) and two *normals* :math:`h_i, f_i`
+perpendicular to :math:`u_i` and to each other, fixed in the axis' body (so the equations
+stay regular for every orientation). :math:`d = r_1 - r_2` joins the origins; :math:`\lvert u \rvert` is a
 length (constant for body-fixed vectors). Equations are listed in Mech's order where its
 reference gives one.
 
@@ -56,11 +56,13 @@ class _TwoAxes(ConstraintBase):
 class Spherical3(Coincident):
     r"""Ball joint: two points coincide. Removes 3 DOF (3D).
 
-    ``Spherical3(point1, point2)``::
+    ``Spherical3(point1, point2)``:
 
-        x_1 - x_2 = 0
-        y_1 - y_2 = 0
-        z_1 - z_2 = 0
+    .. math::
+
+        x_1 - x_2 &= 0 \\
+        y_1 - y_2 &= 0 \\
+        z_1 - z_2 &= 0
     """
 
     mech_name = "Spherical3"
@@ -73,11 +75,13 @@ class OriginLock3(OriginLock2):
     Removes 3 DOF (3D).
 
     ``OriginLock3(body1, body2=None, offset=None)``; ``offset`` is a :class:`Vector` (global
-    if a plain tuple)::
+    if a plain tuple):
 
-        x_1 - x_2 - d_x = 0
-        y_1 - y_2 - d_y = 0
-        z_1 - z_2 - d_z = 0
+    .. math::
+
+        x_1 - x_2 - d_x &= 0 \\
+        y_1 - y_2 - d_y &= 0 \\
+        z_1 - z_2 - d_z &= 0
     """
 
     mech_name = "OriginLock3"
@@ -99,17 +103,19 @@ class RotationLock3(ConstraintBase):
     (``body2`` omitted or ``None``: ground). Each
     ``rot`` is ``(angle, (x, y, z))``, Euler parameters or a virtual rotation; angles may be
     expressions of ``T``. As in Mech, ``rot1``'s axis is in ``body2``'s coordinates,
-    ``rot2``'s in those coordinates turned by ``rot1``, and so on: ``A_1 = A_2 R_1 R_2 ...``.
+    ``rot2``'s in those coordinates turned by ``rot1``, and so on: :math:`A_1 = A_2\, R_1\, R_2\, ...`.
 
-    With ``p = e_2 * q_R`` (quaternion product; ``q_R`` the Euler parameters of
-    ``R_1 R_2 ...``) and ``e_1`` the Euler parameters of ``body1``, the equations are the
-    vector part of the relative rotation ``p^-1 * e_1``::
+    With :math:`p = e_2 * q_R` (quaternion product; :math:`q_R` the Euler parameters of
+    :math:`R_1\, R_2\, ...`) and :math:`e_1` the Euler parameters of ``body1``, the equations are the
+    vector part of the relative rotation :math:`p^{-1} * e_1`:
 
-        p0 e1_x - e1_0 p_x - (p_v x e1_v)_x = 0
-        p0 e1_y - e1_0 p_y - (p_v x e1_v)_y = 0
-        p0 e1_z - e1_0 p_z - (p_v x e1_v)_z = 0
+    .. math::
 
-    Regular at the solution, and satisfied only by the intended orientation (``e_1 = +-p``,
+        p_0\, e_{1,x} - e_{1,0}\, p_x - (p_v \times e_{1,v})_x &= 0 \\
+        p_0\, e_{1,y} - e_{1,0}\, p_y - (p_v \times e_{1,v})_y &= 0 \\
+        p_0\, e_{1,z} - e_{1,0}\, p_z - (p_v \times e_{1,v})_z &= 0
+
+    Regular at the solution, and satisfied only by the intended orientation (:math:`e_1 = \pm p`,
     one rotation).
     """
 
@@ -151,9 +157,11 @@ class RelativeZ1(_RelativeCoordinate):
     r"""Z coordinate of ``point1`` equals ``z`` or is ``dist`` more than that of ``point2``.
     Removes 1 DOF (3D).
 
-    ``RelativeZ1(point, z)`` or ``RelativeZ1(point1, point2, dist)``::
+    ``RelativeZ1(point, z)`` or ``RelativeZ1(point1, point2, dist)``:
 
-        z_1 - z_2 - dist = 0
+    .. math::
+
+        z_1 - z_2 - \mathit{dist} = 0
     """
 
     mech_name = "RelativeZ1"
@@ -164,10 +172,12 @@ class RelativeZ1(_RelativeCoordinate):
 class Parallel2(Parallel1):
     r"""Two vectors are parallel (or anti-parallel). Removes 2 DOF (3D).
 
-    ``Parallel2(vector1, vector2)``; ``h_2, f_2`` normals of ``vector2``::
+    ``Parallel2(vector1, vector2)``; :math:`h_2, f_2` normals of ``vector2``:
 
-        h_2 . u_1 = 0
-        f_2 . u_1 = 0
+    .. math::
+
+        h_2 \cdot u_1 &= 0 \\
+        f_2 \cdot u_1 &= 0
     """
 
     mech_name = "Parallel2"
@@ -181,10 +191,12 @@ class Parallel2(Parallel1):
 class PointOnLine2(ConstraintBase):
     r"""A point lies on a line (axis). Removes 2 DOF (3D).
 
-    ``PointOnLine2(point, line)``; with ``d = r_p - r_o`` and ``h, f`` the line's normals::
+    ``PointOnLine2(point, line)``; with :math:`d = r_p - r_o` and ``h, f`` the line's normals:
 
-        h . d = 0
-        f . d = 0
+    .. math::
+
+        h \cdot d &= 0 \\
+        f \cdot d &= 0
     """
 
     mech_name = "PointOnLine2"
@@ -206,9 +218,11 @@ class PointOnPlane1(ConstraintBase):
     r"""A point lies in the plane normal to an axis through its origin, or ``dist`` from it
     on the side the axis points to. Removes 1 DOF (3D).
 
-    ``PointOnPlane1(point, axis_or_plane, dist=0)``; with ``d = r_p - r_o``::
+    ``PointOnPlane1(point, axis_or_plane, dist=0)``; with :math:`d = r_p - r_o`:
 
-        u . d - dist |u| = 0
+    .. math::
+
+        u \cdot d - \mathit{dist}\, \lvert u \rvert = 0
     """
 
     mech_name = "PointOnPlane1"
@@ -233,10 +247,12 @@ class PointOnCircle2(ConstraintBase):
     r"""A point lies on the circle of radius ``rad`` centred at the origin of an axis, in the
     plane normal to it. Removes 2 DOF (3D).
 
-    ``PointOnCircle2(point, axis, rad)``; with ``d = r_p - r_o``::
+    ``PointOnCircle2(point, axis, rad)``; with :math:`d = r_p - r_o`:
 
-        u . d = 0
-        d . d - rad^2 = 0
+    .. math::
+
+        u \cdot d &= 0 \\
+        d \cdot d - \mathit{rad}^2 &= 0
     """
 
     mech_name = "PointOnCircle2"
@@ -260,12 +276,14 @@ class PointAtIntersection3(ConstraintBase):
     r"""A point lies where ``axis1`` crosses the plane through the origin of ``axis2`` normal
     to it (``axis2`` is typically a :class:`Plane`). Removes 3 DOF (3D).
 
-    ``PointAtIntersection3(point, axis1, axis2)``; with ``h_1, f_1`` the normals of
-    ``axis1``::
+    ``PointAtIntersection3(point, axis1, axis2)``; with :math:`h_1, f_1` the normals of
+    ``axis1``:
 
-        h_1 . (r_p - r_1) = 0
-        f_1 . (r_p - r_1) = 0
-        u_2 . (r_p - r_2) = 0
+    .. math::
+
+        h_1 \cdot (r_p - r_1) &= 0 \\
+        f_1 \cdot (r_p - r_1) &= 0 \\
+        u_2 \cdot (r_p - r_2) &= 0
     """
 
     mech_name = "PointAtIntersection3"
@@ -291,13 +309,15 @@ class PointAtIntersection3(ConstraintBase):
 class Revolute5(_TwoAxes):
     r"""Hinge: the origins coincide and the axes are parallel. Removes 5 DOF (3D).
 
-    ``Revolute5(axis1, axis2)``; ``h_2, f_2`` normals of ``axis2``::
+    ``Revolute5(axis1, axis2)``; :math:`h_2, f_2` normals of ``axis2``:
 
-        x_1 - x_2 = 0
-        y_1 - y_2 = 0
-        z_1 - z_2 = 0
-        h_2 . u_1 = 0
-        f_2 . u_1 = 0
+    .. math::
+
+        x_1 - x_2 &= 0 \\
+        y_1 - y_2 &= 0 \\
+        z_1 - z_2 &= 0 \\
+        h_2 \cdot u_1 &= 0 \\
+        f_2 \cdot u_1 &= 0
 
     Parallel (not anti-parallel) axes are the branch a guess near them converges to.
     """
@@ -313,13 +333,15 @@ class Revolute5(_TwoAxes):
 class Cylindrical4(_TwoAxes):
     r"""The axes are colinear: they may slide along and turn about each other. Removes 4 DOF.
 
-    ``Cylindrical4(axis1, axis2)``; ``h_1, f_1`` normals of ``axis1`` (Mech's order: the
-    origin of ``axis2`` on ``axis1``, then parallel)::
+    ``Cylindrical4(axis1, axis2)``; :math:`h_1, f_1` normals of ``axis1`` (Mech's order: the
+    origin of ``axis2`` on ``axis1``, then parallel):
 
-        h_1 . (r_2 - r_1) = 0
-        f_1 . (r_2 - r_1) = 0
-        h_1 . u_2 = 0
-        f_1 . u_2 = 0
+    .. math::
+
+        h_1 \cdot (r_2 - r_1) &= 0 \\
+        f_1 \cdot (r_2 - r_1) &= 0 \\
+        h_1 \cdot u_2 &= 0 \\
+        f_1 \cdot u_2 &= 0
     """
 
     mech_name = "Cylindrical4"
@@ -334,14 +356,16 @@ class Translate5(Cylindrical4):
     r"""Prismatic joint: the axes are colinear and their reference directions parallel, so
     they only slide. Removes 5 DOF (3D).
 
-    ``Translate5(axis1, axis2)``; the four ``Cylindrical4`` equations, then, with ``g_i`` the
-    reference directions and ``k_1 = u_1^ x g_1``::
+    ``Translate5(axis1, axis2)``; the four ``Cylindrical4`` equations, then, with :math:`g_i` the
+    reference directions and :math:`k_1 = \hat{u}_1 \times g_1`:
 
-        h_1 . (r_2 - r_1) = 0
-        f_1 . (r_2 - r_1) = 0
-        h_1 . u_2 = 0
-        f_1 . u_2 = 0
-        k_1 . g_2 = 0
+    .. math::
+
+        h_1 \cdot (r_2 - r_1) &= 0 \\
+        f_1 \cdot (r_2 - r_1) &= 0 \\
+        h_1 \cdot u_2 &= 0 \\
+        f_1 \cdot u_2 &= 0 \\
+        k_1 \cdot g_2 &= 0
     """
 
     mech_name = "Translate5"
@@ -357,12 +381,14 @@ class Universal4(_TwoAxes):
     cross-pin directions fixed in each body -- stay perpendicular. Removes 4 DOF (3D).
 
     ``Universal4(axis1, axis2)``: ``axis1`` is the pin (yoke) axis of body 1, ``axis2`` that
-    of body 2, through the joint centre::
+    of body 2, through the joint centre:
 
-        x_1 - x_2 = 0
-        y_1 - y_2 = 0
-        z_1 - z_2 = 0
-        u_1 . u_2 = 0
+    .. math::
+
+        x_1 - x_2 &= 0 \\
+        y_1 - y_2 &= 0 \\
+        z_1 - z_2 &= 0 \\
+        u_1 \cdot u_2 &= 0
     """
 
     mech_name = "Universal4"
@@ -377,16 +403,20 @@ class ConstantVelocity4(_TwoAxes):
     equally. Removes 4 DOF (3D).
 
     ``ConstantVelocity4(axis1, axis2, C=0)``. The spin of shaft ``i`` is the angle about
-    ``u_i`` from ``n = u_1 x u_2`` to its reference direction ``g_i``; the joint keeps
-    ``spin_2 = spin_1 + C``. That holds exactly when the relative rotation from frame 1
-    ``(g_1, k_1, u_1^)`` (``k_i = u_i^ x g_i``) to frame 2 turned back by ``C``,
-    ``(g_2', k_2', u_2^)`` with ``g_2' = cos C g_2 - sin C k_2``, ``k_2' = sin C g_2 + cos C k_2``,
-    has its rotation axis perpendicular to ``u_1`` -- a pure bend about ``n``::
+    :math:`u_i` from :math:`n = u_1 \times u_2` to its reference direction :math:`g_i`; the
+    joint keeps :math:`\mathit{spin}_2 = \mathit{spin}_1 + C`. That holds exactly when the
+    relative rotation from frame 1 :math:`(g_1, k_1, \hat{u}_1)` (:math:`k_i = \hat{u}_i \times
+    g_i`) to frame 2 turned back by ``C``, :math:`(g_2^{\prime}, k_2^{\prime}, \hat{u}_2)` with
+    :math:`g_2^{\prime} = \cos C\, g_2 - \sin C\, k_2`, :math:`k_2^{\prime} = \sin C\, g_2 +
+    \cos C\, k_2`, has its rotation axis perpendicular to :math:`u_1` -- a pure bend about
+    ``n``:
 
-        x_1 - x_2 = 0
-        y_1 - y_2 = 0
-        z_1 - z_2 = 0
-        k_1 . g_2' - g_1 . k_2' = 0
+    .. math::
+
+        x_1 - x_2 &= 0 \\
+        y_1 - y_2 &= 0 \\
+        z_1 - z_2 &= 0 \\
+        k_1 \cdot g_2^{\prime} - g_1 \cdot k_2^{\prime} &= 0
 
     The last equation (twice the sine-weighted axial component of the relative rotation) is
     regular at every bend, including zero bend where the spin reference ``n`` is undefined.
@@ -412,14 +442,16 @@ class ParaRevolute4(_TwoAxes):
     r"""Two parallel hinges ``dist`` apart: ``axis1`` parallel to ``axis2``, their origins
     side by side, the axes ``dist`` apart. Removes 4 DOF (3D).
 
-    ``ParaRevolute4(axis1, axis2, dist)`` (Mech's order: parallel, adjacent, distance)::
+    ``ParaRevolute4(axis1, axis2, dist)`` (Mech's order: parallel, adjacent, distance):
 
-        h_2 . u_1 = 0
-        f_2 . u_1 = 0
-        u_2 . d = 0
-        d . d - dist^2 = 0
+    .. math::
 
-    Singular for ``dist = 0``: use ``Revolute5``.
+        h_2 \cdot u_1 &= 0 \\
+        f_2 \cdot u_1 &= 0 \\
+        u_2 \cdot d &= 0 \\
+        d \cdot d - \mathit{dist}^2 &= 0
+
+    Singular for :math:`\mathit{dist} = 0`: use ``Revolute5``.
     """
 
     mech_name = "ParaRevolute4"
@@ -440,13 +472,15 @@ class OrthoRevolute4(_TwoAxes):
     Removes 4 DOF (3D).
 
     ``OrthoRevolute4(axis1, axis2, dist=0)``; ``dist`` is signed: the origin of ``axis1``
-    lies ``dist`` from that of ``axis2`` along ``u_1^ x u_2^`` (Mech's order: origin 2 next
-    to axis 1, origin 1 next to axis 2, separation, perpendicular)::
+    lies ``dist`` from that of ``axis2`` along :math:`\hat{u}_1 \times \hat{u}_2` (Mech's order: origin 2 next
+    to axis 1, origin 1 next to axis 2, separation, perpendicular):
 
-        u_1 . (r_2 - r_1) = 0
-        u_2 . d = 0
-        (u_1 x u_2) . d - dist |u_1| |u_2| = 0
-        u_1 . u_2 = 0
+    .. math::
+
+        u_1 \cdot (r_2 - r_1) &= 0 \\
+        u_2 \cdot d &= 0 \\
+        (u_1 \times u_2) \cdot d - \mathit{dist}\, \lvert u_1 \rvert\, \lvert u_2 \rvert &= 0 \\
+        u_1 \cdot u_2 &= 0
 
     Regular for every ``dist``, zero included.
     """
@@ -469,13 +503,15 @@ class LineOnCylinder3(_TwoAxes):
     r"""``axis1`` is parallel to ``axis2`` and ``rad`` away from it (a line on a cylinder).
     Removes 3 DOF (3D).
 
-    ``LineOnCylinder3(axis1, axis2, rad)``::
+    ``LineOnCylinder3(axis1, axis2, rad)``:
 
-        h_2 . u_1 = 0
-        f_2 . u_1 = 0
-        d . d - (u_2 . d)^2 / |u_2|^2 - rad^2 = 0
+    .. math::
 
-    Singular for ``rad = 0``: use ``Cylindrical4``.
+        h_2 \cdot u_1 &= 0 \\
+        f_2 \cdot u_1 &= 0 \\
+        d \cdot d - (u_2 \cdot d)^2 / \lvert u_2 \rvert^2 - \mathit{rad}^2 &= 0
+
+    Singular for :math:`\mathit{rad} = 0`: use ``Cylindrical4``.
     """
 
     mech_name = "LineOnCylinder3"
@@ -499,10 +535,12 @@ class LineToCircle1(_TwoAxes):
     1 DOF (3D).
 
     ``LineToCircle1(axis1, axis2, rad)``; the line meets the circle's plane at
-    ``p = r_1 + u_1 (u_2 . (r_2 - r_1)) / c`` with ``c = u_2 . u_1``; multiplied through by
-    ``c`` (no division), with ``w = c (r_1 - r_2) + (u_2 . (r_2 - r_1)) u_1 = c (p - r_2)``::
+    :math:`p = r_1 + u_1\, (u_2 \cdot (r_2 - r_1)) / c` with :math:`c = u_2 \cdot u_1`; multiplied through by
+    ``c`` (no division), with :math:`w = c\, (r_1 - r_2) + (u_2 \cdot (r_2 - r_1))\, u_1 = c\, (p - r_2)`:
 
-        w . w - rad^2 c^2 = 0
+    .. math::
+
+        w \cdot w - \mathit{rad}^2\, c^2 = 0
 
     (the line must not lie parallel to the circle's plane).
     """
@@ -526,10 +564,13 @@ class LineToLine1(_TwoAxes):
     r"""The shortest distance between two lines is ``dist``; without ``dist`` the lines
     intersect. Removes 1 DOF (3D).
 
-    ``LineToLine1(axis1, axis2, dist=0)``; with ``w = u_1 x u_2``::
+    ``LineToLine1(axis1, axis2, dist=0)``; with :math:`w = u_1 \times u_2`:
 
-        w . d = 0                                (intersecting form)
-        (w . d)^2 - dist^2 (w . w) = 0           (distance form, dist != 0)
+    .. math::
+
+        w \cdot d &= 0 \qquad \text{(intersecting form)} \\
+        (w \cdot d)^2 - \mathit{dist}^2\, (w \cdot w) &= 0
+        \qquad \text{(distance form, } \mathit{dist} \neq 0 \text{)}
 
     Both are regular at their solutions while the lines are not parallel. The distance form
     is a line tangent to a cylinder of radius ``dist`` about the other line.
@@ -552,12 +593,14 @@ class LineToLine1(_TwoAxes):
 
 class LineToPlane2(_TwoAxes):
     r"""``axis1`` lies in the plane normal to ``axis2`` through its origin (typically a
-    :class:`Plane`), or in the parallel plane ``dist`` away along ``u_2``. Removes 2 DOF (3D).
+    :class:`Plane`), or in the parallel plane ``dist`` away along :math:`u_2`. Removes 2 DOF (3D).
 
-    ``LineToPlane2(axis1, axis2, dist=0)``::
+    ``LineToPlane2(axis1, axis2, dist=0)``:
 
-        u_1 . u_2 = 0
-        u_2 . d - dist |u_2| = 0
+    .. math::
+
+        u_1 \cdot u_2 &= 0 \\
+        u_2 \cdot d - \mathit{dist}\, \lvert u_2 \rvert &= 0
     """
 
     mech_name = "LineToPlane2"
@@ -578,11 +621,13 @@ class PlaneToPlane3(_TwoAxes):
     ``dist``). Removes 3 DOF (3D).
 
     ``PlaneToPlane3(axis1, axis2, dist=0)``: the origin of ``axis1`` lies ``dist`` from that of
-    ``axis2`` along ``u_2``::
+    ``axis2`` along :math:`u_2`:
 
-        h_2 . u_1 = 0
-        f_2 . u_1 = 0
-        u_2 . d - dist |u_2| = 0
+    .. math::
+
+        h_2 \cdot u_1 &= 0 \\
+        f_2 \cdot u_1 &= 0 \\
+        u_2 \cdot d - \mathit{dist}\, \lvert u_2 \rvert &= 0
     """
 
     mech_name = "PlaneToPlane3"
@@ -602,11 +647,13 @@ class Planar3(PlaneToPlane3):
     r"""Planar joint: the planes normal to the two axes coincide (or lie ``dist`` apart), so
     the bodies slide on each other and turn about the normal. Removes 3 DOF (3D).
 
-    ``Planar3(axis1, axis2, dist=0)``; the equations of ``PlaneToPlane3``::
+    ``Planar3(axis1, axis2, dist=0)``; the equations of ``PlaneToPlane3``:
 
-        h_2 . u_1 = 0
-        f_2 . u_1 = 0
-        u_2 . d - dist |u_2| = 0
+    .. math::
+
+        h_2 \cdot u_1 &= 0 \\
+        f_2 \cdot u_1 &= 0 \\
+        u_2 \cdot d - \mathit{dist}\, \lvert u_2 \rvert &= 0
     """
 
     mech_name = "Planar3"
@@ -617,13 +664,16 @@ class PlaneToCircle1(_TwoAxes):
     ground), or a torus. Removes 1 DOF (3D).
 
     ``PlaneToCircle1(axis1, axis2, rad)``: circle of radius ``rad`` centred at the origin of
-    ``axis2``, in the plane normal to ``u_2``. ``PlaneToCircle1(axis1, axis2, majrad, minrad)``:
-    torus with that core circle and tube radius ``minrad``. The circle (torus) lies on the side
-    of the plane that ``u_1`` points to; its nearest point is at height
-    ``u_1^ . (r_2 - r_1) - majrad |u_1^ x u_2^|``, which must equal ``minrad`` (0 for a
-    circle)::
+    ``axis2``, in the plane normal to :math:`u_2`. ``PlaneToCircle1(axis1, axis2, majrad,
+    minrad)``: torus with that core circle and tube radius ``minrad``. The circle (torus) lies
+    on the side of the plane that :math:`u_1` points to; its nearest point is at height
+    :math:`\hat{u}_1 \cdot (r_2 - r_1) - \mathit{majrad}\, \lvert \hat{u}_1 \times \hat{u}_2
+    \rvert`, which must equal ``minrad`` (0 for a circle):
 
-        u_1 . (r_2 - r_1) - rad |u_1 x u_2| / |u_2| - minrad |u_1| = 0
+    .. math::
+
+        u_1 \cdot (r_2 - r_1) - \mathit{rad}\, \lvert u_1 \times u_2 \rvert / \lvert u_2 \rvert
+        - \mathit{minrad}\, \lvert u_1 \rvert = 0
 
     Regular while the circle's plane is not parallel to the plane (then it would lie in it).
     """

@@ -282,15 +282,20 @@ def Involute(sym, center: Sequence, base_radius, pitch_radius, angle,  # noqa: N
     r"""The involute gear-tooth profile ``(x, y)`` as SymPy expressions of ``sym`` (Mech's
     ``Involute[sym, {x, y}, baseradius, pitchradius, angle]``).
 
-    With ``u = sym``, ``rb`` the base radius and ``s = sign(pitch_radius)`` (a negative pitch
-    radius makes the profile spiral clockwise)::
+    With :math:`u` = ``sym``, :math:`r_b` the base radius, :math:`r_p` the pitch radius and
+    :math:`s = \operatorname{sign}(r_p)` (a negative pitch radius makes the profile spiral
+    clockwise):
 
-        P(u) = center + Rot(beta) rb (cos u + u sin u,  s (sin u - u cos u))
+    .. math::
 
-    The profile starts on the base circle at ``u = 0`` and crosses the pitch circle
-    ``|P - center| = rp`` at ``u_p = sqrt(rp^2 / rb^2 - 1)``; ``beta = angle - s phi_p`` with
-    ``phi_p = u_p - atan(u_p)`` (the involute function of the pressure angle) puts that pitch
-    point on the ray from ``center`` at ``angle``.
+        P(u) = c + \operatorname{Rot}(\beta)\, r_b\, (\cos u + u \sin u,\;
+        s\, (\sin u - u \cos u))
+
+    (:math:`c` = ``center``). The profile starts on the base circle at :math:`u = 0` and
+    crosses the pitch circle :math:`\lvert P - c \rvert = r_p` at
+    :math:`u_p = \sqrt{r_p^2 / r_b^2 - 1}`; :math:`\beta = \mathit{angle} - s\, \phi_p` with
+    :math:`\phi_p = u_p - \arctan u_p` (the involute function of the pressure angle) puts
+    that pitch point on the ray from ``center`` at ``angle``.
 
     For ``u < 0`` the natural equation gives the mirror image of the tooth; with
     ``interference=True`` the profile instead runs straight from the base circle to the

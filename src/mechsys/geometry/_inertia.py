@@ -75,13 +75,13 @@ def principal_axes(inertia):
 
 
 def composite_inertia(parts):
-    """Combine parts ``[(mass, centroid, inertia), ...]`` (each inertia centroidal, all in
+    r"""Combine parts ``[(mass, centroid, inertia), ...]`` (each inertia centroidal, all in
     one body frame) into ``(mass, centroid, inertia about the composite centroid)``.
 
     In 3D a part may carry a fourth element, the rotation of its own centroidal frame
     relative to the body frame (Mech's ``CompositeInertia`` element ``{mass, centroid,
     inertia, rotation}``), in any of :func:`parallel_axis`'s formats: its inertia, given in
-    its own axes, enters as ``R J R^T``. Returns ``(M, centroid, J)``: ``J`` a scalar in 2D,
+    its own axes, enters as :math:`R J R^T`. Returns ``(M, centroid, J)``: ``J`` a scalar in 2D,
     ``(Ixx, Iyy, Izz, Ixy, Iyz, Izx)`` in 3D."""
     parts = [tuple(p) for p in parts]
     for p in parts:

@@ -371,7 +371,7 @@ class Line(Axis):
 
 class Plane(Axis):
     r"""A plane through three points (3D): origin ``point1``, normal
-    ``(r_2 - r_1) x (r_3 - r_1)`` and reference direction from ``point1`` to ``point2``.
+    :math:`(r_2 - r_1) \times (r_3 - r_1)` and reference direction from ``point1`` to ``point2``.
 
     ``Plane(point1, point2, point3)`` or ``Plane(body, p1, p2, p3)`` (point names, numbers
     or local coordinates of ``body``). Used where a vector is expected it gives its normal;

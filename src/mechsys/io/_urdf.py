@@ -202,18 +202,18 @@ def from_urdf(path, *, floating_base: bool = False, gravity: float = 9.81,
               backend: str | None = None):
     r"""A :class:`~mechsys.Model3D` of the URDF robot description ``path``.
 
-    Every joint that moves becomes a generalized-coordinate joint named after it (revolute
-    and continuous: ``GenRevolute5``; prismatic: ``GenTranslate5``), links joined by fixed
-    joints one body (their frames kept in ``m.import_report.frames`` and as points of the
-    body named after the link), gravity ``-gravity`` along ``z``. The root link is fixed to
-    ground, or with ``floating_base=True`` a free body with its own (absolute) coordinates
-    ``x, y, z, e0..e3``, as is the child of a ``floating`` joint on the root. ``joint_damping``
-    adds the joints' ``<dynamics damping>`` as loads ``-d q_dot``, ``mimic`` the ``<mimic>``
-    relations as constraints ``q = multiplier q_other + offset``; limits, friction and
-    everything else without a counterpart are listed in ``m.import_report`` (an
+    Every joint that moves becomes a generalized-coordinate joint named after it (revolute and
+    continuous: ``GenRevolute5``; prismatic: ``GenTranslate5``), links joined by fixed joints
+    one body (their frames kept in ``m.import_report.frames`` and as points of the body named
+    after the link), gravity ``-gravity`` along ``z``. The root link is fixed to ground, or with
+    ``floating_base=True`` a free body with its own (absolute) coordinates ``x, y, z, e0..e3``,
+    as is the child of a ``floating`` joint on the root. ``joint_damping`` adds the joints'
+    ``<dynamics damping>`` as loads :math:`-d\, \dot q`, ``mimic`` the ``<mimic>`` relations as
+    constraints :math:`q = \mathit{multiplier}\; q_\text{other} + \mathit{offset}`; limits,
+    friction and everything else without a counterpart are listed in ``m.import_report`` (an
     :class:`ImportReport`). ``geometry``: attach the visual shapes for drawing (boxes,
-    cylinders, spheres; meshes as their bounding box when the file is STL or OBJ and found,
-    else noted).
+    cylinders, spheres; meshes as their bounding box when the file is STL or OBJ and found, else
+    noted).
 
     Files are read safely (no entity expansion, a size limit, regular files only); a bad
     element raises ``ModelError`` naming the element and its line.

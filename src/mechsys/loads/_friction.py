@@ -1,24 +1,8 @@
 r"""Coulomb friction and viscous damping in joints, driven by the joint reaction.
 
-The reaction force a joint applies to its first body is, from the multipliers,
-``R = -(d Phi_c / d r_1)^T lambda_c``; its magnitude ``|R| = sqrt(R.R + eps_R^2)`` (``eps_R``
-= ``eps_reaction``, 1e-30 units of force: it only keeps the Newton on the multipliers
-differentiable at zero load, and must stay far below any reaction of the model: at 1e-9 it
-dominated the reactions of a part of a few picograms in SI units). The sign of the
-sliding or turning velocity is regularised: ``s(v) = v / sqrt(v.v + v_eps^2)``, ``v_eps``
-in the units of that rate (rad per unit time for rotational joints, whatever the unit of
-length; length per unit time for translational ones).
-
-* rotational joints (``Revolute2``, ``Spherical3``, ``Revolute5``): moment on body 1
-  ``-mu r |R| s(omega_1 - omega_2)`` (``r`` the pin radius), opposite on body 2;
-* translational joints (``Translate2``, ``Translate5``, ...): force on body 1 at the axis
-  origin ``-mu |R| s(v_rel . u) u`` (``u`` the unit slide direction, ``v_rel`` the
-  velocity of that point relative to body 2), opposite on body 2 (a force at its origin
-  plus the transfer moment).
-
-Plus ``viscous`` (``c``): ``-c omega_rel`` or ``-c v_rel`` added to the same load. The
-equations become nonlinear in the multipliers: statics and inverse dynamics then iterate
-(Newton, ``lambda_guess``).
+The laws are written, typeset, in :class:`JointFriction`'s docstring. The equations become
+nonlinear in the multipliers: statics and inverse dynamics then iterate (Newton,
+``lambda_guess``).
 """
 
 from __future__ import annotations
@@ -36,10 +20,35 @@ _TRANSLATIONAL = {"Translate2", "Translate5", "Cylindrical4"}
 
 
 class JointFriction(LoadBase):
-    """Coulomb (``mu``, and ``radius`` for rotational joints) plus viscous (``viscous``)
+    r"""Coulomb (``mu``, and ``radius`` for rotational joints) plus viscous (``viscous``)
     friction in a joint: the constraint object, or its name or Mech number (resolved when the
     load is added to the model). ``kind`` is ``"rotational"`` or ``"translational"``
-    (default from the constraint type)."""
+    (default from the constraint type).
+
+    The reaction force the joint applies to its first body is, from its multipliers
+    :math:`\lambda_c`, :math:`R = -(\partial \Phi_c / \partial r_1)^T \lambda_c`, of magnitude
+    :math:`\lvert R \rvert = \sqrt{R \cdot R + \epsilon_R^2}` (:math:`\epsilon_R` =
+    ``eps_reaction``, 1e-30 units of force: it only keeps the Newton on the multipliers
+    differentiable at zero load, and must stay far below any reaction of the model: at 1e-9
+    it dominated the reactions of a part of a few picograms in SI units). The sign of the
+    sliding or turning velocity is regularised, :math:`s(v) = v / \sqrt{v \cdot v +
+    v_\epsilon^2}` (:math:`v_\epsilon` = ``v_eps``, in the units of that rate: rad per unit
+    time for rotational joints, whatever the unit of length; length per unit time for
+    translational ones). The load on body 1 (the opposite on body 2) is:
+
+    .. math::
+
+        M_1 &= -\mu\, r \lvert R \rvert\, s(\omega_1 - \omega_2) - c\, (\omega_1 - \omega_2)
+        \qquad \text{(rotational: Revolute2, Spherical3, Revolute5)} \\
+        F_1 &= -\mu \lvert R \rvert\, s(v_\text{rel} \cdot u)\, u - c\, v_\text{rel}
+        \qquad \text{(translational: Translate2, Translate5, ...)}
+
+    with :math:`r` the pin ``radius``, :math:`c` the ``viscous`` coefficient, :math:`u` the
+    unit slide direction and :math:`v_\text{rel}` the velocity of the axis origin relative
+    to body 2; the force acts at that origin (on body 2: a force at its origin plus the
+    transfer moment). The equations become nonlinear in the multipliers: statics and
+    inverse dynamics then iterate (Newton, ``lambda_guess``).
+    """
 
     def __init__(self, constraint, mu=0.0, radius=0.0, viscous=0.0, kind=None,
                  v_eps=1e-3, eps_reaction=1e-30):

@@ -1,18 +1,20 @@
 r"""Gyroscopic moments of an axially symmetric rotor without a spinning body (Mech's
 ``GyroMoment`` and ``GyroFilter``, manual 10.3.5 and 10.4.6).
 
-A rotor of spin inertia ``I_s`` spinning at ``w_s`` about the body-fixed unit axis ``a`` of
-a carrier body (angular velocity ``w``) adds the angular momentum ``h = I_s w_s a``. Its rate
-of change, applied to the carrier as a moment, is::
+A rotor of spin inertia :math:`I_s` spinning at :math:`\omega_s` about the body-fixed unit
+axis :math:`a` of a carrier body (angular velocity :math:`\omega`) adds the angular momentum
+:math:`h = I_s \omega_s a`. Its rate of change, applied to the carrier as a moment, is:
 
-    M = -I_s w_s (w x a) - I_s (d w_s / dt) a
+.. math::
+
+    M = -I_s \omega_s\, (\omega \times a) - I_s \frac{d\omega_s}{dt}\, a
 
 so the carrier can hold the rotor's transverse inertia while the fast spin never has to be
 integrated. Valid only for a body rotating about a principal axis with equal transverse
 moments (an axially symmetric rotor spinning about its axis).
 
 ``GyroFilter(inertia, axis)`` removes the spin-axis moment from an inertia tensor,
-``J - (a^T J a) a a^T``, so that a rotor's inertia can be lumped into its carrier (the
+:math:`J - (a^T J a)\, a a^T`, so that a rotor's inertia can be lumped into its carrier (the
 free spin carries no axial torque); pair it with a ``GyroMoment`` whose ``omega`` is the
 rotor's absolute axial spin.
 """
@@ -28,14 +30,20 @@ from ._loads import BodyMoment, LoadBase, _magnitude
 
 
 class GyroMoment(LoadBase):
-    """``GyroMoment(body, axis, omega, inertia=None)``: the gyroscopic moment of a rotor
-    spinning at ``omega`` (an expression; may depend on ``T``) about ``axis`` (a vector fixed
-    in ``body``, or local components) with spin inertia ``inertia``.
+    r"""``GyroMoment(body, axis, omega, inertia=None)``: the gyroscopic moment of a rotor
+    spinning at ``omega`` (:math:`\omega_s`, an expression; may depend on ``T``) about ``axis``
+    (:math:`a`, a vector fixed in ``body``, or local components) with spin inertia
+    ``inertia`` (:math:`I_s`), applied to ``body`` (angular velocity :math:`\omega`):
+
+    .. math::
+
+        M = -I_s \omega_s\, (\omega \times a) - I_s \frac{d\omega_s}{dt}\, a
 
     Without ``inertia`` the spin inertia is taken from the body, as Mech does when its
     ``Inertia`` option is not given: the moment of the body's centroidal inertia tensor
-    ``J`` (body axes) about the unit spin axis ``a``, ``I_s = a^T J a`` (``a`` in body axes;
-    for an axis not fixed in the body, ``a^T A J A^T a`` with global ``a``)."""
+    :math:`J` (body axes) about the unit spin axis :math:`a`, :math:`I_s = a^T J a` (:math:`a`
+    in body axes; for an axis not fixed in the body, :math:`a^T A J A^T a` with global
+    :math:`a`)."""
 
     def __init__(self, body, axis, omega, inertia=None):
         super().__init__()
@@ -65,7 +73,7 @@ class GyroMoment(LoadBase):
         return [BodyMoment(b, M)]
 
     def spin_inertia(self, model):
-        """The spin inertia used: ``inertia`` when given, else ``a^T J a`` from the body."""
+        r"""The spin inertia used: ``inertia`` when given, else :math:`a^T J a` from the body."""
         if self.inertia is not None:
             return self.inertia
         b = model.body(self.body)
@@ -82,7 +90,8 @@ class GyroMoment(LoadBase):
 
 
 def gyro_filter(inertia, axis):
-    """Inertia ``(Ixx, Iyy, Izz, Ixy, Iyz, Izx)`` with the moment about ``axis`` removed."""
+    r"""Inertia ``(Ixx, Iyy, Izz, Ixy, Iyz, Izx)`` with the moment about ``axis`` removed:
+    :math:`J - (a^T J a)\, a a^T` with :math:`a` the unit axis."""
     from ..geometry._inertia import _as_list6, _as_matrix3
 
     J = _as_matrix3(inertia)

@@ -1,20 +1,27 @@
 r"""Applied loads and their generalized forces (by virtual work, derived once, symbolically).
 
-Every load reduces to *contributions*: a global force ``F`` at a body point ``P``, a moment
-``M`` on a body, or a magnitude applied directly to a coordinate. The generalized force on
-the coordinates is::
+Every load reduces to *contributions*: a global force :math:`F` at a body point :math:`P`,
+a moment :math:`M` on a body, or a magnitude applied directly to a coordinate. The
+generalized force on the coordinates is:
 
-    Q = sum (d v_P / d qd)^T F  +  sum (d omega_b / d qd)^T M  +  direct loads
+.. math::
 
-which is the virtual work ``dW = F . dr_P + M . dpi_b`` in any velocity representation.
+    Q = \sum_P \left(\frac{\partial v_P}{\partial \dot q}\right)^T F
+      + \sum_b \left(\frac{\partial \omega_b}{\partial \dot q}\right)^T M
+      + Q_\text{direct}
+
+which is the virtual work :math:`\delta W = F \cdot \delta r_P + M \cdot \delta\pi_b` in any
+velocity representation.
 Magnitudes may be expressions of ``T``, parameters, coordinates, velocities and Lagrange
 multipliers (friction).
 
 Sign conventions (written once, followed everywhere; see ``docs/loads.md``):
 
-* equations of motion ``M qdd + Phi_q^T lambda = Q + Q_v`` (``Q_v`` the centrifugal and
-  gyroscopic terms), so the *reaction* on the coordinates is ``-Phi_q^T lambda``;
-* ``applied + reaction + dynamic = 0`` on every body, ``dynamic = Q_v - M qdd``.
+* equations of motion :math:`M \ddot q + \Phi_q^T \lambda = Q + Q_v` (:math:`Q_v` the
+  centrifugal and gyroscopic terms), so the *reaction* on the coordinates is
+  :math:`-\Phi_q^T \lambda`;
+* :math:`\text{applied} + \text{reaction} + \text{dynamic} = 0` on every body,
+  :math:`\text{dynamic} = Q_v - M \ddot q`.
 """
 
 from __future__ import annotations
@@ -152,14 +159,17 @@ class Force(LoadBase):
     ``Force(point, direction, magnitude)`` or ``Force(axis, magnitude=...)`` (Mech's
     ``Force[bnum, axis, mag]``: the axis origin is the point of application, its direction
     the line of action). ``direction`` is a :class:`Vector` (fixed in its body: a follower
-    force) or a global tuple::
+    force) or a global tuple:
 
-        F = magnitude * u / |u|          (magnitude="absolute", the default)
-        F = magnitude * u                (magnitude="relative")
+    .. math::
 
-    ``cutoff`` > 0 uses ``u / sqrt(|u|^2 + cutoff^2)`` so the direction may shrink to zero
-    without a singularity. ``reaction=point2`` applies ``-F`` at ``point2`` of another body
-    (action and reaction).
+        F &= \mathit{magnitude}\; u / \lvert u \rvert
+        \qquad \text{(mode="absolute", the default)} \\
+        F &= \mathit{magnitude}\; u \qquad \text{(mode="relative")}
+
+    ``cutoff`` > 0 uses :math:`u / \sqrt{\lvert u \rvert^2 + \mathit{cutoff}^2}` so the
+    direction may shrink to zero without a singularity. ``reaction=point2`` applies
+    :math:`-F` at ``point2`` of another body (action and reaction).
     """
 
     def __init__(self, point, direction=None, magnitude=1, *, mode: str = "absolute",
@@ -199,7 +209,8 @@ class Force(LoadBase):
 
 class Moment(LoadBase):
     r"""A moment on a body: ``Moment(body, magnitude)`` in 2D (counter-clockwise positive),
-    ``Moment(body, vector, magnitude)`` in 3D (``M = magnitude * u/|u|``).
+    ``Moment(body, vector, magnitude)`` in 3D (:math:`M = \mathit{magnitude}\; u/\lvert u
+    \rvert`).
     ``reaction=body2`` applies the opposite moment to ``body2``."""
 
     def __init__(self, body, a, b=None, *, reaction=None, mode: str = "absolute", cutoff=0):

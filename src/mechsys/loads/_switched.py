@@ -6,15 +6,20 @@ Loads are cumulative, so a switch of loads is not "one of them" as for constrain
   test is true at ``(T, q, qd, p)``, and none when no test is true (Mech's ``StageSwitch``
   of loads, unlike its ``Which``-like behaviour for constraints).
 * ``TimeSwitch(loads_0, t_1, loads_1, ..., t_n, loads_n)`` applies ``loads_i`` for
-  ``t_i <= T < t_(i+1)`` (the first set before ``t_1``, the last after ``t_n``). A *leading*
+  :math:`t_i \le T < t_{i+1}` (the first set before ``t_1``, the last after ``t_n``). A *leading*
   time ``TimeSwitch(t_0, loads_0, t_1, ...)`` applies nothing before ``t_0``; a *trailing*
   time ``TimeSwitch(..., loads_n, t_(n+1))`` applies nothing from ``t_(n+1)`` on. The times
   are numbers or expressions of parameters and must increase.
 
 Each load set is a load or a (nested) list of loads. Every contribution of a set (point
-force, body moment, direct generalized force) is multiplied by its indicator::
+force, body moment, direct generalized force) is multiplied by its indicator:
 
-    chi_i = Piecewise((1, test_i), (0, True))
+.. math::
+
+    \chi_i = \begin{cases} 1 & \text{where } \mathit{test}_i \text{ holds} \\
+                           0 & \text{otherwise} \end{cases}
+
+(``Piecewise((1, test_i), (0, True))``)
 
 so the switched load is an ordinary load expression: statics, inverse dynamics and free
 motion use it unchanged, and the derivatives the equilibrium Newton needs are those of the

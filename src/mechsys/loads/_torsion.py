@@ -1,28 +1,34 @@
 r"""Rotational (torsion) springs and dampers between two bodies.
 
-The relative angle ``phi`` of body 2 with respect to body 1:
+The relative angle :math:`\phi` of body 2 with respect to body 1:
 
-* 2D, ``TorsionSpring(body1, body2, ...)``: ``phi = theta_2 - theta_1`` (counter-clockwise,
-  not wrapped: a spring wound several turns keeps its energy);
+* 2D, ``TorsionSpring(body1, body2, ...)``: :math:`\phi = \theta_2 - \theta_1`
+  (counter-clockwise, not wrapped: a spring wound several turns keeps its energy);
 * 2D or 3D, ``TorsionSpring(axis1, axis2, ...)``: the angle, right-handed about the
   direction of ``axis1``, from the reference direction ``g_1`` of ``axis1`` to the reference
   direction ``g_2`` of ``axis2`` projected on the plane normal to ``axis1``
-  (``phi = atan2(k_1 . g_2, g_1 . g_2)`` with ``k_1 = u_1 x g_1``, the angle frame of
-  ``RotationLock1``; in 2D ``g`` is the axis direction).
+  (:math:`\phi = \operatorname{atan2}(k_1 \cdot g_2, g_1 \cdot g_2)` with
+  :math:`k_1 = u_1 \times g_1`, the angle frame of ``RotationLock1``; in 2D :math:`g` is the
+  axis direction).
   Meant for two bodies joined about a common axis (a revolute joint, ``axis1`` and
   ``axis2`` its two halves); any other relative motion is allowed and the spring acts on the
-  projected angle only. In 3D ``phi`` lies in ``(-pi, pi]``: keep ``phi - free_angle``
-  inside that range (the potential jumps at the branch cut).
+  projected angle only. In 3D :math:`\phi` lies in :math:`(-\pi, \pi]`: keep
+  :math:`\phi - \phi_0` (``free_angle``) inside that range (the potential jumps at the
+  branch cut).
 
-Spring: torque ``tau = k (phi - phi0)`` (or ``law(phi)``), potential ``k (phi - phi0)^2 / 2``.
-Damper: torque ``tau = c dphi/dt`` (or ``law(phi, dphi/dt)``). The torque acts to reduce
-``phi``: ``-tau`` on body 2 and ``+tau`` on body 1 about the axis. Its generalized force is
-exact virtual work for any motion of the bodies::
+Spring: torque :math:`\tau = k (\phi - \phi_0)` (or ``law(phi)``), potential
+:math:`k (\phi - \phi_0)^2 / 2`. Damper: torque :math:`\tau = c\, \dot\phi` (or
+``law(phi, dphi/dt)``). The torque acts to reduce :math:`\phi`: :math:`-\tau` on body 2 and
+:math:`+\tau` on body 1 about the axis. Its generalized force is exact virtual work for any
+motion of the bodies:
 
-    Q = -tau dphi/dq
+.. math::
 
-(for the spring ``-dV/dq``; for the damper ``-d/dqd (c phidot^2 / 2)``), so the spring's
-potential closes the energy balance whatever the joint.
+    Q = -\tau \frac{\partial \phi}{\partial q}
+
+(for the spring :math:`-\partial V / \partial q`; for the damper
+:math:`-\partial (c \dot\phi^2 / 2) / \partial \dot q`), so the spring's potential closes the
+energy balance whatever the joint.
 """
 
 from __future__ import annotations
@@ -37,8 +43,9 @@ from ._loads import DirectLoad, LoadBase, _magnitude
 class TorsionSpring(LoadBase):
     r"""Rotational spring between two bodies: ``TorsionSpring(body1, body2, stiffness,
     free_angle=0, law=None)`` (2D) or ``TorsionSpring(axis1, axis2, stiffness, ...)`` (2D and
-    3D). Torque ``k (phi - free_angle)`` (or ``law(phi)``) resisting the relative angle
-    ``phi`` of body 2 from body 1 (see the module doc); potential ``k (phi - phi0)^2 / 2``.
+    3D). Torque :math:`k (\phi - \phi_0)`, :math:`\phi_0` = ``free_angle`` (or
+    ``law(phi)``) resisting the relative angle :math:`\phi` of body 2 from body 1 (see the
+    module doc); potential :math:`k (\phi - \phi_0)^2 / 2`.
 
     Example::
 
@@ -128,7 +135,7 @@ class TorsionSpring(LoadBase):
 
 class TorsionDamper(TorsionSpring):
     r"""Rotational damper between two bodies: ``TorsionDamper(body1, body2, damping,
-    law=None)`` or with two axes (as :class:`TorsionSpring`); torque ``c dphi/dt`` (or
+    law=None)`` or with two axes (as :class:`TorsionSpring`); torque :math:`c\, \dot\phi` (or
     ``law(phi, dphi/dt)``) resisting the relative angular velocity."""
 
     kind = "TorsionDamper"

@@ -282,11 +282,11 @@ def diagnose_singularity(system, J, scaling, t: float = 0.0, threshold: float = 
 # -- hooks (Mech's $MechPreSolve and $MechPostIterate) ------------------------------------------
 @dataclass(frozen=True)
 class Iteration:
-    """What ``post_iterate`` receives after each Newton iteration of a position solve.
+    r"""What ``post_iterate`` receives after each Newton iteration of a position solve.
 
     t: time; iteration: 1, 2, ...; q: the new iterate (a copy, in layout order ``m.guess()``);
-    residual: its scaled residual ``max |Phi_i| / r_i``; step: the Newton step taken (after
-    damping); names: the coordinate names of ``q``.
+    residual: its scaled residual :math:`\max_i \lvert \Phi_i \rvert / r_i`; step: the Newton
+    step taken (after damping); names: the coordinate names of ``q``.
     """
 
     t: float
