@@ -30,7 +30,7 @@ import numpy as np
 
 from .._errors import ModelError
 from .._symbols import velocity_symbol
-from ._urdf import ImportReport, normal_to
+from ._urdf import ImportReport, add_joint, normal_to
 from ._xml import Element, floats, read_xml, where
 
 
@@ -235,7 +235,7 @@ def _flatten(ctx, el: Element, tag: str, cls):
 
 # -- the import ------------------------------------------------------------------------------------
 def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs: bool = False,
-              geometry: bool = True,
+              geometry: bool = True, coordinates: str = "generalized",
               backend: str | None = None):
     r"""A :class:`~mechsys.Model3D` of the MJCF (MuJoCo) model ``path``.
 
@@ -250,7 +250,17 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
     slide springs ``-k (q - springref)`` (MuJoCo's passive forces); ranges, armature, friction
     loss, springs, actuators, sensors, contacts and everything else without a counterpart
     are listed in ``m.import_report``. Read safely, as ``from_urdf``.
+
+    ``coordinates="absolute"``: every body with hinge or slide joints an absolute body
+    (guessed at its pose at ``qpos0``) and each joint ``Revolute5`` / ``Translate5`` with its
+    coordinate named after it (``from_urdf``'s :func:`~mechsys.io._urdf.add_joint`;
+    decision 0048).
     """
+    from .._errors import OptionError
+
+    if coordinates not in ("generalized", "absolute"):
+        raise OptionError(f"from_mjcf: coordinates={coordinates!r} is 'generalized' or 'absolute'")
+    absolute = coordinates == "absolute"
     import sympy as sp
 
     from .. import constraints as C
@@ -389,8 +399,8 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
                 kinds.append((j, ja, ja.get("type", "hinge")))
             elif j.tag == "freejoint":
                 kinds.append((j, {}, "free"))
-        absolute = any(k in ("ball", "free") for _, _, k in kinds)
-        if absolute and len(kinds) > 1:
+        free_body = any(k in ("ball", "free") for _, _, k in kinds)
+        if free_body and len(kinds) > 1:
             raise ModelError(f"{where(source, el)}: a ball or free joint with other joints in one body "
                              "is not supported; give the body that joint alone")
         if not kinds:                                   # merged into the parent's body
@@ -408,12 +418,15 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
             return
         wr, wR = world_pose[name]
         guess = None
-        if absolute:
+        if free_body or absolute:
             from ..geometry._rotations import _from_matrix
 
+            # at qpos0 every joint's transform is the identity (ref included): the holders'
+            # frames are the body's
             guess = (tuple(float(v) for v in wr), tuple(float(v) for v in _from_matrix(wR)))
         # massless intermediate bodies for all but the last of several joints
-        chain = [m.add_body(f"{name}/{kinds[k][0].get('name') or k}", mass=0) for k in range(len(kinds) - 1)]
+        chain = [m.add_body(f"{name}/{kinds[k][0].get('name') or k}", mass=0,
+                            guess=guess if absolute else None) for k in range(len(kinds) - 1)]
         pts = {}
         for st, sfp, sfR, scls in _flatten(ctx, el, "site", cls):
             if st.get("name"):
@@ -456,7 +469,6 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
             ax = ax / np.linalg.norm(ax)
             g = normal_to(ax)
             slave = holders[k]
-            a1 = slave.axis(tuple(float(v) for v in jp), tuple(ax), tuple(g))
             # ``ref``: the file's pose is at q = ref, so the joint moves by q - ref: the master's
             # reference direction turned by -ref (hinge) or its origin moved by -ref (slide)
             ref = ctx.num(j, ja, "ref", 1, [0.0])[0]
@@ -465,10 +477,10 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
                 g2 = m_R @ _axis_angle(ax, -ctx.angle(ref)) @ g
             elif ref:
                 o2 = o2 - ref * (m_R @ ax)
-            a2 = master.axis(tuple(float(v) for v in o2), tuple(m_R @ ax), tuple(float(v) for v in g2))
-            cls_ = C.GenRevolute5 if typ == "hinge" else C.GenTranslate5
+            ref0 = ctx.angle(ref) if typ == "hinge" else ref
             try:
-                m.add(cls_(a1, a2, (jname, 0.0)), name=jname)
+                add_joint(m, "revolute" if typ == "hinge" else "prismatic", slave, master, jp, ax, g,
+                          o2, m_R @ ax, g2, jname, ref0 if absolute else 0.0, absolute)
             except ModelError as exc:
                 raise ModelError(f"{where(source, j)}: {exc}") from None
             joints_rep[jname] = (typ, (jname,), name)
