@@ -259,10 +259,18 @@ def test_robot_dynamics_refuses_constrained_models_and_bad_shapes(arm_file):
         m.inverse_dynamics({"j1": 0, "j2": 0}, np.zeros(3), np.zeros(3))
     with pytest.raises(ms.ModelError, match="no joint coordinate named 'j9'"):
         m.inverse_dynamics(np.zeros(3), np.zeros(3), np.zeros(3))["j9"]
+    # a constraint equation: the state must satisfy it, and a joint the constraint holds
+    # alone has no unique force (decision 0048)
     f = ms.from_urdf(arm_file, floating_base=False)
     f.add(ms.Constraint(f.compile().layout.q_symbols[0] - 0.1), name="hold")
-    with pytest.raises(ms.ModelError, match="1 equations"):
+    with pytest.raises(ms.ModelError, match="positions of point 0 violate"):
         f.inverse_dynamics(np.zeros(3), np.zeros(3), np.zeros(3))
+    with pytest.raises(ms.ModelError, match=r"forces on \['j1'\] are not unique"):
+        f.inverse_dynamics({"j2": 0.2, "j3": 0.0}, {"j2": 0.0, "j3": 0.0}, {"j2": 0.0, "j3": 0.0})
+    held = f.inverse_dynamics({"j2": 0.2, "j3": 0.01}, {"j2": 0.3, "j3": 0.1}, {"j2": 1.0, "j3": 0.5},
+                              actuated=["j2", "j3"])
+    free = m.inverse_dynamics([0.1, 0.2, 0.01], [0.0, 0.3, 0.1], [0.0, 1.0, 0.5])
+    np.testing.assert_allclose(held.values, free.values[1:], atol=1e-12)
 
 
 # -- real robots against Pinocchio and MuJoCo ---------------------------------------------------------
@@ -436,9 +444,9 @@ def test_geometry_kept_for_drawing(arm_file, tmp_path):
     assert any("x.dae" in n and "not drawn" in n for n in mm.import_report.not_mapped)
 
 
-def test_floating_joint_on_world_and_refused_joints(tmp_path):
-    """A ``floating`` joint from the root makes an absolute body placed at the joint's origin;
-    ``planar`` joints and floating joints below the root are refused by name and line."""
+def test_floating_joint_on_world(tmp_path):
+    """A ``floating`` joint from the root makes an absolute body placed at the joint's origin
+    (planar joints and floating joints below the root: test_io_coordinates.py)."""
     text = ('<robot name="f">\n <link name="world"/>\n <link name="base"><inertial><mass value="2"/>'
             '<inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>\n'
             ' <joint name="float" type="floating"><parent link="world"/><child link="base"/>'
@@ -449,9 +457,6 @@ def test_floating_joint_on_world_and_refused_joints(tmp_path):
     s = m.compile()
     assert s.n == 7 and s.m == 1 and m.import_report.joints["float"][0] == "floating"
     np.testing.assert_allclose(s.guess, [0, 0, 1, np.cos(0.25), 0, 0, np.sin(0.25)], atol=1e-15)
-    p.write_text(text.replace('type="floating"', 'type="planar"'))
-    with pytest.raises(ms.ModelError, match=r"line 4, <joint name='float'>: planar joints"):
-        ms.from_urdf(p)
 
 
 @needs_robots
