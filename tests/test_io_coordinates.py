@@ -55,13 +55,18 @@ def test_ur5_absolute_same_dynamics_as_generalized():
             np.testing.assert_allclose(full[k, i], ref[link], atol=1e-12, err_msg=link)
 
 
-def test_mjcf_absolute_same_dynamics_as_generalized(tmp_path):
+def test_mjcf_armature_and_absolute_against_mujoco(tmp_path):
     """The MJCF zoo (several joints in one body, a hinge and a slide with ``ref``, frames)
-    in absolute coordinates: the same joint forces as the generalized import (1e-9)."""
+    with ``armature=True`` (the joints' armature added to the mass matrix's diagonal, as
+    MuJoCo does), in generalized and in absolute coordinates: joint forces equal
+    ``mj_inverse``'s with the armature on (1e-9 relative), accelerations ``mj_forward``'s
+    (1e-9)."""
+    mujoco = pytest.importorskip("mujoco")
     path = tmp_path / "zoo.xml"
     path.write_text(ZOO)
-    mg = ms.from_mjcf(path, geometry=False)
-    ma = ms.from_mjcf(path, geometry=False, coordinates="absolute")
+    mg = ms.from_mjcf(path, geometry=False, armature=True)
+    ma = ms.from_mjcf(path, geometry=False, coordinates="absolute", armature=True)
+    assert not any("armature" in n for n in mg.import_report.not_mapped)
     names = mg.compile().layout.q_names
     s = ma.compile()
     # bodies with joints: upper, fore (+ one intermediate), slider; each 7 coordinates
@@ -69,10 +74,28 @@ def test_mjcf_absolute_same_dynamics_as_generalized(tmp_path):
     # the guess is the file's pose: the joint coordinates start at qpos0 (ref)
     g = dict(zip(s.layout.q_names, s.guess))
     assert g["elbow"] == pytest.approx(np.radians(25)) and g["slide"] == pytest.approx(0.03)
+    mm = mujoco.MjModel.from_xml_path(str(path))
+    mm.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT)
+    mm.dof_damping[:] = 0
+    mm.jnt_stiffness[:] = 0
+    assert np.all(mm.dof_armature == 0.01)
+    md = mujoco.MjData(mm)
     Q, QD, QDD = RNG.normal(size=(3, 2, 4)) * 0.7
     tau_g = mg.inverse_dynamics(Q, QD, QDD).values
     tau_a = ma.inverse_dynamics(_named(names, Q), _named(names, QD), _named(names, QDD)).values
-    np.testing.assert_allclose(tau_a, tau_g, rtol=0, atol=1e-9 * np.abs(tau_g).max())
+    acc_g = mg.forward_dynamics(Q, QD, tau_g).values
+    acc_a = ma.forward_dynamics(_named(names, Q), _named(names, QD), tau_g)
+    acc_a = acc_a.values[:, [acc_a.names.index(n) for n in names]]
+    for k in range(len(Q)):
+        md.qpos[:], md.qvel[:], md.qacc[:] = Q[k], QD[k], QDD[k]
+        mujoco.mj_inverse(mm, md)
+        ref = md.qfrc_inverse.copy()
+        for got in (tau_g[k], tau_a[k]):
+            np.testing.assert_allclose(got, ref, rtol=0, atol=1e-9 * np.abs(ref).max())
+        md.qfrc_applied[:] = tau_g[k]
+        mujoco.mj_forward(mm, md)
+        for got in (acc_g[k], acc_a[k]):
+            np.testing.assert_allclose(got, md.qacc, rtol=0, atol=1e-9 * (1 + np.abs(md.qacc).max()))
 
 
 def test_floating_base_forward_dynamics_against_mujoco(tmp_path):

@@ -260,12 +260,29 @@ def _actuated(s, what, actuated) -> np.ndarray:
     return np.array(sorted({names.index(a) for a in actuated}), dtype=int)
 
 
-def _augmented(s, t, q, qd):
-    """``(M, F, J, gamma)``: mass matrix, ``Q + Qv``, ``Phi_q`` and ``gamma`` at one state."""
+def _added_inertia(s, what, t, q, qd):
+    """``-dQ/dqdd`` of loads linear in the accelerations (an armature ``-a qdd``) where the
+    dynamics keep them in ``Q`` (the symbolic path; the recursion moves them into ``M``),
+    or None."""
+    d = s.dynamics
+    if not getattr(d, "depends_on_qdd", False):
+        return None
+    if not d.linear_in_qdd:
+        raise ModelError(f"{what}: a load depends nonlinearly on the accelerations; use "
+                         "m.free().simulate(...) for this model")
+    return -d.dQ_dqdd(float(t), q, qd, np.zeros(s.m), s.p_values)
+
+
+def _augmented(s, t, q, qd, what="dynamics"):
+    """``(M, F, J, gamma)``: mass matrix (with inertia added on coordinates), ``Q + Qv`` at
+    zero accelerations, ``Phi_q`` and ``gamma`` at one state."""
     K, rhs = s.dynamics.free_kernel()(float(t), q, qd, np.zeros(s.m), s.p_values)
-    K = np.asarray(K.toarray() if hasattr(K, "toarray") else K)
+    K = np.array(K.toarray() if hasattr(K, "toarray") else K, dtype=float)
     n = s.n
-    return K[:n, :n], rhs[:n], K[n:, :n], rhs[n:]
+    add = _added_inertia(s, what, t, q, qd)
+    if add is not None:
+        K[:n, :n] += add
+    return K[:n, :n], rhs[:n], K[n:, :n], rhs[n:], K, rhs
 
 
 def _no_multiplier_loads(s, what):
@@ -292,7 +309,8 @@ def inverse_dynamics(m, q, qd, qdd, t: float = 0.0, actuated=None) -> JointValue
                              "coordinate (actuated= applies to models with equations)")
         lam = np.zeros(0)
         for k in range(len(Q)):
-            M, F, Fv = d.terms(float(t), Q[k], QD[k], lam, p)[:3]
+            # (loads on the accelerations, an armature's -a qdd, taken at this qdd)
+            M, F, Fv = d.terms(float(t), Q[k], QD[k], lam, p, X[k])[:3]
             out[k] = M @ X[k] - F - Fv
         return JointValues(tuple(names), out[0] if single else out)
     _no_multiplier_loads(s, what)
@@ -300,7 +318,7 @@ def inverse_dynamics(m, q, qd, qdd, t: float = 0.0, actuated=None) -> JointValue
     S = np.zeros((len(act), n))
     S[np.arange(len(act)), act] = 1.0
     for k in range(len(Q)):
-        M, F, J, _ = _augmented(s, t, Q[k], QD[k])
+        M, F, J = _augmented(s, t, Q[k], QD[k], what)[:3]
         A = np.hstack((J.T, -S.T))                # Phi_q^T lambda - S^T tau = Q + Qv - M qdd
         b = F - M @ X[k]
         U, sv, Vt = np.linalg.svd(A, full_matrices=True)
@@ -364,6 +382,9 @@ def forward_dynamics(m, q, qd, tau, t: float = 0.0, actuated=None) -> JointValue
         lam = np.zeros(0)
         for k in range(len(Q)):
             M, F, Fv = d.terms(float(t), Q[k], QD[k], lam, p)[:3]
+            add = _added_inertia(s, what, t, Q[k], QD[k])
+            if add is not None:
+                M = M + add
             try:
                 L = np.linalg.cholesky(M)
             except np.linalg.LinAlgError:
@@ -378,8 +399,7 @@ def forward_dynamics(m, q, qd, tau, t: float = 0.0, actuated=None) -> JointValue
     _no_multiplier_loads(s, what)
     n = s.n
     for k in range(len(Q)):
-        K, rhs = s.dynamics.free_kernel()(float(t), Q[k], QD[k], np.zeros(s.m), p)
-        K = np.asarray(K.toarray() if hasattr(K, "toarray") else K)
+        K, rhs = _augmented(s, t, Q[k], QD[k], what)[4:]
         rhs = rhs.copy()
         rhs[act] += X[k]
         # least squares: consistently redundant constraints (a planar loop closed by a

@@ -29,7 +29,7 @@ import math
 import numpy as np
 
 from .._errors import ModelError
-from .._symbols import velocity_symbol
+from .._symbols import acceleration_symbol, velocity_symbol
 from ._urdf import ImportReport, add_joint, normal_to
 from ._xml import Element, floats, read_xml, where
 
@@ -235,7 +235,7 @@ def _flatten(ctx, el: Element, tag: str, cls):
 
 # -- the import ------------------------------------------------------------------------------------
 def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs: bool = False,
-              geometry: bool = True, coordinates: str = "generalized",
+              geometry: bool = True, armature: bool = False, coordinates: str = "generalized",
               backend: str | None = None):
     r"""A :class:`~mechsys.Model3D` of the MJCF (MuJoCo) model ``path``.
 
@@ -498,12 +498,21 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
                 else:
                     notes.append(f"line {j.line}: joint {jname!r} stiffness {k_} (reported; "
                                  "joint_springs=True adds it as a load)")
-            for key in ("armature", "frictionloss"):
-                v = ctx.num(j, ja, key, 1)
-                if v is not None and v[0] != 0:
-                    if key == "frictionloss":
-                        friction[jname] = v[0]
-                    notes.append(f"line {j.line}: joint {jname!r} {key}={v[0]} (no counterpart; ignored)")
+            arm = ctx.num(j, ja, "armature", 1)
+            if arm is not None and arm[0] != 0:
+                if armature:
+                    # MuJoCo adds the armature to the mass matrix's diagonal: the generalized
+                    # force -a qdd on the coordinate
+                    m.add_load(L.Load(sp.Symbol(jname), -arm[0] * acceleration_symbol(jname)),
+                               name=f"{jname}_armature")
+                else:
+                    notes.append(f"line {j.line}: joint {jname!r} armature={arm[0]} (reported; "
+                                 "armature=True adds it as the load -armature * qdd)")
+            v = ctx.num(j, ja, "frictionloss", 1)
+            if v is not None and v[0] != 0:
+                friction[jname] = v[0]
+                notes.append(f"line {j.line}: joint {jname!r} frictionloss={v[0]} (no counterpart; "
+                             "ignored)")
             d = ctx.num(j, ja, "damping", 1)
             if d is not None and d[0]:
                 damping[jname] = d[0]
