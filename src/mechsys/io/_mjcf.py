@@ -247,9 +247,11 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
     closed-loop models work). ``gravity``: a number overrides the file's magnitude (along
     the file's direction; default ``<option gravity>`` or 9.81 down ``z``).
     ``joint_damping`` adds ``damping`` as ``-d q_dot`` loads, ``joint_springs`` the hinge and
-    slide springs ``-k (q - springref)`` (MuJoCo's passive forces); ranges, armature, friction
-    loss, springs, actuators, sensors, contacts and everything else without a counterpart
-    are listed in ``m.import_report``. Read safely, as ``from_urdf``.
+    slide springs ``-k (q - springref)`` (MuJoCo's passive forces), ``armature`` the joints'
+    armature ``a`` as the load ``-a qdd`` (MuJoCo adds ``a`` to the mass matrix's diagonal;
+    so do mechsys's dynamics with it); ranges, friction loss, springs, armature (unless
+    asked), actuators, sensors, contacts and everything else without a counterpart are
+    listed in ``m.import_report``. Read safely, as ``from_urdf``.
 
     ``coordinates="absolute"``: every body with hinge or slide joints an absolute body
     (guessed at its pose at ``qpos0``) and each joint ``Revolute5`` / ``Translate5`` with its

@@ -258,7 +258,11 @@ def from_urdf(path, *, floating_base: bool = False, gravity: float = 9.81,
     joints one body (their frames kept in ``m.import_report.frames`` and as points of the
     body named after the link), gravity ``-gravity`` along ``z``. The root link is fixed to
     ground, or with ``floating_base=True`` a free body with its own (absolute) coordinates
-    ``x, y, z, e0..e3``, as is the child of a ``floating`` joint on the root. ``joint_damping``
+    ``x, y, z, e0..e3``, as is the child of a ``floating`` joint (below the root its
+    coordinates are global, noted in the report). A ``planar`` joint gives three
+    coordinates ``name_x``, ``name_y`` (slides along ``g`` and ``a x g`` of the joint frame,
+    ``g`` the axis' reference direction: ``x``, ``y`` for ``axis = z``) and ``name_theta``
+    (the turn about the axis) on massless intermediate bodies. ``joint_damping``
     adds the joints' ``<dynamics damping>`` as loads ``-d q_dot``, ``mimic`` the ``<mimic>``
     relations as constraints ``q = multiplier q_other + offset``; limits, friction and
     everything else without a counterpart are listed in ``m.import_report`` (an
