@@ -172,7 +172,7 @@ def test_closed_loop_inverse_dynamics_work_energy():
         path.write_text(FOUR_BAR)
         m = ms.from_mjcf(path, geometry=False)
         s = m.compile()
-    t = np.linspace(0.0, 1.0, 201)
+    t = np.linspace(0.0, 1.0, 101)
     crank = {"crank_joint": 0.4 * np.sin(3 * t)}
     crank_d = {"crank_joint": 1.2 * np.cos(3 * t)}
     crank_dd = {"crank_joint": -3.6 * np.sin(3 * t)}

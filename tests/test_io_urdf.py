@@ -418,7 +418,8 @@ def test_floating_base_against_pinocchio(rel):
 
 def test_geometry_kept_for_drawing(arm_file, tmp_path):
     """The arm's visuals: a rotated box (six facets), a cylinder, a sphere; a picture draws;
-    a mesh that cannot be read is noted, one that can (STL) becomes its bounding box."""
+    a mesh that cannot be read is noted, one that can (STL, OBJ; binary or ASCII) is drawn
+    as its triangles."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -438,10 +439,31 @@ def test_geometry_kept_for_drawing(arm_file, tmp_path):
     p = tmp_path / "mesh.urdf"
     p.write_text(text)
     mm = ms.from_urdf(p)
-    boxes = [q for q in draw.attached(mm) if type(q).__name__ == "Box"]
-    assert len(boxes) == 1
-    np.testing.assert_allclose(np.ravel(boxes[0].corners), [0, 0, 0, 0.2, 0.1, 0.05], atol=1e-7)
+    (mesh,) = [q for q in draw.attached(mm) if type(q).__name__ == "Mesh"]
+    assert mesh.faces == [(0, 2, 1)]             # the distinct corners, sorted, indexed
+    np.testing.assert_allclose(mesh.vertices, [[0, 0, 0], [0, 0.1, 0.05], [0.2, 0, 0]], atol=1e-7)
     assert any("x.dae" in n and "not drawn" in n for n in mm.import_report.not_mapped)
+    draw.snapshot(mm.free().simulate([0.0, 0.01]), index=0)
+    # a binary STL (a unit square: two triangles, four corners) and an OBJ quad with
+    # negative indices (fanned into two triangles), read by our own reader
+    import struct
+
+    from mechsys.io._urdf import read_mesh
+
+    tris = [((0, 0, 0), (1, 0, 0), (1, 1, 0)), ((0, 0, 0), (1, 1, 0), (0, 1, 0))]
+    blob = b"x" * 80 + struct.pack("<I", 2) + b"".join(
+        struct.pack("<12fH", 0, 0, 1, *[c for v in t for c in v], 0) for t in tris)
+    (tmp_path / "sq.stl").write_bytes(blob)
+    V, F = read_mesh(tmp_path / "sq.stl")
+    assert len(V) == 4 and F.shape == (2, 3)
+    np.testing.assert_allclose(V[F].reshape(2, 3, 3), np.array(tris, float))
+    (tmp_path / "sq.obj").write_text("# quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf -4 -3/1 -2//1 -1\n")
+    V, F = read_mesh(tmp_path / "sq.obj")
+    np.testing.assert_array_equal(F, [[0, 1, 2], [0, 2, 3]])
+    (tmp_path / "bad.obj").write_text("v 0 0 0\nf 1 2 3\n")
+    assert read_mesh(tmp_path / "bad.obj") is None
+    with pytest.raises(ms.GeometryError, match="needs at least three indices"):
+        draw.Mesh(mm.ground, V, [(0, 1, 7)])
 
 
 def test_floating_joint_on_world(tmp_path):

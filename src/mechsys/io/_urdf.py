@@ -499,34 +499,66 @@ def from_urdf(path, *, floating_base: bool = False, gravity: float = 9.81,
 
 
 # -- geometry for drawing ------------------------------------------------------------------------
-def _mesh_bounds(path: Path) -> np.ndarray | None:
-    """``(2, 3)`` bounding box of an STL (binary or ASCII) or OBJ file, or None."""
+#: meshes with more triangles are drawn as their bounding box (a picture of a robot stays quick)
+MAX_DRAWN_TRIANGLES = 20000
+
+
+def read_mesh(path: Path) -> tuple[np.ndarray, np.ndarray] | None:
+    """``(vertices (k, 3), faces (f, 3) int)`` of an STL (binary or ASCII) or OBJ file
+    (polygons fanned into triangles, negative OBJ indices counted from the end), or None
+    when it cannot be read. Binary STL is told from ASCII by its size, ``84 + 50 n``."""
     try:
         data = path.read_bytes()
     except OSError:
         return None
     suffix = path.suffix.lower()
-    pts = None
     try:
         if suffix == ".stl":
             if len(data) >= 84 and len(data) == 84 + 50 * struct.unpack("<I", data[80:84])[0]:
                 n = struct.unpack("<I", data[80:84])[0]
                 rec = np.frombuffer(data, dtype=np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)),
                                                          ("a", "<u2")]), count=n, offset=84)
-                pts = rec["v"].reshape(-1, 3).astype(float)
+                tri = rec["v"].reshape(-1, 3).astype(float)
             else:
                 rows = [ln.split()[1:4] for ln in data.decode("ascii", "replace").splitlines()
                         if ln.strip().startswith("vertex")]
-                pts = np.array(rows, dtype=float)
-        elif suffix == ".obj":
-            rows = [ln.split()[1:4] for ln in data.decode("ascii", "replace").splitlines()
-                    if ln.startswith("v ")]
-            pts = np.array(rows, dtype=float)
+                tri = np.array(rows, dtype=float).reshape(-1, 3)
+                if len(tri) % 3:
+                    return None
+            if not len(tri):
+                return None
+            # shared corners once: the faces index the distinct vertices
+            verts, inv = np.unique(tri, axis=0, return_inverse=True)
+            return verts, inv.reshape(-1, 3).astype(np.int64)
+        if suffix == ".obj":
+            verts, faces = [], []
+            for ln in data.decode("ascii", "replace").splitlines():
+                if ln.startswith("v "):
+                    verts.append(ln.split()[1:4])
+                elif ln.startswith("f "):
+                    idx = [int(tok.split("/")[0]) for tok in ln.split()[1:]]
+                    faces.append(idx)
+            V = np.array(verts, dtype=float).reshape(-1, 3)
+            tris = []
+            for f in faces:
+                f = [i - 1 if i > 0 else len(V) + i for i in f]
+                if len(f) < 3 or min(f) < 0 or max(f) >= len(V):
+                    return None
+                tris += [(f[0], f[i], f[i + 1]) for i in range(1, len(f) - 1)]
+            if not len(V):
+                return None
+            return V, np.array(tris, dtype=np.int64).reshape(-1, 3)
     except (ValueError, struct.error):
         return None
-    if pts is None or len(pts) == 0 or not np.all(np.isfinite(pts)):
+    return None
+
+
+def _mesh_bounds(path: Path) -> np.ndarray | None:
+    """``(2, 3)`` bounding box of an STL or OBJ file's vertices, or None."""
+    got = read_mesh(path)
+    if got is None or not np.all(np.isfinite(got[0])):
         return None
-    return np.array([pts.min(axis=0), pts.max(axis=0)])
+    return np.array([got[0].min(axis=0), got[0].max(axis=0)])
 
 
 def _mesh_bounds_of(source: str, geo) -> np.ndarray | None:
@@ -593,13 +625,20 @@ def _attach_geometry(m, source, links, frames, bodies) -> list[str]:
             elif geo.tag == "mesh":
                 fn = geo.get("filename", "")
                 path = _resolve(source, fn)
-                bounds = _mesh_bounds(path) if path is not None else None
-                if bounds is None:
+                got = read_mesh(path) if path is not None else None
+                if got is None or not np.all(np.isfinite(got[0])):
                     notes.append(f"line {geo.line}: mesh {fn!r} of link {name!r} not drawn "
-                                 "(only STL and OBJ files found beside the URDF are read, as their "
-                                 "bounding box)")
+                                 "(only STL and OBJ files found beside the URDF are read)")
                     continue
                 scale = np.array(floats(source, geo, "scale", 3, [1.0, 1.0, 1.0]))
+                V, F = got
+                if len(F) <= MAX_DRAWN_TRIANGLES:
+                    # the triangles themselves, in the body's coordinates
+                    prims.append(draw.Mesh(b, c + (V * scale) @ Rt.T, F))
+                    continue
+                notes.append(f"line {geo.line}: mesh {fn!r} of link {name!r} drawn as its bounding "
+                             f"box ({len(F)} triangles > {MAX_DRAWN_TRIANGLES})")
+                bounds = np.array([V.min(axis=0), V.max(axis=0)])
                 lo, hi = np.minimum(bounds[0] * scale, bounds[1] * scale), np.maximum(
                     bounds[0] * scale, bounds[1] * scale)
             else:
