@@ -290,6 +290,25 @@ def _augmented(s, t, q, qd, what="dynamics"):
     return K[:n, :n], rhs[:n], K[n:, :n], rhs[n:], K, rhs
 
 
+def _solve_regular(A, b):
+    """``A^-1 b`` by LU when ``A`` is square and its pivots are regular (the usual case: an
+    absolute-coordinate robot, a free base), else None (the caller's SVD path handles
+    redundant or non-square systems; an SVD per point costs ten LUs)."""
+    import warnings
+
+    from scipy.linalg import lu_factor, lu_solve
+
+    if A.shape[0] != A.shape[1]:
+        return None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        lu, piv = lu_factor(A, check_finite=False)
+    d = np.abs(np.diag(lu))
+    if not d.size or d.min() <= 1e-11 * d.max():
+        return None
+    return lu_solve((lu, piv), b, check_finite=False)
+
+
 def _no_multiplier_loads(s, what):
     if getattr(s.dynamics, "depends_on_lambda", False):
         raise ModelError(f"{what}: the model's loads depend on constraint reactions (friction); "
@@ -326,6 +345,10 @@ def inverse_dynamics(m, q, qd, qdd, t: float = 0.0, actuated=None) -> JointValue
         M, F, J = _augmented(s, t, Q[k], QD[k], what)[:3]
         A = np.hstack((J.T, -S.T))                # Phi_q^T lambda - S^T tau = Q + Qv - M qdd
         b = F - M @ X[k]
+        x = _solve_regular(A, b)
+        if x is not None:                         # square and regular: unique, exact
+            out[k] = x[m_:]
+            continue
         U, sv, Vt = np.linalg.svd(A, full_matrices=True)
         tol = 1e-10 * max(sv.max(initial=0.0), 1.0)
         rank = int(np.sum(sv > tol))
@@ -407,6 +430,10 @@ def forward_dynamics(m, q, qd, tau, t: float = 0.0, actuated=None) -> JointValue
         K, rhs = _augmented(s, t, Q[k], QD[k], what)[4:]
         rhs = rhs.copy()
         rhs[act] += X[k]
+        y = _solve_regular(K, rhs)
+        if y is not None:
+            out[k] = y[:n]
+            continue
         # least squares: consistently redundant constraints (a planar loop closed by a
         # Spherical3) leave the multipliers, not the accelerations, undetermined
         U, sv, Vt = np.linalg.svd(K)
