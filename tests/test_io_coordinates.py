@@ -317,3 +317,28 @@ def test_option_and_state_errors(tmp_path):
                             {"glide_x": 0, "glide_y": 0, "glide_theta": 0, "hinge": 0},
                             {"glide_x": 0, "glide_y": 0, "glide_theta": 0, "hinge": 0},
                             actuated=["cart.q"])
+
+
+def test_mujoco_test_model_imports_and_reports():
+    """MuJoCo's own test model (shipped in the mujoco package's ``testdata``; nobody here wrote
+    it): it imports; its unnamed hinge gets a coordinate named after its body, and what has no
+    counterpart is reported with its line -- fluid forces (``<option density viscosity
+    wind>``), gravity compensation, tendons, actuators, sensors, the mesh geom's mass, the
+    joints' armature, damping and springs."""
+    mujoco = pytest.importorskip("mujoco")
+    from pathlib import Path
+
+    path = Path(mujoco.__file__).parent / "testdata" / "model.xml"
+    if not path.is_file():
+        pytest.skip("the mujoco package ships no testdata/model.xml")
+    m = ms.from_mjcf(path, geometry=False)
+    rep = m.import_report
+    text = str(rep)
+    mm = mujoco.MjModel.from_xml_path(str(path))
+    assert len(rep.joints) == mm.njnt
+    unnamed = [n for n in rep.joints if n.endswith("_hinge1")]
+    assert unnamed and f"its coordinate is named {unnamed[0]!r}" in text
+    for what in ("<option density=...>", "<option viscosity=...>", "<option wind=...>",
+                 "gravcomp=0.5", "<tendon>", "<actuator>", "<sensor>", "mesh geom of body",
+                 "armature=1.0", "damping 10.0", "stiffness 60.0"):
+        assert what in text, what

@@ -279,6 +279,11 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
     for el in root.children:
         if el.tag == "option":
             g_vec = np.array(floats(source, el, "gravity", 3, list(g_vec)))
+            for key in ("density", "viscosity", "wind", "magnetic"):
+                v = floats(source, el, key, None, [])
+                if v and any(v):
+                    notes.append(f"line {el.line}: <option {key}=...> (fluid or magnetic forces; "
+                                 "no counterpart; ignored)")
         elif el.tag == "include":
             raise ModelError(f"{where(source, el)}: <include> is not read (files name no other files "
                              "here); merge the included file into this one")
@@ -306,13 +311,13 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
             parts.append((gel, a, typ, fp + fR @ pos, fR @ R, size))
         return parts
 
-    def mass_from_geoms(parts, body_el):
+    def mass_from_geoms(parts, body_name):
         mass, cs, Is = 0.0, [], []
         for gel, a, typ, pos, R, size in parts:
             if typ in ("plane", "hfield"):
                 continue
             if typ == "mesh":
-                notes.append(f"line {gel.line}: mesh geom of body {body_el.get('name')!r}: its mass is "
+                notes.append(f"line {gel.line}: mesh geom of body {body_name!r}: its mass is "
                              "not computed here; give the body an <inertial>")
                 continue
             got = _geom_inertia(ctx, gel, a, typ, size)
@@ -373,6 +378,9 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
         R = fR @ ctx.orientation(el, a)
         pr, pR = world_pose[parent]
         world_pose[name] = (pr + pR @ pos, pR @ R)
+        if el.get("gravcomp") not in (None, "0", "0.0"):
+            notes.append(f"line {el.line}: body {name!r} gravcomp={el.get('gravcomp')} (gravity "
+                         "compensation; no counterpart; ignored)")
         parts = add_geoms(el, name, cls)
         ine = el.find("inertial")
         if ine is not None:
@@ -391,7 +399,7 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
                 raise ModelError(f"{where(source, ine)}: an <inertial> needs diaginertia or fullinertia")
             mass = mass[0]
         else:
-            mass, c, I = mass_from_geoms(parts, el)
+            mass, c, I = mass_from_geoms(parts, name)
         pb, pp, pRm = frame_of[parent]
         P, RR = pp + pRm @ pos, pRm @ R                 # this body's frame in pb's
         kinds = []
@@ -453,8 +461,14 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
                 joints_rep[jname or name] = ("free", tuple(s.name for s in b.q), name)
                 continue
             if not jname:
-                raise ModelError(f"{where(source, j)}: a {typ} joint needs a name here (its "
-                                 "coordinate is named after it)")
+                # MuJoCo allows unnamed joints; the coordinate needs a name: the body's and
+                # the joint's place in it, said in the report
+                jname = f"{name}_{typ}{k}"
+                if jname in joints_rep:
+                    raise ModelError(f"{where(source, j)}: an unnamed {typ} joint would be called "
+                                     f"{jname!r}, which another joint is; name it")
+                notes.append(f"line {j.line}: unnamed {typ} joint of body {name!r}: its coordinate "
+                             f"is named {jname!r}")
             jp = np.array(ctx.num(j, ja, "pos", 3, [0.0, 0.0, 0.0]))
             if typ == "ball":
                 m.add(C.Spherical3(b.point(tuple(float(v) for v in jp)),
