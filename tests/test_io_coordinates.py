@@ -102,8 +102,8 @@ def test_floating_base_forward_dynamics_against_mujoco(tmp_path):
     """A free base carrying a ball-jointed arm and a hinged hand (MJCF): ``forward_dynamics``
     on the augmented system from MuJoCo's state gives MuJoCo's accelerations: the base's
     linear acceleration (world), its angular acceleration (local, ``2 G(e) e_ddot``) and the
-    hinge's (1e-9). ``inverse_dynamics`` gives the hinge torque back; a base acceleration
-    that no hinge torque can produce is refused."""
+    hinge's (1e-9), in generalized and in absolute coordinates. ``inverse_dynamics`` gives the
+    hinge torque back; a base acceleration that no hinge torque can produce is refused."""
     mujoco = pytest.importorskip("mujoco")
     from mechsys.io._mjcf import quat_matrix
 
@@ -148,6 +148,12 @@ def test_floating_base_forward_dynamics_against_mujoco(tmp_path):
     got = np.concatenate((qdd[base][:3], 2 * G @ e_dd, [qdd[iw]]))
     ref = np.concatenate((md.qacc[:6], md.qacc[-1:]))
     np.testing.assert_allclose(got, ref, rtol=0, atol=1e-9 * max(1.0, np.abs(md.qacc).max()))
+    # the same in absolute coordinates (the hand an absolute body on a Revolute5), its
+    # coordinates solved from the generalized model's
+    ma = ms.from_mjcf(path, geometry=False, coordinates="absolute")
+    acc_a = ma.forward_dynamics(dict(zip(lay.q_names, q)), dict(zip(lay.q_names, qd)), [torque])
+    np.testing.assert_allclose([acc_a[n] for n in lay.q_names], qdd, rtol=0,
+                               atol=1e-9 * np.abs(qdd).max())
     tau = m.inverse_dynamics(q, qd, qdd)
     assert tau.names == ("wrist",)
     assert tau["wrist"] == pytest.approx(torque, rel=1e-9, abs=1e-12)

@@ -142,6 +142,7 @@ def _complete(s, what, t, Q, held, QD=None, QDD=None, heldd=None, helddd=None):
     N = max(len(a) for a in (Q, QD, QDD) if a is not None)
     out_q = np.empty((N, n))
     q = np.array(s.guess, dtype=float)
+    ranked = False                 # the given coordinates checked to determine the others
     for k in range(N):
         target = Q[min(k, len(Q) - 1)]
         if held is None:
@@ -152,19 +153,24 @@ def _complete(s, what, t, Q, held, QD=None, QDD=None, heldd=None, helddd=None):
         start = q[held].copy()
         for j in range(1, steps + 1):
             q[held] = start + (target - start) * j / steps
-            for _ in range(60):
+            # the steps between may be off the constraints (a held quaternion interpolated is
+            # not a unit one): a few Gauss-Newton steps there, convergence asked at the end
+            for _ in range(60 if j == steps else 8):
                 F, J = s.residual_and_jacobian(t, q)
                 J = J.toarray() if hasattr(J, "toarray") else J
                 if np.abs(F).max(initial=0.0) <= 1e-13 * max(1.0, np.abs(q).max()):
                     break
                 Jd = J[:, dep]
-                if k == 0 and j == 1 and np.linalg.matrix_rank(Jd) < len(dep):
+                if not ranked and np.linalg.matrix_rank(Jd) < len(dep):
                     raise ModelError(
                         f"{what}: the coordinates given ({[names[i] for i in held]}) do not "
                         f"determine the others; give as many independent coordinates as the "
                         f"model has degrees of freedom (coordinates {list(names)})")
+                ranked = True
                 q[dep] += np.linalg.lstsq(Jd, -F, rcond=None)[0]
             else:
+                if j < steps:
+                    continue
                 raise ModelError(f"{what}: the positions do not assemble at point {k} (residual "
                                  f"{np.abs(F).max():.3e} after 60 Newton steps); give values "
                                  "nearer the model's guess or a path in smaller steps")
