@@ -424,7 +424,7 @@ def test_geometry_kept_for_drawing(arm_file, tmp_path):
     assert kinds.count("Facet") == 6 and kinds.count("Cylinder") == 1 and kinds.count("Sphere") == 1
     sol = m.free().simulate([0.0, 0.01], initial_condition={"j1": 0.3})
     draw.snapshot(sol, index=0)
-    # meshes: an ASCII STL beside the file is read as its bounding box, a missing one noted
+    # meshes: an ASCII STL beside the file is drawn as its triangles, a missing one noted
     (tmp_path / "part.stl").write_text("solid p\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n"
                                        "vertex 0.2 0 0\nvertex 0 0.1 0.05\nendloop\nendfacet\n"
                                        "endsolid p\n")

@@ -267,8 +267,8 @@ def from_urdf(path, *, floating_base: bool = False, gravity: float = 9.81,
     relations as constraints ``q = multiplier q_other + offset``; limits, friction and
     everything else without a counterpart are listed in ``m.import_report`` (an
     :class:`ImportReport`). ``geometry``: attach the visual shapes for drawing (boxes,
-    cylinders, spheres; meshes as their bounding box when the file is STL or OBJ and found,
-    else noted).
+    cylinders, spheres; meshes as their triangles when the file is STL or OBJ and found --
+    a visual mesh in another format by the link's collision mesh -- else noted).
 
     ``coordinates="absolute"``: every moving link an absolute body (``x, y, z, e0..e3``,
     guessed at its pose at zero joint coordinates) and each joint ``Revolute5`` /
@@ -600,13 +600,13 @@ def _attach_geometry(m, source, links, frames, bodies) -> list[str]:
                   and _mesh_bounds_of(source, g) is None]
         if unread:
             # a visual mesh this reader cannot open (COLLADA, ...): the link's collision
-            # meshes (usually STL) give its bounding box instead
+            # meshes (usually STL) are drawn instead
             coll = [c for c in lk.collisions
                     if c[0].tag == "mesh" and _mesh_bounds_of(source, c[0]) is not None]
             if coll:
                 shapes = [v for v in shapes if v[0] not in unread] + coll
                 notes.append(f"line {unread[0].line}: visual mesh of link {name!r} drawn from its "
-                             "collision mesh's bounding box")
+                             "collision mesh")
         for geo, xyz, Rv in shapes:
             c = p + R @ xyz
             Rt = R @ Rv
