@@ -327,8 +327,13 @@ def test_spatial_primitives_are_placed_by_the_body_pose():
         d.LocalAxes("crank"),
         d.Arrow(m.body("crank").point("pin"), (0, 0, 1)),
         d.Facet([m.body("crank").point("pin"), (0, 0, 1), (0, 1, 0)]),
+        d.Mesh("crank", [(0, 0, 0), (1, 0, 0), (0, 0.5, 0.2)], [(0, 1, 2)]),
     ]
     fr = d.Scene(m, prims).evaluate(sol)
+    # the mesh's vertices are body points: placed where the solution puts those points
+    crank = m.body("crank")
+    want = np.stack([sol.location(crank.point(v)) for v in ((0, 0, 0), (1, 0, 0), (0, 0.5, 0.2))], 1)
+    np.testing.assert_allclose(fr.items[-1].xyz, want, atol=1e-12)
     sphere = fr.items[0]
     pin = sol.location(m.body("crank").point("pin"))
     r = np.linalg.norm(sphere.xyz - pin[:, None, :], axis=2)

@@ -88,3 +88,44 @@ def test_refusals_name_what_cannot_be_written(tmp_path):
         m.to_urdf(tmp_path / "x.urdf")
     with pytest.raises(ms.ModelError, match="spatial"):
         ms.Model2D().to_urdf(tmp_path / "x.urdf")
+
+
+def test_passive_joint_loads_round_trip_and_mujoco_agrees(tmp_path, monkeypatch):
+    """The zoo's damping, springs (``springref``) and armature, imported as loads, are written
+    back as MJCF joint attributes: reading the export gives the same loads, and MuJoCo's
+    ``mj_inverse`` on the export, passive forces and armature included, agrees with mechsys on
+    the original (1e-9); URDF holds the damping only and refuses the rest by the load's
+    name."""
+    mujoco = pytest.importorskip("mujoco")
+    zoo = tmp_path / "zoo.xml"
+    # one joint per body: MuJoCo refuses the massless intermediate bodies that the export
+    # writes for a body with several joints
+    twist = '<joint name="twist" type="hinge" axis="0 0 1" pos="0.01 0 0"/>'
+    assert twist in ZOO
+    zoo.write_text(ZOO.replace(twist, ""))
+    kw = dict(joint_damping=True, joint_springs=True, armature=True, geometry=False)
+    # three joints would take the symbolic projection (15 s to compile with the armature's
+    # acceleration loads); the recursion carries the armature in M and compiles in 2 s
+    monkeypatch.setenv("MECHSYS_GEN_DYNAMICS", "recursive")
+    m = ms.from_mjcf(zoo, **kw)
+    out = m.to_mjcf(tmp_path / "out.xml")
+    back = ms.from_mjcf(out, **kw)
+    assert back.import_report.damping == m.import_report.damping
+    assert sorted(ld.name for ld in back.load_list) == sorted(ld.name for ld in m.load_list)
+    q, qd, qdd = RNG.normal(size=(3, 3, 3))
+    tau = m.inverse_dynamics(q, qd, qdd).values
+    mm = mujoco.MjModel.from_xml_path(str(out))
+    mm.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT)
+    assert np.all(mm.dof_armature == 0.01) and np.all(mm.dof_damping == 0.2)
+    md = mujoco.MjData(mm)
+    for k in range(len(q)):
+        md.qpos[:], md.qvel[:], md.qacc[:] = q[k], qd[k], qdd[k]
+        mujoco.mj_inverse(mm, md)
+        np.testing.assert_allclose(md.qfrc_inverse, tau[k], rtol=0, atol=1e-9 * np.abs(tau[k]).max())
+    with pytest.raises(ms.ModelError, match="load elbow_spring on joint 'elbow'"):
+        ms.from_mjcf(zoo, joint_springs=True, gravity=9.81).to_urdf(tmp_path / "x.urdf")
+    arm = tmp_path / "arm.urdf"
+    arm.write_text(ARM)
+    u = ms.from_urdf(arm, joint_damping=True, geometry=False).to_urdf(tmp_path / "back.urdf")
+    assert '<dynamics damping="0.4"/>' in u.read_text()
+    assert ms.from_urdf(u, joint_damping=True).import_report.damping == {"j1": 0.4}

@@ -259,9 +259,11 @@ def test_robot_dynamics_refuses_constrained_models_and_bad_shapes(arm_file):
         m.inverse_dynamics({"j1": 0, "j2": 0}, np.zeros(3), np.zeros(3))
     with pytest.raises(ms.ModelError, match="no joint coordinate named 'j9'"):
         m.inverse_dynamics(np.zeros(3), np.zeros(3), np.zeros(3))["j9"]
+    # a constraint equation: the state must satisfy it (decision 0048; constrained models'
+    # dynamics: test_io_coordinates.py)
     f = ms.from_urdf(arm_file, floating_base=False)
     f.add(ms.Constraint(f.compile().layout.q_symbols[0] - 0.1), name="hold")
-    with pytest.raises(ms.ModelError, match="1 equations"):
+    with pytest.raises(ms.ModelError, match="positions of point 0 violate"):
         f.inverse_dynamics(np.zeros(3), np.zeros(3), np.zeros(3))
 
 
@@ -410,7 +412,8 @@ def test_floating_base_against_pinocchio(rel):
 
 def test_geometry_kept_for_drawing(arm_file, tmp_path):
     """The arm's visuals: a rotated box (six facets), a cylinder, a sphere; a picture draws;
-    a mesh that cannot be read is noted, one that can (STL) becomes its bounding box."""
+    a mesh that cannot be read is noted, one that can (STL, OBJ; binary or ASCII) is drawn
+    as its triangles."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -421,7 +424,7 @@ def test_geometry_kept_for_drawing(arm_file, tmp_path):
     assert kinds.count("Facet") == 6 and kinds.count("Cylinder") == 1 and kinds.count("Sphere") == 1
     sol = m.free().simulate([0.0, 0.01], initial_condition={"j1": 0.3})
     draw.snapshot(sol, index=0)
-    # meshes: an ASCII STL beside the file is read as its bounding box, a missing one noted
+    # meshes: an ASCII STL beside the file is drawn as its triangles, a missing one noted
     (tmp_path / "part.stl").write_text("solid p\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n"
                                        "vertex 0.2 0 0\nvertex 0 0.1 0.05\nendloop\nendfacet\n"
                                        "endsolid p\n")
@@ -430,15 +433,36 @@ def test_geometry_kept_for_drawing(arm_file, tmp_path):
     p = tmp_path / "mesh.urdf"
     p.write_text(text)
     mm = ms.from_urdf(p)
-    boxes = [q for q in draw.attached(mm) if type(q).__name__ == "Box"]
-    assert len(boxes) == 1
-    np.testing.assert_allclose(np.ravel(boxes[0].corners), [0, 0, 0, 0.2, 0.1, 0.05], atol=1e-7)
+    (mesh,) = [q for q in draw.attached(mm) if type(q).__name__ == "Mesh"]
+    assert mesh.faces == [(0, 2, 1)]             # the distinct corners, sorted, indexed
+    np.testing.assert_allclose(mesh.vertices, [[0, 0, 0], [0, 0.1, 0.05], [0.2, 0, 0]], atol=1e-7)
     assert any("x.dae" in n and "not drawn" in n for n in mm.import_report.not_mapped)
+    draw.snapshot(mm)                            # the Mesh drawn (at the guess)
+    # a binary STL (a unit square: two triangles, four corners) and an OBJ quad with
+    # negative indices (fanned into two triangles), read by our own reader
+    import struct
+
+    from mechsys.io._urdf import read_mesh
+
+    tris = [((0, 0, 0), (1, 0, 0), (1, 1, 0)), ((0, 0, 0), (1, 1, 0), (0, 1, 0))]
+    blob = b"x" * 80 + struct.pack("<I", 2) + b"".join(
+        struct.pack("<12fH", 0, 0, 1, *[c for v in t for c in v], 0) for t in tris)
+    (tmp_path / "sq.stl").write_bytes(blob)
+    V, F = read_mesh(tmp_path / "sq.stl")
+    assert len(V) == 4 and F.shape == (2, 3)
+    np.testing.assert_allclose(V[F].reshape(2, 3, 3), np.array(tris, float))
+    (tmp_path / "sq.obj").write_text("# quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf -4 -3/1 -2//1 -1\n")
+    V, F = read_mesh(tmp_path / "sq.obj")
+    np.testing.assert_array_equal(F, [[0, 1, 2], [0, 2, 3]])
+    (tmp_path / "bad.obj").write_text("v 0 0 0\nf 1 2 3\n")
+    assert read_mesh(tmp_path / "bad.obj") is None
+    with pytest.raises(ms.GeometryError, match="needs at least three indices"):
+        draw.Mesh(mm.ground, V, [(0, 1, 7)])
 
 
-def test_floating_joint_on_world_and_refused_joints(tmp_path):
-    """A ``floating`` joint from the root makes an absolute body placed at the joint's origin;
-    ``planar`` joints and floating joints below the root are refused by name and line."""
+def test_floating_joint_on_world(tmp_path):
+    """A ``floating`` joint from the root makes an absolute body placed at the joint's origin
+    (planar joints and floating joints below the root: test_io_coordinates.py)."""
     text = ('<robot name="f">\n <link name="world"/>\n <link name="base"><inertial><mass value="2"/>'
             '<inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>\n'
             ' <joint name="float" type="floating"><parent link="world"/><child link="base"/>'
@@ -449,9 +473,6 @@ def test_floating_joint_on_world_and_refused_joints(tmp_path):
     s = m.compile()
     assert s.n == 7 and s.m == 1 and m.import_report.joints["float"][0] == "floating"
     np.testing.assert_allclose(s.guess, [0, 0, 1, np.cos(0.25), 0, 0, np.sin(0.25)], atol=1e-15)
-    p.write_text(text.replace('type="floating"', 'type="planar"'))
-    with pytest.raises(ms.ModelError, match=r"line 4, <joint name='float'>: planar joints"):
-        ms.from_urdf(p)
 
 
 @needs_robots

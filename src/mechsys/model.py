@@ -1372,21 +1372,27 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
 
         return save(self, path)
 
-    def inverse_dynamics(self, q, qd, qdd, t: float = 0.0):
-        r"""Joint forces :math:`\tau = M(q) \ddot q - Q - Q_v` of a model in generalized coordinates
-        without constraint equations (a robot from ``ms.from_urdf``), at one point or ``(N,
-        n)`` points: a :class:`~mechsys.JointValues` named by coordinate
-        (``m.inverse_dynamics(q, qd, qdd)["elbow_joint"]``). Decision 0040."""
+    def inverse_dynamics(self, q, qd, qdd, t: float = 0.0, actuated=None):
+        r"""Joint forces :math:`\tau = M(q) \ddot q - Q - Q_v` (a robot from ``ms.from_urdf``), at one
+        point or ``(N, n)`` points: a :class:`~mechsys.JointValues` named by coordinate
+        (``m.inverse_dynamics(q, qd, qdd)["elbow_joint"]``). On a model with constraint
+        equations (absolute coordinates, a floating base, closed loops) the forces on the
+        ``actuated`` coordinates (default: those not of an absolute body) that with the
+        constraints' reactions give ``qdd``,
+        :math:`M \ddot q + \Phi_q^T \lambda = Q + Q_v + S^T \tau`; mappings may then name
+        the independent coordinates only. Decisions 0040 and 0048."""
         from .analyses._robot import inverse_dynamics
 
-        return inverse_dynamics(self, q, qd, qdd, t)
+        return inverse_dynamics(self, q, qd, qdd, t, actuated)
 
-    def forward_dynamics(self, q, qd, tau, t: float = 0.0):
+    def forward_dynamics(self, q, qd, tau, t: float = 0.0, actuated=None):
         r"""Joint accelerations :math:`\ddot q = M(q)^{-1} (Q + Q_v + \tau)` (the inverse of
-        :meth:`inverse_dynamics`) at one point or ``(N, n)`` points."""
+        :meth:`inverse_dynamics`) at one point or ``(N, n)`` points; on a model with
+        constraint equations every coordinate's acceleration from the augmented system, with
+        ``tau`` on the ``actuated`` coordinates."""
         from .analyses._robot import forward_dynamics
 
-        return forward_dynamics(self, q, qd, tau, t)
+        return forward_dynamics(self, q, qd, tau, t, actuated)
 
     def forward_kinematics(self, q, point, t: float = 0.0, frame: bool = False):
         """Global location of ``point`` (a body point, or a link name of an imported robot; or

@@ -13,9 +13,25 @@ the symbolic projection below; no second algorithm):
     \tau &= M \ddot q - Q - Q_v \qquad \text{(inverse dynamics)} \\
     \ddot q &= M^{-1} (Q + Q_v + \tau) \qquad \text{(forward dynamics, Cholesky)}
 
-They apply to models whose coordinates are all generalized coordinates and which have no
-constraint equation (a tree of Gen joints on ground: what ``from_urdf`` builds for a
-fixed-base robot).
+On a model without constraint equations (a tree of Gen joints on ground: what
+``from_urdf`` builds for a fixed-base robot) every coordinate is a joint coordinate.
+
+A model with constraint equations ``Phi(q, t) = 0`` (absolute bodies: ``coordinates=
+"absolute"``, a floating base, closed loops) moves by the augmented system of free motion,
+with the joint forces ``tau`` acting on the *actuated* coordinates only (``S`` selects them;
+by default every coordinate that is not an absolute body's, i.e. the joint coordinates)::
+
+    M qdd + Phi_q^T lambda = Q + Qv + S^T tau,      Phi_q qdd = gamma
+
+Forward dynamics solves it for ``(qdd, lambda)``; inverse dynamics solves the first rows for
+``(lambda, tau)`` (least squares, then checked: the state must satisfy the constraints, the
+unactuated rows must balance -- a floating base's acceleration is not free to choose -- and
+``tau`` must be unique, i.e. no actuated coordinate may be moved by the constraints alone).
+A mapping ``{name: values}`` may name only some coordinates (as many as the model has
+degrees of freedom, e.g. the joint coordinates); the others are then solved from the
+constraints: positions by Newton's method from the model's guess (continued in steps of
+at most ``0.25`` in the given coordinates, so the branch is the guess's), velocities from
+``Phi_q qd = -Phi_t`` and accelerations from ``Phi_q qdd = gamma``.
 """
 
 from __future__ import annotations
@@ -55,30 +71,30 @@ class JointValues:
         return {n: self[n] for n in self.names}
 
 
-def _system(m, what: str):
-    s = m.compile()
-    if s.m:
-        raise ModelError(f"{what} needs a model in generalized coordinates without constraint "
-                         f"equations (a tree of Gen joints on ground); this one has {s.m} equations "
-                         "(absolute bodies or closing constraints): use m.free().solve(...) for it")
-    return s
+def _system(m):
+    return m.compile()
 
 
-def _points(s, value, what: str) -> tuple[np.ndarray, bool]:
-    """``value`` as ``(N, n)`` in layout order, and whether it was a single point. A mapping
-    ``{name: values}`` must name every coordinate."""
+def _points(s, value, what: str, partial: bool = False):
+    """``(values, single, held)``: ``value`` as ``(N, n)`` in layout order and whether it was
+    a single point; or, when ``partial`` and a mapping names only some coordinates,
+    ``(N, k)`` in layout order of those and ``held`` their layout indices (else None)."""
     names = list(s.layout.q_names)
+    held = None
     if isinstance(value, dict):
-        missing = [n for n in names if n not in value]
         extra = [k for k in value if k not in names]
-        if missing or extra:
+        missing = [n for n in names if n not in value]
+        if extra or (missing and not partial):
             raise ModelError(f"{what}: give a value for each coordinate {names}"
-                             + (f"; missing {missing}" if missing else "")
+                             + (f"; missing {missing}" if missing and not partial else "")
                              + (f"; unknown {extra}" if extra else ""))
-        cols = [np.atleast_1d(np.asarray(value[n], dtype=float)) for n in names]
-        single = all(np.ndim(value[n]) == 0 for n in names)
+        given = [n for n in names if n in value]
+        if missing:
+            held = np.array([names.index(n) for n in given], dtype=int)
+        cols = [np.atleast_1d(np.asarray(value[n], dtype=float)) for n in given]
+        single = all(np.ndim(value[n]) == 0 for n in given)
         try:
-            arr = np.column_stack(np.broadcast_arrays(*cols))
+            arr = np.column_stack(np.broadcast_arrays(*cols)) if cols else np.zeros((1, 0))
         except ValueError:
             raise ModelError(f"{what}: the coordinates' values have different lengths") from None
     else:
@@ -93,61 +109,352 @@ def _points(s, value, what: str) -> tuple[np.ndarray, bool]:
                              f"coordinates {names}, got {np.shape(value)}")
     if not np.all(np.isfinite(arr)):
         raise ModelError(f"{what}: values must be finite")
-    return arr, single
+    return arr, single, held
 
 
-def _inputs(m, what, q, qd, x, xname):
-    s = _system(m, what)
-    Q, single = _points(s, q, f"{what}: q")
-    QD, _ = _points(s, qd, f"{what}: qd")
-    X, _ = _points(s, x, f"{what}: {xname}")
-    N = max(len(Q), len(QD), len(X))
+def _broadcast(what, arrays, labels):
+    N = max(len(a) for a in arrays)
     try:
-        Q, QD, X = (np.broadcast_to(a, (N, s.n)) for a in (Q, QD, X))
+        return [np.broadcast_to(a, (N, a.shape[1])) for a in arrays]
     except ValueError:
-        raise ModelError(f"{what}: q, qd and {xname} have different numbers of points "
-                         f"({len(Q)}, {len(QD)}, {len(X)})") from None
+        raise ModelError(f"{what}: {', '.join(labels)} have different numbers of points "
+                         f"({', '.join(str(len(a)) for a in arrays)})") from None
+
+
+def _solve_dependent(A, b, what: str, k: int) -> np.ndarray:
+    """Least-squares ``A x = b`` that must hold (the constraints' rows): raise when not."""
+    x = np.linalg.lstsq(A, b, rcond=None)[0]
+    r = A @ x - b
+    if np.abs(r).max(initial=0.0) > 1e-9 * max(1.0, np.abs(b).max(initial=0.0)):
+        raise ModelError(f"{what} at point {k}: the given coordinates' values violate the "
+                         f"constraints (residual {np.abs(r).max():.3e}); give independent "
+                         "coordinates only")
+    return x
+
+
+def _complete(s, what, t, Q, held, QD=None, QDD=None, heldd=None, helddd=None):
+    r"""Full states from the values of the coordinates ``held`` (layout indices): positions
+    by Newton's method on ``Phi(q, t) = 0`` in the other coordinates (from the model's
+    guess, then each point from the last, in steps of at most 0.25 in the held
+    coordinates), velocities from ``Phi_q qd = -Phi_t``, accelerations from ``Phi_q qdd =
+    gamma``. ``Q`` etc. are ``(N, n)`` when their ``held*`` is None (given in full)."""
+    n = s.n
+    t = float(t)
+    names = s.layout.q_names
+    N = max(len(a) for a in (Q, QD, QDD) if a is not None)
+    out_q = np.empty((N, n))
+    q = np.array(s.guess, dtype=float)
+    ranked = False                 # the given coordinates checked to determine the others
+    for k in range(N):
+        target = Q[min(k, len(Q) - 1)]
+        if held is None:
+            out_q[k] = target
+            continue
+        dep = np.setdiff1d(np.arange(n), held)
+        steps = max(1, int(np.ceil(np.abs(target - q[held]).max(initial=0.0) / 0.25)))
+        start = q[held].copy()
+        for j in range(1, steps + 1):
+            q[held] = start + (target - start) * j / steps
+            # the steps between may be off the constraints (a held quaternion interpolated is
+            # not a unit one): a few Gauss-Newton steps there, convergence asked at the end
+            for _ in range(60 if j == steps else 8):
+                F, J = s.residual_and_jacobian(t, q)
+                J = J.toarray() if hasattr(J, "toarray") else J
+                if np.abs(F).max(initial=0.0) <= 1e-13 * max(1.0, np.abs(q).max()):
+                    break
+                Jd = J[:, dep]
+                if not ranked and np.linalg.matrix_rank(Jd) < len(dep):
+                    raise ModelError(
+                        f"{what}: the coordinates given ({[names[i] for i in held]}) do not "
+                        f"determine the others; give as many independent coordinates as the "
+                        f"model has degrees of freedom (coordinates {list(names)})")
+                ranked = True
+                q[dep] += np.linalg.lstsq(Jd, -F, rcond=None)[0]
+            else:
+                if j < steps:
+                    continue
+                raise ModelError(f"{what}: the positions do not assemble at point {k} (residual "
+                                 f"{np.abs(F).max():.3e} after 60 Newton steps); give values "
+                                 "nearer the model's guess or a path in smaller steps")
+        out_q[k] = q
+    res = [out_q]
+    for X, hx, order in ((QD, heldd, 1), (QDD, helddd, 2)):
+        if X is None:
+            res.append(None)
+            continue
+        full = np.empty((N, n))
+        for k in range(N):
+            x = X[min(k, len(X) - 1)]
+            if hx is None:
+                full[k] = x
+                continue
+            dep = np.setdiff1d(np.arange(n), hx)
+            if order == 1:
+                J, rhs = s.velocity_rhs(t, out_q[k])
+            else:
+                J = s.jacobian(t, out_q[k])
+                rhs = s.gamma_values(t, out_q[k], res[1][k])
+            J = J.toarray() if hasattr(J, "toarray") else J
+            full[k, hx] = x
+            full[k, dep] = _solve_dependent(J[:, dep], rhs - J[:, hx] @ x, what, k)
+        res.append(full)
+    return res
+
+
+def _state(m, what, q, qd, x=None, xname="", t=0.0):
+    """``(s, Q, QD, X, single)`` with full states (``(N, n)``), completed from the
+    constraints when ``q``/``qd``/``x`` (``qdd``) are mappings naming only some coordinates
+    (``X`` is returned as given when ``xname`` is ``"tau"``)."""
+    s = _system(m)
+    partial = s.m > 0
+    Q, single, hq = _points(s, q, f"{what}: q", partial)
+    QD, _, hd = _points(s, qd, f"{what}: qd", partial)
+    X, hx = None, None
+    if x is not None and xname == "qdd":
+        X, _, hx = _points(s, x, f"{what}: qdd", partial)
+    arrays = [a for a in (Q, QD, X) if a is not None]
+    _broadcast(what, arrays, ["q", "qd", xname][:len(arrays)])
+    if s.m:
+        given = (hq is None, hd is None, hx is None)   # given in full: checked, else solved
+        Q, QD, X = _complete(s, what, t, Q, hq, QD, X, hd, hx)
+        if any(given):
+            _check_state(s, what, t, Q, QD, X, given)
+    else:
+        N = max(len(a) for a in arrays)
+        Q, QD = (np.broadcast_to(a, (N, s.n)) for a in (Q, QD))
+        if X is not None:
+            X = np.broadcast_to(X, (N, s.n))
     return s, Q, QD, X, single
 
 
-def inverse_dynamics(m, q, qd, qdd, t: float = 0.0) -> JointValues:
-    r"""Joint forces ``tau = M(q) qdd - Q - Qv`` (see the module doc) at one point (``(n,)``
-    arrays) or many (``(N, n)``), or from ``{joint name: values}``."""
-    s, Q, QD, X, single = _inputs(m, "inverse_dynamics", q, qd, qdd, "qdd")
+def _check_state(s, what, t, Q, QD, QDD, given=(True, True, True)):
+    """States given in full must satisfy the constraints (positions, velocities,
+    accelerations) to 1e-8 (relative): the dynamics of a state off them mean nothing.
+    ``given``: which of the three were given in full (the others were solved)."""
+    for k in range(len(Q)):
+        bad = []
+        if given[0]:
+            F = s.residual(float(t), Q[k])
+            bad.append(("positions", np.abs(F).max(initial=0.0), 1e-8 * max(1.0, np.abs(Q[k]).max())))
+        J, rhs = s.velocity_rhs(float(t), Q[k])
+        J = J.toarray() if hasattr(J, "toarray") else J
+        if given[1]:
+            v = J @ QD[k] - rhs
+            bad.append(("velocities", np.abs(v).max(initial=0.0),
+                        1e-8 * max(1.0, np.abs(J).max() * np.abs(QD[k]).max())))
+        if QDD is not None and given[2]:
+            a = J @ QDD[k] - s.gamma_values(float(t), Q[k], QD[k])
+            bad.append(("accelerations", np.abs(a).max(initial=0.0),
+                        1e-8 * max(1.0, np.abs(J).max() * np.abs(QDD[k]).max())))
+        for kind, err, tol_ in bad:
+            if err > tol_:
+                raise ModelError(f"{what}: the {kind} of point {k} violate the constraint equations "
+                                 f"(residual {err:.3e}); give a consistent state, or a mapping "
+                                 "of the independent coordinates only (the others are solved)")
+
+
+def _actuated(s, what, actuated) -> np.ndarray:
+    """Layout indices of the coordinates the joint forces act on (default: all of a model
+    without equations; else those not of an absolute body)."""
+    names = list(s.layout.q_names)
+    if actuated is None:
+        if not s.m:
+            return np.arange(s.n)
+        body = set()
+        for sl in s.layout.body_slices.values():
+            body.update(range(*sl.indices(s.n)))
+        return np.array([i for i in range(s.n) if i not in body], dtype=int)
+    if isinstance(actuated, str):
+        actuated = [actuated]
+    unknown = [a for a in actuated if a not in names]
+    if unknown:
+        raise ModelError(f"{what}: actuated names {unknown} are not coordinates of the model "
+                         f"({names})")
+    return np.array(sorted({names.index(a) for a in actuated}), dtype=int)
+
+
+def _added_inertia(s, what, t, q, qd):
+    """``-dQ/dqdd`` of loads linear in the accelerations (an armature ``-a qdd``) where the
+    dynamics keep them in ``Q`` (the symbolic path; the recursion moves them into ``M``),
+    or None."""
+    d = s.dynamics
+    if not getattr(d, "depends_on_qdd", False):
+        return None
+    if not d.linear_in_qdd:
+        raise ModelError(f"{what}: a load depends nonlinearly on the accelerations; use "
+                         "m.free().simulate(...) for this model")
+    return -d.dQ_dqdd(float(t), q, qd, np.zeros(s.m), s.p_values)
+
+
+def _augmented(s, t, q, qd, what="dynamics"):
+    """``(M, F, J, gamma)``: mass matrix (with inertia added on coordinates), ``Q + Qv`` at
+    zero accelerations, ``Phi_q`` and ``gamma`` at one state."""
+    K, rhs = s.dynamics.free_kernel()(float(t), q, qd, np.zeros(s.m), s.p_values)
+    K = np.array(K.toarray() if hasattr(K, "toarray") else K, dtype=float)
+    n = s.n
+    add = _added_inertia(s, what, t, q, qd)
+    if add is not None:
+        K[:n, :n] += add
+    return K[:n, :n], rhs[:n], K[n:, :n], rhs[n:], K, rhs
+
+
+def _solve_regular(A, b):
+    """``A^-1 b`` by LU when ``A`` is square and its pivots are regular (the usual case: an
+    absolute-coordinate robot, a free base), else None (the caller's SVD path handles
+    redundant or non-square systems; an SVD per point costs ten LUs)."""
+    import warnings
+
+    from scipy.linalg import lu_factor, lu_solve
+
+    if A.shape[0] != A.shape[1]:
+        return None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        lu, piv = lu_factor(A, check_finite=False)
+    d = np.abs(np.diag(lu))
+    if not d.size or d.min() <= 1e-11 * d.max():
+        return None
+    return lu_solve((lu, piv), b, check_finite=False)
+
+
+def _no_multiplier_loads(s, what):
+    if getattr(s.dynamics, "depends_on_lambda", False):
+        raise ModelError(f"{what}: the model's loads depend on constraint reactions (friction); "
+                         "use m.free().simulate(...) for it")
+
+
+def inverse_dynamics(m, q, qd, qdd, t: float = 0.0, actuated=None) -> JointValues:
+    r"""Joint forces: ``tau = M(q) qdd - Q - Qv`` (see the module doc) at one point (``(n,)``
+    arrays) or many (``(N, n)``), or from ``{joint name: values}``; on a model with
+    constraint equations the forces on the ``actuated`` coordinates (names; default the
+    joint coordinates) that, with the constraints' reactions, give ``qdd``."""
+    what = "inverse_dynamics"
+    s, Q, QD, X, single = _state(m, what, q, qd, qdd, "qdd", t)
     d = s.dynamics
     p = s.p_values
-    lam = np.zeros(0)
-    out = np.empty((len(Q), s.n))
+    names = s.layout.q_names
+    act = _actuated(s, what, actuated)
+    out = np.empty((len(Q), len(act)))
+    if not s.m:
+        if len(act) != s.n:
+            raise ModelError(f"{what}: a model without constraint equations is actuated on every "
+                             "coordinate (actuated= applies to models with equations)")
+        lam = np.zeros(0)
+        for k in range(len(Q)):
+            # (loads on the accelerations, an armature's -a qdd, taken at this qdd)
+            M, F, Fv = d.terms(float(t), Q[k], QD[k], lam, p, X[k])[:3]
+            out[k] = M @ X[k] - F - Fv
+        return JointValues(tuple(names), out[0] if single else out)
+    _no_multiplier_loads(s, what)
+    n, m_ = s.n, s.m
+    S = np.zeros((len(act), n))
+    S[np.arange(len(act)), act] = 1.0
     for k in range(len(Q)):
-        M, F, Fv = d.terms(float(t), Q[k], QD[k], lam, p)[:3]
-        out[k] = M @ X[k] - F - Fv
-    return JointValues(tuple(s.layout.q_names), out[0] if single else out)
+        M, F, J = _augmented(s, t, Q[k], QD[k], what)[:3]
+        A = np.hstack((J.T, -S.T))                # Phi_q^T lambda - S^T tau = Q + Qv - M qdd
+        b = F - M @ X[k]
+        x = _solve_regular(A, b)
+        if x is not None:                         # square and regular: unique, exact
+            out[k] = x[m_:]
+            continue
+        U, sv, Vt = np.linalg.svd(A, full_matrices=True)
+        tol = 1e-10 * max(sv.max(initial=0.0), 1.0)
+        rank = int(np.sum(sv > tol))
+        null = Vt[rank:]
+        if null.size and np.abs(null[:, m_:]).max() > 1e-8:
+            amb = [names[act[i]] for i in np.unique(np.nonzero(np.abs(null[:, m_:]) > 1e-8)[1])]
+            raise ModelError(f"{what}: the forces on {amb} are not unique: the constraints alone "
+                             "can move or hold those coordinates; actuate fewer coordinates")
+        x = Vt[:rank].T @ ((U[:, :rank].T @ b) / sv[:rank])
+        r = A @ x - b
+        scale = max(1.0, np.abs(F).max(), np.abs(M @ X[k]).max())
+        if np.abs(r).max() > 1e-8 * scale:
+            i = int(np.argmax(np.abs(r)))
+            raise ModelError(f"{what}: at point {k} no forces on the actuated coordinates give "
+                             f"this qdd (the equation of motion of {names[i]!r} is off by "
+                             f"{r[i]:.3e}): an unactuated coordinate's acceleration (a floating "
+                             "base's) is not free to choose; give it actuated=... or a qdd from "
+                             "forward_dynamics")
+        out[k] = x[m_:]
+    return JointValues(tuple(names[i] for i in act), out[0] if single else out)
 
 
-def forward_dynamics(m, q, qd, tau, t: float = 0.0) -> JointValues:
+def forward_dynamics(m, q, qd, tau, t: float = 0.0, actuated=None) -> JointValues:
     r"""Joint accelerations ``qdd = M(q)^-1 (Q + Qv + tau)`` (see the module doc) at one
-    point or many. A mass matrix that is not positive definite (a joint that moves no mass)
-    raises ``SingularMassError`` naming the joint."""
+    point or many; on a model with constraint equations ``tau`` acts on the ``actuated``
+    coordinates (default the joint coordinates, as :func:`inverse_dynamics` returns them)
+    and the result has every coordinate's acceleration. A mass matrix that is not positive
+    definite (a joint that moves no mass) raises ``SingularMassError`` naming the joint."""
     from .._errors import SingularMassError
 
-    s, Q, QD, X, single = _inputs(m, "forward_dynamics", q, qd, tau, "tau")
+    what = "forward_dynamics"
+    s, Q, QD, _, single = _state(m, what, q, qd, None, "tau", t)
     d = s.dynamics
     p = s.p_values
-    lam = np.zeros(0)
-    out = np.empty((len(Q), s.n))
     names = tuple(s.layout.q_names)
+    act = _actuated(s, what, actuated)
+    if isinstance(tau, JointValues):
+        tau = tau.values
+    X = np.atleast_2d(np.asarray(tau, dtype=float)) if not isinstance(tau, dict) else None
+    if isinstance(tau, dict):
+        unknown = [k_ for k_ in tau if k_ not in [names[i] for i in act]]
+        missing = [names[i] for i in act if names[i] not in tau]
+        if unknown or missing:
+            raise ModelError(f"{what}: tau names the actuated coordinates "
+                             f"{[names[i] for i in act]}" + (f"; missing {missing}" if missing else "")
+                             + (f"; unknown {unknown}" if unknown else ""))
+        X = np.column_stack(np.broadcast_arrays(*[np.atleast_1d(np.asarray(tau[names[i]], float))
+                                                  for i in act]))
+    if X.ndim != 2 or X.shape[1] != len(act) or not np.all(np.isfinite(X)):
+        raise ModelError(f"{what}: tau must be finite numbers of shape (k,) or (N, k) with k = "
+                         f"{len(act)} actuated coordinates {[names[i] for i in act]}, got "
+                         f"{np.shape(tau)}")
+    Q, QD, X = _broadcast(what, [Q, QD, X], ["q", "qd", "tau"])
+    out = np.empty((len(Q), s.n))
+    if not s.m:
+        if len(act) != s.n:
+            raise ModelError(f"{what}: a model without constraint equations is actuated on every "
+                             "coordinate (actuated= applies to models with equations)")
+        lam = np.zeros(0)
+        for k in range(len(Q)):
+            M, F, Fv = d.terms(float(t), Q[k], QD[k], lam, p)[:3]
+            add = _added_inertia(s, what, t, Q[k], QD[k])
+            if add is not None:
+                M = M + add
+            try:
+                L = np.linalg.cholesky(M)
+            except np.linalg.LinAlgError:
+                diag = np.diag(M)
+                bad = [names[i] for i in range(s.n) if not diag[i] > 1e-14 * max(1.0, abs(diag).max())]
+                raise SingularMassError(f"forward_dynamics: the mass matrix is singular at point {k}"
+                                        + (f"; joints {bad} move no mass" if bad else "")
+                                        + "; give the bodies they carry mass and inertia") from None
+            y = np.linalg.solve(L, F + Fv + X[k])
+            out[k] = np.linalg.solve(L.T, y)
+        return JointValues(names, out[0] if single else out)
+    _no_multiplier_loads(s, what)
+    n = s.n
     for k in range(len(Q)):
-        M, F, Fv = d.terms(float(t), Q[k], QD[k], lam, p)[:3]
-        try:
-            L = np.linalg.cholesky(M)
-        except np.linalg.LinAlgError:
-            diag = np.diag(M)
-            bad = [names[i] for i in range(s.n) if not diag[i] > 1e-14 * max(1.0, abs(diag).max())]
-            raise SingularMassError(f"forward_dynamics: the mass matrix is singular at point {k}"
-                                    + (f"; joints {bad} move no mass" if bad else "")
-                                    + "; give the bodies they carry mass and inertia") from None
-        y = np.linalg.solve(L, F + Fv + X[k])
-        out[k] = np.linalg.solve(L.T, y)
+        K, rhs = _augmented(s, t, Q[k], QD[k], what)[4:]
+        rhs = rhs.copy()
+        rhs[act] += X[k]
+        y = _solve_regular(K, rhs)
+        if y is not None:
+            out[k] = y[:n]
+            continue
+        # least squares: consistently redundant constraints (a planar loop closed by a
+        # Spherical3) leave the multipliers, not the accelerations, undetermined
+        U, sv, Vt = np.linalg.svd(K)
+        tol = 1e-11 * max(sv.max(initial=0.0), 1.0)
+        rank = int(np.sum(sv > tol))
+        null = Vt[rank:]
+        if null.size and np.abs(null[:, :n]).max() > 1e-8:
+            free_ = [names[i] for i in np.unique(np.nonzero(np.abs(null[:, :n]) > 1e-8)[1])]
+            raise SingularMassError(f"{what}: the accelerations of {free_} are not determined at "
+                                    f"point {k} (they move no mass); give the bodies they carry "
+                                    "mass and inertia")
+        y = Vt[:rank].T @ ((U[:, :rank].T @ rhs) / sv[:rank])
+        out[k] = y[:n]
     return JointValues(names, out[0] if single else out)
 
 
@@ -180,7 +487,9 @@ def forward_kinematics(m, q, point, t: float = 0.0, frame: bool = False) -> np.n
                 raise ModelError(f"forward_kinematics: {p_!r} is not a body point with numeric "
                                  "local coordinates, nor a link name") from None
             spec.append((p_.body if p_.body is not None else m.ground, loc, np.eye(3)))
-    Q, single = _points(s, q, "forward_kinematics: q")
+    Q, single, held = _points(s, q, "forward_kinematics: q", partial=s.m > 0)
+    if held is not None:
+        Q = _complete(s, "forward_kinematics", t, Q, held)[0]
     bodies = list(dict.fromkeys(b for b, _, _ in spec))
     poses = _body_poses(s, Q, bodies, t)        # (N, nb, 4, 4)
     col = {b: i for i, b in enumerate(bodies)}

@@ -358,6 +358,23 @@ class RecursiveDynamics:
         lamset, qddset = set(self.lam), set(lay.qdd_symbols)
         slave_acc = {acceleration_symbol(s.name) for s in pose_syms}
         known = set(self.args()) | set(pose_syms) | set(vel_syms)
+        # loads -c qdd_j with constant c on coordinates (a rotor's armature, decision 0048):
+        # moved into the mass matrix, M_ij += c; the rest of Q may not hold accelerations
+        self._M_added = None
+        qdd_index = {a: j for j, a in enumerate(lay.qdd_symbols)}
+        for i, e in enumerate(Q):
+            e = sp.sympify(e)
+            acc = e.free_symbols & qddset
+            if not acc:
+                continue
+            coeffs = {a: sp.diff(e, a) for a in acc}
+            if not all(c.is_number for c in coeffs.values()):
+                continue                    # not constant: refused below
+            if self._M_added is None:
+                self._M_added = np.zeros((lay.n, lay.n))
+            for a, c in coeffs.items():
+                self._M_added[i, qdd_index[a]] -= float(c)
+            Q[i] = sp.expand(e - sum(c * a for a, c in coeffs.items()))
         for e in [*Q, *Qp]:
             fs = sp.sympify(e).free_symbols
             if fs & lamset or fs & qddset or fs & slave_acc:
@@ -496,6 +513,8 @@ class RecursiveDynamics:
         (eng[0].assemble if eng else _assemble)(
             par, root, nqm, goff, gcols, nq, w["FP"], w["Fg"], w["H"], w["Mb"], w["Qvb"], Qp, w["C"],
             w["BQ"], w["BV"], w["X"], w["Y"], M, Q, Qv)
+        if self._M_added is not None:
+            M += self._M_added
         return M, Q, Qv, out[kM:kM + kJ], out[o:o + kg]
 
     @property
@@ -503,7 +522,9 @@ class RecursiveDynamics:
         """Only slaves on ground and their coordinates, no constraint equation: the free
         accelerations come from the O(N) articulated-body recursion (:meth:`accelerations`)."""
         kid, par, root, nqm, goff, gcols, nq = self._tree
-        return self.system.m == 0 and len(gcols) == self.system.n and bool((root < 0).all())
+        # (inertia added on coordinates is not in the articulated-body recursion)
+        return (self.system.m == 0 and len(gcols) == self.system.n and bool((root < 0).all())
+                and self.__dict__.get("_M_added") is None)
 
     def accelerations(self, t, q, qd, p):
         """Free accelerations ``qdd`` (n,) by the articulated-body recursion

@@ -799,6 +799,44 @@ class _Mesh3D(Primitive):
         return finish
 
 
+class Mesh(_Mesh3D):
+    """A polygon mesh fixed in a body: ``vertices`` ``(k, 3)`` in the body's coordinates and
+    ``faces``, each a sequence of at least three vertex indices (an imported robot's STL or
+    OBJ visual, ``ms.from_urdf``).
+
+    Example: one triangle on body ``b``::
+
+        draw.Mesh(b, [(0, 0, 0), (0.1, 0, 0), (0, 0.1, 0)], [(0, 1, 2)])
+    """
+
+    def __init__(self, body, vertices, faces, **style):
+        super().__init__(**style)
+        self.body = body
+        try:
+            v = np.asarray(vertices, dtype=float)
+        except (TypeError, ValueError):
+            raise GeometryError("Mesh: vertices must be numbers of shape (k, 3)") from None
+        if v.ndim != 2 or v.shape[1] != 3 or not len(v) or not np.all(np.isfinite(v)):
+            raise GeometryError(f"Mesh: vertices must be finite numbers of shape (k, 3), got shape "
+                                f"{v.shape}")
+        fs = []
+        for f in faces:
+            try:
+                idx = tuple(int(i) for i in f)
+            except (TypeError, ValueError):
+                raise GeometryError(f"Mesh: face {f!r} is not a sequence of vertex indices") from None
+            if len(idx) < 3 or min(idx) < 0 or max(idx) >= len(v):
+                raise GeometryError(f"Mesh: face {f!r} needs at least three indices of the {len(v)} "
+                                    "vertices")
+            fs.append(idx)
+        if not fs:
+            raise GeometryError("Mesh: no faces")
+        self.vertices, self.faces = v, fs
+
+    def _mesh(self, ev, b):
+        return self.vertices, self.faces
+
+
 class Sphere(_Mesh3D):
     """A sphere of ``radius`` about a point of a body."""
 

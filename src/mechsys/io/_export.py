@@ -3,8 +3,11 @@ r"""Export of tree models to URDF and MJCF: ``m.to_urdf(path)``, ``m.to_mjcf(pat
 
 What the formats can express: a tree of ``GenRevolute5`` and ``GenTranslate5`` joints on
 ground, bodies with mass, centroid and inertia, gravity (URDF: only 9.81 down ``z``, which
-URDF consumers assume). Anything else (absolute bodies, constraint equations, other Gen
-joints, loads other than gravity, symbolic values) is refused with ``ModelError`` naming it.
+URDF consumers assume), and on a joint coordinate the loads ``-k (q - ref) - d q_dot - a
+q_ddot`` the importers make (MJCF: ``stiffness``, ``springref``, ``damping``, ``armature``;
+URDF: ``<dynamics damping>`` only; decision 0048). Anything else (absolute bodies,
+constraint equations, other Gen joints, other loads, symbolic values) is refused with
+``ModelError`` naming it.
 
 With a Gen joint's frames ``(o_1, R_1)`` on the slave and ``(o_2, R_2)`` on the master
 (``constraints/_generalized.py``) the slave's pose is ``A_s = A_m R_0 Rot(u_1, q)``,
@@ -82,14 +85,23 @@ def _tree(m, fmt: str):
             raise ModelError(f"to_{fmt}: body {b.name!r} has its own (absolute) coordinates; export "
                              "holds bodies moved by GenRevolute5/GenTranslate5 joints only")
     gravity = None
+    coords = {j.coordinates[0].name for j in joints.values()}
+    passive: dict = {}                 # coordinate -> [constant, stiffness, damping, armature]
     for ld in m.load_list:
         if isinstance(ld, Gravity) and ld.only is None:
             v = np.array([_float(x, "gravity direction") for x in np.ravel(ld.vector.local)])
             gmag = _float(ld.g, "gravity magnitude")
             gravity = v / np.linalg.norm(v) * gmag if ld.mode == "absolute" else v * gmag
             continue
+        got = _joint_load(ld, coords)
+        if got is not None:
+            name, c = got
+            prev = passive.get(name, (np.zeros(4), ()))
+            passive[name] = (prev[0] + c, (*prev[1], getattr(ld, "name", None) or "Load"))
+            continue
         raise ModelError(f"to_{fmt}: load {getattr(ld, 'name', None) or type(ld).__name__} has no "
-                         f"{fmt.upper()} counterpart (only gravity on every body); remove it first")
+                         f"{fmt.upper()} counterpart (gravity on every body; on a joint coordinate "
+                         "a spring, damper or armature); remove it first")
     order, seen = [], set()
 
     def visit(b):
@@ -111,7 +123,37 @@ def _tree(m, fmt: str):
         Iraw = np.asarray(m.space.inertia_matrix(b.inertia)) if b.inertia is not None else np.zeros((3, 3))
         I = np.array([[_float(x, f"inertia of body {b.name!r}") for x in row] for row in Iraw])
         props[b] = (mass, c, I)
-    return [joints[b] for b in order], props, gravity
+    return [joints[b] for b in order], props, gravity, passive
+
+
+def _joint_load(ld, coords):
+    r"""``(coordinate, [c0, k, d, a])`` when ``ld`` is a ``Load`` on a joint coordinate ``q``
+    with the magnitude ``c0 - k q - d q_dot - a q_ddot`` (numbers): a spring ``-k (q - ref)``
+    (``c0 = k ref``), a damper and an armature, as the importers write them; else None."""
+    import sympy as sp
+
+    from .._symbols import acceleration_symbol, velocity_symbol
+    from ..loads._loads import Load
+
+    if not isinstance(ld, Load):
+        return None
+    name = ld.symbol.name if isinstance(ld.symbol, sp.Symbol) else str(ld.symbol)
+    if name not in coords:
+        return None
+    e = sp.expand(sp.sympify(ld.magnitude))
+    xs = [sp.Symbol(name), velocity_symbol(name), acceleration_symbol(name)]
+    # the importers' symbols may carry assumptions: match by name
+    sub = {f: x for f in e.free_symbols for x in xs if f.name == x.name}
+    e = e.xreplace(sub)
+    if e.free_symbols - set(xs):
+        return None
+    cs = [-sp.diff(e, x) for x in xs]
+    if not all(c.is_number for c in cs):
+        return None
+    c0 = e.subs({x: 0 for x in xs})
+    if not c0.is_number:
+        return None
+    return name, np.array([float(c0)] + [float(c) for c in cs])
 
 
 def _frames(j, space):
@@ -134,7 +176,12 @@ def to_urdf(m, path, robot: str = "mechsys") -> Path:
     r"""Write the tree model ``m`` as a URDF file (module doc); returns the path."""
     from ..constraints._generalized import GenTranslate5
 
-    joints, props, gravity = _tree(m, "urdf")
+    joints, props, gravity, passive = _tree(m, "urdf")
+    for name, ((c0, k, _d, a), labels) in passive.items():
+        if c0 or k or a:
+            raise ModelError(f"to_urdf: load {', '.join(labels)} on joint {name!r} is a spring, a "
+                             "constant force or an armature, which URDF cannot hold (only "
+                             "<dynamics damping>); use to_mjcf or remove it")
     if gravity is not None and not np.allclose(gravity, (0, 0, -9.81), rtol=0, atol=1e-12):
         raise ModelError(f"to_urdf: gravity {gravity.tolist()} cannot be written (URDF has no gravity; "
                          "its users assume 9.81 down z)")
@@ -165,6 +212,8 @@ def to_urdf(m, path, robot: str = "mechsys") -> Path:
         lines.append(f'    <axis xyz="{_vec(R1[:, 2])}"/>')
         if kind == "prismatic":
             lines.append('    <limit lower="-1e9" upper="1e9" effort="1e9" velocity="1e9"/>')
+        if name in passive and passive[name][0][2]:
+            lines.append(f'    <dynamics damping="{_num(passive[name][0][2])}"/>')
         lines.append("  </joint>")
     lines.append("</robot>")
     p = Path(path)
@@ -177,7 +226,7 @@ def to_mjcf(m, path, model: str = "mechsys") -> Path:
     from ..constraints._generalized import GenTranslate5
     from ..geometry._rotations import _from_matrix
 
-    joints, props, gravity = _tree(m, "mjcf")
+    joints, props, gravity, passive = _tree(m, "mjcf")
     g = gravity if gravity is not None else np.zeros(3)
     children: dict = {}
     for j in joints:
@@ -195,8 +244,21 @@ def to_mjcf(m, path, model: str = "mechsys") -> Path:
         out.append(f"{pad}<body name={quoteattr(b.name)} pos=\"{_vec(o2 - R0 @ o1)}\" "
                    f"quat=\"{_vec(_from_matrix(R0))}\">")
         kind = "slide" if isinstance(j, GenTranslate5) else "hinge"
-        out.append(f"{pad}  <joint name={quoteattr(j.coordinates[0].name)} type=\"{kind}\" "
-                   f"pos=\"{_vec(o1)}\" axis=\"{_vec(R1[:, 2])}\"/>")
+        jn = j.coordinates[0].name
+        extra = ""
+        if jn in passive:
+            (c0, k, d, a), labels = passive[jn]
+            if c0 and not k:
+                raise ModelError(f"to_mjcf: load {', '.join(labels)} on joint {jn!r} has a constant "
+                                 f"part {c0!r} without a spring, which MJCF cannot hold on a joint; "
+                                 "remove it")
+            # -k (q - springref) - d qd - a qdd: MuJoCo's passive forces and armature
+            for key, v in (("stiffness", k), ("springref", c0 / k if k else 0.0), ("damping", d),
+                           ("armature", a)):
+                if v:
+                    extra += f" {key}=\"{_num(v)}\""
+        out.append(f"{pad}  <joint name={quoteattr(jn)} type=\"{kind}\" "
+                   f"pos=\"{_vec(o1)}\" axis=\"{_vec(R1[:, 2])}\"{extra}/>")
         if mass > 0:
             full = (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])
             out.append(f"{pad}  <inertial pos=\"{_vec(c)}\" mass=\"{_num(mass)}\" "

@@ -29,8 +29,8 @@ import math
 import numpy as np
 
 from .._errors import ModelError
-from .._symbols import velocity_symbol
-from ._urdf import ImportReport, normal_to
+from .._symbols import acceleration_symbol, velocity_symbol
+from ._urdf import ImportReport, add_joint, normal_to
 from ._xml import Element, floats, read_xml, where
 
 
@@ -235,7 +235,7 @@ def _flatten(ctx, el: Element, tag: str, cls):
 
 # -- the import ------------------------------------------------------------------------------------
 def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs: bool = False,
-              geometry: bool = True,
+              geometry: bool = True, armature: bool = False, coordinates: str = "generalized",
               backend: str | None = None):
     r"""A :class:`~mechsys.Model3D` of the MJCF (MuJoCo) model ``path``.
 
@@ -247,10 +247,22 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
     closed-loop models work). ``gravity``: a number overrides the file's magnitude (along
     the file's direction; default ``<option gravity>`` or 9.81 down ``z``).
     ``joint_damping`` adds ``damping`` as ``-d q_dot`` loads, ``joint_springs`` the hinge and
-    slide springs ``-k (q - springref)`` (MuJoCo's passive forces); ranges, armature, friction
-    loss, springs, actuators, sensors, contacts and everything else without a counterpart
-    are listed in ``m.import_report``. Read safely, as ``from_urdf``.
+    slide springs ``-k (q - springref)`` (MuJoCo's passive forces), ``armature`` the joints'
+    armature ``a`` as the load ``-a qdd`` (MuJoCo adds ``a`` to the mass matrix's diagonal;
+    so do mechsys's dynamics with it); ranges, friction loss, springs, armature (unless
+    asked), actuators, sensors, contacts and everything else without a counterpart are
+    listed in ``m.import_report``. Read safely, as ``from_urdf``.
+
+    ``coordinates="absolute"``: every body with hinge or slide joints an absolute body
+    (guessed at its pose at ``qpos0``) and each joint ``Revolute5`` / ``Translate5`` with its
+    coordinate named after it (``from_urdf``'s :func:`~mechsys.io._urdf.add_joint`;
+    decision 0048).
     """
+    from .._errors import OptionError
+
+    if coordinates not in ("generalized", "absolute"):
+        raise OptionError(f"from_mjcf: coordinates={coordinates!r} is 'generalized' or 'absolute'")
+    absolute = coordinates == "absolute"
     import sympy as sp
 
     from .. import constraints as C
@@ -267,6 +279,11 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
     for el in root.children:
         if el.tag == "option":
             g_vec = np.array(floats(source, el, "gravity", 3, list(g_vec)))
+            for key in ("density", "viscosity", "wind", "magnetic"):
+                v = floats(source, el, key, None, [])
+                if v and any(v):
+                    notes.append(f"line {el.line}: <option {key}=...> (fluid or magnetic forces; "
+                                 "no counterpart; ignored)")
         elif el.tag == "include":
             raise ModelError(f"{where(source, el)}: <include> is not read (files name no other files "
                              "here); merge the included file into this one")
@@ -294,13 +311,13 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
             parts.append((gel, a, typ, fp + fR @ pos, fR @ R, size))
         return parts
 
-    def mass_from_geoms(parts, body_el):
+    def mass_from_geoms(parts, body_name):
         mass, cs, Is = 0.0, [], []
         for gel, a, typ, pos, R, size in parts:
             if typ in ("plane", "hfield"):
                 continue
             if typ == "mesh":
-                notes.append(f"line {gel.line}: mesh geom of body {body_el.get('name')!r}: its mass is "
+                notes.append(f"line {gel.line}: mesh geom of body {body_name!r}: its mass is "
                              "not computed here; give the body an <inertial>")
                 continue
             got = _geom_inertia(ctx, gel, a, typ, size)
@@ -361,6 +378,9 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
         R = fR @ ctx.orientation(el, a)
         pr, pR = world_pose[parent]
         world_pose[name] = (pr + pR @ pos, pR @ R)
+        if el.get("gravcomp") not in (None, "0", "0.0"):
+            notes.append(f"line {el.line}: body {name!r} gravcomp={el.get('gravcomp')} (gravity "
+                         "compensation; no counterpart; ignored)")
         parts = add_geoms(el, name, cls)
         ine = el.find("inertial")
         if ine is not None:
@@ -379,7 +399,7 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
                 raise ModelError(f"{where(source, ine)}: an <inertial> needs diaginertia or fullinertia")
             mass = mass[0]
         else:
-            mass, c, I = mass_from_geoms(parts, el)
+            mass, c, I = mass_from_geoms(parts, name)
         pb, pp, pRm = frame_of[parent]
         P, RR = pp + pRm @ pos, pRm @ R                 # this body's frame in pb's
         kinds = []
@@ -389,8 +409,8 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
                 kinds.append((j, ja, ja.get("type", "hinge")))
             elif j.tag == "freejoint":
                 kinds.append((j, {}, "free"))
-        absolute = any(k in ("ball", "free") for _, _, k in kinds)
-        if absolute and len(kinds) > 1:
+        free_body = any(k in ("ball", "free") for _, _, k in kinds)
+        if free_body and len(kinds) > 1:
             raise ModelError(f"{where(source, el)}: a ball or free joint with other joints in one body "
                              "is not supported; give the body that joint alone")
         if not kinds:                                   # merged into the parent's body
@@ -408,12 +428,15 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
             return
         wr, wR = world_pose[name]
         guess = None
-        if absolute:
+        if free_body or absolute:
             from ..geometry._rotations import _from_matrix
 
+            # at qpos0 every joint's transform is the identity (ref included): the holders'
+            # frames are the body's
             guess = (tuple(float(v) for v in wr), tuple(float(v) for v in _from_matrix(wR)))
         # massless intermediate bodies for all but the last of several joints
-        chain = [m.add_body(f"{name}/{kinds[k][0].get('name') or k}", mass=0) for k in range(len(kinds) - 1)]
+        chain = [m.add_body(f"{name}/{kinds[k][0].get('name') or k}", mass=0,
+                            guess=guess if absolute else None) for k in range(len(kinds) - 1)]
         pts = {}
         for st, sfp, sfR, scls in _flatten(ctx, el, "site", cls):
             if st.get("name"):
@@ -438,8 +461,14 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
                 joints_rep[jname or name] = ("free", tuple(s.name for s in b.q), name)
                 continue
             if not jname:
-                raise ModelError(f"{where(source, j)}: a {typ} joint needs a name here (its "
-                                 "coordinate is named after it)")
+                # MuJoCo allows unnamed joints; the coordinate needs a name: the body's and
+                # the joint's place in it, said in the report
+                jname = f"{name}_{typ}{k}"
+                if jname in joints_rep:
+                    raise ModelError(f"{where(source, j)}: an unnamed {typ} joint would be called "
+                                     f"{jname!r}, which another joint is; name it")
+                notes.append(f"line {j.line}: unnamed {typ} joint of body {name!r}: its coordinate "
+                             f"is named {jname!r}")
             jp = np.array(ctx.num(j, ja, "pos", 3, [0.0, 0.0, 0.0]))
             if typ == "ball":
                 m.add(C.Spherical3(b.point(tuple(float(v) for v in jp)),
@@ -456,7 +485,6 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
             ax = ax / np.linalg.norm(ax)
             g = normal_to(ax)
             slave = holders[k]
-            a1 = slave.axis(tuple(float(v) for v in jp), tuple(ax), tuple(g))
             # ``ref``: the file's pose is at q = ref, so the joint moves by q - ref: the master's
             # reference direction turned by -ref (hinge) or its origin moved by -ref (slide)
             ref = ctx.num(j, ja, "ref", 1, [0.0])[0]
@@ -465,10 +493,10 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
                 g2 = m_R @ _axis_angle(ax, -ctx.angle(ref)) @ g
             elif ref:
                 o2 = o2 - ref * (m_R @ ax)
-            a2 = master.axis(tuple(float(v) for v in o2), tuple(m_R @ ax), tuple(float(v) for v in g2))
-            cls_ = C.GenRevolute5 if typ == "hinge" else C.GenTranslate5
+            ref0 = ctx.angle(ref) if typ == "hinge" else ref
             try:
-                m.add(cls_(a1, a2, (jname, 0.0)), name=jname)
+                add_joint(m, "revolute" if typ == "hinge" else "prismatic", slave, master, jp, ax, g,
+                          o2, m_R @ ax, g2, jname, ref0 if absolute else 0.0, absolute)
             except ModelError as exc:
                 raise ModelError(f"{where(source, j)}: {exc}") from None
             joints_rep[jname] = (typ, (jname,), name)
@@ -486,12 +514,21 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
                 else:
                     notes.append(f"line {j.line}: joint {jname!r} stiffness {k_} (reported; "
                                  "joint_springs=True adds it as a load)")
-            for key in ("armature", "frictionloss"):
-                v = ctx.num(j, ja, key, 1)
-                if v is not None and v[0] != 0:
-                    if key == "frictionloss":
-                        friction[jname] = v[0]
-                    notes.append(f"line {j.line}: joint {jname!r} {key}={v[0]} (no counterpart; ignored)")
+            arm = ctx.num(j, ja, "armature", 1)
+            if arm is not None and arm[0] != 0:
+                if armature:
+                    # MuJoCo adds the armature to the mass matrix's diagonal: the generalized
+                    # force -a qdd on the coordinate
+                    m.add_load(L.Load(sp.Symbol(jname), -arm[0] * acceleration_symbol(jname)),
+                               name=f"{jname}_armature")
+                else:
+                    notes.append(f"line {j.line}: joint {jname!r} armature={arm[0]} (reported; "
+                                 "armature=True adds it as the load -armature * qdd)")
+            v = ctx.num(j, ja, "frictionloss", 1)
+            if v is not None and v[0] != 0:
+                friction[jname] = v[0]
+                notes.append(f"line {j.line}: joint {jname!r} frictionloss={v[0]} (no counterpart; "
+                             "ignored)")
             d = ctx.num(j, ja, "damping", 1)
             if d is not None and d[0]:
                 damping[jname] = d[0]

@@ -52,6 +52,57 @@ def normal_to(a: np.ndarray) -> np.ndarray:
     return g / np.linalg.norm(g)
 
 
+def add_joint(m, kind: str, slave, master, o1, a, g, o2, a2, g2, name: str, guess: float = 0.0,
+              absolute: bool = False):
+    r"""One joint of an imported file between the axes ``slave.axis(o1, a, g)`` and
+    ``master.axis(o2, a2, g2)`` (``kind`` ``"revolute"`` or ``"prismatic"``), its coordinate
+    named ``name``.
+
+    Generalized coordinates: ``GenRevolute5`` / ``GenTranslate5``. Absolute coordinates
+    (decision 0048): ``Revolute5`` / ``Translate5`` between the same axes and the joint
+    coordinate ``q`` as a new variable of a ``Constraint`` (so ``sol[name]`` and joint
+    forces keep their names); with ``g_1 = A_s g``, ``g_2 = A_m g2``, ``k_2 = A_m (a2 x g2)``
+    (unit) and the axes' global origins ``o_1``, ``o_2``:
+
+    .. math::
+
+        \cos q\,(k_2 \cdot g_1) - \sin q\,(g_2 \cdot g_1) = 0 \quad\text{(revolute)},
+        \qquad (A_m a_2) \cdot (o_1 - o_2) - q = 0 \quad\text{(prismatic)}
+
+    the same pose ``A_s = A_m R_0 \mathrm{Rot}(a, q)`` (or the shift ``q a``) as the Gen
+    joint."""
+    import sympy as sp
+
+    from .. import constraints as C
+
+    tup = lambda v: tuple(float(x) for x in v)  # noqa: E731
+    ax1 = slave.axis(tup(o1), tup(a), tup(g))
+    ax2 = master.axis(tup(o2), tup(a2), tup(g2))
+    if not absolute:
+        cls = C.GenTranslate5 if kind == "prismatic" else C.GenRevolute5
+        m.add(cls(ax1, ax2, (name, float(guess))), name=name)
+        return
+    cls = C.Translate5 if kind == "prismatic" else C.Revolute5
+    m.add(cls(ax1, ax2), name=name)
+    q = sp.Symbol(name)
+
+    def glob(body, v):
+        v = sp.Matrix([sp.Float(float(x)) for x in v])
+        return v if body.is_ground else body.A * v
+
+    def at(body, o):
+        return glob(body, o) if body.is_ground else body.r + glob(body, o)
+
+    a2n = np.asarray(a2, float) / np.linalg.norm(a2)
+    if kind == "prismatic":
+        eq = glob(master, a2n).dot(at(slave, o1) - at(master, o2)) - q
+    else:
+        g1w, g2w = glob(slave, g), glob(master, g2)
+        k2 = glob(master, np.cross(a2n, g2))
+        eq = sp.cos(q) * k2.dot(g1w) - sp.sin(q) * g2w.dot(g1w)
+    m.add(C.Constraint([eq], {q: float(guess)}), name=f"{name}_coordinate")
+
+
 @dataclass(frozen=True)
 class ImportReport:
     """What an import read and what it could not map.
@@ -199,21 +250,32 @@ def _tree(source, robot: Element, links: dict, joints: list):
 
 def from_urdf(path, *, floating_base: bool = False, gravity: float = 9.81,
               joint_damping: bool = False, mimic: bool = False, geometry: bool = True,
-              backend: str | None = None):
+              coordinates: str = "generalized", backend: str | None = None):
     r"""A :class:`~mechsys.Model3D` of the URDF robot description ``path``.
 
-    Every joint that moves becomes a generalized-coordinate joint named after it (revolute and
-    continuous: ``GenRevolute5``; prismatic: ``GenTranslate5``), links joined by fixed joints
-    one body (their frames kept in ``m.import_report.frames`` and as points of the body named
-    after the link), gravity ``-gravity`` along ``z``. The root link is fixed to ground, or with
-    ``floating_base=True`` a free body with its own (absolute) coordinates ``x, y, z, e0..e3``,
-    as is the child of a ``floating`` joint on the root. ``joint_damping`` adds the joints'
-    ``<dynamics damping>`` as loads :math:`-d\, \dot q`, ``mimic`` the ``<mimic>`` relations as
-    constraints :math:`q = \mathit{multiplier}\; q_\text{other} + \mathit{offset}`; limits,
-    friction and everything else without a counterpart are listed in ``m.import_report`` (an
+    Every joint that moves becomes a generalized-coordinate joint named after it (revolute
+    and continuous: ``GenRevolute5``; prismatic: ``GenTranslate5``), links joined by fixed
+    joints one body (their frames kept in ``m.import_report.frames`` and as points of the
+    body named after the link), gravity ``-gravity`` along ``z``. The root link is fixed to
+    ground, or with ``floating_base=True`` a free body with its own (absolute) coordinates
+    ``x, y, z, e0..e3``, as is the child of a ``floating`` joint (below the root its
+    coordinates are global, noted in the report). A ``planar`` joint gives three
+    coordinates ``name_x``, ``name_y`` (slides along ``g`` and ``a x g`` of the joint frame,
+    ``g`` the axis' reference direction: ``x``, ``y`` for ``axis = z``) and ``name_theta``
+    (the turn about the axis) on massless intermediate bodies. ``joint_damping``
+    adds the joints' ``<dynamics damping>`` as loads :math:`-d\, \dot q`, ``mimic`` the
+    ``<mimic>`` relations as constraints
+    :math:`q = \mathit{multiplier}\; q_\text{other} + \mathit{offset}`; limits, friction and
+    everything else without a counterpart are listed in ``m.import_report`` (an
     :class:`ImportReport`). ``geometry``: attach the visual shapes for drawing (boxes,
-    cylinders, spheres; meshes as their bounding box when the file is STL or OBJ and found, else
-    noted).
+    cylinders, spheres; meshes as their triangles when the file is STL or OBJ and found --
+    a visual mesh in another format by the link's collision mesh -- else noted).
+
+    ``coordinates="absolute"``: every moving link an absolute body (``x, y, z, e0..e3``,
+    guessed at its pose at zero joint coordinates) and each joint ``Revolute5`` /
+    ``Translate5`` with its coordinate, named after it, defined by one more equation
+    (:func:`add_joint`): the same robot, its joint forces from ``m.inverse_dynamics`` on the
+    augmented system (decision 0048).
 
     Files are read safely (no entity expansion, a size limit, regular files only); a bad
     element raises ``ModelError`` naming the element and its line.
@@ -227,8 +289,12 @@ def from_urdf(path, *, floating_base: bool = False, gravity: float = 9.81,
 
     from .. import constraints as C
     from .. import loads as L
+    from .._errors import OptionError
     from ..model import Model3D
 
+    if coordinates not in ("generalized", "absolute"):
+        raise OptionError(f"from_urdf: coordinates={coordinates!r} is 'generalized' or 'absolute'")
+    absolute = coordinates == "absolute"
     robot, source = read_xml(path)
     if robot.tag != "robot":
         raise ModelError(f"{where(source, robot)}: a URDF's root element is <robot>, not <{robot.tag}>")
@@ -311,6 +377,9 @@ def from_urdf(path, *, floating_base: bool = False, gravity: float = 9.81,
         bodies[root] = make_body(root, guess=((0, 0, 0), (1, 0, 0, 0)))
     else:
         bodies[root] = m.ground
+    from ..geometry._rotations import _from_matrix
+
+    seg_world: dict = {root: (np.zeros(3), np.eye(3))}    # segment frames at q = 0
     report_joints: dict = {}
     limits: dict = {}
     damping: dict = {}
@@ -319,31 +388,61 @@ def from_urdf(path, *, floating_base: bool = False, gravity: float = 9.81,
     for j in movable:
         pseg, pp, pR = frames[j.parent]
         master = bodies[pseg]
-        if j.type in ("floating",):
-            if master is not m.ground:
-                raise ModelError(f"{where(source, j.el)}: a floating joint on a moving link "
-                                 f"({j.parent!r}) is not supported; only on the root link")
-            from ..geometry._rotations import _from_matrix
-
-            bodies[j.child] = b = make_body(j.child, guess=(
-                tuple(float(v) for v in pp + pR @ j.xyz), tuple(float(v) for v in _from_matrix(pR @ j.R))))
-            report_joints[j.name] = (j.type, tuple(s.name for s in b.q), j.child)
-            continue
-        if j.type == "planar":
-            raise ModelError(f"{where(source, j.el)}: planar joints are not imported yet; replace it "
-                             "by two prismatic joints and a revolute one on massless links")
-        child = make_body(j.child)
-        bodies[j.child] = child
-        a = j.axis
-        g = normal_to(a)
         o2 = pp + pR @ j.xyz
         RR = pR @ j.R
-        ax1 = child.axis((0, 0, 0), tuple(a), tuple(g))
-        ax2 = master.axis(tuple(float(v) for v in o2), tuple(float(v) for v in RR @ a),
-                          tuple(float(v) for v in RR @ g))
-        cls = C.GenTranslate5 if j.type == "prismatic" else C.GenRevolute5
+        wp, wR = seg_world[pseg]
+        seg_world[j.child] = (wp + wR @ o2, wR @ RR)
+        pose0 = (tuple(float(v) for v in seg_world[j.child][0]),
+                 tuple(float(v) for v in _from_matrix(seg_world[j.child][1])))
+        if j.type in ("floating", "planar"):
+            for tag in ("limit", "dynamics", "mimic", "safety_controller", "calibration"):
+                e = j.el.find(tag)
+                if e is not None:
+                    notes.append(f"line {e.line}: joint {j.name!r} <{tag}> (not mapped on a "
+                                 f"{j.type} joint; ignored)")
+        if j.type == "floating":
+            # a floating joint transmits no load: its child is a free body; below the root
+            # its coordinates are global (x, y, z, e0..e3), not relative to the parent link
+            bodies[j.child] = b = make_body(j.child, guess=pose0)
+            report_joints[j.name] = (j.type, tuple(s.name for s in b.q), j.child)
+            if master is not m.ground:
+                notes.append(f"line {j.el.line}: floating joint {j.name!r} below the root: link "
+                             f"{j.child!r} is a free body whose coordinates are global, not "
+                             f"relative to link {j.parent!r}")
+            continue
+        if j.type == "planar":
+            # motion in the plane normal to the axis: slides x, y along e1 = g (normal to the
+            # axis) and e2 = a x g on massless intermediate bodies, then a turn about the
+            # axis: T = T_origin Trans(x e1 + y e2) Rot(a, theta)
+            a = j.axis
+            e1 = normal_to(a)
+            e2 = np.cross(a, e1)
+            names_ = [f"{j.name}_x", f"{j.name}_y", f"{j.name}_theta"]
+            slide1 = m.add_body(f"{j.child}/{names_[0]}", mass=0, guess=pose0 if absolute else None)
+            slide2 = m.add_body(f"{j.child}/{names_[1]}", mass=0, guess=pose0 if absolute else None)
+            child = make_body(j.child, guess=pose0 if absolute else None)
+            bodies[j.child] = child
+            try:
+                add_joint(m, "prismatic", slide1, master, (0, 0, 0), e1, a, o2, RR @ e1, RR @ a,
+                          names_[0], 0.0, absolute)
+                add_joint(m, "prismatic", slide2, slide1, (0, 0, 0), e2, a, (0, 0, 0), e2, a,
+                          names_[1], 0.0, absolute)
+                add_joint(m, "revolute", child, slide2, (0, 0, 0), a, e1, (0, 0, 0), a, e1,
+                          names_[2], 0.0, absolute)
+            except ModelError as exc:
+                raise ModelError(f"{where(source, j.el)}: {exc}") from None
+            report_joints[j.name] = (j.type, tuple(names_), j.child)
+            notes.append(f"line {j.el.line}: planar joint {j.name!r}: coordinates {names_} (slides "
+                         f"along {tuple(float(v) for v in e1)} and {tuple(float(v) for v in e2)} "
+                         "of the joint frame, then the turn about the axis)")
+            continue
+        a = j.axis
+        g = normal_to(a)
+        child = make_body(j.child, guess=pose0 if absolute else None)
+        bodies[j.child] = child
         try:
-            m.add(cls(ax1, ax2, (j.name, 0.0)), name=j.name)
+            add_joint(m, "prismatic" if j.type == "prismatic" else "revolute", child, master,
+                      (0, 0, 0), a, g, o2, RR @ a, RR @ g, j.name, 0.0, absolute)
         except ModelError as exc:
             raise ModelError(f"{where(source, j.el)}: {exc}") from None
         report_joints[j.name] = (j.type, (j.name,), j.child)
@@ -401,34 +500,66 @@ def from_urdf(path, *, floating_base: bool = False, gravity: float = 9.81,
 
 
 # -- geometry for drawing ------------------------------------------------------------------------
-def _mesh_bounds(path: Path) -> np.ndarray | None:
-    """``(2, 3)`` bounding box of an STL (binary or ASCII) or OBJ file, or None."""
+#: meshes with more triangles are drawn as their bounding box (a picture of a robot stays quick)
+MAX_DRAWN_TRIANGLES = 20000
+
+
+def read_mesh(path: Path) -> tuple[np.ndarray, np.ndarray] | None:
+    """``(vertices (k, 3), faces (f, 3) int)`` of an STL (binary or ASCII) or OBJ file
+    (polygons fanned into triangles, negative OBJ indices counted from the end), or None
+    when it cannot be read. Binary STL is told from ASCII by its size, ``84 + 50 n``."""
     try:
         data = path.read_bytes()
     except OSError:
         return None
     suffix = path.suffix.lower()
-    pts = None
     try:
         if suffix == ".stl":
             if len(data) >= 84 and len(data) == 84 + 50 * struct.unpack("<I", data[80:84])[0]:
                 n = struct.unpack("<I", data[80:84])[0]
                 rec = np.frombuffer(data, dtype=np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)),
                                                          ("a", "<u2")]), count=n, offset=84)
-                pts = rec["v"].reshape(-1, 3).astype(float)
+                tri = rec["v"].reshape(-1, 3).astype(float)
             else:
                 rows = [ln.split()[1:4] for ln in data.decode("ascii", "replace").splitlines()
                         if ln.strip().startswith("vertex")]
-                pts = np.array(rows, dtype=float)
-        elif suffix == ".obj":
-            rows = [ln.split()[1:4] for ln in data.decode("ascii", "replace").splitlines()
-                    if ln.startswith("v ")]
-            pts = np.array(rows, dtype=float)
+                tri = np.array(rows, dtype=float).reshape(-1, 3)
+                if len(tri) % 3:
+                    return None
+            if not len(tri):
+                return None
+            # shared corners once: the faces index the distinct vertices
+            verts, inv = np.unique(tri, axis=0, return_inverse=True)
+            return verts, inv.reshape(-1, 3).astype(np.int64)
+        if suffix == ".obj":
+            verts, faces = [], []
+            for ln in data.decode("ascii", "replace").splitlines():
+                if ln.startswith("v "):
+                    verts.append(ln.split()[1:4])
+                elif ln.startswith("f "):
+                    idx = [int(tok.split("/")[0]) for tok in ln.split()[1:]]
+                    faces.append(idx)
+            V = np.array(verts, dtype=float).reshape(-1, 3)
+            tris = []
+            for f in faces:
+                f = [i - 1 if i > 0 else len(V) + i for i in f]
+                if len(f) < 3 or min(f) < 0 or max(f) >= len(V):
+                    return None
+                tris += [(f[0], f[i], f[i + 1]) for i in range(1, len(f) - 1)]
+            if not len(V):
+                return None
+            return V, np.array(tris, dtype=np.int64).reshape(-1, 3)
     except (ValueError, struct.error):
         return None
-    if pts is None or len(pts) == 0 or not np.all(np.isfinite(pts)):
+    return None
+
+
+def _mesh_bounds(path: Path) -> np.ndarray | None:
+    """``(2, 3)`` bounding box of an STL or OBJ file's vertices, or None."""
+    got = read_mesh(path)
+    if got is None or not np.all(np.isfinite(got[0])):
         return None
-    return np.array([pts.min(axis=0), pts.max(axis=0)])
+    return np.array([got[0].min(axis=0), got[0].max(axis=0)])
 
 
 def _mesh_bounds_of(source: str, geo) -> np.ndarray | None:
@@ -470,13 +601,13 @@ def _attach_geometry(m, source, links, frames, bodies) -> list[str]:
                   and _mesh_bounds_of(source, g) is None]
         if unread:
             # a visual mesh this reader cannot open (COLLADA, ...): the link's collision
-            # meshes (usually STL) give its bounding box instead
+            # meshes (usually STL) are drawn instead
             coll = [c for c in lk.collisions
                     if c[0].tag == "mesh" and _mesh_bounds_of(source, c[0]) is not None]
             if coll:
                 shapes = [v for v in shapes if v[0] not in unread] + coll
                 notes.append(f"line {unread[0].line}: visual mesh of link {name!r} drawn from its "
-                             "collision mesh's bounding box")
+                             "collision mesh")
         for geo, xyz, Rv in shapes:
             c = p + R @ xyz
             Rt = R @ Rv
@@ -495,13 +626,20 @@ def _attach_geometry(m, source, links, frames, bodies) -> list[str]:
             elif geo.tag == "mesh":
                 fn = geo.get("filename", "")
                 path = _resolve(source, fn)
-                bounds = _mesh_bounds(path) if path is not None else None
-                if bounds is None:
+                got = read_mesh(path) if path is not None else None
+                if got is None or not np.all(np.isfinite(got[0])):
                     notes.append(f"line {geo.line}: mesh {fn!r} of link {name!r} not drawn "
-                                 "(only STL and OBJ files found beside the URDF are read, as their "
-                                 "bounding box)")
+                                 "(only STL and OBJ files found beside the URDF are read)")
                     continue
                 scale = np.array(floats(source, geo, "scale", 3, [1.0, 1.0, 1.0]))
+                V, F = got
+                if len(F) <= MAX_DRAWN_TRIANGLES:
+                    # the triangles themselves, in the body's coordinates
+                    prims.append(draw.Mesh(b, c + (V * scale) @ Rt.T, F))
+                    continue
+                notes.append(f"line {geo.line}: mesh {fn!r} of link {name!r} drawn as its bounding "
+                             f"box ({len(F)} triangles > {MAX_DRAWN_TRIANGLES})")
+                bounds = np.array([V.min(axis=0), V.max(axis=0)])
                 lo, hi = np.minimum(bounds[0] * scale, bounds[1] * scale), np.maximum(
                     bounds[0] * scale, bounds[1] * scale)
             else:
