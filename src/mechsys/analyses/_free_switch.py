@@ -69,6 +69,7 @@ from ..solvers._integrators import (
     MAX_ERROR,
     MAX_STEP,
     RTOL,
+    counting,
     plan_run,
     stepper_class,
 )
@@ -303,6 +304,9 @@ class SwitchedFreeSystem(FreeSystem):
 
             # the compiled stepper of this stage takes the steps between events where it can
             fast = self._stepper(plans, combo, S, opt, p, sc, t_eval, t_now, y, kw)
+            calls = None
+            if opt.spec.implicit:       # its Jacobians' evaluations are not in nfev
+                rhs, calls = counting(rhs)
             setup = [fast is not None]
             # the starting step is the run's first (Mech's StartingStepSize); after an event
             # SciPy chooses from the new stage's derivatives
@@ -374,7 +378,7 @@ class SwitchedFreeSystem(FreeSystem):
                     out_t.append(float(solver.t))
                     out_y.append(yp.copy())
                     out_c.append(combo)
-            evals += solver.nfev
+            evals += solver.nfev if calls is None else calls[0]
             if hit is None:
                 t_now = t1
                 break

@@ -38,7 +38,10 @@ class Method:
     step (events are located on it); ``scipy``: the class in ``scipy.integrate`` of its Python
     path (Runge-Kutta); ``compiled``: its loop in ``_jit_free_loop`` (``"runge_kutta"`` with
     the tableau ``tableau`` of ``_tableaus``, or ``"adams"``), None when it has none;
-    ``order``: the order of the propagated solution (Runge-Kutta)."""
+    ``order``: the order of the propagated solution (Runge-Kutta); ``implicit``: an implicit
+    Runge-Kutta method for stiff models (SciPy's ``Radau``: each step solves its stage
+    equations by Newton's method with a finite-difference Jacobian of the derivative; no
+    compiled loop)."""
 
     name: str
     family: str
@@ -49,6 +52,7 @@ class Method:
     scipy: str | None = None
     tableau: str | None = None
     order: int | None = None
+    implicit: bool = False
 
     @property
     def runge_kutta(self) -> bool:
@@ -63,6 +67,11 @@ METHODS: dict[str, Method] = {m.name: m for m in (
            tableau="DOP853_TABLEAU", order=8),
     Method("rk45", "runge_kutta", _RK_OPTIONS, True, "runge_kutta", scipy="RK45",
            tableau="RK45_TABLEAU", order=5),
+    # stiff models (stiff springs and dampers, penalty contacts): Radau IIA of order 5,
+    # L-stable, on the same index-1 equations (accelerations from the augmented system) and
+    # the same projection after each step; decision 0051
+    Method("radau", "runge_kutta", _RK_OPTIONS, True, None, scipy="Radau", order=5,
+           implicit=True),
     # Mech's SolveFree integrator, three modes of when the corrector is applied
     Method("automatic", "adams", _ADAMS_OPTIONS, False, "adams", aliases=("adams",)),
     Method("predictor", "adams", _ADAMS_OPTIONS, False, "adams"),
