@@ -29,7 +29,7 @@ def test_stiff_spring_damper_against_its_closed_form():
     exact = 1.0 + a[0] * np.exp(s1 * sol.t) + a[1] * np.exp(s2 * sol.t)
     assert np.abs(sol["b.x"] - exact).max() < 1e-10
     # a stable step far beyond the explicit bound 3.3 / 1e6 s: the whole run in a few
-    # hundred steps (DOP853 needs about 15,000 here: benchmarks/stiff.py)
+    # hundred steps (DOP853 needs about 7,800 here: benchmarks/stiff.py)
     assert sol.extra["steps"] < 1000
     assert sol.extra["method"] == "radau"
     # the evaluations include those of the finite-difference Jacobians; SciPy reports no
