@@ -207,7 +207,7 @@ def _zone_ok(rows0, lam, jv, j0, jr, jc, columns, force):
     return bl < fmax / ZONE and np.isfinite(bl)
 
 
-@nb.njit(cache=True, inline='always')
+@leaf
 def _rhs(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, columns, robust,
          ipiv, ibuf, rhs, b, qdd, lam, force, blocks, blk_i, blk_w, t, y, f):
     """``f = (qd, qdd)`` at ``(t, y)``; False: hand over. ``blocks``: how (``AUGMENTED``,
@@ -216,8 +216,8 @@ def _rhs(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, 
     ``PATH``: ``f = qd`` (n,) at ``(t, q = y)``, also left in ``qdd`` (the next evaluation's
     guess, as the Python path's)."""
     if blocks >= PATH:
-        # (one call site for both kinds: the loops inline _rhs, and a smaller body here kept
-        # them as fast as before the two kinds existed)
+        # (one call site for the three kinds: a smaller body here kept the loops as fast as
+        # before they existed)
         return within(blocks, PATH, SPARSE, _other_rhs, blocks, kp, lapack, ibuf, x, nin,
                       out, KT, n, m, jr, jc, columns, ipiv, rhs, b,
                       qdd, lam, blk_i, blk_w, t, y, f, rows0, robust, force)
@@ -1212,7 +1212,8 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
             xk[1 + j] = y[j]
         _evalx(pp, xk, nin_k, out_pos, ex[1], ph[1])
         if band:
-            _band_rows_of(out_pos, m, jr, columns, r, blk_i[0][7], blk_w[0][3][0])
+            within(blocks, NEWTON, NEWTON, _band_rows_of, out_pos, m, jr, columns, r,
+                   blk_i[0][7], blk_w[0][3][0])
         elif sparse:
             _rows_nz(out_pos[m:m + nnz], jr, jc, columns, r)
         else:
@@ -1261,9 +1262,9 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
     elif band:
         w = blk_w[0][3][0]
         bnd = blk_i[0][7]
-        _band_rows_of(out_vel, 0, jr, columns, r, bnd, w)
+        within(blocks, NEWTON, NEWTON, _band_rows_of, out_vel, 0, jr, columns, r, bnd, w)
         U = bnd[4]
-        o = _band_jmap(bnd, jr.size, n + m) + jr.size
+        o = within(blocks, NEWTON, NEWTON, _band_jmap, bnd, jr.size, n + m) + jr.size
         for i in range(m):
             Fs[i] = 0.0
         for u in range(U):
@@ -1785,11 +1786,12 @@ def derivative(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, robu
     return True
 
 
-@nb.njit(cache=True)
 def workspace(kp, n, m, npar, kk, nnz, blocks, blk_i, bw):
     """The work arrays of ``runge_kutta`` and ``adams`` (their ``ws`` argument), allocated once per
     stepper by the Python caller: it owns them for the loops' whole run, which is what lets
     the loops borrow them (``_jit_borrow``: no reference counting in the inner calls).
+    Plain NumPy, not compiled: it runs once per stepper, and compiling it (every kind's
+    arrays) cost a tenth of the stepper's first compile (decision 0044).
     ``kp`` (3, 5) the kernels' rows, ``kk`` the kernel's outputs before the right-hand side,
     ``nnz`` the Jacobian's nonzeros, ``bw`` the block path's bandwidth."""
     nin = 1 + 2 * n + m + npar + n                   # [t, q, qd, lambda, p, qdd]
@@ -1816,7 +1818,6 @@ def workspace(kp, n, m, npar, kk, nnz, blocks, blk_i, bw):
             np.empty(4 * max(m, 1)), np.empty(max(m, 1), dtype=np.int32), np.empty(m))
 
 
-@nb.njit(cache=True)
 def _block_work(blocks, blk_i, n, m, bw, nnz):
     """Work arrays of ``blk_i = (block structure, Gen tree, expansion maps)`` (see ``_rhs``):
     ``((Mst, Jst, Wst, Sb, u, Pst, Minv, Li), Gen work (_gen_work), (the three kernels'
@@ -1864,7 +1865,8 @@ def _block_work(blocks, blk_i, n, m, bw, nnz):
     ph = (np.zeros(ex[0].max() + 1 if ex[0].size else 1),
           np.zeros(ex[1].max() + 1 if ex[1].size else 1),
           np.zeros(ex[2].max() + 1 if ex[2].size else 1))
-    return bw_, _gen_work(blocks, blk_i[1], n, m), ph
+    # (_gen_work's Python function: it is compiled for gen_loads, not needed here)
+    return bw_, _gen_work.py_func(blocks, blk_i[1], n, m), ph
 
 
 @nb.njit(cache=True)

@@ -28,6 +28,7 @@ the same numbers as the general one (the tests compare both bit for bit).
 from __future__ import annotations
 
 import numba as nb
+import numba.core.options  # noqa: F401  (_LEAF_OPTIONS reads it)
 from numba._dispatcher import compute_fingerprint as _compute_fingerprint
 from numba.extending import overload
 
@@ -49,7 +50,13 @@ def within(mode, lo, hi, fn, *args):
     return fn(*args) if lo <= mode <= hi else False
 
 
-@overload(within, prefer_literal=True)
+#: compiled as the loops' leaf functions (``_jit_lapack.leaf``): no reference counting of the
+#: arrays it hands on (each call would otherwise count every one of them up and down)
+_LEAF_OPTIONS = {"error_model": "numpy", **(
+    {"_nrt": False} if hasattr(getattr(nb.core.options, "DefaultOptions", None), "_nrt") else {})}
+
+
+@overload(within, prefer_literal=True, jit_options=_LEAF_OPTIONS)
 def _within_impl(mode, lo, hi, fn, *args):
     k = getattr(mode, "literal_value", None)
     if isinstance(k, int) and not lo.literal_value <= k <= hi.literal_value:
