@@ -97,8 +97,10 @@ METHODS = tuple(name for name, m in _methods.METHODS.items() if m.compiled is no
 #: the position of the mode (``blocks``) among each loop's arguments (``FreeStepper._call``)
 _MODE_AT = {"loop": 14, "adams": 14, "derivative": 13}
 #: CPU seconds of each loop's compile from empty caches for the augmented kind (the double
-#: pendulum; ``benchmarks/cold_start.py``, decision 0044), for the notice
-_COMPILE_SECONDS = {"loop": None, "adams": None, "derivative": None}
+#: pendulum's 51 s to the first result, ``benchmarks/cold_start.py``, shared as
+#: ``benchmarks/compile_profile.py`` found it; decision 0044), for the notice. Adams: not
+#: measured apart from the derivative it shares with the Runge-Kutta runs
+_COMPILE_SECONDS = {"loop": 35, "adams": None, "derivative": 15}
 
 _state: dict = {"loop": None, "adams": None, "workspace": None, "derivative": None, "coef": None,
                 "gesv": None, "path_acc": None}
