@@ -5,7 +5,7 @@ kinematic sweep hold every solver kind in one function (``blocks``: dense augmen
 Gen tree, path, Newton, sparse; the sweep: dense or sparse LU), chosen at run time. Numba
 types, and so compiles, every function a loop can call, whichever kind a run takes: the
 double pendulum paid for the sparse LU, the Newton with its banded pattern and the block
-path it never runs (about 80 % of the first run's CPU, decision 0044).
+path it never runs (about two thirds of the first run's CPU, decision 0044).
 
 Two pieces make the kind a compile-time constant without a second copy of any algorithm:
 
@@ -94,8 +94,8 @@ _ENTRIES: dict = {}
 
 def _fingerprint(a):
     """Numba's own key of the type of ``a`` (its C dispatcher's: dtype, dimensions, layout,
-    for arrays and tuples of them), 1-2 µs; typing the arguments with ``numba.typeof``
-    instead cost about 100 µs a call."""
+    for arrays and tuples of them), about 1 µs an argument; ``numba.typeof`` took about 100
+    µs an argument (measured on the loaded 2-core machine), milliseconds for a loop's 40."""
     try:
         return _compute_fingerprint(a)
     except (TypeError, ValueError, NotImplementedError):   # (a type it does not key)
