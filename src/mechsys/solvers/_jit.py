@@ -233,7 +233,11 @@ def _recursive_loads(system, times, Q, QD, QDD, p, code):
     if gen is None:
         return None
     if _state.get("gen_loads") is None:
+        from ._jit_cache import notice
         from ._jit_free_loop import gen_loads
+
+        # (every compile of more than about a second is announced: decision 0044)
+        notice("the recursive dynamics' loads", None, ("_jit_free_loop", "gen_loads"))
 
         _state["gen_loads"] = gen_loads
     N, n = len(times), system.n

@@ -921,7 +921,11 @@ class FreeStepper:
         if any(e is None for e in entries):
             return 0
         if _state.get("path_acc") is None:
+            from ._jit_cache import notice
             from ._jit_free_loop import path_accelerations
+
+            # (every compile of more than about a second is announced: decision 0044)
+            notice("a path's accelerations", None, ("_jit_free_loop", "path_accelerations"))
 
             _state["path_acc"] = path_accelerations
         return int(_state["path_acc"](
