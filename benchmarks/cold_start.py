@@ -102,7 +102,8 @@ def main(argv=None) -> int:
         "CPU time of a fresh process (imports included) to the first result, with empty Numba "
         "and kernel caches (`NUMBA_CACHE_DIR`, `MECHSYS_CACHE` in new directories), then of a "
         "second fresh process with the caches the first filled. Most of the cold time is "
-        "Numba compiling the compiled loops once; decision 0039."), lambda: table(measure()),
+        "Numba compiling the compiled loops once, each for the solver kind the run uses; decisions "
+        "0039 (measured) and 0044 (compiled per kind; before and after there)."), lambda: table(measure()),
         argv)
 
 

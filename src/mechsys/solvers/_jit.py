@@ -190,17 +190,18 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
     table = _table(kernels)
     if table is None:
         return 0
-    if _state.get("multipliers") is None:
-        from ._jit_cache import notice
+    from ._jit_cache import notice
+    from ._jit_loop import SPARSE as _SPARSE_BW
+    from ._jit_modes import entry
 
-        notice("the multiplier solves", 8, ("_jit_multipliers", "multipliers"))
+    if _state.get("multipliers") is None:
         from ._jit_multipliers import multipliers as loop
 
         _state["multipliers"] = loop
     _state["loaded"] = True
     dummy = np.zeros((1, system.n))
     bw, band = _band_args(system) if system.n > SPARSE_THRESHOLD else _NO_BAND
-    return int(_state["multipliers"](
+    args = (
         table, _lapack(), np.ascontiguousarray(times, dtype=float),
         np.ascontiguousarray(Q, dtype=float),
         dummy if code == 0 else np.ascontiguousarray(QD, dtype=float),
@@ -210,7 +211,11 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
         _index(dyn.M_cols), len(dyn.M_rows), code, LAM, dr, dc,
         np.broadcast_to(np.asarray(guess, dtype=float), (system.m,)).copy(), float(tol),
         int(max_iterations), np.ascontiguousarray(columns, dtype=float), _band_lapack(), bw,
-        band, kband, Rpre))
+        band, kband, Rpre, bool(bw[0] == _SPARSE_BW))
+    # specialised on the last argument: only the dense or only the sparse solves compiled
+    # (decision 0044)
+    return int(entry(_state["multipliers"], args, literal=(len(args) - 1,), say=lambda _: notice(
+        "the multiplier solves" + (" (sparse)" if args[-1] else ""), _MULTIPLIER_SECONDS))(*args))
 
 
 def _recursive_loads(system, times, Q, QD, QDD, p, code):
@@ -228,7 +233,11 @@ def _recursive_loads(system, times, Q, QD, QDD, p, code):
     if gen is None:
         return None
     if _state.get("gen_loads") is None:
+        from ._jit_cache import notice
         from ._jit_free_loop import gen_loads
+
+        # (every compile of more than about a second is announced: decision 0044)
+        notice("the recursive dynamics' loads", None, ("_jit_free_loop", "gen_loads"))
 
         _state["gen_loads"] = gen_loads
     N, n = len(times), system.n
@@ -273,6 +282,12 @@ def _patterned(system) -> bool:
 
 
 #: the dense sweep's (unused) sparse-LU arguments
+#: CPU seconds of the kinematic sweep's compile from empty caches (the slider-crank's dense
+#: kind; ``benchmarks/cold_start.py``, decision 0044), for the notice
+_SWEEP_SECONDS = 30
+#: the same for the multiplier solves (the slider-crank's inverse dynamics less its sweep)
+_MULTIPLIER_SECONDS = 8
+
 _NO_BAND = (np.array([-1, 0, 0, 0], dtype=np.int64), (np.zeros(0, dtype=np.int64),) * 7)
 
 
@@ -373,14 +388,14 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
     ``R`` (N, n): when given, a point whose condition estimate is proven to be at least
     ``RCOND_WARN`` gets ``RCOND_PENDING`` in ``rconds`` and its row scales in ``R``, for
     :func:`rcond_filler` (decision 0023); None: every estimate is computed in the loop."""
-    if _state["loop"] is None:
-        from ._jit_cache import notice
+    from ._jit_cache import notice as _notice
+    from ._jit_loop import SPARSE as _SPARSE_BW
+    from ._jit_modes import entry as _entry
 
-        notice("the kinematic sweep", 30, ("_jit_loop", "sweep_dense"))
+    if _state["loop"] is None:
         from ._jit_loop import sweep_dense
 
         _state["loop"] = sweep_dense
-    loop = _state["loop"]
     _state["loaded"] = True
     n = system.n
     dummy = np.zeros((1, n))
@@ -403,14 +418,18 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
     else:
         scale = np.array([scaling.length, scaling.offset])
         columns = np.ascontiguousarray(scaling.columns, dtype=float)
-    k, evals = loop(pointers, _lapack(), np.ascontiguousarray(times, dtype=float),
-                    np.ascontiguousarray(q0, dtype=float),
-                    np.ascontiguousarray(system.p_values if p is None else p, dtype=float),
-                    _index(system.jac_rows), _index(system.jac_cols), columns, scale,
-                    float(options.ftol), int(options.max_iterations), bool(options.damping),
-                    int(order), _index(rot), trans, _index(body), length_hint(system), Q,
-                    qd_out, qdd_out, its, rc, rprev, lazy, R if lazy else dummy, int(first),
-                    bool(chord_start), bw, band)
+    args = (pointers, _lapack(), np.ascontiguousarray(times, dtype=float),
+            np.ascontiguousarray(q0, dtype=float),
+            np.ascontiguousarray(system.p_values if p is None else p, dtype=float),
+            _index(system.jac_rows), _index(system.jac_cols), columns, scale,
+            float(options.ftol), int(options.max_iterations), bool(options.damping),
+            int(order), _index(rot), trans, _index(body), length_hint(system), Q,
+            qd_out, qdd_out, its, rc, rprev, lazy, R if lazy else dummy, int(first),
+            bool(chord_start), bw, band, bool(bw[0] == _SPARSE_BW))
+    # the loop specialised on its kind (the last argument: the sparse LU or the dense one),
+    # compiling only that kind's solvers (decision 0044)
+    k, evals = _entry(_state["loop"], args, literal=(len(args) - 1,), say=lambda _: _notice(
+        "the kinematic sweep" + (" (sparse)" if args[-1] else ""), _SWEEP_SECONDS))(*args)
     if scaling is None:
         scaling = Scaling(float(scale[0]), columns, float(scale[1]))
     return int(k), int(evals), scaling

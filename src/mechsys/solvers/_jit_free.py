@@ -94,6 +94,14 @@ ADAMS_CHUNK_VALUES = 2_000_000
 #: the methods with a compiled loop: those of the registry (``_methods``) that name one
 METHODS = tuple(name for name, m in _methods.METHODS.items() if m.compiled is not None)
 
+#: the position of the mode (``blocks``) among each loop's arguments (``FreeStepper._call``)
+_MODE_AT = {"loop": 14, "adams": 14, "derivative": 13}
+#: CPU seconds of each loop's compile from empty caches for the augmented kind (the double
+#: pendulum's 51 s to the first result, ``benchmarks/cold_start.py``, shared as
+#: ``benchmarks/compile_profile.py`` found it; decision 0044), for the notice. Adams: not
+#: measured apart from the derivative it shares with the Runge-Kutta runs
+_COMPILE_SECONDS = {"loop": 35, "adams": None, "derivative": 15}
+
 _state: dict = {"loop": None, "adams": None, "workspace": None, "derivative": None, "coef": None,
                 "gesv": None, "path_acc": None}
 
@@ -747,14 +755,12 @@ class FreeStepper:
         self.EQDD, self.ELAM = np.full((k, n), np.nan), np.full((k, m), np.nan)
         self.steps = 0
         if _state["loop"] is None:
-            from ._jit_cache import notice
-
-            # (a DOP853 run from empty caches: 123 s of CPU, the derivative and set-up included)
-            notice("the free-motion stepper", 120, ("_jit_free_loop", "derivative"))
             from ._jit_free_loop import adams, derivative, runge_kutta, workspace
 
             _state["loop"], _state["adams"], _state["workspace"] = runge_kutta, adams, workspace
             _state["derivative"] = derivative
+        #: the loops' machine code specialised on this stepper's mode (``_call``)
+        self._entries: dict = {}
         # the loops' work arrays, owned here for every run of this stepper (the loops borrow
         # them: decision 0021)
         self.ws = _workspace(self, system)
@@ -917,7 +923,11 @@ class FreeStepper:
         if any(e is None for e in entries):
             return 0
         if _state.get("path_acc") is None:
+            from ._jit_cache import notice
             from ._jit_free_loop import path_accelerations
+
+            # (every compile of more than about a second is announced: decision 0044)
+            notice("a path's accelerations", None, ("_jit_free_loop", "path_accelerations"))
 
             _state["path_acc"] = path_accelerations
         return int(_state["path_acc"](
@@ -947,9 +957,9 @@ class FreeStepper:
         f = np.array(solver.f, dtype=float)
         atol = np.broadcast_to(np.asarray(solver.atol, dtype=float), (self.ny,)).copy()
         t_prev = solver.t
-        status, steps, ie, evals, rejected, projections = _state["loop"](
-            self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr, self.jc,
-            self.rows0, self.columns, self.offset, self.robust, self.mode,
+        status, steps, ie, evals, rejected, projections = self._call(
+            "loop", self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr,
+            self.jc, self.rows0, self.columns, self.offset, self.robust, self.mode,
             self.blk_i, self.ws, self.correction, 1e-12, 8, method, A, B, C, E3, E5, D,
             float(solver.rtol), atol, float(solver.max_step),
             float(solver.t_bound), float(solver.direction), state, y, f, self.t_eval, int(ie),
@@ -986,9 +996,9 @@ class FreeStepper:
         ff = np.array(f, dtype=float)
         atol = np.broadcast_to(np.asarray(solver.atol, dtype=float), (self.ny,)).copy()
         none = np.zeros(0)
-        status, steps, _, evals, _, _ = _state["loop"](
-            self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr, self.jc,
-            self.rows0, self.columns, self.offset, self.robust, self.mode,
+        status, steps, _, evals, _, _ = self._call(
+            "loop", self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr,
+            self.jc, self.rows0, self.columns, self.offset, self.robust, self.mode,
             self.blk_i, self.ws, self.correction, 1e-12, 8, method, A, B, C, E3, E5, D,
             float(solver.rtol), atol, float(solver.max_step),
             float(solver.t_bound), float(solver.direction), state, yy, ff, none, 0, 1,
@@ -999,6 +1009,23 @@ class FreeStepper:
             return None
         return float(T[0]), Y[0].copy(), StepDense(t, float(T[0]), FD, method)
 
+    def _call(self, name: str, *args):
+        """``_state[name](*args)`` (a loop of ``_jit_free_loop``) through its machine code
+        specialised on this stepper's mode (``_jit_modes.entry``: the mode argument typed as
+        its value, so that only this mode's solvers are compiled; decision 0044), found once
+        per stepper. A compile from empty caches is announced first (``_jit_cache.notice``)."""
+        fn = self._entries.get(name)
+        if fn is None:
+            from ._jit_cache import notice
+            from ._jit_modes import entry
+
+            what = {"loop": "the free-motion stepper", "adams": "Mech's Adams integrator",
+                    "derivative": "the free-motion derivative"}[name]
+            fn = self._entries[name] = entry(
+                _state[name], args, literal=(_MODE_AT[name],),
+                say=lambda _: notice(f"{what} ({self.solver})", _COMPILE_SECONDS[name]))
+        return fn(*args)
+
     def derivative(self, t: float, y: np.ndarray):
         """``(f, lam)``: the derivative ``f = (qd, qdd)`` (2n,) and the multipliers (m,) at
         ``(t, y)`` computed as the compiled loop computes them (about 10 µs from Python
@@ -1006,9 +1033,10 @@ class FreeStepper:
         decide (its special handling: the loops hand over there too)."""
         n, m = self.n, self.m
         f, lam = np.empty(self.ny), np.empty(m)
-        ok = _state["derivative"](
-            self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr, self.jc,
-            self.rows0, self.columns, self.robust, self.mode, self.blk_i, self.ws, float(t),
+        ok = self._call(
+            "derivative", self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m,
+            self.jr, self.jc, self.rows0, self.columns, self.robust, self.mode, self.blk_i,
+            self.ws, float(t),
             np.ascontiguousarray(y, dtype=float), f, lam)
         return (f, lam) if ok else None
 
@@ -1039,18 +1067,15 @@ class FreeStepper:
         [t, h, history length, recent count, rejected]``, arrays updated in place. Returns
         ``(status, T, Y, H, E, QDD, LAM, evaluations, projections)``."""
         n, m = self.n, self.m
-        from ._jit_cache import notice
-
-        notice("Mech's Adams integrator", None, ("_jit_free_loop", "adams"))
         if max_steps is None:
             max_steps = max(CHUNK_STEPS, min(10 * CHUNK_STEPS, ADAMS_CHUNK_VALUES // self.ny))
         T, H, E = np.empty(max_steps), np.empty(max_steps), np.empty(max_steps)
         Y = np.empty((max_steps, self.ny))
         QDD, LAM = np.empty((max_steps, n)), np.empty((max_steps, m))
         k, (a, b, c), method, fixed, inv_scale, t1 = options
-        status, steps, evals, projections = _state["adams"](
-            self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr, self.jc,
-            self.rows0, self.columns, self.offset, self.robust, self.mode,
+        status, steps, evals, projections = self._call(
+            "adams", self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr,
+            self.jc, self.rows0, self.columns, self.offset, self.robust, self.mode,
             self.blk_i, self.ws, self.correction, 1e-12, 8, int(k), float(a), float(b),
             float(c), int(method), bool(fixed), inv_scale,
             float(t1), state, y, hist_t, hist_f, recent, int(max_steps), T, Y, H, E, QDD, LAM)

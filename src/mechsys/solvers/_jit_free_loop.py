@@ -51,6 +51,7 @@ from ._jit_loop import _band_factor as _gb_factor
 from ._jit_loop import _band_solve as _gb_solve
 from ._jit_loop import _sparse_factor as _sp_factor
 from ._jit_loop import _sparse_solve_scaled as _sp_solve_scaled
+from ._jit_modes import within
 from ._jit_sparse import IWORK, lu_factor, lu_pivot_ratio, lu_solve
 from ._jit_tree import articulated as _articulated
 from ._jit_tree import assemble as _gen_assemble
@@ -206,7 +207,7 @@ def _zone_ok(rows0, lam, jv, j0, jr, jc, columns, force):
     return bl < fmax / ZONE and np.isfinite(bl)
 
 
-@nb.njit(cache=True, inline='always')
+@leaf
 def _rhs(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, columns, robust,
          ipiv, ibuf, rhs, b, qdd, lam, force, blocks, blk_i, blk_w, t, y, f):
     """``f = (qd, qdd)`` at ``(t, y)``; False: hand over. ``blocks``: how (``AUGMENTED``,
@@ -215,28 +216,29 @@ def _rhs(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, 
     ``PATH``: ``f = qd`` (n,) at ``(t, q = y)``, also left in ``qdd`` (the next evaluation's
     guess, as the Python path's)."""
     if blocks >= PATH:
-        # (one call site for both kinds: the loops inline _rhs, and a smaller body here kept
-        # them as fast as before the two kinds existed)
-        return _other_rhs(blocks, kp, lapack, ibuf, x, nin, out, KT, n, m, jr, jc, columns,
-                          ipiv, rhs, b,
-                          qdd, lam, blk_i, blk_w, t, y, f, rows0, robust, force)
+        # (one call site for the three kinds: a smaller body here kept the loops as fast as
+        # before they existed)
+        return within(blocks, PATH, SPARSE, _other_rhs, blocks, kp, lapack, ibuf, x, nin,
+                      out, KT, n, m, jr, jc, columns, ipiv, rhs, b,
+                      qdd, lam, blk_i, blk_w, t, y, f, rows0, robust, force)
     x[0] = t
     for j in range(2 * n):
         x[1 + j] = y[j]
     ex, ph = blk_i[2], blk_w[2]
     if blocks == BLOCK:
         Mst, Jst, Wst, Sb, u, Pst, Minv, Li = blk_w[0]
-        if not _accel_blocks(kp, x, nin, out, kk, kk - jr.size, n, m, jr, jc, rows0, columns,
-                             robust, blk_i[0], Mst, Jst, Wst, Sb, u, Minv, Li, qdd, lam, force,
-                             ex[0], ph[0]):
+        if not within(blocks, BLOCK, BLOCK, _accel_blocks, kp, x, nin, out, kk, kk - jr.size,
+                      n, m, jr, jc, rows0, columns, robust, blk_i[0], Mst, Jst, Wst, Sb, u,
+                      Minv, Li, qdd, lam, force, ex[0], ph[0]):
             return False
     elif blocks >= GEN_TREE:
-        if not _accel_gen(kp, lapack, x, nin, n, m, jr, jc, rows0, columns, robust, ipiv, ibuf,
-                          rhs, b, qdd, lam, force, blk_i[1], blk_w[1], ex[0], ph[0],
-                          blocks == GEN_TREE, y):
+        if not within(blocks, GEN_TREE, GEN_AUGMENTED, _accel_gen, kp, lapack, x, nin, n, m,
+                      jr, jc, rows0, columns, robust, ipiv, ibuf, rhs, b, qdd, lam, force,
+                      blk_i[1], blk_w[1], ex[0], ph[0], blocks == GEN_TREE, y):
             return False
-    elif not _accel(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, columns,
-                    robust, ipiv, ibuf, rhs, b, qdd, lam, force, ex[0], ph[0]):
+    elif not within(blocks, AUGMENTED, AUGMENTED, _accel, kp, lapack, x, nin, out, KT, KTf,
+                    flat_t, mp, kk, n, m, jr, jc, rows0, columns, robust, ipiv, ibuf, rhs, b,
+                    qdd, lam, force, ex[0], ph[0]):
         return False
     for j in range(n):
         f[j] = y[n + j]
@@ -251,24 +253,25 @@ def _other_rhs(blocks, kp, lapack, ibuf, x, nin, out, KT, n, m, jr, jc, columns,
     qdd)``; above ``SMALL_LU`` unknowns through the Newton matrix's banded pattern,
     ``_newton_accel_band``)."""
     if blocks == PATH and blk_i[0][7].size > 1:
-        return _path_velocity_sparse(kp, x, out, n, m, jr, jc, columns, qdd, blk_i[0],
-                                     blk_w[0], blk_i[2][0], blk_w[2][0], blk_i[2][2],
-                                     blk_w[2][2], t, y, f)
+        return within(blocks, PATH, PATH, _path_velocity_sparse, kp, x, out, n, m, jr, jc,
+                      columns, qdd, blk_i[0], blk_w[0], blk_i[2][0], blk_w[2][0], blk_i[2][2],
+                      blk_w[2][2], t, y, f)
     if blocks == PATH:
-        return _path_velocity(kp, x, out, KT, n, m, jr, jc, columns, ipiv, rhs, b, qdd,
-                              blk_i[0][0], blk_w[0], blk_i[2][0], blk_w[2][0], blk_i[2][2],
-                              blk_w[2][2], t, y, f)
+        return within(blocks, PATH, PATH, _path_velocity, kp, x, out, KT, n, m, jr, jc,
+                      columns, ipiv, rhs, b, qdd, blk_i[0][0], blk_w[0], blk_i[2][0],
+                      blk_w[2][0], blk_i[2][2], blk_w[2][2], t, y, f)
     if blocks == SPARSE:
-        return _accel_sparse(kp, x, nin, out, n, m, jr, jc, rows0, columns, robust, qdd, lam,
-                             force, blk_i[0], blk_w[0], blk_i[2][0], blk_w[2][0], t, y, f)
+        return within(blocks, SPARSE, SPARSE, _accel_sparse, kp, x, nin, out, n, m, jr, jc,
+                      rows0, columns, robust, qdd, lam, force, blk_i[0], blk_w[0], blk_i[2][0],
+                      blk_w[2][0], t, y, f)
     bi = blk_i[0]
     if bi[7].size > 1:
-        return _newton_accel_band(kp, lapack, ibuf, x, nin, out, n, m, jr, jc, ipiv, qdd, lam,
-                                  bi[0], bi[1], bi[2], bi[3], bi[4], bi[5], bi[6], bi[7],
-                                  blk_w[0], blk_i[2][0], blk_w[2][0], t, y, f)
-    return _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, rhs, b, qdd, lam, bi[0], bi[1],
-                         bi[2], bi[3], bi[4], bi[5], bi[6], blk_w[0], blk_i[2][0], blk_w[2][0],
-                         t, y, f)
+        return within(blocks, NEWTON, NEWTON, _newton_accel_band, kp, lapack, ibuf, x, nin,
+                      out, n, m, jr, jc, ipiv, qdd, lam, bi[0], bi[1], bi[2], bi[3], bi[4],
+                      bi[5], bi[6], bi[7], blk_w[0], blk_i[2][0], blk_w[2][0], t, y, f)
+    return within(blocks, NEWTON, NEWTON, _newton_accel, kp, x, nin, out, KT, n, m, jr, jc,
+                  ipiv, rhs, b, qdd, lam, bi[0], bi[1], bi[2], bi[3], bi[4], bi[5], bi[6],
+                  blk_w[0], blk_i[2][0], blk_w[2][0], t, y, f)
 
 
 @leaf
@@ -1190,9 +1193,9 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
     False (``y`` then undefined): hand over. ``blocks``: by the block path when ``BLOCK``."""
     ex, ph = blk_i[2], blk_w[2]
     if blocks == BLOCK:
-        return _project_blocks(pp, pv, xk, nin_k, out_pos, out_vel, jr, jc, columns, offset,
-                               tol, maxit, robust, n, m, t, y, r, Fs, dq, blk_i[0], blk_w[0][5],
-                               blk_w[0][3], ex, ph)
+        return within(blocks, BLOCK, BLOCK, _project_blocks, pp, pv, xk, nin_k, out_pos,
+                      out_vel, jr, jc, columns, offset, tol, maxit, robust, n, m, t, y, r, Fs,
+                      dq, blk_i[0], blk_w[0][5], blk_w[0][3], ex, ph)
     # a large NEWTON system: the Jacobian by its distinct nonzeros, the minimum-norm
     # correction through the Newton matrix's banded pattern (_min_norm_band); the sparse kind:
     # the Jacobian's values straight from the kernels (each entry once), the correction
@@ -1209,7 +1212,8 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
             xk[1 + j] = y[j]
         _evalx(pp, xk, nin_k, out_pos, ex[1], ph[1])
         if band:
-            _band_rows_of(out_pos, m, jr, columns, r, blk_i[0][7], blk_w[0][3][0])
+            within(blocks, NEWTON, NEWTON, _band_rows_of, out_pos, m, jr, columns, r,
+                   blk_i[0][7], blk_w[0][3][0])
         elif sparse:
             _rows_nz(out_pos[m:m + nnz], jr, jc, columns, r)
         else:
@@ -1224,12 +1228,12 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
         if big <= lim:
             break
         if band:
-            if not _min_norm_band(lapack, ibuf, ipiv, r, columns, Fs, dq, n, m, jr,
-                                  blk_i[0][7], blk_w[0][3][0]):
+            if not within(blocks, NEWTON, NEWTON, _min_norm_band, lapack, ibuf, ipiv, r,
+                          columns, Fs, dq, n, m, jr, blk_i[0][7], blk_w[0][3][0]):
                 return False
         elif sparse:
-            if not _min_norm_sparse(r, columns, Fs, dq, n, m, jr, jc, out_pos[m:m + nnz],
-                                    blk_i[0], blk_w[0], robust):
+            if not within(blocks, PATH, SPARSE, _min_norm_sparse, r, columns, Fs, dq, n, m,
+                          jr, jc, out_pos[m:m + nnz], blk_i[0], blk_w[0], robust):
                 return False
         elif not _min_norm(lapack, J, r, columns, Fs, dq, Js, A, ipiv, ibuf, cbuf, dbuf, work,
                            iwork, ybuf, robust):
@@ -1252,22 +1256,23 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
             Fs[jr[k]] += out_vel[k] * y[n + jc[k]]
         for i in range(m):
             Fs[i] = (Fs[i] - (-out_vel[nnz + i])) / r[i]
-        if not _min_norm_sparse(r, columns, Fs, dq, n, m, jr, jc, out_vel[:nnz], blk_i[0],
-                                blk_w[0], robust):
+        if not within(blocks, PATH, SPARSE, _min_norm_sparse, r, columns, Fs, dq, n, m, jr, jc,
+                      out_vel[:nnz], blk_i[0], blk_w[0], robust):
             return False
     elif band:
         w = blk_w[0][3][0]
         bnd = blk_i[0][7]
-        _band_rows_of(out_vel, 0, jr, columns, r, bnd, w)
+        within(blocks, NEWTON, NEWTON, _band_rows_of, out_vel, 0, jr, columns, r, bnd, w)
         U = bnd[4]
-        o = _band_jmap(bnd, jr.size, n + m) + jr.size
+        o = within(blocks, NEWTON, NEWTON, _band_jmap, bnd, jr.size, n + m) + jr.size
         for i in range(m):
             Fs[i] = 0.0
         for u in range(U):
             Fs[bnd[o + u]] += w[u] * y[n + bnd[o + U + u]]
         for i in range(m):
             Fs[i] = (Fs[i] - (-out_vel[nnz + i])) / r[i]
-        if not _min_norm_band(lapack, ibuf, ipiv, r, columns, Fs, dq, n, m, jr, blk_i[0][7], w):
+        if not within(blocks, NEWTON, NEWTON, _min_norm_band, lapack, ibuf, ipiv, r, columns,
+                      Fs, dq, n, m, jr, blk_i[0][7], w):
             return False
     else:
         _assemble(out_vel, 0, jr, jc, J)
@@ -1781,11 +1786,12 @@ def derivative(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, robu
     return True
 
 
-@nb.njit(cache=True)
 def workspace(kp, n, m, npar, kk, nnz, blocks, blk_i, bw):
     """The work arrays of ``runge_kutta`` and ``adams`` (their ``ws`` argument), allocated once per
     stepper by the Python caller: it owns them for the loops' whole run, which is what lets
     the loops borrow them (``_jit_borrow``: no reference counting in the inner calls).
+    Plain NumPy, not compiled: it runs once per stepper, and compiling it (every kind's
+    arrays) cost a tenth of the stepper's first compile (decision 0044).
     ``kp`` (3, 5) the kernels' rows, ``kk`` the kernel's outputs before the right-hand side,
     ``nnz`` the Jacobian's nonzeros, ``bw`` the block path's bandwidth."""
     nin = 1 + 2 * n + m + npar + n                   # [t, q, qd, lambda, p, qdd]
@@ -1812,7 +1818,6 @@ def workspace(kp, n, m, npar, kk, nnz, blocks, blk_i, bw):
             np.empty(4 * max(m, 1)), np.empty(max(m, 1), dtype=np.int32), np.empty(m))
 
 
-@nb.njit(cache=True)
 def _block_work(blocks, blk_i, n, m, bw, nnz):
     """Work arrays of ``blk_i = (block structure, Gen tree, expansion maps)`` (see ``_rhs``):
     ``((Mst, Jst, Wst, Sb, u, Pst, Minv, Li), Gen work (_gen_work), (the three kernels'
@@ -1860,7 +1865,8 @@ def _block_work(blocks, blk_i, n, m, bw, nnz):
     ph = (np.zeros(ex[0].max() + 1 if ex[0].size else 1),
           np.zeros(ex[1].max() + 1 if ex[1].size else 1),
           np.zeros(ex[2].max() + 1 if ex[2].size else 1))
-    return bw_, _gen_work(blocks, blk_i[1], n, m), ph
+    # (_gen_work's Python function: it is compiled for gen_loads, not needed here)
+    return bw_, _gen_work.py_func(blocks, blk_i[1], n, m), ph
 
 
 @nb.njit(cache=True)

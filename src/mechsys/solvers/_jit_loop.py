@@ -39,6 +39,7 @@ from numba.extending import intrinsic
 
 from ._jit_cache import check as _check_cache
 from ._jit_lapack import GUARD_MARGIN, gecon1, getrf, inv_norm_bound, leaf, pattern_size, symbolic_pattern
+from ._jit_modes import within
 from ._jit_sparse import IWORK, lu_factor, lu_pivot_ratio, lu_solve, lu_solve_t
 from ._kinematics import RCOND_PENDING, RCOND_WARN, ROTATION_JUMP, ROTATION_SLACK, ROTATION_START
 from ._linalg import ARM_ROUNDOFF, PIVOT_TOL, RCOND_MIN, SPARSE_THRESHOLD
@@ -639,7 +640,7 @@ def _unique(jr, jc, m, n):
 @nb.njit(cache=True)
 def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit, damping, order,
                 rot, trans, body, hint, Q, QD, QDD, its, rconds, rprev, lazy, R, first,
-                chord_start, bw, band):
+                chord_start, bw, band, large):
     """The sweep's regular points (see the module docstring); returns ``(k, evaluations)``
     with ``k`` the first point left to the Python loop. ``rprev`` (n,) receives the row
     scales of the last solved point's velocity factorisation (the chord of the next point:
@@ -664,7 +665,10 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
     calls): ``bw = (SPARSE, nnz, capL, capU)``, ``band = (slot, cr, cc, pos, row_perm, perm,
     head)`` (each nonzero value's CSC entry; each entry's row, column and position in ``B =
     P Q A P^T``; the pattern's row and column orders; ``B``'s CSC structure). Its condition
-    estimate is the pivot ratio, always computed (never pending); ``scale`` must be given."""
+    estimate is the pivot ratio, always computed (never pending); ``scale`` must be given.
+    ``large``: ``bw[0] == SPARSE``, given apart so that a caller can pass it as a literal
+    (``_jit_modes.entry``: the sparse LU is then compiled only for the sweeps that use it;
+    decision 0044)."""
     n = q0.size
     m = n
     nnz = jr.size
@@ -677,7 +681,6 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
     out_pos = np.empty(m + nnz)
     out_vel = np.empty(nnz + m)
     out_gam = np.empty(m)
-    large = bw[0] == SPARSE          # (through the FixedPattern's sparse LU)
     slot, cr, cc, pos, row_perm, perm, si0 = band
     nd = 1 if large else n          # the dense matrices are not used when large
     J, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, r = _factor_work(m, n, nd)
@@ -722,7 +725,8 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
         _eval_row(ptrs, 1, x, nin, out_vel)
         if large:
             _band_values(out_vel, 0, slot, data)
-            have_chord = _sparse_factor(data, cr, cc, pos, r, columns, AB, bw, SI) >= RCOND_WARN
+            have_chord = within(large, 1, 1, _sparse_factor, data, cr, cc, pos,
+                                r, columns, AB, bw, SI) >= RCOND_WARN
         else:
             if unique:
                 anorm = _fill_nz(out_vel, jr, jc, r, columns, B)
@@ -787,9 +791,11 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                     # (the step is the chord step's below, written twice on purpose: a shared
                     # helper, inlined by Numba, made the sweep 7-9 % slower, measured)
                     if large and last_chord:
-                        _sparse_solve_scaled(AB, bw, SI, row_perm, perm, rprev, columns, F, dq, tmp, False)
+                        within(large, 1, 1, _sparse_solve_scaled, AB, bw, SI, row_perm, perm,
+                               rprev, columns, F, dq, tmp, False)
                     elif large:
-                        _sparse_solve_scaled(AB, bw, SI, row_perm, perm, r, columns, F, dq, tmp, False)
+                        within(large, 1, 1, _sparse_solve_scaled, AB, bw, SI, row_perm, perm,
+                               r, columns, F, dq, tmp, False)
                     elif last_chord:
                         _solve(lapack, B, ipiv, nz, rprev, columns, F, dq, ibuf, cbuf)
                     else:
@@ -819,7 +825,8 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
             if chord:
                 # chord step with the previous point's factorisation (_position.solve_position)
                 if large:
-                    _sparse_solve_scaled(AB, bw, SI, row_perm, perm, rprev, columns, F, dq, tmp, False)
+                    within(large, 1, 1, _sparse_solve_scaled, AB, bw, SI, row_perm, perm,
+                           rprev, columns, F, dq, tmp, False)
                 else:
                     _solve(lapack, B, ipiv, nz, rprev, columns, F, dq, ibuf, cbuf)
                 for j in range(n):
@@ -850,9 +857,11 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
             last_chord = False
             if large:
                 _band_values(jv, 0, slot, data)
-                if _sparse_factor(data, cr, cc, pos, r, columns, AB, bw, SI) < 0:
+                if within(large, 1, 1, _sparse_factor, data, cr, cc, pos,
+                          r, columns, AB, bw, SI) < 0:
                     break
-                _sparse_solve_scaled(AB, bw, SI, row_perm, perm, r, columns, F, dq, tmp, False)
+                within(large, 1, 1, _sparse_solve_scaled, AB, bw, SI, row_perm, perm,
+                       r, columns, F, dq, tmp, False)
             else:
                 if stale:
                     _assemble(jv, 0, jr, jc, J)
@@ -901,7 +910,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
             _eval_row(ptrs, 1, x, nin, out_vel)
             if large:
                 _band_values(out_vel, 0, slot, data)
-                rc = _sparse_factor(data, cr, cc, pos, r, columns, AB, bw, SI)
+                rc = within(large, 1, 1, _sparse_factor, data, cr, cc, pos, r, columns, AB, bw, SI)
             else:
                 if unique:   # (B straight from the values: assembling J first cost 4 %)
                     anorm = _fill_nz(out_vel, jr, jc, r, columns, B)
@@ -923,7 +932,8 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
             for i in range(m):
                 rhs[i] = -out_vel[nnz + i]
             if large:
-                _sparse_solve_scaled(AB, bw, SI, row_perm, perm, r, columns, rhs, dq, tmp, False)
+                within(large, 1, 1, _sparse_solve_scaled, AB, bw, SI, row_perm, perm,
+                       r, columns, rhs, dq, tmp, False)
             else:
                 _solve(lapack, B, ipiv, nz, r, columns, rhs, dq, ibuf, cbuf)
             for j in range(n):
@@ -935,7 +945,8 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                     x[1 + n + j] = dq[j]
                 _eval_row(ptrs, 2, x, nin, out_gam)
                 if large:
-                    _sparse_solve_scaled(AB, bw, SI, row_perm, perm, r, columns, out_gam, dq, tmp, False)
+                    within(large, 1, 1, _sparse_solve_scaled, AB, bw, SI, row_perm, perm,
+                           r, columns, out_gam, dq, tmp, False)
                 else:
                     _solve(lapack, B, ipiv, nz, r, columns, out_gam, dq, ibuf, cbuf)
                 for j in range(n):

@@ -59,6 +59,7 @@ from ._jit_loop import (
     _structure,
     big_sizes,
 )
+from ._jit_modes import within
 
 _check_cache()   # stale cached loops go before anything here compiles (see _jit_cache)
 
@@ -90,7 +91,7 @@ def _loads(ptrs, xd, nin_d, out_dyn, mode, QDD, k, mr, mc, kM, n, Mq, rhs):
 
 @nb.njit(cache=True)
 def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LAM, dr, dc,
-                guess, tol, maxit, cols, blapack, bw, band, kband, Rpre):
+                guess, tol, maxit, cols, blapack, bw, band, kband, Rpre, banded):
     """``LAM[k]`` (m,) at each point ``k`` from 0 on; returns the first point left to the
     Python path (``len(times)`` when all are done).
 
@@ -123,7 +124,10 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
 
     ``Rpre`` (N, n): the right-hand sides given (the recursive Gen dynamics, which has no
     dynamics kernel: ``_jit_free_loop.gen_loads``; ``ptrs[1]`` is then zeros and never
-    called), or (0, n): from the dynamics kernel."""
+    called), or (0, n): from the dynamics kernel. ``banded``: ``bw[0] == SPARSE``, given apart so
+    that a caller can pass it as a literal (``_jit_modes.entry``: the sparse and banded
+    solves are then compiled only for the systems that use them; decision 0044).
+    """
     N = times.size
     n = Q.shape[1]
     m = n
@@ -140,7 +144,6 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
     out_pos = np.empty(m + nnz)
     out_dyn = np.empty(kM + 2 * n)
     out_d = np.empty(max(dr.size, 1))
-    banded = bw[0] == SPARSE          # (through the FixedPattern's sparse LU)
     kbw = kband[0]
     if banded and newton and kbw[0] == -1:
         return 0                     # (not taken: _jit.multipliers sends these to Python)
@@ -193,7 +196,8 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
         if banded:
             _band_values(out_pos, m, slot, data)
             _band_rows(data, cr, cc, cols, r)
-            if _sparse_factor(data, cr, cc, pos, r, cols, AB, bw, SI) < 0:
+            if within(banded, 1, 1, _sparse_factor, data, cr, cc, pos, r, cols, AB, bw,
+                      SI) < 0:
                 return k
         else:
             _assemble(out_pos, m, jr, jc, J)
@@ -218,7 +222,8 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
             elif not _loads(ptrs, xd, nin_d, out_dyn, mode, QDD, k, mr, mc, kM, n, Mq, rhs):
                 return k
             if banded:
-                _sparse_solve_scaled(AB, bw, SI, row_perm, perm, r, cols, rhs, lam, tmp, True)
+                within(banded, 1, 1, _sparse_solve_scaled, AB, bw, SI, row_perm, perm, r, cols,
+                       rhs, lam, tmp, True)
             else:
                 for j in range(n):
                     rhs[j] = cols[j] * rhs[j]
@@ -271,19 +276,20 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
                     for e in range(Kd.size):
                         Kd[e] = (cols[krow[e]] * Kd[e]) / r[kcol[e]]
                     if ksparse:
-                        if _sparse_factor(Kd, krow, kcol, kpos, ones, ones, AB2, kbw, SI2) < 0:
+                        if within(banded, 1, 1, _sparse_factor, Kd, krow, kcol, kpos, ones,
+                                  ones, AB2, kbw, SI2) < 0:
                             return k
-                    elif _band_factor(blapack, Kd, krow, kcol, kpos, ones, ones, AB2, kbw,
-                                      ipiv2, bi) < 0:
+                    elif within(banded, 1, 1, _band_factor, blapack, Kd, krow, kcol, kpos,
+                                ones, ones, AB2, kbw, ipiv2, bi) < 0:
                         return k
                     for j in range(n):
                         R[j] = cols[j] * R[j]
                     if ksparse:
-                        _sparse_solve_scaled(AB2, kbw, SI2, krow_perm, kperm, ones, ones, R,
-                                             dl, tmp, False)
+                        within(banded, 1, 1, _sparse_solve_scaled, AB2, kbw, SI2, krow_perm,
+                               kperm, ones, ones, R, dl, tmp, False)
                     else:
-                        _band_solve(blapack, AB2, kbw, ipiv2, krow_perm, kperm, ones, ones, R,
-                                    dl, tmp, bi, cbuf)
+                        within(banded, 1, 1, _band_solve, blapack, AB2, kbw, ipiv2, krow_perm,
+                               kperm, ones, ones, R, dl, tmp, bi, cbuf)
                     for i in range(m):
                         lam[i] = lam[i] - dl[i] / r[i]
                     continue
