@@ -151,3 +151,46 @@ def test_parquet_hdf5_and_netcdf_keep_values_and_units(dynamic, tmp_path):
 def test_unknown_format_is_refused(static, tmp_path):
     with pytest.raises(ms.ModelError, match=r"\.csv, \.parquet"):
         static[1].save(tmp_path / "r.xlsx")
+
+
+def test_results_as_pint_quantities_in_the_declared_units(dynamic, static):
+    pint = pytest.importorskip("pint")
+    ureg = pint.get_application_registry()
+    m, sol = dynamic                      # mm, kg, s
+    x = sol.quantity("piston.x")
+    assert x.units == ureg.mm and np.array_equal(x.magnitude, sol["piston.x"])
+    assert np.allclose(x.to("m").magnitude, sol["piston.x"] / 1000, rtol=1e-15)
+    v = sol.quantity("piston.x_d").to("m/s")
+    assert np.allclose(v.magnitude, sol.qd[:, sol.names.index("piston.x")] / 1000, rtol=1e-15)
+    w = sol.quantity("rod.th_d")
+    assert w.units == ureg.rad / ureg.s
+    # a reaction force in kg mm/s^2 is a millinewton
+    F = sol.quantity("slider.piston.Fy", reactions=True)
+    assert np.allclose(F.to("N").magnitude, sol.reaction("slider", "piston")[0][:, 1] / 1000,
+                       rtol=1e-14)
+    E = sol.quantity("kinetic", energies=True)
+    assert E.dimensionality == (ureg.J).dimensionality
+    everything = sol.quantities(reactions=True)
+    assert "slider.piston.Fy" in everything and everything["t"].units == ureg.s
+
+
+def test_quantities_refuse_what_has_no_unit(static):
+    pytest.importorskip("pint")
+    _, sol = static                       # no declared units
+    with pytest.raises(ms.ModelError, match="m.set_units"):
+        sol.quantity("piston.x")
+    m = ms.Model2D()
+    a = m.add_body("a", guess=((0, 0), 0))
+    b = m.add_body("b", guess=((3, 0), 0))
+    m.add(ms.Revolute2(m.ground.point((0, 0)), a.point(0)))
+    m.add(ms.Revolute2(m.ground.point((3, 0)), b.point(0)))
+    m.add(ms.TwoGears1(a.point(0), 1.0, b.point(0), 2.0, 1))
+    m.add(ms.RotationLock1(a, ms.T))
+    m.set_units(length="mm", time="s")
+    sol = m.solve(np.linspace(0, 1, 3))
+    variable = next(n for n in sol.names if "." not in n)
+    with pytest.raises(ms.ModelError, match=f"{variable!r} has no unit"):
+        sol.quantity(variable)
+    assert variable not in sol.quantities() and "a.th" in sol.quantities()
+    with pytest.raises(ms.OptionError, match="a.th"):
+        sol.quantity("a.thh")

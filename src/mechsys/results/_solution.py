@@ -297,6 +297,30 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Lin
 
         return to_xarray(self, reactions=reactions, loads=loads, energies=energies)
 
+    def quantity(self, name: str, reactions: bool = False, loads: bool = False,
+                 energies: bool = False):
+        """The column ``name`` of :meth:`to_dataframe` (``"t"``, a coordinate, ``"crank.th_d"``,
+        a reaction ``"<constraint>.<body>.Fx"`` with ``reactions=True`` ...) as a pint
+        ``Quantity`` array in the model's declared units (``m.set_units``), ready for
+        ``.to("mm")``. A column whose unit mechsys does not know (a model variable) is refused
+        with a :class:`~mechsys.ModelError`, a misspelt name with an
+        :class:`~mechsys.OptionError` naming the closest. Needs pint.
+
+        Example: ``sol.quantity("piston.x_d").to("m/s")``."""
+        from ._tables import quantities
+
+        return quantities(self, [name], reactions=reactions, loads=loads,
+                          energies=energies)[name]
+
+    def quantities(self, reactions: bool = False, loads: bool = False,
+                   energies: bool = False) -> dict:
+        """Every column of :meth:`to_dataframe` whose unit is known, as ``{name: pint
+        Quantity}`` in the model's declared units (the columns of model variables are left
+        out; :meth:`quantity` says why when one is asked for). Needs pint."""
+        from ._tables import quantities
+
+        return quantities(self, None, reactions=reactions, loads=loads, energies=energies)
+
     def save(self, path, reactions: bool = False, loads: bool = False, energies: bool = False):
         """Write the table of :meth:`to_dataframe` to ``path``: ``.csv`` (header
         ``name [unit]``, repr-exact floats), ``.parquet`` (pyarrow), ``.h5``/``.hdf5``

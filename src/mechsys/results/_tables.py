@@ -19,6 +19,7 @@ Example::
     sol = m.solve(t, solution="dynamic")
     df = sol.to_dataframe(reactions=True, loads=True, energies=True)
     df.attrs["units"]["piston.x"]        # "mm" after m.set_units(length="mm", ...)
+    sol.quantity("piston.x").to("m")     # a pint Quantity (needs pint)
     sol.save("run.parquet", reactions=True)
 """
 
@@ -224,6 +225,43 @@ def to_xarray(sol, **which):
     if unit_text((0, 0, 1), units):
         t_attrs["units"] = unit_text((0, 0, 1), units)
     return xr.Dataset(data, coords={"t": ("t", cols[0].values, t_attrs)})
+
+
+def quantities(sol, names=None, **which) -> dict:
+    """``{column: pint Quantity}``: the columns of :func:`columns` (``names``: those only, in
+    that order) as arrays in the model's declared units (``m.set_units``), each with the unit
+    of its dimension (angles in ``rad``, Euler parameters dimensionless). A column whose unit
+    is not known (a model variable; a base unit the model did not declare) is left out of the
+    whole table and refused when named. Needs pint."""
+    from .._errors import choice
+    from ..geometry._units import _registry
+
+    units = getattr(sol.model, "units", None)
+    if not units:
+        raise ModelError("results in units need the model's units: declare them with "
+                         "m.set_units(length=..., mass=..., time=...) before solving")
+    ureg = _registry()
+    cols = {c.name: c for c in columns(sol, **which)}
+    if names is None:
+        picked = [c for c in cols.values() if unit_text(c.dims, units, c.angle) is not None]
+    else:
+        if isinstance(names, str):
+            names = [names]
+        picked = []
+        for name in names:
+            if name not in cols:
+                choice(name, list(cols), "quantity: column")
+            c = cols[name]
+            if unit_text(c.dims, units, c.angle) is None:
+                why = ("its dimension is not known to mechsys (a model variable)" if c.dims is None
+                       else f"its dimension {dimension_text(c.dims, c.angle)} needs a base unit "
+                            "the model did not declare (m.set_units)")
+                raise ModelError(f"quantity: column {name!r} has no unit: {why}; take its "
+                                 "numbers from sol.to_dataframe() or sol[...] instead")
+            picked.append(c)
+    return {c.name: ureg.Quantity(np.asarray(c.values, dtype=float),
+                                  unit_text(c.dims, units, c.angle).replace("^", "**"))
+            for c in picked}
 
 
 #: first characters a spreadsheet reads as a formula (OWASP's list for CSV injection)
