@@ -165,22 +165,28 @@ class RollingDisk2(RollingContact):
     direction ``u_1`` is the plane's normal, the disk on the side ``u_1`` points to; ``axis``
     the disk's axis on body 2, its origin the disk centre ``r_2``, direction ``u_2``; ``rad``
     the disk radius. The contact is the rim's point nearest the plane, at any lean, with
-    ``w = u_2 x (u_1 x u_2)`` (in the disk's plane, towards the plane's normal)::
+    :math:`w = u_2 \times (u_1 \times u_2)` (in the disk's plane, towards the plane's
+    normal):
 
-        c = r_2 - rad w / |w|
+    .. math::
 
-    Holonomic part, ``PlaneToCircle1(plane, axis, rad)``::
+        c = r_2 - \mathit{rad}\, \frac{w}{|w|}
 
-        u_1 . (r_2 - r_1) - rad |u_1 x u_2| / |u_2| = 0
+    Holonomic part, ``PlaneToCircle1(plane, axis, rad)``:
 
-    Velocity equations, ``v_c = v_2(c) - v_1(c)`` the slip velocity at the contact, ``h_1``,
-    ``f_1`` the plane's in-plane directions fixed in body 1::
+    .. math::
 
-        h_1 . v_c = 0
-        f_1 . v_c = 0
+        u_1 \cdot (r_2 - r_1) - \mathit{rad}\, \frac{|u_1 \times u_2|}{|u_2|} = 0
 
-    Linear in the velocities, ``A(q) qd = 0`` (:meth:`velocity_form`). Regular while the
-    disk is not flat on the plane (``u_1 x u_2 = 0``). Give the velocity constraint to a path
+    Velocity equations, :math:`v_c = v_2(c) - v_1(c)` the slip velocity at the contact,
+    :math:`h_1`, :math:`f_1` the plane's in-plane directions fixed in body 1:
+
+    .. math::
+
+        h_1 \cdot v_c = 0, \qquad f_1 \cdot v_c = 0
+
+    Linear in the velocities, :math:`A(q)\, \dot q = 0` (:meth:`velocity_form`). Regular
+    while the disk is not flat on the plane (:math:`u_1 \times u_2 = 0`). Give the velocity constraint to a path
     system in place of two dummy constraints:
     ``m.path(replace={("dummy x", "dummy y"): roll})``. Example::
 
@@ -230,18 +236,23 @@ class RollingSphere2(RollingContact):
 
     ``RollingSphere2(plane, point, rad)``: ``plane`` an axis (or ``Plane``) of body 1 whose
     direction ``u_1`` is the normal, the sphere on the side ``u_1`` points to; ``point`` the
-    sphere's centre ``r_2``, fixed in the sphere's body; ``rad`` its radius. Contact::
+    sphere's centre :math:`r_2`, fixed in the sphere's body; ``rad`` its radius. Contact:
 
-        c = r_2 - rad u_1 / |u_1|
+    .. math::
 
-    Holonomic part, ``PointOnPlane1(point, plane, rad)``::
+        c = r_2 - \mathit{rad}\, \frac{u_1}{|u_1|}
 
-        u_1 . (r_2 - r_1) - rad |u_1| = 0
+    Holonomic part, ``PointOnPlane1(point, plane, rad)``:
 
-    Velocity equations (``v_c``, ``h_1``, ``f_1`` as in :class:`RollingDisk2`)::
+    .. math::
 
-        h_1 . v_c = 0
-        f_1 . v_c = 0
+        u_1 \cdot (r_2 - r_1) - \mathit{rad}\, |u_1| = 0
+
+    Velocity equations (:math:`v_c`, :math:`h_1`, :math:`f_1` as in :class:`RollingDisk2`):
+
+    .. math::
+
+        h_1 \cdot v_c = 0, \qquad f_1 \cdot v_c = 0
 
     Example::
 
@@ -289,21 +300,28 @@ class RollingCircle1(RollingContact):
     ``RollingCircle1(point, rad, line)`` (the argument order of ``RackAndPinion2``): the
     circle of radius ``rad`` centred at ``point`` (``r_2``, fixed in the rolling body) lies
     on the left of ``line`` (origin ``r_1``, direction ``u_1``, on body 1). With ``n`` the
-    left normal (``u_1`` turned by +90 deg)::
+    left normal (:math:`u_1` turned by +90 deg):
 
-        c = r_2 - rad n / |n|
+    .. math::
 
-    Holonomic part, ``PointOnLine1(point, line, rad)``::
+        c = r_2 - \mathit{rad}\, \frac{n}{|n|}
 
-        u_1 x (r_2 - r_1) - rad |u_1| = 0
+    Holonomic part, ``PointOnLine1(point, line, rad)``:
 
-    Velocity equation (``v_c`` the slip velocity at ``c``)::
+    .. math::
 
-        u_1 . v_c = 0
+        u_1 \times (r_2 - r_1) - \mathit{rad}\, |u_1| = 0
 
-    In the plane this constraint integrates: with ``s = u_1^ . (r_2 - r_1)`` and ``alpha``
-    the rolling body's angle from the line, ``ds = -rad d alpha``, the position constraint
-    ``s - C + rad alpha = 0`` of ``RackAndPinion2(point, rad, line, C)``. Use that one in a
+    Velocity equation (:math:`v_c` the slip velocity at :math:`c`):
+
+    .. math::
+
+        u_1 \cdot v_c = 0
+
+    In the plane this constraint integrates: with :math:`s = \hat u_1 \cdot (r_2 - r_1)` and
+    :math:`\alpha` the rolling body's angle from the line,
+    :math:`\mathrm{d}s = -\mathit{rad}\, \mathrm{d}\alpha`, the position constraint
+    :math:`s - C + \mathit{rad}\, \alpha = 0` of ``RackAndPinion2(point, rad, line, C)``. Use that one in a
     kinematic model (``m.solve``, free motion); this velocity form is for path systems and
     for the velocity constraints of dynamics, where ``C`` need not be known. Example::
 
