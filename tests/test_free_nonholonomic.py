@@ -1,0 +1,130 @@
+"""Free motion with velocity (nonholonomic) constraints (issue 36 item 1, decision 0053).
+
+Checks against closed forms: the Chaplygin sleigh (a knife edge at distance ``a`` behind the
+centroid: ``u' = a w^2``, ``(I + m a^2) w' = -m a u w``, so from ``u(0) = 0``
+``w = w0 sech(k t)``, ``u = U tanh(k t)``, ``U = |w0| sqrt(J/m)``, ``k = a |w0| sqrt(m/J)``,
+``J = I + m a^2``; Neimark & Fufaev, *Dynamics of Nonholonomic Systems*, ch. III, and
+docs/nonholonomic.md for the derivation) and the steady turning of a rolling disk (lean
+``beta``, heading rate ``W``, spin ``sigma = w . axis``:
+``m R g sin(beta) + W cos(beta) ((I_a + m R^2) sigma - I_d W sin(beta)) = 0``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import mechsys as ms
+
+MASS, INERTIA, OFFSET, W0 = 2.0, 0.3, 0.4, 2.0
+
+
+def sleigh():
+    m = ms.Model2D()
+    b = m.add_body("sleigh", points={"P": (-OFFSET, 0.0)}, guess=((0.1, -0.2), 0.3),
+                   mass=MASS, inertia=INERTIA)
+    # the knife edge at P: no velocity across the body's x axis
+    m.add(ms.Orthogonal1(m.velocity(b.point("P")), b.vector((0, 1))), name="knife")
+    return m, b
+
+
+def test_chaplygin_sleigh_closed_form_energy_and_reaction():
+    m, b = sleigh()
+    fs = m.free()
+    assert fs.dof == 2 and fs.velocity_constraints[0].name == "knife"
+    sol = fs.simulate(np.linspace(0, 3, 31), initial_condition={"th2_d": W0}, rtol=1e-10,
+                      atol=1e-12)
+    assert sol.extra["compiled_steps"] == 0 and sol.extra["compiled_solver"] is None
+    th, w = sol["sleigh.th"], sol.omega(b)
+    vP = sol.velocity(b.point("P"))
+    u = vP[:, 0] * np.cos(th) + vP[:, 1] * np.sin(th)      # forward speed of the edge
+    lateral = -vP[:, 0] * np.sin(th) + vP[:, 1] * np.cos(th)
+    J = INERTIA + MASS * OFFSET**2
+    U, k = W0 * np.sqrt(J / MASS), OFFSET * W0 * np.sqrt(MASS / J)
+    assert np.abs(w - W0 / np.cosh(k * sol.t)).max() < 1e-8
+    assert np.abs(u - U * np.tanh(k * sol.t)).max() < 1e-8
+    assert np.abs(lateral).max() < 1e-12
+    E = 0.5 * MASS * (sol.qd[:, 0]**2 + sol.qd[:, 1]**2) + 0.5 * INERTIA * w**2
+    assert np.ptp(E) < 1e-8 * E[0] and E[0] == pytest.approx(0.5 * J * W0**2)
+    # mu: the edge's lateral force on the body is -mu (along the body's y axis); Newton's
+    # law across the body: F = m (u w + a w')
+    mu = sol.extra["mu"][:, 0]
+    assert sol.lam.shape == (31, 1) and sol.extra["velocity_multipliers"] == ["knife[0]"]
+    F = MASS * (u * w + OFFSET * sol.qdd[:, 2])
+    assert np.abs(-mu - F).max() < 1e-8 * np.abs(F).max()
+    assert sol.extra["accuracy"]["nonholonomic"] < 1e-12
+
+
+def test_free_solve_one_state_and_refusals():
+    m, b = sleigh()
+    one = m.free().solve(0.0, initial_condition={"th2_d": W0})
+    # at u = 0 (the projected start): u' = a w^2, w' = 0, and the centroid's acceleration
+    th = one.q[0, 2] if one.q.ndim == 2 else one.q[2]
+    qdd = np.ravel(one.qdd)
+    assert np.ravel(one.qd)[2] == W0
+    a_G = qdd[:2]                            # the centroid's acceleration
+    ex, ey = np.array([np.cos(th), np.sin(th)]), np.array([-np.sin(th), np.cos(th)])
+    # centroid: d/dt (u ex + a w ey) = u' ex - a w^2 ex at u = 0, w' = 0  ->  0
+    assert abs(a_G @ ex) < 1e-12 and abs(a_G @ ey) < 1e-12
+    assert qdd[2] == pytest.approx(0.0, abs=1e-12)
+    with pytest.raises(ms.ModelError, match="static.*velocity constraints.*knife"):
+        m.free(solution="static")
+    with pytest.raises(ms.ModelError, match="linearize.*velocity constraints"):
+        m.free().linearize()
+
+
+def test_nonlinear_velocity_constraint_refused_by_name():
+    m = ms.Model2D()
+    b = m.add_body("b", guess=((0, 0), 0), mass=1, inertia=1)
+    v = m.velocity(b.point(0))
+    m.add(ms.Constraint([v[0] ** 2 - v[1]]), name="quadratic")
+    with pytest.raises(ms.ModelError, match="quadratic.*not linear in the velocities"):
+        m.free()
+
+
+def test_rolling_disk_steady_turning_energy_and_constraints():
+    R, g, beta, sigma = 0.3, 9.81, 0.3, 5.0
+    Ia, Id = R**2 / 2, R**2 / 4                     # unit mass: a thin disk
+    sb, cb = np.sin(beta), np.cos(beta)
+    roots = np.roots([-Id * sb * cb, cb * (Ia + R**2) * sigma, R * g * sb])
+    W = float(roots[np.argmin(abs(roots))].real)   # the slow steady turn
+    m = ms.Model3D()
+    # lean beta about the heading x: the axis (local y) at (0, cos, sin), contact at the origin
+    disk = m.add_body("disk", guess=((0, -R * sb, R * cb), (np.cos(beta / 2), np.sin(beta / 2),
+                                                            0, 0)), mass=1.0, inertia=(Id, Ia, Id))
+    roll = ms.RollingDisk2(m.ground.axis((0, 0, 0), (0, 0, 1)), disk.axis(0, (0, 1, 0)), R)
+    m.add(roll.holonomic(), name="touch")
+    m.add(roll, name="roll")
+    m.add_load(ms.Gravity((0, 0, -1), g))
+    axis = np.array([0, cb, sb])
+    w0 = W * np.array([0, 0, 1.0]) + (sigma - W * sb) * axis
+    fs = m.free()
+    assert fs.dof == 3
+    sol = fs.simulate(np.linspace(0, 2, 21), initial_condition={("omega", "disk"): w0},
+                      rtol=1e-10, atol=1e-12)
+    assert sol.extra["compiled_steps"] == 0
+    np.testing.assert_allclose(sol.velocity(disk.point(0))[0], [R * sigma, 0, 0], atol=1e-12)
+    E = sol.body_energy() + sol.potential_energy()
+    assert np.ptp(E) < 1e-8 * E[0]
+    # constraints at position and velocity level
+    acc = sol.extra["accuracy"]
+    assert acc["position"] < 1e-10 and acc["velocity"] < 1e-10 and acc["nonholonomic"] < 1e-10
+    assert np.abs(sol.eval(roll.slip_velocity())).max() < 1e-10
+    # steady: lean, spin about the axis and heading rate stay those of the closed form
+    e0, e1, e2, e3 = sol.q[:, 3:7].T
+    a = np.c_[2 * (e1 * e2 - e0 * e3), e0**2 - e1**2 + e2**2 - e3**2, 2 * (e2 * e3 + e0 * e1)]
+    assert np.abs(a[:, 2] - sb).max() < 1e-8
+    assert np.abs(np.einsum("ij,ij->i", sol.omega(disk), a) - sigma).max() < 1e-8
+    heading = np.unwrap(np.arctan2(a[:, 1], a[:, 0]))
+    assert np.abs(heading - heading[0] - W * sol.t).max() < 1e-8
+    # the contact forces: normal from the holonomic part's reaction, tangential -mu along the
+    # plane's in-surface directions (here x, y); together they turn the centroid: m a_G = F + m g
+    F_n, _ = sol.reaction("touch", disk)
+    mu = sol.extra["mu"]
+    assert sol.extra["velocity_multipliers"] == ["roll[0]", "roll[1]"]
+    aG = sol.acceleration(disk.point(0))
+    # (h_1, f_1: the plane's in-surface directions of the no-slip rows; constant on ground)
+    h1, f1 = (np.array(sol.eval(v), dtype=float).reshape(-1, 3)[0]
+              for v in roll._tangents(m.space))
+    F = F_n - mu[:, :1] * h1 - mu[:, 1:] * f1
+    np.testing.assert_allclose(F + np.array([0, 0, -g]), aG, atol=1e-8)
