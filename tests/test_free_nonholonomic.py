@@ -123,8 +123,11 @@ def test_rolling_disk_steady_turning_energy_and_constraints():
     mu = sol.extra["mu"]
     assert sol.extra["velocity_multipliers"] == ["roll[0]", "roll[1]"]
     aG = sol.acceleration(disk.point(0))
-    # (h_1, f_1: the plane's in-surface directions of the no-slip rows; constant on ground)
-    h1, f1 = (np.array(sol.eval(v), dtype=float).reshape(-1, 3)[0]
-              for v in roll._tangents(m.space))
-    F = F_n - mu[:, :1] * h1 - mu[:, 1:] * f1
+    F = F_n + roll.tangential_force(sol)
     np.testing.assert_allclose(F + np.array([0, 0, -g]), aG, atol=1e-8)
+    # (the friction force is -(mu_1 h_1 + mu_2 f_1), h_1, f_1 the plane's directions of the
+    # no-slip rows: for the normal z, h_1 = y and f_1 = -x)
+    np.testing.assert_allclose(roll.tangential_force(sol)[:, :2], np.c_[mu[:, 1], -mu[:, 0]],
+                               atol=1e-14)
+    with pytest.raises(ms.ModelError, match="no multipliers of this constraint"):
+        roll.tangential_force(m.free(drop=["roll"]).solve(0.0))
