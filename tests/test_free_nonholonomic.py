@@ -73,6 +73,23 @@ def test_free_solve_one_state_and_refusals():
         m.free().linearize()
 
 
+def test_start_velocities_projected_with_the_velocity_rows():
+    m, b = sleigh()
+    fs = m.free()
+    assert "velocity constraints knife" in repr(fs)
+    # only the spin given: the centroid's velocity follows (smallest change) so that the edge
+    # does not slip; the spin is kept
+    one = fs.solve(0.0, initial_condition={"th2_d": W0, "x2_d": 0.0})
+    qd, th = np.ravel(one.qd), np.ravel(one.q)[2]
+    assert qd[2] == W0 and qd[0] == 0.0
+    vP = qd[:2] + OFFSET * W0 * np.array([np.sin(th), -np.cos(th)])   # v_G + w x (P - G)
+    assert abs(vP @ np.array([-np.sin(th), np.cos(th)])) < 1e-13
+    # every velocity given, slipping: the constraint cannot be met while they are kept
+    with pytest.raises(ms.ModelError, match=r"velocities \['sleigh.x_d', 'sleigh.y_d', "
+                       r"'sleigh.th_d'\] are not allowed"):
+        fs.solve(0.0, initial_condition={"th2_d": W0, "x2_d": 0.0, "y2_d": 0.0})
+
+
 def test_nonlinear_velocity_constraint_refused_by_name():
     m = ms.Model2D()
     b = m.add_body("b", guess=((0, 0), 0), mass=1, inertia=1)

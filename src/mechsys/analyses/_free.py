@@ -56,10 +56,10 @@ from ..solvers._position import describe_singular
 from ..solvers._rank import InZone, project_regularized, zone_guard
 from ._nonholonomic import (
     VelocityRows,
-    is_velocity_constraint,
     nonholonomic_acceleration,
     project_state,
     project_velocities,
+    velocity_constraints,
     velocity_drift,
 )
 
@@ -205,9 +205,7 @@ class FreeSystem:
         self.dropped = [model.constraint(c) for c in drop]
         self.kind = solution
         # velocity (nonholonomic) constraints: rows A qd + b = 0 beside Phi = 0 (decision 0053)
-        self.velocity_constraints = [c for c in model._constraints
-                                     if all(c is not d for d in self.dropped)
-                                     and is_velocity_constraint(c, model)]
+        self.velocity_constraints = velocity_constraints(model, self.dropped)
         if self.velocity_constraints and solution != "dynamic":
             raise ModelError(
                 f"free(solution={solution!r}): the model holds velocity constraints "
@@ -270,6 +268,9 @@ class FreeSystem:
 
     def __repr__(self) -> str:
         names = ", ".join(c.name for c in self.dropped) or "none"
+        if self.velocity_constraints:
+            names += "; velocity constraints " + ", ".join(
+                c.name for c in self.velocity_constraints)
         return (f"<FreeSystem ({self.kind}): dropped {names}; {self.dof} DOF; "
                 f"{'linear' if self.linear else 'nonlinear'}>")
 

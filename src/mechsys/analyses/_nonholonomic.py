@@ -35,13 +35,14 @@ from ..solvers._free import _solve_fast, project_positions
 from ..solvers._linalg import SPARSE_THRESHOLD, Singular
 
 
-def is_velocity_constraint(constraint, model) -> bool:
-    """Whether ``constraint`` is a velocity constraint: ``order == 1`` (the rolling classes) or
-    equations that use the rates (a ``Constraint``/``Orthogonal1`` of velocity expressions)."""
-    if getattr(constraint, "order", 0) == 1:
-        return True
+def velocity_constraints(model, dropped=()) -> list:
+    """The model's constraints (not in ``dropped``) that are velocity constraints: ``order ==
+    1`` (the rolling classes) or equations that use the rates (a ``Constraint`` or
+    ``Orthogonal1`` of velocity expressions). (Equations are cached per constraint.)"""
     rates = set(model.velocity_symbols().values())
-    return any(e.free_symbols & rates for e in constraint.equations(model.space))
+    return [c for c in model._constraints if all(c is not d for d in dropped) and (
+        getattr(c, "order", 0) == 1
+        or any(e.free_symbols & rates for e in c.equations(model.space)))]
 
 
 class VelocityRows:
