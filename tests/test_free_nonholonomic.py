@@ -148,3 +148,38 @@ def test_rolling_disk_steady_turning_energy_and_constraints():
                                atol=1e-14)
     with pytest.raises(ms.ModelError, match="no multipliers of this constraint"):
         roll.tangential_force(m.free(drop=["roll"]).solve(0.0))
+
+
+def test_rolling_circle_free_motion_matches_rack_and_pinion():
+    """A second formulation: planar rolling integrates, so an eccentric wheel rocking on the
+    ground under gravity moves the same with RollingCircle1 (velocity row, mu) as with
+    RackAndPinion2 (position rows, lambda); the friction forces agree too."""
+    rad, th0, t = 0.5, 0.5, np.linspace(0, 1.5, 16)
+
+    def wheel_model():
+        m = ms.Model2D()
+        w = m.add_body("wheel", guess=((0.2, rad), th0), mass=1.0, inertia=0.05,
+                       centroid=(0.15, 0.0))
+        m.add_load(ms.Gravity((0, -1), 9.81))
+        return m, w
+
+    m, w = wheel_model()
+    roll = ms.RollingCircle1(w.point(0), rad, m.ground.axis((0, 0), (1, 0)))
+    m.add(roll.holonomic(), name="touch")
+    m.add(roll, name="roll")
+    fs = m.free()
+    assert fs.dof == 1
+    a = fs.simulate(t, rtol=1e-11, atol=1e-12)
+    m2, w2 = wheel_model()
+    m2.add(ms.RackAndPinion2(w2.point(0), rad, m2.ground.axis((0, 0), (1, 0)), 0.2 + rad * th0),
+           name="rack")
+    b = m2.free().simulate(t, rtol=1e-11, atol=1e-12)
+    assert np.ptp(b.q[:, 2]) > 0.5                   # it rocks
+    np.testing.assert_allclose(a.q, b.q, atol=1e-8)
+    np.testing.assert_allclose(a.qd, b.qd, atol=1e-8)
+    Fb, _ = b.reaction("rack", w2)
+    Fa, _ = a.reaction("touch", w)
+    np.testing.assert_allclose(Fa[:, 1], Fb[:, 1], atol=1e-7)        # normal force
+    np.testing.assert_allclose(roll.tangential_force(a)[:, 0], Fb[:, 0], atol=1e-7)
+    E = a.body_energy() + a.potential_energy()
+    assert np.ptp(E) < 1e-9 * np.abs(E).max()
