@@ -692,8 +692,22 @@ class FreeSystem:
         extra["accuracy"] = accuracy_report(s, sc, times, Y, p, opt.rtol if opt.runge_kutta
                                          else opt.max_error[0], "FreeSystem.simulate")
         if vrows is not None and len(times) and np.all(np.isfinite(Y[-1])):
-            extra["accuracy"]["nonholonomic"] = velocity_drift(s, vrows, times[-1], Y[-1, :n],
-                                                               Y[-1, n:], p, sc)
+            drift = velocity_drift(s, vrows, times[-1], Y[-1, :n], Y[-1, n:], p, sc)
+            extra["accuracy"]["nonholonomic"] = drift
+            tol = opt.rtol if opt.runge_kutta else opt.max_error[0]
+            bound = max(DRIFT_WARNING, DRIFT_FACTOR * tol)
+            if drift > bound:      # (as accuracy_report for the holonomic rows)
+                import warnings
+
+                from .._errors import DegradedAccuracyWarning
+
+                warnings.warn(DegradedAccuracyWarning(
+                    f"FreeSystem.simulate: the velocity constraints have drifted by the end of "
+                    f"the run (t = {times[-1]:.6g}): residual {drift:.2e} relative to the largest "
+                    f"rate, above {bound:.0e}; keep constraint_correction=True (the default) or "
+                    "tighten rtol/max_error (sol.extra['accuracy'])", measure=drift,
+                    threshold=bound), stacklevel=2)
+                extra["accuracy"]["warned"] = "nonholonomic"
         if diagnostics:
             extra["diagnostics"] = res.diagnostics
         if res.message == "interrupted":
