@@ -52,6 +52,12 @@ def test_chaplygin_sleigh_closed_form_energy_and_reaction():
     assert sol.lam.shape == (31, 1) and sol.extra["velocity_multipliers"] == ["knife[0]"]
     F = MASS * (u * w + OFFSET * sol.qdd[:, 2])
     assert np.abs(-mu - F).max() < 1e-8 * np.abs(F).max()
+    # the same through sol.reaction: the force -mu e_y at P, its moment about the centroid
+    # (the body origin) (P - G) x F = a mu; on ground the opposite
+    Fr, Mr = sol.reaction("knife", b)
+    np.testing.assert_allclose(Fr, -mu[:, None] * np.c_[-np.sin(th), np.cos(th)], atol=1e-13)
+    np.testing.assert_allclose(Mr, OFFSET * mu, atol=1e-13)
+    np.testing.assert_allclose(sol.reaction("knife", m.ground)[0], -Fr, atol=1e-13)
     assert sol.extra["accuracy"]["nonholonomic"] < 1e-12
 
 
@@ -162,6 +168,8 @@ def test_rolling_disk_steady_turning_energy_and_constraints():
     assert sol.extra["velocity_multipliers"] == ["roll[0]", "roll[1]"]
     aG = sol.acceleration(disk.point(0))
     F = F_n + roll.tangential_force(sol)
+    np.testing.assert_allclose(sol.reaction("roll", disk)[0], roll.tangential_force(sol),
+                               atol=1e-12)
     np.testing.assert_allclose(F + np.array([0, 0, -g]), aG, atol=1e-8)
     # (the friction force is -(mu_1 h_1 + mu_2 f_1), h_1, f_1 the plane's directions of the
     # no-slip rows: for the normal z, h_1 = y and f_1 = -x)
