@@ -117,6 +117,13 @@ def test_start_velocities_projected_with_the_velocity_rows():
         fs.solve(0.0, initial_condition={"th2_d": W0, "x2_d": 0.0, "y2_d": 0.0})
 
 
+def test_dependent_velocity_rows_are_named():
+    m, b = sleigh()
+    m.add(ms.Orthogonal1(m.velocity(b.point("P")), b.vector((0, 2))), name="again")
+    with pytest.raises(ms.SingularJacobianError, match="again.*knife|knife.*again"):
+        m.free().solve(0.0, initial_condition={"th2_d": W0})
+
+
 def test_nonlinear_velocity_constraint_refused_by_name():
     m = ms.Model2D()
     b = m.add_body("b", guess=((0, 0), 0), mass=1, inertia=1)
