@@ -124,6 +124,15 @@ def test_dependent_velocity_rows_are_named():
         m.free().solve(0.0, initial_condition={"th2_d": W0})
 
 
+def test_switched_loads_with_velocity_constraints_refused():
+    # (the event-driven stepper of switched models does not hold the velocity rows yet)
+    m, b = sleigh()
+    m.add_load(ms.TimeSwitch(ms.Force(b.point(0), (1, 0), 1.0), 1.0,
+                             ms.Force(b.point(0), (1, 0), 2.0)))
+    with pytest.raises(ms.ModelError, match="velocity constraints.*knife.*switches"):
+        m.free()
+
+
 def test_nonlinear_velocity_constraint_refused_by_name():
     m = ms.Model2D()
     b = m.add_body("b", guess=((0, 0), 0), mass=1, inertia=1)
