@@ -98,6 +98,9 @@ def test_free_solve_one_state_and_refusals():
         m.free(solution="static")
     with pytest.raises(ms.ModelError, match="linearize.*velocity constraints"):
         m.free().linearize()
+    m.parameter("c", 1.0)
+    with pytest.raises(ms.ModelError, match="sensitivity.*velocity constraints.*knife"):
+        m.sensitivity(["c"], free=m.free())
 
 
 def test_start_velocities_projected_with_the_velocity_rows():
