@@ -176,7 +176,11 @@ class FreeSystem:
     r"""A model with constraints dropped. Attributes: ``model``, ``dropped`` (constraints),
     ``system`` (the compiled System of the kept equations), ``kind``, ``linear`` (whether the
     highest-order unknowns enter linearly: no loads depending on multipliers, and for the
-    velocity equilibrium loads linear in velocities), ``dof``.
+    velocity equilibrium loads linear in velocities), ``dof``, ``velocity_constraints`` (the
+    kept velocity constraints :math:`A(q, t)\,\dot q + b(q, t) = 0`, rolling contacts or
+    constraints of velocity expressions: free motion adds :math:`A^T \mu` to the equations of
+    motion and :math:`A \ddot q = -\rho` to the constraints; ``docs/nonholonomic.md``,
+    decision 0053).
 
     With the kept constraints :math:`\Phi(q, t) = 0` (:math:`m < n` equations), their
     Jacobian :math:`\Phi_q`, the mass matrix :math:`M`, the applied loads :math:`Q` and the
