@@ -788,8 +788,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
                         "a model (solve, free, couple) cannot hold. For the first-order motion "
                         "of a nonholonomic system keep a dummy constraint in the model in its "
                         "place and give the velocity constraint to m.path(replace={dummy: "
-                        "velocity_constraint}) (docs/nonholonomic.md); free motion (dynamics) "
-                        "with velocity constraints is not supported yet")
+                        "velocity_constraint}) (docs/nonholonomic.md); free motion (m.free) holds "
+                        "velocity constraints linear in the rates beside the position ones")
                 same = same_name_advice(extra, known)
                 if same:
                     raise ModelError(f"{lab} uses symbol(s) {names} that are not the model's: "

@@ -54,6 +54,14 @@ from ..solvers._jit_free import FreeStepper
 from ..solvers._linalg import Scaling
 from ..solvers._position import describe_singular
 from ..solvers._rank import InZone, project_regularized, zone_guard
+from ._nonholonomic import (
+    VelocityRows,
+    nonholonomic_acceleration,
+    project_state,
+    project_velocities,
+    velocity_constraints,
+    velocity_drift,
+)
 
 KINDS = ("static", "kinematic", "dynamic")
 
@@ -168,7 +176,11 @@ class FreeSystem:
     r"""A model with constraints dropped. Attributes: ``model``, ``dropped`` (constraints),
     ``system`` (the compiled System of the kept equations), ``kind``, ``linear`` (whether the
     highest-order unknowns enter linearly: no loads depending on multipliers, and for the
-    velocity equilibrium loads linear in velocities), ``dof``.
+    velocity equilibrium loads linear in velocities), ``dof``, ``velocity_constraints`` (the
+    kept velocity constraints :math:`A(q, t)\,\dot q + b(q, t) = 0`, rolling contacts or
+    constraints of velocity expressions: free motion adds :math:`A^T \mu` to the equations of
+    motion and :math:`A \ddot q = -\rho` to the constraints; ``docs/nonholonomic.md``,
+    decision 0053).
 
     With the kept constraints :math:`\Phi(q, t) = 0` (:math:`m < n` equations), their
     Jacobian :math:`\Phi_q`, the mass matrix :math:`M`, the applied loads :math:`Q` and the
@@ -196,7 +208,15 @@ class FreeSystem:
         drop = drop if isinstance(drop, (list, tuple)) else [drop]
         self.dropped = [model.constraint(c) for c in drop]
         self.kind = solution
-        self.system = model._system_without(self.dropped)
+        # velocity (nonholonomic) constraints: rows A qd + b = 0 beside Phi = 0 (decision 0053)
+        self.velocity_constraints = velocity_constraints(model, self.dropped)
+        if self.velocity_constraints and solution != "dynamic":
+            raise ModelError(
+                f"free(solution={solution!r}): the model holds velocity constraints "
+                f"({', '.join(c.label() for c in self.velocity_constraints)}); only "
+                "solution='dynamic' takes them (the equilibria with velocity constraints are "
+                "not supported yet): drop them (drop=[...]) or use solution='dynamic'")
+        self.system = model._system_without(self.dropped + self.velocity_constraints)
         if self.system.n == 0:
             raise ModelError("free(): the model has no moving bodies (or variables); add bodies "
                              "before freeing constraints")
@@ -218,7 +238,17 @@ class FreeSystem:
         if self.system.m > self.system.n:
             raise ModelError(f"free system is still overconstrained ({self.system.m} equations,"
                              f" {self.system.n} coordinates)")
-        self.dof = self.system.n - self.system.m
+        self._vrows = None
+        if self.velocity_constraints:
+            dyn = self.system.dynamics
+            if dyn.depends_on_lambda or dyn.depends_on_qdd:
+                raise ModelError(
+                    "free(): loads that depend on multipliers (friction) or accelerations "
+                    "together with velocity constraints "
+                    f"({', '.join(c.label() for c in self.velocity_constraints)}) are not "
+                    "supported yet; remove those loads or the velocity constraints")
+            self._vrows = VelocityRows(model, self.system, self.velocity_constraints)
+        self.dof = self.system.n - self.system.m - (self._vrows.k if self._vrows else 0)
         self._held0: dict = {"q": set(), "qd": set()}
         if initial_condition is not None:
             self._q0, self._qd0, self._p_given = self._apply_condition(
@@ -242,6 +272,9 @@ class FreeSystem:
 
     def __repr__(self) -> str:
         names = ", ".join(c.name for c in self.dropped) or "none"
+        if self.velocity_constraints:
+            names += "; velocity constraints " + ", ".join(
+                c.name for c in self.velocity_constraints)
         return (f"<FreeSystem ({self.kind}): dropped {names}; {self.dof} DOF; "
                 f"{'linear' if self.linear else 'nonlinear'}>")
 
@@ -265,6 +298,11 @@ class FreeSystem:
         """
         from ._linearize import linearize
 
+        if self._vrows is not None:
+            raise ModelError(
+                "linearize(): free systems with velocity constraints "
+                f"({', '.join(c.label() for c in self.velocity_constraints)}) are not "
+                "linearised yet (decision 0047 describes how the rows A qd + b = 0 will enter)")
         return linearize(self, state, inputs=inputs, outputs=outputs, coordinates=coordinates,
                          cyclic=cyclic, t=t, tolerance=tolerance)
 
@@ -393,8 +431,16 @@ class FreeSystem:
         """The start state on the constraints, keeping the values the user gave (the rest
         changes least); values the constraints do not allow are a ModelError naming them."""
         try:
-            return project_holding(self.system, t, q, qd, p, scaling, sorted(held["q"]),
-                                   sorted(held["qd"]))
+            q, qd = project_holding(self.system, t, q, qd, p, scaling, sorted(held["q"]),
+                                    sorted(held["qd"]))
+            if self._vrows is None:
+                return q, qd
+            # the velocities once more, with the velocity constraints' rows A qd + b = 0
+            qd, left = project_velocities(self.system, self._vrows, t, q, qd, p, scaling,
+                                          sorted(held["qd"]))
+            if left > 1e-8:
+                raise ConsistencyError("velocities", left)
+            return q, qd
         except ConsistencyError as exc:
             names = self.system.layout.q_names
             given = ([names[i] for i in sorted(held["q"])] if exc.held == "positions"
@@ -417,10 +463,12 @@ class FreeSystem:
                          indeterminate=_constraint_names(d.involved))
             if LAM is not None:
                 LAM = np.asarray(LAM).reshape(N, -1)
+                LAM, MU = LAM[:, :self.system.m], LAM[:, self.system.m:]
                 LAM = np.array([expand_multipliers(
                     J := system.jacobian(tk, qk, p), self.system.jacobian(tk, qk, p), lk,
                     Scaling.of(system, qk, J)) for tk, qk, lk in zip(t, np.asarray(Q).reshape(
                         N, -1), LAM)])
+                LAM = np.hstack((LAM, MU))       # (the velocity constraints' mu after them)
         sol = Solution(t=np.asarray(t, dtype=float), q=np.asarray(Q).reshape(N, -1),
                        qd=None if QD is None else np.asarray(QD).reshape(N, -1),
                        qdd=None if QDD is None else np.asarray(QDD).reshape(N, -1),
@@ -428,6 +476,18 @@ class FreeSystem:
                        iterations=np.asarray(its, dtype=int).reshape(N), scalar=scalar,
                        lam=None if LAM is None else np.asarray(LAM).reshape(N, -1),
                        mode=f"free-{self.kind}", extra=extra or {})
+        if self._vrows is not None:
+            # the velocity constraints' multipliers: sol.lam[:, m:], named per row here
+            rows = self._vrows
+            count: dict = {}
+            names = []
+            for c in rows.owners:
+                count[c.name] = count.get(c.name, 0) + 1
+                names.append(f"{c.name}[{count[c.name] - 1}]")
+            sol.extra["velocity_multipliers"] = names
+            if sol.lam is not None:
+                sol.extra["mu"] = sol.lam[:, system.m:]
+        return sol
         return sol
 
     def _newton(self, tolerance, max_iterations, what):
@@ -489,6 +549,9 @@ class FreeSystem:
         # initial condition that is not (say only a crank speed) is projected onto them first,
         # as simulate() does (smallest change in the unit-free coordinates)
         q, qd = self._project_start(t, q, qd, p, held, scaling_at(s, t, q, p))
+        if self._vrows is not None:
+            qdd, lam = nonholonomic_acceleration(s, self._vrows, t, q, qd, p)
+            return self._result([t], q, qd, qdd, lam, p, [0], scalar=True)
         qdd, lam, its = free_acceleration(s, t, q, qd, p, lam0 if lambda_guess is not None
                                           else None, **kw)
         return self._result([t], q, qd, qdd, lam, p, [its], scalar=True)
@@ -547,7 +610,9 @@ class FreeSystem:
         lam_box = [None]
 
         # loads linear in the multipliers: singular instants are passed (solvers/_rank.py)
-        robust = s.m > 0 and not (s.dynamics.depends_on_lambda or s.dynamics.depends_on_qdd)
+        vrows = self._vrows
+        robust = s.m > 0 and not (s.dynamics.depends_on_lambda or s.dynamics.depends_on_qdd) \
+            and vrows is None      # (passing singular instants: holonomic rows only)
         zone = [False]                 # a derivative of this step came from the zone
         guard = None
         rows0 = sc.rows(s.jacobian(t0, q0, p)) if robust else None
@@ -558,6 +623,9 @@ class FreeSystem:
                 return _flag(zone, inner(K, b, x))
 
         def accel(tt, y, lam_guess=None):
+            if vrows is not None:
+                qdd, lam = nonholonomic_acceleration(s, vrows, tt, y[:n], y[n:], p)
+                return y[n:], qdd, lam
             qdd, lam, _ = free_acceleration(s, tt, y[:n], y[n:], p, lam_guess, guard=guard,
                                             columns=sc.columns, **kw)
             return y[n:], qdd, lam
@@ -571,6 +639,9 @@ class FreeSystem:
         _check_independent(s, t0, q0, p, sc)
 
         def proj(tt, y):
+            if vrows is not None:
+                qq, vv = project_state(s, vrows, tt, y[:n], y[n:], p, sc)
+                return np.concatenate((qq, vv))
             # rank-tolerant: the motion passes through singular instants (links collinear)
             try:
                 qq, vv = project(s, tt, y[:n], y[n:], p, scaling=sc, rank_tolerant=robust)
@@ -593,7 +664,8 @@ class FreeSystem:
 
         # the compiled stepper (solvers/_jit_free.py) takes the regular steps when it can
         fast = FreeStepper.plan(s, opt.method, p, sc, rows0, robust, opt.correction,
-                                t_eval, (t0, q0), newton=kw)
+                                t_eval, (t0, q0), newton=kw,
+                                velocity_rows=0 if vrows is None else vrows.k)
         try:
             times, Y, res, m = integrate(rhs, proj, run, np.concatenate((q0, qd0)),
                                          scale=np.concatenate((sc.columns, sc.columns)),
@@ -603,7 +675,9 @@ class FreeSystem:
             close()
         # accelerations and multipliers: from the compiled stepper where it ran, else here
         QDD, LAM = res.diagnostics.get("derivatives") or (np.full((len(times), n), np.nan),
-                                                          np.full((len(times), s.m), np.nan))
+                                                          np.full((len(times), s.m + (
+                                                              0 if vrows is None else vrows.k)),
+                                                              np.nan))
         for k in np.nonzero(~(np.isfinite(QDD).all(axis=1) & np.isfinite(LAM).all(axis=1)))[0]:
             got = None if fast is None else fast.derivative(times[k], Y[k])
             if got is None:
@@ -621,6 +695,23 @@ class FreeSystem:
         # the run's own measure of its accuracy: constraint drift, coordinates' range
         extra["accuracy"] = accuracy_report(s, sc, times, Y, p, opt.rtol if opt.runge_kutta
                                          else opt.max_error[0], "FreeSystem.simulate")
+        if vrows is not None and len(times) and np.all(np.isfinite(Y[-1])):
+            drift = velocity_drift(s, vrows, times[-1], Y[-1, :n], Y[-1, n:], p, sc)
+            extra["accuracy"]["nonholonomic"] = drift
+            tol = opt.rtol if opt.runge_kutta else opt.max_error[0]
+            bound = max(DRIFT_WARNING, DRIFT_FACTOR * tol)
+            if drift > bound:      # (as accuracy_report for the holonomic rows)
+                import warnings
+
+                from .._errors import DegradedAccuracyWarning
+
+                warnings.warn(DegradedAccuracyWarning(
+                    f"FreeSystem.simulate: the velocity constraints have drifted by the end of "
+                    f"the run (t = {times[-1]:.6g}): residual {drift:.2e} relative to the largest "
+                    f"rate, above {bound:.0e}; keep constraint_correction=True (the default) or "
+                    "tighten rtol/max_error (sol.extra['accuracy'])", measure=drift,
+                    threshold=bound), stacklevel=2)
+                extra["accuracy"]["warned"] = "nonholonomic"
         if diagnostics:
             extra["diagnostics"] = res.diagnostics
         if res.message == "interrupted":

@@ -198,6 +198,16 @@ class SwitchedFreeSystem(FreeSystem):
             else:
                 plain.append(c)
         self.stage_drops = staged
+        from ._nonholonomic import velocity_constraints
+
+        kept = velocity_constraints(model, [model.constraint(c) for c in plain])
+        if kept:
+            # (its event-driven stepper takes the stage systems' position rows only)
+            raise ModelError(
+                "free(): velocity constraints "
+                f"({', '.join(c.label() for c in kept)}) in a model with stage or time "
+                "switches or event loads (contacts, stops) are not supported yet; remove the "
+                "switches and event loads, or the velocity constraints (drop=[...])")
         super().__init__(model, plain, solution, initial_guess, initial_condition)
 
     @staticmethod

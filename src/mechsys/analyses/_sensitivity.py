@@ -99,6 +99,12 @@ class SensitivitySystem:
             if free.kind != "dynamic":
                 raise ModelError("sensitivity(free=...): trajectory sensitivities need a free "
                                  "system built with solution='dynamic'")
+            if free.velocity_constraints:
+                # (its variational equations would need the rows A qd + b = 0 too)
+                raise ModelError(
+                    "sensitivity(free=...): free systems with velocity constraints ("
+                    f"{', '.join(c.label() for c in free.velocity_constraints)}) have no "
+                    "trajectory sensitivities yet; use finite differences of simulate runs")
         self._tangents: dict = {}
 
     @property

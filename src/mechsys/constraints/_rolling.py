@@ -30,9 +30,10 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
+import numpy as np
 import sympy as sp
 
-from .._errors import GeometryError
+from .._errors import GeometryError, ModelError
 from .._symbols import T, velocity_symbol
 from ..geometry._points import Point, as_axis, as_point
 from ..geometry._units import is_quantity
@@ -154,6 +155,35 @@ class RollingContact(ConstraintBase):
         """``(A, b)``: the equations as ``A(q, t) qd + b(q, t) = 0``, columns in the order of
         the model's coordinates (see :func:`~mechsys.linear_velocity_form`)."""
         return linear_velocity_form(self, model)
+
+    def tangential_force(self, sol) -> np.ndarray:
+        r"""The in-surface contact force (friction that prevents slip) the surface applies
+        to the rolling body at the contact over a free-motion solution (``m.free()`` with this
+        constraint added to the model; decision 0053), array ``(N, dim)``. With the no-slip
+        rows :math:`\psi_i = t_i \cdot v_c` (:math:`t_i` the in-surface directions) and their
+        multipliers :math:`\mu_i` (``sol.extra["mu"]``, the equations of the motion
+        :math:`M \ddot q + \Phi_q^T \lambda + A^T \mu = Q`):
+
+        .. math::  F_t = -\sum_i \mu_i\, t_i
+
+        (the surface's body takes :math:`-F_t`). The normal force is the reaction of the
+        holonomic part: ``sol.reaction(touch, body)``. Example::
+
+            F_t = roll.tangential_force(sol)
+        """
+        names = list(sol.extra.get("velocity_multipliers", ()))
+        rows = [i for i, x in enumerate(names) if x.rsplit("[", 1)[0] == self.name]
+        if not rows:
+            raise ModelError(
+                f"{self.label()}.tangential_force: the solution has no multipliers of this "
+                "constraint; add it to the model (m.add(roll)) and run free motion (m.free()"
+                ".simulate or .solve)")
+        mu = np.asarray(sol.extra["mu"], dtype=float).reshape(len(np.atleast_1d(sol.t)), -1)
+        N = mu.shape[0]
+        F = 0.0
+        for k, t in zip(rows, self._tangents(self._space())):
+            F = F - mu[:, k:k + 1] * np.asarray(sol.eval(t), dtype=float).reshape(N, -1)
+        return F
 
 
 class RollingDisk2(RollingContact):

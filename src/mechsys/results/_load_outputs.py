@@ -159,6 +159,8 @@ class LoadOutputs:
         if constraint is All or isinstance(constraint, (list, tuple)):
             return self._reaction_sum(constraint, body, at, coordinates)
         c = m.constraint(constraint)
+        if self._velocity_columns(c) is not None:
+            return self._velocity_reaction(c, body, at, coordinates)
         if getattr(c, "slave", None) is not None or isinstance(body, sp.Symbol):
             from ..constraints._generalized import generalized_reaction
 
@@ -174,6 +176,55 @@ class LoadOutputs:
             return self._finish_pair(-F, -M)
         F, M = self._reaction_expr(c, b, at, coordinates)
         return self._finish_pair(F, M)
+
+    def _velocity_columns(self, c):
+        """The columns of ``extra["mu"]`` that hold the multipliers of the velocity constraint
+        ``c`` on a free-motion solution with velocity constraints (decision 0053), else None."""
+        extra = getattr(self, "extra", None)
+        names = extra.get("velocity_multipliers") if isinstance(extra, dict) else None
+        if not names:
+            return None
+        cols = [i for i, x in enumerate(names) if x.rsplit("[", 1)[0] == c.name]
+        return cols or None
+
+    def _velocity_reaction(self, c, body, at, coordinates):
+        r"""``(force, moment)`` a velocity constraint applies to ``body`` over a free-motion
+        solution: its generalized force :math:`-A_b^T \mu` (``A_b`` the rows' columns of the
+        body's rates, :math:`\mu` its multipliers) as a force and moment (about ``at``, default
+        the body origin). On ground: the opposite of that on the constraint's one moving
+        body, the moment about ``at`` (default the origin)."""
+        m = self._model()
+        if not isinstance(body, (str, int)) and isinstance(body, sp.Symbol):
+            raise ModelError(f"reaction({c.name!r}, {body!r}): the reaction of a velocity "
+                             "constraint on a coordinate is -A^T mu; give a body")
+        b = m.body(body)
+        sign = 1.0
+        if b.is_ground:
+            others = [x for x in c.bodies() if not x.is_ground]
+            if len(others) != 1:
+                raise ModelError(f"reaction on ground from {c.label()}: it joins "
+                                 f"{len(others)} moving bodies; ask for each body's reaction")
+            b, sign = m.body(others[0]), -1.0
+            at = at if at is not None else (0,) * m.space.dim
+        if b.gen_joint is not None:
+            from ..constraints._generalized import slave_refused
+
+            raise slave_refused(b, "reaction")
+        rates = m.velocity_symbols()
+        psi = sp.Matrix(c.equations(m.space))
+        Ab = psi.jacobian([rates[x] for x in b.q])
+        mu = np.asarray(self.extra["mu"], dtype=float)
+        mu = mu.reshape(-1, mu.shape[-1])[:, self._velocity_columns(c)]
+        F = M = 0.0
+        for i in range(Ab.shape[0]):
+            # the wrench is linear in the generalized force: one per row, weighted by -mu_i
+            Fi, Mi = self._wrench(b, Ab[i, :].T, at, coordinates)
+            Fi, Mi = self._finish_pair(Fi, Mi)
+            shape_F, shape_M = np.shape(Fi), np.shape(Mi)
+            w = -sign * mu[:, i:i + 1]
+            F = F + w * np.asarray(Fi, dtype=float).reshape(len(mu), -1)
+            M = M + w * np.asarray(Mi, dtype=float).reshape(len(mu), -1)
+        return F.reshape(shape_F), M.reshape(shape_M)
 
     def _reaction_constraints(self, constraint) -> list:
         """The constraints of ``All`` (those with multipliers in this system) or a list."""

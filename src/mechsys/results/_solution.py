@@ -173,7 +173,8 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Lin
         X[:, 1 : 1 + n] = self.q
         X[:, 1 + n : 1 + 2 * n] = 0.0 if self.qd is None else self.qd
         X[:, 1 + 2 * n : 1 + 3 * n] = 0.0 if self.qdd is None else self.qdd
-        X[:, 1 + 3 * n : 1 + 3 * n + mm] = 0.0 if self.lam is None else self.lam
+        # (free motion with velocity constraints: lam holds mu after the mm multipliers)
+        X[:, 1 + 3 * n : 1 + 3 * n + mm] = 0.0 if self.lam is None else self.lam[:, :mm]
         X[:, 1 + 3 * n + mm :] = self.p
         with np.errstate(divide="ignore", invalid="ignore"):
             vals = f.batch(X)

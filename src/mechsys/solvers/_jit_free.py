@@ -772,9 +772,14 @@ class FreeStepper:
 
     @classmethod
     def plan(cls, system, method, p, scaling, rows0, robust, correction, t_eval, start,
-             newton=None):
+             newton=None, velocity_rows: int = 0):
         """The stepper when the compiled loop can run this simulation (``method``: DOP853 or
-        one of Mech's Adams methods; ``start``: ``(t0, q0)``), else None."""
+        one of Mech's Adams methods; ``start``: ``(t0, q0)``), else None.
+        ``velocity_rows``: the number of velocity-constraint rows ``A qd + b = 0`` of the
+        free system (decision 0053); the compiled loop does not hold them yet, so a positive
+        number gives None (the Python path, ``sol.extra["compiled_steps"] == 0``)."""
+        if velocity_rows:
+            return None
         spec = _methods.find(method)
         if _jit.mode() == "off" or spec is None or spec.compiled is None or system.n == 0:
             return None
