@@ -216,8 +216,8 @@ class RollingDisk2(RollingContact):
         h_1 \cdot v_c = 0, \qquad f_1 \cdot v_c = 0
 
     Linear in the velocities, :math:`A(q)\, \dot q = 0` (:meth:`velocity_form`). Regular
-    while the disk is not flat on the plane (:math:`u_1 \times u_2 = 0`). Give the velocity constraint to a path
-    system in place of two dummy constraints:
+    while the disk is not flat on the plane (:math:`u_1 \times u_2 = 0`). Give the velocity
+    constraint to a path system in place of two dummy constraints:
     ``m.path(replace={("dummy x", "dummy y"): roll})``. Example::
 
         roll = ms.RollingDisk2(m.ground.axis((0, 0, 0), (0, 0, 1)), disk.axis(0, (0, 1, 0)), 0.3)
