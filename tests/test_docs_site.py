@@ -219,7 +219,7 @@ def test_api_shows_real_signatures(site):
     """Every public constraint and load class shows its own arguments, not the
     ``(*args, **kwargs)`` of the base class's ``__new__`` (78 entries did)."""
     import mechsys
-    from mechsys.constraints import ConstraintBase
+    from mechsys.constraints import ConstraintBase, RollingContact
     from mechsys.loads._loads import LoadBase
 
     entries = _api_entries(site)
@@ -228,7 +228,7 @@ def test_api_shows_real_signatures(site):
         obj = getattr(mechsys, name)
         if not (isinstance(obj, type) and issubclass(obj, (ConstraintBase, LoadBase))):
             continue
-        if obj in (ConstraintBase, LoadBase):
+        if obj in (ConstraintBase, LoadBase, RollingContact):   # abstract bases, not built
             continue
         page, sig = entries[f"mechsys.{name}"]
         assert "*args" not in sig and "**kwargs" not in sig, (name, sig)

@@ -129,7 +129,8 @@ def test_exp_converges_at_the_methods_order(tableau, order, rk45, h):
 
 # -- the registry -------------------------------------------------------------------------------
 def test_registry_names_every_method_once():
-    assert _methods.NAMES == ("dop853", "rk45", "automatic", "adams", "predictor", "corrector")
+    assert _methods.NAMES == ("dop853", "rk45", "radau", "automatic", "adams", "predictor",
+                              "corrector")
     assert _methods.get("ADAMS").name == "automatic" and _methods.get("Dop853").name == "dop853"
     with pytest.raises(ms.OptionError, match=r"method must be one of 'dop853', .*did you mean 'rk45'"):
         _methods.get("rk4")
