@@ -24,9 +24,11 @@ $(STAMP): pyproject.toml $(VENV)/bin/python
 demo: $(CORE)
 	$(VENV)/bin/mechsys demo --out out
 
-# two workers (pytest-xdist): this project's machines have two cores (decision 0052)
+# two workers (pytest-xdist): this project's machines have two cores; the tests that start a
+# Jupyter kernel then run in one process of their own (decision 0052)
 test: $(STAMP)
-	$(PY) -m pytest -n 2 tests
+	$(PY) -m pytest -n 2 -m "not jupyter_kernel" tests
+	$(PY) -m pytest -m jupyter_kernel tests
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check src tests examples benchmarks docs/conf.py docs/_gen

@@ -58,6 +58,7 @@ def test_a_model_without_parameters_is_refused():
         ms.draw.explore(models.slider_crank(), [0.0])
 
 
+@pytest.mark.jupyter_kernel
 def test_panel_in_a_jupyter_kernel(tmp_path):
     nbclient = pytest.importorskip("nbclient")
     nbformat = pytest.importorskip("nbformat")

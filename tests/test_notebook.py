@@ -7,6 +7,8 @@ import nbclient
 import nbformat
 import pytest
 
+pytestmark = pytest.mark.jupyter_kernel
+
 NOTEBOOK = Path(__file__).resolve().parents[1] / "examples" / "notebooks" / "first_model.ipynb"
 
 
