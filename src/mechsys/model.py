@@ -785,7 +785,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
                     raise ModelError(
                         f"{lab} is a velocity constraint (it uses the rates "
                         f"{sorted(map(str, extra & rates))}), which the position equations of "
-                        "a model (solve, free, couple) cannot hold. For the first-order motion "
+                        "solve, couple and the static and kinematic free systems cannot hold. "
+                        "For the first-order motion "
                         "of a nonholonomic system keep a dummy constraint in the model in its "
                         "place and give the velocity constraint to m.path(replace={dummy: "
                         "velocity_constraint}) (docs/nonholonomic.md); free motion (m.free) holds "
