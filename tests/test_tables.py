@@ -78,8 +78,8 @@ def test_units_and_dimensions_in_the_metadata(dynamic, static):
     assert df0.attrs["units"]["crank.th"] == "rad"
 
 
-def test_model_variables_have_no_guessed_unit():
-    """A gear's extra variable (model variable) gets no unit, not a length or angle."""
+def gear_pair(units=None):
+    """Two gears on pins, the first driven: the gear's extra variable is a model variable."""
     m = ms.Model2D()
     a = m.add_body("a", guess=((0, 0), 0))
     b = m.add_body("b", guess=((3, 0), 0))
@@ -87,7 +87,14 @@ def test_model_variables_have_no_guessed_unit():
     m.add(ms.Revolute2(m.ground.point((3, 0)), b.point(0)))
     m.add(ms.TwoGears1(a.point(0), 1.0, b.point(0), 2.0, 1))
     m.add(ms.RotationLock1(a, ms.T))
-    sol = m.solve(np.linspace(0, 1, 3))
+    if units:
+        m.set_units(**units)
+    return m
+
+
+def test_model_variables_have_no_guessed_unit():
+    """A gear's extra variable (model variable) gets no unit, not a length or angle."""
+    sol = gear_pair().solve(np.linspace(0, 1, 3))
     df = sol.to_dataframe()
     variables = [n for n in sol.names if "." not in n]
     assert variables, sol.names
@@ -179,15 +186,7 @@ def test_quantities_refuse_what_has_no_unit(static):
     _, sol = static                       # no declared units
     with pytest.raises(ms.ModelError, match="m.set_units"):
         sol.quantity("piston.x")
-    m = ms.Model2D()
-    a = m.add_body("a", guess=((0, 0), 0))
-    b = m.add_body("b", guess=((3, 0), 0))
-    m.add(ms.Revolute2(m.ground.point((0, 0)), a.point(0)))
-    m.add(ms.Revolute2(m.ground.point((3, 0)), b.point(0)))
-    m.add(ms.TwoGears1(a.point(0), 1.0, b.point(0), 2.0, 1))
-    m.add(ms.RotationLock1(a, ms.T))
-    m.set_units(length="mm", time="s")
-    sol = m.solve(np.linspace(0, 1, 3))
+    sol = gear_pair({"length": "mm", "time": "s"}).solve(np.linspace(0, 1, 3))
     variable = next(n for n in sol.names if "." not in n)
     with pytest.raises(ms.ModelError, match=f"{variable!r} has no unit"):
         sol.quantity(variable)
