@@ -83,14 +83,24 @@ def _disk(rng, moving):
     centre = centre + (n @ (o1 - (centre - rad * w))) * n    # slide along n until it touches
     c = centre - rad * w
     r2 = centre - R2 @ o2l
-    poses = {disk: _pose(r2, R2)}
+    return _rolling_case(rng, moving, m, roll, disk, (r2, R2, centre, c),
+                         b1, (r1, R1) if b1 is not None else (r1, None))
+
+
+def _rolling_case(rng, moving, m, roll, body, rolling_pose, b1, surface_pose):
+    """The case of a 3D rolling contact: the rolling ``body`` at ``(r2, R2)`` with its centre
+    and contact point ``c``, the surface body ``b1`` (or ground) at ``(r1, R1)``; rates with
+    the contact point's material velocities equal on both (no slip), the rest random."""
+    r2, R2, centre, c = rolling_pose
+    r1, R1 = surface_pose
+    poses = {body: _pose(r2, R2)}
     if b1 is not None:
         poses[b1] = _pose(r1, R1)
     q = pose_vector(m, poses)
     v1, w1 = _surface_motion(rng, moving, 3)
     w2 = rng.standard_normal(3)
     v_centre = _material(v1, w1, r1, c) - np.cross(w2, c - centre)
-    motions = {disk: (_material(v_centre, w2, centre, r2), w2)}
+    motions = {body: (_material(v_centre, w2, centre, r2), w2)}
     if b1 is not None:
         motions[b1] = (v1, w1)
     return Case(m, roll, q, qd=_rates(m, q, motions))
@@ -119,17 +129,8 @@ def _sphere(rng, moving):
     centre = centre + (n @ (o1 - centre) + rad) * n
     c = centre - rad * n
     r2 = centre - R2 @ pl
-    poses = {ball: _pose(r2, R2)}
-    if b1 is not None:
-        poses[b1] = _pose(r1, R1)
-    q = pose_vector(m, poses)
-    v1, w1 = _surface_motion(rng, moving, 3)
-    w2 = rng.standard_normal(3)
-    v_centre = _material(v1, w1, r1, c) - np.cross(w2, c - centre)
-    motions = {ball: (_material(v_centre, w2, centre, r2), w2)}
-    if b1 is not None:
-        motions[b1] = (v1, w1)
-    return Case(m, roll, q, qd=_rates(m, q, motions))
+    return _rolling_case(rng, moving, m, roll, ball, (r2, R2, centre, c),
+                         b1, (r1, R1) if b1 is not None else (r1, None))
 
 
 def _circle(rng, moving):
