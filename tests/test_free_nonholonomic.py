@@ -15,17 +15,12 @@ import numpy as np
 import pytest
 
 import mechsys as ms
+from conftest import load_example
 
-MASS, INERTIA, OFFSET, W0 = 2.0, 0.3, 0.4, 2.0
-
-
-def sleigh():
-    m = ms.Model2D()
-    b = m.add_body("sleigh", points={"P": (-OFFSET, 0.0)}, guess=((0.1, -0.2), 0.3),
-                   mass=MASS, inertia=INERTIA)
-    # the knife edge at P: no velocity across the body's x axis
-    m.add(ms.Orthogonal1(m.velocity(b.point("P")), b.vector((0, 1))), name="knife")
-    return m, b
+# the sleigh's model is the example's (examples/chaplygin_sleigh.py)
+_example = load_example("chaplygin_sleigh")
+MASS, INERTIA, OFFSET, W0 = _example.MASS, _example.INERTIA, _example.OFFSET, _example.W0
+sleigh = _example.sleigh
 
 
 def test_chaplygin_sleigh_closed_form_energy_and_reaction():
