@@ -204,6 +204,10 @@ CATALOGUE = [
      "solution='dynamic'"),
     ("free", 'pend().free(drop=["hold"], solution="kinematic").solve(0.0)', "ModelError",
      "velocit"),
+    ("free", 'm = ms.Model2D(); b = m.add_body("b", guess=((0, 0), 0), mass=1, inertia=1); '
+     'm.add(ms.Constraint([m.velocity(b.point(0))[0] - 1]), name="belt"); '
+     'm.add_load(ms.Gravity((0, -1), 9.81)); m.free(solution="static").solve(0.0)',
+     "ModelError", "belt"),
     ("free", 'm = ms.Model2D(); b = m.add_body("b", points={"p": (1, 0)}); m.add(ms.Revolute2('
      'm.ground.point((0, 0)), b.point(0))); m.free().solve(0.0)', "SingularMassError", "'b'"),
     # paths

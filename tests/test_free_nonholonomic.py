@@ -89,8 +89,6 @@ def test_free_solve_one_state_and_refusals():
     # centroid: d/dt (u ex + a w ey) = u' ex - a w^2 ex at u = 0, w' = 0  ->  0
     assert abs(a_G @ ex) < 1e-12 and abs(a_G @ ey) < 1e-12
     assert qdd[2] == pytest.approx(0.0, abs=1e-12)
-    with pytest.raises(ms.ModelError, match="static.*velocity constraints.*knife"):
-        m.free(solution="static")
     with pytest.raises(ms.ModelError, match="linearize.*velocity constraints"):
         m.free().linearize()
     m.parameter("c", 1.0)
@@ -226,3 +224,104 @@ def test_rolling_circle_free_motion_matches_rack_and_pinion():
     np.testing.assert_allclose(roll.tangential_force(a)[:, 0], Fb[:, 0], atol=1e-7)
     E = a.body_energy() + a.potential_energy()
     assert np.ptp(E) < 1e-9 * np.abs(E).max()
+
+
+# -- equilibria with velocity constraints (decision 0055) -------------------------------------
+
+RAD, ECC, MW, SLOPE, G = 0.5, 0.2, 3.0, 0.25, 9.81
+
+
+def wheel_on_slope(ecc=ECC, th0=-1.0, damping=None):
+    """A wheel (centroid ``ecc`` off its centre) on a line rising at ``SLOPE``, rolling on it
+    (``RollingCircle1``: a velocity row) under gravity; optionally a rotational damper to
+    ground."""
+    m = ms.Model2D()
+    t, n = np.array([np.cos(SLOPE), np.sin(SLOPE)]), np.array([-np.sin(SLOPE), np.cos(SLOPE)])
+    w = m.add_body("wheel", guess=(tuple(0.7 * t + RAD * n), th0), mass=MW, inertia=0.4,
+                   centroid=(ecc, 0.0))
+    roll = ms.RollingCircle1(w.point(0), RAD, m.ground.axis((0, 0), tuple(t)))
+    m.add(roll.holonomic(), name="touch")
+    m.add(roll, name="roll")
+    m.add_load(ms.Gravity((0, -1), G))
+    if damping is not None:
+        m.add_load(ms.TorsionDamper(m.ground, w, damping), name="damper")
+    return m, w, roll, t, n
+
+
+def test_static_equilibrium_held_by_rolling_on_a_slope():
+    """At rest the contact force balances the weight: the centroid is straight above the
+    contact, ``ecc cos(th) = RAD sin(SLOPE)`` (the lower root is the stable one, started near
+    it), the friction is ``m g sin(SLOPE)`` up the slope and the normal force ``m g
+    cos(SLOPE)``. Rolling removes a velocity, not a position: the equilibria form a family
+    (any place along the slope), the solve ends near the start (the place does not move) and
+    keeps the coordinates given."""
+    m, w, roll, t, n = wheel_on_slope()
+    fs = m.free(solution="static")
+    x0 = m.guess()[0]
+    eq = fs.solve()
+    q = np.ravel(eq.q)
+    assert q[2] == pytest.approx(-np.arccos(RAD * np.sin(SLOPE) / ECC), abs=1e-12)
+    assert q[0] == x0                      # the minimum-norm steps leave the place alone
+    Ft, Fn = roll.tangential_force(eq)[0], eq.reaction("touch", w)[0]
+    np.testing.assert_allclose(Ft, MW * G * np.sin(SLOPE) * t, atol=1e-12)
+    np.testing.assert_allclose(Fn, MW * G * np.cos(SLOPE) * n, atol=1e-12)
+    assert eq.extra["velocity_multipliers"] == ["roll[0]"] and eq.extra["mu"].shape == (1, 1)
+    # a place given: kept, the same angle, the centre on the line
+    q2 = np.ravel(fs.solve(initial_condition={"wheel.x": 2.0}).q)
+    assert q2[0] == 2.0 and q2[2] == pytest.approx(q[2], abs=1e-10)   # (Newton tolerance)
+    assert (q2[:2] - RAD * n) @ n == pytest.approx(0.0, abs=1e-12)
+
+
+def test_static_refused_where_rest_is_not_allowed():
+    m = ms.Model2D()
+    b = m.add_body("b", guess=((0, 0), 0), mass=1.0, inertia=1.0)
+    m.add(ms.Constraint([m.velocity(b.point(0))[0] - 1]), name="belt")
+    m.add_load(ms.Gravity((0, -1), 9.81))
+    with pytest.raises(ms.ModelError, match="belt.*does not allow rest"):
+        m.free(solution="static").solve(0.0)
+
+
+def test_velocity_equilibrium_with_rolling_and_a_damper():
+    """A centred wheel rolling down the slope against a rotational damper ``c``: the power of
+    gravity ``m g RAD sin(SLOPE) w`` balances the damper's ``c w^2`` (inertia excluded, as in
+    Mech), so ``w = m g RAD sin(SLOPE) / c``; the friction carries the weight's component
+    along the slope, ``m g sin(SLOPE)``, and the centre moves along the slope at ``RAD w``."""
+    c = 0.7
+    m, w, roll, t, n = wheel_on_slope(ecc=0.0, th0=0.0, damping=c)
+    fk = m.free(solution="kinematic")
+    assert fk.dof == 1
+    sk = fk.solve(initial_condition={"wheel.th_d": 1.0})
+    qd = np.ravel(sk.qd)
+    om = MW * G * RAD * np.sin(SLOPE) / c
+    assert qd[2] == pytest.approx(om, rel=1e-12)
+    np.testing.assert_allclose(qd[:2], -RAD * om * t, atol=1e-12)
+    np.testing.assert_allclose(roll.tangential_force(sk)[0], MW * G * np.sin(SLOPE) * t,
+                               atol=1e-12)
+    np.testing.assert_allclose(sk.reaction("touch", w)[0], MW * G * np.cos(SLOPE) * n,
+                               atol=1e-12)
+
+
+def test_coin_at_rest_on_a_slope():
+    """A coin left on a slope (rising at ``a`` along y) from a guess leaning 0.1 rad and
+    heading 0.15 rad off the level line: at rest its plane is vertical (its centroid straight
+    above the contact) and its rolling direction level (the slope's component along it would
+    roll it away); the contact force is the weight, the friction ``m g sin(a)`` up the slope."""
+    coin_ex = load_example("rolling_coin")
+    R, M, g, a = coin_ex.R, coin_ex.M, coin_ex.G, 0.2
+    nrm = np.array([0, -np.sin(a), np.cos(a)])
+    m = ms.Model3D()
+    coin = m.add_body("coin", guess=(tuple(R * coin_ex.frame(0.1, 0.15)[2]),
+                                     coin_ex.quaternion(0.1, 0.15)),
+                      mass=M, inertia=(coin_ex.ID, coin_ex.IA, coin_ex.ID))
+    roll = ms.RollingDisk2(m.ground.axis((0, 0, 0), tuple(nrm)), coin.axis(0, (0, 1, 0)), R)
+    m.add(roll.holonomic(), name="touch")
+    m.add(roll, name="roll")
+    m.add_load(ms.Gravity((0, 0, -1), g))
+    eq = m.free(solution="static").solve()
+    e0, e1, e2, e3 = np.ravel(eq.q)[3:7]
+    axis = [2 * (e1 * e2 - e0 * e3), e0**2 - e1**2 + e2**2 - e3**2, 2 * (e2 * e3 + e0 * e1)]
+    np.testing.assert_allclose(np.abs(axis), [0, 1, 0], atol=1e-12)   # plane x-z: vertical, level
+    Ft, Fn = roll.tangential_force(eq)[0], eq.reaction("touch", coin)[0]
+    np.testing.assert_allclose(Ft + Fn, [0, 0, M * g], atol=1e-12)
+    assert np.linalg.norm(Ft) == pytest.approx(M * g * np.sin(a), rel=1e-12)
+    assert Ft @ nrm == pytest.approx(0.0, abs=1e-14) and Ft[1] > 0     # in the plane, uphill

@@ -210,12 +210,6 @@ class FreeSystem:
         self.kind = solution
         # velocity (nonholonomic) constraints: rows A qd + b = 0 beside Phi = 0 (decision 0053)
         self.velocity_constraints = velocity_constraints(model, self.dropped)
-        if self.velocity_constraints and solution != "dynamic":
-            raise ModelError(
-                f"free(solution={solution!r}): the model holds velocity constraints "
-                f"({', '.join(c.label() for c in self.velocity_constraints)}); only "
-                "solution='dynamic' takes them (the equilibria with velocity constraints are "
-                "not supported yet): drop them (drop=[...]) or use solution='dynamic'")
         self.system = model._system_without(self.dropped + self.velocity_constraints)
         if self.system.n == 0:
             raise ModelError("free(): the model has no moving bodies (or variables); add bodies "
@@ -247,7 +241,9 @@ class FreeSystem:
                     "together with velocity constraints "
                     f"({', '.join(c.label() for c in self.velocity_constraints)}) are not "
                     "supported yet; remove those loads or the velocity constraints")
-            self._vrows = VelocityRows(model, self.system, self.velocity_constraints)
+            # (the equilibria do not use rho = d(A qd + b)/dt: not derived for them)
+            self._vrows = VelocityRows(model, self.system, self.velocity_constraints,
+                                       rho=solution == "dynamic")
         self.dof = self.system.n - self.system.m - (self._vrows.k if self._vrows else 0)
         self._held0: dict = {"q": set(), "qd": set()}
         if initial_condition is not None:
@@ -502,6 +498,23 @@ class FreeSystem:
                 "accelerations, so it is one linear solve); leave them out")
         return kw
 
+    def _check_rest_allowed(self, t, q, p):
+        """A static equilibrium is at rest: a velocity constraint whose term ``b(t)`` does not
+        depend on the coordinates and does not vanish (a conveyor's prescribed speed) allows
+        no rest anywhere; raise naming it (a ``b`` depending on ``q`` is a residual row of the
+        Newton iteration instead)."""
+        rows = self._vrows
+        qs = set(self.system.layout.q_symbols)
+        _, b, _ = rows.evaluate(t, q, np.zeros(self.system.n), p)
+        for e, c, value in zip(rows.b_sym, rows.owners, b):
+            if not (e.free_symbols & qs) and value != 0:
+                raise ModelError(
+                    f"free(solution='static'): the velocity constraint {c.label()} does not "
+                    f"allow rest (its term b = {value:.6g} in A qd + b = 0 does not vanish at "
+                    "zero velocities), so the model has no static equilibrium; use "
+                    "solution='kinematic' for the balance of velocity-dependent loads, or "
+                    "simulate the motion")
+
     # -- single-state analyses ---------------------------------------------------------------
     def solve(self, t: float = 0.0, initial_condition=None, lambda_guess=None,
               tolerance: float | None = None, max_iterations: int | None = None) -> Solution:
@@ -524,12 +537,19 @@ class FreeSystem:
         q, qd, p, held = self._start(initial_condition)
         s = self.system
         lam0 = lambda_guess_vector(s, self.model, lambda_guess)
+        rows = self._vrows
+        if rows is not None and self.kind != "dynamic":
+            # the velocity constraints' multipliers mu (the equilibria are linear in them)
+            lam0 = np.concatenate((lam0, np.zeros(rows.k)))
         if self.kind == "static":
+            if rows is not None:
+                self._check_rest_allowed(t, q, p)
             if self._eq is None:
                 from ..compile._free import StaticEquilibrium
 
-                self._eq = StaticEquilibrium(s)
-            q, lam, its = equilibrium_configuration(self._eq, s, t, q, lam0, p, **kw)
+                self._eq = StaticEquilibrium(s, rows)
+            q, lam, its = equilibrium_configuration(self._eq, s, t, q, lam0, p, rows=rows,
+                                                    held=sorted(held["q"]), **kw)
             return self._result([t], q, np.zeros_like(q), None, lam, p, [its], scalar=True)
         if self.kind == "kinematic":
             if self._eqv is None:
@@ -542,8 +562,9 @@ class FreeSystem:
                         "velocity is an equilibrium (or every one is); add velocity-dependent "
                         "loads (dampers, speed-dependent moments). Inertial (centrifugal) terms "
                         "do not count, as in Mech")
-                self._eqv = VelocityEquilibrium(s)
-            qd, lam, its = equilibrium_velocity(self._eqv, s, t, q, qd, lam0, p, **kw)
+                self._eqv = VelocityEquilibrium(s, rows)
+            qd, lam, its = equilibrium_velocity(self._eqv, s, t, q, qd, lam0, p, rows=rows,
+                                                **kw)
             return self._result([t], q, qd, None, lam, p, [its], scalar=True)
         # a free acceleration is only meaningful at a state the kept constraints allow: an
         # initial condition that is not (say only a crank speed) is projected onto them first,

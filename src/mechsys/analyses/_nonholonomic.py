@@ -50,9 +50,12 @@ class VelocityRows:
     \dot q, t)` (k,) of the velocity constraints ``constraints`` on ``system`` (the free
     system's holonomic part: the same coordinates, in its order). ``owners[i]`` is the
     constraint of row ``i``. A constraint whose equations are not linear in the rates raises
-    :class:`ModelError` naming it."""
+    :class:`ModelError` naming it. ``A_sym``, ``b_sym`` keep the rows as SymPy matrices (the
+    equilibria's residuals take them, decision 0055); ``rho=False`` (the equilibria, which
+    do not need :math:`\rho`) leaves its costly derivatives out and ``evaluate`` returns
+    zeros for it."""
 
-    def __init__(self, model, system, constraints):
+    def __init__(self, model, system, constraints, rho: bool = True):
         lay = system.layout
         q, qd = list(lay.q_symbols), list(lay.qd_symbols)
         allowed = set(q) | set(qd) | set(lay.p_symbols) | {T}
@@ -73,8 +76,9 @@ class VelocityRows:
                     "along a direction), or use a path system (m.path) for it")
             psi += eqs
             owners += [c] * len(eqs)
-        rows = velocity_rows(psi, q, qd)
+        rows = velocity_rows(psi, q, qd, rho=rho)
         self.k, self.n = len(psi), system.n
+        self.A_sym, self.b_sym = rows.A, rows.b
         self.owners = owners
         self.constraints = list(constraints)
         self.system = system
@@ -85,7 +89,8 @@ class VelocityRows:
         """``(A (k, n), b (k,), rho (k,))`` at ``(t, q, qd)``."""
         out = np.asarray(self._f(self.system.pack(t, q, qd, p)), dtype=float).ravel()
         k, n = self.k, self.n
-        return out[:k * n].reshape(k, n), out[k * n:k * n + k], out[k * n + k:]
+        rho = out[k * n + k:] if out.size > k * n + k else np.zeros(k)
+        return out[:k * n].reshape(k, n), out[k * n:k * n + k], rho
 
     def residual(self, t, q, qd, p) -> np.ndarray:
         """:math:`A \\dot q + b` (k,)."""

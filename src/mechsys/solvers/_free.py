@@ -559,14 +559,20 @@ class ConsistencyError(Exception):
 
 
 def _damped_newton(evaluate, x, n, t, what, hint, tol=1e-12, max_iterations=50,
-                   col=None, row=None):
+                   col=None, row=None, minimum_norm=False, fixed=()):
     """Newton with Armijo backtracking on ``R(x) = 0``; ``evaluate(x) -> (R, K)``.
 
     ``col``/``row``: units of the unknowns and of the equations. Newton works on
     ``x^ = x / col``, ``R^ = R / row``, ``K^ = K col / row`` and converges when
     ``max |R^| <= tol (1 + max_{j < n} |x^_j|)`` (the first ``n`` unknowns are the coordinates
-    or velocities): the same decision in any unit of length."""
+    or velocities): the same decision in any unit of length.
+
+    ``minimum_norm``: for a family of solutions (a singular ``K^`` whose equations are
+    consistent: the static equilibria with velocity constraints, decision 0055) each step is
+    the smallest ``dx^`` of least squares (``lstsq``) instead of the LU solve, so the iteration
+    ends on a solution near the start; the unknowns ``fixed`` (indices) do not move."""
     col = np.ones(len(x)) if col is None else col
+    free_cols = np.setdiff1d(np.arange(len(x)), np.asarray(fixed, dtype=int))
     history = []
     for it in range(max_iterations + 1):
         R, K = evaluate(x)
@@ -579,7 +585,12 @@ def _damped_newton(evaluate, x, n, t, what, hint, tol=1e-12, max_iterations=50,
         if err <= tol * (1 + np.abs(x[:n] / col[:n]).max(initial=0.0)):
             return x, it
         try:
-            dx = col * factor(K * col / row[:, None]).solve(-Rs)
+            if minimum_norm:
+                Ks = (K * col / row[:, None])[:, free_cols]
+                dx = np.zeros(len(x))
+                dx[free_cols] = col[free_cols] * np.linalg.lstsq(Ks, -Rs, rcond=1e-12)[0]
+            else:
+                dx = col * factor(K * col / row[:, None]).solve(-Rs)
         except Singular:
             raise ConvergenceError(
                 f"{what} at t = {t:.6g}: singular Jacobian (scaled residual {err:.3e}); {hint}",
@@ -598,7 +609,7 @@ def _damped_newton(evaluate, x, n, t, what, hint, tol=1e-12, max_iterations=50,
         "solution).", time=t, history=tuple(history))
 
 
-def _equilibrium_units(system, t, q, p, evaluate_without_multipliers):
+def _equilibrium_units(system, t, q, p, evaluate_without_multipliers, A=None):
     r"""Units of ``x = [v (n), lambda (m)]`` and ``R = [Phi-like rows (m), J^T lambda - Q
     (n)]`` for the equilibria. With the solver's :class:`Scaling` (columns ``c``, row scales
     ``r``) and a characteristic virtual work ``E = max_j |Q_j c_j|`` (the loads at the
@@ -607,37 +618,53 @@ def _equilibrium_units(system, t, q, p, evaluate_without_multipliers):
         x units: [c, E / r],   R units: [r, E / c]
 
     so that positions are in units of ``L``, multipliers in units of the loads, and every
-    equation is dimensionless."""
+    equation is dimensionless. With velocity constraints (their rows ``A`` (k, n), row scales
+    ``r_A``) ``x = [v, lambda, mu]`` and ``R = [Phi-like (m), velocity rows (k), balance
+    (n)]``: ``x`` units ``[c, E / r, E / r_A]``, ``R`` units ``[r, r_A, E / c]``."""
     J = system.jacobian(t, q, p) if system.m else np.zeros((0, system.n))
     sc = Scaling.of(system, np.asarray(q, dtype=float), J)
     r = sc.rows(J) if system.m else np.zeros(0)
+    rA = sc.rows(A) if A is not None else np.zeros(0)
     R0 = evaluate_without_multipliers()
-    E = float(np.abs(R0[system.m :] * sc.columns).max(initial=0.0))
+    E = float(np.abs(R0[system.m + len(rA):] * sc.columns).max(initial=0.0))
     E = E if E > 0 and np.isfinite(E) else 1.0
-    return np.concatenate((sc.columns, E / r)), np.concatenate((r, E / sc.columns))
+    return (np.concatenate((sc.columns, E / r, E / rA)),
+            np.concatenate((r, rA, E / sc.columns)))
 
 
-def equilibrium_configuration(eq, system, t, q0, lam0, p, tol=1e-12, max_iterations=50):
+def equilibrium_configuration(eq, system, t, q0, lam0, p, tol=1e-12, max_iterations=50,
+                              rows=None, held=()):
     """Newton on ``(q, lambda)`` for the static equilibrium (``eq`` the compiled residual
     ``R(q, lambda)`` and its Jacobian, from ``compile._free``), in the unit-free variables of
-    :func:`_equilibrium_units`. Returns ``(q, lam, its)``."""
+    :func:`_equilibrium_units`. Returns ``(q, lam, its)``.
+
+    With velocity constraints (``rows``, a ``VelocityRows``; ``lam0`` then holds ``(lambda,
+    mu)``) the equilibria form a family (the constraints remove velocities, not positions):
+    minimum-norm Newton steps end on the one near ``q0``, the coordinates ``held`` (indices)
+    kept as given (decision 0055)."""
     n, m = system.n, system.m
+    A = rows.evaluate(t, q0, np.zeros(n), p)[0] if rows is not None else None
+    k = rows.k if rows is not None else 0
     col, row = _equilibrium_units(system, t, q0, p,
-                                  lambda: eq.evaluate(t, q0, np.zeros(m), p)[0])
+                                  lambda: eq.evaluate(t, q0, np.zeros(m + k), p)[0], A)
     x, its = _damped_newton(
         lambda x: eq.evaluate(t, x[:n], x[n:], p), np.concatenate((q0, lam0)), n, t,
         "equilibrium", "the loads may not fix the free coordinates (a neutral direction, e.g. "
         "no load along a free motion) or the guess is at a maximum of potential.", tol,
-        max_iterations, col, row)
+        max_iterations, col, row, minimum_norm=rows is not None, fixed=held)
     return x[:n], x[n:], its
 
 
-def equilibrium_velocity(eqv, system, t, q, qd0, lam0, p, tol=1e-12, max_iterations=50):
+def equilibrium_velocity(eqv, system, t, q, qd0, lam0, p, tol=1e-12, max_iterations=50,
+                         rows=None):
     """Newton on ``(qd, lambda)`` for the velocity equilibrium at fixed ``q`` (unit-free as
-    :func:`equilibrium_configuration`)."""
+    :func:`equilibrium_configuration`); with velocity constraints (``rows``) on ``(qd,
+    lambda, mu)``."""
     n, m = system.n, system.m
+    A = rows.evaluate(t, q, np.zeros(n), p)[0] if rows is not None else None
+    k = rows.k if rows is not None else 0
     col, row = _equilibrium_units(system, t, q, p,
-                                  lambda: eqv.evaluate(t, q, qd0, np.zeros(m), p)[0])
+                                  lambda: eqv.evaluate(t, q, qd0, np.zeros(m + k), p)[0], A)
     x, its = _damped_newton(
         lambda x: eqv.evaluate(t, q, x[:n], x[n:], p), np.concatenate((qd0, lam0)), n, t,
         "equilibrium velocity", "the velocity-dependent loads may not determine the free "
