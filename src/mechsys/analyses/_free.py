@@ -199,6 +199,17 @@ class FreeSystem:
     velocity equations, differentiated once more). The
     dynamic system is linear in :math:`(\ddot q, \lambda)` unless a load depends on the
     multipliers (friction: then Newton); ``simulate`` integrates it over time.
+
+    With velocity constraints each kind adds :math:`A^T \mu` to its balance and their rows
+    to its constraints (decision 0055): static :math:`b(q, t) = 0` (rest allowed), kinematic
+    :math:`A \dot q + b = 0`, dynamic :math:`A \ddot q = -\rho`. The static equilibria then
+    form a family (the constraints remove velocities, not positions): the solve ends on one
+    near the start, keeping the coordinates given in ``initial_condition``.
+
+    Example (a wheel held by rolling on a slope: the friction is ``m g sin(slope)``)::
+
+        eq = m.free(solution="static").solve(initial_condition={"wheel.x": 2.0})
+        roll.tangential_force(eq)
     """
 
     def __init__(self, model, drop=(), solution: str = "dynamic", initial_guess=None,
