@@ -91,9 +91,6 @@ def test_free_solve_one_state_and_refusals():
     assert qdd[2] == pytest.approx(0.0, abs=1e-12)
     with pytest.raises(ms.ModelError, match="linearize.*velocity constraints"):
         m.free().linearize()
-    m.parameter("c", 1.0)
-    with pytest.raises(ms.ModelError, match="sensitivity.*velocity constraints.*knife"):
-        m.sensitivity(["c"], free=m.free())
 
 
 def test_start_velocities_projected_with_the_velocity_rows():
@@ -325,3 +322,40 @@ def test_coin_at_rest_on_a_slope():
     np.testing.assert_allclose(Ft + Fn, [0, 0, M * g], atol=1e-12)
     assert np.linalg.norm(Ft) == pytest.approx(M * g * np.sin(a), rel=1e-12)
     assert Ft @ nrm == pytest.approx(0.0, abs=1e-14) and Ft[1] > 0     # in the plane, uphill
+
+
+def test_trajectory_sensitivities_of_the_sleigh():
+    """Forward sensitivities with the velocity rows (decision 0055), to the edge's offset
+    ``a`` (a parameter of the knife's point only: the velocity row) and to the mass (the
+    dynamics): ``dw/da`` and ``dw/dm`` against the closed form ``w0 sech(k t)`` differentiated
+    by SymPy, and every coordinate, velocity and the multiplier against central differences
+    of whole runs."""
+    import sympy as sp
+
+    def model(a0=OFFSET, m0=MASS):
+        m = ms.Model2D()
+        a, mass = m.parameter("a", a0), m.parameter("mass", m0)
+        b = m.add_body("sleigh", points={"P": (-a, 0.0)}, guess=((0.1, -0.2), 0.3), mass=mass,
+                       inertia=INERTIA)
+        m.add(ms.Orthogonal1(m.velocity(b.point("P")), b.vector((0, 1))), name="knife")
+        return m
+
+    t = np.linspace(0, 3, 16)
+    ic, tol = {"th2_d": W0}, dict(rtol=1e-11, atol=1e-13)
+    m = model()
+    S = m.sensitivity(["a", "mass"], free=m.free()).simulate(t, initial_condition=ic, **tol)
+    assert S.dlam.shape == (16, 2, 1) and S.solution.extra["mu"].shape == (16, 1)
+    a, M, tt = sp.symbols("a M t", positive=True)
+    k = a * W0 * sp.sqrt(M / (INERTIA + M * a**2))
+    w = W0 / sp.cosh(k * tt)
+    for j, x in enumerate((a, M)):
+        dw = sp.lambdify(tt, sp.diff(w, x).subs({a: OFFSET, M: MASS}))(t)
+        assert np.abs(S.dqd[:, j, 2] - dw).max() < 1e-9 * np.abs(dw).max()
+    for j, (name, v0) in enumerate((("a", OFFSET), ("mass", MASS))):
+        h = 1e-5 * v0
+        up, down = (model(**{("a0" if name == "a" else "m0"): v}).free().simulate(
+            t, initial_condition=ic, rtol=1e-12, atol=1e-14) for v in (v0 + h, v0 - h))
+        for got, fd in ((S.dq[:, j], up.q - down.q), (S.dqd[:, j], up.qd - down.qd),
+                        (S.dlam[:, j], up.extra["mu"] - down.extra["mu"])):
+            fd = fd / (2 * h)
+            assert np.abs(got - fd).max() < 1e-7 * np.abs(fd).max()

@@ -78,7 +78,7 @@ class VelocityRows:
             owners += [c] * len(eqs)
         rows = velocity_rows(psi, q, qd, rho=rho)
         self.k, self.n = len(psi), system.n
-        self.A_sym, self.b_sym = rows.A, rows.b
+        self.A_sym, self.b_sym, self.rho_sym = rows.A, rows.b, rows.rho
         self.owners = owners
         self.constraints = list(constraints)
         self.system = system
@@ -171,3 +171,109 @@ def velocity_drift(system, rows: VelocityRows, t, q, qd, p, scaling) -> float:
     rate = np.abs(qd / scaling.columns).max(initial=0.0)
     v = np.abs((A @ qd + b) / r).max(initial=0.0)
     return float(v / rate) if rate > 0 else float(v)
+
+
+class RowTangent:
+    r"""The parameter derivatives the velocity rows add to the forward sensitivities of free
+    motion (decision 0055). With the multipliers :math:`\mu` and the accelerations held, the
+    compiled Jacobians of
+
+    .. math::
+
+        f_1 = A^T \mu \ (n), \qquad f_2 = A \ddot q + \rho \ (k), \qquad
+        f_3 = A \dot q + b \ (k)
+
+    with respect to :math:`q`, :math:`\dot q` and the parameters ``params``: differentiating
+    :math:`M \ddot q + \Phi_q^T \lambda + A^T \mu = Q + Q_v` and
+    :math:`A \ddot q + \rho = 0` along a parameter adds :math:`f_{1,q} s_q + f_{1,p}` to the
+    balance and the rows :math:`A s_{\ddot q} + f_{2,q} s_q + f_{2,\dot q} s_{\dot q} + f_{2,p}
+    = 0`; the velocity level :math:`A s_{\dot q} + f_{3,q} s_q + f_{3,p} = 0` is what the
+    sensitivities are projected onto."""
+
+    def __init__(self, rows: VelocityRows, params):
+        import sympy as sp
+
+        system = rows.system
+        lay = system.layout
+        q, qd, qdd = list(lay.q_symbols), list(lay.qd_symbols), list(lay.qdd_symbols)
+        mu = [sp.Dummy(f"mu{i}") for i in range(rows.k)]
+        A = rows.A_sym
+        f1 = A.T * sp.Matrix(mu)
+        f2 = A * sp.Matrix(qdd) + rows.rho_sym
+        f3 = A * sp.Matrix(qd) + rows.b_sym
+        params = list(params)
+        exprs = []
+        for f, wrt in ((f1, q + params), (f2, q + qd + params), (f3, q + params)):
+            exprs += list(f.jacobian(wrt)) if len(f) else []
+        self.n, self.k, self.kp = system.n, rows.k, len(params)
+        self._f = compile_exprs([T, *q, *qd, *qdd, *mu, *lay.p_symbols], exprs, system.backend)
+
+    def evaluate(self, t, q, qd, qdd, mu, p) -> dict:
+        """The Jacobians at one state: ``F1q`` (n, n), ``F1p`` (n, kp), ``F2q``, ``F2qd`` (k,
+        n), ``F2p`` (k, kp), ``F3q`` (k, n), ``F3p`` (k, kp)."""
+        n, k, kp = self.n, self.k, self.kp
+        x = np.concatenate(([t], q, qd, qdd, mu, p))
+        out = np.asarray(self._f(x), dtype=float).ravel()
+        F1 = out[:n * (n + kp)].reshape(n, n + kp)
+        o = n * (n + kp)
+        F2 = out[o:o + k * (2 * n + kp)].reshape(k, 2 * n + kp)
+        o += k * (2 * n + kp)
+        F3 = out[o:o + k * (n + kp)].reshape(k, n + kp)
+        return {"F1q": F1[:, :n], "F1p": F1[:, n:], "F2q": F2[:, :n], "F2qd": F2[:, n:2 * n],
+                "F2p": F2[:, 2 * n:], "F3q": F3[:, :n], "F3p": F3[:, n:]}
+
+
+def free_tangent_rows(tan, rt: RowTangent, rows: VelocityRows, t, q, qd, qdd, lam, p, sq, sqd):
+    r"""``(sqdd (kp, n), slam (kp, m + k))`` of free motion with velocity rows at one state:
+    the holonomic tangent (``solvers/_sensitivity.free_tangent``'s right-hand sides) bordered
+    by :math:`A` and completed by :class:`RowTangent`'s terms (``lam`` holds
+    :math:`(\lambda, \mu)`)."""
+    K = tan.kernels
+    system = K.system
+    n, m, k = system.n, system.m, rows.k
+    X = tan.base([t], q, qd, qdd, lam[:m], p)
+    D = tan.directions(1, sq=sq[None], sqd=sqd[None])
+    r1 = tan.evaluate(K.kernel("dynamics"), X, D)[0]
+    r2 = tan.evaluate(K.kernel("acceleration"), X, D)[0] if m else np.zeros((tan.k, 0))
+    F = rt.evaluate(t, q, qd, qdd, lam[m:], p)
+    r1 = r1 + sq @ F["F1q"].T + F["F1p"].T
+    r3 = sq @ F["F2q"].T + sqd @ F["F2qd"].T + F["F2p"].T
+    M, _, _ = system.dynamics.terms(t, q, qd, lam[:m], p, qdd)
+    A, _, _ = rows.evaluate(t, q, qd, p)
+    N = n + m + k
+    B = np.zeros((N, N))
+    B[:n, :n] = M
+    if m:
+        J = system.jacobian(t, q, p)
+        J = J.toarray() if sps.issparse(J) else np.asarray(J)
+        B[:n, n:n + m] = J.T
+        B[n:n + m, :n] = J
+    B[:n, n + m:] = A.T
+    B[n + m:, :n] = A
+    rhs = -np.concatenate((r1, r2, r3), axis=1).T
+    try:
+        x = np.linalg.solve(B, rhs)
+    except np.linalg.LinAlgError:
+        raise SingularJacobianError(
+            f"free-motion sensitivity at t = {t:.6g}: the augmented matrix with the velocity "
+            "constraints is singular (dependent rows or a massless free motion); the "
+            "trajectory's sensitivity is not defined there", time=t) from None
+    return x[:n].T, x[n:].T
+
+
+def row_sensitivity_targets(system, tan, rt: RowTangent, rows: VelocityRows, t, q, qd, p, sq):
+    """``(G (m + k, n), bv (m + k, kp))``: the velocity rows of the holonomic and the velocity
+    constraints stacked, and the right-hand sides ``G s_qd + bv = 0`` of the differentiated
+    velocity equations for the position sensitivities ``sq`` (kp, n)."""
+    m = system.m
+    K = tan.kernels
+    A, _, _ = rows.evaluate(t, q, qd, p)
+    F = rt.evaluate(t, q, qd, np.zeros(system.n), np.zeros(rows.k), p)
+    b3 = (sq @ F["F3q"].T + F["F3p"].T).T                     # (k, kp)
+    if m:
+        J = system.jacobian(t, q, p)
+        J = J.toarray() if sps.issparse(J) else np.asarray(J)
+        X = tan.base([t], q, qd, None, None, p)
+        bv = tan.evaluate(K.kernel("velocity"), X, tan.directions(1, sq=sq[None]))[0].T
+        return np.vstack((J, A)), np.vstack((bv, b3))
+    return A, b3

@@ -99,12 +99,6 @@ class SensitivitySystem:
             if free.kind != "dynamic":
                 raise ModelError("sensitivity(free=...): trajectory sensitivities need a free "
                                  "system built with solution='dynamic'")
-            if free.velocity_constraints:
-                # (its variational equations would need the rows A qd + b = 0 too)
-                raise ModelError(
-                    "sensitivity(free=...): free systems with velocity constraints ("
-                    f"{', '.join(c.label() for c in free.velocity_constraints)}) have no "
-                    "trajectory sensitivities yet; use finite differences of simulate runs")
         self._tangents: dict = {}
 
     @property
@@ -115,9 +109,10 @@ class SensitivitySystem:
         kind = "free motion" if self.free is not None else "solutions"
         return f"<SensitivitySystem of {kind} to {list(self.parameters)}>"
 
-    def _tangent(self, system):
+    def _tangent(self, system, also=frozenset()):
         """The tangent kernels of ``system`` (cached per compiled system), after checking
-        that every parameter is used."""
+        that every parameter is used (by the system, or among the symbols ``also``: the
+        velocity constraints' rows)."""
         from ..compile._sensitivity import TangentKernels
         from ..solvers._sensitivity import Tangent
 
@@ -131,7 +126,7 @@ class SensitivitySystem:
                                  "solution was computed; solve again")
         kern = TangentKernels(system, self.params)
         used = kern.uses()
-        unused = [p.name for p in self.params if p not in used]
+        unused = [p.name for p in self.params if p not in used and p not in also]
         if unused:
             raise ModelError(
                 f"sensitivity: parameter(s) {unused} are not used by the model's constraints, "
@@ -235,12 +230,28 @@ class SensitivitySystem:
             max_step, fit_degree, max_error, step_size, constraint_correction, starting_step_size)
         t0 = run.t0
         s = fs.system
-        tan = self._tangent(s)
+        also = frozenset()
+        if fs._vrows is not None:
+            also = frozenset().union(*(e.free_symbols for e in fs._vrows.A_sym),
+                                     *(e.free_symbols for e in fs._vrows.b_sym))
+        tan = self._tangent(s, also)
         n, m, k = s.n, s.m, tan.k
         q0, qd0, p, held = fs._start(initial_condition)
         sc = scaling_at(s, t0, q0, p)
         q0, qd0 = fs._project_start(t0, q0, qd0, p, held, sc)
         K = tan.kernels
+        rows = fs._vrows                  # velocity constraints (decision 0055)
+        rt = None
+        if rows is not None:
+            from ._nonholonomic import (
+                RowTangent,
+                free_tangent_rows,
+                nonholonomic_acceleration,
+                project_state,
+                row_sensitivity_targets,
+            )
+
+            rt = RowTangent(rows, self.params)
         if m:
             X = tan.base([t0], q0, qd0, None, None, p)
             J = s.jacobian(t0, q0, p)
@@ -250,6 +261,11 @@ class SensitivitySystem:
             sqd0 = held_least_squares(s, J, sc, bv, sorted(held["qd"]))
         else:
             sq0 = sqd0 = np.zeros((k, n))
+        if rows is not None:
+            # the start velocities follow the velocity constraints too (their sensitivities
+            # with them), the given ones held
+            G, bv = row_sensitivity_targets(s, tan, rt, rows, t0, q0, qd0, p, sq0)
+            sqd0 = held_least_squares(s, G, sc, bv, sorted(held["qd"]))
         pscale = np.where(p[[s.layout.p_symbols.index(x) for x in self.params]] != 0,
                           np.abs(p[[s.layout.p_symbols.index(x) for x in self.params]]), 1.0)
         lam_box = [None]
@@ -260,6 +276,10 @@ class SensitivitySystem:
 
         def tangent_at(tt, y):
             q, qd, sq, sqd = unpack(y)
+            if rows is not None:
+                qdd, lam = nonholonomic_acceleration(s, rows, tt, q, qd, p)
+                sqdd, slam = free_tangent_rows(tan, rt, rows, tt, q, qd, qdd, lam, p, sq, sqd)
+                return qdd, lam, sqdd, slam
             qdd, lam, _ = free_acceleration(s, tt, q, qd, p, lam_box[0])
             if s.dynamics.depends_on_lambda:
                 lam_box[0] = lam
@@ -272,9 +292,14 @@ class SensitivitySystem:
 
         def proj(tt, y):
             q, qd, sq, sqd = unpack(y)
-            q, qd = project(s, tt, q, qd, p, scaling=sc)
-            if m:
-                sq, sqd = _project_sensitivities(s, tan, sc, tt, q, qd, p, sq, sqd)
+            if rows is not None:
+                q, qd = project_state(s, rows, tt, q, qd, p, sc)
+                sq, sqd = _project_sensitivities(s, tan, sc, tt, q, qd, p, sq, sqd,
+                                                 (rt, rows))
+            else:
+                q, qd = project(s, tt, q, qd, p, scaling=sc)
+                if m:
+                    sq, sqd = _project_sensitivities(s, tan, sc, tt, q, qd, p, sq, sqd)
             return np.concatenate((q, qd, sq.ravel(), sqd.ravel()))
 
         col = sc.columns
@@ -283,9 +308,10 @@ class SensitivitySystem:
         y0 = np.concatenate((q0, qd0, sq0.ravel(), sqd0.ravel()))
         times, Y, res, mname = integrate(rhs, proj, run, y0, scale=scale)
         N = len(times)
-        QDD, LAM = np.empty((N, n)), np.empty((N, m))
+        mk = m + (rows.k if rows is not None else 0)       # (lambda, mu)
+        QDD, LAM = np.empty((N, n)), np.empty((N, mk))
         SQ, SQD = np.empty((N, k, n)), np.empty((N, k, n))
-        SQDD, SLAM = np.empty((N, k, n)), np.empty((N, k, m))
+        SQDD, SLAM = np.empty((N, k, n)), np.empty((N, k, mk))
         for j, (tj, yj) in enumerate(zip(times, Y)):
             lam_box[0] = None
             QDD[j], LAM[j], SQDD[j], SLAM[j] = tangent_at(tj, yj)
@@ -299,17 +325,26 @@ class SensitivitySystem:
                            dlam=SLAM, tangent=tan)
 
 
-def _project_sensitivities(s, tan, sc, t, q, qd, p, sq, sqd):
+def _project_sensitivities(s, tan, sc, t, q, qd, p, sq, sqd, velocity_rows=None):
     """The smallest (unit-free) corrections of ``sq``, ``sqd`` ``(k, n)`` that satisfy the
     differentiated constraints ``Phi_q s_q + Phi_p = 0`` and
-    ``Phi_q s_qd + V_q s_q + V_p = 0`` (the sensitivity of the state projection)."""
+    ``Phi_q s_qd + V_q s_q + V_p = 0`` (the sensitivity of the state projection); with
+    ``velocity_rows`` (``(RowTangent, VelocityRows)``) also the velocity constraints'
+    ``A s_qd + (A qd + b)_q s_q + (A qd + b)_p = 0``."""
     from ..solvers._sensitivity import held_least_squares
 
     K = tan.kernels
-    J = s.jacobian(t, q, p)
-    X = tan.base([t], q, qd, None, None, p)
-    b = tan.evaluate(K.kernel("position"), X, tan.directions(1))[0].T + J @ sq.T
-    sq = sq + held_least_squares(s, J, sc, b, [])
+    if s.m:
+        J = s.jacobian(t, q, p)
+        X = tan.base([t], q, qd, None, None, p)
+        b = tan.evaluate(K.kernel("position"), X, tan.directions(1))[0].T + J @ sq.T
+        sq = sq + held_least_squares(s, J, sc, b, [])
+    if velocity_rows is not None:
+        from ._nonholonomic import row_sensitivity_targets
+
+        G, bv = row_sensitivity_targets(s, tan, *velocity_rows, t, q, qd, p, sq)
+        sqd = sqd + held_least_squares(s, G, sc, bv + G @ sqd.T, [])
+        return sq, sqd
     bv = tan.evaluate(K.kernel("velocity"), X, tan.directions(1, sq=sq[None]))[0].T + J @ sqd.T
     sqd = sqd + held_least_squares(s, J, sc, bv, [])
     return sq, sqd
