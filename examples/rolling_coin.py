@@ -32,8 +32,9 @@ they are the classical equations of the rolling disk, e.g. O'Reilly, *Nonlinear 
 
 (a quadratic in ``W``: for a given lean and spin the coin turns slowly towards its lean, the
 root used here, or fast the other way) and the contact point runs on a circle of radius
-``R (s - W sin(theta)) / W``. The
-coin started on it keeps lean, spin and turning rate.
+``R (s - W sin(theta)) / W``. The turning rate is also solved from a guess with mechsys
+alone (the rate at which its free acceleration of the lean vanishes, by the secant method on
+``free.solve``), and the coin started on it keeps lean, spin and turning rate.
 
 **(ii) Free rolling** from a start that is not steady (leaning, rolling straight, a lean rate):
 the coin wobbles and turns. The script integrates the three equations above with SciPy's
@@ -50,7 +51,9 @@ from __future__ import annotations
 
 import matplotlib.pyplot as plt
 import numpy as np
+import sympy as sp
 from scipy.integrate import solve_ivp
+from scipy.optimize import newton
 
 import mechsys as ms
 
@@ -124,6 +127,24 @@ def minimal_ode(t, theta0, theta_d0, psi_d0, spin0):
     return solve_ivp(rhs, (t[0], t[-1]), y0, t_eval=t, method="DOP853", **TOL).y
 
 
+def turning_rate_from_guess(theta, spin, guess):
+    """The steady turning rate from mechsys's dynamics alone: the ``W`` at which the lean's
+    acceleration vanishes when the coin leans by ``theta``, spins at ``spin`` and turns at
+    ``W`` with no lean rate (``sin(theta)`` is the axis' ``z`` component ``a_z``, and at
+    ``theta' = 0``, ``a_z'' = cos(theta) theta''``)."""
+    m, coin, roll = build(theta)
+    a_z = (coin.A * sp.Matrix([0, 1, 0]))[2]
+    a_zdd = m.time_derivative(m.time_derivative(a_z))
+    free = m.free()
+
+    def lean_acceleration(W):
+        _, ic = start(m, coin, roll, theta, 0.0, W, spin)
+        return float(np.ravel(free.solve(0.0, initial_condition=ic).eval(a_zdd))[0]) \
+            / np.cos(theta)
+
+    return newton(lean_acceleration, guess, tol=1e-14)
+
+
 def steady_turning(theta=0.3, spin=15.0):
     """(i): started on the steady relation; returns the largest deviations of lean, spin and
     turning rate, and the contact path with its closed-form circle radius."""
@@ -170,8 +191,11 @@ def free_rolling(theta0=0.2, theta_d0=3.0, psi_d0=0.0, spin0=10.0, t_end=10.0):
 
 def main() -> None:
     W, radius, dev, off, c_steady, centre = steady_turning()
+    W_solved = turning_rate_from_guess(0.3, 15.0, guess=-1.0)
     print(f"(i) steady turning at lean 0.3 rad, spin 15 rad/s: turning rate W = {W:.6f} rad/s "
           f"(closed form), contact circle radius {radius:.6f} m")
+    print(f"    solved from the guess -1 rad/s with mechsys's free acceleration: W = "
+          f"{W_solved:.12f} rad/s ({abs(W_solved - W):.1e} from the closed form)")
     print(f"    over one turn: lean held to {dev[0]:.1e} rad, spin to {dev[1]:.1e} rad/s, heading "
           f"to {dev[2]:.1e} rad; contact off the circle by {off:.1e} m")
     sol, t, (th, psi, y), c, P, diff, checks = free_rolling()
@@ -182,7 +206,7 @@ def main() -> None:
     print("(iii) over 10 s:")
     for k, v in checks.items():
         print(f"    {k:26s} {v:.1e}")
-    assert max(dev) < 1e-8 and off < 1e-8
+    assert max(dev) < 1e-8 and off < 1e-8 and abs(W_solved - W) < 1e-10
     assert max(diff.values()) < 1e-6, diff
     assert max(checks.values()) < 1e-8, checks
     print(f"    {sol.extra['compiled_steps']} compiled steps (the Python stepper holds the rows)")
