@@ -228,18 +228,19 @@ def test_rolling_circle_free_motion_matches_rack_and_pinion():
 RAD, ECC, MW, SLOPE, G = 0.5, 0.2, 3.0, 0.25, 9.81
 
 
-def wheel_on_slope(ecc=ECC, th0=-1.0, damping=None):
+def wheel_on_slope(ecc=ECC, th0=-1.0, damping=None, unit=1.0):
     """A wheel (centroid ``ecc`` off its centre) on a line rising at ``SLOPE``, rolling on it
     (``RollingCircle1``: a velocity row) under gravity; optionally a rotational damper to
-    ground."""
+    ground. ``unit``: lengths in metres divided by it (1e-3: millimetres)."""
     m = ms.Model2D()
     t, n = np.array([np.cos(SLOPE), np.sin(SLOPE)]), np.array([-np.sin(SLOPE), np.cos(SLOPE)])
-    w = m.add_body("wheel", guess=(tuple(0.7 * t + RAD * n), th0), mass=MW, inertia=0.4,
-                   centroid=(ecc, 0.0))
-    roll = ms.RollingCircle1(w.point(0), RAD, m.ground.axis((0, 0), tuple(t)))
+    L = 1.0 / unit
+    w = m.add_body("wheel", guess=(tuple(L * (0.7 * t + RAD * n)), th0), mass=MW,
+                   inertia=0.4 * L**2, centroid=(L * ecc, 0.0))
+    roll = ms.RollingCircle1(w.point(0), L * RAD, m.ground.axis((0, 0), tuple(t)))
     m.add(roll.holonomic(), name="touch")
     m.add(roll, name="roll")
-    m.add_load(ms.Gravity((0, -1), G))
+    m.add_load(ms.Gravity((0, -1), L * G))
     if damping is not None:
         m.add_load(ms.TorsionDamper(m.ground, w, damping), name="damper")
     return m, w, roll, t, n
@@ -267,6 +268,12 @@ def test_static_equilibrium_held_by_rolling_on_a_slope():
     q2 = np.ravel(fs.solve(initial_condition={"wheel.x": 2.0}).q)
     assert q2[0] == 2.0 and q2[2] == pytest.approx(q[2], abs=1e-10)   # (Newton tolerance)
     assert (q2[:2] - RAD * n) @ n == pytest.approx(0.0, abs=1e-12)
+    # the same in millimetres (the iteration is unit-free, the velocity rows' scales too)
+    mm, w_mm, roll_mm, _, _ = wheel_on_slope(unit=1e-3)
+    eq_mm = mm.free(solution="static").solve()
+    q_mm = np.ravel(eq_mm.q)
+    assert q_mm[2] == pytest.approx(q[2], abs=1e-12) and q_mm[0] == 1e3 * x0
+    np.testing.assert_allclose(roll_mm.tangential_force(eq_mm)[0], 1e3 * Ft, rtol=1e-12)
 
 
 def test_static_refused_where_rest_is_not_allowed():
