@@ -215,7 +215,13 @@ class SensitivitySystem:
         At the start, the coordinates and velocities given in ``initial_condition`` are held
         (their sensitivity is zero) and the others follow the constraints with the smallest
         unit-free change, as the start projection of free motion does. Returns a
-        :class:`~mechsys.Sensitivity` whose ``solution`` is the free motion."""
+        :class:`~mechsys.Sensitivity` whose ``solution`` is the free motion.
+
+        With velocity constraints :math:`A \dot q + b = 0` (rolling contacts) the tangent
+        system is bordered by :math:`A` and takes the rows' parameter derivatives
+        (:class:`~mechsys.analyses._nonholonomic.RowTangent`); the start and the projection
+        hold the differentiated rows too, and ``dlam`` holds
+        :math:`(\partial\lambda/\partial p, \partial\mu/\partial p)` (decision 0055)."""
         from ..solvers._free import free_acceleration, project, scaling_at
         from ..solvers._integrators import integrate, plan_run
         from ..solvers._sensitivity import free_tangent, held_least_squares
