@@ -1,4 +1,5 @@
-"""Free motion with velocity (nonholonomic) constraints (issue 36 item 1, decision 0053).
+"""Free motion with velocity (nonholonomic) constraints (issue 36 item 1, decisions 0053 and
+0055: the motion, its equilibria and its trajectory sensitivities).
 
 Checks against closed forms: the Chaplygin sleigh (a knife edge at distance ``a`` behind the
 centroid: ``u' = a w^2``, ``(I + m a^2) w' = -m a u w``, so from ``u(0) = 0``
@@ -13,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import sympy as sp
 
 import mechsys as ms
 from conftest import load_example
@@ -283,6 +285,15 @@ def test_static_refused_where_rest_is_not_allowed():
     m.add_load(ms.Gravity((0, -1), 9.81))
     with pytest.raises(ms.ModelError, match="belt.*does not allow rest"):
         m.free(solution="static").solve(0.0)
+    # a b that vanishes up to rounding (sin(pi) = 1.2e-16) allows rest: a body held by that
+    # "belt" along x and a rail along y rests anywhere, the rail carrying its weight
+    m2 = ms.Model2D()
+    b2 = m2.add_body("b", guess=((0, 0), 0), mass=1.0, inertia=1.0)
+    m2.add(ms.Constraint([m2.velocity(b2.point(0))[0] - sp.sin(sp.Float(np.pi))]), name="belt")
+    m2.add(ms.Constraint([m2.velocity(b2.point(0))[1]]), name="rail")
+    m2.add_load(ms.Gravity((0, -1), 9.81))
+    eq = m2.free(solution="static").solve(0.0)
+    assert np.ravel(eq.extra["mu"])[1] == pytest.approx(-9.81)      # the rail carries the weight
 
 
 def test_velocity_equilibrium_with_rolling_and_a_damper():

@@ -516,9 +516,12 @@ class FreeSystem:
         Newton iteration instead)."""
         rows = self._vrows
         qs = set(self.system.layout.q_symbols)
-        _, b, _ = rows.evaluate(t, q, np.zeros(self.system.n), p)
-        for e, c, value in zip(rows.b_sym, rows.owners, b):
-            if not (e.free_symbols & qs) and value != 0:
+        A, b, _ = rows.evaluate(t, q, np.zeros(self.system.n), p)
+        # (unit-free: b over the row's scale, a rate in units of the length scale; a b that
+        # is zero up to rounding, sin(pi) say, allows rest)
+        r = scaling_at(self.system, t, q, p).rows(A)
+        for e, c, value, ri in zip(rows.b_sym, rows.owners, b, r):
+            if not (e.free_symbols & qs) and abs(value) > 1e-12 * ri:
                 raise ModelError(
                     f"free(solution='static'): the velocity constraint {c.label()} does not "
                     f"allow rest (its term b = {value:.6g} in A qd + b = 0 does not vanish at "
