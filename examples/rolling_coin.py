@@ -92,7 +92,7 @@ def build(theta, psi=0.0):
     return m, coin, roll
 
 
-def start(m, coin, roll, theta, theta_d, psi_d, spin):
+def start(m, theta, theta_d, psi_d, spin):
     """Simulate-ready: the free system and the coin's angular velocity ``omega = theta' e1 +
     s e2 + psi' (z - sin(theta) e2)`` (the centre's velocity follows from no slip)."""
     e1, e2, _ = frame(theta, 0.0)
@@ -138,7 +138,7 @@ def turning_rate_from_guess(theta, spin, guess):
     free = m.free()
 
     def lean_acceleration(W):
-        _, ic = start(m, coin, roll, theta, 0.0, W, spin)
+        _, ic = start(m, theta, 0.0, W, spin)
         return float(np.ravel(free.solve(0.0, initial_condition=ic).eval(a_zdd))[0]) \
             / np.cos(theta)
 
@@ -151,7 +151,7 @@ def steady_turning(theta=0.3, spin=15.0):
     W = min(np.roots([ID * np.sin(theta) * np.cos(theta), -(IA + M * R**2) * spin * np.cos(theta),
                       -M * G * R * np.sin(theta)]), key=abs).real
     m, coin, roll = build(theta)
-    free, ic = start(m, coin, roll, theta, 0.0, W, spin)
+    free, ic = start(m, theta, 0.0, W, spin)
     # one full turn
     sol = free.simulate(np.linspace(0, 2 * np.pi / abs(W), 61), initial_condition=ic, **TOL)
     th, psi, s, _ = angles(sol, coin)
@@ -166,7 +166,7 @@ def steady_turning(theta=0.3, spin=15.0):
 def free_rolling(theta0=0.2, theta_d0=3.0, psi_d0=0.0, spin0=10.0, t_end=10.0):
     """(ii) and (iii): a non-steady start, mechsys against the minimal ODE over ``t_end``."""
     m, coin, roll = build(theta0)
-    free, ic = start(m, coin, roll, theta0, theta_d0, psi_d0, spin0)
+    free, ic = start(m, theta0, theta_d0, psi_d0, spin0)
     t = np.linspace(0, t_end, 501)
     sol = free.simulate(t, initial_condition=ic, **TOL)
     th, psi, s, axis = angles(sol, coin)
