@@ -96,8 +96,15 @@ def test_free_solve_one_state_and_refusals():
     assert qdd[2] == pytest.approx(0.0, abs=1e-12)
     with pytest.raises(ms.ModelError, match="static.*velocity constraints.*knife"):
         m.free(solution="static")
-    with pytest.raises(ms.ModelError, match="linearize.*velocity constraints"):
-        m.free().linearize()
+    # linearised about straight sliding at speed U (decision 0054): J w' = -m a U w
+    U, th0 = 1.5, 0.3
+    lin = m.free().linearize({"sleigh.x_d": U * np.cos(th0), "sleigh.y_d": U * np.sin(th0)},
+                             cyclic=["sleigh.x", "sleigh.y", "sleigh.th"],
+                             speeds=["sleigh.x", "sleigh.th"])
+    assert lin.states == ("sleigh.x_d", "sleigh.th_d")
+    s = np.sort(lin.eigenvalues.real)
+    assert s == pytest.approx([-MASS * OFFSET * U / (INERTIA + MASS * OFFSET**2), 0.0],
+                              rel=1e-10, abs=1e-12)
     m.parameter("c", 1.0)
     with pytest.raises(ms.ModelError, match="sensitivity.*velocity constraints.*knife"):
         m.sensitivity(["c"], free=m.free())
