@@ -86,7 +86,7 @@ def _inertia(ixx, iyy, izz, ixz=0.0, s=1.0):
 
 
 def _relative_angle(body1, body2, axis):
-    """The rotation angle of ``body2`` relative to ``body1`` about ``axis`` (a unit vector in
+    r"""The rotation angle of ``body2`` relative to ``body1`` about ``axis`` (a unit vector in
     body 1's axes, a hinge): from the relative Euler parameters
     :math:`e_{12} = \bar e_1 \otimes e_2 = (\cos\frac\theta2, \sin\frac\theta2\, u)`,
     :math:`\theta = 2\,\mathrm{atan2}(u \cdot e_{12,v}, e_{12,0})` (bilinear arguments:
@@ -204,6 +204,28 @@ def weave_and_capsize(free, coords):
     return (so.brentq(weave, 4.0, 5.0, xtol=1e-12), so.brentq(capsize, 5.5, 6.5, xtol=1e-12))
 
 
+def kick_response(free, coords, v: float, t: np.ndarray, kick: float = 1e-3):
+    """The nonlinear motion (``free.simulate``, the Python stepper holding the rolling rows)
+    after a lean-rate kick ``kick`` (rad/s) of upright running at ``v``, and the linear
+    prediction ``x(t) = expm(A t) x0`` from the same start: ``(lean, lean_linear)``. The
+    start gives the rear frame's and rear wheel's angular velocities (the lean rate and the
+    wheel's spin ``v / r_R``); the other velocities follow the constraints."""
+    lin = linearize(free, coords, v)
+    sol = free.simulate(t, initial_condition={("omega", "rear_frame"): (kick, 0.0, 0.0),
+                                              ("omega", "rear_wheel"): (kick, v / R_R, 0.0)},
+                        rtol=1e-9, atol=1e-12)
+    i = free.system.layout.index("rear_frame.e0")
+    e0, e1, e2, e3 = sol.q[:, i:i + 4].T
+    lean = np.arcsin(2 * (e2 * e3 + e0 * e1))      # the rear frame's y axis, z component
+    # the linear state at the start: lean, steer, their rates, the wheel's rate change
+    wB, wH, wR = (sol.omega(b)[0] for b in ("rear_frame", "front_frame", "rear_wheel"))
+    down = np.array([np.sin(LAM), 0.0, -np.cos(LAM)])
+    x0 = np.array([lean[0], 0.0, wB[0], (wH - wB) @ down, (wR - wB)[1] - v / R_R])
+    A = np.asarray(lin.A)
+    linear = np.array([(sla.expm(A * tk) @ x0)[0] for tk in t])
+    return lean, linear
+
+
 def main() -> None:
     t0 = time.perf_counter()
     m, coords = build()
@@ -231,6 +253,57 @@ def main() -> None:
         err = max(err, np.abs(K - Kp).max() / np.abs(Kp).max(),
                   np.abs(Cv - Cp).max() / max(np.abs(Cp).max(), 1.0))
     print(f"lean/steer block against the paper's M, C1, K0, K2: largest relative error {err:.1e}")
+    t1 = time.perf_counter()
+    lin5 = linearize(free, coords, 5.0)
+    print(f"one linearisation at 5 m/s: {1e3 * (time.perf_counter() - t1):.1f} ms")
+    del lin5
+    # the nonlinear motion after a small lean-rate kick: decays at 5 m/s (self-stable),
+    # grows at 8 m/s (capsize, +0.143 1/s) and at 2 m/s (weave, +2.68 1/s)
+    t = np.linspace(0.0, 4.0, 81)
+    runs = {}
+    for v, span in ((5.0, 4.0), (8.0, 4.0), (2.0, 2.0)):
+        tv = t[t <= span + 1e-12]
+        lean, linear = kick_response(free, coords, v, tv)
+        runs[v] = (tv, lean, linear)
+        dev = np.abs(lean - linear).max() / np.abs(linear).max()
+        q = len(tv) // 4
+        print(f"kick at {v:.0f} m/s: lean amplitude {np.abs(lean[q:2 * q]).max():.2e} in the "
+              f"second quarter, {np.abs(lean[-q:]).max():.2e} in the last; nonlinear "
+              f"against linear {dev:.1e} of the amplitude")
+    # at 8 m/s the weave has died out after a second: the lean then grows at the capsize rate
+    tv, lean, _ = runs[8.0]
+    rate = np.log(lean[-1] / lean[-21]) / (tv[-1] - tv[-21])
+    s8, _ = bicycle_eigenvalues(linearize(free, coords, 8.0))
+    print(f"growth rate of the lean at 8 m/s over the last second {rate:.5f} 1/s; capsize "
+          f"eigenvalue {s8[0].real:.5f} 1/s")
+    _figure(free, coords, runs)
+
+
+def _figure(free, coords, runs) -> None:
+    """The eigenvalues against speed (the paper's figure 3) with Table 2's points, and the
+    lean after a kick, nonlinear against linear."""
+    import matplotlib.pyplot as plt
+
+    speeds = np.linspace(0.0, 10.0, 101)
+    eig = np.array([bicycle_eigenvalues(linearize(free, coords, v))[0] for v in speeds])
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(11, 4.2))
+    ax.plot(speeds, eig.real, "k.", ms=2)
+    ax.plot(speeds, np.abs(eig.imag), ".", color="tab:blue", ms=2)
+    for v, ref in TABLE2.items():
+        ref = np.array(ref, dtype=complex)
+        ax.plot([v] * 4, ref.real, "o", mfc="none", color="tab:red", ms=5)
+    ax.axvline(WEAVE, ls=":", color="gray")
+    ax.axvline(CAPSIZE, ls=":", color="gray")
+    ax.set(xlabel="forward speed v [m/s]", ylabel="eigenvalue [1/s]", ylim=(-10, 10),
+           title="real (black), |imaginary| (blue); Table 2 (circles)")
+    for v, (tv, lean, linear) in runs.items():
+        line, = bx.plot(tv, 1e3 * lean, label=f"{v:.0f} m/s nonlinear")
+        bx.plot(tv, 1e3 * linear, "--", color=line.get_color(), label=f"{v:.0f} m/s linear")
+    bx.set(xlabel="t [s]", ylabel="lean [mrad]", ylim=(-1, 1),
+           title="after a lean-rate kick of 1 mrad/s")
+    bx.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig("whipple_bicycle.png", dpi=80)
 
 
 if __name__ == "__main__":
