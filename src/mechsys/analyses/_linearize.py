@@ -46,10 +46,39 @@ motion does not depend on them). Both are checked (``tolerance``) and a
 coordinates' positions from the state (their velocities stay), after checking that the
 motion does not depend on them.
 
-**Velocity constraints** ``A(q, t) qd + b = 0`` (rolling) will enter as the ``m_v`` extra rows
-of the velocity chart: the independent velocities are then ``f - m_v`` (a null-space basis of
-``[Phi_q; A]``) and the acceleration solve takes ``A qdd = -(A qd)_q qd - ...`` beside the
-holonomic rows (decision 0047).
+**Velocity constraints** ``psi = A(q, t) qd + b = 0`` (``k`` rows, rolling; multipliers
+``mu``, decision 0053) enter the velocity chart (decision 0054): only ``f - k`` velocities
+are independent, the *speeds* ``v = S yd`` (the rates of ``f - k`` chosen coordinates, named
+with ``speeds=`` or picked by column-pivoted QR of the unit-free ``A P``). With
+``K_v = [Phi_q; A; S h_q]`` nonsingular,
+
+.. math::  \delta\dot q = P_v\,\delta v + W_v\,\delta y, \quad
+           P_v = K_v^{-1}\begin{bmatrix}0\\ 0\\ I\end{bmatrix}, \quad
+           W_v = -K_v^{-1}\begin{bmatrix}\tfrac12 c_{\dot q} P\\ \psi_q P\\
+                                           S\,\dot y_q P\end{bmatrix}
+
+and the acceleration solve is bordered by the rows ``a = A qdd + rho = 0``
+(``rho = psi_q qd + psi_t``), the reactions ``A^T mu`` adding their change with ``q``:
+
+.. math::  \begin{bmatrix}R_{\ddot q} & \Phi_q^T & A^T\\ \Phi_q & 0 & 0\\ A & 0 & 0
+           \end{bmatrix}\begin{bmatrix}\delta\ddot q\\ \delta\lambda\\ \delta\mu
+           \end{bmatrix} = -\begin{bmatrix}(R_q + (A^T\mu)_q)\,\delta q + R_{\dot q}\,
+           \delta\dot q + R_u\,\delta u\\ c_q\,\delta q + c_{\dot q}\,\delta\dot q\\
+           a_q\,\delta q + a_{\dot q}\,\delta\dot q\end{bmatrix}
+
+The state is ``x = (dy, dv)``; ``y`` is no longer the integral of ``v``, so
+
+.. math::  A = \begin{bmatrix} h_q W_v + \dot y_q P & h_q P_v\\
+           S\,\partial\ddot y/\partial y & S\,\partial\ddot y/\partial v\end{bmatrix}
+
+(``h_q W + ydq P = 0`` and ``h_q P = I`` without velocity constraints: the holonomic ``A``).
+The chosen coordinates' third derivatives ``ydd_q`` are then a fourth-order central
+difference of their exact second derivatives (``_Chart(difference=True)``).
+
+Example::
+
+    lin = bike.linearize(state, coordinates=coords, cyclic=["x", "y", "yaw", "rear", "front"],
+                         speeds=["lean", "steer", "rear"])
 """
 
 from __future__ import annotations
@@ -195,7 +224,9 @@ class LinearSystem:
     reference state; ``basis`` ``P`` (n, f) with ``dq = P dy``. ``eigenvalues`` of ``A``
     (ascending by modulus); ``stability`` per eigenvalue ``"stable"`` (``Re s < 0``),
     ``"neutral"`` (``Re s = 0`` on the eigenvalue's own scale) or ``"unstable"``;
-    ``stable`` whether none is unstable.
+    ``stable`` whether none is unstable. ``speeds``: with velocity constraints, the chosen
+    coordinates whose rates are the independent velocities (their states ``<name>_d``; the
+    other coordinates' rates follow from them), else empty.
 
     Each eigenvalue is judged on its own scale (as
     :attr:`~mechsys.VibrationModes.stability`): neutral when
