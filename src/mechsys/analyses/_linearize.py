@@ -1010,8 +1010,11 @@ def _check_steady(system, names, P, Rq, Ra, Gy, yd, ydd, cyc, q, qd, qdd, lam, p
     unit = np.where(reach > 0, 1.0 / np.where(reach > 0, reach, 1.0), 1.0)
     rate = float(np.max(np.abs(yd) / unit, initial=0.0))
     # and the forces a unit change of the coordinates brings (a pendulum hanging in a
-    # minimal coordinate has no force acting at all, only its stiffness m g l)
-    ref = max(ref, float(np.abs(Rq @ (P * unit)).max(initial=0.0)))
+    # minimal coordinate has no force acting at all, only its stiffness m g l), and the
+    # inertial forces on the motion's own time scale (a sleigh sliding straight with no load
+    # has no force acting either: its accelerations are rounding)
+    ref = max(ref, float(np.abs(Rq @ (P * unit)).max(initial=0.0)),
+              float(np.abs(Ra @ (P * unit)).max(initial=0.0)) * rate**2)
 
     def force(a):
         return float(np.abs(Ra @ (P @ a)).max(initial=0.0))
