@@ -24,6 +24,12 @@ The paper's linearised equations ``M q'' + v C1 q' + (g K0 + v^2 K2) q = 0`` (eq
 ``q = (phi, delta)``) follow from ``A``: ``-M^-1 (g K0 + v^2 K2)`` and ``-v M^-1 C1`` are its
 lean/steer block; the example prints the largest deviation from the published matrices.
 
+Finally the nonlinear motion (``free.simulate``, the rolling rows held by the Python stepper)
+after a lean-rate kick of 1 mrad/s: it decays at 5 m/s, inside the self-stable range, and
+grows at 8 m/s at the capsize eigenvalue's rate; both follow the linear prediction
+``expm(A t) x0`` to 1e-6 of the amplitude. The picture shows the eigenvalues against speed
+(the paper's figure 3) with Table 2's values, and these motions.
+
 Run: ``python examples/whipple_bicycle.py``
 """
 
@@ -213,7 +219,7 @@ def kick_response(free, coords, v: float, t: np.ndarray, kick: float = 1e-3):
     lin = linearize(free, coords, v)
     sol = free.simulate(t, initial_condition={("omega", "rear_frame"): (kick, 0.0, 0.0),
                                               ("omega", "rear_wheel"): (kick, v / R_R, 0.0)},
-                        rtol=1e-9, atol=1e-12)
+                        rtol=1e-8, atol=1e-11)
     i = free.system.layout.index("rear_frame.e0")
     e0, e1, e2, e3 = sol.q[:, i:i + 4].T
     lean = np.arcsin(2 * (e2 * e3 + e0 * e1))      # the rear frame's y axis, z component
@@ -258,10 +264,11 @@ def main() -> None:
     print(f"one linearisation at 5 m/s: {1e3 * (time.perf_counter() - t1):.1f} ms")
     del lin5
     # the nonlinear motion after a small lean-rate kick: decays at 5 m/s (self-stable),
-    # grows at 8 m/s (capsize, +0.143 1/s) and at 2 m/s (weave, +2.68 1/s)
+    # grows at 8 m/s (capsize, +0.143 1/s); tests/test_bicycle.py also runs 2 m/s (weave,
+    # +2.68 1/s)
     t = np.linspace(0.0, 4.0, 81)
     runs = {}
-    for v, span in ((5.0, 4.0), (8.0, 4.0), (2.0, 2.0)):
+    for v, span in ((5.0, 4.0), (8.0, 4.0)):
         tv = t[t <= span + 1e-12]
         lean, linear = kick_response(free, coords, v, tv)
         runs[v] = (tv, lean, linear)
@@ -284,7 +291,7 @@ def _figure(free, coords, runs) -> None:
     lean after a kick, nonlinear against linear."""
     import matplotlib.pyplot as plt
 
-    speeds = np.linspace(0.0, 10.0, 101)
+    speeds = np.linspace(0.0, 10.0, 41)
     eig = np.array([bicycle_eigenvalues(linearize(free, coords, v))[0] for v in speeds])
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(11, 4.2))
     ax.plot(speeds, eig.real, "k.", ms=2)
@@ -301,7 +308,8 @@ def _figure(free, coords, runs) -> None:
         bx.plot(tv, 1e3 * linear, "--", color=line.get_color(), label=f"{v:.0f} m/s linear")
     bx.set(xlabel="t [s]", ylabel="lean [mrad]", ylim=(-1, 1),
            title="after a lean-rate kick of 1 mrad/s")
-    bx.legend(fontsize=7)
+    if runs:
+        bx.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig("whipple_bicycle.png", dpi=80)
 
