@@ -493,9 +493,7 @@ def _inputs(free, inputs) -> _Inputs:
     system = free.system
     lay = system.layout
     pnames = [s.name for s in lay.p_symbols]
-    used = set()
-    for e in system.phi:
-        used |= {s.name for s in sp.sympify(e).free_symbols}
+    used = None                 # (the kept constraints' symbols: only for parameter inputs)
     loads = {ld.name: ld for ld in system._loads if getattr(ld, "name", None)}
     names, kinds, where, params, lds, rows = [], [], [], [], [], []
     for u in inputs:
@@ -506,6 +504,10 @@ def _inputs(free, inputs) -> _Inputs:
         if name in names:
             raise ModelError(f"linearize inputs: {name!r} is given twice")
         if name in pnames:
+            if used is None:
+                used = set()
+                for e in system.phi:
+                    used |= {s.name for s in sp.sympify(e).free_symbols}
             if name in used:
                 raise ModelError(f"linearize inputs: parameter {name!r} appears in the kept "
                                  "constraints, so changing it moves the configuration rather "
@@ -673,13 +675,24 @@ def linearize(free, state=None, inputs: Sequence = (), outputs: Sequence = (),
         if isinstance(coordinates, (str, sp.Basic)) or not isinstance(coordinates,
                                                                       (list, tuple)):
             raise ModelError(f"linearize coordinates: give a list, got {coordinates!r}")
-        pairs = [_as_expression(system, c, "coordinates") for c in coordinates]
+        # (parsed once per system and choice: SymPy's symbol sets of a vehicle's angle
+        # expressions were a third of a bicycle's linearisation)
+        parsed = system.__dict__.setdefault("_linear_parsed", {})
+        try:
+            pkey = tuple(coordinates)
+            pairs = parsed.get(pkey)
+        except TypeError:                         # (unhashable entries: parsed each call)
+            pkey, pairs = None, None
+        if pairs is None:
+            pairs = [_as_expression(system, c, "coordinates") for c in coordinates]
+            bad = [a for a, b in pairs if b.free_symbols - set(lay.q_symbols)]
+            if bad:
+                raise ModelError(f"linearize coordinates: {bad} must be expressions of the "
+                                 "coordinates only (no velocities, parameters or T)")
+            if pkey is not None:
+                parsed[pkey] = pairs
         coord_names = [a for a, _ in pairs]
         coord_exprs = [b for _, b in pairs]
-        bad = [a for a, b in pairs if b.free_symbols - set(lay.q_symbols)]
-        if bad:
-            raise ModelError(f"linearize coordinates: {bad} must be expressions of the "
-                             "coordinates only (no velocities, parameters or T)")
     f = n - m
     if len(coord_exprs) != f:
         raise ModelError(f"linearize coordinates: the free system has {f} degree(s) of "
