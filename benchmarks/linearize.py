@@ -3,7 +3,9 @@
 Models: the double pendulum of docs/vibration.md (absolute coordinates, 6 coordinates, 4
 constraint equations), the inverted pendulum on a cart with a force input and two outputs,
 the sleeping top (3D, expression coordinates, a steady spin) and a chain of 10 pendulums
-(30 coordinates, 20 equations). ``first`` is the first call on a freshly built model (it
+(30 coordinates, 20 equations), and the Whipple bicycle of examples/whipple_bicycle.py (4
+bodies, 28 coordinates, 21 equations, 4 rolling rows; lean and steer, the others cyclic, at
+5 m/s: decision 0054). ``first`` is the first call on a freshly built model (it
 derives and compiles the exact derivatives: wall time), ``median`` and ``min`` the following
 calls (wall time, 30 of them).
 
@@ -71,6 +73,19 @@ def sleeping_top():
     return m.free(), ({"top.e3_d": 60.0},), dict(coordinates=coords, cyclic=["spin"])
 
 
+def bicycle():
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location(
+        "whipple_bicycle", Path(__file__).resolve().parents[1] / "examples" / "whipple_bicycle.py")
+    wb = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(wb)
+    m, coords = wb.build()
+    return m.free(), (wb.upright(5.0),), dict(coordinates=coords, cyclic=wb.CYCLIC,
+                                              speeds=wb.SPEEDS)
+
+
 def measure(build, repeat: int = 30):
     free, args, kw = build()
     t0 = time.perf_counter()
@@ -90,7 +105,8 @@ def main() -> None:
     print("|---|---|---|---|---|---|---|")
     for name, build in (("double pendulum", double_pendulum), ("cart-pole (1 input, 2 outputs)",
                         cart_pole), ("sleeping top (3D, steady spin)", sleeping_top),
-                        ("chain of 10 pendulums", lambda: chain(10))):
+                        ("chain of 10 pendulums", lambda: chain(10)),
+                        ("Whipple bicycle (rolling, 5 m/s)", bicycle)):
         lin, first, med, low = measure(build)
         s = lin.model.free().system
         print(f"| {name} | {s.n} | {s.m} | {len(lin.states)} | {first * 1e3:.0f} | "

@@ -182,6 +182,9 @@ CATALOGUE = [
     ("free", "free().linearize()", "NotSteadyError", "acceleration of bar.th"),
     ("free", 'free().linearize(inputs=["nope"])', "ModelError", "'nope'"),
     ("free", 'free().linearize(coordinates=["bar.x"])', "ModelError", "['bar.x']"),
+    ("free", 'm = ms.Model2D(); b = m.add_body("s", mass=1.0, inertia=1.0); '
+     'm.add(ms.Orthogonal1(m.velocity(b.point(0)), b.vector((0, 1)))); '
+     'm.free().linearize(speeds=["s.x", "s.y"])', "ModelError", "['s.x', 's.y']"),
     ("free", "free().simulate((0.0, 0.0))", "ModelError", "equal"),
     ("free", "free().simulate([0.0, 2.0, 1.0])", "ModelError", "t[1]"),
     ("free", 'free().simulate((0.0, 1.0), method="euler")', "OptionError", "'euler'"),

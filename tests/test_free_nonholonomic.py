@@ -91,8 +91,15 @@ def test_free_solve_one_state_and_refusals():
     # centroid: d/dt (u ex + a w ey) = u' ex - a w^2 ex at u = 0, w' = 0  ->  0
     assert abs(a_G @ ex) < 1e-12 and abs(a_G @ ey) < 1e-12
     assert qdd[2] == pytest.approx(0.0, abs=1e-12)
-    with pytest.raises(ms.ModelError, match="linearize.*velocity constraints"):
-        m.free().linearize()
+    # linearised about straight sliding at speed U (decision 0054): J w' = -m a U w
+    U, th0 = 1.5, 0.3
+    lin = m.free().linearize({"sleigh.x_d": U * np.cos(th0), "sleigh.y_d": U * np.sin(th0)},
+                             cyclic=["sleigh.x", "sleigh.y", "sleigh.th"],
+                             speeds=["sleigh.x", "sleigh.th"])
+    assert lin.states == ("sleigh.x_d", "sleigh.th_d")
+    s = np.sort(lin.eigenvalues.real)
+    assert s == pytest.approx([-MASS * OFFSET * U / (INERTIA + MASS * OFFSET**2), 0.0],
+                              rel=1e-10, abs=1e-12)
 
 
 def test_start_velocities_projected_with_the_velocity_rows():

@@ -286,7 +286,7 @@ class FreeSystem:
                 f"{'linear' if self.linear else 'nonlinear'}>")
 
     def linearize(self, state=None, inputs=(), outputs=(), coordinates=None, cyclic=(),
-                  t: float | None = None, tolerance: float = 1e-6):
+                  t: float | None = None, tolerance: float = 1e-6, speeds=None):
         r"""Linearise about an equilibrium or a steady motion to state space
         :math:`\dot x = A x + B u`, :math:`y = C x + D u` (a :class:`~mechsys.LinearSystem`
         with ``A, B, C, D``, ``eigenvalues``, per-eigenvalue ``stability`` and
@@ -295,8 +295,10 @@ class FreeSystem:
         names (the loads' magnitudes); ``outputs``: names or expressions of the state;
         ``coordinates``: the state's coordinates (names or expressions; default independent
         coordinates chosen by column-pivoted QR); ``cyclic``: coordinates whose positions
-        leave the state. A state that is not steady raises :class:`~mechsys.NotSteadyError`.
-        See ``docs/vibration.md`` (state space) and decision 0047.
+        leave the state; ``speeds`` (with velocity constraints, rolling): the chosen
+        coordinates whose rates are the independent velocities (default chosen by QR). A
+        state that is not steady raises :class:`~mechsys.NotSteadyError`. See
+        ``docs/vibration.md`` (state space) and decisions 0047, 0054.
 
         Example::
 
@@ -305,13 +307,8 @@ class FreeSystem:
         """
         from ._linearize import linearize
 
-        if self._vrows is not None:
-            raise ModelError(
-                "linearize(): free systems with velocity constraints "
-                f"({', '.join(c.label() for c in self.velocity_constraints)}) are not "
-                "linearised yet (decision 0047 describes how the rows A qd + b = 0 will enter)")
         return linearize(self, state, inputs=inputs, outputs=outputs, coordinates=coordinates,
-                         cyclic=cyclic, t=t, tolerance=tolerance)
+                         cyclic=cyclic, t=t, tolerance=tolerance, speeds=speeds)
 
     # -- initial conditions -----------------------------------------------------------------
     def _params(self, given=None) -> np.ndarray:

@@ -46,10 +46,39 @@ motion does not depend on them). Both are checked (``tolerance``) and a
 coordinates' positions from the state (their velocities stay), after checking that the
 motion does not depend on them.
 
-**Velocity constraints** ``A(q, t) qd + b = 0`` (rolling) will enter as the ``m_v`` extra rows
-of the velocity chart: the independent velocities are then ``f - m_v`` (a null-space basis of
-``[Phi_q; A]``) and the acceleration solve takes ``A qdd = -(A qd)_q qd - ...`` beside the
-holonomic rows (decision 0047).
+**Velocity constraints** ``psi = A(q, t) qd + b = 0`` (``k`` rows, rolling; multipliers
+``mu``, decision 0053) enter the velocity chart (decision 0054): only ``f - k`` velocities
+are independent, the *speeds* ``v = S yd`` (the rates of ``f - k`` chosen coordinates, named
+with ``speeds=`` or picked by column-pivoted QR of the unit-free ``A P``). With
+``K_v = [Phi_q; A; S h_q]`` nonsingular,
+
+.. math::  \delta\dot q = P_v\,\delta v + W_v\,\delta y, \quad
+           P_v = K_v^{-1}\begin{bmatrix}0\\ 0\\ I\end{bmatrix}, \quad
+           W_v = -K_v^{-1}\begin{bmatrix}\tfrac12 c_{\dot q} P\\ \psi_q P\\
+                                           S\,\dot y_q P\end{bmatrix}
+
+and the acceleration solve is bordered by the rows ``a = A qdd + rho = 0``
+(``rho = psi_q qd + psi_t``), the reactions ``A^T mu`` adding their change with ``q``:
+
+.. math::  \begin{bmatrix}R_{\ddot q} & \Phi_q^T & A^T\\ \Phi_q & 0 & 0\\ A & 0 & 0
+           \end{bmatrix}\begin{bmatrix}\delta\ddot q\\ \delta\lambda\\ \delta\mu
+           \end{bmatrix} = -\begin{bmatrix}(R_q + (A^T\mu)_q)\,\delta q + R_{\dot q}\,
+           \delta\dot q + R_u\,\delta u\\ c_q\,\delta q + c_{\dot q}\,\delta\dot q\\
+           a_q\,\delta q + a_{\dot q}\,\delta\dot q\end{bmatrix}
+
+The state is ``x = (dy, dv)``; ``y`` is no longer the integral of ``v``, so
+
+.. math::  A = \begin{bmatrix} h_q W_v + \dot y_q P & h_q P_v\\
+           S\,\partial\ddot y/\partial y & S\,\partial\ddot y/\partial v\end{bmatrix}
+
+(``h_q W + ydq P = 0`` and ``h_q P = I`` without velocity constraints: the holonomic ``A``).
+The chosen coordinates' third derivatives ``ydd_q`` are then a fourth-order central
+difference of their exact second derivatives (``_Chart(difference=True)``).
+
+Example::
+
+    lin = bike.linearize(state, coordinates=coords, cyclic=["x", "y", "yaw", "rear", "front"],
+                         speeds=["lean", "steer", "rear"])
 """
 
 from __future__ import annotations
@@ -64,6 +93,7 @@ import sympy as sp
 from .._errors import MechError, ModelError, NotSteadyError
 from .._symbols import T
 from ..solvers._free import free_acceleration, project, scaling_at
+from ._nonholonomic import nonholonomic_acceleration, project_state
 
 try:  # optional
     import symengine as se
@@ -194,7 +224,9 @@ class LinearSystem:
     reference state; ``basis`` ``P`` (n, f) with ``dq = P dy``. ``eigenvalues`` of ``A``
     (ascending by modulus); ``stability`` per eigenvalue ``"stable"`` (``Re s < 0``),
     ``"neutral"`` (``Re s = 0`` on the eigenvalue's own scale) or ``"unstable"``;
-    ``stable`` whether none is unstable.
+    ``stable`` whether none is unstable. ``speeds``: with velocity constraints, the chosen
+    coordinates whose rates are the independent velocities (their states ``<name>_d``; the
+    other coordinates' rates follow from them), else empty.
 
     Each eigenvalue is judged on its own scale (as
     :attr:`~mechsys.VibrationModes.stability`): neutral when
@@ -227,6 +259,7 @@ class LinearSystem:
     stability: tuple
     stable: bool
     model: object = field(repr=False)
+    speeds: tuple = ()
 
     def to_scipy(self):
         """The system as :class:`scipy.signal.StateSpace` (continuous time)."""
@@ -333,40 +366,96 @@ def _as_expression(system, e, what: str):
 
 class _Chart:
     """Compiled values and exact derivatives of the chosen coordinates ``y = h(q)``, of
-    ``yd = h_q qd`` and ``ydd = h_q qdd + (h_q qd)_q qd``, and of the outputs."""
+    ``yd = h_q qd`` and ``ydd = h_q qdd + (h_q qd)_q qd``, and of the outputs.
 
-    def __init__(self, system, coords: list, outputs: list, inputs: tuple):
+    ``difference=True`` (free systems with velocity constraints): ``ydd_q`` is a
+    fourth-order central difference of the compiled exact ``ydd`` (steps ``1e-3`` in the
+    unit-free coordinates: error about ``1e-11`` relative) and ``ydd_qd = 2 ydq`` exactly
+    (``ydd`` is quadratic in ``qd`` through the Hessian of ``h``). The exact third
+    derivatives of the angles a vehicle needs (a steer or a wheel angle as ``atan2`` of two
+    bodies' Euler parameters) are megabytes of expression: the bicycle's chart took 14 s to
+    compile with common subexpressions, and ran out of memory without them."""
+
+    def __init__(self, system, coords: list, outputs: list, inputs: tuple,
+                 difference: bool = False):
         lay = system.layout
-        q, qd, qdd = lay.q_symbols, lay.qd_symbols, lay.qdd_symbols
         self.f, self.no, self.n = len(coords), len(outputs), system.n
+        self.difference = difference
         pin = [lay.p_symbols[i] for i in inputs]
+        # SymEngine differentiates expressions of Euler parameters (a lean's asin, a
+        # heading's atan2) hundreds of times faster than SymPy: a rolling disk's chart
+        # took 40 s in SymPy
+        # (models with Gen joints compile through their slave substitution, in SymPy)
+        native = se is not None and system.backend == "symengine" and not system.gen_subs
+        conv = se.sympify if native else sp.sympify
+        q, qd, qdd = ([conv(x) for x in syms] for syms in (lay.q_symbols, lay.qd_symbols,
+                                                           lay.qdd_symbols))
+        zero = conv(0)
+
+        def diff(e, s):
+            return e.diff(s) if s in e.free_symbols else zero
+
         exprs: list = []
+        ydds: list = []
+        cols: set = set()
         for h in coords:
-            hq = [sp.diff(h, s) for s in q]
-            yd = sp.Add(*[a * v for a, v in zip(hq, qd) if a != 0])
-            ydq = [sp.diff(yd, s) for s in q]
-            ydd = sp.Add(*[a * v for a, v in zip(ydq, qd) if a != 0],
-                         *[a * v for a, v in zip(hq, qdd) if a != 0])
-            exprs += [h, yd, ydd, *hq, *ydq, *[sp.diff(ydd, s) for s in q],
-                      *[sp.diff(ydd, s) for s in qd]]
+            h = conv(h)
+            hq = [diff(h, s) for s in q]
+            cols |= {j for j, a in enumerate(hq) if a != 0}
+            yd = sum((a * v for a, v in zip(hq, qd) if a != 0), zero)
+            ydq = [diff(yd, s) for s in q]
+            ydd = sum((a * v for a, v in zip(ydq, qd) if a != 0), zero) + sum(
+                (a * v for a, v in zip(hq, qdd) if a != 0), zero)
+            exprs += [h, yd, ydd, *hq, *ydq]
+            if difference:
+                ydds.append(ydd)
+            else:
+                exprs += [*[diff(ydd, s) for s in q], *[diff(ydd, s) for s in qd]]
         for o in outputs:
-            exprs += [o, *[sp.diff(o, s) for s in (*q, *qd, *qdd, *pin)]]
-        self.fn = system.compile_expression(exprs)
+            o = conv(o)
+            exprs += [o, *[diff(o, conv(s)) for s in (*q, *qd, *qdd, *pin)]]
+        self.cols = sorted(cols)
+        if native:
+            from ..compile._backends import compile_exprs
+
+            args = [T, *lay.q_symbols, *lay.qd_symbols, *lay.qdd_symbols, *system.lam_symbols,
+                    *lay.p_symbols]
+            self.fn = compile_exprs(args, exprs, system.backend)
+            self.fydd = compile_exprs(args, ydds, system.backend) if difference else None
+        else:
+            self.fn = system.compile_expression(exprs)
+            self.fydd = system.compile_expression(ydds) if difference else None
         self.np = len(pin)
 
-    def __call__(self, t, q, qd, qdd, lam, p) -> dict:
+    def __call__(self, t, q, qd, qdd, lam, p, steps=None) -> dict:
         """Values: ``y, yd, ydd`` (f,), ``hq, ydq, yddq, yddv`` (f, n); ``o`` (no,),
-        ``oq, ov, oa`` (no, n), ``op`` (no, nu)."""
-        v = self.fn(np.concatenate(([t], q, qd, qdd, lam, p)))
+        ``oq, ov, oa`` (no, n), ``op`` (no, nu). ``steps`` (n,): the coordinates' unit-free
+        units for the differences (default 1)."""
+        x = np.concatenate(([t], q, qd, qdd, lam, p))
+        v = self.fn(x)
         n, f, no = self.n, self.f, self.no
-        per = 3 + 4 * n
+        per = (3 + 2 * n) if self.difference else (3 + 4 * n)
         Y = v[: f * per].reshape(f, per)
         O = v[f * per :].reshape(no, 1 + 3 * n + self.np)
-        return {"y": Y[:, 0], "yd": Y[:, 1], "ydd": Y[:, 2], "hq": Y[:, 3 : 3 + n],
-                "ydq": Y[:, 3 + n : 3 + 2 * n], "yddq": Y[:, 3 + 2 * n : 3 + 3 * n],
-                "yddv": Y[:, 3 + 3 * n :], "o": O[:, 0], "oq": O[:, 1 : 1 + n],
-                "ov": O[:, 1 + n : 1 + 2 * n], "oa": O[:, 1 + 2 * n : 1 + 3 * n],
-                "op": O[:, 1 + 3 * n :]}
+        out = {"y": Y[:, 0], "yd": Y[:, 1], "ydd": Y[:, 2], "hq": Y[:, 3 : 3 + n],
+               "ydq": Y[:, 3 + n : 3 + 2 * n], "o": O[:, 0], "oq": O[:, 1 : 1 + n],
+               "ov": O[:, 1 + n : 1 + 2 * n], "oa": O[:, 1 + 2 * n : 1 + 3 * n],
+               "op": O[:, 1 + 3 * n :]}
+        if not self.difference:
+            out["yddq"], out["yddv"] = Y[:, 3 + 2 * n : 3 + 3 * n], Y[:, 3 + 3 * n :]
+            return out
+        out["yddv"] = 2.0 * out["ydq"]
+        D = np.zeros((f, n))
+        for j in self.cols:
+            h = 1e-3 * (1.0 if steps is None else steps[j])
+            vals = []
+            for k in (2, 1, -1, -2):
+                xk = x.copy()
+                xk[1 + j] += k * h
+                vals.append(np.asarray(self.fydd(xk), dtype=float))
+            D[:, j] = (-vals[0] + 8 * vals[1] - 8 * vals[2] + vals[3]) / (12 * h)
+        out["yddq"] = D
+        return out
 
 
 def independent_coordinates(system, t, q, p, scaling) -> list:
@@ -404,9 +493,7 @@ def _inputs(free, inputs) -> _Inputs:
     system = free.system
     lay = system.layout
     pnames = [s.name for s in lay.p_symbols]
-    used = set()
-    for e in system.phi:
-        used |= {s.name for s in sp.sympify(e).free_symbols}
+    used = None                 # (the kept constraints' symbols: only for parameter inputs)
     loads = {ld.name: ld for ld in system._loads if getattr(ld, "name", None)}
     names, kinds, where, params, lds, rows = [], [], [], [], [], []
     for u in inputs:
@@ -417,6 +504,10 @@ def _inputs(free, inputs) -> _Inputs:
         if name in names:
             raise ModelError(f"linearize inputs: {name!r} is given twice")
         if name in pnames:
+            if used is None:
+                used = set()
+                for e in system.phi:
+                    used |= {s.name for s in sp.sympify(e).free_symbols}
             if name in used:
                 raise ModelError(f"linearize inputs: parameter {name!r} appears in the kept "
                                  "constraints, so changing it moves the configuration rather "
@@ -500,7 +591,8 @@ class _LoadInputs:
 # -- the linearisation --------------------------------------------------------------------------
 def linearize(free, state=None, inputs: Sequence = (), outputs: Sequence = (),
               coordinates: Sequence | None = None, cyclic: Sequence = (),
-              t: float | None = None, tolerance: float = 1e-6) -> LinearSystem:
+              t: float | None = None, tolerance: float = 1e-6,
+              speeds: Sequence | None = None) -> LinearSystem:
     r"""Linearise ``free`` (a :class:`~mechsys.FreeSystem`) about ``state``, an equilibrium or
     a steady motion, to state space (equations in :mod:`mechsys.analyses._linearize`).
 
@@ -517,7 +609,12 @@ def linearize(free, state=None, inputs: Sequence = (), outputs: Sequence = (),
     coordinates (independent with the constraints); default the independent coordinates
     chosen by column-pivoted QR. ``cyclic``: chosen coordinates whose positions leave the
     state (the motion must not depend on them). ``t``: the time (default the solution's,
-    else 0). ``tolerance``: how far from steady the reference may be.
+    else 0). ``tolerance``: how far from steady the reference may be. ``speeds`` (free
+    systems with velocity constraints only): the ``f - k`` chosen coordinates whose rates
+    are the independent velocities (default: chosen by column-pivoted QR of the unit-free
+    rows ``A P`` of the velocity constraints in the chosen coordinates' rates); the state
+    is then ``(dy, dv)``, the chosen coordinates and the speeds' rates (section *Velocity
+    constraints* of :mod:`mechsys.analyses._linearize`).
 
     .. math::  \dot x = A x + B u, \qquad y = C x + D u
 
@@ -548,12 +645,25 @@ def linearize(free, state=None, inputs: Sequence = (), outputs: Sequence = (),
     else:
         raise ModelError(f"linearize: state must be a Solution, State, mapping or None, got "
                          f"{type(state).__name__}")
+    vrows = getattr(free, "_vrows", None)
+    if vrows is None and speeds is not None:
+        raise ModelError("linearize speeds: this free system has no velocity constraints, so "
+                         "the rates of all its chosen coordinates are the velocities; leave "
+                         "speeds out")
     sc = scaling_at(system, t0, q, p)
     if isinstance(state, (Solution, State)):
-        q, qd = project(system, t0, q, qd, p, scaling=sc)
+        if vrows is None:
+            q, qd = project(system, t0, q, qd, p, scaling=sc)
+        else:
+            q, qd = project_state(system, vrows, t0, q, qd, p, sc)
     else:
         q, qd = free._project_start(t0, q, qd, p, held, sc)
-    qdd, lam, _ = free_acceleration(system, t0, q, qd, p)
+    if vrows is None:
+        qdd, lam, _ = free_acceleration(system, t0, q, qd, p)
+        mu = np.zeros(0)
+    else:
+        qdd, lam = nonholonomic_acceleration(system, vrows, t0, q, qd, p)
+        lam, mu = lam[:m], lam[m:]
     J = system.jacobian(t0, q, p) if m else np.zeros((0, n))
 
     # the chosen coordinates
@@ -565,13 +675,24 @@ def linearize(free, state=None, inputs: Sequence = (), outputs: Sequence = (),
         if isinstance(coordinates, (str, sp.Basic)) or not isinstance(coordinates,
                                                                       (list, tuple)):
             raise ModelError(f"linearize coordinates: give a list, got {coordinates!r}")
-        pairs = [_as_expression(system, c, "coordinates") for c in coordinates]
+        # (parsed once per system and choice: SymPy's symbol sets of a vehicle's angle
+        # expressions were a third of a bicycle's linearisation)
+        parsed = system.__dict__.setdefault("_linear_parsed", {})
+        try:
+            pkey = tuple(coordinates)
+            pairs = parsed.get(pkey)
+        except TypeError:                         # (unhashable entries: parsed each call)
+            pkey, pairs = None, None
+        if pairs is None:
+            pairs = [_as_expression(system, c, "coordinates") for c in coordinates]
+            bad = [a for a, b in pairs if b.free_symbols - set(lay.q_symbols)]
+            if bad:
+                raise ModelError(f"linearize coordinates: {bad} must be expressions of the "
+                                 "coordinates only (no velocities, parameters or T)")
+            if pkey is not None:
+                parsed[pkey] = pairs
         coord_names = [a for a, _ in pairs]
         coord_exprs = [b for _, b in pairs]
-        bad = [a for a, b in pairs if b.free_symbols - set(lay.q_symbols)]
-        if bad:
-            raise ModelError(f"linearize coordinates: {bad} must be expressions of the "
-                             "coordinates only (no velocities, parameters or T)")
     f = n - m
     if len(coord_exprs) != f:
         raise ModelError(f"linearize coordinates: the free system has {f} degree(s) of "
@@ -580,6 +701,14 @@ def linearize(free, state=None, inputs: Sequence = (), outputs: Sequence = (),
     if len(set(coord_names)) != len(coord_names):
         raise ModelError(f"linearize coordinates: {coord_names} names one twice")
     ins = _inputs(free, inputs)
+    if vrows is not None and ins.rows:
+        raise ModelError(f"linearize inputs: driver inputs {list(ins.rows and ins.names)} with "
+                         "velocity constraints are not supported; drive the motion by a load "
+                         "(a named Force or Moment, or a parameter of the loads)")
+    if vrows is not None and _explicit_time(system):
+        raise ModelError("linearize: constraints or loads that depend on the time T together "
+                         "with velocity constraints are not supported; linearise a model whose "
+                         "reference motion is steady without explicit time")
     out_pairs = [_as_expression(system, o, "outputs") for o in outputs]
     cyc = []
     for c in cyclic:
@@ -591,10 +720,11 @@ def linearize(free, state=None, inputs: Sequence = (), outputs: Sequence = (),
 
     # compiled once per system and choice of coordinates, outputs and inputs
     cache = system.__dict__.setdefault("_linear_charts", {})
-    key = (tuple(coord_exprs), tuple(e for _, e in out_pairs), ins.params)
+    key = (tuple(coord_exprs), tuple(e for _, e in out_pairs), ins.params, vrows is not None)
     chart = cache.get(key)
     if chart is None:
-        chart = cache[key] = _Chart(system, coord_exprs, [e for _, e in out_pairs], ins.params)
+        chart = cache[key] = _Chart(system, coord_exprs, [e for _, e in out_pairs], ins.params,
+                                    difference=vrows is not None)
     load_kernel = None
     if ins.loads:
         lkey = ("loads", tuple(id(ld) for ld in ins.loads))
@@ -605,7 +735,7 @@ def linearize(free, state=None, inputs: Sequence = (), outputs: Sequence = (),
     kernel = linear_kernel(system)
     Rq, Rv, Ra = kernel(t0, q, qd, qdd, lam, p)
     cq, cv = kernel.constraints(t0, q, qd, qdd, lam, p)
-    ch = chart(t0, q, qd, qdd, lam, p)
+    ch = chart(t0, q, qd, qdd, lam, p, steps=sc.columns)
     # R_u, and S_u: the driver inputs' place in the acceleration constraints
     nu = len(ins.names)
     Ru, Su = np.zeros((n, nu)), np.zeros((m, nu))
@@ -642,6 +772,10 @@ def linearize(free, state=None, inputs: Sequence = (), outputs: Sequence = (),
     E[drows, f + np.arange(nd)] = 1.0
     # (numpy's solve: SciPy's lu_solve costs 30 ms a call on this machine's BLAS set-up)
     P = np.linalg.solve(Kc, E)
+    if vrows is not None:
+        return _linearize_rolling(
+            free, vrows, ch, coord_names, speeds, cyc, ins, out_pairs, t0, q, qd, qdd, lam, mu,
+            p, J, H, P, sc, Rq, Rv, Ra, Ru, cq, cv, tolerance)
     W = -np.linalg.solve(Kc, np.vstack([0.5 * cv @ P, ch["ydq"] @ P]))
     # columns: (dy, dyd, du)
     dq = np.hstack([P, np.zeros((n, g)), np.zeros((n, nu))])
@@ -706,6 +840,134 @@ def linearize(free, state=None, inputs: Sequence = (), outputs: Sequence = (),
                         model=free.model)
 
 
+def _coordinate_units(P, sc) -> np.ndarray:
+    """The unit of each chosen coordinate: the change that moves the coordinates by one
+    unit-free unit (positions in units of the length scale, angles in radians)."""
+    reach = np.abs(P / sc.columns[:, None]).max(axis=0, initial=0.0)
+    return np.where(reach > 0, 1.0 / np.where(reach > 0, reach, 1.0), 1.0)
+
+
+def _linearize_rolling(free, vrows, ch, coord_names, speeds, cyc, ins, out_pairs, t0, q, qd,
+                       qdd, lam, mu, p, J, H, P, sc, Rq, Rv, Ra, Ru, cq, cv, tolerance):
+    r"""The linearisation with velocity constraints ``A qd + b = 0`` (``k`` rows, multipliers
+    ``mu``): the state is ``(dy, dv)``, ``v = S yd`` the rates of ``f - k`` chosen
+    coordinates (the speeds). Equations in the module docstring, section *Velocity
+    constraints*."""
+    system = free.system
+    n, m, k = system.n, system.m, vrows.k
+    f = P.shape[1]
+    fv = f - k
+    Av = vrows.evaluate(t0, q, qd, p)[0]
+    psi_q, a_q, a_qd, F_q = vrows.derivatives(t0, q, qd, qdd, mu, p)
+    unit = _coordinate_units(P, sc)
+    # the speeds: named, or the chosen coordinates left out of the k well-conditioned pivots
+    # of column-pivoted QR of the velocity rows in the chosen coordinates' rates (unit-free)
+    AP = Av @ P
+    if speeds is None:
+        if k:
+            rs = np.abs(AP * unit).max(axis=1)
+            APs = AP * unit / np.where(rs > 0, rs, 1.0)[:, None]
+            piv = sla.qr(APs, mode="economic", pivoting=True)[2]
+            sp_idx = sorted(int(i) for i in piv[k:])
+        else:
+            sp_idx = list(range(f))
+    else:
+        if isinstance(speeds, (str, sp.Basic)) or not isinstance(speeds, (list, tuple)):
+            raise ModelError(f"linearize speeds: give a list of chosen coordinates, got "
+                             f"{speeds!r}")
+        sp_idx = []
+        for v in speeds:
+            name = v if isinstance(v, str) else getattr(v, "name", None)
+            if isinstance(name, str) and name not in coord_names and name.endswith("_d"):
+                name = name[:-2]
+            if name not in coord_names:
+                raise ModelError(f"linearize speeds: {v!r} is not one of the chosen coordinates "
+                                 f"{coord_names} (a speed is the rate of a chosen coordinate)")
+            if coord_names.index(name) in sp_idx:
+                raise ModelError(f"linearize speeds: {name!r} is named twice")
+            sp_idx.append(coord_names.index(name))
+        if len(sp_idx) != fv:
+            raise ModelError(
+                f"linearize speeds: the free system has {f} chosen coordinates and {k} "
+                f"velocity constraint row(s), so it takes {fv} speed(s); got {len(sp_idx)} "
+                f"({[coord_names[i] for i in sp_idx]})")
+    S = np.zeros((fv, f))
+    S[np.arange(fv), sp_idx] = 1.0
+    # the velocity chart: [Phi_q; A; S h_q] nonsingular (unit-free rows and columns)
+    Kv = np.vstack([J, Av, S @ H])
+    Ks = Kv * sc.columns
+    Ks = Ks / np.maximum(np.abs(Ks).max(axis=1), 1e-300)[:, None]
+    sv = np.linalg.svd(Ks, compute_uv=False)
+    if not sv[-1] > 1e-10 * sv[0]:
+        names = [coord_names[i] for i in sp_idx]
+        raise ModelError(
+            f"linearize speeds: the rates of {names} are not independent velocities with the "
+            f"velocity constraints ({', '.join(c.label() for c in vrows.constraints)}) at the "
+            f"reference state (smallest singular value {sv[-1] / sv[0]:.1e} of the largest); "
+            "name rates the constraints leave free (e.g. a lean, a steer and a wheel's "
+            "rotation), or leave speeds out to have them chosen")
+    Kinv = np.linalg.inv(Kv)
+    Pv = Kinv[:, m + k:]
+    Wv = -Kinv @ np.vstack([0.5 * cv @ P, psi_q @ P, S @ ch["ydq"] @ P])
+    nu = len(ins.names)
+    ns = f + fv
+    dq = np.hstack([P, np.zeros((n, fv)), np.zeros((n, nu))])
+    dqd = np.hstack([Wv, Pv, np.zeros((n, nu))])
+    du = np.hstack([np.zeros((nu, ns)), np.eye(nu)])
+    Kkt = np.block([[Ra, J.T, Av.T], [J, np.zeros((m, m + k))], [Av, np.zeros((k, m + k))]])
+    rhs = -np.vstack([(Rq + F_q) @ dq + Rv @ dqd + Ru @ du, cq @ dq + cv @ dqd,
+                      a_q @ dq + a_qd @ dqd])
+    try:
+        dqdd = np.linalg.solve(Kkt, rhs)[:n]
+    except np.linalg.LinAlgError:
+        raise ModelError("linearize: the mass matrix is singular on the free motions (a "
+                         "massless body free to move); give it mass or constrain it") from None
+    # the chosen coordinates' rates and accelerations: yd = h_q qd, ydd = h_q qdd + ydq qd
+    Yd = H @ dqd + ch["ydq"] @ dq
+    Ydd = ch["yddq"] @ dq + ch["yddv"] @ dqd + H @ dqdd
+    A = np.vstack([Yd[:, :ns], S @ Ydd[:, :ns]])
+    Bm = np.vstack([Yd[:, ns:], S @ Ydd[:, ns:]])
+    O = ch["oq"] @ dq + ch["ov"] @ dqd + ch["oa"] @ dqdd
+    for j, (kind, w) in enumerate(zip(ins.kinds, ins.where)):
+        if kind == "parameter":
+            O[:, ns + j] += ch["op"][:, w]
+    Cm, Dm = O[:, :ns], O[:, ns:]
+    _check_steady(system, coord_names, P, Rq + F_q, Ra, Ydd[:, :f], ch["yd"], ch["ydd"], cyc,
+                  q, qd, qdd, lam, p, t0, J, sc, tolerance, reactions=Av.T @ mu)
+    states = [*coord_names, *(coord_names[i] + "_d" for i in sp_idx)]
+    if cyc:
+        # (a dropped position must act on nothing kept: the accelerations were checked
+        # above, the rates of the kept coordinates here, unit-free)
+        su = np.concatenate([unit, unit[sp_idx]])
+        As = A * su[None, :] / su[:, None]
+        keep = [i for i in range(ns) if i not in cyc]
+        big = max(float(np.abs(As[np.ix_(keep, keep)]).max(initial=0.0)), 1e-300)
+        for j in cyc:
+            col = np.abs(As[keep, j])
+            if col.size and col.max() > tolerance * big:
+                i = keep[int(np.argmax(col))]
+                raise NotSteadyError(
+                    f"linearize cyclic: {coord_names[j]!r} is not cyclic: the rate of "
+                    f"{states[i]} depends on its position ({A[i, j]:.3g} per unit); leave it "
+                    "out of cyclic=")
+            if Cm.shape[0] and np.abs(Cm[:, j]).max() > 1e-9 * max(np.abs(Cm).max(), 1e-300):
+                r = int(np.argmax(np.abs(Cm[:, j])))
+                raise ModelError(f"linearize cyclic: output {out_pairs[r][0]!r} depends on the "
+                                 f"position of {coord_names[j]!r}, which cyclic= drops from "
+                                 "the state; leave it out of cyclic or of the outputs")
+        A, Bm, Cm = A[np.ix_(keep, keep)], Bm[keep], Cm[:, keep]
+        states = [states[i] for i in keep]
+    s, stability = judge(A)
+    for a in (A, Bm, Cm, Dm, P, s, q, qd, qdd, p):
+        a.setflags(write=False)
+    return LinearSystem(A=A, B=Bm, C=Cm, D=Dm, states=tuple(states), inputs=ins.names,
+                        outputs=tuple(a for a, _ in out_pairs),
+                        coordinates=tuple(coord_names), t=t0, q=q, qd=qd, qdd=qdd, p=p,
+                        basis=P, eigenvalues=s, stability=stability,
+                        stable="unstable" not in stability, model=free.model,
+                        speeds=tuple(coord_names[i] for i in sp_idx))
+
+
 def _suggest(system, t, q, p, sc) -> list:
     return [system.layout.q_names[i] for i in independent_coordinates(system, t, q, p, sc)]
 
@@ -744,7 +1006,7 @@ def _explicit_time(system) -> bool:
 
 
 def _check_steady(system, names, P, Rq, Ra, Gy, yd, ydd, cyc, q, qd, qdd, lam, p, t, J, sc, tol,
-                  along=None):
+                  along=None, reactions=None):
     """The reference must be an equilibrium or a steady motion in the chosen coordinates:
     ``ydd = 0`` and ``d(ydd)/dt = G_y yd = 0``; a ``cyclic`` coordinate's position must not
     act (``G_y`` column zero). Each measured as the generalized force it needs
@@ -752,6 +1014,8 @@ def _check_steady(system, names, P, Rq, Ra, Gy, yd, ydd, cyc, q, qd, qdd, lam, p
     dyn = system.dynamics
     M, Q, Qv = dyn.terms(t, q, qd, lam, p, qdd)
     forces = np.abs(Q) + np.abs(Qv) + np.abs(M @ qdd) + (np.abs(J.T @ lam) if len(lam) else 0)
+    if reactions is not None:                 # (the velocity constraints' A^T mu)
+        forces = forces + np.abs(reactions)
     ref = float(np.max(forces, initial=0.0))
     # unit of each chosen coordinate: the change that moves the coordinates by one unit-free
     # unit (positions in units of L, angles in radians)
@@ -759,8 +1023,11 @@ def _check_steady(system, names, P, Rq, Ra, Gy, yd, ydd, cyc, q, qd, qdd, lam, p
     unit = np.where(reach > 0, 1.0 / np.where(reach > 0, reach, 1.0), 1.0)
     rate = float(np.max(np.abs(yd) / unit, initial=0.0))
     # and the forces a unit change of the coordinates brings (a pendulum hanging in a
-    # minimal coordinate has no force acting at all, only its stiffness m g l)
-    ref = max(ref, float(np.abs(Rq @ (P * unit)).max(initial=0.0)))
+    # minimal coordinate has no force acting at all, only its stiffness m g l), and the
+    # inertial forces on the motion's own time scale (a sleigh sliding straight with no load
+    # has no force acting either: its accelerations are rounding)
+    ref = max(ref, float(np.abs(Rq @ (P * unit)).max(initial=0.0)),
+              float(np.abs(Ra @ (P * unit)).max(initial=0.0)) * rate**2)
 
     def force(a):
         return float(np.abs(Ra @ (P @ a)).max(initial=0.0))

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sps
+import sympy as sp
 
 from .._errors import ModelError, SingularJacobianError
 from .._symbols import T
@@ -33,6 +34,11 @@ from ..compile import compile_exprs
 from ..constraints import velocity_rows
 from ..solvers._free import _solve_fast, project_positions
 from ..solvers._linalg import SPARSE_THRESHOLD, Singular
+
+try:  # optional
+    import symengine as se
+except ImportError:  # pragma: no cover
+    se = None
 
 
 def velocity_constraints(model, dropped=()) -> list:
@@ -77,6 +83,8 @@ class VelocityRows:
             psi += eqs
             owners += [c] * len(eqs)
         rows = velocity_rows(psi, q, qd, rho=rho)
+        self.psi = psi                     # (kept for the linearisation's derivatives)
+        self._derivs = None
         self.k, self.n = len(psi), system.n
         self.A_sym, self.b_sym, self.rho_sym = rows.A, rows.b, rows.rho
         self.owners = owners
@@ -91,6 +99,74 @@ class VelocityRows:
         k, n = self.k, self.n
         rho = out[k * n + k:] if out.size > k * n + k else np.zeros(k)
         return out[:k * n].reshape(k, n), out[k * n:k * n + k], rho
+
+    def derivatives(self, t, q, qd, qdd, mu, p):
+        r"""Exact derivatives for the linearisation (:mod:`mechsys.analyses._linearize`), at
+        one state with the rows' multipliers ``mu``: ``(psi_q, a_q, a_qd, F_q)`` with
+        :math:`\psi = A \dot q + b` (its change with the positions, (k, n)),
+        :math:`a = A \ddot q + \rho` (the acceleration rows, (k, n) each) and
+        :math:`F = A^T \mu` (the rows' generalized force, (n, n)). Derived symbolically
+        (SymEngine when the system's backend is) and compiled on first use."""
+        if self._derivs is None:
+            self._derivs = self._derive()
+        f, parts = self._derivs
+        vals = np.asarray(f(np.concatenate((self.system.pack(t, q, qd, p), qdd, mu))),
+                          dtype=float).ravel()
+        out, i = [], 0
+        for (rows, cols), shape in zip(parts, ((self.k, self.n),) * 3 + ((self.n, self.n),)):
+            D = np.zeros(shape)
+            np.add.at(D, (rows, cols), vals[i:i + len(rows)])
+            out.append(D)
+            i += len(rows)
+        return tuple(out)
+
+    def _derive(self):
+        lay = self.system.layout
+        native = se is not None and self.system.backend == "symengine"
+        conv = se.sympify if native else sp.sympify
+        q = [conv(s) for s in lay.q_symbols]
+        qd = [conv(s) for s in lay.qd_symbols]
+        qdd = [conv(s) for s in lay.qdd_symbols]
+        mu = [sp.Symbol(f"_mu{i}") for i in range(self.k)]
+        muc = [conv(s) for s in mu]
+        t = conv(T)
+        psi = [conv(e) for e in self.psi]
+        exprs: list = []
+        parts = []
+
+        def derive(E, wrt):
+            rows, cols = [], []
+            for i, e in enumerate(E):
+                free = e.free_symbols
+                for j, w in enumerate(wrt):
+                    if w in free:
+                        d = e.diff(w)
+                        if d != 0:
+                            rows.append(i)
+                            cols.append(j)
+                            exprs.append(d)
+            parts.append((np.array(rows, dtype=int), np.array(cols, dtype=int)))
+
+        # A = psi_qd, rho = psi_q qd + psi_t, a = A qdd + rho (each row against the
+        # coordinates it contains)
+        a, F = [], [conv(0)] * self.n
+        for i, e in enumerate(psi):
+            free = e.free_symbols
+            r = e.diff(t) if t in free else conv(0)
+            for j, (x, v, w) in enumerate(zip(q, qd, qdd)):
+                if x in free:
+                    r = r + e.diff(x) * v
+                if v in free:
+                    Aij = e.diff(v)
+                    r = r + Aij * w
+                    F[j] = F[j] + Aij * muc[i]
+            a.append(r)
+        derive(psi, q)
+        derive(a, q)
+        derive(a, qd)
+        derive(F, q)
+        args = [*lay.args(), *lay.qdd_symbols, *mu]
+        return compile_exprs(args, exprs, self.system.backend), parts
 
     def residual(self, t, q, qd, p) -> np.ndarray:
         """:math:`A \\dot q + b` (k,)."""
