@@ -198,4 +198,4 @@ def test_every_output_in_units_agrees_between_metres_and_millimetres():
     plain.add(ms.Revolute2(plain.ground.point((0, 0)), b.point(0)))
     plain.add(ms.RotationLock1(b, ms.T))
     with pytest.raises(ms.ModelError, match="m.set_units"):
-        plain.solve(0.0).in_units
+        _ = plain.solve(0.0).in_units

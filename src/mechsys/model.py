@@ -66,11 +66,11 @@ _CONSTANT_NAMES = {"pi": "the constant pi", "E": "Euler's number e", "I": "the i
 
 
 class DOF(int):
-    """Degrees of freedom of a model: an ``int`` (from the Jacobian rank at the current
+    r"""Degrees of freedom of a model: an ``int`` (from the Jacobian rank at the current
     guess) carrying a report.
 
     Attributes: ``coordinates`` (n), ``equations`` (m), ``gruebler`` (n - m, the count),
-    ``rank`` (of Phi_q at ``configuration``), ``redundant`` (constraints with dependent
+    ``rank`` (of :math:`\Phi_q` at ``configuration``), ``redundant`` (constraints with dependent
     equations), ``at``: where the rank is taken — ``"guess"`` (the guess, assembled or with a
     positive Gruebler count), ``"assembled"`` (the assembled configuration nearest a guess
     that does not assemble) or ``"unassembled guess"`` (no assembly found: the figure holds
@@ -1537,11 +1537,12 @@ def _redundant_solution(full, reduced, res, lam, red, p):
 
 
 class Model2D(Model):
-    """Planar model. Bodies have coordinates ``x, y, theta``.
+    r"""Planar model. Bodies have coordinates ``x, y, theta``.
 
     ``orientation="angle"`` (default, Mech's ``Method -> Angular``) or ``"euler"`` (Mech's
     ``SetSymbols[Method -> Euler]``): each body's rotation as Mech's two degenerate Euler
-    parameters ``(ei, ej) = (cos th, sin th)`` with ``ei^2 + ej^2 = 1`` added per body, so
+    parameters :math:`(e_i, e_j) = (\cos \theta, \sin \theta)` with :math:`e_i^2 + e_j^2 = 1` added per
+    body, so
     its coordinates are ``x, y, ei, ej`` and no constraint contains a sine or cosine of a
     coordinate (manual 12.4.1; ``docs/performance-options.md``, decision 0015). Outputs
     (``angle``, ``omega``, ``alpha``, reactions, drawing) stay in the user's terms; the

@@ -1,5 +1,5 @@
 r"""Integrators for the equations of motion of a free system, ``y = (q, qd)``,
-``y' = (qd, qdd(t, q, qd))`` with ``qdd`` from the augmented system.
+:math:`y' = (\dot q, \ddot q(t, q, \dot q))` with ``qdd`` from the augmented system.
 
 Two families, selected by ``method``:
 
@@ -11,7 +11,8 @@ Two families, selected by ``method``:
   predictor and Adams-Moulton corrector of degree ``fit_degree`` (1 linear ... 4 quartic)
   built by polynomial fits through the past derivative values at their actual times (so
   step changes need no restart). With ``max_error = (a, b, c)`` (a number ``e`` means
-  ``(e, e/10, e/100)``) and the error ``err = max |y_corrector - y_predictor|`` of a step:
+  ``(e, e/10, e/100)``) and the error :math:`\mathit{err} = \max \lvert y_{\mathrm{corrector}} -
+  y_{\mathrm{predictor}} \rvert` of a step:
 
   - ``err > a``: reject, back up, halve the step;
   - ``b < err <= a``: accept the corrected (Adams-Moulton) value;
@@ -34,7 +35,8 @@ Options are checked up front by :func:`integration_options` (one place for free 
 systems): every option must apply to the chosen method, and ``max_error`` (Mech's accuracy
 option) is honoured by every method. With the Runge-Kutta methods it becomes
 ``rtol = atol = max_error``: SciPy accepts a step when the (RMS) estimate of its local error
-``e_i`` satisfies ``e_i <= atol + rtol |y_i| = max_error (1 + |y_i|)``, the same absolute
+``e_i`` satisfies :math:`e_i \le \mathit{atol} + \mathit{rtol} \lvert y_i \rvert = \mathit{max\_error}\,
+(1 + \lvert y_i \rvert)`, the same absolute
 per-step budget as Adams' ``a`` for variables of order one (Mech's assumption) and relative
 for large ones.
 """
