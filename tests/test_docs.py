@@ -145,8 +145,10 @@ def _parses(src: str) -> bool:
 
 def _not_maths(lit: str) -> bool:
     """An inline literal holding ``=`` without being an equation: markup, a call with keyword
-    arguments, a grammar, an update in code, LaTeX itself, a lone sign."""
+    arguments, a grammar, an update in code, LaTeX itself, a lone sign, a quoted message (more
+    than eight words)."""
     return bool(lit.startswith("<") or "\\" in lit or ":=" in lit or re.search(r"[-+*/]=", lit)
+                or len(re.findall(r"[A-Za-z]{3,}", lit)) > 8
                 or (re.fullmatch(r"[\w.]+\(.*\)", lit) and "=" in lit and " = " not in lit)
                 or re.fullmatch(r"[&=\s0]*", lit))
 
@@ -351,3 +353,41 @@ def test_drawing_quick_start_runs_as_written(tmp_path, monkeypatch):
     exec(compile(quick, "mechsys.draw quick start", "exec"), {"__name__": "__docs__"})  # noqa: S102
     assert (tmp_path / "slider_crank.gif").stat().st_size > 0
     assert (tmp_path / "slider_crank.html").stat().st_size > 0
+
+
+def _markdown_plain_equations(text: str) -> list[str]:
+    """:func:`plain_equations` for a Markdown page, read as MyST reads it (markdown-it): fenced
+    blocks without a language (or ``text``) that hold equations, and code spans holding an
+    equation or its notation, where ``$...$`` maths belongs."""
+    from markdown_it import MarkdownIt
+
+    found = []
+    for tok in MarkdownIt("commonmark").enable("table").parse(text):
+        if tok.type == "fence":
+            body = tok.content
+            if (tok.info.strip().split(" ")[0] in ("", "text") and body.strip()
+                    and not _parses(body) and ":=" not in body
+                    and not body.lstrip().startswith(("<", "{", "|"))
+                    and ("=" in body or _PLAIN_TOKENS.search(body))):
+                found.append(body)
+        for child in tok.children or []:
+            lit = child.content
+            if child.type != "code_inline" or _not_maths(lit):
+                continue
+            equation = re.search(r"(?<![=<>!])=(?!=)", lit) and not re.match(r"\w+=", lit)
+            if (equation or _PLAIN_TOKENS.search(lit)) and not _parses(lit):
+                found.append(lit)
+    return found
+
+
+def test_guides_typeset_their_equations():
+    """Every page of the site and the README writes its equations as maths (``$...$``,
+    ``$$...$$``), not as code (`` `M qdd + Phi_q^T lambda = Q` ``). The error catalogue quotes
+    messages as printed and is left out."""
+    pages = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+    assert len(pages) > 30
+    plain = {p.name: eqs for p in pages if p.name != "errors.md"
+             for eqs in [_markdown_plain_equations(p.read_text(encoding="utf-8"))] if eqs}
+    assert plain == {}, plain
+    assert _markdown_plain_equations("Then `Phi_q qd = -Phi_t` and `x = 1` and $a = b$.\n") == [
+        "Phi_q qd = -Phi_t"]
