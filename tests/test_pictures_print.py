@@ -53,6 +53,23 @@ def test_no_unit_is_invented_without_declared_units(monkeypatch):
     plt.close("all")
 
 
+def test_snapshot_axes_and_time_carry_the_declared_units(monkeypatch):
+    """A drawing's axes are positions in the model's length unit and its time stamp in the
+    time unit, when the model declares them; bare names otherwise (nothing invented)."""
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    import matplotlib.pyplot as plt
+
+    from mechsys.draw import snapshot
+
+    for units, x, stamp in (({"length": "mm", "time": "s"}, "x [mm]", "t = 0.500 s"),
+                            (None, "x", "t = 0.500")):
+        fig = snapshot(_solution(units), index=4)
+        ax = fig.axes[0]
+        assert (ax.get_xlabel(), ax.get_ylabel()) == (x, x.replace("x", "y"))
+        assert stamp in [t.get_text() for t in ax.texts]
+    plt.close("all")
+
+
 def test_animation_player_needs_no_network(monkeypatch):
     """matplotlib's player loads Font Awesome from a CDN for its buttons (blank offline):
     the player mechsys writes has no remote link and shows its buttons as text."""
