@@ -199,3 +199,29 @@ def test_every_output_in_units_agrees_between_metres_and_millimetres():
     plain.add(ms.RotationLock1(b, ms.T))
     with pytest.raises(ms.ModelError, match="m.set_units"):
         _ = plain.solve(0.0).in_units
+
+
+def test_times_guesses_and_sweep_values_keep_their_units():
+    """Quantities that NumPy would silently strip of their unit (an array of times in ms given
+    to ``simulate``, an array of lengths swept) are converted instead: 100 ms is 0.1 s, 1 m is
+    1000 mm; a guess takes its coordinate's dimension."""
+    m, arm = _pendulum(((0, -1), Q(0, "N")), ms.Gravity((0, -1), Q(9.81, "m/s**2")))
+    free = m.free()
+    sol = free.simulate(Q(np.linspace(0, 100, 3), "ms"), max_step=Q(5, "ms"))
+    assert np.allclose(sol.t, [0, 0.05, 0.1], rtol=0, atol=1e-15)
+    assert free.simulate((Q(0, "s"), Q(20, "ms"))).t[-1] == pytest.approx(0.02, rel=1e-12)
+    m.set_guess({"arm.th": Q(90, "deg")})
+    assert m.guess()[2] == pytest.approx(np.pi / 2, rel=1e-12)
+    with pytest.raises(ms.ModelError, match=r"set_guess 'x2'.*\[length\]"):
+        m.set_guess({"arm.x": Q(1, "s")})
+
+    s = ms.Model2D()
+    s.set_units(length="mm", mass="kg", time="s")
+    length = s.parameter("L", Q(0.3, "m"))
+    bar = s.add_body("bar", points={"tip": (length, 0)}, guess=((0, 0), 0))
+    s.add(ms.Revolute2(s.ground.point((0, 0)), bar.point(0)))
+    s.add(ms.RotationLock1(bar, 0))
+    tip = bar.point("tip")
+    df = ms.sweep(s, {"L": Q(np.array([1.0, 2.0]), "m")}, "location",
+                  outputs={"x": lambda r: r.location(tip)[0]})
+    assert df["x"].tolist() == [1000.0, 2000.0]

@@ -45,6 +45,8 @@ from .geometry._units import (
     check_units,
     convert,
     has_quantity,
+    is_quantity,
+    number,
     resolve,
     to_units,
 )
@@ -357,6 +359,15 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
             raise ModelError("set_units: give at least one of length=, mass=, time=")
         self.units = {**(self.units or {}), **check_units(given)}
 
+    def _coordinate_dims(self, sym) -> tuple | None:
+        """The dimension ``(length, mass, time)`` of a body coordinate: its first ``dim``
+        coordinates are a position (a length), the rest an angle or Euler parameters (none);
+        None for a model variable (a quantity keeps its own dimension)."""
+        for b in self.bodies:
+            if sym in list(b.q):
+                return LENGTH if list(b.q).index(sym) < self.space.dim else (0, 0, 0)
+        return None
+
     def to_units(self, value) -> float:
         """A pint quantity as a number in the model's declared units (``m.set_units``):
         ``[length]^a [mass]^b [time]^c`` becomes ``length^a mass^b time^c``, a dimensionless
@@ -658,6 +669,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
             s = k if isinstance(k, sp.Symbol) else self._coordinate_by_name(str(k))
             if s not in layout_syms:
                 raise ModelError(f"set_guess: {k!r} is not a coordinate or variable of this model")
+            if is_quantity(v):   # a position a length, an angle or Euler parameter none
+                v = number(v, self.units, f"set_guess {s.name!r}", self._coordinate_dims(s))
             try:
                 new[s] = float(v)
             except (TypeError, ValueError):

@@ -621,7 +621,7 @@ class FreeSystem:
             "initial_condition", "method", "rtol", "atol", "max_step", "fit_degree", "max_error",
             "step_size", "constraint_correction", "diagnostics", "tolerance", "max_iterations",
             "progress", "starting_step_size"), method, rtol, atol, max_step, fit_degree,
-            max_error, step_size, constraint_correction, starting_step_size)
+            max_error, step_size, constraint_correction, starting_step_size, units=self.model.units)
         check_progress(progress, "FreeSystem.simulate")
         if self.kind != "dynamic":
             raise MechError("simulate() integrates the free motion: build the FreeSystem with "

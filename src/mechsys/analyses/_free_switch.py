@@ -272,7 +272,8 @@ class SwitchedFreeSystem(FreeSystem):
             "initial_condition", "at_switch", "method", "rtol", "atol", "max_step", "max_error",
             "max_events", "tolerance", "max_iterations", "starting_step_size"), method, rtol,
             atol, max_step, max_error=max_error, starting_step_size=starting_step_size,
-            dense_output="with switches: events are located on the Runge-Kutta dense output")
+            dense_output="with switches: events are located on the Runge-Kutta dense output",
+            units=self.model.units)
         opt, t0, t1, t_eval = run.options, run.t0, run.t1, run.t_eval
         policy = _policy(at_switch)
         if isinstance(max_events, bool) or not isinstance(max_events, (int, np.integer)) or \

@@ -388,7 +388,7 @@ class PathSystem:
             "initial_condition", "method", "rtol", "atol", "max_step", "fit_degree", "max_error",
             "step_size", "constraint_correction", "diagnostics", "starting_step_size"), method,
             rtol, atol, max_step, fit_degree, max_error, step_size, constraint_correction,
-            starting_step_size)
+            starting_step_size, units=self.model.units)
         opt, t0, t_eval = run.options, run.t0, run.t_eval
         s = self.system
         if initial_condition is None:

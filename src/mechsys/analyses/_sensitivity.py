@@ -232,7 +232,8 @@ class SensitivitySystem:
         run = plan_run("SensitivitySystem.simulate", t, unknown, (
             "initial_condition", "method", "rtol", "atol", "max_step", "fit_degree", "max_error",
             "step_size", "constraint_correction", "starting_step_size"), method, rtol, atol,
-            max_step, fit_degree, max_error, step_size, constraint_correction, starting_step_size)
+            max_step, fit_degree, max_error, step_size, constraint_correction, starting_step_size,
+            units=self.model.units)
         t0 = run.t0
         s = fs.system
         tan = self._tangent(s)

@@ -676,7 +676,7 @@ def reject_unknown(where: str, unknown: dict, known) -> None:
 def plan_run(where: str, t, unknown: dict, known, method="dop853", rtol=RTOL, atol=ATOL,
              max_step=MAX_STEP, fit_degree=FIT_DEGREE, max_error=MAX_ERROR, step_size=None,
              constraint_correction=True, starting_step_size=None,
-             dense_output: str | None = None) -> Run:
+             dense_output: str | None = None, units: dict | None = None) -> Run:
     """The protocol every ``simulate`` (free, switched, path, sensitivity) follows before it
     computes anything, in one place and in this order: (1) options not in ``known`` are
     refused (:func:`reject_unknown`); (2) ``method`` is looked up in the registry
@@ -684,8 +684,16 @@ def plan_run(where: str, t, unknown: dict, known, method="dop853", rtol=RTOL, at
     (:func:`integration_options`); ``dense_output``: the run needs a method with a dense
     output, the text says why (events); (3) the times ``t`` are parsed (:func:`output_times`);
     (4) the step lengths are checked against them (:func:`checked_steps`). Returns the
-    :class:`Run` that :func:`integrate` takes, so ``t`` and the options are parsed once."""
+    :class:`Run` that :func:`integrate` takes, so ``t`` and the options are parsed once.
+    Times and step lengths given as pint quantities are converted first to the model's time
+    unit (``units``, its ``m.set_units``; decision 0043), never stripped of their unit."""
+    from ..geometry._units import convert
+
     reject_unknown(where, unknown, known)
+    t, max_step, step_size, starting_step_size = (
+        convert(v, units, f"{where}: {name}", (0, 0, 1)) for name, v in (
+            ("t", t), ("max_step", max_step), ("step_size", step_size),
+            ("starting_step_size", starting_step_size)))
     if dense_output is not None:
         spec = _methods.find(method)
         if spec is None or not spec.dense_output:
