@@ -28,7 +28,7 @@ import numpy as np
 
 from .._errors import MechError, ModelError, choice
 from .._progress import check_progress, reporter
-from ..geometry._units import is_quantity, number
+from ..geometry._units import is_quantity, number, time_numbers
 from ..loads._loads import check_load_values
 from ..results._load_outputs import lambda_guess_vector
 from ..results._solution import Solution, State
@@ -621,7 +621,8 @@ class FreeSystem:
             "initial_condition", "method", "rtol", "atol", "max_step", "fit_degree", "max_error",
             "step_size", "constraint_correction", "diagnostics", "tolerance", "max_iterations",
             "progress", "starting_step_size"), method, rtol, atol, max_step, fit_degree,
-            max_error, step_size, constraint_correction, starting_step_size, units=self.model.units)
+            max_error, step_size, constraint_correction, starting_step_size,
+            to_numbers=time_numbers(self.model))
         check_progress(progress, "FreeSystem.simulate")
         if self.kind != "dynamic":
             raise MechError("simulate() integrates the free motion: build the FreeSystem with "

@@ -62,6 +62,7 @@ from .._errors import ConvergenceError, MechError, ModelError
 from .._symbols import T
 from ..compile._stages import _cache
 from ..constraints._switches import StageSwitch
+from ..geometry._units import time_numbers
 from ..loads._switched import check_switched_loads
 from ..results._load_outputs import lambda_guess_vector
 from ..results._solution import Solution
@@ -273,7 +274,7 @@ class SwitchedFreeSystem(FreeSystem):
             "max_events", "tolerance", "max_iterations", "starting_step_size"), method, rtol,
             atol, max_step, max_error=max_error, starting_step_size=starting_step_size,
             dense_output="with switches: events are located on the Runge-Kutta dense output",
-            units=self.model.units)
+            to_numbers=time_numbers(self.model))
         opt, t0, t1, t_eval = run.options, run.t0, run.t1, run.t_eval
         policy = _policy(at_switch)
         if isinstance(max_events, bool) or not isinstance(max_events, (int, np.integer)) or \

@@ -676,7 +676,7 @@ def reject_unknown(where: str, unknown: dict, known) -> None:
 def plan_run(where: str, t, unknown: dict, known, method="dop853", rtol=RTOL, atol=ATOL,
              max_step=MAX_STEP, fit_degree=FIT_DEGREE, max_error=MAX_ERROR, step_size=None,
              constraint_correction=True, starting_step_size=None,
-             dense_output: str | None = None, units: dict | None = None) -> Run:
+             dense_output: str | None = None, to_numbers=None) -> Run:
     """The protocol every ``simulate`` (free, switched, path, sensitivity) follows before it
     computes anything, in one place and in this order: (1) options not in ``known`` are
     refused (:func:`reject_unknown`); (2) ``method`` is looked up in the registry
@@ -685,15 +685,15 @@ def plan_run(where: str, t, unknown: dict, known, method="dop853", rtol=RTOL, at
     output, the text says why (events); (3) the times ``t`` are parsed (:func:`output_times`);
     (4) the step lengths are checked against them (:func:`checked_steps`). Returns the
     :class:`Run` that :func:`integrate` takes, so ``t`` and the options are parsed once.
-    Times and step lengths given as pint quantities are converted first to the model's time
-    unit (``units``, its ``m.set_units``; decision 0043), never stripped of their unit."""
-    from ..geometry._units import convert
-
+    ``to_numbers(value, what)``, when given, turns the times and step lengths given as pint
+    quantities into numbers in the model's time unit first (decision 0043; the caller's, since
+    the units belong to a model), so that NumPy never strips their unit."""
     reject_unknown(where, unknown, known)
-    t, max_step, step_size, starting_step_size = (
-        convert(v, units, f"{where}: {name}", (0, 0, 1)) for name, v in (
-            ("t", t), ("max_step", max_step), ("step_size", step_size),
-            ("starting_step_size", starting_step_size)))
+    if to_numbers is not None:
+        t, max_step, step_size, starting_step_size = (
+            to_numbers(v, f"{where}: {name}") for name, v in (
+                ("t", t), ("max_step", max_step), ("step_size", step_size),
+                ("starting_step_size", starting_step_size)))
     if dense_output is not None:
         spec = _methods.find(method)
         if spec is None or not spec.dense_output:
