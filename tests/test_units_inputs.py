@@ -225,3 +225,24 @@ def test_times_guesses_and_sweep_values_keep_their_units():
     df = ms.sweep(s, {"L": Q(np.array([1.0, 2.0]), "m")}, "location",
                   outputs={"x": lambda r: r.location(tip)[0]})
     assert df["x"].tolist() == [1000.0, 2000.0]
+
+
+def test_vibration_frequencies_in_units():
+    """A pendulum (1 kg at 0.15 m, 0.0075 kg m^2 about its centroid) hanging down:
+    omega^2 = m g c / J_O = 9.81 * 0.15 / 0.03, whether the model counts time in s or ms."""
+    omegas = []
+    for time in ("s", "ms"):
+        m = ms.Model2D()
+        m.set_units(length="mm", mass="kg", time=time)
+        arm = m.add_body("arm", guess=((0, 0), -np.pi / 2), mass=Q(1, "kg"),
+                         centroid=(Q(0.15, "m"), 0), inertia=Q(0.0075, "kg*m**2"))
+        m.add(ms.Revolute2(m.ground.point((0, 0)), arm.point(0)))
+        m.add_load(ms.Gravity((0, -1), Q(9.81, "m/s**2")))
+        modes = m.vibration(at={"arm.th": -np.pi / 2})
+        omega = modes.quantity("omega")
+        assert modes.quantity("hz").to("1/s").magnitude == pytest.approx(
+            omega.to("rad/s").magnitude / (2 * np.pi), rel=1e-12)
+        omegas.append(omega.to("rad/s").magnitude[0])
+    assert omegas == pytest.approx([np.sqrt(9.81 * 0.15 / 0.03)] * 2, rel=1e-9)
+    with pytest.raises(ms.OptionError, match="omega"):
+        modes.quantity("omegas")

@@ -174,6 +174,33 @@ class VibrationModes:
     def __len__(self) -> int:
         return len(self.omega)
 
+    #: the fields with a known unit: (power of time, unit of the angle or ratio)
+    _UNITS = {"eigenvalues": (-1, ""), "omega": (-1, "rad"), "damped_omega": (-1, "rad"),
+              "hz": (-1, ""), "damping_ratio": (0, ""), "t": (1, "")}
+
+    def quantity(self, name: str):
+        r"""The field ``name`` (``"omega"``, ``"hz"``, ``"damped_omega"``, ``"eigenvalues"``,
+        ``"damping_ratio"``, ``"t"``) as a pint Quantity in the model's declared time unit
+        (``m.set_units``): ``omega`` in rad/s, ``hz`` in 1/s (cycles per second: Hz) when the
+        unit is seconds. A field of no single unit (``shapes``, ``mass``, ...) is refused by
+        name. Example: ``modes.quantity("omega").to("rpm")`` (pint counts a radian as 1 and a
+        revolution as :math:`2\pi`: convert the angular ``omega`` to rpm, not ``hz``). Needs
+        pint."""
+        from .._errors import choice
+        from ..geometry._units import _registry
+
+        choice(name, list(self._UNITS), "VibrationModes.quantity: field")
+        units = getattr(self.model, "units", None) or {}
+        if "time" not in units:
+            raise ModelError("VibrationModes.quantity: frequencies in units need the model's "
+                             "time unit: declare it with m.set_units(time=...) first")
+        ureg = _registry()
+        power, angle = self._UNITS[name]
+        unit = ureg.Unit(units["time"]) ** power
+        if angle == "rad":
+            unit = ureg.Unit("radian") * unit
+        return ureg.Quantity(np.asarray(getattr(self, name)), unit)
+
     def shape(self, k: int, coordinates=None) -> np.ndarray:
         """Mode ``k``'s coordinate changes (all coordinates, or the named ones)."""
         v = self.shapes[self._index(k)]
