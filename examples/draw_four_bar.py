@@ -53,12 +53,15 @@ fig.savefig("draw_four_bar_instant_centre.png", dpi=80)
 gif = draw.animate(sol, "draw_four_bar.gif", rate=0.5, fps=12, dpi=50)
 html = draw.viewer(sol, "draw_four_bar.html", title="four-bar linkage")
 
-# 5. plots of outputs: time histories against the crank angle, and a phase plot
-fig = draw.plot(sol, {"rocker angle [rad]": "rocker.th",
-                      "coupler point P": m.location(P),
-                      "|v_P|": lambda s: np.linalg.norm(s.velocity(P), axis=1)},
-                x="crank.th", xlabel="crank angle [rad]")
+# 5. plots of outputs: time histories against the crank angle, and a phase plot. The model
+# declares no unit system (any consistent one works); read it as metres and seconds, and say
+# so in the labels of the outputs whose unit mechsys cannot know (angles are radians)
+fig = draw.plot(sol, {"rocker angle": "rocker.th",
+                      "coupler point P [m]": m.location(P),
+                      "|v_P| [m/s]": lambda s: np.linalg.norm(s.velocity(P), axis=1)},
+                x="crank.th", xlabel="crank angle")
 fig.savefig("draw_four_bar_plots.png", dpi=80)
-draw.phase_plot(sol, "rocker.th", m.omega(rocker)).savefig("draw_four_bar_phase.png", dpi=80)
+draw.phase_plot(sol, "rocker.th", m.omega(rocker), xlabel="rocker angle",
+                ylabel="rocker angular velocity [rad/s]").savefig("draw_four_bar_phase.png", dpi=80)
 
 print(f"wrote {gif}, {html} and draw_four_bar_*.png")

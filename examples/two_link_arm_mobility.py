@@ -55,14 +55,15 @@ def main(path: str | None = None) -> None:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        fig, ax = plt.subplots(figsize=(5, 5))
+        fig, ax = plt.subplots(figsize=(6.4, 3.2))
         ax.plot(acc[:, 0], acc[:, 1], "-", label="tip acceleration")
         ax.plot([0], [0], "k+")
         ax.set_aspect("equal")
-        ax.set_xlabel("a_x per unit force")
-        ax.set_ylabel("a_y per unit force")
+        # links of 1 m and 1 kg: an acceleration per newton, m s^-2 N^-1 = 1/kg
+        ax.set_xlabel("tip a_x / F [m/(s² N)]")
+        ax.set_ylabel("tip a_y / F [m/(s² N)]")
         ax.set_title("Ellipse of mobility, two-link arm")
-        fig.savefig(path, dpi=90)
+        fig.savefig(path, dpi=90, bbox_inches="tight")   # cropped to the drawing
         print(f"wrote {path}")
 
 

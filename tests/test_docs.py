@@ -84,43 +84,171 @@ def test_constraint_page_typesets_every_equation_block():
 
 
 def _api_docstrings() -> dict[str, str]:
-    """The docstrings the API pages show for the constraint, load and analysis groups: every
-    public name defined there, with its public methods and properties."""
+    """The docstrings a reader meets: every public name of ``mechsys`` (all API pages) with its
+    public methods and properties, the public members of ``mechsys.draw``, ``mechsys.models``
+    and ``mechsys.testing`` (their own API pages), and every module's docstring (``help()`` of
+    the module; the reference for the internals)."""
+    import importlib
     import inspect
+    import pkgutil
 
     import mechsys
+    import mechsys.draw
+    import mechsys.models
+    import mechsys.testing
 
     out = {}
-    for name in mechsys.__all__:
-        obj = getattr(mechsys, name)
-        if not (getattr(obj, "__module__", "") or "").startswith(
-                ("mechsys.constraints", "mechsys.loads", "mechsys.analyses")):
-            continue
-        out[name] = obj.__doc__ or ""           # as written: getdoc would expand a tab
+
+    def add(key, obj):
+        out[key] = obj.__doc__ or ""            # as written: getdoc would expand a tab
         if isinstance(obj, type):
             for attr, member in vars(obj).items():
+                if isinstance(member, (staticmethod, classmethod)):
+                    member = member.__func__
                 if not attr.startswith("_") and (inspect.isfunction(member)
                                                  or isinstance(member, property)):
-                    out[f"{name}.{attr}"] = member.__doc__ or ""
+                    out[f"{key}.{attr}"] = member.__doc__ or ""
+
+    for name in mechsys.__all__:
+        obj = getattr(mechsys, name)
+        if isinstance(obj, type) or inspect.isfunction(obj):
+            add(name, obj)
+    for mod in (mechsys.draw, mechsys.models, mechsys.testing):
+        names = getattr(mod, "__all__", None) or [
+            n for n, o in vars(mod).items() if not n.startswith("_")
+            and (isinstance(o, type) or inspect.isfunction(o)) and o.__module__ == mod.__name__]
+        for name in names:
+            obj = getattr(mod, name)
+            if isinstance(obj, type) or inspect.isfunction(obj):
+                add(f"{mod.__name__}.{name}", obj)
+    for info in pkgutil.walk_packages(mechsys.__path__, "mechsys."):
+        if not info.name.endswith("__main__"):
+            out[f"module {info.name}"] = importlib.import_module(info.name).__doc__ or ""
+    out["module mechsys"] = mechsys.__doc__ or ""
     return out
 
 
+#: names of the plain-text notation of equations (``Phi_q qd``, ``M qdd``, ``E^T``, ``|v|^2``)
+_PLAIN_TOKENS = re.compile(r"\^T\b|\^-1|\bPhi_\w|\bqdd\b|\bqd\b|\be_dot\b|\bsum_\w|\bintegral\b"
+                           r"|\bd/dt\b|\bd\^2|\|\w+\|\^2")
+
+
+def _parses(src: str) -> bool:
+    import ast
+
+    try:
+        ast.parse(src)
+        return True
+    except SyntaxError:
+        return False
+
+
+def _not_maths(lit: str) -> bool:
+    """An inline literal holding ``=`` without being an equation: markup, a call with keyword
+    arguments, a grammar, an update in code, LaTeX itself, a lone sign, a quoted message (more
+    than eight words)."""
+    return bool(lit.startswith("<") or "\\" in lit or ":=" in lit or re.search(r"[-+*/]=", lit)
+                or len(re.findall(r"[A-Za-z]{3,}", lit)) > 8
+                or (re.fullmatch(r"[\w.]+\(.*\)", lit) and "=" in lit and " = " not in lit)
+                or re.fullmatch(r"[&=\s0]*", lit))
+
+
+def plain_equations(doc: str) -> list[str]:
+    """The equations of a reST docstring written in plain text rather than as maths: literal
+    blocks and ``inline literals`` that are not Python but hold an equation or the notation of
+    one (``M qdd + Phi_q^T lambda = Q``), and notation in running text. ``.. math::`` blocks,
+    ``:math:`` roles and doctest lines are maths or code already."""
+    import inspect
+    import textwrap
+
+    doc = re.sub(r":math:`[^`]*`", "MATH", inspect.cleandoc(doc))
+    lines = doc.splitlines()
+    found, prose, i = [], [], 0
+
+    def body(start: int, indent: int) -> tuple[list[str], int]:
+        """The lines indented deeper than ``indent`` after line ``start``, and the next line."""
+        k = start + 1
+        while k < len(lines) and (not lines[k].strip()
+                                  or len(lines[k]) - len(lines[k].lstrip()) > indent):
+            k += 1
+        return lines[start + 1:k], k
+
+    while i < len(lines):
+        line, s = lines[i], lines[i].strip()
+        indent = len(line) - len(line.lstrip())
+
+        if s.startswith((">>>", "... ")) or s == "...":
+            i += 1
+        elif s.startswith(".. "):                  # a directive (math, note, code) and its body
+            content, i = body(i, indent)
+            if not s.startswith((".. math::", ".. code", ".. doctest")):
+                prose += content
+        elif s.endswith("::"):                     # a literal block: code, or plain equations
+            prose.append(line[:-2])
+            content, i = body(i, indent)
+            block = textwrap.dedent("\n".join(content)).strip()
+            if (block and not _parses(block) and ":=" not in block
+                    and ("=" in block or _PLAIN_TOKENS.search(block))):
+                found.append(block)
+        else:
+            prose.append(line)
+            i += 1
+    text = "\n".join(prose)
+    for lit in re.findall(r"``(.+?)``", text, flags=re.S):
+        lit = " ".join(lit.split())
+        if _not_maths(lit):
+            continue
+        equation = re.search(r"(?<![=<>!])=(?!=)", lit) and not re.match(r"\w+=", lit)
+        if (equation or _PLAIN_TOKENS.search(lit)) and not _parses(lit):
+            found.append(lit)
+    for line in re.sub(r"``.+?``", " ", text, flags=re.S).splitlines():
+        if _PLAIN_TOKENS.search(line):
+            found.append(line.strip())
+    return found
+
+
+def test_plain_equations_are_found_and_maths_is_not():
+    """The detector behind :func:`test_api_equations_are_typeset`: the issue's own example, a
+    literal block of equations and notation in running text are found; maths, code and
+    keyword calls are not."""
+    found = plain_equations("""Motion.
+
+    The equations ``M qdd + Phi_q^T lambda = Q`` hold, and so does::
+
+        Phi_q qd = -Phi_t
+
+    with Phi_q^T in a sentence.
+    """)
+    assert found == ["Phi_q qd = -Phi_t", "M qdd + Phi_q^T lambda = Q", "with Phi_q^T in a sentence."]
+    assert plain_equations(r"""Motion :math:`M \ddot q = Q`, ``m.free(initial_condition=...)``,
+    ``x = np.zeros(3)``::
+
+        sol = m.solve(t)
+
+    .. math::
+
+        \Phi_q \dot q = -\Phi_t
+    """) == []
+
+
 def test_api_equations_are_typeset():
-    """Equations in the docstrings the API pages show are reST maths (``.. math::``,
-    ``:math:``), not plain literal blocks; their braces pair up; and a docstring with maths is a
-    raw string (else ``\\times`` would hold a tab and ``\\frac`` a form feed)."""
+    """Equations in the docstrings a reader meets (every API page, every module's docstring)
+    are reST maths (``.. math::``, ``:math:``), not plain text (:func:`plain_equations`); their
+    braces pair up; and a docstring with maths is a raw string (else ``\\times`` would hold a
+    tab and ``\\frac`` a form feed)."""
     import inspect
 
     from mechsys._docgen import _math_block
 
     docs = _api_docstrings()
-    assert len(docs) > 150
+    assert len(docs) > 600
     plain, unbalanced, not_raw, lone_amp = [], [], [], []
     for name, raw in docs.items():
         doc = inspect.cleandoc(raw)
         for block in _literal_blocks(doc):
             if _math_block(block.splitlines()) is not None:
                 plain.append(name)
+        plain += [(name, eq) for eq in plain_equations(raw)]
         if ":math:" in doc or ".. math::" in doc:
             if re.search(r"[\t\x07\x08\x0b\x0c\r]", raw):
                 not_raw.append(name)
@@ -225,3 +353,41 @@ def test_drawing_quick_start_runs_as_written(tmp_path, monkeypatch):
     exec(compile(quick, "mechsys.draw quick start", "exec"), {"__name__": "__docs__"})  # noqa: S102
     assert (tmp_path / "slider_crank.gif").stat().st_size > 0
     assert (tmp_path / "slider_crank.html").stat().st_size > 0
+
+
+def _markdown_plain_equations(text: str) -> list[str]:
+    """:func:`plain_equations` for a Markdown page, read as MyST reads it (markdown-it): fenced
+    blocks without a language (or ``text``) that hold equations, and code spans holding an
+    equation or its notation, where ``$...$`` maths belongs."""
+    from markdown_it import MarkdownIt
+
+    found = []
+    for tok in MarkdownIt("commonmark").enable("table").parse(text):
+        if tok.type == "fence":
+            body = tok.content
+            if (tok.info.strip().split(" ")[0] in ("", "text") and body.strip()
+                    and not _parses(body) and ":=" not in body
+                    and not body.lstrip().startswith(("<", "{", "|"))
+                    and ("=" in body or _PLAIN_TOKENS.search(body))):
+                found.append(body)
+        for child in tok.children or []:
+            lit = child.content
+            if child.type != "code_inline" or _not_maths(lit):
+                continue
+            equation = re.search(r"(?<![=<>!])=(?!=)", lit) and not re.match(r"\w+=", lit)
+            if (equation or _PLAIN_TOKENS.search(lit)) and not _parses(lit):
+                found.append(lit)
+    return found
+
+
+def test_guides_typeset_their_equations():
+    """Every page of the site and the README writes its equations as maths (``$...$``,
+    ``$$...$$``), not as code (`` `M qdd + Phi_q^T lambda = Q` ``). The error catalogue quotes
+    messages as printed and is left out."""
+    pages = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+    assert len(pages) > 30
+    plain = {p.name: eqs for p in pages if p.name != "errors.md"
+             for eqs in [_markdown_plain_equations(p.read_text(encoding="utf-8"))] if eqs}
+    assert plain == {}, plain
+    assert _markdown_plain_equations("Then `Phi_q qd = -Phi_t` and `x = 1` and $a = b$.\n") == [
+        "Phi_q qd = -Phi_t"]

@@ -392,9 +392,11 @@ def test_gallery_pages_open_in_headless_chromium(site, served, tmp_path):
                         "before `make test`")
         pytest.skip("chromium is not installed (apt-get install -y chromium): the gallery's "
                     "browser check did not run")
-    # the guides' maths, and the API pages' (constraint, load and analysis docstrings)
+    # the guides' maths, and the API pages' (every page whose docstrings hold maths)
     maths = ["constraints.html", "loads.html", "free_motion.html", "guide.html",
-             "api/constraints.html", "api/loads.html", "api/analyses.html"]
+             "vibration.html", "spatial.html", "multistage.html", "generalized.html",
+             "api/constraints.html", "api/loads.html", "api/analyses.html",
+             "api/geometry.html", "api/results.html", "api/model.html", "api/models.html"]
     search = "search.html?q=reaction+force"
     pages = ["gallery/index.html", "mech_to_mechsys.html", "index.html", "jupyter.html",
              *maths, search] + [f"gallery/{e.name}.html" for e in _gallery.examples()]

@@ -5,6 +5,7 @@ where they cannot be imported."""
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
 import subprocess
@@ -165,3 +166,27 @@ def test_readme_has_no_link_that_breaks_on_the_package_index():
     # the documents it names exist
     for path in set(re.findall(r"`((?:docs|examples)/[\w./-]*)`", text)):
         assert (ROOT / path).exists(), f"README names {path}, which does not exist"
+
+
+def test_make_demo_installs_the_library_alone_and_the_demo_needs_nothing_more(tmp_path):
+    """``make demo`` installs ``pip install -e .`` (no extra), and the demo runs with every
+    optional package unimportable, writing its table, plots, animation and 3D viewer."""
+    make = (ROOT / "Makefile").read_text(encoding="utf-8")
+    demo = re.search(r"^demo: (.*)$", make, flags=re.M).group(1).split()
+    assert demo == ["$(CORE)"], demo
+    core = re.search(r"^\$\(CORE\):.*\n((?:\t.*\n)+)", make, flags=re.M).group(1)
+    installs = re.findall(r"pip install[^\n]*", core)
+    assert installs == ["pip install --quiet -e ."], installs
+    optional = sorted({re.split(r"[<>=\[ ]", d)[0] for extra, deps
+                       in PYPROJECT["project"]["optional-dependencies"].items()
+                       if extra != "fast" for d in deps} - {"setuptools", "build"})
+    code = (f"import sys\nfor name in {optional!r}:\n    sys.modules[name.replace('-', '_')] = None\n"
+            "from mechsys.cli import main\nsys.exit(main(['demo', '--out', sys.argv[1]]))\n")
+    res = subprocess.run([sys.executable, "-c", code, str(tmp_path)], capture_output=True,
+                         text=True, cwd=ROOT, timeout=900,
+                         env={**os.environ, "MPLBACKEND": "Agg"})
+    assert res.returncode == 0, res.stderr[-3000:]
+    for name in ("slider_crank_kinematics.png", "slider_crank_loads.png", "slider_crank.gif",
+                 "slider_crank_3d.html"):
+        assert (tmp_path / name).stat().st_size > 1000, name
+    assert "x [m]" in res.stdout and "torque [N m]" in res.stdout

@@ -53,6 +53,40 @@ def test_no_unit_is_invented_without_declared_units(monkeypatch):
     plt.close("all")
 
 
+def test_rates_of_coordinates_carry_their_units(monkeypatch):
+    """A velocity symbol (``m.omega(body)`` of a planar body, a coordinate's ``_d``) is the
+    coordinate's unit per time unit; a label given to phase_plot keeps that unit."""
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    import matplotlib.pyplot as plt
+
+    sol = _solution({"length": "mm", "time": "s"})
+    m = sol.model
+    piston_x = m.body("piston").q[0]
+    fig = phase_plot(sol, "crank.th", m.omega(m.body("rod")), ylabel="rod rate")
+    assert (fig.axes[0].get_xlabel(), fig.axes[0].get_ylabel()) == ("crank.th [rad]",
+                                                                    "rod rate [rad/s]")
+    speed = m.time_derivative(piston_x)            # the velocity symbol of piston.x
+    assert plot(sol, {"piston speed": speed}).axes[0].get_ylabel() == "piston speed [mm/s]"
+    plt.close("all")
+
+
+def test_snapshot_axes_and_time_carry_the_declared_units(monkeypatch):
+    """A drawing's axes are positions in the model's length unit and its time stamp in the
+    time unit, when the model declares them; bare names otherwise (nothing invented)."""
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    import matplotlib.pyplot as plt
+
+    from mechsys.draw import snapshot
+
+    for units, x, stamp in (({"length": "mm", "time": "s"}, "x [mm]", "t = 0.500 s"),
+                            (None, "x", "t = 0.500")):
+        fig = snapshot(_solution(units), index=4)
+        ax = fig.axes[0]
+        assert (ax.get_xlabel(), ax.get_ylabel()) == (x, x.replace("x", "y"))
+        assert stamp in [t.get_text() for t in ax.texts]
+    plt.close("all")
+
+
 def test_animation_player_needs_no_network(monkeypatch):
     """matplotlib's player loads Font Awesome from a CDN for its buttons (blank offline):
     the player mechsys writes has no remote link and shows its buttons as text."""

@@ -193,3 +193,28 @@ def test_quantities_refuse_what_has_no_unit(static):
     assert variable not in sol.quantities() and "a.th" in sol.quantities()
     with pytest.raises(ms.OptionError, match="a.th"):
         sol.quantity("a.thh")
+
+
+@pytest.mark.parametrize("suffix, module, package", [
+    (".parquet", "pyarrow", "pyarrow"), (".h5", "h5py", "h5py"), (".nc", "xarray", "xarray")])
+def test_a_missing_writer_is_named(static, tmp_path, monkeypatch, suffix, module, package):
+    """Without its optional writer a format is refused with a MechError naming the package to
+    install (as where it is not installed: the import fails); CSV needs none."""
+    monkeypatch.setitem(__import__("sys").modules, module, None)
+    with pytest.raises(ms.MechError, match=f"pip install {package}"):
+        static[1].save(tmp_path / f"r{suffix}")
+    assert static[1].save(tmp_path / "r.csv").stat().st_size > 0
+
+
+def test_tables_and_units_name_their_missing_package(dynamic, monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "pandas", None)
+    with pytest.raises(ms.MechError, match="pip install pandas"):
+        dynamic[1].to_dataframe()
+    monkeypatch.setitem(sys.modules, "xarray", None)
+    with pytest.raises(ms.MechError, match="pip install xarray"):
+        dynamic[1].to_xarray()
+    monkeypatch.setitem(sys.modules, "pint", None)
+    with pytest.raises(ms.ModelError, match=r"pip install mechsys\[units\]"):
+        dynamic[1].in_units.location("piston")

@@ -96,3 +96,153 @@ def test_the_equations_hold_no_unit():
     m = crank_slider("mm")
     names = {s.name for e in m.compile().dynamics.Q for s in sp.sympify(e).free_symbols}
     assert not any("pint" in n for n in names), names
+
+
+# -- vectors and initial conditions as quantities; every output in units ---------------------
+
+def _pendulum(force, gravity, length="mm"):
+    """A pendulum arm (0.3 m, 1 kg at 0.15 m) with a tip force and gravity as given."""
+    m = ms.Model2D()
+    m.set_units(length=length, mass="kg", time="s")
+    arm = m.add_body("arm", points={"tip": (Q(0.3, "m"), 0)}, guess=((0, 0), 0), mass=Q(1, "kg"),
+                     centroid=(Q(0.15, "m"), 0), inertia=Q(0.0075, "kg*m**2"))
+    m.add(ms.Revolute2(m.ground.point((0, 0)), arm.point(0)), name="pin")
+    m.add_load(gravity)
+    m.add_load(ms.Force(arm.point("tip"), *force))
+    return m, arm
+
+
+def test_force_gravity_and_moment_vectors_as_quantities():
+    """``Force(p, Q([fx, fy], "N"))`` is the force vector; ``Gravity(Q([0, -g], ...))`` the
+    field: the same generalized forces as direction plus magnitude."""
+    m1, a1 = _pendulum((Q(np.array([0.0, -40.0]), "N"),), ms.Gravity(Q(np.array([0, -9.81]), "m/s**2")))
+    m2, a2 = _pendulum(((0, -1), Q(40, "N")), ms.Gravity((0, -1), Q(9.81, "m/s**2")))
+    for m, a in ((m1, a1), (m2, a2)):
+        m.add(ms.RotationLock1(a, 0), name="hold")
+    s1, s2 = (m.solve(0.0, solution="static") for m in (m1, m2))
+    # statics by hand: the holding torque balances 40 N at 0.3 m and 9.81 N at 0.15 m, in
+    # kg mm^2/s^2 (N m x 1e6)
+    torque = (40 * 0.3 + 9.81 * 0.15) * 1e6
+    assert abs(float(np.ravel(s1.generalized("hold"))[0])) == pytest.approx(torque, rel=1e-12)
+    assert np.allclose(s1.generalized("hold"), s2.generalized("hold"), rtol=1e-14)
+    with pytest.raises(ms.ModelError, match="Force: give the vector as a quantity or a magnitude"):
+        ms.Force((0, 0), Q(np.array([1.0, 0]), "N"), 5)
+    with pytest.raises(ms.ModelError, match="Force magnitude"):     # a vector of the wrong dimension
+        _pendulum((Q(np.array([0.0, -1.0]), "kg"),), ms.Gravity())
+    m3 = ms.Model3D()
+    m3.set_units(length="m", mass="kg", time="s")
+    b = m3.add_body("b", mass=1.0)
+    moment = ms.Moment(b, Q(np.array([0.0, 0, 2.0]), "N*m"))
+    m3.add_load(moment)
+    assert [float(x) for x in moment.moment_value(m3)] == [0, 0, 2.0]
+
+
+def test_initial_conditions_take_quantities_of_their_coordinates_dimension():
+    m, arm = _pendulum(((0, -1), Q(0, "N")), ms.Gravity((0, -1), Q(9.81, "m/s**2")))
+    free = m.free()
+    sol = free.simulate(np.array([0.0, 0.01]),
+                        initial_condition={"arm.th": Q(10, "deg"), "arm.th_d": Q(60, "rpm")})
+    assert sol.q[0, 2] == pytest.approx(np.pi / 18, rel=1e-12)
+    assert sol.qd[0, 2] == pytest.approx(2 * np.pi, rel=1e-12)
+    with pytest.raises(ms.ModelError, match=r"'arm.th_d'.*\[length\]"):
+        free.simulate(np.array([0.0, 0.01]), initial_condition={"arm.th_d": Q(1, "mm/s")})
+
+
+def test_every_output_in_units_agrees_between_metres_and_millimetres():
+    """``sol.in_units``: the same mechanism built in m and in mm gives, converted, the same
+    locations, velocities, reactions, loads, energies and momenta; an expression takes the
+    dimension its caller names; what has no known dimension is refused by name."""
+    ureg = pint.get_application_registry()
+    t = np.linspace(0, 1, 5)
+    s1 = crank_slider("m").solve(t, solution="dynamic")
+    s2 = crank_slider("mm").solve(t, solution="dynamic")
+    u1, u2 = s1.in_units, s2.in_units
+    pin = s1.model.body("piston").point(0)
+    pin2 = s2.model.body("piston").point(0)
+    loc = u2.location(pin2)
+    assert loc.units == ureg.mm
+    # the closed form of the piston's position (crank 2 m, rod 6 m), in metres
+    th = 2 * np.pi * t + 0.3
+    assert np.allclose(loc.to("m").magnitude[:, 0], 2 * np.cos(th) + np.sqrt(36 - 4 * np.sin(th) ** 2),
+                       rtol=1e-12)
+    for name, args1, args2, unit in [
+            ("velocity", (pin,), (pin2,), "m/s"), ("acceleration", (pin,), (pin2,), "m/s**2"),
+            ("omega", ("rod",), ("rod",), "rad/s"), ("alpha", ("rod",), ("rod",), "rad/s**2"),
+            ("angle", ("rod",), ("rod",), "deg"),
+            ("body_energy", ("rod",), ("rod",), "J"), ("potential_energy", (), (), "J"),
+            ("linear_momentum", (), (), "kg*m/s"), ("angular_momentum", ("rod",), ("rod",), "J*s")]:
+        a = getattr(u1, name)(*args1).to(unit).magnitude
+        b = getattr(u2, name)(*args2).to(unit).magnitude
+        assert np.allclose(a, b, rtol=1e-9, atol=1e-9 * np.abs(a).max()), name
+    (F1, M1), (F2, M2) = u1.reaction("pin", "crank"), u2.reaction("pin", "crank")
+    assert F2.units == ureg.kg * ureg.mm / ureg.s ** 2
+    assert np.allclose(F1.to("N").magnitude, F2.to("N").magnitude, rtol=1e-9, atol=1e-9)
+    assert np.allclose(M1.to("N*m").magnitude, M2.to("N*m").magnitude, rtol=1e-9, atol=1e-9)
+    L1, _ = u1.loads("piston", coordinates="global")
+    L2, _ = u2.loads("piston", coordinates="global")
+    assert np.allclose(L1.to("N").magnitude, L2.to("N").magnitude, rtol=1e-12, atol=1e-9)
+    x = s2.model.body("piston").q[0]
+    assert np.allclose(u2.eval(x, "[length]").to("m").magnitude, loc.to("m").magnitude[:, 0])
+    assert u2.eval(x, "km").units == ureg.mm           # a unit names the dimension only
+    assert u2.t.units == ureg.s
+    with pytest.raises(ms.ModelError, match="name the expression's dimension"):
+        u2.eval(x)
+    with pytest.raises(ms.ModelError, match="current"):
+        u2.eval(x, "[current]")
+    with pytest.raises(ms.ModelError, match="instant_center"):
+        u2.instant_center("rod")
+    with pytest.raises(ms.ModelError, match="coordinates='global'"):
+        u2.loads("piston")
+    plain = ms.Model2D()
+    b = plain.add_body("b", guess=((0, 0), 0))
+    plain.add(ms.Revolute2(plain.ground.point((0, 0)), b.point(0)))
+    plain.add(ms.RotationLock1(b, ms.T))
+    with pytest.raises(ms.ModelError, match="m.set_units"):
+        _ = plain.solve(0.0).in_units
+
+
+def test_times_guesses_and_sweep_values_keep_their_units():
+    """Quantities that NumPy would silently strip of their unit (an array of times in ms given
+    to ``simulate``, an array of lengths swept) are converted instead: 100 ms is 0.1 s, 1 m is
+    1000 mm; a guess takes its coordinate's dimension."""
+    m, arm = _pendulum(((0, -1), Q(0, "N")), ms.Gravity((0, -1), Q(9.81, "m/s**2")))
+    free = m.free()
+    sol = free.simulate(Q(np.linspace(0, 100, 3), "ms"), max_step=Q(5, "ms"))
+    assert np.allclose(sol.t, [0, 0.05, 0.1], rtol=0, atol=1e-15)
+    assert free.simulate((Q(0, "s"), Q(20, "ms"))).t[-1] == pytest.approx(0.02, rel=1e-12)
+    m.set_guess({"arm.th": Q(90, "deg")})
+    assert m.guess()[2] == pytest.approx(np.pi / 2, rel=1e-12)
+    with pytest.raises(ms.ModelError, match=r"set_guess 'x2'.*\[length\]"):
+        m.set_guess({"arm.x": Q(1, "s")})
+
+    s = ms.Model2D()
+    s.set_units(length="mm", mass="kg", time="s")
+    length = s.parameter("L", Q(0.3, "m"))
+    bar = s.add_body("bar", points={"tip": (length, 0)}, guess=((0, 0), 0))
+    s.add(ms.Revolute2(s.ground.point((0, 0)), bar.point(0)))
+    s.add(ms.RotationLock1(bar, 0))
+    tip = bar.point("tip")
+    df = ms.sweep(s, {"L": Q(np.array([1.0, 2.0]), "m")}, "location",
+                  outputs={"x": lambda r: r.location(tip)[0]})
+    assert df["x"].tolist() == [1000.0, 2000.0]
+
+
+def test_vibration_frequencies_in_units():
+    """A pendulum (1 kg at 0.15 m, 0.0075 kg m^2 about its centroid) hanging down:
+    omega^2 = m g c / J_O = 9.81 * 0.15 / 0.03, whether the model counts time in s or ms."""
+    omegas = []
+    for time in ("s", "ms"):
+        m = ms.Model2D()
+        m.set_units(length="mm", mass="kg", time=time)
+        arm = m.add_body("arm", guess=((0, 0), -np.pi / 2), mass=Q(1, "kg"),
+                         centroid=(Q(0.15, "m"), 0), inertia=Q(0.0075, "kg*m**2"))
+        m.add(ms.Revolute2(m.ground.point((0, 0)), arm.point(0)))
+        m.add_load(ms.Gravity((0, -1), Q(9.81, "m/s**2")))
+        modes = m.vibration(at={"arm.th": -np.pi / 2})
+        omega = modes.quantity("omega")
+        assert modes.quantity("hz").to("1/s").magnitude == pytest.approx(
+            omega.to("rad/s").magnitude / (2 * np.pi), rel=1e-12)
+        omegas.append(omega.to("rad/s").magnitude[0])
+    assert omegas == pytest.approx([np.sqrt(9.81 * 0.15 / 0.03)] * 2, rel=1e-9)
+    with pytest.raises(ms.OptionError, match="omega"):
+        modes.quantity("omegas")

@@ -1,4 +1,4 @@
-"""Generate ``docs/constraints.md`` from the constraint registry.
+r"""Generate ``docs/constraints.md`` from the constraint registry.
 
 Usage: ``python -m mechsys._docgen docs/constraints.md`` (what ``make docs`` runs); without an
 argument the page is printed. The page lists every type in

@@ -1,7 +1,8 @@
-"""Time and naming of symbols. ``T`` is the time symbol used in drivers.
+r"""Time and naming of symbols. ``T`` is the time symbol used in drivers.
 
 Time, coordinates, velocities and accelerations are *real* symbols, so that SymPy can
-differentiate ``Abs``, ``sign`` or ``sqrt(x**2)`` of them (``d|x|/dx = sign(x)``; for a
+differentiate ``Abs``, ``sign`` or ``sqrt(x**2)`` of them (:math:`d\lvert x \rvert/dx =
+\operatorname{sign}(x)`; for a
 complex symbol the derivative stays unevaluated and cannot be compiled). SymEngine drops
 assumptions when its expressions come back to SymPy: :func:`restore_assumptions` maps the
 plain symbols of these names back to the real ones.

@@ -26,9 +26,9 @@ def demo(out: Path) -> int:
     x = sol.location(piston)[:, 0]
     v = sol.velocity(piston)[:, 0]
     a = sol.acceleration(piston)[:, 0]
-    print("mechsys demo: planar slider-crank (crank 2, rod 6, 1 rev/s)")
+    print("mechsys demo: planar slider-crank (crank 2 m, rod 6 m, 1 rev/s)")
     print(repr(m.dof()))
-    print(f"{'t [s]':>8} {'crank [deg]':>12} {'x piston':>12} {'v piston':>12} {'a piston':>12}")
+    print(f"{'t [s]':>8} {'crank [deg]':>12} {'x [m]':>12} {'v [m/s]':>12} {'a [m/s^2]':>12}")
     for k in range(0, len(t), 20):
         print(f"{t[k]:8.3f} {np.degrees(2 * np.pi * t[k]):12.1f} {x[k]:12.5f} {v[k]:12.5f} {a[k]:12.4f}")
     print(f"solved {len(t)} points, {int(sol.iterations.sum())} Newton iterations in all")
@@ -40,7 +40,9 @@ def demo(out: Path) -> int:
 
     fig, axes = plt.subplots(3, 1, figsize=(7, 7), sharex=True)
     deg = np.degrees(2 * np.pi * t)
-    for ax, y, lab in zip(axes, (x, v, a), ("position", "velocity", "acceleration")):
+    # the model is in metres and seconds (its loads, below, in kg and N)
+    for ax, y, lab in zip(axes, (x, v, a), ("position [m]", "velocity [m/s]",
+                                             "acceleration [m/s²]")):
         ax.plot(deg, y)
         ax.set_ylabel(f"piston {lab}")
         ax.grid(True, alpha=0.3)

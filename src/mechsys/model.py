@@ -45,6 +45,8 @@ from .geometry._units import (
     check_units,
     convert,
     has_quantity,
+    is_quantity,
+    number,
     resolve,
     to_units,
 )
@@ -66,11 +68,11 @@ _CONSTANT_NAMES = {"pi": "the constant pi", "E": "Euler's number e", "I": "the i
 
 
 class DOF(int):
-    """Degrees of freedom of a model: an ``int`` (from the Jacobian rank at the current
+    r"""Degrees of freedom of a model: an ``int`` (from the Jacobian rank at the current
     guess) carrying a report.
 
     Attributes: ``coordinates`` (n), ``equations`` (m), ``gruebler`` (n - m, the count),
-    ``rank`` (of Phi_q at ``configuration``), ``redundant`` (constraints with dependent
+    ``rank`` (of :math:`\Phi_q` at ``configuration``), ``redundant`` (constraints with dependent
     equations), ``at``: where the rank is taken — ``"guess"`` (the guess, assembled or with a
     positive Gruebler count), ``"assembled"`` (the assembled configuration nearest a guess
     that does not assemble) or ``"unassembled guess"`` (no assembly found: the figure holds
@@ -356,6 +358,15 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         if not given:
             raise ModelError("set_units: give at least one of length=, mass=, time=")
         self.units = {**(self.units or {}), **check_units(given)}
+
+    def _coordinate_dims(self, sym) -> tuple | None:
+        """The dimension ``(length, mass, time)`` of a body coordinate: its first ``dim``
+        coordinates are a position (a length), the rest an angle or Euler parameters (none);
+        None for a model variable (a quantity keeps its own dimension)."""
+        for b in self.bodies:
+            if sym in list(b.q):
+                return LENGTH if list(b.q).index(sym) < self.space.dim else (0, 0, 0)
+        return None
 
     def to_units(self, value) -> float:
         """A pint quantity as a number in the model's declared units (``m.set_units``):
@@ -658,6 +669,8 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
             s = k if isinstance(k, sp.Symbol) else self._coordinate_by_name(str(k))
             if s not in layout_syms:
                 raise ModelError(f"set_guess: {k!r} is not a coordinate or variable of this model")
+            if is_quantity(v):   # a position a length, an angle or Euler parameter none
+                v = number(v, self.units, f"set_guess {s.name!r}", self._coordinate_dims(s))
             try:
                 new[s] = float(v)
             except (TypeError, ValueError):
@@ -1537,11 +1550,12 @@ def _redundant_solution(full, reduced, res, lam, red, p):
 
 
 class Model2D(Model):
-    """Planar model. Bodies have coordinates ``x, y, theta``.
+    r"""Planar model. Bodies have coordinates ``x, y, theta``.
 
     ``orientation="angle"`` (default, Mech's ``Method -> Angular``) or ``"euler"`` (Mech's
     ``SetSymbols[Method -> Euler]``): each body's rotation as Mech's two degenerate Euler
-    parameters ``(ei, ej) = (cos th, sin th)`` with ``ei^2 + ej^2 = 1`` added per body, so
+    parameters :math:`(e_i, e_j) = (\cos \theta, \sin \theta)` with :math:`e_i^2 + e_j^2 = 1` added per
+    body, so
     its coordinates are ``x, y, ei, ej`` and no constraint contains a sine or cosine of a
     coordinate (manual 12.4.1; ``docs/performance-options.md``, decision 0015). Outputs
     (``angle``, ``omega``, ``alpha``, reactions, drawing) stay in the user's terms; the

@@ -28,10 +28,10 @@ def _finite(factory: str, **values) -> None:
 
 def slider_crank(crank: float = 2.0, rod: float = 6.0, offset: float = 0.0,
                  speed: float = 2 * np.pi, drive=None) -> Model2D:
-    """The planar slider-crank of Mech's section 1.2.
+    r"""The planar slider-crank of Mech's section 1.2.
 
     Crank of length ``crank`` pinned to ground at the origin and driven at ``speed`` rad/s
-    (``theta = speed T``, or any expression ``drive`` of ``T``); connecting rod of length
+    (:math:`\theta = \mathit{speed} T`, or any expression ``drive`` of ``T``); connecting rod of length
     ``rod``; the piston slides along the line ``y = offset`` of ground. Bodies: ``crank``
     (point ``pin``), ``rod`` (points ``a``, ``b``), ``piston``. The driver is named ``drive``.
     """
@@ -125,8 +125,8 @@ def four_bar_chain(n_loops: int, speed: float = 1.0) -> Model2D:
 
 def radial_engine(cylinders: int = 9, crank: float = 1.0, rod: float = 4.0,
                   speed: float = 2 * np.pi, g: float = 0.0) -> Model2D:
-    """A planar radial engine: one crank pinned to ground at the origin and driven at
-    ``speed`` rad/s (``theta = speed T``), and ``cylinders`` cylinders whose axes are spaced
+    r"""A planar radial engine: one crank pinned to ground at the origin and driven at
+    ``speed`` rad/s (:math:`\theta = \mathit{speed} T`), and ``cylinders`` cylinders whose axes are spaced
     evenly around it (cylinder ``k`` at ``2 pi k / cylinders`` from the crank's zero). Each
     rod (length ``rod``) is pinned to the crank pin, as if the master and articulated rods were
     one pin, and its piston slides along its cylinder's axis. Bodies: ``crank`` (point
@@ -290,11 +290,11 @@ def spatial_chain(n_links: int, g: float = 9.81, zigzag: float = 0.0, length: fl
 
 
 def driven_gen_arm(links: int, g: float = 9.81) -> Model2D:
-    """A planar arm of ``links`` rods (1 m, 1 kg, centroidal inertia 1/12) in generalized
+    r"""A planar arm of ``links`` rods (1 m, 1 kg, centroidal inertia 1/12) in generalized
     coordinates: rod ``k`` (body ``link{k}``, points ``o`` and ``e``) is a ``GenRevolute2``
     slave of the previous rod's end (the first of the ground at the origin) through the
     joint angle ``q{k}`` (constraint ``joint{k}``), and every joint is driven,
-    ``q_k = 0.3 sin((k + 1) t)`` (constraints ``drive{k}``), under gravity ``g`` along -y. The
+    :math:`q_k = 0.3 \sin((k + 1) t)` (constraints ``drive{k}``), under gravity ``g`` along -y. The
     coordinates are the ``links`` joint angles; short arms get the symbolic dynamics, longer
     ones the recursive one (decision 0016). For kinematic sweeps and inverse dynamics::
 
@@ -322,10 +322,10 @@ def driven_gen_arm(links: int, g: float = 9.81) -> Model2D:
 
 
 def n_four_bar(n_loops: int, g: float = 9.81, length: float = 1.0) -> Model2D:
-    """The IFToMM multibody benchmark's N-four-bar mechanism (problem A02): ``n_loops``
+    r"""The IFToMM multibody benchmark's N-four-bar mechanism (problem A02): ``n_loops``
     parallelogram loops of ``2 N + 1`` uniform links (length 1, mass 1, centroidal inertia
     1/12; ``length`` changes the unit of length: every length and ``g`` are multiplied by
-    it). Cranks ``crank0 ... crankN`` are pinned to the ground at ``x = 0 ... N``
+    it). Cranks ``crank0 ... crankN`` are pinned to the ground at :math:`x = 0 \dots N`
     (joints ``A{k}``); couplers ``coupler0 ... coupler{N-1}`` join the crank tips (joints
     ``B{k}``, ``C{k}``). At the start the cranks are vertical; gravity ``g`` along -y. The
     constraint ``"hold"`` fixes ``crank0`` for assembly: drop it for the free motion, whose
@@ -407,7 +407,7 @@ def slider_crank_3d(crank: float = 2.0, rod: float = 6.0, offset: float = 0.0,
 
 def cardan_joint(bend: float = 0.5, speed: float = 2 * np.pi, joint: str = "universal",
                  drive=None):
-    """Two shafts joined by a Cardan (Hooke) joint, or a constant-velocity joint.
+    r"""Two shafts joined by a Cardan (Hooke) joint, or a constant-velocity joint.
 
     The input shaft turns about the global X axis (``Revolute5``), driven at ``speed``
     (``RotationLock1``: its yoke pin, local Y, makes the angle ``speed T`` -- or ``drive`` --
@@ -420,7 +420,8 @@ def cardan_joint(bend: float = 0.5, speed: float = 2 * np.pi, joint: str = "univ
 
     Bodies ``input``, ``output``; constraints ``bearing``, ``output axis``, ``joint``,
     ``drive``. For the universal joint the output speed is
-    ``w2 / w1 = cos(bend) / (1 - sin(bend)^2 cos(th1)^2)`` with ``th1`` the drive angle.
+    :math:`\omega_2 / \omega_1 = \cos(\mathit{bend}) / (1 - \sin^2(\mathit{bend}) \cos^2\theta_1)` with
+    ``th1`` the drive angle.
     """
     from ._errors import choice
     from .constraints import ConstantVelocity4, Parallel2, Revolute5, Universal4
@@ -450,8 +451,9 @@ def geneva_drive(slots: int = 4, center_distance: float = 2.0, turns: int = 2) -
 
     The crank turns about the origin at 1 rad/s, ``theta = T - pi`` (so ``T`` from 0 to
     ``2 pi turns`` covers ``turns`` engagements, the first around ``T = pi``); its pin, at
-    radius ``a = c sin(pi / slots)`` (tangential entry), engages the wheel centred at
-    ``(c, 0)``. While engaged (``|theta - 2 pi k| <= alpha = pi/2 - pi/slots``) the wheel
+    radius :math:`a = c \sin(\pi / \mathit{slots})` (tangential entry), engages the wheel centred at
+    ``(c, 0)``. While engaged (:math:`\lvert \theta - 2 \pi k \rvert \le \alpha = \pi/2 -
+    \pi/\mathit{slots}`) the wheel
     turns by ``-2 pi / slots``, following
 
     .. math:: \tan\phi = \frac{\sin\theta}{c/a - \cos\theta},\qquad \text{wheel} = \text{mid} - \phi;

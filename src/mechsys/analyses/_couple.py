@@ -13,16 +13,17 @@ For configuration ``k`` with time ``t_k`` the unknowns and equations are
 =====================  ===========================================  ==========================
 level                  unknowns                                     equations
 =====================  ===========================================  ==========================
-location               ``q_k``                                      ``Phi(q_k, t_k, p) = 0``
-velocity (9.3)         ``qd_k``                                     ``Phi_q qd_k + Phi_t = 0``
-acceleration (9.3)     ``qdd_k``                                    ``Phi_q qdd_k - gamma = 0``
-loads (9.4)            ``lambda_k``                                 ``Phi_q^T lambda_k = rhs``
-conditions             (``t_k`` when ``t=ms.Free``)                 ``g_k(T, q, qd, qdd, lambda, p) = 0``
+location               ``q_k``                                      :math:`\Phi(q_k, t_k, p) = 0`
+velocity (9.3)         ``qd_k``                                     :math:`\Phi_q \dot q_k + \Phi_t = 0`
+acceleration (9.3)     ``qdd_k``                                    :math:`\Phi_q \ddot q_k - \gamma = 0`
+loads (9.4)            ``lambda_k``                                 :math:`\Phi_q^T \lambda_k = \mathrm{rhs}`
+conditions             (``t_k`` when ``t=ms.Free``)                 :math:`g_k = 0`
 =====================  ===========================================  ==========================
 
-with ``rhs = Q(t, q, 0, lambda)`` (static), ``Q(t, q, qd, lambda)`` (kinematic) or
-``Q + Qv - M qdd`` (dynamic), as :mod:`mechsys.solvers._statics`; plus the unknown
-parameters ``u``, shared by every configuration. The stacked system ``F(z) = 0``,
+with the conditions :math:`g_k(T, q, \dot q, \ddot q, \lambda, p)` of configuration ``k``,
+:math:`\mathrm{rhs} = Q(t, q, 0, \lambda)` (static), :math:`Q(t, q, \dot q, \lambda)` (kinematic) or
+:math:`Q + Q_v - M \ddot q` (dynamic), as :mod:`mechsys.solvers._statics`; plus the unknown
+parameters ``u``, shared by every configuration. The stacked system :math:`F(z) = 0`,
 ``z = [q_1, qd_1, qdd_1, lambda_1, t_1, ..., q_K, ..., u]``, is square when the model is
 (``m = n``) and there are as many conditions as unknown parameters and free times.
 
@@ -39,7 +40,7 @@ configuration's conditions are compiled once. Newton's method with the Armijo li
 the position solver runs on the unit-free form :math:`\hat F = S^{-1} F`,
 :math:`\hat J = S^{-1} J C`: coordinates, velocities and accelerations are measured in units
 of the characteristic length of :class:`~mechsys.solvers._linalg.Scaling` (rows of the
-kinematic equations divided by the row sizes ``r`` of ``Phi_q D``); multipliers in units of
+kinematic equations divided by the row sizes ``r`` of :math:`\Phi_q D`); multipliers in units of
 ``W / r_i`` and force rows by ``W / D_j``, with ``W`` the largest generalized load times
 ``D`` at the start (a work); each unknown parameter and free time in units in which its
 largest effect on a model equation is 1 (so a length parameter, an angle and a time are all

@@ -28,6 +28,7 @@ import numpy as np
 
 from .._errors import MechError, ModelError, choice
 from .._progress import check_progress, reporter
+from ..geometry._units import is_quantity, number, time_numbers
 from ..loads._loads import check_load_values
 from ..results._load_outputs import lambda_guess_vector
 from ..results._solution import Solution, State
@@ -367,9 +368,15 @@ class FreeSystem:
         angular = []
         for k, v in cond.items():
             if isinstance(k, tuple) and len(k) == 2 and k[0] in ("omega", "omega_local"):
+                if is_quantity(v):      # an angular velocity: 1/time (rad/s, rpm, deg/s)
+                    v = _in_model_units(v, self.model.units, f"initial_condition {k!r}",
+                                        (0, 0, -1))
                 angular.append((k[0], k[1], v))
                 continue
             name = k.name if hasattr(k, "name") else str(k)
+            if is_quantity(v):
+                v = _in_model_units(v, self.model.units, f"initial_condition {name!r}",
+                                    self._condition_dims(name, pnames))
             try:
                 value = float(v)
             except (TypeError, ValueError):
@@ -394,6 +401,25 @@ class FreeSystem:
             sl = lay.body_slices[self.model.body(body).name]
             held["qd"].update(range(sl.start + self.model.space.dim, sl.stop))
         return q, qd, given
+
+    def _condition_dims(self, name: str, pnames: list) -> tuple | None:
+        """The dimension ``(length, mass, time)`` a quantity given for ``name`` in an initial
+        condition must have: a position coordinate a length, an angle or Euler parameter
+        none, each ``_d`` one time less; None (its own) for a parameter or model variable."""
+        from ..results._tables import _translational
+
+        if name in pnames:
+            return None
+        rate = name.endswith("_d")
+        key = name[:-2] if rate else name
+        try:
+            j = self.system.layout.index(key)
+        except ModelError:
+            return None                 # the unknown name is refused below, by name
+        kind = _translational(self.system)[j]
+        if kind is None:
+            return None
+        return (1 if kind else 0, 0, -1 if rate else 0)
 
     def _set_angular_velocity(self, q, qd, body, w, local):
         """Euler-parameter rates from an angular velocity: ``e_dot = E^T w / 2`` (global) or
@@ -627,7 +653,8 @@ class FreeSystem:
             "initial_condition", "method", "rtol", "atol", "max_step", "fit_degree", "max_error",
             "step_size", "constraint_correction", "diagnostics", "tolerance", "max_iterations",
             "progress", "starting_step_size"), method, rtol, atol, max_step, fit_degree,
-            max_error, step_size, constraint_correction, starting_step_size)
+            max_error, step_size, constraint_correction, starting_step_size,
+            to_numbers=time_numbers(self.model))
         check_progress(progress, "FreeSystem.simulate")
         if self.kind != "dynamic":
             raise MechError("simulate() integrates the free motion: build the FreeSystem with "
@@ -755,3 +782,11 @@ class FreeSystem:
                           RuntimeWarning, stacklevel=2)
         return self._result(times, Y[:, :n], Y[:, n:], QDD, LAM, p, np.zeros(len(times)),
                             extra=extra)
+
+
+def _in_model_units(value, units, what: str, dims):
+    """A pint quantity (a number or an array: a 3D angular velocity) as numbers in the model's
+    units, its dimension checked against ``dims`` when given: the magnitude times the
+    conversion factor of its unit (the units here are linear: lengths, times, angles)."""
+    factor = number(1 * value.units, units, what, dims)
+    return np.asarray(value.magnitude, dtype=float) * factor

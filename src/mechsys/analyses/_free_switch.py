@@ -27,15 +27,17 @@ not missed. The integration stops there, the tests are evaluated just past the z
   integration error) and velocities by the **velocity policy** ``at_switch``:
 
   - ``None`` (default): the velocities must already satisfy the new stage
-    (``|Phi_q qd + Phi_t|`` below ``1e-6`` in the unit-free scaling of the solver); if they
+    (:math:`\lvert \Phi_q \dot q + \Phi_t \rvert` below ``1e-6`` in the unit-free scaling of the solver); if
+    they
     do not, the change is an impact the model does not describe, and a :class:`ModelError`
     names the switch, the time and the options, rather than silently dropping velocity;
   - ``"project"``: keep the compatible part. The velocity after is the one closest to the
     velocity before in the kinetic-energy metric that satisfies the new stage,
-    ``[M Phi_q^T; Phi_q 0] [qd+; P] = [M qd-; -Phi_t]`` — a perfectly plastic impact whose
+    :math:`\begin{bmatrix} M & \Phi_q^T \\ \Phi_q & 0 \end{bmatrix} \begin{bmatrix} \dot q^+ \\ P
+    \end{bmatrix} = \begin{bmatrix} M \dot q^- \\ -\Phi_t \end{bmatrix}` — a perfectly plastic impact whose
     impulse ``P`` the new constraints apply. The kinetic energy lost is reported;
   - ``("restitution", e)`` with ``0 <= e <= 1``: Newton's law on the new stage's rows,
-    ``Phi_q qd+ + Phi_t = -e (Phi_q qd- + Phi_t)`` by the same impulse equations: the motion
+    :math:`\Phi_q \dot q^+ + \Phi_t = -e (\Phi_q \dot q^- + \Phi_t)` by the same impulse equations: the motion
     rebounds off the new stage's constraint (a stop) and **continues in the old stage**.
     Once an approach speed falls below ``1e-6`` times that of the first impact on the same
     switch (the rebounds of a body settling on a stop come ever faster) the stage is taken
@@ -60,6 +62,7 @@ from .._errors import ConvergenceError, MechError, ModelError
 from .._symbols import T
 from ..compile._stages import _cache
 from ..constraints._switches import StageSwitch
+from ..geometry._units import time_numbers
 from ..loads._switched import check_switched_loads
 from ..results._load_outputs import lambda_guess_vector
 from ..results._solution import Solution
@@ -270,7 +273,8 @@ class SwitchedFreeSystem(FreeSystem):
             "initial_condition", "at_switch", "method", "rtol", "atol", "max_step", "max_error",
             "max_events", "tolerance", "max_iterations", "starting_step_size"), method, rtol,
             atol, max_step, max_error=max_error, starting_step_size=starting_step_size,
-            dense_output="with switches: events are located on the Runge-Kutta dense output")
+            dense_output="with switches: events are located on the Runge-Kutta dense output",
+            to_numbers=time_numbers(self.model))
         opt, t0, t1, t_eval = run.options, run.t0, run.t1, run.t_eval
         policy = _policy(at_switch)
         if isinstance(max_events, bool) or not isinstance(max_events, (int, np.integer)) or \

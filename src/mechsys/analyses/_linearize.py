@@ -9,7 +9,8 @@ The free motion (constraints ``Phi`` kept, ``lambda`` their multipliers, ``u`` t
 is written in ``f = n - m`` coordinates ``y = h(q)`` (coordinate names or expressions the
 user chooses, or independent coordinates picked by column-pivoted QR of the unit-free
 ``Phi_q``), which with the constraints form a chart of the configuration manifold:
-``K = [Phi_q; h_q]`` is nonsingular. A perturbation ``(dy, dyd, du)`` of the reference state
+:math:`K = \begin{bmatrix} \Phi_q \\ h_q \end{bmatrix}` is nonsingular. A perturbation ``(dy, dyd, du)`` of
+the reference state
 changes the full coordinates by
 
 .. math::  \delta q = P\,\delta y, \quad
@@ -17,18 +18,20 @@ changes the full coordinates by
            P = K^{-1}\begin{bmatrix}0\\ I\end{bmatrix}, \quad
            W = -K^{-1}\begin{bmatrix}\tfrac12 c_{\dot q}\\ \dot y_q\end{bmatrix} P
 
-(the velocity constraint ``Phi_q qd + Phi_t = 0`` and ``yd = h_q qd`` varied; its derivative
-``d(Phi_q qd + Phi_t)/dq`` is half the velocity derivative ``c_qd`` of the acceleration
-constraint ``c = Phi_q qdd - gamma``). The accelerations and multipliers change by
+(the velocity constraint :math:`\Phi_q \dot q + \Phi_t = 0` and :math:`\dot y = h_q \dot q` varied; its
+derivative
+:math:`d(\Phi_q \dot q + \Phi_t)/dq` is half the velocity derivative ``c_qd`` of the acceleration
+constraint :math:`c = \Phi_q \ddot q - \gamma`). The accelerations and multipliers change by
 
 .. math::  \begin{bmatrix}R_{\ddot q} & \Phi_q^T\\ \Phi_q & 0\end{bmatrix}
            \begin{bmatrix}\delta\ddot q\\ \delta\lambda\end{bmatrix}
            = -\begin{bmatrix}R_q\,\delta q + R_{\dot q}\,\delta\dot q + R_u\,\delta u\\
                               c_q\,\delta q + c_{\dot q}\,\delta\dot q\end{bmatrix}
 
-(``R_q`` includes the geometric stiffness ``d(Phi_q^T lambda)/dq`` of the reference
+(``R_q`` includes the geometric stiffness :math:`d(\Phi_q^T \lambda)/dq` of the reference
 multipliers), and the chosen coordinates' accelerations
-``ydd = h_q qdd + (h_q qd)_q qd`` by ``delta ydd = ydd_q dq + ydd_qd dqd + h_q dqdd``. With the
+:math:`\ddot y = h_q \ddot q + (h_q \dot q)_q \dot q` by :math:`\delta \ddot y = \ddot y_q dq + \ddot
+y_{\dot q} d\dot q + h_q d\ddot q`. With the
 state ``x = (dy, dyd)``:
 
 .. math::  \dot x = A x + B u, \quad y_{out} = C x + D u, \qquad
@@ -40,25 +43,27 @@ All derivatives are exact (symbolic, compiled once per model and set of inputs).
 
 **Steady motion.** The linear system has constant coefficients when the reference is an
 equilibrium or a steady motion in the chosen coordinates: every ``ydd = 0`` and the motion
-does not change them, ``d(ydd)/dt = G_y yd = 0`` (the coordinates that move are cyclic: the
+does not change them, :math:`d(\ddot y)/dt = G_y \dot y = 0` (the coordinates that move are cyclic: the
 motion does not depend on them). Both are checked (``tolerance``) and a
 :class:`~mechsys.NotSteadyError` names the coordinate at fault. ``cyclic=[...]`` drops those
 coordinates' positions from the state (their velocities stay), after checking that the
 motion does not depend on them.
 
-**Velocity constraints** ``psi = A(q, t) qd + b = 0`` (``k`` rows, rolling; multipliers
-``mu``, decision 0053) enter the velocity chart (decision 0054): only ``f - k`` velocities
-are independent, the *speeds* ``v = S yd`` (the rates of ``f - k`` chosen coordinates, named
-with ``speeds=`` or picked by column-pivoted QR of the unit-free ``A P``). With
-``K_v = [Phi_q; A; S h_q]`` nonsingular,
+**Velocity constraints** :math:`\psi = A(q, t)\,\dot q + b = 0` (``k`` rows, rolling;
+multipliers :math:`\mu`, decision 0053) enter the velocity chart (decision 0054): only
+``f - k`` velocities are independent, the *speeds* :math:`v = S \dot y` (the rates of
+``f - k`` chosen coordinates, named with ``speeds=`` or picked by column-pivoted QR of the
+unit-free :math:`A P`). With :math:`K_v = \begin{bmatrix} \Phi_q \\ A \\ S h_q
+\end{bmatrix}` nonsingular,
 
 .. math::  \delta\dot q = P_v\,\delta v + W_v\,\delta y, \quad
            P_v = K_v^{-1}\begin{bmatrix}0\\ 0\\ I\end{bmatrix}, \quad
            W_v = -K_v^{-1}\begin{bmatrix}\tfrac12 c_{\dot q} P\\ \psi_q P\\
                                            S\,\dot y_q P\end{bmatrix}
 
-and the acceleration solve is bordered by the rows ``a = A qdd + rho = 0``
-(``rho = psi_q qd + psi_t``), the reactions ``A^T mu`` adding their change with ``q``:
+and the acceleration solve is bordered by the rows :math:`a = A \ddot q + \rho = 0`
+(:math:`\rho = \psi_q \dot q + \psi_t`), the reactions :math:`A^T \mu` adding their change
+with :math:`q`:
 
 .. math::  \begin{bmatrix}R_{\ddot q} & \Phi_q^T & A^T\\ \Phi_q & 0 & 0\\ A & 0 & 0
            \end{bmatrix}\begin{bmatrix}\delta\ddot q\\ \delta\lambda\\ \delta\mu
@@ -66,14 +71,16 @@ and the acceleration solve is bordered by the rows ``a = A qdd + rho = 0``
            \delta\dot q + R_u\,\delta u\\ c_q\,\delta q + c_{\dot q}\,\delta\dot q\\
            a_q\,\delta q + a_{\dot q}\,\delta\dot q\end{bmatrix}
 
-The state is ``x = (dy, dv)``; ``y`` is no longer the integral of ``v``, so
+The state is :math:`x = (\delta y, \delta v)`; :math:`y` is no longer the integral of
+:math:`v`, so
 
 .. math::  A = \begin{bmatrix} h_q W_v + \dot y_q P & h_q P_v\\
            S\,\partial\ddot y/\partial y & S\,\partial\ddot y/\partial v\end{bmatrix}
 
-(``h_q W + ydq P = 0`` and ``h_q P = I`` without velocity constraints: the holonomic ``A``).
-The chosen coordinates' third derivatives ``ydd_q`` are then a fourth-order central
-difference of their exact second derivatives (``_Chart(difference=True)``).
+(:math:`h_q W + \dot y_q P = 0` and :math:`h_q P = I` without velocity constraints: the
+holonomic ``A``). The chosen coordinates' third derivatives :math:`\ddot y_q` are then a
+fourth-order central difference of their exact second derivatives
+(``_Chart(difference=True)``).
 
 Example::
 
@@ -106,8 +113,8 @@ class LinearKernel:
     r"""Compiled exact derivatives of a system's equations of motion, shared by
     :func:`linearize` and :func:`~mechsys.analyses._vibration.vibration` (one implementation):
 
-    * ``R_q, R_qd, R_qdd`` of ``R = M qdd + Phi_q^T lambda - Q - Qv`` (``__call__``);
-    * ``c_q, c_qd`` of the acceleration constraint ``c = Phi_q qdd - gamma``
+    * ``R_q, R_qd, R_qdd`` of :math:`R = M \ddot q + \Phi_q^T \lambda - Q - Q_v` (``__call__``);
+    * ``c_q, c_qd`` of the acceleration constraint :math:`c = \Phi_q \ddot q - \gamma`
       (:meth:`constraints`, compiled on first use);
     * ``R_p`` for chosen parameters (:meth:`parameters`, compiled per set on first use).
     """
@@ -173,7 +180,7 @@ class LinearKernel:
         return tuple(self._dense(vals, self.parts, ("q", "v", "a"), lambda k: (self.n, self.n)))
 
     def constraints(self, t, q, qd, qdd, lam, p):
-        """``(c_q, c_qd)`` (m, n) of ``c = Phi_q qdd - gamma`` at one state."""
+        r"""``(c_q, c_qd)`` (m, n) of :math:`c = \Phi_q \ddot q - \gamma` at one state."""
         system = self.system
         m = system.m
         if m == 0:
@@ -214,26 +221,26 @@ def linear_kernel(system) -> LinearKernel:
 # -- the result --------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class LinearSystem:
-    r"""A linearised free system ``x' = A x + B u``, ``y = C x + D u`` (see
+    r"""A linearised free system :math:`x' = A x + B u`, :math:`y = C x + D u` (see
     :mod:`mechsys.analyses._linearize` for the equations).
 
     ``A`` (ns, ns), ``B`` (ns, nu), ``C`` (no, ns), ``D`` (no, nu); ``states`` the state
     names (the chosen coordinates, then their velocities ``<name>_d``; a cyclic coordinate
     has its velocity only); ``inputs``, ``outputs`` their names; ``coordinates`` the chosen
     coordinates (names or expressions as given); ``t``, ``q``, ``qd``, ``qdd``, ``p`` the
-    reference state; ``basis`` ``P`` (n, f) with ``dq = P dy``. ``eigenvalues`` of ``A``
+    reference state; ``basis`` ``P`` (n, f) with :math:`dq = P dy`. ``eigenvalues`` of ``A``
     (ascending by modulus); ``stability`` per eigenvalue ``"stable"`` (``Re s < 0``),
-    ``"neutral"`` (``Re s = 0`` on the eigenvalue's own scale) or ``"unstable"``;
-    ``stable`` whether none is unstable. ``speeds``: with velocity constraints, the chosen
-    coordinates whose rates are the independent velocities (their states ``<name>_d``; the
-    other coordinates' rates follow from them), else empty.
+    ``"neutral"`` (:math:`\operatorname{Re} s = 0` on the eigenvalue's own scale) or
+    ``"unstable"``; ``stable`` whether none is unstable. ``speeds``: with velocity
+    constraints, the chosen coordinates whose rates are the independent velocities (their
+    states ``<name>_d``; the other coordinates' rates follow from them), else empty.
 
     Each eigenvalue is judged on its own scale (as
     :attr:`~mechsys.VibrationModes.stability`): neutral when
     :math:`|\mathrm{Re}\,s| \le 10^{-7} s_{own}` or :math:`\le 10^{-12} \max|s|`, with
     :math:`s_{own} = |w|^T |A| |v| / |w^H v|` (``v``, ``w`` its right and left
     eigenvectors): the change of ``s`` that rounding of ``A``'s entries can cause, which
-    the double zero eigenvalue of a rigid-body motion (``w^H v = 0``) makes infinite.
+    the double zero eigenvalue of a rigid-body motion (:math:`w^H v = 0`) makes infinite.
 
     Example::
 
@@ -365,8 +372,9 @@ def _as_expression(system, e, what: str):
 
 
 class _Chart:
-    """Compiled values and exact derivatives of the chosen coordinates ``y = h(q)``, of
-    ``yd = h_q qd`` and ``ydd = h_q qdd + (h_q qd)_q qd``, and of the outputs.
+    r"""Compiled values and exact derivatives of the chosen coordinates ``y = h(q)``, of
+    :math:`\dot y = h_q \dot q` and :math:`\ddot y = h_q \ddot q + (h_q \dot q)_q \dot q`,
+    and of the outputs.
 
     ``difference=True`` (free systems with velocity constraints): ``ydd_q`` is a
     fourth-order central difference of the compiled exact ``ydd`` (steps ``1e-3`` in the
@@ -1007,8 +1015,8 @@ def _explicit_time(system) -> bool:
 
 def _check_steady(system, names, P, Rq, Ra, Gy, yd, ydd, cyc, q, qd, qdd, lam, p, t, J, sc, tol,
                   along=None, reactions=None):
-    """The reference must be an equilibrium or a steady motion in the chosen coordinates:
-    ``ydd = 0`` and ``d(ydd)/dt = G_y yd = 0``; a ``cyclic`` coordinate's position must not
+    r"""The reference must be an equilibrium or a steady motion in the chosen coordinates:
+    ``ydd = 0`` and :math:`d(\ddot y)/dt = G_y \dot y = 0`; a ``cyclic`` coordinate's position must not
     act (``G_y`` column zero). Each measured as the generalized force it needs
     (``R_qdd P a``) against the forces acting (times the motion's rate for the rate)."""
     dyn = system.dynamics

@@ -10,7 +10,7 @@ inverse-dynamic solutions for new parameter values without solving the positions
            \Phi_q^T \lambda = Q + Q_v - M \ddot q  \quad\text{(dynamic)}
 
 with the orders not locked (velocities, accelerations) recomputed from
-``Phi_q qd = -Phi_t`` and ``Phi_q qdd = gamma`` for the new parameters.
+:math:`\Phi_q \dot q = -\Phi_t` and :math:`\Phi_q \ddot q = \gamma` for the new parameters.
 
 Locking is only valid while the locked state still satisfies the constraints: a parameter
 that moves the geometry (a length) would leave the locked coordinates wrong. Each solve

@@ -1,6 +1,6 @@
 r"""Velocity (nonholonomic) constraints in free motion (issue 36 item 1, decision 0053).
 
-A free system whose model holds velocity constraints ``psi(q, qd, t) = 0`` linear in the
+A free system whose model holds velocity constraints :math:`\psi(q, \dot q, t) = 0` linear in the
 rates, :math:`\psi = A(q, t)\,\dot q + b(q, t)` (the rolling contacts, a user ``Constraint``
 of velocity expressions), moves by
 
@@ -204,8 +204,8 @@ def nonholonomic_acceleration(system, rows: VelocityRows, t, q, qd, p):
 
 
 def velocity_matrix(system, rows: VelocityRows, t, q, p):
-    """``(G (m + k, n), g (m + k,))``: the velocity equations ``G qd = g`` of the holonomic
-    (``Phi_q qd = -Phi_t``) and the velocity constraints (``A qd = -b``) stacked."""
+    r"""``(G (m + k, n), g (m + k,))``: the velocity equations :math:`G \dot q = g` of the holonomic
+    (:math:`\Phi_q \dot q = -\Phi_t`) and the velocity constraints (:math:`A \dot q = -b`) stacked."""
     if system.m:
         J, rhs = system.velocity_rhs(t, q, p)
         J = J.toarray() if sps.issparse(J) else np.asarray(J, dtype=float)

@@ -37,7 +37,7 @@ from .._errors import MechError, ModelError, SingularJacobianError
 from .._symbols import T
 from ..compile import compile_exprs
 from ..constraints import ConstraintBase, velocity_rows
-from ..geometry._units import resolve
+from ..geometry._units import resolve, time_numbers
 from ..results._solution import Solution, State
 from ..solvers._free import project_positions, scaling_at
 from ..solvers._integrators import (
@@ -388,7 +388,7 @@ class PathSystem:
             "initial_condition", "method", "rtol", "atol", "max_step", "fit_degree", "max_error",
             "step_size", "constraint_correction", "diagnostics", "starting_step_size"), method,
             rtol, atol, max_step, fit_degree, max_error, step_size, constraint_correction,
-            starting_step_size)
+            starting_step_size, to_numbers=time_numbers(self.model))
         opt, t0, t_eval = run.options, run.t0, run.t_eval
         s = self.system
         if initial_condition is None:

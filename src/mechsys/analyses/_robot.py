@@ -16,14 +16,17 @@ the symbolic projection below; no second algorithm):
 On a model without constraint equations (a tree of Gen joints on ground: what
 ``from_urdf`` builds for a fixed-base robot) every coordinate is a joint coordinate.
 
-A model with constraint equations ``Phi(q, t) = 0`` (absolute bodies: ``coordinates=
+A model with constraint equations :math:`\Phi(q, t) = 0` (absolute bodies: ``coordinates=
 "absolute"``, a floating base, closed loops) moves by the augmented system of free motion,
 with the joint forces ``tau`` acting on the *actuated* coordinates only (``S`` selects them;
-by default every coordinate that is not an absolute body's, i.e. the joint coordinates)::
+by default every coordinate that is not an absolute body's, i.e. the joint coordinates):
 
-    M qdd + Phi_q^T lambda = Q + Qv + S^T tau,      Phi_q qdd = gamma
+.. math::
 
-Forward dynamics solves it for ``(qdd, lambda)``; inverse dynamics solves the first rows for
+    M \ddot q + \Phi_q^T \lambda &= Q + Q_v + S^T \tau \\
+    \Phi_q \ddot q &= \gamma
+
+Forward dynamics solves it for :math:`(\ddot q, \lambda)`; inverse dynamics solves the first rows for
 ``(lambda, tau)`` (least squares, then checked: the state must satisfy the constraints, the
 unactuated rows must balance -- a floating base's acceleration is not free to choose -- and
 ``tau`` must be unique, i.e. no actuated coordinate may be moved by the constraints alone).
@@ -31,7 +34,7 @@ A mapping ``{name: values}`` may name only some coordinates (as many as the mode
 degrees of freedom, e.g. the joint coordinates); the others are then solved from the
 constraints: positions by Newton's method from the model's guess (continued in steps of
 at most ``0.25`` in the given coordinates, so the branch is the guess's), velocities from
-``Phi_q qd = -Phi_t`` and accelerations from ``Phi_q qdd = gamma``.
+:math:`\Phi_q \dot q = -\Phi_t` and accelerations from :math:`\Phi_q \ddot q = \gamma`.
 """
 
 from __future__ import annotations
@@ -134,10 +137,10 @@ def _solve_dependent(A, b, what: str, k: int) -> np.ndarray:
 
 def _complete(s, what, t, Q, held, QD=None, QDD=None, heldd=None, helddd=None):
     r"""Full states from the values of the coordinates ``held`` (layout indices): positions
-    by Newton's method on ``Phi(q, t) = 0`` in the other coordinates (from the model's
+    by Newton's method on :math:`\Phi(q, t) = 0` in the other coordinates (from the model's
     guess, then each point from the last, in steps of at most 0.25 in the held
-    coordinates), velocities from ``Phi_q qd = -Phi_t``, accelerations from ``Phi_q qdd =
-    gamma``. ``Q`` etc. are ``(N, n)`` when their ``held*`` is None (given in full)."""
+    coordinates), velocities from :math:`\Phi_q \dot q = -\Phi_t`, accelerations from :math:`\Phi_q \ddot q
+    = \gamma`. ``Q`` etc. are ``(N, n)`` when their ``held*`` is None (given in full)."""
     n = s.n
     t = float(t)
     names = s.layout.q_names
@@ -324,7 +327,7 @@ def _no_multiplier_loads(s, what):
 
 
 def inverse_dynamics(m, q, qd, qdd, t: float = 0.0, actuated=None) -> JointValues:
-    r"""Joint forces: ``tau = M(q) qdd - Q - Qv`` (see the module doc) at one point (``(n,)``
+    r"""Joint forces: :math:`\tau = M(q) \ddot q - Q - Q_v` (see the module doc) at one point (``(n,)``
     arrays) or many (``(N, n)``), or from ``{joint name: values}``; on a model with
     constraint equations the forces on the ``actuated`` coordinates (names; default the
     joint coordinates) that, with the constraints' reactions, give ``qdd``."""

@@ -26,6 +26,7 @@ import numpy as np
 import sympy as sp
 
 from .._errors import ModelError
+from ..geometry._units import time_numbers
 from ..results._sensitivity import Sensitivity
 from ..results._solution import Solution, State
 from ..solvers._integrators import ATOL, FIT_DEGREE, MAX_ERROR, MAX_STEP, RTOL
@@ -233,7 +234,8 @@ class SensitivitySystem:
         run = plan_run("SensitivitySystem.simulate", t, unknown, (
             "initial_condition", "method", "rtol", "atol", "max_step", "fit_degree", "max_error",
             "step_size", "constraint_correction", "starting_step_size"), method, rtol, atol,
-            max_step, fit_degree, max_error, step_size, constraint_correction, starting_step_size)
+            max_step, fit_degree, max_error, step_size, constraint_correction, starting_step_size,
+            to_numbers=time_numbers(self.model))
         t0 = run.t0
         s = fs.system
         also = frozenset()

@@ -36,6 +36,7 @@ import numpy as np
 import sympy as sp
 
 from .._errors import ConvergenceError, MechError, ModelError, choice
+from ..geometry._units import is_quantity
 
 #: analysis names that mean ``model.solve(t, solution=name)``
 SOLVE_KINDS = ("location", "velocity", "acceleration", "static", "kinematic", "dynamic")
@@ -259,6 +260,10 @@ def _expand(params: Mapping, grid: bool) -> tuple[list[str], list[dict]]:
     names = [p.name if isinstance(p, sp.Symbol) else str(p) for p in params]
     values = []
     for name, v in zip(names, params.values()):
+        if is_quantity(v):
+            # an array quantity: one quantity per point (each converted to the model's units
+            # where it is set), never its magnitudes with the unit stripped
+            v = [v[i] for i in range(len(v))] if np.ndim(v.magnitude) else [v]
         arr = np.atleast_1d(np.asarray(v, dtype=object))
         if arr.ndim != 1 or arr.size == 0:
             raise ModelError(f"sweep: the values of parameter {name!r} must be a non-empty 1-D "

@@ -8,22 +8,22 @@ The equations of free motion (constraints ``drop``-ped as in ``m.free``) are
 
 **Perturbation coordinates.** A small change of each body's pose is measured by its position
 change and a *global* small rotation (``dtheta`` in 2D, a rotation vector ``dphi`` in 3D):
-``dq = B dp`` with ``B = I`` in 2D angles, ``d(ei, ej) = (-ej, ei) dtheta`` in planar Euler
-parameters and, per 3D body, ``de = E(e)^T dphi / 2`` (``E`` of ``omega = 2 E(e) e_dot``):
+:math:`dq = B dp` with ``B = I`` in 2D angles, :math:`d(e_i, e_j) = (-e_j, e_i) d\theta` in planar Euler
+parameters and, per 3D body, :math:`de = E(e)^T d\phi / 2` (``E`` of :math:`\omega = 2 E(e) \dot{e}`):
 the Euler forms keep their normalisation to first order.
-The constrained perturbations are the null space of ``Phi_q B`` (computed on the unit-free
-scaled Jacobian, see :class:`~mechsys.solvers._linalg.Scaling`): ``dp = N z`` with ``f`` =
-number of degrees of freedom independent coordinates ``z``, and ``P = B N``; ``N`` is chosen
+The constrained perturbations are the null space of :math:`\Phi_q B` (computed on the unit-free
+scaled Jacobian, see :class:`~mechsys.solvers._linalg.Scaling`): :math:`dp = N z` with ``f`` =
+number of degrees of freedom independent coordinates ``z``, and :math:`P = B N`; ``N`` is chosen
 by a column-pivoted QR so that each ``z_k`` is one perturbation coordinate
 (:func:`_null_basis`: a soft coordinate is not mixed with a stiff one).
 
 **Linearisation.** With ``A_q = dR/dq``, ``A_v = dR/dqd``, ``A_a = dR/dqdd`` (derived
-symbolically, so the stiffness includes the *geometric stiffness* ``d(Phi_q^T lambda)/dq``
+symbolically, so the stiffness includes the *geometric stiffness* :math:`d(\Phi_q^T \lambda)/dq`
 of the multipliers and the load stiffness ``-dQ/dq``; the inertia terms
-``d(M qdd)/dq`` and ``-dQv/dq, -dQv/dqd`` give the centrifugal and gyroscopic terms)
-and ``dq = P z``, ``dqd = P z' + P' z``, ``dqdd = P z'' + 2 P' z' + P'' z`` (``P' = B(e_dot)
-N``: the perturbation frame turns with a rotating body), projecting on ``P^T`` (which
-removes the multiplier changes, since ``Phi_q P = 0``):
+:math:`d(M \ddot q)/dq` and ``-dQv/dq, -dQv/dqd`` give the centrifugal and gyroscopic terms)
+and :math:`dq = P z`, :math:`d\dot q = P z' + P' z`, :math:`d\ddot q = P z'' + 2 P' z' + P'' z` (:math:`P' =
+B(\dot{e}) N`: the perturbation frame turns with a rotating body), projecting on ``P^T`` (which
+removes the multiplier changes, since :math:`\Phi_q P = 0`):
 
 .. math::
 
@@ -31,10 +31,12 @@ removes the multiplier changes, since ``Phi_q P = 0``):
     M_r &= P^T A_a P, \quad C_r = P^T (A_v P + 2 A_a P'), \quad
     K_r = P^T (A_q P + A_v P' + A_a P'').
 
-Its eigenvalues ``s`` (``det(s^2 M_r + s C_r + K_r) = 0``) give, per oscillatory mode, the
-natural frequency ``omega_n = |s|`` [rad/s], ``hz = omega_n / 2 pi`` [Hz], the damping ratio
-``zeta = -Re(s)/|s|`` and the damped frequency ``|Im s|``. At an equilibrium (``qd = 0``)
-``P' = P'' = 0``; ``K_r`` is then the Hessian of the potential plus ``lambda^T Phi``.
+Its eigenvalues ``s`` (:math:`\det(s^2 M_r + s C_r + K_r) = 0`) give, per oscillatory mode, the
+natural frequency :math:`\omega_n = \lvert s \rvert` [rad/s], :math:`\mathit{hz} = \omega_n / (2 \pi)` [Hz],
+the damping ratio
+:math:`\zeta = -\operatorname{Re}(s)/\lvert s \rvert` and the damped frequency ``|Im s|``. At an equilibrium
+(``qd = 0``)
+:math:`P' = P'' = 0`; ``K_r`` is then the Hessian of the potential plus :math:`\lambda^T \Phi`.
 
 **Steady motion.** The linearisation is taken at the instant of the reference state. It has
 constant coefficients -- and the eigenvalues mean what they say -- when the reference motion
@@ -59,15 +61,15 @@ from ._linearize import linear_kernel
 
 
 def _E(e) -> np.ndarray:
-    """``E(e)`` (3, 4) of the global angular velocity ``omega = 2 E(e) e_dot``."""
+    r"""``E(e)`` (3, 4) of the global angular velocity :math:`\omega = 2 E(e) \dot{e}`."""
     e0, e1, e2, e3 = e
     return np.array([[-e1, e0, -e3, e2], [-e2, e3, e0, -e1], [-e3, -e2, e1, e0]])
 
 
 def _rotation_block(space, rot) -> np.ndarray:
-    """Rotation coordinates' change per unit global small rotation of a body: 2D angle
-    ``[[1]]``; planar Euler parameters ``d(ei, ej) = (-ej, ei) dtheta``; 3D
-    ``de = E(e)^T dphi / 2``. Linear in ``rot`` except for the angle."""
+    r"""Rotation coordinates' change per unit global small rotation of a body: 2D angle
+    ``[[1]]``; planar Euler parameters :math:`d(e_i, e_j) = (-e_j, e_i) d\theta`; 3D
+    :math:`de = E(e)^T d\phi / 2`. Linear in ``rot`` except for the angle."""
     if space.dim == 3:
         return 0.5 * _E(rot).T
     if space.ncoord == 4:                       # orientation="euler"
@@ -171,6 +173,33 @@ class VibrationModes:
 
     def __len__(self) -> int:
         return len(self.omega)
+
+    #: the fields with a known unit: (power of time, unit of the angle or ratio)
+    _UNITS = {"eigenvalues": (-1, ""), "omega": (-1, "rad"), "damped_omega": (-1, "rad"),
+              "hz": (-1, ""), "damping_ratio": (0, ""), "t": (1, "")}
+
+    def quantity(self, name: str):
+        r"""The field ``name`` (``"omega"``, ``"hz"``, ``"damped_omega"``, ``"eigenvalues"``,
+        ``"damping_ratio"``, ``"t"``) as a pint Quantity in the model's declared time unit
+        (``m.set_units``): ``omega`` in rad/s, ``hz`` in 1/s (cycles per second: Hz) when the
+        unit is seconds. A field of no single unit (``shapes``, ``mass``, ...) is refused by
+        name. Example: ``modes.quantity("omega").to("rpm")`` (pint counts a radian as 1 and a
+        revolution as :math:`2\pi`: convert the angular ``omega`` to rpm, not ``hz``). Needs
+        pint."""
+        from .._errors import choice
+        from ..geometry._units import _registry
+
+        choice(name, list(self._UNITS), "VibrationModes.quantity: field")
+        units = getattr(self.model, "units", None) or {}
+        if "time" not in units:
+            raise ModelError("VibrationModes.quantity: frequencies in units need the model's "
+                             "time unit: declare it with m.set_units(time=...) first")
+        ureg = _registry()
+        power, angle = self._UNITS[name]
+        unit = ureg.Unit(units["time"]) ** power
+        if angle == "rad":
+            unit = ureg.Unit("radian") * unit
+        return ureg.Quantity(np.asarray(getattr(self, name)), unit)
 
     def shape(self, k: int, coordinates=None) -> np.ndarray:
         """Mode ``k``'s coordinate changes (all coordinates, or the named ones)."""

@@ -65,10 +65,10 @@ def _big_powers(expr) -> list:
 
 
 def real_expression(expr, owner: str | None = None):
-    """``expr`` ready for real double-precision code (the one check at the boundary where
+    r"""``expr`` ready for real double-precision code (the one check at the boundary where
     SymPy or SymEngine expressions become numbers).
 
-    * A complex constant (``sqrt(-1)``, ``log(-1) = I pi``, ``"I"``, ``asin(2)``) was dropped to
+    * A complex constant (``sqrt(-1)``, :math:`\log(-1) = i \pi`, ``"I"``, ``asin(2)``) was dropped to
       its real part with only a NumPy warning: it raises :class:`~mechsys.ModelError` showing
       the expression (and ``owner``, the constraint or load, when given).
     * An integer exponent ``n`` with ``|n| >= 2**53`` is rewritten with a float exponent:

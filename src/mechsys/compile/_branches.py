@@ -1,15 +1,16 @@
 r"""Branch guards of angle equations: telling the asked angle from the angle plus pi.
 
 A rotational driver in its regular form (``RotationLock1`` with axes, ``RelativeAngle1`` in
-2D, the 2D body form in Euler-parameter coordinates) is ``|f_p| sin(phi - a) = 0``: it holds
+2D, the 2D body form in Euler-parameter coordinates) is :math:`\lvert f_p \rvert \sin(\phi - a) = 0`: it holds
 at ``phi = a`` and at ``phi = a + pi``, and Newton converges to either, whichever the guess is
 nearer. No single smooth equation of an angle can avoid this (a periodic function has an
 even number of zeros per turn), so the solvers test the root instead: with
-``cos_err = |f_p| cos(phi - a)`` (:class:`~mechsys.constraints._angles.Branch`),
+:math:`\mathit{cos\_err} = \lvert f_p \rvert \cos(\phi - a)` (:class:`~mechsys.constraints._angles.Branch`),
 
 * a configuration with ``cos_err < 0`` (a guess or a sweep's prediction more than a quarter
   turn from the asked angle) is *aligned* before Newton starts: the body carrying the angle
-  is turned by ``-(phi - a) = -atan2(sin_err, cos_err)`` about the axis (through the axis'
+  is turned by :math:`-(\phi - a) = -\operatorname{atan2}(\mathit{sin\_err}, \mathit{cos\_err})` about the
+  axis (through the axis'
   origin), which puts ``phi`` on ``a`` and leaves a revolute about that axis assembled;
 * a converged solution with ``cos_err < 0`` is on the wrong branch: it is aligned (turned
   by pi) and solved again, and a solution still on the wrong branch raises
@@ -304,11 +305,12 @@ class BranchGuard:
 
 
 def turn(kind: str, qb, angle: float, origin, axis=None) -> np.ndarray:
-    """A body's coordinates ``qb`` turned rigidly by ``angle`` (rad) about the global
+    r"""A body's coordinates ``qb`` turned rigidly by ``angle`` (rad) about the global
     ``axis`` (unit; 2D: the plane's normal) through the global point ``origin``:
-    ``r' = o + R (r - o)``, ``A' = R A``. Angle coordinates add ``angle``; planar Euler
+    :math:`r' = o + R (r - o)`, :math:`A' = R A`. Angle coordinates add ``angle``; planar Euler
     parameters ``(ei, ej)`` turn as a 2D vector; spatial Euler parameters are multiplied on
-    the left by the rotation's, ``p' = (cos(angle/2), sin(angle/2) u) p`` (Hamilton product)."""
+    the left by the rotation's, :math:`p' = (\cos(\mathit{angle}/2), \sin(\mathit{angle}/2) u) p` (Hamilton
+    product)."""
     qb = np.array(qb, dtype=float)
     c, s = math.cos(angle), math.sin(angle)
     if kind in ("planar", "euler"):

@@ -7,11 +7,14 @@ are returned as SymPy expressions (what users inspect) and, when SymEngine did t
 also as SymEngine expressions that the SymEngine backend compiles without converting again.
 See ``docs/decisions/0004-symbolic-derivation.md``.
 
-For every equation ``phi_i`` (free symbols restricted to the coordinates it uses)::
+For every equation :math:`\phi_i` (free symbols restricted to the coordinates it uses):
 
-    J_ij  = d phi_i / d q_j                       (only nonzero entries)
-    v_i   = sum_j J_ij qd_j + d phi_i / dT
-    gamma_i = -( sum_j d v_i / d q_j qd_j + d v_i / dT )
+.. math::
+
+    J_{ij} &= \partial \phi_i / \partial q_j \qquad \text{(only nonzero entries)} \\
+    v_i &= \textstyle\sum_j J_{ij} \dot q_j + \partial \phi_i / \partial T \\
+    \gamma_i &= -\left( \textstyle\sum_j \partial v_i / \partial q_j \, \dot q_j
+                + \partial v_i / \partial T \right)
 """
 
 from __future__ import annotations
@@ -221,7 +224,8 @@ def hessian_terms(T_expr, q, qd):
 
 
 def time_derivative(expr, q, qd, qdd=None):
-    """Total time derivative ``d/dt f(q, qd, t) = f_q qd + f_qd qdd + f_t`` of a SymPy
+    r"""Total time derivative :math:`\frac{d}{dt} f(q, \dot q, t) = f_q \dot q + f_{\dot q} \ddot q + f_t`
+    of a SymPy
     expression, with ``q``/``qd``/``qdd`` lists of corresponding symbols. Piecewise-constant
     parts (``Mod``'s jumps, ``floor``) differentiate to zero."""
     expr = sp.sympify(expr)

@@ -1,21 +1,31 @@
 r"""Dynamic terms of a compiled system: mass matrix, applied and velocity-dependent forces.
 
-Per body ``b`` with kinetic energy (written once for 2D and 3D)::
+Per body ``b`` with kinetic energy (written once for 2D and 3D)
 
-    T_b = m |v_c|^2 / 2 + omega'^T J' omega' / 2,   v_c = d/dt (r + A c'),
-    omega' = body-local angular velocity, J' = centroidal inertia in body axes
+.. math::
+
+    T_b &= m \lvert v_c \rvert^2 / 2 + \omega'^T J' \omega' / 2 \\
+    v_c &= \frac{d}{dt} (r + A c')
+
+with :math:`\omega'` the body-local angular velocity and :math:`J'` the centroidal inertia in
+body axes.
 
 Lagrange's equations give, on that body's coordinates,
 
-    M_b  = d^2 T_b / d qd_b^2
-    Qv_b = dT_b/dq_b - (d^2 T_b / d qd_b dq_b) qd_b      (centrifugal, gyroscopic)
+.. math::
+
+    M_b &= \partial^2 T_b / \partial \dot q_b^2 \\
+    Q_{v,b} &= \partial T_b / \partial q_b - (\partial^2 T_b / \partial \dot q_b \partial q_b)
+        \, \dot q_b \qquad \text{(centrifugal, gyroscopic)}
 
 and the applied generalized forces come from the loads by virtual work (``_loads``).
-With one multiplier ``lambda_i`` per constraint equation, the equations of motion are::
+With one multiplier :math:`\lambda_i` per constraint equation, the equations of motion are
 
-    M qdd + Phi_q^T lambda = Q(t, q, qd, lambda) + Qv(q, qd)
+.. math::
 
-Numeric functions take ``x = [t, q (n), qd (n), lambda (m), p]``.
+    M \ddot q + \Phi_q^T \lambda = Q(t, q, \dot q, \lambda) + Q_v(q, \dot q)
+
+Numeric functions take :math:`x = [t, q (n), \dot q (n), \lambda (m), p]`.
 """
 
 from __future__ import annotations

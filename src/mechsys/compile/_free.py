@@ -1,12 +1,17 @@
 r"""Symbolic residuals and Jacobians of the equilibrium problems of a free system.
 
-Static equilibrium, unknowns ``x = (q, lambda)``::
+Static equilibrium, unknowns :math:`x = (q, \lambda)`:
 
-    R = [ Phi(q, t) ;  Phi_q^T lambda - Q(t, q, 0, lambda) ]
+.. math::
 
-Velocity equilibrium at fixed ``q``, unknowns ``x = (qd, lambda)``::
+    R = \begin{bmatrix} \Phi(q, t) \\ \Phi_q^T \lambda - Q(t, q, 0, \lambda) \end{bmatrix}
 
-    R = [ Phi_q qd + Phi_t ;  Phi_q^T lambda - Q(t, q, qd, lambda) ]
+Velocity equilibrium at fixed ``q``, unknowns :math:`x = (\dot q, \lambda)`:
+
+.. math::
+
+    R = \begin{bmatrix} \Phi_q \dot q + \Phi_t \\ \Phi_q^T \lambda - Q(t, q, \dot q, \lambda)
+        \end{bmatrix}
 
 With velocity constraints ``A(q, t) qd + b(q, t) = 0`` (``rows``, an
 :class:`~mechsys.analyses._nonholonomic.VelocityRows`; decision 0055) their multipliers

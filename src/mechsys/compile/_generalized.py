@@ -16,8 +16,8 @@ from ..solvers._tree import _articulated, _assemble, _forward_py
 
 def project_inertia(body, Tb, Mb, Qvb, kin) -> tuple:
     r"""A slave's kinetic energy, mass matrix and velocity forces on the independent
-    coordinates. With the pose ``p = P(q)``, ``p_dot = J q_dot`` and ``p_ddot = J q_ddot +
-    h`` (``h = J_dot q_dot``: ``p_ddot`` at ``q_ddot = 0``), Lagrange's equations transform
+    coordinates. With the pose ``p = P(q)``, :math:`\dot{p} = J \dot{q}` and :math:`\ddot{p} = J \ddot{q} +
+    h` (:math:`h = \dot{J} \dot{q}`: ``p_ddot`` at ``q_ddot = 0``), Lagrange's equations transform
     as::
 
         M_q  = J^T M_b(P) J
@@ -258,7 +258,7 @@ class RecursiveDynamics:
         Q[g_s] += F_g,s^T B_s
 
     (``Q_s`` the applied loads on the slave's pose coordinates); an absolute master ``a``
-    receives ``F_P^T C_s F_P`` and ``F_P^T B_s`` on its own coordinates, ground nothing.
+    receives :math:`F_P^T C_s F_P` and :math:`F_P^T B_s` on its own coordinates, ground nothing.
     This is the composite-rigid-body algorithm written in pose coordinates: O(N) kernel
     calls and O(N * depth) small products per evaluation, and a compile cost linear in the
     number of *distinct* joints. The absolute bodies' terms, the loads, the constraint

@@ -8,7 +8,7 @@ what is fingerprinted; ``opt_level`` and ``cse`` are parts of the key).
   equation as the model builds it (Mech's default is ``Chop``). ``None`` (default): the
   equations as the constraints write them. ``"chop"``: numbers smaller than ``1e-12`` times
   the largest number of the same equation become 0 -- the round-off of local coordinates
-  such as ``cos(pi/2) = 6e-17`` -- relative, so the result does not depend on the unit of
+  such as :math:`\cos(\pi/2) = 6 \cdot 10^{-17}` -- relative, so the result does not depend on the unit of
   length. A callable ``f(expr) -> expr`` (``sympy.expand``, ``sympy.trigsimp``...) must
   return an *equal* expression: the multipliers and reactions are those of the processed
   equations.

@@ -1,21 +1,25 @@
 r"""Tangent (directional-derivative) kernels for parameter sensitivities (Mech's
 ``SetSensitivity``, manual section 9.5).
 
-For the residuals of each level of a solution, with ``z = (q, qd, qdd, lambda, p_s)`` (the
-coordinates, velocities, accelerations, multipliers and the *selected* parameters ``p_s``)::
+For the residuals of each level of a solution, with :math:`z = (q, \dot q, \ddot q, \lambda, p_s)` (the
+coordinates, velocities, accelerations, multipliers and the *selected* parameters ``p_s``):
 
-    position       Phi(t, q, p)                                  (m)
-    velocity       V = Phi_q qd + Phi_t                          (m)
-    acceleration   A = Phi_q qdd - gamma                         (m)
-    loads          R = Phi_q^T lambda - Q                        (n)   statics, kinematic loads
-    dynamics       R = Phi_q^T lambda - (Q + Qv - M qdd)         (n)   inverse dynamics, free motion
+.. math::
 
-each kernel returns the directional derivative ``dF = sum_j dF/dz_j dz_j`` for a direction
+    \text{position:} \quad & \Phi(t, q, p) \quad (m) \\
+    \text{velocity:} \quad & V = \Phi_q \dot q + \Phi_t \quad (m) \\
+    \text{acceleration:} \quad & A = \Phi_q \ddot q - \gamma \quad (m) \\
+    \text{loads:} \quad & R = \Phi_q^T \lambda - Q \quad (n)
+        \quad \text{statics, kinematic loads} \\
+    \text{dynamics:} \quad & R = \Phi_q^T \lambda - (Q + Q_v - M \ddot q) \quad (n)
+        \quad \text{inverse dynamics, free motion}
+
+each kernel returns the directional derivative :math:`dF = \sum_j dF/dz_j dz_j` for a direction
 ``dz = (dq, dqd, dqdd, dlambda, dp)``, derived symbolically once (SymEngine when the system
 was derived with it, else SymPy) and compiled as a function of
-``[t, q, qd, qdd, lambda, p, dq, dqd, dqdd, dlambda, dp]``. A sensitivity solve sets the
+:math:`[t, q, \dot q, \ddot q, \lambda, p, dq, d\dot q, d\ddot q, d\lambda, dp]`. A sensitivity solve sets the
 direction of the unknown of its level to zero and solves, for example, at the velocity level
-``Phi_q dqd/dp = -(V_q dq/dp + V_p)`` (``V_qd = Phi_q``). A derivative is linear in the
+:math:`\Phi_q d\dot q/dp = -(V_q dq/dp + V_p)` (``V_qd = Phi_q``). A derivative is linear in the
 direction, so one compiled call serves every parameter and every time point (``batch``).
 """
 
@@ -36,8 +40,8 @@ LEVELS = ("position", "velocity", "acceleration", "loads", "dynamics")
 
 
 class TangentKernels:
-    """Compiled directional derivatives of a :class:`~mechsys.compile.System`'s residuals
-    with respect to ``(q, qd, qdd, lambda)`` and the parameters ``params`` (a subset of
+    r"""Compiled directional derivatives of a :class:`~mechsys.compile.System`'s residuals
+    with respect to :math:`(q, \dot q, \ddot q, \lambda)` and the parameters ``params`` (a subset of
     ``layout.p_symbols``). Kernels are derived and compiled on first use, per level."""
 
     def __init__(self, system, params):
@@ -156,8 +160,8 @@ class TangentKernels:
 
 
 class ExpressionTangent:
-    """The compiled directional derivative of user expressions of
-    ``[t, q, qd, qdd, lambda, p]`` (an output: a location, a reaction, any ``sol.eval``
+    r"""The compiled directional derivative of user expressions of
+    :math:`[t, q, \dot q, \ddot q, \lambda, p]` (an output: a location, a reaction, any ``sol.eval``
     expression), with the same argument order as :class:`TangentKernels`."""
 
     def __init__(self, kernels: TangentKernels, exprs):

@@ -2,14 +2,16 @@ r"""The compiled system: the model's equations in symbolic form and as numeric f
 
 Built once per model version by :meth:`Model.compile`; immutable afterwards.
 
-Symbolic content (``n`` coordinates ``q``, ``m`` equations)::
+Symbolic content (``n`` coordinates ``q``, ``m`` equations):
 
-    Phi(q, t, p)        (m,)      constraint equations
-    Phi_q               (m, n)    sparse: rows, cols, exprs (nnz,)
-    Phi_t               (m,)
-    gamma               (m,)      = -( (Phi_q qd)_q qd + 2 Phi_qt qd + Phi_tt )
+* :math:`\Phi(q, t, p)`, ``(m,)``: the constraint equations;
+* :math:`\Phi_q`, ``(m, n)``, sparse: ``rows``, ``cols``, ``exprs`` ``(nnz,)``;
+* :math:`\Phi_t`, ``(m,)``;
+* :math:`\gamma`, ``(m,)``: :math:`\gamma = -\left( (\Phi_q \dot q)_q \dot q + 2 \Phi_{qt} \dot q
+  + \Phi_{tt} \right)`.
 
-``gamma`` is derived per equation as ``-(v_q qd + v_t)`` with ``v = Phi_q qd + Phi_t``, which
+``gamma`` is derived per equation as :math:`-(v_q \dot q + v_t)` with :math:`v = \Phi_q \dot q + \Phi_t`,
+which
 is the same expression. Numeric functions take one flat argument vector
 ``x = [t, q (n), qd (n), p (np)]``.
 """
@@ -350,8 +352,8 @@ class System:
 
     # -- evaluating arbitrary expressions ---------------------------------------------
     def compile_expression(self, exprs) -> Compiled:
-        """Compile any expressions of ``T, q, qd, qdd, lambda, p`` (cached) as a function of
-        ``[t, q, qd, qdd, lambda, p]``."""
+        r"""Compile any expressions of :math:`T, q, \dot q, \ddot q, \lambda, p` (cached) as a function of
+        :math:`[t, q, \dot q, \ddot q, \lambda, p]`."""
         key = tuple(sp.sympify(e) for e in exprs)
         f = self._eval_cache.get(key)
         if f is None:

@@ -1,6 +1,6 @@
 r"""The constraint contract.
 
-A constraint is a small set of scalar equations ``Phi_c(q, t, p) = 0`` built from the
+A constraint is a small set of scalar equations :math:`\Phi_c(q, t, p) = 0` built from the
 geometry of (usually) two bodies. It may introduce new variables (a curve parameter, a rope
 length); the degrees of freedom it removes are ``len(equations) - len(new_variables)``.
 

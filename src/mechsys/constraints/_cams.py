@@ -67,7 +67,7 @@ class Profile:
         return [_d(self.point.local, v.symbol) for v in self.params]
 
     def tangents(self) -> list[sp.Matrix]:
-        """Global tangents ``t_k = A ds'/da_k``."""
+        r"""Global tangents :math:`t_k = A\, \partial s' / \partial a_k`."""
         return [self._rotate(t) for t in self.local_tangents()]
 
     def local_normal(self, space) -> sp.Matrix:
@@ -201,7 +201,7 @@ class _Cam(ConstraintBase):
 
 
 def contact(space, first: Profile, second: Profile, normal_of: Profile) -> list[sp.Expr]:
-    """Two profiles touch: ``r_c1 - r_c2 = 0``, then the normal of ``normal_of`` is
+    """Two profiles touch: :math:`r_{c1} - r_{c2} = 0`, then the normal of ``normal_of`` is
     orthogonal to each tangent of the other one (``n . t_k = 0``)."""
     other = second if normal_of is first else first
     n = normal_of.normal(space)

@@ -557,7 +557,8 @@ def slave_refused(body, what: str) -> ModelError:
 
 def generalized_reaction(model, c, coordinate, lams):
     r"""Mech 11.2's ``Reaction[cnum, sym]``: the generalized load constraint ``c`` applies to
-    the coordinate ``sym``, ``-(dPhi_c/dsym)^T lambda_c`` (a moment for an angle, a force for
+    the coordinate ``sym``, :math:`-(\partial \Phi_c / \partial \mathit{sym})^T \lambda_c` (a moment for an
+    angle, a force for
     a distance). A Gen joint is not a constraint and applies none (``ModelError``)."""
     if isinstance(c, GenJoint):
         raise ModelError(f"reaction of {c.label()}: a generalized-coordinate joint is not a "

@@ -24,7 +24,7 @@ def _body_of(obj, what: str):
 
 
 class Coincident(ConstraintBase):
-    """Two points coincide (``r_1 - r_2 = 0``): the shared body of ``Revolute2`` (2D) and
+    """Two points coincide (:math:`r_1 - r_2 = 0`): the shared body of ``Revolute2`` (2D) and
     ``Spherical3`` (3D)."""
 
     def __init__(self, point1, point2):

@@ -12,7 +12,7 @@ from ..geometry._points import Axis, Point, Vector
 
 
 def coincident(p1: Point, p2: Point, offset=None) -> list[sp.Expr]:
-    """``r_1 - r_2 - d = 0`` componentwise (``d`` a global offset, default zero)."""
+    """:math:`r_1 - r_2 - d = 0` componentwise (``d`` a global offset, default zero)."""
     # entry by entry: a SymPy Matrix difference goes through its domain matrices (slow)
     d = [a - b for a, b in zip(p1.location(), p2.location())]
     if offset is not None:
@@ -46,7 +46,7 @@ def normals(space, v: Vector) -> list[sp.Matrix]:
 
 
 def point_on_line(space, p: Point, axis: Axis, dist=0) -> list[sp.Expr]:
-    """``n_k . (r_p - r_o) = 0`` for each normal ``n_k`` of the axis (2D: minus ``dist |u|``)."""
+    r""":math:`n_k \cdot (r_p - r_o) = 0` for each normal ``n_k`` of the axis (2D: minus ``dist |u|``)."""
     d = p.location() - axis.location()
     eqs = [(n.T * d)[0, 0] for n in normals(space, axis.dir)]
     if dist != 0:
@@ -56,6 +56,6 @@ def point_on_line(space, p: Point, axis: Axis, dist=0) -> list[sp.Expr]:
 
 
 def parallel(space, v1: Vector, v2: Vector) -> list[sp.Expr]:
-    """``n_k . u_1 = 0`` for each normal ``n_k`` of ``v2`` (2D: ``u_2 x u_1 = 0``)."""
+    r"""``n_k . u_1 = 0`` for each normal ``n_k`` of ``v2`` (2D: :math:`u_2 \times u_1 = 0`)."""
     u1 = v1.direction()
     return [(n.T * u1)[0, 0] for n in normals(space, v2)]

@@ -7,7 +7,7 @@ A rolling contact has two parts:
   ``PointOnPlane1``, ``PointOnLine1``) and added to the model like any other;
 * a **nonholonomic** part, no slip: the material point of the rolling body at the contact
   moves with the surface. These are the equations of the rolling classes themselves, linear
-  in the velocities, ``A(q) qd = 0`` (``b = 0``: the bodies' own velocities carry all the
+  in the velocities, :math:`A(q) \dot q = 0` (``b = 0``: the bodies' own velocities carry all the
   motion), written with the rate symbols of the coordinates (``x2_d``, ``e02_d``, ...).
   Only the components *in* the surface are equations: the normal one is the time
   derivative of the holonomic part (the contact is the rim's extreme point) and would
@@ -16,7 +16,7 @@ A rolling contact has two parts:
 Notation: the surface (plane or line) is an axis of body 1 with origin ``r_1`` and direction
 ``u_1`` (the plane's normal; the line's direction); ``h_1``, ``f_1`` directions in the plane
 fixed in body 1; the rolling body 2 has its centre ``r_2``. The material velocity of body
-``i`` at a global point ``c`` is ``v_i(c) = v_Oi + omega_i x (c - r_Oi)`` (``O_i`` the body
+``i`` at a global point ``c`` is :math:`v_i(c) = v_{O_i} + \omega_i \times (c - r_{O_i})` (``O_i`` the body
 origin, ``omega_i`` its angular velocity from the rates of its rotation coordinates), and the
 slip velocity is ``v_c = v_2(c) - v_1(c)``.
 
@@ -69,7 +69,7 @@ def positive_radius(value, what: str) -> sp.Expr:
 
 
 def norm2(vector) -> sp.Expr:
-    """``|u|^2`` of a direction: of its local components when it is fixed in a body (or
+    r""":math:`\lvert u \rvert^2` of a direction: of its local components when it is fixed in a body (or
     ground) with constant components, a constant; else of its global expression. (Rotation
     matrices are orthogonal on the Euler-parameter normalisation, so both are equal there;
     the constant keeps the contact's expressions of low degree: a disk's contact is then of
@@ -152,7 +152,7 @@ class RollingContact(ConstraintBase):
         raise NotImplementedError
 
     def velocity_form(self, model) -> tuple[sp.Matrix, sp.Matrix]:
-        """``(A, b)``: the equations as ``A(q, t) qd + b(q, t) = 0``, columns in the order of
+        r"""``(A, b)``: the equations as :math:`A(q, t) \dot q + b(q, t) = 0`, columns in the order of
         the model's coordinates (see :func:`~mechsys.linear_velocity_form`)."""
         return linear_velocity_form(self, model)
 

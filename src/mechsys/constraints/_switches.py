@@ -19,7 +19,7 @@ constraint of the model (its handle, name and number address it, its rows carry 
 **Variables of constraints inside a switch** (curve parameters, rope lengths): they are
 coordinates of the model in every stage. In a stage whose constraints do not use a variable,
 the variable is *held* at the value it had when the stage took over, by the extra equation
-``v - v_held = 0`` (``v_held`` a hidden parameter the multistage solver sets), so every stage
+:math:`v - v_{held} = 0` (``v_held`` a hidden parameter the multistage solver sets), so every stage
 determines every coordinate and a stage's degree-of-freedom count is
 ``len(equations) - len(new variables)`` as for any constraint.
 """

@@ -1,6 +1,6 @@
-r"""Velocity (nonholonomic) constraints in the form ``A(q, t) qd + b(q, t) = 0``.
+r"""Velocity (nonholonomic) constraints in the form :math:`A(q, t) \dot q + b(q, t) = 0`.
 
-A velocity constraint's equations ``psi(q, qd, t) = 0`` are ordinary SymPy expressions of the
+A velocity constraint's equations :math:`\psi(q, \dot q, t) = 0` are ordinary SymPy expressions of the
 coordinates ``q``, their rates ``qd`` (the symbols ``x2_d``, ``e12_d``, ...) and time. When they
 are linear in the rates they split into
 
@@ -32,10 +32,10 @@ from .._symbols import T
 
 @dataclass(frozen=True)
 class VelocityRows:
-    r"""The rows of velocity equations ``psi = A qd + b`` (``k`` equations, ``n`` rates).
+    r"""The rows of velocity equations :math:`\psi = A \dot q + b` (``k`` equations, ``n`` rates).
 
     ``A`` (k, n) and ``b`` (k, 1) are SymPy matrices, ``rho`` (k, 1) the velocity-dependent
-    part of ``d psi / dt = A qdd + rho``; ``linear`` says whether ``A`` is free of the rates
+    part of :math:`d \psi / dt = A \ddot q + \rho`; ``linear`` says whether ``A`` is free of the rates
     (when it is not, ``A`` is the Jacobian ``psi_qd`` at the current rates and ``b`` the rest
     at zero rates, which no longer add up to ``psi``)."""
 
@@ -46,7 +46,7 @@ class VelocityRows:
 
 
 def velocity_rows(equations, q, qd, rho: bool = True) -> VelocityRows:
-    r"""``A = psi_qd``, ``b = psi(qd = 0)`` and ``rho = psi_q qd + psi_t`` of the velocity
+    r"""``A = psi_qd``, ``b = psi(qd = 0)`` and :math:`\rho = \psi_q \dot q + \psi_t` of the velocity
     equations ``psi`` (a list of SymPy expressions) with coordinates ``q`` and rates ``qd``
     (lists of symbols, in the same order). ``rho=False`` leaves ``rho`` empty (its
     derivatives are the expensive part).
@@ -74,7 +74,7 @@ def velocity_rows(equations, q, qd, rho: bool = True) -> VelocityRows:
 
 
 def linear_velocity_form(constraint, model) -> tuple[sp.Matrix, sp.Matrix]:
-    r"""``(A, b)`` with ``psi = A(q, t) qd + b(q, t)`` for the equations of a velocity
+    r"""``(A, b)`` with :math:`\psi = A(q, t) \dot q + b(q, t)` for the equations of a velocity
     constraint on ``model``; the columns of ``A`` follow the model's coordinates (the order of
     ``m.location(ms.All)`` and of a solution's ``q``). Raises :class:`ModelError` when the
     equations are not linear in the rates.

@@ -4,9 +4,11 @@ Primitives never evaluate anything themselves. They *request* what they need fro
 :class:`Evaluator` (body poses, point locations, any SymPy expression), and the evaluator
 evaluates every request of every primitive in **one** compiled call of
 :meth:`Solution.eval` over all frames. Body-fixed geometry with constant local coordinates
-is then placed numerically::
+is then placed numerically, for every frame :math:`k` at once (one numpy ``einsum``):
 
-    r_P(k) = r_b(k) + A_b(k) s'_P        for every frame k, as one numpy einsum
+.. math::
+
+    r_P(k) = r_b(k) + A_b(k)\, s'_P
 
 so no symbolic work happens per frame, and a mesh of hundreds of vertices costs only the
 pose of its body (``dim + dim^2`` expressions).

@@ -166,8 +166,17 @@ def setup_2d(ax, fr: Frames, grid=True, margin=0.05):
     ax.set_axisbelow(True)
     if grid:
         ax.grid(True, alpha=0.25)
-    ax.set_xlabel("x")
-    ax.set_ylabel("y")
+    ax.set_xlabel(_axis_label(fr, "x"))
+    ax.set_ylabel(_axis_label(fr, "y"))
+
+
+def _axis_label(fr: Frames, name: str) -> str:
+    """``"x [mm]"`` in the model's declared length unit; the bare name when none is declared
+    (a unit is never invented: the model may be in any consistent system)."""
+    from ..results._tables import LENGTH, unit_text
+
+    unit = unit_text(LENGTH, getattr(fr.model, "units", None))
+    return f"{name} [{unit}]" if unit else name
 
 
 def _figsize_2d(fr: Frames, width=6.4):
@@ -270,9 +279,9 @@ def setup_3d(ax, fr: Frames, view=None, grid=True):
     for axis, frac in zip((ax.xaxis, ax.yaxis, ax.zaxis), half / half.max(), strict=True):
         axis.set_major_locator(MaxNLocator(nbins=max(2, int(round(4 * frac))), steps=[1, 2, 2.5, 5, 10]))
     ax.tick_params(labelsize=7, pad=0)
-    ax.set_xlabel("x")
-    ax.set_ylabel("y")
-    ax.set_zlabel("z")
+    ax.set_xlabel(_axis_label(fr, "x"))
+    ax.set_ylabel(_axis_label(fr, "y"))
+    ax.set_zlabel(_axis_label(fr, "z"))
     ax.grid(grid)
     elev, azim = view if view is not None else (25, -60)
     ax.view_init(elev=elev, azim=azim)

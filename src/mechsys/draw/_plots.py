@@ -69,11 +69,22 @@ def _unit(sol, spec) -> str | None:
     """The unit of a time or coordinate output (``"t"``, ``"crank.th"``): from the model's
     declared units, ``rad`` for a planar angle; ``None`` when not known (an expression, a
     callable, an array, a model variable, or no declared unit)."""
-    from ..results._tables import LENGTH, _translational, unit_text
+    from ..results._tables import _translational, unit_text
 
+    units = getattr(sol.model, "units", None)
+    rate = 0
+    if isinstance(spec, sp.Symbol):
+        # a coordinate's symbol, or its velocity or acceleration symbol (``m.omega(b)`` of a
+        # planar body is ``th3_d``): the coordinate's unit per time unit
+        lay = sol.system.layout
+        for k, syms in enumerate((lay.q_symbols, lay.qd_symbols, lay.qdd_symbols)):
+            if spec in syms:
+                spec, rate = lay.q_names[list(syms).index(spec)], k
+                break
+        else:
+            return None
     if not isinstance(spec, str):
         return None
-    units = getattr(sol.model, "units", None)
     if spec == "t":
         return unit_text((0, 0, 1), units)
     try:
@@ -82,11 +93,9 @@ def _unit(sol, spec) -> str | None:
         return None
     dim = sol.model.space.dim
     kind = _translational(sol.system)[j]
-    if kind is None:
+    if kind is None or (not kind and dim != 2):   # a 3D Euler parameter has no unit
         return None
-    if kind:
-        return unit_text(LENGTH, units)
-    return "rad" if dim == 2 else None        # a 3D Euler parameter has no unit
+    return unit_text((1 if kind else 0, 0, -rate), units, angle=not kind)
 
 
 def _with_unit(label: str, unit: str | None) -> str:
@@ -148,9 +157,11 @@ def plot(solution, outputs, x=None, ax=None, overlay=False, title=None, xlabel=N
     return fig
 
 
-def phase_plot(solution, x, y, ax=None, arrows=6, title=None, figsize=(5.5, 5.0), grid=True):
+def phase_plot(solution, x, y, ax=None, arrows=6, title=None, figsize=(5.5, 5.0), grid=True,
+               xlabel=None, ylabel=None):
     """``y`` against ``x`` (outputs, e.g. a coordinate and its velocity), with the start
-    marked and arrows showing the direction of motion; returns the Figure."""
+    marked and arrows showing the direction of motion; returns the Figure. ``xlabel``,
+    ``ylabel``: the axis labels (default the outputs' names, with their units when known)."""
     import matplotlib.pyplot as plt
 
     sol = as_solution(solution)
@@ -169,8 +180,8 @@ def phase_plot(solution, x, y, ax=None, arrows=6, title=None, figsize=(5.5, 5.0)
         for k in np.linspace(0, n - 2, int(arrows) + 2)[1:-1].astype(int):
             ax.annotate("", xy=(xv[k + 1], yv[k + 1]), xytext=(xv[k], yv[k]),
                         arrowprops=dict(arrowstyle="->", color=line.get_color(), lw=1.5))
-    ax.set_xlabel(_with_unit(xl, _unit(sol, x)))
-    ax.set_ylabel(_with_unit(yl, _unit(sol, y)))
+    ax.set_xlabel(_with_unit(xlabel or xl, _unit(sol, x)))
+    ax.set_ylabel(_with_unit(ylabel or yl, _unit(sol, y)))
     if title:
         ax.set_title(title)
     if grid:

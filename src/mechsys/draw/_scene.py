@@ -65,7 +65,11 @@ class Frames:
         return len(self.t)
 
     def time_text(self, k: int) -> str:
-        return f"{self.label} = {self.t[k]:.3f}"
+        """``"t = 0.250"``, with the model's time unit when it declares one (``"t = 0.250 s"``)."""
+        from ..results._tables import unit_text
+
+        unit = unit_text((0, 0, 1), getattr(self.model, "units", None)) if self.label == "t" else None
+        return f"{self.label} = {self.t[k]:.3f}" + (f" {unit}" if unit else "")
 
 
 class Scene:

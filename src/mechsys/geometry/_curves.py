@@ -7,9 +7,11 @@ derived *exactly* from them (``compile/_derive.py``), never by finite difference
 
 A spline becomes a ``Piecewise`` of cubic polynomials, nested as a binary search over the
 knots (``log2(n)`` comparisons per evaluation); on the interval ``[t_k, t_k+1)``, with
-``h = u - t_k``::
+:math:`h = u - t_k`:
 
-    s(u) = a0_k + h (a1_k + h (a2_k + h a3_k))
+.. math::
+
+    s(u) = a_{0,k} + h\, (a_{1,k} + h\, (a_{2,k} + h\, a_{3,k}))
 
 SymEngine differentiates that ``Piecewise`` piece by piece and compiles it with LLVM (see
 ``docs/decisions/0008-curves.md`` for the choice and its measurements).
@@ -256,7 +258,7 @@ def SplineFit(data, end_conditions="natural", knots=None) -> SplineFunction:  # 
     function such as a cam's radius ``r(alpha)``.
     ``end_conditions`` (Mech's ``EndConditions``):
 
-    * ``"natural"`` (default): zero curvature, ``s'' = 0``, at both ends;
+    * ``"natural"`` (default): zero curvature, :math:`s'' = 0`, at both ends;
     * ``"closed"``: equal slope and curvature at the two ends. As in Mech, the curve closes
       upon itself only when the last point is identical to the first; it then repeats beyond
       its knots (a closed cam profile);
@@ -299,7 +301,7 @@ def Involute(sym, center: Sequence, base_radius, pitch_radius, angle,  # noqa: N
 
     For ``u < 0`` the natural equation gives the mirror image of the tooth; with
     ``interference=True`` the profile instead runs straight from the base circle to the
-    center, ``P(u) = center + rb (1 + u) (cos beta, sin beta)`` for ``-1 <= u < 0``.
+    center, :math:`P(u) = \mathit{center} + r_b (1 + u) (\cos \beta, \sin \beta)` for ``-1 <= u < 0``.
     ``base_radius`` and ``pitch_radius`` may be numbers or symbolic parameters; numbers are
     checked (``rb > 0``, ``|rp| >= rb``).
     """

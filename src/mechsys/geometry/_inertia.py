@@ -1,6 +1,7 @@
 r"""Mass-property utilities (Mech's ``ParallelAxis``, ``PrincipalAxes``, composite bodies).
 
-Inertia is the matrix ``J = integral (|s|^2 I - s s^T) dm`` (scalar ``integral |s|^2 dm`` in
+Inertia is the matrix :math:`J = \int (\lvert s \rvert^2 I - s s^T)\, dm` (scalar :math:`\int \lvert s
+\rvert^2\, dm` in
 2D), so products of inertia are the (signed) off-diagonal matrix elements.
 """
 
@@ -37,10 +38,12 @@ def _rotation_matrix(rotation) -> np.ndarray:
 def parallel_axis(vector, mass: float, inertia, rotation=None):
     r"""Inertia about another origin (parallel axis theorem).
 
-    ``inertia`` is centroidal; ``vector`` runs from the new origin to the centroid::
+    ``inertia`` is centroidal; ``vector`` runs from the new origin to the centroid:
 
-        2D:  J_O = J_c + m |d|^2
-        3D:  J_O = R J_c R^T + m (|d|^2 I - d d^T)
+    .. math::
+
+        J_O &= J_c + m \lvert d \rvert^2 \qquad \text{(2D)} \\
+        J_O &= R J_c R^T + m (\lvert d \rvert^2 I - d d^T) \qquad \text{(3D)}
 
     ``rotation`` (3D) is the rotation of the centroidal frame relative to the new frame,
     ``R`` its matrix (columns: the centroidal axes in new-frame components). As in Mech it

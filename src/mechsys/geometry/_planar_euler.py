@@ -1,16 +1,23 @@
 r"""Planar bodies in Mech's degenerate Euler parameters (``SetSymbols[Method -> Euler]`` in
-Modeler2D; manual 12.4.1): ``q_b = (x, y, ei, ej)`` with ``ei = cos th``, ``ej = sin th``.
+Modeler2D; manual 12.4.1): ``q_b = (x, y, ei, ej)`` with :math:`e_i = \cos \theta`, :math:`e_j = \sin \theta`.
 
 The rotation matrix is *linear* in the coordinates, so no constraint contains a sine or a
-cosine of a coordinate::
+cosine of a coordinate:
 
-    A(e) = [[ei, -ej], [ej, ei]],    ei^2 + ej^2 - 1 = 0   (one normalisation per body)
+.. math::
 
-Angular velocity and acceleration follow from the rates (exact on ``|e| = 1``)::
+    A(e) = \begin{bmatrix} e_i & -e_j \\ e_j & e_i \end{bmatrix}, \qquad
+    e_i^2 + e_j^2 - 1 = 0 \quad \text{(one normalisation per body)}
 
-    omega = ei ej' - ej ei',    alpha = ei ej'' - ej ei''
+Angular velocity and acceleration follow from the rates (exact on :math:`\lvert e \rvert = 1`):
 
-and the angle reported to the user is ``th = atan2(ej, ei)`` in ``(-pi, pi]``. Select it
+.. math::
+
+    \omega &= e_i e_j' - e_j e_i' \\
+    \alpha &= e_i e_j'' - e_j e_i''
+
+and the angle reported to the user is :math:`\theta = \operatorname{atan2}(e_j, e_i)` in
+:math:`(-\pi, \pi]`. Select it
 with ``Model2D(orientation="euler")``; decision 0015 records why it is an option and not
 the default.
 
@@ -47,8 +54,8 @@ class PlanarEuler(Planar):
         return (1, 0)
 
     def rotation_guess(self, rot, who: str) -> tuple:
-        """``(cos th, sin th)`` from an angle guess or from ``(ei, ej)`` (any positive
-        scale; normalised here so the first Newton step starts on ``|e| = 1``)."""
+        r"""``(cos th, sin th)`` from an angle guess or from ``(ei, ej)`` (any positive
+        scale; normalised here so the first Newton step starts on :math:`\lvert e \rvert = 1`)."""
         (th,) = super().rotation_guess(rot, who)
         return (math.cos(th), math.sin(th))
 
@@ -68,9 +75,9 @@ class PlanarEuler(Planar):
         return [ei**2 + ej**2 - 1]
 
     def wrench_from_generalized(self, G, rot):
-        """Force (2,) at the body origin and moment from a body's generalized force
-        ``(Q_x, Q_y, Q_ei, Q_ej)``: a virtual turn ``de = (-ej, ei) dth`` does the work
-        ``M dth``, so ``M = ei Q_ej - ej Q_ei`` (the part along ``e``, the normalisation's
+        r"""Force (2,) at the body origin and moment from a body's generalized force
+        ``(Q_x, Q_y, Q_ei, Q_ej)``: a virtual turn :math:`de = (-e_j, e_i)\, d\theta` does the work
+        ``M dth``, so :math:`M = e_i Q_{e_j} - e_j Q_{e_i}` (the part along ``e``, the normalisation's
         reaction, does no work)."""
         ei, ej = rot
         return sp.Matrix(G[:2]), ei * G[3] - ej * G[2]
@@ -82,7 +89,7 @@ class PlanarEuler(Planar):
         return c1 * c2 + s1 * s2, s1 * c2 - c1 * s2
 
     def rates_from_omega(self, rot, w: float) -> tuple[float, float]:
-        """Rates ``(ei', ej') = w (-ej, ei)`` of a body turning at ``w`` (initial conditions)."""
+        """Rates :math:`(e_i', e_j') = w (-e_j, e_i)` of a body turning at ``w`` (initial conditions)."""
         ei, ej = (float(v) for v in rot)
         return (-ej * w, ei * w)
 

@@ -2,10 +2,12 @@ r"""Geometric objects attached to bodies: :class:`Point`, :class:`Vector`, :clas
 :class:`Line` (and :class:`Plane` in 3D).
 
 Each holds *local* coordinates on one body (SymPy expressions, so they may depend on time
-``T`` or on parameters) and gives its *global* expression through the body's pose::
+``T`` or on parameters) and gives its *global* expression through the body's pose:
 
-    r_P = r_b + A_b s'_P          (point)
-    v   = A_b v'                  (vector)
+.. math::
+
+    r_P &= r_b + A_b s'_P \qquad \text{(point)} \\
+    v &= A_b v' \qquad \text{(vector)}
 
 A plain coordinate tuple wherever a point is expected means a point on ground; wherever a
 vector is expected, a vector in ground (global) coordinates.
@@ -223,15 +225,19 @@ def reference_direction(direction, rule: str = "default"):
     rotation that takes the Z axis of a frame onto ``u``:
 
     * ``"default"`` (non-singular for every direction): the frame is the global one when
-      ``u_z >= 0`` and the one turned half a revolution about X (Z -> -Z) when ``u_z < 0``::
+      :math:`u_z \ge 0` and the one turned half a revolution about X (Z -> -Z) when
+      :math:`u_z < 0`:
 
-          s = +1 if u_z >= 0 else -1
-          ref = (1 - u_x^2 / (1 + |u_z|),  -u_x u_y / (1 + |u_z|),  -s u_x)
+      .. math::
+
+          \mathit{ref} = \left(1 - \frac{u_x^2}{1 + \lvert u_z \rvert},\;
+          -\frac{u_x u_y}{1 + \lvert u_z \rvert},\; -s\, u_x\right), \qquad
+          s = \operatorname{sign}(u_z) \ (s = +1 \text{ at } u_z = 0)
 
       so +Z gets +X, -Z gets +X, and the rule is continuous within each hemisphere (it jumps
       only across ``u_z = 0``, like Mech's ``Step``-function rule).
     * ``"minimal"`` (Mech's ``$MechUseMinimalRotation``): always from +Z,
-      ``ref = (1 - u_x^2/(1 + u_z), -u_x u_y/(1 + u_z), -u_x)``; simpler, but singular at
+      :math:`\mathit{ref} = (1 - u_x^2/(1 + u_z), -u_x u_y/(1 + u_z), -u_x)`; simpler, but singular at
       ``u = -Z``.
 
     Numeric input gives a NumPy array; SymPy input a SymPy column (a ``Piecewise`` for the

@@ -4,13 +4,19 @@ cylindrical/spherical conversions, ``Magnitude``, ``Unit``, ``Direction``, ``Dis
 
 Conventions
 -----------
-Euler parameters ``e = (e0, e1, e2, e3)`` of a rotation by ``phi`` about the unit axis ``u``::
+Euler parameters ``e = (e0, e1, e2, e3)`` of a rotation by :math:`\phi` about the unit axis
+:math:`u`:
 
-    e0 = cos(phi / 2),   (e1, e2, e3) = sin(phi / 2) u
+.. math::
 
-and its matrix (the one bodies use, see :mod:`mechsys.geometry._space`)::
+    e_0 = \cos(\phi / 2), \qquad (e_1, e_2, e_3) = \sin(\phi / 2)\, u
 
-    A(e) = (e0^2 - e.e) I + 2 e e^T + 2 e0 e~        (e = (e1, e2, e3))
+and its matrix (the one bodies use, see :mod:`mechsys.geometry._space`), with
+:math:`e = (e_1, e_2, e_3)` and :math:`\tilde e` its cross-product matrix:
+
+.. math::
+
+    A(e) = (e_0^2 - e \cdot e)\, I + 2\, e e^T + 2 e_0 \tilde e
 
 A *rotation specification* is any of Mech's formats:
 
@@ -19,12 +25,13 @@ A *rotation specification* is any of Mech's formats:
 * an angle and axis ``(angle, (x, y, z))`` (the axis need not be unit; it may be a mechsys
   :class:`~mechsys.Vector`, ``Axis``, ``Line`` or ``Plane``);
 * a rotation matrix, given as a 2-D ``numpy`` array or a SymPy ``Matrix``; it must be a
-  proper rotation (``max |R^T R - I| <= 1e-6``, ``det R > 0``), else :class:`GeometryError`;
+  proper rotation (:math:`\max \lvert R^T R - I \rvert \le 10^{-6}`, ``det R > 0``), else
+  :class:`GeometryError`;
 * a nested Python list or tuple of three rows of three numbers is refused as ambiguous (a
   matrix, or three virtual rotations?) by every function that takes a rotation;
 * a sequence of the above, ``[rot1, rot2, ...]``: rotate by ``rot1``, then by ``rot2`` about
   axes expressed in the frame already rotated by ``rot1``, and so on (Mech's
-  ``RotationLock3`` convention; intrinsic, so ``A = A1 A2 ... An``). Equivalently, rotate by
+  ``RotationLock3`` convention; intrinsic, so :math:`A = A_1 A_2 \cdots A_n`). Equivalently, rotate by
   ``rotn`` first, then ``rot(n-1)``, ..., all about fixed axes;
 * a :class:`~mechsys.Body` (its Euler-parameter coordinates, symbolic).
 
@@ -188,7 +195,8 @@ def _from_virtual(v) -> list:
     return [float(np.cos(phi / 2)), *(k * v)]
 
 
-#: a matrix is a rotation when ``max |R^T R - I| <= ORTHO_TOL`` and ``det R > 0``. Rotation
+#: a matrix is a rotation when :math:`\max \lvert R^T R - I \rvert \le \mathtt{ORTHO\_TOL}`
+#: and :math:`\det R > 0`. Rotation
 #: matrices are dimensionless, so the bound is absolute: it takes matrices computed in double
 #: precision or printed to seven digits or more (float32 round trips), and refuses a shear,
 #: a scaling or a matrix rounded to a few digits, whose rotation would be a guess.
@@ -196,9 +204,9 @@ ORTHO_TOL = 1e-6
 
 
 def check_rotation_matrix(R, what: str = "rotation matrix") -> np.ndarray:
-    """``R`` as a (3, 3) float array when it is a proper rotation, else :class:`GeometryError`
+    r"""``R`` as a (3, 3) float array when it is a proper rotation, else :class:`GeometryError`
     saying what it is instead (not finite, not orthonormal, a reflection). The test is
-    ``max |R^T R - I| <= ORTHO_TOL`` and ``det R > 0``."""
+    :math:`\max \lvert R^T R - I \rvert \le \mathtt{ORTHO\_TOL}` and ``det R > 0``."""
     try:
         R = np.array(R.tolist() if isinstance(R, sp.MatrixBase) else R, dtype=float)
     except (TypeError, ValueError):
@@ -361,7 +369,7 @@ def rotation_matrix(rot):
 
 
 def rotation(rot, normalized: bool = True):
-    """Angle and axis ``(angle, (x, y, z))`` of any rotation format (Mech's ``Rotation``).
+    r"""Angle and axis ``(angle, (x, y, z))`` of any rotation format (Mech's ``Rotation``).
 
     Numeric: the angle is in ``[0, pi]`` (the sign of the parameters is chosen with
     ``e0 >= 0``), computed as ``2 atan2(|e_v|, e0)`` so it stays accurate near 0 and 180
@@ -372,7 +380,7 @@ def rotation(rot, normalized: bool = True):
 
     Planar forms (Mech's ``Rotation`` in Modeler2D) return the scalar angle ``theta``
     (radians, counterclockwise): a planar body (its angle coordinate, symbolic), the
-    degenerate Euler parameters ``(ei, ej) = (cos theta, sin theta)`` (any positive scale;
+    degenerate Euler parameters :math:`(e_i, e_j) = (\cos \theta, \sin \theta)` (any positive scale;
     ``atan2(ej, ei)``, as ``Model2D(orientation="euler")``), or a 2 x 2 rotation matrix
     (``atan2(A[1, 0], A[0, 0])``; a matrix that is not a rotation raises ``GeometryError``).
     """
@@ -474,20 +482,22 @@ def projected_angle(vector1, vector2, vector3=None):
 
 
 def intersection_point(axis1, axis2, offset=None):
-    """Point where ``axis1`` meets the plane through the origin of ``axis2`` normal to its
+    r"""Point where ``axis1`` meets the plane through the origin of ``axis2`` normal to its
     direction (3D; ``axis2`` is typically a :class:`~mechsys.Plane`), or where two lines
-    meet (2D: the "plane" of ``axis2`` is the line itself)::
+    meet (2D: the "plane" of ``axis2`` is the line itself):
 
-        r = r_1 + u_1 (n_2 . (r_2 - r_1)) / (n_2 . u_1)
+    .. math::
 
-    with ``n_2`` the plane normal (3D) or the normal of line 2 (2D). Symbolic in the body
+        r = r_1 + u_1 \, \frac{n_2 \cdot (r_2 - r_1)}{n_2 \cdot u_1}
+
+    with :math:`n_2` the plane normal (3D) or the normal of line 2 (2D). Symbolic in the body
     coordinates (evaluate with ``sol.eval``); numeric when both axes are on ground.
     Raises :class:`GeometryError` when the axis is parallel to the plane (numerically).
 
     2D only, ``offset`` (Mech's ``IntersectionPoint[axis1, axis2, offset]``): the point
     ``offset`` units to the left of both axes, e.g. the centre of a fillet of radius
     ``offset`` between them -- the intersection of the two lines each moved by ``offset``
-    along its left normal ``perp(u)/|u|``, ``perp(u) = (-u_y, u_x)`` (negative: to the right).
+    along its left normal ``perp(u)/|u|``, :math:`\mathit{perp}(u) = (-u_y, u_x)` (negative: to the right).
     """
 
     a1, a2 = as_axis(axis1), as_axis(axis2)
@@ -572,8 +582,9 @@ def cylindrical_to_xyz(point, coordinates: str = "XYZ"):
 
 
 def polar_to_xy(point):
-    """Planar polar ``(radius, angle)`` to Cartesian ``(x, y)`` (Mech's ``PolarToXY``):
-    ``x = r cos(angle)``, ``y = r sin(angle)``, the angle counterclockwise from +X in
+    r"""Planar polar ``(radius, angle)`` to Cartesian ``(x, y)`` (Mech's ``PolarToXY``):
+    :math:`x = r \cos(\mathit{angle})`, :math:`y = r \sin(\mathit{angle})`, the angle counterclockwise from
+    +X in
     radians. Numeric input of shape ``(..., 2)`` gives an array ``(..., 2)``; symbolic input
     a SymPy column. Inverse of ``(hypot(x, y), atan2(y, x))``."""
     if _is_symbolic(point):

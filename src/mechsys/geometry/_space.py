@@ -4,15 +4,19 @@ A body's pose is a position ``r`` and a rotation matrix ``A``; a global point is
 ``r + A s'`` in both dimensions, so constraints written with :class:`Space` helpers are
 written once.
 
-Planar body coordinates ``q_b = (x, y, theta)``::
+Planar body coordinates :math:`q_b = (x, y, \theta)`:
 
-    A(theta) = [[cos th, -sin th], [sin th, cos th]]
+.. math::
+
+    A(\theta) = \begin{bmatrix} \cos\theta & -\sin\theta \\ \sin\theta & \cos\theta \end{bmatrix}
 
 Spatial body coordinates ``q_b = (x, y, z, e0, e1, e2, e3)`` with Euler parameters
-``e0 = cos(phi/2)``, ``(e1, e2, e3) = sin(phi/2) u`` and the normalisation constraint
-``e0^2 + e1^2 + e2^2 + e3^2 - 1 = 0``::
+:math:`e_0 = \cos(\phi/2)`, :math:`(e_1, e_2, e_3) = \sin(\phi/2) u` and the normalisation constraint
+:math:`e_0^2 + e_1^2 + e_2^2 + e_3^2 - 1 = 0`:
 
-    A(e) = (2 e0^2 - 1) I + 2 (e e^T + e0 e~)
+.. math::
+
+    A(e) = (2 e_0^2 - 1)\, I + 2\, (e e^T + e_0 \tilde e)
 """
 
 from __future__ import annotations
@@ -77,8 +81,8 @@ class Planar(Space):
         return (0,)
 
     def rotation_guess(self, rot, who: str) -> tuple:
-        """A planar rotation guess is the angle (radians), or Mech's degenerate Euler
-        parameters ``(ei, ej) = (cos th, sin th)`` (any positive scale), converted at once
+        r"""A planar rotation guess is the angle (radians), or Mech's degenerate Euler
+        parameters :math:`(e_i, e_j) = (\cos \theta, \sin \theta)` (any positive scale), converted at once
         to ``th = atan2(ej, ei)``."""
         if isinstance(rot, (tuple, list)) and len(rot) == 2:
             try:
@@ -240,7 +244,7 @@ class Spatial(Space):
 
     def wrench_from_generalized(self, G, rot):
         """Force (3,) at the origin and global moment (3,) from a body's generalized force
-        ``(Q_r, Q_e)`` (7,): ``Q_e = 2 E^T M`` so ``M = E Q_e / 2`` (``E E^T = I``)."""
+        ``(Q_r, Q_e)`` (7,): :math:`Q_e = 2 E^T M` so :math:`M = E Q_e / 2` (:math:`E E^T = I`)."""
         e0, e1, e2, e3 = rot
         E = sp.Matrix([[-e1, e0, -e3, e2], [-e2, e3, e0, -e1], [-e3, -e2, e1, e0]])
         return sp.Matrix(G[:3]), E * sp.Matrix(G[3:]) / 2

@@ -158,6 +158,12 @@ def convert(value, units: dict | None, what: str, dims: tuple | None = None):
     return tuple(items) if isinstance(value, tuple) else items
 
 
+def time_numbers(model):
+    """``(value, what) -> value`` with every pint quantity inside in ``model``'s time unit
+    (the times and step lengths of a ``simulate``: :func:`~mechsys.solvers._integrators.plan_run`)."""
+    return lambda value, what: convert(value, getattr(model, "units", None), what, (0, 0, 1))
+
+
 _PENDING: dict = {}
 
 

@@ -10,16 +10,15 @@ constraint equations, other Gen joints, other loads, symbolic values) is refused
 ``ModelError`` naming it.
 
 With a Gen joint's frames ``(o_1, R_1)`` on the slave and ``(o_2, R_2)`` on the master
-(``constraints/_generalized.py``) the slave's pose is ``A_s = A_m R_0 Rot(u_1, q)``,
-``R_0 = R_2 R_1^T``, ``u_1`` the slave's axis direction, and ``r_s = r_m + A_m o_2 - A_s
-o_1``. Hence
+(``constraints/_generalized.py``) the slave's pose is :math:`A_s = A_m R_0 \operatorname{Rot}(u_1, q)`,
+:math:`R_0 = R_2 R_1^T`, ``u_1`` the slave's axis direction, and :math:`r_s = r_m + A_m o_2 - A_s o_1`. Hence
 
 * MJCF: ``<body pos="o_2 - R_0 o_1" quat="R_0">`` with ``<joint pos="o_1" axis="u_1">``
   (MuJoCo turns the body about the joint's point), the body frame being mechsys's;
 * URDF: a joint turns its child about the child frame's origin, so each link frame is the
   body frame moved to its joint's point ``o_1`` (same axes): ``<origin xyz="o_2 - o_1^m"
   rpy="R_0">`` (``o_1^m`` the master's shift), ``<axis xyz="u_1">``; the centroid and the
-  drawn points shift by ``-o_1``. ``rpy`` from ``R = Rz(y) Ry(p) Rx(r)``.
+  drawn points shift by ``-o_1``. ``rpy`` from :math:`R = R_z(y) R_y(p) R_x(r)`.
 
 Numbers are written with ``repr`` (shortest round-trip), so a file read back gives the
 same doubles.
@@ -37,7 +36,7 @@ from .._errors import ModelError
 
 
 def matrix_rpy(R) -> tuple[float, float, float]:
-    """``(r, p, y)`` with ``R = Rz(y) Ry(p) Rx(r)`` (``p`` in [-pi/2, pi/2]; at ``|p| = pi/2``
+    """``(r, p, y)`` with :math:`R = R_z(y) R_y(p) R_x(r)` (``p`` in [-pi/2, pi/2]; at ``|p| = pi/2``
     the yaw is set to 0)."""
     R = np.asarray(R, float)
     cp = math.hypot(R[0, 0], R[1, 0])

@@ -2,10 +2,13 @@ r"""MJCF import: ``ms.from_mjcf(path)`` builds a :class:`~mechsys.Model3D` of a 
 
 Frames (decision 0040). A ``<body pos quat>`` places the body's frame in its parent's; its
 joints act in the body's frame, in the order written, about (hinge) or along (slide) their
-``axis`` through their ``pos``::
+``axis`` through their ``pos``:
 
-    T_body = T_parent * (pos, R) * J_1(q_1) * J_2(q_2) ...
-    J(q) = Trans(p_j) Rot(a, q) Trans(-p_j)      (hinge)      J(q) = Trans(q a)   (slide)
+.. math::
+
+    T_{\mathrm{body}} &= T_{\mathrm{parent}}\, (\mathit{pos}, R)\, J_1(q_1)\, J_2(q_2) \cdots \\
+    J(q) &= \operatorname{Trans}(p_j) \operatorname{Rot}(a, q) \operatorname{Trans}(-p_j)
+        \quad \text{(hinge)}, \qquad J(q) = \operatorname{Trans}(q\, a) \quad \text{(slide)}
 
 A hinge becomes ``GenRevolute5(body.axis(p_j, a, g), parent.axis(pos + R p_j, R a, R g))``,
 a slide ``GenTranslate5`` with the same axes (``g`` normal to ``a``), each coordinate named
@@ -15,7 +18,7 @@ a ball joint adding ``Spherical3`` at its point. Orientations: ``quat`` (w x y z
 ``axisangle``, ``euler`` (``compiler eulerseq``, lower case intrinsic, upper case extrinsic),
 ``xyaxes``, ``zaxis``; angles in degrees unless ``<compiler angle="radian">``.
 ``<inertial pos quat mass diaginertia | fullinertia>`` gives the centroid and the inertia
-``R diag(I) R^T`` (``fullinertia = Ixx Iyy Izz Ixy Ixz Iyz``); without it the body's mass
+:math:`R \operatorname{diag}(I) R^T` (``fullinertia="Ixx Iyy Izz Ixy Ixz Iyz"``); without it the body's mass
 comes from its geoms (sphere, box, cylinder, capsule, ellipsoid; ``mass`` or ``density``,
 default 1000) as MuJoCo's ``inertiafromgeom="auto"`` does. Equalities: ``connect`` ->
 ``Spherical3``, ``weld`` -> ``Spherical3`` + ``RotationLock3``, ``joint`` -> ``Constraint(q1
@@ -248,7 +251,7 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
     the file's direction; default ``<option gravity>`` or 9.81 down ``z``).
     ``joint_damping`` adds ``damping`` as ``-d q_dot`` loads, ``joint_springs`` the hinge and
     slide springs ``-k (q - springref)`` (MuJoCo's passive forces), ``armature`` the joints'
-    armature ``a`` as the load ``-a qdd`` (MuJoCo adds ``a`` to the mass matrix's diagonal;
+    armature ``a`` as the load :math:`-a \ddot q` (MuJoCo adds ``a`` to the mass matrix's diagonal;
     so do mechsys's dynamics with it); ranges, friction loss, springs, armature (unless
     asked), actuators, sensors, contacts and everything else without a counterpart are
     listed in ``m.import_report``. Read safely, as ``from_urdf``.

@@ -2,23 +2,29 @@ r"""URDF import: ``ms.from_urdf(path)`` builds a :class:`~mechsys.Model3D` of a 
 
 Frames (decision 0040). A URDF link has its own frame; a joint's ``<origin xyz rpy>`` places
 the joint frame in the parent link's frame, and at zero joint coordinate the child link's
-frame *is* the joint frame. ``rpy`` are fixed-axis X-Y-Z angles::
+frame *is* the joint frame. ``rpy`` are fixed-axis X-Y-Z angles:
 
-    R(r, p, y) = Rz(y) Ry(p) Rx(r)
+.. math::
+
+    R(r, p, y) = R_z(y)\, R_y(p)\, R_x(r)
 
 A revolute joint turns the child about the unit ``axis`` (joint-frame components) by ``q``,
-a prismatic one slides it by ``q`` along ``axis``::
+a prismatic one slides it by ``q`` along ``axis``:
 
-    T_child = T_parent * (xyz, R(rpy)) * (0, Rot(axis, q))     (revolute, continuous)
-    T_child = T_parent * (xyz, R(rpy)) * (q axis, I)           (prismatic)
+.. math::
+
+    T_{\mathrm{child}} &= T_{\mathrm{parent}}\, (\mathit{xyz}, R(\mathit{rpy}))\,
+        (0, \operatorname{Rot}(\mathit{axis}, q)) \qquad \text{(revolute, continuous)} \\
+    T_{\mathrm{child}} &= T_{\mathrm{parent}}\, (\mathit{xyz}, R(\mathit{rpy}))\,
+        (q\, \mathit{axis}, I) \qquad \text{(prismatic)}
 
 Each moving link (with the links fixed to it, merged) is one mechsys body whose local frame
 is the link's frame; a revolute joint becomes ``GenRevolute5(child.axis(0, a, g),
 parent.axis(xyz, R a, R g))`` (``g`` a unit vector normal to ``a``), which gives exactly
 the pose above, and a prismatic one ``GenTranslate5`` with the same axes. The coordinate is
 named after the joint (``sol["shoulder_pan_joint"]``). A ``<inertial>`` with origin
-``(c, R_i)`` and tensor ``I_i`` gives the centroid ``c`` and the centroidal inertia ``R_i I_i
-R_i^T`` in link axes; links fixed to a body add theirs by the parallel-axis theorem.
+``(c, R_i)`` and tensor ``I_i`` gives the centroid ``c`` and the centroidal inertia :math:`R_i I_i R_i^T` in
+link axes; links fixed to a body add theirs by the parallel-axis theorem.
 """
 
 from __future__ import annotations

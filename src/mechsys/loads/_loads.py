@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
 import sympy as sp
 
 from .._errors import ModelError, choice
@@ -132,6 +133,27 @@ def _magnitude(value, what: str) -> sp.Expr:
     return v
 
 
+def _split_vector(vector, magnitude, default, mode: str, cutoff, what: str):
+    """``(direction, magnitude)`` of a load given as one pint quantity vector
+    (``Force(p, Q([0, -20], "N"))``): the numbers become the direction and the unit, with the
+    vector's length in the absolute mode, the magnitude (converted when the load is added,
+    its dimension checked there). Other arguments pass through unchanged."""
+    if not is_quantity(vector):
+        return vector, magnitude
+    if magnitude is not default and not (isinstance(magnitude, (int, float))
+                                         and magnitude == default):
+        raise ModelError(f"{what}: give the vector as a quantity or a magnitude, not both "
+                         f"(got {vector} and {magnitude!r})")
+    if cutoff:
+        raise ModelError(f"{what}: a cutoff is in the direction's own numbers; give the "
+                         "direction as numbers and the magnitude as the quantity")
+    numbers = np.asarray(vector.magnitude, dtype=float).ravel()
+    if not np.all(np.isfinite(numbers)):
+        raise ModelError(f"{what}: the vector {vector} must be finite")
+    size = float(np.linalg.norm(numbers)) if mode == "absolute" else 1.0
+    return tuple(numbers), size * (1 * vector.units)
+
+
 def _check_nonnegative(v: sp.Expr, what: str, hint: str, when: str) -> None:
     if v.is_number and v.is_real and bool(v < 0):
         raise ModelError(f"{what} must be zero or positive, got {float(v):g}{when}"
@@ -180,6 +202,7 @@ class Force(LoadBase):
         else:
             if direction is None:
                 raise ModelError("Force needs a direction (a vector, axis or tuple)")
+            direction, magnitude = _split_vector(direction, magnitude, 1, mode, cutoff, "Force")
             self.point, self.direction = as_point(point), as_vector(direction)
         choice(mode, ("absolute", "relative"), "Force: mode")
         self.magnitude = _magnitude(magnitude, "Force magnitude")
@@ -216,8 +239,11 @@ class Moment(LoadBase):
     def __init__(self, body, a, b=None, *, reaction=None, mode: str = "absolute", cutoff=0):
         super().__init__()
         self.body = body
-        if b is None:
+        if b is None and not (is_quantity(a) and np.ndim(a.magnitude) == 1):
             self.vector, self.magnitude = None, _magnitude(a, "Moment magnitude")
+        elif is_quantity(a) and np.ndim(a.magnitude) == 1:   # a 3D moment as one vector
+            a, b = _split_vector(a, 1 if b is None else b, 1, mode, cutoff, "Moment")
+            self.vector, self.magnitude = as_vector(a), _magnitude(b, "Moment magnitude")
         else:
             self.vector, self.magnitude = as_vector(a), _magnitude(b, "Moment magnitude")
         self.reaction = reaction
@@ -271,6 +297,7 @@ class Gravity(LoadBase):
 
     def __init__(self, vector=(0, -1), g=9.81, bodies=None, *, mode: str = "absolute"):
         super().__init__()
+        vector, g = _split_vector(vector, g, 9.81, mode, 0, "Gravity")
         self.vector = as_vector(vector)
         self.vector.check_nonzero("Gravity direction")
         self.g = _magnitude(g, "Gravity g")

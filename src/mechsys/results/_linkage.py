@@ -2,26 +2,31 @@ r"""Linkage metrics: transmission angle and mechanical advantage (output functio
 on a model, arrays over a solution).
 
 **Transmission angle** ``transmission_angle(coupler, output)``: the unsigned angle in
-``[0, pi]`` between two vectors (``Vector(point_from, point_to)``, a body vector, an axis)::
+:math:`[0, \pi]` between two vectors (``Vector(point_from, point_to)``, a body vector, an axis):
 
-    mu = atan2(|u x v|, u . v)
+.. math::
+
+    \mu = \operatorname{atan2}(\lvert u \times v \rvert,\ u \cdot v)
 
 * four-bar: ``coupler`` from the output joint ``C`` to the crank tip ``B``, ``output`` from
   ``C`` to the rocker's ground pivot ``D`` -- the classic ``mu`` of the triangle ``BCD``,
-  ``cos mu = (b^2 + c^2 - a^2 - d^2 + 2 a d cos theta_2) / (2 b c)``;
+  :math:`\cos \mu = (b^2 + c^2 - a^2 - d^2 + 2 a d \cos \theta_2) / (2 b c)`;
 * slider-crank: ``coupler`` along the connecting rod, ``output`` perpendicular to the
-  slider's path (e.g. the piston's ``vector((0, 1))`` for a slide along x): ``mu = 90 deg``
-  when the rod pushes along the path, ``mu = 90 deg -+ phi`` for a rod at ``phi`` to it (the
-  sign depends on the sense of the normal; ``|90 deg - mu| = phi``).
+  slider's path (e.g. the piston's ``vector((0, 1))`` for a slide along x): :math:`\mu = 90^\circ`
+  when the rod pushes along the path, :math:`\mu = 90^\circ \mp \phi` for a rod at ``phi`` to it (the
+  sign depends on the sense of the normal; :math:`\lvert 90^\circ - \mu \rvert = \phi`).
 
-Force transmission is best at ``mu = 90 deg``; a common design rule keeps
+Force transmission is best at :math:`\mu = 90^\circ`; a common design rule keeps
 ``|90 deg - mu| <= 50 deg``.
 
 **Mechanical advantage** ``mechanical_advantage(input, output)``: the ratio of output to
 input effort of an ideal (frictionless, quasi-static) mechanism, by virtual work equal to the
-ratio of input to output rates::
+ratio of input to output rates:
 
-    MA = F_out / F_in = (d input/dt) / (d output/dt)
+.. math::
+
+    \mathit{MA} = \frac{F_{\mathrm{out}}}{F_{\mathrm{in}}}
+        = \frac{d\, \mathit{input} / dt}{d\, \mathit{output} / dt}
 
 ``input`` and ``output`` are a body (its angle: 2D only), a coordinate or model-variable
 symbol, or any expression of the coordinates (e.g. ``m.location(piston.point(0))[0]``, a
@@ -78,9 +83,9 @@ class LinkageOutputs:
         return m.time_derivative(expr)
 
     def mechanical_advantage(self, input, output):  # noqa: A002 - the engineering names
-        """``(d input/dt) / (d output/dt)``: output effort per unit input effort (module doc).
+        r"""``(d input/dt) / (d output/dt)``: output effort per unit input effort (module doc).
         On a static solution of a driven model (zero velocities by definition) the rates are
-        those of the drivers' motion, ``Phi_q qd = -Phi_t`` at each point: the ratio does not
+        those of the drivers' motion, :math:`\Phi_q \dot q = -\Phi_t` at each point: the ratio does not
         depend on the drivers' speed."""
         expr = self._rate_of(input, "input") / self._rate_of(output, "output")
         if getattr(self, "_at_rest", False):

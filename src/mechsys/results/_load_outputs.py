@@ -1,18 +1,23 @@
 r"""Load and energy outputs, written once: symbolic on a Model, numeric on a Solution.
 
-Sign conventions (also in ``docs/loads.md``)::
+Sign conventions (also in ``docs/loads.md``):
 
-    M qdd + Phi_q^T lambda = Q + Qv
-    applied  = Q_b                       (the loads, generalized on body b's coordinates)
-    reaction = -(Phi_q^T lambda)_b        (what the constraints apply to body b)
-    dynamic  = (Qv - M qdd)_b             (the inertial load, d'Alembert)
-    applied + reaction + dynamic = 0
+.. math::
+
+    M \ddot q + \Phi_q^T \lambda &= Q + Q_v \\
+    \mathit{applied} &= Q_b
+        \qquad \text{(the loads, generalized on the coordinates of body } b \text{)} \\
+    \mathit{reaction} &= -(\Phi_q^T \lambda)_b
+        \qquad \text{(what the constraints apply to body } b \text{)} \\
+    \mathit{dynamic} &= (Q_v - M \ddot q)_b
+        \qquad \text{(the inertial load, d'Alembert)} \\
+    \mathit{applied} + \mathit{reaction} + \mathit{dynamic} &= 0
 
 A generalized load on a body converts to a force at the body origin ``O`` and a moment
-(2D scalar, 3D global vector); moved to a point ``P``: ``M_P = M_O + (r_O - r_P) x F``.
+(2D scalar, 3D global vector); moved to a point ``P``: :math:`M_P = M_O + (r_O - r_P) \times F`.
 
 Mech's selection forms (``All``, ``Rest``, lists; see :mod:`._outputs`) make the static
-balance one line, ``Phi_q^T lambda = Q``::
+balance one line, :math:`\Phi_q^T \lambda = Q`::
 
     sol.jacobian(All, All).T @ sol.generalized(All) == sol.loads(All)
 
@@ -120,7 +125,7 @@ class LoadOutputs:
         return self._finish(sp.Matrix(self._lams(m.constraint(constraint))))
 
     def reaction(self, constraint, body, at=None, coordinates: str = "global"):
-        """``(force, moment)`` that ``constraint`` applies *to* ``body``, the moment about
+        r"""``(force, moment)`` that ``constraint`` applies *to* ``body``, the moment about
         ``at`` (default the body origin), in global or body-local axes.
 
         Mech's forms (``Reaction[cnum, bnum]``, ``Reaction[cnum, bnum, point]``,
@@ -133,7 +138,8 @@ class LoadOutputs:
           constraints (their reactions summed);
         * ``body`` may be a coordinate symbol (a generalized coordinate, Mech 11.2) or a
           **parameter** symbol: the generalized load the constraints apply to it,
-          ``-sum_c (dPhi_c/dp)^T lambda_c`` (for a parameter that is a link's length, the
+          :math:`-\sum_c (\partial \Phi_c / \partial p)^T \lambda_c` (for a parameter that is a link's
+          length, the
           link's tension, positive when the link pulls; Mech: ``Reaction[All, len]``), a scalar.
 
         On ground, the reaction is the opposite of that on the constraint's other body
@@ -266,7 +272,8 @@ class LoadOutputs:
         return self._finish_pair(F, M)
 
     def _parameter_reaction(self, constraint, p):
-        """``-sum_c (dPhi_c/dp)^T lambda_c`` over ``All`` or the given constraints."""
+        r""":math:`-\sum_c (\partial \Phi_c / \partial p)^T \lambda_c` over ``All`` or the given
+        constraints."""
         m = self._model()
         cs = (self._reaction_constraints(constraint) if constraint is All
               or isinstance(constraint, (list, tuple)) else [m.constraint(constraint)])
@@ -390,8 +397,8 @@ class LoadOutputs:
         return self._finish(pot if pot is not None else sp.S.Zero)
 
     def power(self, constraint):
-        """Power a constraint delivers to the mechanism (a driver's power):
-        ``-lambda_c^T (Phi_c)_q qd``."""
+        r"""Power a constraint delivers to the mechanism (a driver's power):
+        :math:`-\lambda_c^T (\Phi_c)_q \dot q`."""
         if _staged(self):  # a multistage solution: each point with its stage's rows
             from ._stagewise import stagewise
 

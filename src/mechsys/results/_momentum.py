@@ -1,15 +1,19 @@
 r"""Momentum outputs: linear and angular momentum of a body or a set of bodies, and the centre
 of mass (symbolic on a model, numeric over a solution, like every output function).
 
-For bodies ``b`` with mass ``m_b``, centroid ``c_b = r_b + A_b c'_b``, centroid velocity
-``v_b`` and angular velocity ``omega_b``::
+For bodies ``b`` with mass ``m_b``, centroid :math:`c_b = r_b + A_b c'_b`, centroid velocity
+:math:`v_b` and angular velocity :math:`\omega_b`:
 
-    p     = sum m_b v_b                                       (linear momentum)
-    r_G   = sum m_b c_b / sum m_b                             (centre of mass)
-    H_O   = sum (c_b - r_O) x m_b v_b + A_b J'_b omega'_b     (angular momentum about O)
+.. math::
 
-``J'_b`` the centroidal inertia in body axes and ``omega'_b`` the body-local angular
-velocity (3D; in 2D ``J_b omega_b`` and the cross product is the scalar ``z`` component).
+    p &= \textstyle\sum_b m_b v_b \qquad \text{(linear momentum)} \\
+    r_G &= \textstyle\sum_b m_b c_b \big/ \sum_b m_b \qquad \text{(centre of mass)} \\
+    H_O &= \textstyle\sum_b (c_b - r_O) \times m_b v_b + A_b J'_b \omega'_b
+        \qquad \text{(angular momentum about } O \text{)}
+
+:math:`J'_b` the centroidal inertia in body axes and :math:`\omega'_b` the body-local angular
+velocity (3D; in 2D :math:`J_b \omega_b` and the cross product is the scalar :math:`z`
+component).
 ``about=None`` takes the centroid of the body, or the centre of mass of a set of bodies;
 ``about`` may also be a body point (moving: ``r_O`` follows it, velocities stay absolute)
 or a global point. Without applied moments about ``O`` (a fixed point or the centre of

@@ -1,13 +1,19 @@
 r"""Output functions, written once: symbolic on a :class:`Model`, numeric on a
 :class:`Solution` (which evaluates the same expressions over its time points).
 
-Velocities and accelerations are total time derivatives::
+Velocities and accelerations are total time derivatives:
 
-    v_P = d r_P / dt = (r_P)_q qd + (r_P)_t,      a_P = d v_P / dt
+.. math::
 
-Planar instant centre of a body with origin velocity ``v_O`` and angular velocity ``w``::
+    v_P &= \frac{d r_P}{dt} = (r_P)_q \dot q + (r_P)_t \\
+    a_P &= \frac{d v_P}{dt}
 
-    r_IC = r_O + perp(v_O) / w,    perp(v) = (-v_y, v_x)
+Planar instant centre of a body with origin velocity :math:`v_O` and angular velocity
+:math:`w`:
+
+.. math::
+
+    r_{IC} = r_O + \operatorname{perp}(v_O) / w, \qquad \operatorname{perp}(v) = (-v_y, v_x)
 
 (infinite when ``w = 0``: the body translates).
 
@@ -144,7 +150,7 @@ class OutputFunctions:
         return self._finish(a)
 
     def instant_center(self, body, coordinates: str = "global"):
-        """Planar instant centre ``(2,)`` of ``body`` (infinite when it does not rotate).
+        r"""Planar instant centre ``(2,)`` of ``body`` (infinite when it does not rotate).
 
         In 3D a body has an instant screw axis instead: returns ``(point, direction)``, the
         point of the axis nearest the body origin ``r_O`` and the axis direction ``omega``::
@@ -156,7 +162,7 @@ class OutputFunctions:
 
         ``coordinates="local"`` (Mech's ``Coordinates -> Local``) gives the point in the
         body's own frame, ``A^T (r_IC - r_O)`` (and in 3D the direction in body axes,
-        ``A^T omega``); the default ``"global"`` as in Mech.
+        :math:`A^T \omega`); the default ``"global"`` as in Mech.
         """
         m = self._model()
         b = m.body(body)
@@ -202,7 +208,7 @@ class OutputFunctions:
 
     def vector_to_local(self, body, vector):
         """Components of ``vector`` in the axes of ``body`` (Mech's ``VectorToLocal``):
-        ``A_b^T d``, the inverse of :meth:`direction`."""
+        :math:`A_b^T d`, the inverse of :meth:`direction`."""
         m = self._model()
         return self._finish(m.body(body).A.T * m._vector(vector).direction())
 
@@ -216,7 +222,7 @@ class OutputFunctions:
         return self._finish(sp.Matrix(c.equations(m.space)))
 
     def jacobian(self, constraint=None, body=None):
-        """``d Phi_c / d q_b``: of one constraint's equations with respect to one body's
+        r""":math:`d \Phi_c / d q_b`: of one constraint's equations with respect to one body's
         coordinates (all equations or all coordinates when omitted).
 
         Mech's forms: ``constraint`` may be ``All`` (every equation of the system, Euler
@@ -247,9 +253,9 @@ class OutputFunctions:
         return self._finish(eqs.diff(T) if len(eqs) else eqs)
 
     def acceleration_terms(self, constraint=None):
-        """Mech's ``AccelerationTerms``: the part of the second time derivative of a
+        r"""Mech's ``AccelerationTerms``: the part of the second time derivative of a
         constraint's equations that is not linear in the accelerations,
-        ``(Phi_q qd)_q qd + 2 Phi_qt qd + Phi_tt = -gamma``, so that the acceleration
+        :math:`(\Phi_q \dot q)_q \dot q + 2 \Phi_{qt} \dot q + \Phi_{tt} = -\gamma`, so that the acceleration
         equations read ``jacobian(c) @ qdd + acceleration_terms(c) == 0``."""
         m = self._model()
         eqs = sp.Matrix(self._equation_rows(constraint))

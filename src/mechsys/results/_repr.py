@@ -8,7 +8,7 @@ shows the richest one its front end supports. :class:`~mechsys.Model` gives
   coordinates, mass, points), a table of the constraints with their equations in LaTeX
   (``\(...\)``, typeset by the notebook's MathJax), the parameters and the loads;
 * Markdown: the same as Markdown tables (for front ends without HTML);
-* LaTeX: the constraint equations ``Phi(q, T, p) = 0`` as one ``aligned`` block.
+* LaTeX: the constraint equations :math:`\Phi(q, T, p) = 0` as one ``aligned`` block.
 
 :class:`~mechsys.Solution` gives a summary table: the time span, what was solved, the
 iterations, and per coordinate its first and last value, range, and largest speed and

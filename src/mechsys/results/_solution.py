@@ -313,6 +313,23 @@ class Solution(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Lin
         return quantities(self, [name], reactions=reactions, loads=loads,
                           energies=energies)[name]
 
+    @property
+    def in_units(self):
+        """The outputs whose dimension mechsys knows, as pint quantities in the model's
+        declared units (``m.set_units``): ``location``, ``velocity``, ``acceleration``,
+        ``relative_velocity``, ``angle``, ``omega``, ``alpha``, ``reaction``,
+        ``joint_reaction``, ``loads`` (force and moment), ``body_energy``,
+        ``potential_energy``, ``linear_momentum``, ``angular_momentum``, ``t``; and
+        ``eval(expr, dimension)`` for an expression, whose dimension the caller names. Any
+        other output is refused with a :class:`~mechsys.ModelError` (decision 0056). Needs
+        pint.
+
+        Example: ``sol.in_units.location(piston.point(0)).to("m")``,
+        ``sol.in_units.eval(r * sp.cos(th), "[length]")``."""
+        from ._in_units import InUnits
+
+        return InUnits(self)
+
     def quantities(self, reactions: bool = False, loads: bool = False,
                    energies: bool = False) -> dict:
         """Every column of :meth:`to_dataframe` whose unit is known, as ``{name: pint

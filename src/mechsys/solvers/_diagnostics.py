@@ -2,13 +2,13 @@ r"""Debugging tools of Mech's chapter 13: why a position solve failed, where the
 Jacobian is (nearly) singular, and the solver hooks ``pre_solve`` / ``post_iterate``.
 
 Everything is measured on the unit-free equations of
-:class:`~mechsys.solvers._linalg.Scaling` (``Phi_hat = R^-1 Phi``, coordinates in units of the
+:class:`~mechsys.solvers._linalg.Scaling` (:math:`\hat\Phi = R^{-1} \Phi`, coordinates in units of the
 characteristic length ``L``), so the diagnosis does not depend on the unit of length.
 
 *Failure to converge* (Mech 13.2). After a failed Newton solve,
 :func:`diagnose_convergence` ranks
 
-* the constraints by the largest scaled residual ``|Phi_i| / r_i`` of their equations (to
+* the constraints by the largest scaled residual :math:`\lvert \Phi_i \rvert / r_i` of their equations (to
   first order the distance, in units of ``L`` or radians, from satisfying the equation), and
 * the coordinates by how far Newton moved them, ``|q_end - q_start|_j / c_j`` (``c_j = L`` for
   positions, 1 for angles),
@@ -20,9 +20,9 @@ position), a residual that oscillates (a toggle position, or a guess between two
 branches), or one still decreasing (more iterations).
 
 *Mathematical anomalies* (Mech 13.3). :func:`diagnose_singularity` takes the singular value
-decomposition ``Phi_hat_q = U S V^T`` of the scaled Jacobian. A singular value
+decomposition :math:`\hat\Phi_q = U S V^T` of the scaled Jacobian. A singular value
 ``s_k <= threshold * s_max`` marks a (near-)dependency: its left singular vector ``u_k``
-spans the (near) null space of ``Phi_q^T`` — ``u_k^T Phi_q ~ 0``, a combination of equations
+spans the (near) null space of ``Phi_q^T`` — :math:`u_k^T \Phi_q \approx 0`, a combination of equations
 that does not constrain anything — and the equations with a large weight ``|u_k[i]|`` are the
 constraints involved; its right singular vector ``v_k`` is the motion the constraints
 (nearly) fail to control (the direction in which a toggle position can move, or the motion a

@@ -1,22 +1,29 @@
 r"""Underconstrained (free) systems: free acceleration, equilibrium configuration and
 equilibrium velocity. Pure numerics on a System and its Dynamics.
 
-Free acceleration (``m < n`` equations), the augmented system::
+Free acceleration (``m < n`` equations), the augmented system:
 
-    [ M      Phi_q^T ] [ qdd    ]   [ Q(t, q, qd, lambda) + Qv(q, qd) ]
-    [ Phi_q  0       ] [ lambda ] = [ gamma(t, q, qd)                 ]
+.. math::
 
-linear unless ``Q`` depends on ``lambda`` (friction): then Newton on ``(qdd, lambda)`` with
-the Jacobian ``[[M, Phi_q^T - dQ/dlambda], [Phi_q, 0]]``.
+    \begin{bmatrix} M & \Phi_q^T \\ \Phi_q & 0 \end{bmatrix}
+    \begin{bmatrix} \ddot q \\ \lambda \end{bmatrix} =
+    \begin{bmatrix} Q(t, q, \dot q, \lambda) + Q_v(q, \dot q) \\ \gamma(t, q, \dot q) \end{bmatrix}
 
-Equilibrium configuration (static loads), unknowns ``(q, lambda)``::
+linear unless ``Q`` depends on ``lambda`` (friction): then Newton on :math:`(\ddot q, \lambda)` with
+the Jacobian :math:`\begin{bmatrix} M & \Phi_q^T - \partial Q / \partial \lambda \\ \Phi_q & 0 \end{bmatrix}`.
 
-    Phi(q, t) = 0,    Phi_q^T lambda - Q(t, q, 0, lambda) = 0
+Equilibrium configuration (static loads), unknowns :math:`(q, \lambda)`:
+
+.. math::
+
+    \Phi(q, t) = 0, \qquad \Phi_q^T \lambda - Q(t, q, 0, \lambda) = 0
 
 Equilibrium velocity (velocity-dependent loads, inertial terms excluded), unknowns
-``(qd, lambda)`` at fixed ``q``::
+:math:`(\dot q, \lambda)` at fixed ``q``:
 
-    Phi_q qd + Phi_t = 0,    Phi_q^T lambda - Q(t, q, qd, lambda) = 0
+.. math::
+
+    \Phi_q \dot q + \Phi_t = 0, \qquad \Phi_q^T \lambda - Q(t, q, \dot q, \lambda) = 0
 """
 
 from __future__ import annotations
@@ -56,10 +63,10 @@ def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterat
                       guard=None, columns=None):
     r"""``(qdd (n,), lambda (m,), iterations)`` of a free system at ``(t, q, qd)``.
     ``guard(K, rhs, x)`` (free motion, linear case): ``None`` to keep the solution ``x`` of
-    the augmented system, or a replacement ``(qdd, lambda)`` near a singular instant
+    the augmented system, or a replacement :math:`(\ddot q, \lambda)` near a singular instant
     (:func:`._rank.zone_guard`).
 
-    Loads that depend on the multipliers or accelerations: Newton on ``(qdd, lambda)`` from
+    Loads that depend on the multipliers or accelerations: Newton on :math:`(\ddot q, \lambda)` from
     ``qdd = 0`` and ``lam_guess`` (default ones) with the residuals ``r1 = M qdd + Phi_q^T
     lambda - Q - Qv``, ``r2 = Phi_q qdd - gamma``, converged after at least one step when,
     unit-free (``c = columns``, the column scales of
@@ -657,9 +664,9 @@ def equilibrium_configuration(eq, system, t, q0, lam0, p, tol=1e-12, max_iterati
 
 def equilibrium_velocity(eqv, system, t, q, qd0, lam0, p, tol=1e-12, max_iterations=50,
                          rows=None):
-    """Newton on ``(qd, lambda)`` for the velocity equilibrium at fixed ``q`` (unit-free as
-    :func:`equilibrium_configuration`); with velocity constraints (``rows``) on ``(qd,
-    lambda, mu)``."""
+    r"""Newton on :math:`(\dot q, \lambda)` for the velocity equilibrium at fixed ``q``
+    (unit-free as :func:`equilibrium_configuration`); with velocity constraints (``rows``) on
+    :math:`(\dot q, \lambda, \mu)`."""
     n, m = system.n, system.m
     A = rows.evaluate(t, q, np.zeros(n), p)[0] if rows is not None else None
     k = rows.k if rows is not None else 0

@@ -1,5 +1,5 @@
 r"""Integrators for the equations of motion of a free system, ``y = (q, qd)``,
-``y' = (qd, qdd(t, q, qd))`` with ``qdd`` from the augmented system.
+:math:`y' = (\dot q, \ddot q(t, q, \dot q))` with ``qdd`` from the augmented system.
 
 Two families, selected by ``method``:
 
@@ -11,7 +11,8 @@ Two families, selected by ``method``:
   predictor and Adams-Moulton corrector of degree ``fit_degree`` (1 linear ... 4 quartic)
   built by polynomial fits through the past derivative values at their actual times (so
   step changes need no restart). With ``max_error = (a, b, c)`` (a number ``e`` means
-  ``(e, e/10, e/100)``) and the error ``err = max |y_corrector - y_predictor|`` of a step:
+  ``(e, e/10, e/100)``) and the error :math:`\mathit{err} = \max \lvert y_{\mathrm{corrector}} -
+  y_{\mathrm{predictor}} \rvert` of a step:
 
   - ``err > a``: reject, back up, halve the step;
   - ``b < err <= a``: accept the corrected (Adams-Moulton) value;
@@ -34,7 +35,8 @@ Options are checked up front by :func:`integration_options` (one place for free 
 systems): every option must apply to the chosen method, and ``max_error`` (Mech's accuracy
 option) is honoured by every method. With the Runge-Kutta methods it becomes
 ``rtol = atol = max_error``: SciPy accepts a step when the (RMS) estimate of its local error
-``e_i`` satisfies ``e_i <= atol + rtol |y_i| = max_error (1 + |y_i|)``, the same absolute
+``e_i`` satisfies :math:`e_i \le \mathit{atol} + \mathit{rtol} \lvert y_i \rvert = \mathit{max\_error}\,
+(1 + \lvert y_i \rvert)`, the same absolute
 per-step budget as Adams' ``a`` for variables of order one (Mech's assumption) and relative
 for large ones.
 """
@@ -674,7 +676,7 @@ def reject_unknown(where: str, unknown: dict, known) -> None:
 def plan_run(where: str, t, unknown: dict, known, method="dop853", rtol=RTOL, atol=ATOL,
              max_step=MAX_STEP, fit_degree=FIT_DEGREE, max_error=MAX_ERROR, step_size=None,
              constraint_correction=True, starting_step_size=None,
-             dense_output: str | None = None) -> Run:
+             dense_output: str | None = None, to_numbers=None) -> Run:
     """The protocol every ``simulate`` (free, switched, path, sensitivity) follows before it
     computes anything, in one place and in this order: (1) options not in ``known`` are
     refused (:func:`reject_unknown`); (2) ``method`` is looked up in the registry
@@ -682,8 +684,16 @@ def plan_run(where: str, t, unknown: dict, known, method="dop853", rtol=RTOL, at
     (:func:`integration_options`); ``dense_output``: the run needs a method with a dense
     output, the text says why (events); (3) the times ``t`` are parsed (:func:`output_times`);
     (4) the step lengths are checked against them (:func:`checked_steps`). Returns the
-    :class:`Run` that :func:`integrate` takes, so ``t`` and the options are parsed once."""
+    :class:`Run` that :func:`integrate` takes, so ``t`` and the options are parsed once.
+    ``to_numbers(value, what)``, when given, turns the times and step lengths given as pint
+    quantities into numbers in the model's time unit first (decision 0043; the caller's, since
+    the units belong to a model), so that NumPy never strips their unit."""
     reject_unknown(where, unknown, known)
+    if to_numbers is not None:
+        t, max_step, step_size, starting_step_size = (
+            to_numbers(v, f"{where}: {name}") for name, v in (
+                ("t", t), ("max_step", max_step), ("step_size", step_size),
+                ("starting_step_size", starting_step_size)))
     if dense_output is not None:
         spec = _methods.find(method)
         if spec is None or not spec.dense_output:

@@ -8,7 +8,7 @@ projections onto the constraints with no Python between the compiled equations.
            \begin{bmatrix} \ddot q \\ \lambda \end{bmatrix} =
            \begin{bmatrix} Q + Q_v \\ \gamma \end{bmatrix}
 
-with SciPy's DOP853 (or RK45) and projects ``(q, qd)`` onto ``Phi = 0``, ``Phi_q qd = -Phi_t`` after
+with SciPy's DOP853 (or RK45) and projects ``(q, qd)`` onto ``Phi = 0``, :math:`\Phi_q \dot q = -\Phi_t` after
 every accepted step. The compiled loop (``_jit_free_loop.runge_kutta``) performs exactly these
 steps: SciPy's Runge-Kutta stages, error norm and step-size control (the same coefficients,
 from our own tableaus: ``_tableaus``, decision 0038), the augmented system from the compiled
@@ -34,7 +34,7 @@ parameters, decision 0032), or above it the augmented matrix's pattern by the co
 sparse LU (``"sparse"``: trees of many branches, whose pattern is not banded and whose
 block band exceeds :data:`BLOCK_BAND`, with the Python path's pattern and LU; systems the
 block path cannot take, with the banded pattern's sparse twin; its projections through the
-Python path's pattern of ``[[I, J^T], [J^, 0]]``); every kernel
+Python path's pattern of :math:`\begin{bmatrix} I & J^T \\ \hat J & 0 \end{bmatrix}`); every kernel
 SymEngine LLVM code (CSE kernels included: their repeated outputs are expanded in the
 loop). Loads that depend on the multipliers (friction) or accelerations
 (added mass) take ``free_acceleration``'s Newton in the loop (``"newton"``, decision 0028).
@@ -49,10 +49,11 @@ Numba and the cached machine code costs about 0.7 s CPU once per process.
 Nonholonomic paths (:class:`~mechsys.analyses._path.PathSystem`, Mech's ``SolvePath``) run
 in the same loops (:meth:`FreeStepper.plan_path`, decision 0027): the state is ``q``, its
 derivative the velocities of the holonomic and velocity constraints (Newton on ``qd`` with
-``[Phi_q; psi_qd]``: one step when the velocity constraints are linear in the velocities),
+:math:`\begin{bmatrix} \Phi_q \\ \psi_{\dot q} \end{bmatrix}`: one step when the velocity constraints are
+linear in the velocities),
 the projection onto the positions only. Above ``SMALL_LU`` coordinates the velocity system
 goes through the Python path's fixed pattern and the same compiled sparse LU, and the
-projection through ``[[I, J^T], [J^, 0]]`` (``_free.projection_pattern``).
+projection through :math:`\begin{bmatrix} I & J^T \\ \hat J & 0 \end{bmatrix}` (``_free.projection_pattern``).
 """
 
 from __future__ import annotations
@@ -448,10 +449,11 @@ def _workspace(stepper, system):
 
 
 def _projection_part(system):
-    """The projection's structure for :func:`_two_structures`: ``(FixedPattern, head, pos,
-    kperm, dpos)`` of ``[[I, J^T], [J^, 0]]`` (``_free.projection_pattern``, the Python
-    path's; kernel values the Jacobian's, each twice, the identity at ``dpos``), or None when
-    the Jacobian has a repeated entry (the row scales are taken entry by entry)."""
+    r"""The projection's structure for :func:`_two_structures`: ``(FixedPattern, head, pos,
+    kperm, dpos)`` of :math:`\begin{bmatrix} I & J^T \\ \hat J & 0 \end{bmatrix}`
+    (``_free.projection_pattern``, the Python path's; kernel values the Jacobian's, each twice,
+    the identity at ``dpos``), or None when the Jacobian has a repeated entry (the row scales
+    are taken entry by entry)."""
     from ._free import projection_pattern
 
     n, m = system.n, system.m
@@ -883,11 +885,12 @@ class FreeStepper:
 
     @classmethod
     def plan_path(cls, path, method, p, scaling, correction, t_eval):
-        """The stepper of a nonholonomic path (:class:`~mechsys.analyses._path.PathSystem`)
+        r"""The stepper of a nonholonomic path (:class:`~mechsys.analyses._path.PathSystem`)
         when the compiled loop can run it, else None: LLVM kernels; up to ``SMALL_LU``
         coordinates the velocity system dense (the written-out LU), above it (where the
         Python path solves it sparse) by the Python path's pattern and the compiled sparse
-        LU, the projection through ``[[I, J^T], [J^, 0]]`` (``_path_sparse_structure``)."""
+        LU, the projection through :math:`\begin{bmatrix} I & J^T \\ \hat J & 0 \end{bmatrix}`
+        (``_path_sparse_structure``)."""
         from ._jit_loop import SMALL as SMALL_LU
 
         system = path.system

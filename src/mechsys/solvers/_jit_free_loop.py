@@ -1,4 +1,4 @@
-"""Numba code of the compiled free-motion stepper (imported only when it runs: see
+r"""Numba code of the compiled free-motion stepper (imported only when it runs: see
 ``_jit_free.py``).
 
 Each function mirrors one piece of the Python path, in the same order of operations where
@@ -8,19 +8,19 @@ the Python path fixes one:
                  ``solvers._rank.zone_guard``: the augmented system ``[[M, J^T], [J, 0]]``
                  from the compiled kernel, solved by LAPACK ``dgesv`` (SciPy's own) or,
                  up to ``SMALL`` unknowns, by the same elimination written out here
-* ``_min_norm``  ``solvers._free._min_norm``: ``D J^T (J^ J^T)^-1 b``, ``J^ = R^-1 J D``
+* ``_min_norm``  ``solvers._free._min_norm``: :math:`D J^T (\hat J J^T)^{-1} b`, :math:`\hat J = R^{-1} J D`
 * ``_project``   ``solvers._free.project`` (positions, then velocities)
 * ``runge_kutta`` ``scipy.integrate._ivp.rk.rk_step`` for DOP853 and RK45, with their
                  error norms (``DOP853._estimate_error_norm``, ``RungeKutta``'s RMS norm of
-                 ``K^T E h / scale``), step-size control (``_step_impl``) and dense output
-                 (``Dop853DenseOutput``; ``RkDenseOutput`` with ``Q = K^T P``)
+                 :math:`K^T E h / \mathit{scale}`), step-size control (``_step_impl``) and dense output
+                 (``Dop853DenseOutput``; ``RkDenseOutput`` with :math:`Q = K^T P`)
 * ``_path_velocity`` ``analyses._path.PathSystem.velocities`` (a nonholonomic path's
                  derivative, velocity constraints linear in the velocities; decision 0027),
                  and ``path_accelerations`` its ``accelerations`` at the outputs; above
                  ``SMALL_LU`` coordinates ``_path_velocity_sparse`` (its ``_velocities_sparse``:
                  the fixed pattern and the compiled sparse LU)
 * ``_newton_accel`` ``solvers._free.free_acceleration`` when the loads depend on the
-                 multipliers or accelerations (its Newton on ``(qdd, lambda)``)
+                 multipliers or accelerations (its Newton on :math:`(\ddot q, \lambda)`)
 * ``_accel_gen`` ``compile._generalized.RecursiveDynamics`` (generalized coordinates,
                  decision 0018): the joint kernels, then the articulated-body recursion
                  (a tree of Gen joints) or the composite-body mass matrix in the augmented
@@ -73,7 +73,7 @@ AUGMENTED, BLOCK, GEN_TREE, GEN_AUGMENTED = 0, 1, 2, 3
 #: (``_path_velocity``); the projection is onto the positions only
 PATH = 4
 #: loads that depend on the multipliers (friction) or on the accelerations (added masses):
-#: ``solvers._free.free_acceleration``'s Newton on ``(qdd, lambda)`` (``_newton_accel``)
+#: ``solvers._free.free_acceleration``'s Newton on :math:`(\ddot q, \lambda)` (``_newton_accel``)
 NEWTON = 5
 #: a large system whose augmented matrix has a wide band (a tree of many branches): the
 #: Python path's ``FixedPattern`` of it, factorised by the compiled sparse LU it calls
@@ -520,8 +520,8 @@ def _band_rows_of(vals, off, jr, columns, r, bnd, w):
 
 @leaf
 def _min_norm_band(lapack, bi, ipiv, r, columns, bvec, out, n, m, jr, bnd, w):
-    """``_min_norm`` through the Newton matrix's banded pattern: the smallest ``z`` (``out =
-    D z``) with ``J^ z = bvec``, ``J^ = R^-1 J D``, from the augmented system ``[[I, J^T],
+    r"""``_min_norm`` through the Newton matrix's banded pattern: the smallest ``z`` (``out =
+    D z``) with ``J^ z = bvec``, :math:`\hat J = R^{-1} J D`, from the augmented system ``[[I, J^T],
     [J^, 0]] [z; -nu] = [0; bvec]`` (its entries are among the pattern's: the mass matrix's
     diagonal, ``Phi_q``, ``Phi_q^T``), factorised by ``dgbtrf``. The Jacobian's distinct
     values ``Jv`` are in ``w`` (``_band_rows_of``). False (hand over) at a pivot ratio below
@@ -567,7 +567,7 @@ def _min_norm_band(lapack, bi, ipiv, r, columns, bvec, out, n, m, jr, bnd, w):
 @leaf
 def _newton_accel_band(kp, lapack, bi, x, nin, out, n, m, jr, jc, ipiv, qdd, lam, info, Mr, Mc,
                        Dr, Dc, Ar, Ac, bnd, nw, ex, ph, t, y, f):
-    """``_newton_accel`` for large systems: the same Newton on ``(qdd, lambda)`` and the same
+    r"""``_newton_accel`` for large systems: the same Newton on :math:`(\ddot q, \lambda)` and the same
     unit-free convergence test, with the Jacobian held by its distinct nonzeros and the
     Newton matrix by its fixed pattern (``solvers._free._newton_pattern``), factorised as the
     Python path's ``FixedPattern.factor`` does: LAPACK's ``dgbtrf`` in the reverse
@@ -804,8 +804,8 @@ def _accel_sparse(kp, x, nin, out, n, m, jr, jc, rows0, columns, robust, qdd, la
 
 @leaf
 def _min_norm_sparse(r, columns, bvec, out, n, m, jr, jc, jv, bi, bw, robust):
-    """``_free._min_norm`` of a large system, operation for operation: the smallest ``z``
-    (``out = D z``) with ``J^ z = bvec``, ``J^ = R^-1 J D`` (``jv`` the Jacobian's values,
+    r"""``_free._min_norm`` of a large system, operation for operation: the smallest ``z``
+    (``out = D z``) with ``J^ z = bvec``, :math:`\hat J = R^{-1} J D` (``jv`` the Jacobian's values,
     each entry once), from ``[[I, J^T], [J^, 0]] [z; -nu] = [0; bvec]`` through that
     matrix's pattern (``_free.projection_pattern``: the first structure of ``bi``) and the
     same sparse LU. False (hand over) at a pivot ratio below ``RCOND_MIN``, or, ``robust``,

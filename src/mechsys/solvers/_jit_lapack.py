@@ -1,4 +1,4 @@
-"""Small dense LU in Numba for the compiled loops: LAPACK's algorithms without the call.
+r"""Small dense LU in Numba for the compiled loops: LAPACK's algorithms without the call.
 
 For the 5-30 unknowns of a mechanism's Jacobian a call of SciPy's LAPACK through its C
 address costs about 0.7 µs of overhead, more than the arithmetic; a sweep point makes
@@ -12,7 +12,7 @@ routines the Python path calls (``scipy.linalg.lapack``):
   unit lower ``L`` and upper ``U`` in place, ``info > 0`` at an exactly zero pivot;
 * ``getrs``  ``dgetrs`` with ``trans = 'N'``: row interchanges, then the two triangular solves;
 * ``gecon1`` ``dgecon`` with ``norm = '1'``: Higham's refinement of Hager's estimator of
-  ``||A^-1||_1`` (LAPACK ``dlacn2``: at most five iterations, then the alternating-sign
+  :math:`\lVert A^{-1} \rVert_1` (LAPACK ``dlacn2``: at most five iterations, then the alternating-sign
   test vector) with the triangular solves of ``dlatrs`` in its unscaled case (``dtrsv``).
 
 The loops sum in their own order, so the results agree with LAPACK's to rounding (the

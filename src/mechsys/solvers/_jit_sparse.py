@@ -8,9 +8,9 @@ permutation beforehand) has LU factors as sparse as its Jacobian, and this facto
 work is proportional to the arithmetic on them plus ``nnz(A)`` (an ``O(n)`` initialisation per
 call aside): linear in ``n`` for such mechanisms.
 
-**Algorithm** (:func:`lu_factor`). Column ``k`` of ``P A = L U`` (``P`` the row permutation
+**Algorithm** (:func:`lu_factor`). Column ``k`` of :math:`P A = L U` (``P`` the row permutation
 chosen on the way, columns in their given order) comes from the sparse triangular solve
-``L_k x = A(:, k)``, ``L_k`` the ``k`` columns of ``L`` found so far (unit lower, padded with
+:math:`L_k x = A(:, k)`, ``L_k`` the ``k`` columns of ``L`` found so far (unit lower, padded with
 the identity):
 
 * the nonzero pattern of ``x`` is the set of rows reachable from the rows of ``A(:, k)`` in
@@ -37,10 +37,11 @@ the identity):
   ``Ui[Up[k + 1] - 1] == k``).
 * The rows of ``L`` and ``U`` are in the **pivoted** numbering (``0 .. n-1`` in pivot order),
   in no particular order within a column (the search's). ``pinv`` (n,): ``pinv[i] = k`` when
-  row ``i`` of ``A`` is the ``k``-th pivot row, i.e. ``(P A)[pinv[i], :] = A[i, :]``.
+  row ``i`` of ``A`` is the ``k``-th pivot row, i.e. :math:`(P A)[\mathtt{pinv}[i], :] = A[i, :]`.
 * Entries are structural: an ``x_i`` that cancels to zero is stored (as zero).
 
-``nnz(L) + nnz(U) = nnz(A)`` exactly when the elimination makes no fill (``nnz(L)`` without
+:math:`\mathit{nnz}(L) + \mathit{nnz}(U) = \mathit{nnz}(A)` exactly when the elimination makes no fill
+(``nnz(L)`` without
 the unit diagonal). Every function here is a :data:`~._jit_lapack.leaf`: no allocation, no
 exception, no recursion; all storage belongs to the caller (sizes: :func:`work_sizes`).
 :class:`SparseLU` is the Python-side convenience that allocates and retries.
@@ -87,7 +88,7 @@ def work_sizes(n):
 
 @leaf
 def _reach(n, Ap, Ai, k, Lp, Li, pinv, iw):
-    """Nonzero pattern of ``x`` in ``L_k x = A(:, k)``, in topological order, into
+    """Nonzero pattern of ``x`` in :math:`L_k x = A(:, k)`, in topological order, into
     ``iw[top:n]``; returns ``top``. Depth-first search from each row of ``A(:, k)`` over the
     edges ``j -> Li[p]``, ``p`` in ``Lp[J] .. Lp[J+1]``, ``J = pinv[j] >= 0`` (``Li`` still
     in the original row numbering). ``iw[0:n]``: the stack grows from ``0`` while the finished
@@ -130,7 +131,7 @@ def _reach(n, Ap, Ai, k, Lp, Li, pinv, iw):
 
 @leaf
 def lu_factor(n, Ap, Ai, Ax, tol, Lp, Li, Lx, Up, Ui, Ux, pinv, iw, xw):
-    r"""``P A = L U`` of the sparse ``A`` (n, n) (module docstring: algorithm, storage).
+    r""":math:`P A = L U` of the sparse ``A`` (n, n) (module docstring: algorithm, storage).
 
     ``A``: ``Ap`` (n+1,), ``Ai`` (nnz,), ``Ax`` (nnz,) in CSC; ``tol``: the diagonal is kept
     as pivot while ``|x_k| >= tol max |x_i|`` over the candidates (``0 <= tol <= 1``; 0.1
@@ -231,7 +232,7 @@ def lu_factor(n, Ap, Ai, Ax, tol, Lp, Li, Lx, Up, Ui, Ux, pinv, iw, xw):
 
 @leaf
 def lu_solve(n, pinv, Lp, Li, Lx, Up, Ui, Ux, b, x, w):
-    r"""``x = A^-1 b`` from :func:`lu_factor`'s factors (status 0): ``P A = L U``, so
+    r"""``x = A^-1 b`` from :func:`lu_factor`'s factors (status 0): :math:`P A = L U`, so
     ``L y = P b`` (``(P b)[pinv[i]] = b[i]``), then ``U x = y``, both by columns. ``b`` (n,)
     is read only; ``x`` (n,) must not alias it; ``w`` (n,): not used (the solves share their
     arguments)."""
@@ -305,7 +306,7 @@ class SparseLU:
     Attributes: ``n``, ``nnz_L`` (without the unit diagonal), ``nnz_U`` (with the diagonal),
     ``pinv``, ``rcond`` (:func:`lu_pivot_ratio`), the raw arrays ``Lp, Li, Lx, Up, Ui, Ux``
     (trimmed to their ``nnz``) and the matrices :attr:`L` and :attr:`U` (pivoted numbering:
-    ``P A = L U`` with ``(P A)[pinv[i]] = A[i]``)."""
+    :math:`P A = L U` with ``(P A)[pinv[i]] = A[i]``)."""
 
     def __init__(self, A, tol=0.1, capacity=None):
         A = sps.csc_matrix(A, dtype=np.float64, copy=True)

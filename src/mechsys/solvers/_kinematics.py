@@ -1,24 +1,24 @@
 r"""Velocity, acceleration and kinematic sweeps of a fully constrained system.
 
-Velocity ``Phi_q qd = -Phi_t``; acceleration ``Phi_q qdd = gamma``, both solved on the
+Velocity :math:`\Phi_q \dot q = -\Phi_t`; acceleration :math:`\Phi_q \ddot q = \gamma`, both solved on the
 unit-free scaled Jacobian (:class:`~mechsys.solvers._linalg.Scaling`), whose reciprocal
 condition number ``rcond`` is the unit-invariant measure of closeness to a lock-up.
 
 A sweep over times ``t_0 < t_1 < ...`` solves each position by Newton from a predictor of the
 previous point, so it follows one assembly branch:
 
-* the Taylor predictor ``q + qd dt + qdd dt^2 / 2`` (as far as solved) when the previous
+* the Taylor predictor :math:`q + \dot q\, dt + \ddot q\, dt^2 / 2` (as far as solved) when the previous
   point is well conditioned (``rcond >= RCOND_WARN``), with ``+ q3 dt^3 / 6 + q4 dt^4 / 24``
   when the two (three) points before are too: ``q3``, ``q4`` from the divided differences
   of their accelerations (``a = qdd[k-1, k-2]``, ``b = qdd[k-1, k-2, k-3]``:
-  ``q3 = a + b dt_{k-1}``, ``q4 = 2 b``), an ``O(dt^5)`` prediction;
+  :math:`q_3 = a + b\, dt_{k-1}`, :math:`q_4 = 2 b`), an ``O(dt^5)`` prediction;
 * the secant ``q_k + (q_k - q_{k-1}) dt_k / dt_{k-1}`` when it is not (and in location-only
   sweeps, which have no ``qd``): at and next to a
   toggle (lock-up) position ``qd`` and ``qdd`` are undefined or meaningless, and the secant
   continues the branch through the singular point with continuous angles (for a slider-crank
   driven at the piston through a dead centre: the crank keeps turning the same way);
 * right after a first point that is nearly singular (no secant yet), the first-order step
-  ``qd dt`` shortened to turn at most ``ROTATION_START``: its direction, not its size, is
+  :math:`\dot q\, dt` shortened to turn at most ``ROTATION_START``: its direction, not its size, is
   meaningful there;
 * the secant also replaces a Taylor prediction that moves a rotational coordinate by far
   more than the previous step did (``> ROTATION_SLACK + 4 |secant step|``).
@@ -71,7 +71,7 @@ FIRST_CHUNK = 64
 
 
 def solve_velocity(system, t: float, q, p=None, scaling: Scaling | None = None) -> np.ndarray:
-    """Velocities ``qd`` (n,) from ``Phi_q qd = -Phi_t`` at ``(t, q)``."""
+    r"""Velocities ``qd`` (n,) from :math:`\Phi_q \dot q = -\Phi_t` at ``(t, q)``."""
     sparse = system.n > SPARSE_THRESHOLD
     J, rhs = system.velocity_rhs(t, q, p, sparse)
     sc = scaling or Scaling.of(system, q, J)
@@ -83,7 +83,7 @@ def solve_velocity(system, t: float, q, p=None, scaling: Scaling | None = None) 
 
 def solve_acceleration(system, t: float, q, qd, p=None, J=None,
                        scaling: Scaling | None = None) -> np.ndarray:
-    """Accelerations ``qdd`` (n,) from ``Phi_q qdd = gamma`` at ``(t, q, qd)``."""
+    r"""Accelerations ``qdd`` (n,) from :math:`\Phi_q \ddot q = \gamma` at ``(t, q, qd)``."""
     if J is None:
         J = system.jacobian(t, q, p, system.n > SPARSE_THRESHOLD)
     sc = scaling or Scaling.of(system, q, J)

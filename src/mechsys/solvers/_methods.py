@@ -9,7 +9,7 @@ compiled stepper's plan (``_jit_free.FreeStepper``) and the event-driven runs
 (``analyses/_free_switch``). A method added here without a compiled loop runs in Python and
 says so (``compiled=None``); a method cannot be known to one part and missing in another.
 
-The contract every method meets (what ``integrate`` relies on): it advances ``y' = f(t, y)``
+The contract every method meets (what ``integrate`` relies on): it advances :math:`y' = f(t, y)`
 from ``t0`` toward ``t1`` by accepted steps, each followed by the projection onto the
 constraints when ``constraint_correction`` is on; it reports the accepted steps' times and
 states, the evaluations of ``f``, the rejected steps; it stops cleanly on KeyboardInterrupt

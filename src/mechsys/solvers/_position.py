@@ -1,14 +1,14 @@
-r"""Position analysis: damped Newton on ``Phi(q, t) = 0``.
+r"""Position analysis: damped Newton on :math:`\Phi(q, t) = 0`.
 
-Each iteration solves ``Phi_q dq = -Phi`` and takes the longest step ``a dq``
-(``a = 1, 1/2, 1/4 ...``) that reduces the scaled residual (Armijo test), which keeps poor
+Each iteration solves :math:`\Phi_q dq = -\Phi` and takes the longest step ``a dq``
+(:math:`a = 1, 1/2, 1/4 \dots`) that reduces the scaled residual (Armijo test), which keeps poor
 guesses from diverging. All decisions are taken on the unit-free equations of
-:class:`~mechsys.solvers._linalg.Scaling` (``Phi_hat = R^-1 Phi``, coordinates in units of
+:class:`~mechsys.solvers._linalg.Scaling` (:math:`\hat\Phi = R^{-1} \Phi`, coordinates in units of
 the characteristic length ``L``), so they do not depend on the unit of length: converged when
 
 .. math::  \max_i |\Phi_i| / r_i \le \mathrm{ftol}\,(1 + \max|x| / L)
 
-after at least one update, with ``r_i`` the size of row ``i`` of ``Phi_q D`` and ``max|x|``
+after at least one update, with ``r_i`` the size of row ``i`` of :math:`\Phi_q D` and ``max|x|``
 the largest position coordinate of the reference configuration (the rounding of coordinates
 far from the origin). ``ftol`` is thus a relative position error (positions in units of
 ``L``) or an angle error in radians; the singularity test uses the condition number of the
@@ -166,7 +166,7 @@ def _checked_start(system, start):
 def solve_position(system, t: float, guess, options: PositionOptions | None = None,
                    p=None, scaling: Scaling | None = None, hooks=None,
                    chord=None, start=None, _again: bool = False) -> PositionResult:
-    """Solve ``Phi(q, t) = 0`` for ``q`` by damped Newton from ``guess`` (shape ``(n,)``).
+    r"""Solve :math:`\Phi(q, t) = 0` for ``q`` by damped Newton from ``guess`` (shape ``(n,)``).
 
     ``chord``: a factorisation (:class:`~mechsys.solvers._linalg.ScaledFactor`) of a nearby
     Jacobian ``J_c`` (a sweep passes its previous point's). The iteration then starts with

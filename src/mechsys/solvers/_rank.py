@@ -1,6 +1,6 @@
 r"""Rank-revealing and rank-tolerant pieces: singular instants of free motion and of
 kinematic sweeps, redundant but consistent constraints. Every decision is taken on the
-unit-free scaled Jacobian ``J^ = R^-1 Phi_q D`` (:class:`~mechsys.solvers._linalg.Scaling`),
+unit-free scaled Jacobian :math:`\hat J = R^{-1} \Phi_q D` (:class:`~mechsys.solvers._linalg.Scaling`),
 so it does not depend on the unit of length. Choices and measurements:
 ``docs/decisions/0012-singular-and-redundant.md``.
 

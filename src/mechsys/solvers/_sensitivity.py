@@ -9,21 +9,30 @@ For parameters ``p_1..p_k`` and a solution that satisfies, at every time,
     \quad \Phi_q^T \lambda - Q - Q_v + M \ddot q = 0
 
 differentiating with respect to ``p_i`` gives, level after level, linear equations with the
-matrices of the solution itself (so the Jacobian is factorised once per time point)::
+matrices of the solution itself (so the Jacobian is factorised once per time point):
 
-    Phi_q s_q   = -Phi_p e_i
-    Phi_q s_qd  = -(V_q s_q + V_p e_i)                 V = Phi_q qd + Phi_t
-    Phi_q s_qdd = -(A_q s_q + A_qd s_qd + A_p e_i)     A = Phi_q qdd - gamma
-    (Phi_q^T - Q_lambda) s_lam = -(R_q s_q + R_qd s_qd + R_qdd s_qdd + R_p e_i)
+.. math::
+
+    \Phi_q s_q &= -\Phi_p e_i \\
+    \Phi_q s_{\dot q} &= -(V_q s_q + V_p e_i), \qquad V = \Phi_q \dot q + \Phi_t \\
+    \Phi_q s_{\ddot q} &= -(A_q s_q + A_{\dot q} s_{\dot q} + A_p e_i),
+        \qquad A = \Phi_q \ddot q - \gamma \\
+    (\Phi_q^T - Q_\lambda)\, s_\lambda &= -(R_q s_q + R_{\dot q} s_{\dot q}
+        + R_{\ddot q} s_{\ddot q} + R_p e_i)
 
 with ``s_q = dq/dp_i`` and so on; ``R`` is the load balance of the solution (statics:
-``Phi_q^T lambda - Q`` at rest; inverse dynamics: ``Phi_q^T lambda - (Q + Qv - M qdd)``).
-Free motion (``free_tangent``) differentiates the augmented system instead::
+:math:`\Phi_q^T \lambda - Q` at rest; inverse dynamics: :math:`\Phi_q^T \lambda - (Q + Q_v - M \ddot q)`).
+Free motion (``free_tangent``) differentiates the augmented system instead:
 
-    [M - Q_qdd   Phi_q^T - Q_lam] [s_qdd]     [R_q s_q + R_qd s_qd + R_p e_i]
-    [Phi_q       0              ] [s_lam] = - [A_q s_q + A_qd s_qd + A_p e_i]
+.. math::
 
-the forward sensitivity equations ``d/dt s_q = s_qd``, ``d/dt s_qd = s_qdd`` of the
+    \begin{bmatrix} M - Q_{\ddot q} & \Phi_q^T - Q_\lambda \\ \Phi_q & 0 \end{bmatrix}
+    \begin{bmatrix} s_{\ddot q} \\ s_\lambda \end{bmatrix} =
+    -\begin{bmatrix} R_q s_q + R_{\dot q} s_{\dot q} + R_p e_i \\
+    A_q s_q + A_{\dot q} s_{\dot q} + A_p e_i \end{bmatrix}
+
+the forward sensitivity equations :math:`\frac{d}{dt} s_q = s_{\dot q}`, :math:`\frac{d}{dt} s_{\dot q} =
+s_{\ddot q}` of the
 index-1 (acceleration level) form that the free-motion integrator solves.
 """
 

@@ -1,22 +1,27 @@
 r"""Multipliers of a fully constrained system: statics, kinematic loads, inverse dynamics.
 
-With ``n`` coordinates and ``m = n`` equations, the multipliers follow from::
+With ``n`` coordinates and ``m = n`` equations, the multipliers follow from
 
-    static:     Phi_q^T lambda = Q(t, q, 0, lambda)
-    kinematic:  Phi_q^T lambda = Q(t, q, qd, lambda)
-    dynamic:    Phi_q^T lambda = Q(t, q, qd, lambda) + Qv(q, qd) - M(q) qdd
+.. math::
 
-solved in the unit-free form of the Jacobian (``B = R^-1 Phi_q D``, positions in units of
+    \text{static:} \quad & \Phi_q^T \lambda = Q(t, q, 0, \lambda) \\
+    \text{kinematic:} \quad & \Phi_q^T \lambda = Q(t, q, \dot q, \lambda) \\
+    \text{dynamic:} \quad & \Phi_q^T \lambda = Q(t, q, \dot q, \lambda) + Q_v(q, \dot q)
+        - M(q) \ddot q
+
+solved in the unit-free form of the Jacobian (:math:`B = R^{-1} \Phi_q D`, positions in units of
 the model's length, each equation divided by its row scale; a sweep's own scaling, else
-``Scaling.of`` at ``q``)::
+``Scaling.of`` at ``q``):
 
-    B^T (R lambda) = D rhs
+.. math::
+
+    B^T (R \lambda) = D\, \mathrm{rhs}
 
 so that the conditioning, hence the refusal of a singular Jacobian, does not depend on the
 unit of length (unscaled, a mechanism modelled in micrometres was refused as singular).
 
 Linear in ``lambda`` unless loads depend on the multipliers (friction); then Newton on
-``R(lambda) = Phi_q^T lambda - rhs(lambda)`` with Jacobian ``Phi_q^T - dQ/dlambda`` from
+:math:`R(\lambda) = \Phi_q^T \lambda - \mathrm{rhs}(\lambda)` with Jacobian ``Phi_q^T - dQ/dlambda`` from
 ``lambda_guess`` (default 1 for every multiplier, as in Mech).
 """
 

@@ -17,7 +17,7 @@ Arrays, as the compiled stepper (``_jit_free_loop.runge_kutta``) reads them: ``A
 (weights of the propagated solution), ``C`` (nodes), ``E3``, ``E5`` (DOP853's 3rd- and
 5th-order error estimators; RK45 has one, ``E``), ``D`` (dense output: DOP853's 4 x 16 ``d``
 rows; RK45's 7 x 4 ``P``). ``tests/test_tableaus.py`` checks order conditions and that each
-method integrates ``y' = y`` to its order.
+method integrates :math:`y' = y` to its order.
 """
 
 from __future__ import annotations

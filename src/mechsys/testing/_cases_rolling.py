@@ -1,10 +1,11 @@
-"""Conformance cases for the rolling constraints: configurations and rates built by hand.
+r"""Conformance cases for the rolling constraints: configurations and rates built by hand.
 
 Each builder places the rolling body at random, moves it along the surface normal until it
 touches (the geometry of the contact, not the constraint's equations), and chooses random
 angular velocities and a random motion of the surface body; the rolling body's centre then
 gets the velocity that makes the material point at the contact move with the surface:
-``v_centre = v_1(c) - omega_2 x (c - r_centre)``. The model holds the holonomic part only
+:math:`v_{\mathrm{centre}} = v_1(c) - \omega_2 \times (c - r_{\mathrm{centre}})`. The model holds the
+holonomic part only
 (``constraint.holonomic()``); the velocity constraint is checked on ``(q, qd)``.
 """
 

@@ -3,24 +3,27 @@ r"""Conformance checks run over every constraint type (cf. scikit-learn's ``chec
 A *case* is a small model holding one constraint and a configuration ``q`` built *by hand*
 to satisfy it (not solved for). Checks:
 
-1. residual: ``Phi(q, t) = 0`` at the built configuration;
+1. residual: :math:`\Phi(q, t) = 0` at the built configuration;
 2. Jacobian: ``Phi_q`` equals central finite differences of ``Phi`` at a perturbed ``q``;
-3. gamma: along an arbitrary smooth path ``q(t)`` (polynomial plus sine terms)::
+3. gamma: along an arbitrary smooth path ``q(t)`` (polynomial plus sine terms)
 
-       d^2 Phi / dt^2 = Phi_q qdd - gamma
+   .. math::
 
-   so ``gamma`` must equal ``Phi_q qdd - (Phi(t+h) - 2 Phi(t) + Phi(t-h)) / h^2``;
+       \frac{d^2 \Phi}{dt^2} = \Phi_q \ddot q - \gamma
+
+   so :math:`\gamma` must equal
+   :math:`\Phi_q \ddot q - (\Phi(t+h) - 2 \Phi(t) + \Phi(t-h)) / h^2`;
 4. DOF: ``len(equations) - len(new variables)`` equals the documented ``dof_removed``.
 
 A *velocity* constraint (``constraint.order == 1``: the rolling contacts) is not part of the
 case's model, which holds its holonomic part (``constraint.holonomic()``); the case adds
 rates ``qd`` built by hand so that the contact does not slip. Its checks (decision 0046):
 
-1. residual: ``psi(q, qd) = 0`` and the holonomic part's ``Phi(q) = 0``;
+1. residual: :math:`\psi(q, \dot q) = 0` and the holonomic part's :math:`\Phi(q) = 0`;
 2. Jacobians: ``A = psi_qd`` of :func:`~mechsys.linear_velocity_form` and ``psi_q`` (which
    linearisation needs) equal central finite differences of ``psi``, and ``b = psi(q, 0)``;
-3. acceleration rows: along the same smooth path ``q(t)`` with ``qd = q'(t)``,
-   ``d psi / dt = A qdd + rho`` with ``rho`` of :func:`~mechsys.constraints.velocity_rows`
+3. acceleration rows: along the same smooth path ``q(t)`` with :math:`\dot q = q'(t)`,
+   :math:`d \psi / dt = A \ddot q + \rho` with ``rho`` of :func:`~mechsys.constraints.velocity_rows`
    (what path systems integrate with);
 4. DOF: the number of velocity equations equals ``dof_removed``.
 """

@@ -21,8 +21,8 @@ r"""Random mechanisms for fuzz tests (``tests/test_fuzz.py``, ``benchmarks/fuzz_
   equilibrated Jacobian; configurations whose singular values fall in a gray zone are not
   compared);
 * a kinematic solve (positions, velocities, accelerations) over a few times satisfies the
-  constraints to tolerance, and velocities ``Phi_q qd = -Phi_t``;
-* the free acceleration with the drivers dropped satisfies ``Phi_q qdd = gamma``;
+  constraints to tolerance, and velocities :math:`\Phi_q \dot q = -\Phi_t`;
+* the free acceleration with the drivers dropped satisfies :math:`\Phi_q \ddot q = \gamma`;
 * the diagnostics (``m.singularity``) report the rank the solver sees.
 
 It returns a dict of what was measured and what was skipped (``outcome``).
