@@ -71,7 +71,7 @@ with :math:`q`:
            \delta\dot q + R_u\,\delta u\\ c_q\,\delta q + c_{\dot q}\,\delta\dot q\\
            a_q\,\delta q + a_{\dot q}\,\delta\dot q\end{bmatrix}
 
-The state is :math:`x = (\delta y, \delta v)`; :math:`y` is no longer the integral of
+The state is :math:`x = (\delta y, \delta v)`; the rate of :math:`y` is no longer
 :math:`v`, so
 
 .. math::  A = \begin{bmatrix} h_q W_v + \dot y_q P & h_q P_v\\

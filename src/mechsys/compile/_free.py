@@ -13,14 +13,19 @@ Velocity equilibrium at fixed ``q``, unknowns :math:`x = (\dot q, \lambda)`:
     R = \begin{bmatrix} \Phi_q \dot q + \Phi_t \\ \Phi_q^T \lambda - Q(t, q, \dot q, \lambda)
         \end{bmatrix}
 
-With velocity constraints ``A(q, t) qd + b(q, t) = 0`` (``rows``, an
+With velocity constraints :math:`A(q, t)\,\dot q + b(q, t) = 0` (``rows``, an
 :class:`~mechsys.analyses._nonholonomic.VelocityRows`; decision 0055) their multipliers
-``mu`` join the unknowns, ``x = (q, lambda, mu)`` and ``(qd, lambda, mu)``::
+:math:`\mu` join the unknowns, :math:`x = (q, \lambda, \mu)` (static) and
+:math:`x = (\dot q, \lambda, \mu)` (kinematic):
 
-    R = [ Phi ;  b ;  Phi_q^T lambda + A^T mu - Q(t, q, 0, lambda) ]            (static)
-    R = [ Phi_q qd + Phi_t ;  A qd + b ;  Phi_q^T lambda + A^T mu - Q ]         (kinematic)
+.. math::
 
-(at rest the velocity constraints allow ``qd = 0`` only where ``b = 0``).
+    R = \begin{bmatrix} \Phi \\ b \\ \Phi_q^T \lambda + A^T \mu - Q(t, q, 0, \lambda)
+        \end{bmatrix}, \qquad
+    R = \begin{bmatrix} \Phi_q \dot q + \Phi_t \\ A \dot q + b \\
+        \Phi_q^T \lambda + A^T \mu - Q \end{bmatrix}
+
+(at rest the velocity constraints allow :math:`\dot q = 0` only where :math:`b = 0`).
 
 Jacobians are derived symbolically (sparse) and compiled once, on first use.
 """
