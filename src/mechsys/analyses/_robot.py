@@ -121,61 +121,55 @@ def _broadcast(what, arrays, labels):
                          f"({', '.join(str(len(a)) for a in arrays)})") from None
 
 
-def _solve_dependent(A, b, what: str, k: int) -> np.ndarray:
-    """Least-squares ``A x = b`` that must hold (the constraints' rows): raise when not."""
-    x = np.linalg.lstsq(A, b, rcond=None)[0]
-    r = A @ x - b
-    if np.abs(r).max(initial=0.0) > 1e-9 * max(1.0, np.abs(b).max(initial=0.0)):
-        raise ModelError(f"{what} at point {k}: the given coordinates' values violate the "
-                         f"constraints (residual {np.abs(r).max():.3e}); give independent "
-                         "coordinates only")
-    return x
-
-
 def _complete(s, what, t, Q, held, QD=None, QDD=None, heldd=None, helddd=None):
     r"""Full states from the values of the coordinates ``held`` (layout indices): positions
-    by Newton's method on ``Phi(q, t) = 0`` in the other coordinates (from the model's
-    guess, then each point from the last, in steps of at most 0.25 in the held
-    coordinates), velocities from ``Phi_q qd = -Phi_t``, accelerations from ``Phi_q qdd =
-    gamma``. ``Q`` etc. are ``(N, n)`` when their ``held*`` is None (given in full)."""
+    on ``Phi(q, t) = 0`` by the position solver that keeps given coordinates
+    (:func:`~mechsys.solvers._free.hold_positions`: Gauss-Newton in the other coordinates,
+    the one the start of free motion uses) from the model's guess, then each point from the
+    last, continued in steps of at most 0.25 in the held coordinates; velocities from
+    ``Phi_q qd = -Phi_t`` and accelerations from ``Phi_q qdd = gamma`` with the given entries
+    kept (:func:`~mechsys.solvers._free.hold_rates`). ``Q`` etc. are ``(N, n)`` when their
+    ``held*`` is None (given in full)."""
+    from ..solvers._free import ConsistencyError, hold_positions, hold_rates, scaling_at
+
     n = s.n
     t = float(t)
+    p = s.p_values
     names = s.layout.q_names
     N = max(len(a) for a in (Q, QD, QDD) if a is not None)
     out_q = np.empty((N, n))
     q = np.array(s.guess, dtype=float)
-    ranked = False                 # the given coordinates checked to determine the others
+    scaling = scaling_at(s, t, q, p)
+    if held is not None:
+        # the given coordinates must determine the others (as many independent ones as the
+        # model has degrees of freedom): else a least-squares step picks one of many
+        dep = np.setdiff1d(np.arange(n), held)
+        J = s.jacobian(t, q, p)
+        J = J.toarray() if hasattr(J, "toarray") else J
+        if np.linalg.matrix_rank(J[:, dep]) < len(dep):
+            raise ModelError(
+                f"{what}: the coordinates given ({[names[i] for i in held]}) do not "
+                f"determine the others; give as many independent coordinates as the "
+                f"model has degrees of freedom (coordinates {list(names)})")
     for k in range(N):
         target = Q[min(k, len(Q) - 1)]
         if held is None:
             out_q[k] = target
             continue
-        dep = np.setdiff1d(np.arange(n), held)
         steps = max(1, int(np.ceil(np.abs(target - q[held]).max(initial=0.0) / 0.25)))
         start = q[held].copy()
         for j in range(1, steps + 1):
             q[held] = start + (target - start) * j / steps
             # the steps between may be off the constraints (a held quaternion interpolated is
-            # not a unit one): a few Gauss-Newton steps there, convergence asked at the end
-            for _ in range(60 if j == steps else 8):
-                F, J = s.residual_and_jacobian(t, q)
-                J = J.toarray() if hasattr(J, "toarray") else J
-                if np.abs(F).max(initial=0.0) <= 1e-13 * max(1.0, np.abs(q).max()):
-                    break
-                Jd = J[:, dep]
-                if not ranked and np.linalg.matrix_rank(Jd) < len(dep):
-                    raise ModelError(
-                        f"{what}: the coordinates given ({[names[i] for i in held]}) do not "
-                        f"determine the others; give as many independent coordinates as the "
-                        f"model has degrees of freedom (coordinates {list(names)})")
-                ranked = True
-                q[dep] += np.linalg.lstsq(Jd, -F, rcond=None)[0]
-            else:
-                if j < steps:
-                    continue
-                raise ModelError(f"{what}: the positions do not assemble at point {k} (residual "
-                                 f"{np.abs(F).max():.3e} after 60 Newton steps); give values "
-                                 "nearer the model's guess or a path in smaller steps")
+            # not a unit one): a few iterations there, convergence asked at the end
+            last = j == steps
+            try:
+                q = hold_positions(s, t, q, p, scaling, held, max_iterations=50 if last else 8,
+                                   check=last)
+            except ConsistencyError as exc:
+                raise ModelError(f"{what}: the positions do not assemble at point {k} (scaled "
+                                 f"residual {exc.residual:.3e} left); give values nearer the "
+                                 "model's guess or a path in smaller steps") from None
         out_q[k] = q
     res = [out_q]
     for X, hx, order in ((QD, heldd, 1), (QDD, helddd, 2)):
@@ -188,15 +182,20 @@ def _complete(s, what, t, Q, held, QD=None, QDD=None, heldd=None, helddd=None):
             if hx is None:
                 full[k] = x
                 continue
-            dep = np.setdiff1d(np.arange(n), hx)
             if order == 1:
-                J, rhs = s.velocity_rhs(t, out_q[k])
+                J, rhs = s.velocity_rhs(t, out_q[k], p)
             else:
-                J = s.jacobian(t, out_q[k])
-                rhs = s.gamma_values(t, out_q[k], res[1][k])
-            J = J.toarray() if hasattr(J, "toarray") else J
-            full[k, hx] = x
-            full[k, dep] = _solve_dependent(J[:, dep], rhs - J[:, hx] @ x, what, k)
+                J = s.jacobian(t, out_q[k], p)
+                rhs = s.gamma_values(t, out_q[k], res[1][k], p)
+            y = np.zeros(n)
+            y[hx] = x
+            try:
+                full[k] = hold_rates(s, J, rhs, y, scaling, hx,
+                                     "velocities" if order == 1 else "accelerations")
+            except ConsistencyError as exc:
+                raise ModelError(f"{what} at point {k}: the given coordinates' {exc.held} "
+                                 f"violate the constraints (scaled residual {exc.residual:.3e});"
+                                 " give independent coordinates only") from None
         res.append(full)
     return res
 
