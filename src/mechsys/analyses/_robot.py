@@ -75,6 +75,50 @@ def _system(m):
     return m.compile()
 
 
+#: ``MECHSYS_JIT`` unset (auto): the robot entry points take the compiled loops from this
+#: many points on. Loading Numba and its cached code costs about 0.7 s CPU once per process
+#: (compiling it, several seconds once per installation); the plain-Python recursion costs
+#: about 6 ms a point on a 9-joint arm (the Panda), so about 110 points pay for the loading
+#: (measured: decision 0057)
+AUTO_POINTS = 100
+
+
+def _compiled(N: int) -> bool:
+    """Whether evaluations over ``N`` points take the compiled loops (``MECHSYS_JIT``: ``0``
+    never, ``1`` always, ``auto`` from :data:`AUTO_POINTS` points)."""
+    from ..solvers import _jit
+
+    mode = _jit.mode()
+    return mode == "on" or (mode == "auto" and N >= AUTO_POINTS)
+
+
+def _evaluations(s, N: int):
+    """The context of ``N`` evaluations of ``s``'s dynamics: the plain-Python recursion of
+    the recursive Gen dynamics unless :func:`_compiled` (the symbolic dynamics' kernels are
+    machine code either way)."""
+    from contextlib import nullcontext
+
+    d = s.dynamics
+    if getattr(d, "recursive", False) and not _compiled(N):
+        return d.plain_python()
+    return nullcontext()
+
+
+def _loads_compiled(s, t, Q, QD, QDD):
+    """``Q + Qv - M qdd`` at the ``N`` points by the compiled loop over points of the
+    recursive Gen dynamics (``_jit_free_loop.gen_loads``, the one the compiled multiplier
+    solves use; decision 0057) as ``(R (N', n), N')``, ``N'`` the points done before the
+    first with values that are not finite; None when it cannot run (no C entry points, not
+    the recursive dynamics, Numba missing)."""
+    from ..solvers import _jit
+
+    if not getattr(s.dynamics, "recursive", False) or not _jit.available():
+        return None
+    N = len(Q)
+    Q, QD, QDD = (np.ascontiguousarray(np.broadcast_to(a, (N, s.n))) for a in (Q, QD, QDD))
+    return _jit._recursive_loads(s, np.full(N, float(t)), Q, QD, QDD, s.p_values, 2)
+
+
 def _points(s, value, what: str, partial: bool = False):
     """``(values, single, held)``: ``value`` as ``(N, n)`` in layout order and whether it was
     a single point; or, when ``partial`` and a mapping names only some coordinates,
@@ -339,12 +383,25 @@ def inverse_dynamics(m, q, qd, qdd, t: float = 0.0, actuated=None) -> JointValue
             raise ModelError(f"{what}: a model without constraint equations is actuated on every "
                              "coordinate (actuated= applies to models with equations)")
         lam = np.zeros(0)
-        for k in range(len(Q)):
-            # (loads on the accelerations, an armature's -a qdd, taken at this qdd)
-            M, F, Fv = d.terms(float(t), Q[k], QD[k], lam, p, X[k])[:3]
-            out[k] = M @ X[k] - F - Fv
+        done = 0
+        if _compiled(len(Q)):
+            got = _loads_compiled(s, t, Q, QD, X)
+            if got is not None:
+                done = got[1]
+                out[:done] = -got[0]          # tau = M qdd - (Q + Qv)
+        with _evaluations(s, len(Q) - done):
+            for k in range(done, len(Q)):
+                # (loads on the accelerations, an armature's -a qdd, taken at this qdd)
+                M, F, Fv = d.terms(float(t), Q[k], QD[k], lam, p, X[k])[:3]
+                out[k] = M @ X[k] - F - Fv
         return JointValues(tuple(names), out[0] if single else out)
     _no_multiplier_loads(s, what)
+    with _evaluations(s, len(Q)):
+        return _inverse_constrained(s, what, t, Q, QD, X, act, names, single)
+
+
+def _inverse_constrained(s, what, t, Q, QD, X, act, names, single):
+    out = np.empty((len(Q), len(act)))
     n, m_ = s.n, s.m
     S = np.zeros((len(act), n))
     S[np.arange(len(act)), act] = 1.0
@@ -384,12 +441,8 @@ def forward_dynamics(m, q, qd, tau, t: float = 0.0, actuated=None) -> JointValue
     coordinates (default the joint coordinates, as :func:`inverse_dynamics` returns them)
     and the result has every coordinate's acceleration. A mass matrix that is not positive
     definite (a joint that moves no mass) raises ``SingularMassError`` naming the joint."""
-    from .._errors import SingularMassError
-
     what = "forward_dynamics"
     s, Q, QD, _, single = _state(m, what, q, qd, None, "tau", t)
-    d = s.dynamics
-    p = s.p_values
     names = tuple(s.layout.q_names)
     act = _actuated(s, what, actuated)
     if isinstance(tau, JointValues):
@@ -409,6 +462,15 @@ def forward_dynamics(m, q, qd, tau, t: float = 0.0, actuated=None) -> JointValue
                          f"{len(act)} actuated coordinates {[names[i] for i in act]}, got "
                          f"{np.shape(tau)}")
     Q, QD, X = _broadcast(what, [Q, QD, X], ["q", "qd", "tau"])
+    with _evaluations(s, len(Q)):
+        return _forward_points(s, what, t, Q, QD, X, act, names, single)
+
+
+def _forward_points(s, what, t, Q, QD, X, act, names, single):
+    from .._errors import SingularMassError
+
+    d = s.dynamics
+    p = s.p_values
     out = np.empty((len(Q), s.n))
     if not s.m:
         if len(act) != s.n:
@@ -490,7 +552,8 @@ def forward_kinematics(m, q, point, t: float = 0.0, frame: bool = False) -> np.n
     if held is not None:
         Q = _complete(s, "forward_kinematics", t, Q, held)[0]
     bodies = list(dict.fromkeys(b for b, _, _ in spec))
-    poses = _body_poses(s, Q, bodies, t)        # (N, nb, 4, 4)
+    with _evaluations(s, len(Q)):
+        poses = _body_poses(s, Q, bodies, t)    # (N, nb, 4, 4)
     col = {b: i for i, b in enumerate(bodies)}
     out = np.empty((len(Q), len(spec), 4, 4))
     for i, (b, loc, R) in enumerate(spec):

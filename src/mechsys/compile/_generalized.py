@@ -464,6 +464,25 @@ class RecursiveDynamics:
                     self._numba = (jit, np.array([[p[0], p[1]] for p in ptrs], dtype=np.int64))
         return self._numba
 
+    def plain_python(self):
+        """A context in which this thread's evaluations take the plain-Python recursion
+        (the same operations as the compiled one, see :meth:`_engine`): for a few
+        evaluations, where loading Numba and its cached code (about 0.7 s CPU once per
+        process; compiling it, several seconds once per installation) would not be
+        recovered (the robot entry points on few points, decision 0057)."""
+        from contextlib import contextmanager
+
+        @contextmanager
+        def ctx():
+            before = getattr(self._local, "plain", False)
+            self._local.plain = True
+            try:
+                yield
+            finally:
+                self._local.plain = before
+
+        return ctx()
+
     def _workspace(self):
         kid, par, root, nqm, goff, gcols, nq = self._tree
         S = len(kid)
@@ -487,7 +506,10 @@ class RecursiveDynamics:
         q = np.asarray(q, dtype=float)
         qd = np.asarray(qd, dtype=float)
         p = np.asarray(p, dtype=float)
-        eng = self._numba if self._numba is not None else self._engine()
+        if getattr(self._local, "plain", False):
+            eng = False                      # (plain_python(): a few evaluations)
+        else:
+            eng = self._numba if self._numba is not None else self._engine()
         P, Pd = w["P"], w["Pd"]
         if eng:
             eng[0].forward(eng[1], kid, par, root, nqm, goff, gcols, nq, float(t), q, qd, p, w["x"],
