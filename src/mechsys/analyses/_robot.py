@@ -29,9 +29,21 @@ unactuated rows must balance -- a floating base's acceleration is not free to ch
 ``tau`` must be unique, i.e. no actuated coordinate may be moved by the constraints alone).
 A mapping ``{name: values}`` may name only some coordinates (as many as the model has
 degrees of freedom, e.g. the joint coordinates); the others are then solved from the
-constraints: positions by Newton's method from the model's guess (continued in steps of
-at most ``0.25`` in the given coordinates, so the branch is the guess's), velocities from
-``Phi_q qd = -Phi_t`` and accelerations from ``Phi_q qdd = gamma``.
+constraints: positions by the Gauss-Newton solver that keeps given coordinates
+(``solvers/_free.hold_positions``, the one free motion starts with) from the model's guess
+(continued in steps of at most ``0.25`` in the given coordinates, so the branch is the
+guess's), velocities from ``Phi_q qd = -Phi_t`` and accelerations from ``Phi_q qdd =
+gamma``.
+
+Over many points (from :data:`AUTO_POINTS` with ``MECHSYS_JIT`` unset) the recursion runs
+compiled, and inverse dynamics on a model without equations is one compiled loop over the
+points; over few, the plain-Python recursion (no Numba to load: decision 0057).
+
+Example::
+
+    m = ms.from_urdf("ur5.urdf")
+    tau = m.inverse_dynamics(q, qd, qdd)          # (N, 6) arrays -> JointValues
+    tau["elbow_joint"]
 """
 
 from __future__ import annotations

@@ -187,7 +187,13 @@ def generalized_forces(model, loads, layout, slaves: dict | None = None) -> list
                     continue
                 F = list(c.force)
                 slave = gen and body.gen_joint is not None
-                fast = None if slave else _point_force_terms(model.space, body, c.point, F)
+                # (the recursion keeps a slave's loads on its own pose coordinates, which the
+                # closed form gives as for an absolute body; projected slaves differentiate)
+                fast = None if slave and slaves is None else \
+                    _point_force_terms(model.space, body, c.point, F)
+                if fast is not None and slave:
+                    _collect(slaves, body, fast)
+                    continue
                 if fast is not None:
                     for s, v in zip(body.q, fast):
                         Q[index[s]] += v

@@ -203,12 +203,18 @@ def _joint_exprs(space, body, p_syms, conv):
     joint = body.gen_joint
     m = joint.master
     ground = m is None or m.is_ground
-    r, rot = joint.pose(space)
+    native = conv is not sp.sympify and space.dim == 3
+    r, rot = joint.pose(space, conv if native else None)
     F = [*r, *rot]
     coords = list(joint.coordinates)
     mq = [] if ground else list(m.q)
     allowed = set(mq) | set(coords) | set(p_syms) | {Tsym}
-    extra = set().union(*(sp.sympify(e).free_symbols for e in F)) - allowed
+    if native:
+        # (SymEngine's symbols, compared by name with the model's)
+        names = {str(a) for a in allowed}
+        extra = {x for e in F for x in e.free_symbols if str(x) not in names}
+    else:
+        extra = set().union(*(sp.sympify(e).free_symbols for e in F)) - allowed
     if extra:
         raise _Unsupported(f"{joint.label()}: the slave's pose uses {sorted(map(str, extra))}, "
                            "not only its master's pose and its own coordinates")
