@@ -402,16 +402,9 @@ def test_armature_in_the_fast_paths_against_mujoco(tmp_path, monkeypatch):
     for k, n in enumerate(names):
         c = m.compile().layout.q_symbols[k]
         m.add(ms.Constraint([c - 0.2 * sp.sin((k + 1) * ms.T) - 0.1 * k]), name=f"drive_{n}")
-    from mechsys.solvers import _jit, _statics
+    from test_jit_multipliers import spy_multipliers
 
-    taken = []
-    real = _jit.multipliers
-
-    def spy(*a, **k):
-        taken.append(real(*a, **k))
-        return taken[-1]
-
-    monkeypatch.setattr(_statics._jit, "multipliers", spy)
+    taken = spy_multipliers(monkeypatch)
     t = np.linspace(0.0, 1.0, 9)
     sol = m.solve(t, solution="dynamic")
     assert sol.extra["compiled_points"] == len(t) and taken == [len(t)]

@@ -25,6 +25,16 @@ def _same_dynamics(m1, m2, n, tol=1e-12):
     return q, qd, qdd, t1
 
 
+def _mujoco_inverse_agrees(mujoco, path, q, qd, qdd, tau):
+    """MuJoCo reading ``path``: its ``mj_inverse`` equals ``tau`` at each state (1e-9)."""
+    mm = mujoco.MjModel.from_xml_path(str(path))
+    md = mujoco.MjData(mm)
+    for k in range(len(q)):
+        md.qpos[:], md.qvel[:], md.qacc[:] = q[k], qd[k], qdd[k]
+        mujoco.mj_inverse(mm, md)
+        np.testing.assert_allclose(md.qfrc_inverse, tau[k], rtol=0, atol=1e-9 * np.abs(tau[k]).max())
+
+
 def test_matrix_rpy_inverts_rpy_matrix():
     for rpy in [*RNG.uniform(-3, 3, size=(20, 3)), (0.3, np.pi / 2, 0.2), (0.1, -np.pi / 2, -1.0)]:
         R = rpy_matrix(rpy)
@@ -61,12 +71,7 @@ def test_round_trip_robots_and_mujoco_reads_the_export(tmp_path, rel):
     _same_dynamics(m, ms.from_urdf(u), n, tol=0)                   # exact: repr'd doubles
     x = m.to_mjcf(tmp_path / "robot.xml")
     q, qd, qdd, tau = _same_dynamics(m, ms.from_mjcf(x), n)
-    mm = mujoco.MjModel.from_xml_path(str(x))
-    md = mujoco.MjData(mm)
-    for k in range(len(q)):
-        md.qpos[:], md.qvel[:], md.qacc[:] = q[k], qd[k], qdd[k]
-        mujoco.mj_inverse(mm, md)
-        np.testing.assert_allclose(md.qfrc_inverse, tau[k], rtol=0, atol=1e-9 * np.abs(tau[k]).max())
+    _mujoco_inverse_agrees(mujoco, x, q, qd, qdd, tau)
 
 
 def test_refusals_name_what_cannot_be_written(tmp_path):
@@ -148,12 +153,7 @@ def test_massless_holders_are_written_as_one_body_mujoco_reads(tmp_path, case):
     names = m.compile().layout.q_names
     assert back.compile().layout.q_names == names
     q, qd, qdd, tau = _same_dynamics(m, back, len(names))
-    mm = mujoco.MjModel.from_xml_path(str(out))
-    md = mujoco.MjData(mm)
-    for k in range(len(q)):
-        md.qpos[:], md.qvel[:], md.qacc[:] = q[k], qd[k], qdd[k]
-        mujoco.mj_inverse(mm, md)
-        np.testing.assert_allclose(md.qfrc_inverse, tau[k], rtol=0, atol=1e-9 * np.abs(tau[k]).max())
+    _mujoco_inverse_agrees(mujoco, out, q, qd, qdd, tau)
 
 
 def test_bodies_mujoco_refuses_are_named(tmp_path):

@@ -225,13 +225,18 @@ class GenJoint(ConstraintBase):
         return tuple(out)
 
 
+_EXACT: list = []          # (float, exact value) of 0, +-1/2, +-1, +-sqrt(2)/2, made once
+
+
 def _exact(c: float) -> sp.Expr:
     """A numeric frame parameter, exact when it is 0, +-1/2, +-1 or +-sqrt(2)/2 (the common
     frames), so expressions stay free of stray floats."""
-    for v in (sp.S.Zero, sp.S.Half, sp.S.One, sp.sqrt(2) / 2):
-        for sgn in (1, -1):
-            if abs(c - sgn * float(v)) < 1e-14:
-                return sgn * v
+    if not _EXACT:
+        _EXACT.extend((sgn * float(v), sgn * v) for v in (sp.S.Zero, sp.S.Half, sp.S.One,
+                                                          sp.sqrt(2) / 2) for sgn in (1, -1))
+    for f, v in _EXACT:
+        if abs(c - f) < 1e-14:
+            return v
     return sp.Float(c)
 
 
