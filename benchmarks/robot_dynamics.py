@@ -140,7 +140,11 @@ def per_point(name: str, path: Path) -> dict:
 
 
 def table() -> str:
-    lines = ["| robot | joints | first, cold [s CPU] | first, second session [s CPU] | "
+    import mujoco
+    import pinocchio as pin
+
+    lines = [f"Pinocchio {pin.__version__}, MuJoCo {mujoco.__version__}.", "",
+             "| robot | joints | first, cold [s CPU] | first, second session [s CPU] | "
              "ID mechsys [µs] | ID Pinocchio | ID MuJoCo | FD mechsys [µs] | FD Pinocchio | "
              "FD MuJoCo | ID vs Pinocchio |",
              "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]

@@ -136,6 +136,10 @@ class System:
             getattr(b, "gen_joint", None) is not None for b in self._bodies)
         self._gen_subs = None if self.has_gen else {}
         self._model_version = getattr(model, "_version", None)
+        cache = getattr(model, "_gen_cache", None)
+        if self.has_gen and cache is not None and cache[0] == self._model_version:
+            # derived already (the model's equations used them): kept as of this version
+            self._gen_subs = model._gen_substitution()
         #: compile with common subexpressions (nested slave poses share most of theirs)
         self.cse = self.has_gen if opts is None or opts.cse is None else opts.cse
 
