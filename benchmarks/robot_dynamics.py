@@ -1,16 +1,25 @@
 """Imported robots: the first inverse dynamics in a fresh process, and the cost per point of
-inverse and forward dynamics beside Pinocchio (C++) and MuJoCo on the same file.
+inverse and forward dynamics beside Pinocchio (C++) and MuJoCo on the same file (issue 37,
+item 5; decision 0057).
 
-Robots: the UR5 (6 joints) and the Panda (7 arm joints, 2 finger slides) of
-``example-robot-data``. ``first`` is the CPU time of a fresh interpreter that imports
-mechsys, reads the URDF (``ms.from_urdf``) and evaluates one inverse dynamics (everything
-compiled on the way; mechsys's kernel cache empty, Numba's as installed). The
-per-point columns are CPU time per state, median of interleaved repetitions over 200 random
-states: mechsys ``m.inverse_dynamics`` / ``m.forward_dynamics`` over all 200 at once,
-Pinocchio ``rnea`` / ``aba`` and MuJoCo ``mj_inverse`` / ``mj_forward`` (constraints off) in a
-Python loop (each call crosses into C/C++ once per state).
+Robots: the UR5 (6 joints) and the Panda (7 arm joints and 2 finger slides) of
+``example-robot-data``.
 
-Run: ``.venv/bin/python benchmarks/robot_dynamics.py`` (about a minute) prints the table.
+* ``first``: CPU time (user + system, ``resource.getrusage``, imports included) of a fresh
+  interpreter that imports mechsys, reads the URDF (``ms.from_urdf``) and evaluates one
+  inverse dynamics, with new empty Numba and kernel caches (``NUMBA_CACHE_DIR``,
+  ``MECHSYS_CACHE``); then of a second fresh process with the caches the first filled. The
+  median of ``FIRST`` such pairs, run one after the other.
+* per point: CPU time per state over ``N`` random states, median of ``REPEAT`` interleaved
+  rounds (every tool once per round) after a warm-up: mechsys ``m.inverse_dynamics`` /
+  ``m.forward_dynamics`` over all ``N`` at once (``MECHSYS_JIT`` unset: the compiled loops
+  from 100 points on), Pinocchio ``rnea`` / ``aba`` and MuJoCo ``mj_inverse`` /
+  ``mj_forward`` (constraints off) in a Python loop, one call per state.
+
+Run from the repository root (a few minutes)::
+
+    PYTHONPATH=$PWD/src python benchmarks/robot_dynamics.py
+    PYTHONPATH=$PWD/src python benchmarks/robot_dynamics.py --write docs/performance.md
 """
 
 from __future__ import annotations
@@ -18,10 +27,12 @@ from __future__ import annotations
 import os
 
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+    os.environ.setdefault(_var, "1")  # before NumPy loads: CPU time of one thread
 
 import importlib.metadata  # noqa: E402
+import json  # noqa: E402
 import re  # noqa: E402
+import statistics  # noqa: E402
 import subprocess  # noqa: E402
 import sys  # noqa: E402
 import tempfile  # noqa: E402
@@ -29,7 +40,10 @@ import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
-from _machine import machine  # noqa: E402  (sibling module)
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _machine import table_main  # noqa: E402  (sibling module)
 
 SHARE = Path(importlib.metadata.distribution("example-robot-data").locate_file(
     "cmeel.prefix/share/example-robot-data/robots"))
@@ -37,37 +51,42 @@ ROBOTS = {"UR5": SHARE / "ur_description/urdf/ur5_robot.urdf",
           "Panda": SHARE / "panda_description/urdf/panda.urdf"}
 N = 200
 REPEAT = 5
+FIRST = 3
 
-FIRST = """
-import time
-t0 = time.process_time()
+_FIRST = """
+import resource, json
+def cpu():
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
 import numpy as np
 import mechsys as ms
 m = ms.from_urdf({path!r})
 n = m.compile().n
-m.inverse_dynamics(np.zeros(n), np.zeros(n), np.zeros(n))
-print(time.process_time() - t0)
+tau = m.inverse_dynamics(np.zeros(n), np.zeros(n), np.zeros(n))
+print(json.dumps({{"cpu": cpu()}}))
 """
 
 
-def first(path: Path) -> float:
-    with tempfile.TemporaryDirectory() as cache:
-        env = dict(os.environ, MECHSYS_CACHE=cache)
-        out = subprocess.run([sys.executable, "-c", FIRST.format(path=str(path))], env=env,
-                             capture_output=True, text=True, check=True)
-    return float(out.stdout.strip().splitlines()[-1])
+def _fresh(path: Path, numba_cache: str, mechsys_cache: str) -> float:
+    env = dict(os.environ, NUMBA_CACHE_DIR=numba_cache, MECHSYS_CACHE=mechsys_cache)
+    env.pop("MECHSYS_JIT", None)
+    out = subprocess.run([sys.executable, "-c", _FIRST.format(path=str(path))], env=env,
+                         capture_output=True, text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])["cpu"]
 
 
-def median_per_point(fn) -> float:
-    times = []
-    for _ in range(REPEAT):
-        t0 = time.process_time()
-        fn()
-        times.append((time.process_time() - t0) / N)
-    return float(np.median(times))
+def first(path: Path) -> tuple[float, float]:
+    """``(cold, second session)`` CPU seconds, medians of :data:`FIRST` pairs."""
+    cold, warm = [], []
+    for _ in range(FIRST):
+        with tempfile.TemporaryDirectory() as nb, tempfile.TemporaryDirectory() as mc:
+            cold.append(_fresh(path, nb, mc))
+            warm.append(_fresh(path, nb, mc))
+    return statistics.median(cold), statistics.median(warm)
 
 
-def row(name: str, path: Path) -> str:
+def per_point(name: str, path: Path) -> dict:
+    """Microseconds of CPU per state of each tool (median of interleaved rounds)."""
     import mujoco
     import pinocchio as pin
 
@@ -85,6 +104,8 @@ def row(name: str, path: Path) -> str:
     mm = mujoco.MjModel.from_xml_string(text)
     mm.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT)
     md = mujoco.MjData(mm)
+    ref = np.array([pin.rnea(pm, pd, Q[k], QD[k], QDD[k]) for k in range(N)])
+    err = float(np.abs(tau - ref).max() / np.abs(ref).max())
 
     def pin_id():
         for k in range(N):
@@ -104,22 +125,55 @@ def row(name: str, path: Path) -> str:
             md.qpos[:], md.qvel[:], md.qfrc_applied[:] = Q[k], QD[k], tau[k]
             mujoco.mj_forward(mm, md)
 
-    us = {k: 1e6 * median_per_point(f) for k, f in [
-        ("ms_id", lambda: m.inverse_dynamics(Q, QD, QDD)), ("pin_id", pin_id), ("mj_id", mj_id),
-        ("ms_fd", lambda: m.forward_dynamics(Q, QD, tau)), ("pin_fd", pin_fd), ("mj_fd", mj_fd)]}
-    return (f"| {name} | {n} | {first(path):.2f} | {us['ms_id']:.1f} | {us['pin_id']:.1f} | "
-            f"{us['mj_id']:.1f} | {us['ms_fd']:.1f} | {us['pin_fd']:.1f} | {us['mj_fd']:.1f} |")
+    tools = {"ms_id": lambda: m.inverse_dynamics(Q, QD, QDD), "pin_id": pin_id, "mj_id": mj_id,
+             "ms_fd": lambda: m.forward_dynamics(Q, QD, tau), "pin_fd": pin_fd, "mj_fd": mj_fd}
+    times: dict = {k: [] for k in tools}
+    for _ in range(REPEAT):
+        for key, fn in tools.items():
+            t0 = time.process_time()
+            fn()
+            times[key].append((time.process_time() - t0) / N)
+    out = {k: 1e6 * statistics.median(v) for k, v in times.items()}
+    out["n"], out["err"] = n, err
+    print(f"{name}: {out}", file=sys.stderr)
+    return out
 
 
-def main() -> None:
-    print(machine())
-    print()
-    print("| robot | joints | first [s CPU] | ID mechsys [us] | ID Pinocchio | ID MuJoCo "
-          "| FD mechsys [us] | FD Pinocchio | FD MuJoCo |")
-    print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+def table() -> str:
+    import mujoco
+    import pinocchio as pin
+
+    lines = [f"Pinocchio {pin.__version__}, MuJoCo {mujoco.__version__}.", "",
+             "| robot | joints | first, cold [s CPU] | first, second session [s CPU] | "
+             "ID mechsys [µs] | ID Pinocchio | ID MuJoCo | FD mechsys [µs] | FD Pinocchio | "
+             "FD MuJoCo | ID vs Pinocchio |",
+             "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for name, path in ROBOTS.items():
-        print(row(name, path), flush=True)
+        cold, warm = first(path)
+        print(f"{name}: first {cold:.2f} s cold, {warm:.2f} s cached", file=sys.stderr)
+        us = per_point(name, path)
+        lines.append(f"| {name} | {us['n']} | {cold:.2f} | {warm:.2f} | {us['ms_id']:.1f} | "
+                     f"{us['pin_id']:.1f} | {us['mj_id']:.1f} | {us['ms_fd']:.1f} | "
+                     f"{us['pin_fd']:.1f} | {us['mj_fd']:.1f} | {us['err']:.0e} |")
+    return "\n".join(lines)
+
+
+INTRO = ("`first`: CPU time (imports included) of a fresh process that imports mechsys, reads "
+         "the URDF and evaluates one inverse dynamics, with empty Numba and kernel caches "
+         "(`NUMBA_CACHE_DIR`, `MECHSYS_CACHE` in new directories), then of a second fresh "
+         f"process with the caches the first filled (median of {FIRST} pairs). Then CPU time "
+         f"per state, median of {REPEAT} interleaved rounds over {N} random states: mechsys's "
+         "`m.inverse_dynamics` (ID) and `m.forward_dynamics` (FD) over all of them in one call "
+         "(the compiled loop over points from 100 points on); Pinocchio's `rnea`/`aba` and "
+         "MuJoCo's `mj_inverse`/`mj_forward` called once per state from Python (MuJoCo's "
+         "forward step also computes what its simulation needs beyond the accelerations). "
+         "Last column: mechsys's joint forces against Pinocchio's RNEA, relative. Decision "
+         "0057 has the numbers before its changes.")
+
+
+def main(argv=None) -> int:
+    return table_main(__doc__, "robot_dynamics", "Imported robots", INTRO, table, argv)
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

@@ -25,6 +25,16 @@ def _same_dynamics(m1, m2, n, tol=1e-12):
     return q, qd, qdd, t1
 
 
+def _mujoco_inverse_agrees(mujoco, path, q, qd, qdd, tau):
+    """MuJoCo reading ``path``: its ``mj_inverse`` equals ``tau`` at each state (1e-9)."""
+    mm = mujoco.MjModel.from_xml_path(str(path))
+    md = mujoco.MjData(mm)
+    for k in range(len(q)):
+        md.qpos[:], md.qvel[:], md.qacc[:] = q[k], qd[k], qdd[k]
+        mujoco.mj_inverse(mm, md)
+        np.testing.assert_allclose(md.qfrc_inverse, tau[k], rtol=0, atol=1e-9 * np.abs(tau[k]).max())
+
+
 def test_matrix_rpy_inverts_rpy_matrix():
     for rpy in [*RNG.uniform(-3, 3, size=(20, 3)), (0.3, np.pi / 2, 0.2), (0.1, -np.pi / 2, -1.0)]:
         R = rpy_matrix(rpy)
@@ -61,12 +71,7 @@ def test_round_trip_robots_and_mujoco_reads_the_export(tmp_path, rel):
     _same_dynamics(m, ms.from_urdf(u), n, tol=0)                   # exact: repr'd doubles
     x = m.to_mjcf(tmp_path / "robot.xml")
     q, qd, qdd, tau = _same_dynamics(m, ms.from_mjcf(x), n)
-    mm = mujoco.MjModel.from_xml_path(str(x))
-    md = mujoco.MjData(mm)
-    for k in range(len(q)):
-        md.qpos[:], md.qvel[:], md.qacc[:] = q[k], qd[k], qdd[k]
-        mujoco.mj_inverse(mm, md)
-        np.testing.assert_allclose(md.qfrc_inverse, tau[k], rtol=0, atol=1e-9 * np.abs(tau[k]).max())
+    _mujoco_inverse_agrees(mujoco, x, q, qd, qdd, tau)
 
 
 def test_refusals_name_what_cannot_be_written(tmp_path):
@@ -90,7 +95,7 @@ def test_refusals_name_what_cannot_be_written(tmp_path):
         ms.Model2D().to_urdf(tmp_path / "x.urdf")
 
 
-def test_passive_joint_loads_round_trip_and_mujoco_agrees(tmp_path, monkeypatch):
+def test_passive_joint_loads_round_trip_and_mujoco_agrees(tmp_path):
     """The zoo's damping, springs (``springref``) and armature, imported as loads, are written
     back as MJCF joint attributes: reading the export gives the same loads, and MuJoCo's
     ``mj_inverse`` on the export, passive forces and armature included, agrees with mechsys on
@@ -98,21 +103,15 @@ def test_passive_joint_loads_round_trip_and_mujoco_agrees(tmp_path, monkeypatch)
     name."""
     mujoco = pytest.importorskip("mujoco")
     zoo = tmp_path / "zoo.xml"
-    # one joint per body: MuJoCo refuses the massless intermediate bodies that the export
-    # writes for a body with several joints
-    twist = '<joint name="twist" type="hinge" axis="0 0 1" pos="0.01 0 0"/>'
-    assert twist in ZOO
-    zoo.write_text(ZOO.replace(twist, ""))
+    # (the fore body's two joints: written as one body again, decision 0057)
+    zoo.write_text(ZOO)
     kw = dict(joint_damping=True, joint_springs=True, armature=True, geometry=False)
-    # three joints would take the symbolic projection (15 s to compile with the armature's
-    # acceleration loads); the recursion carries the armature in M and compiles in 2 s
-    monkeypatch.setenv("MECHSYS_GEN_DYNAMICS", "recursive")
     m = ms.from_mjcf(zoo, **kw)
     out = m.to_mjcf(tmp_path / "out.xml")
     back = ms.from_mjcf(out, **kw)
     assert back.import_report.damping == m.import_report.damping
     assert sorted(ld.name for ld in back.load_list) == sorted(ld.name for ld in m.load_list)
-    q, qd, qdd = RNG.normal(size=(3, 3, 3))
+    q, qd, qdd = RNG.normal(size=(3, 3, 4))
     tau = m.inverse_dynamics(q, qd, qdd).values
     mm = mujoco.MjModel.from_xml_path(str(out))
     mm.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT)
@@ -129,3 +128,44 @@ def test_passive_joint_loads_round_trip_and_mujoco_agrees(tmp_path, monkeypatch)
     u = ms.from_urdf(arm, joint_damping=True, geometry=False).to_urdf(tmp_path / "back.urdf")
     assert '<dynamics damping="0.4"/>' in u.read_text()
     assert ms.from_urdf(u, joint_damping=True).import_report.damping == {"j1": 0.4}
+
+
+@pytest.mark.parametrize("case", ["planar", "expanded"])
+def test_massless_holders_are_written_as_one_body_mujoco_reads(tmp_path, case):
+    """MuJoCo refuses moving bodies without mass: the massless bodies the importers make (a
+    body with several MJCF joints, a URDF planar joint's two slides) or a file has (massless
+    URDF links between joints) are written as one body holding the chain's joints in order
+    (decision 0057). MuJoCo reads the export and its ``mj_inverse`` equals mechsys's joint
+    forces on the original (1e-9 relative); reading the export back gives the same joint
+    names and dynamics (1e-12). (The zoo's body with two joints: the passive-loads test.)"""
+    from test_io_coordinates import EXPANDED, PLANAR
+
+    mujoco = pytest.importorskip("mujoco")
+    src = tmp_path / "src.urdf"
+    src.write_text({"planar": PLANAR, "expanded": EXPANDED}[case])
+    m = ms.from_urdf(src)
+    massless = [b.name for b in m.bodies[1:] if float(b.mass) == 0]
+    assert massless                                   # the case has holders to merge
+    out = m.to_mjcf(tmp_path / "out.xml")
+    for name in massless:
+        assert f'name="{name}"' not in out.read_text()
+    back = ms.from_mjcf(out)
+    names = m.compile().layout.q_names
+    assert back.compile().layout.q_names == names
+    q, qd, qdd, tau = _same_dynamics(m, back, len(names))
+    _mujoco_inverse_agrees(mujoco, out, q, qd, qdd, tau)
+
+
+def test_bodies_mujoco_refuses_are_named(tmp_path):
+    """A moving body MuJoCo would refuse (no mass at the end of a chain; a point mass) is
+    refused by name before a file is written."""
+    for kw, match in [({"mass": 0}, "body 'a' is moved by a joint and has no mass"),
+                      ({"mass": 1.0, "centroid": (0.5, 0, 0)},
+                       "body 'a' has mass 1.0 and principal moments")]:
+        m = ms.Model3D()
+        a = m.add_body("a", **kw)
+        m.add(ms.GenRevolute5(a.axis((0, 0, 0), (0, 0, 1)), m.ground.axis((0, 0, 0), (0, 0, 1)),
+                              ("q", 0.0)), name="j")
+        with pytest.raises(ms.ModelError, match=match):
+            m.to_mjcf(tmp_path / "x.xml")
+    assert not (tmp_path / "x.xml").exists()

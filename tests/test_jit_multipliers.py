@@ -85,9 +85,9 @@ BUILDS = {"gen-arm": _gen_arm, "gen-arm-12": lambda: _gen_arm(12), "slider-crank
           "radial-183": lambda: models.radial_engine(30, g=9.81)}
 
 
-def _solve_both(monkeypatch, build, t, mode):
-    """The same solve with the compiled loops and with the Python ones; also how many points
-    the compiled multiplier loop took."""
+def spy_multipliers(monkeypatch) -> list:
+    """A list that receives, for each multiplier solve, how many points the compiled
+    multiplier loop took."""
     taken = []
     real = _jit.multipliers
 
@@ -96,6 +96,13 @@ def _solve_both(monkeypatch, build, t, mode):
         return taken[-1]
 
     monkeypatch.setattr(_statics._jit, "multipliers", spy)
+    return taken
+
+
+def _solve_both(monkeypatch, build, t, mode):
+    """The same solve with the compiled loops and with the Python ones; also how many points
+    the compiled multiplier loop took."""
+    taken = spy_multipliers(monkeypatch)
     out = {}
     for jit in ("1", "0"):
         monkeypatch.setenv("MECHSYS_JIT", jit)

@@ -768,10 +768,14 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
 
     def _all_equations(self):
         eqs, owners, index = [], [], []
-        sub = self._gen_substitution()
+        sub = None
         for c in self._constraints:
             for k, e in enumerate(c.equations(self.space)):
                 e = process_equation(self._compile_opts, e, c.label())  # Mech's $MechProcessFunction
+                if sub is None:
+                    # the slaves' nested poses only where an equation may use them: a tree
+                    # of Gen joints (an imported robot) has none to substitute (decision 0057)
+                    sub = self._gen_substitution()
                 eqs.append(e.xreplace(sub) if sub else e)
                 owners.append(c)
                 index.append(k)

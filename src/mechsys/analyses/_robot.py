@@ -32,9 +32,21 @@ unactuated rows must balance -- a floating base's acceleration is not free to ch
 ``tau`` must be unique, i.e. no actuated coordinate may be moved by the constraints alone).
 A mapping ``{name: values}`` may name only some coordinates (as many as the model has
 degrees of freedom, e.g. the joint coordinates); the others are then solved from the
-constraints: positions by Newton's method from the model's guess (continued in steps of
-at most ``0.25`` in the given coordinates, so the branch is the guess's), velocities from
-:math:`\Phi_q \dot q = -\Phi_t` and accelerations from :math:`\Phi_q \ddot q = \gamma`.
+constraints: positions by the Gauss-Newton solver that keeps given coordinates
+(``solvers/_free.hold_positions``, the one free motion starts with) from the model's guess
+(continued in steps of at most ``0.25`` in the given coordinates, so the branch is the
+guess's), velocities from :math:`\Phi_q \dot q = -\Phi_t` and accelerations from
+:math:`\Phi_q \ddot q = \gamma`.
+
+Over many points (from :data:`AUTO_POINTS` with ``MECHSYS_JIT`` unset) the recursion runs
+compiled, and inverse dynamics on a model without equations is one compiled loop over the
+points; over few, the plain-Python recursion (no Numba to load: decision 0057).
+
+Example::
+
+    m = ms.from_urdf("ur5.urdf")
+    tau = m.inverse_dynamics(q, qd, qdd)          # (N, 6) arrays -> JointValues
+    tau["elbow_joint"]
 """
 
 from __future__ import annotations
@@ -76,6 +88,50 @@ class JointValues:
 
 def _system(m):
     return m.compile()
+
+
+#: ``MECHSYS_JIT`` unset (auto): the robot entry points take the compiled loops from this
+#: many points on. Loading Numba and its cached code costs about 0.7 s CPU once per process
+#: (compiling it, several seconds once per installation); the plain-Python recursion costs
+#: about 6 ms a point on a 9-joint arm (the Panda), so about 110 points pay for the loading
+#: (measured: decision 0057)
+AUTO_POINTS = 100
+
+
+def _compiled(N: int) -> bool:
+    """Whether evaluations over ``N`` points take the compiled loops (``MECHSYS_JIT``: ``0``
+    never, ``1`` always, ``auto`` from :data:`AUTO_POINTS` points)."""
+    from ..solvers import _jit
+
+    mode = _jit.mode()
+    return mode == "on" or (mode == "auto" and N >= AUTO_POINTS)
+
+
+def _evaluations(s, N: int):
+    """The context of ``N`` evaluations of ``s``'s dynamics: the plain-Python recursion of
+    the recursive Gen dynamics unless :func:`_compiled` (the symbolic dynamics' kernels are
+    machine code either way)."""
+    from contextlib import nullcontext
+
+    d = s.dynamics
+    if getattr(d, "recursive", False) and not _compiled(N):
+        return d.plain_python()
+    return nullcontext()
+
+
+def _loads_compiled(s, t, Q, QD, QDD):
+    """``Q + Qv - M qdd`` at the ``N`` points by the compiled loop over points of the
+    recursive Gen dynamics (``_jit_free_loop.gen_loads``, the one the compiled multiplier
+    solves use; decision 0057) as ``(R (N', n), N')``, ``N'`` the points done before the
+    first with values that are not finite; None when it cannot run (no C entry points, not
+    the recursive dynamics, Numba missing)."""
+    from ..solvers import _jit
+
+    if not getattr(s.dynamics, "recursive", False) or not _jit.available():
+        return None
+    N = len(Q)
+    Q, QD, QDD = (np.ascontiguousarray(np.broadcast_to(a, (N, s.n))) for a in (Q, QD, QDD))
+    return _jit._recursive_loads(s, np.full(N, float(t)), Q, QD, QDD, s.p_values, 2)
 
 
 def _points(s, value, what: str, partial: bool = False):
@@ -124,61 +180,55 @@ def _broadcast(what, arrays, labels):
                          f"({', '.join(str(len(a)) for a in arrays)})") from None
 
 
-def _solve_dependent(A, b, what: str, k: int) -> np.ndarray:
-    """Least-squares ``A x = b`` that must hold (the constraints' rows): raise when not."""
-    x = np.linalg.lstsq(A, b, rcond=None)[0]
-    r = A @ x - b
-    if np.abs(r).max(initial=0.0) > 1e-9 * max(1.0, np.abs(b).max(initial=0.0)):
-        raise ModelError(f"{what} at point {k}: the given coordinates' values violate the "
-                         f"constraints (residual {np.abs(r).max():.3e}); give independent "
-                         "coordinates only")
-    return x
-
-
 def _complete(s, what, t, Q, held, QD=None, QDD=None, heldd=None, helddd=None):
     r"""Full states from the values of the coordinates ``held`` (layout indices): positions
-    by Newton's method on :math:`\Phi(q, t) = 0` in the other coordinates (from the model's
-    guess, then each point from the last, in steps of at most 0.25 in the held
-    coordinates), velocities from :math:`\Phi_q \dot q = -\Phi_t`, accelerations from :math:`\Phi_q \ddot q
-    = \gamma`. ``Q`` etc. are ``(N, n)`` when their ``held*`` is None (given in full)."""
+    on :math:`\Phi(q, t) = 0` by the position solver that keeps given coordinates
+    (:func:`~mechsys.solvers._free.hold_positions`: Gauss-Newton in the other coordinates,
+    the one the start of free motion uses) from the model's guess, then each point from the
+    last, continued in steps of at most 0.25 in the held coordinates; velocities from
+    :math:`\Phi_q \dot q = -\Phi_t` and accelerations from :math:`\Phi_q \ddot q = \gamma`
+    with the given entries kept (:func:`~mechsys.solvers._free.hold_rates`). ``Q`` etc. are
+    ``(N, n)`` when their ``held*`` is None (given in full)."""
+    from ..solvers._free import ConsistencyError, hold_positions, hold_rates, scaling_at
+
     n = s.n
     t = float(t)
+    p = s.p_values
     names = s.layout.q_names
     N = max(len(a) for a in (Q, QD, QDD) if a is not None)
     out_q = np.empty((N, n))
     q = np.array(s.guess, dtype=float)
-    ranked = False                 # the given coordinates checked to determine the others
+    scaling = scaling_at(s, t, q, p)
+    if held is not None:
+        # the given coordinates must determine the others (as many independent ones as the
+        # model has degrees of freedom): else a least-squares step picks one of many
+        dep = np.setdiff1d(np.arange(n), held)
+        J = s.jacobian(t, q, p)
+        J = J.toarray() if hasattr(J, "toarray") else J
+        if np.linalg.matrix_rank(J[:, dep]) < len(dep):
+            raise ModelError(
+                f"{what}: the coordinates given ({[names[i] for i in held]}) do not "
+                f"determine the others; give as many independent coordinates as the "
+                f"model has degrees of freedom (coordinates {list(names)})")
     for k in range(N):
         target = Q[min(k, len(Q) - 1)]
         if held is None:
             out_q[k] = target
             continue
-        dep = np.setdiff1d(np.arange(n), held)
         steps = max(1, int(np.ceil(np.abs(target - q[held]).max(initial=0.0) / 0.25)))
         start = q[held].copy()
         for j in range(1, steps + 1):
             q[held] = start + (target - start) * j / steps
             # the steps between may be off the constraints (a held quaternion interpolated is
-            # not a unit one): a few Gauss-Newton steps there, convergence asked at the end
-            for _ in range(60 if j == steps else 8):
-                F, J = s.residual_and_jacobian(t, q)
-                J = J.toarray() if hasattr(J, "toarray") else J
-                if np.abs(F).max(initial=0.0) <= 1e-13 * max(1.0, np.abs(q).max()):
-                    break
-                Jd = J[:, dep]
-                if not ranked and np.linalg.matrix_rank(Jd) < len(dep):
-                    raise ModelError(
-                        f"{what}: the coordinates given ({[names[i] for i in held]}) do not "
-                        f"determine the others; give as many independent coordinates as the "
-                        f"model has degrees of freedom (coordinates {list(names)})")
-                ranked = True
-                q[dep] += np.linalg.lstsq(Jd, -F, rcond=None)[0]
-            else:
-                if j < steps:
-                    continue
-                raise ModelError(f"{what}: the positions do not assemble at point {k} (residual "
-                                 f"{np.abs(F).max():.3e} after 60 Newton steps); give values "
-                                 "nearer the model's guess or a path in smaller steps")
+            # not a unit one): a few iterations there, convergence asked at the end
+            last = j == steps
+            try:
+                q = hold_positions(s, t, q, p, scaling, held, max_iterations=50 if last else 8,
+                                   check=last)
+            except ConsistencyError as exc:
+                raise ModelError(f"{what}: the positions do not assemble at point {k} (scaled "
+                                 f"residual {exc.residual:.3e} left); give values nearer the "
+                                 "model's guess or a path in smaller steps") from None
         out_q[k] = q
     res = [out_q]
     for X, hx, order in ((QD, heldd, 1), (QDD, helddd, 2)):
@@ -191,15 +241,20 @@ def _complete(s, what, t, Q, held, QD=None, QDD=None, heldd=None, helddd=None):
             if hx is None:
                 full[k] = x
                 continue
-            dep = np.setdiff1d(np.arange(n), hx)
             if order == 1:
-                J, rhs = s.velocity_rhs(t, out_q[k])
+                J, rhs = s.velocity_rhs(t, out_q[k], p)
             else:
-                J = s.jacobian(t, out_q[k])
-                rhs = s.gamma_values(t, out_q[k], res[1][k])
-            J = J.toarray() if hasattr(J, "toarray") else J
-            full[k, hx] = x
-            full[k, dep] = _solve_dependent(J[:, dep], rhs - J[:, hx] @ x, what, k)
+                J = s.jacobian(t, out_q[k], p)
+                rhs = s.gamma_values(t, out_q[k], res[1][k], p)
+            y = np.zeros(n)
+            y[hx] = x
+            try:
+                full[k] = hold_rates(s, J, rhs, y, scaling, hx,
+                                     "velocities" if order == 1 else "accelerations")
+            except ConsistencyError as exc:
+                raise ModelError(f"{what} at point {k}: the given coordinates' {exc.held} "
+                                 f"violate the constraints (scaled residual {exc.residual:.3e});"
+                                 " give independent coordinates only") from None
         res.append(full)
     return res
 
@@ -343,12 +398,25 @@ def inverse_dynamics(m, q, qd, qdd, t: float = 0.0, actuated=None) -> JointValue
             raise ModelError(f"{what}: a model without constraint equations is actuated on every "
                              "coordinate (actuated= applies to models with equations)")
         lam = np.zeros(0)
-        for k in range(len(Q)):
-            # (loads on the accelerations, an armature's -a qdd, taken at this qdd)
-            M, F, Fv = d.terms(float(t), Q[k], QD[k], lam, p, X[k])[:3]
-            out[k] = M @ X[k] - F - Fv
+        done = 0
+        if _compiled(len(Q)):
+            got = _loads_compiled(s, t, Q, QD, X)
+            if got is not None:
+                done = got[1]
+                out[:done] = -got[0]          # tau = M qdd - (Q + Qv)
+        with _evaluations(s, len(Q) - done):
+            for k in range(done, len(Q)):
+                # (loads on the accelerations, an armature's -a qdd, taken at this qdd)
+                M, F, Fv = d.terms(float(t), Q[k], QD[k], lam, p, X[k])[:3]
+                out[k] = M @ X[k] - F - Fv
         return JointValues(tuple(names), out[0] if single else out)
     _no_multiplier_loads(s, what)
+    with _evaluations(s, len(Q)):
+        return _inverse_constrained(s, what, t, Q, QD, X, act, names, single)
+
+
+def _inverse_constrained(s, what, t, Q, QD, X, act, names, single):
+    out = np.empty((len(Q), len(act)))
     n, m_ = s.n, s.m
     S = np.zeros((len(act), n))
     S[np.arange(len(act)), act] = 1.0
@@ -388,12 +456,8 @@ def forward_dynamics(m, q, qd, tau, t: float = 0.0, actuated=None) -> JointValue
     coordinates (default the joint coordinates, as :func:`inverse_dynamics` returns them)
     and the result has every coordinate's acceleration. A mass matrix that is not positive
     definite (a joint that moves no mass) raises ``SingularMassError`` naming the joint."""
-    from .._errors import SingularMassError
-
     what = "forward_dynamics"
     s, Q, QD, _, single = _state(m, what, q, qd, None, "tau", t)
-    d = s.dynamics
-    p = s.p_values
     names = tuple(s.layout.q_names)
     act = _actuated(s, what, actuated)
     if isinstance(tau, JointValues):
@@ -413,6 +477,15 @@ def forward_dynamics(m, q, qd, tau, t: float = 0.0, actuated=None) -> JointValue
                          f"{len(act)} actuated coordinates {[names[i] for i in act]}, got "
                          f"{np.shape(tau)}")
     Q, QD, X = _broadcast(what, [Q, QD, X], ["q", "qd", "tau"])
+    with _evaluations(s, len(Q)):
+        return _forward_points(s, what, t, Q, QD, X, act, names, single)
+
+
+def _forward_points(s, what, t, Q, QD, X, act, names, single):
+    from .._errors import SingularMassError
+
+    d = s.dynamics
+    p = s.p_values
     out = np.empty((len(Q), s.n))
     if not s.m:
         if len(act) != s.n:
@@ -494,7 +567,8 @@ def forward_kinematics(m, q, point, t: float = 0.0, frame: bool = False) -> np.n
     if held is not None:
         Q = _complete(s, "forward_kinematics", t, Q, held)[0]
     bodies = list(dict.fromkeys(b for b, _, _ in spec))
-    poses = _body_poses(s, Q, bodies, t)        # (N, nb, 4, 4)
+    with _evaluations(s, len(Q)):
+        poses = _body_poses(s, Q, bodies, t)    # (N, nb, 4, 4)
     col = {b: i for i, b in enumerate(bodies)}
     out = np.empty((len(Q), len(spec), 4, 4))
     for i, (b, loc, R) in enumerate(spec):

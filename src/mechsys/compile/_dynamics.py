@@ -175,7 +175,12 @@ def generalized_forces(model, loads, layout, slaves: dict | None = None) -> list
     n = layout.n
     qd_of = dict(zip(layout.q_symbols, layout.qd_symbols))
     index = {s: i for i, s in enumerate(layout.q_symbols)}
-    gen = model._gen_substitution() if hasattr(model, "_gen_substitution") else {}
+    if slaves is not None:
+        # (the recursion keeps the slaves' loads on their poses: whether a body is a slave
+        # is all it asks, not the nested poses, decision 0057)
+        gen = any(getattr(b, "gen_joint", None) is not None for b in model.bodies[1:])
+    else:
+        gen = model._gen_substitution() if hasattr(model, "_gen_substitution") else {}
     projected: dict = {}  # layout index -> the slaves' projected loads
     Q = [sp.S.Zero] * n
     for load in loads:
@@ -192,7 +197,13 @@ def generalized_forces(model, loads, layout, slaves: dict | None = None) -> list
                     continue
                 F = list(c.force)
                 slave = gen and body.gen_joint is not None
-                fast = None if slave else _point_force_terms(model.space, body, c.point, F)
+                # (the recursion keeps a slave's loads on its own pose coordinates, which the
+                # closed form gives as for an absolute body; projected slaves differentiate)
+                fast = None if slave and slaves is None else \
+                    _point_force_terms(model.space, body, c.point, F)
+                if fast is not None and slave:
+                    _collect(slaves, body, fast)
+                    continue
                 if fast is not None:
                     for s, v in zip(body.q, fast):
                         Q[index[s]] += v

@@ -203,12 +203,18 @@ def _joint_exprs(space, body, p_syms, conv):
     joint = body.gen_joint
     m = joint.master
     ground = m is None or m.is_ground
-    r, rot = joint.pose(space)
+    native = conv is not sp.sympify and space.dim == 3
+    r, rot = joint.pose(space, conv if native else None)
     F = [*r, *rot]
     coords = list(joint.coordinates)
     mq = [] if ground else list(m.q)
     allowed = set(mq) | set(coords) | set(p_syms) | {Tsym}
-    extra = set().union(*(sp.sympify(e).free_symbols for e in F)) - allowed
+    if native:
+        # (SymEngine's symbols, compared by name with the model's)
+        names = {str(a) for a in allowed}
+        extra = {x for e in F for x in e.free_symbols if str(x) not in names}
+    else:
+        extra = set().union(*(sp.sympify(e).free_symbols for e in F)) - allowed
     if extra:
         raise _Unsupported(f"{joint.label()}: the slave's pose uses {sorted(map(str, extra))}, "
                            "not only its master's pose and its own coordinates")
@@ -350,8 +356,6 @@ class RecursiveDynamics:
                         entries[(index[si], index[q[jj]])] = (
                             entries.get((index[si], index[q[jj]]), zero) + conv(Mb[i][jj]))
                 Qv[index[si]] += conv(Qvb[i])
-        self._M_rows = np.array([k[0] for k in entries], dtype=np.int64)
-        self._M_cols = np.array([k[1] for k in entries], dtype=np.int64)
         pose_syms = [s for b in order for s in b.q]
         vel_syms = [velocity_symbol(s.name) for s in pose_syms]
         Qp = [e for b in order for e in slave_q[b]]
@@ -359,8 +363,11 @@ class RecursiveDynamics:
         slave_acc = {acceleration_symbol(s.name) for s in pose_syms}
         known = set(self.args()) | set(pose_syms) | set(vel_syms)
         # loads -c qdd_j with constant c on coordinates (a rotor's armature, decision 0048):
-        # moved into the mass matrix, M_ij += c; the rest of Q may not hold accelerations
-        self._M_added = None
+        # moved into the mass matrix, M_ij += c, as constant entries of the main kernel's mass
+        # entries, so every path that assembles M (the Python one, the compiled stepper's,
+        # the compiled multiplier solves') carries them; the articulated-body recursion adds
+        # those within one joint's coordinates to that joint's D (decision 0057)
+        self._M_added: dict = {}
         qdd_index = {a: j for j, a in enumerate(lay.qdd_symbols)}
         for i, e in enumerate(Q):
             e = sp.sympify(e)
@@ -370,11 +377,13 @@ class RecursiveDynamics:
             coeffs = {a: sp.diff(e, a) for a in acc}
             if not all(c.is_number for c in coeffs.values()):
                 continue                    # not constant: refused below
-            if self._M_added is None:
-                self._M_added = np.zeros((lay.n, lay.n))
             for a, c in coeffs.items():
-                self._M_added[i, qdd_index[a]] -= float(c)
+                key = (i, qdd_index[a])
+                self._M_added[key] = self._M_added.get(key, 0.0) - float(c)
+                entries[key] = entries.get(key, zero) + conv(-c)
             Q[i] = sp.expand(e - sum(c * a for a, c in coeffs.items()))
+        self._M_rows = np.array([k[0] for k in entries], dtype=np.int64)
+        self._M_cols = np.array([k[1] for k in entries], dtype=np.int64)
         for e in [*Q, *Qp]:
             fs = sp.sympify(e).free_symbols
             if fs & lamset or fs & qddset or fs & slave_acc:
@@ -461,6 +470,25 @@ class RecursiveDynamics:
                     self._numba = (jit, np.array([[p[0], p[1]] for p in ptrs], dtype=np.int64))
         return self._numba
 
+    def plain_python(self):
+        """A context in which this thread's evaluations take the plain-Python recursion
+        (the same operations as the compiled one, see :meth:`_engine`): for a few
+        evaluations, where loading Numba and its cached code (about 0.7 s CPU once per
+        process; compiling it, several seconds once per installation) would not be
+        recovered (the robot entry points on few points, decision 0057)."""
+        from contextlib import contextmanager
+
+        @contextmanager
+        def ctx():
+            before = getattr(self._local, "plain", False)
+            self._local.plain = True
+            try:
+                yield
+            finally:
+                self._local.plain = before
+
+        return ctx()
+
     def _workspace(self):
         kid, par, root, nqm, goff, gcols, nq = self._tree
         S = len(kid)
@@ -484,7 +512,10 @@ class RecursiveDynamics:
         q = np.asarray(q, dtype=float)
         qd = np.asarray(qd, dtype=float)
         p = np.asarray(p, dtype=float)
-        eng = self._numba if self._numba is not None else self._engine()
+        if getattr(self._local, "plain", False):
+            eng = False                      # (plain_python(): a few evaluations)
+        else:
+            eng = self._numba if self._numba is not None else self._engine()
         P, Pd = w["P"], w["Pd"]
         if eng:
             eng[0].forward(eng[1], kid, par, root, nqm, goff, gcols, nq, float(t), q, qd, p, w["x"],
@@ -513,8 +544,6 @@ class RecursiveDynamics:
         (eng[0].assemble if eng else _assemble)(
             par, root, nqm, goff, gcols, nq, w["FP"], w["Fg"], w["H"], w["Mb"], w["Qvb"], Qp, w["C"],
             w["BQ"], w["BV"], w["X"], w["Y"], M, Q, Qv)
-        if self._M_added is not None:
-            M += self._M_added
         return M, Q, Qv, out[kM:kM + kJ], out[o:o + kg]
 
     @property
@@ -522,9 +551,14 @@ class RecursiveDynamics:
         """Only slaves on ground and their coordinates, no constraint equation: the free
         accelerations come from the O(N) articulated-body recursion (:meth:`accelerations`)."""
         kid, par, root, nqm, goff, gcols, nq = self._tree
-        # (inertia added on coordinates is not in the articulated-body recursion)
+        # inertia added on coordinates (an armature) joins the recursion when each entry
+        # couples coordinates of one joint (it adds to that joint's D); across joints it
+        # would couple two joints' D, which the recursion cannot hold: the full system then
+        joint = np.empty(self.system.n, dtype=np.int64)
+        for s in range(len(kid)):
+            joint[gcols[goff[s]:goff[s + 1]]] = s
         return (self.system.m == 0 and len(gcols) == self.system.n and bool((root < 0).all())
-                and self.__dict__.get("_M_added") is None)
+                and all(joint[i] == joint[j] for i, j in self.__dict__.get("_M_added", {})))
 
     def accelerations(self, t, q, qd, p):
         """Free accelerations ``qdd`` (n,) by the articulated-body recursion
@@ -541,8 +575,9 @@ class RecursiveDynamics:
         Qp = out[o + 2 * n + kg:].reshape(len(kid), nq)
         qdd = np.empty(n)
         bad = (eng[0].articulated if eng else _articulated)(
-            par, nqm, goff, gcols, nq, w["FP"], w["Fg"], w["HL"], w["Mb"], w["Qvb"], Qp, Qd, w["C"],
-            w["BQ"], w["U"], w["L"], w["Z"], w["W"], qdd, 1e-13)
+            par, nqm, goff, gcols, nq, w["FP"], w["Fg"], w["HL"], w["Mb"], w["Qvb"], Qp, Qd,
+            out[:kM], self._M_rows, self._M_cols, w["C"], w["BQ"], w["U"], w["L"], w["Z"], w["W"],
+            qdd, 1e-13)
         return qdd if bad < 0 else None
 
     def terms(self, t, q, qd, lam, p, qdd=None):

@@ -24,6 +24,7 @@ import numpy as np
 import scipy.sparse as sps
 import sympy as sp
 
+from .._errors import ModelError
 from .._symbols import T, acceleration_symbol, velocity_symbol
 from ..solvers._linalg import FixedPattern
 from ._backends import Compiled, compile_exprs, default_backend
@@ -132,10 +133,31 @@ class System:
         self._dynamics = None
 
         self.lam_symbols = multiplier_symbols(layout)
-        #: slave-body symbol -> expression in this layout's coordinates (Gen joints)
-        self.gen_subs = model._gen_substitution() if model is not None else {}
+        #: whether the model has Gen joints (slave bodies), known without their nested poses
+        self.has_gen = model is not None and any(
+            getattr(b, "gen_joint", None) is not None for b in self._bodies)
+        self._gen_subs = None if self.has_gen else {}
+        self._model_version = getattr(model, "_version", None)
+        cache = getattr(model, "_gen_cache", None)
+        if self.has_gen and cache is not None and cache[0] == self._model_version:
+            # derived already (the model's equations used them): kept as of this version
+            self._gen_subs = model._gen_substitution()
         #: compile with common subexpressions (nested slave poses share most of theirs)
-        self.cse = bool(self.gen_subs) if opts is None or opts.cse is None else opts.cse
+        self.cse = self.has_gen if opts is None or opts.cse is None else opts.cse
+
+    @property
+    def gen_subs(self) -> dict:
+        """Slave-body symbol -> expression in this layout's coordinates (Gen joints), derived
+        on first use: the recursive dynamics of a tree (an imported robot's first inverse
+        dynamics) never needs the nested poses, which take seconds for a deep chain
+        (decision 0057)."""
+        if self._gen_subs is None:
+            if getattr(self._model, "_version", None) != self._model_version:
+                raise ModelError("this compiled system belongs to an earlier state of its model "
+                                 "(bodies, constraints or loads changed since); compile or solve "
+                                 "again")
+            self._gen_subs = self._model._gen_substitution()
+        return self._gen_subs
 
     def kinematic_exprs(self, key: str, for_compile: bool = False) -> list:
         """``"jac"`` (nonzero Jacobian entries), ``"phi_t"`` or ``"gamma"``: SymPy lists (made
@@ -223,7 +245,7 @@ class System:
         """Mass matrix, applied and velocity-dependent forces (derived and compiled on first
         use: kinematics-only work never pays for them)."""
         if self._dynamics is None:
-            if self.gen_subs:  # Gen joints: symbolic or recursive (compile/_generalized.py)
+            if self.has_gen:  # Gen joints: symbolic or recursive (compile/_generalized.py)
                 from ._generalized import make_dynamics
 
                 self._dynamics = make_dynamics(self, self._model, self._bodies, self._loads)

@@ -129,13 +129,18 @@ class GenJoint(ConstraintBase):
         return -len(self._vars)
 
     # -- the slave's pose ----------------------------------------------------------------
-    def pose(self, space) -> tuple[sp.Matrix, list]:
+    def pose(self, space, conv=None) -> tuple[sp.Matrix, list]:
         """``(r_s, rot_s)``: the slave's position and rotation coordinates (angle, or Euler
-        parameters) as expressions of the master's coordinate symbols and the joint's."""
+        parameters) as expressions of the master's coordinate symbols and the joint's.
+        ``conv`` (3D; ``symengine.sympify``): the same products in that algebra, returned as
+        two lists of its expressions (SymPy's evaluation of the quaternion and matrix
+        products is most of a robot arm's first dynamics; decision 0057)."""
         o1, R1, o2, R2 = self._frames(space)
         tj, Rj = self._relative(space)
         m = self.master
         ground = m is None or m.is_ground
+        if conv is not None and space.dim == 3:
+            return self._pose_in(conv, o1, R1, o2, R2, tj, Rj, None if ground else m)
         if space.dim == 2 and hasattr(space, "continuous_angle"):
             # planar Euler parameters (orientation="euler"): the master's (ei, ej) turned by
             # the joint's angle; the Gen coordinate itself counts the turns
@@ -160,12 +165,44 @@ class GenJoint(ConstraintBase):
         r_s = r_m + A_m * (o2 + R2m * tj) - A_s * o1
         return r_s, [sp.sympify(e) for e in rot_s]
 
+    @staticmethod
+    def _pose_in(conv, o1, R1, o2, R2, tj, Rj, m):
+        """:meth:`pose` in 3D in the algebra of ``conv``: the same formulas term for term."""
+        from ..geometry._rotations import matrix_elements
+
+        def vec(v):
+            return [conv(c) for c in v]
+
+        e_m = vec(_ONE_Q if m is None else m.q[3:])
+        rot_s = quaternion_product(quaternion_product(quaternion_product(e_m, vec(R2)), vec(Rj)),
+                                   quaternion_inverse(vec(R1)))
+        A_s = matrix_elements(rot_s)
+        R2m = matrix_elements(vec(R2))
+        o1, o2, tj = vec(o1), vec(o2), vec(tj)
+        w = [o2[i] + sum((R2m[i][k] * tj[k] for k in range(3)), conv(0)) for i in range(3)]
+        if m is None:
+            r_s = [w[i] - sum((A_s[i][k] * o1[k] for k in range(3)), conv(0)) for i in range(3)]
+        else:
+            A_m = [[conv(m.A[i, k]) for k in range(3)] for i in range(3)]
+            r_m = vec(m.r)
+            r_s = [r_m[i] + sum((A_m[i][k] * w[k] for k in range(3)), conv(0))
+                   - sum((A_s[i][k] * o1[k] for k in range(3)), conv(0)) for i in range(3)]
+        return r_s, rot_s
+
     def _relative(self, space):  # pragma: no cover - interface
         raise NotImplementedError
 
     def _frames(self, space):
         """Joint frames of the two axes: 2D the local direction angle, 3D the Euler
-        parameters of ``[g, u x g, u]`` (reference, normal, unit direction), local."""
+        parameters of ``[g, u x g, u]`` (reference, normal, unit direction), local; made once
+        per space (the check at ``add``, each pose and the exporters ask for them)."""
+        key = ("frames", space.name)
+        got = self._cache.get(key)
+        if got is None:
+            got = self._cache[key] = self._make_frames(space)
+        return got
+
+    def _make_frames(self, space):
         out = []
         for ax in (self._g1, self._g2):
             o = ax.origin.local
@@ -188,13 +225,18 @@ class GenJoint(ConstraintBase):
         return tuple(out)
 
 
+_EXACT: list = []          # (float, exact value) of 0, +-1/2, +-1, +-sqrt(2)/2, made once
+
+
 def _exact(c: float) -> sp.Expr:
     """A numeric frame parameter, exact when it is 0, +-1/2, +-1 or +-sqrt(2)/2 (the common
     frames), so expressions stay free of stray floats."""
-    for v in (sp.S.Zero, sp.S.Half, sp.S.One, sp.sqrt(2) / 2):
-        for sgn in (1, -1):
-            if abs(c - sgn * float(v)) < 1e-14:
-                return sgn * v
+    if not _EXACT:
+        _EXACT.extend((sgn * float(v), sgn * v) for v in (sp.S.Zero, sp.S.Half, sp.S.One,
+                                                          sp.sqrt(2) / 2) for sgn in (1, -1))
+    for f, v in _EXACT:
+        if abs(c - f) < 1e-14:
+            return v
     return sp.Float(c)
 
 

@@ -46,6 +46,10 @@ def matrix_rpy(R) -> tuple[float, float, float]:
     return math.atan2(-R[1, 2], R[1, 1]), p, 0.0
 
 
+#: MuJoCo's ``mjMINVAL``: a moving body's mass and principal moments must exceed it
+MJ_MINVAL = 1e-15
+
+
 def _num(v) -> str:
     return repr(float(v))
 
@@ -234,40 +238,77 @@ def to_mjcf(m, path, model: str = "mechsys") -> Path:
     out = [f"<mujoco model={quoteattr(model)}>", '  <compiler angle="radian" autolimits="true"/>',
            f'  <option gravity="{_vec(g)}"/>', "  <worldbody>"]
 
-    def body(j, depth):
-        b = j.slave
-        pad = "  " * depth
+    def placed(j):
+        """``(pos, R0, o1, u1)``: the slave's frame in its master's, the joint's point and axis
+        on the slave (module doc)."""
         o1, R1, o2, R2 = _frames(j, m.space)
         R0 = R2 @ R1.T
-        mass, c, I = props[b]
-        out.append(f"{pad}<body name={quoteattr(b.name)} pos=\"{_vec(o2 - R0 @ o1)}\" "
-                   f"quat=\"{_vec(_from_matrix(R0))}\">")
-        kind = "slide" if isinstance(j, GenTranslate5) else "hinge"
-        jn = j.coordinates[0].name
-        extra = ""
-        if jn in passive:
-            (c0, k, d, a), labels = passive[jn]
-            if c0 and not k:
-                raise ModelError(f"to_mjcf: load {', '.join(labels)} on joint {jn!r} has a constant "
-                                 f"part {c0!r} without a spring, which MJCF cannot hold on a joint; "
-                                 "remove it")
-            # -k (q - springref) - d qd - a qdd: MuJoCo's passive forces and armature
-            for key, v in (("stiffness", k), ("springref", c0 / k if k else 0.0), ("damping", d),
-                           ("armature", a)):
-                if v:
-                    extra += f" {key}=\"{_num(v)}\""
-        out.append(f"{pad}  <joint name={quoteattr(jn)} type=\"{kind}\" "
-                   f"pos=\"{_vec(o1)}\" axis=\"{_vec(R1[:, 2])}\"{extra}/>")
-        if mass > 0:
-            full = (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])
-            out.append(f"{pad}  <inertial pos=\"{_vec(c)}\" mass=\"{_num(mass)}\" "
-                       f"fullinertia=\"{_vec(full)}\"/>")
-        for k in children.get(b, []):
-            body(k, depth + 1)
+        return o2 - R0 @ o1, R0, o1, R1[:, 2]
+
+    def massless(b):
+        mass, _, I = props[b]
+        return mass == 0 and not np.any(I)
+
+    def body(j, depth, Pa, Ra):
+        """The body of joint ``j`` (its frame placed in the written parent's frame moved by
+        ``(Pa, Ra)``, the parent's content frame in the written frame)."""
+        pad = "  " * depth
+        pos, R0, _, _ = placed(j)
+        # MuJoCo refuses moving bodies without mass (an importer's intermediate body of a
+        # body with several joints, a planar joint's slides, a massless URDF link): a
+        # massless body with one child joint is written as one body holding both joints.
+        # MuJoCo applies a body's joints in order, each about its point and axis in the frame
+        # the joints before it have moved: the chain's own frames. The child's frame is the
+        # written one moved by (Pb, Rb); its joint and content are written in the written frame.
+        chain = [j]
+        while massless(chain[-1].slave) and len(children.get(chain[-1].slave, [])) == 1:
+            chain.append(children[chain[-1].slave][0])
+        last = chain[-1].slave
+        mass, c, I = props[last]
+        if massless(last):
+            what = ("has no child" if not children.get(last) else
+                    f"carries {len(children[last])} bodies")
+            raise ModelError(f"to_mjcf: body {last.name!r} is moved by a joint and has no mass and "
+                             f"no inertia, and it {what}: MuJoCo refuses moving bodies without "
+                             "mass; give it a mass and inertia (or remove it)")
+        if not mass > MJ_MINVAL or np.linalg.eigvalsh(I).min() <= MJ_MINVAL:
+            raise ModelError(f"to_mjcf: body {last.name!r} has mass {mass!r} and principal moments "
+                             f"of inertia {np.linalg.eigvalsh(I).tolist()}: MuJoCo refuses a moving "
+                             "body unless both are positive (a point mass or a slender rod is "
+                             "refused); give it a positive mass and positive principal moments")
+        out.append(f"{pad}<body name={quoteattr(last.name)} pos=\"{_vec(Pa + Ra @ pos)}\" "
+                   f"quat=\"{_vec(_from_matrix(Ra @ R0))}\">")
+        Pb, Rb = np.zeros(3), np.eye(3)
+        for k, jj in enumerate(chain):
+            pk, Rk, o1, u1 = placed(jj)
+            if k:
+                Pb, Rb = Pb + Rb @ pk, Rb @ Rk
+            kind = "slide" if isinstance(jj, GenTranslate5) else "hinge"
+            jn = jj.coordinates[0].name
+            extra = ""
+            if jn in passive:
+                (c0, ks, d, a), labels = passive[jn]
+                if c0 and not ks:
+                    raise ModelError(f"to_mjcf: load {', '.join(labels)} on joint {jn!r} has a "
+                                     f"constant part {c0!r} without a spring, which MJCF cannot "
+                                     "hold on a joint; remove it")
+                # -k (q - springref) - d qd - a qdd: MuJoCo's passive forces and armature
+                for key, v in (("stiffness", ks), ("springref", c0 / ks if ks else 0.0),
+                               ("damping", d), ("armature", a)):
+                    if v:
+                        extra += f" {key}=\"{_num(v)}\""
+            out.append(f"{pad}  <joint name={quoteattr(jn)} type=\"{kind}\" "
+                       f"pos=\"{_vec(Pb + Rb @ o1)}\" axis=\"{_vec(Rb @ u1)}\"{extra}/>")
+        Iw = Rb @ I @ Rb.T
+        full = (Iw[0, 0], Iw[1, 1], Iw[2, 2], Iw[0, 1], Iw[0, 2], Iw[1, 2])
+        out.append(f"{pad}  <inertial pos=\"{_vec(Pb + Rb @ c)}\" mass=\"{_num(mass)}\" "
+                   f"fullinertia=\"{_vec(full)}\"/>")
+        for k in children.get(last, []):
+            body(k, depth + 1, Pb, Rb)
         out.append(f"{pad}</body>")
 
     for j in children.get(None, []):
-        body(j, 2)
+        body(j, 2, np.zeros(3), np.eye(3))
     out += ["  </worldbody>", "</mujoco>"]
     p = Path(path)
     p.write_text("\n".join(out) + "\n", encoding="utf-8")

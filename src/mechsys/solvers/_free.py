@@ -514,46 +514,72 @@ def project_holding(system, t, q, qd, p, scaling, hold_q=(), hold_qd=(), tol=1e-
     q, qd = np.array(q, dtype=float), np.array(qd, dtype=float)
     if system.m == 0:
         return q, qd
+    q = hold_positions(system, t, q, p, scaling, hold_q, tol, max_iterations)
+    J, rhs = system.velocity_rhs(t, q, p, system.n > SPARSE_THRESHOLD)
+    qd = hold_rates(system, J, rhs, qd, scaling, hold_qd, "velocities")
+    return q, qd
 
+
+def hold_positions(system, t, q, p, scaling, hold=(), tol=1e-12, max_iterations=8,
+                   check: bool = True):
+    r"""Gauss-Newton on ``Phi(q, t) = 0`` with the coordinates ``hold`` (indices) kept: each
+    step the smallest unit-free change of the others (least squares on the scaled Jacobian
+    with the held columns removed, see :func:`hold_rates`), until ``max_i |Phi_i| / r_i <= tol
+    (1 + offset)`` or ``max_iterations``. ``check``: a scaled residual above ``1e-8 (1 +
+    offset)`` left at the end raises :class:`ConsistencyError` (``"positions"``); without it
+    the iterate is returned as it is (a continuation's step between two targets)."""
+    q = np.array(q, dtype=float)
+    hold = list(hold)
     sparse = system.n > SPARSE_THRESHOLD
-
-    def step(J, b, hold):
-        """Least-squares, minimum-norm scaled correction with the held columns fixed."""
-        r = scaling.rows(J)
-        if sparse:
-            # large systems: the minimum-norm correction from J^ J^T (sparse), when the free
-            # columns keep full row rank and it is well conditioned; else least squares below
-            keep = np.ones(system.n)
-            keep[hold] = 0.0
-            Js = sps.csr_matrix(scaling.scaled(J, r)) @ sps.diags(keep)
-            try:
-                fac = factor(sps.csc_matrix(Js @ Js.T))
-                if fac.rcond >= HOLDING_RCOND:
-                    return scaling.columns * (Js.T @ fac.solve(-b / r)), r
-            except Singular:
-                pass
-        Js = np.asarray(scaling.scaled(J.toarray() if sps.issparse(J) else J, r))
-        Js[:, hold] = 0.0
-        dx = np.linalg.lstsq(Js, -b / r, rcond=1e-12)[0]
-        return scaling.columns * dx, r
-
     for _ in range(max_iterations):
         F, J = system.residual_and_jacobian(t, q, p, sparse)
-        r = scaling.rows(J)
-        if np.abs(F / r).max(initial=0.0) <= tol * (1.0 + scaling.offset):
-            break
-        q += step(J, F, hold_q)[0]
-    F, J = system.residual_and_jacobian(t, q, p, sparse)
-    left = np.abs(F / scaling.rows(J)).max(initial=0.0)
-    if left > 1e-8 * (1.0 + scaling.offset):
-        raise ConsistencyError("positions", left)
-    J, rhs = system.velocity_rhs(t, q, p, sparse)
-    dqd, r = step(J, J @ qd - rhs, hold_qd)
-    qd += dqd
-    left = np.abs((J @ qd - rhs) / r).max(initial=0.0)
-    if left > 1e-8 * (1.0 + np.abs(qd / scaling.columns).max(initial=0.0)):
-        raise ConsistencyError("velocities", left)
-    return q, qd
+        if np.abs(F / scaling.rows(J)).max(initial=0.0) <= tol * (1.0 + scaling.offset):
+            return q
+        q += _held_step(system, J, F, hold, scaling)
+    if check:
+        F, J = system.residual_and_jacobian(t, q, p, sparse)
+        left = np.abs(F / scaling.rows(J)).max(initial=0.0)
+        if left > 1e-8 * (1.0 + scaling.offset):
+            raise ConsistencyError("positions", left)
+    return q
+
+
+def hold_rates(system, J, rhs, x, scaling, hold=(), what: str = "velocities"):
+    r"""``x`` changed least (unit-free) so that ``J x = rhs``, the entries ``hold`` kept: the
+    velocities (``J = Phi_q``, ``rhs = -Phi_t``) or the accelerations (``rhs = gamma``) of a
+    state whose other coordinates follow from the given ones. A residual above ``1e-8 (1 +
+    max |x / c|)`` left raises :class:`ConsistencyError` (``what``)."""
+    x = np.array(x, dtype=float)
+    if system.m == 0:
+        return x
+    r = scaling.rows(J)
+    x += _held_step(system, J, J @ x - rhs, list(hold), scaling)
+    left = np.abs((J @ x - rhs) / r).max(initial=0.0)
+    if left > 1e-8 * (1.0 + np.abs(x / scaling.columns).max(initial=0.0)):
+        raise ConsistencyError(what, left)
+    return x
+
+
+def _held_step(system, J, b, hold, scaling):
+    """The least-squares, minimum-norm scaled correction ``dx`` with ``J dx = -b`` and the
+    held columns fixed."""
+    r = scaling.rows(J)
+    if system.n > SPARSE_THRESHOLD:
+        # large systems: the minimum-norm correction from J^ J^T (sparse), when the free
+        # columns keep full row rank and it is well conditioned; else least squares below
+        keep = np.ones(system.n)
+        keep[hold] = 0.0
+        Js = sps.csr_matrix(scaling.scaled(J, r)) @ sps.diags(keep)
+        try:
+            fac = factor(sps.csc_matrix(Js @ Js.T))
+            if fac.rcond >= HOLDING_RCOND:
+                return scaling.columns * (Js.T @ fac.solve(-b / r))
+        except Singular:
+            pass
+    Js = np.asarray(scaling.scaled(J.toarray() if sps.issparse(J) else J, r))
+    Js[:, hold] = 0.0
+    dx = np.linalg.lstsq(Js, -b / r, rcond=1e-12)[0]
+    return scaling.columns * dx
 
 
 class ConsistencyError(Exception):

@@ -405,8 +405,6 @@ class _Gen:
         ptrs = [_jit._pointer(k) for k in dyn._kernels]
         if any(p is None or p[2] != 0 for p in ptrs):
             return None
-        if getattr(dyn, "_M_added", None) is not None:
-            return None          # inertia added on coordinates (armature): the Python stepper
         kid, par, root, nqm, goff, gcols, nq = dyn._tree
         kM, kJ, _, kg, _ = dyn._sizes
         n, m = system.n, system.m

@@ -1960,8 +1960,8 @@ def _accel_gen(kp, lapack, x, nin, n, m, jr, jc, rows0, columns, robust, ipiv, i
     if tree:
         for j in range(n):
             Qd[j] = og[o + j] + og[o + n + j]
-        if _articulated(par, nqm, goff, gcols, nq, FP, Fg, HL, Mb, Qvb, Qp, Qd, C, BQ, U, L, Z,
-                        W, qdd, 1e-13) >= 0:
+        if _articulated(par, nqm, goff, gcols, nq, FP, Fg, HL, Mb, Qvb, Qp, Qd, og[:kM], Mr, Mc,
+                        C, BQ, U, L, Z, W, qdd, 1e-13) >= 0:
             return False
         for j in range(n):
             if not np.isfinite(qdd[j]):

@@ -177,12 +177,16 @@ def _assemble(par, root, nqm, goff, gcols, nq, FP, Fg, H, Mb, Qvb, Qp, C, BQ, BV
                 break
 
 
-def _articulated(par, nqm, goff, gcols, nq, FP, Fg, HL, Mb, Qvb, Qp, Qd, IA, PA, U, L, Z, W, qdd, tol):
+def _articulated(par, nqm, goff, gcols, nq, FP, Fg, HL, Mb, Qvb, Qp, Qd, Av, Ar, Ac, IA, PA, U,
+                 L, Z, W, qdd, tol):
     r"""Free accelerations of a tree of slaves on ground with no constraint equations, in
     O(N): the articulated-body algorithm in pose coordinates. Backward, with ``IA_s``,
     ``PA_s`` the subtree's articulated inertia and force on the slave's pose (leaf: ``M_s``,
-    ``Qv_s + Q_s``), ``U = IA F_g``, ``D = F_g^T U`` (Cholesky ``L``), ``Qd`` the forces
-    applied to the coordinates themselves::
+    ``Qv_s + Q_s``), ``U = IA F_g``, ``D = F_g^T U + A_s`` (Cholesky ``L``), ``Qd`` the forces
+    applied to the coordinates themselves, ``A_s`` the inertia added on the joint's own
+    coordinates (an armature: the entries ``Av[e]`` at ``(Ar[e], Ac[e])`` of the mass matrix
+    that fall within the joint's coordinates; the caller sends entries across joints to the
+    full system)::
 
         Ia = IA - U D^-1 U^T,   pa = PA - U D^-1 (F_g^T PA + Qd_g)
         IA_master += F_P^T Ia F_P,   PA_master += F_P^T (pa - Ia h_loc)
@@ -216,6 +220,10 @@ def _articulated(par, nqm, goff, gcols, nq, FP, Fg, HL, Mb, Qvb, Qp, Qd, IA, PA,
                 v = 0.0
                 for l in range(nq):  # noqa: E741
                     v += Fg[s, l, ii] * U[s, l, jj]
+                ci, cj = gcols[g0 + ii], gcols[g0 + jj]
+                for e in range(Av.size):
+                    if Ar[e] == ci and Ac[e] == cj:
+                        v += Av[e]
                 for r in range(jj):
                     v -= L[s, ii, r] * L[s, jj, r]
                 if ii == jj:
