@@ -194,3 +194,34 @@ def test_acceleration_dependent_load_acts_as_added_mass():
     th, w = sol["bar.th"], sol.coordinate("bar.th", 1)
     E = 0.5 * (m0 + ma) * (L * w) ** 2 + m0 * g * L * np.sin(th)
     assert np.ptp(E) < 1e-8
+
+
+def test_held_angular_velocity_follows_the_attitude_the_start_projection_gives():
+    """``("omega", body)`` with a length parameter changed in the same initial condition: the
+    start projection moves (and turns) the body onto the constraints first, then the Euler
+    parameters' rates are taken from the angular velocity on the attitude reached. (Rates
+    derived on the old attitude could not be held: a ``ModelError`` before.)"""
+    m = ms.Model3D()
+    L = m.parameter("L", 1.0)
+    b = m.add_body("bob", mass=2.0, inertia=(0.05, 0.08, 0.04),
+                   guess=((0.3, 0.0, -0.9), (0.3, (0, 1, 0))))
+    m.add(ms.Spherical3(b.point((L, 0, 1.0)), m.ground.point((0, 0, 0))), name="ball")
+    m.add(ms.RotationLock3(b, (0.3, (0, 1, 0))), name="hold")
+    m.add_load(ms.Gravity((0, 0, -1), 9.81))
+    m.solve(0.0)
+    w = np.array([0.3, -0.4, 2.0])
+    for kind in ("omega", "omega_local"):
+        s = m.free(drop=["hold"]).solve(0.0, initial_condition={(kind, "bob"): w, "L": 1.3})
+        e, ed = s.q[0, 3:7], s.qd[0, 3:7]
+        e0, e1, e2, e3 = e
+        sg = 1.0 if kind == "omega" else -1.0      # E (global) or G (local)
+        E = np.array([[-e1, e0, -sg * e3, sg * e2], [-e2, sg * e3, e0, -sg * e1],
+                      [-e3, -sg * e2, sg * e1, e0]])
+        np.testing.assert_allclose(2 * E @ ed, w, atol=1e-12)
+        assert abs(e @ e - 1) < 1e-12 and abs(e @ ed) < 1e-12
+        # the pivot point, now at (1.3, 0, 1) on the body, stays at the origin
+        A = np.eye(3) * (e0**2 - e[1:] @ e[1:]) + 2 * np.outer(e[1:], e[1:]) + 2 * e0 * np.array(
+            [[0, -e3, e2], [e3, 0, -e1], [-e2, e1, 0]])
+        np.testing.assert_allclose(s.q[0, :3] + A @ [1.3, 0, 1.0], 0, atol=1e-12)
+        v_pivot = s.qd[0, :3] + np.cross(A @ w if kind == "omega_local" else w, A @ [1.3, 0, 1.0])
+        np.testing.assert_allclose(v_pivot, 0, atol=1e-12)

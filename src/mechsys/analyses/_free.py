@@ -37,6 +37,7 @@ from ..solvers._free import (
     equilibrium_configuration,
     equilibrium_velocity,
     free_acceleration,
+    hold_positions,
     project,
     project_holding,
     scaling_at,
@@ -400,6 +401,9 @@ class FreeSystem:
             self._set_angular_velocity(q, qd, body, w, local=(kind == "omega_local"))
             sl = lay.body_slices[self.model.body(body).name]
             held["qd"].update(range(sl.start + self.model.space.dim, sl.stop))
+            # kept as an angular velocity: the rates follow the attitude the start
+            # projection gives (a changed length parameter turns the body a little)
+            held.setdefault("omega", []).append((kind, body, w))
         return q, qd, given
 
     def _condition_dims(self, name: str, pnames: list) -> tuple | None:
@@ -447,7 +451,7 @@ class FreeSystem:
         """``(q, qd, p)`` of a call: the FreeSystem's start, ``initial_condition`` on top, and
         the parameters as they are now (the loads' stiffnesses, damping and friction
         coefficients checked with them: :func:`~mechsys.loads._loads.check_load_values`)."""
-        held = {k: set(v) for k, v in self._held0.items()}
+        held = {k: (list(v) if k == "omega" else set(v)) for k, v in self._held0.items()}
         if initial_condition is None:
             q, qd, p = self._q0.copy(), self._qd0.copy(), self._params()
         else:
@@ -461,6 +465,14 @@ class FreeSystem:
         """The start state on the constraints, keeping the values the user gave (the rest
         changes least); values the constraints do not allow are a ModelError naming them."""
         try:
+            if held.get("omega") and self.system.m:
+                # positions first, then the held angular velocities' Euler-parameter rates
+                # on the attitude reached (rates derived on the unprojected attitude do not
+                # satisfy its normalisation's rate, and holding them would fail)
+                qd = qd.copy()
+                q = hold_positions(self.system, t, q, p, scaling, sorted(held["q"]))
+                for kind, body, w in held["omega"]:
+                    self._set_angular_velocity(q, qd, body, w, local=(kind == "omega_local"))
             q, qd = project_holding(self.system, t, q, qd, p, scaling, sorted(held["q"]),
                                     sorted(held["qd"]))
             if self._vrows is None:
