@@ -8,9 +8,9 @@ holonomic part and in the no-slip rows) and to gravity ``g`` (the loads). The fi
 differences rerun the motion at ``p +- 1e-5 p`` (rtol 1e-12) from the same start state: a
 start on the constraints at the nominal values, given as a state (nothing held), so that the
 start projection of each run moves it by the same smallest change the sensitivities' start
-takes. (With the angular velocity held instead, a run at another radius projects the
-positions first and then cannot keep the Euler-parameter rates derived from the
-unprojected attitude: a start the sensitivities do not describe.)
+takes. (With the angular velocity held instead, each run would keep that angular velocity
+on the attitude its radius gives: a start the sensitivities, which hold nothing, do not
+describe.)
 
 This is not a unit test: the 3D tangent kernels take 8 to 17 s to compile on a loaded
 two-core machine. The unit test is the sleigh's (tests/test_free_nonholonomic.py), against
