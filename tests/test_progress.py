@@ -14,7 +14,7 @@ import pytest
 
 import mechsys as ms
 from mechsys import models
-from mechsys.solvers import _jit
+from mechsys.solvers import _jit_sweep
 from mechsys.solvers import _kinematics as kin
 
 pytest.importorskip("numba")
@@ -26,14 +26,14 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 def _spy_runs(monkeypatch):
     """Record every call of the compiled sweep loop: (first point, points given, returned k)."""
     calls = []
-    real = _jit.run
+    real = _jit_sweep.run
 
     def spy(system, pointers, times, *rest):
         out = real(system, pointers, times, *rest)
         calls.append((rest[-2], len(times), out[0]))
         return out
 
-    monkeypatch.setattr(_jit, "run", spy)
+    monkeypatch.setattr(_jit_sweep, "run", spy)
     return calls
 
 
@@ -124,7 +124,7 @@ def test_interrupt_before_any_point_is_a_clear_error(monkeypatch):
     def ctrl_c(*a, **k):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(_jit, "run", ctrl_c)
+    monkeypatch.setattr(_jit_sweep, "run", ctrl_c)
     with pytest.raises(ms.MechError, match="before any point was solved: interrupted"):
         models.slider_crank().solve(np.linspace(0, 1, 1000), progress=lambda d, n: None)
 

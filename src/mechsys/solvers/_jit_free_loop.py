@@ -56,8 +56,7 @@ from ._jit_sparse import IWORK, lu_factor, lu_pivot_ratio, lu_solve
 from ._jit_tree import articulated as _articulated
 from ._jit_tree import assemble as _gen_assemble
 from ._jit_tree import forward as _gen_forward
-from ._linalg import PIVOT_TOL, RCOND_MIN
-from ._rank import ZONE
+from ._tolerances import PIVOT_TOL, RCOND_MIN, ZONE
 
 _check_cache()   # stale cached loops go before anything here compiles (see _jit_cache)
 
@@ -569,7 +568,7 @@ def _newton_accel_band(kp, lapack, bi, x, nin, out, n, m, jr, jc, ipiv, qdd, lam
                        Dr, Dc, Ar, Ac, bnd, nw, ex, ph, t, y, f):
     """``_newton_accel`` for large systems: the same Newton on ``(qdd, lambda)`` and the same
     unit-free convergence test, with the Jacobian held by its distinct nonzeros and the
-    Newton matrix by its fixed pattern (``solvers._free._newton_pattern``), factorised as the
+    Newton matrix by its fixed pattern (``_patterns.free_newton_pattern``), factorised as the
     Python path's ``FixedPattern.factor`` does: LAPACK's ``dgbtrf`` in the reverse
     Cuthill-McKee band (chains), or the compiled sparse LU in the minimum-degree ordering
     (trees of many branches, ``_nb_factor``): no dense ``(n + m)^2`` array, work linear in
@@ -704,7 +703,7 @@ def _newton_accel_band(kp, lapack, bi, x, nin, out, n, m, jr, jc, ipiv, qdd, lam
 # -- the sparse kind: the augmented matrix by the compiled sparse LU of its fixed pattern ----
 #
 # ``bi = (info, pos, kperm, Bp, Bi, perms, dpos, LUi, -)`` holds two matrices' structures.
-# The first is the projection's ``[[I, J^T], [J^, 0]]`` (``_free.projection_pattern``, the
+# The first is the projection's ``[[I, J^T], [J^, 0]]`` (``_patterns.projection_pattern``, the
 # Python path's): ``info[:7] = [N, nK, nB, k_M, k_J, capL, capU]``; stored entry ``s`` holds
 # kernel value ``kperm[s] - k_M`` (the Jacobian's; ``k_M = 0``) and goes to ``Bx[pos[s]]``
 # of ``B = P Q K P^T`` (``FixedPattern._pos``), whose CSC structure is ``Bp``, ``Bi``;
@@ -807,7 +806,7 @@ def _min_norm_sparse(r, columns, bvec, out, n, m, jr, jc, jv, bi, bw, robust):
     """``_free._min_norm`` of a large system, operation for operation: the smallest ``z``
     (``out = D z``) with ``J^ z = bvec``, ``J^ = R^-1 J D`` (``jv`` the Jacobian's values,
     each entry once), from ``[[I, J^T], [J^, 0]] [z; -nu] = [0; bvec]`` through that
-    matrix's pattern (``_free.projection_pattern``: the first structure of ``bi``) and the
+    matrix's pattern (``_patterns.projection_pattern``: the first structure of ``bi``) and the
     same sparse LU. False (hand over) at a pivot ratio below ``RCOND_MIN``, or, ``robust``,
     below ``ZONE^2``: the Python path's tests on the same pivots (the identity's and the
     Schur complements' of ``J^ J^T``): it hands over before the zone of a singular

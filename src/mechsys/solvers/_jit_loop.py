@@ -1,4 +1,4 @@
-"""Numba code of the compiled kinematic sweep (imported only when it runs: see ``_jit.py``).
+"""Numba code of the compiled kinematic sweep (imported only when it runs: see ``_jit_sweep.py``).
 
 Every function mirrors one piece of the Python path, in the same order of floating-point
 operations, so that both give the same numbers:
@@ -41,9 +41,18 @@ from ._jit_cache import check as _check_cache
 from ._jit_lapack import GUARD_MARGIN, gecon1, getrf, inv_norm_bound, leaf, pattern_size, symbolic_pattern
 from ._jit_modes import within
 from ._jit_sparse import IWORK, lu_factor, lu_pivot_ratio, lu_solve, lu_solve_t
-from ._kinematics import RCOND_PENDING, RCOND_WARN, ROTATION_JUMP, ROTATION_SLACK, ROTATION_START
-from ._linalg import ARM_ROUNDOFF, PIVOT_TOL, RCOND_MIN, SPARSE_THRESHOLD
-from ._position import CHORD_RATE
+from ._tolerances import (
+    ARM_ROUNDOFF,
+    CHORD_RATE,
+    PIVOT_TOL,
+    RCOND_MIN,
+    RCOND_PENDING,
+    RCOND_WARN,
+    ROTATION_JUMP,
+    ROTATION_SLACK,
+    ROTATION_START,
+    SPARSE_THRESHOLD,
+)
 
 _check_cache()   # stale cached loops go before anything here compiles (see _jit_cache)
 
@@ -102,7 +111,7 @@ def _kcall(typingctx, addr, out, off, x, ctx):
 
 @leaf
 def _eval(ptr, x, nin, out):
-    """One kernel (a row of the pointer table: see ``_jit.plan``) at ``x[:nin]``; a
+    """One kernel (a row of the pointer table: see ``_jit_runtime.table``) at ``x[:nin]``; a
     two-stage kernel first writes its ``Piecewise`` values into ``x[nin:]``."""
     if ptr[2] != 0:
         _kcall(ptr[2], x, nin, x, ptr[3])

@@ -23,7 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._errors import ConvergenceError, ModelError, SingularJacobianError, option_fields
-from ._linalg import RCOND_MIN, SPARSE_THRESHOLD, Scaling, Singular
+from ._linalg import Scaling
+from ._tolerances import CHORD_RATE, RCOND_MIN, SPARSE_THRESHOLD, Singular
 
 
 @option_fields
@@ -56,11 +57,6 @@ class PositionOptions:
 
 _DEFAULT = PositionOptions()
 
-#: a chord step (with a factorisation of an earlier Jacobian, see :func:`solve_position`) is
-#: kept when it reduces the scaled residual at least this much; otherwise Newton takes over.
-#: (At 0.1 a chord took 6-7 steps on a coarse sweep where Newton takes 2-3, and near that
-#: rate rounding decided between a step more or less.)
-CHORD_RATE = 0.01
 
 
 @dataclass(frozen=True)
