@@ -264,11 +264,11 @@ def _stub(bodies, variables, hint):
 
 
 def test_the_loops_scaling_takes_every_branch_like_scaling_of():
-    """``_jit_loop._scaling`` against ``Scaling.of`` on random Jacobians of every kind it
+    """``_jit_sweep_loop._scaling`` against ``Scaling.of`` on random Jacobians of every kind it
     decides on: ordinary, lever arms at round-off (the fallback to the hint or to the
     coordinates), entries and coordinates not finite, empty rows, model variables, no
     length at all."""
-    from mechsys.solvers._jit_loop import _scaling
+    from mechsys.solvers._jit_sweep_loop import _scaling
     from mechsys.solvers._linalg import Scaling, _column_kinds
 
     rng = np.random.default_rng(5)

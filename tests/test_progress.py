@@ -195,12 +195,12 @@ def test_a_long_compile_is_announced_once(monkeypatch, caplog):
 
     monkeypatch.setattr(_jit_cache, "_said", set())
     with caplog.at_level(logging.INFO, logger="mechsys"):
-        assert _jit_cache.notice("a test loop", 12, ("_jit_loop", "no_such_loop"))
-        assert not _jit_cache.notice("a test loop", 12, ("_jit_loop", "no_such_loop"))
+        assert _jit_cache.notice("a test loop", 12, ("_jit_sweep_loop", "no_such_loop"))
+        assert not _jit_cache.notice("a test loop", 12, ("_jit_sweep_loop", "no_such_loop"))
     assert [r.getMessage() for r in caplog.records] == [
         "mechsys: compiling a test loop (first run, about 12 s of CPU; cached for later runs)"]
     # a loop in the cache (the compiled sweep, after one ran) is not announced
     monkeypatch.setenv("MECHSYS_JIT", "1")
     models.slider_crank().solve(np.linspace(0, 1, 20))
-    assert _jit_cache.cached("_jit_loop", "sweep_dense")
-    assert not _jit_cache.notice("the kinematic sweep", 25, ("_jit_loop", "sweep_dense"))
+    assert _jit_cache.cached("_jit_sweep_loop", "sweep_dense")
+    assert not _jit_cache.notice("the kinematic sweep", 25, ("_jit_sweep_loop", "sweep_dense"))

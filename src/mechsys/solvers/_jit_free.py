@@ -520,7 +520,7 @@ def _newton_band(system):
     branches) the compiled sparse LU's integer store; None when such a pattern has no
     compiled LU (the Python path's SuperLU)."""
     from ._jit_free_loop import BAND_HEAD
-    from ._jit_loop import SPARSE as SPARSE_BW
+    from ._jit_runtime import SPARSE as SPARSE_BW
     from ._jit_sparse import IWORK
     from ._linalg import _sparse_lu, pattern_slots
     from ._patterns import free_newton_pattern
@@ -551,7 +551,7 @@ def _newton_band(system):
     k = slot(diag, diag)
     P = rows.size
     if sparse:
-        # (the sizes of _jit_loop.big_sizes; the integer store starts with B's structure)
+        # (the sizes of _jit_linalg.big_sizes; the integer store starts with B's structure)
         capL, capU = pat._cap
         bw, store = [SPARSE_BW, P, capL, capU], P + capL + capU + 3 * N
         SI = np.concatenate([pat.s_indptr, pat.s_indices,
@@ -791,7 +791,7 @@ class FreeStepper:
         (``_newton_band``): banded (chains) by LAPACK's band LU, else (trees of many
         branches) by the compiled sparse LU; None only where the Python path has no
         compiled LU either (no Numba: SuperLU)."""
-        from ._jit_loop import SMALL as SMALL_LU
+        from ._jit_runtime import SMALL as SMALL_LU
 
         dyn = system.dynamics
         n, m = system.n, system.m
@@ -832,7 +832,7 @@ class FreeStepper:
         coordinates the velocity system dense (the written-out LU), above it (where the
         Python path solves it sparse) by the Python path's pattern and the compiled sparse
         LU, the projection through ``[[I, J^T], [J^, 0]]`` (``_path_sparse_structure``)."""
-        from ._jit_loop import SMALL as SMALL_LU
+        from ._jit_runtime import SMALL as SMALL_LU
 
         system = path.system
         n = system.n

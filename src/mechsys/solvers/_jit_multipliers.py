@@ -25,6 +25,7 @@ import numpy as np
 
 from ._jit_runtime import (
     NO_BAND,
+    SPARSE,
     GenTree,
     band_args,
     band_lapack,
@@ -95,7 +96,6 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
     if table is None:
         return 0
     from ._jit_cache import notice
-    from ._jit_loop import SPARSE as _SPARSE_BW
     from ._jit_modes import entry
 
     if _state.get("multipliers") is None:
@@ -114,7 +114,7 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
         index(dyn.M_cols), len(dyn.M_rows), code, LAM, dr, dc,
         np.broadcast_to(np.asarray(guess, dtype=float), (system.m,)).copy(), float(tol),
         int(max_iterations), np.ascontiguousarray(columns, dtype=float), band_lapack(), bw,
-        band, kband, Rpre, bool(bw[0] == _SPARSE_BW))
+        band, kband, Rpre, bool(bw[0] == SPARSE))
     # specialised on the last argument: only the dense or only the sparse solves compiled
     # (decision 0044)
     return int(entry(_state["multipliers"], args, literal=(len(args) - 1,), say=lambda _: notice(
@@ -187,8 +187,6 @@ def _multiplier_band(system):
         got = pat._jit_kband = tuple(index(a) for a in (
             pat._pos, rows, cols, pat.row_perm, pat.perm, slot(jcols, jrows),
             slot(dyn.dQ_rows, dyn.dQ_cols), head))
-    from ._jit_loop import SPARSE
-
     kbw = [pat.kl, pat.ku, pat._ld, 0] if pat.banded else [SPARSE, rows.size, *pat._cap]
     return np.array(kbw, dtype=np.int64), got
 

@@ -22,7 +22,7 @@ Python path), in the same order:
 
 Above ``SPARSE_THRESHOLD`` unknowns the Python path factorises ``R^-1 Phi_q D`` itself
 through the Jacobian's ``FixedPattern`` and solves it transposed; so does this loop, with
-the same operations: the sparse LU of ``_jit_sparse`` (``_jit_loop._sparse_factor``,
+the same operations: the sparse LU of ``_jit_sparse`` (``_jit_linalg._sparse_factor``,
 ``_sparse_solve_scaled``). With friction, the Newton matrix goes through its own
 pattern (the Python path's ``_patterns.multiplier_newton_pattern``: LAPACK's band LU when banded,
 else the same compiled sparse LU), and the residual
@@ -40,15 +40,14 @@ import numba as nb
 import numpy as np
 
 from ._jit_cache import check as _check_cache
+from ._jit_calls import _eval_row
 from ._jit_lapack import leaf
-from ._jit_loop import (
-    SPARSE,
+from ._jit_linalg import (
     _assemble,
     _band_factor,
     _band_rows,
     _band_solve,
     _band_values,
-    _eval_row,
     _factor_filled,
     _factor_work,
     _norm1,
@@ -60,6 +59,7 @@ from ._jit_loop import (
     big_sizes,
 )
 from ._jit_modes import within
+from ._jit_runtime import SPARSE
 
 _check_cache()   # stale cached loops go before anything here compiles (see _jit_cache)
 
@@ -114,7 +114,7 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
     apart at the tolerance: they agree to it, not to rounding.
 
     ``bw[0] >= 0``: a large system through its Jacobian's pattern (``bw``, ``band`` as in
-    ``_jit_loop.sweep_dense``): the Jacobian's values in its CSC order. With loads that
+    ``_jit_sweep_loop.sweep_dense``): the Jacobian's values in its CSC order. With loads that
     depend on the multipliers, the Newton matrix through its own pattern (the Python path's
     ``_patterns.multiplier_newton_pattern``): ``kband = (kbw, (pos, rows, cols, row_perm, perm, sJT,
     sD, head))``, ``sJT`` the slot of each Jacobian CSC entry (transposed), ``sD`` of each

@@ -39,6 +39,22 @@ from ._tolerances import SPARSE_THRESHOLD
 #: ``auto``: the compiled loop is used for sweeps of at least this many points
 AUTO_POINTS = 1000
 
+#: up to this many unknowns the LU and condition estimate are computed in the loop
+#: (``_jit_lapack``: LAPACK's algorithms, without the call overhead, skipping the zero
+#: multipliers and visiting only the factors' nonzeros); above, LAPACK is called. That is
+#: every size the compiled sweep takes: a mechanism's Jacobian is sparse, and the written-out
+#: LU beat LAPACK's blocked one on the four-bar chains of 33 to 147 unknowns by 1.6-2.6 x
+#: (decision 0019, amended); the Numba code is ``_jit_linalg``
+SMALL = SPARSE_THRESHOLD
+
+#: ``bw[0]`` of a pattern factorised by the sparse LU (``_jit_sparse``, a wide band: trees);
+#: ``bw = (SPARSE, nnz, capL, capU)`` with ``nnz`` the pattern's entries and ``capL``,
+#: ``capU`` the storage of the factors. The factors and work arrays live in the float array
+#: ``AB = [Bx (nnz) | Lx (capL) | Ux (capU) | 3 work (n)]`` and the int array
+#: ``SI = [Bp (n + 1) | Bi (nnz) | Lp (n + 1) | Up (n + 1) | pinv (n) | iw (IWORK n) |
+#: Li (capL) | Ui (capU)]``, whose head is ``B = P Q A P^T``'s CSC structure
+SPARSE = -2
+
 _PLANS: dict = {}    # table(): kernel ids -> (kernels, pointer table)
 _state: dict = {"failed": None, "lapack": None, "band_lapack": None}
 
@@ -150,13 +166,11 @@ NO_BAND = (np.array([-1, 0, 0, 0], dtype=np.int64), (np.zeros(0, dtype=np.int64)
 
 
 def band_args(system):
-    """``(bw, band)`` of ``_jit_loop.sweep_dense`` for a system above ``SPARSE_THRESHOLD``
+    """``(bw, band)`` of ``_jit_sweep_loop.sweep_dense`` for a system above ``SPARSE_THRESHOLD``
     unknowns: its Jacobian's ``FixedPattern`` (the arrays kept on the pattern, made once):
     ``bw = (SPARSE, nnz, capL, capU)`` (the factors' storage as the Python path has grown it
     so far) and ``band = (slot, rows, cols, pos, row_perm, perm, head)``, ``head`` the CSC
     structure of ``B = P Q A P^T``."""
-    from ._jit_loop import SPARSE
-
     pat = system.jacobian_pattern()
     got = getattr(pat, "_jit_band", None)
     if got is None:

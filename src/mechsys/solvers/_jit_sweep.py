@@ -26,7 +26,7 @@ When it runs: the ``MECHSYS_JIT`` rule of :mod:`~mechsys.solvers._jit_runtime` (
 sweeps of at least ``AUTO_POINTS`` points), with the SymEngine LLVM backend's kernels
 (two-stage ``Piecewise`` kernels of spline profiles included), for any square system, dense
 or through its Jacobian's pattern (chains, trees, any branching). The Numba code is
-``_jit_loop``; this module is its Python driver (the multiplier solves' driver is
+``_jit_sweep_loop``; this module is its Python driver (the multiplier solves' driver is
 ``_jit_multipliers``; decision 0058).
 
 Example (what ``_kinematics.sweep`` does)::
@@ -47,7 +47,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._errors import MechError
-from ._jit_runtime import NO_BAND, band_args, index, lapack, wanted
+from ._jit_runtime import NO_BAND, SPARSE, band_args, index, lapack, wanted
 from ._jit_runtime import table as _table
 from ._linalg import Scaling, _column_kinds, length_hint
 from ._tolerances import SPARSE_THRESHOLD
@@ -87,11 +87,10 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
     ``RCOND_WARN`` gets ``RCOND_PENDING`` in ``rconds`` and its row scales in ``R``, for
     :func:`rcond_filler` (decision 0023); None: every estimate is computed in the loop."""
     from ._jit_cache import notice as _notice
-    from ._jit_loop import SPARSE as _SPARSE_BW
     from ._jit_modes import entry as _entry
 
     if _state["loop"] is None:
-        from ._jit_loop import sweep_dense
+        from ._jit_sweep_loop import sweep_dense
 
         _state["loop"] = sweep_dense
     n = system.n
@@ -122,7 +121,7 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
             float(options.ftol), int(options.max_iterations), bool(options.damping),
             int(order), index(rot), trans, index(body), length_hint(system), Q,
             qd_out, qdd_out, its, rc, rprev, lazy, R if lazy else dummy, int(first),
-            bool(chord_start), bw, band, bool(bw[0] == _SPARSE_BW))
+            bool(chord_start), bw, band, bool(bw[0] == SPARSE))
     # the loop specialised on its kind (the last argument: the sparse LU or the dense one),
     # compiling only that kind's solvers (decision 0044)
     k, evals = _entry(_state["loop"], args, literal=(len(args) - 1,), say=lambda _: _notice(
@@ -135,9 +134,9 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
 def rcond_filler(system, pointers, times, Q, p, scaling, R):
     """A function ``fill(rconds)`` computing in place the estimates :func:`run` left
     ``RCOND_PENDING`` (``rconds`` may be a leading part of the sweep's): the same numbers the
-    loop computes when it is not lazy (``_jit_loop.fill_rconds``)."""
+    loop computes when it is not lazy (``_jit_sweep_loop.fill_rconds``)."""
     if _state["fill"] is None:
-        from ._jit_loop import fill_rconds
+        from ._jit_sweep_loop import fill_rconds
 
         _state["fill"] = fill_rconds
     fill_rconds = _state["fill"]
