@@ -59,9 +59,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _jit_runtime, _methods
+from . import _jit_runtime, _methods, _tableaus
+from ._jit_cache import notice
+from ._jit_runtime import SMALL as SMALL_LU
+from ._jit_runtime import SPARSE as SPARSE_BW
 from ._jit_runtime import GenTree, kernel_entry
-from ._tolerances import SPARSE_THRESHOLD
+from ._linalg import FixedPattern, _sparse_lu, pattern_slots
+from ._patterns import free_newton_pattern, projection_pattern
+from ._tolerances import SPARSE_THRESHOLD, Singular
 
 #: above ``SPARSE_THRESHOLD`` unknowns the block path runs while its banded Cholesky's work
 #: ``m bw^2`` is at most this (else the Python path). Systems whose augmented matrix is not
@@ -114,7 +119,7 @@ def _coefficients(solver):
     (``_tableaus``, decision 0038), not SciPy's private modules."""
     import scipy.integrate
 
-    from . import _jit_free_loop, _tableaus
+    from . import _jit_free_loop
 
     spec = next(m for m in _methods.METHODS.values()
                 if m.compiled == "runge_kutta" and isinstance(solver, getattr(scipy.integrate, m.scipy)))
@@ -396,8 +401,6 @@ def _projection_part(system):
     kperm, dpos)`` of ``[[I, J^T], [J^, 0]]`` (``_patterns.projection_pattern``, the Python
     path's; kernel values the Jacobian's, each twice, the identity at ``dpos``), or None when
     the Jacobian has a repeated entry (the row scales are taken entry by entry)."""
-    from ._patterns import projection_pattern
-
     n, m = system.n, system.m
     jr = np.asarray(system.jac_rows, dtype=np.int64)
     jc = np.asarray(system.jac_cols, dtype=np.int64)
@@ -471,9 +474,6 @@ def _sparse_twin(system, fk, start):
     two loops then solve by independent factorisations). Made once per kernel. The Python
     path never factorises it, so it cannot grow its storage when a run outgrows it: one
     factorisation at ``start`` (``(t0, q0, p)``, at rest) sizes it here."""
-    from ._linalg import FixedPattern
-    from ._tolerances import Singular
-
     pat = fk.pattern
     twin = getattr(pat, "_sparse_twin", None)
     if twin is None:
@@ -520,10 +520,7 @@ def _newton_band(system):
     branches) the compiled sparse LU's integer store; None when such a pattern has no
     compiled LU (the Python path's SuperLU)."""
     from ._jit_free_loop import BAND_HEAD
-    from ._jit_runtime import SPARSE as SPARSE_BW
     from ._jit_sparse import IWORK
-    from ._linalg import _sparse_lu, pattern_slots
-    from ._patterns import free_newton_pattern
 
     rows, cols, pat = free_newton_pattern(system)
     sparse = not pat.banded
@@ -791,8 +788,6 @@ class FreeStepper:
         (``_newton_band``): banded (chains) by LAPACK's band LU, else (trees of many
         branches) by the compiled sparse LU; None only where the Python path has no
         compiled LU either (no Numba: SuperLU)."""
-        from ._jit_runtime import SMALL as SMALL_LU
-
         dyn = system.dynamics
         n, m = system.n, system.m
         if getattr(dyn, "recursive", False):
@@ -832,8 +827,6 @@ class FreeStepper:
         coordinates the velocity system dense (the written-out LU), above it (where the
         Python path solves it sparse) by the Python path's pattern and the compiled sparse
         LU, the projection through ``[[I, J^T], [J^, 0]]`` (``_path_sparse_structure``)."""
-        from ._jit_runtime import SMALL as SMALL_LU
-
         system = path.system
         n = system.n
         spec = _methods.find(method)
@@ -842,8 +835,6 @@ class FreeStepper:
             return None
         big = None
         if n > SMALL_LU:
-            from ._linalg import _sparse_lu
-
             if not path._sparse or _sparse_lu() is None:
                 return None
             big = _path_sparse_structure(path)
@@ -872,7 +863,6 @@ class FreeStepper:
         if any(e is None for e in entries):
             return 0
         if _state.get("path_acc") is None:
-            from ._jit_cache import notice
             from ._jit_free_loop import path_accelerations
 
             # (every compile of more than about a second is announced: decision 0044)
@@ -965,7 +955,6 @@ class FreeStepper:
         per stepper. A compile from empty caches is announced first (``_jit_cache.notice``)."""
         fn = self._entries.get(name)
         if fn is None:
-            from ._jit_cache import notice
             from ._jit_modes import entry
 
             what = {"loop": "the free-motion stepper", "adams": "Mech's Adams integrator",

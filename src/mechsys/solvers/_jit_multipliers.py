@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._jit_cache import notice
 from ._jit_runtime import (
     NO_BAND,
     SPARSE,
@@ -95,7 +96,6 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
     table = _table(kernels)
     if table is None:
         return 0
-    from ._jit_cache import notice
     from ._jit_modes import entry
 
     if _state.get("multipliers") is None:
@@ -134,7 +134,6 @@ def _recursive_loads(system, times, Q, QD, QDD, p, code):
     if gen is None:
         return None
     if _state.get("gen_loads") is None:
-        from ._jit_cache import notice
         from ._jit_free_loop import gen_loads
 
         # (every compile of more than about a second is announced: decision 0044)

@@ -34,6 +34,7 @@ import os
 import numpy as np
 
 from .._errors import ModelError, slow_path_warning
+from ._linalg import _sparse_lu
 from ._tolerances import SPARSE_THRESHOLD
 
 #: ``auto``: the compiled loop is used for sweeps of at least this many points
@@ -155,8 +156,6 @@ def _jacobian_pattern(system):
 def patterned(system) -> bool:
     """The system's Jacobian has a ``FixedPattern`` whose sparse LU the loops call (the
     compiled one, ``_jit_sparse``: also the Python path's)."""
-    from ._linalg import _sparse_lu
-
     pat = _jacobian_pattern(system)
     return pat is not None and pat.size > 0 and not pat.banded and _sparse_lu() is not None
 

@@ -47,6 +47,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._errors import MechError
+from ._jit_cache import notice
 from ._jit_runtime import NO_BAND, SPARSE, band_args, index, lapack, wanted
 from ._jit_runtime import table as _table
 from ._linalg import Scaling, _column_kinds, length_hint
@@ -86,7 +87,6 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
     ``R`` (N, n): when given, a point whose condition estimate is proven to be at least
     ``RCOND_WARN`` gets ``RCOND_PENDING`` in ``rconds`` and its row scales in ``R``, for
     :func:`rcond_filler` (decision 0023); None: every estimate is computed in the loop."""
-    from ._jit_cache import notice as _notice
     from ._jit_modes import entry as _entry
 
     if _state["loop"] is None:
@@ -124,7 +124,7 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
             bool(chord_start), bw, band, bool(bw[0] == SPARSE))
     # the loop specialised on its kind (the last argument: the sparse LU or the dense one),
     # compiling only that kind's solvers (decision 0044)
-    k, evals = _entry(_state["loop"], args, literal=(len(args) - 1,), say=lambda _: _notice(
+    k, evals = _entry(_state["loop"], args, literal=(len(args) - 1,), say=lambda _: notice(
         "the kinematic sweep" + (" (sparse)" if args[-1] else ""), _SWEEP_SECONDS))(*args)
     if scaling is None:
         scaling = Scaling(float(scale[0]), columns, float(scale[1]))
