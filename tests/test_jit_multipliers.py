@@ -1,7 +1,8 @@
 """The compiled multiplier solves of static, kinematic and dynamic sweeps
 (solvers/_jit_multipliers_loop.py, driven by _jit_multipliers.py) against the Python path:
-the same numbers on planar, spatial and two-stage (spline) models, friction's Newton, the load balance they satisfy, the
-hand-over to the Python path at a point it must diagnose, and when the compiled loop runs."""
+the same numbers on planar, spatial and two-stage (spline) models, friction's Newton, the
+load balance they satisfy, the hand-over to the Python path at a point it must diagnose, and
+when the compiled loop runs."""
 
 from __future__ import annotations
 
