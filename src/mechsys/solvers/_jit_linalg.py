@@ -6,7 +6,7 @@ Each function mirrors one piece of the Python path:
 
 * ``_assemble``      ``System.assemble`` (dense ``Phi_q`` from its nonzero values)
 * ``_rows``          ``Scaling.rows``
-* ``_factor``        ``Scaling.factor`` -> ``Factor`` (LAPACK dgetrf + dgecon on ``R^-1 J D``;
+* ``_factor``        ``Scaling.factor`` -> ``Factor`` (LAPACK dgetrf + dgecon on :math:`R^{-1} J D`;
                      up to ``SMALL`` unknowns their algorithms from ``_jit_lapack``)
 * ``_solve``         ``ScaledFactor.solve``
 * ``_band_*``,      the same, above ``SPARSE_THRESHOLD`` unknowns, through the Jacobian's
@@ -95,7 +95,7 @@ def _norm1(B, n):
 
 @leaf
 def _fill(J, r, columns, B):
-    """``B`` = ``R^-1 J D`` in transposed storage; returns its one-norm."""
+    """``B`` = :math:`R^{-1} J D` in transposed storage; returns its one-norm."""
     n = J.shape[0]
     for i in range(n):
         inv = 1.0 / r[i]
@@ -120,7 +120,7 @@ def _fill_nz(vals, jr, jc, r, columns, B):
 @leaf
 def _factor(lapack, J, r, columns, B, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, work, iwork,
             guard):
-    """LU of ``R^-1 J D`` into ``B`` (transposed storage): :func:`_fill`, then
+    """LU of :math:`R^{-1} J D` into ``B`` (transposed storage): :func:`_fill`, then
     :func:`_factor_filled`."""
     return _factor_filled(lapack, B, _fill(J, r, columns, B), ipiv, nz, S, W, seen, ibuf, cbuf,
                           dbuf, work, iwork, guard)

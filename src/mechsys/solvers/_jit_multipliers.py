@@ -4,7 +4,7 @@ kernels' C entry points and the fixed patterns' arrays, and calls the loop speci
 its kind (dense or sparse LU, decision 0044).
 
 At each point ``k`` the loop solves, as :func:`~mechsys.solvers._statics.solve_multipliers`
-does, in the unit-free form of the Jacobian (``B = R^-1 Phi_q D``):
+does, in the unit-free form of the Jacobian, :math:`B = R^{-1} \Phi_q D`:
 
 .. math:: B^T (R \lambda_k) = D\, \mathrm{rhs}_k, \qquad
           \mathrm{rhs} = Q(t, q, \dot q, \lambda) + Q_v(q, \dot q) - M(q) \ddot q

@@ -3,8 +3,8 @@ Python between the compiled equations.
 
 Per point, exactly the arithmetic of the Python path (:mod:`mechsys.solvers._kinematics`,
 :mod:`mechsys.solvers._position`, :class:`~mechsys.solvers._linalg.Scaling`): the predictor,
-the damped Newton iteration on the unit-free equations ``R^-1 Phi_q D``, the velocity
-``Phi_q qd = -Phi_t`` and acceleration ``Phi_q qdd = gamma`` solves. The constraint
+the damped Newton iteration on the unit-free equations :math:`R^{-1} \Phi_q D`, the velocity
+:math:`\Phi_q \dot q = -\Phi_t` and acceleration :math:`\Phi_q \ddot q = \gamma` solves. The constraint
 kernels are SymEngine's LLVM functions, called through their C entry points
 (``void f(double *out, const double *in, void *ctx)``); the factorisations are LAPACK's
 ``dgetrf``/``dgecon``/``dgetrs``, the routines the Python path calls, their algorithms
