@@ -49,10 +49,12 @@ Numba and the cached machine code costs about 0.7 s CPU once per process.
 Nonholonomic paths (:class:`~mechsys.analyses._path.PathSystem`, Mech's ``SolvePath``) run
 in the same loops (:meth:`FreeStepper.plan_path`, decision 0027): the state is ``q``, its
 derivative the velocities of the holonomic and velocity constraints (Newton on ``qd`` with
-``[Phi_q; psi_qd]``: one step when the velocity constraints are linear in the velocities),
+:math:`\begin{bmatrix} \Phi_q \\ \psi_{\dot q} \end{bmatrix}`: one step when the velocity constraints are
+linear in the velocities),
 the projection onto the positions only. Above ``SMALL_LU`` coordinates the velocity system
 goes through the Python path's fixed pattern and the same compiled sparse LU, and the
-projection through ``[[I, J^T], [J^, 0]]`` (``_patterns.projection_pattern``).
+projection through :math:`\begin{bmatrix} I & J^T \\ \hat J & 0 \end{bmatrix}`
+(``_patterns.projection_pattern``).
 """
 
 from __future__ import annotations
@@ -397,10 +399,11 @@ def _workspace(stepper, system):
 
 
 def _projection_part(system):
-    """The projection's structure for :func:`_two_structures`: ``(FixedPattern, head, pos,
-    kperm, dpos)`` of ``[[I, J^T], [J^, 0]]`` (``_patterns.projection_pattern``, the Python
-    path's; kernel values the Jacobian's, each twice, the identity at ``dpos``), or None when
-    the Jacobian has a repeated entry (the row scales are taken entry by entry)."""
+    r"""The projection's structure for :func:`_two_structures`: ``(FixedPattern, head, pos,
+    kperm, dpos)`` of :math:`\begin{bmatrix} I & J^T \\ \hat J & 0 \end{bmatrix}`
+    (``_patterns.projection_pattern``, the Python path's; kernel values the Jacobian's, each
+    twice, the identity at ``dpos``), or None when the Jacobian has a repeated entry (the row
+    scales are taken entry by entry)."""
     n, m = system.n, system.m
     jr = np.asarray(system.jac_rows, dtype=np.int64)
     jc = np.asarray(system.jac_cols, dtype=np.int64)
@@ -822,11 +825,12 @@ class FreeStepper:
 
     @classmethod
     def plan_path(cls, path, method, p, scaling, correction, t_eval):
-        """The stepper of a nonholonomic path (:class:`~mechsys.analyses._path.PathSystem`)
+        r"""The stepper of a nonholonomic path (:class:`~mechsys.analyses._path.PathSystem`)
         when the compiled loop can run it, else None: LLVM kernels; up to ``SMALL_LU``
         coordinates the velocity system dense (the written-out LU), above it (where the
         Python path solves it sparse) by the Python path's pattern and the compiled sparse
-        LU, the projection through ``[[I, J^T], [J^, 0]]`` (``_path_sparse_structure``)."""
+        LU, the projection through :math:`\begin{bmatrix} I & J^T \\ \hat J & 0 \end{bmatrix}`
+        (``_path_sparse_structure``)."""
         system = path.system
         n = system.n
         spec = _methods.find(method)

@@ -1,32 +1,34 @@
 r"""Numba loop of the multiplier solves over a solved sweep (imported only when it runs: see
 ``_jit_multipliers.multipliers``): statics, kinematic loads and inverse dynamics at every point,
 
-    static:     Phi_q^T lambda = Q(t, q, 0)
-    kinematic:  Phi_q^T lambda = Q(t, q, qd)
-    dynamic:    Phi_q^T lambda = Q(t, q, qd, qdd) + Qv(q, qd) - M(q) qdd
+.. math::
+
+    \text{static:} \quad & \Phi_q^T \lambda = Q(t, q, 0) \\
+    \text{kinematic:} \quad & \Phi_q^T \lambda = Q(t, q, \dot q) \\
+    \text{dynamic:} \quad & \Phi_q^T \lambda = Q(t, q, \dot q, \ddot q) + Q_v(q, \dot q) - M(q) \ddot q
 
 each point's operations those of :func:`~mechsys.solvers._statics.solve_multipliers` (the
 Python path), in the same order:
 
 * ``Phi_q`` from the position kernel (``System.jacobian``), assembled dense;
-* its unit-free form ``B = R^-1 Phi_q D`` (the sweep's column scales, the row scales of
+* its unit-free form :math:`B = R^{-1} \Phi_q D` (the sweep's column scales, the row scales of
   the point: ``_rows``), and ``B^T`` factorised by LU with partial pivoting and its reciprocal condition
   estimated (``Factor``: LAPACK ``dgetrf`` + ``dgecon``; up to ``SMALL`` unknowns their
   algorithms from ``_jit_lapack``). ``B`` in C order *is* ``B^T`` in the transposed storage
   the LAPACK helpers use, so no transpose is formed;
-* ``M``, ``Q``, ``Qv`` from the dynamics kernel (``Dynamics.terms``); ``M qdd`` from the
+* ``M``, ``Q``, ``Qv`` from the dynamics kernel (``Dynamics.terms``); :math:`M \ddot q` from the
   mass matrix's nonzeros (the Python path multiplies the dense ``M``: the same to rounding);
-* one solve (``dgetrs``) of ``B^T (R lambda) = D rhs``; or, for loads that depend on the
-  multipliers (friction), Newton with ``D (Phi_q^T - dQ/dlambda) R^-1`` from the previous
+* one solve (``dgetrs``) of :math:`B^T (R \lambda) = D \mathrm{rhs}`; or, for loads that depend on the
+  multipliers (friction), Newton with :math:`D (\Phi_q^T - dQ/d\lambda) R^{-1}` from the previous
   point's multipliers.
 
-Above ``SPARSE_THRESHOLD`` unknowns the Python path factorises ``R^-1 Phi_q D`` itself
+Above ``SPARSE_THRESHOLD`` unknowns the Python path factorises :math:`R^{-1} \Phi_q D` itself
 through the Jacobian's ``FixedPattern`` and solves it transposed; so does this loop, with
 the same operations: the sparse LU of ``_jit_sparse`` (``_jit_linalg._sparse_factor``,
 ``_sparse_solve_scaled``). With friction, the Newton matrix goes through its own
 pattern (the Python path's ``_patterns.multiplier_newton_pattern``: LAPACK's band LU when banded,
 else the same compiled sparse LU), and the residual
-``Phi_q^T lambda - rhs`` is formed from the Jacobian's CSC values (the Python path: a dense
+:math:`\Phi_q^T \lambda - \mathrm{rhs}` is formed from the Jacobian's CSC values (the Python path: a dense
 ``Phi_q``; the same to rounding, and both stop on the same tolerance).
 
 A point that the Python path would refuse (an exactly zero pivot, a reciprocal condition
