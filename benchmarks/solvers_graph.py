@@ -13,7 +13,9 @@ Imports that leave the folder are listed apart, with the tier of the part they r
 it imports from the package must be a tier-0 module such as ``_errors``).
 
 Run: ``python benchmarks/solvers_graph.py`` (no mechsys import, it reads the sources);
-``--arrows`` also prints every arrow, ``--json`` the numbers as one JSON object.
+``--arrows`` also prints every arrow, ``--json`` the numbers as one JSON object, ``--at
+COMMIT`` measures the folder as it was at a git commit (decision 0058's "before": ``--at
+88dfcfa``).
 """
 
 from __future__ import annotations
@@ -147,12 +149,33 @@ def measure(folder: Path = FOLDER) -> dict:
     }
 
 
+def _at(commit: str, out: Path) -> Path:
+    """The folder as it was at ``commit``, unpacked into the directory ``out``."""
+    import subprocess
+    import tarfile
+
+    tar = subprocess.run(["git", "-C", str(ROOT.parents[1]), "archive", commit, "src/mechsys/solvers"],
+                         check=True, capture_output=True).stdout
+    path = out / "solvers.tar"
+    path.write_bytes(tar)
+    with tarfile.open(path) as t:
+        t.extractall(out, filter="data")
+    return out / "src" / "mechsys" / "solvers"
+
+
 def main(argv: list[str]) -> None:
-    m = measure()
+    if "--at" in argv:
+        import tempfile
+
+        with tempfile.TemporaryDirectory(prefix="solvers_graph_") as tmp:
+            m = measure(_at(argv[argv.index("--at") + 1], Path(tmp)))
+    else:
+        m = measure()
     if "--json" in argv:
         print(json.dumps({k: v for k, v in m.items() if not k.startswith("_")}, indent=1))
         return
-    print(f"src/mechsys/solvers: {m['files']} files, {m['lines']} lines, {m['arrows']} arrows "
+    print(f"src/mechsys/solvers{' at ' + argv[argv.index('--at') + 1] if '--at' in argv else ''}: "
+          f"{m['files']} files, {m['lines']} lines, {m['arrows']} arrows "
           f"({m['lazy_arrows']} only inside functions)")
     print(f"circles: {len(m['circles'])}")
     for c in m["circles"]:
