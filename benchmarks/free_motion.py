@@ -112,7 +112,7 @@ def four_bar():
 
 def compiled(build, *args):
     """Build, assemble and free a model and compile its dynamics; CPU time of each part."""
-    from mechsys.solvers._linalg import SPARSE_THRESHOLD
+    from mechsys.solvers._tolerances import SPARSE_THRESHOLD
 
     c0 = time.process_time()
     m, drop = build(*args)

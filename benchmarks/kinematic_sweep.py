@@ -69,7 +69,7 @@ def sweep_case(case: str, n_loops: int | None, points: int, backend: str,
                repeat: int = 3, loop: str = "python") -> dict:
     """Build, compile (symbolic derivation + numeric compile) and sweep one model; the sweep
     time is the best of ``repeat`` runs (the compiled system is reused). ``loop``: the
-    Python sweep loop or the compiled one (``MECHSYS_JIT``, solvers/_jit.py)."""
+    Python sweep loop or the compiled one (``MECHSYS_JIT``, solvers/_jit_sweep.py)."""
     os.environ["MECHSYS_BACKEND"] = backend
     os.environ["MECHSYS_JIT"] = "1" if loop == "compiled" else "0"
     try:
@@ -181,9 +181,9 @@ def eval_case(case: str, n_loops: int | None, backend: str) -> dict:
 
 
 def _jit_available() -> bool:
-    from mechsys.solvers import _jit
+    from mechsys.solvers import _jit_runtime
 
-    return _jit.available()
+    return _jit_runtime.available()
 
 
 def _growth(rows: list[dict], key: str, loop: str = "python",

@@ -160,7 +160,7 @@ def _both(fn, *args, **kwargs):
 
 
 def _counting(ran: list):
-    """``_jit.run`` that appends how many points the compiled loop solved to ``ran``."""
+    """``_jit_sweep.run`` that appends how many points the compiled loop solved to ``ran``."""
     def run(*a, **k):
         out = original_run(*a, **k)
         ran.append(out[0])
@@ -169,7 +169,7 @@ def _counting(ran: list):
 
 
 def _counting_multipliers(ran: list):
-    """``_jit.multipliers`` that appends how many points the compiled loop solved to ``ran``."""
+    """``_jit_multipliers.multipliers`` that appends how many points the compiled loop solved to ``ran``."""
     def multipliers(*a, **k):
         out = original_jit_multipliers(*a, **k)
         ran.append(out)
@@ -203,21 +203,21 @@ def check() -> list[dict]:
                             "python_compiled": int(py.extra.get("compiled_steps", 0))})
         elif kind == "multipliers":
             ran = []
-            _statics._jit.multipliers = _counting_multipliers(ran)
+            _statics._jit_multipliers.multipliers = _counting_multipliers(ran)
             try:
                 py, jit = _both(original_multipliers, obj, *args, **kwargs)
             finally:
-                _statics._jit.multipliers = original_jit_multipliers
+                _statics._jit_multipliers.multipliers = original_jit_multipliers
             results.append({"kind": "multipliers", "difference": _diff(py, jit),
                             "rows": len(py), "compiled": int(sum(ran))})
         else:
             ran: list = []
-            _kinematics._jit.run = _counting(ran)
+            _kinematics._jit_sweep.run = _counting(ran)
             try:
                 fn = original_sweep if kind == "sweep" else original_stages
                 py, jit = _both(fn, obj, t, *args, **kwargs)
             finally:
-                _kinematics._jit.run = original_run
+                _kinematics._jit_sweep.run = original_run
             d = 0.0
             if kind == "stages":      # (result, stages, scalings): the stages must be equal
                 if not np.array_equal(py[1], jit[1]):
@@ -234,10 +234,10 @@ original_simulate = _free.FreeSystem.simulate
 original_path = _path.PathSystem.simulate
 original_switched = _free_switch.SwitchedFreeSystem.simulate
 original_sweep = _kinematics.sweep
-original_run = _kinematics._jit.run
+original_run = _kinematics._jit_sweep.run
 original_multipliers = _statics.multipliers_over
 original_stages = _multistage._sweep_stages
-original_jit_multipliers = _statics._jit.multipliers
+original_jit_multipliers = _statics._jit_multipliers.multipliers
 
 if __name__ == "__main__":
     FIRST_STEPS_ONLY = "--first-steps" in sys.argv[2:]

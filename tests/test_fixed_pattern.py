@@ -10,8 +10,9 @@ import scipy.sparse as sps
 
 import mechsys as ms
 from mechsys import models
-from mechsys.solvers import _free, _linalg
-from mechsys.solvers._linalg import FixedPattern, Singular
+from mechsys.solvers import _free, _linalg, _patterns, _tolerances
+from mechsys.solvers._linalg import FixedPattern
+from mechsys.solvers._tolerances import Singular
 
 
 def _csc(A):
@@ -123,7 +124,7 @@ def test_sparse_free_acceleration_agrees_with_dense(monkeypatch, band_work):
     monkeypatch.setattr(_linalg, "BAND_WORK", band_work)
     free = _chain_free(32)
     s = free.system
-    assert s.n + s.m > _linalg.SPARSE_THRESHOLD
+    assert s.n + s.m > _tolerances.SPARSE_THRESHOLD
     rng = np.random.default_rng(1)
     q, qd, p = _state(free, rng)
     kern = s.dynamics.free_kernel(True)
@@ -148,11 +149,11 @@ def test_large_friction_newton_through_its_pattern(monkeypatch):
     m.solve(0.0)
     free = m.free(drop=[f"lock{k}" for k in range(32)])
     s = free.system
-    assert s.n + s.m > _linalg.SPARSE_THRESHOLD and s.dynamics.depends_on_lambda
+    assert s.n + s.m > _tolerances.SPARSE_THRESHOLD and s.dynamics.depends_on_lambda
     rng = np.random.default_rng(5)
     q, qd, p = _state(free, rng)
     qdd, lam, its = _free.free_acceleration(s, 0.0, q, qd, p)
-    rows, cols, pattern = _free._newton_pattern(s)
+    rows, cols, pattern = _patterns.free_newton_pattern(s)
     assert pattern.banded and pattern.kl + pattern.ku < 40 and its >= 1
     monkeypatch.setattr(_free, "SPARSE_THRESHOLD", 10**6)
     de_qdd, de_lam, _ = _free.free_acceleration(s, 0.0, q, qd, p)
@@ -172,7 +173,7 @@ def test_sparse_free_system_with_a_massless_link_is_diagnosed():
     m.set_mass_properties("l31", mass=0, inertia=0)
     m.solve(0.0)
     free = m.free(drop=[f"lock{k}" for k in range(32)])
-    assert free.system.n + free.system.m > _linalg.SPARSE_THRESHOLD
+    assert free.system.n + free.system.m > _tolerances.SPARSE_THRESHOLD
     with pytest.raises(ms.SingularMassError, match="l31"):
         free.solve(0.0)
 
@@ -236,7 +237,7 @@ def test_wide_free_system_solves_through_the_sparse_lu(monkeypatch):
     free = m.free(drop=["drive"])
     s = free.system
     kern = s.dynamics.free_kernel(True)
-    assert s.n + s.m > _linalg.SPARSE_THRESHOLD and not kern.pattern.banded
+    assert s.n + s.m > _tolerances.SPARSE_THRESHOLD and not kern.pattern.banded
     sol0 = free.solve(0.0, initial_condition={"crank.th_d": 3.0})
     q, qd, p = sol0.q[0], sol0.qd[0], sol0.p
     fac = kern.pattern.factor(kern(0.0, q, qd, np.zeros(s.m), p)[0].data)

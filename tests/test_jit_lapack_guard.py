@@ -19,7 +19,7 @@ from mechsys.solvers._jit_lapack import (  # noqa: E402
     pattern_size,
     symbolic_pattern,
 )
-from mechsys.solvers._linalg import RCOND_MIN  # noqa: E402
+from mechsys.solvers._tolerances import RCOND_MIN  # noqa: E402
 
 LIMIT = GUARD_MARGIN / RCOND_MIN     # the guard: anorm * bound <= LIMIT skips the estimate
 

@@ -1,7 +1,8 @@
 """The compiled multiplier solves of static, kinematic and dynamic sweeps
-(solvers/_jit_multipliers.py) against the Python path: the same numbers on planar, spatial
-and two-stage (spline) models, friction's Newton, the load balance they satisfy, the
-hand-over to the Python path at a point it must diagnose, and when the compiled loop runs."""
+(solvers/_jit_multipliers_loop.py, driven by _jit_multipliers.py) against the Python path:
+the same numbers on planar, spatial and two-stage (spline) models, friction's Newton, the
+load balance they satisfy, the hand-over to the Python path at a point it must diagnose, and
+when the compiled loop runs."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import sympy as sp
 
 import mechsys as ms
 from mechsys import T, models
-from mechsys.solvers import _jit, _statics
+from mechsys.solvers import _jit_multipliers, _statics
 from mechsys.solvers._linalg import Scaling
 
 pytest.importorskip("numba")
@@ -89,13 +90,13 @@ def spy_multipliers(monkeypatch) -> list:
     """A list that receives, for each multiplier solve, how many points the compiled
     multiplier loop took."""
     taken = []
-    real = _jit.multipliers
+    real = _jit_multipliers.multipliers
 
     def spy(*a, **k):
         taken.append(real(*a, **k))
         return taken[-1]
 
-    monkeypatch.setattr(_statics._jit, "multipliers", spy)
+    monkeypatch.setattr(_statics._jit_multipliers, "multipliers", spy)
     return taken
 
 
@@ -182,14 +183,14 @@ def _friction_incline():
 def test_hand_over_mid_sweep_gives_the_python_result(monkeypatch, build):
     """The compiled loop stopped after 7 points: the Python path continues (with friction,
     its Newton from the 7th point's multipliers), and the whole equals an all-Python solve."""
-    real = _jit.multipliers
+    real = _jit_multipliers.multipliers
 
     def partial(system, times, Q, QD, QDD, p, mode, LAM, *rest):
         cut = lambda a: None if a is None else a[:7]   # noqa: E731
         return real(system, times[:7], Q[:7], cut(QD), cut(QDD), p, mode, LAM[:7], *rest)
 
     t = np.linspace(0.1, 1.0, 30)
-    monkeypatch.setattr(_statics._jit, "multipliers", partial)
+    monkeypatch.setattr(_statics._jit_multipliers, "multipliers", partial)
     monkeypatch.setenv("MECHSYS_JIT", "1")
     mixed = build().solve(t, solution="dynamic")
     monkeypatch.setenv("MECHSYS_JIT", "0")
@@ -259,15 +260,15 @@ def test_when_the_compiled_loop_runs(monkeypatch):
     args = (s, t, sol.q, sol.qd, sol.qdd, sol.p, "dynamic", lam)
     kw = {"columns": columns}
     monkeypatch.setenv("MECHSYS_JIT", "0")
-    assert _jit.multipliers(*args, **kw) == 0
+    assert _jit_multipliers.multipliers(*args, **kw) == 0
     monkeypatch.delenv("MECHSYS_JIT")
-    assert _jit.multipliers(*args, **kw) == 0
+    assert _jit_multipliers.multipliers(*args, **kw) == 0
     monkeypatch.setenv("MECHSYS_JIT", "1")
-    assert _jit.multipliers(*args, **kw) == len(t)
+    assert _jit_multipliers.multipliers(*args, **kw) == len(t)
     np.testing.assert_allclose(lam, sol.lam, rtol=1e-13, atol=1e-12)
     # without the column scales, or in a mode whose rates were not computed: not compiled
-    assert _jit.multipliers(*args) == 0
-    assert _jit.multipliers(s, t, sol.q, None, None, sol.p, "kinematic", lam, **kw) == 0
+    assert _jit_multipliers.multipliers(*args) == 0
+    assert _jit_multipliers.multipliers(s, t, sol.q, None, None, sol.p, "kinematic", lam, **kw) == 0
 
 
 def _friction_chain():
@@ -296,17 +297,17 @@ def test_large_model_with_friction_runs_compiled_through_the_band(monkeypatch, m
                                                                    plain):
     """Above SPARSE_THRESHOLD coordinates, loads that depend on the multipliers: the loop's
     Newton factorises ``Phi_q^T - dQ/dlambda`` through the Python path's pattern
-    (``_statics._newton_pattern``: banded for the chain, the compiled sparse LU for the
+    (``_patterns.multiplier_newton_pattern``: banded for the chain, the compiled sparse LU for the
     radial engine's star) and forms the residual from the Jacobian's CSC values. Both stop
     on the same tolerance (1e-10 of the terms), so they agree to it; the friction is active
     (the multipliers differ from those without it), and the compiled multipliers balance
     the loads evaluated separately in Python."""
-    from mechsys.solvers._statics import _newton_pattern
+    from mechsys.solvers._patterns import multiplier_newton_pattern
 
     t = np.linspace(0.1, 1.0, 12)
     fast, slow, taken = _solve_both(monkeypatch, build, t, mode)
     assert fast.system.n == 183 and taken[0] == len(t)
-    assert _newton_pattern(fast.system)[2].banded == (build is _friction_chain)
+    assert multiplier_newton_pattern(fast.system)[2].banded == (build is _friction_chain)
     scale = np.maximum(1.0, np.abs(slow.lam).max(axis=0))
     assert (np.abs(fast.lam - slow.lam) / scale).max() <= 1e-8
     monkeypatch.setenv("MECHSYS_JIT", "1")

@@ -10,11 +10,11 @@ import sympy as sp
 import mechsys as ms
 from mechsys import T, models
 from mechsys.analyses import _multistage
-from mechsys.solvers import _jit, sweep
-from mechsys.solvers._kinematics import RCOND_WARN
+from mechsys.solvers import _jit_multipliers, _jit_runtime, _jit_sweep, sweep
+from mechsys.solvers._tolerances import RCOND_WARN
 from test_multistage_free import lp, pushed_slider
 
-pytestmark = pytest.mark.skipif(not _jit.available(), reason="Numba not installed")
+pytestmark = pytest.mark.skipif(not _jit_runtime.available(), reason="Numba not installed")
 
 
 def _spy(monkeypatch, module, name):
@@ -31,7 +31,7 @@ def _spy(monkeypatch, module, name):
 
 
 def _both(monkeypatch, build, t, **kw):
-    runs = _spy(monkeypatch, _jit, "run")
+    runs = _spy(monkeypatch, _jit_sweep, "run")
     out = {}
     for jit in ("1", "0"):
         monkeypatch.setenv("MECHSYS_JIT", jit)
@@ -112,7 +112,7 @@ def _jog(mass):
 
 @pytest.mark.parametrize("solution", ["static", "kinematic", "dynamic"])
 def test_compiled_and_python_multipliers_over_stages_agree(monkeypatch, solution):
-    taken = _spy(monkeypatch, _jit, "multipliers")
+    taken = _spy(monkeypatch, _jit_multipliers, "multipliers")
     t = np.linspace(0, 8, 161)
     fast, slow, _ = _both(monkeypatch, lambda: _jog(2.0), t, solution=solution)
     np.testing.assert_array_equal(fast.stage("jog"), slow.stage("jog"))
@@ -130,11 +130,11 @@ def test_compiled_and_python_multipliers_over_stages_agree(monkeypatch, solution
 def test_multistage_sweep_follows_the_auto_rule(monkeypatch):
     """``auto``: the whole multistage sweep's size decides, as for a plain sweep."""
     monkeypatch.delenv("MECHSYS_JIT", raising=False)
-    runs = _spy(monkeypatch, _jit, "run")
+    runs = _spy(monkeypatch, _jit_sweep, "run")
     m = models.geneva_drive()
     m.solve(np.linspace(0, 4 * np.pi, 201))
     assert not runs
-    m.solve(np.linspace(0, 4 * np.pi, _jit.AUTO_POINTS + 1))
+    m.solve(np.linspace(0, 4 * np.pi, _jit_runtime.AUTO_POINTS + 1))
     assert runs
 
 

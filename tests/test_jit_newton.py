@@ -234,11 +234,11 @@ def test_wide_friction_tree_runs_compiled_through_the_sparse_lu(monkeypatch):
     LU of the Python path's pattern, in the Newton and in the projections: with the same
     steps and a Newton converged to rounding the two loops agree to rounding; adaptive, both
     are within the tolerance of a tight reference, with the loops closed."""
-    from mechsys.solvers._free import _newton_pattern
+    from mechsys.solvers._patterns import free_newton_pattern
 
     free = friction_engine()
     s = free.system
-    assert s.n + s.m == 173 and not _newton_pattern(s)[2].banded
+    assert s.n + s.m == 173 and not free_newton_pattern(s)[2].banded
     ic = {"crank.th_d": 3.0}
     t = np.linspace(0.0, 0.3, 4)
     kw = dict(initial_condition=ic, rtol=1e6, atol=1e6, max_step=0.3 / 60, tolerance=1e-14)

@@ -21,7 +21,7 @@ from mechsys.solvers._jit_sparse import (  # noqa: E402
     lu_solve_t,
     work_sizes,
 )
-from mechsys.solvers._linalg import Singular  # noqa: E402
+from mechsys.solvers._tolerances import Singular  # noqa: E402
 
 
 def _random(rng, n, density):

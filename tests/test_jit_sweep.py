@@ -1,4 +1,4 @@
-"""The compiled kinematic sweep (solvers/_jit.py) against the Python loop: the same numbers on
+"""The compiled kinematic sweep (solvers/_jit_sweep.py) against the Python loop: the same numbers on
 planar, spatial, parametric and toggle-passing sweeps, the hand-over to the Python loop at a
 point it cannot take, and the cases where it must not run."""
 
@@ -10,7 +10,7 @@ import sympy as sp
 
 import mechsys as ms
 from mechsys import T, models
-from mechsys.solvers import _jit
+from mechsys.solvers import _jit_runtime, _jit_sweep
 
 pytest.importorskip("numba")
 pytestmark = pytest.mark.filterwarnings("ignore::mechsys.NearSingularWarning")
@@ -75,7 +75,7 @@ def test_spline_cam_two_stage_kernels(monkeypatch):
     t = np.linspace(0.0, 1.0, 81)
     fast, slow = _both(monkeypatch, lambda: _spline_cam()[0], t)
     monkeypatch.setenv("MECHSYS_JIT", "1")
-    assert _jit.plan(fast.system, 10, 2)[0, 2] != 0          # a first stage is there
+    assert _jit_sweep.plan(fast.system, 10, 2)[0, 2] != 0          # a first stage is there
     _same(fast, slow)
     r = _spline_cam()[1]
     uu = 2 * np.pi - 2 * np.pi * t
@@ -100,7 +100,7 @@ def test_generalized_coordinates_sweep_compiled(monkeypatch):
     monkeypatch.setenv("MECHSYS_JIT", "1")
     system = _gen_arm().compile()
     assert system.f_position.c_entry()[1] is not None          # repeated outputs
-    assert _jit.plan(system, len(t), 2) is not None
+    assert _jit_sweep.plan(system, len(t), 2) is not None
     fast, slow = _both(monkeypatch, _gen_arm, t)
     _same(fast, slow)
     for k in range(4):
@@ -115,14 +115,14 @@ def _assert_compiled_sweep(monkeypatch, build, t):
     """The compiled loop is entered and finishes the sweep itself: every evaluation is the
     loop's (the scaling comes from its first one)."""
     calls = []
-    real = _jit.run
+    real = _jit_sweep.run
 
     def spy(*a, **k):
         out = real(*a, **k)
         calls.append(out)
         return out
 
-    monkeypatch.setattr(_jit, "run", spy)
+    monkeypatch.setattr(_jit_sweep, "run", spy)
     monkeypatch.setenv("MECHSYS_JIT", "1")
     sol = build().solve(t)
     assert calls and calls[0][0] == len(t) and calls[0][1] == sol.evaluations
@@ -199,13 +199,13 @@ def test_hand_over_to_the_python_loop(monkeypatch):
 def test_handover_mid_sweep_gives_the_python_result(monkeypatch):
     """Force the compiled loop to stop after 7 points: the rest is the Python loop's, and the
     whole equals an all-Python sweep."""
-    real = _jit.run
+    real = _jit_sweep.run
     t = np.linspace(0.0, 1.0, 30)
 
     def partial(system, pointers, times, *rest):
         return real(system, pointers, times[:7], *rest)
 
-    monkeypatch.setattr(_jit, "run", partial)
+    monkeypatch.setattr(_jit_sweep, "run", partial)
     monkeypatch.setenv("MECHSYS_JIT", "1")
     mixed = models.four_bar().solve(t)
     monkeypatch.setenv("MECHSYS_JIT", "0")
@@ -247,7 +247,7 @@ def test_the_loops_scaling_is_the_python_one(build):
     want = Scaling.of(s, q0, s.jacobian(t[0], q0, p))
     N, n = len(t), s.n
     out = [np.empty((N, n)) for _ in range(3)]
-    _, _, got = _jit.run(s, _jit.plan(s, 10_000, 2), t, q0, p, 2, PositionOptions(), None,
+    _, _, got = _jit_sweep.run(s, _jit_sweep.plan(s, 10_000, 2), t, q0, p, 2, PositionOptions(), None,
                          rotation_indices(s), *out, np.zeros(N, dtype=int), np.full(N, np.nan),
                          np.ones(n))
     assert got.length == want.length and got.offset == want.offset
@@ -264,11 +264,11 @@ def _stub(bodies, variables, hint):
 
 
 def test_the_loops_scaling_takes_every_branch_like_scaling_of():
-    """``_jit_loop._scaling`` against ``Scaling.of`` on random Jacobians of every kind it
+    """``_jit_sweep_loop._scaling`` against ``Scaling.of`` on random Jacobians of every kind it
     decides on: ordinary, lever arms at round-off (the fallback to the hint or to the
     coordinates), entries and coordinates not finite, empty rows, model variables, no
     length at all."""
-    from mechsys.solvers._jit_loop import _scaling
+    from mechsys.solvers._jit_sweep_loop import _scaling
     from mechsys.solvers._linalg import Scaling, _column_kinds
 
     rng = np.random.default_rng(5)
@@ -308,18 +308,18 @@ def test_the_loops_scaling_takes_every_branch_like_scaling_of():
 def test_when_it_does_not_run(monkeypatch):
     s = models.slider_crank().compile()
     monkeypatch.setenv("MECHSYS_JIT", "0")
-    assert _jit.plan(s, 10_000, 2) is None
+    assert _jit_sweep.plan(s, 10_000, 2) is None
     monkeypatch.setenv("MECHSYS_JIT", "1")
-    assert _jit.plan(s, 5, 2) is not None
+    assert _jit_sweep.plan(s, 5, 2) is not None
     monkeypatch.delenv("MECHSYS_JIT")
-    assert _jit.plan(s, _jit.AUTO_POINTS - 1, 2) is None      # auto: too short to pay the load
-    assert _jit.plan(s, _jit.AUTO_POINTS, 2) is not None
-    models.slider_crank().solve(np.linspace(0, 1, _jit.AUTO_POINTS))   # loaded now ...
-    assert _jit.plan(s, _jit.AUTO_POINTS - 1, 2) is None      # ... and still the same choice
+    assert _jit_sweep.plan(s, _jit_runtime.AUTO_POINTS - 1, 2) is None      # auto: too short to pay the load
+    assert _jit_sweep.plan(s, _jit_runtime.AUTO_POINTS, 2) is not None
+    models.slider_crank().solve(np.linspace(0, 1, _jit_runtime.AUTO_POINTS))   # loaded now ...
+    assert _jit_sweep.plan(s, _jit_runtime.AUTO_POINTS - 1, 2) is None      # ... and still the same choice
     # the SymPy backend has no C entry points
     monkeypatch.setenv("MECHSYS_JIT", "1")
     monkeypatch.setenv("MECHSYS_BACKEND", "sympy")
-    assert _jit.plan(models.slider_crank().compile(), 100, 2) is None
+    assert _jit_sweep.plan(models.slider_crank().compile(), 100, 2) is None
 
 
 @pytest.mark.parametrize("value", ["of", "2", "enable", "ture"])
@@ -336,19 +336,19 @@ def test_a_misspelled_mode_is_an_error_not_a_default(monkeypatch, value):
         chain.free(drop=["lock0", "lock1"]).simulate((0.0, 0.1))
     for ok in ("AUTO", " 0 ", "On"):
         monkeypatch.setenv("MECHSYS_JIT", ok)
-        assert _jit.mode() in ("auto", "off", "on")
+        assert _jit_runtime.mode() in ("auto", "off", "on")
 
 
 def _runs(monkeypatch):
     """Record ``(first point left to Python, evaluations)`` of each compiled sweep."""
-    real, got = _jit.run, []
+    real, got = _jit_sweep.run, []
 
     def run(*a, **k):
         out = real(*a, **k)
         got.append(out[:2])
         return out
 
-    monkeypatch.setattr(_jit, "run", run)
+    monkeypatch.setattr(_jit_sweep, "run", run)
     return got
 
 
@@ -358,7 +358,7 @@ def test_large_banded_sweep_is_compiled_with_the_same_numbers(monkeypatch, loops
     the sweep through the Jacobian's FixedPattern (the compiled sparse LU both paths call):
     the Python loop's numbers bit for bit, with its iterations, evaluations and pivot
     ratios."""
-    from mechsys.solvers._linalg import SPARSE_THRESHOLD
+    from mechsys.solvers._tolerances import SPARSE_THRESHOLD
 
     runs = _runs(monkeypatch)
     t = np.linspace(0.0, 2 * np.pi, 41)
@@ -381,16 +381,16 @@ def test_large_banded_sweep_hands_over_and_continues(monkeypatch):
     for bit, in the banded loop too."""
     from mechsys.solvers import sweep
 
-    real = _jit.run
+    real = _jit_sweep.run
     t = np.linspace(0.0, 1.0, 30)
 
     def partial(system, pointers, times, *rest):
         return real(system, pointers, times[:7], *rest)
 
-    monkeypatch.setattr(_jit, "run", partial)
+    monkeypatch.setattr(_jit_sweep, "run", partial)
     mixed, plain = _both(monkeypatch, lambda: models.four_bar_chain(30), t)
     _same(mixed, plain)
-    monkeypatch.setattr(_jit, "run", real)
+    monkeypatch.setattr(_jit_sweep, "run", real)
     monkeypatch.setenv("MECHSYS_JIT", "1")
     s = models.four_bar_chain(30).compile()
     t = np.linspace(0.0, 2.0, 40)
@@ -452,8 +452,8 @@ def test_large_loop_needs_the_pattern(monkeypatch):
     """Above SPARSE_THRESHOLD the loops run only where they were asked to take a pattern."""
     monkeypatch.setenv("MECHSYS_JIT", "1")
     s = models.four_bar_chain(30).compile()
-    assert _jit.plan(s, 10, 2) is not None
-    assert not _jit._wanted(s, 10)
+    assert _jit_sweep.plan(s, 10, 2) is not None
+    assert not _jit_runtime.wanted(s, 10)
 
 
 def test_sparse_lu_storage_too_small_hands_over_and_grows(monkeypatch):

@@ -3,6 +3,10 @@
 Module-level imports between parts must follow the layer order below, and no module may
 import one that (directly or not) imports it back. Imports inside functions are allowed only
 where listed in ``LAZY_UP`` (call-time conveniences that reach up to ``draw``).
+
+Inside ``solvers/`` every import counts, the ones inside functions too (a call-time import
+that dodges a circle is still an arrow): its modules sit in the tiers of ``SOLVERS_TIER``,
+import only their own tier or lower ones, and form no circle (decision 0058).
 """
 
 from __future__ import annotations
@@ -30,6 +34,25 @@ LAZY_UP = {
     ("mechsys.model", "draw"),               # Model.add_graphics
     ("mechsys.analyses._vibration", "draw"),  # VibrationModes.animate
     ("mechsys.model", "io"),                 # Model.save (model files)
+}
+
+
+# solvers/ by what its modules hold (decision 0058); a module imports its own tier or lower ones
+SOLVERS_TIER = {
+    # 0 constants, tables and the compile machinery, importing no other module of the folder
+    "_tolerances": 0, "_methods": 0, "_tableaus": 0, "_tree": 0,
+    "_jit_cache": 0, "_jit_modes": 0, "_jit_borrow": 0,
+    # 1 compiled primitives: LAPACK's algorithms, calls into C, the sparse LU, the Gen tree
+    "_jit_lapack": 1, "_jit_calls": 1, "_jit_sparse": 1, "_jit_tree": 1,
+    # 2 linear algebra (Python and compiled), fixed patterns, what every compiled loop needs
+    "_linalg": 2, "_patterns": 2, "_jit_linalg": 2, "_jit_runtime": 2,
+    # 3 the compiled loops
+    "_jit_sweep_loop": 3, "_jit_multipliers_loop": 3, "_jit_free_loop": 3,
+    # 4 the Python solvers and the drivers of the compiled loops
+    "_position": 4, "_rank": 4, "_diagnostics": 4, "_free": 4, "_sensitivity": 4,
+    "_jit_sweep": 4, "_jit_multipliers": 4, "_jit_free": 4,
+    # 5 what the analyses call: sweeps, multipliers, the integrator registry, the package
+    "_kinematics": 5, "_statics": 5, "_integrators": 5, "__init__": 5,
 }
 
 
@@ -161,3 +184,66 @@ def test_top_level_has_only_the_tiers():
     folders = sorted(p.name for p in PKG.iterdir() if p.is_dir() and (p / "__init__.py").exists())
     assert folders == ["analyses", "compile", "constraints", "draw", "geometry", "io", "loads",
                        "results", "solvers", "testing"]
+
+
+def _solvers_arrows():
+    """``(importer, imported)`` for every import between two modules of ``solvers/``, at module
+    level or inside a function (``from . import a, b`` names two modules)."""
+    folder = PKG / "solvers"
+    names = {f.stem for f in folder.glob("*.py")}
+    arrows = set()
+    for f in sorted(folder.glob("*.py")):
+        for node in ast.walk(ast.parse(f.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.level == 1:
+                targets = [node.module.split(".")[0]] if node.module else [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and (node.module or "").startswith("mechsys.solvers."):
+                targets = [node.module.split(".")[2]]
+            elif isinstance(node, ast.Import):
+                targets = [a.name.split(".")[2] for a in node.names if a.name.startswith("mechsys.solvers.")]
+            else:
+                continue
+            arrows |= {(f.stem, t) for t in targets if t in names and t != f.stem}
+    return names, arrows
+
+
+def test_every_solvers_module_has_a_tier():
+    names, _ = _solvers_arrows()
+    assert names == set(SOLVERS_TIER), (
+        f"solvers/ modules without a tier: {sorted(names - set(SOLVERS_TIER))}; "
+        f"tiers of missing modules: {sorted(set(SOLVERS_TIER) - names)}")
+
+
+def test_solvers_imports_run_down_its_tiers():
+    """No module of ``solvers/`` imports one of a higher tier, even inside a function."""
+    _, arrows = _solvers_arrows()
+    bad = sorted(f"{a} (tier {SOLVERS_TIER[a]}) -> {b} (tier {SOLVERS_TIER[b]})"
+                 for a, b in arrows if a in SOLVERS_TIER and b in SOLVERS_TIER
+                 and SOLVERS_TIER[b] > SOLVERS_TIER[a])
+    assert not bad, "imports up the tiers of solvers/:\n" + "\n".join(bad)
+
+
+def test_no_import_circles_in_solvers():
+    """The imports of ``solvers/``, call-time ones included, form no circle."""
+    _, arrows = _solvers_arrows()
+    graph: dict[str, set[str]] = {}
+    for a, b in arrows:
+        graph.setdefault(a, set()).add(b)
+    _assert_acyclic(graph)
+
+
+def test_solvers_imports_nothing_above_it():
+    """``solvers/`` is the bottom tier of the package: what it imports from mechsys, at
+    module level or in a function, is a layer-0 module (``_errors``, ``_private``, ...)."""
+    bad = [f"{src} -> {dst}" for src, dst, _top in _graph()
+           if _part(src) == "solvers" and _part(dst) != "solvers" and LAYER[_part(dst)] > 0]
+    assert not bad, "solvers/ imports from higher tiers:\n" + "\n".join(bad)
+
+
+def test_the_solvers_checks_see_a_circle():
+    """The circle check finds one made by a call-time import (as ``_jit_loop`` importing
+    ``_kinematics`` made before decision 0058)."""
+    import pytest
+
+    with pytest.raises(AssertionError, match="import circle"):
+        _assert_acyclic({"_kinematics": {"_jit_sweep"}, "_jit_sweep": {"_jit_sweep_loop"},
+                         "_jit_sweep_loop": {"_kinematics"}})

@@ -12,8 +12,8 @@ import pytest
 
 from mechsys import models
 from mechsys.results._extra import Extra
-from mechsys.solvers import _jit
-from mechsys.solvers._kinematics import RCOND_PENDING, RCOND_WARN
+from mechsys.solvers import _jit_sweep
+from mechsys.solvers._tolerances import RCOND_PENDING, RCOND_WARN
 
 pytest.importorskip("numba")
 pytestmark = pytest.mark.filterwarnings("ignore::mechsys.NearSingularWarning")
@@ -29,12 +29,12 @@ def _dead_centres():
 
 def _eager(monkeypatch):
     """Make the compiled loop compute every estimate itself (no row scales to defer with)."""
-    real = _jit.run
+    real = _jit_sweep.run
 
     def run(*args):
         return real(*args[:15], None)
 
-    monkeypatch.setattr(_jit, "run", run)
+    monkeypatch.setattr(_jit_sweep, "run", run)
 
 
 @pytest.mark.parametrize("build", [models.slider_crank, _dead_centres], ids=["regular", "dead-centres"])
@@ -114,13 +114,13 @@ def test_reading_releases_the_row_scales(monkeypatch):
 
     monkeypatch.setenv("MECHSYS_JIT", "1")
     refs = []
-    real = _jit.rcond_filler
+    real = _jit_sweep.rcond_filler
 
     def spy(system, pointers, times, Q, p, scaling, R):
         refs.append(weakref.ref(R))
         return real(system, pointers, times, Q, p, scaling, R)
 
-    monkeypatch.setattr(_jit, "rcond_filler", spy)
+    monkeypatch.setattr(_jit_sweep, "rcond_filler", spy)
     sol = models.slider_crank().solve(np.linspace(0, 1, 50))
     gc.collect()
     assert refs and refs[0]() is not None

@@ -106,8 +106,8 @@ def test_set_parameters_after_path_changes_the_motion():
     np.testing.assert_allclose(sol.location(c.point(0))[:, 0], -2.0 * t, atol=1e-10)
     sol = path.simulate(t, initial_condition={"v": 0.5}, rtol=1e-11, atol=1e-12)
     np.testing.assert_allclose(sol["caster.th"], closed(0.5), atol=1e-8)
-    from mechsys.solvers import _jit
+    from mechsys.solvers import _jit_runtime
 
-    if _jit.available() and _jit.mode() != "off":    # the parameters reached the compiled loop
+    if _jit_runtime.available() and _jit_runtime.mode() != "off":  # the parameters reached the compiled loop
         assert sol.extra["compiled_steps"] == sol.extra["steps"] > 0
     np.testing.assert_allclose(path.velocities(0.0, sol.q[0]), sol.qd[0] * 4, atol=1e-12)

@@ -14,7 +14,7 @@ import pytest
 
 import mechsys as ms
 from mechsys import models
-from mechsys.solvers import _jit
+from mechsys.solvers import _jit_sweep
 from mechsys.solvers import _kinematics as kin
 
 pytest.importorskip("numba")
@@ -26,14 +26,14 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 def _spy_runs(monkeypatch):
     """Record every call of the compiled sweep loop: (first point, points given, returned k)."""
     calls = []
-    real = _jit.run
+    real = _jit_sweep.run
 
     def spy(system, pointers, times, *rest):
         out = real(system, pointers, times, *rest)
         calls.append((rest[-2], len(times), out[0]))
         return out
 
-    monkeypatch.setattr(_jit, "run", spy)
+    monkeypatch.setattr(_jit_sweep, "run", spy)
     return calls
 
 
@@ -124,7 +124,7 @@ def test_interrupt_before_any_point_is_a_clear_error(monkeypatch):
     def ctrl_c(*a, **k):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(_jit, "run", ctrl_c)
+    monkeypatch.setattr(_jit_sweep, "run", ctrl_c)
     with pytest.raises(ms.MechError, match="before any point was solved: interrupted"):
         models.slider_crank().solve(np.linspace(0, 1, 1000), progress=lambda d, n: None)
 
@@ -195,12 +195,12 @@ def test_a_long_compile_is_announced_once(monkeypatch, caplog):
 
     monkeypatch.setattr(_jit_cache, "_said", set())
     with caplog.at_level(logging.INFO, logger="mechsys"):
-        assert _jit_cache.notice("a test loop", 12, ("_jit_loop", "no_such_loop"))
-        assert not _jit_cache.notice("a test loop", 12, ("_jit_loop", "no_such_loop"))
+        assert _jit_cache.notice("a test loop", 12, ("_jit_sweep_loop", "no_such_loop"))
+        assert not _jit_cache.notice("a test loop", 12, ("_jit_sweep_loop", "no_such_loop"))
     assert [r.getMessage() for r in caplog.records] == [
         "mechsys: compiling a test loop (first run, about 12 s of CPU; cached for later runs)"]
     # a loop in the cache (the compiled sweep, after one ran) is not announced
     monkeypatch.setenv("MECHSYS_JIT", "1")
     models.slider_crank().solve(np.linspace(0, 1, 20))
-    assert _jit_cache.cached("_jit_loop", "sweep_dense")
-    assert not _jit_cache.notice("the kinematic sweep", 25, ("_jit_loop", "sweep_dense"))
+    assert _jit_cache.cached("_jit_sweep_loop", "sweep_dense")
+    assert not _jit_cache.notice("the kinematic sweep", 25, ("_jit_sweep_loop", "sweep_dense"))

@@ -125,12 +125,12 @@ def test_sparse_path_agrees_with_dense(monkeypatch):
     """Above SPARSE_THRESHOLD coordinates the scaled Jacobian is factorised sparse, through
     the system's FixedPattern (the scaled values are swapped into the caller's matrix for
     the factorisation only)."""
-    from mechsys.solvers import _kinematics, _linalg, _position
+    from mechsys.solvers import _kinematics, _linalg, _position, _tolerances
 
     m = models.four_bar_chain(25)                           # 153 coordinates: sparse
     t = np.linspace(0, 1, 11)
     sparse = m.solve(t)
-    assert m.compile().n > _linalg.SPARSE_THRESHOLD
+    assert m.compile().n > _tolerances.SPARSE_THRESHOLD
     system = m.compile()
     J = system.jacobian(0.3, sparse.q[3], m._p(), sparse=True)
     before = J.toarray()

@@ -109,7 +109,7 @@ def test_large_model_multipliers_solve_sparse(solution):
     multipliers as the dense solve of the same equations, and the load balance
     ``Phi_q^T lambda = Q + Qv - M qdd``."""
     from mechsys.solvers import solve_multipliers
-    from mechsys.solvers._linalg import SPARSE_THRESHOLD
+    from mechsys.solvers._tolerances import SPARSE_THRESHOLD
 
     m = models.four_bar_chain(30)
     for b in m.bodies:
@@ -138,8 +138,8 @@ def test_large_model_with_friction_newton_through_its_pattern(monkeypatch):
     the multipliers (joint friction) factorises ``Phi_q^T - dQ/dlambda`` through its fixed
     pattern (rows matched, banded LU): the multipliers of the dense Newton, and the load
     balance with the friction loads at those multipliers."""
-    from mechsys.solvers import _statics
-    from mechsys.solvers._linalg import SPARSE_THRESHOLD
+    from mechsys.solvers import _patterns, _statics
+    from mechsys.solvers._tolerances import SPARSE_THRESHOLD
 
     m = models.four_bar_chain(30)
     for b in m.bodies:
@@ -152,7 +152,7 @@ def test_large_model_with_friction_newton_through_its_pattern(monkeypatch):
     assert s.n > SPARSE_THRESHOLD and s.dynamics.depends_on_lambda
     t = np.linspace(0.1, 0.5, 3)
     sol = m.solve(t, solution="dynamic")
-    rows, cols, pattern = _statics._newton_pattern(s)
+    rows, cols, pattern = _patterns.multiplier_newton_pattern(s)
     assert pattern.banded
     monkeypatch.setattr(_statics, "SPARSE_THRESHOLD", 10**6)
     dense = m.solve(t, solution="dynamic")

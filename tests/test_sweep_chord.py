@@ -11,9 +11,10 @@ import pytest
 
 import mechsys as ms
 from mechsys import models
-from mechsys.solvers import _jit, _kinematics
+from mechsys.solvers import _jit_sweep, _kinematics
 from mechsys.solvers._linalg import Scaling, rotation_columns
-from mechsys.solvers._position import CHORD_RATE, solve_position
+from mechsys.solvers._position import solve_position
+from mechsys.solvers._tolerances import CHORD_RATE
 
 W = 2 * np.pi
 
@@ -154,7 +155,7 @@ def test_handover_passes_the_chord(monkeypatch):
     chord it had (from the returned row scales), so the iterations and evaluations at every
     later point are those of an all-compiled and of an all-Python sweep."""
     pytest.importorskip("numba")
-    real = _jit.run
+    real = _jit_sweep.run
     t = np.linspace(0.0, 1.0, 1000)
 
     def partial(system, pointers, times, *rest):
@@ -162,7 +163,7 @@ def test_handover_passes_the_chord(monkeypatch):
 
     monkeypatch.setenv("MECHSYS_JIT", "1")
     fast = models.slider_crank().solve(t)
-    monkeypatch.setattr(_jit, "run", partial)
+    monkeypatch.setattr(_jit_sweep, "run", partial)
     chords = []
     real_solve = _kinematics.solve_position
 

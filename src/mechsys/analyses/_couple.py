@@ -79,8 +79,9 @@ from ..compile._backends import compile_exprs
 from ..compile._derive import _diff, _rewrite_steps, symengine_safe, to_sympy_list
 from ..results._solution import Solution, State
 from ..solvers._kinematics import solve_acceleration, solve_velocity
-from ..solvers._linalg import SPARSE_THRESHOLD, Scaling, Singular, dependent_rows, factor
+from ..solvers._linalg import Scaling, dependent_rows, factor
 from ..solvers._position import PositionOptions, solve_position
+from ..solvers._tolerances import SPARSE_THRESHOLD, Singular
 
 #: compiled kernels of couples, per System (dropped with it)
 _KERNELS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()

@@ -40,7 +40,7 @@ from .._symbols import T
 from ..compile import System
 from ..compile._stages import _cache, stage_system
 from ..constraints._switches import StageSwitch, TimeSwitch
-from ..solvers import ORDERS, PositionOptions, _jit, sweep
+from ..solvers import ORDERS, PositionOptions, _jit_sweep, sweep
 from ..solvers._kinematics import SweepResult, _predict
 from ..solvers._linalg import Scaling, rotation_indices
 
@@ -265,7 +265,7 @@ class _StageSweep:
         self.evals = 0
         self.fills: list = []    # (first point, count, fill) of runs with pending estimates
         self.rows = None         # the chord's rows after the last kept point (a whole run)
-        self.runs = RUNS_COMPILED if _jit.plan(base, N, order) is not None else RUNS
+        self.runs = RUNS_COMPILED if _jit_sweep.plan(base, N, order) is not None else RUNS
 
     def fill(self):
         """``fill(rconds)`` for the sweep's result: each run's pending estimates."""

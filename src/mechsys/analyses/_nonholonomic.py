@@ -33,7 +33,7 @@ from .._symbols import T
 from ..compile import compile_exprs
 from ..constraints import velocity_rows
 from ..solvers._free import _solve_fast, project_positions
-from ..solvers._linalg import SPARSE_THRESHOLD, Singular
+from ..solvers._tolerances import SPARSE_THRESHOLD, Singular
 
 try:  # optional
     import symengine as se

@@ -51,15 +51,14 @@ from ..solvers._integrators import (
 )
 from ..solvers._jit_free import FreeStepper
 from ..solvers._linalg import (
-    SPARSE_THRESHOLD,
     Scaling,
-    Singular,
     dependent_rows,
     factor,
     involved_rows,
     pattern_of,
     pattern_slots,
 )
+from ..solvers._tolerances import SPARSE_THRESHOLD, Singular
 from ._free import accuracy_report
 
 

@@ -101,9 +101,9 @@ AUTO_POINTS = 100
 def _compiled(N: int) -> bool:
     """Whether evaluations over ``N`` points take the compiled loops (``MECHSYS_JIT``: ``0``
     never, ``1`` always, ``auto`` from :data:`AUTO_POINTS` points)."""
-    from ..solvers import _jit
+    from ..solvers import _jit_runtime
 
-    mode = _jit.mode()
+    mode = _jit_runtime.mode()
     return mode == "on" or (mode == "auto" and N >= AUTO_POINTS)
 
 
@@ -125,13 +125,13 @@ def _loads_compiled(s, t, Q, QD, QDD):
     solves use; decision 0057) as ``(R (N', n), N')``, ``N'`` the points done before the
     first with values that are not finite; None when it cannot run (no C entry points, not
     the recursive dynamics, Numba missing)."""
-    from ..solvers import _jit
+    from ..solvers import _jit_multipliers, _jit_runtime
 
-    if not getattr(s.dynamics, "recursive", False) or not _jit.available():
+    if not getattr(s.dynamics, "recursive", False) or not _jit_runtime.available():
         return None
     N = len(Q)
     Q, QD, QDD = (np.ascontiguousarray(np.broadcast_to(a, (N, s.n))) for a in (Q, QD, QDD))
-    return _jit._recursive_loads(s, np.full(N, float(t)), Q, QD, QDD, s.p_values, 2)
+    return _jit_multipliers._recursive_loads(s, np.full(N, float(t)), Q, QD, QDD, s.p_values, 2)
 
 
 def _points(s, value, what: str, partial: bool = False):

@@ -374,7 +374,7 @@ class _SymengineCompiled(Compiled):
 
     def c_function(self):
         """C entry points ``void f(double *out, const double *x, void *context)`` of the
-        kernel, for compiled loops (``solvers/_jit.py``): ``(address, context, pre_address,
+        kernel, for compiled loops (``solvers/_jit_runtime.py``): ``(address, context, pre_address,
         pre_context, pieces)``. With ``Piecewise`` (two stages, see the class) the first stage
         at ``pre_address`` writes the ``pieces`` values after the ``x`` arguments and the
         kernel reads ``[x, pieces]``; otherwise ``pre_address`` is 0. None when a stage is not

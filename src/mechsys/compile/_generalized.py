@@ -460,9 +460,9 @@ class RecursiveDynamics:
         ``MECHSYS_JIT=0``), or False for the plain-Python path (the same operations)."""
         if self._numba is None:
             self._numba = False
-            from ..solvers import _jit
+            from ..solvers import _jit_runtime
 
-            if _jit.mode() != "off" and _jit.available():
+            if _jit_runtime.mode() != "off" and _jit_runtime.available():
                 ptrs = [getattr(k, "c_function", lambda: None)() for k in self._kernels]
                 if all(p is not None and p[2] == 0 for p in ptrs):
                     from ..solvers import _jit_tree as jit

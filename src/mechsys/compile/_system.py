@@ -299,7 +299,7 @@ class System:
         structure (None when ``m != n``), made once: its factorisations reuse the ordering
         found here: a sparse LU in a minimum-degree ordering (compiled when Numba is
         installed, else SuperLU's with the same ordering and pivoting). Shared with the
-        compiled sweep and multiplier loops (``_jit.run``), which call the same LU."""
+        compiled sweep and multiplier loops (``_jit_sweep.run``), which call the same LU."""
         if self.m != self.n:
             return None
         got = self.__dict__.get("_jac_pattern")

@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._errors import ModelError
+from ._linalg import rotation_columns
 
 #: number of constraints / coordinates listed in a convergence diagnosis
 TOP = 5
@@ -122,8 +123,6 @@ def diagnose_convergence(system, t, q_start, q_end, F, rows, scaling, history) -
     sdq = np.abs(dq / cols)
     sdq[~np.isfinite(sdq)] = np.inf
     # an angle that turned by whole turns did not go anywhere: measure angles modulo 2 pi
-    from ._linalg import rotation_columns
-
     rot = np.asarray(rotation_columns(system), dtype=bool)
     if rot.shape == sdq.shape and rot.any():
         sdq[rot] = np.abs((dq[rot] + np.pi) % (2 * np.pi) - np.pi)

@@ -33,17 +33,11 @@ import scipy.sparse as sps
 from scipy.linalg.lapack import dgesv as _dgesv
 
 from .._errors import ConvergenceError, SingularJacobianError, SingularMassError
-from ._linalg import (
-    SPARSE_THRESHOLD,
-    Scaling,
-    Singular,
-    dependent_rows,
-    factor,
-    pattern_of,
-    pattern_slots,
-)
+from ._linalg import Scaling, dependent_rows, factor, pattern_slots
+from ._patterns import free_newton_pattern, projection_pattern
 from ._position import describe_singular
-from ._rank import ZONE, InZone, kkt_rank_tolerant
+from ._rank import InZone, kkt_rank_tolerant
+from ._tolerances import SPARSE_THRESHOLD, ZONE, Singular
 
 
 def _augmented(M, J, D=None, dense=False):
@@ -107,7 +101,7 @@ def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterat
     # large systems: the Jacobian's and the mass matrix's nonzeros (products by bincount, no
     # sparse-matrix objects per iteration), the Newton matrix's values straight into its
     # fixed pattern (_newton_values): no dense (n + m)^2 arrays
-    pat = _newton_pattern(system) if n + m > SPARSE_THRESHOLD else None
+    pat = free_newton_pattern(system) if n + m > SPARSE_THRESHOLD else None
     J = system.jacobian(t, q, p, pat is not None)
     g = system.gamma_values(t, q, qd, p)
     c = Scaling.of(system, q, J).columns if columns is None else np.asarray(columns, dtype=float)
@@ -182,37 +176,14 @@ def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterat
         time=t)
 
 
-def _newton_pattern(system):
-    """``(rows, cols, FixedPattern)`` of the Newton matrix ``[[M - dQ/dqdd, Phi_q^T -
-    dQ/dlambda], [Phi_q, 0]]`` of a large system: every entry the dense matrix can hold
-    (the mass matrix's, ``dQ/dqdd``'s, the Jacobian's and ``dQ/dlambda``'s nonzeros, the
-    positions the dense blocks are filled from), in CSC order, made once per dynamics."""
-    dyn = system.dynamics
-    got = dyn.__dict__.get("_newton_pattern")
-    if got is not None and got[0] is system:
-        return got[1]
-    n, m = system.n, system.m
-    jr, jc = np.asarray(system.jac_rows, dtype=np.int64), np.asarray(system.jac_cols, dtype=np.int64)
-    r = [np.asarray(dyn.M_rows, dtype=np.int64), jc, n + jr]
-    c = [np.asarray(dyn.M_cols, dtype=np.int64), n + jr, jc]
-    if dyn.depends_on_qdd:
-        r.append(np.asarray(dyn.dA_rows, dtype=np.int64))
-        c.append(np.asarray(dyn.dA_cols, dtype=np.int64))
-    if dyn.depends_on_lambda:
-        r.append(np.asarray(dyn.dQ_rows, dtype=np.int64))
-        c.append(n + np.asarray(dyn.dQ_cols, dtype=np.int64))
-    got = pattern_of(np.concatenate(r), np.concatenate(c), n + m)
-    dyn.__dict__["_newton_pattern"] = (system, got)
-    return got
-
-
 def _newton_values(system, dyn, Mv, J, t, q, qd, lam, p, qdd):
     """The values of ``[[M - dQ/dqdd, Phi_q^T - dQ/dlambda], [Phi_q, 0]]`` at the entries of
-    its pattern (:func:`_newton_pattern`, CSC order) from the mass matrix's nonzero values
-    ``Mv`` (at ``dyn.M_rows``, ``dyn.M_cols``), the sparse Jacobian ``J`` (its stored entries
-    placed through slots found once per structure) and the derivatives' nonzero values."""
+    its pattern (:func:`~._patterns.free_newton_pattern`, CSC order) from the mass matrix's
+    nonzero values ``Mv`` (at ``dyn.M_rows``, ``dyn.M_cols``), the sparse Jacobian ``J`` (its
+    stored entries placed through slots found once per structure) and the derivatives'
+    nonzero values."""
     n = system.n
-    rows, cols, _ = _newton_pattern(system)
+    rows, cols, _ = free_newton_pattern(system)
     key = (J.indptr.tobytes(), J.indices.tobytes())
     got = dyn.__dict__.get("_newton_slots")
     if got is None or got[0] is not system or got[1] != key:
@@ -405,28 +376,6 @@ def _project_positions(system, t, q, p, tol, max_iterations, scaling, rank_toler
             break
         q -= _min_norm(system, J, r, scaling, Fs, t, q, rank_tolerant)
     return q
-
-
-def projection_pattern(system):
-    """``(FixedPattern, slots)`` of the projection's matrix ``[[I, J^T], [J, 0]]`` (``n + m``)
-    of a system's sparse Jacobian, analysed once per system (the compiled sparse LU's
-    minimum-degree ordering): ``slots`` (n + 2 nnz,) the places among the pattern's entries
-    of the identity's diagonal, then of ``J``'s entries in its CSC order
-    (``System._csc_structure``), then of ``J^T``'s. The compiled steppers project through
-    the same pattern (``_jit_free_loop._min_norm_sparse``)."""
-    got = system.__dict__.get("_projection_pattern")
-    if got is None:
-        n, m = system.n, system.m
-        _, indices, indptr = system._csc_structure()
-        jr = indices.astype(np.int64)
-        jc = np.repeat(np.arange(n, dtype=np.int64), np.diff(indptr))
-        d = np.arange(n, dtype=np.int64)
-        rows = np.concatenate((d, n + jr, jc))
-        cols = np.concatenate((d, jc, n + jr))
-        r, c, pat = pattern_of(rows, cols, n + m, sparse=True)
-        got = system.__dict__["_projection_pattern"] = (
-            pat, pattern_slots(r, c, n + m, rows, cols))
-    return got
 
 
 def _system_structure(system, J) -> bool:

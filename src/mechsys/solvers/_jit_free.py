@@ -8,7 +8,7 @@ projections onto the constraints with no Python between the compiled equations.
            \begin{bmatrix} \ddot q \\ \lambda \end{bmatrix} =
            \begin{bmatrix} Q + Q_v \\ \gamma \end{bmatrix}
 
-with SciPy's DOP853 (or RK45) and projects ``(q, qd)`` onto ``Phi = 0``, :math:`\Phi_q \dot q = -\Phi_t` after
+with SciPy's DOP853 (or RK45) and projects ``(q, qd)`` onto ``Phi = 0``, ``Phi_q qd = -Phi_t`` after
 every accepted step. The compiled loop (``_jit_free_loop.runge_kutta``) performs exactly these
 steps: SciPy's Runge-Kutta stages, error norm and step-size control (the same coefficients,
 from our own tableaus: ``_tableaus``, decision 0038), the augmented system from the compiled
@@ -34,7 +34,7 @@ parameters, decision 0032), or above it the augmented matrix's pattern by the co
 sparse LU (``"sparse"``: trees of many branches, whose pattern is not banded and whose
 block band exceeds :data:`BLOCK_BAND`, with the Python path's pattern and LU; systems the
 block path cannot take, with the banded pattern's sparse twin; its projections through the
-Python path's pattern of :math:`\begin{bmatrix} I & J^T \\ \hat J & 0 \end{bmatrix}`); every kernel
+Python path's pattern of ``[[I, J^T], [J^, 0]]``); every kernel
 SymEngine LLVM code (CSE kernels included: their repeated outputs are expanded in the
 loop). Loads that depend on the multipliers (friction) or accelerations
 (added mass) take ``free_acceleration``'s Newton in the loop (``"newton"``, decision 0028).
@@ -53,15 +53,22 @@ derivative the velocities of the holonomic and velocity constraints (Newton on `
 linear in the velocities),
 the projection onto the positions only. Above ``SMALL_LU`` coordinates the velocity system
 goes through the Python path's fixed pattern and the same compiled sparse LU, and the
-projection through :math:`\begin{bmatrix} I & J^T \\ \hat J & 0 \end{bmatrix}` (``_free.projection_pattern``).
+projection through :math:`\begin{bmatrix} I & J^T \\ \hat J & 0 \end{bmatrix}`
+(``_patterns.projection_pattern``).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from . import _jit, _methods
-from ._linalg import SPARSE_THRESHOLD
+from . import _jit_runtime, _methods, _tableaus
+from ._jit_cache import notice
+from ._jit_runtime import SMALL as SMALL_LU
+from ._jit_runtime import SPARSE as SPARSE_BW
+from ._jit_runtime import GenTree, kernel_entry
+from ._linalg import FixedPattern, _sparse_lu, pattern_slots
+from ._patterns import free_newton_pattern, projection_pattern
+from ._tolerances import SPARSE_THRESHOLD, Singular
 
 #: above ``SPARSE_THRESHOLD`` unknowns the block path runs while its banded Cholesky's work
 #: ``m bw^2`` is at most this (else the Python path). Systems whose augmented matrix is not
@@ -114,7 +121,7 @@ def _coefficients(solver):
     (``_tableaus``, decision 0038), not SciPy's private modules."""
     import scipy.integrate
 
-    from . import _jit_free_loop, _tableaus
+    from . import _jit_free_loop
 
     spec = next(m for m in _methods.METHODS.values()
                 if m.compiled == "runge_kutta" and isinstance(solver, getattr(scipy.integrate, m.scipy)))
@@ -134,9 +141,9 @@ def _lapack() -> np.ndarray:
     if _state["gesv"] is None:
         from scipy.linalg import cython_lapack
 
-        gesv = _jit._capsule_address(cython_lapack.__pyx_capi__["dgesv"])
-        _state["gesv"] = np.concatenate((_jit._lapack(), [gesv],
-                                         _jit._band_lapack())).astype(np.int64)
+        gesv = _jit_runtime.capsule_address(cython_lapack.__pyx_capi__["dgesv"])
+        _state["gesv"] = np.concatenate((_jit_runtime.lapack(), [gesv],
+                                         _jit_runtime.band_lapack())).astype(np.int64)
     return _state["gesv"]
 
 
@@ -356,70 +363,15 @@ def _regularise(B, j) -> bool:
     return True
 
 
-def _entry(kernel):
-    """``(row, expand)`` of a kernel's C entry points (``_SymengineCompiled.c_entry``: the
-    pointer-table row and the map of its repeated outputs, an empty array when there are
-    none), or None when it has no LLVM code."""
-    get = getattr(kernel, "c_entry", None)
-    e = get() if get is not None else None
-    if e is None:
-        return None
-    row, expand = e
-    return row, (np.zeros(0, dtype=np.int64) if expand is None
-                 else np.asarray(expand, dtype=np.int64))
-
-
 _NO_EXPAND = np.zeros(0, dtype=np.int64)
 
 
 def _constraint_entries(system, *kernels) -> list:
-    """:func:`_entry` of each of the constraint kernels ``kernels``, or rows of zeros (never
-    called) when the system has no constraint equation."""
+    """:func:`~._jit_runtime.kernel_entry` of each of the constraint kernels ``kernels``, or
+    rows of zeros (never called) when the system has no constraint equation."""
     if system.m:
-        return [_entry(k) for k in kernels]
+        return [kernel_entry(k) for k in kernels]
     return [((0, 0, 0, 0, 0), _NO_EXPAND)] * len(kernels)
-
-
-class _Gen:
-    """The recursive Gen dynamics (``compile._generalized.RecursiveDynamics``) as the
-    compiled loop evaluates it (``_jit_free_loop._accel_gen``): ``arrays = (joint kernel
-    entry points (kernels, 2), kid, par, root, nqm, goff, gcols, M_rows, M_cols, sizes)``
-    with ``sizes = [nq, kM, kJ, kg, slaves, kmax, joint inputs, joint outputs, main inputs,
-    main outputs]``; ``tree``: the articulated-body recursion (no constraint equation)."""
-
-    def __init__(self, arrays, tree):
-        self.arrays, self.tree = arrays, bool(tree)
-
-    @staticmethod
-    def none():
-        z = np.zeros(1, dtype=np.int64)
-        return (np.zeros((1, 2), dtype=np.int64), z, z, z, z, z, z, z, z,
-                np.ones(10, dtype=np.int64))
-
-    @classmethod
-    def of(cls, system, dyn, main_row):
-        """The structure, or None when the joint kernels have no C entry points (then the
-        Python stepper runs)."""
-        # the joint kernels' C entry points (as RecursiveDynamics._engine, which may have
-        # settled on plain Python in an earlier MECHSYS_JIT=0 run)
-        ptrs = [_jit._pointer(k) for k in dyn._kernels]
-        if any(p is None or p[2] != 0 for p in ptrs):
-            return None
-        kid, par, root, nqm, goff, gcols, nq = dyn._tree
-        kM, kJ, _, kg, _ = dyn._sizes
-        n, m = system.n, system.m
-        S = len(kid)
-        kmax = max(1, int(np.diff(goff).max(initial=1)))
-        npar = len(system.p_values)
-        nin = 1 + 3 * n + m + npar
-        sizes = [nq, kM, kJ, kg, S, kmax, 1 + 2 * nq + 2 * kmax + npar,
-                 nq * (4 + nq + kmax + nq), nin + 2 * S * nq + max(int(main_row[4]), 0),
-                 kM + kJ + 2 * n + kg + S * nq]
-        i64 = np.int64
-        arrays = (np.array([[p[0], p[1]] for p in ptrs], dtype=i64), *(np.ascontiguousarray(a, dtype=i64)
-                  for a in (kid, par, root, nqm, goff, gcols, dyn._M_rows, dyn._M_cols)),
-                  np.array(sizes, dtype=i64))
-        return cls(arrays, dyn.tree_only)
 
 
 _WORKSPACES: dict = {}   # (system id, structure) -> (system, its last stepper (weak), workspace)
@@ -449,11 +401,9 @@ def _workspace(stepper, system):
 def _projection_part(system):
     r"""The projection's structure for :func:`_two_structures`: ``(FixedPattern, head, pos,
     kperm, dpos)`` of :math:`\begin{bmatrix} I & J^T \\ \hat J & 0 \end{bmatrix}`
-    (``_free.projection_pattern``, the Python path's; kernel values the Jacobian's, each twice,
-    the identity at ``dpos``), or None when the Jacobian has a repeated entry (the row scales
-    are taken entry by entry)."""
-    from ._free import projection_pattern
-
+    (``_patterns.projection_pattern``, the Python path's; kernel values the Jacobian's, each
+    twice, the identity at ``dpos``), or None when the Jacobian has a repeated entry (the row
+    scales are taken entry by entry)."""
     n, m = system.n, system.m
     jr = np.asarray(system.jac_rows, dtype=np.int64)
     jc = np.asarray(system.jac_cols, dtype=np.int64)
@@ -527,8 +477,6 @@ def _sparse_twin(system, fk, start):
     two loops then solve by independent factorisations). Made once per kernel. The Python
     path never factorises it, so it cannot grow its storage when a run outgrows it: one
     factorisation at ``start`` (``(t0, q0, p)``, at rest) sizes it here."""
-    from ._linalg import FixedPattern, Singular
-
     pat = fk.pattern
     twin = getattr(pat, "_sparse_twin", None)
     if twin is None:
@@ -570,17 +518,14 @@ def _path_sparse_structure(path):
 
 def _newton_band(system):
     """The structure array of ``_jit_free_loop._newton_accel_band`` (see there): the Newton
-    matrix's ``FixedPattern`` (``solvers._free._newton_pattern``, the Python path's) and where
+    matrix's ``FixedPattern`` (``_patterns.free_newton_pattern``, the Python path's) and where
     each term's values go in it, and for a pattern that is not banded (trees of many
     branches) the compiled sparse LU's integer store; None when such a pattern has no
     compiled LU (the Python path's SuperLU)."""
-    from ._free import _newton_pattern
     from ._jit_free_loop import BAND_HEAD
-    from ._jit_loop import SPARSE as SPARSE_BW
     from ._jit_sparse import IWORK
-    from ._linalg import _sparse_lu, pattern_slots
 
-    rows, cols, pat = _newton_pattern(system)
+    rows, cols, pat = free_newton_pattern(system)
     sparse = not pat.banded
     if sparse and (_sparse_lu() is None or not hasattr(pat, "s_indptr")):
         return None
@@ -606,7 +551,7 @@ def _newton_band(system):
     k = slot(diag, diag)
     P = rows.size
     if sparse:
-        # (the sizes of _jit_loop.big_sizes; the integer store starts with B's structure)
+        # (the sizes of _jit_linalg.big_sizes; the integer store starts with B's structure)
         capL, capU = pat._cap
         bw, store = [SPARSE_BW, P, capL, capU], P + capL + capU + 3 * N
         SI = np.concatenate([pat.s_indptr, pat.s_indices,
@@ -732,7 +677,7 @@ class FreeStepper:
             self.flat_t = self.mp = np.zeros(0, dtype=np.int64)
             blk, self.bw = blocks.arrays, blocks.bandwidth
         # the loop's structure argument: (block path, Gen tree, the kernels' output maps)
-        self.blk_i = (blk, _Gen.none() if gen is None else gen.arrays, tuple(expand))
+        self.blk_i = (blk, GenTree.none() if gen is None else gen.arrays, tuple(expand))
         if path is not None:
             # the velocity constraints' outputs: [psi, psi_qd (dense, or its nonzeros), rest]
             self.kk = int(2 * path[0] + (path[0] * n if path[2] is None
@@ -768,7 +713,6 @@ class FreeStepper:
             self.ws[14][:] = 1.0              # the first evaluation's multipliers (Python: ones)
             self.ws[16][0][7][0] = newton_tol   # then the column scales (the unit-free test)
             self.ws[16][0][7][1:1 + n] = self.columns
-        _jit._state["loaded"] = True
 
     @classmethod
     def plan(cls, system, method, p, scaling, rows0, robust, correction, t_eval, start,
@@ -781,12 +725,12 @@ class FreeStepper:
         if velocity_rows:
             return None
         spec = _methods.find(method)
-        if _jit.mode() == "off" or spec is None or spec.compiled is None or system.n == 0:
+        if _jit_runtime.mode() == "off" or spec is None or spec.compiled is None or system.n == 0:
             return None
         if not spec.runge_kutta:
             t_eval = None              # Adams output times are interpolated afterwards
         dyn = system.dynamics
-        if not _jit.available():
+        if not _jit_runtime.available():
             return None
         if dyn.depends_on_lambda or dyn.depends_on_qdd:
             return cls._plan_newton(system, p, scaling, correction, t_eval, newton)
@@ -797,7 +741,7 @@ class FreeStepper:
             # and the kernel of the rest, the recursion in the loop (dense at any size, as
             # the Python path: the mass matrix of a chain in joint coordinates is full)
             fk = None
-            entries = [_entry(dyn._main)]
+            entries = [kernel_entry(dyn._main)]
         else:
             # the kernel the Python path uses (sparse above the threshold): compiled once
             fk = dyn.free_kernel(N > SPARSE_THRESHOLD)
@@ -824,13 +768,13 @@ class FreeStepper:
                 sparse = _sparse_structure(system, fk, (*start, p))
                 if sparse is None:
                     return None
-            entries = [_entry(fk.f)]
+            entries = [kernel_entry(fk.f)]
         entries += _constraint_entries(system, system.f_position, system.f_velocity)
         if any(e is None for e in entries):
             return None
         rows = [e[0] for e in entries]
         if fk is None:
-            gen = _Gen.of(system, dyn, rows[0])
+            gen = GenTree.of(system, dyn, rows[0])
             if gen is None:
                 return None
         return cls(system, p, scaling, rows0, robust, correction, t_eval, rows, fk, blocks,
@@ -847,8 +791,6 @@ class FreeStepper:
         (``_newton_band``): banded (chains) by LAPACK's band LU, else (trees of many
         branches) by the compiled sparse LU; None only where the Python path has no
         compiled LU either (no Numba: SuperLU)."""
-        from ._jit_loop import SMALL as SMALL_LU
-
         dyn = system.dynamics
         n, m = system.n, system.m
         if getattr(dyn, "recursive", False):
@@ -860,12 +802,12 @@ class FreeStepper:
                 return None
         kw = dict(newton or {})
         tol, maxit = float(kw.get("tol", 1e-10)), int(kw.get("max_iterations", 30))
-        main = [_entry(dyn.f_terms)] + _constraint_entries(system, system.f_position,
+        main = [kernel_entry(dyn.f_terms)] + _constraint_entries(system, system.f_position,
                                                            system.f_velocity)
         extra = _constraint_entries(system, system.f_position, system.f_gamma)
         z = np.zeros(0, dtype=np.int64)
         for flag, kern in ((dyn.depends_on_lambda, "f_dQ_dlam"), (dyn.depends_on_qdd, "f_dQ_dqdd")):
-            extra.append(_entry(getattr(dyn, kern)) if flag else ((0, 0, 0, 0, 0), _NO_EXPAND))
+            extra.append(kernel_entry(getattr(dyn, kern)) if flag else ((0, 0, 0, 0, 0), _NO_EXPAND))
         if any(e is None for e in main + extra) or any(len(e[1]) for e in extra):
             return None
         if any(e[0][2] != 0 for e in extra[2:]):
@@ -889,18 +831,14 @@ class FreeStepper:
         Python path solves it sparse) by the Python path's pattern and the compiled sparse
         LU, the projection through :math:`\begin{bmatrix} I & J^T \\ \hat J & 0 \end{bmatrix}`
         (``_path_sparse_structure``)."""
-        from ._jit_loop import SMALL as SMALL_LU
-
         system = path.system
         n = system.n
         spec = _methods.find(method)
-        if _jit.mode() == "off" or spec is None or spec.compiled is None or n == 0 or \
-                not _jit.available():
+        if _jit_runtime.mode() == "off" or spec is None or spec.compiled is None or n == 0 or \
+                not _jit_runtime.available():
             return None
         big = None
         if n > SMALL_LU:
-            from ._linalg import _sparse_lu
-
             if not path._sparse or _sparse_lu() is None:
                 return None
             big = _path_sparse_structure(path)
@@ -908,7 +846,7 @@ class FreeStepper:
                 return None
         if not spec.runge_kutta:
             t_eval = None
-        entries = [_entry(path._f)] + _constraint_entries(system, system.f_position,
+        entries = [kernel_entry(path._f)] + _constraint_entries(system, system.f_position,
                                                           system.f_velocity)
         if any(e is None for e in entries):
             return None
@@ -925,11 +863,10 @@ class FreeStepper:
         # (a large path's Jacobian from the velocity kernel, as its Python path takes it)
         entries = _constraint_entries(
             system, system.f_velocity if sparse else system.f_position, system.f_gamma)
-        entries.append(_entry(path._f))
+        entries.append(kernel_entry(path._f))
         if any(e is None for e in entries):
             return 0
         if _state.get("path_acc") is None:
-            from ._jit_cache import notice
             from ._jit_free_loop import path_accelerations
 
             # (every compile of more than about a second is announced: decision 0044)
@@ -1022,7 +959,6 @@ class FreeStepper:
         per stepper. A compile from empty caches is announced first (``_jit_cache.notice``)."""
         fn = self._entries.get(name)
         if fn is None:
-            from ._jit_cache import notice
             from ._jit_modes import entry
 
             what = {"loop": "the free-motion stepper", "adams": "Mech's Adams integrator",

@@ -43,21 +43,21 @@ import numpy as np
 
 from ._jit_borrow import borrow
 from ._jit_cache import check as _check_cache
+from ._jit_calls import _ccall, _eval
 from ._jit_lapack import gecon1, getrf, getrs, leaf
-from ._jit_loop import SMALL as SMALL_LU
-from ._jit_loop import SPARSE as SPARSE_BW
-from ._jit_loop import _assemble, _ccall, _eval, _norm1, _rows, _rows_nz
-from ._jit_loop import _band_factor as _gb_factor
-from ._jit_loop import _band_solve as _gb_solve
-from ._jit_loop import _sparse_factor as _sp_factor
-from ._jit_loop import _sparse_solve_scaled as _sp_solve_scaled
+from ._jit_linalg import _assemble, _norm1, _rows, _rows_nz
+from ._jit_linalg import _band_factor as _gb_factor
+from ._jit_linalg import _band_solve as _gb_solve
+from ._jit_linalg import _sparse_factor as _sp_factor
+from ._jit_linalg import _sparse_solve_scaled as _sp_solve_scaled
 from ._jit_modes import within
+from ._jit_runtime import SMALL as SMALL_LU
+from ._jit_runtime import SPARSE as SPARSE_BW
 from ._jit_sparse import IWORK, lu_factor, lu_pivot_ratio, lu_solve
 from ._jit_tree import articulated as _articulated
 from ._jit_tree import assemble as _gen_assemble
 from ._jit_tree import forward as _gen_forward
-from ._linalg import PIVOT_TOL, RCOND_MIN
-from ._rank import ZONE
+from ._tolerances import PIVOT_TOL, RCOND_MIN, ZONE
 
 _check_cache()   # stale cached loops go before anything here compiles (see _jit_cache)
 
@@ -455,7 +455,7 @@ def _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, w1, w2, qdd, lam, inf
 
 #: the header of ``_newton_accel_band``'s structure array: kl, ku, ld, the pattern's
 #: entries, the Jacobian's distinct positions, the mass matrix's, dQ/dqdd's and
-#: dQ/dlambda's entries, n; then the sparse LU's ``bw`` (``_jit_loop.big_sizes``: ``SPARSE``,
+#: dQ/dlambda's entries, n; then the sparse LU's ``bw`` (``_jit_linalg.big_sizes``: ``SPARSE``,
 #: the pattern's entries, capL, capU; zeros for a banded pattern) and the length of the
 #: factors' float store (``ld (n + m)`` banded, ``big_sizes``' first size sparse)
 BAND_HEAD = 14
@@ -464,7 +464,7 @@ BAND_HEAD = 14
 @nb.njit(cache=True, inline='always')
 def _nb_sparse(bnd, nj, N):
     """``(sparse, SI)`` of ``_newton_accel_band``'s structure ``bnd``: whether its pattern goes
-    by the compiled sparse LU (a wide band: trees), and that LU's integer store (``_jit_loop.
+    by the compiled sparse LU (a wide band: trees), and that LU's integer store (``_jit_linalg.
     _sparse_factor``'s ``SI``, after the diagonal's slots). (Inlined: it returns a view.)"""
     return bnd[9] == SPARSE_BW, bnd[_band_jmap(bnd, nj, N) + nj + 4 * bnd[4] + bnd[8]:]
 
@@ -569,7 +569,7 @@ def _newton_accel_band(kp, lapack, bi, x, nin, out, n, m, jr, jc, ipiv, qdd, lam
                        Dr, Dc, Ar, Ac, bnd, nw, ex, ph, t, y, f):
     r"""``_newton_accel`` for large systems: the same Newton on :math:`(\ddot q, \lambda)` and the same
     unit-free convergence test, with the Jacobian held by its distinct nonzeros and the
-    Newton matrix by its fixed pattern (``solvers._free._newton_pattern``), factorised as the
+    Newton matrix by its fixed pattern (``_patterns.free_newton_pattern``), factorised as the
     Python path's ``FixedPattern.factor`` does: LAPACK's ``dgbtrf`` in the reverse
     Cuthill-McKee band (chains), or the compiled sparse LU in the minimum-degree ordering
     (trees of many branches, ``_nb_factor``): no dense ``(n + m)^2`` array, work linear in
@@ -581,7 +581,7 @@ def _newton_accel_band(kp, lapack, bi, x, nin, out, n, m, jr, jc, ipiv, qdd, lam
     columns, and slots in the ``Phi_q`` and ``Phi_q^T`` blocks (U each), the slots of the
     diagonal of the first block (n; ``_min_norm_band``), and for the sparse LU its integer
     store. ``nw[3]`` (1, U + P + S + 4 (n + m)) holds the Jacobian's values, the pattern's
-    values, the factors' store (``S``: the band, or ``_jit_loop.big_sizes``' float store)
+    values, the factors' store (``S``: the band, or ``_jit_linalg.big_sizes``' float store)
     and four vectors. ``bi``: int32 work (8: LAPACK's integer arguments,
     the last one's bytes its character argument); ``lapack[4:6]``: ``dgbtrf``,
     ``dgbtrs``. False: hand over (as ``_newton_accel``)."""
@@ -704,7 +704,7 @@ def _newton_accel_band(kp, lapack, bi, x, nin, out, n, m, jr, jc, ipiv, qdd, lam
 # -- the sparse kind: the augmented matrix by the compiled sparse LU of its fixed pattern ----
 #
 # ``bi = (info, pos, kperm, Bp, Bi, perms, dpos, LUi, -)`` holds two matrices' structures.
-# The first is the projection's ``[[I, J^T], [J^, 0]]`` (``_free.projection_pattern``, the
+# The first is the projection's ``[[I, J^T], [J^, 0]]`` (``_patterns.projection_pattern``, the
 # Python path's): ``info[:7] = [N, nK, nB, k_M, k_J, capL, capU]``; stored entry ``s`` holds
 # kernel value ``kperm[s] - k_M`` (the Jacobian's; ``k_M = 0``) and goes to ``Bx[pos[s]]``
 # of ``B = P Q K P^T`` (``FixedPattern._pos``), whose CSC structure is ``Bp``, ``Bi``;
@@ -807,7 +807,7 @@ def _min_norm_sparse(r, columns, bvec, out, n, m, jr, jc, jv, bi, bw, robust):
     r"""``_free._min_norm`` of a large system, operation for operation: the smallest ``z``
     (``out = D z``) with ``J^ z = bvec``, :math:`\hat J = R^{-1} J D` (``jv`` the Jacobian's values,
     each entry once), from ``[[I, J^T], [J^, 0]] [z; -nu] = [0; bvec]`` through that
-    matrix's pattern (``_free.projection_pattern``: the first structure of ``bi``) and the
+    matrix's pattern (``_patterns.projection_pattern``: the first structure of ``bi``) and the
     same sparse LU. False (hand over) at a pivot ratio below ``RCOND_MIN``, or, ``robust``,
     below ``ZONE^2``: the Python path's tests on the same pivots (the identity's and the
     Schur complements' of ``J^ J^T``): it hands over before the zone of a singular

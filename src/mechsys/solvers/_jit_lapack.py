@@ -60,7 +60,7 @@ leaf = nb.njit(cache=True, error_model="numpy", **(
 
 #: :func:`inv_norm_bound` exceeds what ``gecon1`` can compute from the same factors up to a
 #: relative ``(4 n^2 + 8 n + 20) u`` (``n <= 32``: below 5e-13); the compiled sweep's guard
-#: leaves a factor of two (``_jit_loop._factor``)
+#: leaves a factor of two (``_jit_linalg._factor``)
 GUARD_MARGIN = 0.5
 
 

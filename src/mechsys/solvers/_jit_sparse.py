@@ -61,7 +61,7 @@ import scipy.sparse as sps
 
 from ._jit_cache import check as _check_cache
 from ._jit_lapack import leaf
-from ._linalg import Singular
+from ._tolerances import Singular
 
 _check_cache()   # stale cached loops go before anything here compiles (see _jit_cache)
 
@@ -300,7 +300,7 @@ def lu_pivot_ratio(n, Up, Ux):
 class SparseLU:
     """:func:`lu_factor` of a SciPy sparse (or dense) square ``A`` with Python-side storage:
     starts from ``capacity`` entries for each of ``L`` and ``U`` (default ``4 nnz(A) + n``)
-    and doubles both on status -1. Raises :class:`~._linalg.Singular` on an exactly zero
+    and doubles both on status -1. Raises :class:`~._tolerances.Singular` on an exactly zero
     pivot column or a non-finite value, ``ValueError`` on a non-square ``A``.
 
     Attributes: ``n``, ``nnz_L`` (without the unit diagonal), ``nnz_U`` (with the diagonal),

@@ -2,13 +2,13 @@
 ``RecursiveDynamics``; the loops in ``_tree.py``), imported only when Numba is installed.
 ``_fill``, ``_unpack``, ``_assemble`` and ``_articulated`` are the very
 functions of the Python path, compiled; ``forward`` calls the joint kernels (SymEngine LLVM
-code) through their C entry points like the compiled sweep (``solvers/_jit_loop.py``)."""
+code) through their C entry points like the compiled sweep (``solvers/_jit_calls.py``)."""
 
 from __future__ import annotations
 
 from ._jit_cache import check as _check_cache
+from ._jit_calls import _kcall
 from ._jit_lapack import leaf
-from ._jit_loop import _kcall
 from ._tree import _articulated, _assemble, _fill, _unpack
 
 _check_cache()   # stale cached loops go before anything here compiles (see _jit_cache)

@@ -44,26 +44,23 @@ import numpy as np
 import scipy.sparse as sps
 
 from .._errors import ConvergenceError, ModelError, SingularJacobianError
-from . import _jit
+from . import _jit_sweep
 from ._diagnostics import Stopped
-from ._linalg import SPARSE_THRESHOLD, Scaling, Singular, rotation_indices
+from ._linalg import Scaling, rotation_indices
 from ._position import PositionOptions, PositionResult, describe_singular, solve_position
 from ._rank import continue_position, continue_rates
+from ._tolerances import (
+    RCOND_PENDING,
+    RCOND_WARN,
+    ROTATION_JUMP,
+    ROTATION_SLACK,
+    ROTATION_START,
+    SPARSE_THRESHOLD,
+    Singular,
+)
 
 ORDERS = {"location": 0, "velocity": 1, "acceleration": 2}
 
-#: below this reciprocal condition number of the scaled Phi_q a sweep warns (near a toggle
-#: position) and does not trust qd, qdd in its predictor
-RCOND_WARN = 1e-6
-#: in a compiled sweep's ``rconds``: an estimate proven to be at least ``RCOND_WARN`` and not
-#: computed yet (``SweepResult.rcond`` computes it when asked: decision 0023)
-RCOND_PENDING = np.inf
-#: largest distance (rad) of a solved rotational coordinate from its prediction
-ROTATION_JUMP = np.pi / 2
-#: largest rotation (rad) of the first predictor step when the sweep starts near a toggle
-ROTATION_START = np.pi / 8
-#: a Taylor prediction may turn this much (rad) more than 4 x the secant step
-ROTATION_SLACK = 0.25
 #: with a ``progress`` callback the compiled loop runs in chunks of about this many seconds
 #: (the first of ``FIRST_CHUNK`` points), the callback called between them (decision 0039)
 CHUNK_SECONDS = 0.1
@@ -405,7 +402,7 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
     k0 = P
     chord = None    # the previous point's velocity factorisation: Newton's first steps reuse it
     # hooks (pre_solve, post_iterate) run in the Python loop only
-    pointers = _jit.plan(system, N - P if points is None else points, order) \
+    pointers = _jit_sweep.plan(system, N - P if points is None else points, order) \
         if N > P and hooks is None else None
     start = None    # the first point's equations at the guess, evaluated for the scaling
     if sc is None and N and pointers is None:
@@ -423,7 +420,7 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
         args = (system, pointers, times, q0, p, order, options or PositionOptions(), sc, rot, Q,
                 QD, QDD, its, rconds, rprev, R, P, prior_rows is not None)
         if progress is None:
-            k0, done, sc = _jit.run(*args)
+            k0, done, sc = _jit_sweep.run(*args)
         else:
             k0, done, sc, interrupted = _run_chunks(args, progress)
         if guard is not None and k0 > P:
@@ -434,7 +431,7 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
         if k0 > P:
             rows_last = rprev.copy() if order >= 1 and rconds[k0 - 1] >= RCOND_WARN else None
         if order >= 1 and (rconds[P:k0] == RCOND_PENDING).any():
-            fill = _jit.rcond_filler(system, pointers, times[P:], Q[P:], p, sc, R[P:])
+            fill = _jit_sweep.rcond_filler(system, pointers, times[P:], Q[P:], p, sc, R[P:])
         evals += done
         compiled = k0 - P
         if interrupted:
@@ -576,7 +573,7 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
 
 
 def _run_chunks(args, progress):
-    """``_jit.run(*args)`` in chunks of points, ``progress(done)`` between them; returns
+    """``_jit_sweep.run(*args)`` in chunks of points, ``progress(done)`` between them; returns
     ``(k, evaluations, scaling, interrupted)``. Each chunk resumes the loop at the point where
     the last one ended (``first``), with that point's chord (``chord_start``) rebuilt from its
     coordinates and row scales exactly as the loop builds it, so the numbers are those of one
@@ -590,7 +587,7 @@ def _run_chunks(args, progress):
         end = min(N, k + size)
         clock = time.perf_counter()
         try:
-            kk, done, sc = _jit.run(system, pointers, times[:end], q0, p, order, options, sc, rot,
+            kk, done, sc = _jit_sweep.run(system, pointers, times[:end], q0, p, order, options, sc, rot,
                                     Q, QD, QDD, its, rconds, rprev, R, k, chord_start)
         except KeyboardInterrupt:
             return k, evals, sc, True         # (the points of this chunk are not all known)

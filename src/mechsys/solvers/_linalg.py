@@ -22,10 +22,8 @@ from scipy.linalg.lapack import dgbtrf as _dgbtrf
 from scipy.linalg.lapack import dgbtrs as _dgbtrs
 from scipy.sparse.csgraph import maximum_bipartite_matching, reverse_cuthill_mckee
 
-SPARSE_THRESHOLD = 150
-RCOND_MIN = 1e-13
-#: a lever arm below this fraction of the model's length is round-off (see Scaling.of)
-ARM_ROUNDOFF = 1e-9
+from ._tolerances import ARM_ROUNDOFF, PIVOT_TOL, RCOND_MIN, Singular
+
 #: :class:`FixedPattern` solves banded (LAPACK) while ``N (kl + ku)^2``, the banded LU's
 #: work, is at most this, else with SuperLU: the two cost the same near it (measured on
 #: chains, grids and trees: ``docs/decisions/0017-fixed-pattern-sparse-solve.md``)
@@ -35,10 +33,6 @@ BAND_WORK = 8e6
 #: 1.05e6, banded 29.5 ms, sparse 16.6 ms; chains, 8e4: banded 34 ms, sparse 37 ms;
 #: decision 0031)
 BAND_WORK_SPARSE = 2e5
-
-
-class Singular(Exception):
-    """Raised by :func:`factor` when the matrix is numerically singular."""
 
 
 class Factor:
@@ -368,9 +362,6 @@ class _SuperFactor(_Permuted):
         return self._lu.solve(b, trans="T" if trans else "N")
 
 
-#: threshold partial pivoting of the sparse LU: the fill-reducing order's diagonal entry is
-#: the pivot while ``|b_kk| >= PIVOT_TOL max_i |b_ik|`` (the fill the ordering planned)
-PIVOT_TOL = 0.1
 #: whether :class:`FixedPattern` may use the compiled sparse LU (tests switch it off to check
 #: the SuperLU fallback)
 COMPILED_LU = True

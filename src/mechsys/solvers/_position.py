@@ -23,7 +23,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._errors import ConvergenceError, ModelError, SingularJacobianError, option_fields
-from ._linalg import RCOND_MIN, SPARSE_THRESHOLD, Scaling, Singular
+from ._diagnostics import Iteration, Stopped, diagnose_convergence
+from ._linalg import Scaling
+from ._tolerances import CHORD_RATE, RCOND_MIN, SPARSE_THRESHOLD, Singular
 
 
 @option_fields
@@ -56,11 +58,6 @@ class PositionOptions:
 
 _DEFAULT = PositionOptions()
 
-#: a chord step (with a factorisation of an earlier Jacobian, see :func:`solve_position`) is
-#: kept when it reduces the scaled residual at least this much; otherwise Newton takes over.
-#: (At 0.1 a chord took 6-7 steps on a coarse sweep where Newton takes 2-3, and near that
-#: rate rounding decided between a step more or less.)
-CHORD_RATE = 0.01
 
 
 @dataclass(frozen=True)
@@ -299,8 +296,6 @@ def solve_position(system, t: float, guess, options: PositionOptions | None = No
         history.append(norm)
         if post is not None:
             _post(post, system, t, it, q, norm, a * dq)
-    from ._diagnostics import diagnose_convergence
-
     diag = diagnose_convergence(system, t, q_start, q, F, rows, scaling, history)
     raise ConvergenceError(
         f"position solve at t = {t:.6g} did not converge in {opt.max_iterations} iterations "
@@ -328,8 +323,6 @@ def _on_branch(system, guard, t, res, opt, p, scaling, hooks, again) -> Position
 
 def _post(post, system, t, it, q, norm, step) -> None:
     """Call the ``post_iterate`` hook; ``Stopped`` when it returns False."""
-    from ._diagnostics import Iteration, Stopped
-
     if post(Iteration(float(t), it, q.copy(), float(norm), step,
                       tuple(system.layout.q_names))) is False:
         raise Stopped("post_iterate", float(t), it)

@@ -31,13 +31,11 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sps
 
-from ._linalg import Singular, factor
+from ._linalg import factor
+from ._tolerances import ZONE, Singular
 
 #: singular values of the scaled Jacobian below RANK_TOL * s_max count as zero
 RANK_TOL = 1e-8
-#: singular-value ratio s_min / s_max of the scaled Jacobian below which free motion is in
-#: the "zone" of a singular instant (measured by the reciprocal condition of J^ J^T < ZONE^2)
-ZONE = 1e-3
 #: regularisation of the acceleration solve and weight 1 / KAPPA of the projections there
 KAPPA = 1e-6
 
@@ -68,7 +66,7 @@ def kkt_rank_tolerant(M, J, F, gamma, rows, columns, tol: float = RANK_TOL):
         mu = U_r S_r^-1 V_r^T (F^ - M^ x)            (minimum norm)
 
     with ``M^ = D M D``, ``F^ = D F``. Amplification is bounded by ``1 / (tol s_1)``, where
-    the augmented matrix would square it. Raises :class:`~mechsys.solvers._linalg.Singular`
+    the augmented matrix would square it. Raises :class:`~mechsys.solvers._tolerances.Singular`
     when ``N^T M^ N`` is singular (``M`` singular on the free motions)."""
     M, J = _dense(M), _dense(J)
     Js = (J * columns) / rows[:, None]

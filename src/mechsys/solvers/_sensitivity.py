@@ -42,8 +42,9 @@ import numpy as np
 from scipy.linalg.lapack import dgesv as _dgesv
 
 from .._errors import SingularJacobianError
-from ._linalg import Scaling, Singular, factor
+from ._linalg import Scaling, factor
 from ._position import describe_singular
+from ._tolerances import Singular
 
 
 class Tangent:

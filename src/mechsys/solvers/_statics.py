@@ -33,9 +33,11 @@ import numpy as np
 import scipy.sparse as sps
 
 from .._errors import ConvergenceError, ModelError, OptionError, option_fields
-from . import _jit
-from ._linalg import SPARSE_THRESHOLD, Scaling, Singular, factor, pattern_of, pattern_slots
+from . import _jit_multipliers
+from ._linalg import Scaling, factor, pattern_slots
+from ._patterns import multiplier_newton_pattern
 from ._position import describe_singular
+from ._tolerances import SPARSE_THRESHOLD, Singular
 
 MODES = ("static", "kinematic", "dynamic")
 
@@ -143,7 +145,7 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
             if n > SPARSE_THRESHOLD and m == n:
                 # large models: through the matrix's fixed pattern, analysed once (banded LU
                 # for chains) instead of a dense LU per iteration
-                rows, cols, pattern = _newton_pattern(system)
+                rows, cols, pattern = multiplier_newton_pattern(system)
                 K = _newton_values(system, dyn, J, t, q, qd_eff, lam, p, qdd_eff)
                 fac = pattern.factor((c[rows] * K) / r[cols])
             else:
@@ -166,9 +168,10 @@ def solve_multipliers(system, dyn, t, q, qd, qdd, p, mode: str = "dynamic",
 
 def _newton_values(system, dyn, J, t, q, qd, lam, p, qdd):
     """The values of ``Phi_q^T - dQ/dlambda`` at the entries of its pattern
-    (:func:`_newton_pattern`, CSC order), from ``J`` (sparse CSC: its stored entries placed
-    through slots found once; dense: gathered) and ``dQ/dlambda``'s nonzero values."""
-    rows, cols, _ = _newton_pattern(system)
+    (:func:`~._patterns.multiplier_newton_pattern`, CSC order), from ``J`` (sparse CSC: its
+    stored entries placed through slots found once; dense: gathered) and ``dQ/dlambda``'s
+    nonzero values."""
+    rows, cols, _ = multiplier_newton_pattern(system)
     dvals = dyn.f_dQ_dlam(dyn.pack(t, q, qd, lam, p, qdd))
     if not sps.issparse(J):
         sD = pattern_slots(rows, cols, system.n, dyn.dQ_rows, dyn.dQ_cols)
@@ -183,32 +186,13 @@ def _newton_values(system, dyn, J, t, q, qd, lam, p, qdd):
     return np.bincount(got[2], J.data, rows.size) - np.bincount(got[3], dvals, rows.size)
 
 
-def _newton_pattern(system):
-    """``(rows, cols, FixedPattern)`` of the multiplier Newton matrix ``Phi_q^T -
-    dQ/dlambda`` (n, m) of a square system: the transposed Jacobian's and ``dQ/dlambda``'s
-    nonzeros in CSC order, rows matched to columns (decision 0030), made once per
-    dynamics."""
-    dyn = system.dynamics
-    got = dyn.__dict__.get("_multiplier_pattern")
-    if got is not None and got[0] is system:
-        return got[1]
-    n = system.n
-    r = np.concatenate((np.asarray(system.jac_cols, dtype=np.int64),
-                        np.asarray(dyn.dQ_rows, dtype=np.int64)))
-    c = np.concatenate((np.asarray(system.jac_rows, dtype=np.int64),
-                        np.asarray(dyn.dQ_cols, dtype=np.int64)))
-    got = pattern_of(r, c, n, match_rows=True)
-    dyn.__dict__["_multiplier_pattern"] = (system, got)
-    return got
-
-
 def multipliers_over(system, times, Q, QD, QDD, p, mode: str = "dynamic", lambda_guess=1.0,
                      scaling=None, points: int | None = None):
     """Multipliers ``(N, m)`` at each point of a solved sweep (``Q``, ``QD``, ``QDD`` (N, n);
     ``QD``/``QDD`` None where the sweep did not compute them): :func:`solve_multipliers`
     point by point, each point's ``lambda_guess`` the previous point's multipliers (Newton,
     loads that depend on the multipliers). The points the compiled loop can take go there
-    first (``_jit.multipliers``: the same operations); the Python loop continues from the
+    first (``_jit_multipliers.multipliers``: the same operations); the Python loop continues from the
     first point it leaves. ``scaling``: the unit-free form's column scales for every point
     (the sweep's; default ``Scaling.of`` at the first point). ``points``: the size of the
     whole job (a multistage sweep's), for the compiled loop's ``auto`` rule."""
@@ -217,7 +201,7 @@ def multipliers_over(system, times, Q, QD, QDD, p, mode: str = "dynamic", lambda
     if N and scaling is None:
         scaling = Scaling.of(system, Q[0], system.jacobian(times[0], Q[0], p))
     opt = MultiplierOptions()
-    k0 = _jit.multipliers(system, times, Q, QD, QDD, p, mode, lam, lambda_guess, opt.tol,
+    k0 = _jit_multipliers.multipliers(system, times, Q, QD, QDD, p, mode, lam, lambda_guess, opt.tol,
                           opt.max_iterations, None if scaling is None else scaling.columns,
                           points)
     dyn = system.dynamics

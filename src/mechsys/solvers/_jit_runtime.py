@@ -1,0 +1,264 @@
+r"""What every compiled loop needs from Python, whichever it is: whether compiled loops run
+at all (``MECHSYS_JIT``, Numba importable), the C entry points of the compiled kernels and of
+LAPACK that the loops call, and the arrays of a large Jacobian's fixed pattern.
+
+The drivers of the loops (``_jit_sweep``, ``_jit_multipliers``, ``_jit_free``) import this
+module; it imports no driver and no loop (decision 0058), and Numba only when
+:func:`available` is first asked.
+
+When a loop runs (``MECHSYS_JIT``): ``0`` never, ``1`` whenever possible, unset (``auto``) when
+the job has at least :data:`AUTO_POINTS` points: loading Numba and the cached machine code
+costs about 0.7 s CPU once per process, which a short sweep would not recover. (The choice
+depends on the job alone, never on what ran before in the process.) Possible means: Numba
+importable (a core dependency since decision 0041), the kernels' C entry points (the
+SymEngine LLVM backend), as many equations as coordinates, and a dense system
+(``n <= SPARSE_THRESHOLD``) or a larger one through its Jacobian's pattern:
+
+.. math:: \text{run} \iff \text{mode} \ne \text{off} \wedge m = n > 0 \wedge
+          (n \le N_s \vee \text{patterned}) \wedge (\text{mode} = \text{on} \vee
+          N \ge N_{auto}) \wedge \text{Numba}
+
+Example::
+
+    from mechsys.solvers import _jit_runtime
+
+    if _jit_runtime.wanted(system, points=5000, large_ok=True):
+        table = _jit_runtime.table([system.f_position, system.f_velocity])
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+
+import numpy as np
+
+from .._errors import ModelError, slow_path_warning
+from ._linalg import _sparse_lu
+from ._tolerances import SPARSE_THRESHOLD
+
+#: ``auto``: the compiled loop is used for sweeps of at least this many points
+AUTO_POINTS = 1000
+
+#: up to this many unknowns the LU and condition estimate are computed in the loop
+#: (``_jit_lapack``: LAPACK's algorithms, without the call overhead, skipping the zero
+#: multipliers and visiting only the factors' nonzeros); above, LAPACK is called. That is
+#: every size the compiled sweep takes: a mechanism's Jacobian is sparse, and the written-out
+#: LU beat LAPACK's blocked one on the four-bar chains of 33 to 147 unknowns by 1.6-2.6 x
+#: (decision 0019, amended); the Numba code is ``_jit_linalg``
+SMALL = SPARSE_THRESHOLD
+
+#: ``bw[0]`` of a pattern factorised by the sparse LU (``_jit_sparse``, a wide band: trees);
+#: ``bw = (SPARSE, nnz, capL, capU)`` with ``nnz`` the pattern's entries and ``capL``,
+#: ``capU`` the storage of the factors. The factors and work arrays live in the float array
+#: ``AB = [Bx (nnz) | Lx (capL) | Ux (capU) | 3 work (n)]`` and the int array
+#: ``SI = [Bp (n + 1) | Bi (nnz) | Lp (n + 1) | Up (n + 1) | pinv (n) | iw (IWORK n) |
+#: Li (capL) | Ui (capU)]``, whose head is ``B = P Q A P^T``'s CSC structure
+SPARSE = -2
+
+_PLANS: dict = {}    # table(): kernel ids -> (kernels, pointer table)
+_state: dict = {"failed": None, "lapack": None, "band_lapack": None}
+
+
+def mode() -> str:
+    """``"off"``, ``"on"`` or ``"auto"`` from ``MECHSYS_JIT`` (``0/off/false/no``,
+    ``1/on/true/yes``, unset or ``auto``). Anything else raises :class:`ModelError`: a
+    misspelled ``MECHSYS_JIT=of`` must not quietly mean the opposite."""
+    v = os.environ.get("MECHSYS_JIT", "").strip().lower()
+    if v in ("0", "off", "false", "no"):
+        return "off"
+    if v in ("1", "on", "true", "yes"):
+        return "on"
+    if v in ("", "auto"):
+        return "auto"
+    raise ModelError(f"MECHSYS_JIT={os.environ['MECHSYS_JIT']!r}: use 0 (never compiled loops), "
+                     "1 (whenever possible) or auto (unset: the default)")
+
+
+def available() -> bool:
+    """Numba can be imported."""
+    if _state["failed"] is None:
+        try:
+            import llvmlite  # noqa: F401
+            import numba  # noqa: F401
+
+            _state["failed"] = False
+        except ImportError as exc:
+            _state["failed"] = True
+            slow_path_warning("numba", exc)
+    return not _state["failed"]
+
+
+def pointer(kernel):
+    """``(address, context)`` of a compiled kernel's C entry point, or None."""
+    get = getattr(kernel, "c_function", None)
+    return get() if get is not None else None
+
+
+def table(kernels):
+    """The pointer table of ``kernels`` (one row each: address, context, first-stage address,
+    its context, Piecewise values; rows of zeros up to three), or None when one has no C
+    entry point. Kept per kernel objects, which the entry holds (their entry points live
+    as long as they do; not on the system: a pickled copy must not carry another process's
+    addresses)."""
+    key = tuple(id(k) for k in kernels)
+    got = _PLANS.get(key)
+    if got is not None and all(a is b for a, b in zip(got[0], kernels)):
+        return got[1]
+    ptrs = [pointer(k) for k in kernels]
+    if any(p is None for p in ptrs):
+        return None
+    while len(ptrs) < 3:
+        ptrs.append((0, 0, 0, 0, 0))
+    rows = np.array(ptrs, dtype=np.int64)
+    if len(_PLANS) >= 64:
+        _PLANS.clear()
+    _PLANS[key] = (tuple(kernels), rows)
+    return rows
+
+
+def wanted(system, points: int, large_ok: bool = False) -> bool:
+    """Whether a compiled loop should run for ``points`` points of this system (the
+    ``MECHSYS_JIT`` rule of the module docstring; Numba importable). ``large_ok``: the loop
+    also takes systems above ``SPARSE_THRESHOLD`` unknowns through their Jacobian's
+    ``FixedPattern`` (the sweep, and the multiplier solves; with friction, when its Newton
+    matrix's pattern is banded)."""
+    m = mode()
+    if m == "off" or system.n == 0 or system.m != system.n:
+        return False
+    if system.n > SPARSE_THRESHOLD and not (large_ok and patterned(system)):
+        return False
+    if m == "auto" and points < AUTO_POINTS:
+        return False
+    return available()
+
+
+def index(a) -> np.ndarray:
+    """``a`` as int64 (no copy when it is already)."""
+    return np.asarray(a, dtype=np.int64)
+
+
+def capsule_address(capsule) -> int:
+    """The C address held by a ``PyCapsule`` (SciPy's ``cython_lapack.__pyx_capi__`` entries)."""
+    api = ctypes.pythonapi
+    api.PyCapsule_GetName.restype = ctypes.c_char_p
+    api.PyCapsule_GetName.argtypes = [ctypes.py_object]
+    api.PyCapsule_GetPointer.restype = ctypes.c_void_p
+    api.PyCapsule_GetPointer.argtypes = [ctypes.py_object, ctypes.c_char_p]
+    return api.PyCapsule_GetPointer(capsule, api.PyCapsule_GetName(capsule))
+
+
+def _jacobian_pattern(system):
+    pattern = getattr(system, "jacobian_pattern", None)
+    return pattern() if pattern is not None else None
+
+
+def patterned(system) -> bool:
+    """The system's Jacobian has a ``FixedPattern`` whose sparse LU the loops call (the
+    compiled one, ``_jit_sparse``: also the Python path's)."""
+    pat = _jacobian_pattern(system)
+    return pat is not None and pat.size > 0 and not pat.banded and _sparse_lu() is not None
+
+
+#: the (unused) sparse-LU arguments of a dense system's loop
+NO_BAND = (np.array([-1, 0, 0, 0], dtype=np.int64), (np.zeros(0, dtype=np.int64),) * 7)
+
+
+def band_args(system):
+    """``(bw, band)`` of ``_jit_sweep_loop.sweep_dense`` for a system above ``SPARSE_THRESHOLD``
+    unknowns: its Jacobian's ``FixedPattern`` (the arrays kept on the pattern, made once):
+    ``bw = (SPARSE, nnz, capL, capU)`` (the factors' storage as the Python path has grown it
+    so far) and ``band = (slot, rows, cols, pos, row_perm, perm, head)``, ``head`` the CSC
+    structure of ``B = P Q A P^T``."""
+    pat = system.jacobian_pattern()
+    got = getattr(pat, "_jit_band", None)
+    if got is None:
+        slot, rows, indptr = system._csc_structure()
+        cols = np.repeat(np.arange(system.n), np.diff(indptr))
+        head = np.concatenate([pat.s_indptr, pat.s_indices])
+        got = tuple(index(a) for a in (slot, rows, cols, pat._pos, pat.row_perm, pat.perm, head))
+        pat._jit_band = got
+    return np.array([SPARSE, pat.s_indices.size, *pat._cap], dtype=np.int64), got
+
+
+def band_lapack() -> np.ndarray:
+    """The C addresses of SciPy's ``dgbtrf`` and ``dgbtrs``."""
+    if _state.get("band_lapack") is None:
+        from scipy.linalg import cython_lapack
+
+        caps = cython_lapack.__pyx_capi__
+        _state["band_lapack"] = np.array([capsule_address(caps[f]) for f in ("dgbtrf", "dgbtrs")],
+                                         dtype=np.int64)
+    return _state["band_lapack"]
+
+
+def lapack() -> np.ndarray:
+    """The C addresses of SciPy's ``dgetrf``, ``dgecon`` and ``dgetrs``."""
+    if _state["lapack"] is None:
+        from scipy.linalg import cython_lapack
+
+        caps = cython_lapack.__pyx_capi__
+        _state["lapack"] = np.array([capsule_address(caps[f]) for f in ("dgetrf", "dgecon", "dgetrs")],
+                                    dtype=np.int64)
+    return _state["lapack"]
+
+
+def kernel_entry(kernel):
+    """``(row, expand)`` of a kernel's C entry points (``_SymengineCompiled.c_entry``: the
+    pointer-table row and the map of its repeated outputs, an empty array when there are
+    none), or None when it has no LLVM code."""
+    get = getattr(kernel, "c_entry", None)
+    e = get() if get is not None else None
+    if e is None:
+        return None
+    row, expand = e
+    return row, (np.zeros(0, dtype=np.int64) if expand is None
+                 else np.asarray(expand, dtype=np.int64))
+
+
+class GenTree:
+    """The recursive Gen dynamics (``compile._generalized.RecursiveDynamics``) as the
+    compiled loop evaluates it (``_jit_free_loop._accel_gen``): ``arrays = (joint kernel
+    entry points (kernels, 2), kid, par, root, nqm, goff, gcols, M_rows, M_cols, sizes)``
+    with ``sizes = [nq, kM, kJ, kg, slaves, kmax, joint inputs, joint outputs, main inputs,
+    main outputs]``; ``tree``: the articulated-body recursion (no constraint equation)."""
+
+    def __init__(self, arrays, tree):
+        self.arrays, self.tree = arrays, bool(tree)
+
+    @staticmethod
+    def none():
+        z = np.zeros(1, dtype=np.int64)
+        return (np.zeros((1, 2), dtype=np.int64), z, z, z, z, z, z, z, z,
+                np.ones(10, dtype=np.int64))
+
+    @classmethod
+    def of(cls, system, dyn, main_row):
+        """The structure, or None when the joint kernels have no C entry points (then the
+        Python stepper runs)."""
+        # the joint kernels' C entry points (as RecursiveDynamics._engine, which may have
+        # settled on plain Python in an earlier MECHSYS_JIT=0 run)
+        ptrs = [pointer(k) for k in dyn._kernels]
+        if any(p is None or p[2] != 0 for p in ptrs):
+            return None
+        kid, par, root, nqm, goff, gcols, nq = dyn._tree
+        kM, kJ, _, kg, _ = dyn._sizes
+        n, m = system.n, system.m
+        S = len(kid)
+        kmax = max(1, int(np.diff(goff).max(initial=1)))
+        npar = len(system.p_values)
+        nin = 1 + 3 * n + m + npar
+        sizes = [nq, kM, kJ, kg, S, kmax, 1 + 2 * nq + 2 * kmax + npar,
+                 nq * (4 + nq + kmax + nq), nin + 2 * S * nq + max(int(main_row[4]), 0),
+                 kM + kJ + 2 * n + kg + S * nq]
+        i64 = np.int64
+        arrays = (np.array([[p[0], p[1]] for p in ptrs], dtype=i64),
+                  *(np.ascontiguousarray(a, dtype=i64)
+                    for a in (kid, par, root, nqm, goff, gcols, dyn._M_rows, dyn._M_cols)),
+                  np.array(sizes, dtype=i64))
+        return cls(arrays, dyn.tree_only)
+
+
+__all__ = ["AUTO_POINTS", "NO_BAND", "GenTree", "available", "band_args", "band_lapack",
+           "capsule_address", "index", "kernel_entry", "lapack", "mode", "patterned", "pointer",
+           "table", "wanted"]
