@@ -349,3 +349,25 @@ def test_generated_hostile_inputs_only_raise_mecherrors(rich_base):
             escaped.append((path, repr(value)[:60], f"{type(exc).__name__}: {str(exc)[:120]}"))
     assert not escaped, escaped[:10]
     assert len(cases) >= 300 and loaded < len(cases) and solved
+
+
+def test_cli_table_names_the_declared_units(tmp_path):
+    """``mechsys run`` writes its table with the library's writer (``Solution.save``): a model
+    that declares its units gets ``name [unit]`` headers (the CSV of ``mechsys run`` had bare
+    names), numbers unchanged."""
+    import csv
+
+    m = models.slider_crank(crank=2.0, rod=6.0, speed=2 * np.pi)
+    m.set_units(length="mm", mass="kg", time="s")
+    path = m.save(tmp_path / "crank.json")
+    out = tmp_path / "r.csv"
+    assert main(["run", str(path), "--t", "0:1:5", "--out", str(out)]) == 0
+    with open(out, newline="", encoding="utf-8") as fh:
+        rows = list(csv.reader(fh))
+    header = rows[0]
+    assert header[0] == "t [s]"
+    assert "piston.x [mm]" in header and "piston.x_d [mm/s]" in header
+    assert "crank.th [rad]" in header and "crank.th_dd [rad/s^2]" in header
+    sol = ms.load(path).solve(np.linspace(0, 1, 5))
+    got = np.array([float(r[header.index("piston.x_dd [mm/s^2]")]) for r in rows[1:]])
+    np.testing.assert_array_equal(got, sol.qdd[:, sol.names.index("piston.x")])

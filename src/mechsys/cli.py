@@ -153,8 +153,10 @@ def parse_times(spec: str) -> np.ndarray:
 def run(model_file: Path, times: str, out: Path, solution: str = "acceleration",
         progress: bool | None = None) -> int:
     """Load a model file (``mechsys.load``, safe for files from strangers), solve it at the
-    times ``t0:t1:n`` and write ``t``, every coordinate and its ``_d``/``_dd`` rates to ``out``:
-    CSV (``.csv``) or Parquet (``.parquet``, needs pyarrow). A progress bar (tqdm) on stderr
+    times ``t0:t1:n`` and write ``t``, every coordinate and its ``_d``/``_dd`` rates to ``out``
+    by :meth:`~mechsys.Solution.save`: CSV (``.csv``, header ``name [unit]`` where the model
+    declares its units) or Parquet (``.parquet``, needs pyarrow; units in the field
+    metadata). A progress bar (tqdm) on stderr
     counts the solved points (``progress=None``: on a terminal, once the solve has taken 2 s);
     it does not slow the solve (the compiled loop runs in chunks, the bar advanced between
     them). Ctrl-C writes the points solved so far and returns 130."""
@@ -177,28 +179,16 @@ def run(model_file: Path, times: str, out: Path, solution: str = "acceleration",
         # (an interruption is reported below, once)
         warnings.filterwarnings("ignore", message="solve: interrupted", category=RuntimeWarning)
         sol = m.solve(t, solution=solution, progress=progress)
-    cols = {"t": np.asarray(sol.t, dtype=float)}
-    for j, name in enumerate(sol.names):
-        for col, arr in ((name, sol.q), (name + "_d", sol.qd), (name + "_dd", sol.qdd)):
-            if arr is None:
-                continue
-            if col in cols:   # a dict would silently keep the last: names must not collide
-                raise MechError(f"two columns of the table would be named {col!r}; rename the "
-                                "body or variable")
-            cols[col] = arr[:, j]
+    # the library's own table writer (Solution.save): the same columns as to_dataframe,
+    # the header "name [unit]" where the model declares units, Parquet with field metadata
     out.parent.mkdir(parents=True, exist_ok=True)
-    if suffix == ".parquet":
-        import pyarrow as pa
-        import pyarrow.parquet as pq
-
-        pq.write_table(pa.table(cols), out)
-    else:
-        write_csv(out, cols)
+    sol.save(out)
+    ncols = 1 + sum(len(sol.names) for a in (sol.q, sol.qd, sol.qdd) if a is not None)
     if sol.extra.get("interrupted"):
         _say(f"interrupted: solved {len(sol.t)} of {len(t)} points of {model_file}; wrote them "
-             f"to {out} ({len(cols)} columns)", sys.stderr)
+             f"to {out} ({ncols} columns)", sys.stderr)
         return 130
-    _say(f"solved {len(t)} points of {model_file}; wrote {out} ({len(cols)} columns)", sys.stdout)
+    _say(f"solved {len(t)} points of {model_file}; wrote {out} ({ncols} columns)", sys.stdout)
     return 0
 
 
@@ -224,23 +214,6 @@ def cache(action: str) -> int:
               f"{info['max_age_days']} days are deleted)")
     print(f"Numba's compiled loops: {info['numba_cache_dir']}")
     return 0
-
-
-def write_csv(path: Path, cols: dict) -> None:
-    """``cols`` (name -> column of floats) as CSV through the csv module: the header row
-    quoted where a name holds a comma, quote or newline and neutralised where it starts
-    like a formula (:func:`csv_cell`); numbers repr-exact (17 significant digits: the table
-    reads back to the same doubles)."""
-    import csv
-
-    from .results._tables import csv_cell
-
-    data = np.column_stack(list(cols.values()))
-    with open(path, "w", newline="", encoding="utf-8") as fh:
-        w = csv.writer(fh)
-        w.writerow([csv_cell(c) for c in cols])
-        for row in data:
-            w.writerow([format(float(v), ".17g") for v in row])
 
 
 def main(argv: list[str] | None = None) -> int:
