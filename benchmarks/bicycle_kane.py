@@ -3,7 +3,8 @@ with SciPy, side by side (issue 36, item 6): build time, run time of 10 s, steps
 
 The model is the benchmark of Meijaard, Papadopoulos, Ruina & Schwab (2007) with its Table 1
 parameters, upright at 4.6 m/s (just above the weave speed, 4.29 m/s) after a lean-rate kick
-of 0.5 rad/s: it weaves (lean and steer peak at 0.12 and 0.13 rad) and recovers. Both sides integrate 10 s with DOP853 at ``rtol = 1e-8, atol = 1e-10``.
+of 0.5 rad/s: it weaves (lean and steer peak at 0.12 and 0.13 rad) and recovers. Both sides
+integrate 10 s with DOP853 at ``rtol = 1e-8, atol = 1e-10``.
 
 * **mechsys**: the model of examples/whipple_bicycle.py (imported: four bodies in absolute
   coordinates with Euler parameters, three ``Revolute5`` hinges, two ``RollingDisk2``
