@@ -49,6 +49,19 @@ stage), switch, stages, policy, kinetic energy before and after, energy lost, im
 solution has every stage's free-system multipliers mapped into the rows of the full stage
 system (a dropped constraint carries no force: its multipliers are zero), so
 ``sol.reaction`` and ``sol.stage`` work as for a kinematic sweep.
+
+**Velocity constraints** (rolling, a knife edge; decisions 0053 and 0060) added outside the
+switches hold in every stage: each stage's acceleration is the bordered solve of
+:func:`~mechsys.analyses._nonholonomic.nonholonomic_acceleration`, every projection is
+:func:`~mechsys.analyses._nonholonomic.project_state`, and the velocity reset takes the new
+stage's rows and the velocity rows stacked, :math:`G = [\Phi_q; A]`,
+:math:`g = [-\Phi_t; -b]`, in place of :math:`\Phi_q` and :math:`-\Phi_t` above (the
+plastic impact keeps the rolling). Their multipliers are ``sol.extra["mu"]``. A velocity
+constraint inside a stage of a switch raises :class:`ModelError`. Example (a sleigh pushed
+from ``t = 1`` to ``t = 2``)::
+
+    m.add_load(ms.TimeSwitch(1.0, ms.Force(b.point(0), (1, 0), 1.5), 2.0))
+    sol = m.free().simulate((0, 3), initial_condition={"th2_d": 2.0})
 """
 
 from __future__ import annotations
