@@ -223,6 +223,17 @@ def test_sleigh_latching_heading_velocity_reset_keeps_the_edge():
     E = 0.5 * MASS * (sol.qd[:, 0]**2 + sol.qd[:, 1]**2) + 0.5 * INERTIA * w**2
     assert np.abs(E[~after] - E[0]).max() < 1e-9
     assert np.abs(E[after] - (E[0] - ev["energy_lost"])).max() < 1e-9
+    # Newton's restitution on the stacked rows: the spin reverses to -e w, the edge still
+    # holds, the old stage goes on, and (1 - e^2) J w^2 / 2 is lost
+    e = 0.5
+    back = fs.simulate(t, initial_condition={"th2_d": W0}, at_switch=("restitution", e),
+                       rtol=1e-11, atol=1e-13)
+    (ev,) = back.extra["events"]
+    assert ev["stage_after"] == [1] and ev["t"] == pytest.approx(te, abs=1e-9)
+    assert ev["energy_lost"] == pytest.approx((1 - e**2) * 0.5 * J * we**2, rel=1e-9)
+    th = back["sleigh.th"]
+    vP = back.velocity(b.point("P"))
+    assert np.abs(-vP[:, 0] * np.sin(th) + vP[:, 1] * np.cos(th)).max() < 1e-12
 
 
 def test_velocity_constraint_inside_a_switch_refused_by_name():
