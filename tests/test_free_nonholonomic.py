@@ -126,12 +126,125 @@ def test_dependent_velocity_rows_are_named():
         m.free().solve(0.0, initial_condition={"th2_d": W0})
 
 
-def test_switched_loads_with_velocity_constraints_refused():
-    # (the event-driven stepper of switched models does not hold the velocity rows yet)
+def _sleigh_minimal(t, s, fx):
+    r"""The sleigh's minimal equations (independent of mechsys) with a global force ``(fx,
+    0)`` at the centroid: ``(x, y, th, u, w)``, ``u`` the forward speed of the edge (and of
+    the centroid), ``w`` the spin; the centroid moves across the body at ``a w``:
+    ``u' = a w^2 + F.e1 / m``, ``(I + m a^2) w' = -m a u w + a F.e2``."""
+    x, y, th, u, w = s
+    c, sn = np.cos(th), np.sin(th)
+    J = INERTIA + MASS * OFFSET**2
+    return [u * c - OFFSET * w * sn, u * sn + OFFSET * w * c, w,
+            OFFSET * w * w + fx * c / MASS, (-MASS * OFFSET * u * w - OFFSET * fx * sn) / J]
+
+
+def test_sleigh_with_time_switched_force_against_minimal_ode():
+    # a push along x from t = 1 to t = 2 (an event load, decision 0060): the switched free
+    # system holds the knife edge through the load events
+    from scipy.integrate import solve_ivp
+
+    F = 1.5
     m, b = sleigh()
-    m.add_load(ms.TimeSwitch(ms.Force(b.point(0), (1, 0), 1.0), 1.0,
-                             ms.Force(b.point(0), (1, 0), 2.0)))
-    with pytest.raises(ms.ModelError, match="velocity constraints.*knife.*switches"):
+    m.add_load(ms.TimeSwitch(1.0, ms.Force(b.point(0), (1, 0), F), 2.0))
+    fs = m.free()
+    assert type(fs).__name__ == "SwitchedFreeSystem" and fs.velocity_constraints[0].name == "knife"
+    t = np.linspace(0, 3, 31)
+    sol = fs.simulate(t, initial_condition={"th2_d": W0}, rtol=1e-11, atol=1e-13)
+    assert [e["t"] for e in sol.extra["events"]] == pytest.approx([1.0, 2.0], abs=1e-12)
+    # the independent ODE, restarted at the switch times
+    s0 = [*_example.START[0], _example.START[1], 0.0, W0]
+    ref = np.empty((len(t), 5))
+    for ta, tb, fx in ((0, 1, 0.0), (1, 2, F), (2, 3, 0.0)):
+        k = (t >= ta) & (t <= tb)
+        r = solve_ivp(_sleigh_minimal, (ta, tb), s0, args=(fx,), t_eval=t[k], rtol=1e-12,
+                      atol=1e-14, method="DOP853")
+        ref[k], s0 = r.y.T, r.y[:, -1]
+    th, w = sol["sleigh.th"], sol.omega(b)
+    c, sn = np.cos(th), np.sin(th)
+    u = sol.qd[:, 0] * c + sol.qd[:, 1] * sn
+    assert np.abs(sol.q - ref[:, :3]).max() < 1e-8
+    assert np.abs(u - ref[:, 3]).max() < 1e-8 and np.abs(w - ref[:, 4]).max() < 1e-8
+    # the edge's lateral force from Newton across the body: m (a w' + u w) = lam + F.e2,
+    # and mu = -lam (sol.extra["mu"], as without switches); away from the switch instants
+    on = (t > 1) & (t < 2)
+    inner = (np.abs(t - 1) > 1e-9) & (np.abs(t - 2) > 1e-9)
+    wd = np.array([_sleigh_minimal(0, ref[i], F if on[i] else 0.0)[4] for i in range(len(t))])
+    lam = MASS * (OFFSET * wd + ref[:, 3] * ref[:, 4]) + np.where(on, F, 0.0) * sn
+    assert sol.extra["velocity_multipliers"] == ["knife[0]"]
+    assert np.abs(sol.extra["mu"][inner, 0] + lam[inner]).max() < 1e-8
+    # no slip across the body, and the energy balance across the switches: the kinetic
+    # energy grows by the push's work F (x(t) - x(1)) while it acts, and is kept otherwise
+    vP = sol.velocity(b.point("P"))
+    assert np.abs(-vP[:, 0] * sn + vP[:, 1] * c).max() < 1e-12
+    assert sol.extra["accuracy"]["nonholonomic"] < 1e-12
+    E = 0.5 * MASS * (sol.qd[:, 0]**2 + sol.qd[:, 1]**2) + 0.5 * INERTIA * w**2
+    x = sol.q[:, 0]
+    work = F * (x - x[10]) * on + F * (x[20] - x[10]) * (t >= 2)
+    assert np.abs(E - E[0] - work).max() < 1e-9
+    # one point in the switched system: the same acceleration and mu as the run at t = 1.5
+    one = fs.solve(1.5, initial_condition={n: v for n, v in zip(
+        ["sleigh.x", "sleigh.y", "sleigh.th", "sleigh.x_d", "sleigh.y_d", "sleigh.th_d"],
+        np.concatenate((sol.q[15], sol.qd[15])))})
+    assert one.extra["mu"][0, 0] == pytest.approx(sol.extra["mu"][15, 0], rel=1e-9)
+
+
+def test_sleigh_latching_heading_velocity_reset_keeps_the_edge():
+    # a stage change with a velocity reset (decision 0060): the heading latches at STOP; the
+    # plastic impact in the kinetic-energy metric onto {w = 0, no slip across the body}
+    # keeps the forward speed u and loses J w^2 / 2 (J = I + m a^2)
+    STOP = _example.START[1] + 0.5
+    m, b = sleigh()
+    m.add(ms.StageSwitch((b.q[2] < STOP, ms.RotationLock1(b, 0.0)),
+                         (True, ms.RotationLock1(b, STOP))), name="latch")
+    fs = m.free(drop=[("latch", 1)])
+    t = np.linspace(0, 1, 11)
+    with pytest.raises(ms.ModelError, match="latch.*velocities its new stage does not allow"):
+        fs.simulate(t, initial_condition={"th2_d": W0}, rtol=1e-11, atol=1e-13)
+    sol = fs.simulate(t, initial_condition={"th2_d": W0}, at_switch="project", rtol=1e-11,
+                      atol=1e-13)
+    (ev,) = sol.extra["events"]
+    J = INERTIA + MASS * OFFSET**2
+    U, k = W0 * np.sqrt(J / MASS), OFFSET * W0 * np.sqrt(MASS / J)
+    # th(t) = th0 + (W0 / k) gd(k t) reaches STOP at gd(k te) = 0.5 k / W0
+    te = 2 * np.arctanh(np.tan(0.25 * k / W0)) / k
+    ue, we = U * np.tanh(k * te), W0 / np.cosh(k * te)
+    assert ev["t"] == pytest.approx(te, abs=1e-9) and ev["policy"] == "project"
+    assert ev["energy_lost"] == pytest.approx(0.5 * J * we**2, rel=1e-9)
+    assert len(ev["impulse"]) == 2              # the lock's row and the knife's row
+    after = t > te
+    th, w = sol["sleigh.th"], sol.omega(b)
+    u = sol.qd[:, 0] * np.cos(th) + sol.qd[:, 1] * np.sin(th)
+    assert np.abs(u[after] - ue).max() < 1e-9 and np.abs(w[after]).max() < 1e-12
+    assert np.abs(th[after] - STOP).max() < 1e-12
+    vP = sol.velocity(b.point("P"))
+    assert np.abs(-vP[:, 0] * np.sin(th) + vP[:, 1] * np.cos(th)).max() < 1e-12
+    # straight on at u: no force across the edge after the latch
+    assert np.abs(sol.extra["mu"][after]).max() < 1e-12
+    E = 0.5 * MASS * (sol.qd[:, 0]**2 + sol.qd[:, 1]**2) + 0.5 * INERTIA * w**2
+    assert np.abs(E[~after] - E[0]).max() < 1e-9
+    assert np.abs(E[after] - (E[0] - ev["energy_lost"])).max() < 1e-9
+    # Newton's restitution on the stacked rows: the spin reverses to -e w, the edge still
+    # holds, the old stage goes on, and (1 - e^2) J w^2 / 2 is lost
+    e = 0.5
+    back = fs.simulate(t, initial_condition={"th2_d": W0}, at_switch=("restitution", e),
+                       rtol=1e-11, atol=1e-13)
+    (ev,) = back.extra["events"]
+    assert ev["stage_after"] == [1] and ev["t"] == pytest.approx(te, abs=1e-9)
+    assert ev["energy_lost"] == pytest.approx((1 - e**2) * 0.5 * J * we**2, rel=1e-9)
+    th = back["sleigh.th"]
+    vP = back.velocity(b.point("P"))
+    assert np.abs(-vP[:, 0] * np.sin(th) + vP[:, 1] * np.cos(th)).max() < 1e-12
+
+
+def test_velocity_constraint_inside_a_switch_refused_by_name():
+    m = ms.Model2D()
+    b = m.add_body("sleigh", points={"P": (-OFFSET, 0.0)}, guess=_example.START, mass=MASS,
+                   inertia=INERTIA)
+    v = m.velocity(b.point("P"))
+    m.add(ms.TimeSwitch(ms.Orthogonal1(v, b.vector((0, 1))), 1.0,
+                        ms.Orthogonal1(v, b.vector((1, 0)))), name="edge")
+    with pytest.raises(ms.ModelError, match="velocity constraints inside stage or time switches"
+                       ".*stage 1 of switch 'edge'.*outside the switch"):
         m.free()
 
 

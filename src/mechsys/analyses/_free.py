@@ -61,6 +61,7 @@ from ._nonholonomic import (
     nonholonomic_acceleration,
     project_state,
     project_velocities,
+    row_names,
     velocity_constraints,
     velocity_drift,
 )
@@ -520,13 +521,7 @@ class FreeSystem:
                        mode=f"free-{self.kind}", extra=extra or {})
         if self._vrows is not None:
             # the velocity constraints' multipliers: sol.lam[:, m:], named per row here
-            rows = self._vrows
-            count: dict = {}
-            names = []
-            for c in rows.owners:
-                count[c.name] = count.get(c.name, 0) + 1
-                names.append(f"{c.name}[{count[c.name] - 1}]")
-            sol.extra["velocity_multipliers"] = names
+            sol.extra["velocity_multipliers"] = row_names(self._vrows)
             if sol.lam is not None:
                 sol.extra["mu"] = sol.lam[:, system.m:]
         return sol
@@ -766,23 +761,10 @@ class FreeSystem:
         # the run's own measure of its accuracy: constraint drift, coordinates' range
         extra["accuracy"] = accuracy_report(s, sc, times, Y, p, opt.rtol if opt.runge_kutta
                                          else opt.max_error[0], "FreeSystem.simulate")
-        if vrows is not None and len(times) and np.all(np.isfinite(Y[-1])):
-            drift = velocity_drift(s, vrows, times[-1], Y[-1, :n], Y[-1, n:], p, sc)
-            extra["accuracy"]["nonholonomic"] = drift
-            tol = opt.rtol if opt.runge_kutta else opt.max_error[0]
-            bound = max(DRIFT_WARNING, DRIFT_FACTOR * tol)
-            if drift > bound:      # (as accuracy_report for the holonomic rows)
-                import warnings
-
-                from .._errors import DegradedAccuracyWarning
-
-                warnings.warn(DegradedAccuracyWarning(
-                    f"FreeSystem.simulate: the velocity constraints have drifted by the end of "
-                    f"the run (t = {times[-1]:.6g}): residual {drift:.2e} relative to the largest "
-                    f"rate, above {bound:.0e}; keep constraint_correction=True (the default) or "
-                    "tighten rtol/max_error (sol.extra['accuracy'])", measure=drift,
-                    threshold=bound), stacklevel=2)
-                extra["accuracy"]["warned"] = "nonholonomic"
+        if vrows is not None:
+            nonholonomic_accuracy(s, vrows, times, Y, p, sc, opt.rtol if opt.runge_kutta
+                                  else opt.max_error[0], extra["accuracy"],
+                                  "FreeSystem.simulate")
         if diagnostics:
             extra["diagnostics"] = res.diagnostics
         if res.message == "interrupted":
@@ -794,6 +776,31 @@ class FreeSystem:
                           RuntimeWarning, stacklevel=2)
         return self._result(times, Y[:, :n], Y[:, n:], QDD, LAM, p, np.zeros(len(times)),
                             extra=extra)
+
+
+def nonholonomic_accuracy(s, vrows, times, Y, p, sc, tol, accuracy: dict, what: str) -> None:
+    """``accuracy["nonholonomic"]``: the velocity constraints' scaled drift at the end of a
+    run (:func:`~mechsys.analyses._nonholonomic.velocity_drift`), with a
+    :class:`~mechsys.DegradedAccuracyWarning` above ``max(DRIFT_WARNING, DRIFT_FACTOR
+    tol)`` (as :func:`accuracy_report` for the holonomic rows)."""
+    n = s.n
+    if not len(times) or not np.all(np.isfinite(Y[-1])):
+        return
+    drift = velocity_drift(s, vrows, times[-1], Y[-1, :n], Y[-1, n:], p, sc)
+    accuracy["nonholonomic"] = drift
+    bound = max(DRIFT_WARNING, DRIFT_FACTOR * tol)
+    if drift > bound:
+        import warnings
+
+        from .._errors import DegradedAccuracyWarning
+
+        warnings.warn(DegradedAccuracyWarning(
+            f"{what}: the velocity constraints have drifted by the end of "
+            f"the run (t = {times[-1]:.6g}): residual {drift:.2e} relative to the largest "
+            f"rate, above {bound:.0e}; keep constraint_correction=True (the default) or "
+            "tighten rtol/max_error (sol.extra['accuracy'])", measure=drift,
+            threshold=bound), stacklevel=3)
+        accuracy["warned"] = "nonholonomic"
 
 
 def _in_model_units(value, units, what: str, dims):

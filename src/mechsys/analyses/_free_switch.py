@@ -49,6 +49,19 @@ stage), switch, stages, policy, kinetic energy before and after, energy lost, im
 solution has every stage's free-system multipliers mapped into the rows of the full stage
 system (a dropped constraint carries no force: its multipliers are zero), so
 ``sol.reaction`` and ``sol.stage`` work as for a kinematic sweep.
+
+**Velocity constraints** (rolling, a knife edge; decisions 0053 and 0060) added outside the
+switches hold in every stage: each stage's acceleration is the bordered solve of
+:func:`~mechsys.analyses._nonholonomic.nonholonomic_acceleration`, every projection is
+:func:`~mechsys.analyses._nonholonomic.project_state`, and the velocity reset takes the new
+stage's rows and the velocity rows stacked, :math:`G = [\Phi_q; A]`,
+:math:`g = [-\Phi_t; -b]`, in place of :math:`\Phi_q` and :math:`-\Phi_t` above (the
+plastic impact keeps the rolling). Their multipliers are ``sol.extra["mu"]``. A velocity
+constraint inside a stage of a switch raises :class:`ModelError`. Example (a sleigh pushed
+from ``t = 1`` to ``t = 2``)::
+
+    m.add_load(ms.TimeSwitch(1.0, ms.Force(b.point(0), (1, 0), 1.5), 2.0))
+    sol = m.free().simulate((0, 3), initial_condition={"th2_d": 2.0})
 """
 
 from __future__ import annotations
@@ -78,8 +91,15 @@ from ..solvers._integrators import (
 )
 from ..solvers._jit_free import PAUSE_STEPS, FreeStepper
 from ..solvers._linalg import factor
-from ._free import FreeSystem, accuracy_report
+from ._free import FreeSystem, accuracy_report, nonholonomic_accuracy
 from ._multistage import _HeldValues, cached_tests, lambdify_exact, stage_system
+from ._nonholonomic import (
+    nonholonomic_acceleration,
+    project_state,
+    row_names,
+    switched_velocity_constraints,
+    velocity_matrix,
+)
 
 #: velocities are compatible with a stage when its scaled velocity residual is below this
 COMPATIBLE = 1e-6
@@ -201,16 +221,15 @@ class SwitchedFreeSystem(FreeSystem):
             else:
                 plain.append(c)
         self.stage_drops = staged
-        from ._nonholonomic import velocity_constraints
-
-        kept = velocity_constraints(model, [model.constraint(c) for c in plain])
-        if kept:
-            # (its event-driven stepper takes the stage systems' position rows only)
+        inside = switched_velocity_constraints(model)
+        if inside:
+            # (the velocity rows are compiled once, for the coordinates every stage shares;
+            # rows that come and go with a stage are not held)
             raise ModelError(
-                "free(): velocity constraints "
-                f"({', '.join(c.label() for c in kept)}) in a model with stage or time "
-                "switches or event loads (contacts, stops) are not supported yet; remove the "
-                "switches and event loads, or the velocity constraints (drop=[...])")
+                "free(): velocity constraints inside stage or time switches are not supported: "
+                + ", ".join(f"{c.label()} in stage {k} of {sw.label()}" for sw, k, c in inside)
+                + "; add the velocity constraint to the model outside the switch (it then "
+                "holds in every stage), or replace the switch by the stage you need")
         super().__init__(model, plain, solution, initial_guess, initial_condition)
 
     @staticmethod
@@ -224,7 +243,31 @@ class SwitchedFreeSystem(FreeSystem):
             return False
 
     def _dropped(self) -> tuple:
-        return tuple(self.dropped) + tuple(self.stage_drops)
+        # (the velocity constraints are rows of their own, self._vrows, not of the stages)
+        return tuple(self.dropped) + tuple(self.velocity_constraints) + tuple(self.stage_drops)
+
+    def _base(self, combo=None):
+        """The full System of stage combination ``combo`` (the solution's rows), without the
+        velocity constraints (their multipliers are ``sol.extra["mu"]``)."""
+        return stage_system(self.model, combo, tuple(self.velocity_constraints))
+
+    def _project(self, S, t, q, qd, p, sc):
+        """``(q, qd)`` on stage system ``S``'s constraints and the velocity rows (one
+        projection: :func:`~mechsys.solvers._free.project`, or with velocity constraints
+        :func:`~mechsys.analyses._nonholonomic.project_state`). The rows ``self._vrows``
+        serve every stage: the stage systems share their coordinates and parameters (the
+        same layout), and the velocity constraints are outside the switches."""
+        if self._vrows is None:
+            return project(S, t, q, qd, p, scaling=sc)
+        return project_state(S, self._vrows, t, q, qd, p, sc)
+
+    def _acceleration(self, S, t, q, qd, p, sc, kw):
+        r"""``(qdd, multipliers)`` in stage system ``S``: the multipliers of its rows, then
+        (with velocity constraints, :func:`~mechsys.analyses._nonholonomic.nonholonomic_acceleration`)
+        those of the velocity rows, :math:`\mu`."""
+        if self._vrows is None:
+            return free_acceleration(S, t, q, qd, p, columns=sc.columns, **kw)[:2]
+        return nonholonomic_acceleration(S, self._vrows, t, q, qd, p)
 
     def _free_system(self, combo):
         return stage_system(self.model, combo, self._dropped())
@@ -249,7 +292,7 @@ class SwitchedFreeSystem(FreeSystem):
         if lambda_guess is not None:
             kw["lam_guess"] = lambda_guess_vector(self.system, self.model, lambda_guess)
         q, qd, p, held = self._start(initial_condition)
-        combo = cached_tests(self.model, stage_system(self.model, None)).stages(t, q, p, {})
+        combo = cached_tests(self.model, self._base()).stages(t, q, p, {})
         self.system = self._free_system(combo)
         sc = scaling_at(self.system, t, q, p)
         q, qd = self._project_start(t, q, qd, p, held, sc)
@@ -283,7 +326,7 @@ class SwitchedFreeSystem(FreeSystem):
         kw = self._newton(tolerance, max_iterations, "FreeSystem.simulate")
         _check_times(self.model)
         model = self.model
-        base = stage_system(model, None)
+        base = self._base()
         # the tests and the event relations, lambdified once per model version
         tests = cached_tests(model, base)
         cache = _cache(model)
@@ -313,11 +356,12 @@ class SwitchedFreeSystem(FreeSystem):
             S = self._free_system(combo)
 
             def rhs(tt, yy, S=S):
-                return np.concatenate((yy[n:], free_acceleration(
-                    S, tt, yy[:n], yy[n:], p, columns=sc.columns, **kw)[0]))
+                return np.concatenate((yy[n:], self._acceleration(S, tt, yy[:n], yy[n:], p, sc,
+                                                                  kw)[0]))
 
             # the compiled stepper of this stage takes the steps between events where it can
-            fast = self._stepper(plans, combo, S, opt, p, sc, t_eval, t_now, y, kw)
+            fast = self._stepper(plans, combo, S, opt, p, sc, t_eval, t_now, y, kw,
+                                 0 if self._vrows is None else self._vrows.k)
             calls = None
             if opt.spec.implicit:       # its Jacobians' evaluations are not in nfev
                 rhs, calls = counting(rhs)
@@ -361,8 +405,8 @@ class SwitchedFreeSystem(FreeSystem):
                     dense = solver.dense_output()
                     # the events at the projected state (the state the motion goes on from;
                     # the compiled steps are projected in the loop)
-                    yp = np.concatenate(project(S, solver.t, solver.y[:n], solver.y[n:], p,
-                                                scaling=sc))
+                    yp = np.concatenate(self._project(S, solver.t, solver.y[:n],
+                                                      solver.y[n:], p, sc))
                     g_new = events(solver.t, yp, p)
                 crossed = [i for i in range(len(g_new)) if g_ref[i] != 0 and g_new[i] == -g_ref[i]]
                 g_ref = np.where(g_ref == 0, g_new, g_ref)
@@ -380,8 +424,8 @@ class SwitchedFreeSystem(FreeSystem):
                                 events(t_eval[ie], dense(t_eval[ie]), p)[hit[0]] == hit[3])):
                         yi = dense(t_eval[ie])
                         out_t.append(float(t_eval[ie]))
-                        out_y.append(np.concatenate(project(S, t_eval[ie], yi[:n], yi[n:], p,
-                                                            scaling=sc)))
+                        out_y.append(np.concatenate(self._project(S, t_eval[ie], yi[:n],
+                                                                  yi[n:], p, sc)))
                         out_c.append(combo)
                         ie += 1
                 if hit is not None:
@@ -407,7 +451,7 @@ class SwitchedFreeSystem(FreeSystem):
             s0 = hit[3]
             fresh = {i_ev: -s0}         # the motion goes on to the far side ...
             if new == combo:
-                y = np.concatenate(project(S, te, ye[:n], ye[n:], p, scaling=sc))
+                y = np.concatenate(self._project(S, te, ye[:n], ye[n:], p, sc))
                 g = events.exprs[i_ev]
                 log.append({"t": te, "kind": "load" if g in events.of_load else "relation",
                             "event": str(g)})
@@ -432,17 +476,23 @@ class SwitchedFreeSystem(FreeSystem):
                 "rtol": opt.rtol, "atol": opt.atol, "compiled_steps": compiled_steps}
         sol = self._assemble(out_t, out_y, out_c, p, kw, info, sc, known=known)
         # the run's own measure of its accuracy, in the last stage's kept constraints
-        sol.extra["accuracy"] = accuracy_report(self.system, sc, sol.t, np.hstack((sol.q, sol.qd)),
-                                                p, opt.rtol, "FreeSystem.simulate (with switches)")
+        Y = np.hstack((sol.q, sol.qd))
+        sol.extra["accuracy"] = accuracy_report(self.system, sc, sol.t, Y, p, opt.rtol,
+                                                "FreeSystem.simulate (with switches)")
+        if self._vrows is not None:
+            nonholonomic_accuracy(self.system, self._vrows, sol.t, Y, p, sc, opt.rtol,
+                                  sol.extra["accuracy"], "FreeSystem.simulate (with switches)")
         return sol
 
     @staticmethod
-    def _stepper(plans, combo, S, opt, p, sc, t_eval, t_now, y, kw):
+    def _stepper(plans, combo, S, opt, p, sc, t_eval, t_now, y, kw, velocity_rows=0):
         """The compiled stepper of stage combination ``combo`` (planned once per run), or
-        None where the compiled loop cannot run it (the ``MECHSYS_JIT`` rule, ...)."""
+        None where the compiled loop cannot run it (the ``MECHSYS_JIT`` rule, velocity
+        rows, ...)."""
         if combo not in plans:
             plans[combo] = FreeStepper.plan(S, opt.method, p, sc, None, False, True, t_eval,
-                                            (t_now, y[:S.n]), newton=kw)
+                                            (t_now, y[:S.n]), newton=kw,
+                                            velocity_rows=velocity_rows)
         fast = plans[combo]
         if fast is not None:
             fast.p[:] = p           # (the held values of the switches' variables change)
@@ -575,11 +625,17 @@ class SwitchedFreeSystem(FreeSystem):
         q = project_positions(SB, te, ye[:n], p, scaling=sc)
         qd = ye[n:]
         M = SB.dynamics.terms(te, q, qd, np.zeros(SB.m), p, np.zeros(n))[0]
-        J, rhs = SB.velocity_rhs(te, q, p)
-        J = np.asarray(J.toarray() if hasattr(J, "toarray") else J)
+        if self._vrows is None:
+            J, rhs = SB.velocity_rhs(te, q, p)
+            J = np.asarray(J.toarray() if hasattr(J, "toarray") else J)
+        else:
+            # the new stage's velocity equations and the velocity constraints' rows
+            # A qd = -b stacked: the reset keeps the rolling (no slip across the switch)
+            J, rhs = velocity_matrix(SB, self._vrows, te, q, p)
+        m = J.shape[0]
         viol = J @ qd - rhs
-        r = sc.rows(J) if SB.m else np.zeros(0)
-        speed = float(np.abs(viol / r).max(initial=0.0)) if SB.m else 0.0
+        r = sc.rows(J) if m else np.zeros(0)
+        speed = float(np.abs(viol / r).max(initial=0.0)) if m else 0.0
         ke0 = 0.5 * float(qd @ M @ qd)
         entry = {"t": te, "kind": "stage", "switch": names[0] if len(names) == 1 else names,
                  "from": [k + 1 for k in old], "to": [k + 1 for k in new],
@@ -587,7 +643,7 @@ class SwitchedFreeSystem(FreeSystem):
         target, e = new, 0.0
         if speed <= COMPATIBLE * (1.0 + np.abs(qd / sc.columns).max(initial=0.0)):
             entry["policy"] = "compatible"
-            qd_new = project(SB, te, q, qd, p, scaling=sc)[1]
+            qd_new = self._project(SB, te, q, qd, p, sc)[1]
         else:
             kind, e = policy
             if kind is None:
@@ -606,7 +662,6 @@ class SwitchedFreeSystem(FreeSystem):
                 else:
                     target = old
             entry["policy"] = kind if kind == "project" else f"restitution e={e:g}"
-            m = SB.m
             K = np.zeros((n + m, n + m))
             K[:n, :n], K[:n, n:], K[n:, :n] = M, J.T, J
             x = factor(K).solve(np.concatenate((M @ qd, rhs - e * viol)))
@@ -614,7 +669,7 @@ class SwitchedFreeSystem(FreeSystem):
             entry["impulse"] = x[n:].copy()
         if target is old:       # a rebound: the old stage continues, its constraints exact
             SA = self._free_system(old)
-            q, qd_new = project(SA, te, q, qd_new, p, scaling=sc)
+            q, qd_new = self._project(SA, te, q, qd_new, p, sc)
         ke1 = 0.5 * float(qd_new @ M @ qd_new)
         entry.update(kinetic_energy_after=ke1, energy_lost=ke0 - ke1, stage_after=[k + 1 for k in target])
         return target, np.concatenate((q, qd_new)), entry
@@ -626,11 +681,12 @@ class SwitchedFreeSystem(FreeSystem):
         ``known`` ({row: (qdd, lambda)}): those the compiled loop computed at the same states
         (the same numbers to rounding; rows with a NaN are computed here)."""
         model = self.model
-        base = stage_system(model, None)
+        base = self._base()
         n, N = base.n, len(out_t)
         Y = np.array(out_y)
         QDD = np.empty((N, n))
         LAM = np.zeros((N, base.m))
+        MU = np.zeros((N, 0 if self._vrows is None else self._vrows.k))
         rows: dict = {}
         known = known or {}
         systems: dict = {}
@@ -642,11 +698,11 @@ class SwitchedFreeSystem(FreeSystem):
             if got is not None and np.isfinite(got[0]).all() and np.isfinite(got[1]).all():
                 qdd, lam = got
             else:
-                qdd, lam, _ = free_acceleration(S, tk, yk[:n], yk[n:], p, columns=sc.columns,
-                                                **kw)
+                qdd, lam = self._acceleration(S, tk, yk[:n], yk[n:], p, sc, kw)
             QDD[k] = qdd
+            MU[k] = lam[S.m:]
             if ck not in rows:
-                rows[ck] = _row_map(S, stage_system(model, ck))
+                rows[ck] = _row_map(S, self._base(ck))
             src, dst = rows[ck]
             LAM[k, dst] = lam[src]
         switches = model._switches()
@@ -654,6 +710,10 @@ class SwitchedFreeSystem(FreeSystem):
         extra = {**info, "length_scale": sc.length}
         if switches:
             extra["stages"] = {sw.name: C[:, j] + 1 for j, sw in enumerate(switches)}
+        if self._vrows is not None:
+            # the velocity constraints' multipliers, as FreeSystem._result names them
+            extra["velocity_multipliers"] = row_names(self._vrows)
+            extra["mu"] = MU
         self.system = self._free_system(out_c[-1])
         return Solution(t=np.asarray(out_t, dtype=float), q=Y[:, :n].copy(), qd=Y[:, n:].copy(),
                         qdd=QDD, p=p, system=base, model=model, iterations=np.zeros(N, dtype=int),

@@ -249,6 +249,27 @@ def velocity_drift(system, rows: VelocityRows, t, q, qd, p, scaling) -> float:
     return float(v / rate) if rate > 0 else float(v)
 
 
+def row_names(rows: VelocityRows) -> list[str]:
+    """The names of the rows' multipliers, ``"knife[0]"`` (constraint name, row within it):
+    the columns of ``sol.extra["mu"]`` (``sol.extra["velocity_multipliers"]``)."""
+    count: dict = {}
+    names = []
+    for c in rows.owners:
+        count[c.name] = count.get(c.name, 0) + 1
+        names.append(f"{c.name}[{count[c.name] - 1}]")
+    return names
+
+
+def switched_velocity_constraints(model) -> list[tuple]:
+    """``(switch, stage (1-based), constraint)`` of every velocity constraint inside a stage
+    of a ``StageSwitch``/``TimeSwitch`` of ``model`` (free motion through stage changes holds
+    only the velocity constraints outside the switches, decision 0060)."""
+    rates = set(model.velocity_symbols().values())
+    return [(sw, k + 1, c) for sw in model._switches() for k, stage in enumerate(sw.stages)
+            for c in stage if getattr(c, "order", 0) == 1
+            or any(e.free_symbols & rates for e in c.equations(model.space))]
+
+
 class RowTangent:
     r"""The parameter derivatives the velocity rows add to the forward sensitivities of free
     motion (decision 0055). With the multipliers :math:`\mu` and the accelerations held, the
