@@ -189,9 +189,9 @@ def lean_steer_matrices(lin):
 def table(free, coords, scale: float = 1.0):
     """``{v: (eigenvalues (4,), neutral, largest relative error)}`` for v = 0..10."""
     out = {}
-    for v, ref in TABLE2.items():
+    for v, published in TABLE2.items():
         s, zero = bicycle_eigenvalues(linearize(free, coords, float(v), scale))
-        ref = np.array(ref, dtype=complex)
+        ref = np.array(published, dtype=complex)
         ref = ref[np.lexsort((-ref.imag, -ref.real))]
         out[v] = (s, zero, float(np.max(np.abs(s - ref) / np.abs(ref))))
     return out
@@ -342,8 +342,8 @@ def _figure(free, coords, runs) -> None:
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(11, 4.2))
     ax.plot(speeds, eig.real, "k.", ms=2)
     ax.plot(speeds, np.abs(eig.imag), ".", color="tab:blue", ms=2)
-    for v, ref in TABLE2.items():
-        ref = np.array(ref, dtype=complex)
+    for v, published in TABLE2.items():
+        ref = np.array(published, dtype=complex)
         ax.plot([v] * 4, ref.real, "o", mfc="none", color="tab:red", ms=5)
     ax.axvline(WEAVE, ls=":", color="gray")
     ax.axvline(CAPSIZE, ls=":", color="gray")

@@ -8,7 +8,7 @@ projections onto the constraints with no Python between the compiled equations.
            \begin{bmatrix} \ddot q \\ \lambda \end{bmatrix} =
            \begin{bmatrix} Q + Q_v \\ \gamma \end{bmatrix}
 
-with SciPy's DOP853 (or RK45) and projects ``(q, qd)`` onto ``Phi = 0``, ``Phi_q qd = -Phi_t`` after
+with SciPy's DOP853 (or RK45) and projects ``(q, qd)`` onto ``Phi = 0``, :math:`\Phi_q \dot q = -\Phi_t` after
 every accepted step. The compiled loop (``_jit_free_loop.runge_kutta``) performs exactly these
 steps: SciPy's Runge-Kutta stages, error norm and step-size control (the same coefficients,
 from our own tableaus: ``_tableaus``, decision 0038), the augmented system from the compiled
@@ -34,7 +34,7 @@ parameters, decision 0032), or above it the augmented matrix's pattern by the co
 sparse LU (``"sparse"``: trees of many branches, whose pattern is not banded and whose
 block band exceeds :data:`BLOCK_BAND`, with the Python path's pattern and LU; systems the
 block path cannot take, with the banded pattern's sparse twin; its projections through the
-Python path's pattern of ``[[I, J^T], [J^, 0]]``); every kernel
+Python path's pattern of :math:`\begin{bmatrix} I & J^T \\ \hat J & 0 \end{bmatrix}`); every kernel
 SymEngine LLVM code (CSE kernels included: their repeated outputs are expanded in the
 loop). Loads that depend on the multipliers (friction) or accelerations
 (added mass) take ``free_acceleration``'s Newton in the loop (``"newton"``, decision 0028).
