@@ -32,7 +32,6 @@ from collections.abc import Mapping
 
 import numpy as np
 import sympy as sp
-from scipy.optimize import brentq
 from sympy.printing.numpy import NumPyPrinter
 
 from .._errors import ConvergenceError, MechError, ModelError, choice
@@ -435,6 +434,9 @@ def _root(values, solve, t_range, samples, what) -> float:
 
     def at(t):
         return float(values(solve([t], sol.q[i]))[0])
+
+    # Imported here so that `import mechsys` does not load scipy.optimize (decision 0061).
+    from scipy.optimize import brentq
 
     tol = 1e-13 * max(1.0, abs(a), abs(b))
     return float(brentq(at, ts[i], ts[i + 1], xtol=tol, rtol=4 * np.finfo(float).eps))

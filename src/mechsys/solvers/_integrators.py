@@ -47,7 +47,6 @@ from dataclasses import dataclass, field
 from numbers import Integral, Real
 
 import numpy as np
-import scipy.integrate
 
 from .._errors import MechError, ModelError, unknown_options
 from . import _methods
@@ -502,6 +501,11 @@ class IntegrationOptions:
 def stepper_class(method: str):
     """The SciPy stepper class (public ``scipy.integrate``) of a Runge-Kutta method's Python
     path, from the registry."""
+    # Imported here, not at module level: scipy.integrate (with the scipy.optimize it pulls in)
+    # costs ~0.3 s, and a user who only solves kinematics or inverse dynamics never steps an ODE
+    # (decision 0061; tests/test_import_cost.py guards it).
+    import scipy.integrate
+
     return getattr(scipy.integrate, _methods.get(method).scipy)
 
 
