@@ -99,6 +99,7 @@ import sympy as sp
 
 from .._errors import MechError, ModelError, NotSteadyError
 from .._symbols import T
+from ..compile._derive import sparse_derivatives
 from ..solvers._free import free_acceleration, project, scaling_at
 from ._nonholonomic import nonholonomic_acceleration, project_state
 
@@ -151,18 +152,7 @@ class LinearKernel:
 
     def _derivatives(self, E, wrt, exprs):
         """Rows and columns of the nonzero ``dE_i / dw_j`` (appended to ``exprs``)."""
-        rows, cols = [], []
-        wrt_c = [self._conv(w) for w in wrt]
-        for i, e in enumerate(E):
-            free = e.free_symbols
-            for j, w in enumerate(wrt_c):
-                if w in free:
-                    d = e.diff(w)
-                    if d != 0:
-                        rows.append(i)
-                        cols.append(j)
-                        exprs.append(d)
-        return np.array(rows, dtype=int), np.array(cols, dtype=int)
+        return sparse_derivatives(E, [self._conv(w) for w in wrt], exprs)
 
     def _dense(self, vals, parts, keys, shape):
         out, k = [], 0
@@ -828,24 +818,8 @@ def linearize(free, state=None, inputs: Sequence = (), outputs: Sequence = (),
                   qd, qdd, lam, p, t0, J, sc, tolerance, along)
     names = [*coord_names, *(ins.names[k] for k in range(nu) if ins.kinds[k] == "driver")]
     states = [*names, *(c + "_d" for c in names)]
-    if cyc:
-        for j in cyc:
-            if no and np.abs(Cm[:, j]).max() > 1e-9 * max(np.abs(Cm).max(), 1e-300):
-                k = int(np.argmax(np.abs(Cm[:, j])))
-                raise ModelError(f"linearize cyclic: output {out_pairs[k][0]!r} depends on the "
-                                 f"position of {coord_names[j]!r}, which cyclic= drops from "
-                                 "the state; leave it out of cyclic or of the outputs")
-        keep = [i for i in range(2 * g) if i not in cyc]
-        A, Bm, Cm = A[np.ix_(keep, keep)], Bm[keep], Cm[:, keep]
-        states = [states[i] for i in keep]
-    s, stability = judge(A)
-    for a in (A, Bm, Cm, Dm, P, s, q, qd, qdd, p):
-        a.setflags(write=False)
-    return LinearSystem(A=A, B=Bm, C=Cm, D=Dm, states=tuple(states), inputs=ins.names,
-                        outputs=tuple(a for a, _ in out_pairs), coordinates=tuple(names),
-                        t=t0, q=q, qd=qd, qdd=qdd, p=p, basis=P, eigenvalues=s,
-                        stability=stability, stable="unstable" not in stability,
-                        model=free.model)
+    return _linear_system(free, A, Bm, Cm, Dm, states, cyc, coord_names, names, out_pairs,
+                          ins, P, t0, q, qd, qdd, p)
 
 
 def _coordinate_units(P, sc) -> np.ndarray:
@@ -958,22 +932,34 @@ def _linearize_rolling(free, vrows, ch, coord_names, speeds, cyc, ins, out_pairs
                     f"linearize cyclic: {coord_names[j]!r} is not cyclic: the rate of "
                     f"{states[i]} depends on its position ({A[i, j]:.3g} per unit); leave it "
                     "out of cyclic=")
+    return _linear_system(free, A, Bm, Cm, Dm, states, cyc, coord_names, coord_names,
+                          out_pairs, ins, P, t0, q, qd, qdd, p,
+                          speeds=tuple(coord_names[i] for i in sp_idx))
+
+
+def _linear_system(free, A, Bm, Cm, Dm, states, cyc, coord_names, names, out_pairs, ins, P, t0,
+                   q, qd, qdd, p, speeds=()) -> LinearSystem:
+    """The :class:`LinearSystem` of both charts: the ``cyclic`` positions (state indices
+    ``cyc``, checked not to act on the kept states by the caller) dropped after checking no
+    output depends on them; eigenvalues judged; arrays read-only."""
+    if cyc:
+        for j in cyc:
             if Cm.shape[0] and np.abs(Cm[:, j]).max() > 1e-9 * max(np.abs(Cm).max(), 1e-300):
                 r = int(np.argmax(np.abs(Cm[:, j])))
                 raise ModelError(f"linearize cyclic: output {out_pairs[r][0]!r} depends on the "
                                  f"position of {coord_names[j]!r}, which cyclic= drops from "
                                  "the state; leave it out of cyclic or of the outputs")
+        keep = [i for i in range(len(states)) if i not in cyc]
         A, Bm, Cm = A[np.ix_(keep, keep)], Bm[keep], Cm[:, keep]
         states = [states[i] for i in keep]
     s, stability = judge(A)
     for a in (A, Bm, Cm, Dm, P, s, q, qd, qdd, p):
         a.setflags(write=False)
     return LinearSystem(A=A, B=Bm, C=Cm, D=Dm, states=tuple(states), inputs=ins.names,
-                        outputs=tuple(a for a, _ in out_pairs),
-                        coordinates=tuple(coord_names), t=t0, q=q, qd=qd, qdd=qdd, p=p,
-                        basis=P, eigenvalues=s, stability=stability,
-                        stable="unstable" not in stability, model=free.model,
-                        speeds=tuple(coord_names[i] for i in sp_idx))
+                        outputs=tuple(a for a, _ in out_pairs), coordinates=tuple(names),
+                        t=t0, q=q, qd=qd, qdd=qdd, p=p, basis=P, eigenvalues=s,
+                        stability=stability, stable="unstable" not in stability,
+                        model=free.model, speeds=speeds)
 
 
 def _suggest(system, t, q, p, sc) -> list:

@@ -31,6 +31,7 @@ import sympy as sp
 from .._errors import ModelError, SingularJacobianError
 from .._symbols import T
 from ..compile import compile_exprs
+from ..compile._derive import sparse_derivatives
 from ..constraints import velocity_rows
 from ..solvers._free import _solve_fast, project_positions
 from ..solvers._tolerances import SPARSE_THRESHOLD, Singular
@@ -135,17 +136,7 @@ class VelocityRows:
         parts = []
 
         def derive(E, wrt):
-            rows, cols = [], []
-            for i, e in enumerate(E):
-                free = e.free_symbols
-                for j, w in enumerate(wrt):
-                    if w in free:
-                        d = e.diff(w)
-                        if d != 0:
-                            rows.append(i)
-                            cols.append(j)
-                            exprs.append(d)
-            parts.append((np.array(rows, dtype=int), np.array(cols, dtype=int)))
+            parts.append(sparse_derivatives(E, wrt, exprs))
 
         # A = psi_qd, rho = psi_q qd + psi_t, a = A qdd + rho (each row against the
         # coordinates it contains)

@@ -19,6 +19,7 @@ For every equation :math:`\phi_i` (free symbols restricted to the coordinates it
 
 from __future__ import annotations
 
+import numpy as np
 import sympy as sp
 
 from .._symbols import T, restore_assumptions
@@ -106,6 +107,23 @@ def _to_sympy(x):
     if se is not None and isinstance(x, se.Basic):
         return restore_assumptions(sp.sympify(x))      # SymEngine drops "real"
     return x
+
+
+def sparse_derivatives(E, wrt, exprs: list) -> tuple[np.ndarray, np.ndarray]:
+    r"""The nonzero entries of :math:`\partial E_i / \partial w_j`: their rows and columns,
+    the derivatives appended to ``exprs`` in that order (each expression differentiated only
+    by the symbols of ``wrt`` it holds; SymPy or SymEngine expressions and symbols alike).
+    Assemble with ``np.add.at(D, (rows, cols), values)``."""
+    index = {w: j for j, w in enumerate(wrt)}
+    rows, cols = [], []
+    for i, e in enumerate(E):
+        for j in sorted(index[w] for w in e.free_symbols if w in index):
+            d = e.diff(wrt[j])
+            if d != 0:
+                rows.append(i)
+                cols.append(j)
+                exprs.append(d)
+    return np.array(rows, dtype=int), np.array(cols, dtype=int)
 
 
 #: per-equation derivatives (SymEngine): systems of one model share most equations -- the

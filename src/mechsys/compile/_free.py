@@ -37,23 +37,14 @@ import sympy as sp
 
 from .._symbols import T
 from ._backends import compile_exprs
+from ._derive import sparse_derivatives
 
 
 class _Residual:
     def __init__(self, system, R, unknowns, args):
         self.system = system
-        index = {s: i for i, s in enumerate(unknowns)}
-        rows, cols, vals = [], [], []
-        for i, e in enumerate(R):
-            for s in e.free_symbols:
-                j = index.get(s)
-                if j is not None:
-                    d = sp.diff(e, s)
-                    if d != 0:
-                        rows.append(i)
-                        cols.append(j)
-                        vals.append(d)
-        self.rows, self.cols = np.array(rows, dtype=int), np.array(cols, dtype=int)
+        vals: list = []
+        self.rows, self.cols = sparse_derivatives(R, list(unknowns), vals)
         self.size = len(R)
         self.nR = len(R)
         self.f = compile_exprs(args, list(R) + vals, system.backend,
