@@ -422,8 +422,9 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
                 mass_parts.setdefault(pb.name, []).append((mass, P + RR @ c, RR @ I @ RR.T))
             for st, sfp, sfR, scls in _flatten(ctx, el, "site", cls):
                 if st.get("name"):
-                    sp_ = sfp + sfR @ np.array(ctx.num(st, ctx.attrs(st, scls), "pos", 3, [0.0, 0.0, 0.0]))
-                    sites[st.get("name")] = (name, sp_)
+                    sa = ctx.attrs(st, scls)
+                    sp_ = sfp + sfR @ np.array(ctx.num(st, sa, "pos", 3, [0.0, 0.0, 0.0]))
+                    sites[st.get("name")] = (name, sp_, sfR @ ctx.orientation(st, sa))
             if geometry:
                 draw([(g_, a_, t_, P + RR @ p_, RR @ R_, s_) for g_, a_, t_, p_, R_, s_ in parts], pb)
             for child, cfp, cfR, ccls in _flatten(ctx, el, "body", cls):
@@ -443,8 +444,9 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
         pts = {}
         for st, sfp, sfR, scls in _flatten(ctx, el, "site", cls):
             if st.get("name"):
-                sp_ = sfp + sfR @ np.array(ctx.num(st, ctx.attrs(st, scls), "pos", 3, [0.0, 0.0, 0.0]))
-                sites[st.get("name")] = (name, sp_)
+                sa = ctx.attrs(st, scls)
+                sp_ = sfp + sfR @ np.array(ctx.num(st, sa, "pos", 3, [0.0, 0.0, 0.0]))
+                sites[st.get("name")] = (name, sp_, sfR @ ctx.orientation(st, sa))
                 pts[st.get("name")] = tuple(float(v) for v in sp_)
         try:
             b = m.add_body(name, points=pts or None, guess=guess)
@@ -561,10 +563,11 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
         except ModelError as exc:
             raise ModelError(f"{source}, line {body_line[bname]}, <body name={bname!r}>: {exc}") from None
     # geoms and sites on the world body
-    for st, sfp, sfR, _ in _flatten(ctx, wb, "site", None):
+    for st, sfp, sfR, scls in _flatten(ctx, wb, "site", None):
         if st.get("name"):
-            sites[st.get("name")] = ("world",
-                                     sfp + sfR @ np.array(floats(source, st, "pos", 3, [0.0, 0.0, 0.0])))
+            sa = ctx.attrs(st, scls)
+            sp_ = sfp + sfR @ np.array(ctx.num(st, sa, "pos", 3, [0.0, 0.0, 0.0]))
+            sites[st.get("name")] = ("world", sp_, sfR @ ctx.orientation(st, sa))
     if geometry:
         draw([p for p in add_geoms(wb, "world", None) if p[2] != "plane"], m.ground)
     # equalities
@@ -626,8 +629,9 @@ def _equality(ctx, m, e, frame_of, world_pose, sites, C, notes):
             for s in (s1, s2):
                 if s not in sites:
                     raise ModelError(f"{where(source, e)}: site {s!r} is not a site of the model")
-            (b1, p1), (b2, p2) = sites[s1], sites[s2]
+            (b1, p1, S1), (b2, p2, S2) = sites[s1], sites[s2]
         else:
+            S1 = S2 = None
             b1, b2 = body("body1"), body("body2") or "world"
             if b1 is None:
                 raise ModelError(f"{where(source, e)}: a {e.tag} needs body1 (or site1 and site2)")
@@ -646,7 +650,12 @@ def _equality(ctx, m, e, frame_of, world_pose, sites, C, notes):
             def A(b):           # the mechsys body's rotation at qpos0
                 return world_pose[b][1] @ frame_of[b][2].T
 
-            Rrel = A(b2).T @ A(b1)
+            if S1 is not None:
+                # MuJoCo welds the two sites' frames: A_1 F_1 S_1 = A_2 F_2 S_2 (F: the MJCF
+                # body's frame in its mechsys body's), whatever the pose at qpos0
+                Rrel = frame_of[b2][2] @ S2 @ S1.T @ frame_of[b1][2].T
+            else:
+                Rrel = A(b2).T @ A(b1)
             m.add(C.RotationLock3(mb1, None if mb2 is m.ground else mb2, _rot_spec(Rrel)),
                   name=label + "_rotation")
         return
