@@ -342,8 +342,9 @@ def test_closed_loops_round_trip_and_mujoco_reads_the_equalities(tmp_path):
     on the file's pose; here the plate's guess is moved off the weld to show it. Read back:
     the same system (residuals, mass matrix, bias forces, constraint rows; 1e-12). MuJoCo
     reading the export: its connect and weld residuals vanish at the original file's
-    ``qpos0`` (where the importer closed them; 1e-12), and at a random pose the connect's and the
-    joint equality's equal mechsys's (1e-12)."""
+    ``qpos0`` (where the importer closed them; 1e-12), and at a random pose all its equality rows
+    (connect, weld position and rotation, joint) equal mechsys's equations (1e-12): the
+    importer reads a site weld as MuJoCo does, the sites' frames welded."""
     mujoco = pytest.importorskip("mujoco")
     src = tmp_path / "loops.xml"
     src.write_text(LOOPS)
@@ -383,10 +384,11 @@ def test_closed_loops_round_trip_and_mujoco_reads_the_equalities(tmp_path):
         jid = mujoco.mj_name2id(mm, mujoco.mjtObj.mjOBJ_JOINT, j)
         q[s.layout.q_names.index(j)] = md.qpos[mm.jnt_qposadr[jid]]
     r = s.residual(0.0, q)
-    rows = {c: [k for k, o in enumerate(s.layout.eq_owner) if getattr(o, "name", None) == c]
-            for c in ("tie", "mesh")}
-    np.testing.assert_allclose(r[rows["tie"]], md.efc_pos[:3], rtol=0, atol=1e-12)
-    np.testing.assert_allclose(r[rows["mesh"]], md.efc_pos[9:10], rtol=0, atol=1e-12)
+    rows = [k for c in ("tie", "glue", "glue_rotation", "mesh")
+            for k, o in enumerate(s.layout.eq_owner) if getattr(o, "name", None) == c]
+    # MuJoCo's rows: connect, weld (position, then the relative quaternion's vector part),
+    # joint: mechsys's equations, row for row
+    np.testing.assert_allclose(r[rows], md.efc_pos[:10], rtol=0, atol=1e-12)
 
 
 def test_urdf_floating_base_round_trip(tmp_path):

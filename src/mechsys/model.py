@@ -1420,15 +1420,22 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         return forward_kinematics(self, q, point, t, frame)
 
     def to_urdf(self, path, robot: str = "mechsys"):
-        """Write a tree of ``GenRevolute5``/``GenTranslate5`` joints on ground as a URDF file
-        (docs/import.md); what URDF cannot hold raises ``ModelError`` naming it."""
+        """Write a tree of ``GenRevolute5``/``GenTranslate5`` joints, free bodies included
+        (``floating`` joints at their guessed pose), as a URDF file (docs/import.md); what
+        URDF cannot hold (ball joints, closed loops, springs, ...) raises ``ModelError``
+        naming it. Example: ``ms.from_urdf("arm.urdf").to_urdf("again.urdf")``."""
         from .io._export import to_urdf
 
         return to_urdf(self, path, robot)
 
     def to_mjcf(self, path, model: str = "mechsys"):
-        """Write a tree of ``GenRevolute5``/``GenTranslate5`` joints on ground as an MJCF
-        (MuJoCo) file (docs/import.md); what it cannot hold raises ``ModelError`` naming it."""
+        r"""Write the model as an MJCF (MuJoCo) file (docs/import.md): a tree of
+        ``GenRevolute5``/``GenTranslate5`` joints, ``ball`` joints (an absolute body and a
+        ``Spherical3``), free bodies (``<freejoint>``, at their guessed pose) and, closing
+        loops, ``connect``/``weld`` equalities between sites (``Spherical3``, with
+        ``RotationLock3`` for a weld) and ``joint`` equalities (a ``Constraint``
+        :math:`q_1 - c_0 - c_1 q_2 - \dots - c_4 q_2^4`); what MJCF cannot hold raises
+        ``ModelError`` naming it. Example: ``ms.from_mjcf("loop.xml").to_mjcf("again.xml")``."""
         from .io._export import to_mjcf
 
         return to_mjcf(self, path, model)

@@ -1,13 +1,27 @@
-r"""Export of tree models to URDF and MJCF: ``m.to_urdf(path)``, ``m.to_mjcf(path)``
-(decision 0040).
+r"""Export to URDF and MJCF: ``m.to_urdf(path)``, ``m.to_mjcf(path)`` (decisions 0040, 0067).
 
-What the formats can express: a tree of ``GenRevolute5`` and ``GenTranslate5`` joints on
-ground, bodies with mass, centroid and inertia, gravity (URDF: only 9.81 down ``z``, which
-URDF consumers assume), and on a joint coordinate the loads ``-k (q - ref) - d q_dot - a
-q_ddot`` the importers make (MJCF: ``stiffness``, ``springref``, ``damping``, ``armature``;
-URDF: ``<dynamics damping>`` only; decision 0048). Anything else (absolute bodies,
-constraint equations, other Gen joints, other loads, symbolic values) is refused with
-``ModelError`` naming it.
+What the formats can express: a tree of ``GenRevolute5`` and ``GenTranslate5`` joints, bodies
+with mass, centroid and inertia, gravity (URDF: only 9.81 down ``z``, which URDF consumers
+assume), and on a joint coordinate the loads ``-k (q - ref) - d q_dot - a q_ddot`` the
+importers make (MJCF: ``stiffness``, ``springref``, ``damping``, ``armature``; URDF:
+``<dynamics damping>`` only; decision 0048). Absolute bodies (``x, y, z, e0..e3``) and
+equations (decision 0067):
+
+* an absolute body whose first point of a ``Spherical3`` it is, the other point on a body
+  that does not hang from it, is a body with a ``ball`` joint at that point (MJCF); an
+  absolute body with no such joint is a free body under the world: MJCF ``<freejoint>``,
+  URDF a ``floating`` joint from the world link, at the pose of the model's guess
+  (``m.guess()``), which is where the importers put MuJoCo's ``qpos0`` and URDF's origin;
+* MJCF equalities, named after the constraint: a ``Spherical3`` and a ``RotationLock3``
+  between the same bodies a ``weld``, another ``Spherical3`` a ``connect``, both between two
+  sites on the bodies (MuJoCo makes the sites, and for a weld their frames, coincide, so the
+  file does not depend on its pose at ``qpos0``), and a ``Constraint`` with one equation
+  :math:`a\,(q_1 - c_0 - c_1 q_2 - \dots - c_4 q_2^4) = 0` in joint coordinates a ``joint``
+  equality with ``polycoef`` :math:`c_0 \dots c_4` (written divided by ``a``).
+
+Anything else (other constraint types, a rotation lock without a point constraint, other
+equations, URDF ball joints and loops, other Gen joints, other loads, symbolic values) is
+refused with ``ModelError`` naming it.
 
 With a Gen joint's frames ``(o_1, R_1)`` on the slave and ``(o_2, R_2)`` on the master
 (``constraints/_generalized.py``) the slave's pose is :math:`A_s = A_m R_0 \operatorname{Rot}(u_1, q)`,
@@ -20,8 +34,19 @@ With a Gen joint's frames ``(o_1, R_1)`` on the slave and ``(o_2, R_2)`` on the 
   rpy="R_0">`` (``o_1^m`` the master's shift), ``<axis xyz="u_1">``; the centroid and the
   drawn points shift by ``-o_1``. ``rpy`` from :math:`R = R_z(y) R_y(p) R_x(r)`.
 
+A ball joint ``Spherical3(p_1 on b, p_2 on the parent P)``: the body frame is mechsys's,
+placed in its parent's at the initial relative rotation :math:`R_r = A_P^T A_b` (at the
+guess) and at :math:`p_2 - R_r\, p_1`, so the points coincide at ``qpos0``; ``<joint
+type="ball" pos="p_1">``. A weld ``RotationLock3`` :math:`A_1 = A_2 Q` is the site frames
+:math:`S_1 = I` on body 1 and :math:`S_2 = Q` on body 2 (:math:`A_1 S_1 = A_2 S_2`).
+
 Numbers are written with ``repr`` (shortest round-trip), so a file read back gives the
 same doubles.
+
+Example::
+
+    m = ms.from_mjcf("humanoid.xml")        # a free base, ball joints, equalities
+    m.to_mjcf("again.xml")                  # MuJoCo and ms.from_mjcf read it back
 """
 
 from __future__ import annotations

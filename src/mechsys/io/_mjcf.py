@@ -22,7 +22,11 @@ a ball joint adding ``Spherical3`` at its point. Orientations: ``quat`` (w x y z
 comes from its geoms (sphere, box, cylinder, capsule, ellipsoid; ``mass`` or ``density``,
 default 1000) as MuJoCo's ``inertiafromgeom="auto"`` does. Equalities: ``connect`` ->
 ``Spherical3``, ``weld`` -> ``Spherical3`` + ``RotationLock3``, ``joint`` -> ``Constraint(q1
-- poly(q2))`` (hard constraints here; MuJoCo's are soft, ``solref``/``solimp`` reported).
+- poly(q2))`` (hard constraints here; MuJoCo's are soft, ``solref``/``solimp`` reported). A
+weld between bodies locks their relative rotation at ``qpos0``; a weld between sites locks
+the sites' frames together, as MuJoCo does: with ``F`` the MJCF body's frame in its mechsys
+body's and ``S`` the site's, :math:`A_1 F_1 S_1 = A_2 F_2 S_2`, so
+``RotationLock3(b1, b2, F_2 S_2 S_1^T F_1^T)`` (decision 0067).
 """
 
 from __future__ import annotations
