@@ -432,6 +432,7 @@ def _two_bodies():
     ("variables", r"constraint 'eq' .* adds variables \['s'\]"),
     ("two equations", "constraint 'eq' .* has 2 equations"),
     ("massless free body", "body 'c' has a free joint and has no mass"),
+    ("no rotation guessed", r"the guess of body 'c' has Euler parameters \[0.0, 0.0, 0.0, 0.0\]"),
     ("point on a merged body", "constraint 'tie' .* has a point on body 'h'"),
     ("joint names", "the joint of body 'c' and the joint of body 'a' would both be MJCF joints named 'qa'"),
     ("urdf ball", "to_urdf: constraint 'ball' .* use to_mjcf"),
@@ -459,6 +460,8 @@ def test_refusals_of_absolute_bodies_and_equalities_name_the_culprit(tmp_path, c
         m.add(ms.Constraint([qa - qb, qa + qb]), name="eq")
     elif case == "massless free body":
         m.set_mass_properties(c, mass=0, inertia=(0, 0, 0))
+    elif case == "no rotation guessed":
+        m.set_guess({"c.e0": 0.0})
     elif case == "point on a merged body":
         h = m.add_body("h")                            # massless, carrying one hinge: merged
         m.add(ms.GenRevolute5(h.axis((0, 0, 0), (1, 0, 0)), a.axis((0, 0, 0.1), (1, 0, 0)),

@@ -336,7 +336,7 @@ def _inertia_attrs_urdf(I) -> str:
             f'iyy="{_num(I[1, 1])}" iyz="{_num(I[1, 2])}" izz="{_num(I[2, 2])}"')
 
 
-def _initial_poses(m, tree: _Tree):
+def _initial_poses(m, tree: _Tree, fmt: str):
     """World rotations of the bodies at the model's initial guess (``m.guess()``: absolute
     bodies at their guessed pose, a Gen slave :math:`A_s = A_m R_2 R_z(q) R_1^T` at its
     coordinate's guess) and the absolute bodies' ``(r, e)`` there (``e`` normalised)."""
@@ -356,6 +356,10 @@ def _initial_poses(m, tree: _Tree):
             rots[b] = rots[tree.parent[b]] @ R2 @ Rz @ R1.T
         else:
             g = np.array([vals[s.name] for s in b.q])
+            if not np.linalg.norm(g[3:]) > 1e-12:
+                raise ModelError(f"to_{fmt}: the guess of body {b.name!r} has Euler parameters "
+                                 f"{g[3:].tolist()}, which are no rotation; give it a guess "
+                                 "(m.set_guess) before exporting: the file places it there")
             e = g[3:] / np.linalg.norm(g[3:])
             rots[b] = quat_matrix(e)
             poses[b] = (g[:3], e)
@@ -376,7 +380,7 @@ def to_urdf(m, path, robot: str = "mechsys") -> Path:
     if gravity is not None and not np.allclose(gravity, (0, 0, -9.81), rtol=0, atol=1e-12):
         raise ModelError(f"to_urdf: gravity {gravity.tolist()} cannot be written (URDF has no gravity; "
                          "its users assume 9.81 down z)")
-    _, poses = _initial_poses(m, tree)
+    _, poses = _initial_poses(m, tree, "urdf")
     taken = {j.coordinates[0].name for j in tree.joints}
     shift = {}
     root = m.ground.name
@@ -436,7 +440,7 @@ def to_mjcf(m, path, model: str = "mechsys") -> Path:
 
     tree = _tree(m, "mjcf")
     props, passive = tree.props, tree.passive
-    rots, poses = _initial_poses(m, tree)
+    rots, poses = _initial_poses(m, tree, "mjcf")
     g = tree.gravity if tree.gravity is not None else np.zeros(3)
     children: dict = {}
     for b, kind, item in tree.entries:

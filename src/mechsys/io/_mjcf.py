@@ -25,8 +25,8 @@ default 1000) as MuJoCo's ``inertiafromgeom="auto"`` does. Equalities: ``connect
 - poly(q2))`` (hard constraints here; MuJoCo's are soft, ``solref``/``solimp`` reported). A
 weld between bodies locks their relative rotation at ``qpos0``; a weld between sites locks
 the sites' frames together, as MuJoCo does: with ``F`` the MJCF body's frame in its mechsys
-body's and ``S`` the site's, :math:`A_1 F_1 S_1 = A_2 F_2 S_2`, so
-``RotationLock3(b1, b2, F_2 S_2 S_1^T F_1^T)`` (decision 0067).
+body's and ``S`` the site's, :math:`A_1 F_1 S_1 = A_2 F_2 S_2`, so ``RotationLock3`` of
+body 1 to body 2 turned by :math:`F_2 S_2 S_1^T F_1^T` (decision 0067).
 """
 
 from __future__ import annotations
