@@ -146,10 +146,13 @@ class StageSwitch(ConstraintBase):
                 used |= e.free_symbols
         return [v.symbol for v in self.new_variables() if v.symbol not in used]
 
-    def stage_equations(self, space, k: int) -> list[sp.Expr]:
-        """Rows of stage ``k`` (0-based): its constraints' equations, then ``v - v_held``
-        for each variable of the switch it does not use."""
-        eqs = [e for c in self.stages[k] for e in c.equations(space)]
+    def stage_equations(self, space, k: int, without=()) -> list[sp.Expr]:
+        """Rows of stage ``k`` (0-based): its constraints' equations (those of the constraints
+        in ``without`` left out: free motion holds a stage's velocity constraints as rows of
+        their own, decision 0063), then ``v - v_held`` for each variable of the switch it
+        does not use."""
+        eqs = [e for c in self.stages[k] if all(c is not w for w in without)
+               for e in c.equations(space)]
         return eqs + [v - self.held_symbol(v) for v in self.held_variables(space, k)]
 
     def held_symbols(self) -> list[sp.Symbol]:
