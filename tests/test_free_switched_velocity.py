@@ -117,7 +117,14 @@ def test_sliding_sleigh_whose_blade_touches_down_at_a_time_switch():
     assert np.abs(np.sum(sol.qd[after, :2] * e2[after], axis=1) - OFFSET * w[after]).max() < 1e-13
     # the edge's force -mu e2 at P: Newton across the body, m (u w + a w') = -mu
     F = MASS * (u * w + OFFSET * sol.qdd[:, 2])
-    assert np.abs(sol.extra["mu"][after, 0] + F[after]).max() < 1e-9
+    mu = sol.extra["mu"][:, 0]
+    assert np.abs(mu[after] + F[after]).max() < 1e-9
+    # sol.reaction of the switch: nothing while sliding, then the blade's force -mu e2 at P
+    # and its moment (P - G) x F = a mu about the centroid
+    Fr, Mr = sol.reaction("edge", b)
+    assert np.abs(Fr[before]).max() == 0 and np.abs(Mr[before]).max() == 0
+    np.testing.assert_allclose(Fr[after], -mu[after, None] * e2[after], atol=1e-14)
+    np.testing.assert_allclose(Mr[after], OFFSET * mu[after], atol=1e-14)
     E = _energy(sol)
     assert np.abs(E[after] - (E[0] - ev["energy_lost"])).max() < 1e-10
     assert sol.extra["accuracy"]["nonholonomic"] < 1e-12
@@ -230,8 +237,14 @@ def test_outside_and_inside_rows_share_the_reset_and_the_columns():
     e1, _ = _frame(sol["sleigh.th"])
     u = np.sum(sol.qd[:, :2] * e1, axis=1)
     assert np.abs(u[2:] - u_cf[-1]).max() < 1e-9 and np.abs(sol.qd[2:, 2]).max() < 1e-12
-    # straight on: no force on either blade
+    # straight on: no force on either blade; before, the sleigh's blade (outside the switch:
+    # sol.reaction evaluated stage by stage) carries -mu e2 at P
     assert np.abs(mu[2:]).max() < 1e-12
+    th = sol["sleigh.th"]
+    Fr, Mr = sol.reaction("knife", b)
+    np.testing.assert_allclose(Fr, -mu[:, :1] * np.c_[-np.sin(th), np.cos(th)], atol=1e-14)
+    np.testing.assert_allclose(Mr, OFFSET * mu[:, 0], atol=1e-14)
+    assert np.abs(sol.reaction("front", b)[0]).max() < 1e-12
     # one state in each stage (FreeSystem.solve): the same columns
     one = fs.solve(0.25, initial_condition={"th2_d": W0})
     assert one.extra["mu"].shape == (1, 2) and np.isnan(one.extra["mu"][0, 1])

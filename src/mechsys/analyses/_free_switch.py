@@ -75,7 +75,7 @@ import sympy as sp
 from .._errors import ConvergenceError, MechError, ModelError
 from .._symbols import T
 from ..compile._stages import _cache
-from ..constraints._switches import StageSwitch
+from ..constraints._switches import StageSwitch, velocity_members
 from ..geometry._units import time_numbers
 from ..loads._switched import check_switched_loads
 from ..results._load_outputs import lambda_guess_vector
@@ -270,10 +270,10 @@ class SwitchedFreeSystem(FreeSystem):
                 + tuple(self._held_apart()) + tuple(self.stage_drops))
 
     def _base(self, combo=None):
-        """The full System of stage combination ``combo`` (the solution's rows), without the
-        velocity constraints (their multipliers are ``sol.extra["mu"]``)."""
-        return stage_system(self.model, combo,
-                            tuple(self.velocity_constraints) + tuple(self._held_apart()))
+        """The full System of stage combination ``combo`` (the solution's rows), without any
+        velocity constraint (their multipliers are ``sol.extra["mu"]``): the system
+        ``results/_stagewise.py`` evaluates the outputs of that stage with."""
+        return stage_system(self.model, combo, tuple(velocity_members(self.model)))
 
     def _rows(self, combo):
         """``(rows, columns)`` of stage combination ``combo``: the
@@ -756,7 +756,9 @@ class SwitchedFreeSystem(FreeSystem):
         n, N = base.n, len(out_t)
         Y = np.array(out_y)
         QDD = np.empty((N, n))
-        LAM = np.zeros((N, base.m))
+        # (the stages may differ in position rows where a velocity constraint stands for
+        # one: the widest stage's count, each stage's rows from the first column)
+        LAM = np.zeros((N, max(self._base(c).m for c in {*out_c, None})))
         # every velocity row of the model has its column; NaN where a row is not in effect
         MU = np.full((N, len(self._columns)), np.nan)
         rows: dict = {}

@@ -33,7 +33,7 @@ from .._symbols import T
 from ..compile import compile_exprs
 from ..compile._derive import sparse_derivatives
 from ..constraints import velocity_rows
-from ..constraints._switches import StageSwitch
+from ..constraints._switches import is_velocity_constraint
 from ..solvers._free import _solve_fast, project_positions
 from ..solvers._tolerances import SPARSE_THRESHOLD, Singular
 
@@ -51,9 +51,7 @@ def velocity_constraints(model, dropped=()) -> list:
     # (a switch is not one: the velocity constraints inside its stages are
     # switched_velocity_constraints, held stage by stage, decision 0063)
     return [c for c in model._constraints if all(c is not d for d in dropped)
-            and not isinstance(c, StageSwitch) and (
-        getattr(c, "order", 0) == 1
-        or any(e.free_symbols & rates for e in c.equations(model.space)))]
+            and is_velocity_constraint(c, model.space, rates)]
 
 
 class VelocityRows:
@@ -276,8 +274,7 @@ def switched_velocity_constraints(model) -> list[tuple]:
     (free motion through stage changes holds them in their stages, decision 0063)."""
     rates = set(model.velocity_symbols().values())
     return [(sw, k + 1, c) for sw in model._switches() for k, stage in enumerate(sw.stages)
-            for c in stage if getattr(c, "order", 0) == 1
-            or any(e.free_symbols & rates for e in c.equations(model.space))]
+            for c in stage if is_velocity_constraint(c, model.space, rates)]
 
 
 class RowTangent:
