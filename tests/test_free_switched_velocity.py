@@ -255,3 +255,39 @@ def test_outside_and_inside_rows_share_the_reset_and_the_columns():
     # a spin the two blades do not allow, given as held: refused by name
     with pytest.raises(ms.ModelError, match=r"velocities \['sleigh.th_d'\] are not allowed"):
         fs.solve(0.75, initial_condition={"th2_d": W0})
+
+
+def test_blade_that_lifts_as_a_heading_lock_takes_over():
+    # stage 1 the sleigh's blade, stage 2 (t >= 1) a lock of the heading at its value then:
+    # a velocity row ends and a position row starts (the stages differ in position rows).
+    # The lock's impulse is a pure moment: w is removed, v_G kept, I w^2 / 2 lost; then
+    # the centroid runs straight on at v_G(1) = u e1 + a w e2
+    u_cf, w_cf, th_cf, P_cf = _example.closed_form(np.array([0.0, 1.0]))
+    ue, we, the = u_cf[-1], w_cf[-1], th_cf[-1]
+    m, b, v = _body()
+    m.add(ms.TimeSwitch(_blade(b, v), 1.0, ms.RotationLock1(b, the)), name="edge")
+    fs = m.free()
+    t = np.linspace(0, 1.5, 4)
+    with pytest.raises(ms.ModelError, match="switch 'edge'.*at t = 1 with velocities"):
+        fs.simulate(t, initial_condition={"th2_d": W0}, rtol=1e-11, atol=1e-13)
+    sol = fs.simulate(t, initial_condition={"th2_d": W0}, at_switch="project", rtol=1e-11,
+                      atol=1e-13)
+    (ev,) = sol.extra["events"]
+    assert ev["energy_lost"] == pytest.approx(0.5 * INERTIA * we**2, rel=1e-9)
+    two = t >= 1
+    e1 = np.array([np.cos(the), np.sin(the)])
+    e2 = np.array([-np.sin(the), np.cos(the)])
+    vG = ue * e1 + OFFSET * we * e2
+    Ge = P_cf[-1] + OFFSET * e1
+    assert np.abs(sol.q[two, :2] - (Ge + np.outer(t[two] - 1, vG))).max() < 1e-9
+    assert np.abs(sol.q[two, 2] - the).max() < 1e-12 and np.abs(sol.qd[two, 2]).max() < 1e-12
+    mu = sol.extra["mu"][:, 0]
+    assert np.isfinite(mu[~two]).all() and np.isnan(mu[two]).all()
+    # the lock's multiplier column (zero while the blade holds: no such row in stage 1) and
+    # its moment (none needed to go straight on)
+    assert sol.lam.shape == (4, 1) and np.abs(sol.lam).max() < 1e-12
+    Fr, Mr = sol.reaction("edge", b)
+    th = sol["sleigh.th"]
+    np.testing.assert_allclose(Fr[~two], -mu[~two, None] * np.c_[-np.sin(th), np.cos(th)][~two],
+                               atol=1e-14)
+    assert np.abs(Fr[two]).max() < 1e-12 and np.abs(Mr[two]).max() < 1e-12
