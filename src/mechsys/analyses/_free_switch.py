@@ -41,7 +41,8 @@ not missed. The integration stops there, the tests are evaluated just past the z
     rebounds off the new stage's constraint (a stop) and **continues in the old stage**.
     Once an approach speed falls below ``1e-6`` times that of the first impact on the same
     switch (the rebounds of a body settling on a stop come ever faster) the stage is taken
-    with ``"project"``. ``e = 0`` is ``"project"``.
+    with ``"project"``. ``e = 0`` is ``"project"``. The law acts on the position rows only:
+    velocity constraints grip during the impact (below).
 
 Each event is reported in ``sol.extra["events"]``: time, kind (``"stage"``; ``"load"`` when
 only a switched load changed; ``"relation"`` when a relation crossed without changing any
@@ -50,18 +51,50 @@ solution has every stage's free-system multipliers mapped into the rows of the f
 system (a dropped constraint carries no force: its multipliers are zero), so
 ``sol.reaction`` and ``sol.stage`` work as for a kinematic sweep.
 
-**Velocity constraints** (rolling, a knife edge; decisions 0053 and 0060) added outside the
-switches hold in every stage: each stage's acceleration is the bordered solve of
-:func:`~mechsys.analyses._nonholonomic.nonholonomic_acceleration`, every projection is
-:func:`~mechsys.analyses._nonholonomic.project_state`, and the velocity reset takes the new
-stage's rows and the velocity rows stacked, :math:`G = [\Phi_q; A]`,
-:math:`g = [-\Phi_t; -b]`, in place of :math:`\Phi_q` and :math:`-\Phi_t` above (the
-plastic impact keeps the rolling). Their multipliers are ``sol.extra["mu"]``. A velocity
-constraint inside a stage of a switch raises :class:`ModelError`. Example (a sleigh pushed
-from ``t = 1`` to ``t = 2``)::
+**Velocity constraints** (rolling, a knife edge; decisions 0053, 0060 and 0063) added
+outside the switches hold in every stage; those inside a stage of a switch hold while that
+stage is in effect (not in a dropped stage or switch). Each stage has the velocity rows
+:math:`A \dot q + b = 0` of the constraints outside the switches and of those of its stages
+(:meth:`SwitchedFreeSystem._rows`, each distinct set compiled once): its acceleration is the
+bordered solve of :func:`~mechsys.analyses._nonholonomic.nonholonomic_acceleration`, every
+projection is :func:`~mechsys.analyses._nonholonomic.project_state`. The velocity reset
+of a stage change takes the new stage's position rows and velocity rows stacked,
+:math:`G = [\Phi_q; A]`, :math:`g = [-\Phi_t; -b]`, in place of :math:`\Phi_q` and
+:math:`-\Phi_t` above:
 
-    m.add_load(ms.TimeSwitch(1.0, ms.Force(b.point(0), (1, 0), 1.5), 2.0))
-    sol = m.free().simulate((0, 3), initial_condition={"th2_d": 2.0})
+.. math::
+
+    \begin{bmatrix} M & G^T \\ G & 0 \end{bmatrix}
+    \begin{bmatrix} \dot q^+ \\ P \end{bmatrix} =
+    \begin{bmatrix} M \dot q^- \\ g - E (G \dot q^- - g) \end{bmatrix}
+
+with :math:`E` = ``e`` on the position rows and 0 on the velocity rows. So
+
+* a velocity constraint that **starts** (a blade that touches down, a wheel that grips)
+  removes the velocity it forbids by the impulse ``P`` it applies, perfectly plastically
+  and in the kinetic-energy metric (a sliding body's lateral slip ``s`` at a blade under
+  its centroid costs ``m s^2 / 2``); ``at_switch=None`` refuses it naming the switch unless
+  the velocities already satisfy it; with ``("restitution", e)`` it grips too (a contact
+  that grips does not rebound sideways), and if no position row of the new stage is
+  approached the stage is simply taken, as with ``"project"``;
+* one that **ends** drops its rows: no impulse, the velocities are kept (compatible, also
+  under ``None``);
+* one in effect before and after (outside the switches) keeps holding: the plastic impact
+  keeps the rolling.
+
+``impulse`` holds the new stage's position rows' impulses, then its velocity rows' (in the
+order of their columns in ``mu``). ``sol.extra["mu"]`` has a column for every velocity row
+of the model, named in ``sol.extra["velocity_multipliers"]``: those outside the switches
+(``"knife[0]"``), then those inside the stages (``"edge.stage2[0]"``: switch, stage, row
+within the stage), NaN where the row is not in effect. ``sol.reaction(switch, body)`` of a
+stage with a velocity constraint is its :math:`-A^T \mu` plus the stage's position rows'
+reaction. Example (a sliding sleigh whose blade touches down at ``t = 1``)::
+
+    v = m.velocity(b.point("P"))
+    m.add(ms.TimeSwitch(ms.Orthogonal1(v, b.vector((0, 1))), 1.0,
+                        ms.Orthogonal1(v, b.vector((0, 1)))), name="edge")
+    sol = m.free(drop=[("edge", 1)]).simulate((0, 3), at_switch="project",
+                                              initial_condition={"x2_d": 0.5, "y2_d": 0.8})
 """
 
 from __future__ import annotations
@@ -363,7 +396,9 @@ class SwitchedFreeSystem(FreeSystem):
         dense output), ``rtol``/``atol``/``max_step``/``max_error``, ``starting_step_size``
         (the run's first step; after each event SciPy's own choice), ``tolerance``/
         ``max_iterations`` as :meth:`FreeSystem.simulate`; ``at_switch`` the velocity policy at a
-        constraint stage change (``None``, ``"project"``, ``("restitution", e)``);
+        constraint stage change (``None``, ``"project"``, ``("restitution", e)``; velocity
+        constraints that start there take a plastic impulse, those that end drop their rows:
+        module docstring);
         ``max_events`` the number of events after which a :class:`ConvergenceError` is raised
         (e.g. a motion chattering on a switch boundary)."""
         run = plan_run("FreeSystem.simulate (with switches)", t, unknown, (
