@@ -291,3 +291,22 @@ def test_blade_that_lifts_as_a_heading_lock_takes_over():
     np.testing.assert_allclose(Fr[~two], -mu[~two, None] * np.c_[-np.sin(th), np.cos(th)][~two],
                                atol=1e-14)
     assert np.abs(Fr[two]).max() < 1e-12 and np.abs(Mr[two]).max() < 1e-12
+
+
+def test_linearize_in_the_stage_its_tests_choose():
+    # straight on at speed u along the heading: free sliding before the blade touches down
+    # (a free body: every eigenvalue zero), on the blade after: the spin decays at the rate
+    # m a u / J (from (I + m a^2) w' = -m a u w), the eigenvalue the closed form gives
+    m, b, v = _body()
+    m.add(ms.TimeSwitch(_blade(b, v), 1.0, _blade(b, v)), name="edge")
+    fs = m.free(drop=[("edge", 1)])
+    u = 0.7
+    state = {"sleigh.x_d": u * np.cos(START[1]), "sleigh.y_d": u * np.sin(START[1]),
+             "sleigh.th_d": 0.0}
+    cyc = ["sleigh.x", "sleigh.y"]
+    sliding = fs.linearize(state, t=0.5, cyclic=cyc)
+    assert np.abs(sliding.eigenvalues).max() < 1e-12
+    on = fs.linearize(state, t=1.5, coordinates=[*cyc, "sleigh.th"], cyclic=cyc)
+    lam = np.sort(on.eigenvalues.real)
+    assert lam[0] == pytest.approx(-MASS * OFFSET * u / J, rel=1e-12)
+    assert np.abs(lam[1:]).max() < 1e-12 and np.abs(on.eigenvalues.imag).max() < 1e-12

@@ -88,7 +88,8 @@ of the model, named in ``sol.extra["velocity_multipliers"]``: those outside the 
 (``"knife[0]"``), then those inside the stages (``"edge.stage2[0]"``: switch, stage, row
 within the stage), NaN where the row is not in effect. ``sol.reaction(switch, body)`` of a
 stage with a velocity constraint is its :math:`-A^T \mu` plus the stage's position rows'
-reaction. Example (a sliding sleigh whose blade touches down at ``t = 1``)::
+reaction. :meth:`SwitchedFreeSystem.linearize` linearises in the stage the tests choose at
+the state. Example (a sliding sleigh whose blade touches down at ``t = 1``)::
 
     v = m.velocity(b.point("P"))
     m.add(ms.TimeSwitch(ms.Orthogonal1(v, b.vector((0, 1))), 1.0,
@@ -99,6 +100,7 @@ reaction. Example (a sliding sleigh whose blade touches down at ``t = 1``)::
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from numbers import Real
 from types import SimpleNamespace
 
@@ -358,6 +360,25 @@ class SwitchedFreeSystem(FreeSystem):
 
     def _free_system(self, combo):
         return stage_system(self.model, combo, self._dropped())
+
+    def linearize(self, state=None, inputs=(), outputs=(), coordinates=None, cyclic=(),
+                  t: float | None = None, tolerance: float = 1e-6, speeds=None):
+        """:meth:`FreeSystem.linearize` in the stage its tests choose at the state (as
+        :meth:`solve`): that stage's position rows (dropped stages left out) and velocity
+        rows (those of the constraints outside the switches and of the stages in effect,
+        decision 0063)."""
+        from ..results._solution import Solution, State
+
+        if isinstance(state, (Solution, State)) or state is None or isinstance(state, Mapping):
+            if isinstance(state, (Solution, State)):
+                t0 = float(np.atleast_1d(state.t)[-1]) if t is None else float(t)
+            else:
+                t0 = 0.0 if t is None else float(t)
+            q, _, p, _ = self._start(state)
+            self._enter(cached_tests(self.model, self._base()).stages(t0, q, p, {}))
+        return super().linearize(state, inputs=inputs, outputs=outputs,
+                                 coordinates=coordinates, cyclic=cyclic, t=t,
+                                 tolerance=tolerance, speeds=speeds)
 
     def _params(self, given=None) -> np.ndarray:
         # the model's parameters, then the held values of the switches' variables
