@@ -237,7 +237,9 @@ def _signs(v: np.ndarray) -> np.ndarray:
 
 class SwitchedFreeSystem(FreeSystem):
     """A free system of a model with switches: :meth:`simulate` passes through stage changes
-    as events (module docstring). Only ``solution="dynamic"`` (free motion)."""
+    as events (module docstring). Only ``solution="dynamic"`` (free motion).
+    ``velocity_constraints`` lists the velocity constraints outside the switches (held in
+    every stage); those inside the stages are held stage by stage (decision 0063)."""
 
     def __init__(self, model, drop=(), solution: str = "dynamic", initial_guess=None,
                  initial_condition=None):
