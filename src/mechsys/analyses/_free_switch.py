@@ -280,11 +280,14 @@ class SwitchedFreeSystem(FreeSystem):
             checked_equations(model, self.system, [c for _, _, c in self._inside])
         # the columns of sol.extra["mu"]: the rows outside the switches (in every stage),
         # then those inside the stages, switch by switch, stage by stage ("edge.stage2[0]")
-        self._labels = {id(c): f"{switches[j].name}.stage{k + 1}" for j, k, c in self._inside}
+        # (one owner per stage entry, named for row_names: the same constraint object may
+        # stand in two stages)
         self._outside_rows = self._vrows
         owners = [] if self._vrows is None else list(self._vrows.owners)
-        owners += [c for _, _, c in self._inside for _ in c.equations(model.space)]
-        self._columns = row_names(SimpleNamespace(owners=owners), self._labels)
+        for j, k, c in self._inside:
+            entry = SimpleNamespace(name=f"{switches[j].name}.stage{k + 1}")
+            owners += [entry] * len(c.equations(model.space))
+        self._columns = row_names(SimpleNamespace(owners=owners))
 
     @staticmethod
     def _is_pair(model, c) -> bool:
@@ -327,7 +330,7 @@ class SwitchedFreeSystem(FreeSystem):
                 active.append(c)
                 cols += range(at, at + r)
             at += r
-        key = (self.model._version, tuple(map(id, active)))
+        key = (self.model._version, tuple(cols))
         got = self._stage_rows.get(key)
         if got is None:
             if len(active) == len(self.velocity_constraints):

@@ -253,18 +253,17 @@ def velocity_drift(system, rows: VelocityRows, t, q, qd, p, scaling) -> float:
     return float(v / rate) if rate > 0 else float(v)
 
 
-def row_names(rows: VelocityRows, labels: dict | None = None) -> list[str]:
+def row_names(rows: VelocityRows) -> list[str]:
     """The names of the rows' multipliers, ``"knife[0]"`` (constraint name, row within it):
-    the columns of ``sol.extra["mu"]`` (``sol.extra["velocity_multipliers"]``). ``labels``
-    ({id(constraint): name}) names the constraints that have no name of their own (those
-    inside a stage of a switch: ``"edge.stage2"``, decision 0063); rows of constraints
-    with the same name are counted together."""
+    the columns of ``sol.extra["mu"]`` (``sol.extra["velocity_multipliers"]``). Rows of
+    owners with the same name are counted together (the velocity constraints of one stage
+    of a switch, ``"edge.stage2[0]"``, ``"edge.stage2[1]"``, decision 0063: ``rows`` is
+    anything with ``owners``, each with a ``name``)."""
     count: dict = {}
     names = []
     for c in rows.owners:
-        name = (labels or {}).get(id(c), c.name)
-        count[name] = count.get(name, 0) + 1
-        names.append(f"{name}[{count[name] - 1}]")
+        count[c.name] = count.get(c.name, 0) + 1
+        names.append(f"{c.name}[{count[c.name] - 1}]")
     return names
 
 
