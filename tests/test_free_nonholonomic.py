@@ -236,16 +236,28 @@ def test_sleigh_latching_heading_velocity_reset_keeps_the_edge():
     assert np.abs(-vP[:, 0] * np.sin(th) + vP[:, 1] * np.cos(th)).max() < 1e-12
 
 
-def test_velocity_constraint_inside_a_switch_refused_by_name():
+def test_velocity_constraint_inside_a_switch_is_held_in_its_stage():
+    # (refused before decision 0063; the motion through such switches, with the resets
+    # against closed forms: tests/test_free_switched_velocity.py)
     m = ms.Model2D()
     b = m.add_body("sleigh", points={"P": (-OFFSET, 0.0)}, guess=_example.START, mass=MASS,
                    inertia=INERTIA)
     v = m.velocity(b.point("P"))
     m.add(ms.TimeSwitch(ms.Orthogonal1(v, b.vector((0, 1))), 1.0,
                         ms.Orthogonal1(v, b.vector((1, 0)))), name="edge")
-    with pytest.raises(ms.ModelError, match="velocity constraints inside stage or time switches"
-                       ".*stage 1 of switch 'edge'.*outside the switch"):
-        m.free()
+    fs = m.free()
+    assert fs.velocity_constraints == [] and fs.system.m == 0
+    ic = {"sleigh.x_d": 0.3, "th2_d": W0}
+    for t, on in ((0.5, 0), (1.5, 1)):
+        one = fs.solve(t, initial_condition=ic)
+        assert one.extra["velocity_multipliers"] == ["edge.stage1[0]", "edge.stage2[0]"]
+        mu = one.extra["mu"][0]
+        assert np.isfinite(mu[on]) and np.isnan(mu[1 - on])
+        # the row in effect holds at the (projected) start: no velocity of P across its blade
+        vP = one.velocity(b.point("P"))
+        th = one["sleigh.th"]
+        n = (-np.sin(th), np.cos(th)) if on == 0 else (np.cos(th), np.sin(th))
+        assert abs(vP[0] * n[0] + vP[1] * n[1]) < 1e-14
 
 
 def test_nonlinear_velocity_constraint_refused_by_name():

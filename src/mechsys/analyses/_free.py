@@ -224,7 +224,8 @@ class FreeSystem:
         self.kind = solution
         # velocity (nonholonomic) constraints: rows A qd + b = 0 beside Phi = 0 (decision 0053)
         self.velocity_constraints = velocity_constraints(model, self.dropped)
-        self.system = model._system_without(self.dropped + self.velocity_constraints)
+        self.system = model._system_without(self.dropped + self.velocity_constraints
+                                            + self._held_apart())
         if self.system.n == 0:
             raise ModelError("free(): the model has no moving bodies (or variables); add bodies "
                              "before freeing constraints")
@@ -247,14 +248,16 @@ class FreeSystem:
             raise ModelError(f"free system is still overconstrained ({self.system.m} equations,"
                              f" {self.system.n} coordinates)")
         self._vrows = None
-        if self.velocity_constraints:
+        every = self.velocity_constraints + self._held_apart()
+        if every:
             dyn = self.system.dynamics
             if dyn.depends_on_lambda or dyn.depends_on_qdd:
                 raise ModelError(
                     "free(): loads that depend on multipliers (friction) or accelerations "
                     "together with velocity constraints "
-                    f"({', '.join(c.label() for c in self.velocity_constraints)}) are not "
+                    f"({', '.join(c.label() for c in every)}) are not "
                     "supported yet; remove those loads or the velocity constraints")
+        if self.velocity_constraints:
             # (the equilibria do not use rho = d(A qd + b)/dt: not derived for them)
             self._vrows = VelocityRows(model, self.system, self.velocity_constraints,
                                        rho=solution == "dynamic")
@@ -263,6 +266,11 @@ class FreeSystem:
         if initial_condition is not None:
             self._q0, self._qd0, self._p_given = self._apply_condition(
                 initial_condition, self._q0, self._qd0, self._held0)
+
+    def _held_apart(self) -> list:
+        """Velocity constraints held as rows of their own besides ``velocity_constraints``:
+        none here (those inside the stages of switches, :class:`SwitchedFreeSystem`)."""
+        return []
 
     # -- properties ------------------------------------------------------------------------
     @property

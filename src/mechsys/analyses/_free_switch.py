@@ -41,7 +41,8 @@ not missed. The integration stops there, the tests are evaluated just past the z
     rebounds off the new stage's constraint (a stop) and **continues in the old stage**.
     Once an approach speed falls below ``1e-6`` times that of the first impact on the same
     switch (the rebounds of a body settling on a stop come ever faster) the stage is taken
-    with ``"project"``. ``e = 0`` is ``"project"``.
+    with ``"project"``. ``e = 0`` is ``"project"``. The law acts on the position rows only:
+    velocity constraints grip during the impact (below).
 
 Each event is reported in ``sol.extra["events"]``: time, kind (``"stage"``; ``"load"`` when
 only a switched load changed; ``"relation"`` when a relation crossed without changing any
@@ -50,23 +51,58 @@ solution has every stage's free-system multipliers mapped into the rows of the f
 system (a dropped constraint carries no force: its multipliers are zero), so
 ``sol.reaction`` and ``sol.stage`` work as for a kinematic sweep.
 
-**Velocity constraints** (rolling, a knife edge; decisions 0053 and 0060) added outside the
-switches hold in every stage: each stage's acceleration is the bordered solve of
-:func:`~mechsys.analyses._nonholonomic.nonholonomic_acceleration`, every projection is
-:func:`~mechsys.analyses._nonholonomic.project_state`, and the velocity reset takes the new
-stage's rows and the velocity rows stacked, :math:`G = [\Phi_q; A]`,
-:math:`g = [-\Phi_t; -b]`, in place of :math:`\Phi_q` and :math:`-\Phi_t` above (the
-plastic impact keeps the rolling). Their multipliers are ``sol.extra["mu"]``. A velocity
-constraint inside a stage of a switch raises :class:`ModelError`. Example (a sleigh pushed
-from ``t = 1`` to ``t = 2``)::
+**Velocity constraints** (rolling, a knife edge; decisions 0053, 0060 and 0063) added
+outside the switches hold in every stage; those inside a stage of a switch hold while that
+stage is in effect (not in a dropped stage or switch). Each stage has the velocity rows
+:math:`A \dot q + b = 0` of the constraints outside the switches and of those of its stages
+(:meth:`SwitchedFreeSystem._rows`, each distinct set compiled once): its acceleration is the
+bordered solve of :func:`~mechsys.analyses._nonholonomic.nonholonomic_acceleration`, every
+projection is :func:`~mechsys.analyses._nonholonomic.project_state`. The velocity reset
+of a stage change takes the new stage's position rows and velocity rows stacked,
+:math:`G = [\Phi_q; A]`, :math:`g = [-\Phi_t; -b]`, in place of :math:`\Phi_q` and
+:math:`-\Phi_t` above:
 
-    m.add_load(ms.TimeSwitch(1.0, ms.Force(b.point(0), (1, 0), 1.5), 2.0))
-    sol = m.free().simulate((0, 3), initial_condition={"th2_d": 2.0})
+.. math::
+
+    \begin{bmatrix} M & G^T \\ G & 0 \end{bmatrix}
+    \begin{bmatrix} \dot q^+ \\ P \end{bmatrix} =
+    \begin{bmatrix} M \dot q^- \\ g - E (G \dot q^- - g) \end{bmatrix}
+
+with :math:`E` = ``e`` on the position rows and 0 on the velocity rows. So
+
+* a velocity constraint that **starts** (a blade that touches down, a wheel that grips)
+  removes the velocity it forbids by the impulse ``P`` it applies, perfectly plastically
+  and in the kinetic-energy metric (a sliding body's lateral slip ``s`` at a blade under
+  its centroid costs ``m s^2 / 2``); ``at_switch=None`` refuses it naming the switch unless
+  the velocities already satisfy it; with ``("restitution", e)`` it grips too (a contact
+  that grips does not rebound sideways), and if no position row of the new stage is
+  approached the stage is simply taken, as with ``"project"``;
+* one that **ends** drops its rows: no impulse, the velocities are kept (compatible, also
+  under ``None``);
+* one in effect before and after (outside the switches) keeps holding: the plastic impact
+  keeps the rolling.
+
+``impulse`` holds the new stage's position rows' impulses, then its velocity rows' (in the
+order of their columns in ``mu``). ``sol.extra["mu"]`` has a column for every velocity row
+of the model, named in ``sol.extra["velocity_multipliers"]``: those outside the switches
+(``"knife[0]"``), then those inside the stages (``"edge.stage2[0]"``: switch, stage, row
+within the stage), NaN where the row is not in effect. ``sol.reaction(switch, body)`` of a
+stage with a velocity constraint is its :math:`-A^T \mu` plus the stage's position rows'
+reaction. :meth:`SwitchedFreeSystem.linearize` linearises in the stage the tests choose at
+the state. Example (a sliding sleigh whose blade touches down at ``t = 1``)::
+
+    v = m.velocity(b.point("P"))
+    m.add(ms.TimeSwitch(ms.Orthogonal1(v, b.vector((0, 1))), 1.0,
+                        ms.Orthogonal1(v, b.vector((0, 1)))), name="edge")
+    sol = m.free(drop=[("edge", 1)]).simulate((0, 3), at_switch="project",
+                                              initial_condition={"x2_d": 0.5, "y2_d": 0.8})
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from numbers import Real
+from types import SimpleNamespace
 
 import numpy as np
 import sympy as sp
@@ -74,7 +110,7 @@ import sympy as sp
 from .._errors import ConvergenceError, MechError, ModelError
 from .._symbols import T
 from ..compile._stages import _cache
-from ..constraints._switches import StageSwitch
+from ..constraints._switches import StageSwitch, velocity_members
 from ..geometry._units import time_numbers
 from ..loads._switched import check_switched_loads
 from ..results._load_outputs import lambda_guess_vector
@@ -94,6 +130,8 @@ from ..solvers._linalg import factor
 from ._free import FreeSystem, accuracy_report, nonholonomic_accuracy
 from ._multistage import _HeldValues, cached_tests, lambdify_exact, stage_system
 from ._nonholonomic import (
+    VelocityRows,
+    checked_equations,
     nonholonomic_acceleration,
     project_state,
     row_names,
@@ -199,7 +237,9 @@ def _signs(v: np.ndarray) -> np.ndarray:
 
 class SwitchedFreeSystem(FreeSystem):
     """A free system of a model with switches: :meth:`simulate` passes through stage changes
-    as events (module docstring). Only ``solution="dynamic"`` (free motion)."""
+    as events (module docstring). Only ``solution="dynamic"`` (free motion).
+    ``velocity_constraints`` lists the velocity constraints outside the switches (held in
+    every stage); those inside the stages are held stage by stage (decision 0063)."""
 
     def __init__(self, model, drop=(), solution: str = "dynamic", initial_guess=None,
                  initial_condition=None):
@@ -221,16 +261,33 @@ class SwitchedFreeSystem(FreeSystem):
             else:
                 plain.append(c)
         self.stage_drops = staged
+        # velocity constraints inside the stages (decision 0063): never rows of a stage
+        # system; held as velocity rows in their stages except in dropped switches and
+        # stages: (switch index, stage (0-based), constraint)
+        dropped = [model.constraint(c) for c in plain]
+        switches = model._switches()
+        where = {id(sw): j for j, sw in enumerate(switches)}
         inside = switched_velocity_constraints(model)
-        if inside:
-            # (the velocity rows are compiled once, for the coordinates every stage shares;
-            # rows that come and go with a stage are not held)
-            raise ModelError(
-                "free(): velocity constraints inside stage or time switches are not supported: "
-                + ", ".join(f"{c.label()} in stage {k} of {sw.label()}" for sw, k, c in inside)
-                + "; add the velocity constraint to the model outside the switch (it then "
-                "holds in every stage), or replace the switch by the stage you need")
+        self._apart = [c for _, _, c in inside]
+        self._inside = [(where[id(sw)], k - 1, c) for sw, k, c in inside
+                        if all(sw is not d for d in dropped)
+                        and all(not (sw is d and k - 1 == j) for d, j in staged)]
+        self._stage_rows: dict = {}
         super().__init__(model, plain, solution, initial_guess, initial_condition)
+        if self._inside:
+            # every stage's rows are compiled on first use; their equations are checked
+            # (linear in the rates, known symbols) now, naming the constraint at fault
+            checked_equations(model, self.system, [c for _, _, c in self._inside])
+        # the columns of sol.extra["mu"]: the rows outside the switches (in every stage),
+        # then those inside the stages, switch by switch, stage by stage ("edge.stage2[0]")
+        # (one owner per stage entry, named for row_names: the same constraint object may
+        # stand in two stages)
+        self._outside_rows = self._vrows
+        owners = [] if self._vrows is None else list(self._vrows.owners)
+        for j, k, c in self._inside:
+            entry = SimpleNamespace(name=f"{switches[j].name}.stage{k + 1}")
+            owners += [entry] * len(c.equations(model.space))
+        self._columns = row_names(SimpleNamespace(owners=owners))
 
     @staticmethod
     def _is_pair(model, c) -> bool:
@@ -242,35 +299,91 @@ class SwitchedFreeSystem(FreeSystem):
         except MechError:
             return False
 
+    def _held_apart(self) -> list:
+        # the velocity constraints inside the stages: rows of their own, stage by stage
+        return list(self._apart)
+
     def _dropped(self) -> tuple:
-        # (the velocity constraints are rows of their own, self._vrows, not of the stages)
-        return tuple(self.dropped) + tuple(self.velocity_constraints) + tuple(self.stage_drops)
+        # (the velocity constraints are rows of their own, self._rows(combo), not of the
+        # stages)
+        return (tuple(self.dropped) + tuple(self.velocity_constraints)
+                + tuple(self._held_apart()) + tuple(self.stage_drops))
 
     def _base(self, combo=None):
-        """The full System of stage combination ``combo`` (the solution's rows), without the
-        velocity constraints (their multipliers are ``sol.extra["mu"]``)."""
-        return stage_system(self.model, combo, tuple(self.velocity_constraints))
+        """The full System of stage combination ``combo`` (the solution's rows), without any
+        velocity constraint (their multipliers are ``sol.extra["mu"]``): the system
+        ``results/_stagewise.py`` evaluates the outputs of that stage with."""
+        return stage_system(self.model, combo, tuple(velocity_members(self.model)))
 
-    def _project(self, S, t, q, qd, p, sc):
-        """``(q, qd)`` on stage system ``S``'s constraints and the velocity rows (one
-        projection: :func:`~mechsys.solvers._free.project`, or with velocity constraints
-        :func:`~mechsys.analyses._nonholonomic.project_state`). The rows ``self._vrows``
-        serve every stage: the stage systems share their coordinates and parameters (the
-        same layout), and the velocity constraints are outside the switches."""
-        if self._vrows is None:
+    def _rows(self, combo):
+        """``(rows, columns)`` of stage combination ``combo``: the
+        :class:`~mechsys.analyses._nonholonomic.VelocityRows` of the velocity constraints
+        outside the switches and of those inside the stages in effect (None without any),
+        and their columns in ``sol.extra["mu"]``. Each distinct set of constraints is
+        compiled once (per model version); the stage systems share their coordinates and
+        parameters (the same layout), so one set serves every combination that has it."""
+        k0 = 0 if self._outside_rows is None else self._outside_rows.k
+        active, cols, at = list(self.velocity_constraints), list(range(k0)), k0
+        for j, k, c in self._inside:
+            r = len(c.equations(self.model.space))
+            if combo[j] == k:
+                active.append(c)
+                cols += range(at, at + r)
+            at += r
+        key = (self.model._version, tuple(cols))
+        got = self._stage_rows.get(key)
+        if got is None:
+            if len(active) == len(self.velocity_constraints):
+                rows = self._outside_rows
+            else:
+                rows = VelocityRows(self.model, self._free_system(combo), active)
+            got = self._stage_rows[key] = (rows, np.array(cols, dtype=int))
+        return got
+
+    def _project(self, S, rows, t, q, qd, p, sc):
+        """``(q, qd)`` on stage system ``S``'s constraints and its velocity rows ``rows``
+        (:meth:`_rows`; one projection: :func:`~mechsys.solvers._free.project`, or with
+        velocity constraints :func:`~mechsys.analyses._nonholonomic.project_state`)."""
+        if rows is None:
             return project(S, t, q, qd, p, scaling=sc)
-        return project_state(S, self._vrows, t, q, qd, p, sc)
+        return project_state(S, rows, t, q, qd, p, sc)
 
-    def _acceleration(self, S, t, q, qd, p, sc, kw):
-        r"""``(qdd, multipliers)`` in stage system ``S``: the multipliers of its rows, then
-        (with velocity constraints, :func:`~mechsys.analyses._nonholonomic.nonholonomic_acceleration`)
-        those of the velocity rows, :math:`\mu`."""
-        if self._vrows is None:
+    def _acceleration(self, S, rows, t, q, qd, p, sc, kw):
+        r"""``(qdd, multipliers)`` in stage system ``S`` with its velocity rows ``rows``: the
+        multipliers of its rows, then (with velocity constraints,
+        :func:`~mechsys.analyses._nonholonomic.nonholonomic_acceleration`) those of the
+        velocity rows, :math:`\mu`."""
+        if rows is None:
             return free_acceleration(S, t, q, qd, p, columns=sc.columns, **kw)[:2]
-        return nonholonomic_acceleration(S, self._vrows, t, q, qd, p)
+        return nonholonomic_acceleration(S, rows, t, q, qd, p)
+
+    def _enter(self, combo):
+        """Make ``combo`` the current stage: ``self.system`` and ``self._vrows`` (the start
+        projection and the accuracy report use them)."""
+        self.system = self._free_system(combo)
+        self._vrows = self._rows(combo)[0]
 
     def _free_system(self, combo):
         return stage_system(self.model, combo, self._dropped())
+
+    def linearize(self, state=None, inputs=(), outputs=(), coordinates=None, cyclic=(),
+                  t: float | None = None, tolerance: float = 1e-6, speeds=None):
+        """:meth:`FreeSystem.linearize` in the stage its tests choose at the state (as
+        :meth:`solve`): that stage's position rows (dropped stages left out) and velocity
+        rows (those of the constraints outside the switches and of the stages in effect,
+        decision 0063)."""
+        from ..results._solution import Solution, State
+
+        if isinstance(state, (Solution, State)) or state is None or isinstance(state, Mapping):
+            if isinstance(state, (Solution, State)):
+                t0 = float(np.atleast_1d(state.t)[-1]) if t is None else float(t)
+            else:
+                t0 = 0.0 if t is None else float(t)
+            q, _, p, _ = self._start(state)
+            self._enter(cached_tests(self.model, self._base()).stages(t0, q, p, {}))
+        return super().linearize(state, inputs=inputs, outputs=outputs,
+                                 coordinates=coordinates, cyclic=cyclic, t=t,
+                                 tolerance=tolerance, speeds=speeds)
 
     def _params(self, given=None) -> np.ndarray:
         # the model's parameters, then the held values of the switches' variables
@@ -293,7 +406,7 @@ class SwitchedFreeSystem(FreeSystem):
             kw["lam_guess"] = lambda_guess_vector(self.system, self.model, lambda_guess)
         q, qd, p, held = self._start(initial_condition)
         combo = cached_tests(self.model, self._base()).stages(t, q, p, {})
-        self.system = self._free_system(combo)
+        self._enter(combo)
         sc = scaling_at(self.system, t, q, p)
         q, qd = self._project_start(t, q, qd, p, held, sc)
         return self._assemble([t], [np.concatenate((q, qd))], [combo], p, kw, {}, sc, scalar=True)
@@ -309,7 +422,9 @@ class SwitchedFreeSystem(FreeSystem):
         dense output), ``rtol``/``atol``/``max_step``/``max_error``, ``starting_step_size``
         (the run's first step; after each event SciPy's own choice), ``tolerance``/
         ``max_iterations`` as :meth:`FreeSystem.simulate`; ``at_switch`` the velocity policy at a
-        constraint stage change (``None``, ``"project"``, ``("restitution", e)``);
+        constraint stage change (``None``, ``"project"``, ``("restitution", e)``; velocity
+        constraints that start there take a plastic impulse, those that end drop their rows:
+        module docstring);
         ``max_events`` the number of events after which a :class:`ConvergenceError` is raised
         (e.g. a motion chattering on a switch boundary)."""
         run = plan_run("FreeSystem.simulate (with switches)", t, unknown, (
@@ -338,7 +453,7 @@ class SwitchedFreeSystem(FreeSystem):
         held = _HeldValues(model, base, q)
         held.p = p
         combo = tests.stages(t0, q, p, {})
-        self.system = self._free_system(combo)
+        self._enter(combo)
         sc = scaling_at(self.system, t0, q, p)
         q, qd = self._project_start(t0, q, qd, p, held_ic, sc)
         y = np.concatenate((q, qd))
@@ -354,14 +469,15 @@ class SwitchedFreeSystem(FreeSystem):
         known: dict = {}            # row -> (qdd, lambda) from the compiled loop
         while (t1 - t_now) * d > 0:
             S = self._free_system(combo)
+            R = self._rows(combo)[0]            # this stage's velocity rows (or None)
 
-            def rhs(tt, yy, S=S):
-                return np.concatenate((yy[n:], self._acceleration(S, tt, yy[:n], yy[n:], p, sc,
-                                                                  kw)[0]))
+            def rhs(tt, yy, S=S, R=R):
+                return np.concatenate((yy[n:], self._acceleration(S, R, tt, yy[:n], yy[n:], p,
+                                                                  sc, kw)[0]))
 
             # the compiled stepper of this stage takes the steps between events where it can
             fast = self._stepper(plans, combo, S, opt, p, sc, t_eval, t_now, y, kw,
-                                 0 if self._vrows is None else self._vrows.k)
+                                 0 if R is None else R.k)
             calls = None
             if opt.spec.implicit:       # its Jacobians' evaluations are not in nfev
                 rhs, calls = counting(rhs)
@@ -405,7 +521,7 @@ class SwitchedFreeSystem(FreeSystem):
                     dense = solver.dense_output()
                     # the events at the projected state (the state the motion goes on from;
                     # the compiled steps are projected in the loop)
-                    yp = np.concatenate(self._project(S, solver.t, solver.y[:n],
+                    yp = np.concatenate(self._project(S, R, solver.t, solver.y[:n],
                                                       solver.y[n:], p, sc))
                     g_new = events(solver.t, yp, p)
                 crossed = [i for i in range(len(g_new)) if g_ref[i] != 0 and g_new[i] == -g_ref[i]]
@@ -424,7 +540,7 @@ class SwitchedFreeSystem(FreeSystem):
                                 events(t_eval[ie], dense(t_eval[ie]), p)[hit[0]] == hit[3])):
                         yi = dense(t_eval[ie])
                         out_t.append(float(t_eval[ie]))
-                        out_y.append(np.concatenate(self._project(S, t_eval[ie], yi[:n],
+                        out_y.append(np.concatenate(self._project(S, R, t_eval[ie], yi[:n],
                                                                   yi[n:], p, sc)))
                         out_c.append(combo)
                         ie += 1
@@ -451,7 +567,7 @@ class SwitchedFreeSystem(FreeSystem):
             s0 = hit[3]
             fresh = {i_ev: -s0}         # the motion goes on to the far side ...
             if new == combo:
-                y = np.concatenate(self._project(S, te, ye[:n], ye[n:], p, sc))
+                y = np.concatenate(self._project(S, R, te, ye[:n], ye[n:], p, sc))
                 g = events.exprs[i_ev]
                 log.append({"t": te, "kind": "load" if g in events.of_load else "relation",
                             "event": str(g)})
@@ -480,8 +596,11 @@ class SwitchedFreeSystem(FreeSystem):
         sol.extra["accuracy"] = accuracy_report(self.system, sc, sol.t, Y, p, opt.rtol,
                                                 "FreeSystem.simulate (with switches)")
         if self._vrows is not None:
+            # (in the last stage's velocity rows, as the holonomic accuracy in its rows)
             nonholonomic_accuracy(self.system, self._vrows, sol.t, Y, p, sc, opt.rtol,
                                   sol.extra["accuracy"], "FreeSystem.simulate (with switches)")
+        elif self._columns:
+            sol.extra["accuracy"]["nonholonomic"] = 0.0     # no velocity rows in that stage
         return sol
 
     @staticmethod
@@ -625,13 +744,16 @@ class SwitchedFreeSystem(FreeSystem):
         q = project_positions(SB, te, ye[:n], p, scaling=sc)
         qd = ye[n:]
         M = SB.dynamics.terms(te, q, qd, np.zeros(SB.m), p, np.zeros(n))[0]
-        if self._vrows is None:
+        RB = self._rows(new)[0]
+        if RB is None:
             J, rhs = SB.velocity_rhs(te, q, p)
             J = np.asarray(J.toarray() if hasattr(J, "toarray") else J)
         else:
-            # the new stage's velocity equations and the velocity constraints' rows
-            # A qd = -b stacked: the reset keeps the rolling (no slip across the switch)
-            J, rhs = velocity_matrix(SB, self._vrows, te, q, p)
+            # the new stage's velocity equations and its velocity rows A qd = -b stacked
+            # (those outside the switches and those of the new stages): the reset keeps the
+            # rolling, and a velocity constraint that starts here (a blade that touches
+            # down, a wheel that grips) takes its impulse; one that ends just drops its rows
+            J, rhs = velocity_matrix(SB, RB, te, q, p)
         m = J.shape[0]
         viol = J @ qd - rhs
         r = sc.rows(J) if m else np.zeros(0)
@@ -641,9 +763,11 @@ class SwitchedFreeSystem(FreeSystem):
                  "from": [k + 1 for k in old], "to": [k + 1 for k in new],
                  "kinetic_energy_before": ke0}
         target, e = new, 0.0
-        if speed <= COMPATIBLE * (1.0 + np.abs(qd / sc.columns).max(initial=0.0)):
+        within = COMPATIBLE * (1.0 + np.abs(qd / sc.columns).max(initial=0.0))
+        mh = SB.m                   # the position rows' velocity equations come first
+        if speed <= within:
             entry["policy"] = "compatible"
-            qd_new = self._project(SB, te, q, qd, p, sc)[1]
+            qd_new = self._project(SB, RB, te, q, qd, p, sc)[1]
         else:
             kind, e = policy
             if kind is None:
@@ -655,21 +779,29 @@ class SwitchedFreeSystem(FreeSystem):
                     "'project') (keep the compatible part; the kinetic energy lost is reported) "
                     "or at_switch=('restitution', e) (rebound off the new stage's constraint)")
             if kind == "restitution":
+                # Newton's law on the new stage's position rows only (the approach to a
+                # stop); the velocity rows grip during the impact (a perfectly rough
+                # contact: a blade or a wheel does not rebound sideways). Without an
+                # approach there is nothing to rebound from: the stage is taken plastically
+                approach = float(np.abs(viol[:mh] / r[:mh]).max(initial=0.0))
                 key = tuple(names)
-                first = first_speed.setdefault(key, speed)
-                if speed <= LATCH_FRACTION * first:
+                if approach <= within:
+                    kind, e = "project", 0.0
+                elif approach <= LATCH_FRACTION * first_speed.setdefault(key, approach):
                     kind, e = "project", 0.0
                 else:
                     target = old
             entry["policy"] = kind if kind == "project" else f"restitution e={e:g}"
             K = np.zeros((n + m, n + m))
             K[:n, :n], K[:n, n:], K[n:, :n] = M, J.T, J
-            x = factor(K).solve(np.concatenate((M @ qd, rhs - e * viol)))
+            law = np.zeros(m)
+            law[:mh] = e
+            x = factor(K).solve(np.concatenate((M @ qd, rhs - law * viol)))
             qd_new = x[:n]
             entry["impulse"] = x[n:].copy()
         if target is old:       # a rebound: the old stage continues, its constraints exact
             SA = self._free_system(old)
-            q, qd_new = self._project(SA, te, q, qd_new, p, sc)
+            q, qd_new = self._project(SA, self._rows(old)[0], te, q, qd_new, p, sc)
         ke1 = 0.5 * float(qd_new @ M @ qd_new)
         entry.update(kinetic_energy_after=ke1, energy_lost=ke0 - ke1, stage_after=[k + 1 for k in target])
         return target, np.concatenate((q, qd_new)), entry
@@ -685,22 +817,27 @@ class SwitchedFreeSystem(FreeSystem):
         n, N = base.n, len(out_t)
         Y = np.array(out_y)
         QDD = np.empty((N, n))
-        LAM = np.zeros((N, base.m))
-        MU = np.zeros((N, 0 if self._vrows is None else self._vrows.k))
+        # (the stages may differ in position rows where a velocity constraint stands for
+        # one: the widest stage's count, each stage's rows from the first column)
+        LAM = np.zeros((N, max(self._base(c).m for c in {*out_c, None})))
+        # every velocity row of the model has its column; NaN where a row is not in effect
+        MU = np.full((N, len(self._columns)), np.nan)
         rows: dict = {}
         known = known or {}
         systems: dict = {}
         for k, (tk, yk, ck) in enumerate(zip(out_t, Y, out_c)):
-            S = systems.get(ck)
-            if S is None:
-                S = systems[ck] = self._free_system(ck)
-            got = known.get(k)
-            if got is not None and np.isfinite(got[0]).all() and np.isfinite(got[1]).all():
-                qdd, lam = got
+            got = systems.get(ck)
+            if got is None:
+                got = systems[ck] = (self._free_system(ck), *self._rows(ck))
+            S, R, cols = got
+            kept = known.get(k)
+            if kept is not None and np.isfinite(kept[0]).all() and np.isfinite(kept[1]).all() \
+                    and len(kept[1]) == S.m + len(cols):
+                qdd, lam = kept
             else:
-                qdd, lam = self._acceleration(S, tk, yk[:n], yk[n:], p, sc, kw)
+                qdd, lam = self._acceleration(S, R, tk, yk[:n], yk[n:], p, sc, kw)
             QDD[k] = qdd
-            MU[k] = lam[S.m:]
+            MU[k, cols] = lam[S.m:]
             if ck not in rows:
                 rows[ck] = _row_map(S, self._base(ck))
             src, dst = rows[ck]
@@ -710,11 +847,11 @@ class SwitchedFreeSystem(FreeSystem):
         extra = {**info, "length_scale": sc.length}
         if switches:
             extra["stages"] = {sw.name: C[:, j] + 1 for j, sw in enumerate(switches)}
-        if self._vrows is not None:
+        if self._columns:
             # the velocity constraints' multipliers, as FreeSystem._result names them
-            extra["velocity_multipliers"] = row_names(self._vrows)
+            extra["velocity_multipliers"] = list(self._columns)
             extra["mu"] = MU
-        self.system = self._free_system(out_c[-1])
+        self._enter(out_c[-1])
         return Solution(t=np.asarray(out_t, dtype=float), q=Y[:, :n].copy(), qd=Y[:, n:].copy(),
                         qdd=QDD, p=p, system=base, model=model, iterations=np.zeros(N, dtype=int),
                         lam=LAM, mode="free-dynamic", extra=extra, scalar=scalar)

@@ -33,6 +33,7 @@ from .._symbols import T
 from ..compile import compile_exprs
 from ..compile._derive import sparse_derivatives
 from ..constraints import velocity_rows
+from ..constraints._switches import is_velocity_constraint
 from ..solvers._free import _solve_fast, project_positions
 from ..solvers._tolerances import SPARSE_THRESHOLD, Singular
 
@@ -47,9 +48,10 @@ def velocity_constraints(model, dropped=()) -> list:
     1`` (the rolling classes) or equations that use the rates (a ``Constraint`` or
     ``Orthogonal1`` of velocity expressions). (Equations are cached per constraint.)"""
     rates = set(model.velocity_symbols().values())
-    return [c for c in model._constraints if all(c is not d for d in dropped) and (
-        getattr(c, "order", 0) == 1
-        or any(e.free_symbols & rates for e in c.equations(model.space)))]
+    # (a switch is not one: the velocity constraints inside its stages are
+    # switched_velocity_constraints, held stage by stage, decision 0063)
+    return [c for c in model._constraints if all(c is not d for d in dropped)
+            and is_velocity_constraint(c, model.space, rates)]
 
 
 class VelocityRows:
@@ -65,24 +67,7 @@ class VelocityRows:
     def __init__(self, model, system, constraints, rho: bool = True):
         lay = system.layout
         q, qd = list(lay.q_symbols), list(lay.qd_symbols)
-        allowed = set(q) | set(qd) | set(lay.p_symbols) | {T}
-        gen = model._gen_substitution()
-        psi, owners = [], []
-        for c in constraints:
-            eqs = [e.xreplace(gen) if gen else e for e in c.equations(model.space)]
-            for e in eqs:
-                extra = e.free_symbols - allowed
-                if extra:
-                    raise ModelError(f"{c.label()} uses unknown symbol(s) "
-                                     f"{sorted(map(str, extra))}")
-            if not velocity_rows(eqs, q, qd, rho=False).linear:
-                raise ModelError(
-                    f"free(): the velocity constraint {c.label()} is not linear in the "
-                    "velocities, so it has no form A(q, t) qd + b(q, t) = 0 that free motion "
-                    "can hold; write it linear in the rates (e.g. a component of a velocity "
-                    "along a direction), or use a path system (m.path) for it")
-            psi += eqs
-            owners += [c] * len(eqs)
+        psi, owners = checked_equations(model, system, constraints)
         rows = velocity_rows(psi, q, qd, rho=rho)
         self.psi = psi                     # (kept for the linearisation's derivatives)
         self._derivs = None
@@ -165,6 +150,34 @@ class VelocityRows:
         return A @ qd + b
 
 
+def checked_equations(model, system, constraints) -> tuple[list, list]:
+    """``(psi, owners)``: the equations of the velocity ``constraints`` in the coordinates of
+    ``system`` and the constraint of each row. A constraint that uses symbols the system
+    does not know, or whose equations are not linear in the rates, raises
+    :class:`ModelError` naming it."""
+    lay = system.layout
+    q, qd = list(lay.q_symbols), list(lay.qd_symbols)
+    allowed = set(q) | set(qd) | set(lay.p_symbols) | {T}
+    gen = model._gen_substitution()
+    psi, owners = [], []
+    for c in constraints:
+        eqs = [e.xreplace(gen) if gen else e for e in c.equations(model.space)]
+        for e in eqs:
+            extra = e.free_symbols - allowed
+            if extra:
+                raise ModelError(f"{c.label()} uses unknown symbol(s) "
+                                 f"{sorted(map(str, extra))}")
+        if not velocity_rows(eqs, q, qd, rho=False).linear:
+            raise ModelError(
+                f"free(): the velocity constraint {c.label()} is not linear in the "
+                "velocities, so it has no form A(q, t) qd + b(q, t) = 0 that free motion "
+                "can hold; write it linear in the rates (e.g. a component of a velocity "
+                "along a direction), or use a path system (m.path) for it")
+        psi += eqs
+        owners += [c] * len(eqs)
+    return psi, owners
+
+
 def nonholonomic_acceleration(system, rows: VelocityRows, t, q, qd, p):
     r"""``(qdd (n,), multipliers (m + k,))`` of the free motion with velocity rows: the
     augmented system of the module docstring, solved dense (LAPACK). The multipliers are
@@ -242,7 +255,10 @@ def velocity_drift(system, rows: VelocityRows, t, q, qd, p, scaling) -> float:
 
 def row_names(rows: VelocityRows) -> list[str]:
     """The names of the rows' multipliers, ``"knife[0]"`` (constraint name, row within it):
-    the columns of ``sol.extra["mu"]`` (``sol.extra["velocity_multipliers"]``)."""
+    the columns of ``sol.extra["mu"]`` (``sol.extra["velocity_multipliers"]``). Rows of
+    owners with the same name are counted together (the velocity constraints of one stage
+    of a switch, ``"edge.stage2[0]"``, ``"edge.stage2[1]"``, decision 0063: ``rows`` is
+    anything with ``owners``, each with a ``name``)."""
     count: dict = {}
     names = []
     for c in rows.owners:
@@ -253,12 +269,11 @@ def row_names(rows: VelocityRows) -> list[str]:
 
 def switched_velocity_constraints(model) -> list[tuple]:
     """``(switch, stage (1-based), constraint)`` of every velocity constraint inside a stage
-    of a ``StageSwitch``/``TimeSwitch`` of ``model`` (free motion through stage changes holds
-    only the velocity constraints outside the switches, decision 0060)."""
+    of a ``StageSwitch``/``TimeSwitch`` of ``model``, in the switches' order, stage by stage
+    (free motion through stage changes holds them in their stages, decision 0063)."""
     rates = set(model.velocity_symbols().values())
     return [(sw, k + 1, c) for sw in model._switches() for k, stage in enumerate(sw.stages)
-            for c in stage if getattr(c, "order", 0) == 1
-            or any(e.free_symbols & rates for e in c.equations(model.space))]
+            for c in stage if is_velocity_constraint(c, model.space, rates)]
 
 
 class RowTangent:

@@ -22,9 +22,11 @@ def stage_system(model, stages, dropped=()) -> System:
     """The System of the stage combination ``stages`` (0-based stage index per switch, in
     model order; ``None``: every switch at its first stage), compiled once per model version.
 
-    ``dropped`` (free motion): constraints whose rows are left out, and ``(switch, stage)``
-    pairs (0-based stage): in that stage the switch contributes only the rows holding its
-    variables (``v - v_held``), so the motion it constrained elsewhere is free there."""
+    ``dropped`` (free motion): constraints whose rows are left out (of the model, or inside
+    a stage of a switch: the velocity constraints free motion holds as rows of their own,
+    decision 0063), and ``(switch, stage)`` pairs (0-based stage): in that stage the switch
+    contributes only the rows holding its variables (``v - v_held``), so the motion it
+    constrained elsewhere is free there."""
     switches = model._switches()
     stages = tuple(stages) if stages is not None else (0,) * len(switches)
     plain = [c for c in dropped if not isinstance(c, tuple)]
@@ -45,7 +47,7 @@ def stage_system(model, stages, dropped=()) -> System:
             if id(o) not in done:
                 done.add(id(o))
                 k = chosen[id(o)][1]
-                rows = (o.stage_equations(model.space, k) if (id(o), k) not in staged
+                rows = (o.stage_equations(model.space, k, plain) if (id(o), k) not in staged
                         else [v.symbol - o.held_symbol(v.symbol) for v in o.new_variables()])
                 # m.set_compile_options(process=...) reaches the switched rows too
                 rows = [process_equation(model._compile_opts, e, o.label()) for e in rows]

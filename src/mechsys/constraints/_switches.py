@@ -68,6 +68,29 @@ def _as_test(test, where: str):
         raise ModelError(f"{where}: test {test!r} is not a SymPy relation or Boolean") from None
 
 
+def is_velocity_constraint(c, space, rates) -> bool:
+    """Whether ``c`` is a velocity constraint: ``order == 1`` (the rolling classes) or
+    equations that use the rates ``rates`` (a ``Constraint`` or ``Orthogonal1`` of velocity
+    expressions). A switch is not one (its stages may hold some)."""
+    if isinstance(c, StageSwitch):
+        return False
+    return getattr(c, "order", 0) == 1 or any(e.free_symbols & rates
+                                              for e in c.equations(space))
+
+
+def velocity_members(model) -> list:
+    """Every velocity constraint of ``model``: those added to it (in model order), then those
+    inside the stages of its switches (switch by switch, stage by stage), each once."""
+    rates = set(model.velocity_symbols().values())
+    out = [c for c in model._constraints if is_velocity_constraint(c, model.space, rates)]
+    for sw in model._constraints:
+        if isinstance(sw, StageSwitch):
+            for stage in sw.stages:
+                out += [c for c in stage if is_velocity_constraint(c, model.space, rates)
+                        and all(c is not x for x in out)]
+    return out
+
+
 class StageSwitch(ConstraintBase):
     """A compound constraint whose active stage is chosen by tests at solve time (Mech's
     ``StageSwitch[cnum, test1 -> con1, test2 -> con2, ...]``).
@@ -127,10 +150,19 @@ class StageSwitch(ConstraintBase):
     _view: int | None = None
 
     def equations(self, space) -> list[sp.Expr]:
-        """The rows of stage 1, or of the stage being evaluated (see ``_view``)."""
-        if self._view:
-            return self.stage_equations(space, self._view)
+        """The rows of stage 1, or of the stage being evaluated (see ``_view``: without its
+        velocity constraints, whose multipliers a free motion keeps apart, decision 0063)."""
+        if self._view is not None:
+            return self.stage_equations(space, self._view, self.velocity_members(self._view))
         return super().equations(space)
+
+    def velocity_members(self, k: int) -> list:
+        """The velocity constraints of stage ``k`` (0-based; :func:`is_velocity_constraint`
+        with the rates of the switch's model)."""
+        if self.model is None:
+            return []
+        rates = set(self.model.velocity_symbols().values())
+        return [c for c in self.stages[k] if is_velocity_constraint(c, self.model.space, rates)]
 
     # -- stages ---------------------------------------------------------------------------
     def held_symbol(self, var: sp.Symbol) -> sp.Symbol:
@@ -146,10 +178,13 @@ class StageSwitch(ConstraintBase):
                 used |= e.free_symbols
         return [v.symbol for v in self.new_variables() if v.symbol not in used]
 
-    def stage_equations(self, space, k: int) -> list[sp.Expr]:
-        """Rows of stage ``k`` (0-based): its constraints' equations, then ``v - v_held``
-        for each variable of the switch it does not use."""
-        eqs = [e for c in self.stages[k] for e in c.equations(space)]
+    def stage_equations(self, space, k: int, without=()) -> list[sp.Expr]:
+        """Rows of stage ``k`` (0-based): its constraints' equations (those of the constraints
+        in ``without`` left out: free motion holds a stage's velocity constraints as rows of
+        their own, decision 0063), then ``v - v_held`` for each variable of the switch it
+        does not use."""
+        eqs = [e for c in self.stages[k] if all(c is not w for w in without)
+               for e in c.equations(space)]
         return eqs + [v - self.held_symbol(v) for v in self.held_variables(space, k)]
 
     def held_symbols(self) -> list[sp.Symbol]:
@@ -223,4 +258,4 @@ class TimeSwitch(StageSwitch):
         check_switch_times(self.label(), self.switch_times(params))
 
 
-__all__ = ["StageSwitch", "TimeSwitch"]
+__all__ = ["StageSwitch", "TimeSwitch", "is_velocity_constraint", "velocity_members"]

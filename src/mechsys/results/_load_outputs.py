@@ -165,8 +165,24 @@ class LoadOutputs:
         if constraint is All or isinstance(constraint, (list, tuple)):
             return self._reaction_sum(constraint, body, at, coordinates)
         c = m.constraint(constraint)
+        viewed = getattr(c, "_view", None)
+        if viewed is not None and c.velocity_members(viewed):
+            # a switch whose stage (evaluated by stagewise) holds velocity constraints
+            # (decision 0063): their -A^T mu (zero where the stage is dropped) plus the
+            # reaction of the stage's position rows
+            F, M = self._velocity_reaction(c, body, at, coordinates)
+            if any(o is c for o in self._sys().layout.eq_owner):
+                F2, M2 = self._position_reaction(c, body, at, coordinates)
+                F, M = F + np.asarray(F2), M + np.asarray(M2)
+            return F, M
         if self._velocity_columns(c) is not None:
             return self._velocity_reaction(c, body, at, coordinates)
+        return self._position_reaction(c, body, at, coordinates)
+
+    def _position_reaction(self, c, body, at, coordinates):
+        """The reaction of constraint ``c``'s position rows (its multipliers ``lambda``) on
+        ``body`` (:meth:`reaction`)."""
+        m = self._model()
         if getattr(c, "slave", None) is not None or isinstance(body, sp.Symbol):
             from ..constraints._generalized import generalized_reaction
 
@@ -185,12 +201,17 @@ class LoadOutputs:
 
     def _velocity_columns(self, c):
         """The columns of ``extra["mu"]`` that hold the multipliers of the velocity constraint
-        ``c`` on a free-motion solution with velocity constraints (decision 0053), else None."""
+        ``c`` on a free-motion solution with velocity constraints (decision 0053), else None;
+        of a switch evaluated stage by stage, those of the velocity constraints of the
+        stage in view (``"edge.stage2[0]"``, decision 0063)."""
         extra = getattr(self, "extra", None)
         names = extra.get("velocity_multipliers") if isinstance(extra, dict) else None
         if not names:
             return None
-        cols = [i for i, x in enumerate(names) if x.rsplit("[", 1)[0] == c.name]
+        name = c.name
+        if getattr(c, "_view", None) is not None:
+            name = f"{c.name}.stage{c._view + 1}"
+        cols = [i for i, x in enumerate(names) if x.rsplit("[", 1)[0] == name]
         return cols or None
 
     def _velocity_reaction(self, c, body, at, coordinates):
@@ -217,10 +238,15 @@ class LoadOutputs:
 
             raise slave_refused(b, "reaction")
         rates = m.velocity_symbols()
-        psi = sp.Matrix(c.equations(m.space))
+        viewed = getattr(c, "_view", None)
+        members = [c] if viewed is None else c.velocity_members(viewed)
+        psi = sp.Matrix([e for x in members for e in x.equations(m.space)])
         Ab = psi.jacobian([rates[x] for x in b.q])
         mu = np.asarray(self.extra["mu"], dtype=float)
-        mu = mu.reshape(-1, mu.shape[-1])[:, self._velocity_columns(c)]
+        mu = mu.reshape(-1, mu.shape[-1])
+        cols = self._velocity_columns(c)
+        # (a dropped stage's velocity constraints have no columns: no force)
+        mu = mu[:, cols] if cols is not None else np.zeros((len(mu), psi.shape[0]))
         F = M = 0.0
         for i in range(Ab.shape[0]):
             # the wrench is linear in the generalized force: one per row, weighted by -mu_i

@@ -9,6 +9,7 @@ import dataclasses
 import numpy as np
 
 from ..compile._stages import stage_system
+from ..constraints._switches import velocity_members
 
 
 def is_staged(out) -> bool:
@@ -28,12 +29,15 @@ def stagewise(sol, output):
                        for sw in switches], axis=1)
     keys = sorted({tuple(int(x) for x in c) for c in combos})
     extra = {k: v for k, v in sol.extra.items() if k != "stages"}
+    # the velocity constraints (free motion, decisions 0060 and 0063) are no rows of the
+    # stage systems: their multipliers are extra["mu"] (the free motion's _base systems)
+    apart = tuple(velocity_members(model))
     out = None
     try:
         for key in keys:
             for sw, k in zip(switches, key):
                 sw._view = k
-            part = dataclasses.replace(sol, system=stage_system(model, key), extra=extra,
+            part = dataclasses.replace(sol, system=stage_system(model, key, apart), extra=extra,
                                        scalar=False)
             val = output(part)
             mask = np.all(combos == np.array(key), axis=1)
