@@ -509,3 +509,24 @@ def test_trajectory_sensitivities_of_the_sleigh():
                         (S.dlam[:, j], up.extra["mu"] - down.extra["mu"])):
             fd = fd / (2 * h)
             assert np.abs(got - fd).max() < 1e-7 * np.abs(fd).max()
+
+
+def test_power_of_velocity_constraints():
+    """``sol.power`` of a velocity constraint is :math:`-\\mu^T A \\dot q`: a rate drive
+    ``x_d = v0`` holding a block against a force ``F`` takes the force's power, ``-F v0``
+    (so the kinetic energy stays constant), and the sleigh's ideal knife edge delivers none."""
+    F, v0 = 3.0, 0.7
+    m = ms.Model2D()
+    b = m.add_body("block", guess=((0.0, 0.0), 0.0), mass=2.0, inertia=0.1)
+    m.add(ms.Constraint([m.velocity(b.point(0))[0] - v0]), name="drive")
+    m.add_load(ms.Force(b.point(0), (1, 0), F))
+    sol = m.free().simulate(np.linspace(0.0, 1.0, 5),
+                            initial_condition={"block.x_d": v0, "block.y_d": 0.0,
+                                               "block.th_d": 0.0})
+    np.testing.assert_allclose(np.ravel(sol.extra["mu"]), F, rtol=1e-12)
+    np.testing.assert_allclose(sol.power("drive"), -F * v0, rtol=1e-12)
+    sm, _ = load_example("chaplygin_sleigh").sleigh()
+    ss = sm.free().simulate(np.linspace(0.0, 2.0, 9),
+                            initial_condition={"sleigh.th_d": 2.0})
+    assert np.abs(ss.extra["mu"]).max() > 0.1
+    np.testing.assert_allclose(ss.power("knife"), 0.0, atol=1e-12)

@@ -125,6 +125,8 @@ def test_sliding_sleigh_whose_blade_touches_down_at_a_time_switch():
     assert np.abs(Fr[before]).max() == 0 and np.abs(Mr[before]).max() == 0
     np.testing.assert_allclose(Fr[after], -mu[after, None] * e2[after], atol=1e-14)
     np.testing.assert_allclose(Mr[after], OFFSET * mu[after], atol=1e-14)
+    # an ideal blade does no work: no power before (dropped) nor after (-mu^T A qd = 0)
+    np.testing.assert_allclose(sol.power("edge"), 0.0, atol=1e-12)
     E = _energy(sol)
     assert np.abs(E[after] - (E[0] - ev["energy_lost"])).max() < 1e-10
     assert sol.extra["accuracy"]["nonholonomic"] < 1e-12

@@ -424,18 +424,57 @@ class LoadOutputs:
 
     def power(self, constraint):
         r"""Power a constraint delivers to the mechanism (a driver's power):
-        :math:`-\lambda_c^T (\Phi_c)_q \dot q`."""
+        :math:`-\lambda_c^T (\Phi_c)_q \dot q`; of a velocity constraint
+        :math:`A \dot q + b = 0` in free motion, :math:`-\mu^T A \dot q` (zero for ideal
+        rolling or a knife edge, where ``b = 0``)."""
         if _staged(self):  # a multistage solution: each point with its stage's rows
             from ._stagewise import stagewise
 
             return stagewise(self, lambda s: s.power(constraint))
         m = self._model()
         c = m.constraint(constraint)
+        viewed = getattr(c, "_view", None)
+        if (viewed is not None and c.velocity_members(viewed)) or \
+                self._velocity_columns(c) is not None:
+            # velocity constraints (decisions 0053, 0063): -mu^T A qd, plus a switch's
+            # position rows in the stage in view
+            P = self._velocity_power(c)
+            if viewed is not None and any(o is c for o in self._sys().layout.eq_owner):
+                P = P + np.asarray(self._position_power(c), dtype=float)
+            return P
+        return self._position_power(c)
+
+    def _position_power(self, c):
+        r""":math:`-\lambda_c^T (\Phi_c)_q \dot q` of constraint ``c``'s position rows."""
+        m = self._model()
         s = self._sys()
         lam = sp.Matrix(self._lams(c))
         eqs = sp.Matrix(c.equations(m.space))
         q, qd = list(s.layout.q_symbols), sp.Matrix(s.layout.qd_symbols)
         return self._finish(-(lam.T * eqs.jacobian(q) * qd)[0, 0])
+
+    def _velocity_power(self, c):
+        r"""Power of a velocity constraint's force :math:`-A^T \mu` over a free-motion
+        solution: :math:`-\mu^T A \dot q` (the rows' part linear in the rates,
+        :math:`A \dot q = \psi - \psi|_{\dot q = 0}`); along the motion
+        :math:`A \dot q = -b`, so an ideal rolling or knife edge (``b = 0``) delivers none."""
+        m = self._model()
+        rates = list(m.velocity_symbols().values())
+        viewed = getattr(c, "_view", None)
+        members = [c] if viewed is None else c.velocity_members(viewed)
+        psi = [e for x in members for e in x.equations(m.space)]
+        zero = dict.fromkeys(rates, 0)
+        mu = np.asarray(self.extra["mu"], dtype=float)
+        mu = mu.reshape(-1, mu.shape[-1])
+        cols = self._velocity_columns(c)
+        if cols is None:                     # a stage that drops them: no force, no power
+            return np.zeros(len(mu)) if mu.shape[0] > 1 else 0.0
+        P = np.zeros(len(mu))
+        for i, e in enumerate(psi):
+            rate_part = sp.expand(e - e.subs(zero))
+            v = np.asarray(self._finish(rate_part), dtype=float).reshape(-1)
+            P -= mu[:, cols[i]] * v
+        return P if P.size > 1 else float(P[0])
 
 
 def lambda_guess_vector(system, model, spec) -> np.ndarray:
