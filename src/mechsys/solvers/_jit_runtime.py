@@ -75,6 +75,23 @@ def mode() -> str:
                      "1 (whenever possible) or auto (unset: the default)")
 
 
+def compile_policy() -> str:
+    """``"background"`` or ``"wait"`` from ``MECHSYS_COMPILE``: what a run does when the
+    compiled loop it needs is neither in the process nor in Numba's on-disk cache (decision
+    0064). ``background`` (unset: the default): one low-priority process compiles it into the
+    cache while this run takes the Python path, and switches to the compiled loop once the
+    compile is done; ``wait``: compile it in this process first (the run waits for it).
+    Anything else raises :class:`ModelError`, like ``MECHSYS_JIT``."""
+    v = os.environ.get("MECHSYS_COMPILE", "").strip().lower()
+    if v in ("", "background"):
+        return "background"
+    if v == "wait":
+        return "wait"
+    raise ModelError(f"MECHSYS_COMPILE={os.environ['MECHSYS_COMPILE']!r}: use background "
+                     "(unset: the default; compile in another process, this run continues "
+                     "without the compiled loop) or wait (compile in this process first)")
+
+
 def available() -> bool:
     """Numba can be imported."""
     if _state["failed"] is None:
@@ -259,6 +276,6 @@ class GenTree:
         return cls(arrays, dyn.tree_only)
 
 
-__all__ = ["AUTO_POINTS", "NO_BAND", "GenTree", "available", "band_args", "band_lapack",
+__all__ = ["AUTO_POINTS", "NO_BAND", "GenTree", "available", "compile_policy", "band_args", "band_lapack",
            "capsule_address", "index", "kernel_entry", "lapack", "mode", "patterned", "pointer",
            "table", "wanted"]
