@@ -86,7 +86,7 @@ def run(jobfile: str) -> int:
     for module, qualname, sig, lock, result in spec["jobs"]:
         start, wall = _cpu(), time.time()
         out = {"function": f"{module}.{qualname}", "signature": str(sig), "ok": False,
-               "error": None}
+               "error": None, "pid": os.getpid()}
         try:
             _dispatcher(module, qualname).compile(sig)
             out["ok"] = True
