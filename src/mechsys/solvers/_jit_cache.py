@@ -105,6 +105,25 @@ def check() -> None:
         _done["deleted"] = sync(_HERE)
 
 
+def compile_policy() -> str:
+    """``"background"`` or ``"wait"`` from ``MECHSYS_COMPILE``: what a run does when the
+    compiled loop it needs is neither in the process nor in Numba's on-disk cache (decision
+    0064). ``background`` (unset: the default): one low-priority process compiles it into the
+    cache while this run takes the Python path, and switches to the compiled loop once the
+    compile is done; ``wait``: compile it in this process first (the run waits for it).
+    Anything else raises :class:`ModelError`, like ``MECHSYS_JIT``."""
+    v = os.environ.get("MECHSYS_COMPILE", "").strip().lower()
+    if v in ("", "background"):
+        return "background"
+    if v == "wait":
+        return "wait"
+    from .._errors import ModelError
+
+    raise ModelError(f"MECHSYS_COMPILE={os.environ['MECHSYS_COMPILE']!r}: use background "
+                     "(unset: the default; compile in another process, this run continues "
+                     "without the compiled loop) or wait (compile in this process first)")
+
+
 def cached(module: str, function: str) -> bool:
     """Whether Numba's on-disk cache holds the compiled ``module.function`` of this package
     (its index file ``module.function-LINE.pyXY.nbi``, beside the sources or under
@@ -150,4 +169,4 @@ def notice(what: str, seconds: float | None, *functions: tuple, background: bool
     return True
 
 
-__all__ = ["cached", "check", "check_safe", "notice", "sources_digest", "sync"]
+__all__ = ["cached", "check", "check_safe", "compile_policy", "notice", "sources_digest", "sync"]

@@ -251,7 +251,7 @@ def _background(dispatcher, sig, say):
     queued behind this process's child) when no process holds its lock, else waiting for the
     process that does. None when it cannot be done (the policy is ``wait``; the dispatcher
     has no on-disk cache; its directory cannot be written): the caller compiles here."""
-    from ._jit_runtime import compile_policy
+    from ._jit_cache import compile_policy
 
     if compile_policy() != "background":
         return None

@@ -34,6 +34,7 @@ import os
 import numpy as np
 
 from .._errors import ModelError, slow_path_warning
+from ._jit_cache import compile_policy
 from ._linalg import _sparse_lu
 from ._tolerances import SPARSE_THRESHOLD
 
@@ -73,23 +74,6 @@ def mode() -> str:
         return "auto"
     raise ModelError(f"MECHSYS_JIT={os.environ['MECHSYS_JIT']!r}: use 0 (never compiled loops), "
                      "1 (whenever possible) or auto (unset: the default)")
-
-
-def compile_policy() -> str:
-    """``"background"`` or ``"wait"`` from ``MECHSYS_COMPILE``: what a run does when the
-    compiled loop it needs is neither in the process nor in Numba's on-disk cache (decision
-    0064). ``background`` (unset: the default): one low-priority process compiles it into the
-    cache while this run takes the Python path, and switches to the compiled loop once the
-    compile is done; ``wait``: compile it in this process first (the run waits for it).
-    Anything else raises :class:`ModelError`, like ``MECHSYS_JIT``."""
-    v = os.environ.get("MECHSYS_COMPILE", "").strip().lower()
-    if v in ("", "background"):
-        return "background"
-    if v == "wait":
-        return "wait"
-    raise ModelError(f"MECHSYS_COMPILE={os.environ['MECHSYS_COMPILE']!r}: use background "
-                     "(unset: the default; compile in another process, this run continues "
-                     "without the compiled loop) or wait (compile in this process first)")
 
 
 def available() -> bool:
