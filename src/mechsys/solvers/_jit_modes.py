@@ -358,7 +358,10 @@ def _start(jobs) -> None:
     _CHILD["proc"], _CHILD["jobs"] = proc, jobs
     # reaped as soon as it ends (no zombie while this process lives, whether or not it asks
     # again); the child outlives this process (its own session) and fills the cache anyway
-    threading.Thread(target=proc.wait, name="mechsys-compile-reaper", daemon=True).start()
+    try:
+        threading.Thread(target=proc.wait, name="mechsys-compile-reaper", daemon=True).start()
+    except RuntimeError:        # (at interpreter shutdown, Python 3.12+: no reaping needed)
+        pass
     if not _CHILD["exit_hook"]:
         import atexit
 
