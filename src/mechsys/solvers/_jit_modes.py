@@ -146,6 +146,9 @@ def entry(dispatcher, args, literal=(), say=None):
         fn = cres.entry_point
     elif in_cache(dispatcher, sig):
         fn = dispatcher.compile(sig)          # (loads the machine code: well under a second)
+        if job is not None:
+            _LOG.info("mechsys: %s compiled in the background; from here on it runs compiled",
+                      _name(dispatcher))
     else:
         job = job if job is not None else _background(dispatcher, sig, say)
         if job is not None and not job.failed:
