@@ -305,6 +305,13 @@ def _background(dispatcher, sig, say):
 def _pump() -> None:
     """Reap this process's finished child and start the next one for the queued jobs (at
     most one child at a time while this process lives: the machine's other core)."""
+    if _CHILD.get("pid", os.getpid()) != os.getpid():
+        # a forked copy of the process that started the child (a worker of a parallel
+        # sweep): the child and the queue are the parent's; here the jobs wait for their locks
+        for job in _CHILD["jobs"] + _CHILD["queue"]:
+            job.mine = False
+        _CHILD.update(proc=None, jobs=[], queue=[])
+    _CHILD["pid"] = os.getpid()
     proc = _CHILD["proc"]
     if proc is not None:
         if proc.poll() is None:
@@ -375,6 +382,8 @@ def _start(jobs) -> None:
 def _at_exit() -> None:
     """At exit, start a child for the jobs still queued behind the running one (the cache is
     filled for the next session)."""
+    if _CHILD.get("pid", os.getpid()) != os.getpid():
+        return                    # (a forked copy: the queue is its parent's)
     queue, _CHILD["queue"] = _CHILD["queue"], []
     if queue:
         _start(queue)
