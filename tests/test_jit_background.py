@@ -141,3 +141,33 @@ def test_compile_policy_is_validated(monkeypatch):
     monkeypatch.setenv("MECHSYS_COMPILE", "later")
     with pytest.raises(ModelError, match=r"MECHSYS_COMPILE='later'.*background.*wait"):
         compile_policy()
+
+
+def test_a_compile_under_way_elsewhere_is_waited_for(probe, caplog):
+    """A lock held by another live process (here pid 1): no child is started, the caller
+    takes its Python path; once the lock is gone without filling the cache (that process
+    failed), the request compiles here, with a warning, and answers right. A lock whose
+    process is gone is stale (:func:`_alive`)."""
+    from mechsys.solvers import _jit_modes
+
+    mod, _ = probe
+    x = np.arange(3.0)
+    sig = _jit_modes.signature((x, 7), (1,))
+    lock = _jit_modes._lock_path(_jit_modes._cache_dir(mod.scaled), mod.scaled, sig)
+    lock.write_text("1\n")
+    assert _jit_modes._alive(lock)
+    assert _jit_modes.entry(mod.scaled, (x, 7), literal=(1,)) is None
+    assert _jit_modes._CHILD["proc"] is None and not _jit_modes._CHILD["queue"]
+    assert _jit_modes.entry(mod.scaled, (x, 7), literal=(1,)) is None     # still held
+    lock.unlink()
+    with caplog.at_level(logging.WARNING, logger="mechsys"):
+        fn = _jit_modes.entry(mod.scaled, (x, 7), literal=(1,))
+    assert fn is not None and any("did not fill" in r.getMessage() for r in caplog.records)
+    np.testing.assert_array_equal(fn(x, 7), 2.0 * x + 7)
+    # a stale lock: a process that has ended
+    import subprocess
+
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()
+    lock.write_text(f"{gone.pid}\n")
+    assert not _jit_modes._alive(lock)

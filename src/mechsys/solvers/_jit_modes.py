@@ -229,6 +229,14 @@ def _cache_dir(dispatcher) -> Path | None:
     return Path(path)
 
 
+def _lock_path(where: Path, dispatcher, sig) -> Path:
+    """The lock file of the compile of ``sig`` of ``dispatcher`` in the cache directory
+    ``where`` (keyed by the function, the signature, Python's and Numba's versions)."""
+    digest = hashlib.sha256(f"{_name(dispatcher)}|{sig!r}|{sys.version}|{nb.__version__}"
+                            .encode()).hexdigest()[:20]
+    return where / f"mechsys-bg-{digest}.lock"
+
+
 def _alive(lock: Path) -> bool:
     """Whether the process named in ``lock`` may still be compiling (its process exists and
     the lock is younger than :data:`_STALE_SECONDS`)."""
@@ -264,9 +272,7 @@ def _background(dispatcher, sig, say):
     where = _cache_dir(dispatcher)
     if where is None:
         return None
-    digest = hashlib.sha256(f"{_name(dispatcher)}|{sig!r}|{sys.version}|{nb.__version__}"
-                            .encode()).hexdigest()[:20]
-    lock = where / f"mechsys-bg-{digest}.lock"
+    lock = _lock_path(where, dispatcher, sig)
     mine = False
     for _ in range(2):
         try:
