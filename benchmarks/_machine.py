@@ -8,6 +8,11 @@ import os
 import platform
 from pathlib import Path
 
+# The benchmarks time the compiled loops: a loop missing from Numba's cache is compiled in the
+# process before it runs (not in the background while the warm-up run takes the Python path,
+# which would then be timed as "compiled"; decision 0064). cold_start.py sets its own.
+os.environ.setdefault("MECHSYS_COMPILE", "wait")
+
 
 def machine() -> str:
     import numpy

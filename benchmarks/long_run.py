@@ -30,6 +30,8 @@ import os
 
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
+# (the compiled loops it times compile in the process, not in the background: decision 0064)
+os.environ.setdefault("MECHSYS_COMPILE", "wait")
 
 import argparse  # noqa: E402
 import sys  # noqa: E402

@@ -1,7 +1,13 @@
 """Shared test helpers."""
 
 import importlib.util
+import os
 import pathlib
+
+# The tests compile a missing loop in their own process and wait for it (decision 0064): the
+# tests asserting ``compiled_steps`` / ``compiled_points`` keep their meaning. The background
+# tier has its own tests (tests/test_jit_background.py). Set before mechsys is imported.
+os.environ.setdefault("MECHSYS_COMPILE", "wait")
 
 EXAMPLES = pathlib.Path(__file__).resolve().parents[1] / "examples"
 

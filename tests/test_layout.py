@@ -41,7 +41,7 @@ LAZY_UP = {
 SOLVERS_TIER = {
     # 0 constants, tables and the compile machinery, importing no other module of the folder
     "_tolerances": 0, "_methods": 0, "_tableaus": 0, "_tree": 0,
-    "_jit_cache": 0, "_jit_modes": 0, "_jit_borrow": 0,
+    "_jit_cache": 0, "_jit_modes": 0, "_jit_background": 0, "_jit_borrow": 0,
     # 1 compiled primitives: LAPACK's algorithms, calls into C, the sparse LU, the Gen tree
     "_jit_lapack": 1, "_jit_calls": 1, "_jit_sparse": 1, "_jit_tree": 1,
     # 2 linear algebra (Python and compiled), fixed patterns, what every compiled loop needs

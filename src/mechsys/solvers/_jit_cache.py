@@ -105,6 +105,25 @@ def check() -> None:
         _done["deleted"] = sync(_HERE)
 
 
+def compile_policy() -> str:
+    """``"background"`` or ``"wait"`` from ``MECHSYS_COMPILE``: what a run does when the
+    compiled loop it needs is neither in the process nor in Numba's on-disk cache (decision
+    0064). ``background`` (unset: the default): one low-priority process compiles it into the
+    cache while this run takes the Python path, and switches to the compiled loop once the
+    compile is done; ``wait``: compile it in this process first (the run waits for it).
+    Anything else raises :class:`ModelError`, like ``MECHSYS_JIT``."""
+    v = os.environ.get("MECHSYS_COMPILE", "").strip().lower()
+    if v in ("", "background"):
+        return "background"
+    if v == "wait":
+        return "wait"
+    from .._errors import ModelError
+
+    raise ModelError(f"MECHSYS_COMPILE={os.environ['MECHSYS_COMPILE']!r}: use background "
+                     "(unset: the default; compile in another process, this run continues "
+                     "without the compiled loop) or wait (compile in this process first)")
+
+
 def cached(module: str, function: str) -> bool:
     """Whether Numba's on-disk cache holds the compiled ``module.function`` of this package
     (its index file ``module.function-LINE.pyXY.nbi``, beside the sources or under
@@ -119,23 +138,30 @@ def cached(module: str, function: str) -> bool:
         return False
 
 
-def notice(what: str, seconds: float | None, *functions: tuple) -> bool:
+def notice(what: str, seconds: float | None, *functions: tuple, background: bool = False) -> bool:
     """Say once per process that ``what`` is being compiled, when one of ``functions``
     (``(module, function)`` pairs) is not in Numba's cache: the compile takes about
     ``seconds`` of CPU (measured by ``benchmarks/cold_start.py``; None: not measured on its
     own, the message gives no figure), and a silent wait of that long looks like a hang.
     With no ``functions`` the caller has found the compile needed (``_jit_modes.entry``: a
-    specialisation missing from the cache). The message goes to the ``mechsys`` logger
+    specialisation missing from the cache). ``background``: the compile runs in another
+    process (decision 0064) and this run continues without it. The message goes to the
+    ``mechsys`` logger
     (INFO); when logging is not configured and stderr is a terminal it is also printed
     there. Returns whether it was said."""
-    key = (what,) + tuple(functions)
+    key = (what, background) + tuple(functions)
     if key in _said:
         return False
     _said.add(key)
     if functions and all(cached(m, f) for m, f in functions):
         return False
-    cost = "" if seconds is None else f", about {seconds:.0f} s of CPU"
-    msg = f"mechsys: compiling {what} (first run{cost}; cached for later runs)"
+    if background:
+        cost = "" if seconds is None else f" (about {seconds:.0f} s of CPU on another core)"
+        msg = (f"mechsys: compiling {what} in the background{cost}; this run continues "
+               "without it, later runs use it")
+    else:
+        cost = "" if seconds is None else f", about {seconds:.0f} s of CPU"
+        msg = f"mechsys: compiling {what} (first run{cost}; cached for later runs)"
     _LOG.info(msg)
     isatty = getattr(sys.stderr, "isatty", lambda: False)
     if not _LOG.hasHandlers() and isatty():
@@ -143,4 +169,4 @@ def notice(what: str, seconds: float | None, *functions: tuple) -> bool:
     return True
 
 
-__all__ = ["cached", "check", "check_safe", "notice", "sources_digest", "sync"]
+__all__ = ["cached", "check", "check_safe", "compile_policy", "notice", "sources_digest", "sync"]

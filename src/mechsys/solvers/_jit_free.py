@@ -114,6 +114,12 @@ _state: dict = {"loop": None, "adams": None, "workspace": None, "derivative": No
                 "gesv": None, "path_acc": None}
 
 
+def _background() -> bool:
+    """Whether a missing loop is compiled in the background (``MECHSYS_COMPILE``, decision
+    0064)."""
+    return _jit_runtime.compile_policy() == "background"
+
+
 def _coefficients(solver):
     """``(method, A, B, C, E3, E5, D)`` of ``_jit_free_loop.runge_kutta`` for the SciPy
     ``solver`` (DOP853, or RK45: its ``E`` and ``P`` in the places of ``E5`` and ``D``): the
@@ -869,15 +875,18 @@ class FreeStepper:
         if _state.get("path_acc") is None:
             from ._jit_free_loop import path_accelerations
 
-            # (every compile of more than about a second is announced: decision 0044)
-            notice("a path's accelerations", None, ("_jit_free_loop", "path_accelerations"))
-
             _state["path_acc"] = path_accelerations
-        return int(_state["path_acc"](
-            np.array([e[0] for e in entries], dtype=np.int64), tuple(e[1] for e in entries),
-            np.ascontiguousarray(times, dtype=float), np.ascontiguousarray(Q, dtype=float),
-            np.ascontiguousarray(QD, dtype=float), self.p, self.jr, self.jc, len(path.psi),
-            self.blk_i[0], self.ws[16][0], QDD))
+        from ._jit_modes import entry
+
+        args = (np.array([e[0] for e in entries], dtype=np.int64), tuple(e[1] for e in entries),
+                np.ascontiguousarray(times, dtype=float), np.ascontiguousarray(Q, dtype=float),
+                np.ascontiguousarray(QD, dtype=float), self.p, self.jr, self.jc, len(path.psi),
+                self.blk_i[0], self.ws[16][0], QDD)
+        # (every compile of more than about a second is announced: decision 0044; None: being
+        # compiled in the background, decision 0064, and the Python path takes every point)
+        fn = entry(_state["path_acc"], args, say=lambda how: notice(
+            "a path's accelerations", None, background=how == "background"))
+        return 0 if fn is None else int(fn(*args))
 
     def rate(self, y, row):
         """The state's derivative at ``y`` from a row the loop returned (its ``QDD``):
@@ -900,7 +909,7 @@ class FreeStepper:
         f = np.array(solver.f, dtype=float)
         atol = np.broadcast_to(np.asarray(solver.atol, dtype=float), (self.ny,)).copy()
         t_prev = solver.t
-        status, steps, ie, evals, rejected, projections = self._call(
+        got = self._call(
             "loop", self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr,
             self.jc, self.rows0, self.columns, self.offset, self.robust, self.mode,
             self.blk_i, self.ws, self.correction, 1e-12, 8, method, A, B, C, E3, E5, D,
@@ -908,6 +917,9 @@ class FreeStepper:
             float(solver.t_bound), float(solver.direction), state, y, f, self.t_eval, int(ie),
             int(max_steps), T, Y, H, QDD, LAM, self.ET, self.EY, self.EQDD, self.ELAM,
             np.zeros((0, self.ny)))
+        if got is None:            # (being compiled in the background: hand over at once)
+            return 2, T[:0], Y[:0], H[:0], QDD[:0], LAM[:0], int(ie), 0, 0
+        status, steps, ie, evals, rejected, projections = got
         solver.nfev += int(evals)
         if steps:
             solver.t_old = float(T[steps - 2]) if steps >= 2 else t_prev
@@ -939,7 +951,7 @@ class FreeStepper:
         ff = np.array(f, dtype=float)
         atol = np.broadcast_to(np.asarray(solver.atol, dtype=float), (self.ny,)).copy()
         none = np.zeros(0)
-        status, steps, _, evals, _, _ = self._call(
+        got = self._call(
             "loop", self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr,
             self.jc, self.rows0, self.columns, self.offset, self.robust, self.mode,
             self.blk_i, self.ws, self.correction, 1e-12, 8, method, A, B, C, E3, E5, D,
@@ -947,6 +959,9 @@ class FreeStepper:
             float(solver.t_bound), float(solver.direction), state, yy, ff, none, 0, 1,
             T, Y, H, QDD, LAM, none, np.zeros((0, self.ny)), np.zeros((0, n)),
             np.zeros((0, m)), FD)
+        if got is None:            # (being compiled in the background)
+            return None
+        status, steps, _, evals, _, _ = got
         solver.nfev += int(evals)
         if steps != 1:
             return None
@@ -963,9 +978,14 @@ class FreeStepper:
 
             what = {"loop": "the free-motion stepper", "adams": "Mech's Adams integrator",
                     "derivative": "the free-motion derivative"}[name]
-            fn = self._entries[name] = entry(
-                _state[name], args, literal=(_MODE_AT[name],),
-                say=lambda _: notice(f"{what} ({self.solver})", _COMPILE_SECONDS[name]))
+            fn = entry(_state[name], args, literal=(_MODE_AT[name],),
+                       say=lambda how: notice(f"{what} ({self.solver})", _COMPILE_SECONDS[name],
+                                              background=how == "background"))
+            if fn is None:
+                # being compiled in the background (decision 0064): the caller hands over to
+                # its Python path and asks again after its pause
+                return None
+            self._entries[name] = fn
         return fn(*args)
 
     def derivative(self, t: float, y: np.ndarray):
@@ -974,6 +994,10 @@ class FreeStepper:
         instead of about 40 µs for the Python path's), or None where the Python path must
         decide (its special handling: the loops hand over there too)."""
         n, m = self.n, self.m
+        if "loop" not in self._entries and "adams" not in self._entries and _background():
+            # a speed-up of SciPy's set-up alone (two evaluations a run): compiled only once
+            # a loop runs, so that a first run's background compile is the loop's (0064)
+            return None
         f, lam = np.empty(self.ny), np.empty(m)
         ok = self._call(
             "derivative", self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m,
@@ -1015,12 +1039,15 @@ class FreeStepper:
         Y = np.empty((max_steps, self.ny))
         QDD, LAM = np.empty((max_steps, n)), np.empty((max_steps, m))
         k, (a, b, c), method, fixed, inv_scale, t1 = options
-        status, steps, evals, projections = self._call(
+        got = self._call(
             "adams", self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr,
             self.jc, self.rows0, self.columns, self.offset, self.robust, self.mode,
             self.blk_i, self.ws, self.correction, 1e-12, 8, int(k), float(a), float(b),
             float(c), int(method), bool(fixed), inv_scale,
             float(t1), state, y, hist_t, hist_f, recent, int(max_steps), T, Y, H, E, QDD, LAM)
+        if got is None:            # (being compiled in the background: hand over at once)
+            return 2, T[:0], Y[:0], H[:0], E[:0], QDD[:0], LAM[:0], 0, 0
+        status, steps, evals, projections = got
         self.steps += int(steps)
         return (int(status), T[:steps], Y[:steps], H[:steps], E[:steps], QDD[:steps],
                 LAM[:steps], int(evals), int(projections))

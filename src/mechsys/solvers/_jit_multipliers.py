@@ -117,15 +117,18 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
         band, kband, Rpre, bool(bw[0] == SPARSE))
     # specialised on the last argument: only the dense or only the sparse solves compiled
     # (decision 0044)
-    return int(entry(_state["multipliers"], args, literal=(len(args) - 1,), say=lambda _: notice(
-        "the multiplier solves" + (" (sparse)" if args[-1] else ""), _MULTIPLIER_SECONDS))(*args))
+    fn = entry(_state["multipliers"], args, literal=(len(args) - 1,), say=lambda how: notice(
+        "the multiplier solves" + (" (sparse)" if args[-1] else ""), _MULTIPLIER_SECONDS,
+        background=how == "background"))
+    # (None: being compiled in the background, decision 0064; the Python loop takes every point)
+    return 0 if fn is None else int(fn(*args))
 
 
 def _recursive_loads(system, times, Q, QD, QDD, p, code):
     """``(R (N', n), N')``: the right-hand sides of the multiplier solves of a system with
     recursive Gen dynamics at the first ``N'`` points (up to the first whose values are not
     finite, which the Python path reports), by ``_jit_free_loop.gen_loads``; None when its
-    kernels have no C entry points."""
+    kernels have no C entry points or the loop is being compiled in the background."""
     dyn = system.dynamics
     entry = kernel_entry(dyn._main)
     if entry is None:
@@ -136,20 +139,25 @@ def _recursive_loads(system, times, Q, QD, QDD, p, code):
     if _state.get("gen_loads") is None:
         from ._jit_free_loop import gen_loads
 
-        # (every compile of more than about a second is announced: decision 0044)
-        notice("the recursive dynamics' loads", None, ("_jit_free_loop", "gen_loads"))
-
         _state["gen_loads"] = gen_loads
+    from ._jit_modes import entry as _entry
+
     N, n = len(times), system.n
     R = np.empty((N, n))
     dummy = np.zeros((1, n))
-    k = _state["gen_loads"](
-        np.asarray(entry[0], dtype=np.int64), gen.arrays, entry[1],
-        np.ascontiguousarray(times, dtype=float), np.ascontiguousarray(Q, dtype=float),
-        dummy if code == 0 else np.ascontiguousarray(QD, dtype=float),
-        dummy if code < 2 else np.ascontiguousarray(QDD, dtype=float),
-        np.ascontiguousarray(system.p_values if p is None else p, dtype=float), system.m,
-        code, R)
+    args = (np.asarray(entry[0], dtype=np.int64), gen.arrays, entry[1],
+            np.ascontiguousarray(times, dtype=float), np.ascontiguousarray(Q, dtype=float),
+            dummy if code == 0 else np.ascontiguousarray(QD, dtype=float),
+            dummy if code < 2 else np.ascontiguousarray(QDD, dtype=float),
+            np.ascontiguousarray(system.p_values if p is None else p, dtype=float), system.m,
+            code, R)
+    # (every compile of more than about a second is announced: decision 0044; None: being
+    # compiled in the background, decision 0064, and the Python path computes the loads)
+    fn = _entry(_state["gen_loads"], args, say=lambda how: notice(
+        "the recursive dynamics' loads", None, background=how == "background"))
+    if fn is None:
+        return None
+    k = fn(*args)
     return R[:k], int(k)
 
 

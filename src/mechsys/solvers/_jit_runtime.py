@@ -34,6 +34,7 @@ import os
 import numpy as np
 
 from .._errors import ModelError, slow_path_warning
+from ._jit_cache import compile_policy
 from ._linalg import _sparse_lu
 from ._tolerances import SPARSE_THRESHOLD
 
@@ -259,6 +260,6 @@ class GenTree:
         return cls(arrays, dyn.tree_only)
 
 
-__all__ = ["AUTO_POINTS", "NO_BAND", "GenTree", "available", "band_args", "band_lapack",
+__all__ = ["AUTO_POINTS", "NO_BAND", "GenTree", "available", "compile_policy", "band_args", "band_lapack",
            "capsule_address", "index", "kernel_entry", "lapack", "mode", "patterned", "pointer",
            "table", "wanted"]

@@ -79,8 +79,10 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
     before it: the points solved before, which the predictor continues; ``scaling`` given
     then; ``chord_start``: point ``first - 1`` had the chord, of row scales ``rprev``);
     return ``(k, evals,
-    scaling)``: the first point left to the Python loop (``len(times)`` when all are done),
-    the number of kernel calls made, and the :class:`~mechsys.solvers._linalg.Scaling` used.
+    scaling)``: the first point left to the Python loop (``len(times)`` when all are done;
+    ``first`` while the loop is being compiled in the background, decision 0064), the number
+    of kernel calls made, and the :class:`~mechsys.solvers._linalg.Scaling` used (the given
+    one, possibly None, when the loop did not run).
     ``scaling`` None: the loop takes ``Scaling.of`` the guess ``q0`` at the first time from
     its first evaluation (the same numbers). ``rprev`` (n,) receives the row scales of the
     last solved point's velocity factorisation (the chord the Python loop continues with).
@@ -124,8 +126,14 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
             bool(chord_start), bw, band, bool(bw[0] == SPARSE))
     # the loop specialised on its kind (the last argument: the sparse LU or the dense one),
     # compiling only that kind's solvers (decision 0044)
-    k, evals = _entry(_state["loop"], args, literal=(len(args) - 1,), say=lambda _: notice(
-        "the kinematic sweep" + (" (sparse)" if args[-1] else ""), _SWEEP_SECONDS))(*args)
+    fn = _entry(_state["loop"], args, literal=(len(args) - 1,), say=lambda how: notice(
+        "the kinematic sweep" + (" (sparse)" if args[-1] else ""), _SWEEP_SECONDS,
+        background=how == "background"))
+    if fn is None:
+        # being compiled in the background (decision 0064): every point from ``first`` on is
+        # left to the Python loop, with the scaling it was given (None: the caller's own)
+        return int(first), 0, scaling
+    k, evals = fn(*args)
     if scaling is None:
         scaling = Scaling(float(scale[0]), columns, float(scale[1]))
     return int(k), int(evals), scaling

@@ -423,6 +423,11 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
             k0, done, sc = _jit_sweep.run(*args)
         else:
             k0, done, sc, interrupted = _run_chunks(args, progress)
+        if sc is None and N:
+            # the loop did not run (compiled in the background meanwhile: decision 0064); the
+            # Python loop's scaling, as above
+            F0, J0 = system.residual_and_jacobian(times[0], q0, p, sparse)
+            sc, start = Scaling.of(system, q0, J0), (F0, J0)
         if guard is not None and k0 > P:
             # a compiled row on the wrong root of an angle equation (a prediction more than a
             # quarter turn off): it and the rows after it are solved again below
