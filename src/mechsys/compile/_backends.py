@@ -479,10 +479,11 @@ class _FirstUse(Compiled):
 
     Until then it evaluates the same expressions with SymEngine's interpreted ``Lambdify``
     (``backend="lambda"``) after common-subexpression elimination (the repeated-output and
-    argument-name workarounds of :class:`_SymengineCompiled` included): about 0.06 s to
-    build the nine joint kernels and the main kernel of a 7-joint arm where LLVM takes about
-    0.7 s, and about as fast per call for kernels of this size. The LLVM kernel (exactly
-    the one :func:`compile_exprs` makes without ``first_use``) replaces it
+    argument-name workarounds of :class:`_SymengineCompiled` included): about 0.05 s to
+    build the nine joint kernels and the main kernel of the Panda arm where LLVM takes about
+    0.7 s; a call then costs 6 to 50 µs instead of 1.5 to 6 µs, so about 2000 calls would
+    pay for LLVM's 0.07 s a kernel. The LLVM kernel (exactly the one :func:`compile_exprs`
+    makes without ``first_use``) replaces it
 
     * at once, when the on-disk kernel cache holds it (loading costs milliseconds);
     * after :data:`FIRST_USE_CALLS` calls, or for a ``batch`` of :data:`FIRST_USE_ROWS`
