@@ -55,7 +55,7 @@ ROBOTS = {"UR5": SHARE / "ur_description/urdf/ur5_robot.urdf",
           "Panda": SHARE / "panda_description/urdf/panda.urdf"}
 N = 200
 REPEAT = 5
-FIRST = 3
+FIRST = 5
 
 _FIRST = """
 import resource, json
