@@ -9,7 +9,11 @@ Robots: the UR5 (6 joints) and the Panda (7 arm joints and 2 finger slides) of
   interpreter that imports mechsys, reads the URDF (``ms.from_urdf``) and evaluates one
   inverse dynamics, with new empty Numba and kernel caches (``NUMBA_CACHE_DIR``,
   ``MECHSYS_CACHE``); then of a second fresh process with the caches the first filled. The
-  median of ``FIRST`` such pairs, run one after the other.
+  median of ``FIRST`` such pairs, run one after the other, and the phases of the cold one
+  (import, reading the file, the first inverse dynamics). mechsys's bytecode is compiled
+  first (``compileall``, as ``pip install`` does): with ``PYTHONDONTWRITEBYTECODE`` set and
+  a source checkout, every process would otherwise compile its ~100 modules from source
+  (about 0.4 s, decision 0065).
 * per point: CPU time per state over ``N`` random states, median of ``REPEAT`` interleaved
   rounds (every tool once per round) after a warm-up: mechsys ``m.inverse_dynamics`` /
   ``m.forward_dynamics`` over all ``N`` at once (``MECHSYS_JIT`` unset: the compiled loops
@@ -51,38 +55,57 @@ ROBOTS = {"UR5": SHARE / "ur_description/urdf/ur5_robot.urdf",
           "Panda": SHARE / "panda_description/urdf/panda.urdf"}
 N = 200
 REPEAT = 5
-FIRST = 3
+FIRST = 5
 
 _FIRST = """
 import resource, json
 def cpu():
     r = resource.getrusage(resource.RUSAGE_SELF)
     return r.ru_utime + r.ru_stime
+t = [cpu()]
 import numpy as np
 import mechsys as ms
+t.append(cpu())
 m = ms.from_urdf({path!r})
+t.append(cpu())
 n = m.compile().n
 tau = m.inverse_dynamics(np.zeros(n), np.zeros(n), np.zeros(n))
-print(json.dumps({{"cpu": cpu()}}))
+t.append(cpu())
+print(json.dumps({{"cpu": t[-1], "phases": [t[1], t[2] - t[1], t[3] - t[2]]}}))
 """
 
 
-def _fresh(path: Path, numba_cache: str, mechsys_cache: str) -> float:
+def _bytecode() -> None:
+    """Compile mechsys's modules to bytecode (what ``pip install`` does), so that a fresh
+    process reads them instead of compiling their source."""
+    import compileall
+    import importlib.util
+
+    spec = importlib.util.find_spec("mechsys")
+    compileall.compile_dir(str(Path(spec.origin).parent), quiet=1)
+
+
+def _fresh(path: Path, numba_cache: str, mechsys_cache: str) -> dict:
     env = dict(os.environ, NUMBA_CACHE_DIR=numba_cache, MECHSYS_CACHE=mechsys_cache)
     env.pop("MECHSYS_JIT", None)
     out = subprocess.run([sys.executable, "-c", _FIRST.format(path=str(path))], env=env,
                          capture_output=True, text=True, check=True)
-    return json.loads(out.stdout.strip().splitlines()[-1])["cpu"]
+    return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def first(path: Path) -> tuple[float, float]:
-    """``(cold, second session)`` CPU seconds, medians of :data:`FIRST` pairs."""
+def first(path: Path) -> tuple[float, float, list[float]]:
+    """``(cold, second session, phases of the cold one)`` CPU seconds, medians of
+    :data:`FIRST` pairs; the phases: interpreter start and ``import mechsys``, reading the
+    file, the first inverse dynamics."""
+    _bytecode()
     cold, warm = [], []
     for _ in range(FIRST):
         with tempfile.TemporaryDirectory() as nb, tempfile.TemporaryDirectory() as mc:
             cold.append(_fresh(path, nb, mc))
             warm.append(_fresh(path, nb, mc))
-    return statistics.median(cold), statistics.median(warm)
+    phases = [statistics.median(c["phases"][k] for c in cold) for k in range(3)]
+    return (statistics.median(c["cpu"] for c in cold), statistics.median(w["cpu"] for w in warm),
+            phases)
 
 
 def per_point(name: str, path: Path) -> dict:
@@ -148,27 +171,35 @@ def table() -> str:
              "ID mechsys [µs] | ID Pinocchio | ID MuJoCo | FD mechsys [µs] | FD Pinocchio | "
              "FD MuJoCo | ID vs Pinocchio |",
              "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    split = ["", "Phases of the cold first call (CPU s, medians): interpreter start and "
+             "`import mechsys`; `ms.from_urdf`; `compile()` and the first "
+             "`inverse_dynamics` (symbolic derivation and kernels).", "",
+             "| robot | start + import | read URDF | first inverse dynamics |",
+             "| --- | ---: | ---: | ---: |"]
     for name, path in ROBOTS.items():
-        cold, warm = first(path)
-        print(f"{name}: first {cold:.2f} s cold, {warm:.2f} s cached", file=sys.stderr)
+        cold, warm, phases = first(path)
+        print(f"{name}: first {cold:.2f} s cold, {warm:.2f} s cached, phases {phases}",
+              file=sys.stderr)
         us = per_point(name, path)
         lines.append(f"| {name} | {us['n']} | {cold:.2f} | {warm:.2f} | {us['ms_id']:.1f} | "
                      f"{us['pin_id']:.1f} | {us['mj_id']:.1f} | {us['ms_fd']:.1f} | "
                      f"{us['pin_fd']:.1f} | {us['mj_fd']:.1f} | {us['err']:.0e} |")
-    return "\n".join(lines)
+        split.append(f"| {name} | {phases[0]:.2f} | {phases[1]:.2f} | {phases[2]:.2f} |")
+    return "\n".join(lines + split)
 
 
 INTRO = ("`first`: CPU time (imports included) of a fresh process that imports mechsys, reads "
          "the URDF and evaluates one inverse dynamics, with empty Numba and kernel caches "
          "(`NUMBA_CACHE_DIR`, `MECHSYS_CACHE` in new directories), then of a second fresh "
-         f"process with the caches the first filled (median of {FIRST} pairs). Then CPU time "
+         f"process with the caches the first filled (median of {FIRST} pairs; mechsys's "
+         "bytecode compiled first, as `pip install` does). Then CPU time "
          f"per state, median of {REPEAT} interleaved rounds over {N} random states: mechsys's "
          "`m.inverse_dynamics` (ID) and `m.forward_dynamics` (FD) over all of them in one call "
          "(the compiled loop over points from 100 points on); Pinocchio's `rnea`/`aba` and "
          "MuJoCo's `mj_inverse`/`mj_forward` called once per state from Python (MuJoCo's "
          "forward step also computes what its simulation needs beyond the accelerations). "
          "Last column: mechsys's joint forces against Pinocchio's RNEA, relative. Decision "
-         "0057 has the numbers before its changes.")
+         "0057 has the numbers before its changes, 0065 those of the first call.")
 
 
 def main(argv=None) -> int:

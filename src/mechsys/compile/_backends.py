@@ -126,13 +126,35 @@ def real_expressions(exprs) -> list:
     skipped (about 0.1 ms an expression in Python: a second of a 1024-link chain)."""
     exprs = list(exprs)
     if _se is not None and exprs and all(isinstance(e, _se.Basic) for e in exprs):
-        from symengine.lib.symengine_wrapper import ComplexBase
-
-        found = _se.DenseMatrix(len(exprs), 1, exprs).atoms(ComplexBase, type(_se.zoo), _se.Pow)
-        if not any(not isinstance(a, _se.Pow) or (a.args[1].is_Integer and abs(int(a.args[1]))
-                                                  >= BIG_EXPONENT) for a in found):
+        if not _se_flagged(exprs):
             return exprs
     return [real_expression(e) for e in exprs]
+
+
+def _se_flagged(exprs) -> bool:
+    """Whether SymEngine ``exprs`` hold anything :func:`real_expression` acts on (a complex
+    number, complex infinity, a power with an integer exponent of magnitude at least
+    :data:`BIG_EXPONENT`). One walk over the distinct nodes: SymEngine's own ``atoms``
+    walks the expression *tree*, visiting a shared subexpression once per occurrence, which
+    for a Gen joint's nested pose and its derivatives (a DAG with much sharing) cost 0.2 to
+    0.4 s of a 7-joint arm's first inverse dynamics (decision 0065)."""
+    from symengine.lib.symengine_wrapper import ComplexBase
+
+    flagged = (ComplexBase, type(_se.zoo))
+    seen: set = set()
+    stack = list(exprs)
+    while stack:
+        e = stack.pop()
+        if e in seen:
+            continue
+        seen.add(e)
+        if isinstance(e, flagged):
+            return True
+        args = e.args
+        if isinstance(e, _se.Pow) and args[1].is_Integer and abs(int(args[1])) >= BIG_EXPONENT:
+            return True
+        stack.extend(args)
+    return False
 
 
 class Compiled:
@@ -205,12 +227,26 @@ def _split_piecewise(exprs):
     return {v: k for k, v in found.items()}, [e.xreplace(found) for e in exprs]
 
 
-def _lambdify(args, exprs, opt_level, cse=False):
+class _NotCached(Exception):
+    """A kernel asked for from the on-disk cache only (``mode="cached"``) is not there."""
+
+
+def _lambdify(args, exprs, opt_level, cse=False, mode="llvm"):
+    """``(SymEngine Lambdify, backend name)``. ``mode``: ``"llvm"`` loads the LLVM kernel
+    from the on-disk cache or compiles (and stores) it; ``"cached"`` only loads it, raising
+    :class:`_NotCached` when it is not there; ``"lambda"`` builds SymEngine's interpreted
+    kernel (no LLVM: cheap to build, for a few evaluations, see :class:`_FirstUse`)."""
+    if mode == "lambda":
+        # (named: SymEngine's default backend is LLVM when it was built with it)
+        return (_se.Lambdify(list(args), list(exprs), backend="lambda", cse=cse),
+                "symengine-lambda")
     key = _cache_key(args, exprs, opt_level, cse)
     if key is not None:
         f = _cache.load(key)
         if f is not None:
             return f, "symengine-llvm"
+    if mode == "cached":
+        raise _NotCached
     try:
         f = _se.Lambdify(list(args), list(exprs), backend="llvm", cse=cse, opt_level=opt_level)
     except (ValueError, TypeError, RuntimeError):  # built without LLVM, or unsupported
@@ -301,7 +337,7 @@ class _SymengineCompiled(Compiled):
 
     backend = "symengine"
 
-    def __init__(self, args, exprs, opt_level: int = 3, cse: bool = False):
+    def __init__(self, args, exprs, opt_level: int = 3, cse: bool = False, mode: str = "llvm"):
         self.nout = len(exprs)
         exprs = [_se.sympify(e) for e in exprs]
         if cse:
@@ -320,7 +356,8 @@ class _SymengineCompiled(Compiled):
         self._pre = None
         self._npieces = len(pieces)
         if pieces:
-            self._pre, self._pre_backend = _lambdify(args, list(pieces.values()), opt_level, cse)
+            self._pre, self._pre_backend = _lambdify(args, list(pieces.values()), opt_level, cse,
+                                                     mode)
             self._nargs = len(args)
             args = [*args, *pieces]
             self._buf = np.empty(len(args))     # [x, Piecewise values]: one call each
@@ -337,7 +374,7 @@ class _SymengineCompiled(Compiled):
                 self._plain_src = (list(args), list(exprs), opt_level)
                 exprs = distinct
         self._nf = len(exprs)
-        self._f, self.backend = _lambdify(args, exprs, opt_level, cse)
+        self._f, self.backend = _lambdify(args, exprs, opt_level, cse, mode)
         self._nin = len(args) - len(pieces)
         # SymEngine's unchecked entry point costs ~0.8 us a call instead of ~4 us: the
         # checks it skips (length, dtype, contiguity) are done here, once per call
@@ -431,6 +468,111 @@ class _SymengineCompiled(Compiled):
         return out if self._expand is None else out[:, self._expand]
 
 
+#: a first-use kernel (:class:`_FirstUse`) compiles its LLVM code after this many calls
+FIRST_USE_CALLS = 1000
+#: ... or for a ``batch`` of this many points
+FIRST_USE_ROWS = 100
+
+
+class _FirstUse(Compiled):
+    """A SymEngine kernel whose LLVM code is compiled when the work pays for it.
+
+    Until then it evaluates the same expressions with SymEngine's interpreted ``Lambdify``
+    (``backend="lambda"``) after common-subexpression elimination (the repeated-output and
+    argument-name workarounds of :class:`_SymengineCompiled` included): about 0.05 s to
+    build the nine joint kernels and the main kernel of the Panda arm where LLVM takes about
+    0.7 s; a call then costs 6 to 50 µs instead of 1.5 to 6 µs, so about 2000 calls would
+    pay for LLVM's 0.07 s a kernel. The LLVM kernel (exactly the one :func:`compile_exprs`
+    makes without ``first_use``) replaces it
+
+    * at once, when the on-disk kernel cache holds it (loading costs milliseconds);
+    * after :data:`FIRST_USE_CALLS` calls, or for a ``batch`` of :data:`FIRST_USE_ROWS`
+      points or more;
+    * when a compiled loop asks for its C entry points (:meth:`c_entry`,
+      :meth:`c_function`), and before pickling (the interpreted kernel does not pickle).
+
+    Both evaluate the same expressions; they may differ in the last bits (the order of the
+    floating-point operations differs), never more (decision 0065).
+
+    Example::
+
+        f = compile_exprs(args, exprs, first_use=True)   # cheap to build
+        f(x)                                             # interpreted, first calls
+        f.c_entry()                                      # LLVM from here on
+    """
+
+    backend = "symengine"
+
+    def __init__(self, args, exprs, opt_level: int, cse: bool):
+        import threading
+
+        self.nout = len(exprs)
+        self._src = (list(args), list(exprs), opt_level, cse)
+        self._calls = 0
+        self._lock = threading.Lock()
+        self._cheap = None
+        try:
+            self._full = _SymengineCompiled(args, exprs, opt_level=opt_level, cse=cse,
+                                            mode="cached")
+        except _NotCached:
+            self._full = None
+            self._cheap = _SymengineCompiled(args, exprs, opt_level=opt_level, cse=True,
+                                             mode="lambda")
+
+    def full(self) -> Compiled:
+        """The LLVM kernel, compiled (or loaded from the cache) on the first request. A
+        kernel LLVM refuses keeps the interpreted one (its C entry points are then None)."""
+        f = self._full
+        if f is None:
+            with self._lock:
+                f = self._full
+                if f is None:
+                    args, exprs, opt_level, cse = self._src
+                    try:
+                        f = _SymengineCompiled(args, exprs, opt_level=opt_level, cse=cse)
+                    except (RuntimeError, TypeError, ValueError, NotImplementedError):
+                        f = self._cheap
+                    self._full = f
+        return f
+
+    def __call__(self, x):
+        f = self._full
+        if f is not None:
+            return f(x)
+        self._calls += 1
+        if self._calls > FIRST_USE_CALLS:
+            return self.full()(x)
+        return self._cheap(x)
+
+    def batch(self, X):
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        if self._full is None and X.shape[0] < FIRST_USE_ROWS:
+            return self._cheap.batch(X)
+        return self.full().batch(X)
+
+    def c_entry(self):
+        """:meth:`_SymengineCompiled.c_entry` of the LLVM kernel (compiled now if not yet)."""
+        return self.full().c_entry()
+
+    def c_function(self):
+        """:meth:`_SymengineCompiled.c_function` of the LLVM kernel (compiled now if not
+        yet)."""
+        return self.full().c_function()
+
+    def __getstate__(self):
+        self.full()
+        state = dict(self.__dict__)
+        state.pop("_lock")
+        state["_cheap"] = None
+        return state
+
+    def __setstate__(self, state):
+        import threading
+
+        self.__dict__.update(state)
+        self._lock = threading.Lock()
+
+
 def available_backends() -> list[str]:
     return (["symengine"] if _se is not None else []) + ["sympy"]
 
@@ -451,7 +593,8 @@ LARGE_KERNEL = 500
 
 
 def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
-                  backend: str | None = None, once: bool = False, cse: bool = False) -> Compiled:
+                  backend: str | None = None, once: bool = False, cse: bool = False,
+                  first_use: bool = False) -> Compiled:
     """Compile ``exprs`` as a function of the flat argument list ``args``.
 
     ``once``: the function is evaluated a few times only (``m.dof()``'s Jacobian): LLVM
@@ -460,7 +603,11 @@ def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
 
     ``cse``: common subexpressions first (SymEngine). Off by default (slow on the flat
     expressions of absolute coordinates); on for models with Gen joints, whose nested slave
-    poses share most of their subexpressions (decision 0010: 10 times faster compiles)."""
+    poses share most of their subexpressions (decision 0010: 10 times faster compiles).
+
+    ``first_use``: SymEngine evaluates the expressions without LLVM until the work pays for
+    compiling them (:class:`_FirstUse`; the LLVM kernel at once when the on-disk cache has
+    it): the first result of a fresh process sooner, the same numbers to the last bits."""
     if not exprs:
         return _Empty()
     # every expression that becomes numeric code passes here: complex constants refused,
@@ -485,6 +632,8 @@ def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
             level = getattr(backend, "opt_level", None)
             if level is None:
                 level = 0 if len(exprs) > LARGE_KERNEL else 3
+            if first_use and not once:
+                return _FirstUse(args, exprs, level, cse)
             return _SymengineCompiled(args, exprs, opt_level=0 if once else level, cse=cse)
         except (RuntimeError, TypeError, ValueError, NotImplementedError):
             # a function SymEngine cannot compile (e.g. Mod, Abs): SymPy can

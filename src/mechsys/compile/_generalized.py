@@ -248,7 +248,9 @@ def _compile(args, exprs, backend):
     from ._derive import to_sympy_list
 
     if backend == "symengine":
-        return compile_exprs(args, exprs, backend)
+        # (interpreted until the work pays for LLVM: the first inverse dynamics of an arm in
+        # a fresh process, decision 0065)
+        return compile_exprs(args, exprs, backend, first_use=True)
     return compile_exprs(args, to_sympy_list(exprs), backend)
 
 
@@ -406,7 +408,7 @@ class RecursiveDynamics:
         from ._backends import compile_exprs
 
         self._main = compile_exprs([*self.args(), *pose_syms, *vel_syms], exprs, system.backend,
-                                   cse=system.cse)
+                                   cse=system.cse, first_use=True)
         self._sizes = (len(entries), len(jac), lay.n, len(gamma), S * nq)
         import threading
 
