@@ -181,13 +181,21 @@ class _SympyCompiled(Compiled):
         return out
 
 
-def _split_piecewise(exprs):
+def _split_piecewise(exprs, atoms=None):
     """``(pieces, reduced)``: the distinct outermost ``Piecewise`` of SymEngine ``exprs`` and
     ``exprs`` with each replaced by a new symbol (``{symbol: piecewise}``, insertion order).
+    ``atoms``: the result of a search of ``exprs`` for ``Piecewise`` (and other types)
+    already made, else one is made here.
 
     A spline profile's ``Piecewise`` (``geometry/_curves.py``) recurs tens of times in a
     Jacobian and ``gamma``; without CSE (``docs/decisions/0002``) LLVM would compile every
     copy: 60 s instead of 2 s for a 361-knot cam (``docs/decisions/0008-curves.md``)."""
+    exprs = list(exprs)
+    if atoms is None:
+        # one search in C++ (the Python walk below costs ~40 ms a 10,000-output kernel)
+        atoms = _se.DenseMatrix(len(exprs), 1, exprs).atoms(_se.Piecewise) if exprs else ()
+    if not any(isinstance(a, _se.Piecewise) for a in atoms):
+        return {}, exprs
     found: dict = {}
     seen: set = set()
     stack = list(exprs)
@@ -202,7 +210,112 @@ def _split_piecewise(exprs):
             stack.extend(e.args)
     if not found:
         return {}, list(exprs)
-    return {v: k for k, v in found.items()}, [e.xreplace(found) for e in exprs]
+    return {v: k for k, v in found.items()}, xreplace_all(exprs, found)
+
+
+def xreplace_all(exprs, mapping: dict) -> list:
+    """``[e.xreplace(mapping) for e in exprs]`` for SymEngine ``exprs`` in one call.
+
+    SymEngine converts the Python ``mapping`` to its C++ map on every ``xreplace``: with a
+    few thousand entries that is ~2 ms an expression (40 s for the 18,428 outputs of a
+    1024-link chain's free-motion kernel). The expressions are wrapped as the arguments of
+    one undefined function, replaced in a single call (one conversion, shared
+    subexpressions visited once) and unwrapped; a function's arguments are kept as given."""
+    exprs = list(exprs)
+    if not exprs or not mapping:
+        return exprs
+    return list(_se.Function("_mechsys_all")(*exprs).xreplace(mapping).args)
+
+
+#: a kernel with more outputs than this and compiled without LLVM's optimiser (level 0)
+#: computes the distinct ``sin``/``cos`` of its arguments in a first stage (see
+#: :func:`_split_trig`); below it the optimiser merges the repeated calls itself
+STAGE_TRIG = 500
+
+
+def _split_trig(exprs, avoid=(), atoms=None):
+    r"""``(values, reduced)``: the distinct ``sin(a)``, ``cos(a)`` of SymEngine ``exprs`` whose
+    arguments hold none of the symbols ``avoid``, and ``exprs`` with each replaced by a new
+    symbol (``{symbol: sin or cos}``). ``atoms``: a search of ``exprs`` for ``sin`` and
+    ``cos`` (and other types) already made, else one is made here.
+
+    Unoptimised LLVM code (large kernels: :data:`LARGE_KERNEL`) calls ``sin`` and ``cos``
+    wherever they occur: the free-motion kernel of an N-link chain holds each angle's
+    ``sin`` and ``cos`` about nine times. Computed once in a first stage, the 1024-link
+    kernel evaluates 7 times faster (364 -> 45 us) and compiles in 1.2 s instead of 1.9 s
+    (decision 0066). The reduced expressions are the same terms with the value of
+    :math:`\sin a` read from an argument instead of computed: equal to rounding (a product
+    may be ordered differently)."""
+    if atoms is None:
+        atoms = _se.DenseMatrix(len(exprs), 1, list(exprs)).atoms(_se.sin, _se.cos)
+    found = {a for a in atoms if isinstance(a, (_se.sin, _se.cos))}
+    if avoid:
+        avoid = set(avoid)
+        found = {a for a in found if not (a.free_symbols & avoid)}
+    if not found:
+        return {}, list(exprs)
+    # a fixed order (the cache key of both stages depends on it): by printed form
+    ordered = sorted(found, key=str)
+    names = {a: _se.Symbol(f"_mechsys_trig_{i}") for i, a in enumerate(ordered)}
+    return {v: k for k, v in names.items()}, xreplace_all(exprs, names)
+
+
+def _gather_stage(args, stage: dict, exprs) -> tuple[list, list, list]:
+    r"""``(pre_args, pre_values, main_args)`` of a two-stage kernel whose second stage reads
+    only the first stage's values: the first stage, on the arguments ``pre_args`` (a prefix
+    of ``args``: those up to the last it uses), writes ``pre_values`` = the arguments the
+    reduced ``exprs`` use, copied, then the ``stage`` values; the second stage takes
+    ``main_args`` = those copies' symbols and the ``stage`` symbols, in that order.
+
+    SymEngine's LLVM code loads every declared argument at its entry and finds an argument
+    by a linear search of the list (per occurrence of a symbol): a kernel declaring the
+    11,265 arguments of a 1024-link chain's dynamics but using 1,024 of them and its 2,048
+    stage values compiles in 1.3-1.6 s, on the 3,072 it uses in 0.66 s (decision 0066)."""
+    names = [_name(a) for a in args]
+    used = {_name(a) for a in _se.DenseMatrix(len(exprs), 1, list(exprs)).free_symbols} \
+        if exprs else set()
+    # (by name: SymPy and SymEngine symbols of one name are one argument; only the arguments
+    # kept are converted)
+    copied = [_se.sympify(a) for a, nm in zip(args, names) if nm in used]
+    values = [*copied, *stage.values()]
+    if not values:
+        return list(args), [], list(args)
+    needs = {_name(a) for a in _se.DenseMatrix(len(values), 1, values).free_symbols}
+    last = max((i for i, nm in enumerate(names) if nm in needs), default=0)
+    return list(args[:last + 1]), values, [*copied, *stage]
+
+
+#: the LLVM objects of the entry points made by :func:`_offset_entry` (target machine, once)
+_TRAMPOLINE: dict = {}
+
+
+def _offset_entry(keep, main, offset: int):
+    """``(owners, (address, context))`` of a C function ``g(out, x, ctx) = f(out, x + offset,
+    ctx)`` for the entry point ``main = (address of f, ctx)``: the compiled loops call every
+    kernel's second stage with ``x`` (``solvers/_jit_calls._eval``); a gathered second stage
+    (:func:`_gather_stage`) reads its values after the ``offset`` arguments. Three
+    instructions compiled by llvmlite (Numba's code generator, ~4 ms)."""
+    import llvmlite.binding as llvm
+    from llvmlite import ir
+
+    if "tm" not in _TRAMPOLINE:
+        llvm.initialize_native_target()
+        llvm.initialize_native_asmprinter()
+        _TRAMPOLINE["tm"] = llvm.Target.from_default_triple().create_target_machine()
+    mod = ir.Module(name="mechsys_offset_entry")
+    dp, vp = ir.DoubleType().as_pointer(), ir.IntType(8).as_pointer()
+    fty = ir.FunctionType(ir.VoidType(), [dp, dp, vp])
+    fn = ir.Function(mod, fty, name="entry")
+    b = ir.IRBuilder(fn.append_basic_block())
+    out, x, ctx = fn.args
+    target = b.inttoptr(ir.Constant(ir.IntType(64), main[0]), fty.as_pointer())
+    b.call(target, [out, b.gep(x, [ir.Constant(ir.IntType(64), offset)]), ctx])
+    b.ret_void()
+    parsed = llvm.parse_assembly(str(mod))
+    parsed.verify()
+    engine = llvm.create_mcjit_compiler(parsed, _TRAMPOLINE["tm"])
+    engine.finalize_object()
+    return (keep, engine), (engine.get_function_address("entry"), main[1])
 
 
 def _lambdify(args, exprs, opt_level, cse=False):
@@ -297,7 +410,9 @@ def _entry_point(f):
 
 class _SymengineCompiled(Compiled):
     """SymEngine ``Lambdify``; expressions with ``Piecewise`` in two stages: the distinct
-    ``Piecewise`` first (``_pre``), then the rest with their values as extra arguments."""
+    ``Piecewise`` first (``_pre``), then the rest with their values as extra arguments. A
+    large unoptimised kernel computes the distinct ``sin``/``cos`` of its arguments in that
+    first stage too (:func:`_split_trig`)."""
 
     backend = "symengine"
 
@@ -316,14 +431,33 @@ class _SymengineCompiled(Compiled):
             if ren:
                 exprs = list(_se.DenseMatrix(len(exprs), 1, exprs).xreplace(ren))
                 args = [ren.get(_se.sympify(a), a) for a in args]
-        pieces, exprs = _split_piecewise(exprs)
+        nin = len(args)
+        staged = not cse and opt_level == 0 and len(exprs) > STAGE_TRIG
+        # one search of the expressions for what the stages take out (each costs ~0.1 s on
+        # the 18,000 outputs of a 1024-link chain's free-motion kernel)
+        atoms = _se.DenseMatrix(len(exprs), 1, exprs).atoms(
+            _se.Piecewise, *((_se.sin, _se.cos) if staged else ())) if exprs else set()
+        pieces, exprs = _split_piecewise(exprs, atoms)
+        pre_args, pre_values, main_args = args, list(pieces.values()), [*args, *pieces]
+        self._gather = False
+        if staged:
+            # a large unoptimised kernel (decision 0066): the distinct sin/cos once, in the
+            # first stage beside the Piecewise values (with CSE they are computed once
+            # already), and the second stage reads only what it uses, gathered by the first
+            # (the trig functions searched again only in what the Piecewise split left)
+            trig, exprs = _split_trig(exprs, avoid=pieces, atoms=None if pieces else atoms)
+            pre_args, pre_values, main_args = _gather_stage(args, {**pieces, **trig}, exprs)
+            self._gather = bool(pre_values)
+            if not self._gather:
+                pre_args, pre_values, main_args = args, [], list(args)
         self._pre = None
-        self._npieces = len(pieces)
-        if pieces:
-            self._pre, self._pre_backend = _lambdify(args, list(pieces.values()), opt_level, cse)
-            self._nargs = len(args)
-            args = [*args, *pieces]
-            self._buf = np.empty(len(args))     # [x, Piecewise values]: one call each
+        self._npieces = len(pre_values)
+        if pre_values:
+            self._pre, self._pre_backend = _lambdify(pre_args, pre_values, opt_level, cse)
+            self._pre_nin = len(pre_args)   # the first stage reads x[:_pre_nin]
+            self._nargs = nin
+            self._buf = np.empty(nin + len(pre_values))   # [x, first-stage values]
+        args = main_args
         self._expand = None
         if cse:
             # SymEngine 0.15's CSE returns wrong values for repeated outputs (decision 0002):
@@ -338,7 +472,7 @@ class _SymengineCompiled(Compiled):
                 exprs = distinct
         self._nf = len(exprs)
         self._f, self.backend = _lambdify(args, exprs, opt_level, cse)
-        self._nin = len(args) - len(pieces)
+        self._nin = nin
         # SymEngine's unchecked entry point costs ~0.8 us a call instead of ~4 us: the
         # checks it skips (length, dtype, contiguity) are done here, once per call
         self._fast = hasattr(self._f, "unsafe_real") and (
@@ -358,7 +492,7 @@ class _SymengineCompiled(Compiled):
             buf = self._buf
             buf[:self._nargs] = x
             self._pre.unsafe_real(x, buf[self._nargs:])
-            x = buf
+            x = buf[self._nargs:] if self._gather else buf
         out = np.empty(self._nf)       # a new array per call: callers may keep the last one
         self._f.unsafe_real(x, out)
         return out if self._expand is None else out[self._expand]
@@ -410,6 +544,9 @@ class _SymengineCompiled(Compiled):
             return None
         if not hasattr(self, "_cfun"):
             keep, main = _entry_point(self._f)
+            if self._gather:
+                # the second stage reads the first stage's values only: called at x + nin
+                keep, main = _offset_entry(keep, main, self._nargs)
             keep_pre, pre = _entry_point(self._pre) if self._pre is not None else (None, (0, 0))
             self._cfun = (keep, keep_pre, (*main, *pre, self._npieces))  # owners kept alive
         return self._cfun[2], self._expand
@@ -418,15 +555,16 @@ class _SymengineCompiled(Compiled):
         if self._pre is not None:
             buf = self._buf
             buf[:self._nargs] = x
-            buf[self._nargs:] = self._pre(x)
-            x = buf
+            buf[self._nargs:] = self._pre(x[:self._pre_nin])
+            x = buf[self._nargs:] if self._gather else buf
         out = self._f(x).reshape(self._nf)
         return out if self._expand is None else out[self._expand]
 
     def batch(self, X):
         X = np.atleast_2d(np.asarray(X, dtype=float))
         if self._pre is not None:
-            X = np.hstack([X, self._pre(X).reshape(X.shape[0], -1)])
+            P = self._pre(X[:, :self._pre_nin]).reshape(X.shape[0], -1)
+            X = P if self._gather else np.hstack([X, P])
         out = self._f(X).reshape(X.shape[0], self._nf)
         return out if self._expand is None else out[:, self._expand]
 
