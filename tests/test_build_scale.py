@@ -127,3 +127,24 @@ def test_large_unoptimised_kernel_computes_each_sin_cos_once(monkeypatch):
         proto(pre)(xs[2:].ctypes.data, xs.ctypes.data, pre_context)
         proto(address)(out.ctypes.data, xs.ctypes.data, context)
         np.testing.assert_allclose(out, want, rtol=1e-14, atol=1e-15)
+
+
+def test_lever_arm_of_a_large_sparse_dense_jacobian_equals_the_grouped_maxima():
+    """A large, mostly empty dense Jacobian takes the scatter of its nonzero entries
+    (decision 0066): the same lever arm as the grouped maxima of every entry, NaN entries
+    ignored by both."""
+    from mechsys.solvers import _linalg
+
+    rng = np.random.default_rng(3)
+    nb, m = 200, 1300                      # 600 columns: (x, y, angle) per body
+    J = np.zeros((m, 3 * nb))
+    rows = rng.integers(0, m, 4000)
+    cols = rng.integers(0, 3 * nb, 4000)
+    J[rows, cols] = rng.normal(size=4000) * np.where(cols % 3 == 2, 7.0, 1.0)
+    J[5, 7] = np.nan
+    trans = np.tile([True, True, False], nb)
+    body = np.repeat(np.arange(nb), 3)
+    assert J.size > _linalg.LEVER_DENSE_MAX
+    dense = _linalg._lever_arm_dense(J, trans, body)
+    assert dense > 0
+    assert _linalg._lever_arm(J, trans, body) == dense

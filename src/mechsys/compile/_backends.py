@@ -119,20 +119,38 @@ def _plainly_real(expr: sp.Basic) -> bool:
     return True
 
 
-def real_expressions(exprs) -> list:
+def real_expressions(exprs, atoms=None) -> list:
     """:func:`real_expression` of each of ``exprs``. SymEngine lists are first searched once
     as a whole for what it looks for (imaginary and complex numbers, complex infinity,
     powers): when none of it occurs, nothing can change and the per-expression searches are
-    skipped (about 0.1 ms an expression in Python: a second of a 1024-link chain)."""
-    exprs = list(exprs)
-    if _se is not None and exprs and all(isinstance(e, _se.Basic) for e in exprs):
+    skipped (about 0.1 ms an expression in Python: a second of a 1024-link chain).
+    ``atoms``: that search made already (:func:`_search`: it also serves the kernel's
+    stages); the list itself is returned when nothing changes."""
+    exprs = exprs if isinstance(exprs, list) else list(exprs)
+    if atoms is None:
+        atoms = _search(exprs)
+    if atoms is not None:
         from symengine.lib.symengine_wrapper import ComplexBase
 
-        found = _se.DenseMatrix(len(exprs), 1, exprs).atoms(ComplexBase, type(_se.zoo), _se.Pow)
-        if not any(not isinstance(a, _se.Pow) or (a.args[1].is_Integer and abs(int(a.args[1]))
-                                                  >= BIG_EXPONENT) for a in found):
+        if not any(isinstance(a, (ComplexBase, type(_se.zoo))) or (
+                isinstance(a, _se.Pow) and a.args[1].is_Integer
+                and abs(int(a.args[1])) >= BIG_EXPONENT) for a in atoms):
             return exprs
     return [real_expression(e) for e in exprs]
+
+
+def _search(exprs):
+    """The atoms of a list of SymEngine expressions that the compile boundary acts on, found
+    in one traversal (~0.1 s for the 18,000 outputs of a 1024-link chain's free-motion
+    kernel): complex numbers and infinity, powers (:func:`real_expressions`), ``Piecewise``
+    (:func:`_split_piecewise`), ``sin`` and ``cos`` (:func:`_split_trig`). None unless every
+    expression is a SymEngine one."""
+    if _se is None or not exprs or not all(isinstance(e, _se.Basic) for e in exprs):
+        return None
+    from symengine.lib.symengine_wrapper import ComplexBase
+
+    return _se.DenseMatrix(len(exprs), 1, exprs).atoms(
+        ComplexBase, type(_se.zoo), _se.Pow, _se.Piecewise, _se.sin, _se.cos)
 
 
 class Compiled:
@@ -416,7 +434,7 @@ class _SymengineCompiled(Compiled):
 
     backend = "symengine"
 
-    def __init__(self, args, exprs, opt_level: int = 3, cse: bool = False):
+    def __init__(self, args, exprs, opt_level: int = 3, cse: bool = False, atoms=None):
         self.nout = len(exprs)
         exprs = [_se.sympify(e) for e in exprs]
         if cse:
@@ -435,8 +453,8 @@ class _SymengineCompiled(Compiled):
         staged = not cse and opt_level == 0 and len(exprs) > STAGE_TRIG
         # one search of the expressions for what the stages take out (each costs ~0.1 s on
         # the 18,000 outputs of a 1024-link chain's free-motion kernel)
-        atoms = _se.DenseMatrix(len(exprs), 1, exprs).atoms(
-            _se.Piecewise, *((_se.sin, _se.cos) if staged else ())) if exprs else set()
+        if atoms is None or cse:        # (CSE renames arguments: search the renamed)
+            atoms = _search(exprs) or set()
         pieces, exprs = _split_piecewise(exprs, atoms)
         pre_args, pre_values, main_args = args, list(pieces.values()), [*args, *pieces]
         self._gather = False
@@ -604,7 +622,11 @@ def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
     # every expression that becomes numeric code passes here: complex constants refused,
     # huge integer exponents made floats (the constraints and loads were checked with their
     # names already, this catches what was derived from them or built elsewhere)
-    exprs = real_expressions(exprs)
+    exprs = list(exprs)
+    atoms = _search(exprs)
+    checked = real_expressions(exprs, atoms)
+    if checked is not exprs:      # rewritten: what was found no longer describes them
+        exprs, atoms = checked, None
     backend = backend or default_backend()
     if backend == "symengine":
         if _se is None:
@@ -623,7 +645,8 @@ def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
             level = getattr(backend, "opt_level", None)
             if level is None:
                 level = 0 if len(exprs) > LARGE_KERNEL else 3
-            return _SymengineCompiled(args, exprs, opt_level=0 if once else level, cse=cse)
+            return _SymengineCompiled(args, exprs, opt_level=0 if once else level, cse=cse,
+                                      atoms=atoms)
         except (RuntimeError, TypeError, ValueError, NotImplementedError):
             # a function SymEngine cannot compile (e.g. Mod, Abs): SymPy can
             return _SympyCompiled(args, [sp.sympify(e) for e in exprs])
