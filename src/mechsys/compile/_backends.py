@@ -303,7 +303,7 @@ def _gather_stage(args, stage: dict, exprs) -> tuple[list, list, list]:
     return list(args[:last + 1]), values, [*copied, *stage]
 
 
-#: the LLVM objects of the entry points made by :func:`_offset_entry` (target machine, once)
+#: llvmlite's target of :func:`_offset_entry` (looked up once)
 _TRAMPOLINE: dict = {}
 
 
@@ -316,10 +316,10 @@ def _offset_entry(keep, main, offset: int):
     import llvmlite.binding as llvm
     from llvmlite import ir
 
-    if "tm" not in _TRAMPOLINE:
+    if "target" not in _TRAMPOLINE:
         llvm.initialize_native_target()
         llvm.initialize_native_asmprinter()
-        _TRAMPOLINE["tm"] = llvm.Target.from_default_triple().create_target_machine()
+        _TRAMPOLINE["target"] = llvm.Target.from_default_triple()
     mod = ir.Module(name="mechsys_offset_entry")
     dp, vp = ir.DoubleType().as_pointer(), ir.IntType(8).as_pointer()
     fty = ir.FunctionType(ir.VoidType(), [dp, dp, vp])
@@ -331,7 +331,8 @@ def _offset_entry(keep, main, offset: int):
     b.ret_void()
     parsed = llvm.parse_assembly(str(mod))
     parsed.verify()
-    engine = llvm.create_mcjit_compiler(parsed, _TRAMPOLINE["tm"])
+    # (an execution engine owns its target machine: one each, never shared)
+    engine = llvm.create_mcjit_compiler(parsed, _TRAMPOLINE["target"].create_target_machine())
     engine.finalize_object()
     return (keep, engine), (engine.get_function_address("entry"), main[1])
 
