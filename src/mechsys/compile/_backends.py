@@ -8,7 +8,10 @@ many, ``X`` of shape ``(N, nargs)`` into ``(N, k)``.
   with it (the ``fast`` extra), *without* its common-subexpression elimination (SymEngine
   0.15's ``cse=True`` returns wrong values; LLVM's optimiser removes repeated work anyway).
   Preferred: see ``docs/decisions/0002-numeric-backend.md`` for the measurement.
-  ``Piecewise`` (spline profiles) compiles in two stages, see :func:`_split_piecewise`.
+  ``Piecewise`` (spline profiles) compiles in two stages, see :func:`_split_piecewise`; so
+  does a large unoptimised kernel, whose first stage computes the distinct ``sin``/``cos``
+  and copies the arguments its second stage reads (:func:`_split_trig`,
+  :func:`_gather_stage`, ``docs/decisions/0066-two-stage-large-kernels.md``).
   Expressions SymEngine cannot compile (``Mod``, ``Abs``...) go to SymPy instead.
 * ``"sympy"`` – ``sympy.lambdify`` to NumPy with ``cse=True``; always available.
 """
