@@ -72,6 +72,79 @@ def test_large_kernels_compile_unoptimised_with_the_same_values(monkeypatch):
 
     monkeypatch.setattr(_backends, "_lambdify", spy)
     big = _backends.compile_exprs([x, y], exprs, "symengine")
+    # the distinct sin/cos in a first stage (STAGE_TRIG = 500 > 39 outputs: unstaged here)
     assert seen == [0]
     for v in ([0.3, -1.1], [2.0, 0.5]):
         np.testing.assert_allclose(big(np.array(v)), opt(np.array(v)), rtol=1e-15, atol=0)
+
+
+def test_large_unoptimised_kernel_computes_each_sin_cos_once(monkeypatch):
+    """Above ``STAGE_TRIG`` outputs an unoptimised kernel computes the distinct ``sin(a)``,
+    ``cos(a)`` in a first stage, which also copies the arguments the second stage reads
+    (decision 0066): the same values (to rounding) as the optimised one-stage kernel, in
+    Python, in batch and through the C entry points the compiled loops call (the second
+    stage's at ``x``, reading after the arguments); a ``sin`` of a ``Piecewise`` stays in
+    the second stage."""
+    if "symengine" not in _backends.available_backends():
+        pytest.skip("SymEngine not installed")
+    import ctypes
+
+    x, y = sp.symbols("x y")
+    pw = sp.Piecewise((x, x < 0.5), (x**2, True))
+    exprs = [sp.sin(k * x) * y + sp.cos(y) ** k + sp.sin(x + y) for k in range(1, 40)]
+    exprs += [sp.sin(pw) * sp.cos(y)]
+    opt = _backends.compile_exprs([x, y], exprs, "symengine")
+    assert opt._npieces == 1                             # the Piecewise only
+    monkeypatch.setattr(_backends, "LARGE_KERNEL", 10)
+    monkeypatch.setattr(_backends, "STAGE_TRIG", 10)
+    stages = []
+    real = _backends._lambdify
+
+    def spy(args, ex, opt_level, cse=False, mode="llvm"):
+        stages.append([str(e) for e in ex])
+        return real(args, ex, opt_level, cse, mode)
+
+    monkeypatch.setattr(_backends, "_lambdify", spy)
+    big = _backends.compile_exprs([x, y], exprs, "symengine")
+    # the first stage: y (the one argument the second stage reads, copied), the Piecewise,
+    # sin(k x) for k = 1..39, cos(y), sin(x + y)
+    assert big._npieces == 1 + 1 + 39 + 2
+    first, second = stages
+    assert first[0] == "y" and sum("Piecewise" in e for e in first) == 1 and len(first) == 43
+    assert not any(e.startswith("sin(Piecewise") for e in first)
+    assert sum("sin(" in e for e in second) == 1        # sin of the Piecewise's value
+    for v in ([0.3, -1.1], [2.0, 0.5]):
+        want = opt(np.array(v))
+        np.testing.assert_allclose(big(np.array(v)), want, rtol=1e-14, atol=1e-15)
+        np.testing.assert_allclose(big.batch(np.array([v]))[0], want, rtol=1e-14, atol=1e-15)
+        # the C entry points as a compiled loop calls them: the first stage writes its values
+        # after the arguments, the second reads them there
+        address, context, pre, pre_context, npieces = big.c_function()
+        proto = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
+        xs = np.zeros(2 + npieces)
+        xs[:2] = v
+        out = np.zeros(len(exprs))
+        proto(pre)(xs[2:].ctypes.data, xs.ctypes.data, pre_context)
+        proto(address)(out.ctypes.data, xs.ctypes.data, context)
+        np.testing.assert_allclose(out, want, rtol=1e-14, atol=1e-15)
+
+
+def test_lever_arm_of_a_large_sparse_dense_jacobian_equals_the_grouped_maxima():
+    """A large, mostly empty dense Jacobian takes the scatter of its nonzero entries
+    (decision 0066): the same lever arm as the grouped maxima of every entry, NaN entries
+    ignored by both."""
+    from mechsys.solvers import _linalg
+
+    rng = np.random.default_rng(3)
+    nb, m = 200, 1300                      # 600 columns: (x, y, angle) per body
+    J = np.zeros((m, 3 * nb))
+    rows = rng.integers(0, m, 4000)
+    cols = rng.integers(0, 3 * nb, 4000)
+    J[rows, cols] = rng.normal(size=4000) * np.where(cols % 3 == 2, 7.0, 1.0)
+    J[5, 7] = np.nan
+    trans = np.tile([True, True, False], nb)
+    body = np.repeat(np.arange(nb), 3)
+    assert J.size > _linalg.LEVER_DENSE_MAX
+    dense = _linalg._lever_arm_dense(J, trans, body)
+    assert dense > 0
+    assert _linalg._lever_arm(J, trans, body) == dense

@@ -8,7 +8,10 @@ many, ``X`` of shape ``(N, nargs)`` into ``(N, k)``.
   with it (the ``fast`` extra), *without* its common-subexpression elimination (SymEngine
   0.15's ``cse=True`` returns wrong values; LLVM's optimiser removes repeated work anyway).
   Preferred: see ``docs/decisions/0002-numeric-backend.md`` for the measurement.
-  ``Piecewise`` (spline profiles) compiles in two stages, see :func:`_split_piecewise`.
+  ``Piecewise`` (spline profiles) compiles in two stages, see :func:`_split_piecewise`; so
+  does a large unoptimised kernel, whose first stage computes the distinct ``sin``/``cos``
+  and copies the arguments its second stage reads (:func:`_split_trig`,
+  :func:`_gather_stage`, ``docs/decisions/0066-two-stage-large-kernels.md``).
   Expressions SymEngine cannot compile (``Mod``, ``Abs``...) go to SymPy instead.
 * ``"sympy"`` – ``sympy.lambdify`` to NumPy with ``cse=True``; always available.
 """
@@ -119,28 +122,49 @@ def _plainly_real(expr: sp.Basic) -> bool:
     return True
 
 
-def real_expressions(exprs) -> list:
+def real_expressions(exprs, atoms=None) -> list:
     """:func:`real_expression` of each of ``exprs``. SymEngine lists are first searched once
     as a whole for what it looks for (imaginary and complex numbers, complex infinity,
     powers): when none of it occurs, nothing can change and the per-expression searches are
-    skipped (about 0.1 ms an expression in Python: a second of a 1024-link chain)."""
-    exprs = list(exprs)
-    if _se is not None and exprs and all(isinstance(e, _se.Basic) for e in exprs):
-        if not _se_flagged(exprs):
-            return exprs
+    skipped (about 0.1 ms an expression in Python: a second of a 1024-link chain).
+    ``atoms``: that search made already (:func:`_search`: it also serves the kernel's
+    stages); the list itself is returned when nothing changes."""
+    exprs = exprs if isinstance(exprs, list) else list(exprs)
+    if atoms is None:
+        atoms = _search(exprs)
+    if atoms is not None and not _flagged(atoms):
+        return exprs
     return [real_expression(e) for e in exprs]
 
 
-def _se_flagged(exprs) -> bool:
-    """Whether SymEngine ``exprs`` hold anything :func:`real_expression` acts on (a complex
-    number, complex infinity, a power with an integer exponent of magnitude at least
-    :data:`BIG_EXPONENT`). One walk over the distinct nodes: SymEngine's own ``atoms``
-    walks the expression *tree*, visiting a shared subexpression once per occurrence, which
-    for a Gen joint's nested pose and its derivatives (a DAG with much sharing) cost 0.2 to
-    0.4 s of a 7-joint arm's first inverse dynamics (decision 0065)."""
+def _flagged(atoms) -> bool:
+    """Whether the atoms found by :func:`_search` hold anything :func:`real_expression` acts
+    on: a complex number, complex infinity, or a power with an integer exponent of magnitude
+    at least :data:`BIG_EXPONENT`."""
     from symengine.lib.symengine_wrapper import ComplexBase
 
-    flagged = (ComplexBase, type(_se.zoo))
+    return any(isinstance(a, (ComplexBase, type(_se.zoo))) or (
+        isinstance(a, _se.Pow) and a.args[1].is_Integer
+        and abs(int(a.args[1])) >= BIG_EXPONENT) for a in atoms)
+
+
+def _search(exprs):
+    """The atoms of a list of SymEngine expressions that the compile boundary acts on, found
+    in one traversal of the distinct nodes (0.19 s for the 50,000 outputs of a 1024-link
+    chain's kernels, where SymEngine's ``atoms`` took 0.69 s): complex numbers and
+    infinity, powers (:func:`real_expressions`), ``Piecewise`` (:func:`_split_piecewise`),
+    ``sin`` and ``cos`` (:func:`_split_trig`). None unless every expression is a SymEngine
+    one."""
+    if _se is None or not exprs or not all(isinstance(e, _se.Basic) for e in exprs):
+        return None
+    from symengine.lib.symengine_wrapper import ComplexBase
+
+    kinds = (ComplexBase, type(_se.zoo), _se.Pow, _se.Piecewise, _se.sin, _se.cos)
+    # each distinct node once: SymEngine's own ``atoms`` walks the expression *tree*,
+    # visiting a shared subexpression once per occurrence, which for a Gen joint's nested
+    # pose and its derivatives (a DAG with much sharing) cost 0.2 to 0.4 s of a 7-joint
+    # arm's first inverse dynamics (decision 0065)
+    found: set = set()
     seen: set = set()
     stack = list(exprs)
     while stack:
@@ -148,13 +172,10 @@ def _se_flagged(exprs) -> bool:
         if e in seen:
             continue
         seen.add(e)
-        if isinstance(e, flagged):
-            return True
-        args = e.args
-        if isinstance(e, _se.Pow) and args[1].is_Integer and abs(int(args[1])) >= BIG_EXPONENT:
-            return True
-        stack.extend(args)
-    return False
+        if isinstance(e, kinds):
+            found.add(e)
+        stack.extend(e.args)
+    return found
 
 
 class Compiled:
@@ -203,13 +224,21 @@ class _SympyCompiled(Compiled):
         return out
 
 
-def _split_piecewise(exprs):
+def _split_piecewise(exprs, atoms=None):
     """``(pieces, reduced)``: the distinct outermost ``Piecewise`` of SymEngine ``exprs`` and
     ``exprs`` with each replaced by a new symbol (``{symbol: piecewise}``, insertion order).
+    ``atoms``: the result of a search of ``exprs`` for ``Piecewise`` (and other types)
+    already made, else one is made here.
 
     A spline profile's ``Piecewise`` (``geometry/_curves.py``) recurs tens of times in a
     Jacobian and ``gamma``; without CSE (``docs/decisions/0002``) LLVM would compile every
     copy: 60 s instead of 2 s for a 361-knot cam (``docs/decisions/0008-curves.md``)."""
+    exprs = list(exprs)
+    if atoms is None:
+        # one search in C++ (the Python walk below costs ~40 ms a 10,000-output kernel)
+        atoms = _se.DenseMatrix(len(exprs), 1, exprs).atoms(_se.Piecewise) if exprs else ()
+    if not any(isinstance(a, _se.Piecewise) for a in atoms):
+        return {}, exprs
     found: dict = {}
     seen: set = set()
     stack = list(exprs)
@@ -224,7 +253,119 @@ def _split_piecewise(exprs):
             stack.extend(e.args)
     if not found:
         return {}, list(exprs)
-    return {v: k for k, v in found.items()}, [e.xreplace(found) for e in exprs]
+    return {v: k for k, v in found.items()}, xreplace_all(exprs, found)
+
+
+def xreplace_all(exprs: Sequence, mapping: dict) -> list:
+    """``[e.xreplace(mapping) for e in exprs]`` for SymEngine ``exprs`` in one call.
+
+    SymEngine converts the Python ``mapping`` to its C++ map on every ``xreplace``: with a
+    few thousand entries that is ~2 ms an expression (40 s for the 18,428 outputs of a
+    1024-link chain's free-motion kernel). The expressions are wrapped as the arguments of
+    one undefined function, replaced in a single call (one conversion, shared
+    subexpressions visited once) and unwrapped; a function's arguments are kept as given.
+
+    Example::
+
+        x, s = symengine.symbols("x s")
+        xreplace_all([symengine.sin(x) * 2, x + 1], {symengine.sin(x): s})   # [2*s, 1 + x]
+    """
+    exprs = list(exprs)
+    if not exprs or not mapping:
+        return exprs
+    return list(_se.Function("_mechsys_all")(*exprs).xreplace(mapping).args)
+
+
+#: a kernel with more outputs than this and compiled without LLVM's optimiser (level 0)
+#: computes the distinct ``sin``/``cos`` of its arguments in a first stage (see
+#: :func:`_split_trig`); below it the optimiser merges the repeated calls itself
+STAGE_TRIG = 500
+
+
+def _split_trig(exprs, avoid=(), atoms=None):
+    r"""``(values, reduced)``: the distinct ``sin(a)``, ``cos(a)`` of SymEngine ``exprs`` whose
+    arguments hold none of the symbols ``avoid``, and ``exprs`` with each replaced by a new
+    symbol (``{symbol: sin or cos}``). ``atoms``: a search of ``exprs`` for ``sin`` and
+    ``cos`` (and other types) already made, else one is made here.
+
+    Unoptimised LLVM code (large kernels: :data:`LARGE_KERNEL`) calls ``sin`` and ``cos``
+    wherever they occur: in a chain's mass matrix, Jacobian and ``gamma`` each angle's
+    ``sin`` and ``cos`` occur many times. Computed once in a first stage, the 1024-link
+    free-motion kernel evaluates 8 times faster (364 -> 45 us) and compiles in 1.2 s instead
+    of 1.9 s (decision 0066). The reduced expressions are the same terms with the value of
+    :math:`\sin a` read from an argument instead of computed: equal to rounding (a product
+    may be ordered differently)."""
+    if atoms is None:
+        atoms = _se.DenseMatrix(len(exprs), 1, list(exprs)).atoms(_se.sin, _se.cos)
+    found = {a for a in atoms if isinstance(a, (_se.sin, _se.cos))}
+    if avoid:
+        avoid = set(avoid)
+        found = {a for a in found if not (a.free_symbols & avoid)}
+    if not found:
+        return {}, list(exprs)
+    # a fixed order (the cache key of both stages depends on it): by printed form
+    ordered = sorted(found, key=str)
+    names = {a: _se.Symbol(f"_mechsys_trig_{i}") for i, a in enumerate(ordered)}
+    return {v: k for k, v in names.items()}, xreplace_all(exprs, names)
+
+
+def _gather_stage(args, stage: dict, exprs) -> tuple[list, list, list]:
+    r"""``(pre_args, pre_values, main_args)`` of a two-stage kernel whose second stage reads
+    only the first stage's values: the first stage, on the arguments ``pre_args`` (a prefix
+    of ``args``: those up to the last it uses), writes ``pre_values`` = the arguments the
+    reduced ``exprs`` use, copied, then the ``stage`` values; the second stage takes
+    ``main_args`` = those copies' symbols and the ``stage`` symbols, in that order.
+
+    SymEngine's LLVM code loads every declared argument at its entry and finds an argument
+    by a linear search of the list (per occurrence of a symbol): a kernel declaring the
+    11,265 arguments of a 1024-link chain's dynamics but using 1,024 of them and its 2,048
+    stage values compiles in 1.3-1.6 s, on the 3,072 it uses in 0.66 s (decision 0066)."""
+    names = [_name(a) for a in args]
+    used = {_name(a) for a in _se.DenseMatrix(len(exprs), 1, list(exprs)).free_symbols} \
+        if exprs else set()
+    # (by name: SymPy and SymEngine symbols of one name are one argument; only the arguments
+    # kept are converted)
+    copied = [_se.sympify(a) for a, nm in zip(args, names) if nm in used]
+    values = [*copied, *stage.values()]
+    if not values:
+        return list(args), [], list(args)
+    needs = {_name(a) for a in _se.DenseMatrix(len(values), 1, values).free_symbols}
+    last = max((i for i, nm in enumerate(names) if nm in needs), default=0)
+    return list(args[:last + 1]), values, [*copied, *stage]
+
+
+#: llvmlite's target of :func:`_offset_entry` (looked up once)
+_TRAMPOLINE: dict = {}
+
+
+def _offset_entry(keep, main, offset: int):
+    """``(owners, (address, context))`` of a C function ``g(out, x, ctx) = f(out, x + offset,
+    ctx)`` for the entry point ``main = (address of f, ctx)``: the compiled loops call every
+    kernel's second stage with ``x`` (``solvers/_jit_calls._eval``); a gathered second stage
+    (:func:`_gather_stage`) reads its values after the ``offset`` arguments. Three
+    instructions compiled by llvmlite (Numba's code generator, ~4 ms)."""
+    import llvmlite.binding as llvm
+    from llvmlite import ir
+
+    if "target" not in _TRAMPOLINE:
+        llvm.initialize_native_target()
+        llvm.initialize_native_asmprinter()
+        _TRAMPOLINE["target"] = llvm.Target.from_default_triple()
+    mod = ir.Module(name="mechsys_offset_entry")
+    dp, vp = ir.DoubleType().as_pointer(), ir.IntType(8).as_pointer()
+    fty = ir.FunctionType(ir.VoidType(), [dp, dp, vp])
+    fn = ir.Function(mod, fty, name="entry")
+    b = ir.IRBuilder(fn.append_basic_block())
+    out, x, ctx = fn.args
+    target = b.inttoptr(ir.Constant(ir.IntType(64), main[0]), fty.as_pointer())
+    b.call(target, [out, b.gep(x, [ir.Constant(ir.IntType(64), offset)]), ctx])
+    b.ret_void()
+    parsed = llvm.parse_assembly(str(mod))
+    parsed.verify()
+    # (an execution engine owns its target machine: one each, never shared)
+    engine = llvm.create_mcjit_compiler(parsed, _TRAMPOLINE["target"].create_target_machine())
+    engine.finalize_object()
+    return (keep, engine), (engine.get_function_address("entry"), main[1])
 
 
 class _NotCached(Exception):
@@ -333,11 +474,14 @@ def _entry_point(f):
 
 class _SymengineCompiled(Compiled):
     """SymEngine ``Lambdify``; expressions with ``Piecewise`` in two stages: the distinct
-    ``Piecewise`` first (``_pre``), then the rest with their values as extra arguments."""
+    ``Piecewise`` first (``_pre``), then the rest with their values as extra arguments. A
+    large unoptimised kernel computes the distinct ``sin``/``cos`` of its arguments in that
+    first stage too (:func:`_split_trig`)."""
 
     backend = "symengine"
 
-    def __init__(self, args, exprs, opt_level: int = 3, cse: bool = False, mode: str = "llvm"):
+    def __init__(self, args, exprs, opt_level: int = 3, cse: bool = False, atoms=None,
+                 mode: str = "llvm"):
         self.nout = len(exprs)
         exprs = [_se.sympify(e) for e in exprs]
         if cse:
@@ -352,15 +496,34 @@ class _SymengineCompiled(Compiled):
             if ren:
                 exprs = list(_se.DenseMatrix(len(exprs), 1, exprs).xreplace(ren))
                 args = [ren.get(_se.sympify(a), a) for a in args]
-        pieces, exprs = _split_piecewise(exprs)
+        nin = len(args)
+        staged = not cse and opt_level == 0 and len(exprs) > STAGE_TRIG
+        # one search of the expressions for what the stages take out (each costs ~0.1 s on
+        # the 18,000 outputs of a 1024-link chain's free-motion kernel)
+        if atoms is None or cse:        # (CSE renames arguments: search the renamed)
+            atoms = _search(exprs) or set()
+        pieces, exprs = _split_piecewise(exprs, atoms)
+        pre_args, pre_values, main_args = args, list(pieces.values()), [*args, *pieces]
+        self._gather = False
+        if staged:
+            # a large unoptimised kernel (decision 0066): the distinct sin/cos once, in the
+            # first stage beside the Piecewise values (with CSE they are computed once
+            # already), and the second stage reads only what it uses, gathered by the first
+            # (the trig functions searched again only in what the Piecewise split left)
+            trig, exprs = _split_trig(exprs, avoid=pieces, atoms=None if pieces else atoms)
+            pre_args, pre_values, main_args = _gather_stage(args, {**pieces, **trig}, exprs)
+            self._gather = bool(pre_values)
+            if not self._gather:
+                pre_args, pre_values, main_args = args, [], list(args)
         self._pre = None
-        self._npieces = len(pieces)
-        if pieces:
-            self._pre, self._pre_backend = _lambdify(args, list(pieces.values()), opt_level, cse,
+        self._npieces = len(pre_values)
+        if pre_values:
+            self._pre, self._pre_backend = _lambdify(pre_args, pre_values, opt_level, cse,
                                                      mode)
-            self._nargs = len(args)
-            args = [*args, *pieces]
-            self._buf = np.empty(len(args))     # [x, Piecewise values]: one call each
+            self._pre_nin = len(pre_args)   # the first stage reads x[:_pre_nin]
+            self._nargs = nin
+            self._buf = np.empty(nin + len(pre_values))   # [x, first-stage values]
+        args = main_args
         self._expand = None
         if cse:
             # SymEngine 0.15's CSE returns wrong values for repeated outputs (decision 0002):
@@ -375,7 +538,7 @@ class _SymengineCompiled(Compiled):
                 exprs = distinct
         self._nf = len(exprs)
         self._f, self.backend = _lambdify(args, exprs, opt_level, cse, mode)
-        self._nin = len(args) - len(pieces)
+        self._nin = nin
         # SymEngine's unchecked entry point costs ~0.8 us a call instead of ~4 us: the
         # checks it skips (length, dtype, contiguity) are done here, once per call
         self._fast = hasattr(self._f, "unsafe_real") and (
@@ -395,7 +558,7 @@ class _SymengineCompiled(Compiled):
             buf = self._buf
             buf[:self._nargs] = x
             self._pre.unsafe_real(x, buf[self._nargs:])
-            x = buf
+            x = buf[self._nargs:] if self._gather else buf
         out = np.empty(self._nf)       # a new array per call: callers may keep the last one
         self._f.unsafe_real(x, out)
         return out if self._expand is None else out[self._expand]
@@ -447,6 +610,9 @@ class _SymengineCompiled(Compiled):
             return None
         if not hasattr(self, "_cfun"):
             keep, main = _entry_point(self._f)
+            if self._gather:
+                # the second stage reads the first stage's values only: called at x + nin
+                keep, main = _offset_entry(keep, main, self._nargs)
             keep_pre, pre = _entry_point(self._pre) if self._pre is not None else (None, (0, 0))
             self._cfun = (keep, keep_pre, (*main, *pre, self._npieces))  # owners kept alive
         return self._cfun[2], self._expand
@@ -455,15 +621,16 @@ class _SymengineCompiled(Compiled):
         if self._pre is not None:
             buf = self._buf
             buf[:self._nargs] = x
-            buf[self._nargs:] = self._pre(x)
-            x = buf
+            buf[self._nargs:] = self._pre(x[:self._pre_nin])
+            x = buf[self._nargs:] if self._gather else buf
         out = self._f(x).reshape(self._nf)
         return out if self._expand is None else out[self._expand]
 
     def batch(self, X):
         X = np.atleast_2d(np.asarray(X, dtype=float))
         if self._pre is not None:
-            X = np.hstack([X, self._pre(X).reshape(X.shape[0], -1)])
+            P = self._pre(X[:, :self._pre_nin]).reshape(X.shape[0], -1)
+            X = P if self._gather else np.hstack([X, P])
         out = self._f(X).reshape(X.shape[0], self._nf)
         return out if self._expand is None else out[:, self._expand]
 
@@ -613,7 +780,11 @@ def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
     # every expression that becomes numeric code passes here: complex constants refused,
     # huge integer exponents made floats (the constraints and loads were checked with their
     # names already, this catches what was derived from them or built elsewhere)
-    exprs = real_expressions(exprs)
+    exprs = list(exprs)
+    atoms = _search(exprs)
+    checked = real_expressions(exprs, atoms)
+    if checked is not exprs:      # rewritten: what was found no longer describes them
+        exprs, atoms = checked, None
     backend = backend or default_backend()
     if backend == "symengine":
         if _se is None:
@@ -634,7 +805,8 @@ def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
                 level = 0 if len(exprs) > LARGE_KERNEL else 3
             if first_use and not once:
                 return _FirstUse(args, exprs, level, cse)
-            return _SymengineCompiled(args, exprs, opt_level=0 if once else level, cse=cse)
+            return _SymengineCompiled(args, exprs, opt_level=0 if once else level, cse=cse,
+                                      atoms=atoms)
         except (RuntimeError, TypeError, ValueError, NotImplementedError):
             # a function SymEngine cannot compile (e.g. Mod, Abs): SymPy can
             return _SympyCompiled(args, [sp.sympify(e) for e in exprs])

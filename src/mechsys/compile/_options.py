@@ -15,7 +15,8 @@ what is fingerprinted; ``opt_level`` and ``cse`` are parts of the key).
 * ``opt_level`` -- LLVM's optimisation level 0..3 for the SymEngine backend. ``None``
   (default, automatic): 3, and 0 for kernels of more than ``LARGE_KERNEL`` (500) outputs,
   whose optimisation costs seconds (a 256-link chain's free-motion kernel: 5.5 s at level 3,
-  0.3 s at 0, evaluating 109 µs instead of 14 µs). 0 compiles several times faster and
+  0.3 s at 0, evaluating 109 µs instead of 14 µs; such a kernel computes its distinct
+  ``sin``/``cos`` once in a first stage, decision 0066). 0 compiles several times faster and
   evaluates about 1.5-8 times slower (a large model run for a few points); 3 everywhere
   suits a long run of a large model.
 * ``cse`` -- common-subexpression elimination before compiling: ``None`` (default: on for
