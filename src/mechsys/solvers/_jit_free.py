@@ -46,6 +46,14 @@ Numba and the cached machine code costs about 0.7 s CPU once per process.
 ``sol.extra["compiled_solver"]`` how (``"augmented"``, ``"block"``, ``"sparse"``,
 ``"recursive"``, ``"recursive+augmented"``, ``"path"``, ``"newton"``).
 
+Velocity constraints :math:`A(q, t) \dot q + b(q, t) = 0` (rolling; decisions 0053, 0062)
+run in the same loops (kind ``ROLLING``, reported as ``"augmented"``, :meth:`FreeStepper._plan_rows`)
+up to ``SPARSE_THRESHOLD`` holonomic unknowns: the dense augmented system bordered by
+:math:`A` (the rows' kernel gives :math:`A`, :math:`b`, :math:`\rho`) and solved as the
+Python path's ``nonholonomic_acceleration``, the velocity projection onto
+:math:`[\Phi_q; A] \dot q = [-\Phi_t; -b]`, the multipliers :math:`(\lambda, \mu)`.
+No zone guard (the Python path with velocity rows passes no singular instant either).
+
 Nonholonomic paths (:class:`~mechsys.analyses._path.PathSystem`, Mech's ``SolvePath``) run
 in the same loops (:meth:`FreeStepper.plan_path`, decision 0027): the state is ``q``, its
 derivative the velocities of the holonomic and velocity constraints (Newton on ``qd`` with

@@ -21,6 +21,10 @@ the Python path fixes one:
                  the fixed pattern and the compiled sparse LU)
 * ``_newton_accel`` ``solvers._free.free_acceleration`` when the loads depend on the
                  multipliers or accelerations (its Newton on :math:`(\ddot q, \lambda)`)
+* ``_accel_rows`` ``analyses._nonholonomic.nonholonomic_acceleration`` (velocity
+                 constraints ``A qd + b = 0``, decision 0062): the augmented system bordered
+                 by ``A``, ``-rho`` on the right; ``_project_rows`` its ``project_velocities``
+                 (the minimum-norm change onto ``[Phi_q; A] qd = [-Phi_t; -b]``)
 * ``_accel_gen`` ``compile._generalized.RecursiveDynamics`` (generalized coordinates,
                  decision 0018): the joint kernels, then the articulated-body recursion
                  (a tree of Gen joints) or the composite-body mass matrix in the augmented
