@@ -819,8 +819,8 @@ class FreeStepper:
         dyn = system.dynamics
         n, m = system.n, system.m
         if dyn.depends_on_lambda or dyn.depends_on_qdd or getattr(dyn, "recursive", False) \
-                or n + m > SPARSE_THRESHOLD or rows.k == 0:
-            return None
+                or n + m > SPARSE_THRESHOLD or rows.k == 0 or len(rows.rho_sym) != rows.k:
+            return None          # (rho: the rows' kernel holds [A, b, rho], rho derived)
         fk = dyn.free_kernel(False)
         entries = [kernel_entry(fk.f)] + _constraint_entries(system, system.f_position,
                                                             system.f_velocity)
