@@ -91,7 +91,8 @@ def test_compiled_stepper_holds_the_velocity_rows(monkeypatch, case):
     """The compiled stepper's kind ``ROLLING`` (decision 0062) against the Python stepper
     (``MECHSYS_JIT=0``): every step compiled; at common output times (DOP853) the states,
     accelerations, lambda and mu agree to 1e-12 relative; on the same steps (Mech's Adams
-    with a constant step) to rounding. Its accelerations and multipliers are those of
+    with a constant step; and RK45 on the sleigh) to rounding. Its accelerations and
+    multipliers are those of
     ``nonholonomic_acceleration`` at its states, and the velocity rows hold to rounding."""
     pytest.importorskip("numba")
     from mechsys.analyses._nonholonomic import nonholonomic_acceleration
@@ -129,6 +130,12 @@ def test_compiled_stepper_holds_the_velocity_rows(monkeypatch, case):
     np.testing.assert_array_equal(jit.t, py.t)
     for a, b in ((jit.q, py.q), (jit.qd, py.qd), (jit.lam, py.lam)):      # (1.2e-15)
         assert np.abs(a - b).max() < 1e-13 * (1.0 + np.abs(b).max())
+    if case == "sleigh":                 # RK45: the same loop, its own tableau (2e-15)
+        py, jit = simulate_both(monkeypatch, fs, grid, initial_condition=ic, method="rk45",
+                                rtol=1e-9, atol=1e-11)
+        assert jit.extra["compiled_steps"] == jit.extra["steps"] == py.extra["steps"] > 20
+        assert np.abs(jit.extra["mu"] - py.extra["mu"]).max() < 1e-12
+        assert np.abs(jit.q - py.q).max() < 1e-12
 
 
 def test_free_solve_one_state_and_refusals():
