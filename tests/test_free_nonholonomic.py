@@ -92,8 +92,8 @@ def test_compiled_stepper_holds_the_velocity_rows(monkeypatch, case):
     (``MECHSYS_JIT=0``): every step compiled; at common output times (DOP853) the states,
     accelerations, lambda and mu agree to 1e-12 relative; on the same steps (Mech's Adams
     with a constant step; and RK45 on the sleigh) to rounding. Its accelerations and
-    multipliers are those of
-    ``nonholonomic_acceleration`` at its states, and the velocity rows hold to rounding."""
+    multipliers are those of ``nonholonomic_acceleration`` at its states, and the velocity
+    rows hold to rounding."""
     pytest.importorskip("numba")
     from mechsys.analyses._nonholonomic import nonholonomic_acceleration
 
