@@ -209,7 +209,8 @@ def main() -> None:
     assert max(dev) < 1e-8 and off < 1e-8 and abs(W_solved - W) < 1e-10
     assert max(diff.values()) < 1e-6, diff
     assert max(checks.values()) < 1e-8, checks
-    print(f"    {sol.extra['compiled_steps']} compiled steps (the Python stepper holds the rows)")
+    print(f"    {sol.extra['compiled_steps']} of {sol.extra['steps']} steps compiled "
+          f"({sol.extra['compiled_solver']}: the compiled stepper holds the rolling rows)")
 
     fig, ax = plt.subplots(1, 3, figsize=(13, 4.2))
     a = np.linspace(0, 2 * np.pi, 200)

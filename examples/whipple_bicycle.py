@@ -24,7 +24,7 @@ The paper's linearised equations ``M q'' + v C1 q' + (g K0 + v^2 K2) q = 0`` (eq
 ``q = (phi, delta)``) follow from ``A``: ``-M^-1 (g K0 + v^2 K2)`` and ``-v M^-1 C1`` are its
 lean/steer block; the example prints the largest deviation from the published matrices.
 
-Finally the nonlinear motion (``free.simulate``, the rolling rows held by the Python stepper)
+Finally the nonlinear motion (``free.simulate``, the rolling rows held by the compiled stepper)
 after a lean-rate kick of 1 mrad/s: it decays at 5 m/s, inside the self-stable range, and
 grows at 8 m/s at the capsize eigenvalue's rate; both follow the linear prediction
 ``expm(A t) x0`` to 1e-6 of the amplitude. The picture shows the eigenvalues against speed
@@ -213,7 +213,7 @@ def weave_and_capsize(free, coords):
 
 
 def kick_response(free, coords, v: float, t: np.ndarray, kick: float = 1e-3):
-    """The nonlinear motion (``free.simulate``, the Python stepper holding the rolling rows)
+    """The nonlinear motion (``free.simulate``, the compiled stepper holding the rolling rows)
     after a lean-rate kick ``kick`` (rad/s) of upright running at ``v``, and the linear
     prediction ``x(t) = expm(A t) x0`` from the same start: ``(lean, lean_linear)``. The
     start gives the rear frame's and rear wheel's angular velocities (the lean rate and the

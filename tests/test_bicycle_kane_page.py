@@ -43,10 +43,12 @@ def test_block_renders_from_a_result():
     r = {"cold": 1.5, "warm": 0.9, "cold_all": [1.4, 1.6], "warm_all": [0.8, 1.0],
          "kernels": 4, "sympy_build": 23.0,
          "sympy_phases": {"derivation": 10.0, "lambdify": 13.0},
-         "run": {"mechsys": 0.5, "sympy": 0.35}, "steps": {"mechsys": 217, "sympy": 75},
+         "run": {"mechsys": 0.5, "sympy": 0.35, "python": 0.9},
+         "steps": {"mechsys": 217, "sympy": 75, "python": 217, "compiled": 217},
          "sympy_steps_with_wheels": 124, "evaluations": {"mechsys": 3564, "sympy": 1208},
          "lean": 1.3e-9, "steer": 4.8e-9, "lean_peak": 0.116, "steer_peak": 0.134,
          "lean_end": 2e-3}
     text = bench.table(r)
     assert "| mechsys | 56 | 1.5 s | 900 ms | 500 ms | 217 | 3564 | 140 µs |" in text
     assert "lean within 1.3e-09 rad" in text and "124 steps instead of 75" in text
+    assert "Python stepper (`MECHSYS_JIT=0`): 900 ms (217 steps)" in text

@@ -51,6 +51,15 @@ SCRIPTS = sorted(EXAMPLES.glob("*.py"))
 HANG_GUARD_S = 900
 AGREE = {"sweep": 1e-12, "multipliers": 1e-12, "stages": 1e-12, "free": 1e-9, "path": 1e-9,
          "switched": 1e-9, "free steps": 1e-12, "path steps": 1e-12, "switched steps": 1e-12}
+#: examples whose motion amplifies rounding beyond the common bounds (measured, decision
+#: 0062). The rolling coin wobbles for 10 s (1208 equal steps): the Python stepper against
+#: itself with the start's spin one ulp off parts by 1.5e-12 in the accelerations, the
+#: compiled loop by 8.9e-13; the bicycle's same-step runs part by 9.8e-13. The bicycle's
+#: kick at 8 m/s runs at rtol 1e-8 from a first step of 2e-5 s whose error estimate is
+#: rounding noise, so the two loops take different second steps (1e-3 apart) and then agree
+#: to the tolerance (7.1e-8 at its first outputs), not to 1e-9
+LOOSER = {"rolling_coin.py": {"free steps": 5e-12},
+          "whipple_bicycle.py": {"free": 5e-7, "free steps": 5e-12}}
 SINGULAR = {"n_four_bar.py"}
 STEPPED = {"free", "path", "switched"}
 COMPILED = {"four_bar.py": {"sweep"}, "slider_crank_3d.py": {"sweep"}, "gyroscope.py": {"free"},
@@ -79,7 +88,8 @@ def test_example_runs(script, tmp_path):
     line = [ln for ln in proc.stdout.splitlines() if ln.startswith("paths-agree: ")][-1]
     records = json.loads(line.removeprefix("paths-agree: "))
     for rec in records:
-        assert rec["difference"] <= AGREE[rec["kind"]], (script.name, rec)
+        bound = LOOSER.get(script.name, {}).get(rec["kind"], AGREE[rec["kind"]])
+        assert rec["difference"] <= bound, (script.name, rec)
     if script.name in COMPILED:
         # not vacuous: the runner saw the computations and the compiled loops took them
         kinds = COMPILED[script.name] | {k + " steps" for k in COMPILED[script.name] & STEPPED}

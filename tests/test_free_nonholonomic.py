@@ -17,7 +17,7 @@ import pytest
 import sympy as sp
 
 import mechsys as ms
-from conftest import load_example
+from conftest import load_example, simulate_both
 
 # the sleigh's model is the example's (examples/chaplygin_sleigh.py)
 _example = load_example("chaplygin_sleigh")
@@ -31,7 +31,6 @@ def test_chaplygin_sleigh_closed_form_energy_and_reaction():
     assert fs.dof == 2 and fs.velocity_constraints[0].name == "knife"
     sol = fs.simulate(np.linspace(0, 3, 31), initial_condition={"th2_d": W0}, rtol=1e-10,
                       atol=1e-12)
-    assert sol.extra["compiled_steps"] == 0 and sol.extra["compiled_solver"] is None
     th, w = sol["sleigh.th"], sol.omega(b)
     vP = sol.velocity(b.point("P"))
     u = vP[:, 0] * np.cos(th) + vP[:, 1] * np.sin(th)      # forward speed of the edge
@@ -77,6 +76,66 @@ def test_drift_control_of_the_velocity_rows(monkeypatch):
     with pytest.warns(ms.DegradedAccuracyWarning, match="velocity constraints have drifted"):
         sol = fs.simulate((0, 20), constraint_correction=False, **kw)
     assert sol.extra["accuracy"]["warned"] == "nonholonomic"
+
+
+def _coin():
+    """The example's rolling coin (7 coordinates, 2 position rows, 2 rolling rows), leaning,
+    wobbling and turning: ``(free system, initial condition)``."""
+    coin = load_example("rolling_coin")
+    m = coin.build(0.2)[0]
+    return coin.start(m, 0.2, 3.0, 0.0, 10.0)
+
+
+@pytest.mark.parametrize("case", ["sleigh", "coin"])
+def test_compiled_stepper_holds_the_velocity_rows(monkeypatch, case):
+    """The compiled stepper's kind ``ROLLING`` (decision 0062) against the Python stepper
+    (``MECHSYS_JIT=0``): every step compiled; at common output times (DOP853) the states,
+    accelerations, lambda and mu agree to 1e-12 relative; on the same steps (Mech's Adams
+    with a constant step; and RK45 on the sleigh) to rounding. Its accelerations and
+    multipliers are those of ``nonholonomic_acceleration`` at its states, and the velocity
+    rows hold to rounding."""
+    pytest.importorskip("numba")
+    from mechsys.analyses._nonholonomic import nonholonomic_acceleration
+
+    if case == "sleigh":
+        fs, ic, span = sleigh()[0].free(), {"th2_d": W0}, 3.0
+    else:
+        (fs, ic), span = _coin(), 1.0
+    s = fs.system
+    grid = np.linspace(0.0, span, 11)
+    py, jit = simulate_both(monkeypatch, fs, grid, initial_condition=ic, rtol=1e-10,
+                            atol=1e-12)
+    assert py.extra["compiled_steps"] == 0 and jit.extra["compiled_solver"] == "augmented"
+    assert jit.extra["compiled_steps"] == jit.extra["steps"] > 10
+    k = fs._vrows.k
+    assert jit.extra["mu"].shape == py.extra["mu"].shape == (11, k)
+    assert jit.lam.shape == (11, s.m + k)
+    # (measured: 1.6e-14 at most, the coin's velocities)
+    for a, b, tol in ((jit.q, py.q, 1e-12), (jit.qd, py.qd, 1e-12), (jit.qdd, py.qdd, 1e-11),
+                      (jit.lam, py.lam, 1e-11), (jit.extra["mu"], py.extra["mu"], 1e-11)):
+        assert np.abs(a - b).max() < tol * (1.0 + np.abs(b).max())
+    assert jit.extra["accuracy"]["nonholonomic"] < 1e-14
+    for i in (3, 10):
+        qdd, lam = nonholonomic_acceleration(s, fs._vrows, jit.t[i], jit.q[i], jit.qd[i],
+                                             s.p_values)
+        np.testing.assert_allclose(jit.qdd[i], qdd, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(jit.lam[i], lam, rtol=1e-12, atol=1e-12)
+        assert np.abs(fs._vrows.residual(jit.t[i], jit.q[i], jit.qd[i], s.p_values)).max() \
+            < 1e-15 * (1.0 + np.abs(jit.qd[i]).max())
+    # the same steps: Mech's Adams at a constant step (the predictor's polynomial and the
+    # projection after each step on both sides)
+    py, jit = simulate_both(monkeypatch, fs, (0.0, span / 4), initial_condition=ic,
+                            method="adams", step_size=span / 400)
+    assert jit.extra["compiled_steps"] == jit.extra["steps"] == py.extra["steps"] == 100
+    np.testing.assert_array_equal(jit.t, py.t)
+    for a, b in ((jit.q, py.q), (jit.qd, py.qd), (jit.lam, py.lam)):      # (1.2e-15)
+        assert np.abs(a - b).max() < 1e-13 * (1.0 + np.abs(b).max())
+    if case == "sleigh":                 # RK45: the same loop, its own tableau (2e-15)
+        py, jit = simulate_both(monkeypatch, fs, grid, initial_condition=ic, method="rk45",
+                                rtol=1e-9, atol=1e-11)
+        assert jit.extra["compiled_steps"] == jit.extra["steps"] == py.extra["steps"] > 20
+        assert np.abs(jit.extra["mu"] - py.extra["mu"]).max() < 1e-12
+        assert np.abs(jit.q - py.q).max() < 1e-12
 
 
 def test_free_solve_one_state_and_refusals():
@@ -289,7 +348,6 @@ def test_rolling_disk_steady_turning_energy_and_constraints():
     assert fs.dof == 3
     sol = fs.simulate(np.linspace(0, 2, 21), initial_condition={("omega", "disk"): w0},
                       rtol=1e-10, atol=1e-12)
-    assert sol.extra["compiled_steps"] == 0
     np.testing.assert_allclose(sol.velocity(disk.point(0))[0], [R * sigma, 0, 0], atol=1e-12)
     E = sol.body_energy() + sol.potential_energy()
     assert np.ptp(E) < 1e-8 * E[0]

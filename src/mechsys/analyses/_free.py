@@ -738,8 +738,7 @@ class FreeSystem:
 
         # the compiled stepper (solvers/_jit_free.py) takes the regular steps when it can
         fast = FreeStepper.plan(s, opt.method, p, sc, rows0, robust, opt.correction,
-                                t_eval, (t0, q0), newton=kw,
-                                velocity_rows=0 if vrows is None else vrows.k)
+                                t_eval, (t0, q0), newton=kw, rows=vrows)
         try:
             times, Y, res, m = integrate(rhs, proj, run, np.concatenate((q0, qd0)),
                                          scale=np.concatenate((sc.columns, sc.columns)),

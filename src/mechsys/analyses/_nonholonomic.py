@@ -17,9 +17,12 @@ projected (after each step and at the start) onto :math:`\Phi = 0` and then, wit
 smallest scaled velocity change, onto :math:`\Phi_q \dot q + \Phi_t = 0` and
 :math:`A \dot q + b = 0` together.
 
-This is the Python path only: the compiled stepper does not know the rows ``A``
-(``FreeStepper.plan`` returns ``None`` for these systems, ``sol.extra["compiled_steps"]``
-is 0).
+These functions are the Python stepper's. The compiled free-motion stepper holds the same
+rows (kind ``ROLLING``, decision 0062: ``solvers/_jit_free_loop._accel_rows`` is
+:func:`nonholonomic_acceleration`, ``_project_rows`` the velocity half of
+:func:`project_state`, operation for operation, on the same kernels: the free kernel and
+:class:`VelocityRows`' ``A, b, rho``); it hands a step it cannot take to these, and the
+event-driven stepper of switched systems uses only these.
 """
 
 from __future__ import annotations

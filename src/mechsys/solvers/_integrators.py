@@ -230,10 +230,10 @@ def integrate_rk(fun, project, t0, t1, y0, method="dop853", rtol=1e-8, atol=1e-1
 
 
 def _compiled_derivatives(diag, fast, known, rows) -> None:
-    """``diag["derivatives"] = (qdd (rows, n), lam (rows, m))`` from the compiled stepper's
-    blocks ``(first row, qdd, lam)`` (NaN rows: evaluated by the caller), and the count of
-    compiled steps."""
-    QDD, LAM = np.full((rows, fast.n), np.nan), np.full((rows, fast.m), np.nan)
+    """``diag["derivatives"] = (qdd (rows, n), lam (rows, m + k))`` (k: velocity rows) from
+    the compiled stepper's blocks ``(first row, qdd, lam)`` (NaN rows: evaluated by the
+    caller), and the count of compiled steps."""
+    QDD, LAM = np.full((rows, fast.n), np.nan), np.full((rows, fast.nl), np.nan)
     for k, qdd, lam in known:
         j = min(len(qdd), rows - k)     # Ctrl-C can leave a block beyond the rows kept
         if j > 0:

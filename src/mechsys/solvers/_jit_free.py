@@ -46,6 +46,14 @@ Numba and the cached machine code costs about 0.7 s CPU once per process.
 ``sol.extra["compiled_solver"]`` how (``"augmented"``, ``"block"``, ``"sparse"``,
 ``"recursive"``, ``"recursive+augmented"``, ``"path"``, ``"newton"``).
 
+Velocity constraints :math:`A(q, t) \dot q + b(q, t) = 0` (rolling; decisions 0053, 0062)
+run in the same loops (kind ``ROLLING``, reported as ``"augmented"``, :meth:`FreeStepper._plan_rows`)
+up to ``SPARSE_THRESHOLD`` holonomic unknowns: the dense augmented system bordered by
+:math:`A` (the rows' kernel gives :math:`A`, :math:`b`, :math:`\rho`) and solved as the
+Python path's ``nonholonomic_acceleration``, the velocity projection onto
+:math:`[\Phi_q; A] \dot q = [-\Phi_t; -b]`, the multipliers :math:`(\lambda, \mu)`.
+No zone guard (the Python path with velocity rows passes no singular instant either).
+
 Nonholonomic paths (:class:`~mechsys.analyses._path.PathSystem`, Mech's ``SolvePath``) run
 in the same loops (:meth:`FreeStepper.plan_path`, decision 0027): the state is ``q``, its
 derivative the velocities of the holonomic and velocity constraints (Newton on ``qd`` with
@@ -391,7 +399,7 @@ def _workspace(stepper, system):
 
     key = (id(system), stepper.mode, stepper.p.size, stepper.kp.tobytes(), stepper.kk,
            stepper.jr.size, stepper.bw, tuple(a.tobytes() for a in stepper.blk_i[0]),
-           stepper.n, stepper.m)
+           stepper.n, stepper.m, tuple(a.tobytes() for a in stepper.blk_i[3]))
     got = _WORKSPACES.get(key)
     if got is not None and got[0] is system and got[1]() is None and stepper.mode < 2:
         ws = got[2]
@@ -613,7 +621,7 @@ class FreeStepper:
 
     def __init__(self, system, p, scaling, rows0, robust, correction, t_eval, kernels, fk,
                  blocks=None, expand=(_NO_EXPAND,) * 3, gen=None, path=None, newton=None,
-                 newton_tol=1e-10, sparse=None):
+                 newton_tol=1e-10, sparse=None, rows=None):
         from ._jit_free_loop import (
             AUGMENTED,
             BLOCK,
@@ -622,6 +630,7 @@ class FreeStepper:
             NEWTON,
             PATH,
             PATH_EXTRA,
+            ROLLING,
             SPARSE,
         )
 
@@ -629,6 +638,10 @@ class FreeStepper:
         n, m = system.n, system.m
         N = n + m
         self.n, self.m = n, m
+        #: the velocity constraints' rows (``ROLLING``): ``(k, their kernel's row, expansion
+        #: map)``; the multipliers are ``(lambda, mu)``, ``nl = m + k`` of them
+        kv = 0 if rows is None else int(rows[0])
+        self.kv, self.nl = kv, m + kv
         #: the state's size: (q, qd) for free motion, q for a path
         self.ny = n if path is not None else 2 * n
         self.kp = np.array([kern, fpos, fvel], dtype=np.int64)
@@ -639,7 +652,9 @@ class FreeStepper:
         #: (Gen joints with constraint equations: the composite-body mass matrix in the
         #: augmented system), "sparse" (the augmented system by the compiled sparse LU of its
         #: fixed pattern: trees whose band is wide)
-        if path is not None:
+        if rows is not None:
+            self.mode, self.solver = ROLLING, "augmented"
+        elif path is not None:
             self.mode, self.solver = PATH, "path"
         elif sparse is not None:
             self.mode, self.solver = SPARSE, "sparse"
@@ -673,7 +688,8 @@ class FreeStepper:
             blk, self.bw = sparse, 0
         elif blocks is None and gen is None:
             flat = np.asarray(fk._flat, dtype=np.int64)
-            self.flat_t = (flat % N) * N + flat // N      # K^T in C order = K in Fortran order
+            Nk = N + kv                  # (bordered by the velocity rows: ROLLING)
+            self.flat_t = (flat % N) * Nk + flat // N     # K^T in C order = K in Fortran order
             self.mp = np.asarray(fk._map, dtype=np.int64)
             blk, self.bw = _Blocks.none(), 0
         elif blocks is None:
@@ -683,7 +699,11 @@ class FreeStepper:
             self.flat_t = self.mp = np.zeros(0, dtype=np.int64)
             blk, self.bw = blocks.arrays, blocks.bandwidth
         # the loop's structure argument: (block path, Gen tree, the kernels' output maps)
-        self.blk_i = (blk, GenTree.none() if gen is None else gen.arrays, tuple(expand))
+        if rows is None:
+            ri = (np.zeros(7, dtype=np.int64), _NO_EXPAND)
+        else:
+            ri = (np.array([*rows[1], kv, len(p)], dtype=np.int64), rows[2])
+        self.blk_i = (blk, GenTree.none() if gen is None else gen.arrays, tuple(expand), ri)
         if path is not None:
             # the velocity constraints' outputs: [psi, psi_qd (dense, or its nonzeros), rest]
             self.kk = int(2 * path[0] + (path[0] * n if path[2] is None
@@ -699,11 +719,11 @@ class FreeStepper:
         self.columns = np.ascontiguousarray(scaling.columns, dtype=float)
         self.offset = float(scaling.offset)
         self.robust = bool(robust)
-        self.correction = bool(correction) and m > 0
+        self.correction = bool(correction) and m + kv > 0
         self.t_eval = np.zeros(0) if t_eval is None else np.ascontiguousarray(t_eval, dtype=float)
         k = len(self.t_eval)
         self.ET, self.EY = np.zeros(k), np.zeros((k, self.ny))
-        self.EQDD, self.ELAM = np.full((k, n), np.nan), np.full((k, m), np.nan)
+        self.EQDD, self.ELAM = np.full((k, n), np.nan), np.full((k, self.nl), np.nan)
         self.steps = 0
         if _state["loop"] is None:
             from ._jit_free_loop import adams, derivative, runge_kutta, workspace
@@ -722,14 +742,15 @@ class FreeStepper:
 
     @classmethod
     def plan(cls, system, method, p, scaling, rows0, robust, correction, t_eval, start,
-             newton=None, velocity_rows: int = 0):
-        """The stepper when the compiled loop can run this simulation (``method``: DOP853 or
+             newton=None, velocity_rows: int = 0, rows=None):
+        r"""The stepper when the compiled loop can run this simulation (``method``: DOP853 or
         one of Mech's Adams methods; ``start``: ``(t0, q0)``), else None.
-        ``velocity_rows``: the number of velocity-constraint rows ``A qd + b = 0`` of the
-        free system (decision 0053); the compiled loop does not hold them yet, so a positive
-        number gives None (the Python path, ``sol.extra["compiled_steps"] == 0``)."""
-        if velocity_rows:
-            return None
+
+        ``rows``: the free system's velocity constraints :math:`A \dot q + b = 0`
+        (:class:`~mechsys.analyses._nonholonomic.VelocityRows`, decisions 0053, 0062): the
+        kind ``ROLLING`` (:meth:`_plan_rows`). ``velocity_rows``: their number when the caller
+        does not hand the rows themselves (the switched stepper): a positive number then
+        gives None (the Python path, ``sol.extra["compiled_steps"] == 0``)."""
         spec = _methods.find(method)
         if _jit_runtime.mode() == "off" or spec is None or spec.compiled is None or system.n == 0:
             return None
@@ -737,6 +758,10 @@ class FreeStepper:
             t_eval = None              # Adams output times are interpolated afterwards
         dyn = system.dynamics
         if not _jit_runtime.available():
+            return None
+        if rows is not None:
+            return cls._plan_rows(system, rows, p, scaling, correction, t_eval)
+        if velocity_rows:
             return None
         if dyn.depends_on_lambda or dyn.depends_on_qdd:
             return cls._plan_newton(system, p, scaling, correction, t_eval, newton)
@@ -785,6 +810,31 @@ class FreeStepper:
                 return None
         return cls(system, p, scaling, rows0, robust, correction, t_eval, rows, fk, blocks,
                    [e[1] for e in entries], gen, sparse=sparse)
+
+    @classmethod
+    def _plan_rows(cls, system, rows, p, scaling, correction, t_eval):
+        r"""The stepper of free motion with velocity constraints (kind ``ROLLING``: the
+        dense augmented system bordered by the rows ``A``, solved as
+        ``analyses._nonholonomic.nonholonomic_acceleration`` solves it; the velocity
+        projection onto :math:`[\Phi_q; A] \dot q = [-\Phi_t; -b]` as its
+        ``project_velocities``), or None (the Python path, the same answer): loads that
+        depend on the multipliers or accelerations, recursive (Gen) dynamics, more than
+        ``SPARSE_THRESHOLD`` holonomic unknowns (the sparse free kernel), or a kernel
+        without LLVM code. The run passes no singular instant (``robust`` off, as the
+        Python path with velocity constraints)."""
+        dyn = system.dynamics
+        n, m = system.n, system.m
+        if dyn.depends_on_lambda or dyn.depends_on_qdd or getattr(dyn, "recursive", False) \
+                or n + m > SPARSE_THRESHOLD or rows.k == 0 or len(rows.rho_sym) != rows.k:
+            return None          # (rho: the rows' kernel holds [A, b, rho], rho derived)
+        fk = dyn.free_kernel(False)
+        entries = [kernel_entry(fk.f)] + _constraint_entries(system, system.f_position,
+                                                            system.f_velocity)
+        mine = kernel_entry(rows._f)
+        if mine is None or any(e is None for e in entries):
+            return None
+        return cls(system, p, scaling, None, False, correction, t_eval, [e[0] for e in entries],
+                   fk, expand=[e[1] for e in entries], rows=(rows.k, mine[0], mine[1]))
 
     @classmethod
     def _plan_newton(cls, system, p, scaling, correction, t_eval, newton):
@@ -903,7 +953,7 @@ class FreeStepper:
         method, A, B, C, E3, E5, D = _coefficients(solver)
         T, H = np.empty(max_steps), np.empty(max_steps)
         Y = np.empty((max_steps, self.ny))
-        QDD, LAM = np.empty((max_steps, n)), np.empty((max_steps, m))
+        QDD, LAM = np.empty((max_steps, n)), np.empty((max_steps, self.nl))
         state = np.array([solver.t, solver.h_abs], dtype=float)
         y = np.array(solver.y, dtype=float)
         f = np.array(solver.f, dtype=float)
@@ -944,7 +994,7 @@ class FreeStepper:
         method, A, B, C, E3, E5, D = _coefficients(solver)
         T, H = np.empty(1), np.empty(1)
         Y = np.empty((1, self.ny))
-        QDD, LAM = np.empty((1, n)), np.empty((1, m))
+        QDD, LAM = np.empty((1, n)), np.empty((1, self.nl))
         FD = np.empty((8, self.ny))
         state = np.array([t, h_abs], dtype=float)
         yy = np.array(y, dtype=float)
@@ -958,7 +1008,7 @@ class FreeStepper:
             float(solver.rtol), atol, float(solver.max_step),
             float(solver.t_bound), float(solver.direction), state, yy, ff, none, 0, 1,
             T, Y, H, QDD, LAM, none, np.zeros((0, self.ny)), np.zeros((0, n)),
-            np.zeros((0, m)), FD)
+            np.zeros((0, self.nl)), FD)
         if got is None:            # (being compiled in the background)
             return None
         status, steps, _, evals, _, _ = got
@@ -998,7 +1048,7 @@ class FreeStepper:
             # a speed-up of SciPy's set-up alone (two evaluations a run): compiled only once
             # a loop runs, so that a first run's background compile is the loop's (0064)
             return None
-        f, lam = np.empty(self.ny), np.empty(m)
+        f, lam = np.empty(self.ny), np.empty(self.nl)
         ok = self._call(
             "derivative", self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m,
             self.jr, self.jc, self.rows0, self.columns, self.robust, self.mode, self.blk_i,
@@ -1037,7 +1087,7 @@ class FreeStepper:
             max_steps = max(CHUNK_STEPS, min(10 * CHUNK_STEPS, ADAMS_CHUNK_VALUES // self.ny))
         T, H, E = np.empty(max_steps), np.empty(max_steps), np.empty(max_steps)
         Y = np.empty((max_steps, self.ny))
-        QDD, LAM = np.empty((max_steps, n)), np.empty((max_steps, m))
+        QDD, LAM = np.empty((max_steps, n)), np.empty((max_steps, self.nl))
         k, (a, b, c), method, fixed, inv_scale, t1 = options
         got = self._call(
             "adams", self.kp, _lapack(), self.p, self.flat_t, self.mp, self.kk, n, m, self.jr,

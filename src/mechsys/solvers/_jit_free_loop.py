@@ -21,6 +21,10 @@ the Python path fixes one:
                  the fixed pattern and the compiled sparse LU)
 * ``_newton_accel`` ``solvers._free.free_acceleration`` when the loads depend on the
                  multipliers or accelerations (its Newton on :math:`(\ddot q, \lambda)`)
+* ``_accel_rows`` ``analyses._nonholonomic.nonholonomic_acceleration`` (velocity
+                 constraints ``A qd + b = 0``, decision 0062): the augmented system bordered
+                 by ``A``, ``-rho`` on the right; ``_project_rows`` its ``project_velocities``
+                 (the minimum-norm change onto ``[Phi_q; A] qd = [-Phi_t; -b]``)
 * ``_accel_gen`` ``compile._generalized.RecursiveDynamics`` (generalized coordinates,
                  decision 0018): the joint kernels, then the articulated-body recursion
                  (a tree of Gen joints) or the composite-body mass matrix in the augmented
@@ -80,6 +84,11 @@ NEWTON = 5
 #: (``_accel_sparse``), the projection through the Python path's pattern of ``[[I, J^T],
 #: [J^, 0]]`` (``_min_norm_sparse``)
 SPARSE = 6
+
+#: free motion with velocity constraints ``A(q, t) qd + b(q, t) = 0`` (decisions 0053, 0062):
+#: the dense augmented system bordered by ``A`` (``_accel_rows``), the velocity projection
+#: onto ``[Phi_q; A] qd = [-Phi_t; -b]`` (``_project_rows``)
+ROLLING = 7
 
 #: augmented systems up to this size are solved by the loop's own elimination (``_lu_solve``);
 #: larger ones by LAPACK ``dgesv``, whose call overhead no longer matters there
@@ -182,6 +191,129 @@ def _accepted(x, big_rhs, n, m, qdd, lam, robust, rows0, jv, j0, jr, jc, columns
 
 
 @leaf
+def _accel_rows(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, ipiv, ibuf, rhs, b,
+                qdd, lam, ex, ph, ri, rw):
+    r"""Free acceleration with velocity constraints (``ROLLING``; the Python path's
+    ``analyses._nonholonomic.nonholonomic_acceleration``) at ``x = [t, q, qd, 0, p, 0]``:
+
+    .. math::
+
+        \begin{bmatrix} M & \Phi_q^T & A^T \\ \Phi_q & 0 & 0 \\ A & 0 & 0 \end{bmatrix}
+        \begin{bmatrix} \ddot q \\ \lambda \\ \mu \end{bmatrix} =
+        \begin{bmatrix} Q + Q_v \\ \gamma \\ -\rho \end{bmatrix}
+
+    the holonomic part from the free kernel (``kp``: its values scattered by ``flat_t`` into
+    the transposed storage of the bordered matrix, ``KT`` (n + m + k)^2), ``A`` and
+    :math:`\rho` from the rows' kernel (``ri = (info, expand)``, ``info = [kernel row (5), k,
+    parameters]``, evaluated at ``[t, q, qd, p]``), solved as the Python path solves it
+    (LAPACK ``dgesv``; the matrix and the answer checked as ``solvers._free._solve_fast`` does:
+    finite, no zero pivot, ``|x| < 1e15 (1 + max |rhs|)``). ``qdd`` (n,), ``lam`` (m,),
+    ``mu`` (``rw[13]``, k); False: hand over (the Python path decides)."""
+    info, exr = ri
+    xr, outr, phr, mu = rw[0], rw[1], rw[2], rw[13]
+    k = info[5]
+    npar = info[6]
+    N = n + m
+    Nk = N + k
+    _evalx(kp, x, nin, out, ex, ph)
+    KTf[:] = 0.0
+    for i in range(flat_t.size):
+        KTf[flat_t[i]] = out[mp[i]]
+    # the rows' kernel takes [t, q, qd, p] (x holds [t, q, qd, lambda, p, qdd])
+    for j in range(1 + 2 * n):
+        xr[j] = x[j]
+    for j in range(npar):
+        xr[1 + 2 * n + j] = x[1 + 2 * n + m + j]
+    _evalx(info, xr, 1 + 2 * n + npar, outr, exr, phr)
+    for i in range(k):
+        for j in range(n):
+            a = outr[i * n + j]
+            KT[j, N + i] = a            # K[N + i, j] = A[i, j]  (KT holds K transposed)
+            KT[N + i, j] = a            # K[j, N + i] = A[i, j]
+    for i in range(Nk):
+        for j in range(Nk):
+            if not np.isfinite(KT[i, j]):
+                return False
+    big_rhs = 0.0
+    for i in range(Nk):
+        rhs[i] = out[kk + i] if i < N else -outr[k * n + k + i - N]
+        b[i] = rhs[i]
+        v = abs(rhs[i])
+        if v > big_rhs:
+            big_rhs = v
+    # LAPACK dgesv at every size, the routine the Python path calls: the same accelerations
+    # bit for bit (the loop's own LU of small systems rounds differently, and a wobbling
+    # coin amplified that to 1.4e-12 over 1200 steps)
+    ibuf[0] = Nk             # n, nrhs, lda = ldb, info
+    ibuf[1] = 1
+    ibuf[2] = Nk
+    ibuf[3] = 0
+    _ccall(lapack[3], (ibuf[0:1], ibuf[1:2], KT, ibuf[2:3], ipiv, b, ibuf[2:3], ibuf[3:4]))
+    if ibuf[3] != 0:
+        return False
+    big = 0.0
+    for i in range(Nk):
+        v = abs(b[i])
+        if not v <= big:          # NaN too
+            big = v
+    if not big < 1e15 * (1.0 + big_rhs):
+        return False
+    for j in range(n):
+        qdd[j] = b[j]
+    for i in range(m):
+        lam[i] = b[n + i]
+    for i in range(k):
+        mu[i] = b[N + i]
+    return True
+
+
+@leaf
+def _project_rows(pv, lapack, xk, nin_k, out_vel, jr, jc, columns, n, m, y, ibuf, cbuf, dbuf,
+                  ex_vel, ph_vel, ri, rw):
+    r"""The velocity projection with velocity constraints (``ROLLING``; the Python path's
+    ``analyses._nonholonomic.project_velocities``): the smallest scaled change of
+    :math:`\dot q` (``y[n:]``) onto
+
+    .. math::  G \dot q = g, \qquad G = \begin{bmatrix} \Phi_q \\ A \end{bmatrix}, \quad
+               g = \begin{bmatrix} -\Phi_t \\ -b \end{bmatrix}
+
+    at the positions ``xk = [t, q, 0, p]`` (already projected), by ``_min_norm`` on ``G``
+    (each row divided by its scale, as ``Scaling.rows``). False: hand over."""
+    info, exr = ri
+    xr, outr, phr, G, Gs, AG, rG, FsG, dqG, ybufG, workG, ipivG, iworkG = rw[:13]
+    k = info[5]
+    npar = info[6]
+    nnz = jr.size
+    G[:, :] = 0.0
+    if m > 0:
+        _evalx(pv, xk, nin_k, out_vel, ex_vel, ph_vel)
+        for i in range(nnz):
+            G[jr[i], jc[i]] += out_vel[i]
+    for j in range(1 + 2 * n + npar):
+        xr[j] = xk[j]
+    _evalx(info, xr, 1 + 2 * n + npar, outr, exr, phr)
+    for i in range(k):
+        for j in range(n):
+            G[m + i, j] = outr[i * n + j]
+    _rows(G, columns, rG)
+    for i in range(m + k):
+        s = 0.0
+        for j in range(n):
+            s += G[i, j] * y[n + j]
+        g = -out_vel[nnz + i] if i < m else -outr[k * n + i - m]
+        FsG[i] = (s - g) / rG[i]
+    if not _min_norm(lapack, G, rG, columns, FsG, dqG, Gs, AG, ipivG, ibuf, cbuf, dbuf, workG,
+                     iworkG, ybufG, False):
+        return False
+    for j in range(n):
+        y[n + j] = y[n + j] - dqG[j]
+    for j in range(2 * n):
+        if not np.isfinite(y[j]):
+            return False
+    return True
+
+
+@leaf
 def _zone_ok(rows0, lam, jv, j0, jr, jc, columns, force):
     """zone_guard's cheap test: multipliers large against the constraint forces they make
     (``J^T lam``, from the Jacobian values ``jv[j0:]`` of the kernel) mean a singular instant
@@ -215,6 +347,18 @@ def _rhs(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, 
     expansion maps of the three kernels)``, ``blk_w`` their work arrays (``_block_work``).
     ``PATH``: ``f = qd`` (n,) at ``(t, q = y)``, also left in ``qdd`` (the next evaluation's
     guess, as the Python path's)."""
+    if blocks == ROLLING:
+        x[0] = t
+        for j in range(2 * n):
+            x[1 + j] = y[j]
+        if not within(blocks, ROLLING, ROLLING, _accel_rows, kp, lapack, x, nin, out, KT, KTf,
+                      flat_t, mp, kk, n, m, ipiv, ibuf, rhs, b, qdd, lam, blk_i[2][0],
+                      blk_w[2][0], blk_i[3], blk_w[3]):
+            return False
+        for j in range(n):
+            f[j] = y[n + j]
+            f[n + j] = qdd[j]
+        return True
     if blocks >= PATH:
         # (one call site for the three kinds: a smaller body here kept the loops as fast as
         # before they existed)
@@ -1207,7 +1351,7 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
     for j in range(n):
         xk[1 + n + j] = 0.0
     lim = tol * (1.0 + offset)
-    for _ in range(maxit):
+    for _ in range(maxit if m > 0 else 0):     # (velocity rows alone: no position rows)
         for j in range(n):
             xk[1 + j] = y[j]
         _evalx(pp, xk, nin_k, out_pos, ex[1], ph[1])
@@ -1247,6 +1391,10 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
         return True
     for j in range(n):
         xk[1 + j] = y[j]
+    if blocks == ROLLING:
+        return within(blocks, ROLLING, ROLLING, _project_rows, pv, lapack, xk, nin_k, out_vel,
+                      jr, jc, columns, n, m, y, ibuf, cbuf, dbuf, ex[2], ph[2], blk_i[3],
+                      blk_w[3])
     _evalx(pv, xk, nin_k, out_vel, ex[2], ph[2])
     if sparse:
         _rows_nz(out_vel[:nnz], jr, jc, columns, r)
@@ -1329,6 +1477,7 @@ def runge_kutta(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, off
      blk_w, J, r, Fs, dq, Js, Am, work, iwork, ybuf) = borrow(ws)
     (lapack, p, flat_t, mp, jr, jc, rows0, columns, blk_i, y, state, f, t_eval, atol) = borrow(
         (lapack, p, flat_t, mp, jr, jc, rows0, columns, blk_i, y, state, f, t_eval, atol))
+    mu = blk_w[3][13]                # the velocity constraints' multipliers (ROLLING)
     _setup(x, p, n, m, blocks, lam)
     xk[:] = 0.0                      # [t, q, qd = 0 (positions), p]
     for j in range(npar):
@@ -1520,6 +1669,8 @@ def runge_kutta(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, off
                     EQDD[ie, j] = qdd[j]
                 for i in range(m):
                     ELAM[ie, i] = lam[i]
+                for i in range(mu.size):         # (velocity constraints' multipliers)
+                    ELAM[ie, m + i] = mu[i]
                 ie += 1
         # -- projection after the accepted step; the derivative at the projected state --
         if correction:
@@ -1549,8 +1700,10 @@ def runge_kutta(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, off
         if correction or ie == ie_step:
             for i in range(m):
                 LAM[steps, i] = lam[i]
+            for i in range(mu.size):
+                LAM[steps, m + i] = mu[i]
         else:
-            for i in range(m):
+            for i in range(LAM.shape[1]):
                 LAM[steps, i] = np.nan
         steps += 1
         state[0] = t
@@ -1614,6 +1767,7 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
      blk_w, J, r, Fs, dq, Js, Am, work, iwork, ybuf) = borrow(ws)
     (lapack, p, flat_t, mp, jr, jc, rows0, columns, blk_i, y, state, hist_t, hist_f, recent) = borrow(
         (lapack, p, flat_t, mp, jr, jc, rows0, columns, blk_i, y, state, hist_t, hist_f, recent))
+    mu = blk_w[3][13]                # the velocity constraints' multipliers (ROLLING)
     _setup(x, p, n, m, blocks, lam)
     xk[:] = 0.0                      # [t, q, qd = 0 (positions), p]
     for j in range(npar):
@@ -1739,6 +1893,8 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
             QDD[steps, j] = f_new[N2 - n + j]
         for i in range(m):
             LAM[steps, i] = lam[i]
+        for i in range(mu.size):
+            LAM[steps, m + i] = mu[i]
         steps += 1
         if nrec == window:
             for i in range(window - 1):
@@ -1783,6 +1939,9 @@ def derivative(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, robu
         return False
     for i in range(m):
         lam_out[i] = lam[i]
+    mu = blk_w[3][13]
+    for i in range(mu.size):
+        lam_out[m + i] = mu[i]
     return True
 
 
@@ -1796,9 +1955,11 @@ def workspace(kp, n, m, npar, kk, nnz, blocks, blk_i, bw):
     ``nnz`` the Jacobian's nonzeros, ``bw`` the block path's bandwidth."""
     nin = 1 + 2 * n + m + npar + n                   # [t, q, qd, lambda, p, qdd]
     nin_k = 1 + 2 * n + npar                         # [t, q, qd, p]
-    NN = n + m
+    # (ROLLING: the augmented system bordered by the k velocity rows)
+    NN = n + m + (int(blk_i[3][0][5]) if blocks == ROLLING else 0)
     # the dense matrix: the augmented system, a path's velocity system (n x n), else unused
-    side = NN if blocks == AUGMENTED or blocks == NEWTON else (n if blocks == PATH else 1)
+    side = NN if blocks == AUGMENTED or blocks == NEWTON or blocks == ROLLING else (
+        n if blocks == PATH else 1)
     banded = ((blocks == NEWTON or blocks == PATH) and blk_i[0][7].size > 1) \
         or blocks == SPARSE
     if banded:
@@ -1866,7 +2027,29 @@ def _block_work(blocks, blk_i, n, m, bw, nnz):
           np.zeros(ex[1].max() + 1 if ex[1].size else 1),
           np.zeros(ex[2].max() + 1 if ex[2].size else 1))
     # (_gen_work's Python function: it is compiled for gen_loads, not needed here)
-    return bw_, _gen_work.py_func(blocks, blk_i[1], n, m), ph
+    return bw_, _gen_work.py_func(blocks, blk_i[1], n, m), ph, _rows_work(blocks, blk_i, n, m)
+
+
+def _rows_work(blocks, blk_i, n, m):
+    """Work arrays of the velocity constraints (``ROLLING``; ``blk_i[3] = (info, expand)``,
+    ``info = [the rows' kernel row (5), k, parameters]``): ``(xr, outr, phr, G, Gs, AG, rG,
+    FsG, dqG, ybufG, workG, ipivG, iworkG, mu)``: the rows' kernel's arguments ``[t, q, qd,
+    p]`` (and its Piecewise values), outputs ``[A, b, rho]`` and distinct outputs, the
+    projection's ``_min_norm`` arrays for ``G = [Phi_q; A]`` ((m + k) rows) and the
+    multipliers ``mu`` (k,). The other kinds: the same types, empty (``mu`` size 0)."""
+    if blocks != ROLLING:
+        z = np.zeros(0)
+        return (np.zeros(1), np.zeros(1), np.zeros(1), np.zeros((1, 1)), np.zeros((1, 1)),
+                np.zeros((1, 1)), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1),
+                np.zeros(4), np.zeros(1, dtype=np.int32), np.zeros(1, dtype=np.int32), z)
+    info, ex = blk_i[3]
+    k, npar = int(info[5]), int(info[6])
+    g = m + k
+    return (np.zeros(1 + 2 * n + npar + max(int(info[4]), 0)), np.zeros(k * n + 2 * k),
+            np.zeros(ex.max() + 1 if ex.size else 1), np.zeros((g, n)), np.zeros((g, n)),
+            np.zeros((g, g)), np.zeros(g), np.zeros(g), np.zeros(n), np.zeros(g),
+            np.zeros(4 * max(g, 1)), np.zeros(max(g, 1), dtype=np.int32),
+            np.zeros(max(g, 1), dtype=np.int32), np.zeros(k))
 
 
 @nb.njit(cache=True)
