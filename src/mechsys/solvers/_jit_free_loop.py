@@ -22,9 +22,10 @@ the Python path fixes one:
 * ``_newton_accel`` ``solvers._free.free_acceleration`` when the loads depend on the
                  multipliers or accelerations (its Newton on :math:`(\ddot q, \lambda)`)
 * ``_accel_rows`` ``analyses._nonholonomic.nonholonomic_acceleration`` (velocity
-                 constraints ``A qd + b = 0``, decision 0062): the augmented system bordered
-                 by ``A``, ``-rho`` on the right; ``_project_rows`` its ``project_velocities``
-                 (the minimum-norm change onto ``[Phi_q; A] qd = [-Phi_t; -b]``)
+                 constraints :math:`A \dot q + b = 0`, decision 0062): the augmented system
+                 bordered by ``A``, :math:`-\rho` on the right; ``_project_rows`` its
+                 ``project_velocities`` (the minimum-norm change onto
+                 :math:`[\Phi_q; A] \dot q = [-\Phi_t; -b]`)
 * ``_accel_gen`` ``compile._generalized.RecursiveDynamics`` (generalized coordinates,
                  decision 0018): the joint kernels, then the articulated-body recursion
                  (a tree of Gen joints) or the composite-body mass matrix in the augmented
@@ -85,9 +86,9 @@ NEWTON = 5
 #: [J^, 0]]`` (``_min_norm_sparse``)
 SPARSE = 6
 
-#: free motion with velocity constraints ``A(q, t) qd + b(q, t) = 0`` (decisions 0053, 0062):
+#: free motion with velocity constraints :math:`A(q, t) \dot q + b(q, t) = 0` (decisions 0053, 0062):
 #: the dense augmented system bordered by ``A`` (``_accel_rows``), the velocity projection
-#: onto ``[Phi_q; A] qd = [-Phi_t; -b]`` (``_project_rows``)
+#: onto :math:`[\Phi_q; A] \dot q = [-\Phi_t; -b]` (``_project_rows``)
 ROLLING = 7
 
 #: augmented systems up to this size are solved by the loop's own elimination (``_lu_solve``);
