@@ -205,7 +205,9 @@ class FreeSystem:
 
     With velocity constraints each kind adds :math:`A^T \mu` to its balance and their rows
     to its constraints (decision 0055): static :math:`b(q, t) = 0` (rest allowed), kinematic
-    :math:`A \dot q + b = 0`, dynamic :math:`A \ddot q = -\rho`. The static equilibria then
+    :math:`A \dot q + b = 0`, dynamic :math:`A \ddot q = -\rho` (with loads that depend on
+    the multipliers or accelerations, the same Newton on the bordered system, decision 0068;
+    not yet through switches). The static equilibria then
     form a family (the constraints remove velocities, not positions): the solve ends on one
     near the start, keeping the coordinates given in ``initial_condition``.
 
