@@ -272,6 +272,9 @@ CATALOGUE = [
     ("path", 'm = ms.Model2D(); b = m.add_body("w"); '
      'ms.linear_velocity_form(ms.Constraint([m.velocity_symbols()[b.q[0]] ** 2]), m)',
      "ModelError", "not linear"),
+    # a velocity constraint has no multiplier symbols for loads (decision 0068)
+    ("path", 'm = caster(); m.add(rolling(m), name="rolling"); m.multipliers("rolling")',
+     "ModelError", "'rolling'"),
     # export of absolute bodies and equations (decision 0067)
     ("import", 'm = ms.Model3D(); b = m.add_body("b", mass=1, inertia=(1, 1, 1)); '
      'm.add(ms.RotationLock3(b), name="turn"); m.to_mjcf("never_written.xml")', "ModelError", "'turn'"),

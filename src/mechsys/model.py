@@ -32,7 +32,7 @@ from .compile._options import _UNSET, CompileOptions, process_equation
 from .compile._options import updated as _updated_options
 from .constraints import Constraint, ConstraintBase, Variable
 from .constraints._generalized import GenJoint, GenKinematics, check_new_joint
-from .constraints._switches import StageSwitch
+from .constraints._switches import StageSwitch, is_velocity_constraint
 from .geometry._bodies import Body
 from .geometry._planar_euler import PLANAR_EULER
 from .geometry._points import Axis, Point, Vector, as_point, as_vector
@@ -642,9 +642,26 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         self._touch()
 
     def multipliers(self, constraint) -> list:
-        """Lagrange multiplier symbols of a constraint (Mech's ``Generalized``)."""
+        r"""Lagrange multiplier symbols of a position constraint (Mech's ``Generalized``):
+        ``lam<number>_<row>``, the symbols loads such as ``JointFriction`` are written in.
+
+        A velocity constraint (rolling) has none: its multipliers :math:`\mu` are unknowns of
+        free motion only (``sol.extra["mu"]``), not symbols a load can use, so asking raises
+        :class:`ModelError`. In a model that holds velocity constraints the symbols are those
+        of its position constraints (the model's own kinematic system refuses the velocity
+        rows; the free system keeps the same names, decision 0068)."""
         c = self.constraint(constraint)
-        s = self.compile()
+        rates = set(self.velocity_symbols().values())
+        if is_velocity_constraint(c, self.space, rates):
+            raise ModelError(
+                f"multipliers({c.label()}): a velocity constraint has no multiplier symbols "
+                "for loads to use (its multipliers mu are unknowns of free motion: "
+                "sol.extra['mu'], sol.reaction); write the load with the multipliers of a "
+                "position constraint, e.g. the holonomic part roll.holonomic() of a rolling "
+                "contact for its normal force")
+        moving = [] if self._switches() else [
+            d for d in self._constraints if is_velocity_constraint(d, self.space, rates)]
+        s = self._system_without(moving) if moving else self.compile()
         return [lam for lam, o in zip(s.lam_symbols, s.layout.eq_owner) if o is c]
 
     # -- guesses ------------------------------------------------------------------------

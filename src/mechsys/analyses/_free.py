@@ -205,7 +205,9 @@ class FreeSystem:
 
     With velocity constraints each kind adds :math:`A^T \mu` to its balance and their rows
     to its constraints (decision 0055): static :math:`b(q, t) = 0` (rest allowed), kinematic
-    :math:`A \dot q + b = 0`, dynamic :math:`A \ddot q = -\rho`. The static equilibria then
+    :math:`A \dot q + b = 0`, dynamic :math:`A \ddot q = -\rho` (with loads that depend on
+    the multipliers or accelerations, the same Newton on the bordered system, decision 0068;
+    not yet through switches). The static equilibria then
     form a family (the constraints remove velocities, not positions): the solve ends on one
     near the start, keeping the coordinates given in ``initial_condition``.
 
@@ -249,14 +251,17 @@ class FreeSystem:
                              f" {self.system.n} coordinates)")
         self._vrows = None
         every = self.velocity_constraints + self._held_apart()
-        if every:
+        if every and not self._newton_with_rows:
+            # (free motion holds them: the Newton of free_acceleration on the bordered
+            # system, decision 0068; the stage-by-stage stepper of switches does not yet)
             dyn = self.system.dynamics
             if dyn.depends_on_lambda or dyn.depends_on_qdd:
                 raise ModelError(
                     "free(): loads that depend on multipliers (friction) or accelerations "
                     "together with velocity constraints "
-                    f"({', '.join(c.label() for c in every)}) are not "
-                    "supported yet; remove those loads or the velocity constraints")
+                    f"({', '.join(c.label() for c in every)}) in a model with stage or time "
+                    "switches or event loads are not supported yet; remove those loads, the "
+                    "velocity constraints or the switches")
         if self.velocity_constraints:
             # (the equilibria do not use rho = d(A qd + b)/dt: not derived for them)
             self._vrows = VelocityRows(model, self.system, self.velocity_constraints,
@@ -266,6 +271,10 @@ class FreeSystem:
         if initial_condition is not None:
             self._q0, self._qd0, self._p_given = self._apply_condition(
                 initial_condition, self._q0, self._qd0, self._held0)
+
+    #: whether loads that depend on the multipliers or accelerations may stand beside
+    #: velocity constraints (the Newton on the bordered system, decision 0068)
+    _newton_with_rows = True
 
     def _held_apart(self) -> list:
         """Velocity constraints held as rows of their own besides ``velocity_constraints``:
@@ -623,7 +632,10 @@ class FreeSystem:
         # as simulate() does (smallest change in the unit-free coordinates)
         q, qd = self._project_start(t, q, qd, p, held, scaling_at(s, t, q, p))
         if self._vrows is not None:
-            qdd, lam = nonholonomic_acceleration(s, self._vrows, t, q, qd, p)
+            # (mu starts at 1 as lambda does, for a friction load's Newton)
+            guess = None if lambda_guess is None else np.concatenate(
+                (lam0, np.ones(self._vrows.k)))
+            qdd, lam = nonholonomic_acceleration(s, self._vrows, t, q, qd, p, guess, **kw)
             return self._result([t], q, qd, qdd, lam, p, [0], scalar=True)
         qdd, lam, its = free_acceleration(s, t, q, qd, p, lam0 if lambda_guess is not None
                                           else None, **kw)
@@ -698,7 +710,8 @@ class FreeSystem:
 
         def accel(tt, y, lam_guess=None):
             if vrows is not None:
-                qdd, lam = nonholonomic_acceleration(s, vrows, tt, y[:n], y[n:], p)
+                qdd, lam = nonholonomic_acceleration(s, vrows, tt, y[:n], y[n:], p, lam_guess,
+                                                     columns=sc.columns, **kw)
                 return y[n:], qdd, lam
             qdd, lam, _ = free_acceleration(s, tt, y[:n], y[n:], p, lam_guess, guard=guard,
                                             columns=sc.columns, **kw)

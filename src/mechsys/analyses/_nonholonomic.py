@@ -37,7 +37,7 @@ from ..compile import compile_exprs
 from ..compile._derive import sparse_derivatives
 from ..constraints import velocity_rows
 from ..constraints._switches import is_velocity_constraint
-from ..solvers._free import _solve_fast, project_positions
+from ..solvers._free import _solve_fast, free_acceleration, project_positions
 from ..solvers._tolerances import SPARSE_THRESHOLD, Singular
 
 try:  # optional
@@ -181,13 +181,34 @@ def checked_equations(model, system, constraints) -> tuple[list, list]:
     return psi, owners
 
 
-def nonholonomic_acceleration(system, rows: VelocityRows, t, q, qd, p):
+def nonholonomic_acceleration(system, rows: VelocityRows, t, q, qd, p, lam_guess=None,
+                              **newton):
     r"""``(qdd (n,), multipliers (m + k,))`` of the free motion with velocity rows: the
     augmented system of the module docstring, solved dense (LAPACK). The multipliers are
     :math:`(\lambda, \mu)`. A singular matrix (dependent rows, or mass missing on a free
-    motion) raises :class:`SingularJacobianError` naming the velocity constraints."""
+    motion) raises :class:`SingularJacobianError` naming the velocity constraints.
+
+    Loads that depend on the multipliers (joint friction) or on the accelerations make the
+    system nonlinear: then the Newton iteration of
+    :func:`~mechsys.solvers._free.free_acceleration` runs on the bordered system (its
+    ``rows``; ``lam_guess`` the start of :math:`(\lambda, \mu)`, ``newton`` its ``tol``,
+    ``max_iterations`` and ``columns``; decision 0068).
+
+    Example::
+
+        qdd, lam_mu = nonholonomic_acceleration(free.system, free._vrows, 0.0, q, qd, p)
+    """
     n, m, k = system.n, system.m, rows.k
-    kern = system.dynamics.free_kernel(n + m > SPARSE_THRESHOLD)
+    dyn = system.dynamics
+    if dyn.depends_on_lambda or dyn.depends_on_qdd:
+        A, _, rho = rows.evaluate(t, q, qd, p)
+        try:
+            qdd, lam, _ = free_acceleration(system, t, q, qd, p, lam_guess, rows=(A, rho),
+                                            **newton)
+        except Singular:
+            raise _singular_rows(rows, t) from None
+        return qdd, lam
+    kern = dyn.free_kernel(n + m > SPARSE_THRESHOLD)
     K0, rhs0 = kern(t, q, qd, np.zeros(m), p)
     K0 = K0.toarray() if sps.issparse(K0) else np.asarray(K0)
     A, _, rho = rows.evaluate(t, q, qd, p)
@@ -200,14 +221,19 @@ def nonholonomic_acceleration(system, rows: VelocityRows, t, q, qd, p):
     try:
         x = _solve_fast(K, rhs)
     except Singular:
-        names = ", ".join(sorted({c.label() for c in rows.constraints}))
-        raise SingularJacobianError(
-            f"free acceleration at t = {t:.6g}: the augmented system with the velocity "
-            f"constraints ({names}) is singular: their rows are dependent on each other or on "
-            "the holonomic constraints (e.g. a no-slip row that is the derivative of a kept "
-            "position constraint), or a free motion carries no mass; remove the redundant "
-            "constraint or give the bodies mass and inertia", time=t) from None
+        raise _singular_rows(rows, t) from None
     return x[:n], x[n:]
+
+
+def _singular_rows(rows: VelocityRows, t) -> SingularJacobianError:
+    """The error for a singular augmented system bordered by the velocity rows ``rows``."""
+    names = ", ".join(sorted({c.label() for c in rows.constraints}))
+    return SingularJacobianError(
+        f"free acceleration at t = {t:.6g}: the augmented system with the velocity "
+        f"constraints ({names}) is singular: their rows are dependent on each other or on "
+        "the holonomic constraints (e.g. a no-slip row that is the derivative of a kept "
+        "position constraint), or a free motion carries no mass; remove the redundant "
+        "constraint or give the bodies mass and inertia", time=t)
 
 
 def velocity_matrix(system, rows: VelocityRows, t, q, p):

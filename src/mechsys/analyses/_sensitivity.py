@@ -250,6 +250,15 @@ class SensitivitySystem:
         K = tan.kernels
         rows = fs._vrows                  # velocity constraints (decision 0055)
         rt = None
+        if rows is not None and (s.dynamics.depends_on_lambda or s.dynamics.depends_on_qdd):
+            # (the bordered tangent, free_tangent_rows, leaves out the loads' derivatives
+            # along the multipliers and accelerations: refused rather than wrong, 0068)
+            raise ModelError(
+                "sensitivity of free motion: loads that depend on the multipliers (joint "
+                "friction) or on the accelerations together with velocity constraints "
+                f"({', '.join(c.label() for c in rows.constraints)}) are not supported yet; "
+                "simulate the free motion itself (m.free().simulate), or take central "
+                "differences of whole runs")
         if rows is not None:
             from ._nonholonomic import (
                 RowTangent,

@@ -54,11 +54,32 @@ def _augmented(M, J, D=None, dense=False):
 
 
 def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterations=30,
-                      guard=None, columns=None):
+                      guard=None, columns=None, rows=None):
     r"""``(qdd (n,), lambda (m,), iterations)`` of a free system at ``(t, q, qd)``.
     ``guard(K, rhs, x)`` (free motion, linear case): ``None`` to keep the solution ``x`` of
     the augmented system, or a replacement :math:`(\ddot q, \lambda)` near a singular instant
     (:func:`._rank.zone_guard`).
+
+    ``rows``: ``(A (k, n), rho (k,))``, the velocity constraints' rows at this state
+    (:class:`~mechsys.analyses._nonholonomic.VelocityRows`, decision 0068): the Newton below
+    then runs on the bordered system, :math:`\Phi_q` stacked with :math:`A`, :math:`\gamma`
+    with :math:`-\rho`, the multipliers :math:`(\lambda, \mu)` (``m + k`` of them, the
+    loads reading the first ``m``; their derivative along :math:`\mu` is zero):
+
+    .. math::
+
+        \begin{bmatrix} M - \partial Q / \partial \ddot q & \Phi_q^T - \partial Q / \partial
+        \lambda & A^T \\ \Phi_q & 0 & 0 \\ A & 0 & 0 \end{bmatrix}
+        \begin{bmatrix} \Delta \ddot q \\ \Delta \lambda \\ \Delta \mu \end{bmatrix}
+        = -\begin{bmatrix} r_1 \\ r_2 \end{bmatrix}, \qquad
+        r_1 = M \ddot q + \Phi_q^T \lambda + A^T \mu - Q - Q_v, \quad
+        r_2 = \begin{bmatrix} \Phi_q \ddot q - \gamma \\ A \ddot q + \rho \end{bmatrix}
+
+    (dense; only for loads that depend on the multipliers or accelerations: the linear case
+    is :func:`~mechsys.analyses._nonholonomic.nonholonomic_acceleration`'s one solve). A
+    singular Newton matrix then raises the internal :class:`Singular` for the caller to name
+    the velocity constraints. The column scales are those of :math:`\Phi_q` alone, as
+    without rows.
 
     Loads that depend on the multipliers or accelerations: Newton on :math:`(\ddot q, \lambda)` from
     ``qdd = 0`` and ``lam_guess`` (default ones) with the residuals ``r1 = M qdd + Phi_q^T
@@ -78,7 +99,7 @@ def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterat
     length, mass or force)."""
     dyn = system.dynamics
     n, m = system.n, system.m
-    if not (dyn.depends_on_lambda or dyn.depends_on_qdd):
+    if rows is None and not (dyn.depends_on_lambda or dyn.depends_on_qdd):
         kern = dyn.free_kernel(n + m > SPARSE_THRESHOLD)
         direct = getattr(kern, "accelerations", None)  # a tree of Gen joints: O(N), no K
         if direct is not None and m == 0:
@@ -101,10 +122,24 @@ def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterat
     # large systems: the Jacobian's and the mass matrix's nonzeros (products by bincount, no
     # sparse-matrix objects per iteration), the Newton matrix's values straight into its
     # fixed pattern (_newton_values): no dense (n + m)^2 arrays
-    pat = free_newton_pattern(system) if n + m > SPARSE_THRESHOLD else None
-    J = system.jacobian(t, q, p, pat is not None)
-    g = system.gamma_values(t, q, qd, p)
+    pat = free_newton_pattern(system) if n + m > SPARSE_THRESHOLD and rows is None else None
+    if rows is None:
+        J = system.jacobian(t, q, p, pat is not None)
+        g = system.gamma_values(t, q, qd, p)
+    elif m:
+        J = system.jacobian(t, q, p)
+        J = J.toarray() if sps.issparse(J) else np.asarray(J, dtype=float)
+        g = np.asarray(system.gamma_values(t, q, qd, p), dtype=float)
+    else:                   # (no position rows: a free body on a knife edge)
+        J, g = np.zeros((0, n)), np.zeros(0)
     c = Scaling.of(system, q, J).columns if columns is None else np.asarray(columns, dtype=float)
+    k = 0
+    if rows is not None:
+        # the bordered system: the velocity rows below the position rows, their
+        # multipliers mu after lambda (the loads see lambda only)
+        A, rho_v = rows
+        k = A.shape[0]
+        J, g = np.vstack((J, A)), np.concatenate((g, -np.asarray(rho_v, dtype=float)))
     if pat is not None:
         Jd, Jr, Jc = J.data, J.indices, np.repeat(np.arange(n), np.diff(J.indptr))
         Mr, Mc = dyn.M_rows, dyn.M_cols
@@ -113,12 +148,12 @@ def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterat
     else:
         rho = (np.abs(J) * c).max(axis=1, initial=0.0)
     rho[rho == 0] = 1.0
-    lam = np.ones(m) if lam_guess is None else np.array(lam_guess, dtype=float)
+    lam = np.ones(m + k) if lam_guess is None else np.array(lam_guess, dtype=float)
     qdd = np.zeros(n)
 
     def terms(lam, qdd):
         if pat is None:
-            return dyn.terms(t, q, qd, lam, p, qdd)
+            return dyn.terms(t, q, qd, lam[:m], p, qdd)
         out = dyn.f_terms(dyn.pack(t, q, qd, lam, p, qdd))
         k = len(Mr)
         return out[:k], out[k:k + n], out[k + n:]
@@ -152,8 +187,10 @@ def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterat
             first = (rows < n) & (cols < n)
             mu = np.abs(c[rows[first]] * K[first] * c[cols[first]]).max(initial=0.0) or 1.0
         else:
-            D = dyn.dQ_dlam(t, q, qd, lam, p, qdd)
-            Meff = Mm - dyn.dQ_dqdd(t, q, qd, lam, p, qdd)
+            D = dyn.dQ_dlam(t, q, qd, lam[:m], p, qdd)
+            if k:                   # (the loads do not depend on mu)
+                D = np.hstack((np.asarray(D, dtype=float).reshape(n, m), np.zeros((n, k))))
+            Meff = Mm - dyn.dQ_dqdd(t, q, qd, lam[:m], p, qdd)
             mu = (c[:, None] * np.abs(Meff) * c[None, :]).max(initial=0.0) or 1.0
         dr = np.concatenate((c / mu, 1.0 / rho))
         dc = np.concatenate((c, mu / rho))
@@ -166,6 +203,8 @@ def free_acceleration(system, t, q, qd, p, lam_guess=None, tol=1e-10, max_iterat
                 fac = factor(dr[:, None] * _augmented(Meff, J, D) * dc[None, :])
             dx = dc * fac.solve(-dr * np.concatenate((r1, r2)))
         except Singular:
+            if rows is not None:
+                raise               # (the caller names the velocity constraints)
             raise _singular_free(system, t, q, qd, p) from None
         qdd, lam = qdd + dx[:n], lam + dx[n:]
         Mm, Q, Qv = terms(lam, qdd)
