@@ -1,0 +1,150 @@
+"""A real robot's MJCF file: the Kinova Jaco arm, its joint torques along a trajectory
+checked against MuJoCo, and an animation drawn from its meshes.
+
+The MuJoCo Menagerie's files do not install offline (the ``mujoco-menagerie`` package
+downloads them at run time), so the arm here is the Kinova Jaco that ``dm_control`` ships
+(``dm_control/third_party/kinova/jaco_arm.xml``, Apache-2.0, with its STL meshes): a
+six-joint arm with joint ``armature``, ``damping`` and ``frictionloss``, bodies turned by
+quaternions, and links whose masses are given on mesh geoms. Only the package's files are
+read (its Python code is not imported). The script
+
+1. imports the arm with ``ms.from_mjcf(..., armature=True, joint_damping=True)``: six
+   ``GenRevolute5`` joints whose coordinates are named after the file's joints, and prints
+   what the import report could not map. The importer does not compute a mesh's volume
+   inertia (it says so), so each body's mass, centroid and inertia are those MuJoCo
+   computes from the meshes, written into a copy of the file as ``<inertial>`` elements;
+   ``<include file="common.xml"/>`` is inlined in that copy (its defaults merged into the
+   arm's);
+2. drives the six joints along quintics and computes the joint torques with
+   ``m.inverse_dynamics`` at every instant at once, and checks them against MuJoCo's
+   ``mj_inverse`` on the original file (constraints off: no contacts, joint limits or dry
+   friction; armature, damping and gravity on), to 1e-9 relative;
+3. plots the torques and animates the arm, each link drawn from its STL mesh.
+"""
+
+import importlib.util
+import re
+import struct
+import sys
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+import mechsys as ms
+from mechsys import draw
+
+
+def package_dir(name: str) -> Path:
+    """The folder of an installed package, found without importing it (importing
+    dm_control loads OpenGL machinery)."""
+    spec = importlib.util.find_spec(name)
+    if spec is None or not spec.submodule_search_locations:
+        sys.exit(f"jaco_arm.py needs the {name!r} package: pip install {name}")
+    return Path(list(spec.submodule_search_locations)[0])
+
+
+kinova = package_dir("dm_control") / "third_party" / "kinova"
+try:
+    import mujoco
+except ImportError:
+    sys.exit("jaco_arm.py needs the 'mujoco' package (for the reference torques): pip install mujoco")
+
+# -- 1. MuJoCo's compiled model of the original file, and the copy mechsys reads -------------
+original = kinova / "jaco_arm.xml"
+mj = mujoco.MjModel.from_xml_path(str(original))
+text = original.read_text()
+common = (kinova / "common.xml").read_text()
+# the included file's <default> merged into the arm's (one top-level default class here),
+# the rest of it in place of the <include>
+dflt = common[common.index("<default>"):common.index("</default>") + len("</default>")]
+inner = common[common.index("<mujoco>") + len("<mujoco>"):common.rindex("</mujoco>")]
+text = text.replace('<include file="common.xml"/>', inner.replace(dflt, ""))
+text = text.replace("<default>", "<default>" + dflt[len("<default>"):-len("</default>")], 1)
+
+
+def with_inertial(match: re.Match) -> str:
+    """The body's opening tag followed by MuJoCo's mass properties of it."""
+    b = mj.body(match.group(1))
+    ipos, iquat, I = (" ".join(f"{v:.17g}" for v in x) for x in (b.ipos, b.iquat, b.inertia))
+    return (f'{match.group(0)}\n<inertial pos="{ipos}" quat="{iquat}" mass="{b.mass[0]:.17g}" '
+            f'diaginertia="{I}"/>')
+
+
+text = re.sub(r'<body name="(b_\d)"[^>]*>', with_inertial, text)
+path = Path("jaco_arm.xml")
+path.write_text(text)
+m = ms.from_mjcf(path, armature=True, joint_damping=True)
+names = list(m.compile().layout.q_names)
+assert names == [mj.joint(k).name for k in range(mj.njnt)]
+print("joints:", ", ".join(names))
+print(m.import_report)
+
+# -- 2. quintics from q0 to q1 in 2 s, the torques, and MuJoCo's -------------------------------
+q0 = np.array([0.0, 2.6, 1.2, -0.6, 0.9, 0.0])
+q1 = np.array([1.4, 3.7, 2.3, 0.8, -0.7, 1.2])   # joints 2 and 3 stay inside their ranges
+t = np.linspace(0.0, 2.0, 41)
+s = t / 2.0
+blend = (10 * s**3 - 15 * s**4 + 6 * s**5)[:, None]
+dblend = ((30 * s**2 - 60 * s**3 + 30 * s**4) / 2.0)[:, None]
+ddblend = ((60 * s - 180 * s**2 + 120 * s**3) / 4.0)[:, None]
+q, qd, qdd = q0 + (q1 - q0) * blend, (q1 - q0) * dblend, (q1 - q0) * ddblend
+tau = m.inverse_dynamics(q, qd, qdd).values      # (41, 6), all instants at once
+
+mj.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONSTRAINT
+data = mujoco.MjData(mj)
+ref = np.empty_like(tau)
+for k in range(len(t)):
+    data.qpos[:], data.qvel[:], data.qacc[:] = q[k], qd[k], qdd[k]
+    mujoco.mj_inverse(mj, data)
+    ref[k] = data.qfrc_inverse
+err = np.abs(tau - ref).max() / np.abs(ref).max()
+print(f"joint torques against MuJoCo's mj_inverse: max |difference| / max |torque| = {err:.1e}")
+assert err < 1e-9
+# the rotors' armature (4 and 2 kg m^2) carries most of the torque: the links' own share
+# (gravity, inertia, Coriolis, damping) is checked on its own scale too
+links = ref - mj.dof_armature * qdd
+err_links = np.abs(tau - ref).max() / np.abs(links).max()
+print(f"  relative to the links' share alone (max {np.abs(links).max():.3f} N m): {err_links:.1e}")
+assert err_links < 1e-9
+print("peak |torque| per joint [N m]:")
+for k, name in enumerate(names):
+    print(f"  {name:8s} {np.abs(tau[:, k]).max():8.3f}")
+
+# -- 3. the torques, and the motion drawn from the links' STL meshes ---------------------------
+fig, ax = plt.subplots(figsize=(6, 3.2))
+for k, name in enumerate(names):
+    ax.plot(t, tau[:, k], label=name)
+ax.set_xlabel("t [s]")
+ax.set_ylabel("joint torque [N m]")
+ax.legend(ncol=3, fontsize=8)
+ax.grid(alpha=0.3)
+fig.tight_layout()
+fig.savefig("jaco_arm_torques.png", dpi=80)
+
+
+def read_stl(file: Path) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices and triangles of a binary STL file (80-byte header, count, 50-byte records)."""
+    raw = file.read_bytes()
+    n = struct.unpack("<I", raw[80:84])[0]
+    rec = np.frombuffer(raw, np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")]),
+                        count=n, offset=84)
+    return rec["v"].reshape(-1, 3).astype(float), np.arange(3 * n).reshape(-1, 3)
+
+
+# the animation: a copy of the import whose joints are driven along the same quintics
+# (a Constraint q - f(T) = 0 per joint), solved kinematically at 11 instants; the mesh geoms
+# sit at their bodies' origins (no pos or quat), so their vertices are in body coordinates
+driven = ms.from_mjcf(path)
+T = ms.T
+sT = T / 2
+for k, qk in enumerate(driven.compile().layout.q_symbols):
+    driven.add(ms.Constraint([qk - (q0[k] + (q1[k] - q0[k]) * (10 * sT**3 - 15 * sT**4 + 6 * sT**5))]),
+               name=f"drive_{names[k]}")
+meshes = {"b_1": "shoulder", "b_2": "arm", "b_3": "forearm", "b_4": "wrist", "b_5": "wrist"}
+driven.add_graphics(*(draw.Mesh(driven.body(b), *read_stl(kinova / "meshes_decimated" / f"{f}.stl"))
+                      for b, f in meshes.items()))
+sol = driven.solve(np.linspace(0.0, 2.0, 11))
+assert np.abs(sol.q - q[::4]).max() < 1e-9
+draw.animate(sol, "jaco_arm.gif", fps=5, dpi=50)
+print("wrote jaco_arm_torques.png and jaco_arm.gif")
