@@ -14,17 +14,17 @@ read (its Python code is not imported). The script
    inertia (it says so), so each body's mass, centroid and inertia are those MuJoCo
    computes from the meshes, written into a copy of the file as ``<inertial>`` elements;
    ``<include file="common.xml"/>`` is inlined in that copy (its defaults merged into the
-   arm's);
+   arm's), and its ``meshdir`` points to the package's meshes;
 2. drives the six joints along quintics and computes the joint torques with
    ``m.inverse_dynamics`` at every instant at once, and checks them against MuJoCo's
    ``mj_inverse`` on the original file (constraints off: no contacts, joint limits or dry
    friction; armature, damping and gravity on), to 1e-9 relative;
-3. plots the torques and animates the arm, each link drawn from its STL mesh.
+3. plots the torques and animates the arm, each link drawn by the importer from its STL
+   mesh (a ``draw.Mesh`` of its triangles).
 """
 
 import importlib.util
 import re
-import struct
 import sys
 from pathlib import Path
 
@@ -72,6 +72,8 @@ def with_inertial(match: re.Match) -> str:
 
 
 text = re.sub(r'<body name="(b_\d)"[^>]*>', with_inertial, text)
+# the copy is written here: its meshes are read from the package's folder
+text = text.replace('meshdir="meshes_decimated/"', f'meshdir="{kinova / "meshes_decimated"}"')
 path = Path("jaco_arm.xml")
 path.write_text(text)
 m = ms.from_mjcf(path, armature=True, joint_damping=True)
@@ -123,27 +125,15 @@ fig.tight_layout()
 fig.savefig("jaco_arm_torques.png", dpi=80)
 
 
-def read_stl(file: Path) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices and triangles of a binary STL file (80-byte header, count, 50-byte records)."""
-    raw = file.read_bytes()
-    n = struct.unpack("<I", raw[80:84])[0]
-    rec = np.frombuffer(raw, np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")]),
-                        count=n, offset=84)
-    return rec["v"].reshape(-1, 3).astype(float), np.arange(3 * n).reshape(-1, 3)
-
-
 # the animation: a copy of the import whose joints are driven along the same quintics
-# (a Constraint q - f(T) = 0 per joint), solved kinematically at 11 instants; the mesh geoms
-# sit at their bodies' origins (no pos or quat), so their vertices are in body coordinates
+# (a Constraint q - f(T) = 0 per joint), solved kinematically at 11 instants; the importer
+# draws the mesh geoms from their STL files
 driven = ms.from_mjcf(path)
 T = ms.T
 sT = T / 2
 for k, qk in enumerate(driven.compile().layout.q_symbols):
     driven.add(ms.Constraint([qk - (q0[k] + (q1[k] - q0[k]) * (10 * sT**3 - 15 * sT**4 + 6 * sT**5))]),
                name=f"drive_{names[k]}")
-meshes = {"b_1": "shoulder", "b_2": "arm", "b_3": "forearm", "b_4": "wrist", "b_5": "wrist"}
-driven.add_graphics(*(draw.Mesh(driven.body(b), *read_stl(kinova / "meshes_decimated" / f"{f}.stl"))
-                      for b, f in meshes.items()))
 sol = driven.solve(np.linspace(0.0, 2.0, 11))
 assert np.abs(sol.q - q[::4]).max() < 1e-9
 draw.animate(sol, "jaco_arm.gif", fps=5, dpi=50)

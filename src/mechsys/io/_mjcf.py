@@ -32,12 +32,13 @@ body 1 to body 2 turned by :math:`F_2 S_2 S_1^T F_1^T` (decision 0067).
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 
 from .._errors import ModelError
 from .._symbols import acceleration_symbol, velocity_symbol
-from ._urdf import ImportReport, add_joint, normal_to
+from ._urdf import MAX_DRAWN_TRIANGLES, ImportReport, add_joint, normal_to, read_mesh
 from ._xml import Element, floats, read_xml, where
 
 
@@ -253,12 +254,16 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
     equality constraints ``connect``, ``weld`` and ``joint`` become mechsys constraints (so
     closed-loop models work). ``gravity``: a number overrides the file's magnitude (along
     the file's direction; default ``<option gravity>`` or 9.81 down ``z``).
-    ``joint_damping`` adds ``damping`` as ``-d q_dot`` loads, ``joint_springs`` the hinge and
-    slide springs ``-k (q - springref)`` (MuJoCo's passive forces), ``armature`` the joints'
-    armature ``a`` as the load :math:`-a \ddot q` (MuJoCo adds ``a`` to the mass matrix's diagonal;
-    so do mechsys's dynamics with it); ranges, friction loss, springs, armature (unless
-    asked), actuators, sensors, contacts and everything else without a counterpart are
-    listed in ``m.import_report``. Read safely, as ``from_urdf``.
+    Geoms are kept for drawing: spheres, cylinders, capsules, boxes, ellipsoids, and meshes
+    as the triangles of their STL or OBJ files (``<asset><mesh file scale>`` under the
+    ``<compiler meshdir>``; a mesh's mass properties are not computed: give its body an
+    ``<inertial>``). ``joint_damping`` adds ``damping`` as ``-d q_dot`` loads,
+    ``joint_springs`` the hinge and slide springs ``-k (q - springref)`` (MuJoCo's passive
+    forces), ``armature`` the joints' armature ``a`` as the load :math:`-a \ddot q` (MuJoCo
+    adds ``a`` to the mass matrix's diagonal; so do mechsys's dynamics with it); ranges,
+    friction loss, springs, armature (unless asked), actuators, sensors, contacts and
+    everything else without a counterpart are listed in ``m.import_report``. Read safely, as
+    ``from_urdf``.
 
     ``coordinates="absolute"``: every body with hinge or slide joints an absolute body
     (guessed at its pose at ``qpos0``) and each joint ``Revolute5`` / ``Translate5`` with its
@@ -349,6 +354,9 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
         from .. import draw as D
 
         for gel, _a, typ, pos, R, size in parts:
+            if typ == "mesh":
+                mesh_prims(D, gel, _a, pos, R, b)
+                continue
             try:
                 if typ == "sphere":
                     prims.append(D.Sphere(b, b.point(tuple(pos)), size[0]))
@@ -365,6 +373,52 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
                         prims.append(D.Facet([b.point(tuple(corners[i])) for i in f]))
             except (ModelError, IndexError):
                 notes.append(f"line {gel.line}: geom of type {typ!r} not drawn")
+
+    # <asset><mesh>: name (default: the file's stem) -> (element, file, scale); files are
+    # looked up in <compiler meshdir> (or assetdir) beside the model file, as MuJoCo does
+    meshdir = ""
+    for c in root.findall("compiler"):
+        meshdir = c.get("meshdir", c.get("assetdir", meshdir))
+    mesh_assets: dict = {}
+    for asset in root.findall("asset"):
+        for me in asset.findall("mesh"):
+            fn = me.get("file")
+            name = me.get("name") or (Path(fn).stem if fn else None)
+            if name:
+                ma = ctx.attrs(me, None)
+                mesh_assets[name] = (me, fn, np.array(ctx.num(me, ma, "scale", 3, [1.0, 1.0, 1.0])))
+
+    def mesh_prims(D, gel, a, pos, R, b):
+        """A mesh geom drawn as its triangles (its bounding box when it has more than
+        ``MAX_DRAWN_TRIANGLES``): the file's vertices, scaled, in the geom's frame. MuJoCo
+        moves a mesh to its inertial frame and the geom by the opposite offset, so the
+        file's coordinates in the geom's frame are where it draws the mesh too."""
+        name = a.get("mesh", "")
+        if name not in mesh_assets:
+            notes.append(f"line {gel.line}: mesh geom names no <asset><mesh> {name!r}; not drawn")
+            return
+        me, fn, scale = mesh_assets[name]
+        if not fn:
+            notes.append(f"line {me.line}: mesh {name!r} given by its vertices in the file (no "
+                         "file=...); not drawn")
+            return
+        file = Path(source).resolve().parent / meshdir / fn
+        got = read_mesh(file) if file.suffix.lower() in (".stl", ".obj") else None
+        if got is None or not np.all(np.isfinite(got[0])):
+            notes.append(f"line {gel.line}: mesh {fn!r} not drawn (only STL and OBJ files found "
+                         "in the compiler's meshdir beside the file are read)")
+            return
+        V = pos + (got[0] * scale) @ R.T
+        if len(got[1]) <= MAX_DRAWN_TRIANGLES:
+            prims.append(D.Mesh(b, V, got[1]))
+            return
+        notes.append(f"line {gel.line}: mesh {fn!r} drawn as its bounding box ({len(got[1])} "
+                     f"triangles > {MAX_DRAWN_TRIANGLES})")
+        lo, hi = (got[0] * scale).min(axis=0), (got[0] * scale).max(axis=0)
+        corners = [pos + R @ np.array([(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]])
+                   for i in (0, 1) for j in (0, 1) for k in (0, 1)]
+        for f in ((0, 1, 3, 2), (4, 5, 7, 6), (0, 1, 5, 4), (2, 3, 7, 6), (0, 2, 6, 4), (1, 3, 7, 5)):
+            prims.append(D.Facet([b.point(tuple(corners[i])) for i in f]))
 
     # frame_of[MJCF body] = (mechsys body, origin, rotation): a body without joints is
     # merged into its parent's mechsys body (as URDF's fixed joints), ground included
