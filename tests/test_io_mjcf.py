@@ -329,3 +329,109 @@ def test_mesh_geoms_are_drawn_where_mujoco_places_them(tmp_path):
     ours = b[0] + np.asarray(mesh.vertices, float) @ b[1].T
     order = np.lexsort(ref.T)
     np.testing.assert_allclose(ours[np.lexsort(ours.T)], ref[order], atol=1e-6)
+
+
+# <include> (decision 0070): a main file whose defaults, assets and bodies come from included
+# files, one of them nested and in a subfolder, read as the same model written in one file
+INC_MAIN = """<mujoco model="inc">
+  <compiler angle="radian"/>
+  <include file="parts/defaults.xml"/>
+  <default>
+    <geom density="800"/>
+  </default>
+  <worldbody>
+    <body name="base" pos="0 0 0.5">
+      <joint name="yaw" axis="0 0 1"/>
+      <geom type="box" size="0.1 0.1 0.05"/>
+      <include file="parts/arm.xml"/>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+INC_DEFAULTS = """<mujoco>
+  <asset><material name="red" rgba="1 0 0 1"/></asset>
+  <default>
+    <joint axis="0 1 0"/>
+    <geom density="300" material="red"/>
+    <default class="thin"><geom type="capsule" size="0.02"/></default>
+  </default>
+</mujoco>
+"""
+INC_ARM = """<mujoco>
+  <body name="upper" pos="0.1 0 0.05" quat="0.9 0.1 0.3 0.2">
+    <joint name="shoulder"/>
+    <geom class="thin" fromto="0 0 0 0.4 0 0"/>
+    <include file="parts/hand.xml"/>
+  </body>
+</mujoco>
+"""
+INC_HAND = """<mujoco>
+  <body name="hand" pos="0.4 0 0">
+    <joint name="wrist" axis="1 0 0.5"/>
+    <geom type="sphere" size="0.05" pos="0.05 0 0"/>
+  </body>
+</mujoco>
+"""
+# the same model in one file: the two top-level defaults merged as MuJoCo merges them
+INC_ONE = (INC_MAIN.replace('  <include file="parts/defaults.xml"/>\n',
+                            INC_DEFAULTS[len("<mujoco>\n"):-len("</mujoco>\n")])
+           .replace('      <include file="parts/arm.xml"/>\n',
+                    INC_ARM[len("<mujoco>\n"):-len("</mujoco>\n")].replace(
+                        '    <include file="parts/hand.xml"/>\n', INC_HAND[len("<mujoco>\n"):-len("</mujoco>\n")])))
+
+
+def _included(tmp_path, **parts):
+    (tmp_path / "parts").mkdir(exist_ok=True)
+    files = {"parts/defaults.xml": INC_DEFAULTS, "parts/arm.xml": INC_ARM, "parts/hand.xml": INC_HAND}
+    files.update({k.replace("__", "/") + ".xml": v for k, v in parts.items()})
+    for name, text in files.items():
+        _write(tmp_path, text, name)
+    return _write(tmp_path, INC_MAIN)
+
+
+def test_include_reads_as_one_file_and_as_mujoco(tmp_path):
+    assert "include" not in INC_ONE
+    m = ms.from_mjcf(_included(tmp_path))
+    one = ms.from_mjcf(_write(tmp_path, INC_ONE, "one.xml"))
+    assert m.compile().layout.q_names == one.compile().layout.q_names == ("yaw", "shoulder", "wrist")
+    Q, QD, QDD = RNG.normal(size=(3, 3))
+    tau, tau1 = (x.inverse_dynamics(Q, QD, QDD).values for x in (m, one))
+    np.testing.assert_allclose(tau, tau1, rtol=0, atol=1e-12 * np.abs(tau1).max())
+    # MuJoCo reading the main file: the merged defaults (density 800 after 300), the nested
+    # include found beside the main file, masses and frames
+    mm, md = _reference(tmp_path / "model.xml")
+    assert mm.nbody == 4
+    _compare(m, mm, md)
+
+
+@pytest.mark.parametrize("parts, match", [
+    ({"parts__hand": "<mujoco>\n<body name='h'><include file='parts/gone.xml'/></body></mujoco>"},
+     r"hand\.xml, line 2, <include>: included file 'parts/gone\.xml' not found"),
+    ({"parts__hand": "<mujoco>\n <include file='parts/arm.xml'/>\n</mujoco>"},
+     r"hand\.xml, line 2, <include>: 'parts/arm\.xml' closes an include cycle \(model\.xml -> "
+     r"arm\.xml -> hand\.xml -> arm\.xml\)"),
+    ({"parts__hand": "<mujoco>\n <include file='parts/defaults.xml'/>\n</mujoco>"},
+     r"hand\.xml, line 2, <include>: 'parts/defaults\.xml' is already included"),
+    ({"parts__hand": "<robot name='r'/>"},
+     r"hand\.xml, line 1, <robot name='r'>: an included file's root element is <mujoco>.*"
+     r"arm\.xml, line 5, <include>"),
+    ({"parts__hand": "<mujoco>\n <body name='h'>\n  <joint name='w' axis='0 0 0'/>\n"
+                     "  <geom size='0.1'/></body>\n</mujoco>"},
+     r"hand\.xml, line 3, <joint name='w'>: the joint axis is zero"),
+])
+def test_include_refusals_name_file_and_line(tmp_path, parts, match):
+    with pytest.raises(ms.ModelError, match=match):
+        ms.from_mjcf(_included(tmp_path, **parts))
+
+
+def test_include_size_limit_over_all_files(tmp_path, monkeypatch):
+    import mechsys.io._mjcf as mjcf_mod
+
+    path = _included(tmp_path)
+    size = sum(p.stat().st_size for p in tmp_path.rglob("*.xml") if p.name != "one.xml")
+    monkeypatch.setattr(mjcf_mod, "MAX_XML_BYTES", size - 1)     # each file fits, all do not
+    with pytest.raises(ms.ModelError, match=r"arm\.xml, line 5, <include>: the included files "
+                                            r"together pass the limit"):
+        ms.from_mjcf(path)
+    monkeypatch.setattr(mjcf_mod, "MAX_XML_BYTES", size)
+    ms.from_mjcf(path)

@@ -39,7 +39,10 @@ import numpy as np
 from .._errors import ModelError
 from .._symbols import acceleration_symbol, velocity_symbol
 from ._urdf import MAX_DRAWN_TRIANGLES, ImportReport, add_joint, normal_to, read_mesh
-from ._xml import Element, floats, read_xml, where
+from ._xml import MAX_XML_BYTES, Element, floats, read_xml, where
+
+#: ``<include>`` nesting deeper than this is refused (a cycle is refused before that)
+MAX_INCLUDE_DEPTH = 16
 
 
 def quat_matrix(q) -> np.ndarray:
@@ -76,7 +79,10 @@ class _Ctx:
             if ifg == "true":
                 self.notes.append(f"line {c.line}: inertiafromgeom='true' (inertials from geoms only "
                                   "where a body has none)")
-        # default classes: name -> (parent name, {tag: attrs})
+        # default classes: name -> (parent name, {tag: attrs}), each class holding its
+        # parent's values as they were when it was defined, over its own (as MuJoCo copies
+        # the parent class into a new one): a later top-level <default> changes the main
+        # class only, not the classes already derived from it
         self.defaults: dict = {}
         for d in root.findall("default"):
             self._read_default(d, None)
@@ -85,32 +91,34 @@ class _Ctx:
         name = d.get("class", "main" if parent is None else None)
         if name is None:
             raise ModelError(f"{where(self.source, d)}: a nested <default> needs class=...")
-        if name in self.defaults:
+        if name in self.defaults and not (parent is None and name == "main"):
             raise ModelError(f"{where(self.source, d)}: default class {name!r} defined twice")
-        own = {c.tag: dict(c.attrib) for c in d.children if c.tag != "default"}
-        self.defaults[name] = (parent, own)
+        if name not in self.defaults:
+            inherited = self.defaults[parent][1] if parent is not None else {}
+            self.defaults[name] = (parent, {tag: dict(a) for tag, a in inherited.items()})
+        # a second top-level <default> (often from an <include>) is merged into the main
+        # class, a later attribute replacing an earlier one, as MuJoCo does; the block's own
+        # elements apply before its nested classes copy it (whatever their order in the file)
+        own = self.defaults[name][1]
+        for c in d.children:
+            if c.tag != "default":
+                own.setdefault(c.tag, {}).update(c.attrib)
         for c in d.findall("default"):
             self._read_default(c, name)
 
     def attrs(self, el: Element, cls: str | None) -> dict:
-        """``el``'s attributes over those of its default class chain."""
+        """``el``'s attributes over those of its default class."""
         name = el.get("class", cls) or "main"
         if name not in self.defaults and name != "main":
             raise ModelError(f"{where(self.source, el)}: default class {name!r} is not defined")
-        chain = []
-        while name is not None and name in self.defaults:
-            chain.append(name)
-            name = self.defaults[name][0]
-        out: dict = {}
-        for n in reversed(chain):
-            out.update(self.defaults[n][1].get(el.tag, {}))
+        out: dict = dict(self.defaults.get(name, (None, {}))[1].get(el.tag, {}))
         out.update(el.attrib)
         return out
 
     def num(self, el, attrs, key, n, default=None):
         if key not in attrs:
             return default
-        tmp = Element(el.tag, {key: attrs[key]}, el.line)
+        tmp = Element(el.tag, {key: attrs[key]}, el.line, source=el.source)
         tmp.attrib["name"] = el.get("name")
         if tmp.attrib["name"] is None:
             del tmp.attrib["name"]
@@ -242,6 +250,70 @@ def _flatten(ctx, el: Element, tag: str, cls):
 
 
 # -- the import ------------------------------------------------------------------------------------
+def _expand_includes(root: Element, source: str) -> None:
+    r"""Replace every ``<include file="f"/>`` under ``root`` by the children of ``f``'s
+    ``<mujoco>`` root, as MuJoCo assembles its files before reading them (decision 0070).
+
+    ``f`` is looked up in the main file's directory (MuJoCo's rule), then in the including
+    file's directory (where MuJoCo 4 also looks). Each included file is read as the main
+    one (:func:`~mechsys.io._xml.read_xml`: no declarations, size and element limits), the
+    files together at most :data:`~mechsys.io._xml.MAX_XML_BYTES`; a file is included at most
+    once (MuJoCo's rule), a cycle and nesting deeper than :data:`MAX_INCLUDE_DEPTH` are
+    refused, and so is an included root other than ``<mujoco>`` and an empty one. Every
+    element keeps its own file in ``Element.source``, so later errors name the file and line
+    it was written on.
+    """
+    main = Path(source).resolve()
+    base = main.parent
+    seen: dict = {main: None}
+    total = [main.stat().st_size]
+
+    def expand(el: Element, chain: tuple) -> None:
+        out = []
+        for c in el.children:
+            if c.tag != "include":
+                expand(c, chain)
+                out.append(c)
+                continue
+            fn = c.get("file")
+            if not fn:
+                raise ModelError(f"{where(source, c)}: an <include> needs file=...")
+            here = Path(c.source or source).resolve().parent
+            cands = [base / fn, here / fn]
+            f = next((p.resolve() for p in cands if p.is_file()), None)
+            if f is None:
+                raise ModelError(f"{where(source, c)}: included file {fn!r} not found in "
+                                 f"{base} (the main file's directory) or {here}")
+            if f in chain:
+                raise ModelError(f"{where(source, c)}: {fn!r} closes an include cycle ("
+                                 "" + " -> ".join(p.name for p in chain) + f" -> {f.name})")
+            if f in seen:
+                raise ModelError(f"{where(source, c)}: {fn!r} is already included (a file is "
+                                 "included at most once, as in MuJoCo)")
+            if len(chain) > MAX_INCLUDE_DEPTH:
+                raise ModelError(f"{where(source, c)}: includes nested deeper than "
+                                 f"{MAX_INCLUDE_DEPTH} levels")
+            total[0] += f.stat().st_size
+            if total[0] > MAX_XML_BYTES:
+                raise ModelError(f"{where(source, c)}: the included files together pass the "
+                                 f"limit of {MAX_XML_BYTES} bytes for a robot description")
+            sub, sub_source = read_xml(f)
+            if sub.tag != "mujoco":
+                raise ModelError(f"{where(sub_source, sub)}: an included file's root element is "
+                                 f"<mujoco>, not <{sub.tag}> (included at {where(source, c)})")
+            if not sub.children:
+                raise ModelError(f"{where(sub_source, sub)}: the included file is empty (included "
+                                 f"at {where(source, c)})")
+            seen[f] = c
+            expand(sub, chain + (f,))
+            for k in sub.children:
+                k.parent = el
+                out.append(k)
+        el.children = out
+
+    expand(root, (main,))
+
+
 def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs: bool = False,
               geometry: bool = True, armature: bool = False, coordinates: str = "generalized",
               backend: str | None = None):
@@ -284,6 +356,7 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
     root, source = read_xml(path)
     if root.tag != "mujoco":
         raise ModelError(f"{where(source, root)}: an MJCF's root element is <mujoco>, not <{root.tag}>")
+    _expand_includes(root, source)
     ctx = _Ctx(source, root)
     notes = ctx.notes
     m = Model3D(backend=backend)
@@ -296,9 +369,6 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
                 if v and any(v):
                     notes.append(f"line {el.line}: <option {key}=...> (fluid or magnetic forces; "
                                  "no counterpart; ignored)")
-        elif el.tag == "include":
-            raise ModelError(f"{where(source, el)}: <include> is not read (files name no other files "
-                             "here); merge the included file into this one")
         elif el.tag in ("actuator", "sensor", "contact", "tendon", "keyframe", "visual", "statistic",
                         "extension", "custom", "deformable", "size"):
             notes.append(f"line {el.line}: {el.label()} (no counterpart; ignored)")

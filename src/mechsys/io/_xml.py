@@ -34,6 +34,8 @@ class Element:
     line: int
     children: list = field(default_factory=list)
     parent: Element | None = field(default=None, repr=False)
+    #: the file the element was read from (an MJCF ``<include>`` brings elements of other files)
+    source: str | None = field(default=None, repr=False)
 
     def find(self, tag: str) -> Element | None:
         for c in self.children:
@@ -53,7 +55,11 @@ class Element:
 
 
 def where(source: str, el: Element | None) -> str:
-    return f"{source}, line {el.line}, {el.label()}" if el is not None else source
+    """``"file, line n, <tag name='x'>"``: the element's own file when it has one (an element
+    brought by an ``<include>`` names the included file), else ``source``."""
+    if el is None:
+        return source
+    return f"{el.source or source}, line {el.line}, {el.label()}"
 
 
 def read_xml(path) -> tuple[Element, str]:
@@ -101,7 +107,7 @@ def parse_xml(data: bytes, source: str = "<string>") -> Element:
         if count[0] > MAX_ELEMENTS or len(stack) >= MAX_DEPTH:
             raise ModelError(f"{source}, line {parser.CurrentLineNumber}: more than "
                                f"{MAX_ELEMENTS} elements or deeper than {MAX_DEPTH} levels")
-        el = Element(tag, dict(attrs), parser.CurrentLineNumber)
+        el = Element(tag, dict(attrs), parser.CurrentLineNumber, source=source)
         if stack:
             el.parent = stack[-1]
             stack[-1].children.append(el)
