@@ -13,8 +13,8 @@ read (its Python code is not imported). The script
    what the import report could not map. The importer does not compute a mesh's volume
    inertia (it says so), so each body's mass, centroid and inertia are those MuJoCo
    computes from the meshes, written into a copy of the file as ``<inertial>`` elements;
-   ``<include file="common.xml"/>`` is inlined in that copy (its defaults merged into the
-   arm's), and its ``meshdir`` points to the package's meshes;
+   the copy's ``meshdir`` and its ``<include file="common.xml"/>`` point to the package's
+   files (the importer reads the include as MuJoCo does, decision 0070);
 2. drives the six joints along quintics and computes the joint torques with
    ``m.inverse_dynamics`` at every instant at once, and checks them against MuJoCo's
    ``mj_inverse`` on the original file (constraints off: no contacts, joint limits or dry
@@ -54,13 +54,6 @@ except ImportError:
 original = kinova / "jaco_arm.xml"
 mj = mujoco.MjModel.from_xml_path(str(original))
 text = original.read_text()
-common = (kinova / "common.xml").read_text()
-# the included file's <default> merged into the arm's (one top-level default class here),
-# the rest of it in place of the <include>
-dflt = common[common.index("<default>"):common.index("</default>") + len("</default>")]
-inner = common[common.index("<mujoco>") + len("<mujoco>"):common.rindex("</mujoco>")]
-text = text.replace('<include file="common.xml"/>', inner.replace(dflt, ""))
-text = text.replace("<default>", "<default>" + dflt[len("<default>"):-len("</default>")], 1)
 
 
 def with_inertial(match: re.Match) -> str:
@@ -72,8 +65,11 @@ def with_inertial(match: re.Match) -> str:
 
 
 text = re.sub(r'<body name="(b_\d)"[^>]*>', with_inertial, text)
-# the copy is written here: its meshes are read from the package's folder
+# the copy is written here: its meshes and its <include file="common.xml"/> (materials and a
+# second top-level <default>, merged into the arm's as MuJoCo merges them) are read from the
+# package's folder
 text = text.replace('meshdir="meshes_decimated/"', f'meshdir="{kinova / "meshes_decimated"}"')
+text = text.replace('<include file="common.xml"/>', f'<include file="{kinova / "common.xml"}"/>')
 path = Path("jaco_arm.xml")
 path.write_text(text)
 m = ms.from_mjcf(path, armature=True, joint_damping=True)

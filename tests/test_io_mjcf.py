@@ -367,17 +367,21 @@ INC_ARM = """<mujoco>
 """
 INC_HAND = """<mujoco>
   <body name="hand" pos="0.4 0 0">
-    <joint name="wrist" axis="1 0 0.5"/>
+    <joint name="wrist" axis="1 0 0.5" frictionloss="0.1"/>
     <geom type="sphere" size="0.05" pos="0.05 0 0"/>
   </body>
 </mujoco>
 """
-# the same model in one file: the two top-level defaults merged as MuJoCo merges them
-INC_ONE = (INC_MAIN.replace('  <include file="parts/defaults.xml"/>\n',
-                            INC_DEFAULTS[len("<mujoco>\n"):-len("</mujoco>\n")])
-           .replace('      <include file="parts/arm.xml"/>\n',
-                    INC_ARM[len("<mujoco>\n"):-len("</mujoco>\n")].replace(
-                        '    <include file="parts/hand.xml"/>\n', INC_HAND[len("<mujoco>\n"):-len("</mujoco>\n")])))
+
+
+def _inner(text):
+    return text[len("<mujoco>\n"):-len("</mujoco>\n")]
+
+
+# the same model in one file, each include replaced by the included file's children
+INC_ONE = (INC_MAIN.replace('  <include file="parts/defaults.xml"/>\n', _inner(INC_DEFAULTS))
+           .replace('      <include file="parts/arm.xml"/>\n', _inner(INC_ARM).replace(
+               '    <include file="parts/hand.xml"/>\n', _inner(INC_HAND))))
 
 
 def _included(tmp_path, **parts):
@@ -394,6 +398,8 @@ def test_include_reads_as_one_file_and_as_mujoco(tmp_path):
     m = ms.from_mjcf(_included(tmp_path))
     one = ms.from_mjcf(_write(tmp_path, INC_ONE, "one.xml"))
     assert m.compile().layout.q_names == one.compile().layout.q_names == ("yaw", "shoulder", "wrist")
+    # the report names the included file an element came from
+    assert f"{tmp_path / 'parts' / 'hand.xml'}, line 3: joint 'wrist' frictionloss" in str(m.import_report)
     Q, QD, QDD = RNG.normal(size=(3, 3))
     tau, tau1 = (x.inverse_dynamics(Q, QD, QDD).values for x in (m, one))
     np.testing.assert_allclose(tau, tau1, rtol=0, atol=1e-12 * np.abs(tau1).max())

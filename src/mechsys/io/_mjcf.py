@@ -58,6 +58,11 @@ def _axis_angle(a, angle) -> np.ndarray:
     return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
 
 
+def _at(source: str, el: Element) -> str:
+    """``"line n"`` of an element of the main file, ``"file, line n"`` of an included one."""
+    return f"line {el.line}" if el.source in (None, source) else f"{el.source}, line {el.line}"
+
+
 class _Ctx:
     def __init__(self, source, root: Element):
         self.source = source
@@ -77,7 +82,7 @@ class _Ctx:
                 self.eulerseq = seq
             ifg = c.get("inertiafromgeom")
             if ifg == "true":
-                self.notes.append(f"line {c.line}: inertiafromgeom='true' (inertials from geoms only "
+                self.notes.append(f"{_at(source, c)}: inertiafromgeom='true' (inertials from geoms only "
                                   "where a body has none)")
         # default classes: name -> (parent name, {tag: attrs}), each class holding its
         # parent's values as they were when it was defined, over its own (as MuJoCo copies
@@ -367,11 +372,11 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
             for key in ("density", "viscosity", "wind", "magnetic"):
                 v = floats(source, el, key, None, [])
                 if v and any(v):
-                    notes.append(f"line {el.line}: <option {key}=...> (fluid or magnetic forces; "
+                    notes.append(f"{_at(ctx.source, el)}: <option {key}=...> (fluid or magnetic forces; "
                                  "no counterpart; ignored)")
         elif el.tag in ("actuator", "sensor", "contact", "tendon", "keyframe", "visual", "statistic",
                         "extension", "custom", "deformable", "size"):
-            notes.append(f"line {el.line}: {el.label()} (no counterpart; ignored)")
+            notes.append(f"{_at(ctx.source, el)}: {el.label()} (no counterpart; ignored)")
     wb = root.find("worldbody")
     if wb is None:
         raise ModelError(f"{where(source, root)}: the model has no <worldbody>")
@@ -399,7 +404,7 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
             if typ in ("plane", "hfield"):
                 continue
             if typ == "mesh":
-                notes.append(f"line {gel.line}: mesh geom of body {body_name!r}: its mass is "
+                notes.append(f"{_at(ctx.source, gel)}: mesh geom of body {body_name!r}: its mass is "
                              "not computed here; give the body an <inertial>")
                 continue
             got = _geom_inertia(ctx, gel, a, typ, size)
@@ -442,7 +447,7 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
                               (1, 3, 7, 5)):
                         prims.append(D.Facet([b.point(tuple(corners[i])) for i in f]))
             except (ModelError, IndexError):
-                notes.append(f"line {gel.line}: geom of type {typ!r} not drawn")
+                notes.append(f"{_at(ctx.source, gel)}: geom of type {typ!r} not drawn")
 
     # <asset><mesh>: name (default: the file's stem) -> (element, file, scale); files are
     # looked up in <compiler meshdir> (or assetdir) beside the model file, as MuJoCo does
@@ -465,24 +470,24 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
         file's coordinates in the geom's frame are where it draws the mesh too."""
         name = a.get("mesh", "")
         if name not in mesh_assets:
-            notes.append(f"line {gel.line}: mesh geom names no <asset><mesh> {name!r}; not drawn")
+            notes.append(f"{_at(ctx.source, gel)}: mesh geom names no <asset><mesh> {name!r}; not drawn")
             return
         me, fn, scale = mesh_assets[name]
         if not fn:
-            notes.append(f"line {me.line}: mesh {name!r} given by its vertices in the file (no "
+            notes.append(f"{_at(ctx.source, me)}: mesh {name!r} given by its vertices in the file (no "
                          "file=...); not drawn")
             return
         file = Path(source).resolve().parent / meshdir / fn
         got = read_mesh(file) if file.suffix.lower() in (".stl", ".obj") else None
         if got is None or not np.all(np.isfinite(got[0])):
-            notes.append(f"line {gel.line}: mesh {fn!r} not drawn (only STL and OBJ files found "
+            notes.append(f"{_at(ctx.source, gel)}: mesh {fn!r} not drawn (only STL and OBJ files found "
                          "in the compiler's meshdir beside the file are read)")
             return
         V = pos + (got[0] * scale) @ R.T
         if len(got[1]) <= MAX_DRAWN_TRIANGLES:
             prims.append(D.Mesh(b, V, got[1]))
             return
-        notes.append(f"line {gel.line}: mesh {fn!r} drawn as its bounding box ({len(got[1])} "
+        notes.append(f"{_at(ctx.source, gel)}: mesh {fn!r} drawn as its bounding box ({len(got[1])} "
                      f"triangles > {MAX_DRAWN_TRIANGLES})")
         lo, hi = (got[0] * scale).min(axis=0), (got[0] * scale).max(axis=0)
         corners = [pos + R @ np.array([(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]])
@@ -510,7 +515,7 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
         pr, pR = world_pose[parent]
         world_pose[name] = (pr + pR @ pos, pR @ R)
         if el.get("gravcomp") not in (None, "0", "0.0"):
-            notes.append(f"line {el.line}: body {name!r} gravcomp={el.get('gravcomp')} (gravity "
+            notes.append(f"{_at(ctx.source, el)}: body {name!r} gravcomp={el.get('gravcomp')} (gravity "
                          "compensation; no counterpart; ignored)")
         parts = add_geoms(el, name, cls)
         ine = el.find("inertial")
@@ -581,7 +586,7 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
         except ModelError as exc:
             raise ModelError(f"{where(source, el)}: {exc}") from None
         mass_parts[name] = [(mass, c, I)]
-        body_line[name] = el.line
+        body_line[name] = el
         frame_of[name] = (b, np.zeros(3), np.eye(3))
         holders = [*chain, b]
         master, m_origin, m_R = pb, P, RR               # the body frame in the master's
@@ -589,7 +594,7 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
             jname = j.get("name")
             if typ == "free":
                 if pb is not m.ground:
-                    notes.append(f"line {j.line}: free joint of body {name!r} on a moving body: "
+                    notes.append(f"{_at(ctx.source, j)}: free joint of body {name!r} on a moving body: "
                                  "the body is absolute (its coordinates are global)")
                 joints_rep[jname or name] = ("free", tuple(s.name for s in b.q), name)
                 continue
@@ -600,14 +605,14 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
                 if jname in joints_rep:
                     raise ModelError(f"{where(source, j)}: an unnamed {typ} joint would be called "
                                      f"{jname!r}, which another joint is; name it")
-                notes.append(f"line {j.line}: unnamed {typ} joint of body {name!r}: its coordinate "
+                notes.append(f"{_at(ctx.source, j)}: unnamed {typ} joint of body {name!r}: its coordinate "
                              f"is named {jname!r}")
             jp = np.array(ctx.num(j, ja, "pos", 3, [0.0, 0.0, 0.0]))
             if typ == "ball":
                 m.add(C.Spherical3(b.point(tuple(float(v) for v in jp)),
                                    master.point(tuple(float(v) for v in m_origin + m_R @ jp))), name=jname)
                 joints_rep[jname] = ("ball", tuple(s.name for s in b.q), name)
-                notes.append(f"line {j.line}: ball joint {jname!r}: the body has absolute coordinates "
+                notes.append(f"{_at(ctx.source, j)}: ball joint {jname!r}: the body has absolute coordinates "
                              "and a Spherical3 (MuJoCo's quaternion qpos has no named counterpart)")
                 continue
             if typ not in ("hinge", "slide"):
@@ -645,7 +650,7 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
                     m.add_load(L.Load(sp.Symbol(jname), -k_ * (sp.Symbol(jname) - sref)),
                                name=f"{jname}_spring")
                 else:
-                    notes.append(f"line {j.line}: joint {jname!r} stiffness {k_} (reported; "
+                    notes.append(f"{_at(ctx.source, j)}: joint {jname!r} stiffness {k_} (reported; "
                                  "joint_springs=True adds it as a load)")
             arm = ctx.num(j, ja, "armature", 1)
             if arm is not None and arm[0] != 0:
@@ -655,12 +660,12 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
                     m.add_load(L.Load(sp.Symbol(jname), -arm[0] * acceleration_symbol(jname)),
                                name=f"{jname}_armature")
                 else:
-                    notes.append(f"line {j.line}: joint {jname!r} armature={arm[0]} (reported; "
+                    notes.append(f"{_at(ctx.source, j)}: joint {jname!r} armature={arm[0]} (reported; "
                                  "armature=True adds it as the load -armature * qdd)")
             v = ctx.num(j, ja, "frictionloss", 1)
             if v is not None and v[0] != 0:
                 friction[jname] = v[0]
-                notes.append(f"line {j.line}: joint {jname!r} frictionloss={v[0]} (no counterpart; "
+                notes.append(f"{_at(ctx.source, j)}: joint {jname!r} frictionloss={v[0]} (no counterpart; "
                              "ignored)")
             d = ctx.num(j, ja, "damping", 1)
             if d is not None and d[0]:
@@ -669,7 +674,7 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
                     m.add_load(L.Load(sp.Symbol(jname), -d[0] * velocity_symbol(jname)),
                                name=f"{jname}_damping")
                 else:
-                    notes.append(f"line {j.line}: joint {jname!r} damping {d[0]} (reported; "
+                    notes.append(f"{_at(ctx.source, j)}: joint {jname!r} damping {d[0]} (reported; "
                                  "joint_damping=True adds it as a load)")
         if geometry:
             draw(parts, b)
@@ -689,7 +694,7 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
             m.set_mass_properties(bname, mass=float(mass), centroid=tuple(float(v) for v in c),
                                   inertia=(0.5 * (I + I.T)).tolist())
         except ModelError as exc:
-            raise ModelError(f"{source}, line {body_line[bname]}, <body name={bname!r}>: {exc}") from None
+            raise ModelError(f"{where(source, body_line[bname])}: {exc}") from None
     # geoms and sites on the world body
     for st, sfp, sfR, scls in _flatten(ctx, wb, "site", None):
         if st.get("name"):
@@ -728,11 +733,11 @@ def _equality(ctx, m, e, frame_of, world_pose, sites, C, notes):
     source = ctx.source
     name = e.get("name")
     if e.get("active", "true") == "false":
-        notes.append(f"line {e.line}: inactive equality {e.label()} (ignored)")
+        notes.append(f"{_at(ctx.source, e)}: inactive equality {e.label()} (ignored)")
         return
     for key in ("solref", "solimp"):
         if e.get(key) is not None:
-            notes.append(f"line {e.line}: {e.label()} {key} (MuJoCo's softness; here a hard constraint)")
+            notes.append(f"{_at(source, e)}: {e.label()} {key} (MuJoCo's softness; here a hard constraint)")
 
     def body(key):
         n = e.get(key)
@@ -773,7 +778,7 @@ def _equality(ctx, m, e, frame_of, world_pose, sites, C, notes):
         m.add(C.Spherical3(on(b1, p1), on(b2, p2)), name=label)
         if e.tag == "weld":
             if e.get("relpose") is not None:
-                notes.append(f"line {e.line}: weld relpose (the relative pose at qpos0 is used)")
+                notes.append(f"{_at(ctx.source, e)}: weld relpose (the relative pose at qpos0 is used)")
 
             def A(b):           # the mechsys body's rotation at qpos0
                 return world_pose[b][1] @ frame_of[b][2].T
@@ -800,4 +805,4 @@ def _equality(ctx, m, e, frame_of, world_pose, sites, C, notes):
         rhs = sum(sp.Float(ck) * x**k for k, ck in enumerate(c)) if j2 else sp.Float(c[0])
         m.add(C.Constraint(sp.Symbol(j1) - rhs), name=name or f"joint_{j1}")
         return
-    notes.append(f"line {e.line}: equality {e.label()} (not mapped)")
+    notes.append(f"{_at(ctx.source, e)}: equality {e.label()} (not mapped)")
