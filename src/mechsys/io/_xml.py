@@ -5,7 +5,8 @@ a document type declaration (``<!DOCTYPE``) or an entity declaration (``<!ENTITY
 refused *before* parsing, and the Expat parser refuses them again while parsing (no entity
 expansion, no external entities, no "billion laughs"); nesting deeper than
 :data:`MAX_DEPTH` and more than :data:`MAX_ELEMENTS` elements are refused. Every element
-keeps the line it starts on, so an error names the element and its line.
+keeps the line it starts on and its file (``Element.source``: an MJCF ``<include>``
+brings elements of other files), so an error names the file, the element and its line.
 """
 
 from __future__ import annotations
