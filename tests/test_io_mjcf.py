@@ -441,3 +441,20 @@ def test_include_size_limit_over_all_files(tmp_path, monkeypatch):
         ms.from_mjcf(path)
     monkeypatch.setattr(mjcf_mod, "MAX_XML_BYTES", size)
     ms.from_mjcf(path)
+
+
+@pytest.mark.parametrize("name", ["cheetah", "finger"])
+def test_dm_control_suite_files_with_includes_against_mujoco(name):
+    """Real files: dm_control's suite models include ``./common/*.xml`` (visual, skybox,
+    materials); the cheetah sets ``<compiler settotalmass>``, the finger disables gravity
+    with ``<flag gravity="disable"/>``: both read as MuJoCo reads them."""
+    import importlib.util
+
+    spec = importlib.util.find_spec("dm_control")
+    if spec is None:
+        pytest.skip("dm_control is not installed")
+    path = next(iter(spec.submodule_search_locations)) + f"/suite/{name}.xml"
+    m = ms.from_mjcf(path)
+    assert "common/visual.xml, line 2: <visual>" in str(m.import_report)
+    mm, md = _reference(path)
+    _compare(m, mm, md, points=1)

@@ -69,6 +69,7 @@ class _Ctx:
         self.degree = True
         self.eulerseq = "xyz"
         self.notes: list[str] = []
+        self.totalmass: float | None = None      # <compiler settotalmass>
         for c in root.findall("compiler"):
             ang = c.get("angle")
             if ang is not None:
@@ -80,6 +81,8 @@ class _Ctx:
                 if len(seq) != 3 or any(ch not in "xyzXYZ" for ch in seq):
                     raise ModelError(f"{where(source, c)}: eulerseq={seq!r} is three of x y z X Y Z")
                 self.eulerseq = seq
+            if c.get("settotalmass") is not None:
+                self.totalmass = floats(source, c, "settotalmass", 1)[0]
             ifg = c.get("inertiafromgeom")
             if ifg == "true":
                 self.notes.append(f"{_at(source, c)}: inertiafromgeom='true' (inertials from geoms only "
@@ -368,9 +371,14 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
     notes = ctx.notes
     m = Model3D(backend=backend)
     g_vec = np.array([0.0, 0.0, -9.81])
+    gravity_off = False
     for el in root.children:
         if el.tag == "option":
             g_vec = np.array(floats(source, el, "gravity", 3, list(g_vec)))
+            for fl in el.findall("flag"):
+                if fl.get("gravity") is not None:
+                    # MuJoCo leaves gravity out of the dynamics: so does the import
+                    gravity_off = fl.get("gravity") == "disable"
             for key in ("density", "viscosity", "wind", "magnetic"):
                 v = floats(source, el, key, None, [])
                 if v and any(v):
@@ -685,6 +693,13 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
 
     for el, fp, fR, ccls in _flatten(ctx, wb, "body", wb.get("childclass")):
         visit(el, "world", ccls, fp, fR)
+    total = sum(pm for parts_ in mass_parts.values() for pm, _, _ in parts_)
+    if ctx.totalmass is not None and ctx.totalmass > 0 and total > 0:
+        # <compiler settotalmass>: MuJoCo scales every body's mass and inertia by one factor
+        # so that the masses add up to it (centroids unchanged)
+        k_mass = ctx.totalmass / total
+        mass_parts = {b: [(pm * k_mass, pc, pI * k_mass) for pm, pc, pI in parts_]
+                      for b, parts_ in mass_parts.items()}
     for bname, parts_ in mass_parts.items():
         mass = sum(pm for pm, _, _ in parts_)
         c = sum(pm * pc for pm, pc, _ in parts_) / mass if mass > 0 else np.zeros(3)
@@ -709,6 +724,8 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
     for eq in root.findall("equality"):
         for e in eq.children:
             _equality(ctx, m, e, frame_of, world_pose, sites, C, notes)
+    if gravity_off:
+        g_vec = np.zeros(3)
     gnorm = float(np.linalg.norm(g_vec))
     if gravity is not None:
         gnorm = float(gravity)
