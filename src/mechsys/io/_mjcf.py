@@ -332,7 +332,9 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
     their ``<inertial>`` (or their geoms' mass as MuJoCo computes it); default classes,
     ``childclass``, ``<compiler angle eulerseq>``, ``<option gravity>`` and ``<include
     file>`` (nested; found beside the main file, else beside the including file; each file
-    read as safely as the main one, decision 0070) are read;
+    read as safely as the main one, decision 0070) are read; ``<compiler settotalmass>``
+    scales the masses and inertias and ``<flag gravity="disable"/>`` drops gravity, as in
+    MuJoCo;
     equality constraints ``connect``, ``weld`` and ``joint`` become mechsys constraints (so
     closed-loop models work). ``gravity``: a number overrides the file's magnitude (along
     the file's direction; default ``<option gravity>`` or 9.81 down ``z``).
