@@ -444,7 +444,7 @@ def test_include_size_limit_over_all_files(tmp_path, monkeypatch):
 
 
 @pytest.mark.parametrize("name", ["cheetah", "finger"])
-def test_dm_control_suite_files_with_includes_against_mujoco(name):
+def test_dm_control_suite_files_with_includes_against_mujoco(name, tmp_path, monkeypatch):
     """Real files: dm_control's suite models include ``./common/*.xml`` (visual, skybox,
     materials); the cheetah sets ``<compiler settotalmass>``, the finger disables gravity
     with ``<flag gravity="disable"/>``: both read as MuJoCo reads them."""
@@ -454,6 +454,7 @@ def test_dm_control_suite_files_with_includes_against_mujoco(name):
     if spec is None:
         pytest.skip("dm_control is not installed")
     path = next(iter(spec.submodule_search_locations)) + f"/suite/{name}.xml"
+    monkeypatch.chdir(tmp_path)     # MuJoCo logs settotalmass's deprecation to MUJOCO_LOG.TXT
     m = ms.from_mjcf(path)
     assert "common/visual.xml, line 2: <visual>" in str(m.import_report)
     mm, md = _reference(path)
