@@ -1,5 +1,5 @@
-"""A real robot's MJCF file: the Kinova Jaco arm, its joint torques along a trajectory
-checked against MuJoCo, and an animation drawn from its meshes.
+"""The Kinova Jaco arm from a real MJCF file: its joint torques along a trajectory checked
+against MuJoCo, and an animation drawn from its meshes.
 
 The MuJoCo Menagerie's files do not install offline (the ``mujoco-menagerie`` package
 downloads them at run time), so the arm here is the Kinova Jaco that ``dm_control`` ships
@@ -46,7 +46,7 @@ def package_dir(name: str) -> Path:
 
 kinova = package_dir("dm_control") / "third_party" / "kinova"
 try:
-    import mujoco
+    import mujoco  # type: ignore[import-untyped]  # no type information shipped
 except ImportError:
     sys.exit("jaco_arm.py needs the 'mujoco' package (for the reference torques): pip install mujoco")
 
@@ -133,4 +133,5 @@ for k, qk in enumerate(driven.compile().layout.q_symbols):
 sol = driven.solve(np.linspace(0.0, 2.0, 11))
 assert np.abs(sol.q - q[::4]).max() < 1e-9
 draw.animate(sol, "jaco_arm.gif", fps=5, dpi=50)
+path.unlink()                      # (the working copy: only the pictures are kept)
 print("wrote jaco_arm_torques.png and jaco_arm.gif")
