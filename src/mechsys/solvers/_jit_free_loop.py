@@ -173,16 +173,24 @@ def _solve_augmented(lapack, KT, rv, r0, jv, j0, n, m, jr, jc, rows0, columns, r
 
 
 @nb.njit(cache=True, inline='always')
+def _bounded(x, count, big_rhs):
+    r"""Whether the first ``count`` entries of a solution are finite and not far beyond its
+    right-hand side, as the Python path accepts it: :math:`\max_i |x_i| < 10^{15} (1 +
+    \max |\mathit{rhs}|)` (NaN refused)."""
+    big = 0.0
+    for i in range(count):
+        v = abs(x[i])
+        if not v <= big:          # NaN too
+            big = v
+    return big < 1e15 * (1.0 + big_rhs)
+
+
+@nb.njit(cache=True, inline='always')
 def _accepted(x, big_rhs, n, m, qdd, lam, robust, rows0, jv, j0, jr, jc, columns, force):
     """The augmented system's solution ``x = [qdd; lam]`` as the Python path accepts it: not
     far beyond its right-hand side (``|x| < 1e15 (1 + max |rhs|)``, NaN refused), split into
     ``qdd`` and ``lam``, and, ``robust``, passing :func:`_zone_ok`. False: hand over."""
-    big = 0.0
-    for i in range(n + m):
-        v = abs(x[i])
-        if not v <= big:          # NaN too
-            big = v
-    if not big < 1e15 * (1.0 + big_rhs):
+    if not _bounded(x, n + m, big_rhs):
         return False
     for j in range(n):
         qdd[j] = x[j]
@@ -252,12 +260,7 @@ def _accel_rows(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, ipiv, ib
     _ccall(lapack[3], (ibuf[0:1], ibuf[1:2], KT, ibuf[2:3], ipiv, b, ibuf[2:3], ibuf[3:4]))
     if ibuf[3] != 0:
         return False
-    big = 0.0
-    for i in range(Nk):
-        v = abs(b[i])
-        if not v <= big:          # NaN too
-            big = v
-    if not big < 1e15 * (1.0 + big_rhs):
+    if not _bounded(b, Nk, big_rhs):
         return False
     for j in range(n):
         qdd[j] = b[j]
@@ -2473,16 +2476,7 @@ def _accel_blocks(kp, x, nin, out, kk, kM, n, m, jr, jc, rows0, columns, robust,
     if ordered:
         for i in range(m):
             lam[rptr[m + 1 + i]] = sol[i]
-    big = 0.0
-    for j in range(n):
-        v = abs(qdd[j])
-        if not v <= big:
-            big = v
-    for i in range(m):
-        v = abs(lam[i])
-        if not v <= big:
-            big = v
-    if not big < 1e15 * (1.0 + big_rhs):
+    if not (_bounded(qdd, n, big_rhs) and _bounded(lam, m, big_rhs)):
         return False
     return not robust or _zone_ok(rows0, lam, out, kM, jr, jc, columns, force)
 
