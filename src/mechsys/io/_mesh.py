@@ -159,13 +159,13 @@ def _obj(data: bytes, label: str) -> tuple[np.ndarray, np.ndarray]:
                                  "vertex numbers") from None
             # negative indices count back from the vertices read so far (the OBJ rule)
             idx = [i - 1 if i > 0 else len(verts) + i for i in idx]
-            if len(idx) < 3 or min(idx) < 0 or max(idx) >= len(verts) or 0 in [int(t.split("/")[0])
-                                                                               for t in tok[1:]]:
+            if len(idx) < 3 or min(idx) < 0 or max(idx) >= len(verts) or len(verts) in idx:
                 raise ModelError(f"mesh file {label!r}, line {k}: face {' '.join(tok[1:])!r} names a vertex "
                                  f"that does not exist ({len(verts)} read so far) or has fewer than three")
             tris += [(idx[0], idx[i], idx[i + 1]) for i in range(1, len(idx) - 1)]
             if len(tris) > MAX_MESH_TRIANGLES:
-                raise ModelError(f"mesh file {label!r}: more than the limit of {MAX_MESH_TRIANGLES} triangles")
+                raise ModelError(f"mesh file {label!r}: more than the limit of {MAX_MESH_TRIANGLES} "
+                                 "triangles")
     if not verts or not tris:
         raise ModelError(f"mesh file {label!r}: an OBJ file with no vertices or no faces")
     V = np.array(verts, dtype=np.float32).astype(np.float64)
@@ -189,7 +189,8 @@ def _msh(data: bytes, label: str) -> tuple[np.ndarray, np.ndarray]:
     V = np.frombuffer(data, "<f4", 3 * nv, 16).reshape(-1, 3).astype(np.float64)
     if nf == 0:
         return V, hull_faces(V, label)
-    F = np.frombuffer(data, "<i4", 3 * nf, 16 + 4 * (3 * nv + 3 * nn + 2 * nt)).reshape(-1, 3).astype(np.int64)
+    at = 16 + 4 * (3 * nv + 3 * nn + 2 * nt)
+    F = np.frombuffer(data, "<i4", 3 * nf, at).reshape(-1, 3).astype(np.int64)
     if F.min() < 0 or F.max() >= nv:
         raise ModelError(f"mesh file {label!r}: an MSH face names a vertex that does not exist")
     return V, F
@@ -293,3 +294,12 @@ def mesh_mass_properties(V: np.ndarray, F: np.ndarray, mode: str = "legacy",
     if ev[0] + ev[1] < ev[2] * (1 - 1e-6) - 1e-9:
         raise ModelError(f"mesh {label!r}: its principal moments {ev.tolist()} violate A + B >= C")
     return float(size), com, J
+
+
+def signed_volume(V: np.ndarray, F: np.ndarray) -> float:
+    r"""The volume enclosed by the triangles, :math:`\tfrac16 \sum_k a_k \cdot (b_k \times c_k)`:
+    negative when they are wound inside out, the enclosed volume when the surface is closed
+    and wound counter-clockwise seen from outside (whatever its convexity)."""
+    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    p = V.mean(axis=0)                  # any apex; the centre of the points keeps it well scaled
+    return float(np.einsum("ij,ij->i", a - p, np.cross(b - p, c - p)).sum() / 6)

@@ -38,7 +38,8 @@ import numpy as np
 
 from .._errors import ModelError
 from .._symbols import acceleration_symbol, velocity_symbol
-from ._urdf import MAX_DRAWN_TRIANGLES, ImportReport, add_joint, normal_to, read_mesh
+from ._mesh import INERTIA_MODES, hull_faces, load_mesh, mesh_mass_properties, signed_volume
+from ._urdf import MAX_DRAWN_TRIANGLES, ImportReport, add_joint, normal_to
 from ._xml import MAX_XML_BYTES, Element, floats, read_xml, where
 
 #: ``<include>`` nesting deeper than this is refused (a cycle is refused before that)
@@ -410,15 +411,58 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
             parts.append((gel, a, typ, fp + fR @ pos, fR @ R, size))
         return parts
 
+    def mesh_inertia(gel, a, body_name):
+        """``(mass, centroid, inertia about it)`` of a mesh geom in its frame, by MuJoCo's
+        ``<mesh inertia=...>`` mode (default ``legacy``), or None when massless."""
+        if a.get("shellinertia") in ("true", "1"):
+            raise ModelError(f"{where(source, gel)}: shellinertia on a mesh geom: give the mesh asset "
+                             "inertia='shell' (MuJoCo refuses it on the geom too)")
+        given = ctx.num(gel, a, "mass", 1)
+        density = ctx.num(gel, a, "density", 1, [1000.0])[0]
+        if (given is not None and given[0] == 0) or (given is None and density == 0):
+            return None
+        Vg, F, me, label = mesh_in_geom(gel, a)
+        mode = mesh_assets[a["mesh"]][2].get("inertia", "legacy")
+        if mode not in INERTIA_MODES:
+            raise ModelError(f"{where(source, me)}: inertia={mode!r} is one of {', '.join(INERTIA_MODES)}")
+        key = (a["mesh"], mode)
+        if key not in mesh_cache:
+            try:
+                mesh_cache[key] = mesh_mass_properties(Vg, F, mode, label)
+            except ModelError as exc:
+                raise ModelError(f"{where(source, gel)}: {exc} (the mass of body {body_name!r})") from None
+            vol_ = mesh_cache[key][0]
+            if mode == "legacy":
+                exact = signed_volume(Vg, F)
+                if exact < 0:
+                    notes.append(f"{_at(ctx.source, me)}: mesh {label!r} is wound inside out (signed volume "
+                                 f"{exact:.4g}); MuJoCo's legacy inertia takes absolute volumes, so the "
+                                 "solid's mass is used, as MuJoCo does")
+                elif abs(vol_ - exact) > 1e-6 * vol_:
+                    notes.append(f"{_at(ctx.source, me)}: mesh {label!r} is not convex: MuJoCo's legacy "
+                                 f"inertia (the default, reproduced here) counts volume {vol_:.6g} against "
+                                 f"the enclosed {exact:.6g}; inertia='exact' on the <mesh> gives the solid's")
+        vol, cg, J = mesh_cache[key]
+        gm = given[0] if given is not None else density * vol
+        return gm, cg, J * (gm / vol)
+
     def mass_from_geoms(parts, body_name):
         mass, cs, Is = 0.0, [], []
         for gel, a, typ, pos, R, size in parts:
             if typ in ("plane", "hfield"):
                 continue
             if typ == "mesh":
-                notes.append(f"{_at(ctx.source, gel)}: mesh geom of body {body_name!r}: its mass is "
-                             "not computed here; give the body an <inertial>")
+                got = mesh_inertia(gel, a, body_name)
+                if got is None:
+                    continue
+                gm, cg, Jg = got
+                mass += gm
+                cs.append((gm, pos + R @ cg))
+                Is.append((gm, pos + R @ cg, R @ Jg @ R.T))
                 continue
+            if a.get("mesh") is not None:
+                raise ModelError(f"{where(source, gel)}: a {typ} geom fitted to mesh {a.get('mesh')!r} "
+                                 "(MuJoCo's fitted primitives) is not read; give the body an <inertial>")
             got = _geom_inertia(ctx, gel, a, typ, size)
             if got is None:
                 continue
@@ -461,8 +505,9 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
             except (ModelError, IndexError):
                 notes.append(f"{_at(ctx.source, gel)}: geom of type {typ!r} not drawn")
 
-    # <asset><mesh>: name (default: the file's stem) -> (element, file, scale); files are
-    # looked up in <compiler meshdir> (or assetdir) beside the model file, as MuJoCo does
+    # <asset><mesh>: name (default: the file's stem) -> (element, file, its attributes);
+    # files are looked up in <compiler meshdir> (or assetdir) beside the model file, as
+    # MuJoCo does
     meshdir = ""
     for c in root.findall("compiler"):
         meshdir = c.get("meshdir", c.get("assetdir", meshdir))
@@ -472,36 +517,66 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
             fn = me.get("file")
             name = me.get("name") or (Path(fn).stem if fn else None)
             if name:
-                ma = ctx.attrs(me, None)
-                mesh_assets[name] = (me, fn, np.array(ctx.num(me, ma, "scale", 3, [1.0, 1.0, 1.0])))
+                mesh_assets[name] = (me, fn, ctx.attrs(me, None))
+    mesh_cache: dict = {}
+
+    def mesh_in_geom(gel, a):
+        """``(vertices in the geom's frame, faces, mesh element, label)`` of a mesh geom:
+        the file's (or inline) vertices moved by ``-refpos``, turned by ``refquat``'s
+        inverse and scaled, as MuJoCo places them before it moves the mesh to its
+        principal frame and the geom by the opposite offset. Raises ModelError."""
+        name = a.get("mesh", "")
+        if name not in mesh_assets:
+            raise ModelError(f"{where(source, gel)}: the mesh geom names no <asset><mesh> {name!r}")
+        if name in mesh_cache:
+            return mesh_cache[name]
+        me, fn, ma = mesh_assets[name]
+        if fn:
+            label = fn
+            V, F = load_mesh(Path(source).resolve().parent / meshdir / fn, label)
+        else:
+            label = name
+            vv = ctx.num(me, ma, "vertex", None)
+            if not vv or len(vv) % 3 or len(vv) < 12:
+                raise ModelError(f"{where(source, me)}: mesh {name!r} has no file and no vertex list of "
+                                 "at least four points (3 numbers each)")
+            # MuJoCo keeps vertices in single precision
+            V = np.array(vv, dtype=np.float32).astype(float).reshape(-1, 3)
+            ff = ctx.num(me, ma, "face", None)
+            if ff:
+                if len(ff) % 3 or any(f_ != int(f_) or not 0 <= f_ < len(V) for f_ in ff):
+                    raise ModelError(f"{where(source, me)}: mesh {name!r}: face is a list of vertex "
+                                     f"numbers 0..{len(V) - 1}, three a triangle")
+                F = np.array(ff, dtype=np.int64).reshape(-1, 3)
+            else:
+                F = hull_faces(V, name)       # MuJoCo: no faces -> the convex hull's
+        refpos = np.array(ctx.num(me, ma, "refpos", 3, [0.0, 0.0, 0.0]))
+        refq = ctx.num(me, ma, "refquat", 4, [1.0, 0.0, 0.0, 0.0])
+        if np.linalg.norm(refq) < 1e-12:
+            raise ModelError(f"{where(source, me)}: refquat is zero")
+        scale = np.array(ctx.num(me, ma, "scale", 3, [1.0, 1.0, 1.0]))
+        V = ((V - refpos) @ quat_matrix(refq)) * scale      # rows: R_ref^T (v - refpos), scaled
+        if np.prod(scale) < 0:
+            F = F[:, [0, 2, 1]]     # a mirroring scale turns the faces inside out: MuJoCo turns them back
+        mesh_cache[name] = (V, F, me, label)
+        return mesh_cache[name]
 
     def mesh_prims(D, gel, a, pos, R, b):
         """A mesh geom drawn as its triangles (its bounding box when it has more than
-        ``MAX_DRAWN_TRIANGLES``): the file's vertices, scaled, in the geom's frame. MuJoCo
-        moves a mesh to its inertial frame and the geom by the opposite offset, so the
-        file's coordinates in the geom's frame are where it draws the mesh too."""
-        name = a.get("mesh", "")
-        if name not in mesh_assets:
-            notes.append(f"{_at(ctx.source, gel)}: mesh geom names no <asset><mesh> {name!r}; not drawn")
+        ``MAX_DRAWN_TRIANGLES``) in the geom's frame (``mesh_in_geom``), where MuJoCo
+        draws it too."""
+        try:
+            Vg, F, me, label = mesh_in_geom(gel, a)
+        except ModelError as exc:
+            notes.append(f"{_at(ctx.source, gel)}: mesh geom not drawn ({exc})")
             return
-        me, fn, scale = mesh_assets[name]
-        if not fn:
-            notes.append(f"{_at(ctx.source, me)}: mesh {name!r} given by its vertices in the file (no "
-                         "file=...); not drawn")
+        V = pos + Vg @ R.T
+        if len(F) <= MAX_DRAWN_TRIANGLES:
+            prims.append(D.Mesh(b, V, F))
             return
-        file = Path(source).resolve().parent / meshdir / fn
-        got = read_mesh(file) if file.suffix.lower() in (".stl", ".obj") else None
-        if got is None or not np.all(np.isfinite(got[0])):
-            notes.append(f"{_at(ctx.source, gel)}: mesh {fn!r} not drawn (only STL and OBJ files found "
-                         "in the compiler's meshdir beside the file are read)")
-            return
-        V = pos + (got[0] * scale) @ R.T
-        if len(got[1]) <= MAX_DRAWN_TRIANGLES:
-            prims.append(D.Mesh(b, V, got[1]))
-            return
-        notes.append(f"{_at(ctx.source, gel)}: mesh {fn!r} drawn as its bounding box ({len(got[1])} "
+        notes.append(f"{_at(ctx.source, gel)}: mesh {label!r} drawn as its bounding box ({len(F)} "
                      f"triangles > {MAX_DRAWN_TRIANGLES})")
-        lo, hi = (got[0] * scale).min(axis=0), (got[0] * scale).max(axis=0)
+        lo, hi = Vg.min(axis=0), Vg.max(axis=0)
         corners = [pos + R @ np.array([(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]])
                    for i in (0, 1) for j in (0, 1) for k in (0, 1)]
         for f in ((0, 1, 3, 2), (4, 5, 7, 6), (0, 1, 5, 4), (2, 3, 7, 6), (0, 2, 6, 4), (1, 3, 7, 5)):

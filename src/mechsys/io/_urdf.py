@@ -30,7 +30,6 @@ link axes; links fixed to a body add theirs by the parallel-axis theorem.
 from __future__ import annotations
 
 import math
-import struct
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -511,53 +510,15 @@ MAX_DRAWN_TRIANGLES = 20000
 
 
 def read_mesh(path: Path) -> tuple[np.ndarray, np.ndarray] | None:
-    """``(vertices (k, 3), faces (f, 3) int)`` of an STL (binary or ASCII) or OBJ file
-    (polygons fanned into triangles, negative OBJ indices counted from the end), or None
-    when it cannot be read. Binary STL is told from ASCII by its size, ``84 + 50 n``."""
+    """``(vertices (k, 3), faces (f, 3) int)`` of an STL (binary or ASCII), OBJ or MSH file
+    for drawing, or None when it cannot be read (:func:`mechsys.io._mesh.load_mesh`, whose
+    errors are for the mass properties)."""
+    from ._mesh import load_mesh
+
     try:
-        data = path.read_bytes()
-    except OSError:
+        return load_mesh(path)
+    except ModelError:
         return None
-    suffix = path.suffix.lower()
-    try:
-        if suffix == ".stl":
-            if len(data) >= 84 and len(data) == 84 + 50 * struct.unpack("<I", data[80:84])[0]:
-                n = struct.unpack("<I", data[80:84])[0]
-                rec = np.frombuffer(data, dtype=np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)),
-                                                         ("a", "<u2")]), count=n, offset=84)
-                tri = rec["v"].reshape(-1, 3).astype(float)
-            else:
-                rows = [ln.split()[1:4] for ln in data.decode("ascii", "replace").splitlines()
-                        if ln.strip().startswith("vertex")]
-                tri = np.array(rows, dtype=float).reshape(-1, 3)
-                if len(tri) % 3:
-                    return None
-            if not len(tri):
-                return None
-            # shared corners once: the faces index the distinct vertices
-            verts, inv = np.unique(tri, axis=0, return_inverse=True)
-            return verts, inv.reshape(-1, 3).astype(np.int64)
-        if suffix == ".obj":
-            verts, faces = [], []
-            for ln in data.decode("ascii", "replace").splitlines():
-                if ln.startswith("v "):
-                    verts.append(ln.split()[1:4])
-                elif ln.startswith("f "):
-                    idx = [int(tok.split("/")[0]) for tok in ln.split()[1:]]
-                    faces.append(idx)
-            V = np.array(verts, dtype=float).reshape(-1, 3)
-            tris = []
-            for f in faces:
-                f = [i - 1 if i > 0 else len(V) + i for i in f]
-                if len(f) < 3 or min(f) < 0 or max(f) >= len(V):
-                    return None
-                tris += [(f[0], f[i], f[i + 1]) for i in range(1, len(f) - 1)]
-            if not len(V):
-                return None
-            return V, np.array(tris, dtype=np.int64).reshape(-1, 3)
-    except (ValueError, struct.error):
-        return None
-    return None
 
 
 def _mesh_bounds(path: Path) -> np.ndarray | None:
