@@ -533,7 +533,10 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
         me, fn, ma = mesh_assets[name]
         if fn:
             label = fn
-            V, F = load_mesh(Path(source).resolve().parent / meshdir / fn, label)
+            try:
+                V, F = load_mesh(Path(source).resolve().parent / meshdir / fn, label)
+            except ModelError as exc:
+                raise ModelError(f"{where(source, me)}: {exc}") from None
         else:
             label = name
             vv = ctx.num(me, ma, "vertex", None)
