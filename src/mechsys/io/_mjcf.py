@@ -19,8 +19,8 @@ a ball joint adding ``Spherical3`` at its point. Orientations: ``quat`` (w x y z
 ``xyaxes``, ``zaxis``; angles in degrees unless ``<compiler angle="radian">``.
 ``<inertial pos quat mass diaginertia | fullinertia>`` gives the centroid and the inertia
 :math:`R \operatorname{diag}(I) R^T` (``fullinertia="Ixx Iyy Izz Ixy Ixz Iyz"``); without it the body's mass
-comes from its geoms (sphere, box, cylinder, capsule, ellipsoid; ``mass`` or ``density``,
-default 1000) as MuJoCo's ``inertiafromgeom="auto"`` does. Equalities: ``connect`` ->
+comes from its geoms (sphere, box, cylinder, capsule, ellipsoid, mesh; ``mass`` or
+``density``, default 1000) as MuJoCo's ``inertiafromgeom="auto"`` does. Equalities: ``connect`` ->
 ``Spherical3``, ``weld`` -> ``Spherical3`` + ``RotationLock3``, ``joint`` -> ``Constraint(q1
 - poly(q2))`` (hard constraints here; MuJoCo's are soft, ``solref``/``solimp`` reported). A
 weld between bodies locks their relative rotation at ``qpos0``; a weld between sites locks
@@ -340,9 +340,12 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
     closed-loop models work). ``gravity``: a number overrides the file's magnitude (along
     the file's direction; default ``<option gravity>`` or 9.81 down ``z``).
     Geoms are kept for drawing: spheres, cylinders, capsules, boxes, ellipsoids, and meshes
-    as the triangles of their STL or OBJ files (``<asset><mesh file scale>`` under the
-    ``<compiler meshdir>``; a mesh's mass properties are not computed: give its body an
-    ``<inertial>``). ``joint_damping`` adds ``damping`` as ``-d q_dot`` loads,
+    as the triangles of their STL, OBJ or MSH files (``<asset><mesh file scale refpos
+    refquat>`` under the ``<compiler meshdir>``). A mesh geom's mass, centroid and inertia
+    are those MuJoCo computes with the mesh's ``inertia`` mode (default ``legacy``; see
+    :mod:`mechsys.io._mesh`, decision 0072); a mesh file that is missing, malformed, too
+    large or encloses no volume is refused naming the file when a body's mass needs it.
+    ``joint_damping`` adds ``damping`` as ``-d q_dot`` loads,
     ``joint_springs`` the hinge and slide springs ``-k (q - springref)`` (MuJoCo's passive
     forces), ``armature`` the joints' armature ``a`` as the load :math:`-a \ddot q` (MuJoCo
     adds ``a`` to the mass matrix's diagonal; so do mechsys's dynamics with it); ranges,
