@@ -736,6 +736,20 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
             if rng is not None:
                 limits[jname] = tuple(ctx.angle(v) if typ == "hinge" else v for v in rng) + (None, None)
             k_ = ctx.num(j, ja, "stiffness", 1, [0.0])[0]
+            sd = ctx.num(j, ja, "springdamper", 2, [0.0, 0.0])
+            auto = sd[0] > 0 and sd[1] > 0
+            if any(sd) and not auto:
+                raise ModelError(f"{where(source, j)}: springdamper={sd} needs two positive numbers "
+                                 "(time constant, damping ratio), as in MuJoCo")
+            if auto:
+                # MuJoCo replaces the joint's stiffness and damping by values it derives from
+                # the joint's inertia in the whole model at qpos0 (its dof_invweight0), which
+                # the importer does not compute: neither is added, and neither is the
+                # stiffness or damping written (MuJoCo ignores them too)
+                notes.append(f"{_at(ctx.source, j)}: joint {jname!r} springdamper={sd} (MuJoCo derives the "
+                             "stiffness and damping from the joint's inertia at qpos0; not mapped: no "
+                             "spring or damping on this joint)")
+                k_ = 0.0
             if k_:
                 sref = ctx.num(j, ja, "springref", 1, [0.0])[0]
                 sref = ctx.angle(sref) if typ == "hinge" else sref
@@ -761,7 +775,7 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
                 notes.append(f"{_at(ctx.source, j)}: joint {jname!r} frictionloss={v[0]} (no counterpart; "
                              "ignored)")
             d = ctx.num(j, ja, "damping", 1)
-            if d is not None and d[0]:
+            if d is not None and d[0] and not auto:
                 damping[jname] = d[0]
                 if joint_damping:
                     m.add_load(L.Load(sp.Symbol(jname), -d[0] * velocity_symbol(jname)),
