@@ -112,19 +112,36 @@ def zero_unmapped(mm, f):
 
 def exact_principal_axes(m, mm):
     """Give MuJoCo's bodies the principal axes and moments of mechsys's inertia tensors
-    (NumPy's ``eigh``) where a MuJoCo body is a mechsys body on its own: MuJoCo's compiler
-    stops its Jacobi rotations at a cosine of 1 - 1e-12, so its axes of a mesh's inertia
-    carry up to ~1e-6 rad of that tolerance (decision 0072)."""
+    (NumPy's ``eigh``): MuJoCo's compiler stops its Jacobi rotations at a cosine of
+    1 - 1e-12, so its axes of a mesh's inertia (and of a body's) carry up to ~1e-6 rad of
+    that tolerance (decision 0072). Where mechsys merged several MuJoCo bodies into one, the
+    owner (the MuJoCo body whose frame is the mechsys body's) takes the rest of the merged
+    tensor once the others' are taken off (only the rigid group's total matters)."""
     fr = m.import_report.frames
     owners: dict = {}
     for i in range(1, mm.nbody):
         owners.setdefault(fr[mm.body(i).name][0], []).append(i)
     for mb, ids in owners.items():
-        if mb == "ground" or len(ids) != 1 or mm.body_mass[ids[0]] == 0:
+        own = [i for i in ids if not fr[mm.body(i).name][1].any()
+               and np.allclose(fr[mm.body(i).name][2], np.eye(3))]
+        if mb == "ground" or len(own) != 1 or mm.body_mass[own[0]] == 0:
             continue
-        i = ids[0]
-        _, p, R = fr[mm.body(i).name]
-        I = R.T @ np.array(m.body(mb).inertia, float) @ R
+        i = own[0]
+        b = m.body(mb)
+        C = np.array(b.centroid, float).ravel()
+        J = np.array(b.inertia, float)
+        for k in ids:                       # the others' share about the group's centroid
+            if k == i:
+                continue
+            _, p, R = fr[mm.body(k).name]
+            Rk = np.zeros(9)
+            mujoco.mju_quat2Mat(Rk, mm.body_iquat[k])
+            Rk = R @ Rk.reshape(3, 3)
+            dk = p + R @ mm.body_ipos[k] - C
+            J = J - Rk @ np.diag(mm.body_inertia[k]) @ Rk.T
+            J = J - mm.body_mass[k] * (dk @ dk * np.eye(3) - np.outer(dk, dk))
+        d0 = mm.body_ipos[i] - C
+        I = J - mm.body_mass[i] * (d0 @ d0 * np.eye(3) - np.outer(d0, d0))
         ev, V = np.linalg.eigh(I)
         # in MuJoCo's order and sense of its axes (a body whose axes are the body frame's
         # stays so: MuJoCo's "simple body" shortcuts rely on it)
@@ -158,7 +175,8 @@ def free_base(points=3, exact_axes=False):
         d = mujoco.MjData(mm)
         free = [int(j) for j in np.nonzero(mm.jnt_type == int(mujoco.mjtJoint.mjJNT_FREE))[0]]
         other = [j for j in range(mm.njnt) if j not in free]
-        assert all(mm.jnt_type[j] in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)) for j in other)
+        hs = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+        assert all(mm.jnt_type[j] in hs for j in other)
         jn = [mm.joint(j).name for j in other]
         idx = [lay.q_names.index(n) for n in jn]              # mechsys's index of each hinge
         act = [i for i in range(s.n) if not any(i in range(*sl.indices(s.n))
@@ -192,7 +210,8 @@ def free_base(points=3, exact_axes=False):
                 qd[sl] = np.concatenate((d.qvel[v:v + 3], de))
                 qdd[sl] = np.concatenate((d.qacc[v:v + 3], dde))
             for j, i in zip(other, idx):
-                q[i], qd[i], qdd[i] = d.qpos[mm.jnt_qposadr[j]], d.qvel[mm.jnt_dofadr[j]], d.qacc[mm.jnt_dofadr[j]]
+                a, v = mm.jnt_qposadr[j], mm.jnt_dofadr[j]
+                q[i], qd[i], qdd[i] = d.qpos[a], d.qvel[v], d.qacc[v]
             tau_m = np.zeros(len(act))
             for j, i in zip(other, idx):
                 tau_m[act.index(i)] = d.qfrc_applied[mm.jnt_dofadr[j]]
@@ -235,7 +254,8 @@ def merged_bodies(m, mm):
         Ri = np.zeros(9)
         mujoco.mju_quat2Mat(Ri, b.iquat)
         Ri = Ri.reshape(3, 3)
-        out.setdefault(mb, []).append((b.mass[0], p + R @ b.ipos, R @ Ri @ np.diag(b.inertia) @ Ri.T @ R.T, i))
+        RR = R @ Ri
+        out.setdefault(mb, []).append((b.mass[0], p + R @ b.ipos, RR @ np.diag(b.inertia) @ RR.T, i))
     return out
 
 
@@ -261,7 +281,8 @@ def meshes():
                 continue
             n += 1
             C = sum(x[0] * x[1] for x in ps) / M
-            J = sum(x[2] + x[0] * ((x[1] - C) @ (x[1] - C) * np.eye(3) - np.outer(x[1] - C, x[1] - C)) for x in ps)
+            J = sum(x[2] + x[0] * ((x[1] - C) @ (x[1] - C) * np.eye(3) - np.outer(x[1] - C, x[1] - C))
+                    for x in ps)
             b = m.body(mb)
             I = np.array(b.inertia, float)
             err = [abs(float(b.mass) - M) / M,

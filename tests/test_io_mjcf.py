@@ -459,3 +459,42 @@ def test_dm_control_suite_files_with_includes_against_mujoco(name, tmp_path, mon
     assert "common/visual.xml, line 2: <visual>" in str(m.import_report)
     mm, md = _reference(path)
     _compare(m, mm, md, points=1)
+
+
+SPRINGDAMPER = """<mujoco>
+  <default><joint axis="0 1 0" stiffness="0.5" damping="0.2" springref="10"/></default>
+  <worldbody>
+    <body name="upper" pos="0 0 1">
+      <joint name="shoulder" springdamper="0.1 0.7"/>
+      <geom type="capsule" fromto="0 0 0 0.4 0 0" size="0.03"/>
+      <body name="fore" pos="0.4 0 0">
+        <joint name="elbow"/>
+        <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.02"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def test_springdamper_is_reported_not_replaced_by_class_values(tmp_path):
+    """A joint's ``springdamper`` makes MuJoCo derive its stiffness and damping from the
+    joint's inertia at qpos0, overriding the class's: the importer reports it and adds
+    neither (before, the class's stiffness and damping were added, silently wrong, as the
+    dm_control dog showed); the other joint keeps its spring and damper. Against
+    ``mj_inverse`` with the springdamper joint's derived values zeroed (1e-9)."""
+    path = _write(tmp_path, SPRINGDAMPER)
+    m = ms.from_mjcf(path, joint_springs=True, joint_damping=True)
+    assert any("'shoulder' springdamper=[0.1, 0.7]" in n for n in m.import_report.not_mapped)
+    assert "shoulder" not in m.import_report.damping and m.import_report.damping["elbow"] == 0.2
+    mm = mujoco.MjModel.from_xml_path(str(path))
+    assert mm.jnt_stiffness[0] != 0.5 and mm.dof_damping[0] != 0.2      # MuJoCo's own values
+    mm.jnt_stiffness[0] = mm.dof_damping[0] = 0.0
+    md = mujoco.MjData(mm)
+    q, qd, qdd = RNG.normal(size=(3, 2))
+    md.qpos[:], md.qvel[:], md.qacc[:] = q, qd, qdd
+    mujoco.mj_inverse(mm, md)
+    np.testing.assert_allclose(m.inverse_dynamics(q, qd, qdd).values, md.qfrc_inverse, rtol=0,
+                               atol=1e-9 * np.abs(md.qfrc_inverse).max())
+    with pytest.raises(ms.ModelError, match="line 5.*springdamper=.*two positive numbers"):
+        ms.from_mjcf(_write(tmp_path, SPRINGDAMPER.replace("0.1 0.7", "0 0.7"), "bad.xml"))
