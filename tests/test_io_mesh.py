@@ -256,3 +256,25 @@ def test_size_limit_and_inside_out_legacy(tmp_path, monkeypatch):
         notes.append(" ".join(m.import_report.not_mapped))
     assert masses[0] == pytest.approx(masses[1], rel=1e-14)
     assert "'turned.stl' is wound inside out" in notes[0] and "inside out" not in notes[1]
+
+
+def test_inline_vertices_and_msh_without_faces_take_the_hull(tmp_path):
+    """A ``<mesh vertex=...>`` without faces and an MSH file without faces are their convex
+    hull, as in MuJoCo: mass and centroid against MuJoCo's compiled bodies (1e-12)."""
+    mujoco = pytest.importorskip("mujoco")
+    V, _ = ell()
+    write_msh(tmp_path / "pts.msh", V, np.zeros((0, 3), int))
+    verts = " ".join(f"{x!r}" for x in V.ravel().tolist())
+    path = tmp_path / "hull.xml"
+    path.write_text(f"""<mujoco><asset><mesh name="pts" vertex="{verts}"/><mesh file="pts.msh"
+      scale="1 2 1"/></asset><worldbody>
+      <body name="a"><joint name="ja"/><geom type="mesh" mesh="pts" density="500" euler="10 20 30"/></body>
+      <body name="b" pos="1 0 0"><joint name="jb"/><geom type="mesh" mesh="pts.msh" pos="0 0.1 0"/></body>
+      </worldbody></mujoco>""".replace('mesh="pts.msh"', 'mesh="pts_1"').replace(
+        'file="pts.msh"', 'name="pts_1" file="pts.msh"'))
+    m = ms.from_mjcf(path, geometry=False)
+    mm = mujoco.MjModel.from_xml_path(str(path))
+    for name in ("a", "b"):
+        b = mm.body(name)
+        assert float(m.body(name).mass) == pytest.approx(b.mass[0], rel=1e-12)
+        np.testing.assert_allclose(np.array(m.body(name).centroid, float).ravel(), b.ipos, atol=1e-13)
