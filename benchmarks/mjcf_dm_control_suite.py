@@ -3,7 +3,8 @@
 1. The suite's fixed-base files that use ``<include>``: ``ms.from_mjcf`` against
    ``mj_inverse`` at a random state (constraints, damping, armature, springs and fluid
    forces off in MuJoCo, not mapped in mechsys), relative to the largest torque.
-2. The suite's free-base files (humanoid, humanoid_CMU, quadruped, dog, fish): inverse
+2. The suite's free-base files (humanoid, humanoid_CMU, quadruped, dog, fish) and the
+   locomotion walkers ``dog_v2`` and ``fruitfly_v2`` (mesh bones): inverse
    dynamics against ``mj_inverse`` and forward dynamics against ``mj_forward`` at random
    states, with what mechsys maps switched on on both sides (joint ``armature``,
    ``damping``, ``stiffness``/``springref``: ``from_mjcf(armature=True, joint_damping=True,
@@ -161,10 +162,11 @@ def exact_principal_axes(m, mm):
 def free_base(points=3, exact_axes=False):
     rng = np.random.default_rng(72)
     print("part 2: free-base suite files; relative to the largest |qacc| (forward) and |qfrc| (inverse)")
-    print(f"  {'file':18s} {'nq':>3s} {'nv':>3s} {'free':>4s} {'hinge':>5s}  {'forward':>8s} {'inverse':>8s} "
+    print(f"  {'file':22s} {'nq':>3s} {'nv':>3s} {'free':>4s} {'hinge':>5s}  {'forward':>8s} {'inverse':>8s} "
           f"{'base rows':>9s}  import+compile, {points} points")
-    for name in ("humanoid", "humanoid_CMU", "quadruped", "dog", "fish"):
-        f = suite / f"{name}.xml"
+    files = [suite / f"{name}.xml" for name in ("humanoid", "humanoid_CMU", "quadruped", "dog", "fish")]
+    files += [dm / "locomotion/walkers/assets" / n for n in ("dog_v2/dog.xml", "fruitfly_v2/fruitfly.xml")]
+    for f in files:
         t0 = time.process_time()
         m = ms.from_mjcf(f, armature=True, joint_damping=True, joint_springs=True, geometry=False)
         s = m.compile()
@@ -240,7 +242,8 @@ def free_base(points=3, exact_axes=False):
             base = max(base, max(np.abs(ref[mm.jnt_dofadr[j]:mm.jnt_dofadr[j] + 6]).max() for j in free)
                        / np.abs(ref).max())
         cpu = time.process_time() - t0
-        print(f"  {f.name:18s} {mm.nq:3d} {mm.nv:3d} {len(free):4d} {len(other):5d}  {fwd:8.1e} {inv:8.1e} "
+        label = f.name if f.parent == suite else f"{f.parent.name}/{f.name}"
+        print(f"  {label:22s} {mm.nq:3d} {mm.nv:3d} {len(free):4d} {len(other):5d}  {fwd:8.1e} {inv:8.1e} "
               f"{base:9.1e}  {cpu:.0f} s CPU (inverse worst at {worst})")
 
 
