@@ -177,6 +177,23 @@ class _Ctx:
 
 
 # -- geom mass properties (MuJoCo's inertiafromgeom) ---------------------------------------------
+def _geom_groups(groups) -> set:
+    """``geom_groups`` of :func:`from_mjcf` as the set of group attributes drawn ("0" to "5")."""
+    from .._errors import OptionError
+
+    try:
+        if isinstance(groups, (str, bytes)):
+            raise TypeError
+        got = {int(g) for g in groups}
+        ok = all(float(g) == int(g) for g in groups)
+    except (TypeError, ValueError):
+        got, ok = set(), False
+    if not ok or not got <= set(range(6)):
+        raise OptionError(f"from_mjcf: geom_groups={groups!r} is a collection of MuJoCo geom groups, "
+                          "whole numbers 0 to 5 (e.g. (0, 1, 2), what MuJoCo's viewer shows)")
+    return {str(g) for g in got}
+
+
 def _geom_frame(ctx, el, a):
     """``(pos, R, size list)`` of a geom; ``fromto`` for capsule/cylinder/box/ellipsoid."""
     size = ctx.num(el, a, "size", None, [])
@@ -325,7 +342,7 @@ def _expand_includes(root: Element, source: str) -> None:
 
 def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs: bool = False,
               geometry: bool = True, armature: bool = False, coordinates: str = "generalized",
-              backend: str | None = None):
+              backend: str | None = None, geom_groups=(0, 1, 2)):
     r"""A :class:`~mechsys.Model3D` of the MJCF (MuJoCo) model ``path``.
 
     Hinge and slide joints become generalized-coordinate joints named after them
@@ -345,7 +362,11 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
     are those MuJoCo computes with the mesh's ``inertia`` mode (default ``legacy``; see
     :mod:`mechsys.io._mesh`, decision 0072); a mesh file that is missing, malformed, too
     large or encloses no volume is refused naming the file when a body's mass needs it.
-    ``joint_damping`` adds ``damping`` as ``-d q_dot`` loads,
+    ``geom_groups``: the geom groups drawn (MuJoCo's ``group``, 0 to 5); the default
+    ``(0, 1, 2)`` shows what MuJoCo's viewer shows by default (the Menagerie's files put
+    their detailed visual meshes in group 2 and their coarse collision meshes in group 3:
+    ``geom_groups=(3,)`` draws the latter); the number of geoms left out is in the import
+    report. ``joint_damping`` adds ``damping`` as ``-d q_dot`` loads,
     ``joint_springs`` the hinge and slide springs ``-k (q - springref)`` (MuJoCo's passive
     forces), ``armature`` the joints' armature ``a`` as the load :math:`-a \ddot q` (MuJoCo
     adds ``a`` to the mass matrix's diagonal; so do mechsys's dynamics with it); ranges,
@@ -362,6 +383,7 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
 
     if coordinates not in ("generalized", "absolute"):
         raise OptionError(f"from_mjcf: coordinates={coordinates!r} is 'generalized' or 'absolute'")
+    groups = _geom_groups(geom_groups)
     absolute = coordinates == "absolute"
     import sympy as sp
 
@@ -402,6 +424,7 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
     joints_rep: dict = {}
     limits, damping, friction = {}, {}, {}
     prims: list = []
+    hidden: dict = {}           # geom group -> geoms not drawn (not in geom_groups)
     count = [0]
 
     def add_geoms(el, body_name, cls):
@@ -488,6 +511,10 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
         from .. import draw as D
 
         for gel, _a, typ, pos, R, size in parts:
+            group = str(int(ctx.num(gel, _a, "group", 1, [0])[0]))
+            if group not in groups:
+                hidden[group] = hidden.get(group, 0) + 1
+                continue
             if typ == "mesh":
                 mesh_prims(D, gel, _a, pos, R, b)
                 continue
@@ -829,6 +856,10 @@ def from_mjcf(path, *, gravity=None, joint_damping: bool = False, joint_springs:
     if gnorm:
         m.add_load(L.Gravity(tuple(float(v) for v in g_vec) if np.linalg.norm(g_vec) else (0, 0, -1), gnorm),
                    name="gravity")
+    if hidden:
+        notes.append("geoms not drawn: " + ", ".join(f"{hidden[g]} of group {g}" for g in sorted(hidden))
+                     + f" (geom_groups={tuple(int(g) for g in sorted(groups))}; MuJoCo's viewer also "
+                     "hides groups 3 to 5 by default)")
     if prims:
         m.add_graphics(*prims)
     frames = {n: (b.name, p.copy(), R.copy()) for n, (b, p, R) in frame_of.items()}
