@@ -54,6 +54,22 @@ def cart_and_wheel(added_mass=0.0, damping=None, friction=True, ecc=0.0, th0=0.0
     return m, cart, wheel, roll
 
 
+def scaled_cart_and_wheel(k):
+    """:func:`cart_and_wheel` written in a unit of length ``1/k`` m (``k = 1000``: mm): lengths
+    times ``k``, inertias times ``k^2``, gravity times ``k``."""
+    m = ms.Model2D()
+    c0 = (S0 * TU + RAD * NU) * k
+    cart = m.add_body("cart", guess=(tuple(c0), AL), mass=MC, inertia=0.1 * k * k)
+    wheel = m.add_body("wheel", guess=(tuple(c0), 0.0), mass=MW, inertia=IW * k * k)
+    m.add(ms.Translate2(cart.axis((0, 0), (1, 0)), m.ground.axis(tuple(RAD * k * NU), tuple(TU))),
+          name="slide")
+    m.add(ms.Revolute2(wheel.point(0), cart.point(0)), name="pin")
+    m.add(ms.RollingCircle1(wheel.point(0), RAD * k, m.ground.axis((0, 0), tuple(TU))), name="roll")
+    m.add_load(ms.Gravity((0, -1), G * k))
+    m.add_load(ms.JointFriction("pin", mu=MUB, radius=RB * k, v_eps=1e-9))
+    return m
+
+
 def closed_form(added_mass=0.0):
     """``(a, |R|, F_c)``: the acceleration along the slope, the pin's reaction and the
     slope's tangential force on the wheel (along ``TU``)."""
@@ -168,3 +184,19 @@ def test_what_stays_refused_is_named():
     m.add_load(ms.TimeSwitch(1.0, ms.Force(cart.point(0), (1, 0), 1.0), 2.0))
     with pytest.raises(ms.ModelError, match="roll.*switches"):
         m.free()
+
+
+def test_the_same_motion_in_millimetres():
+    """The wheel with bearing friction, written in metres and in millimetres: the same motion
+    (lengths times 1000), the same rolling multiplier (a force: times 1000) and the holonomic
+    multipliers in their own units (forces times 1000, the slide's moment times 10^6), to
+    rounding; a result that depended on the unit of length would be a silent error."""
+    t = np.linspace(0, 0.5, 6)
+    m_, mm = (scaled_cart_and_wheel(k).free().simulate(t, initial_condition={"wheel.th_d": W0})
+              for k in (1.0, 1000.0))
+    unit = np.array([1000.0, 1000.0, 1.0] * 2)
+    for a, b in ((m_.q, mm.q), (m_.qd, mm.qd), (m_.qdd, mm.qdd)):
+        assert np.abs(b / unit - a).max() <= 1e-12 * np.abs(a).max()
+    assert np.abs(mm.extra["mu"] / 1000 - m_.extra["mu"]).max() <= 1e-12 * np.abs(m_.extra["mu"]).max()
+    lam_unit = np.array([1e3, 1e6, 1e3, 1e3, 1e3])        # slide: a force and a moment; pin: forces
+    assert np.abs(mm.lam / lam_unit - m_.lam).max() <= 1e-12 * np.abs(m_.lam).max()

@@ -312,3 +312,30 @@ def test_linearize_in_the_stage_its_tests_choose():
     lam = np.sort(on.eigenvalues.real)
     assert lam[0] == pytest.approx(-MASS * OFFSET * u / J, rel=1e-12)
     assert np.abs(lam[1:]).max() < 1e-12 and np.abs(on.eigenvalues.imag).max() < 1e-12
+
+
+def test_touch_down_the_same_in_millimetres():
+    """The blade's touch-down at a time switch written in metres and in millimetres (lengths
+    times 1000, the inertia times 10^6): the same motion, the same event, and the blade's
+    multiplier (a force) times 1000, to rounding."""
+
+    def run(k):
+        m = ms.Model2D()
+        b = m.add_body("sleigh", points={"P": (-OFFSET * k, 0.0)},
+                       guess=((START[0][0] * k, START[0][1] * k), START[1]), mass=MASS,
+                       inertia=INERTIA * k * k)
+        v = m.velocity(b.point("P"))
+        m.add(ms.TimeSwitch(_blade(b, v), 1.0, _blade(b, v)), name="edge")
+        ic = {"sleigh.x_d": 0.5 * k, "sleigh.y_d": 0.8 * k, "sleigh.th_d": 1.0}
+        return m.free(drop=[("edge", 1)]).simulate(np.linspace(0, 2.5, 11), initial_condition=ic,
+                                                   at_switch="project")
+
+    a, b = run(1.0), run(1000.0)
+    unit = np.array([1000.0, 1000.0, 1.0])
+    assert np.abs(b.q / unit - a.q).max() <= 1e-12 * np.abs(a.q).max()
+    assert np.abs(b.qd / unit - a.qd).max() <= 1e-12 * np.abs(a.qd).max()
+    assert [e["t"] for e in a.extra["events"]] == [e["t"] for e in b.extra["events"]]
+    mu_a, mu_b = a.extra["mu"], b.extra["mu"]
+    assert np.array_equal(np.isnan(mu_a), np.isnan(mu_b))
+    ok = ~np.isnan(mu_a)
+    assert np.abs(mu_b[ok] / 1000 - mu_a[ok]).max() <= 1e-12 * np.abs(mu_a[ok]).max()

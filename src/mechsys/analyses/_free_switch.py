@@ -224,7 +224,8 @@ class _Events:
                      for v in self.f(np.asarray(t, dtype=float), *np.asarray(Y).T, *p)]
         except (TypeError, ValueError):      # a side that does not evaluate on arrays
             return np.array([self(t[k], Y[k], p) for k in range(K)]).reshape(K, -1)
-        return _signs(np.stack(sides, axis=1).reshape(K, -1, 2))
+        # (the number of relations spelled out: with no states, K = 0, -1 could not be inferred)
+        return _signs(np.stack(sides, axis=1).reshape(K, len(sides) // 2, 2))
 
 
 def _signs(v: np.ndarray) -> np.ndarray:
