@@ -202,9 +202,11 @@ def _best_peer(rows, problem, tol, packages, gap=None):
 
 
 def previous(path: Path) -> tuple[str, dict]:
-    """The mechsys column of the block the page holds now: ``(its date, {(problem, target):
-    CPU seconds})``, to be shown beside the new figures ("before" is whatever was last
-    written, so a change's effect reads off one table)."""
+    """The mechsys column of the block the page holds now and its ratio to the best peer:
+    ``(its date, {(problem, target): (CPU seconds, ratio)})``, to be shown beside the new
+    figures ("before" is whatever was last written, so a change's effect reads off one
+    table). The ratio is the load-robust comparison: the rounds interleave the packages, so
+    a busier machine slows them alike, while the CPU times themselves move with the load."""
     if not path.exists():
         return "", {}
     text = path.read_text()
@@ -212,21 +214,27 @@ def previous(path: Path) -> tuple[str, dict]:
         return "", {}
     block = text.split(BEGIN, 1)[1].split(END, 1)[0]
     date = re.search(r"Measured on: (\d{4}-\d{2}-\d{2})", block)
-    old = {}
+    old: dict = {}
+    at = None                           # the column of the ratio to the best peer
     for line in block.splitlines():
+        if line.startswith("| problem | target |"):
+            at = [c.strip() for c in line.strip().strip("|").split("|")].index("mechsys / best peer")
         cells = [c.strip() for c in line.strip().strip("|").split("|")]
         if len(cells) < 4 or cells[0] in ("problem", "---"):
             continue
         got = re.match(r"([\d.]+) (ms|s) ", cells[2] + " ")
+        ratio = re.fullmatch(r"[\d.]+", cells[at]) if at is not None and at < len(cells) else None
         if got:
-            old[(cells[0], cells[1])] = float(got.group(1)) * (1e-3 if got.group(2) == "ms" else 1.0)
+            old[(cells[0], cells[1])] = (float(got.group(1)) * (1e-3 if got.group(2) == "ms" else 1.0),
+                                         float(ratio.group(0)) if ratio else None)
     return (date.group(1) if date else ""), old
 
 
 def page(rows, sweep, builds, sizes, notes, command, machine, before=("", {})) -> str:
     peers = sorted({r["package"] for r in rows} - {"mechsys"})
     when, old = before
-    extra = f" | mechsys before ({when}) | after / before" if old else ""
+    extra = (f" | mechsys before ({when}) | after / before | mechsys / best peer before"
+             if old else "")
     head = "| problem | target | mechsys | " + " | ".join(peers) + " | mechsys / best peer" + extra + " |"
     lines = [BEGIN, "## Side by side with the peers", "",
              f"Written by `{command}` (see the script's docstring for the method); rerun it rather "
@@ -237,7 +245,7 @@ def page(rows, sweep, builds, sizes, notes, command, machine, before=("", {})) -
              "Repetitions on this shared machine spread 5–20 %: treat ratios within 1.3 as equal.",
              ""]
     lines += [f"* {n}" for n in notes]
-    lines += ["", head, "|" + " --- |" * (4 + len(peers) + (2 if old else 0))]
+    lines += ["", head, "|" + " --- |" * (4 + len(peers) + (3 if old else 0))]
     problems = [("A", "double pendulum 10 s")] + [(f"B{n}", f"{n}-link chain 2 s") for n in sizes] + [
         ("C", "four-bar 5 s")]
     present = {r["problem"] for r in rows}
@@ -253,9 +261,10 @@ def page(rows, sweep, builds, sizes, notes, command, machine, before=("", {})) -
                    + " | ".join(_cell(t, key == "C") for t in theirs)
                    + f" | {_ratio(ours, _best_peer(rows, key, tol, peers))} |")
             if old:
-                was = old.get((name, target))
+                was, was_ratio = old.get((name, target), (None, None))
                 row += (" – | – |" if was is None else f" {_fmt_time(was)} | "
                         + ("–" if ours is None else f"{ours['cpu'] / was:.2f}") + " |")
+                row += " – |" if was_ratio is None else f" {was_ratio:.2f} |"
             lines.append(row)
     chain = [(n, cheapest(rows, f"B{n}", "mechsys", 1e-6)) for n in sizes]
     chain = [(n, r) for n, r in chain if r is not None]
