@@ -29,6 +29,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse  # noqa: E402
 import json  # noqa: E402
+import re  # noqa: E402
 import statistics  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
@@ -174,6 +175,8 @@ def build_rows(sizes) -> list[dict]:
 # the page
 # ---------------------------------------------------------------------------------------
 def _fmt_time(s):
+    if s < 0.0095:
+        return f"{s * 1e3:.1f} ms"
     return f"{s * 1e3:.0f} ms" if s < 10 else f"{s:.1f} s"
 
 
@@ -198,9 +201,41 @@ def _best_peer(rows, problem, tol, packages, gap=None):
     return min(found, key=lambda r: r["cpu"]) if found else None
 
 
-def page(rows, sweep, builds, sizes, notes, command, machine) -> str:
+def previous(path: Path) -> tuple[str, dict]:
+    """The mechsys column of the block the page holds now and its ratio to the best peer:
+    ``(its date, {(problem, target): (CPU seconds, ratio)})``, to be shown beside the new
+    figures ("before" is whatever was last written, so a change's effect reads off one
+    table). The ratio is the load-robust comparison: the rounds interleave the packages, so
+    a busier machine slows them alike, while the CPU times themselves move with the load."""
+    if not path.exists():
+        return "", {}
+    text = path.read_text()
+    if BEGIN not in text or END not in text:
+        return "", {}
+    block = text.split(BEGIN, 1)[1].split(END, 1)[0]
+    date = re.search(r"Measured on: (\d{4}-\d{2}-\d{2})", block)
+    old: dict = {}
+    at = None                           # the column of the ratio to the best peer
+    for line in block.splitlines():
+        if line.startswith("| problem | target |"):
+            at = [c.strip() for c in line.strip().strip("|").split("|")].index("mechsys / best peer")
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) < 4 or cells[0] in ("problem", "---"):
+            continue
+        got = re.match(r"([\d.]+) (ms|s) ", cells[2] + " ")
+        ratio = re.fullmatch(r"[\d.]+", cells[at]) if at is not None and at < len(cells) else None
+        if got:
+            old[(cells[0], cells[1])] = (float(got.group(1)) * (1e-3 if got.group(2) == "ms" else 1.0),
+                                         float(ratio.group(0)) if ratio else None)
+    return (date.group(1) if date else ""), old
+
+
+def page(rows, sweep, builds, sizes, notes, command, machine, before=("", {})) -> str:
     peers = sorted({r["package"] for r in rows} - {"mechsys"})
-    head = "| problem | target | mechsys | " + " | ".join(peers) + " | mechsys / best peer |"
+    when, old = before
+    extra = (f" | mechsys before ({when}) | after / before | mechsys / best peer before"
+             if old else "")
+    head = "| problem | target | mechsys | " + " | ".join(peers) + " | mechsys / best peer" + extra + " |"
     lines = [BEGIN, "## Side by side with the peers", "",
              f"Written by `{command}` (see the script's docstring for the method); rerun it rather "
              "than editing. Measured on: " + machine + ".", "",
@@ -210,7 +245,7 @@ def page(rows, sweep, builds, sizes, notes, command, machine) -> str:
              "Repetitions on this shared machine spread 5–20 %: treat ratios within 1.3 as equal.",
              ""]
     lines += [f"* {n}" for n in notes]
-    lines += ["", head, "|" + " --- |" * (4 + len(peers))]
+    lines += ["", head, "|" + " --- |" * (4 + len(peers) + (3 if old else 0))]
     problems = [("A", "double pendulum 10 s")] + [(f"B{n}", f"{n}-link chain 2 s") for n in sizes] + [
         ("C", "four-bar 5 s")]
     present = {r["problem"] for r in rows}
@@ -222,9 +257,15 @@ def page(rows, sweep, builds, sizes, notes, command, machine) -> str:
             ours = cheapest(rows, key, "mechsys", tol, gap)
             theirs = [cheapest(rows, key, p, tol) for p in peers]
             target = f"error ≤ {tol:.0e}" + (f", gap ≤ {C_GAP:.0e} (mechsys)" if gap else "")
-            lines.append(f"| {name} | {target} | {_cell(ours, key == 'C')} | "
-                         + " | ".join(_cell(t, key == "C") for t in theirs)
-                         + f" | {_ratio(ours, _best_peer(rows, key, tol, peers))} |")
+            row = (f"| {name} | {target} | {_cell(ours, key == 'C')} | "
+                   + " | ".join(_cell(t, key == "C") for t in theirs)
+                   + f" | {_ratio(ours, _best_peer(rows, key, tol, peers))} |")
+            if old:
+                was, was_ratio = old.get((name, target), (None, None))
+                row += (" – | – |" if was is None else f" {_fmt_time(was)} | "
+                        + ("–" if ours is None else f"{ours['cpu'] / was:.2f}") + " |")
+                row += " – |" if was_ratio is None else f" {was_ratio:.2f} |"
+            lines.append(row)
     chain = [(n, cheapest(rows, f"B{n}", "mechsys", 1e-6)) for n in sizes]
     chain = [(n, r) for n, r in chain if r is not None]
     if len(chain) >= 2:
@@ -322,7 +363,8 @@ def main(argv=None) -> int:
     sweep = sweep_row(3 if args.quick else 15) if "D" in wanted else None   # (rounds: cheap, noisy)
     builds = build_rows((4, 16) if args.quick else (4, 16, 64, 256, 1024)) if "build" in wanted else []
     command = "python benchmarks/peers/run.py " + " ".join(sys.argv[1:] if argv is None else argv)
-    text = page(rows, sweep, builds, sizes, notes, command.strip(), machine())
+    before = previous(Path(args.write)) if args.write else ("", {})
+    text = page(rows, sweep, builds, sizes, notes, command.strip(), machine(), before)
     print()
     print(text)
     if args.write:
