@@ -171,3 +171,87 @@ def test_a_compile_under_way_elsewhere_is_waited_for(probe, caplog):
     gone.wait()
     lock.write_text(f"{gone.pid}\n")
     assert not _jit_modes._alive(lock)
+
+
+_HOLDER = '''
+import os, sys, time
+lock, where, name, what = sys.argv[1:]
+fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600)
+os.write(fd, f"{os.getpid()}\\n".encode())
+os.close(fd)
+print("locked", flush=True)
+time.sleep(0.5)                # (the other process is surely waiting by now)
+if what == "compile":          # (writes the cache, as a compiling worker does)
+    sys.path.insert(0, where)
+    import importlib
+    import numpy as np
+    from mechsys.solvers import _jit_modes
+    importlib.import_module(name).scaled.compile(_jit_modes.signature((np.arange(3.0), 7), (1,)))
+os.unlink(lock)
+'''
+
+
+@pytest.mark.parametrize("holder", ["compile", "give up"])
+def test_wait_policy_waits_for_another_process_compile(probe, monkeypatch, caplog, tmp_path,
+                                                       holder):
+    """``MECHSYS_COMPILE=wait`` (decision 0071): a specialisation another live process is
+    compiling (its lock held) is waited for, then loaded from the cache (a cache hit, nothing
+    compiled here); if that process lets go without filling the cache, it is compiled here.
+    Either way the answer is the Python one, and no lock is left."""
+    import subprocess
+
+    from mechsys.solvers import _jit_modes
+
+    mod, cache = probe
+    monkeypatch.setenv("MECHSYS_COMPILE", "wait")
+    x = np.arange(3.0)
+    lock = _jit_modes._lock_path(_jit_modes._cache_dir(mod.scaled), mod.scaled,
+                                 _jit_modes.signature((x, 7), (1,)))
+    proc = subprocess.Popen([sys.executable, "-c", _HOLDER, str(lock), str(tmp_path),
+                             mod.__name__, holder], stdout=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout.readline().strip() == "locked"
+        said = []
+        with caplog.at_level(logging.INFO, logger="mechsys"):
+            fn = _jit_modes.entry(mod.scaled, (x, 7), literal=(1,), say=said.append)
+    finally:
+        proc.wait(timeout=300)
+    assert proc.returncode == 0
+    assert said == ["wait"]
+    assert any(f"waiting for process {proc.pid}" in r.getMessage() for r in caplog.records)
+    np.testing.assert_array_equal(fn(x, 7), 2.0 * x + 7)
+    if holder == "compile":
+        assert mod.scaled._cache_hits and not mod.scaled._cache_misses   # loaded, not compiled
+    else:
+        assert mod.scaled._cache_misses                                   # compiled here
+    assert not list(cache.rglob("mechsys-bg-*.lock"))
+
+
+def test_wait_policy_holds_the_lock_while_it_compiles(probe, monkeypatch):
+    """The process that compiles under ``wait`` holds the lock with its pid meanwhile (others
+    wait for it) and removes it after; an empty lock (its creator has not written its pid
+    yet) counts as held for a few seconds, then as stale."""
+    import os
+    import time
+
+    from mechsys.solvers import _jit_modes
+
+    mod, cache = probe
+    monkeypatch.setenv("MECHSYS_COMPILE", "wait")
+    x = np.arange(5.0)
+    sig = _jit_modes.signature((x, 2), (1,))
+    lock = _jit_modes._lock_path(_jit_modes._cache_dir(mod.scaled), mod.scaled, sig)
+    seen = []
+
+    def say(how):
+        seen.append((how, lock.read_text().split()))
+
+    fn = _jit_modes.entry(mod.scaled, (x, 2), literal=(1,), say=say)
+    assert seen == [("wait", [str(os.getpid())])]
+    assert not lock.exists() and mod.scaled._cache_misses
+    np.testing.assert_array_equal(fn(x, 2), 2.0 * x + 2)
+    lock.write_text("")
+    assert _jit_modes._alive(lock)
+    old = time.time() - 2 * _jit_modes._UNWRITTEN_SECONDS
+    os.utime(lock, (old, old))
+    assert not _jit_modes._alive(lock)

@@ -154,11 +154,73 @@ def entry(dispatcher, args, literal=(), say=None):
         if job is not None and not job.failed:
             _WAITING[key] = job
             return None
-        if say is not None:
-            say("wait")
-        fn = dispatcher.compile(sig)
+        fn = _compile_here(dispatcher, sig, say)
     _ENTRIES[key] = fn
     return fn
+
+
+#: how often a process waiting for another's compile looks at its lock (seconds)
+_POLL_SECONDS = 0.2
+
+
+def _compile_here(dispatcher, sig, say):
+    """``dispatcher.compile(sig)`` in this process (the ``wait`` policy, or a background
+    compile that could not be had), holding the same lock file as the background tier
+    (:func:`_lock_path`), so that two processes needing the same missing specialisation at
+    once compile it once (decision 0071): while another live process holds the lock (its
+    own compile, or a background child's), wait for it and then load its result from the
+    cache. A stale lock is taken over; a cache directory where no lock can be written, a
+    lock this process holds, or a holder that ended without filling the cache: compile
+    here. ``say("wait")`` is called once, before the wait or the compile (the caller's
+    notice: the run waits either way). Example::
+
+        fn = _compile_here(runge_kutta, signature(args, (14,)), None)
+    """
+    said = False
+    where = _cache_dir(dispatcher)
+    lock = None if where is None else _lock_path(where, dispatcher, sig)
+    while lock is not None:
+        try:
+            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600)
+        except FileExistsError:
+            if not _alive(lock):
+                try:
+                    lock.unlink()         # (stale: its process is gone; take it over)
+                except FileNotFoundError:
+                    pass
+                except OSError:
+                    lock = None
+                continue
+            if _holder(lock) == os.getpid():
+                lock = None               # (held by this process: nothing to wait for)
+                break
+            if not said and say is not None:
+                say("wait")
+            said = True
+            _LOG.info("mechsys: waiting for process %s, which compiles %s", _holder(lock),
+                      _name(dispatcher))
+            while lock.exists() and _alive(lock):
+                time.sleep(_POLL_SECONDS)
+            if in_cache(dispatcher, sig):
+                return dispatcher.compile(sig)    # (loads the other process's machine code)
+            continue                      # (it failed or was killed: compile it here)
+        except OSError:                   # (an unwritable cache directory: no lock)
+            lock = None
+            break
+        with os.fdopen(fd, "w") as fh:
+            fh.write(f"{os.getpid()}\n")
+        try:
+            if not said and say is not None:
+                say("wait")
+            return dispatcher.compile(sig)
+        finally:
+            try:
+                lock.unlink()
+            except OSError:
+                pass
+    if not said and say is not None:
+        say("wait")
+    return dispatcher.compile(sig)
 
 
 # --- the background tier (decision 0064) --------------------------------------------------
@@ -174,6 +236,8 @@ _CHILD: dict = {"proc": None, "jobs": [], "queue": [], "exit_hook": False}
 
 #: a lock older than this is taken for abandoned whoever holds it (a compile takes minutes)
 _STALE_SECONDS = 3 * 3600.0
+#: an empty lock (its creator has not written its pid yet) is taken as held this long
+_UNWRITTEN_SECONDS = 10.0
 
 
 class _Job:
@@ -241,11 +305,18 @@ def _alive(lock: Path) -> bool:
     """Whether the process named in ``lock`` may still be compiling (its process exists and
     the lock is younger than :data:`_STALE_SECONDS`)."""
     try:
-        if time.time() - lock.stat().st_mtime > _STALE_SECONDS:
+        age = time.time() - lock.stat().st_mtime
+        if age > _STALE_SECONDS:
             return False
-        pid = int(lock.read_text().split()[0])
-    except (OSError, ValueError, IndexError):
+        text = lock.read_text()
+    except OSError:
         return False
+    try:
+        pid = int(text.split()[0])
+    except (ValueError, IndexError):
+        # (created but its pid not yet written: its creator writes it next; a lock left
+        # empty by a process that died at that instant is stale a few seconds later)
+        return age < _UNWRITTEN_SECONDS
     if pid == os.getpid():
         return True
     try:
@@ -255,6 +326,14 @@ def _alive(lock: Path) -> bool:
     except (PermissionError, OSError):
         return True           # (someone else's process, or no way to ask: assume alive)
     return True
+
+
+def _holder(lock: Path) -> int | None:
+    """The pid written in ``lock`` (None when it cannot be read)."""
+    try:
+        return int(lock.read_text().split()[0])
+    except (OSError, ValueError, IndexError):
+        return None
 
 
 def _background(dispatcher, sig, say):
