@@ -104,12 +104,23 @@ DOP853, RK45 = 0, 1
 
 
 @leaf
-def _lu_solve(AT, b, N, piv):
-    """``A x = b`` in place (``b`` becomes ``x``; ``AT`` holds ``A`` transposed and is
+def _lu_solve(AT, b, N, piv, ratio=0.0):
+    r"""``A x = b`` in place (``b`` becomes ``x``; ``AT`` holds ``A`` transposed and is
     overwritten) by ``_jit_lapack``'s ``dgetrf``/``dgetrs``, without LAPACK's call overhead.
-    False at an exactly zero pivot (``dgesv``'s ``info > 0``)."""
+    False at an exactly zero pivot (``dgesv``'s ``info > 0``) and, ``ratio > 0``, when the
+    pivots are not regular, :math:`\min_j |U_{jj}| \le \mathit{ratio} \max_j |U_{jj}|` (the
+    robot entry points' rule: ``analyses._robot._solve_regular``)."""
     if getrf(AT, N, piv) > 0:
         return False
+    if ratio > 0.0:
+        lo = np.inf
+        hi = 0.0
+        for j in range(N):
+            d = abs(AT[j, j])
+            lo = min(lo, d)
+            hi = max(hi, d)
+        if not lo > ratio * hi:
+            return False
     getrs(AT, N, piv, b)
     return True
 
@@ -2060,8 +2071,9 @@ def _rows_work(blocks, blk_i, n, m):
 def _gen_work(blocks, gi, n, m):
     """Work arrays of the recursive Gen dynamics (the same as
     ``compile._generalized.RecursiveDynamics._workspace``, plus the main kernel's arguments
-    and outputs, the mass matrix and the augmented matrix): tiny unless ``blocks`` is
-    ``GEN_TREE`` or ``GEN_AUGMENTED``."""
+    and outputs, the mass matrix, the augmented matrix and ``F``, forces added on the
+    coordinates: zeros in free motion, the joint forces of the robot entry points'
+    :func:`gen_forward`): tiny unless ``blocks`` is ``GEN_TREE`` or ``GEN_AUGMENTED``."""
     sc = gi[9]
     nq, S, kmax, nin_j, nout_j, nin_g, nout_g = sc[0], sc[4], sc[5], sc[6], sc[7], sc[8], sc[9]
     if blocks < GEN_TREE:
@@ -2074,7 +2086,7 @@ def _gen_work(blocks, gi, n, m):
             z((S, nq, nq)), z((S, nq)), z((S, nq, nq)), z((S, nq)), z((S, nq)), z((nq, width)),
             z((nq, width)), z((S, nq, kmax)), z((S, kmax, kmax)), z((kmax, nq + 1)),
             z((nq, nq + 1)), z((S, nq)), z(nin_j), z(nout_j), z(nin_g), z(nout_g), z(max(n, 1)),
-            z(max(n, 1)), z(max(n, 1)), z((nM, nM)), z((NN, NN)))
+            z(max(n, 1)), z(max(n, 1)), z((nM, nM)), z((NN, NN)), z(max(n, 1)))
 
 
 @leaf
@@ -2086,7 +2098,7 @@ def _gen_forward_main(kp, x, nin, n, m, gi, gw, ex, ph, y):
     ``og`` of ``gw``, the slaves' loads into ``Qp``. False: a value that is not finite."""
     ptrs, kid, par, root, nqm, goff, gcols, Mr, Mc, sc = gi
     (P, Pd, FP, Fg, H, HL, Mb, Qvb, C, BQ, BV, X, Y, U, L, Z, W, Qp, xj, oj, xg, og, Q, Qv, Qd,
-     M, KT) = gw
+     M, KT, F) = gw
     nq, kM, kJ, kg, S = sc[0], sc[1], sc[2], sc[3], sc[4]
     npar = nin - (1 + 3 * n + m)
     p0 = 1 + 2 * n + m
@@ -2115,7 +2127,7 @@ def _gen_mass(gi, gw, n):
     :func:`_gen_forward_main`."""
     ptrs, kid, par, root, nqm, goff, gcols, Mr, Mc, sc = gi
     (P, Pd, FP, Fg, H, HL, Mb, Qvb, C, BQ, BV, X, Y, U, L, Z, W, Qp, xj, oj, xg, og, Q, Qv, Qd,
-     M, KT) = gw
+     M, KT, F) = gw
     nq, kM, kJ = sc[0], sc[1], sc[2]
     o = kM + kJ
     M[:, :] = 0.0
@@ -2129,17 +2141,45 @@ def _gen_mass(gi, gw, n):
 
 
 @leaf
+def _gen_augmented(gi, gw, n, m, jr, jc):
+    r"""After :func:`_gen_forward_main`: the augmented system of free motion by the
+    composite bodies (:func:`_gen_mass`), its matrix transposed in ``KT`` of ``gw``
+    (:math:`[[M, \Phi_q^T], [\Phi_q, 0]]`) and its right-hand side :math:`[Q + Q_v + F;
+    \gamma]` over ``og[o:o + n + m]``, ``o = kM + kJ`` (the Jacobian's values before it
+    stay)."""
+    ptrs, kid, par, root, nqm, goff, gcols, Mr, Mc, sc = gi
+    (P, Pd, FP, Fg, H, HL, Mb, Qvb, C, BQ, BV, X, Y, U, L, Z, W, Qp, xj, oj, xg, og, Q, Qv, Qd,
+     M, KT, F) = gw
+    kM, kJ = sc[1], sc[2]
+    o = kM + kJ
+    _gen_mass(gi, gw, n)
+    KT[:, :] = 0.0
+    for i in range(n):                   # K transposed (M is symmetric only to rounding)
+        for j in range(n):
+            KT[j, i] = M[i, j]
+    for k in range(jr.size):
+        v = og[kM + k]
+        KT[n + jr[k], jc[k]] = v
+        KT[jc[k], n + jr[k]] = v
+    # (Q, Qv are copied out of og by _gen_mass)
+    for j in range(n):
+        og[o + j] = (Q[j] + Qv[j]) + F[j]
+    for i in range(m):
+        og[o + n + i] = og[o + 2 * n + i]
+
+
+@leaf
 def _accel_gen(kp, lapack, x, nin, n, m, jr, jc, rows0, columns, robust, ipiv, ibuf, rhs, b,
                qdd, lam, force, gi, gw, ex, ph, tree, y):
     """Free acceleration of a system with recursive Gen dynamics
     (``compile._generalized.RecursiveDynamics``, decision 0016) at ``x = [t, q, qd, 0, p,
     0]``, ``y = (q, qd)``: :func:`_gen_forward_main`; ``tree``: ``qdd`` by the
     articulated-body recursion (no constraint equation), else the composite-body mass matrix
-    in the augmented system, solved as ``_accel`` does. False: hand over (a joint whose
-    motion carries no mass, a singular or non-finite system)."""
+    in the augmented system (:func:`_gen_augmented`), solved as ``_accel`` does. False: hand
+    over (a joint whose motion carries no mass, a singular or non-finite system)."""
     ptrs, kid, par, root, nqm, goff, gcols, Mr, Mc, sc = gi
     (P, Pd, FP, Fg, H, HL, Mb, Qvb, C, BQ, BV, X, Y, U, L, Z, W, Qp, xj, oj, xg, og, Q, Qv, Qd,
-     M, KT) = gw
+     M, KT, F) = gw
     nq, kM, kJ = sc[0], sc[1], sc[2]
     if not _gen_forward_main(kp, x, nin, n, m, gi, gw, ex, ph, y):
         return False
@@ -2154,21 +2194,7 @@ def _accel_gen(kp, lapack, x, nin, n, m, jr, jc, rows0, columns, robust, ipiv, i
             if not np.isfinite(qdd[j]):
                 return False
         return True
-    _gen_mass(gi, gw, n)
-    KT[:, :] = 0.0
-    for i in range(n):                   # K transposed (M is symmetric only to rounding)
-        for j in range(n):
-            KT[j, i] = M[i, j]
-    for k in range(jr.size):
-        v = og[kM + k]
-        KT[n + jr[k], jc[k]] = v
-        KT[jc[k], n + jr[k]] = v
-    # the right-hand side [Q + Qv; gamma] over og[o:o + n + m] (Q, Qv are copied out above;
-    # the Jacobian's values before it stay)
-    for j in range(n):
-        og[o + j] = Q[j] + Qv[j]
-    for i in range(m):
-        og[o + n + i] = og[o + 2 * n + i]
+    _gen_augmented(gi, gw, n, m, jr, jc)
     return _solve_augmented(lapack, KT, og, o, og, kM, n, m, jr, jc, rows0, columns, robust,
                             ipiv, ibuf, rhs, b, qdd, lam, force)
 
@@ -2213,6 +2239,114 @@ def gen_loads(kp, gi, ex, times, Q, QD, QDD, p, m, mode, R):
                 R[k, i] = Qg[i]
             if not np.isfinite(R[k, i]):
                 return k
+    return N
+
+
+@leaf
+def _gen_cholesky(gi, gw, n, qdd):
+    r"""After :func:`_gen_forward_main` on a system without constraint equations:
+    :math:`\ddot q = M^{-1} (Q + Q_v + F)` by the composite-body mass matrix
+    (:func:`_gen_mass`) and its Cholesky factor (:func:`_band_chol` with the full band, the
+    block path's; ``KT`` of ``gw`` holds it), as the Python path's
+    ``analyses._robot._forward_free``. False: hand over (``M`` not positive definite: the
+    Python path names the joints; a value that is not finite)."""
+    ptrs, kid, par, root, nqm, goff, gcols, Mr, Mc, sc = gi
+    (P, Pd, FP, Fg, H, HL, Mb, Qvb, C, BQ, BV, X, Y, U, L, Z, W, Qp, xj, oj, xg, og, Q, Qv, Qd,
+     M, KT, F) = gw
+    _gen_mass(gi, gw, n)
+    for i in range(n):                   # the lower triangle, band storage Sb[i, i - j]
+        for j in range(i + 1):
+            if not np.isfinite(M[i, j]):
+                return False
+            KT[i, i - j] = M[i, j]
+    if _band_chol(KT, n, n - 1) < 0.0:
+        return False
+    for j in range(n):
+        qdd[j] = (Q[j] + Qv[j]) + F[j]
+    _band_solve(KT, n, n - 1, qdd)
+    for j in range(n):
+        if not np.isfinite(qdd[j]):
+            return False
+    return True
+
+
+@leaf
+def _gen_regular(gi, gw, n, m, jr, jc, piv, sol, qdd):
+    """After :func:`_gen_forward_main`: ``qdd`` from the augmented system
+    (:func:`_gen_augmented`) by LU with partial pivoting, when its pivots are regular (the
+    Python path's ``analyses._robot._solve_regular``: the smallest above ``1e-11`` times the
+    largest). False: hand over (a redundant or singular system, which the Python path solves
+    by least squares or diagnoses; a value that is not finite)."""
+    kM, kJ = gi[9][1], gi[9][2]
+    _gen_augmented(gi, gw, n, m, jr, jc)
+    og, KT = gw[21], gw[26]
+    o = kM + kJ
+    for i in range(n + m):
+        v = og[o + i]
+        if not np.isfinite(v):
+            return False
+        sol[i] = v
+    for i in range(n + m):
+        for j in range(n + m):
+            if not np.isfinite(KT[i, j]):
+                return False
+    if not _lu_solve(KT, sol, n + m, piv, 1e-11):
+        return False
+    for j in range(n):
+        if not np.isfinite(sol[j]):
+            return False
+        qdd[j] = sol[j]
+    return True
+
+
+@nb.njit(cache=True)
+def gen_forward(kp, gi, ex, times, Q, QD, F, p, m, jr, jc, kind, QDD):
+    r"""Forward dynamics over points of a system with recursive Gen dynamics (the robot
+    entry point ``m.forward_dynamics``, ``analyses._robot``): ``QDD[k]`` (n,) at each state
+    ``Q[k]``, ``QD[k]`` (N, n) with the forces ``F[k]`` (n,) on the coordinates,
+
+    .. math:: M \ddot q + \Phi_q^T \lambda = Q + Q_v + F, \qquad \Phi_q \ddot q = \gamma
+
+    by the evaluations of :func:`_accel_gen` (the free-motion stepper's) and the
+    composite-body mass matrix: ``kind`` 1, no constraint equation, by its Cholesky factor
+    (:func:`_gen_cholesky`, as the Python path); 0 in the augmented system by LU
+    (:func:`_gen_regular`).
+    ``kind`` is passed as a literal (``_jit_modes.entry``): only the kind's solve is
+    compiled. ``jr``, ``jc``: the Jacobian's nonzero positions. Returns the first point left
+    to the Python path (``len(times)``: all done): values not finite, a joint whose motion
+    carries no mass, pivots that are not regular; the Python path takes it and the rest,
+    with its diagnostics."""
+    N = times.size
+    n = Q.shape[1]
+    npar = p.size
+    nin = 1 + 3 * n + m + npar
+    gw = _gen_work(GEN_AUGMENTED, gi, n, m)
+    Ft = gw[27]
+    ph = np.zeros(ex.max() + 1 if ex.size else 1)
+    x = np.zeros(nin)
+    y = np.zeros(2 * n)
+    qdd = np.zeros(n)
+    piv = np.zeros(n + m, dtype=np.int32)
+    sol = np.zeros(n + m)
+    for j in range(npar):
+        x[1 + 2 * n + m + j] = p[j]
+    for k in range(N):
+        x[0] = times[k]
+        for j in range(n):
+            x[1 + j] = Q[k, j]
+            y[j] = Q[k, j]
+            x[1 + n + j] = QD[k, j]
+            y[n + j] = QD[k, j]
+            Ft[j] = F[k, j]
+        if not _gen_forward_main(kp, x, nin, n, m, gi, gw, ex, ph, y):
+            return k
+        if kind == 1:
+            if not within(kind, 1, 1, _gen_cholesky, gi, gw, n, qdd):
+                return k
+        elif not within(kind, 0, 0, _gen_regular, gi, gw, n, m, jr, jc, piv, sol, qdd):
+            return k
+        for j in range(n):
+            QDD[k, j] = qdd[j]
     return N
 
 
