@@ -121,17 +121,16 @@ def _evaluations(s, N: int):
 
 def _loads_compiled(s, t, Q, QD, QDD):
     """``Q + Qv - M qdd`` at the ``N`` points by the compiled loop over points of the
-    recursive Gen dynamics (``_jit_free_loop.gen_loads``, the one the compiled multiplier
-    solves use; decision 0057) as ``(R (N', n), N')``, ``N'`` the points done before the
-    first with values that are not finite; None when it cannot run (no C entry points, not
-    the recursive dynamics, Numba missing)."""
-    from ..solvers import _jit_multipliers, _jit_runtime
+    recursive Gen dynamics (``solvers._jit_gen_points``, the one the compiled multiplier
+    solves and the forward dynamics use; decisions 0057, 0073) as ``(R (N', n), N')``, ``N'``
+    the points done before the first with values that are not finite; None when it cannot
+    run (no C entry points, not the recursive dynamics, Numba missing, being compiled in the
+    background)."""
+    from ..solvers import _jit_gen_points as jp
 
-    if not getattr(s.dynamics, "recursive", False) or not _jit_runtime.available():
-        return None
     N = len(Q)
     Q, QD, QDD = (np.ascontiguousarray(np.broadcast_to(a, (N, s.n))) for a in (Q, QD, QDD))
-    return _jit_multipliers._recursive_loads(s, np.full(N, float(t)), Q, QD, QDD, s.p_values, 2)
+    return jp.points(s, np.full(N, float(t)), Q, QD, QDD, jp.DYNAMIC_LOADS)
 
 
 def _points(s, value, what: str, partial: bool = False):
@@ -483,7 +482,7 @@ def forward_dynamics(m, q, qd, tau, t: float = 0.0, actuated=None) -> JointValue
 
 def _forward_points(s, what, t, Q, QD, X, act, names, single):
     """The accelerations at the ``N`` points: the compiled loop over points from
-    :data:`AUTO_POINTS` on (``solvers._jit_robot.forward``, the recursive Gen dynamics,
+    :data:`AUTO_POINTS` on (``solvers._jit_gen_points``, the recursive Gen dynamics,
     decision 0073), then the Python loop from the first point it left (all of them when it
     cannot run), which gives every diagnosis."""
     out = np.empty((len(Q), s.n))
@@ -494,11 +493,12 @@ def _forward_points(s, what, t, Q, QD, X, act, names, single):
         _no_multiplier_loads(s, what)
     done = 0
     if _compiled(len(Q)):
-        from ..solvers import _jit_robot
+        from ..solvers import _jit_gen_points as jp
 
         F = np.zeros((len(Q), s.n))
         F[:, act] = X
-        got = _jit_robot.forward(s, t, Q, QD, F)
+        got = jp.points(s, np.full(len(Q), float(t)), Q, QD, F,
+                        jp.FORWARD_AUGMENTED if s.m else jp.FORWARD_FREE)
         if got is not None:
             done = got[1]
             out[:done] = got[0][:done]

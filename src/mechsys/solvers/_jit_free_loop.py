@@ -26,6 +26,8 @@ the Python path fixes one:
                  bordered by ``A``, :math:`-\rho` on the right; ``_project_rows`` its
                  ``project_velocities`` (the minimum-norm change onto
                  :math:`[\Phi_q; A] \dot q = [-\Phi_t; -b]`)
+* ``gen_points`` the recursive Gen dynamics over given states: the multiplier solves'
+                 right-hand sides and the robot entry points' inverse and forward dynamics
 * ``_accel_gen`` ``compile._generalized.RecursiveDynamics`` (generalized coordinates,
                  decision 0018): the joint kernels, then the articulated-body recursion
                  (a tree of Gen joints) or the composite-body mass matrix in the augmented
@@ -104,23 +106,12 @@ DOP853, RK45 = 0, 1
 
 
 @leaf
-def _lu_solve(AT, b, N, piv, ratio=0.0):
-    r"""``A x = b`` in place (``b`` becomes ``x``; ``AT`` holds ``A`` transposed and is
+def _lu_solve(AT, b, N, piv):
+    """``A x = b`` in place (``b`` becomes ``x``; ``AT`` holds ``A`` transposed and is
     overwritten) by ``_jit_lapack``'s ``dgetrf``/``dgetrs``, without LAPACK's call overhead.
-    False at an exactly zero pivot (``dgesv``'s ``info > 0``) and, ``ratio > 0``, when the
-    pivots are not regular, :math:`\min_j |U_{jj}| \le \mathit{ratio} \max_j |U_{jj}|` (the
-    robot entry points' rule: ``analyses._robot._solve_regular``)."""
+    False at an exactly zero pivot (``dgesv``'s ``info > 0``)."""
     if getrf(AT, N, piv) > 0:
         return False
-    if ratio > 0.0:
-        lo = np.inf
-        hi = 0.0
-        for j in range(N):
-            d = abs(AT[j, j])
-            lo = min(lo, d)
-            hi = max(hi, d)
-        if not lo > ratio * hi:
-            return False
     getrs(AT, N, piv, b)
     return True
 
@@ -2041,7 +2032,7 @@ def _block_work(blocks, blk_i, n, m, bw, nnz):
     ph = (np.zeros(ex[0].max() + 1 if ex[0].size else 1),
           np.zeros(ex[1].max() + 1 if ex[1].size else 1),
           np.zeros(ex[2].max() + 1 if ex[2].size else 1))
-    # (_gen_work's Python function: it is compiled for gen_loads, not needed here)
+    # (_gen_work's Python function: it is compiled for gen_points, not needed here)
     return bw_, _gen_work.py_func(blocks, blk_i[1], n, m), ph, _rows_work(blocks, blk_i, n, m)
 
 
@@ -2140,7 +2131,7 @@ def _gen_mass(gi, gw, n):
                   Q, Qv)
 
 
-@leaf
+@nb.njit(cache=True, inline='always')
 def _gen_augmented(gi, gw, n, m, jr, jc):
     r"""After :func:`_gen_forward_main`: the augmented system of free motion by the
     composite bodies (:func:`_gen_mass`), its matrix transposed in ``KT`` of ``gw``
@@ -2199,50 +2190,7 @@ def _accel_gen(kp, lapack, x, nin, n, m, jr, jc, rows0, columns, robust, ipiv, i
                             ipiv, ibuf, rhs, b, qdd, lam, force)
 
 
-@nb.njit(cache=True)
-def gen_loads(kp, gi, ex, times, Q, QD, QDD, p, m, mode, R):
-    """The right-hand sides of the multiplier solves of a system with recursive Gen dynamics
-    (``_jit_multipliers``: ``R[k]`` (n,) at each point of the solved sweep ``Q``, ``QD``,
-    ``QDD`` (N, n)): ``Q`` (``mode`` 0, static: velocities taken zero; 1, kinematic) or ``Q
-    + Qv - M qdd`` (2, dynamic), by the recursion as :func:`_accel_gen` evaluates it (the
-    Python path's ``RecursiveDynamics.terms``). Returns the first point whose values are not
-    finite (``len(times)``: all done)."""
-    N = times.size
-    n = Q.shape[1]
-    npar = p.size
-    nin = 1 + 3 * n + m + npar
-    gw = _gen_work(GEN_AUGMENTED, gi, n, m)
-    M, Qg, Qv = gw[25], gw[22], gw[23]
-    ph = np.zeros(ex.max() + 1 if ex.size else 1)
-    x = np.zeros(nin)
-    y = np.zeros(2 * n)
-    for j in range(npar):
-        x[1 + 2 * n + m + j] = p[j]
-    for k in range(N):
-        x[0] = times[k]
-        for j in range(n):
-            x[1 + j] = Q[k, j]
-            y[j] = Q[k, j]
-            v = QD[k, j] if mode >= 1 else 0.0
-            x[1 + n + j] = v
-            y[n + j] = v
-        if not _gen_forward_main(kp, x, nin, n, m, gi, gw, ex, ph, y):
-            return k
-        _gen_mass(gi, gw, n)
-        for i in range(n):
-            if mode == 2:
-                s = 0.0
-                for j in range(n):
-                    s += M[i, j] * QDD[k, j]
-                R[k, i] = (Qg[i] + Qv[i]) - s
-            else:
-                R[k, i] = Qg[i]
-            if not np.isfinite(R[k, i]):
-                return k
-    return N
-
-
-@leaf
+@nb.njit(cache=True, inline='always')
 def _gen_cholesky(gi, gw, n, qdd):
     r"""After :func:`_gen_forward_main` on a system without constraint equations:
     :math:`\ddot q = M^{-1} (Q + Q_v + F)` by the composite-body mass matrix
@@ -2270,28 +2218,47 @@ def _gen_cholesky(gi, gw, n, qdd):
     return True
 
 
-@leaf
-def _gen_regular(gi, gw, n, m, jr, jc, piv, sol, qdd):
+@nb.njit(cache=True, inline='always')
+def _gen_regular(gi, gw, n, m, jr, jc, lapack, ipiv, ibuf, cbuf, sol, qdd):
     """After :func:`_gen_forward_main`: ``qdd`` from the augmented system
-    (:func:`_gen_augmented`) by LU with partial pivoting, when its pivots are regular (the
-    Python path's ``analyses._robot._solve_regular``: the smallest above ``1e-11`` times the
+    (:func:`_gen_augmented`) by LAPACK's ``dgetrf``/``dgetrs`` (SciPy's, the Python path's
+    ``scipy.linalg.lu_factor``: the same factors) when its pivots are regular, the Python
+    path's rule (``analyses._robot._solve_regular``: the smallest above ``1e-11`` times the
     largest). False: hand over (a redundant or singular system, which the Python path solves
     by least squares or diagnoses; a value that is not finite)."""
     kM, kJ = gi[9][1], gi[9][2]
     _gen_augmented(gi, gw, n, m, jr, jc)
     og, KT = gw[21], gw[26]
     o = kM + kJ
-    for i in range(n + m):
+    N = n + m
+    for i in range(N):
         v = og[o + i]
         if not np.isfinite(v):
             return False
         sol[i] = v
-    for i in range(n + m):
-        for j in range(n + m):
+    for i in range(N):
+        for j in range(N):
             if not np.isfinite(KT[i, j]):
                 return False
-    if not _lu_solve(KT, sol, n + m, piv, 1e-11):
+    ibuf[0] = N          # m, n, lda = ldb, info, nrhs
+    ibuf[1] = N
+    ibuf[2] = N
+    ibuf[3] = 0
+    ibuf[4] = 1
+    _ccall(lapack[0], (ibuf[0:1], ibuf[1:2], KT, ibuf[2:3], ipiv, ibuf[3:4]))
+    if ibuf[3] != 0:
         return False
+    lo = np.inf
+    hi = 0.0
+    for j in range(N):
+        d = abs(KT[j, j])
+        lo = min(lo, d)
+        hi = max(hi, d)
+    if not lo > 1e-11 * hi:
+        return False
+    cbuf[0] = 78         # 'N': no transpose
+    _ccall(lapack[2], (cbuf[0:1], ibuf[1:2], ibuf[4:5], KT, ibuf[2:3], ipiv, sol, ibuf[2:3],
+                       ibuf[3:4]))
     for j in range(n):
         if not np.isfinite(sol[j]):
             return False
@@ -2299,34 +2266,90 @@ def _gen_regular(gi, gw, n, m, jr, jc, piv, sol, qdd):
     return True
 
 
+#: the modes of :func:`gen_points`: the right-hand sides of the multiplier solves (static,
+#: kinematic, dynamic), forward dynamics without and with constraint equations
+STATIC_LOADS, KINEMATIC_LOADS, DYNAMIC_LOADS, FORWARD_FREE, FORWARD_AUGMENTED = 0, 1, 2, 3, 4
+
+
+@nb.njit(cache=True, inline='always')
+def _gen_loads_point(gi, gw, n, mode, X, R, k):
+    """After :func:`_gen_forward_main`: ``R[k]`` = ``Q`` (``STATIC_LOADS``,
+    ``KINEMATIC_LOADS``) or ``Q + Qv - M X[k]`` (``DYNAMIC_LOADS``) by the composite bodies.
+    False: a value that is not finite."""
+    M, Qg, Qv = gw[25], gw[22], gw[23]
+    _gen_mass(gi, gw, n)
+    for i in range(n):
+        if mode == DYNAMIC_LOADS:
+            s = 0.0
+            for j in range(n):
+                s += M[i, j] * X[k, j]
+            R[k, i] = (Qg[i] + Qv[i]) - s
+        else:
+            R[k, i] = Qg[i]
+        if not np.isfinite(R[k, i]):
+            return False
+    return True
+
+
+@nb.njit(cache=True, inline='always')
+def _gen_forward_point(gi, gw, n, m, jr, jc, lapack, ipiv, ibuf, cbuf, sol, qdd, mode, X, R,
+                       k):
+    """After :func:`_gen_forward_main`: ``R[k]`` the accelerations under the forces ``X[k]``
+    on the coordinates, ``FORWARD_FREE`` by :func:`_gen_cholesky`, ``FORWARD_AUGMENTED`` by
+    :func:`_gen_regular`. False: hand over to the Python path."""
+    Ft = gw[27]
+    for j in range(n):
+        Ft[j] = X[k, j]
+    if mode == FORWARD_FREE:
+        if not _gen_cholesky(gi, gw, n, qdd):
+            return False
+    elif not _gen_regular(gi, gw, n, m, jr, jc, lapack, ipiv, ibuf, cbuf, sol, qdd):
+        return False
+    for j in range(n):
+        R[k, j] = qdd[j]
+    return True
+
+
 @nb.njit(cache=True)
-def gen_forward(kp, gi, ex, times, Q, QD, F, p, m, jr, jc, kind, QDD):
-    r"""Forward dynamics over points of a system with recursive Gen dynamics (the robot
-    entry point ``m.forward_dynamics``, ``analyses._robot``): ``QDD[k]`` (n,) at each state
-    ``Q[k]``, ``QD[k]`` (N, n) with the forces ``F[k]`` (n,) on the coordinates,
+def gen_points(kp, gi, ex, lapack, times, Q, QD, X, p, m, jr, jc, mode, R):
+    r"""Evaluations of a system with recursive Gen dynamics at each point ``k`` of the states
+    ``Q``, ``QD`` (N, n), by the recursion as :func:`_accel_gen` evaluates it (the Python
+    path's ``RecursiveDynamics.terms``), into ``R[k]`` (n,):
 
-    .. math:: M \ddot q + \Phi_q^T \lambda = Q + Q_v + F, \qquad \Phi_q \ddot q = \gamma
+    * the right-hand sides of the multiplier solves (``_jit_multipliers``, over a solved
+      sweep, ``X`` its accelerations): ``Q`` (``mode`` ``STATIC_LOADS``: velocities taken
+      zero; ``KINEMATIC_LOADS``) or :math:`Q + Q_v - M \ddot q` (``DYNAMIC_LOADS``; the
+      robot entry point ``m.inverse_dynamics`` too), :func:`_gen_loads_point`;
+    * forward dynamics (the robot entry point ``m.forward_dynamics``),
+      ``X[k]`` the forces on the coordinates and ``R[k]`` the accelerations of
 
-    by the evaluations of :func:`_accel_gen` (the free-motion stepper's) and the
-    composite-body mass matrix: ``kind`` 1, no constraint equation, by its Cholesky factor
-    (:func:`_gen_cholesky`, as the Python path); 0 in the augmented system by LU
-    (:func:`_gen_regular`).
-    ``kind`` is passed as a literal (``_jit_modes.entry``): only the kind's solve is
-    compiled. ``jr``, ``jc``: the Jacobian's nonzero positions. Returns the first point left
-    to the Python path (``len(times)``: all done): values not finite, a joint whose motion
-    carries no mass, pivots that are not regular; the Python path takes it and the rest,
-    with its diagnostics."""
+      .. math:: M \ddot q + \Phi_q^T \lambda = Q + Q_v + X_k, \qquad
+                \Phi_q \ddot q = \gamma
+
+      ``FORWARD_FREE`` (no constraint equation) by the Cholesky factor of ``M``
+      (:func:`_gen_cholesky`), ``FORWARD_AUGMENTED`` by LU of the augmented system with
+      regular pivots (:func:`_gen_regular`; ``jr``, ``jc`` the Jacobian's nonzero
+      positions, ``lapack`` SciPy's ``dgetrf``, ``dgecon``, ``dgetrs``:
+      ``_jit_runtime.lapack``).
+
+    One specialisation for every ``mode`` (the inverse and forward dynamics of a session
+    share one compile); the helpers of each point are inlined (``inline='always'``: a
+    separate compiled function would have LLVM optimise the recursion's code once more with
+    each caller). Returns the first point left to the Python path (``len(times)``: all
+    done): values not finite; in forward dynamics also a mass matrix that is not positive
+    definite or pivots that are not regular (the Python path diagnoses)."""
     N = times.size
     n = Q.shape[1]
     npar = p.size
     nin = 1 + 3 * n + m + npar
     gw = _gen_work(GEN_AUGMENTED, gi, n, m)
-    Ft = gw[27]
     ph = np.zeros(ex.max() + 1 if ex.size else 1)
     x = np.zeros(nin)
     y = np.zeros(2 * n)
     qdd = np.zeros(n)
-    piv = np.zeros(n + m, dtype=np.int32)
+    ipiv = np.zeros(n + m, dtype=np.int32)
+    ibuf = np.zeros(5, dtype=np.int32)
+    cbuf = np.zeros(1, dtype=np.uint8)
     sol = np.zeros(n + m)
     for j in range(npar):
         x[1 + 2 * n + m + j] = p[j]
@@ -2335,18 +2358,17 @@ def gen_forward(kp, gi, ex, times, Q, QD, F, p, m, jr, jc, kind, QDD):
         for j in range(n):
             x[1 + j] = Q[k, j]
             y[j] = Q[k, j]
-            x[1 + n + j] = QD[k, j]
-            y[n + j] = QD[k, j]
-            Ft[j] = F[k, j]
+            v = QD[k, j] if mode >= KINEMATIC_LOADS else 0.0
+            x[1 + n + j] = v
+            y[n + j] = v
         if not _gen_forward_main(kp, x, nin, n, m, gi, gw, ex, ph, y):
             return k
-        if kind == 1:
-            if not within(kind, 1, 1, _gen_cholesky, gi, gw, n, qdd):
+        if mode >= FORWARD_FREE:
+            if not _gen_forward_point(gi, gw, n, m, jr, jc, lapack, ipiv, ibuf, cbuf, sol, qdd,
+                                      mode, X, R, k):
                 return k
-        elif not within(kind, 0, 0, _gen_regular, gi, gw, n, m, jr, jc, piv, sol, qdd):
+        elif not _gen_loads_point(gi, gw, n, mode, X, R, k):
             return k
-        for j in range(n):
-            QDD[k, j] = qdd[j]
     return N
 
 
