@@ -38,9 +38,15 @@ constraints: positions by the Gauss-Newton solver that keeps given coordinates
 guess's), velocities from :math:`\Phi_q \dot q = -\Phi_t` and accelerations from
 :math:`\Phi_q \ddot q = \gamma`.
 
-Over many points (from :data:`AUTO_POINTS` with ``MECHSYS_JIT`` unset) the recursion runs
-compiled, and inverse dynamics on a model without equations is one compiled loop over the
-points; over few, the plain-Python recursion (no Numba to load: decision 0057).
+Over many points (from :data:`AUTO_POINTS` with ``MECHSYS_JIT`` unset) the recursive Gen
+dynamics runs compiled: inverse dynamics on a model without equations, and forward dynamics
+on any model with the recursive dynamics (the Cholesky factor of ``M`` without equations,
+the augmented system by LU with regular pivots with them), are one compiled loop over the
+points (``solvers._jit_gen_points``, decisions 0057 and 0073), which hands a point it cannot
+take (a mass matrix that is not positive definite, a redundant system) and the rest to the
+Python loop; over few, the plain-Python recursion (no Numba to load: decision 0057). The
+symbolic dynamics (fewer than 4 spatial Gen joints, absolute coordinates) evaluates its
+compiled kernels point by point from Python.
 
 Example::
 
