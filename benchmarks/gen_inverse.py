@@ -8,7 +8,7 @@ Short arms (``L <= 8``) get the symbolic dynamics, longer ones the recursive dyn
 (composite bodies, decision 0016). Their kernels are compiled with common-subexpression
 elimination; the sweep and multiplier loops read them through the entry points compiled
 once more without it (decision 0018, amended in the fourteenth session), and the recursive
-dynamics' right-hand sides come from the compiled recursion (``_jit_free_loop.gen_loads``).
+dynamics' right-hand sides come from the compiled recursion (``_jit_free_loop.gen_points``).
 
 Each row: CPU time per point (median of interleaved repetitions, after a warm-up run that
 compiles) of ``solve(t, solution="acceleration")`` (the sweep) and of ``solution="dynamic"``

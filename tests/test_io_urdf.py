@@ -487,3 +487,101 @@ def test_mimic_reported_or_a_constraint():
     f1, f2 = sp.Symbol("panda_finger_joint1"), sp.Symbol("panda_finger_joint2")
     assert sp.simplify(eq - (f2 - f1)) == 0
     assert mm.compile().m == 1
+
+
+# -- forward dynamics over many points, compiled (decision 0073) --------------------------------------
+def _spy_points(monkeypatch):
+    """Record ``(mode, points done)`` of each call of the compiled loop over points."""
+    from mechsys.solvers import _jit_gen_points as jp
+
+    calls, real = [], jp.points
+
+    def spy(system, times, Q, QD, X, mode, p=None):
+        got = real(system, times, Q, QD, X, mode, p)
+        calls.append((mode, None if got is None else got[1]))
+        return got
+
+    monkeypatch.setattr(jp, "points", spy)
+    return calls
+
+
+@needs_robots
+def test_forward_dynamics_compiled_over_points(monkeypatch):
+    """The UR5 over ``AUTO_POINTS`` states with ``MECHSYS_JIT`` unset: the compiled loop over
+    points takes every point (the composite-body mass matrix and its Cholesky factor); its
+    accelerations equal the Python path's (``MECHSYS_JIT=0``, 1e-13 relative) and MuJoCo's
+    ``mj_forward`` on MuJoCo's own import of the file (contacts off, 1e-9 relative), and the
+    compiled inverse dynamics gives the joint forces back (1e-12). The same robot on a free
+    base (an absolute body: one constraint equation) through the augmented system: equal to
+    the Python path, and a round trip with the inverse dynamics on the joints."""
+    from mechsys.analyses._robot import AUTO_POINTS
+    from mechsys.solvers import _jit_gen_points as jp
+
+    path = ROBOTS / UR5
+    m = ms.from_urdf(path, geometry=False)
+    n = m.compile().n
+    N = AUTO_POINTS
+    Q = RNG.uniform(-2.5, 2.5, size=(N, n))
+    QD, TAU = RNG.normal(size=(2, N, n))
+    TAU *= 20.0
+    monkeypatch.delenv("MECHSYS_JIT", raising=False)
+    calls = _spy_points(monkeypatch)
+    qdd = m.forward_dynamics(Q, QD, TAU).values
+    assert calls == [(jp.FORWARD_FREE, N)]
+    tau = m.inverse_dynamics(Q, QD, qdd).values               # compiled too (N points)
+    assert calls[-1] == (jp.DYNAMIC_LOADS, N)
+    np.testing.assert_allclose(tau, TAU, rtol=0, atol=1e-12 * np.abs(TAU).max())
+    monkeypatch.setenv("MECHSYS_JIT", "0")
+    ref = m.forward_dynamics(Q[:6], QD[:6], TAU[:6]).values
+    assert len(calls) == 2                                    # the Python path
+    np.testing.assert_allclose(qdd[:6], ref, rtol=0, atol=1e-13 * np.abs(ref).max())
+    mujoco, mm = _mujoco_from_urdf(path)
+    md = mujoco.MjData(mm)
+    for k in range(0, N, 20):
+        md.qpos[:], md.qvel[:], md.qfrc_applied[:] = Q[k], QD[k], TAU[k]
+        mujoco.mj_forward(mm, md)
+        np.testing.assert_allclose(qdd[k], md.qacc, rtol=0, atol=1e-9 * np.abs(md.qacc).max())
+    # a free base: x, y, z and Euler parameters, the joints actuated
+    f = ms.from_urdf(path, geometry=False, floating_base=True)
+    s = f.compile()
+    assert s.m == 1 and s.n == n + 7
+    k = 5
+    e = RNG.normal(size=(k, 4))
+    e /= np.linalg.norm(e, axis=1)[:, None]
+    w = RNG.normal(size=(k, 4))
+    w -= np.sum(w * e, axis=1)[:, None] * e                   # e . e_dot = 0
+    Qf = np.hstack((RNG.normal(size=(k, 3)), e, Q[:k]))
+    QDf = np.hstack((RNG.normal(size=(k, 3)), w, QD[:k]))
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    acc = f.forward_dynamics(Qf, QDf, TAU[:k]).values
+    assert calls[-1] == (jp.FORWARD_AUGMENTED, k)
+    back = f.inverse_dynamics(Qf, QDf, acc).values            # the joints' forces
+    np.testing.assert_allclose(back, TAU[:k], rtol=0, atol=1e-9 * np.abs(TAU).max())
+    monkeypatch.setenv("MECHSYS_JIT", "0")
+    ref = f.forward_dynamics(Qf, QDf, TAU[:k]).values
+    np.testing.assert_allclose(acc, ref, rtol=0, atol=1e-13 * np.abs(ref).max())
+
+
+def test_forward_dynamics_compiled_hands_a_massless_joint_to_python(arm_file, tmp_path,
+                                                                     monkeypatch):
+    """A joint that moves no mass (the slide's link massless): the compiled loop stops at
+    that point (its Cholesky factor fails) and the Python path raises its error naming the
+    joint, as without the compiled loop."""
+    from mechsys.solvers import _jit_gen_points as jp
+
+    text = ARM.replace('<link name="slide"><inertial><mass value="0.7"/>\n      <inertia '
+                       'ixx="0.002" ixy="0" ixz="0" iyy="0.002" iyz="0" izz="0.001"/>'
+                       '</inertial></link>', '<link name="slide"/>')
+    assert text != ARM
+    p = tmp_path / "massless.urdf"
+    p.write_text(text)
+    monkeypatch.setenv("MECHSYS_GEN_DYNAMICS", "recursive")   # (3 joints: else symbolic)
+    m = ms.from_urdf(p, geometry=False)
+    assert getattr(m.compile().dynamics, "recursive", False)
+    calls = _spy_points(monkeypatch)
+    q, qd, tau = RNG.normal(size=(3, 2, 3))
+    for jit in ("1", "0"):
+        monkeypatch.setenv("MECHSYS_JIT", jit)
+        with pytest.raises(ms.SingularMassError, match=r"joints \['j3'\] move no mass"):
+            m.forward_dynamics(q, qd, tau)
+    assert calls == [(jp.FORWARD_FREE, 0)]

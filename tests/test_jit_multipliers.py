@@ -69,7 +69,7 @@ def _gen_arm(links=4):
     Short (4 links), its dynamics is symbolic (a CSE kernel whose repeated outputs the
     compiled loop reads through the kernel compiled again without CSE); long (12 links), it
     is the recursion (composite bodies), whose right-hand sides the compiled loop gets from
-    ``_jit_free_loop.gen_loads``."""
+    ``_jit_free_loop.gen_points``."""
     return models.driven_gen_arm(links)
 
 

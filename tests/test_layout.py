@@ -50,7 +50,7 @@ SOLVERS_TIER = {
     "_jit_sweep_loop": 3, "_jit_multipliers_loop": 3, "_jit_free_loop": 3,
     # 4 the Python solvers and the drivers of the compiled loops
     "_position": 4, "_rank": 4, "_diagnostics": 4, "_free": 4, "_sensitivity": 4,
-    "_jit_sweep": 4, "_jit_multipliers": 4, "_jit_free": 4,
+    "_jit_sweep": 4, "_jit_multipliers": 4, "_jit_free": 4, "_jit_gen_points": 4,
     # 5 what the analyses call: sweeps, multipliers, the integrator registry, the package
     "_kinematics": 5, "_statics": 5, "_integrators": 5, "__init__": 5,
 }

@@ -38,9 +38,15 @@ constraints: positions by the Gauss-Newton solver that keeps given coordinates
 guess's), velocities from :math:`\Phi_q \dot q = -\Phi_t` and accelerations from
 :math:`\Phi_q \ddot q = \gamma`.
 
-Over many points (from :data:`AUTO_POINTS` with ``MECHSYS_JIT`` unset) the recursion runs
-compiled, and inverse dynamics on a model without equations is one compiled loop over the
-points; over few, the plain-Python recursion (no Numba to load: decision 0057).
+Over many points (from :data:`AUTO_POINTS` with ``MECHSYS_JIT`` unset) the recursive Gen
+dynamics runs compiled: inverse dynamics on a model without equations, and forward dynamics
+on any model with the recursive dynamics (the Cholesky factor of ``M`` without equations,
+the augmented system by LU with regular pivots with them), are one compiled loop over the
+points (``solvers._jit_gen_points``, decisions 0057 and 0073), which hands a point it cannot
+take (a mass matrix that is not positive definite, a redundant system) and the rest to the
+Python loop; over few, the plain-Python recursion (no Numba to load: decision 0057). The
+symbolic dynamics (fewer than 4 spatial Gen joints, absolute coordinates) evaluates its
+compiled kernels point by point from Python.
 
 Example::
 
@@ -121,17 +127,16 @@ def _evaluations(s, N: int):
 
 def _loads_compiled(s, t, Q, QD, QDD):
     """``Q + Qv - M qdd`` at the ``N`` points by the compiled loop over points of the
-    recursive Gen dynamics (``_jit_free_loop.gen_loads``, the one the compiled multiplier
-    solves use; decision 0057) as ``(R (N', n), N')``, ``N'`` the points done before the
-    first with values that are not finite; None when it cannot run (no C entry points, not
-    the recursive dynamics, Numba missing)."""
-    from ..solvers import _jit_multipliers, _jit_runtime
+    recursive Gen dynamics (``solvers._jit_gen_points``, the one the compiled multiplier
+    solves and the forward dynamics use; decisions 0057, 0073) as ``(R (N', n), N')``, ``N'``
+    the points done before the first with values that are not finite; None when it cannot
+    run (no C entry points, not the recursive dynamics, Numba missing, being compiled in the
+    background)."""
+    from ..solvers import _jit_gen_points as jp
 
-    if not getattr(s.dynamics, "recursive", False) or not _jit_runtime.available():
-        return None
     N = len(Q)
     Q, QD, QDD = (np.ascontiguousarray(np.broadcast_to(a, (N, s.n))) for a in (Q, QD, QDD))
-    return _jit_multipliers._recursive_loads(s, np.full(N, float(t)), Q, QD, QDD, s.p_values, 2)
+    return jp.points(s, np.full(N, float(t)), Q, QD, QDD, jp.DYNAMIC_LOADS)
 
 
 def _points(s, value, what: str, partial: bool = False):
@@ -482,56 +487,86 @@ def forward_dynamics(m, q, qd, tau, t: float = 0.0, actuated=None) -> JointValue
 
 
 def _forward_points(s, what, t, Q, QD, X, act, names, single):
+    """The accelerations at the ``N`` points: the compiled loop over points from
+    :data:`AUTO_POINTS` on (``solvers._jit_gen_points``, the recursive Gen dynamics,
+    decision 0073), then the Python loop from the first point it left (all of them when it
+    cannot run), which gives every diagnosis."""
+    out = np.empty((len(Q), s.n))
+    if not s.m and len(act) != s.n:
+        raise ModelError(f"{what}: a model without constraint equations is actuated on every "
+                         "coordinate (actuated= applies to models with equations)")
+    if s.m:
+        _no_multiplier_loads(s, what)
+    done = 0
+    if _compiled(len(Q)):
+        from ..solvers import _jit_gen_points as jp
+
+        F = np.zeros((len(Q), s.n))
+        F[:, act] = X
+        got = jp.points(s, np.full(len(Q), float(t)), Q, QD, F,
+                        jp.FORWARD_AUGMENTED if s.m else jp.FORWARD_FREE)
+        if got is not None:
+            done = got[1]
+            out[:done] = got[0][:done]
+    for k in range(done, len(Q)):
+        out[k] = (_forward_augmented if s.m else _forward_free)(s, what, t, Q[k], QD[k], X[k],
+                                                                act, names, k)
+    return JointValues(names, out[0] if single else out)
+
+
+def _forward_free(s, what, t, q, qd, tau, act, names, k):
+    r""":math:`\ddot q = M^{-1} (Q + Q_v + \tau)` at one state of a model without constraint
+    equations, by the Cholesky factor of the mass matrix (the compiled loop's algorithm,
+    ``_jit_free_loop._gen_cholesky``), whose failure names the joints. (Not the O(N)
+    articulated-body recursion: in pose coordinates it costs more than the composite-body
+    mass matrix and its Cholesky factor up to a dozen joints, 2.4 times as much in plain
+    Python on the Panda; decision 0073.)"""
     from .._errors import SingularMassError
 
     d = s.dynamics
     p = s.p_values
-    out = np.empty((len(Q), s.n))
-    if not s.m:
-        if len(act) != s.n:
-            raise ModelError(f"{what}: a model without constraint equations is actuated on every "
-                             "coordinate (actuated= applies to models with equations)")
-        lam = np.zeros(0)
-        for k in range(len(Q)):
-            M, F, Fv = d.terms(float(t), Q[k], QD[k], lam, p)[:3]
-            add = _added_inertia(s, what, t, Q[k], QD[k])
-            if add is not None:
-                M = M + add
-            try:
-                L = np.linalg.cholesky(M)
-            except np.linalg.LinAlgError:
-                diag = np.diag(M)
-                bad = [names[i] for i in range(s.n) if not diag[i] > 1e-14 * max(1.0, abs(diag).max())]
-                raise SingularMassError(f"forward_dynamics: the mass matrix is singular at point {k}"
-                                        + (f"; joints {bad} move no mass" if bad else "")
-                                        + "; give the bodies they carry mass and inertia") from None
-            y = np.linalg.solve(L, F + Fv + X[k])
-            out[k] = np.linalg.solve(L.T, y)
-        return JointValues(names, out[0] if single else out)
-    _no_multiplier_loads(s, what)
+    M, F, Fv = d.terms(float(t), q, qd, np.zeros(0), p)[:3]
+    add = _added_inertia(s, what, t, q, qd)
+    if add is not None:
+        M = M + add
+    try:
+        L = np.linalg.cholesky(M)
+    except np.linalg.LinAlgError:
+        diag = np.diag(M)
+        bad = [names[i] for i in range(s.n) if not diag[i] > 1e-14 * max(1.0, abs(diag).max())]
+        raise SingularMassError(f"forward_dynamics: the mass matrix is singular at point {k}"
+                                + (f"; joints {bad} move no mass" if bad else "")
+                                + "; give the bodies they carry mass and inertia") from None
+    y = np.linalg.solve(L, F + Fv + tau)
+    return np.linalg.solve(L.T, y)
+
+
+def _forward_augmented(s, what, t, q, qd, tau, act, names, k):
+    """The accelerations at one state of a model with constraint equations: the augmented
+    system by LU when regular, else least squares (redundant constraints), refusing
+    accelerations the system does not determine."""
+    from .._errors import SingularMassError
+
     n = s.n
-    for k in range(len(Q)):
-        K, rhs = _augmented(s, t, Q[k], QD[k], what)[4:]
-        rhs = rhs.copy()
-        rhs[act] += X[k]
-        y = _solve_regular(K, rhs)
-        if y is not None:
-            out[k] = y[:n]
-            continue
-        # least squares: consistently redundant constraints (a planar loop closed by a
-        # Spherical3) leave the multipliers, not the accelerations, undetermined
-        U, sv, Vt = np.linalg.svd(K)
-        tol = 1e-11 * max(sv.max(initial=0.0), 1.0)
-        rank = int(np.sum(sv > tol))
-        null = Vt[rank:]
-        if null.size and np.abs(null[:, :n]).max() > 1e-8:
-            free_ = [names[i] for i in np.unique(np.nonzero(np.abs(null[:, :n]) > 1e-8)[1])]
-            raise SingularMassError(f"{what}: the accelerations of {free_} are not determined at "
-                                    f"point {k} (they move no mass); give the bodies they carry "
-                                    "mass and inertia")
-        y = Vt[:rank].T @ ((U[:, :rank].T @ rhs) / sv[:rank])
-        out[k] = y[:n]
-    return JointValues(names, out[0] if single else out)
+    K, rhs = _augmented(s, t, q, qd, what)[4:]
+    rhs = rhs.copy()
+    rhs[act] += tau
+    y = _solve_regular(K, rhs)
+    if y is not None:
+        return y[:n]
+    # least squares: consistently redundant constraints (a planar loop closed by a
+    # Spherical3) leave the multipliers, not the accelerations, undetermined
+    U, sv, Vt = np.linalg.svd(K)
+    tol = 1e-11 * max(sv.max(initial=0.0), 1.0)
+    rank = int(np.sum(sv > tol))
+    null = Vt[rank:]
+    if null.size and np.abs(null[:, :n]).max() > 1e-8:
+        free_ = [names[i] for i in np.unique(np.nonzero(np.abs(null[:, :n]) > 1e-8)[1])]
+        raise SingularMassError(f"{what}: the accelerations of {free_} are not determined at "
+                                f"point {k} (they move no mass); give the bodies they carry "
+                                "mass and inertia")
+    y = Vt[:rank].T @ ((U[:, :rank].T @ rhs) / sv[:rank])
+    return y[:n]
 
 
 def forward_kinematics(m, q, point, t: float = 0.0, frame: bool = False) -> np.ndarray:

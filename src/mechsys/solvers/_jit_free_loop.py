@@ -26,6 +26,8 @@ the Python path fixes one:
                  bordered by ``A``, :math:`-\rho` on the right; ``_project_rows`` its
                  ``project_velocities`` (the minimum-norm change onto
                  :math:`[\Phi_q; A] \dot q = [-\Phi_t; -b]`)
+* ``gen_points`` the recursive Gen dynamics over given states: the multiplier solves'
+                 right-hand sides and the robot entry points' inverse and forward dynamics
 * ``_accel_gen`` ``compile._generalized.RecursiveDynamics`` (generalized coordinates,
                  decision 0018): the joint kernels, then the articulated-body recursion
                  (a tree of Gen joints) or the composite-body mass matrix in the augmented
@@ -2030,7 +2032,7 @@ def _block_work(blocks, blk_i, n, m, bw, nnz):
     ph = (np.zeros(ex[0].max() + 1 if ex[0].size else 1),
           np.zeros(ex[1].max() + 1 if ex[1].size else 1),
           np.zeros(ex[2].max() + 1 if ex[2].size else 1))
-    # (_gen_work's Python function: it is compiled for gen_loads, not needed here)
+    # (_gen_work's Python function: it is compiled for gen_points, not needed here)
     return bw_, _gen_work.py_func(blocks, blk_i[1], n, m), ph, _rows_work(blocks, blk_i, n, m)
 
 
@@ -2060,8 +2062,9 @@ def _rows_work(blocks, blk_i, n, m):
 def _gen_work(blocks, gi, n, m):
     """Work arrays of the recursive Gen dynamics (the same as
     ``compile._generalized.RecursiveDynamics._workspace``, plus the main kernel's arguments
-    and outputs, the mass matrix and the augmented matrix): tiny unless ``blocks`` is
-    ``GEN_TREE`` or ``GEN_AUGMENTED``."""
+    and outputs, the mass matrix, the augmented matrix and ``F``, forces added on the
+    coordinates: zeros in free motion, the joint forces of the robot entry points'
+    :func:`gen_forward`): tiny unless ``blocks`` is ``GEN_TREE`` or ``GEN_AUGMENTED``."""
     sc = gi[9]
     nq, S, kmax, nin_j, nout_j, nin_g, nout_g = sc[0], sc[4], sc[5], sc[6], sc[7], sc[8], sc[9]
     if blocks < GEN_TREE:
@@ -2074,7 +2077,7 @@ def _gen_work(blocks, gi, n, m):
             z((S, nq, nq)), z((S, nq)), z((S, nq, nq)), z((S, nq)), z((S, nq)), z((nq, width)),
             z((nq, width)), z((S, nq, kmax)), z((S, kmax, kmax)), z((kmax, nq + 1)),
             z((nq, nq + 1)), z((S, nq)), z(nin_j), z(nout_j), z(nin_g), z(nout_g), z(max(n, 1)),
-            z(max(n, 1)), z(max(n, 1)), z((nM, nM)), z((NN, NN)))
+            z(max(n, 1)), z(max(n, 1)), z((nM, nM)), z((NN, NN)), z(max(n, 1)))
 
 
 @leaf
@@ -2086,7 +2089,7 @@ def _gen_forward_main(kp, x, nin, n, m, gi, gw, ex, ph, y):
     ``og`` of ``gw``, the slaves' loads into ``Qp``. False: a value that is not finite."""
     ptrs, kid, par, root, nqm, goff, gcols, Mr, Mc, sc = gi
     (P, Pd, FP, Fg, H, HL, Mb, Qvb, C, BQ, BV, X, Y, U, L, Z, W, Qp, xj, oj, xg, og, Q, Qv, Qd,
-     M, KT) = gw
+     M, KT, F) = gw
     nq, kM, kJ, kg, S = sc[0], sc[1], sc[2], sc[3], sc[4]
     npar = nin - (1 + 3 * n + m)
     p0 = 1 + 2 * n + m
@@ -2115,7 +2118,7 @@ def _gen_mass(gi, gw, n):
     :func:`_gen_forward_main`."""
     ptrs, kid, par, root, nqm, goff, gcols, Mr, Mc, sc = gi
     (P, Pd, FP, Fg, H, HL, Mb, Qvb, C, BQ, BV, X, Y, U, L, Z, W, Qp, xj, oj, xg, og, Q, Qv, Qd,
-     M, KT) = gw
+     M, KT, F) = gw
     nq, kM, kJ = sc[0], sc[1], sc[2]
     o = kM + kJ
     M[:, :] = 0.0
@@ -2128,6 +2131,34 @@ def _gen_mass(gi, gw, n):
                   Q, Qv)
 
 
+@nb.njit(cache=True, inline='always')
+def _gen_augmented(gi, gw, n, m, jr, jc):
+    r"""After :func:`_gen_forward_main`: the augmented system of free motion by the
+    composite bodies (:func:`_gen_mass`), its matrix transposed in ``KT`` of ``gw``
+    (:math:`[[M, \Phi_q^T], [\Phi_q, 0]]`) and its right-hand side :math:`[Q + Q_v + F;
+    \gamma]` over ``og[o:o + n + m]``, ``o = kM + kJ`` (the Jacobian's values before it
+    stay)."""
+    ptrs, kid, par, root, nqm, goff, gcols, Mr, Mc, sc = gi
+    (P, Pd, FP, Fg, H, HL, Mb, Qvb, C, BQ, BV, X, Y, U, L, Z, W, Qp, xj, oj, xg, og, Q, Qv, Qd,
+     M, KT, F) = gw
+    kM, kJ = sc[1], sc[2]
+    o = kM + kJ
+    _gen_mass(gi, gw, n)
+    KT[:, :] = 0.0
+    for i in range(n):                   # K transposed (M is symmetric only to rounding)
+        for j in range(n):
+            KT[j, i] = M[i, j]
+    for k in range(jr.size):
+        v = og[kM + k]
+        KT[n + jr[k], jc[k]] = v
+        KT[jc[k], n + jr[k]] = v
+    # (Q, Qv are copied out of og by _gen_mass)
+    for j in range(n):
+        og[o + j] = (Q[j] + Qv[j]) + F[j]
+    for i in range(m):
+        og[o + n + i] = og[o + 2 * n + i]
+
+
 @leaf
 def _accel_gen(kp, lapack, x, nin, n, m, jr, jc, rows0, columns, robust, ipiv, ibuf, rhs, b,
                qdd, lam, force, gi, gw, ex, ph, tree, y):
@@ -2135,11 +2166,11 @@ def _accel_gen(kp, lapack, x, nin, n, m, jr, jc, rows0, columns, robust, ipiv, i
     (``compile._generalized.RecursiveDynamics``, decision 0016) at ``x = [t, q, qd, 0, p,
     0]``, ``y = (q, qd)``: :func:`_gen_forward_main`; ``tree``: ``qdd`` by the
     articulated-body recursion (no constraint equation), else the composite-body mass matrix
-    in the augmented system, solved as ``_accel`` does. False: hand over (a joint whose
-    motion carries no mass, a singular or non-finite system)."""
+    in the augmented system (:func:`_gen_augmented`), solved as ``_accel`` does. False: hand
+    over (a joint whose motion carries no mass, a singular or non-finite system)."""
     ptrs, kid, par, root, nqm, goff, gcols, Mr, Mc, sc = gi
     (P, Pd, FP, Fg, H, HL, Mb, Qvb, C, BQ, BV, X, Y, U, L, Z, W, Qp, xj, oj, xg, og, Q, Qv, Qd,
-     M, KT) = gw
+     M, KT, F) = gw
     nq, kM, kJ = sc[0], sc[1], sc[2]
     if not _gen_forward_main(kp, x, nin, n, m, gi, gw, ex, ph, y):
         return False
@@ -2154,42 +2185,172 @@ def _accel_gen(kp, lapack, x, nin, n, m, jr, jc, rows0, columns, robust, ipiv, i
             if not np.isfinite(qdd[j]):
                 return False
         return True
-    _gen_mass(gi, gw, n)
-    KT[:, :] = 0.0
-    for i in range(n):                   # K transposed (M is symmetric only to rounding)
-        for j in range(n):
-            KT[j, i] = M[i, j]
-    for k in range(jr.size):
-        v = og[kM + k]
-        KT[n + jr[k], jc[k]] = v
-        KT[jc[k], n + jr[k]] = v
-    # the right-hand side [Q + Qv; gamma] over og[o:o + n + m] (Q, Qv are copied out above;
-    # the Jacobian's values before it stay)
-    for j in range(n):
-        og[o + j] = Q[j] + Qv[j]
-    for i in range(m):
-        og[o + n + i] = og[o + 2 * n + i]
+    _gen_augmented(gi, gw, n, m, jr, jc)
     return _solve_augmented(lapack, KT, og, o, og, kM, n, m, jr, jc, rows0, columns, robust,
                             ipiv, ibuf, rhs, b, qdd, lam, force)
 
 
+@nb.njit(cache=True, inline='always')
+def _gen_cholesky(gi, gw, n, qdd):
+    r"""After :func:`_gen_forward_main` on a system without constraint equations:
+    :math:`\ddot q = M^{-1} (Q + Q_v + F)` by the composite-body mass matrix
+    (:func:`_gen_mass`) and its Cholesky factor (:func:`_band_chol` with the full band, the
+    block path's; ``KT`` of ``gw`` holds it), as the Python path's
+    ``analyses._robot._forward_free``. False: hand over (``M`` not positive definite: the
+    Python path names the joints; a value that is not finite)."""
+    ptrs, kid, par, root, nqm, goff, gcols, Mr, Mc, sc = gi
+    (P, Pd, FP, Fg, H, HL, Mb, Qvb, C, BQ, BV, X, Y, U, L, Z, W, Qp, xj, oj, xg, og, Q, Qv, Qd,
+     M, KT, F) = gw
+    _gen_mass(gi, gw, n)
+    for i in range(n):                   # the lower triangle, band storage Sb[i, i - j]
+        for j in range(i + 1):
+            if not np.isfinite(M[i, j]):
+                return False
+            KT[i, i - j] = M[i, j]
+    if _band_chol(KT, n, n - 1) < 0.0:
+        return False
+    for j in range(n):
+        qdd[j] = (Q[j] + Qv[j]) + F[j]
+    _band_solve(KT, n, n - 1, qdd)
+    for j in range(n):
+        if not np.isfinite(qdd[j]):
+            return False
+    return True
+
+
+@nb.njit(cache=True, inline='always')
+def _gen_regular(gi, gw, n, m, jr, jc, lapack, ipiv, ibuf, cbuf, sol, qdd):
+    """After :func:`_gen_forward_main`: ``qdd`` from the augmented system
+    (:func:`_gen_augmented`) by LAPACK's ``dgetrf``/``dgetrs`` (SciPy's, the Python path's
+    ``scipy.linalg.lu_factor``: the same factors) when its pivots are regular, the Python
+    path's rule (``analyses._robot._solve_regular``: the smallest above ``1e-11`` times the
+    largest). False: hand over (a redundant or singular system, which the Python path solves
+    by least squares or diagnoses; a value that is not finite)."""
+    kM, kJ = gi[9][1], gi[9][2]
+    _gen_augmented(gi, gw, n, m, jr, jc)
+    og, KT = gw[21], gw[26]
+    o = kM + kJ
+    N = n + m
+    for i in range(N):
+        v = og[o + i]
+        if not np.isfinite(v):
+            return False
+        sol[i] = v
+    for i in range(N):
+        for j in range(N):
+            if not np.isfinite(KT[i, j]):
+                return False
+    ibuf[0] = N          # m, n, lda = ldb, info, nrhs
+    ibuf[1] = N
+    ibuf[2] = N
+    ibuf[3] = 0
+    ibuf[4] = 1
+    _ccall(lapack[0], (ibuf[0:1], ibuf[1:2], KT, ibuf[2:3], ipiv, ibuf[3:4]))
+    if ibuf[3] != 0:
+        return False
+    lo = np.inf
+    hi = 0.0
+    for j in range(N):
+        d = abs(KT[j, j])
+        lo = min(lo, d)
+        hi = max(hi, d)
+    if not lo > 1e-11 * hi:
+        return False
+    cbuf[0] = 78         # 'N': no transpose
+    _ccall(lapack[2], (cbuf[0:1], ibuf[1:2], ibuf[4:5], KT, ibuf[2:3], ipiv, sol, ibuf[2:3],
+                       ibuf[3:4]))
+    for j in range(n):
+        if not np.isfinite(sol[j]):
+            return False
+        qdd[j] = sol[j]
+    return True
+
+
+#: the modes of :func:`gen_points`: the right-hand sides of the multiplier solves (static,
+#: kinematic, dynamic), forward dynamics without and with constraint equations
+STATIC_LOADS, KINEMATIC_LOADS, DYNAMIC_LOADS, FORWARD_FREE, FORWARD_AUGMENTED = 0, 1, 2, 3, 4
+
+
+@nb.njit(cache=True, inline='always')
+def _gen_loads_point(gi, gw, n, mode, X, R, k):
+    """After :func:`_gen_forward_main`: ``R[k]`` = ``Q`` (``STATIC_LOADS``,
+    ``KINEMATIC_LOADS``) or ``Q + Qv - M X[k]`` (``DYNAMIC_LOADS``) by the composite bodies.
+    False: a value that is not finite."""
+    M, Qg, Qv = gw[25], gw[22], gw[23]
+    _gen_mass(gi, gw, n)
+    for i in range(n):
+        if mode == DYNAMIC_LOADS:
+            s = 0.0
+            for j in range(n):
+                s += M[i, j] * X[k, j]
+            R[k, i] = (Qg[i] + Qv[i]) - s
+        else:
+            R[k, i] = Qg[i]
+        if not np.isfinite(R[k, i]):
+            return False
+    return True
+
+
+@nb.njit(cache=True, inline='always')
+def _gen_forward_point(gi, gw, n, m, jr, jc, lapack, ipiv, ibuf, cbuf, sol, qdd, mode, X, R,
+                       k):
+    """After :func:`_gen_forward_main`: ``R[k]`` the accelerations under the forces ``X[k]``
+    on the coordinates, ``FORWARD_FREE`` by :func:`_gen_cholesky`, ``FORWARD_AUGMENTED`` by
+    :func:`_gen_regular`. False: hand over to the Python path."""
+    Ft = gw[27]
+    for j in range(n):
+        Ft[j] = X[k, j]
+    if mode == FORWARD_FREE:
+        if not _gen_cholesky(gi, gw, n, qdd):
+            return False
+    elif not _gen_regular(gi, gw, n, m, jr, jc, lapack, ipiv, ibuf, cbuf, sol, qdd):
+        return False
+    for j in range(n):
+        R[k, j] = qdd[j]
+    return True
+
+
 @nb.njit(cache=True)
-def gen_loads(kp, gi, ex, times, Q, QD, QDD, p, m, mode, R):
-    """The right-hand sides of the multiplier solves of a system with recursive Gen dynamics
-    (``_jit_multipliers``: ``R[k]`` (n,) at each point of the solved sweep ``Q``, ``QD``,
-    ``QDD`` (N, n)): ``Q`` (``mode`` 0, static: velocities taken zero; 1, kinematic) or ``Q
-    + Qv - M qdd`` (2, dynamic), by the recursion as :func:`_accel_gen` evaluates it (the
-    Python path's ``RecursiveDynamics.terms``). Returns the first point whose values are not
-    finite (``len(times)``: all done)."""
+def gen_points(kp, gi, ex, lapack, times, Q, QD, X, p, m, jr, jc, mode, R):
+    r"""Evaluations of a system with recursive Gen dynamics at each point ``k`` of the states
+    ``Q``, ``QD`` (N, n), by the recursion as :func:`_accel_gen` evaluates it (the Python
+    path's ``RecursiveDynamics.terms``), into ``R[k]`` (n,):
+
+    * the right-hand sides of the multiplier solves (``_jit_multipliers``, over a solved
+      sweep, ``X`` its accelerations): ``Q`` (``mode`` ``STATIC_LOADS``: velocities taken
+      zero; ``KINEMATIC_LOADS``) or :math:`Q + Q_v - M \ddot q` (``DYNAMIC_LOADS``; the
+      robot entry point ``m.inverse_dynamics`` too), :func:`_gen_loads_point`;
+    * forward dynamics (the robot entry point ``m.forward_dynamics``),
+      ``X[k]`` the forces on the coordinates and ``R[k]`` the accelerations of
+
+      .. math:: M \ddot q + \Phi_q^T \lambda = Q + Q_v + X_k, \qquad
+                \Phi_q \ddot q = \gamma
+
+      ``FORWARD_FREE`` (no constraint equation) by the Cholesky factor of ``M``
+      (:func:`_gen_cholesky`), ``FORWARD_AUGMENTED`` by LU of the augmented system with
+      regular pivots (:func:`_gen_regular`; ``jr``, ``jc`` the Jacobian's nonzero
+      positions, ``lapack`` SciPy's ``dgetrf``, ``dgecon``, ``dgetrs``:
+      ``_jit_runtime.lapack``).
+
+    One specialisation for every ``mode`` (the inverse and forward dynamics of a session
+    share one compile); the helpers of each point are inlined (``inline='always'``: a
+    separate compiled function would have LLVM optimise the recursion's code once more with
+    each caller). Returns the first point left to the Python path (``len(times)``: all
+    done): values not finite; in forward dynamics also a mass matrix that is not positive
+    definite or pivots that are not regular (the Python path diagnoses)."""
     N = times.size
     n = Q.shape[1]
     npar = p.size
     nin = 1 + 3 * n + m + npar
     gw = _gen_work(GEN_AUGMENTED, gi, n, m)
-    M, Qg, Qv = gw[25], gw[22], gw[23]
     ph = np.zeros(ex.max() + 1 if ex.size else 1)
     x = np.zeros(nin)
     y = np.zeros(2 * n)
+    qdd = np.zeros(n)
+    ipiv = np.zeros(n + m, dtype=np.int32)
+    ibuf = np.zeros(5, dtype=np.int32)
+    cbuf = np.zeros(1, dtype=np.uint8)
+    sol = np.zeros(n + m)
     for j in range(npar):
         x[1 + 2 * n + m + j] = p[j]
     for k in range(N):
@@ -2197,22 +2358,17 @@ def gen_loads(kp, gi, ex, times, Q, QD, QDD, p, m, mode, R):
         for j in range(n):
             x[1 + j] = Q[k, j]
             y[j] = Q[k, j]
-            v = QD[k, j] if mode >= 1 else 0.0
+            v = QD[k, j] if mode >= KINEMATIC_LOADS else 0.0
             x[1 + n + j] = v
             y[n + j] = v
         if not _gen_forward_main(kp, x, nin, n, m, gi, gw, ex, ph, y):
             return k
-        _gen_mass(gi, gw, n)
-        for i in range(n):
-            if mode == 2:
-                s = 0.0
-                for j in range(n):
-                    s += M[i, j] * QDD[k, j]
-                R[k, i] = (Qg[i] + Qv[i]) - s
-            else:
-                R[k, i] = Qg[i]
-            if not np.isfinite(R[k, i]):
+        if mode >= FORWARD_FREE:
+            if not _gen_forward_point(gi, gw, n, m, jr, jc, lapack, ipiv, ibuf, cbuf, sol, qdd,
+                                      mode, X, R, k):
                 return k
+        elif not _gen_loads_point(gi, gw, n, mode, X, R, k):
+            return k
     return N
 
 

@@ -27,11 +27,9 @@ from ._jit_cache import notice
 from ._jit_runtime import (
     NO_BAND,
     SPARSE,
-    GenTree,
     band_args,
     band_lapack,
     index,
-    kernel_entry,
     lapack,
     patterned,
     wanted,
@@ -41,7 +39,7 @@ from ._linalg import _sparse_lu, pattern_slots
 from ._patterns import multiplier_newton_pattern
 from ._tolerances import SPARSE_THRESHOLD
 
-_state: dict = {"multipliers": None, "gen_loads": None}
+_state: dict = {"multipliers": None}
 
 #: CPU seconds of the multiplier solves' compile from empty caches (the slider-crank's inverse
 #: dynamics less its sweep; ``benchmarks/cold_start.py``, decision 0044), for the notice
@@ -127,38 +125,15 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
 def _recursive_loads(system, times, Q, QD, QDD, p, code):
     """``(R (N', n), N')``: the right-hand sides of the multiplier solves of a system with
     recursive Gen dynamics at the first ``N'`` points (up to the first whose values are not
-    finite, which the Python path reports), by ``_jit_free_loop.gen_loads``; None when its
-    kernels have no C entry points or the loop is being compiled in the background."""
-    dyn = system.dynamics
-    entry = kernel_entry(dyn._main)
-    if entry is None:
-        return None
-    gen = GenTree.of(system, dyn, entry[0])
-    if gen is None:
-        return None
-    if _state.get("gen_loads") is None:
-        from ._jit_free_loop import gen_loads
+    finite, which the Python path reports), by ``_jit_free_loop.gen_points``
+    (``_jit_gen_points``); None when its kernels have no C entry points or the loop is being
+    compiled in the background."""
+    from ._jit_gen_points import points
 
-        _state["gen_loads"] = gen_loads
-    from ._jit_modes import entry as _entry
-
-    N, n = len(times), system.n
-    R = np.empty((N, n))
+    n = system.n
     dummy = np.zeros((1, n))
-    args = (np.asarray(entry[0], dtype=np.int64), gen.arrays, entry[1],
-            np.ascontiguousarray(times, dtype=float), np.ascontiguousarray(Q, dtype=float),
-            dummy if code == 0 else np.ascontiguousarray(QD, dtype=float),
-            dummy if code < 2 else np.ascontiguousarray(QDD, dtype=float),
-            np.ascontiguousarray(system.p_values if p is None else p, dtype=float), system.m,
-            code, R)
-    # (every compile of more than about a second is announced: decision 0044; None: being
-    # compiled in the background, decision 0064, and the Python path computes the loads)
-    fn = _entry(_state["gen_loads"], args, say=lambda how: notice(
-        "the recursive dynamics' loads", None, background=how == "background"))
-    if fn is None:
-        return None
-    k = fn(*args)
-    return R[:k], int(k)
+    return points(system, times, Q, dummy if code == 0 else QD, dummy if code < 2 else QDD,
+                  code, p)
 
 
 #: the multiplier loop's (unused) Newton band arguments

@@ -125,7 +125,7 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
     Jacobian's CSC values.
 
     ``Rpre`` (N, n): the right-hand sides given (the recursive Gen dynamics, which has no
-    dynamics kernel: ``_jit_free_loop.gen_loads``; ``ptrs[1]`` is then zeros and never
+    dynamics kernel: ``_jit_free_loop.gen_points``; ``ptrs[1]`` is then zeros and never
     called), or (0, n): from the dynamics kernel. ``banded``: ``bw[0] == SPARSE``, given apart so
     that a caller can pass it as a literal (``_jit_modes.entry``: the sparse and banded
     solves are then compiled only for the systems that use them; decision 0044).
