@@ -119,7 +119,8 @@ class SweepResult:
     #: (n,) the row scales of the last point's velocity factorisation when it is the next
     #: point's chord (``rcond >= RCOND_WARN``), else None: what ``prior`` continues with
     rows: np.ndarray | None = field(default=None, repr=False, compare=False)
-    #: how many of the points the compiled loop solved (the rest: the Python loop)
+    #: how many of the points the compiled loop solved (the rest: the same loop interpreted,
+    #: decision 0075, or the Python loop)
     compiled: int = field(default=0, compare=False)
 
     @property
@@ -420,14 +421,15 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
         args = (system, pointers, times, q0, p, order, options or PositionOptions(), sc, rot, Q,
                 QD, QDD, its, rconds, rprev, R, P, prior_rows is not None)
         if progress is None:
-            k0, done, sc = _jit_sweep.run(*args)
+            k0, done, sc, compiled = _jit_sweep.run(*args)
         else:
-            k0, done, sc, interrupted = _run_chunks(args, progress)
+            k0, done, sc, compiled, interrupted = _run_chunks(args, progress)
         if sc is None and N:
             # the loop did not run (compiled in the background meanwhile: decision 0064); the
             # Python loop's scaling, as above
             F0, J0 = system.residual_and_jacobian(times[0], q0, p, sparse)
             sc, start = Scaling.of(system, q0, J0), (F0, J0)
+        ran = k0
         if guard is not None and k0 > P:
             # a compiled row on the wrong root of an angle equation (a prediction more than a
             # quarter turn off): it and the rows after it are solved again below
@@ -438,7 +440,9 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
         if order >= 1 and (rconds[P:k0] == RCOND_PENDING).any():
             fill = _jit_sweep.rcond_filler(system, pointers, times[P:], Q[P:], p, sc, R[P:])
         evals += done
-        compiled = k0 - P
+        # (the compiled loop's rows are the last ones it solved; the guard's redone rows are
+        # the last ones too)
+        compiled = max(0, compiled - (ran - k0))
         if interrupted:
             raise _interrupted(k0, P, times, Q, QD, QDD, its, evals, order, rconds, fill, compiled)
         if P < k0 < N and order >= 1 and rconds[k0 - 1] >= RCOND_WARN:
@@ -579,35 +583,38 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
 
 def _run_chunks(args, progress):
     """``_jit_sweep.run(*args)`` in chunks of points, ``progress(done)`` between them; returns
-    ``(k, evaluations, scaling, interrupted)``. Each chunk resumes the loop at the point where
-    the last one ended (``first``), with that point's chord (``chord_start``) rebuilt from its
-    coordinates and row scales exactly as the loop builds it, so the numbers are those of one
-    call. Chunks grow (or shrink) toward ``CHUNK_SECONDS`` each, at most 4x per chunk; a
+    ``(k, evaluations, scaling, compiled, interrupted)`` (``compiled``: the points the
+    compiled loop solved, the others the interpreted loop's). Each chunk resumes the loop at
+    the point where the last one ended (``first``), with that point's chord (``chord_start``)
+    rebuilt from its coordinates and row scales exactly as the loop builds it, so the numbers
+    are those of one call. Chunks grow (or shrink) toward ``CHUNK_SECONDS`` each, at most 4x per chunk; a
     ``KeyboardInterrupt`` (Ctrl-C during a chunk, or from ``progress``) ends the run with
     the points of the chunks before it (``interrupted`` True)."""
     (system, pointers, times, q0, p, order, options, sc, rot, Q, QD, QDD, its, rconds, rprev,
      R, first, chord_start) = args
-    N, k, evals, size = len(times), first, 0, FIRST_CHUNK
+    N, k, evals, size, compiled = len(times), first, 0, FIRST_CHUNK, 0
     while k < N:
         end = min(N, k + size)
         clock = time.perf_counter()
         try:
-            kk, done, sc = _jit_sweep.run(system, pointers, times[:end], q0, p, order, options, sc, rot,
-                                    Q, QD, QDD, its, rconds, rprev, R, k, chord_start)
+            kk, done, sc, got = _jit_sweep.run(system, pointers, times[:end], q0, p, order,
+                                               options, sc, rot, Q, QD, QDD, its, rconds, rprev,
+                                               R, k, chord_start)
         except KeyboardInterrupt:
-            return k, evals, sc, True         # (the points of this chunk are not all known)
+            return k, evals, sc, compiled, True   # (the points of this chunk are not all known)
         evals += done
+        compiled += got
         if kk < end:                          # left to the Python loop
-            return kk, evals, sc, False
+            return kk, evals, sc, compiled, False
         k = end
         chord_start = order >= 1 and bool(rconds[k - 1] >= RCOND_WARN)
         try:
             progress(k - first)
         except KeyboardInterrupt:
-            return k, evals, sc, True
+            return k, evals, sc, compiled, True
         took = max(time.perf_counter() - clock, 1e-6)
         size = max(1, int(size * min(4.0, max(0.25, CHUNK_SECONDS / took))))
-    return k, evals, sc, False
+    return k, evals, sc, compiled, False
 
 
 def _interrupted(k, P, times, Q, QD, QDD, its, evals, order, rconds, fill, compiled) -> Stopped:
