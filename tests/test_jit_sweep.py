@@ -247,7 +247,7 @@ def test_the_loops_scaling_is_the_python_one(build):
     want = Scaling.of(s, q0, s.jacobian(t[0], q0, p))
     N, n = len(t), s.n
     out = [np.empty((N, n)) for _ in range(3)]
-    _, _, got = _jit_sweep.run(s, _jit_sweep.plan(s, 10_000, 2), t, q0, p, 2, PositionOptions(), None,
+    _, _, got, _ = _jit_sweep.run(s, _jit_sweep.plan(s, 10_000, 2), t, q0, p, 2, PositionOptions(), None,
                          rotation_indices(s), *out, np.zeros(N, dtype=int), np.full(N, np.nan),
                          np.ones(n))
     assert got.length == want.length and got.offset == want.offset
