@@ -11,7 +11,8 @@ the two intrinsics that have no Python meaning replaced by calls through :mod:`c
   ``void f(double *out, const double *x, void *ctx)`` at ``addr``, ``out`` from element
   ``off`` on (the compiled loop's instruction: the same machine code of the kernel);
 * ``_ccall(addr, args)``: the C function at ``addr`` (SciPy's LAPACK) with each array of
-  ``args`` passed by its data pointer and each integer as a pointer value.
+  ``args`` passed by its data pointer and each integer as a pointer value;
+* ``borrow(value)`` (reference counting switched off): ``value`` itself.
 
 Nothing is re-written: the bytecode that runs is the one Numba compiles, so the two tiers
 take the same branches and, with IEEE double arithmetic in both (NumPy's scalars here,
@@ -71,10 +72,17 @@ def _is_dispatcher(obj) -> bool:
     return hasattr(obj, "py_func") and hasattr(obj, "overloads")
 
 
-def _shims():
-    from . import _jit_calls
+def _borrow(value):
+    """The intrinsic ``_jit_borrow.borrow`` (reference counting switched off: nothing to do
+    in Python)."""
+    return value
 
-    return {id(_jit_calls._kcall): _kcall, id(_jit_calls._ccall): _ccall}
+
+def _shims():
+    from . import _jit_borrow, _jit_calls
+
+    return {id(_jit_calls._kcall): _kcall, id(_jit_calls._ccall): _ccall,
+            id(_jit_borrow.borrow): _borrow}
 
 
 def _rebound(g: dict) -> dict:
