@@ -136,6 +136,11 @@ class SweepResult:
         return self.fill is not None
 
 
+#: the Python code stops resuming the loop after a hand-over (and takes the rest of the
+#: sweep) once the loop has solved no point this many times in a row
+RESUME_MISSES = 4
+
+
 #: a step between two solved points that turns a rotational coordinate by more than this (rad)
 #: is coarse: the sweep checks it by continuation in substeps (decision 0035)
 STEP_CHECK = np.pi / 6
@@ -412,46 +417,77 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
     fill = None
     prior_rows = prior[5] if P and order >= 1 and rconds[P - 1] >= RCOND_WARN else None
     rows_last = prior_rows     # the chord's rows of the last point solved
-    interrupted, compiled = False, 0
-    if pointers is not None:
-        # the regular points in compiled code; the first one needing care is left to the loop
-        # below (the loop takes the scaling from its first evaluation when none is given)
-        rprev = np.ones(n) if prior_rows is None else np.array(prior_rows, dtype=float)
-        R = np.empty((N, n)) if order >= 1 else None   # row scales of the pending estimates
+    compiled = 0
+    rprev = np.ones(n) if prior_rows is None else np.array(prior_rows, dtype=float)
+    R = np.empty((N, n)) if order >= 1 and pointers is not None else None   # pending estimates' rows
+
+    def loop_from(first: int, chord_start: bool) -> int:
+        """The loop (compiled, or the same code interpreted) from point ``first``; returns the
+        first point it leaves to the Python code below (the points before it are solved),
+        with ``chord`` the chord of the point before it."""
+        nonlocal sc, start, rows_last, fill, evals, compiled, chord
         args = (system, pointers, times, q0, p, order, options or PositionOptions(), sc, rot, Q,
-                QD, QDD, its, rconds, rprev, R, P, prior_rows is not None)
+                QD, QDD, its, rconds, rprev, R, first, chord_start)
+        interrupted = False
         if progress is None:
-            k0, done, sc, compiled = _jit_sweep.run(*args)
+            k, done, sc, got = _jit_sweep.run(*args)
         else:
-            k0, done, sc, compiled, interrupted = _run_chunks(args, progress)
+            k, done, sc, got, interrupted = _run_chunks(args, progress, P)
+        k = max(int(k), first)
         if sc is None and N:
             # the loop did not run (compiled in the background meanwhile: decision 0064); the
             # Python loop's scaling, as above
             F0, J0 = system.residual_and_jacobian(times[0], q0, p, sparse)
             sc, start = Scaling.of(system, q0, J0), (F0, J0)
-        ran = k0
-        if guard is not None and k0 > P:
-            # a compiled row on the wrong root of an angle equation (a prediction more than a
-            # quarter turn off): it and the rows after it are solved again below
-            bad = np.flatnonzero(guard.wrong_rows(times[P:k0], Q[P:k0], p).any(axis=1))
-            k0 = k0 if not bad.size else P + int(bad[0])
-        if k0 > P:
-            rows_last = rprev.copy() if order >= 1 and rconds[k0 - 1] >= RCOND_WARN else None
-        if order >= 1 and (rconds[P:k0] == RCOND_PENDING).any():
+        ran = k
+        if guard is not None and k > first:
+            # a row on the wrong root of an angle equation (a prediction more than a quarter
+            # turn off): it and the rows after it are solved again below
+            bad = np.flatnonzero(guard.wrong_rows(times[first:k], Q[first:k], p).any(axis=1))
+            k = k if not bad.size else first + int(bad[0])
+        if k > first:
+            rows_last = rprev.copy() if order >= 1 and rconds[k - 1] >= RCOND_WARN else None
+        if fill is None and order >= 1 and (rconds[first:k] == RCOND_PENDING).any():
             fill = _jit_sweep.rcond_filler(system, pointers, times[P:], Q[P:], p, sc, R[P:])
         evals += done
         # (the compiled loop's rows are the last ones it solved; the guard's redone rows are
         # the last ones too)
-        compiled = max(0, compiled - (ran - k0))
+        compiled += max(0, got - (ran - k))
         if interrupted:
-            raise _interrupted(k0, P, times, Q, QD, QDD, its, evals, order, rconds, fill, compiled)
-        if P < k0 < N and order >= 1 and rconds[k0 - 1] >= RCOND_WARN:
-            # the chord the compiled loop had: the same matrix, factorised again (not counted
-            # as an evaluation: the all-Python sweep has it at hand)
-            try:
-                chord = sc.factor(system.jacobian(times[k0 - 1], Q[k0 - 1], p, sparse), rprev)
-            except Singular:
-                chord = None
+            raise _interrupted(k, P, times, Q, QD, QDD, its, evals, order, rconds, fill, compiled)
+        if first < k < N:
+            chord = None
+            if order >= 1 and rconds[k - 1] >= RCOND_WARN:
+                # the chord the loop had: the same matrix, factorised again (not counted as an
+                # evaluation: the all-Python sweep has it at hand)
+                try:
+                    chord = sc.factor(system.jacobian(times[k - 1], Q[k - 1], p, sparse), rprev)
+                except Singular:
+                    chord = None
+        return k
+
+    if pointers is not None:
+        # the regular points in the loop; the first one needing care is left to the Python
+        # code below (the loop takes the scaling from its first evaluation when none is given)
+        k0 = loop_from(P, prior_rows is not None)
+
+    def points():
+        """The points the Python code takes: each point the loop leaves to it, after which
+        the loop resumes from the next point with that point's chord (decision 0075); the
+        rest of the sweep once the loop has solved nothing ``RESUME_MISSES`` times in a row
+        (not at hand, or a stretch of points needing care)."""
+        k, misses = k0, 0
+        while k < N:
+            yield k
+            k += 1
+            if pointers is None or k >= N or misses >= RESUME_MISSES:
+                continue
+            if order >= 1 and chord is not None:
+                rprev[:] = rows_last
+            kk = loop_from(k, order >= 1 and chord is not None)
+            misses = misses + 1 if kk == k else 0
+            k = kk
+
     if k0 == P and prior_rows is not None:
         # the last prior point's chord, as the long sweep has it (also when the compiled
         # loop left the first point to this loop)
@@ -463,7 +499,7 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
     clock = time.perf_counter()
     k = k0
     try:
-        for k in range(k0, N):
+        for k in points():
             t = times[k]
             if progress is not None and k > k0 and time.perf_counter() - clock > CHUNK_SECONDS:
                 progress(k - P)
@@ -581,7 +617,7 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
                        rows_last, compiled)
 
 
-def _run_chunks(args, progress):
+def _run_chunks(args, progress, base: int):
     """``_jit_sweep.run(*args)`` in chunks of points, ``progress(done)`` between them; returns
     ``(k, evaluations, scaling, compiled, interrupted)`` (``compiled``: the points the
     compiled loop solved, the others the interpreted loop's). Each chunk resumes the loop at
@@ -609,7 +645,7 @@ def _run_chunks(args, progress):
         k = end
         chord_start = order >= 1 and bool(rconds[k - 1] >= RCOND_WARN)
         try:
-            progress(k - first)
+            progress(k - base)
         except KeyboardInterrupt:
             return k, evals, sc, compiled, True
         took = max(time.perf_counter() - clock, 1e-6)
