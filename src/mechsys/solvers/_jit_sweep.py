@@ -15,12 +15,17 @@ matching and minimum-degree ordering analysed once per system, then the sparse L
 the same numbers to rounding.
 
 The compiled loop handles the regular points. At the first point that needs the Python
-path's care (Newton not converging, a singular or nearly singular Jacobian, a branch jump)
-it stops and returns that point's index; the Python loop takes over from there with its
-whole logic (retries, toggle handling, diagnostics). It factorises the last solved point's
-Jacobian again, with the row scales the compiled loop returns, so that its first position
-solve starts with the same chord steps (decision 0020). Results never depend on which path
-ran.
+path's care (Newton not converging, a singular Jacobian, a branch jump) it stops and
+returns that point's index; the Python code takes that point with its whole logic
+(retries, toggle handling, diagnostics), factorising the last solved point's Jacobian
+again with the row scales the loop returns, so that its first position solve starts with
+the same chord steps (decision 0020); then the loop resumes from the next point with that
+point's chord (decision 0075). Results never depend on which path ran.
+
+While the compiled loop is being compiled in the background (decision 0064) the same loop
+runs interpreted (:mod:`._jit_interp`: its own code, the same numbers bit for bit) for
+systems of up to :data:`INTERP_MAX` unknowns, and hands over to the compiled loop when
+that is ready (decision 0075).
 
 When it runs: the ``MECHSYS_JIT`` rule of :mod:`~mechsys.solvers._jit_runtime` (``auto``:
 sweeps of at least ``AUTO_POINTS`` points), with the SymEngine LLVM backend's kernels
@@ -33,8 +38,8 @@ Example (what ``_kinematics.sweep`` does)::
 
     pointers = plan(system, len(times), order=2)
     if pointers is not None:
-        k, evals, scaling = run(system, pointers, times, q0, p, 2, options, None, rot, Q, QD,
-                                QDD, its, rconds, rprev)
+        k, evals, scaling, compiled = run(system, pointers, times, q0, p, 2, options, None,
+                                          rot, Q, QD, QDD, its, rconds, rprev)
 
 Measured (slider-crank, 1000 points with velocities and accelerations): see
 ``docs/performance.md``, ``docs/decisions/0013-compiled-sweep.md`` and

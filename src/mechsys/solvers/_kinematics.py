@@ -360,9 +360,12 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
                 p=None, scaling: Scaling | None = None, hooks=None, prior=None,
                 partial: bool = False, points: int | None = None,
                 progress: Callable[[int], None] | None = None) -> SweepResult:
-    """The sweep's loops (compiled, then Python) without the coarse-step checks of
-    :func:`sweep`, which calls it. Kinematic solution at each of ``times`` (1D, any order;
-    continuation follows the given order). ``order`` 0 = location, 1 = + velocity,
+    """The sweep's loops without the coarse-step checks of :func:`sweep`, which calls it:
+    the loop of ``_jit_sweep`` (compiled, or its code interpreted) for the regular points,
+    the Python code for each point it leaves (after which the loop resumes) and for every
+    point when the loop cannot run (hooks, kernels without C entry points, ``MECHSYS_JIT``,
+    a large system while its loop compiles; decision 0075). Kinematic solution at each of
+    ``times`` (1D, any order; continuation follows the given order). ``order`` 0 = location, 1 = + velocity,
     2 = + acceleration. ``scaling`` defaults to the one of ``guess`` at the first time.
     ``hooks``
     (:class:`~mechsys.solvers._diagnostics.Hooks`): ``pre_solve(t)`` before each point's
