@@ -53,6 +53,7 @@ import numpy as np
 
 from .._errors import MechError
 from ._jit_cache import notice
+from ._jit_runtime import INTERP_MAX as _INTERP_MAX
 from ._jit_runtime import NO_BAND, SPARSE, band_args, index, lapack, wanted
 from ._jit_runtime import table as _table
 from ._linalg import Scaling, _column_kinds, length_hint
@@ -73,12 +74,9 @@ def plan(system, points: int, order: int):
     return _table(kernels)
 
 
-#: the interpreted loop (:mod:`._jit_interp`: the loop's own code run by Python) is the first
-#: tier of systems up to this many unknowns while the compiled one is being compiled in the
-#: background (decision 0075): its cost per point grows about as n^2 (the slider-crank's 9
-#: unknowns: 0.55 ms a point, 3 x the Python loop; 21: 1.4 ms, 6 x; 63: 19 ms, 25 x), so
-#: larger systems keep the Python loop meanwhile
-INTERP_MAX = 24
+#: the interpreted loop is the first tier of systems up to this many unknowns while the
+#: compiled one is compiled in the background (``_jit_runtime.INTERP_MAX``, decision 0075)
+INTERP_MAX = _INTERP_MAX
 #: the interpreted loop runs in chunks of this many points, asking between them whether the
 #: compiled loop is ready (it then takes the rest of the sweep: the same numbers)
 INTERP_CHUNK = 256
