@@ -161,23 +161,6 @@ def entry(dispatcher, args, literal=(), say=None):
     return fn
 
 
-def loaded(dispatcher, args, literal=()):
-    """The machine code :func:`entry` would return for ``args`` when this process already
-    holds it (found before, or compiled here), else None: nothing is compiled, loaded or
-    started. For a job too short to pay for loading a loop whose interpreted run gives the
-    same numbers (decision 0075)."""
-    key = (dispatcher, tuple(args[i] for i in literal), tuple(map(_fingerprint, args)))
-    got = _ENTRIES.get(key)
-    if got is None and not dispatcher.overloads:
-        return None
-    if got is None:
-        cres = dispatcher.overloads.get(signature(args, literal))
-        if cres is None:
-            return None
-        got = _ENTRIES[key] = cres.entry_point
-    return got
-
-
 # --- the background tier (decision 0064) --------------------------------------------------
 
 _LOG = logging.getLogger("mechsys")
