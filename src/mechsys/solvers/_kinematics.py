@@ -365,9 +365,9 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
     the Python code for each point it leaves (after which the loop resumes) and for every
     point when the loop cannot run (hooks, kernels without C entry points, ``MECHSYS_JIT``,
     a large system while its loop compiles; decision 0075). Kinematic solution at each of
-    ``times`` (1D, any order; continuation follows the given order). ``order`` 0 = location, 1 = + velocity,
-    2 = + acceleration. ``scaling`` defaults to the one of ``guess`` at the first time.
-    ``hooks``
+    ``times`` (1D, any order; continuation follows the given order). ``order`` 0 = location,
+    1 = + velocity, 2 = + acceleration. ``scaling`` defaults to the one of ``guess`` at the
+    first time. ``hooks``
     (:class:`~mechsys.solvers._diagnostics.Hooks`): ``pre_solve(t)`` before each point's
     position solve; a hook returning False raises ``Stopped`` carrying the points solved so
     far (``partial``, a :class:`SweepResult`).
@@ -626,9 +626,10 @@ def _run_chunks(args, progress, base: int):
     compiled loop solved, the others the interpreted loop's). Each chunk resumes the loop at
     the point where the last one ended (``first``), with that point's chord (``chord_start``)
     rebuilt from its coordinates and row scales exactly as the loop builds it, so the numbers
-    are those of one call. Chunks grow (or shrink) toward ``CHUNK_SECONDS`` each, at most 4x per chunk; a
-    ``KeyboardInterrupt`` (Ctrl-C during a chunk, or from ``progress``) ends the run with
-    the points of the chunks before it (``interrupted`` True)."""
+    are those of one call. Chunks grow (or shrink) toward ``CHUNK_SECONDS`` each, at most 4x
+    per chunk; a ``KeyboardInterrupt`` (Ctrl-C during a chunk, or from ``progress``) ends the
+    run with the points of the chunks before it (``interrupted`` True). ``progress`` is told
+    the points solved since ``base``."""
     (system, pointers, times, q0, p, order, options, sc, rot, Q, QD, QDD, its, rconds, rprev,
      R, first, chord_start) = args
     N, k, evals, size, compiled = len(times), first, 0, FIRST_CHUNK, 0
