@@ -49,7 +49,7 @@ def _close(a, b, tol=1e-12):
 def test_compiled_and_python_multistage_sweeps_agree(monkeypatch, solution):
     t = np.linspace(0, 4 * np.pi, 401)
     fast, slow, runs = _both(monkeypatch, models.geneva_drive, t, solution=solution)
-    assert runs and sum(done for _, done, _ in runs) > 0.8 * len(t)  # the compiled loop ran
+    assert runs and sum(done for _, done, _, _ in runs) > 0.8 * len(t)  # the compiled loop ran
     np.testing.assert_array_equal(fast.stage("geneva"), slow.stage("geneva"))
     assert sorted(set(slow.stage("geneva"))) == [1, 2, 3, 4, 5]
     assert _close(fast.q, slow.q)

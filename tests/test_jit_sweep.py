@@ -247,7 +247,7 @@ def test_the_loops_scaling_is_the_python_one(build):
     want = Scaling.of(s, q0, s.jacobian(t[0], q0, p))
     N, n = len(t), s.n
     out = [np.empty((N, n)) for _ in range(3)]
-    _, _, got = _jit_sweep.run(s, _jit_sweep.plan(s, 10_000, 2), t, q0, p, 2, PositionOptions(), None,
+    _, _, got, _ = _jit_sweep.run(s, _jit_sweep.plan(s, 10_000, 2), t, q0, p, 2, PositionOptions(), None,
                          rotation_indices(s), *out, np.zeros(N, dtype=int), np.full(N, np.nan),
                          np.ones(n))
     assert got.length == want.length and got.offset == want.offset
@@ -476,3 +476,23 @@ def test_sparse_lu_storage_too_small_hands_over_and_grows(monkeypatch):
     again = m.solve(t)
     assert runs and runs[0][0] == len(t)            # the next run has the room
     np.testing.assert_array_equal(again.q, plain.q)
+
+
+def test_a_forced_hand_over_is_one_python_point(monkeypatch):
+    """The loop made to stop at point 7 once: the Python code solves that point alone and the
+    loop takes the rest; the numbers are those of the loop throughout, to rounding (the
+    Python code's LAPACK against the loop's written-out LU at one point)."""
+    real = _jit_sweep.run
+    t = np.linspace(0.0, 1.0, 30)
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    whole = models.four_bar().solve(t)
+    seen = []
+
+    def once(system, pointers, times, *rest):
+        seen.append(rest[-2])
+        return real(system, pointers, times[:7] if len(seen) == 1 else times, *rest)
+
+    monkeypatch.setattr(_jit_sweep, "run", once)
+    mixed = models.four_bar().solve(t)
+    assert seen == [0, 8] and mixed.extra["compiled_points"] == 29
+    _same(whole, mixed)

@@ -46,6 +46,8 @@ SOLVERS_TIER = {
     "_jit_lapack": 1, "_jit_calls": 1, "_jit_sparse": 1, "_jit_tree": 1,
     # 2 linear algebra (Python and compiled), fixed patterns, what every compiled loop needs
     "_linalg": 2, "_patterns": 2, "_jit_linalg": 2, "_jit_runtime": 2,
+    # (runs a compiled loop's code interpreted: imports only the intrinsics it replaces)
+    "_jit_interp": 2,
     # 3 the compiled loops
     "_jit_sweep_loop": 3, "_jit_multipliers_loop": 3, "_jit_free_loop": 3,
     # 4 the Python solvers and the drivers of the compiled loops

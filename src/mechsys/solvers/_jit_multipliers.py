@@ -25,6 +25,7 @@ import numpy as np
 
 from ._jit_cache import notice
 from ._jit_runtime import (
+    INTERP_MAX,
     NO_BAND,
     SPARSE,
     band_args,
@@ -118,7 +119,14 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
     fn = entry(_state["multipliers"], args, literal=(len(args) - 1,), say=lambda how: notice(
         "the multiplier solves" + (" (sparse)" if args[-1] else ""), _MULTIPLIER_SECONDS,
         background=how == "background"))
-    # (None: being compiled in the background, decision 0064; the Python loop takes every point)
+    if fn is None and not args[-1] and system.n <= INTERP_MAX:
+        # being compiled in the background (decision 0064): the same loop interpreted, the
+        # same numbers bit for bit (decision 0075)
+        from ._jit_interp import interpreted
+
+        fn = interpreted(_state["multipliers"])
+    # (None: a large system, being compiled in the background; the Python loop takes every
+    # point)
     return 0 if fn is None else int(fn(*args))
 
 

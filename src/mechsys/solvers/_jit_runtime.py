@@ -41,6 +41,13 @@ from ._tolerances import SPARSE_THRESHOLD
 #: ``auto``: the compiled loop is used for sweeps of at least this many points
 AUTO_POINTS = 1000
 
+#: the interpreted loops (:mod:`._jit_interp`: a compiled loop's own code run by Python) are
+#: the first tier of systems up to this many unknowns while the compiled loop is being
+#: compiled in the background (decision 0075): their cost per point grows about as n^2 (the
+#: sweep: 2 x the Python loop at 9 unknowns, 11 x at 21, 48 x at 63), so larger systems keep
+#: the Python loop meanwhile
+INTERP_MAX = 24
+
 #: up to this many unknowns the LU and condition estimate are computed in the loop
 #: (``_jit_lapack``: LAPACK's algorithms, without the call overhead, skipping the zero
 #: multipliers and visiting only the factors' nonzeros); above, LAPACK is called. That is
@@ -260,6 +267,6 @@ class GenTree:
         return cls(arrays, dyn.tree_only)
 
 
-__all__ = ["AUTO_POINTS", "NO_BAND", "GenTree", "available", "compile_policy", "band_args", "band_lapack",
-           "capsule_address", "index", "kernel_entry", "lapack", "mode", "patterned", "pointer",
-           "table", "wanted"]
+__all__ = ["AUTO_POINTS", "INTERP_MAX", "NO_BAND", "GenTree", "available", "compile_policy",
+           "band_args", "band_lapack", "capsule_address", "index", "kernel_entry", "lapack",
+           "mode", "patterned", "pointer", "table", "wanted"]

@@ -119,7 +119,8 @@ class SweepResult:
     #: (n,) the row scales of the last point's velocity factorisation when it is the next
     #: point's chord (``rcond >= RCOND_WARN``), else None: what ``prior`` continues with
     rows: np.ndarray | None = field(default=None, repr=False, compare=False)
-    #: how many of the points the compiled loop solved (the rest: the Python loop)
+    #: how many of the points the compiled loop solved (the rest: the same loop interpreted,
+    #: decision 0075, or the Python loop)
     compiled: int = field(default=0, compare=False)
 
     @property
@@ -133,6 +134,11 @@ class SweepResult:
     def rcond_pending(self) -> bool:
         """Whether reading ``rcond`` still has estimates to compute."""
         return self.fill is not None
+
+
+#: the Python code stops resuming the loop after a hand-over (and takes the rest of the
+#: sweep) once the loop has solved no point this many times in a row
+RESUME_MISSES = 4
 
 
 #: a step between two solved points that turns a rotational coordinate by more than this (rad)
@@ -354,11 +360,14 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
                 p=None, scaling: Scaling | None = None, hooks=None, prior=None,
                 partial: bool = False, points: int | None = None,
                 progress: Callable[[int], None] | None = None) -> SweepResult:
-    """The sweep's loops (compiled, then Python) without the coarse-step checks of
-    :func:`sweep`, which calls it. Kinematic solution at each of ``times`` (1D, any order;
-    continuation follows the given order). ``order`` 0 = location, 1 = + velocity,
-    2 = + acceleration. ``scaling`` defaults to the one of ``guess`` at the first time.
-    ``hooks``
+    """The sweep's loops without the coarse-step checks of :func:`sweep`, which calls it:
+    the loop of ``_jit_sweep`` (compiled, or its code interpreted) for the regular points,
+    the Python code for each point it leaves (after which the loop resumes) and for every
+    point when the loop cannot run (hooks, kernels without C entry points, ``MECHSYS_JIT``,
+    a large system while its loop compiles; decision 0075). Kinematic solution at each of
+    ``times`` (1D, any order; continuation follows the given order). ``order`` 0 = location,
+    1 = + velocity, 2 = + acceleration. ``scaling`` defaults to the one of ``guess`` at the
+    first time. ``hooks``
     (:class:`~mechsys.solvers._diagnostics.Hooks`): ``pre_solve(t)`` before each point's
     position solve; a hook returning False raises ``Stopped`` carrying the points solved so
     far (``partial``, a :class:`SweepResult`).
@@ -411,43 +420,77 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
     fill = None
     prior_rows = prior[5] if P and order >= 1 and rconds[P - 1] >= RCOND_WARN else None
     rows_last = prior_rows     # the chord's rows of the last point solved
-    interrupted, compiled = False, 0
-    if pointers is not None:
-        # the regular points in compiled code; the first one needing care is left to the loop
-        # below (the loop takes the scaling from its first evaluation when none is given)
-        rprev = np.ones(n) if prior_rows is None else np.array(prior_rows, dtype=float)
-        R = np.empty((N, n)) if order >= 1 else None   # row scales of the pending estimates
+    compiled = 0
+    rprev = np.ones(n) if prior_rows is None else np.array(prior_rows, dtype=float)
+    R = np.empty((N, n)) if order >= 1 and pointers is not None else None   # pending estimates' rows
+
+    def loop_from(first: int, chord_start: bool) -> int:
+        """The loop (compiled, or the same code interpreted) from point ``first``; returns the
+        first point it leaves to the Python code below (the points before it are solved),
+        with ``chord`` the chord of the point before it."""
+        nonlocal sc, start, rows_last, fill, evals, compiled, chord
         args = (system, pointers, times, q0, p, order, options or PositionOptions(), sc, rot, Q,
-                QD, QDD, its, rconds, rprev, R, P, prior_rows is not None)
+                QD, QDD, its, rconds, rprev, R, first, chord_start)
+        interrupted = False
         if progress is None:
-            k0, done, sc = _jit_sweep.run(*args)
+            k, done, sc, got = _jit_sweep.run(*args)
         else:
-            k0, done, sc, interrupted = _run_chunks(args, progress)
+            k, done, sc, got, interrupted = _run_chunks(args, progress, P)
+        k = max(int(k), first)
         if sc is None and N:
             # the loop did not run (compiled in the background meanwhile: decision 0064); the
             # Python loop's scaling, as above
             F0, J0 = system.residual_and_jacobian(times[0], q0, p, sparse)
             sc, start = Scaling.of(system, q0, J0), (F0, J0)
-        if guard is not None and k0 > P:
-            # a compiled row on the wrong root of an angle equation (a prediction more than a
-            # quarter turn off): it and the rows after it are solved again below
-            bad = np.flatnonzero(guard.wrong_rows(times[P:k0], Q[P:k0], p).any(axis=1))
-            k0 = k0 if not bad.size else P + int(bad[0])
-        if k0 > P:
-            rows_last = rprev.copy() if order >= 1 and rconds[k0 - 1] >= RCOND_WARN else None
-        if order >= 1 and (rconds[P:k0] == RCOND_PENDING).any():
+        ran = k
+        if guard is not None and k > first:
+            # a row on the wrong root of an angle equation (a prediction more than a quarter
+            # turn off): it and the rows after it are solved again below
+            bad = np.flatnonzero(guard.wrong_rows(times[first:k], Q[first:k], p).any(axis=1))
+            k = k if not bad.size else first + int(bad[0])
+        if k > first:
+            rows_last = rprev.copy() if order >= 1 and rconds[k - 1] >= RCOND_WARN else None
+        if fill is None and order >= 1 and (rconds[first:k] == RCOND_PENDING).any():
             fill = _jit_sweep.rcond_filler(system, pointers, times[P:], Q[P:], p, sc, R[P:])
         evals += done
-        compiled = k0 - P
+        # (the compiled loop's rows are the last ones it solved; the guard's redone rows are
+        # the last ones too)
+        compiled += max(0, got - (ran - k))
         if interrupted:
-            raise _interrupted(k0, P, times, Q, QD, QDD, its, evals, order, rconds, fill, compiled)
-        if P < k0 < N and order >= 1 and rconds[k0 - 1] >= RCOND_WARN:
-            # the chord the compiled loop had: the same matrix, factorised again (not counted
-            # as an evaluation: the all-Python sweep has it at hand)
-            try:
-                chord = sc.factor(system.jacobian(times[k0 - 1], Q[k0 - 1], p, sparse), rprev)
-            except Singular:
-                chord = None
+            raise _interrupted(k, P, times, Q, QD, QDD, its, evals, order, rconds, fill, compiled)
+        if first < k < N:
+            chord = None
+            if order >= 1 and rconds[k - 1] >= RCOND_WARN:
+                # the chord the loop had: the same matrix, factorised again (not counted as an
+                # evaluation: the all-Python sweep has it at hand)
+                try:
+                    chord = sc.factor(system.jacobian(times[k - 1], Q[k - 1], p, sparse), rprev)
+                except Singular:
+                    chord = None
+        return k
+
+    if pointers is not None:
+        # the regular points in the loop; the first one needing care is left to the Python
+        # code below (the loop takes the scaling from its first evaluation when none is given)
+        k0 = loop_from(P, prior_rows is not None)
+
+    def points():
+        """The points the Python code takes: each point the loop leaves to it, after which
+        the loop resumes from the next point with that point's chord (decision 0075); the
+        rest of the sweep once the loop has solved nothing ``RESUME_MISSES`` times in a row
+        (not at hand, or a stretch of points needing care)."""
+        k, misses = k0, 0
+        while k < N:
+            yield k
+            k += 1
+            if pointers is None or k >= N or misses >= RESUME_MISSES:
+                continue
+            if order >= 1 and chord is not None:
+                rprev[:] = rows_last
+            kk = loop_from(k, order >= 1 and chord is not None)
+            misses = misses + 1 if kk == k else 0
+            k = kk
+
     if k0 == P and prior_rows is not None:
         # the last prior point's chord, as the long sweep has it (also when the compiled
         # loop left the first point to this loop)
@@ -459,7 +502,7 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
     clock = time.perf_counter()
     k = k0
     try:
-        for k in range(k0, N):
+        for k in points():
             t = times[k]
             if progress is not None and k > k0 and time.perf_counter() - clock > CHUNK_SECONDS:
                 progress(k - P)
@@ -577,37 +620,41 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
                        rows_last, compiled)
 
 
-def _run_chunks(args, progress):
+def _run_chunks(args, progress, base: int):
     """``_jit_sweep.run(*args)`` in chunks of points, ``progress(done)`` between them; returns
-    ``(k, evaluations, scaling, interrupted)``. Each chunk resumes the loop at the point where
-    the last one ended (``first``), with that point's chord (``chord_start``) rebuilt from its
-    coordinates and row scales exactly as the loop builds it, so the numbers are those of one
-    call. Chunks grow (or shrink) toward ``CHUNK_SECONDS`` each, at most 4x per chunk; a
-    ``KeyboardInterrupt`` (Ctrl-C during a chunk, or from ``progress``) ends the run with
-    the points of the chunks before it (``interrupted`` True)."""
+    ``(k, evaluations, scaling, compiled, interrupted)`` (``compiled``: the points the
+    compiled loop solved, the others the interpreted loop's). Each chunk resumes the loop at
+    the point where the last one ended (``first``), with that point's chord (``chord_start``)
+    rebuilt from its coordinates and row scales exactly as the loop builds it, so the numbers
+    are those of one call. Chunks grow (or shrink) toward ``CHUNK_SECONDS`` each, at most 4x
+    per chunk; a ``KeyboardInterrupt`` (Ctrl-C during a chunk, or from ``progress``) ends the
+    run with the points of the chunks before it (``interrupted`` True). ``progress`` is told
+    the points solved since ``base``."""
     (system, pointers, times, q0, p, order, options, sc, rot, Q, QD, QDD, its, rconds, rprev,
      R, first, chord_start) = args
-    N, k, evals, size = len(times), first, 0, FIRST_CHUNK
+    N, k, evals, size, compiled = len(times), first, 0, FIRST_CHUNK, 0
     while k < N:
         end = min(N, k + size)
         clock = time.perf_counter()
         try:
-            kk, done, sc = _jit_sweep.run(system, pointers, times[:end], q0, p, order, options, sc, rot,
-                                    Q, QD, QDD, its, rconds, rprev, R, k, chord_start)
+            kk, done, sc, got = _jit_sweep.run(system, pointers, times[:end], q0, p, order,
+                                               options, sc, rot, Q, QD, QDD, its, rconds, rprev,
+                                               R, k, chord_start)
         except KeyboardInterrupt:
-            return k, evals, sc, True         # (the points of this chunk are not all known)
+            return k, evals, sc, compiled, True   # (the points of this chunk are not all known)
         evals += done
+        compiled += got
         if kk < end:                          # left to the Python loop
-            return kk, evals, sc, False
+            return kk, evals, sc, compiled, False
         k = end
         chord_start = order >= 1 and bool(rconds[k - 1] >= RCOND_WARN)
         try:
-            progress(k - first)
+            progress(k - base)
         except KeyboardInterrupt:
-            return k, evals, sc, True
+            return k, evals, sc, compiled, True
         took = max(time.perf_counter() - clock, 1e-6)
         size = max(1, int(size * min(4.0, max(0.25, CHUNK_SECONDS / took))))
-    return k, evals, sc, False
+    return k, evals, sc, compiled, False
 
 
 def _interrupted(k, P, times, Q, QD, QDD, its, evals, order, rconds, fill, compiled) -> Stopped:
