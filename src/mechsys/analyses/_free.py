@@ -707,7 +707,9 @@ class FreeSystem:
             and vrows is None      # (passing singular instants: holonomic rows only)
         zone = [False]                 # a derivative of this step came from the zone
         guard = None
-        rows0 = sc.rows(s.jacobian(t0, q0, p)) if robust else None
+        # (sparse above SPARSE_THRESHOLD coordinates: the same row maxima, without a dense
+        # m x n Jacobian)
+        rows0 = sc.rows(s.jacobian(t0, q0, p, n > SPARSE_THRESHOLD)) if robust else None
         if robust:
             inner = zone_guard(s, sc, rows0)
 
