@@ -202,13 +202,18 @@ class _Blocks:
         (bstart, boff, rptr, rblk, roff, jpos, bsize, mpos, segs), bw, rows_blocks, order = got
         n, m = system.n, system.m
         t0, q0 = start
-        M = system.dynamics.terms(t0, q0, np.zeros(n), np.zeros(m), p, np.zeros(n))[0]
+        dyn = system.dynamics
+        # the mass matrix in the loop's packed block store (not dense n x n: 75 MB for a
+        # 1024-link chain at every run's plan), summed as the dense matrix would be
+        vals = dyn.f_terms(dyn.pack(t0, q0, np.zeros(n), np.zeros(m), p, np.zeros(n)))
+        Mst = np.zeros(boff[-1])
+        np.add.at(Mst, mpos, vals[:len(mpos)])
         J, own = None, []
-        for b in _irregular(M, bstart, bsize):
+        for b in _irregular(Mst, boff, bsize):
             # a singular block (Euler parameters): regularised by the rows on it alone, as
             # the loop does it (_jit_free_loop._regularise)
             a, z = bstart[b], bsize[b]
-            B = M[a:a + z, a:a + z].copy()
+            B = Mst[boff[b]:boff[b] + z * z].reshape(z, z).copy()
             rows = [i for i, r in enumerate(rows_blocks) if r == [b]]
             if J is None:
                 J = system.jacobian(t0, q0, p)
@@ -291,14 +296,15 @@ def _make_block_structure(system):
     return ((bstart, boff, rptr, rblk, roff, jpos, bsize, mpos, segs), bw, rows_blocks, order)
 
 
-def _irregular(M, bstart, bsize) -> list:
-    """The blocks of ``M`` that are not regular (:func:`_regular`), tested a stack of blocks
-    of one size at a time."""
+def _irregular(Mst, boff, bsize) -> list:
+    """The blocks of the mass matrix that are not regular (:func:`_regular`), from its packed
+    block store ``Mst`` (block ``b``: ``Mst[boff[b]:boff[b + 1]]``, row-major ``z x z``),
+    tested a stack of blocks of one size at a time."""
     bad = []
     for z in np.unique(bsize):
         which = np.flatnonzero(bsize == z)
-        idx = bstart[which][:, None] + np.arange(z)
-        bad += which[~_pivots_ok(M[idx[:, :, None], idx[:, None, :]])].tolist()
+        idx = boff[which][:, None] + np.arange(z * z)
+        bad += which[~_pivots_ok(Mst[idx].reshape(-1, z, z))].tolist()
     return sorted(bad)
 
 
