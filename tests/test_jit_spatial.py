@@ -166,6 +166,44 @@ def test_rows_reordered_only_for_wide_bands(loops, ordered, band):
     assert blocks.bandwidth == band
 
 
+@pytest.mark.parametrize("case", ["spatial", "four_bar"])
+def test_gram_by_blocks_is_the_band_of_the_product(case):
+    """``_jit_free_loop._gram`` (each block couples its rows, decision 0074) against the dense
+    product ``A B^T`` of the per-(row, block) segments laid out as ``m x n`` matrices:
+    equal inside the band, and the product has nothing outside it. The spatial chain has
+    rows on one block (the normalisation) and on two; the 15-loop n-four-bar its rows in
+    the reordered (banded) structure."""
+    from mechsys.solvers._jit_free_loop import _gram
+
+    if case == "spatial":
+        free = _free(6, zigzag=0.3)
+    else:
+        m = models.n_four_bar(15, 9.81)
+        m.solve(0.0)
+        free = m.free(drop=["hold"])
+    s = free.system
+    blocks = _Blocks.of(s, s.p_values, (0.0, free.solve(0.0).q[0]))
+    bstart, _, rptr, rblk, roff, _, bsize, _, segs = blocks.arrays
+    m_ = s.m
+    rng = np.random.default_rng(7)
+    A_st, B_st = rng.normal(size=roff[-1]), rng.normal(size=roff[-1])
+    A, B = np.zeros((m_, s.n)), np.zeros((m_, s.n))
+    for i in range(m_):
+        for p in range(rptr[i], rptr[i + 1]):
+            b, o, z = rblk[p], roff[p], bsize[rblk[p]]
+            A[i, bstart[b]:bstart[b] + z] = A_st[o:o + z]
+            B[i, bstart[b]:bstart[b] + z] = B_st[o:o + z]
+    S = A @ B.T
+    bw = blocks.bandwidth
+    Sb = np.full((m_, bw + 1), np.nan)
+    _gram.py_func(A_st, B_st, segs, bsize, Sb)
+    i, k = np.tril_indices(m_)
+    inside = i - k <= bw
+    assert np.allclose(Sb[i[inside], (i - k)[inside]], S[i[inside], k[inside]], rtol=1e-13,
+                       atol=1e-13)
+    assert not np.any(S[i[~inside], k[~inside]])
+
+
 def test_units_of_length_do_not_change_the_motion():
     """The same chain in metres and in millimetres (rods of 1000 mm, g = 9810 mm/s^2): the
     block test and the regularising weight are free of units, so both take the block path

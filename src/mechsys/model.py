@@ -58,6 +58,7 @@ from .solvers import ORDERS, PositionOptions, sweep
 from .solvers._linalg import Scaling
 from .solvers._position import dependency
 from .solvers._rank import constraint_names as _constraint_names
+from .solvers._tolerances import SPARSE_THRESHOLD
 
 _parameter_value = parameter_value   # the validation lives with the errors it raises
 
@@ -870,7 +871,9 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         model version and set of dropped equations (RedundantConstraintWarning)."""
         if system.m == 0 or (what == "solve" and system.m <= system.n):
             return system, None, q
-        J = system.jacobian(t, q, self._p())
+        # (sparse above SPARSE_THRESHOLD coordinates, as the solvers take it: the rank is
+        # certified by a sparse LU of J J^T, and only a dependency found makes it dense)
+        J = system.jacobian(t, q, self._p(), system.n > SPARSE_THRESHOLD)
         d = dependency(system, J, Scaling.of(system, q, J), q)
         if what == "solve" and d.rank < system.n:
             # the guess may not assemble the mechanism (a driver's row can vanish there):

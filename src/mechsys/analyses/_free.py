@@ -56,6 +56,7 @@ from ..solvers._jit_free import FreeStepper
 from ..solvers._linalg import Scaling
 from ..solvers._position import describe_singular
 from ..solvers._rank import InZone, project_regularized, zone_guard
+from ..solvers._tolerances import SPARSE_THRESHOLD
 from ._nonholonomic import (
     VelocityRows,
     nonholonomic_acceleration,
@@ -131,7 +132,9 @@ def accuracy_report(s, sc, t, Y, p, tol: float, what: str) -> dict:
     pos = vel = 0.0
     if s.m and len(t) and np.all(np.isfinite(Y[-1])):
         q, qd = Q[-1], QD[-1]
-        J, rhs = s.velocity_rhs(t[-1], q, p)
+        # (sparse above SPARSE_THRESHOLD coordinates: the same row maxima and products; a
+        # dense Jacobian is O(n m) to build and scan, a tenth of a 1024-link chain's run)
+        J, rhs = s.velocity_rhs(t[-1], q, p, n > SPARSE_THRESHOLD)
         r = sc.rows(J)
         pos = float(np.abs(s.residual(t[-1], q, p) / r).max(initial=0.0))
         v = np.abs((J @ qd - rhs) / r).max(initial=0.0)
@@ -170,9 +173,12 @@ def _check_independent(system, t, q, p, scaling) -> None:
     """Dependent kept constraints at the start raise :class:`SingularJacobianError` naming
     them (the integration tolerates only singular instants on the way, not a redundancy)."""
     if system.m:
-        J = system.jacobian(t, q, p)
+        # (sparse above SPARSE_THRESHOLD coordinates: dependent_rows certifies full rank by a
+        # sparse LU of J J^T there, and densifies only for its QR)
+        J = system.jacobian(t, q, p, system.n > SPARSE_THRESHOLD)
         if scaling.dependent_rows(J)[1]:
-            raise describe_singular(system, J, t, q, "free motion", scaling)
+            raise describe_singular(system, system.jacobian(t, q, p), t, q, "free motion",
+                                    scaling)
 
 
 class FreeSystem:
@@ -701,7 +707,9 @@ class FreeSystem:
             and vrows is None      # (passing singular instants: holonomic rows only)
         zone = [False]                 # a derivative of this step came from the zone
         guard = None
-        rows0 = sc.rows(s.jacobian(t0, q0, p)) if robust else None
+        # (sparse above SPARSE_THRESHOLD coordinates: the same row maxima, without a dense
+        # m x n Jacobian)
+        rows0 = sc.rows(s.jacobian(t0, q0, p, n > SPARSE_THRESHOLD)) if robust else None
         if robust:
             inner = zone_guard(s, sc, rows0)
 

@@ -369,7 +369,11 @@ def scaling_at(system, t, q, p) -> Scaling:
     """The unit-free scaling (:class:`Scaling`) of ``system`` at ``(t, q)``: characteristic
     length and column units, computed once per simulation."""
     q = np.asarray(q, dtype=float)
-    J = system.jacobian(t, q, p) if system.m else np.zeros((0, system.n))
+    # (sparse above SPARSE_THRESHOLD coordinates, as the projections take it: the lever arm
+    # is the same maximum over the same nonzero entries; the dense 2048 x 3072 Jacobian of a
+    # 1024-link chain cost a tenth of its 2 s run in allocation and scans)
+    J = system.jacobian(t, q, p, system.n > SPARSE_THRESHOLD) if system.m else \
+        np.zeros((0, system.n))
     return Scaling.of(system, q, J)
 
 

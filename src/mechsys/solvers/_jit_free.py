@@ -177,8 +177,11 @@ class _Blocks:
     ``jpos`` (nnz,) segment position of each Jacobian value; ``bsize`` (blocks,); ``mpos``
     (M nonzeros + A,) packed position of each mass-matrix value, then the ``A`` rows of
     ``J`` that regularise singular blocks (Euler parameters; ``_jit_free_loop._regularise``);
-    ``pairs`` (couplings, 5): row, band offset, the two segment offsets and the block size
-    of every pair of rows (``i >= k``) that share a block."""
+    ``segs`` (segments, 3): the row, the segment offset and the block of every (row, block)
+    segment, ordered by block and then row: each block couples every pair of its rows
+    (``_jit_free_loop._gram``). (The list of every coupled pair of rows, five integers per
+    three products, was six times the Jacobian's segments: at N = 1024 it alone outgrew the
+    core's cache between two evaluations.)"""
 
     def __init__(self, arrays, bandwidth):
         self.arrays, self.bandwidth = arrays, int(bandwidth)
@@ -186,7 +189,7 @@ class _Blocks:
     @staticmethod
     def none():
         z = np.zeros(1, dtype=np.int64)
-        return (z, z, z, z, z, z, z, z, np.zeros((1, 5), dtype=np.int64))
+        return (z, z, z, z, z, z, z, z, np.zeros((1, 3), dtype=np.int64))
 
     @classmethod
     def of(cls, system, p, start):
@@ -196,16 +199,21 @@ class _Blocks:
         got = _block_structure(system)
         if got is None:
             return None
-        (bstart, boff, rptr, rblk, roff, jpos, bsize, mpos, pairs), bw, rows_blocks, order = got
+        (bstart, boff, rptr, rblk, roff, jpos, bsize, mpos, segs), bw, rows_blocks, order = got
         n, m = system.n, system.m
         t0, q0 = start
-        M = system.dynamics.terms(t0, q0, np.zeros(n), np.zeros(m), p, np.zeros(n))[0]
+        dyn = system.dynamics
+        # the mass matrix in the loop's packed block store (not dense n x n: 75 MB for a
+        # 1024-link chain at every run's plan), summed as the dense matrix would be
+        vals = dyn.f_terms(dyn.pack(t0, q0, np.zeros(n), np.zeros(m), p, np.zeros(n)))
+        Mst = np.zeros(boff[-1])
+        np.add.at(Mst, mpos, vals[:len(mpos)])
         J, own = None, []
-        for b in _irregular(M, bstart, bsize):
+        for b in _irregular(Mst, boff, bsize):
             # a singular block (Euler parameters): regularised by the rows on it alone, as
             # the loop does it (_jit_free_loop._regularise)
             a, z = bstart[b], bsize[b]
-            B = M[a:a + z, a:a + z].copy()
+            B = Mst[boff[b]:boff[b] + z * z].reshape(z, z).copy()
             rows = [i for i, r in enumerate(rows_blocks) if r == [b]]
             if J is None:
                 J = system.jacobian(t0, q0, p)
@@ -214,7 +222,7 @@ class _Blocks:
                 return None
             own += rows
         mpos = np.concatenate((mpos, np.array(own, dtype=np.int64)))
-        return cls((bstart, boff, rptr, rblk, roff, jpos, bsize, mpos, pairs), bw)
+        return cls((bstart, boff, rptr, rblk, roff, jpos, bsize, mpos, segs), bw)
 
 
 def _block_structure(system):
@@ -281,25 +289,22 @@ def _make_block_structure(system):
     if order is not None:
         # (the loop reads the order after rptr's m + 1 entries: rptr.size > m + 1)
         rptr = np.concatenate((rptr, order)).astype(np.int64)
-    # every coupling of two rows through a block, for the band of J W and J^ J^T
-    on = {}
-    for i, r in enumerate(rows_blocks):
-        for k, b in enumerate(r):
-            on.setdefault(b, []).append((i, int(roff[rptr[i] + k])))
-    pairs = [(i, i - k, oi, ok, int(bsize[b])) for b, rows in on.items()
-             for i, oi in rows for k, ok in rows if k <= i]
-    pairs = np.array(sorted(pairs), dtype=np.int64).reshape(-1, 5)
-    return ((bstart, boff, rptr, rblk, roff, jpos, bsize, mpos, pairs), bw, rows_blocks, order)
+    # the segments by block, then row: each block couples its rows (the band of J W, J^ J^T)
+    segs = sorted((b, i, int(roff[rptr[i] + k])) for i, r in enumerate(rows_blocks)
+                  for k, b in enumerate(r))
+    segs = np.array([(i, o, b) for b, i, o in segs], dtype=np.int64).reshape(-1, 3)
+    return ((bstart, boff, rptr, rblk, roff, jpos, bsize, mpos, segs), bw, rows_blocks, order)
 
 
-def _irregular(M, bstart, bsize) -> list:
-    """The blocks of ``M`` that are not regular (:func:`_regular`), tested a stack of blocks
-    of one size at a time."""
+def _irregular(Mst, boff, bsize) -> list:
+    """The blocks of the mass matrix that are not regular (:func:`_regular`), from its packed
+    block store ``Mst`` (block ``b``: ``Mst[boff[b]:boff[b + 1]]``, row-major ``z x z``),
+    tested a stack of blocks of one size at a time."""
     bad = []
     for z in np.unique(bsize):
         which = np.flatnonzero(bsize == z)
-        idx = bstart[which][:, None] + np.arange(z)
-        bad += which[~_pivots_ok(M[idx[:, :, None], idx[:, None, :]])].tolist()
+        idx = boff[which][:, None] + np.arange(z * z)
+        bad += which[~_pivots_ok(Mst[idx].reshape(-1, z, z))].tolist()
     return sorted(bad)
 
 

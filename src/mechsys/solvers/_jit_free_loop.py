@@ -1460,6 +1460,19 @@ def _setup(x, p, n, m, blocks, lam):
         lam[:] = np.nan
 
 
+@nb.njit(cache=True, inline='always')
+def _combine(K, c, s, acc):
+    r"""``acc[j] = sum_{k < s} K[k, j] c[k]`` (:math:`\sum_k c_k K_k`, the stages' sum), row
+    by row of ``K``: for each coordinate the terms are added in the order of ``k``, from 0."""
+    for j in range(acc.size):
+        acc[j] = 0.0
+    for k in range(s):
+        ck = c[k]
+        row = K[k]
+        for j in range(acc.size):
+            acc[j] += row[j] * ck
+
+
 @nb.njit(cache=True)
 def runge_kutta(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, robust,
                 blocks, blk_i, ws, correction, ptol, pmaxit, method, Acoef, Bcoef, Ccoef, E3,
@@ -1495,6 +1508,12 @@ def runge_kutta(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, off
     scale = np.empty(N2)
     F = np.empty((7, N2))
     yo = np.empty(N2)
+    # the sums over the stages, accumulated stage by stage over contiguous rows of K (see
+    # _combine): summed per coordinate over k in the same order as before, so the same
+    # numbers; a sum per coordinate across the rows of K read one cache line per row and
+    # coordinate, which at N2 = 6144 evicted everything else between two evaluations
+    acc = np.empty(N2)
+    acc3 = np.empty(N2)
     t = state[0]
     h_abs = state[1]
     evals = 0
@@ -1530,21 +1549,17 @@ def runge_kutta(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, off
             for j in range(N2):
                 K[0, j] = f[j]
             for s in range(1, n_stages):
+                _combine(K, Acoef[s], s, acc)
                 for j in range(N2):
-                    acc = 0.0
-                    for k in range(s):
-                        acc += K[k, j] * Acoef[s, k]
-                    ytmp[j] = y[j] + acc * h
+                    ytmp[j] = y[j] + acc[j] * h
                 evals += 1
                 if not _rhs(kp[0], lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0,
                             columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force, blocks, blk_i, blk_w,
                             t + Ccoef[s] * h, ytmp, K[s]):
                     return HANDOVER, steps, ie, evals, rejected, projections
+            _combine(K, Bcoef, n_stages, acc)
             for j in range(N2):
-                acc = 0.0
-                for k in range(n_stages):
-                    acc += K[k, j] * Bcoef[k]
-                ynew[j] = y[j] + h * acc
+                ynew[j] = y[j] + h * acc[j]
             evals += 1
             if not _rhs(kp[0], lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0,
                         columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force,
@@ -1555,25 +1570,22 @@ def runge_kutta(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, off
             if rk45:
                 # RungeKutta._estimate_error_norm: the RMS norm of (K^T E) h / scale
                 e5 = 0.0
+                _combine(K, E5, n_stages + 1, acc)
                 for j in range(N2):
                     scale[j] = atol[j] + max(abs(y[j]), abs(ynew[j])) * rtol
-                    a5 = 0.0
-                    for k in range(n_stages + 1):
-                        a5 += K[k, j] * E5[k]
-                    a5 = a5 * h / scale[j]
+                    a5 = acc[j] * h / scale[j]
                     e5 += a5 * a5
                 error_norm = np.sqrt(e5) / np.sqrt(N2)
             else:
                 # DOP853._estimate_error_norm
                 e5 = 0.0
                 e3 = 0.0
+                _combine(K, E5, n_stages + 1, acc)
+                _combine(K, E3, n_stages + 1, acc3)
                 for j in range(N2):
                     scale[j] = atol[j] + max(abs(y[j]), abs(ynew[j])) * rtol
-                    a5 = 0.0
-                    a3 = 0.0
-                    for k in range(n_stages + 1):
-                        a5 += K[k, j] * E5[k]
-                        a3 += K[k, j] * E3[k]
+                    a5 = acc[j]
+                    a3 = acc3[j]
                     a5 /= scale[j]
                     a3 /= scale[j]
                     e5 += a5 * a5
@@ -1602,17 +1614,15 @@ def runge_kutta(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, off
             # RK45._dense_output_impl: Q = K^T P (rows 0-3 of F)
             for j in range(N2):
                 for i in range(4):
-                    acc = 0.0
+                    d = 0.0
                     for k in range(n_stages + 1):
-                        acc += K[k, j] * Dcoef[k, i]
-                    F[i, j] = acc
+                        d += K[k, j] * Dcoef[k, i]
+                    F[i, j] = d
         elif dense:
             for s in range(n_stages + 1, 16):
+                _combine(K, Acoef[s], s, acc)
                 for j in range(N2):
-                    acc = 0.0
-                    for k in range(s):
-                        acc += K[k, j] * Acoef[s, k]
-                    ytmp[j] = y[j] + acc * h
+                    ytmp[j] = y[j] + acc[j] * h
                 evals += 1
                 if not _rhs(kp[0], lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc,
                             rows0, columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force,
@@ -1625,10 +1635,10 @@ def runge_kutta(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, off
                 F[1, j] = h * K[0, j] - dy
                 F[2, j] = 2 * dy - h * (fnew[j] + K[0, j])
                 for i in range(4):
-                    acc = 0.0
+                    d = 0.0
                     for k in range(16):
-                        acc += Dcoef[i, k] * K[k, j]
-                    F[3 + i, j] = h * acc
+                        d += Dcoef[i, k] * K[k, j]
+                    F[3 + i, j] = h * d
         if FD.shape[0] > 0:
             for j in range(N2):
                 for i in range(4 if rk45 else 7):
@@ -2560,26 +2570,35 @@ def _fill_rows(vals, j0, jpos, Jst, scale_rows, r, columns, jc, jr):
 
 
 @leaf
-def _gram(A_st, B_st, pairs, Sb):
-    """``Sb`` (banded) of ``A B^T`` from per-(row, block) segments: rows couple through a
-    common block only; ``pairs`` (k, 5): row ``i``, band offset ``i - k``, the two segment
-    offsets and the block size of every such coupling (``_Blocks``)."""
+def _gram(A_st, B_st, segs, bsize, Sb):
+    r"""``Sb`` (banded) of ``A B^T`` from per-(row, block) segments: rows couple through a
+    common block only. ``segs`` (k, 3): row, segment offset and block of every segment,
+    ordered by block and then row (``_Blocks``); each block adds, for every pair of its rows
+    ``k <= i``, :math:`S_{ik} \mathrel{+}= A_{i,b} \cdot B_{k,b}` at band offset ``i - k``.
+    An entry that several blocks couple receives their products in the order of the blocks,
+    the order of the row's own segments."""
     Sb[:, :] = 0.0
-    for r in range(pairs.shape[0]):
-        i = pairs[r, 0]
-        oi = pairs[r, 2]
-        ok = pairs[r, 3]
-        s = 0.0
-        for t in range(pairs[r, 4]):
-            s += A_st[oi + t] * B_st[ok + t]
-        Sb[i, pairs[r, 1]] += s
+    first = 0
+    for a in range(segs.shape[0]):
+        b = segs[a, 2]
+        if a > 0 and b != segs[a - 1, 2]:
+            first = a
+        i = segs[a, 0]
+        oi = segs[a, 1]
+        z = bsize[b]
+        for c in range(first, a + 1):
+            ok = segs[c, 1]
+            s = 0.0
+            for t in range(z):
+                s += A_st[oi + t] * B_st[ok + t]
+            Sb[i, i - segs[c, 0]] += s
 
 
 @leaf
 def _accel_blocks(kp, x, nin, out, kk, kM, n, m, jr, jc, rows0, columns, robust, blk_i,
                   Mst, Jst, Wst, Sb, u, Minv, Li, qdd, lam, force, ex, ph):
     """``_accel`` by the block path (see above); False: hand over."""
-    bstart, boff, rptr, rblk, roff, jpos, bsize, mpos, pairs = blk_i
+    bstart, boff, rptr, rblk, roff, jpos, bsize, mpos, segs = blk_i
     nblk = bsize.size
     bw = Sb.shape[1] - 1
     _evalx(kp, x, nin, out, ex, ph)
@@ -2607,7 +2626,7 @@ def _accel_blocks(kp, x, nin, out, kk, kM, n, m, jr, jc, rows0, columns, robust,
         for p in range(rptr[i], rptr[i + 1]):
             b = rblk[p]
             _block_mul(Minv, boff[b], bsize[b], Jst, roff[p], Wst, roff[p])
-    _gram(Jst, Wst, pairs, Sb)
+    _gram(Jst, Wst, segs, bsize, Sb)
     for i in range(m):
         lam[i] = -out[kk + n + i]
     for k in range(jr.size):
@@ -2644,10 +2663,10 @@ def _min_norm_blocks(vals, j0, jr, jc, columns, m, n, bvec, r, blk_i, Pst, Sb, r
     positive definite or, ``robust``, when its Cholesky diagonal spreads by more than
     ``sqrt(ZONE)`` (an optimistic stand-in for the Python path's condition estimate: the
     hand-over comes before the zone of a singular Jacobian). ``bvec`` is overwritten."""
-    bstart, boff, rptr, rblk, roff, jpos, bsize, mpos, pairs = blk_i
+    bstart, boff, rptr, rblk, roff, jpos, bsize, mpos, segs = blk_i
     bw = Sb.shape[1] - 1
     _fill_rows(vals, j0, jpos, Pst, True, r, columns, jc, jr)
-    _gram(Pst, Pst, pairs, Sb)
+    _gram(Pst, Pst, segs, bsize, Sb)
     ratio = _band_chol(Sb, m, bw)
     if ratio < 0 or (robust and ratio * ratio < ZONE):
         return False
