@@ -329,8 +329,8 @@ def test_mujoco_test_model_imports_and_reports():
     """MuJoCo's own test model (shipped in the mujoco package's ``testdata``; nobody here wrote
     it): it imports; its unnamed hinge gets a coordinate named after its body, and what has no
     counterpart is reported with its line -- fluid forces (``<option density viscosity
-    wind>``), gravity compensation, tendons, actuators, sensors, the mesh geom's mass, the
-    joints' armature, damping and springs."""
+    wind>``), gravity compensation, tendons, actuators, sensors, the joints' armature,
+    damping and springs; the bodies' masses, the mesh geom's included, are MuJoCo's."""
     mujoco = pytest.importorskip("mujoco")
     from pathlib import Path
 
@@ -345,9 +345,15 @@ def test_mujoco_test_model_imports_and_reports():
     unnamed = [n for n in rep.joints if n.endswith("_hinge1")]
     assert unnamed and f"its coordinate is named {unnamed[0]!r}" in text
     for what in ("<option density=...>", "<option viscosity=...>", "<option wind=...>",
-                 "gravcomp=0.5", "<tendon>", "<actuator>", "<sensor>", "mesh geom of body",
+                 "gravcomp=0.5", "<tendon>", "<actuator>", "<sensor>",
                  "armature=1.0", "damping 10.0", "stiffness 60.0"):
         assert what in text, what
+    # the masses, the mesh geom's among them (computed as MuJoCo does, decision 0072)
+    ours = {b.name: float(b.mass) for b in m.bodies}
+    assert sum(ours.values()) == pytest.approx(float(mm.body_mass.sum()), rel=1e-12)
+    for k in range(1, mm.nbody):
+        if mm.body(k).name:
+            assert ours[mm.body(k).name] == pytest.approx(float(mm.body_mass[k]), rel=1e-12)
 
 
 def _zoo_reference(path):
