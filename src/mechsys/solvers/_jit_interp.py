@@ -1,5 +1,5 @@
 r"""The compiled loops' own code, run by the Python interpreter: the first tier of a loop
-that is not compiled yet, and ``MECHSYS_JIT=0`` (decision 0075).
+that is not compiled yet (decision 0075; ``MECHSYS_JIT=0`` still selects the Python loop).
 
 A Numba dispatcher keeps the Python function it compiles (``dispatcher.py_func``); its code
 object is the loop. :func:`interpreted` makes a plain Python function of that same code
