@@ -295,6 +295,18 @@ of that function (no symbolic derivation).
 """
 
 
+def with_rest_of_page(page: str, old: str) -> str:
+    """This script's part of the page followed by everything the old page holds from the
+    peers' block on: that block (``benchmarks/peers/run.py``) and the blocks and notes the
+    other benchmarks write below it (bicycle, robots, cold start, scale), which an earlier
+    version dropped (it kept the peers' block only). A page without the peers' block keeps
+    nothing of the old text: this script's part is then the whole page."""
+    begin = "<!-- peers:begin -->"
+    if begin not in old:
+        return page
+    return page + "\n" + begin + old.split(begin, 1)[1]
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--write", metavar="PATH", help="also write the results page (markdown)")
@@ -365,10 +377,7 @@ def main(argv: list[str] | None = None) -> int:
                            evals=eval_table(evals), growth=growth, loads=loads_table(loads))
         out = Path(args.write)
         old = out.read_text(encoding="utf-8") if out.exists() else ""
-        begin, end = "<!-- peers:begin -->", "<!-- peers:end -->"
-        if begin in old and end in old:   # keep the peers' tables (benchmarks/peers/run.py)
-            page += "\n" + begin + old.split(begin, 1)[1].split(end, 1)[0] + end + "\n"
-        out.write_text(page, encoding="utf-8")
+        out.write_text(with_rest_of_page(page, old), encoding="utf-8")
         print(f"wrote {args.write}")
     return 0
 
