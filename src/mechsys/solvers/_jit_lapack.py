@@ -92,19 +92,18 @@ def getrf(AT, n, piv, nz=None):
         if lj[p] != 0.0:
             if p != j:
                 for c in range(n):
-                    ac = AT[c]
-                    tmp = ac[j]
-                    ac[j] = ac[p]
-                    ac[p] = tmp
+                    tmp = AT[c, j]
+                    AT[c, j] = AT[c, p]
+                    AT[c, p] = tmp
             inv = 1.0 / lj[j]
             for i in range(j + 1, n):
                 lj[i] *= inv
         elif info == 0:
             info = j + 1
         for c in range(j + 1, n):
-            ac = AT[c]
-            a = ac[j]
+            a = AT[c, j]
             if a != 0.0:
+                ac = AT[c]
                 for i in range(j + 1, n):
                     ac[i] -= lj[i] * a
     if nz is not None:
