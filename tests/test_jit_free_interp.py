@@ -86,6 +86,25 @@ def test_interpreted_then_compiled_equals_compiled_bit_for_bit(monkeypatch, doub
             assert np.array_equal(getattr(fast, key), getattr(other, key)), key
 
 
+def test_adams_keeps_the_python_path_and_its_loop_interprets_bit_for_bit(monkeypatch,
+                                                                         double_pendulum):
+    """Mech's Adams integrator is not in ``INTERP_LOOPS`` (its interpreted steps cost 2.7 x
+    the Python path's): its Python path takes the steps meanwhile. Its loop, interpreted,
+    gives the compiled loop's numbers bit for bit all the same (the tier, when enabled)."""
+    kw = dict(method="adams", max_error=1e-6)
+    fast = double_pendulum.simulate((0.0, 0.5), **kw)
+    assert fast.extra["compiled_steps"] == fast.extra["steps"]
+    _first_tier(monkeypatch)
+    python = double_pendulum.simulate((0.0, 0.5), **kw)
+    assert python.extra["interpreted_steps"] == python.extra["compiled_steps"] == 0
+    np.testing.assert_allclose(python.q, fast.q, atol=1e-12)
+    monkeypatch.setattr(_jit_free, "INTERP_LOOPS", _jit_free.INTERP_LOOPS | {"adams"})
+    slow = double_pendulum.simulate((0.0, 0.5), **kw)
+    assert slow.extra["interpreted_steps"] == slow.extra["steps"]
+    for key in ("t", "q", "qd", "qdd", "lam"):
+        assert np.array_equal(getattr(fast, key), getattr(slow, key)), key
+
+
 def test_a_large_system_keeps_the_python_path(monkeypatch):
     """Above ``INTERP_MAX`` unknowns the Python path takes the steps meanwhile (the
     interpreted loop's cost grows as the cube of the size)."""

@@ -128,6 +128,11 @@ INTERP_MAX = 24
 #: again, and the compiled loop takes the next step once its compile is done (about 0.1 s
 #: of interpreted work each on the double pendulum)
 INTERP_STEPS = {"loop": 32, "adams": 128}
+#: the loops that run interpreted meanwhile. Not Mech's Adams integrator: interpreted, its
+#: steps cost about 2.7 x the Python path's (0.85 ms a step of the double pendulum against
+#: 0.3 ms), and the cold start's 10 s Adams run took 6.0 s of CPU to its first result (the
+#: target: 5 s; decision 0077), so its Python path keeps the steps while it is compiled
+INTERP_LOOPS = frozenset({"loop", "derivative", "path_acc"})
 
 def _steps_at(name: str) -> int:
     """The position of ``max_steps`` among the arguments of the loop ``_state[name]``."""
@@ -1052,9 +1057,10 @@ class FreeStepper:
         per stepper. A compile from empty caches is announced first (``_jit_cache.notice``).
 
         While that machine code is compiled in the background (decision 0064) the same
-        loop runs interpreted (:mod:`._jit_interp`, decision 0077) when the system is small
-        enough (:meth:`interpretable`), with at most :data:`INTERP_STEPS` steps (its
-        ``max_steps`` argument) so that the caller asks again soon: the interpreted
+        loop runs interpreted (:mod:`._jit_interp`, decision 0077) when it is one of
+        :data:`INTERP_LOOPS` and the system is small enough (:meth:`interpretable`), with at
+        most :data:`INTERP_STEPS` steps (its ``max_steps`` argument) so that the caller asks
+        again soon: the interpreted
         function is not kept, and the compiled loop takes the first call after its compile
         is done. None: neither (the caller hands over to its Python path and asks again
         after its pause). ``self.tier`` tells which ran."""
@@ -1070,7 +1076,7 @@ class FreeStepper:
                                               background=how == "background"))
             if fn is None:
                 # being compiled in the background (decision 0064)
-                if not self.interpretable():
+                if name not in INTERP_LOOPS or not self.interpretable():
                     self.tier = None
                     return None
                 from ._jit_interp import interpreted
