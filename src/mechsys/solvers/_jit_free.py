@@ -120,10 +120,11 @@ _COMPILE_SECONDS = {"loop": 35, "adams": None, "derivative": 15}
 
 #: while a loop is compiled in the background (decision 0064) its own code runs interpreted
 #: (:mod:`._jit_interp`, decision 0077) for systems of up to this many unknowns ``n + m``
-#: (and velocity rows): the interpreted step costs about as much as the Python path's up to
-#: here and grows as the cube of it (the augmented system's LU; decision 0077's table),
-#: larger systems keep the Python path meanwhile
-INTERP_MAX = 24
+#: (and velocity rows). Its step costs 2.3 x the Python path's at 5 unknowns, 4.9 x at 10
+#: (the double pendulum: 4.0 s of CPU to the cold start's first result), 5.9 x at 15 and
+#: 12 x at 20 (the augmented system's LU, about as the cube of the size; decision 0077's
+#: table): larger systems keep the Python path meanwhile
+INTERP_MAX = 12
 #: interpreted steps per call of a loop: between two calls ``_jit_modes.entry`` is asked
 #: again, and the compiled loop takes the next step once its compile is done (about 0.1 s
 #: of interpreted work each on the double pendulum)
