@@ -46,6 +46,15 @@ Numba and the cached machine code costs about 0.7 s CPU once per process.
 ``sol.extra["compiled_solver"]`` how (``"augmented"``, ``"block"``, ``"sparse"``,
 ``"recursive"``, ``"recursive+augmented"``, ``"path"``, ``"newton"``).
 
+While a missing loop is compiled in the background (``MECHSYS_COMPILE`` unset, decision
+0064) the Runge-Kutta loop, the derivative and a path's accelerations run their own code
+interpreted (:mod:`._jit_interp`, decision 0077) for systems of up to :data:`INTERP_MAX`
+unknowns, :data:`INTERP_STEPS` steps a call, and the compiled loop takes the next call once
+its compile is done: the same numbers bit for bit from the first step
+(``sol.extra["interpreted_steps"]`` counts those steps). Mech's Adams integrator and larger
+systems keep the Python path meanwhile (its interpreted steps cost too much: decision 0077).
+``MECHSYS_JIT=0`` still selects the Python path, as for the sweep.
+
 Velocity constraints :math:`A(q, t) \dot q + b(q, t) = 0` (rolling; decisions 0053, 0062)
 run in the same loops (kind ``ROLLING``, reported as ``"augmented"``, :meth:`FreeStepper._plan_rows`)
 up to ``SPARSE_THRESHOLD`` holonomic unknowns: the dense augmented system bordered by
