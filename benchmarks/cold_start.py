@@ -5,8 +5,10 @@ compile it starts, and the same again with the caches that compile filled (a sec
 Each task runs in its own fresh Python process whose Numba cache (``NUMBA_CACHE_DIR``) and
 kernel cache (``MECHSYS_CACHE``) point at new empty directories; the time is the process's
 CPU time (user + system, ``resource.getrusage``) at the first result, imports included.
-With ``MECHSYS_COMPILE`` unset (``background``) the run takes the Python path while one
-background process compiles the loops into the cache; the script waits for it (its lock
+With ``MECHSYS_COMPILE`` unset (``background``) the run takes its first tier while one
+background process compiles the loops into the cache (the loop's own code interpreted: the
+sweep and multipliers, decision 0075, the Runge-Kutta stepper of a small system, decision
+0077; else the Python path: Mech's Adams integrator); the script waits for it (its lock
 files) and reads the CPU time it recorded (``mechsys-bg-*.json``). Then a second fresh
 process runs the task with the caches the first one left. Last, for comparison, a fresh
 process with new empty caches and ``MECHSYS_COMPILE=wait`` (compile in the process first:
@@ -144,8 +146,10 @@ def main(argv=None) -> int:
         "and kernel caches (`NUMBA_CACHE_DIR`, `MECHSYS_CACHE` in new directories) and "
         "`MECHSYS_COMPILE` unset: the compiled loops the run needs are compiled by one "
         "low-priority background process (its CPU time, imports included, in the next column; "
-        "it outlives the session and fills the cache) while the run takes the Python path "
-        "(decision 0064). Then a second fresh process with the caches it filled (it compiles "
+        "it outlives the session and fills the cache) while the run takes its first tier "
+        "(decision 0064): the loop's own code interpreted, the same numbers bit for bit (the "
+        "sweep and the multipliers: decision 0075; the DOP853 stepper: decision 0077), or the "
+        "Python path (Adams). Then a second fresh process with the caches it filled (it compiles "
         "in the background what only it asks for: the free-motion derivative). The last column "
         "is a fresh process with empty caches that compiles in its own process and waits "
         "(`MECHSYS_COMPILE=wait`, the behaviour before decision 0064; decisions 0039 and 0044)."),

@@ -1,6 +1,9 @@
 """The first tier of decision 0064: while a compiled loop is being compiled in the background,
-``_jit_modes.entry`` returns None and every analysis must take its Python path and give that
-path's answer. The suite runs with ``MECHSYS_COMPILE=wait`` (conftest), so that path is never
+``_jit_modes.entry`` returns None and every analysis must take its first tier and give that
+tier's answer: the loop's own code interpreted where it runs (the sweep, the multiplier
+solves: decision 0075; the free-motion Runge-Kutta stepper of a small system: decision 0077;
+the compiled loop's numbers, which agree with the Python path's to rounding here), else the
+Python path. The suite runs with ``MECHSYS_COMPILE=wait`` (conftest), so that tier is never
 met there otherwise; here ``entry`` is made to answer "still compiling" for every loop, as a
 first session with empty caches does, and each analysis is compared with ``MECHSYS_JIT=0``.
 
@@ -99,6 +102,8 @@ def test_double_pendulum(compiling, method):
 
     plain, tier, asked = compiling(job)
     assert asked
+    # (DOP853: the interpreted loop took every step; Adams: the Python path, decision 0077)
+    assert tier.extra["interpreted_steps"] == (tier.extra["steps"] if method == "dop853" else 0)
     _same(plain.q, tier.q)
     _same(plain.qdd, tier.qdd, 1e-10)
 

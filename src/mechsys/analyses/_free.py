@@ -781,6 +781,7 @@ class FreeSystem:
         extra = {"evaluations": res.evaluations, "steps": res.steps, "rejected": res.rejected,
                  "method": m, "length_scale": sc.length,
                  "compiled_steps": res.diagnostics.get("compiled_steps", 0),
+                 "interpreted_steps": res.diagnostics.get("interpreted_steps", 0),
                  "compiled_solver": None if fast is None else fast.solver}
         if opt.runge_kutta:
             extra["rtol"], extra["atol"] = opt.rtol, opt.atol

@@ -469,7 +469,7 @@ class SwitchedFreeSystem(FreeSystem):
         ie = 1 if t_eval is not None else 0
         log, first_speed = [], {}
         fresh: dict = {}
-        t_now, evals, steps, compiled_steps = t0, 0, 0, 0
+        t_now, evals, steps, compiled_steps, interpreted_steps = t0, 0, 0, 0, 0
         plans: dict = {}
         known: dict = {}            # row -> (qdd, lambda) from the compiled loop
         while (t1 - t_now) * d > 0:
@@ -506,7 +506,11 @@ class SwitchedFreeSystem(FreeSystem):
                         combo, run, known)
                     run = min(2 * run, RUN_STEPS)
                     steps += kept
-                    compiled_steps += kept
+                    # (the loop's steps, compiled or interpreted: decision 0077)
+                    if fast.tier == "interpreted":
+                        interpreted_steps += kept
+                    else:
+                        compiled_steps += kept
                     if crossing is None or crossing == "python":
                         if crossing or status == 2:
                             # the step with the event (or one the loop handed over) in Python
@@ -515,7 +519,10 @@ class SwitchedFreeSystem(FreeSystem):
                     # the step with the event, taken again compiled with its dense output
                     t_old, dense, yp, g_new = crossing
                     steps += 1
-                    compiled_steps += 1
+                    if fast.tier == "interpreted":
+                        interpreted_steps += 1
+                    else:
+                        compiled_steps += 1
                 else:
                     pause = max(pause - 1, 0)
                     t_old = solver.t
@@ -594,7 +601,8 @@ class SwitchedFreeSystem(FreeSystem):
             out_c.append(combo)
             ie += 1
         info = {"events": log, "evaluations": evals, "steps": steps, "method": opt.method,
-                "rtol": opt.rtol, "atol": opt.atol, "compiled_steps": compiled_steps}
+                "rtol": opt.rtol, "atol": opt.atol, "compiled_steps": compiled_steps,
+                "interpreted_steps": interpreted_steps}
         sol = self._assemble(out_t, out_y, out_c, p, kw, info, sc, known=known)
         # the run's own measure of its accuracy, in the last stage's kept constraints
         Y = np.hstack((sol.q, sol.qd))

@@ -423,6 +423,7 @@ class PathSystem:
         extra = {"evaluations": res.evaluations, "steps": res.steps, "method": m, "drift": drift,
                  "length_scale": sc.length,
                  "compiled_steps": res.diagnostics.get("compiled_steps", 0),
+                 "interpreted_steps": res.diagnostics.get("interpreted_steps", 0),
                  "compiled_solver": None if fast is None else fast.solver}
         # the run's own measure of its accuracy (holonomic drift, coordinates' range)
         extra["accuracy"] = accuracy_report(s, sc, times, np.hstack((Q, QD)), p,

@@ -240,6 +240,7 @@ def _compiled_derivatives(diag, fast, known, rows) -> None:
             QDD[k:k + j], LAM[k:k + j] = qdd[:j], lam[:j]
     diag["derivatives"] = (QDD, LAM)
     diag["compiled_steps"] = fast.steps
+    diag["interpreted_steps"] = fast.interpreted_steps
 
 
 def counting(fun):

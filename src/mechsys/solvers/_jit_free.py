@@ -46,6 +46,15 @@ Numba and the cached machine code costs about 0.7 s CPU once per process.
 ``sol.extra["compiled_solver"]`` how (``"augmented"``, ``"block"``, ``"sparse"``,
 ``"recursive"``, ``"recursive+augmented"``, ``"path"``, ``"newton"``).
 
+While a missing loop is compiled in the background (``MECHSYS_COMPILE`` unset, decision
+0064) the Runge-Kutta loop, the derivative and a path's accelerations run their own code
+interpreted (:mod:`._jit_interp`, decision 0077) for systems of up to :data:`INTERP_MAX`
+unknowns, :data:`INTERP_STEPS` steps a call, and the compiled loop takes the next call once
+its compile is done: the same numbers bit for bit from the first step
+(``sol.extra["interpreted_steps"]`` counts those steps). Mech's Adams integrator and larger
+systems keep the Python path meanwhile (its interpreted steps cost too much: decision 0077).
+``MECHSYS_JIT=0`` still selects the Python path, as for the sweep.
+
 Velocity constraints :math:`A(q, t) \dot q + b(q, t) = 0` (rolling; decisions 0053, 0062)
 run in the same loops (kind ``ROLLING``, reported as ``"augmented"``, :meth:`FreeStepper._plan_rows`)
 up to ``SPARSE_THRESHOLD`` holonomic unknowns: the dense augmented system bordered by
@@ -117,6 +126,33 @@ _MODE_AT = {"loop": 14, "adams": 14, "derivative": 13}
 #: ``benchmarks/compile_profile.py`` found it; decision 0044), for the notice. Adams: not
 #: measured apart from the derivative it shares with the Runge-Kutta runs
 _COMPILE_SECONDS = {"loop": 35, "adams": None, "derivative": 15}
+
+#: while a loop is compiled in the background (decision 0064) its own code runs interpreted
+#: (:mod:`._jit_interp`, decision 0077) for systems of up to this many unknowns ``n + m``
+#: (and velocity rows). Its step costs 2.3 x the Python path's at 5 unknowns, 4.9 x at 10
+#: (the double pendulum: 4.0 s of CPU to the cold start's first result), 5.9 x at 15 and
+#: 12 x at 20 (the augmented system's LU, about as the cube of the size; decision 0077's
+#: table): larger systems keep the Python path meanwhile
+INTERP_MAX = 12
+#: interpreted steps per call of a loop: between two calls ``_jit_modes.entry`` is asked
+#: again, and the compiled loop takes the next step once its compile is done (about 0.1 s
+#: of interpreted work each on the double pendulum)
+INTERP_STEPS = {"loop": 32, "adams": 128}
+#: the loops that run interpreted meanwhile. Not Mech's Adams integrator: interpreted, its
+#: steps cost about 2.7 x the Python path's (0.85 ms a step of the double pendulum against
+#: 0.3 ms), and the cold start's 10 s Adams run took 6.0 s of CPU to its first result (the
+#: target: 5 s; decision 0077), so its Python path keeps the steps while it is compiled
+INTERP_LOOPS = frozenset({"loop", "derivative", "path_acc"})
+
+def _steps_at(name: str) -> int:
+    """The position of ``max_steps`` among the arguments of the loop ``_state[name]``."""
+    import inspect
+
+    key = "steps_at_" + name
+    if _state.get(key) is None:
+        _state[key] = list(inspect.signature(_state[name].py_func).parameters).index("max_steps")
+    return _state[key]
+
 
 _state: dict = {"loop": None, "adams": None, "workspace": None, "derivative": None, "coef": None,
                 "gesv": None, "path_acc": None}
@@ -729,7 +765,11 @@ class FreeStepper:
         k = len(self.t_eval)
         self.ET, self.EY = np.zeros(k), np.zeros((k, self.ny))
         self.EQDD, self.ELAM = np.full((k, n), np.nan), np.full((k, self.nl), np.nan)
+        #: steps taken by the compiled loop, and by the same loop interpreted (decision 0077)
         self.steps = 0
+        self.interpreted_steps = 0
+        #: the tier of the last loop call: "compiled", "interpreted" or None (handed over)
+        self.tier = None
         if _state["loop"] is None:
             from ._jit_free_loop import adams, derivative, runge_kutta, workspace
 
@@ -931,17 +971,15 @@ class FreeStepper:
             from ._jit_free_loop import path_accelerations
 
             _state["path_acc"] = path_accelerations
-        from ._jit_modes import entry
-
-        args = (np.array([e[0] for e in entries], dtype=np.int64), tuple(e[1] for e in entries),
-                np.ascontiguousarray(times, dtype=float), np.ascontiguousarray(Q, dtype=float),
-                np.ascontiguousarray(QD, dtype=float), self.p, self.jr, self.jc, len(path.psi),
-                self.blk_i[0], self.ws[16][0], QDD)
-        # (every compile of more than about a second is announced: decision 0044; None: being
-        # compiled in the background, decision 0064, and the Python path takes every point)
-        fn = entry(_state["path_acc"], args, say=lambda how: notice(
-            "a path's accelerations", None, background=how == "background"))
-        return 0 if fn is None else int(fn(*args))
+        # (every compile of more than about a second is announced: decision 0044; while it
+        # is compiled in the background, decision 0064, the same code interpreted for a
+        # small path, decision 0077, else None: the Python path takes every point)
+        got = self._call(
+            "path_acc", np.array([e[0] for e in entries], dtype=np.int64),
+            tuple(e[1] for e in entries), np.ascontiguousarray(times, dtype=float),
+            np.ascontiguousarray(Q, dtype=float), np.ascontiguousarray(QD, dtype=float), self.p,
+            self.jr, self.jc, len(path.psi), self.blk_i[0], self.ws[16][0], QDD)
+        return 0 if got is None else int(got)
 
     def rate(self, y, row):
         """The state's derivative at ``y`` from a row the loop returned (its ``QDD``):
@@ -983,7 +1021,7 @@ class FreeStepper:
             solver.h_previous = float(T[steps - 1] - solver.t_old)
             if status == 0:
                 solver.status = "finished"
-        self.steps += int(steps)
+        self._count(steps)
         return (int(status), T[:steps], Y[:steps], H[:steps], QDD[:steps], LAM[:steps], int(ie),
                 int(rejected), int(projections))
 
@@ -1026,22 +1064,56 @@ class FreeStepper:
         """``_state[name](*args)`` (a loop of ``_jit_free_loop``) through its machine code
         specialised on this stepper's mode (``_jit_modes.entry``: the mode argument typed as
         its value, so that only this mode's solvers are compiled; decision 0044), found once
-        per stepper. A compile from empty caches is announced first (``_jit_cache.notice``)."""
+        per stepper. A compile from empty caches is announced first (``_jit_cache.notice``).
+
+        While that machine code is compiled in the background (decision 0064) the same
+        loop runs interpreted (:mod:`._jit_interp`, decision 0077) when it is one of
+        :data:`INTERP_LOOPS` and the system is small enough (:meth:`interpretable`), with at
+        most :data:`INTERP_STEPS` steps (its ``max_steps`` argument) so that the caller asks
+        again soon: the interpreted
+        function is not kept, and the compiled loop takes the first call after its compile
+        is done. None: neither (the caller hands over to its Python path and asks again
+        after its pause). ``self.tier`` tells which ran."""
         fn = self._entries.get(name)
         if fn is None:
             from ._jit_modes import entry
 
             what = {"loop": "the free-motion stepper", "adams": "Mech's Adams integrator",
-                    "derivative": "the free-motion derivative"}[name]
-            fn = entry(_state[name], args, literal=(_MODE_AT[name],),
-                       say=lambda how: notice(f"{what} ({self.solver})", _COMPILE_SECONDS[name],
+                    "derivative": "the free-motion derivative",
+                    "path_acc": "a path's accelerations"}[name]
+            fn = entry(_state[name], args, literal=(_MODE_AT[name],) if name in _MODE_AT else (),
+                       say=lambda how: notice(f"{what} ({self.solver})", _COMPILE_SECONDS.get(name),
                                               background=how == "background"))
             if fn is None:
-                # being compiled in the background (decision 0064): the caller hands over to
-                # its Python path and asks again after its pause
-                return None
+                # being compiled in the background (decision 0064)
+                if name not in INTERP_LOOPS or not self.interpretable():
+                    self.tier = None
+                    return None
+                from ._jit_interp import interpreted
+
+                if name in INTERP_STEPS:
+                    at = _steps_at(name)
+                    args = list(args)
+                    args[at] = min(int(args[at]), INTERP_STEPS[name])
+                self.tier = "interpreted"
+                return interpreted(_state[name])(*args)
             self._entries[name] = fn
+        self.tier = "compiled"
         return fn(*args)
+
+    def interpretable(self) -> bool:
+        """Whether the loops may run interpreted while their machine code is compiled in the
+        background: at most :data:`INTERP_MAX` unknowns (coordinates, multipliers and
+        velocity rows; decision 0077) and every kernel with a C entry point (the stepper's
+        plan already requires them)."""
+        return self.n + self.nl <= INTERP_MAX
+
+    def _count(self, steps) -> None:
+        """Add ``steps`` to the count of the tier that took them."""
+        if self.tier == "interpreted":
+            self.interpreted_steps += int(steps)
+        else:
+            self.steps += int(steps)
 
     def derivative(self, t: float, y: np.ndarray):
         """``(f, lam)``: the derivative ``f = (qd, qdd)`` (2n,) and the multipliers (m,) at
@@ -1049,7 +1121,8 @@ class FreeStepper:
         instead of about 40 µs for the Python path's), or None where the Python path must
         decide (its special handling: the loops hand over there too)."""
         n, m = self.n, self.m
-        if "loop" not in self._entries and "adams" not in self._entries and _background():
+        if self.tier is None and "loop" not in self._entries and "adams" not in self._entries \
+                and _background():
             # a speed-up of SciPy's set-up alone (two evaluations a run): compiled only once
             # a loop runs, so that a first run's background compile is the loop's (0064)
             return None
@@ -1103,7 +1176,7 @@ class FreeStepper:
         if got is None:            # (being compiled in the background: hand over at once)
             return 2, T[:0], Y[:0], H[:0], E[:0], QDD[:0], LAM[:0], 0, 0
         status, steps, evals, projections = got
-        self.steps += int(steps)
+        self._count(steps)
         return (int(status), T[:steps], Y[:steps], H[:steps], E[:steps], QDD[:steps],
                 LAM[:steps], int(evals), int(projections))
 

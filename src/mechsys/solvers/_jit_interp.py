@@ -1,5 +1,7 @@
 r"""The compiled loops' own code, run by the Python interpreter: the first tier of a loop
-that is not compiled yet (decision 0075; ``MECHSYS_JIT=0`` still selects the Python loop).
+that is not compiled yet (the sweep and the multiplier solves: decision 0075; the
+free-motion Runge-Kutta stepper, its derivative and a path's accelerations: decision 0077;
+``MECHSYS_JIT=0`` still selects the Python loop).
 
 A Numba dispatcher keeps the Python function it compiles (``dispatcher.py_func``); its code
 object is the loop. :func:`interpreted` makes a plain Python function of that same code
@@ -35,6 +37,7 @@ from __future__ import annotations
 
 import ctypes
 import types
+import weakref
 
 import numpy as np
 
@@ -44,6 +47,13 @@ _FUNCS: dict = {}
 _GLOBALS: dict = {}
 #: C function objects by (address, argument count)
 _CFUNCS: dict = {}
+#: kernel functions (three pointer arguments) by address alone: the hot path of ``_kcall``
+_KFUNCS: dict = {}
+#: data addresses of arrays: id -> (weak reference, address). An array's data never moves
+#: (the loops do not resize), so its address is computed once; the weak reference tells a
+#: live array from a new one that reuses a dead one's id. ``a.ctypes.data`` builds a ctypes
+#: object each time, about 1 µs, a third of an interpreted kernel call (decision 0077)
+_ADDRS: dict = {}
 
 
 def _cfunc(addr, nargs: int):
@@ -55,16 +65,36 @@ def _cfunc(addr, nargs: int):
     return f
 
 
+def _address(a: np.ndarray) -> int:
+    """The data address of array ``a`` (cached for the arrays that live on: a run's work
+    arrays; a view made per call is a new object, looked up anew)."""
+    got = _ADDRS.get(id(a))
+    if got is not None and got[0]() is a:
+        return got[1]
+    addr = a.ctypes.data
+    try:
+        ref = weakref.ref(a)
+    except TypeError:                  # (not weakly referable: not cached)
+        return addr
+    if len(_ADDRS) >= 4096:
+        _ADDRS.clear()
+    _ADDRS[id(a)] = (ref, addr)
+    return addr
+
+
 def _kcall(addr, out, off, x, ctx):
     """The intrinsic ``_jit_calls._kcall`` through ctypes: the kernel at ``addr`` writes
     ``out[off:]`` from ``x`` (the arrays are C-contiguous float64, as in the loops)."""
-    _cfunc(addr, 3)(out.ctypes.data + 8 * int(off), x.ctypes.data, int(ctx) or None)
+    f = _KFUNCS.get(addr)
+    if f is None:
+        f = _KFUNCS[addr] = _cfunc(addr, 3)
+    f(_address(out) + 8 * int(off), _address(x), int(ctx) or None)
 
 
 def _ccall(addr, args):
     """The intrinsic ``_jit_calls._ccall`` through ctypes: arrays by their data pointers,
     integers as pointer values."""
-    ptrs = [a.ctypes.data if isinstance(a, np.ndarray) else (int(a) or None) for a in args]
+    ptrs = [_address(a) if isinstance(a, np.ndarray) else (int(a) or None) for a in args]
     _cfunc(addr, len(ptrs))(*ptrs)
 
 

@@ -75,32 +75,37 @@ def getrf(AT, n, piv, nz=None):
     """LU of ``A`` (n, n) in place; ``piv[j]``: the row swapped with row ``j`` (0-based).
     Returns LAPACK's ``info``: 0, or ``j + 1`` for the first exactly zero pivot. With ``nz``
     (see the module docstring) ``nz`` receives the factors' nonzero structure."""
+    # (each column of the transposed storage through a row view, ``lj = AT[j]``: the same
+    # operations; the interpreted tier (decision 0075) indexes a view by one integer, about
+    # 1.5 x faster than ``AT[j, i]``; compiled, the same code: decision 0077)
     info = 0
     for j in range(n):
+        lj = AT[j]
         p = j
-        big = abs(AT[j, j])
+        big = abs(lj[j])
         for i in range(j + 1, n):
-            v = abs(AT[j, i])
+            v = abs(lj[i])
             if v > big:
                 big = v
                 p = i
         piv[j] = p
-        if AT[j, p] != 0.0:
+        if lj[p] != 0.0:
             if p != j:
                 for c in range(n):
                     tmp = AT[c, j]
                     AT[c, j] = AT[c, p]
                     AT[c, p] = tmp
-            inv = 1.0 / AT[j, j]
+            inv = 1.0 / lj[j]
             for i in range(j + 1, n):
-                AT[j, i] *= inv
+                lj[i] *= inv
         elif info == 0:
             info = j + 1
         for c in range(j + 1, n):
             a = AT[c, j]
             if a != 0.0:
+                ac = AT[c]
                 for i in range(j + 1, n):
-                    AT[c, i] -= AT[j, i] * a
+                    ac[i] -= lj[i] * a
     if nz is not None:
         _pattern(AT, n, nz)
     return info
@@ -168,35 +173,39 @@ def _lower(AT, n, x):            # L x = b, L unit lower (dtrsv 'L', 'N', 'U')
     for j in range(n):
         xj = x[j]
         if xj != 0.0:
+            lj = AT[j]
             for i in range(j + 1, n):
-                x[i] -= xj * AT[j, i]
+                x[i] -= xj * lj[i]
 
 
 @leaf
 def _upper(AT, n, x):            # U x = b (dtrsv 'U', 'N', 'N')
     for j in range(n - 1, -1, -1):
         if x[j] != 0.0:
-            x[j] /= AT[j, j]
+            uj = AT[j]
+            x[j] /= uj[j]
             xj = x[j]
             for i in range(j):
-                x[i] -= xj * AT[j, i]
+                x[i] -= xj * uj[i]
 
 
 @leaf
 def _upper_t(AT, n, x):          # U^T x = b (dtrsv 'U', 'T', 'N')
     for j in range(n):
+        uj = AT[j]
         s = x[j]
         for i in range(j):
-            s -= AT[j, i] * x[i]
-        x[j] = s / AT[j, j]
+            s -= uj[i] * x[i]
+        x[j] = s / uj[j]
 
 
 @leaf
 def _lower_t(AT, n, x):          # L^T x = b (dtrsv 'L', 'T', 'U')
     for j in range(n - 1, -1, -1):
+        lj = AT[j]
         s = x[j]
         for i in range(j + 1, n):
-            s -= AT[j, i] * x[i]
+            s -= lj[i] * x[i]
         x[j] = s
 
 

@@ -58,8 +58,9 @@ def _rows(J, columns, r):
     n = J.shape[0]
     for i in range(n):
         big = 0.0
+        Ji = J[i]                 # (a row view: the interpreted tier's faster indexing)
         for j in range(J.shape[1]):
-            v = abs(J[i, j] * columns[j])
+            v = abs(Ji[j] * columns[j])
             if v > big:
                 big = v
         r[i] = big if big > 0 else 1.0
