@@ -151,6 +151,214 @@ def symbolic_pattern(S, n, piv, nz, W):
     _pattern(W, n, nz)
 
 
+#: :func:`getrf_lists` runs its elimination over the structure only while every value it can
+#: form is finite: the entries' largest magnitude times the growth bound ``2^(n-1)`` of partial
+#: pivoting stays below ``2^LIST_EXPONENT`` (no overflow, hence no ``0 * inf`` among the
+#: skipped operations)
+LIST_EXPONENT = 1000
+
+
+@nb.njit(cache=True)
+def lists_size(n):
+    """Rows of the ``W`` work array of :func:`getrf_lists` (``n`` columns)."""
+    return 3 * n + 4
+
+
+@leaf
+def getrf_lists(AT, n, piv, S, W, P):
+    r""":func:`getrf` visiting the structure only: the same pivots, the same ``info`` and the
+    same factors (up to the sign of a zero), at a cost that grows with the factors' nonzeros
+    instead of ``n^2``. It eliminates along lists of the nonzero structure, updated with the
+    fill as it goes, which are the symbolic factorisation of ``S`` with these pivots
+    (:func:`symbolic_pattern`'s structure; :func:`lists_pattern` writes it as ``nz``).
+
+    Why the numbers are :func:`getrf`'s: an entry outside the structure is an exact zero
+    (zero in ``A``, and every update of it is ``x - l a`` with ``l`` or ``a`` outside the
+    structure too, hence zero). So the pivot search over the structural rows finds the same
+    first largest entry (ties to the lower position, as the dense loop's strict ``>`` in
+    ascending order), the row interchange over the two rows' structural columns moves every
+    nonzero, and of the elimination's updates ``A(i, c) -= l_i a_c`` the ones skipped are those
+    with ``a_c = 0`` (which :func:`getrf` skips too) or ``l_i = 0``: ``x - 0 a = x`` for a
+    finite ``a`` (a zero ``x`` may change sign in the dense loop, a sign that nothing reads).
+    Each entry is updated once per step, so the order within a step is immaterial.
+
+    Finite: the structural entries are checked first (finite, largest magnitude ``M`` with
+    ``M 2^(n-1) < 2^LIST_EXPONENT``: partial pivoting's multipliers are at most one in
+    magnitude, so no value can overflow), and a pivot whose reciprocal is not finite (below
+    about ``5.6e-309``) is caught where it occurs. In either case the dense loops of
+    :func:`getrf` take over from that point (they run on the same matrix: the numbers are
+    then :func:`getrf`'s exactly, ``NaN`` included), the lists following the pivots.
+
+    ``S`` (:func:`_jit_linalg._structure`, int32 (2n + 2, n)): ``S[c, :S[2n, c]]`` the
+    structural rows of column ``c``, ascending; ``S[n + r, :S[2n + 1, r]]`` the structural
+    columns of row ``r``. ``W`` (int32 (:func:`lists_size` ``(n)``, n), its flags rows
+    ``2n + 4 ..`` zero on entry and on return): ``W[c, :W[2n, c]]`` the rows (by identity:
+    the row's position in ``A``) of column ``c``'s structure, ``W[n + r, :W[2n + 1, r]]``
+    row ``r``'s columns, ``W[2n + 2]``, ``W[2n + 3]`` the positions and identities of the
+    current column's rows below the diagonal, ``W[2n + 4 + c, r]`` one when ``(r, c)`` is in
+    the structure. ``P`` (int32 (3, n)): ``P[1]`` receives the position of each row, ``P[2]``
+    the row at each position (``P[0]``: the caller's). Returns LAPACK's ``info``.
+
+    Example::
+
+        info = getrf_lists(B, n, ipiv, S, W, P)      # then lists_pattern(n, W, P, nz)
+    """
+    cl = 2 * n                       # W[cl, c], W[cl + 1, r]: the lists' lengths
+    sc = 2 * n + 2                   # the current column's rows below the diagonal
+    fl = 2 * n + 4                   # W[fl + c, r]: (r, c) in the structure
+    pos = P[1]
+    rid = P[2]
+    big = 0.0
+    dense = False
+    for c in range(n):
+        k_n = S[2 * n, c]
+        W[cl, c] = k_n
+        for k in range(k_n):
+            r = S[c, k]
+            W[c, k] = r
+            W[fl + c, r] = 1
+            v = abs(AT[c, r])
+            if not v <= big:
+                big = v if v == v else np.inf    # (a NaN stays: as an infinity)
+    for r in range(n):
+        k_n = S[2 * n + 1, r]
+        W[cl + 1, r] = k_n
+        for k in range(k_n):
+            W[n + r, k] = S[n + r, k]
+        pos[r] = r
+        rid[r] = r
+    if not big * 2.0 ** (n - 1) < 2.0 ** LIST_EXPONENT:
+        dense = True
+    info = 0
+    for j in range(n):
+        p = j
+        pv = abs(AT[j, j])
+        if dense:
+            for i in range(j + 1, n):
+                v = abs(AT[j, i])
+                if v > pv:
+                    pv = v
+                    p = i
+        else:
+            for k in range(W[cl, j]):
+                i = pos[W[j, k]]
+                if i > j:
+                    v = abs(AT[j, i])
+                    if v > pv or (v == pv and i < p):
+                        pv = v
+                        p = i
+        piv[j] = p
+        # the current column's structural rows below the diagonal, after the interchange
+        a_id = rid[j]
+        if AT[j, p] != 0.0 and p != j:
+            b_id = rid[p]
+            if dense:
+                for c in range(n):
+                    tmp = AT[c, j]
+                    AT[c, j] = AT[c, p]
+                    AT[c, p] = tmp
+            else:
+                for k in range(W[cl + 1, a_id]):
+                    c = W[n + a_id, k]
+                    tmp = AT[c, j]
+                    AT[c, j] = AT[c, p]
+                    AT[c, p] = tmp
+                for k in range(W[cl + 1, b_id]):
+                    c = W[n + b_id, k]
+                    if W[fl + c, a_id] == 0:
+                        tmp = AT[c, j]
+                        AT[c, j] = AT[c, p]
+                        AT[c, p] = tmp
+            pos[a_id] = p
+            pos[b_id] = j
+            rid[j] = b_id
+            rid[p] = a_id
+        nl = 0
+        for k in range(W[cl, j]):
+            r = W[j, k]
+            i = pos[r]
+            if i > j:
+                W[sc, nl] = i
+                W[sc + 1, nl] = r
+                nl += 1
+        if AT[j, j] != 0.0:
+            inv = 1.0 / AT[j, j]
+            if not abs(inv) < np.inf:
+                dense = True             # (a subnormal pivot: 0 * inv is NaN in getrf)
+            if dense:
+                for i in range(j + 1, n):
+                    AT[j, i] *= inv
+            else:
+                for k in range(nl):
+                    AT[j, W[sc, k]] *= inv
+        elif info == 0:
+            info = j + 1
+        # the elimination, with the fill of the structure: row j's columns c > j, column
+        # j's rows below j
+        jid = rid[j]
+        for kc in range(W[cl + 1, jid]):
+            c = W[n + jid, kc]
+            if c > j:
+                a = AT[c, j]
+                for k in range(nl):
+                    r = W[sc + 1, k]
+                    if W[fl + c, r] == 0:
+                        W[fl + c, r] = 1
+                        W[c, W[cl, c]] = r
+                        W[cl, c] += 1
+                        W[n + r, W[cl + 1, r]] = c
+                        W[cl + 1, r] += 1
+                if a != 0.0 and not dense:
+                    for k in range(nl):
+                        i = W[sc, k]
+                        AT[c, i] -= AT[j, i] * a
+        if dense:
+            for c in range(j + 1, n):
+                a = AT[c, j]
+                if a != 0.0:
+                    for i in range(j + 1, n):
+                        AT[c, i] -= AT[j, i] * a
+    for c in range(n):                   # (the flags back to zero for the next call)
+        for k in range(W[cl, c]):
+            W[fl + c, W[c, k]] = 0
+    return info
+
+
+@leaf
+def lists_pattern(n, W, P, nz):
+    """``nz`` (module docstring) of the structure :func:`getrf_lists` left in ``W`` with the
+    positions ``P[1]``: each column's rows below and above the diagonal, sorted (insertion:
+    the lists are short). Equal to :func:`symbolic_pattern` of the same structure and pivots.
+    """
+    cl = 2 * n
+    pos = P[1]
+    pl = 2 * n + 2
+    pu = pl + (n * (n - 1)) // 2
+    for j in range(n):
+        nz[j] = pl
+        nz[n + 1 + j] = pu
+        l0 = pl
+        u0 = pu
+        for k in range(W[cl, j]):
+            i = pos[W[j, k]]
+            if i > j:
+                q = pl
+                while q > l0 and nz[q - 1] > i:
+                    nz[q] = nz[q - 1]
+                    q -= 1
+                nz[q] = i
+                pl += 1
+            elif i < j:
+                q = pu
+                while q > u0 and nz[q - 1] > i:
+                    nz[q] = nz[q - 1]
+                    q -= 1
+                nz[q] = i
+                pu += 1
+    nz[n] = pl
+    nz[2 * n + 1] = pu
+
+
 @leaf
 def getrs(AT, n, piv, x, nz=None):
     """``x <- A^-1 x`` from :func:`getrf`'s factors (``nz``: as given to it)."""
