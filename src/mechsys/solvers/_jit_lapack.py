@@ -151,13 +151,6 @@ def symbolic_pattern(S, n, piv, nz, W):
     _pattern(W, n, nz)
 
 
-#: :func:`getrf_lists` runs its elimination over the structure only while every value it can
-#: form is finite: the entries' largest magnitude times the growth bound ``2^(n-1)`` of partial
-#: pivoting stays below ``2^LIST_EXPONENT`` (no overflow, hence no ``0 * inf`` among the
-#: skipped operations)
-LIST_EXPONENT = 1000
-
-
 @nb.njit(cache=True)
 def lists_size(n):
     """Rows of the ``W`` work array of :func:`getrf_lists` (``n`` columns)."""
@@ -177,27 +170,29 @@ def getrf_lists(AT, n, piv, S, W, P):
     structure too, hence zero). So the pivot search over the structural rows finds the same
     first largest entry (ties to the lower position, as the dense loop's strict ``>`` in
     ascending order), the row interchange over the two rows' structural columns moves every
-    nonzero, and of the elimination's updates ``A(i, c) -= l_i a_c`` the ones skipped are those
-    with ``a_c = 0`` (which :func:`getrf` skips too) or ``l_i = 0``: ``x - 0 a = x`` for a
-    finite ``a`` (a zero ``x`` may change sign in the dense loop, a sign that nothing reads).
-    Each entry is updated once per step, so the order within a step is immaterial.
+    nonzero, and the updates ``A(i, c) -= l_i a_c`` skipped are those with ``l_i = 0`` or
+    ``a_c = 0``: ``x - 0 y = x`` for a finite ``y`` (a zero ``x`` may come out with the other
+    sign, which nothing reads). Each entry is updated once per step, so the order within a
+    step is immaterial.
 
-    Finite: the structural entries are checked first (finite, largest magnitude ``M`` with
-    ``M 2^(n-1) < 2^LIST_EXPONENT``: partial pivoting's multipliers are at most one in
-    magnitude, so no value can overflow), and a pivot whose reciprocal is not finite (below
-    about ``5.6e-309``) is caught where it occurs. In either case the dense loops of
-    :func:`getrf` take over from that point (they run on the same matrix: the numbers are
-    then :func:`getrf`'s exactly, ``NaN`` included), the lists following the pivots.
+    Not finite: the skipped updates are exact while every ``a_c`` and every pivot's
+    reciprocal is finite (``0 * inf`` is NaN). Where one is not, :func:`getrf`'s dense loops
+    take over (the column's update at once, the rest from the next step on: the zeros
+    outside the structure may no longer be zeros), on the same matrix, so that the numbers
+    are then :func:`getrf`'s exactly, ``NaN`` included; the lists keep following the pivots.
 
     ``S`` (:func:`_jit_linalg._structure`, int32 (2n + 2, n)): ``S[c, :S[2n, c]]`` the
     structural rows of column ``c``, ascending; ``S[n + r, :S[2n + 1, r]]`` the structural
-    columns of row ``r``. ``W`` (int32 (:func:`lists_size` ``(n)``, n), its flags rows
-    ``2n + 4 ..`` zero on entry and on return): ``W[c, :W[2n, c]]`` the rows (by identity:
-    the row's position in ``A``) of column ``c``'s structure, ``W[n + r, :W[2n + 1, r]]``
-    row ``r``'s columns, ``W[2n + 2]``, ``W[2n + 3]`` the positions and identities of the
-    current column's rows below the diagonal, ``W[2n + 4 + c, r]`` one when ``(r, c)`` is in
-    the structure. ``P`` (int32 (3, n)): ``P[1]`` receives the position of each row, ``P[2]``
-    the row at each position (``P[0]``: the caller's). Returns LAPACK's ``info``.
+    columns of row ``r``. ``W`` (int32 (:func:`lists_size` ``(n)``, n), holding ``S``'s lists
+    on entry, with ``S``'s flags): ``W[c, :W[2n, c]]`` the rows (by identity: the row's position in ``A``) of
+    column ``c``'s structure, ``W[n + r, :W[2n + 1, r]]`` row ``r``'s columns, ``W[2n + 2]``,
+    ``W[2n + 3]`` the positions and identities of the current column's rows below the
+    diagonal, ``W[2n + 4 + c, r]`` one when ``(r, c)`` is in the structure (the lists and
+    flags past ``S``'s are the fill, dropped on the next call). ``P`` (int32 (3, n)):
+    ``P[1]`` receives the position of each row, ``P[2]`` the row at each position
+    (``P[0]``: the caller's). Returns LAPACK's ``info``.
+    (Written for the interpreter too, which runs it as the first tier (decision 0078): few
+    statements per entry visited, whole-row copies as slice assignments.)
 
     Example::
 
@@ -208,79 +203,72 @@ def getrf_lists(AT, n, piv, S, W, P):
     fl = 2 * n + 4                   # W[fl + c, r]: (r, c) in the structure
     pos = P[1]
     rid = P[2]
-    big = 0.0
+    for c in range(n):               # (the lists are S's, then the fill: drop the fill)
+        W[cl, c] = S[cl, c]
+        W[cl + 1, c] = S[cl + 1, c]
+        pos[c] = c
+        rid[c] = c
     dense = False
-    for c in range(n):
-        k_n = S[2 * n, c]
-        W[cl, c] = k_n
-        for k in range(k_n):
-            r = S[c, k]
-            W[c, k] = r
-            W[fl + c, r] = 1
-            v = abs(AT[c, r])
-            if not v <= big:
-                big = v if v == v else np.inf    # (a NaN stays: as an infinity)
-    for r in range(n):
-        k_n = S[2 * n + 1, r]
-        W[cl + 1, r] = k_n
-        for k in range(k_n):
-            W[n + r, k] = S[n + r, k]
-        pos[r] = r
-        rid[r] = r
-    if not big * 2.0 ** (n - 1) < 2.0 ** LIST_EXPONENT:
-        dense = True
     info = 0
     for j in range(n):
+        # the pivot (the first largest below the diagonal) and the column's rows below it
         p = j
         pv = abs(AT[j, j])
+        nl = 0
+        kp = -1
+        for r in W[j, :W[cl, j]]:
+            i = pos[r]
+            if i > j:
+                W[sc, nl] = i
+                W[sc + 1, nl] = r
+                v = abs(AT[j, i])
+                if v > pv or (v == pv and i < p):
+                    pv = v
+                    p = i
+                    kp = nl
+                nl += 1
         if dense:
+            p = j
+            pv = abs(AT[j, j])
             for i in range(j + 1, n):
                 v = abs(AT[j, i])
                 if v > pv:
                     pv = v
                     p = i
-        else:
-            for k in range(W[cl, j]):
-                i = pos[W[j, k]]
-                if i > j:
-                    v = abs(AT[j, i])
-                    if v > pv or (v == pv and i < p):
-                        pv = v
-                        p = i
+            kp = -1
+            for k in range(nl):
+                if W[sc, k] == p:
+                    kp = k
         piv[j] = p
-        # the current column's structural rows below the diagonal, after the interchange
-        a_id = rid[j]
         if AT[j, p] != 0.0 and p != j:
+            a_id = rid[j]
             b_id = rid[p]
             if dense:
                 for c in range(n):
-                    tmp = AT[c, j]
-                    AT[c, j] = AT[c, p]
-                    AT[c, p] = tmp
+                    AT[c, j], AT[c, p] = AT[c, p], AT[c, j]
             else:
-                for k in range(W[cl + 1, a_id]):
-                    c = W[n + a_id, k]
-                    tmp = AT[c, j]
-                    AT[c, j] = AT[c, p]
-                    AT[c, p] = tmp
-                for k in range(W[cl + 1, b_id]):
-                    c = W[n + b_id, k]
+                for c in W[n + a_id, :W[cl + 1, a_id]]:
+                    AT[c, j], AT[c, p] = AT[c, p], AT[c, j]
+                for c in W[n + b_id, :W[cl + 1, b_id]]:
                     if W[fl + c, a_id] == 0:
-                        tmp = AT[c, j]
-                        AT[c, j] = AT[c, p]
-                        AT[c, p] = tmp
+                        AT[c, j], AT[c, p] = AT[c, p], AT[c, j]
             pos[a_id] = p
             pos[b_id] = j
             rid[j] = b_id
             rid[p] = a_id
-        nl = 0
-        for k in range(W[cl, j]):
-            r = W[j, k]
-            i = pos[r]
-            if i > j:
-                W[sc, nl] = i
-                W[sc + 1, nl] = r
+            # the pivot row left the rows below the diagonal, the row it replaced (at p now)
+            # joins them where it has an entry in this column
+            if kp < 0:                   # (dense: a pivot outside the structure)
+                W[sc, nl] = p
+                W[sc + 1, nl] = a_id
                 nl += 1
+                kp = nl - 1
+            if W[fl + j, a_id] != 0:
+                W[sc + 1, kp] = a_id
+            else:
+                nl -= 1
+                W[sc, kp] = W[sc, nl]
+                W[sc + 1, kp] = W[sc + 1, nl]
         if AT[j, j] != 0.0:
             inv = 1.0 / AT[j, j]
             if not abs(inv) < np.inf:
@@ -289,17 +277,18 @@ def getrf_lists(AT, n, piv, S, W, P):
                 for i in range(j + 1, n):
                     AT[j, i] *= inv
             else:
-                for k in range(nl):
-                    AT[j, W[sc, k]] *= inv
+                for i in W[sc, :nl]:
+                    AT[j, i] *= inv
         elif info == 0:
             info = j + 1
         # the elimination, with the fill of the structure: row j's columns c > j, column
         # j's rows below j
         jid = rid[j]
-        for kc in range(W[cl + 1, jid]):
-            c = W[n + jid, kc]
+        spoilt = False
+        for c in W[n + jid, :W[cl + 1, jid]]:
             if c > j:
                 a = AT[c, j]
+                live = not dense and abs(a) < np.inf
                 for k in range(nl):
                     r = W[sc + 1, k]
                     if W[fl + c, r] == 0:
@@ -308,9 +297,14 @@ def getrf_lists(AT, n, piv, S, W, P):
                         W[cl, c] += 1
                         W[n + r, W[cl + 1, r]] = c
                         W[cl + 1, r] += 1
-                if a != 0.0 and not dense:
-                    for k in range(nl):
-                        i = W[sc, k]
+                    if live:
+                        AT[c, W[sc, k]] -= AT[j, W[sc, k]] * a
+                if not live and not dense:
+                    # a non-finite a: getrf's update of the whole column (0 * a is NaN),
+                    # and its loops from the next step on (the zeros outside the
+                    # structure may be NaN now)
+                    spoilt = True
+                    for i in range(j + 1, n):
                         AT[c, i] -= AT[j, i] * a
         if dense:
             for c in range(j + 1, n):
@@ -318,9 +312,10 @@ def getrf_lists(AT, n, piv, S, W, P):
                 if a != 0.0:
                     for i in range(j + 1, n):
                         AT[c, i] -= AT[j, i] * a
-    for c in range(n):                   # (the flags back to zero for the next call)
-        for k in range(W[cl, c]):
-            W[fl + c, W[c, k]] = 0
+        dense = dense or spoilt
+    for c in range(n):                   # (the fill's flags back to zero)
+        for r in W[c, S[cl, c]:W[cl, c]]:
+            W[fl + c, r] = 0
     return info
 
 

@@ -244,12 +244,13 @@ def _structure(jr, jc, n):
     are at rows ``jr``, columns ``jc`` (repeats allowed): ``S`` (int32 (2n + 2, n)) its
     structure as lists, ascending (``S[c, :S[2n, c]]`` column ``c``'s rows, ``S[n + r,
     :S[2n + 1, r]]`` row ``r``'s columns: ``_jit_lapack.getrf_lists``), ``W`` the lists'
-    work (its flags zero), ``seen`` (int32 (3, n)): no pivots seen yet (``seen[0]``), and
-    the rows' positions."""
+    work (holding ``S``'s lists and flags), ``seen`` (int32 (3, n)): no pivots seen yet
+    (``seen[0]``), and the rows' positions."""
     mark = np.zeros((n, n), dtype=np.bool_)
     for k in range(jr.size):
         mark[jr[k], jc[k]] = True
     S = np.zeros((2 * n + 2, n), dtype=np.int32)
+    W = np.zeros((lists_size(n), n), dtype=np.int32)
     for c in range(n):
         for r in range(n):
             if mark[r, c]:
@@ -257,9 +258,11 @@ def _structure(jr, jc, n):
                 S[2 * n, c] += 1
                 S[n + r, S[2 * n + 1, r]] = c
                 S[2 * n + 1, r] += 1
+                W[2 * n + 4 + c, r] = 1
+    W[:2 * n + 2, :] = S
     seen = np.zeros((3, n), dtype=np.int32)
     seen[0, :] = -1
-    return S, np.zeros((lists_size(n), n), dtype=np.int32), seen
+    return S, W, seen
 
 
 @nb.njit(cache=True)
@@ -288,22 +291,19 @@ def _solve(lapack, B, ipiv, nz, r, columns, b, out, ibuf, cbuf):
     if n <= SMALL:
         # getrs(B, n, ipiv, out, nz) written out (the same operations in the same order): the
         # calls cost about half as much as the solve itself at this size
+        # (few statements per entry: the interpreted tier pays per statement)
         for j in range(n):
             p = ipiv[j]
             if p != j:
-                tmp = out[j]
-                out[j] = out[p]
-                out[p] = tmp
+                out[j], out[p] = out[p], out[j]
         for j in range(n):
             xj = out[j]
-            for k in range(nz[j], nz[j + 1]):
-                i = nz[k]
+            for i in nz[nz[j]:nz[j + 1]]:
                 out[i] -= xj * B[j, i]
         for j in range(n - 1, -1, -1):
             xj = out[j] / B[j, j]
             out[j] = xj
-            for k in range(nz[n + 1 + j], nz[n + 2 + j]):
-                i = nz[k]
+            for i in nz[nz[n + 1 + j]:nz[n + 2 + j]]:
                 out[i] -= xj * B[j, i]
     else:
         cbuf[1] = 78         # 'N': no transpose
