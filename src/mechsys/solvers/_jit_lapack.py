@@ -151,6 +151,13 @@ def symbolic_pattern(S, n, piv, nz, W):
     _pattern(W, n, nz)
 
 
+#: from this many unknowns the compiled loops factorise along the lists (:func:`getrf_lists`);
+#: below, the dense :func:`getrf` costs less, compiled and interpreted (its ``n^2`` zero tests
+#: are few), and the lists only give the factors' structure when the pivots change
+#: (decision 0078)
+LIST_LU_MIN = 17
+
+
 @nb.njit(cache=True)
 def lists_size(n):
     """Rows of the ``W`` work array of :func:`getrf_lists` (``n`` columns)."""
@@ -158,7 +165,7 @@ def lists_size(n):
 
 
 @leaf
-def getrf_lists(AT, n, piv, S, W, P):
+def getrf_lists(AT, n, piv, S, W, P, numeric):
     r""":func:`getrf` visiting the structure only: the same pivots, the same ``info`` and the
     same factors (up to the sign of a zero), at a cost that grows with the factors' nonzeros
     instead of ``n^2``. It eliminates along lists of the nonzero structure, updated with the
@@ -190,13 +197,15 @@ def getrf_lists(AT, n, piv, S, W, P):
     diagonal, ``W[2n + 4 + c, r]`` one when ``(r, c)`` is in the structure (the lists and
     flags past ``S``'s are the fill, dropped on the next call). ``P`` (int32 (3, n)):
     ``P[1]`` receives the position of each row, ``P[2]`` the row at each position
-    (``P[0]``: the caller's). Returns LAPACK's ``info``.
+    (``P[0]``: the caller's). Returns LAPACK's ``info``. ``numeric`` False: the structure
+    only, for the pivots given in ``piv`` (``AT`` untouched, 0 returned): the lists of the
+    factors that :func:`getrf` made with them.
     (Written for the interpreter too, which runs it as the first tier (decision 0078): few
     statements per entry visited, whole-row copies as slice assignments.)
 
     Example::
 
-        info = getrf_lists(B, n, ipiv, S, W, P)      # then lists_pattern(n, W, P, nz)
+        info = getrf_lists(B, n, ipiv, S, W, P, True)    # then lists_pattern(n, W, P, nz)
     """
     cl = 2 * n                       # W[cl, c], W[cl + 1, r]: the lists' lengths
     sc = 2 * n + 2                   # the current column's rows below the diagonal
@@ -212,7 +221,7 @@ def getrf_lists(AT, n, piv, S, W, P):
     info = 0
     for j in range(n):
         # the pivot (the first largest below the diagonal) and the column's rows below it
-        p = j
+        p = j if numeric else piv[j]
         pv = abs(AT[j, j])
         nl = 0
         kp = -1
@@ -221,13 +230,17 @@ def getrf_lists(AT, n, piv, S, W, P):
             if i > j:
                 W[sc, nl] = i
                 W[sc + 1, nl] = r
-                v = abs(AT[j, i])
-                if v > pv or (v == pv and i < p):
-                    pv = v
-                    p = i
-                    kp = nl
+                if not numeric:
+                    if i == p:
+                        kp = nl
+                else:
+                    v = abs(AT[j, i])
+                    if v > pv or (v == pv and i < p):
+                        pv = v
+                        p = i
+                        kp = nl
                 nl += 1
-        if dense:
+        if dense and numeric:
             p = j
             pv = abs(AT[j, j])
             for i in range(j + 1, n):
@@ -240,10 +253,12 @@ def getrf_lists(AT, n, piv, S, W, P):
                 if W[sc, k] == p:
                     kp = k
         piv[j] = p
-        if AT[j, p] != 0.0 and p != j:
+        if p != j:                       # (then A(p, j) != 0: p moved on a larger |A(i, j)|)
             a_id = rid[j]
             b_id = rid[p]
-            if dense:
+            if not numeric:
+                pass
+            elif dense:
                 for c in range(n):
                     AT[c, j], AT[c, p] = AT[c, p], AT[c, j]
             else:
@@ -269,7 +284,9 @@ def getrf_lists(AT, n, piv, S, W, P):
                 nl -= 1
                 W[sc, kp] = W[sc, nl]
                 W[sc + 1, kp] = W[sc + 1, nl]
-        if AT[j, j] != 0.0:
+        if not numeric:
+            pass
+        elif AT[j, j] != 0.0:
             inv = 1.0 / AT[j, j]
             if not abs(inv) < np.inf:
                 dense = True             # (a subnormal pivot: 0 * inv is NaN in getrf)
@@ -288,7 +305,7 @@ def getrf_lists(AT, n, piv, S, W, P):
         for c in W[n + jid, :W[cl + 1, jid]]:
             if c > j:
                 a = AT[c, j]
-                live = not dense and abs(a) < np.inf
+                live = numeric and not dense and abs(a) < np.inf
                 for k in range(nl):
                     r = W[sc + 1, k]
                     if W[fl + c, r] == 0:
@@ -299,14 +316,14 @@ def getrf_lists(AT, n, piv, S, W, P):
                         W[cl + 1, r] += 1
                     if live:
                         AT[c, W[sc, k]] -= AT[j, W[sc, k]] * a
-                if not live and not dense:
+                if numeric and not live and not dense:
                     # a non-finite a: getrf's update of the whole column (0 * a is NaN),
                     # and its loops from the next step on (the zeros outside the
                     # structure may be NaN now)
                     spoilt = True
                     for i in range(j + 1, n):
                         AT[c, i] -= AT[j, i] * a
-        if dense:
+        if dense and numeric:
             for c in range(j + 1, n):
                 a = AT[c, j]
                 if a != 0.0:
@@ -421,30 +438,28 @@ def _inv(AT, n, x, transposed, nz=None):
         # branch that skips only exact no-ops here). They divide by the pivots as dtrsv
         # does: multiplying by reciprocals would differ by rounding, which a nearly singular
         # matrix (a dead centre) amplifies beyond the 1e-12 the two paths agree to.
+        # (two statements an entry, which the interpreted tier pays per statement; the same
+        # operations)
         for j in range(n):
             s = x[j]
             for k in range(nz[n + 1 + j], nz[n + 2 + j]):
-                i = nz[k]
-                s -= AT[j, i] * x[i]
+                s -= AT[j, nz[k]] * x[nz[k]]
             x[j] = s / AT[j, j]
         for j in range(n - 1, -1, -1):
             s = x[j]
             for k in range(nz[j], nz[j + 1]):
-                i = nz[k]
-                s -= AT[j, i] * x[i]
+                s -= AT[j, nz[k]] * x[nz[k]]
             x[j] = s
     else:
         for j in range(n):
             xj = x[j]
             for k in range(nz[j], nz[j + 1]):
-                i = nz[k]
-                x[i] -= xj * AT[j, i]
+                x[nz[k]] -= xj * AT[j, nz[k]]
         for j in range(n - 1, -1, -1):
             xj = x[j] / AT[j, j]
             x[j] = xj
             for k in range(nz[n + 1 + j], nz[n + 2 + j]):
-                i = nz[k]
-                x[i] -= xj * AT[j, i]
+                x[nz[k]] -= xj * AT[j, nz[k]]
 
 
 @leaf
@@ -553,16 +568,14 @@ def inv_norm_bound(AT, n, nz, y):
     for j in range(n):               # M(U)^T y = e: forward, y_j = (1 + sum |u_ij| y_i) / |u_jj|
         s = 1.0
         for k in range(nz[n + 1 + j], nz[n + 2 + j]):
-            i = nz[k]
-            s += abs(AT[j, i]) * y[i]
+            s += abs(AT[j, nz[k]]) * y[nz[k]]
         y[j] = s / abs(AT[j, j])
     big = 0.0
     total = 0.0                      # (an inf in y can meet a zero of a symbolic_pattern:
     for j in range(n - 1, -1, -1):   # 0 * inf is NaN, which "s > big" would pass over)
         s = y[j]                     # M(L)^T z = y: backward, z_j = y_j + sum |l_ij| z_i
         for k in range(nz[j], nz[j + 1]):
-            i = nz[k]
-            s += abs(AT[j, i]) * y[i]
+            s += abs(AT[j, nz[k]]) * y[nz[k]]
         y[j] = s
         total += s
         if s > big:

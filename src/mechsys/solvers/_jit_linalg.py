@@ -40,7 +40,9 @@ from ._jit_cache import check as _check_cache
 from ._jit_calls import _ccall
 from ._jit_lapack import (
     GUARD_MARGIN,
+    LIST_LU_MIN,
     gecon1,
+    getrf,
     getrf_lists,
     inv_norm_bound,
     leaf,
@@ -176,10 +178,11 @@ def _factor_filled(lapack, B, anorm, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, wor
     exact zero pivot or an estimate below ``RCOND_MIN``).
 
     Up to ``SMALL`` unknowns the LU is :func:`getrf_lists` (LAPACK's elimination visiting
-    the Jacobian's structure ``S`` and its fill only, decision 0078), and the factors'
-    nonzero structure ``nz`` (used by the solves and estimates) is written again
-    (:func:`lists_pattern`) only when the pivots differ from ``seen[0]`` (those it was made
-    for); ``W``: the lists' work; :func:`_structure` makes the three.
+    the Jacobian's structure ``S`` and its fill only, decision 0078; below ``LIST_LU_MIN``
+    unknowns the dense :func:`getrf`, the same numbers), and the factors' nonzero structure
+    ``nz`` (used by the solves and estimates) is written again (:func:`lists_pattern`) only
+    when the pivots differ from ``seen[0]`` (those it was made for); ``W``: the lists' work;
+    :func:`_structure` makes the three.
 
     ``guard`` > 0 (up to ``SMALL`` unknowns): when :func:`inv_norm_bound` proves that the
     estimate is at least ``guard`` it is not computed and ``RCOND_PENDING`` (``inf``) is
@@ -191,7 +194,9 @@ def _factor_filled(lapack, B, anorm, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, wor
     n = B.shape[0]
     if n <= SMALL:
         # LAPACK's algorithms written out (_jit_lapack): the calls' overhead dominated
-        if getrf_lists(B, n, ipiv, S, W, seen) > 0 or anorm == 0:
+        small = n < LIST_LU_MIN
+        info = getrf(B, n, ipiv) if small else getrf_lists(B, n, ipiv, S, W, seen, True)
+        if info > 0 or anorm == 0:
             return -1.0
         same = True
         for j in range(n):
@@ -200,6 +205,8 @@ def _factor_filled(lapack, B, anorm, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, wor
         if not same:
             # the factors' structure (symbolic: every matrix of this structure and these
             # pivots), written once per pivot sequence
+            if small:
+                getrf_lists(B, n, ipiv, S, W, seen, False)
             lists_pattern(n, W, seen, nz)
             for j in range(n):
                 seen[0, j] = ipiv[j]
@@ -291,20 +298,20 @@ def _solve(lapack, B, ipiv, nz, r, columns, b, out, ibuf, cbuf):
     if n <= SMALL:
         # getrs(B, n, ipiv, out, nz) written out (the same operations in the same order): the
         # calls cost about half as much as the solve itself at this size
-        # (few statements per entry: the interpreted tier pays per statement)
+        # (two statements an entry: the interpreted tier pays per statement)
         for j in range(n):
             p = ipiv[j]
             if p != j:
                 out[j], out[p] = out[p], out[j]
         for j in range(n):
             xj = out[j]
-            for i in nz[nz[j]:nz[j + 1]]:
-                out[i] -= xj * B[j, i]
+            for k in range(nz[j], nz[j + 1]):
+                out[nz[k]] -= xj * B[j, nz[k]]
         for j in range(n - 1, -1, -1):
             xj = out[j] / B[j, j]
             out[j] = xj
-            for i in nz[nz[n + 1 + j]:nz[n + 2 + j]]:
-                out[i] -= xj * B[j, i]
+            for k in range(nz[n + 1 + j], nz[n + 2 + j]):
+                out[nz[k]] -= xj * B[j, nz[k]]
     else:
         cbuf[1] = 78         # 'N': no transpose
         ibuf[1] = n          # n, lda = ldb (set here too: a solve never relies on an earlier factor call)
