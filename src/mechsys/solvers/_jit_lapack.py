@@ -33,6 +33,15 @@ that holds for every matrix of a given sparsity and pivot sequence, so the compi
 makes it once per pivot sequence instead of recording it after each factorisation
 (decision 0025).
 
+**The elimination along the structure** (:func:`getrf_lists`, decision 0078; the sweep's
+and the multiplier solves' LU from ``LIST_LU_MIN`` unknowns): ``getrf``'s elimination
+visiting only the structure's lists and their fill, which are :func:`symbolic_pattern`'s
+structure for the pivots it takes (:func:`lists_pattern` writes it as ``nz``): the same
+pivots and factors (up to the sign of a zero) at a cost in the factors' nonzeros instead of
+``n^2``, for the compiled loops and above all for their code run by the interpreter
+(:mod:`._jit_interp`), which pays per statement. (:func:`symbolic_pattern` stays as the
+dense statement of that structure, against which the tests check the lists.)
+
 Layout of ``nz`` (0-based, positions absolute): ``nz[j] .. nz[j + 1]`` hold the rows
 ``i > j`` with ``L(i, j) != 0`` of column ``j``, ascending; ``nz[n + 1 + j] .. nz[n + 2 + j]``
 the rows ``i < j`` with ``U(i, j) != 0``, ascending.
