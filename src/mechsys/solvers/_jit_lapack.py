@@ -186,10 +186,10 @@ def getrf_lists(AT, n, piv, S, W, P, numeric):
     structure too, hence zero). So the pivot search over the structural rows finds the same
     first largest entry (ties to the lower position, as the dense loop's strict ``>`` in
     ascending order), the row interchange over the two rows' structural columns moves every
-    nonzero, and the updates ``A(i, c) -= l_i a_c`` skipped are those with ``l_i = 0`` or
-    ``a_c = 0``: ``x - 0 y = x`` for a finite ``y`` (a zero ``x`` may come out with the other
-    sign, which nothing reads). Each entry is updated once per step, so the order within a
-    step is immaterial.
+    nonzero, and the updates ``A(i, c) -= l_i a_c`` skipped are those with ``a_c = 0``
+    (which :func:`getrf` skips too) or ``l_i = 0``: ``x - 0 a = x`` for a finite ``a`` (a
+    zero ``x`` may come out with the other sign, which nothing reads). Each entry is updated
+    once per step, so the order within a step is immaterial.
 
     Not finite: the skipped updates are exact while every ``a_c`` and every pivot's
     reciprocal is finite (``0 * inf`` is NaN). Where one is not, :func:`getrf`'s dense loops
@@ -314,7 +314,16 @@ def getrf_lists(AT, n, piv, S, W, P, numeric):
         for c in W[n + jid, :W[cl + 1, jid]]:
             if c > j:
                 a = AT[c, j]
-                live = numeric and not dense and abs(a) < np.inf
+                # (getrf skips a zero a: so does this loop, l * 0 being NaN for l not finite)
+                live = numeric and not dense and a != 0.0
+                if live and not abs(a) < np.inf:
+                    # a non-finite a: getrf's update of the whole column (0 * a is NaN),
+                    # and its loops from the next step on (the zeros outside the
+                    # structure may be NaN now)
+                    live = False
+                    spoilt = True
+                    for i in range(j + 1, n):
+                        AT[c, i] -= AT[j, i] * a
                 for k in range(nl):
                     r = W[sc + 1, k]
                     if W[fl + c, r] == 0:
@@ -325,13 +334,6 @@ def getrf_lists(AT, n, piv, S, W, P, numeric):
                         W[cl + 1, r] += 1
                     if live:
                         AT[c, W[sc, k]] -= AT[j, W[sc, k]] * a
-                if numeric and not live and not dense:
-                    # a non-finite a: getrf's update of the whole column (0 * a is NaN),
-                    # and its loops from the next step on (the zeros outside the
-                    # structure may be NaN now)
-                    spoilt = True
-                    for i in range(j + 1, n):
-                        AT[c, i] -= AT[j, i] * a
         if dense and numeric:
             for c in range(j + 1, n):
                 a = AT[c, j]
