@@ -66,6 +66,7 @@ from ._jit_linalg import (
 )
 from ._jit_modes import within
 from ._jit_runtime import SPARSE
+from ._tolerances import RCOND_MIN
 
 _check_cache()   # stale cached loops go before anything here compiles (see _jit_cache)
 
@@ -221,8 +222,11 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
                     for j in range(n):
                         B[i, j] = (J[i, j] * cols[j]) * inv
                 anorm = _norm1_nz(B, n, S)
+            # (guard RCOND_MIN: only "singular or not" is read, so the estimate is skipped
+            # where its bound proves it regular, as in the sweep's Newton steps: the same
+            # decision, decision 0078)
             if _factor_filled(lapack, B, anorm, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf,
-                              work, iwork, 0.0) < 0:
+                              work, iwork, RCOND_MIN) < 0:
                 return k
         if mode != STATIC:
             for j in range(n):
@@ -317,7 +321,7 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
                     for j in range(n):
                         K[i, j] = (cols[j] * K[i, j]) / r[i]
                 if _factor_filled(lapack, K, _norm1_nz(K, n, S2), ipiv2, nz2, S2, W2, seen2, ibuf, cbuf,
-                                  dbuf, work, iwork, 0.0) < 0:
+                                  dbuf, work, iwork, RCOND_MIN) < 0:
                     return k
                 for j in range(n):
                     R[j] = cols[j] * R[j]
