@@ -45,9 +45,9 @@ AUTO_POINTS = 1000
 #: the first tier of systems up to this many unknowns while the compiled loop is being
 #: compiled in the background (decisions 0075, 0078): their LU visits the structure only
 #: (``_jit_lapack.getrf_lists``), so their cost per point grows about as the nonzeros, 45 to
-#: 60 µs an unknown (the sweep: 2-4 x the Python loop at 9 unknowns, 5-7 x at 21, 10-11 x at
-#: 63, the ratio decision 0075 accepted at its limit of 24); larger systems keep the Python
-#: loop meanwhile
+#: 90 µs an unknown (the sweep: 2-4 x the Python loop at 9 unknowns, 7-10 x at 21, 10-20 x
+#: at 63, about the ratio decision 0075 accepted at its limit of 24: 11-18 x at 21 then);
+#: larger systems keep the Python loop meanwhile
 INTERP_MAX = 64
 
 #: the multiplier solves with loads that depend on the multipliers (friction) run Newton on
