@@ -15,12 +15,15 @@ loop's (0: the same numbers, bit for bit).
 optimisation level (``NUMBA_OPT=0``) in a fresh process with an empty cache: the CPU time
 to its first result (its compile) and its cost per point.
 
+``--sparse``: the same three ways on chains of 183 and 273 unknowns (the sparse kind,
+above ``SPARSE_THRESHOLD``; the interpreted one is not wired: decision 0078).
+
 ``--cold``: ``benchmarks/cold_start.py``'s sweep row (a fresh process with empty caches, the
 background compile, a second session).
 
 Run from the repository root::
 
-    PYTHONPATH=src python benchmarks/interpreted_sweep.py [--opt] [--cold]
+    PYTHONPATH=src python benchmarks/interpreted_sweep.py [--opt] [--cold] [--sparse]
 """
 
 from __future__ import annotations
@@ -46,6 +49,7 @@ if way == "interpreted":
     # the first tier as in a first session: no machine code at hand, the loop interpreted
     _jit_modes.entry = lambda d, args, literal=(), say=None: None
     _jit_sweep.INTERP_MAX = 10**9    # (every size: what the tier would cost)
+    _jit_sweep.INTERP_SPARSE = True  # (the sparse kind too: decision 0078)
 os.environ["MECHSYS_JIT"] = "0" if way == "python" else "1"
 build = models.slider_crank if size == 0 else (lambda: models.four_bar_chain(size))
 m = build()
@@ -63,6 +67,8 @@ print(json.dumps({"n": sol.q.shape[1], "us": (c1 - c0) / N * 1e6,
 #: (label, four_bar_chain loops or 0 for the slider-crank, points)
 CASES = [("slider-crank", 0, 1000), ("four-bar chain, 3 loops", 3, 200),
          ("four-bar chain, 10 loops", 10, 200)]
+#: ``--sparse``: chains above ``SPARSE_THRESHOLD`` unknowns (the sparse LU's kind)
+SPARSE_CASES = [("four-bar chain, 30 loops", 30, 40), ("four-bar chain, 45 loops", 45, 20)]
 
 
 def _child(way: str, size: int, N: int, out: str, env=None) -> dict:
@@ -72,14 +78,14 @@ def _child(way: str, size: int, N: int, out: str, env=None) -> dict:
     return json.loads(got.stdout.strip().splitlines()[-1])
 
 
-def ways() -> str:
+def ways(cases=CASES) -> str:
     import numpy as np
 
     lines = ["| mechanism | unknowns | points | compiled loop: µs/point | interpreted loop: "
              "µs/point | Python loop: µs/point | interpreted / Python | largest difference "
              "interpreted - compiled |", "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     with tempfile.TemporaryDirectory() as tmp:
-        for label, size, N in CASES:
+        for label, size, N in cases:
             got, arrays = {}, {}
             for way in ("compiled", "interpreted", "python"):
                 path = os.path.join(tmp, f"{way}.npz")
@@ -136,8 +142,13 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--opt", action="store_true", help="also NUMBA_OPT=0 against 3")
     ap.add_argument("--cold", action="store_true", help="also the sweep's cold start")
+    ap.add_argument("--sparse", action="store_true",
+                    help="also the sparse kind (183 and 273 unknowns)")
     args = ap.parse_args(argv)
     print(ways())
+    if args.sparse:
+        print()
+        print(ways(SPARSE_CASES))
     if args.opt:
         print()
         print(optimisation_levels())

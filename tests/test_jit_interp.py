@@ -107,8 +107,8 @@ def test_interpreted_loop_hands_over_like_the_compiled_one(monkeypatch):
 
 
 def test_larger_systems_keep_the_python_loop_meanwhile(monkeypatch):
-    """Above ``INTERP_MAX`` unknowns the interpreted loop would cost 25 x the Python loop (63
-    unknowns, measured): the Python loop takes the sweep while the compile runs."""
+    """Above ``INTERP_MAX`` unknowns the interpreted loop costs more than 10 x the Python loop
+    (decision 0078, measured): the Python loop takes the sweep while the compile runs."""
     _first_tier(monkeypatch)
     monkeypatch.setattr(_jit_sweep, "INTERP_MAX", 5)
     m = models.slider_crank()
@@ -178,6 +178,88 @@ def test_interpreted_multipliers_against_the_power_balance(monkeypatch):
     _first_tier(monkeypatch, chunk=256)
     slow = models.slider_crank_dynamic().solve(t, solution="dynamic")
     np.testing.assert_array_equal(slow.lam[:40], fast.lam)
+    energy = np.asarray(slow.body_energy(), dtype=float) + np.asarray(slow.potential_energy(),
+                                                                      dtype=float)
+    rate = np.gradient(energy, t)
+    power = np.asarray(slow.power("drive"), dtype=float)
+    scale = np.abs(power).max()
+    np.testing.assert_allclose(power[1:-1], rate[1:-1], rtol=0, atol=5e-4 * scale)
+
+
+def _count_python_points(monkeypatch):
+    """The points the Python loop's per-point path takes (``_kinematics._solve_point``)."""
+    from mechsys.solvers import _kinematics
+
+    taken = []
+    real = _kinematics._solve_point
+
+    def solve_point(*args, **kwargs):
+        taken.append(args[1])
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(_kinematics, "_solve_point", solve_point)
+    return taken
+
+
+def test_interpreted_above_the_old_limit(monkeypatch):
+    """A four-bar chain of 10 loops (63 unknowns, above decision 0075's limit of 24 and
+    within decision 0078's): the interpreted first tier takes every point, none is left to
+    the Python loop, the loop equations hold at every point, and the numbers are the
+    compiled loop's bit for bit."""
+    t = np.linspace(0.0, 1.0, 8)
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    fast = models.four_bar_chain(10).solve(t)
+    assert fast.extra["compiled_points"] == 8
+    _first_tier(monkeypatch)
+    taken = _count_python_points(monkeypatch)
+    m = models.four_bar_chain(10)
+    slow = m.solve(t)
+    assert slow.q.shape[1] == 63 <= _jit_sweep.INTERP_MAX
+    assert slow.extra["compiled_points"] == 0 and taken == []
+    system = m.compile()
+    for k in range(len(t)):
+        assert np.abs(system.residual_and_jacobian(t[k], slow.q[k], system.p_values,
+                                                   False)[0]).max() < 1e-10
+    for x, y in ((fast.q, slow.q), (fast.qd, slow.qd), (fast.qdd, slow.qdd),
+                 (fast.extra["rcond"], slow.extra["rcond"])):
+        np.testing.assert_array_equal(x, y)
+    np.testing.assert_array_equal(fast.iterations, slow.iterations)
+
+
+def test_interpreted_multipliers_above_the_old_limit(monkeypatch):
+    """The inverse dynamics of the 63-unknown chain with masses under gravity, its multiplier
+    solves interpreted (the Python multiplier solve never called): the drive's power equals
+    the rate of the kinetic plus potential energy (central differences), and the
+    multipliers are the compiled loop's bit for bit."""
+    from mechsys.solvers import _jit_multipliers, _statics
+
+    def loaded():
+        m = models.four_bar_chain(10)
+        for b in m.bodies:
+            if not b.is_ground:
+                m.set_mass_properties(b.name, mass=1.0, centroid=(0.5, 0), inertia=0.1)
+        m.add_load(ms.Gravity((0, -1), 9.81))
+        return m
+
+    t = np.linspace(0.0, 1.0, 201)
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    fast = loaded().solve(t[:12], solution="dynamic")
+    real = _jit_modes.entry
+
+    def entry(dispatcher, args, literal=(), say=None):
+        if dispatcher is _jit_multipliers._state["multipliers"]:
+            return None                  # (being compiled in the background)
+        return real(dispatcher, args, literal, say)
+
+    monkeypatch.setattr(_jit_modes, "entry", entry)
+
+    def python_path(*args, **kwargs):
+        raise AssertionError("the Python multiplier solve ran")
+
+    monkeypatch.setattr(_statics, "solve_multipliers", python_path)
+    slow = loaded().solve(t, solution="dynamic")
+    assert slow.q.shape[1] == 63 <= _jit_multipliers.INTERP_MAX
+    np.testing.assert_array_equal(slow.lam[:12], fast.lam)
     energy = np.asarray(slow.body_energy(), dtype=float) + np.asarray(slow.potential_energy(),
                                                                       dtype=float)
     rate = np.gradient(energy, t)

@@ -213,3 +213,64 @@ def test_bound_is_exact_for_comparison_matrices():
         assert info == 0 and np.all(piv == np.arange(n))
         exact = np.abs(np.linalg.inv(A)).sum(axis=0).max()
         assert bound == pytest.approx(exact, rel=1e-9)
+
+
+def test_lists_elimination_is_the_dense_one():
+    """``getrf_lists`` (the sweep's and the multiplier solves' LU: the elimination along the
+    structure's lists and their fill, decision 0078) against the dense ``getrf``: the same
+    pivots and ``info``, the same factors (their zeros may differ in sign, nothing else), and
+    ``lists_pattern`` equal to ``symbolic_pattern`` of the same structure and pivots. Sparse
+    and nearly singular matrices, exact ties (entries of one magnitude), a structural entry
+    that is zero right now, and non-finite or subnormal entries (where the dense loops take
+    over: ``0 * inf`` is NaN), some with the structure given with repeats."""
+    from mechsys.solvers._jit_lapack import getrf_lists, lists_pattern
+    from mechsys.solvers._jit_linalg import _structure
+
+    rng = np.random.default_rng(13)
+    for trial in range(301):
+        n = int(rng.integers(1, 16))
+        A = _rowscaled(_sparse(rng, n, 0.25) if trial % 3 else _near_singular(rng, n))
+        if trial == 300:
+            # a NaN multiplier meeting a structural zero of the pivot row: getrf skips the
+            # zero (NaN * 0 would be NaN)
+            n, A = 3, np.array([[1.0, 0.0, 1.0], [np.nan, 1.0, 0.0], [0.5, 0.0, 1.0]])
+        if trial % 7 == 0:
+            A[A != 0] = np.sign(A[A != 0])               # ties everywhere
+        structural = A != 0
+        if trial == 300:
+            structural[0, 1] = True
+        if trial % 4 == 0:
+            structural[rng.integers(n), rng.integers(n)] = True
+        if trial % 11 == 0:
+            A[rng.integers(n), rng.integers(n)] = (np.inf, np.nan, 1e-310, -np.inf)[trial % 4]
+            structural |= A != 0
+        rows, cols = np.nonzero(structural)
+        twice = trial % 5 == 0
+        rows, cols = (np.tile(rows, 2), np.tile(cols, 2)) if twice else (rows, cols)
+        S, W, P = _structure(rows.astype(np.int64), cols.astype(np.int64), n)
+        DT = np.ascontiguousarray(A.T)
+        LT = DT.copy()
+        dpiv, lpiv = np.empty(n, np.int32), np.empty(n, np.int32)
+        with np.errstate(all="ignore"):
+            info = getrf(DT, n, dpiv)
+            assert getrf_lists(LT, n, lpiv, S, W, P, True) == info
+        np.testing.assert_array_equal(lpiv, dpiv)
+        np.testing.assert_array_equal(LT, DT)            # (NaN == NaN here; -0.0 == 0.0)
+        if trial == 300:
+            assert LT[1, 1] == 1.0                       # (A(1, 1): not NaN)
+        if info:
+            continue
+        mine, theirs = np.empty(pattern_size(n), np.int32), np.empty(pattern_size(n), np.int32)
+        lists_pattern(n, W, P, mine)
+        symbolic_pattern(np.ascontiguousarray(structural.T.astype(float)), n, dpiv, theirs,
+                         np.empty((n, n)))
+        assert _ranges(mine, n) == _ranges(theirs, n)
+        # the structure alone for getrf's pivots (the small systems' use): the same lists
+        again = np.empty(pattern_size(n), np.int32)
+        assert getrf_lists(DT, n, dpiv, S, W, P, False) == 0
+        lists_pattern(n, W, P, again)
+        assert _ranges(again, n) == _ranges(theirs, n)
+        for j in range(n):                               # (ascending, as the solves sum)
+            assert list(mine[mine[j]:mine[j + 1]]) == sorted(mine[mine[j]:mine[j + 1]])
+            assert list(mine[mine[n + 1 + j]:mine[n + 2 + j]]) == sorted(
+                mine[mine[n + 1 + j]:mine[n + 2 + j]])

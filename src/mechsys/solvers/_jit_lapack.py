@@ -33,6 +33,15 @@ that holds for every matrix of a given sparsity and pivot sequence, so the compi
 makes it once per pivot sequence instead of recording it after each factorisation
 (decision 0025).
 
+**The elimination along the structure** (:func:`getrf_lists`, decision 0078; the sweep's
+and the multiplier solves' LU from ``LIST_LU_MIN`` unknowns): ``getrf``'s elimination
+visiting only the structure's lists and their fill, which are :func:`symbolic_pattern`'s
+structure for the pivots it takes (:func:`lists_pattern` writes it as ``nz``): the same
+pivots and factors (up to the sign of a zero) at a cost in the factors' nonzeros instead of
+``n^2``, for the compiled loops and above all for their code run by the interpreter
+(:mod:`._jit_interp`), which pays per statement. (:func:`symbolic_pattern` stays as the
+dense statement of that structure, against which the tests check the lists.)
+
 Layout of ``nz`` (0-based, positions absolute): ``nz[j] .. nz[j + 1]`` hold the rows
 ``i > j`` with ``L(i, j) != 0`` of column ``j``, ascending; ``nz[n + 1 + j] .. nz[n + 2 + j]``
 the rows ``i < j`` with ``U(i, j) != 0``, ascending.
@@ -156,6 +165,228 @@ def symbolic_pattern(S, n, piv, nz, W):
     _pattern(W, n, nz)
 
 
+#: from this many unknowns the compiled loops factorise along the lists (:func:`getrf_lists`);
+#: below, the dense :func:`getrf` costs less, compiled and interpreted (its ``n^2`` zero tests
+#: are few), and the lists only give the factors' structure when the pivots change
+#: (decision 0078)
+LIST_LU_MIN = 17
+
+
+@nb.njit(cache=True)
+def lists_size(n):
+    """Rows of the ``W`` work array of :func:`getrf_lists` (``n`` columns)."""
+    return 3 * n + 4
+
+
+@leaf
+def getrf_lists(AT, n, piv, S, W, P, numeric):
+    r""":func:`getrf` visiting the structure only: the same pivots, the same ``info`` and the
+    same factors (up to the sign of a zero), at a cost that grows with the factors' nonzeros
+    instead of ``n^2``. It eliminates along lists of the nonzero structure, updated with the
+    fill as it goes, which are the symbolic factorisation of ``S`` with these pivots
+    (:func:`symbolic_pattern`'s structure; :func:`lists_pattern` writes it as ``nz``).
+
+    Why the numbers are :func:`getrf`'s: an entry outside the structure is an exact zero
+    (zero in ``A``, and every update of it is ``x - l a`` with ``l`` or ``a`` outside the
+    structure too, hence zero). So the pivot search over the structural rows finds the same
+    first largest entry (ties to the lower position, as the dense loop's strict ``>`` in
+    ascending order), the row interchange over the two rows' structural columns moves every
+    nonzero, and the updates ``A(i, c) -= l_i a_c`` skipped are those with ``a_c = 0``
+    (which :func:`getrf` skips too) or ``l_i = 0``: ``x - 0 a = x`` for a finite ``a`` (a
+    zero ``x`` may come out with the other sign, which nothing reads). Each entry is updated
+    once per step, so the order within a step is immaterial.
+
+    Not finite: the skipped updates are exact while every ``a_c`` and every pivot's
+    reciprocal is finite (``0 * inf`` is NaN). Where one is not, :func:`getrf`'s dense loops
+    take over (the column's update at once, the rest from the next step on: the zeros
+    outside the structure may no longer be zeros), on the same matrix, so that the numbers
+    are then :func:`getrf`'s exactly, ``NaN`` included; the lists keep following the pivots.
+
+    ``S`` (:func:`_jit_linalg._structure`, int32 (2n + 2, n)): ``S[c, :S[2n, c]]`` the
+    structural rows of column ``c``, ascending; ``S[n + r, :S[2n + 1, r]]`` the structural
+    columns of row ``r``. ``W`` (int32 (:func:`lists_size` ``(n)``, n), holding ``S``'s lists
+    on entry, with ``S``'s flags): ``W[c, :W[2n, c]]`` the rows (by identity: the row's position in ``A``) of
+    column ``c``'s structure, ``W[n + r, :W[2n + 1, r]]`` row ``r``'s columns, ``W[2n + 2]``,
+    ``W[2n + 3]`` the positions and identities of the current column's rows below the
+    diagonal, ``W[2n + 4 + c, r]`` one when ``(r, c)`` is in the structure (the lists and
+    flags past ``S``'s are the fill, dropped on the next call). ``P`` (int32 (3, n)):
+    ``P[1]`` receives the position of each row, ``P[2]`` the row at each position
+    (``P[0]``: the caller's). Returns LAPACK's ``info``. ``numeric`` False: the structure
+    only, for the pivots given in ``piv`` (``AT`` untouched, 0 returned): the lists of the
+    factors that :func:`getrf` made with them.
+    (Written for the interpreter too, which runs it as the first tier (decision 0078): few
+    statements per entry visited, whole-row copies as slice assignments.)
+
+    Example::
+
+        info = getrf_lists(B, n, ipiv, S, W, P, True)    # then lists_pattern(n, W, P, nz)
+    """
+    cl = 2 * n                       # W[cl, c], W[cl + 1, r]: the lists' lengths
+    sc = 2 * n + 2                   # the current column's rows below the diagonal
+    fl = 2 * n + 4                   # W[fl + c, r]: (r, c) in the structure
+    pos = P[1]
+    rid = P[2]
+    for c in range(n):               # (the lists are S's, then the fill: drop the fill)
+        W[cl, c] = S[cl, c]
+        W[cl + 1, c] = S[cl + 1, c]
+        pos[c] = c
+        rid[c] = c
+    dense = False
+    info = 0
+    for j in range(n):
+        # the pivot (the first largest below the diagonal) and the column's rows below it
+        p = j if numeric else piv[j]
+        pv = abs(AT[j, j])
+        nl = 0
+        kp = -1
+        for r in W[j, :W[cl, j]]:
+            i = pos[r]
+            if i > j:
+                W[sc, nl] = i
+                W[sc + 1, nl] = r
+                if not numeric:
+                    if i == p:
+                        kp = nl
+                else:
+                    v = abs(AT[j, i])
+                    if v > pv or (v == pv and i < p):
+                        pv = v
+                        p = i
+                        kp = nl
+                nl += 1
+        if dense and numeric:
+            p = j
+            pv = abs(AT[j, j])
+            for i in range(j + 1, n):
+                v = abs(AT[j, i])
+                if v > pv:
+                    pv = v
+                    p = i
+            kp = -1
+            for k in range(nl):
+                if W[sc, k] == p:
+                    kp = k
+        piv[j] = p
+        if p != j:                       # (then A(p, j) != 0: p moved on a larger |A(i, j)|)
+            a_id = rid[j]
+            b_id = rid[p]
+            if not numeric:
+                pass
+            elif dense:
+                for c in range(n):
+                    AT[c, j], AT[c, p] = AT[c, p], AT[c, j]
+            else:
+                for c in W[n + a_id, :W[cl + 1, a_id]]:
+                    AT[c, j], AT[c, p] = AT[c, p], AT[c, j]
+                for c in W[n + b_id, :W[cl + 1, b_id]]:
+                    if W[fl + c, a_id] == 0:
+                        AT[c, j], AT[c, p] = AT[c, p], AT[c, j]
+            pos[a_id] = p
+            pos[b_id] = j
+            rid[j] = b_id
+            rid[p] = a_id
+            # the pivot row left the rows below the diagonal, the row it replaced (at p now)
+            # joins them where it has an entry in this column
+            if kp < 0:                   # (dense: a pivot outside the structure)
+                W[sc, nl] = p
+                W[sc + 1, nl] = a_id
+                nl += 1
+                kp = nl - 1
+            if W[fl + j, a_id] != 0:
+                W[sc + 1, kp] = a_id
+            else:
+                nl -= 1
+                W[sc, kp] = W[sc, nl]
+                W[sc + 1, kp] = W[sc + 1, nl]
+        if not numeric:
+            pass
+        elif AT[j, j] != 0.0:
+            inv = 1.0 / AT[j, j]
+            if not abs(inv) < np.inf:
+                dense = True             # (a subnormal pivot: 0 * inv is NaN in getrf)
+            if dense:
+                for i in range(j + 1, n):
+                    AT[j, i] *= inv
+            else:
+                for i in W[sc, :nl]:
+                    AT[j, i] *= inv
+        elif info == 0:
+            info = j + 1
+        # the elimination, with the fill of the structure: row j's columns c > j, column
+        # j's rows below j
+        jid = rid[j]
+        spoilt = False
+        for c in W[n + jid, :W[cl + 1, jid]]:
+            if c > j:
+                a = AT[c, j]
+                # (getrf skips a zero a: so does this loop, l * 0 being NaN for l not finite)
+                live = numeric and not dense and a != 0.0
+                if live and not abs(a) < np.inf:
+                    # a non-finite a: getrf's update of the whole column (0 * a is NaN),
+                    # and its loops from the next step on (the zeros outside the
+                    # structure may be NaN now)
+                    live = False
+                    spoilt = True
+                    for i in range(j + 1, n):
+                        AT[c, i] -= AT[j, i] * a
+                for k in range(nl):
+                    r = W[sc + 1, k]
+                    if W[fl + c, r] == 0:
+                        W[fl + c, r] = 1
+                        W[c, W[cl, c]] = r
+                        W[cl, c] += 1
+                        W[n + r, W[cl + 1, r]] = c
+                        W[cl + 1, r] += 1
+                    if live:
+                        AT[c, W[sc, k]] -= AT[j, W[sc, k]] * a
+        if dense and numeric:
+            for c in range(j + 1, n):
+                a = AT[c, j]
+                if a != 0.0:
+                    for i in range(j + 1, n):
+                        AT[c, i] -= AT[j, i] * a
+        dense = dense or spoilt
+    for c in range(n):                   # (the fill's flags back to zero)
+        for r in W[c, S[cl, c]:W[cl, c]]:
+            W[fl + c, r] = 0
+    return info
+
+
+@leaf
+def lists_pattern(n, W, P, nz):
+    """``nz`` (module docstring) of the structure :func:`getrf_lists` left in ``W`` with the
+    positions ``P[1]``: each column's rows below and above the diagonal, sorted (insertion:
+    the lists are short). Equal to :func:`symbolic_pattern` of the same structure and pivots.
+    """
+    cl = 2 * n
+    pos = P[1]
+    pl = 2 * n + 2
+    pu = pl + (n * (n - 1)) // 2
+    for j in range(n):
+        nz[j] = pl
+        nz[n + 1 + j] = pu
+        l0 = pl
+        u0 = pu
+        for k in range(W[cl, j]):
+            i = pos[W[j, k]]
+            if i > j:
+                q = pl
+                while q > l0 and nz[q - 1] > i:
+                    nz[q] = nz[q - 1]
+                    q -= 1
+                nz[q] = i
+                pl += 1
+            elif i < j:
+                q = pu
+                while q > u0 and nz[q - 1] > i:
+                    nz[q] = nz[q - 1]
+                    q -= 1
+                nz[q] = i
+                pu += 1
+    nz[n] = pl
+    nz[2 * n + 1] = pu
+
+
 @leaf
 def getrs(AT, n, piv, x, nz=None):
     """``x <- A^-1 x`` from :func:`getrf`'s factors (``nz``: as given to it)."""
@@ -227,30 +458,28 @@ def _inv(AT, n, x, transposed, nz=None):
         # branch that skips only exact no-ops here). They divide by the pivots as dtrsv
         # does: multiplying by reciprocals would differ by rounding, which a nearly singular
         # matrix (a dead centre) amplifies beyond the 1e-12 the two paths agree to.
+        # (two statements an entry, which the interpreted tier pays per statement; the same
+        # operations)
         for j in range(n):
             s = x[j]
             for k in range(nz[n + 1 + j], nz[n + 2 + j]):
-                i = nz[k]
-                s -= AT[j, i] * x[i]
+                s -= AT[j, nz[k]] * x[nz[k]]
             x[j] = s / AT[j, j]
         for j in range(n - 1, -1, -1):
             s = x[j]
             for k in range(nz[j], nz[j + 1]):
-                i = nz[k]
-                s -= AT[j, i] * x[i]
+                s -= AT[j, nz[k]] * x[nz[k]]
             x[j] = s
     else:
         for j in range(n):
             xj = x[j]
             for k in range(nz[j], nz[j + 1]):
-                i = nz[k]
-                x[i] -= xj * AT[j, i]
+                x[nz[k]] -= xj * AT[j, nz[k]]
         for j in range(n - 1, -1, -1):
             xj = x[j] / AT[j, j]
             x[j] = xj
             for k in range(nz[n + 1 + j], nz[n + 2 + j]):
-                i = nz[k]
-                x[i] -= xj * AT[j, i]
+                x[nz[k]] -= xj * AT[j, nz[k]]
 
 
 @leaf
@@ -359,16 +588,14 @@ def inv_norm_bound(AT, n, nz, y):
     for j in range(n):               # M(U)^T y = e: forward, y_j = (1 + sum |u_ij| y_i) / |u_jj|
         s = 1.0
         for k in range(nz[n + 1 + j], nz[n + 2 + j]):
-            i = nz[k]
-            s += abs(AT[j, i]) * y[i]
+            s += abs(AT[j, nz[k]]) * y[nz[k]]
         y[j] = s / abs(AT[j, j])
     big = 0.0
     total = 0.0                      # (an inf in y can meet a zero of a symbolic_pattern:
     for j in range(n - 1, -1, -1):   # 0 * inf is NaN, which "s > big" would pass over)
         s = y[j]                     # M(L)^T z = y: backward, z_j = y_j + sum |l_ij| z_i
         for k in range(nz[j], nz[j + 1]):
-            i = nz[k]
-            s += abs(AT[j, i]) * y[i]
+            s += abs(AT[j, nz[k]]) * y[nz[k]]
         y[j] = s
         total += s
         if s > big:

@@ -38,7 +38,18 @@ import numpy as np
 
 from ._jit_cache import check as _check_cache
 from ._jit_calls import _ccall
-from ._jit_lapack import GUARD_MARGIN, gecon1, getrf, inv_norm_bound, leaf, pattern_size, symbolic_pattern
+from ._jit_lapack import (
+    GUARD_MARGIN,
+    LIST_LU_MIN,
+    gecon1,
+    getrf,
+    getrf_lists,
+    inv_norm_bound,
+    leaf,
+    lists_pattern,
+    lists_size,
+    pattern_size,
+)
 from ._jit_runtime import SMALL, SPARSE
 from ._jit_sparse import IWORK, lu_factor, lu_pivot_ratio, lu_solve, lu_solve_t
 from ._tolerances import PIVOT_TOL, RCOND_MIN, RCOND_PENDING
@@ -95,6 +106,22 @@ def _norm1(B, n):
 
 
 @leaf
+def _norm1_nz(B, n, S):
+    """:func:`_norm1` summing only the structure ``S`` (:func:`_structure`; each column's rows
+    ascending): the same sums in the same order, since an entry outside it is a zero and
+    ``s + 0 = s`` for the running ``s >= 0``. (A cost in the nonzeros instead of ``n^2``: the
+    interpreted tier pays per element, decision 0078.)"""
+    anorm = 0.0
+    for j in range(n):
+        s = 0.0
+        for k in range(S[2 * n, j]):
+            s += abs(B[j, S[j, k]])
+        if s > anorm:
+            anorm = s
+    return anorm
+
+
+@leaf
 def _fill(J, r, columns, B):
     """``B`` = :math:`R^{-1} J D` in transposed storage; returns its one-norm."""
     n = J.shape[0]
@@ -106,16 +133,33 @@ def _fill(J, r, columns, B):
 
 
 @leaf
-def _fill_nz(vals, jr, jc, r, columns, B):
+def _fill_nz(vals, jr, jc, r, columns, B, S):
     """:func:`_fill` of the Jacobian whose nonzero values are ``vals`` (each position once:
     ``sweep_dense`` checks), without assembling it: the same entries (``0.0 + v`` as
-    :func:`_assemble` forms them, so even the sign of a zero is the same), the same norm."""
+    :func:`_assemble` forms them, so even the sign of a zero is the same), the same norm
+    (:func:`_norm1_nz` over its structure ``S``)."""
     B[:, :] = 0.0
     for k in range(jr.size):
         i = jr[k]
         j = jc[k]
         B[j, i] = ((0.0 + vals[k]) * columns[j]) * (1.0 / r[i])
-    return _norm1(B, r.size)
+    return _norm1_nz(B, r.size, S)
+
+
+@leaf
+def _fill_nz_t(vals, jr, jc, r, columns, B, S):
+    """``B[i, j] = (J_ij c_j) / r_i`` from the nonzero values (each position once): the C
+    order of :math:`R^{-1} J D`, which is the transposed storage of its transpose (the
+    multiplier solves factorise :math:`B^T`), the operations of the dense fill
+    ``inv = 1 / r_i; B[i, j] = (J_ij c_j) inv`` (``0.0 + v`` as :func:`_assemble` forms the
+    entry); returns the one-norm of that transpose (:func:`_norm1_nz` over ``S``, the
+    structure of :math:`J^T`)."""
+    B[:, :] = 0.0
+    for k in range(jr.size):
+        i = jr[k]
+        j = jc[k]
+        B[i, j] = ((0.0 + vals[k]) * columns[j]) * (1.0 / r[i])
+    return _norm1_nz(B, r.size, S)
 
 
 @leaf
@@ -134,10 +178,12 @@ def _factor_filled(lapack, B, anorm, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, wor
     reciprocal condition number, or -1 when singular (the Python path's ``Singular``: an
     exact zero pivot or an estimate below ``RCOND_MIN``).
 
-    Up to ``SMALL`` unknowns the factors' nonzero structure ``nz`` (used by the solves and
-    estimates) is :func:`symbolic_pattern` of the Jacobian's structure ``S`` (n, n, transposed
-    storage), made again only when the pivots differ from ``seen`` (n,), those it was made
-    for (``W`` (n, n): its work); :func:`_structure` makes the three.
+    Up to ``SMALL`` unknowns the LU is :func:`getrf_lists` (LAPACK's elimination visiting
+    the Jacobian's structure ``S`` and its fill only, decision 0078; below ``LIST_LU_MIN``
+    unknowns the dense :func:`getrf`, the same numbers), and the factors' nonzero structure
+    ``nz`` (used by the solves and estimates) is written again (:func:`lists_pattern`) only
+    when the pivots differ from ``seen[0]`` (those it was made for); ``W``: the lists' work;
+    :func:`_structure` makes the three.
 
     ``guard`` > 0 (up to ``SMALL`` unknowns): when :func:`inv_norm_bound` proves that the
     estimate is at least ``guard`` it is not computed and ``RCOND_PENDING`` (``inf``) is
@@ -149,18 +195,22 @@ def _factor_filled(lapack, B, anorm, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, wor
     n = B.shape[0]
     if n <= SMALL:
         # LAPACK's algorithms written out (_jit_lapack): the calls' overhead dominated
-        if getrf(B, n, ipiv) > 0 or anorm == 0:
+        small = n < LIST_LU_MIN
+        info = getrf(B, n, ipiv) if small else getrf_lists(B, n, ipiv, S, W, seen, True)
+        if info > 0 or anorm == 0:
             return -1.0
         same = True
         for j in range(n):
-            if ipiv[j] != seen[j]:
+            if ipiv[j] != seen[0, j]:
                 same = False
         if not same:
-            # the factors' structure, once per pivot sequence: recording it after every
-            # factorisation cost 6 % of the sweep
-            symbolic_pattern(S, n, ipiv, nz, W)
+            # the factors' structure (symbolic: every matrix of this structure and these
+            # pivots), written once per pivot sequence
+            if small:
+                getrf_lists(B, n, ipiv, S, W, seen, False)
+            lists_pattern(n, W, seen, nz)
             for j in range(n):
-                seen[j] = ipiv[j]
+                seen[0, j] = ipiv[j]
         if guard > 0 and anorm * inv_norm_bound(B, n, nz, work) <= GUARD_MARGIN / guard:
             return RCOND_PENDING
         rcond = gecon1(B, n, anorm, work, work[n:], nz)
@@ -198,12 +248,47 @@ def _factor_work(m, n, nd):
 
 @nb.njit(cache=True)
 def _structure(jr, jc, n):
-    """``S``, ``W``, ``seen`` of :func:`_factor_filled`: the square Jacobian's structure from
-    its nonzeros' rows and columns (transposed storage), work, no pivots seen yet."""
-    S = np.zeros((n, n))
+    """``S``, ``W``, ``seen`` of :func:`_factor_filled` for the square matrix whose nonzeros
+    are at rows ``jr``, columns ``jc`` (repeats allowed): ``S`` (int32 (2n + 2, n)) its
+    structure as lists, ascending (``S[c, :S[2n, c]]`` column ``c``'s rows, ``S[n + r,
+    :S[2n + 1, r]]`` row ``r``'s columns: ``_jit_lapack.getrf_lists``), ``W`` the lists'
+    work (holding ``S``'s lists and flags), ``seen`` (int32 (3, n)): no pivots seen yet
+    (``seen[0]``), and the rows' positions."""
+    mark = np.zeros((n, n), dtype=np.bool_)
     for k in range(jr.size):
-        S[jc[k], jr[k]] = 1.0
-    return S, np.empty((n, n)), np.full(n, -1, dtype=np.int32)
+        mark[jr[k], jc[k]] = True
+    S = np.zeros((2 * n + 2, n), dtype=np.int32)
+    W = np.zeros((lists_size(n), n), dtype=np.int32)
+    for c in range(n):
+        for r in range(n):
+            if mark[r, c]:
+                S[c, S[2 * n, c]] = r
+                S[2 * n, c] += 1
+                S[n + r, S[2 * n + 1, r]] = c
+                S[2 * n + 1, r] += 1
+                W[2 * n + 4 + c, r] = 1
+    W[:2 * n + 2, :] = S
+    seen = np.zeros((3, n), dtype=np.int32)
+    seen[0, :] = -1
+    return S, W, seen
+
+
+@nb.njit(cache=True)
+def _unique(jr, jc, m, n):
+    """No (row, column) twice among the Jacobian's nonzeros."""
+    seen = np.zeros((m, n), dtype=np.bool_)
+    for k in range(jr.size):
+        if seen[jr[k], jc[k]]:
+            return False
+        seen[jr[k], jc[k]] = True
+    return True
+
+
+@nb.njit(cache=True)
+def _no_structure():
+    """:func:`_structure`'s arrays for a loop that does not factorise dense matrices."""
+    return (np.zeros((1, 1), dtype=np.int32), np.zeros((1, 1), dtype=np.int32),
+            np.full((3, 1), -1, dtype=np.int32))
 
 
 @leaf
@@ -214,23 +299,20 @@ def _solve(lapack, B, ipiv, nz, r, columns, b, out, ibuf, cbuf):
     if n <= SMALL:
         # getrs(B, n, ipiv, out, nz) written out (the same operations in the same order): the
         # calls cost about half as much as the solve itself at this size
+        # (two statements an entry: the interpreted tier pays per statement)
         for j in range(n):
             p = ipiv[j]
             if p != j:
-                tmp = out[j]
-                out[j] = out[p]
-                out[p] = tmp
+                out[j], out[p] = out[p], out[j]
         for j in range(n):
             xj = out[j]
             for k in range(nz[j], nz[j + 1]):
-                i = nz[k]
-                out[i] -= xj * B[j, i]
+                out[nz[k]] -= xj * B[j, nz[k]]
         for j in range(n - 1, -1, -1):
             xj = out[j] / B[j, j]
             out[j] = xj
             for k in range(nz[n + 1 + j], nz[n + 2 + j]):
-                i = nz[k]
-                out[i] -= xj * B[j, i]
+                out[nz[k]] -= xj * B[j, nz[k]]
     else:
         cbuf[1] = 78         # 'N': no transpose
         ibuf[1] = n          # n, lda = ldb (set here too: a solve never relies on an earlier factor call)

@@ -26,6 +26,7 @@ import numpy as np
 from ._jit_cache import notice
 from ._jit_runtime import (
     INTERP_MAX,
+    INTERP_MAX_DENSE,
     NO_BAND,
     SPARSE,
     band_args,
@@ -119,9 +120,11 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
     fn = entry(_state["multipliers"], args, literal=(len(args) - 1,), say=lambda how: notice(
         "the multiplier solves" + (" (sparse)" if args[-1] else ""), _MULTIPLIER_SECONDS,
         background=how == "background"))
-    if fn is None and not args[-1] and system.n <= INTERP_MAX:
+    if fn is None and not args[-1] and system.n <= (
+            INTERP_MAX_DENSE if dyn.depends_on_lambda else INTERP_MAX):
         # being compiled in the background (decision 0064): the same loop interpreted, the
-        # same numbers bit for bit (decision 0075)
+        # same numbers bit for bit (decision 0075; its factorisation visits the structure
+        # only, decision 0078)
         from ._jit_interp import interpreted
 
         fn = interpreted(_state["multipliers"])

@@ -52,16 +52,21 @@ from ._jit_linalg import (
     _band_values,
     _factor_filled,
     _factor_work,
-    _norm1,
+    _fill_nz_t,
+    _no_structure,
+    _norm1_nz,
     _rows,
+    _rows_nz,
     _solve,
     _sparse_factor,
     _sparse_solve_scaled,
     _structure,
+    _unique,
     big_sizes,
 )
 from ._jit_modes import within
 from ._jit_runtime import SPARSE
+from ._tolerances import RCOND_MIN
 
 _check_cache()   # stale cached loops go before anything here compiles (see _jit_cache)
 
@@ -164,13 +169,14 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
     # Newton's matrix Phi_q^T - dQ/dlambda: its own factors and structure (both terms')
     _, K, ipiv2, nz2, _, _, _, _, _, _ = _factor_work(m, n, nd if newton else 1)
     if banded:
-        S, W, seen = np.empty((1, 1)), np.empty((1, 1)), np.full(1, -1, dtype=np.int32)
+        S, W, seen = _no_structure()
         S2, W2, seen2 = S, W, seen
+        unique = False
     else:
         S, W, seen = _structure(jc, jr, n)           # the structure of Phi_q^T
-        S2, W2, seen2 = _structure(jc, jr, n)
-        for e in range(dr.size):
-            S2[dc[e], dr[e]] = 1.0
+        # (of Phi_q^T - dQ/dlambda)
+        S2, W2, seen2 = _structure(np.concatenate((jc, dr)), np.concatenate((jr, dc)), n)
+        unique = _unique(jr, jc, m, n)
     fsize, isize = big_sizes(bw, n)
     AB = np.zeros(fsize)
     SI = np.zeros(isize, dtype=np.int64)
@@ -202,14 +208,25 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
                       SI) < 0:
                 return k
         else:
-            _assemble(out_pos, m, jr, jc, J)
-            _rows(J, cols, r)
-            for i in range(m):                        # B = R^-1 J D (C order) = B^T stored transposed
-                inv = 1.0 / r[i]
-                for j in range(n):
-                    B[i, j] = (J[i, j] * cols[j]) * inv
-            if _factor_filled(lapack, B, _norm1(B, n), ipiv, nz, S, W, seen, ibuf, cbuf, dbuf,
-                              work, iwork, 0.0) < 0:
+            if newton or not unique:                  # (Newton's residual reads J)
+                _assemble(out_pos, m, jr, jc, J)
+            if unique:
+                # B = R^-1 J D (C order) = B^T stored transposed, from the nonzero values:
+                # the entries and row scales of the dense loops below (decision 0078)
+                _rows_nz(out_pos[m:], jr, jc, cols, r)
+                anorm = _fill_nz_t(out_pos[m:], jr, jc, r, cols, B, S)
+            else:
+                _rows(J, cols, r)
+                for i in range(m):
+                    inv = 1.0 / r[i]
+                    for j in range(n):
+                        B[i, j] = (J[i, j] * cols[j]) * inv
+                anorm = _norm1_nz(B, n, S)
+            # (guard RCOND_MIN: only "singular or not" is read, so the estimate is skipped
+            # where its bound proves it regular, as in the sweep's Newton steps: the same
+            # decision, decision 0078)
+            if _factor_filled(lapack, B, anorm, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf,
+                              work, iwork, RCOND_MIN) < 0:
                 return k
         if mode != STATIC:
             for j in range(n):
@@ -303,8 +320,8 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
                 for i in range(m):                   # unit-free: D K R^-1 (as the linear solve)
                     for j in range(n):
                         K[i, j] = (cols[j] * K[i, j]) / r[i]
-                if _factor_filled(lapack, K, _norm1(K, n), ipiv2, nz2, S2, W2, seen2, ibuf, cbuf,
-                                  dbuf, work, iwork, 0.0) < 0:
+                if _factor_filled(lapack, K, _norm1_nz(K, n, S2), ipiv2, nz2, S2, W2, seen2, ibuf, cbuf,
+                                  dbuf, work, iwork, RCOND_MIN) < 0:
                     return k
                 for j in range(n):
                     R[j] = cols[j] * R[j]

@@ -43,10 +43,17 @@ AUTO_POINTS = 1000
 
 #: the interpreted loops (:mod:`._jit_interp`: a compiled loop's own code run by Python) are
 #: the first tier of systems up to this many unknowns while the compiled loop is being
-#: compiled in the background (decision 0075): their cost per point grows about as n^2 (the
-#: sweep: 2 x the Python loop at 9 unknowns, 11 x at 21, 48 x at 63), so larger systems keep
-#: the Python loop meanwhile
-INTERP_MAX = 24
+#: compiled in the background (decisions 0075, 0078): their LU visits the structure only
+#: (``_jit_lapack.getrf_lists``), so their cost per point grows about as the nonzeros, 45 to
+#: 90 µs an unknown (the sweep: 2-4 x the Python loop at 9 unknowns, 7-10 x at 21, 10-20 x
+#: at 63, about the ratio decision 0075 accepted at its limit of 24: 11-18 x at 21 then);
+#: larger systems keep the Python loop meanwhile
+INTERP_MAX = 64
+
+#: the multiplier solves with loads that depend on the multipliers (friction) run Newton on
+#: dense ``n x n`` matrices (the residual and its matrix are formed densely): interpreted up
+#: to decision 0075's limit only
+INTERP_MAX_DENSE = 24
 
 #: up to this many unknowns the LU and condition estimate are computed in the loop
 #: (``_jit_lapack``: LAPACK's algorithms, without the call overhead, skipping the zero
@@ -267,6 +274,6 @@ class GenTree:
         return cls(arrays, dyn.tree_only)
 
 
-__all__ = ["AUTO_POINTS", "INTERP_MAX", "NO_BAND", "GenTree", "available", "compile_policy",
-           "band_args", "band_lapack", "capsule_address", "index", "kernel_entry", "lapack",
+__all__ = ["AUTO_POINTS", "INTERP_MAX", "INTERP_MAX_DENSE", "NO_BAND", "GenTree", "available",
+           "compile_policy", "band_args", "band_lapack", "capsule_address", "index", "kernel_entry", "lapack",
            "mode", "patterned", "pointer", "table", "wanted"]

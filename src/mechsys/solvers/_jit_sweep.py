@@ -24,8 +24,9 @@ point's chord (decision 0075). Results never depend on which path ran.
 
 While the compiled loop is being compiled in the background (decision 0064) the same loop
 runs interpreted (:mod:`._jit_interp`: its own code, the same numbers bit for bit) for
-systems of up to :data:`INTERP_MAX` unknowns, and hands over to the compiled loop when
-that is ready (decision 0075).
+systems of up to :data:`INTERP_MAX` unknowns (dense kind), and hands over to the compiled
+loop when that is ready (decision 0075). Its factorisations visit the Jacobian's structure
+only (decision 0078), so its cost per point grows about as the nonzeros.
 
 When it runs: the ``MECHSYS_JIT`` rule of :mod:`~mechsys.solvers._jit_runtime` (``auto``:
 sweeps of at least ``AUTO_POINTS`` points), with the SymEngine LLVM backend's kernels
@@ -75,8 +76,13 @@ def plan(system, points: int, order: int):
 
 
 #: the interpreted loop is the first tier of systems up to this many unknowns while the
-#: compiled one is compiled in the background (``_jit_runtime.INTERP_MAX``, decision 0075)
+#: compiled one is compiled in the background (``_jit_runtime.INTERP_MAX``, decisions 0075
+#: and 0078)
 INTERP_MAX = _INTERP_MAX
+#: the sparse kind (above ``SPARSE_THRESHOLD`` unknowns) is not interpreted: the Python loop
+#: takes its sweeps while the compiled loop is compiled (decision 0078 measured it
+#: interpreted; ``benchmarks/interpreted_sweep.py --sparse`` sets this to see it)
+INTERP_SPARSE = False
 #: the interpreted loop runs in chunks of this many points, asking between them whether the
 #: compiled loop is ready (it then takes the rest of the sweep: the same numbers)
 INTERP_CHUNK = 256
@@ -159,7 +165,7 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
     N = len(times)
     k, evals, chord = int(first), 0, bool(chord_start)
     fn = compiled_loop(args(N, k, chord))
-    if fn is None and (large or n > INTERP_MAX):
+    if fn is None and ((large and not INTERP_SPARSE) or n > INTERP_MAX):
         # (the Python loop takes every point from ``first`` on, with the scaling it was
         # given; None: the caller's own)
         return k, 0, scaling, 0

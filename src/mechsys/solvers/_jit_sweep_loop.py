@@ -30,6 +30,7 @@ from ._jit_linalg import (
     _factor_work,
     _fill,
     _fill_nz,
+    _no_structure,
     _rows,
     _rows_nz,
     _scaled_norm,
@@ -37,6 +38,7 @@ from ._jit_linalg import (
     _sparse_factor,
     _sparse_solve_scaled,
     _structure,
+    _unique,
     big_sizes,
 )
 from ._jit_modes import within
@@ -168,17 +170,6 @@ def _scaling(J, q, trans, body, nbody, hint, columns):
 
 
 @nb.njit(cache=True)
-def _unique(jr, jc, m, n):
-    """No (row, column) twice among the Jacobian's nonzeros."""
-    seen = np.zeros((m, n), dtype=np.bool_)
-    for k in range(jr.size):
-        if seen[jr[k], jc[k]]:
-            return False
-        seen[jr[k], jc[k]] = True
-    return True
-
-
-@nb.njit(cache=True)
 def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit, damping, order,
                 rot, trans, body, hint, Q, QD, QDD, its, rconds, rprev, lazy, R, first,
                 chord_start, bw, band, large):
@@ -226,7 +217,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
     nd = 1 if large else n          # the dense matrices are not used when large
     J, B, ipiv, nz, ibuf, cbuf, dbuf, work, iwork, r = _factor_work(m, n, nd)
     if large:
-        S, W, seen = np.empty((1, 1)), np.empty((1, 1)), np.full(1, -1, dtype=np.int32)
+        S, W, seen = _no_structure()
     else:
         S, W, seen = _structure(jr, jc, n)
     fsize, isize = big_sizes(bw, n)
@@ -270,7 +261,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                                 r, columns, AB, bw, SI) >= RCOND_WARN
         else:
             if unique:
-                anorm = _fill_nz(out_vel, jr, jc, r, columns, B)
+                anorm = _fill_nz(out_vel, jr, jc, r, columns, B, S)
             else:
                 _assemble(out_vel, 0, jr, jc, J)
                 anorm = _fill(J, r, columns, B)
@@ -404,12 +395,20 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                 within(large, 1, 1, _sparse_solve_scaled, AB, bw, SI, row_perm, perm,
                        r, columns, F, dq, tmp, False)
             else:
-                if stale:
-                    _assemble(jv, 0, jr, jc, J)
-                    stale = False
-                if _factor(lapack, J, r, columns, B, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf,
-                           work, iwork, RCOND_MIN) < 0:
-                    break
+                if unique:
+                    # B straight from the values, as the velocity's (the same entries as
+                    # _fill of the assembled J: no n x n pass, decision 0078)
+                    anorm = _fill_nz(jv, jr, jc, r, columns, B, S)
+                    if _factor_filled(lapack, B, anorm, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf,
+                                      work, iwork, RCOND_MIN) < 0:
+                        break
+                else:
+                    if stale:
+                        _assemble(jv, 0, jr, jc, J)
+                        stale = False
+                    if _factor(lapack, J, r, columns, B, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf,
+                               work, iwork, RCOND_MIN) < 0:
+                        break
                 _solve(lapack, B, ipiv, nz, r, columns, F, dq, ibuf, cbuf)
             for j in range(n):
                 dq[j] = -dq[j]
@@ -432,9 +431,10 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                 q[j] = qn[j]
             for i in range(m):
                 F[i] = out_pos[i]
-            if large:                            # (a Newton step: J is current)
+            if large or unique:                  # (a Newton step: J's values are current)
                 for i in range(nnz):
                     jv[i] = out_pos[m + i]
+                stale = True
             else:
                 _assemble(out_pos, m, jr, jc, J)
             prev = norm
@@ -454,7 +454,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                 rc = within(large, 1, 1, _sparse_factor, data, cr, cc, pos, r, columns, AB, bw, SI)
             else:
                 if unique:   # (B straight from the values: assembling J first cost 4 %)
-                    anorm = _fill_nz(out_vel, jr, jc, r, columns, B)
+                    anorm = _fill_nz(out_vel, jr, jc, r, columns, B, S)
                 else:
                     _assemble(out_vel, 0, jr, jc, J)
                     anorm = _fill(J, r, columns, B)
@@ -530,7 +530,7 @@ def fill_rconds(ptrs, lapack, times, Q, p, jr, jc, columns, R, rconds):
             r[i] = R[k, i]
         _eval_row(ptrs, 1, x, nin, out_vel)
         if unique:                       # (as the loop forms B)
-            anorm = _fill_nz(out_vel, jr, jc, r, columns, B)
+            anorm = _fill_nz(out_vel, jr, jc, r, columns, B, S)
         else:
             _assemble(out_vel, 0, jr, jc, J)
             anorm = _fill(J, r, columns, B)
