@@ -38,7 +38,7 @@ import sympy as sp
 
 from .._symbols import T, velocity_symbol
 from ..solvers._linalg import FixedPattern
-from ._backends import compile_exprs, real_expression
+from ._backends import compile_exprs, gc_paused, real_expression
 from ._derive import hessian_terms, time_derivative, to_sympy_list
 
 try:  # optional
@@ -372,6 +372,7 @@ class Dynamics:
     Compiled: ``f_terms(x) -> [M values, Q, Qv]`` and ``f_dQ_dlam(x)``.
     """
 
+    @gc_paused()
     def __init__(self, system, model, bodies, loads):
         lay = system.layout
         self.system = system
@@ -577,6 +578,7 @@ class FreeKernel:
     ``K.pattern``): banded LU after a reverse Cuthill-McKee ordering for chains.
     """
 
+    @gc_paused()
     def __init__(self, system, sparse: bool):
         dyn = system.dynamics
         n, m = system.n, system.m
