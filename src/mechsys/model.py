@@ -852,7 +852,10 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
                 "(m.replace(name, constraint)), or use free motion (m.free), which passes "
                 "through stage changes")
         eqs, owners, index = self._all_equations()
-        keep = [i for i, o in enumerate(owners) if o not in removed]
+        # by identity (constraints compare so): a set, not a scan of the list per equation
+        # (3072 x 1024 comparisons for a 1024-link chain's free system)
+        gone = {id(c) for c in removed}
+        keep = [i for i, o in enumerate(owners) if id(o) not in gone]
         eqs = [eqs[i] for i in keep]
         owners = [owners[i] for i in keep]
         index = [index[i] for i in keep]
