@@ -185,6 +185,10 @@ def _real_contribution(c, owner: str):
     if isinstance(c, DirectLoad):
         return replace(c, magnitude=real_expression(sp.sympify(c.magnitude), owner))
     if isinstance(c, PointForce):
+        # (a force already fit, as gravity's constant one: kept, not copied entry by entry
+        # into a new matrix, ~0.1 ms a body)
+        if all(real_expression(e, owner) is e for e in c.force):
+            return c
         return replace(c, force=c.force.applyfunc(lambda e: real_expression(e, owner)))
     if isinstance(c, BodyMoment):
         M = c.moment
@@ -421,21 +425,23 @@ class Dynamics:
         self._sympy: dict = {}
         self.Q = generalized_forces(model, loads, lay)
         self._potential = (model, tuple(loads))
+        # each force's free symbols once (SymPy walks the expression on every ask)
+        free = [e.free_symbols for e in self.Q]
         lamset = set(self.lam)
-        self.depends_on_lambda = any(e.free_symbols & lamset for e in self.Q)
+        self.depends_on_lambda = any(f & lamset for f in free)
         qdset = set(lay.qd_symbols)           # once: not per load term (N^2 for N bodies)
-        self.depends_on_qd = any(e.free_symbols & qdset for e in self.Q)
+        self.depends_on_qd = any(f & qdset for f in free)
         qddset = set(lay.qdd_symbols)
         #: loads that depend on accelerations (added mass, inertial couplings): free
         #: accelerations are then found by Newton on (qdd, lambda)
-        self.depends_on_qdd = any(e.free_symbols & qddset for e in self.Q)
+        self.depends_on_qdd = any(f & qddset for f in free)
         self.linear_in_qdd = all(
-            sp.diff(e, a, b) == 0 for e in self.Q if e.free_symbols & qddset
-            for a in (e.free_symbols & qddset) for b in (e.free_symbols & qddset))
+            sp.diff(e, a, b) == 0 for e, f in zip(self.Q, free) if f & qddset
+            for a in (f & qddset) for b in (f & qddset))
         args = self.args()
         allowed = set(args)
-        for i, e in enumerate(self.Q):
-            extra = e.free_symbols - allowed
+        for i, f in enumerate(free):
+            extra = f - allowed
             if extra:
                 from .._errors import ModelError
 
