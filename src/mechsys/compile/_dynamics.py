@@ -39,7 +39,7 @@ import sympy as sp
 from .._symbols import T, velocity_symbol
 from ..solvers._linalg import FixedPattern
 from ._backends import compile_exprs, gc_paused, real_expression
-from ._derive import hessian_terms, time_derivative, to_sympy_list
+from ._derive import hessian_terms, se_symbol, time_derivative, to_sympy_list
 
 try:  # optional
     import symengine as se
@@ -162,7 +162,8 @@ def body_terms(space, q: tuple, qd: tuple, mass, centroid: tuple, inertia: tuple
         return z, [[z] * len(q) for _ in q], [z] * len(q)
     pairs = [*zip(gq, q), *zip(gqd, qd), (gm, mass), *zip(gc, centroid), *zip(gJ, inertia)]
     if se is not None:
-        sub = {se.sympify(k): se.sympify(v) for k, v in pairs}
+        # (symbols and the shared mass properties converted once: ~10 us each)
+        sub = {se_symbol(k): se_symbol(v) for k, v in pairs}
         # one substitution of all the body's terms at once: SymEngine converts the Python
         # dict on every xreplace call (13 calls a planar body, 57 a spatial one)
         nq = len(q)
