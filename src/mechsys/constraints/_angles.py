@@ -198,7 +198,13 @@ class RotationLock1(ConstraintBase):
 
     def geometry(self):
         if self.b1 is not None:
-            return [self.b1.point(0)] + ([self.b2.point(0)] if self.b2 is not None else [])
+            # the bodies' origins, made once per pair of bodies (asked for several times as
+            # the constraint is added: its bodies, dimension and side checks)
+            g = self.__dict__.get("_origins")
+            if g is None or g[0] is not self.b1 or g[1] is not self.b2:
+                g = self._origins = (self.b1, self.b2, [self.b1.point(0)] + (
+                    [self.b2.point(0)] if self.b2 is not None else []))
+            return list(g[2])
         return [self.axis1, self.axis2]
 
     def _build(self, space):
