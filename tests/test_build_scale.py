@@ -227,3 +227,21 @@ def test_gc_paused_nests_and_restores_the_collector():
         assert not gc.isenabled()        # it was off: stays off
     finally:
         gc.enable()
+
+
+def test_rotation_entry_times_float_is_sympys_product():
+    """``_times`` (decision 0079) builds ``cos(th) * w`` directly for a Float ``w``: the same
+    expression as SymPy's product (equal, same ``srepr``, same precision of the
+    coefficient), and SymPy's product itself for anything else."""
+    from mechsys.compile._dynamics import _times
+
+    th = sp.Symbol("th", real=True)
+    for f in (sp.cos(th, evaluate=False), sp.sin(th, evaluate=False), -sp.sin(th, evaluate=False),
+              sp.cos(2 * th), sp.Symbol("x")):
+        for w in (sp.Float(-4.905), sp.Float(0.5) * sp.Float(3.0), sp.Float(1.0), sp.Float(-1.0),
+                  sp.Float(0.0), sp.Integer(3), sp.Rational(1, 3), sp.Float("1e-300")):
+            want = f * w
+            got = _times(f, w)
+            assert got == want and sp.srepr(got) == sp.srepr(want)
+            if isinstance(want, sp.Mul) and isinstance(want.args[0], sp.Float):
+                assert got.args[0]._prec == want.args[0]._prec
