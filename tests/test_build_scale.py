@@ -245,3 +245,16 @@ def test_rotation_entry_times_float_is_sympys_product():
             assert got == want and sp.srepr(got) == sp.srepr(want)
             if isinstance(want, sp.Mul) and isinstance(want.args[0], sp.Float):
                 assert got.args[0]._prec == want.args[0]._prec
+
+
+def test_rotation_lock_at_a_zero_float_angle_is_the_angle_itself():
+    """``RotationLock1(body, 0.0)`` (decision 0079) gives SymPy's ``th - 0 - 0.0``, which is
+    ``th`` itself, without building the sum; other angles go through the sum as before."""
+    m = ms.Model2D()
+    b = m.add_body("b", guess=((0.0, 0.0), 0.0))
+    th = b.q[2]
+    for angle in (0.0, -0.0, 0, 0.3, sp.Float(0, 30)):
+        c = ms.RotationLock1(b, angle)
+        (eq,) = c.equations(m.space)
+        want = th - 0 - sp.sympify(angle)
+        assert eq == want and sp.srepr(eq) == sp.srepr(want)
