@@ -148,3 +148,113 @@ def test_lever_arm_of_a_large_sparse_dense_jacobian_equals_the_grouped_maxima():
     dense = _linalg._lever_arm_dense(J, trans, body)
     assert dense > 0
     assert _linalg._lever_arm(J, trans, body) == dense
+
+
+def test_gathered_first_stage_equals_symengines_to_the_last_bit(monkeypatch):
+    """A large kernel whose first stage only copies arguments and takes ``sin``/``cos`` of
+    arguments runs the shared gather loop instead of a compiled SymEngine stage (decision
+    0079): the same bits as the same two stages with SymEngine's first stage, through Python,
+    batch, the C entry points the compiled loops call, and after pickling; a first stage
+    holding anything else (``sin`` of a sum) stays SymEngine's."""
+    if "symengine" not in _backends.available_backends():
+        pytest.skip("SymEngine not installed")
+    import ctypes
+    import pickle
+
+    t, x, y, th = sp.symbols("t x y th")
+    exprs = [sp.sin(th) * k + sp.cos(x) * y ** k + x * sp.cos(th) for k in range(1, 30)]
+    monkeypatch.setattr(_backends, "LARGE_KERNEL", 10)
+    monkeypatch.setattr(_backends, "STAGE_TRIG", 10)
+    big = _backends.compile_exprs([t, x, y, th], exprs, "symengine")
+    with monkeypatch.context() as mp:   # the same two stages, the first compiled by SymEngine
+        mp.setattr(_backends, "_gather_table", lambda *a: None)
+        plain = _backends.compile_exprs([t, x, y, th], exprs, "symengine")
+    assert plain._pre_backend == "symengine-llvm" and big._pre_backend == "gather"
+    # the first stage: x, y copied (th only inside sin/cos), then sin/cos values
+    assert big._npieces == 2 + 3
+    again = pickle.loads(pickle.dumps(big))
+    proto = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
+    rng = np.random.default_rng(7)
+    for scale in (1.0, 1e3, 1e12):
+        v = rng.standard_normal(4) * scale
+        want = plain(v)
+        for got in (big(v), big.batch(v[None])[0], again(v)):
+            assert np.array_equal(got.view(np.int64), want.view(np.int64))
+        address, context, pre, pre_context, npieces = big.c_function()
+        xs = np.zeros(4 + npieces)
+        xs[:4] = v
+        out = np.zeros(len(exprs))
+        proto(pre)(xs[4:].ctypes.data, xs.ctypes.data, pre_context)
+        proto(address)(out.ctypes.data, xs.ctypes.data, context)
+        assert np.array_equal(out.view(np.int64), want.view(np.int64))
+    mixed = _backends.compile_exprs([t, x, y, th], exprs + [sp.sin(x + th)], "symengine")
+    assert mixed._pre_backend == "symengine-llvm"
+
+
+def test_small_matrices_from_entries_equal_sympys():
+    """``_matrix`` (decision 0079) gives what ``sp.Matrix`` gives: equal, of the same
+    domain (integers stay an integer matrix), usable as before."""
+    from mechsys.geometry._points import _matrix
+
+    x, th = sp.symbols("x th", real=True)
+    c, s = sp.cos(th, evaluate=False), sp.sin(th, evaluate=False)
+    for flat, shape in (([c, -s, s, c], (2, 2)), ([x, sp.S.Zero], (2, 1)),
+                        ([sp.Integer(1), sp.Integer(0)], (2, 1)),
+                        ([sp.Rational(1, 2), sp.Float(0.5)], (2, 1))):
+        a, b = _matrix(*shape, flat), sp.Matrix(*shape, flat)
+        assert a == b and type(a) is type(b) and a._rep.domain == b._rep.domain
+        assert a.T * a == b.T * b
+
+
+def test_gc_paused_nests_and_restores_the_collector():
+    """``gc_paused`` (decision 0079) pauses the cyclic collector once for nested uses and
+    gives it back as it found it, also when the work raises."""
+    import gc
+
+    assert gc.isenabled()
+    with _backends.gc_paused():
+        with _backends.gc_paused():
+            assert not gc.isenabled()
+        assert not gc.isenabled()
+    assert gc.isenabled()
+    with pytest.raises(ValueError), _backends.gc_paused():
+        raise ValueError("inside")
+    assert gc.isenabled()
+    gc.disable()
+    try:
+        with _backends.gc_paused():
+            pass
+        assert not gc.isenabled()        # it was off: stays off
+    finally:
+        gc.enable()
+
+
+def test_rotation_entry_times_float_is_sympys_product():
+    """``_times`` (decision 0079) builds ``cos(th) * w`` directly for a Float ``w``: the same
+    expression as SymPy's product (equal, same ``srepr``, same precision of the
+    coefficient), and SymPy's product itself for anything else."""
+    from mechsys.compile._dynamics import _times
+
+    th = sp.Symbol("th", real=True)
+    for f in (sp.cos(th, evaluate=False), sp.sin(th, evaluate=False), -sp.sin(th, evaluate=False),
+              sp.cos(2 * th), sp.Symbol("x")):
+        for w in (sp.Float(-4.905), sp.Float(0.5) * sp.Float(3.0), sp.Float(1.0), sp.Float(-1.0),
+                  sp.Float(0.0), sp.Integer(3), sp.Rational(1, 3), sp.Float("1e-300")):
+            want = f * w
+            got = _times(f, w)
+            assert got == want and sp.srepr(got) == sp.srepr(want)
+            if isinstance(want, sp.Mul) and isinstance(want.args[0], sp.Float):
+                assert got.args[0]._prec == want.args[0]._prec
+
+
+def test_rotation_lock_at_a_zero_float_angle_is_the_angle_itself():
+    """``RotationLock1(body, 0.0)`` (decision 0079) gives SymPy's ``th - 0 - 0.0``, which is
+    ``th`` itself, without building the sum; other angles go through the sum as before."""
+    m = ms.Model2D()
+    b = m.add_body("b", guess=((0.0, 0.0), 0.0))
+    th = b.q[2]
+    for angle in (0.0, -0.0, 0, 0.3, sp.Float(0, 30)):
+        c = ms.RotationLock1(b, angle)
+        (eq,) = c.equations(m.space)
+        want = th - 0 - sp.sympify(angle)
+        assert eq == want and sp.srepr(eq) == sp.srepr(want)

@@ -18,8 +18,11 @@ many, ``X`` of shape ``(N, nargs)`` into ``(N, k)``.
 
 from __future__ import annotations
 
+import gc
 import os
+import threading
 from collections.abc import Sequence
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -33,6 +36,41 @@ try:  # a core dependency (decision 0041); SymPy's lambdify serves where it cann
 except ImportError as _exc:  # pragma: no cover - depends on environment
     _se = None
     _se_error = _exc
+
+
+# -- the cyclic garbage collector, paused while the symbolic build allocates --------------
+_GC = {"depth": 0, "was_enabled": False, "lock": threading.Lock()}
+
+
+@contextmanager
+def gc_paused():
+    """Pause Python's cyclic garbage collector for the enclosed symbolic work (nested and
+    threaded uses pause it once; it is re-enabled as it was when the outermost ends).
+
+    Deriving and compiling a large model allocates millions of short-lived objects (SymPy
+    and SymEngine expression wrappers, none in reference cycles: reference counting frees
+    them), and each allocation burst triggers the collector's full passes over every live
+    object, the library's own included: 0.55 s of the 1024-link chain's 6.5 s build went to
+    seven such passes (decision 0079). No value changes; what becomes garbage in cycles
+    meanwhile is collected after.
+
+    Example::
+
+        with gc_paused():
+            kernel = compile_exprs(args, exprs)
+    """
+    with _GC["lock"]:
+        if _GC["depth"] == 0:
+            _GC["was_enabled"] = gc.isenabled()
+            gc.disable()
+        _GC["depth"] += 1
+    try:
+        yield
+    finally:
+        with _GC["lock"]:
+            _GC["depth"] -= 1
+            if _GC["depth"] == 0 and _GC["was_enabled"]:
+                gc.enable()
 
 
 # -- the numbers an expression may hold ------------------------------------------------------
@@ -321,21 +359,178 @@ def _gather_stage(args, stage: dict, exprs) -> tuple[list, list, list]:
     11,265 arguments of a 1024-link chain's dynamics but using 1,024 of them and its 2,048
     stage values compiles in 1.3-1.6 s, on the 3,072 it uses in 0.66 s (decision 0066)."""
     names = [_name(a) for a in args]
-    used = {_name(a) for a in _se.DenseMatrix(len(exprs), 1, list(exprs)).free_symbols} \
-        if exprs else set()
-    # (by name: SymPy and SymEngine symbols of one name are one argument; only the arguments
-    # kept are converted)
-    copied = [_se.sympify(a) for a, nm in zip(args, names) if nm in used]
+    used = {_name(a): a for a in _se.DenseMatrix(len(exprs), 1, list(exprs)).free_symbols} \
+        if exprs else {}
+    # (by name: SymPy and SymEngine symbols of one name are one argument; the kept ones are
+    # the SymEngine symbols found in the expressions, not converted again)
+    copied = [used[nm] for nm in names if nm in used]
     values = [*copied, *stage.values()]
     if not values:
         return list(args), [], list(args)
-    needs = {_name(a) for a in _se.DenseMatrix(len(values), 1, values).free_symbols}
+    # what the first stage reads: the copied arguments and those of the stage values
+    stage_values = list(stage.values())
+    needs = set(used).union(_name(a) for a in _se.DenseMatrix(
+        len(stage_values), 1, stage_values).free_symbols) if stage_values else set(used)
     last = max((i for i, nm in enumerate(names) if nm in needs), default=0)
     return list(args[:last + 1]), values, [*copied, *stage]
 
 
 #: llvmlite's target of :func:`_offset_entry` (looked up once)
 _TRAMPOLINE: dict = {}
+
+
+#: the one machine-code routine every :class:`_GatherStage` calls (built once a process)
+_GATHER: dict = {}
+
+
+def _gather_routine() -> int:
+    r"""Address of ``void gather(double *out, const double *x, int64 *table)``, built with
+    llvmlite once per process (~10 ms): for ``i < table[0]``, with ``c = table[1 + i]``,
+
+    .. math:: \mathrm{out}_i = x_{c \gg 2},\ \sin x_{c \gg 2}\ \text{or}\ \cos x_{c \gg 2}
+              \quad (c \mathbin{\&} 3 = 0, 1, 2)
+
+    ``sin`` and ``cos`` are LLVM's intrinsics, lowered to calls of the C library's ``sin`` and
+    ``cos``, as in SymEngine's LLVM kernels: the same values to the last bit."""
+    if "address" in _GATHER:
+        return _GATHER["address"]
+    import llvmlite.binding as llvm
+    from llvmlite import ir
+
+    if "target" not in _TRAMPOLINE:
+        llvm.initialize_native_target()
+        llvm.initialize_native_asmprinter()
+        _TRAMPOLINE["target"] = llvm.Target.from_default_triple()
+    f64, i64 = ir.DoubleType(), ir.IntType(64)
+    mod = ir.Module(name="mechsys_gather")
+    fn = ir.Function(mod, ir.FunctionType(ir.VoidType(), [f64.as_pointer(), f64.as_pointer(),
+                                                          ir.IntType(8).as_pointer()]),
+                     name="gather")
+    sin = mod.declare_intrinsic("llvm.sin", [f64])
+    cos = mod.declare_intrinsic("llvm.cos", [f64])
+    entry, loop, bsin, bcos, store, done = (fn.append_basic_block(n) for n in (
+        "entry", "loop", "sin", "cos", "store", "done"))
+    out, x, ctx = fn.args
+    b = ir.IRBuilder(entry)
+    table = b.bitcast(ctx, i64.as_pointer())
+    n = b.load(table)
+    b.cbranch(b.icmp_signed(">", n, ir.Constant(i64, 0)), loop, done)
+    b = ir.IRBuilder(loop)
+    i = b.phi(i64)
+    i.add_incoming(ir.Constant(i64, 0), entry)
+    code = b.load(b.gep(table, [b.add(i, ir.Constant(i64, 1))]))
+    v = b.load(b.gep(x, [b.ashr(code, ir.Constant(i64, 2))]))
+    switch = b.switch(b.and_(code, ir.Constant(i64, 3)), store)
+    switch.add_case(ir.Constant(i64, 1), bsin)
+    switch.add_case(ir.Constant(i64, 2), bcos)
+    b = ir.IRBuilder(bsin)
+    vs = b.call(sin, [v])
+    b.branch(store)
+    b = ir.IRBuilder(bcos)
+    vc = b.call(cos, [v])
+    b.branch(store)
+    b = ir.IRBuilder(store)
+    r = b.phi(f64)
+    for val, block in ((v, loop), (vs, bsin), (vc, bcos)):
+        r.add_incoming(val, block)
+    b.store(r, b.gep(out, [i]))
+    nxt = b.add(i, ir.Constant(i64, 1))
+    i.add_incoming(nxt, store)
+    b.cbranch(b.icmp_signed("<", nxt, n), loop, done)
+    ir.IRBuilder(done).ret_void()
+    parsed = llvm.parse_assembly(str(mod))
+    parsed.verify()
+    engine = llvm.create_mcjit_compiler(parsed, _TRAMPOLINE["target"].create_target_machine())
+    engine.finalize_object()
+    _GATHER["engine"] = engine            # owns the code: kept for the process's life
+    _GATHER["address"] = engine.get_function_address("gather")
+    return _GATHER["address"]
+
+
+def _gather_table(pre_args, values) -> np.ndarray | None:
+    """The table of :func:`_gather_routine` for a first stage on ``pre_args`` whose
+    ``values`` are each an argument, or ``sin`` or ``cos`` of one; None for anything else
+    (a ``Piecewise``, ``sin`` of a sum, arguments of one name twice): SymEngine compiles
+    that first stage."""
+    index: dict = {}
+    for k, a in enumerate(pre_args):
+        index.setdefault(_name(a), k)
+    if len(index) != len(pre_args):
+        return None
+    codes = np.empty(len(values) + 1, dtype=np.int64)
+    codes[0] = len(values)
+    sym, sin, cos = _se.Symbol, _se.sin, _se.cos
+    for k, v in enumerate(values):
+        t = type(v)
+        if t is sym:
+            op, a = 0, v
+        elif t is sin or t is cos:
+            a = v.args[0]
+            if type(a) is not sym:
+                return None
+            op = 1 if t is sin else 2
+        else:
+            return None
+        j = index.get(a.name)
+        if j is None:
+            return None
+        codes[k + 1] = 4 * j + op
+    return codes
+
+
+class _GatherStage:
+    r"""A first stage (decision 0066) that only copies arguments and takes ``sin``/``cos``
+    of arguments, as the first stage of a chain's kernels does: one shared loop of machine
+    code (:func:`_gather_routine`) reading a table, instead of SymEngine's LLVM compile of
+    the same straight-line code (0.1 to 0.25 s per kernel of the 1024-link chain: SymEngine
+    finds each argument by a linear search, and emits every call of ``sin`` at its place;
+    decision 0079). The values are the same to the last bit (the same C library ``sin``
+    and ``cos``). It offers what :class:`_SymengineCompiled` asks of a SymEngine stage:
+    ``unsafe_real``, a call on one or many argument rows, ``as_ctypes`` and pickling.
+
+    Example::
+
+        g = _GatherStage(3, _gather_table([t, x, th], [se.sin(th), x]))
+        g(np.array([0.0, 2.0, 0.5]))          # [sin(0.5), 2.0]
+    """
+
+    def __init__(self, nin: int, table: np.ndarray):
+        self.nin, self.nout = nin, int(table[0])
+        self._table = np.ascontiguousarray(table, dtype=np.int64)
+        self._bind()
+
+    def _bind(self) -> None:
+        import ctypes
+
+        proto = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
+        self._fn = proto(_gather_routine())
+        self._ctx = ctypes.c_void_p(self._table.ctypes.data)
+
+    def unsafe_real(self, x: np.ndarray, out: np.ndarray) -> None:
+        """``out[:] = values(x)``; ``x`` and ``out`` contiguous float64 (not checked)."""
+        self._fn(out.ctypes.data, x.ctypes.data, self._ctx)
+
+    def __call__(self, x) -> np.ndarray:
+        x = np.ascontiguousarray(x, dtype=float)
+        if x.ndim == 1:
+            out = np.empty(self.nout)
+            self.unsafe_real(x, out)
+            return out
+        out = np.empty((x.shape[0], self.nout))
+        for row, o in zip(x, out):
+            self.unsafe_real(np.ascontiguousarray(row), o)
+        return out
+
+    def as_ctypes(self):
+        """``(function, context)`` as SymEngine's ``Lambdify.as_ctypes`` gives them."""
+        return self._fn, self._ctx
+
+    def __getstate__(self):
+        return {"nin": self.nin, "nout": self.nout, "_table": self._table}
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._bind()
 
 
 def _offset_entry(keep, main, offset: int):
@@ -518,8 +713,15 @@ class _SymengineCompiled(Compiled):
         self._pre = None
         self._npieces = len(pre_values)
         if pre_values:
-            self._pre, self._pre_backend = _lambdify(pre_args, pre_values, opt_level, cse,
-                                                     mode)
+            # a first stage of copies and sin/cos of arguments (a chain's): the shared
+            # gather loop, no compile (decision 0079); anything else: SymEngine's
+            table = _gather_table(pre_args, pre_values) if staged and mode != "lambda" \
+                else None
+            if table is not None:
+                self._pre, self._pre_backend = _GatherStage(len(pre_args), table), "gather"
+            else:
+                self._pre, self._pre_backend = _lambdify(pre_args, pre_values, opt_level,
+                                                         cse, mode)
             self._pre_nin = len(pre_args)   # the first stage reads x[:_pre_nin]
             self._nargs = nin
             self._buf = np.empty(nin + len(pre_values))   # [x, first-stage values]
@@ -606,7 +808,8 @@ class _SymengineCompiled(Compiled):
         not LLVM code. The compiled free-motion stepper (``solvers/_jit_free.py``) expands
         the values itself, so the CSE kernels of generalized coordinates serve it too."""
         if self.backend != "symengine-llvm" or (
-                self._pre is not None and self._pre_backend != "symengine-llvm"):
+                self._pre is not None and self._pre_backend not in ("symengine-llvm",
+                                                                    "gather")):
             return None
         if not hasattr(self, "_cfun"):
             keep, main = _entry_point(self._f)
@@ -759,6 +962,7 @@ def default_backend() -> str:
 LARGE_KERNEL = 500
 
 
+@gc_paused()
 def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
                   backend: str | None = None, once: bool = False, cse: bool = False,
                   first_use: bool = False) -> Compiled:

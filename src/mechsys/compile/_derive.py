@@ -134,27 +134,52 @@ _DERIVED: dict = {}
 _DERIVED_MAX = 200_000
 
 
+#: SymPy symbol -> its SymEngine symbol: the conversion costs ~10 us, and the derivation of
+#: a large model converts each coordinate, velocity and time symbol thousands of times
+_SE_SYMBOLS: dict = {}
+
+
+def se_symbol(s):
+    """``symengine.sympify(s)``, remembered for plain SymPy symbols (anything else, numbers
+    included, is converted each time: ``Float(1.0) == 1`` in SymPy, so a number could not
+    be a key).
+
+    Example::
+
+        se_symbol(sp.Symbol("x", real=True)) == symengine.Symbol("x")   # True
+    """
+    if type(s) is not sp.Symbol:
+        return se.sympify(s)
+    out = _SE_SYMBOLS.get(s)
+    if out is None:
+        out = se.sympify(s)
+        if len(_SE_SYMBOLS) >= _DERIVED_MAX:
+            _SE_SYMBOLS.clear()
+        _SE_SYMBOLS[s] = out
+    return out
+
+
 def _derive_one(e, mine, mine_d):
     """``(phi, [(q_j, d phi / d q_j)], phi_t, gamma)`` of one equation (SymEngine), for its
     coordinates ``mine`` (in column order) and their velocities ``mine_d``."""
     E, thaw = _freeze_steps(e)
     free = E.free_symbols
-    Ts = se.sympify(T)
+    Ts = se_symbol(T)
     jac = []
     v = se.Integer(0)
     for s, sd in zip(mine, mine_d):
-        d = E.diff(se.sympify(s))
+        d = E.diff(se_symbol(s))
         if d != 0:
             jac.append((s, _thaw(d, thaw)))
-            v += d * se.sympify(sd)
+            v += d * se_symbol(sd)
     et = E.diff(Ts) if Ts in free else se.Integer(0)
     v += et
     fv = v.free_symbols
     gm = v.diff(Ts) if Ts in fv else se.Integer(0)
     for s, sd in zip(mine, mine_d):
-        a = se.sympify(s)
+        a = se_symbol(s)
         if a in fv:
-            gm += v.diff(a) * se.sympify(sd)
+            gm += v.diff(a) * se_symbol(sd)
     return _thaw(E, thaw), jac, _thaw(et, thaw), _thaw(-gm, thaw)
 
 

@@ -31,6 +31,7 @@ Numeric functions take :math:`x = [t, q (n), \dot q (n), \lambda (m), p]`.
 from __future__ import annotations
 
 import functools
+import math
 
 import numpy as np
 import scipy.sparse as sps
@@ -38,8 +39,8 @@ import sympy as sp
 
 from .._symbols import T, velocity_symbol
 from ..solvers._linalg import FixedPattern
-from ._backends import compile_exprs, real_expression
-from ._derive import hessian_terms, time_derivative, to_sympy_list
+from ._backends import compile_exprs, gc_paused, real_expression
+from ._derive import hessian_terms, se_symbol, time_derivative, to_sympy_list
 
 try:  # optional
     import symengine as se
@@ -162,7 +163,8 @@ def body_terms(space, q: tuple, qd: tuple, mass, centroid: tuple, inertia: tuple
         return z, [[z] * len(q) for _ in q], [z] * len(q)
     pairs = [*zip(gq, q), *zip(gqd, qd), (gm, mass), *zip(gc, centroid), *zip(gJ, inertia)]
     if se is not None:
-        sub = {se.sympify(k): se.sympify(v) for k, v in pairs}
+        # (symbols and the shared mass properties converted once: ~10 us each)
+        sub = {se_symbol(k): se_symbol(v) for k, v in pairs}
         # one substitution of all the body's terms at once: SymEngine converts the Python
         # dict on every xreplace call (13 calls a planar body, 57 a spatial one)
         nq = len(q)
@@ -185,6 +187,10 @@ def _real_contribution(c, owner: str):
     if isinstance(c, DirectLoad):
         return replace(c, magnitude=real_expression(sp.sympify(c.magnitude), owner))
     if isinstance(c, PointForce):
+        # (a force already fit, as gravity's constant one: kept, not copied entry by entry
+        # into a new matrix, ~0.1 ms a body)
+        if all(real_expression(e, owner) is e for e in c.force):
+            return c
         return replace(c, force=c.force.applyfunc(lambda e: real_expression(e, owner)))
     if isinstance(c, BodyMoment):
         M = c.moment
@@ -290,8 +296,9 @@ def _rotation_derivatives(body) -> list:
     A = body.A
     dim = A.rows
     rot = body.q[dim:]
-    # (compared with an unevaluated cos: SymPy's evaluation of cos(symbol) costs ~1 ms)
-    if dim == 2 and len(rot) == 1 and A[0, 0] == sp.cos(rot[0], evaluate=False):
+    # (A[0, 0] is cos(th): tested by type and argument, no cos made to compare with)
+    a00 = A[0, 0]
+    if dim == 2 and len(rot) == 1 and type(a00) is sp.cos and a00.args == (rot[0],):
         # A(th) = [[c, -s], [s, c]]: dA/dth = A [[0, -1], [1, 0]], no differentiation (SymPy's
         # diff costs ~1 ms an entry: 4 s of a 1024-link chain)
         out = [[[A[0, 1], -A[0, 0]], [A[1, 1], -A[1, 0]]]]
@@ -335,8 +342,23 @@ def _point_force_terms(space, body, point, F) -> list | None:
     pairs = [(i, j, out[i] * local[j]) for i in range(dim) for j in range(dim)
              if out[i] != 0 and local[j] != 0]
     for dA in _rotation_derivatives(body):
-        out.append(sp.Add(*(dA[i][j] * w for i, j, w in pairs)))
+        out.append(sp.Add(*(_times(dA[i][j], w) for i, j, w in pairs)))
     return out
+
+
+def _times(a, w):
+    r"""``a * w``. For ``a`` the cosine or sine of a symbol (a planar rotation matrix's
+    entry) and ``w`` a Float other than 0 and :math:`\pm 1`, SymPy's product is the
+    two-factor ``Mul`` of ``w`` and ``a``; built directly: ``Mul``'s general flattening makes
+    a new Float coefficient whose first ``is_zero`` runs SymPy's fact deduction (~0.2 ms, a
+    fifth of a 1024-link chain's dynamics, decision 0079). The same expression (equal,
+    same ``srepr``)."""
+    if type(w) is sp.Float and (type(a) is sp.cos or type(a) is sp.sin) \
+            and type(a.args[0]) is sp.Symbol:
+        v = float(w)
+        if math.isfinite(v) and v not in (0.0, 1.0, -1.0):
+            return sp.Mul._from_args((w, a), True)
+    return a * w
 
 
 def _collect(out: dict, body, Qp) -> None:
@@ -372,6 +394,7 @@ class Dynamics:
     Compiled: ``f_terms(x) -> [M values, Q, Qv]`` and ``f_dQ_dlam(x)``.
     """
 
+    @gc_paused()
     def __init__(self, system, model, bodies, loads):
         lay = system.layout
         self.system = system
@@ -420,21 +443,23 @@ class Dynamics:
         self._sympy: dict = {}
         self.Q = generalized_forces(model, loads, lay)
         self._potential = (model, tuple(loads))
+        # each force's free symbols once (SymPy walks the expression on every ask)
+        free = [e.free_symbols for e in self.Q]
         lamset = set(self.lam)
-        self.depends_on_lambda = any(e.free_symbols & lamset for e in self.Q)
+        self.depends_on_lambda = any(f & lamset for f in free)
         qdset = set(lay.qd_symbols)           # once: not per load term (N^2 for N bodies)
-        self.depends_on_qd = any(e.free_symbols & qdset for e in self.Q)
+        self.depends_on_qd = any(f & qdset for f in free)
         qddset = set(lay.qdd_symbols)
         #: loads that depend on accelerations (added mass, inertial couplings): free
         #: accelerations are then found by Newton on (qdd, lambda)
-        self.depends_on_qdd = any(e.free_symbols & qddset for e in self.Q)
+        self.depends_on_qdd = any(f & qddset for f in free)
         self.linear_in_qdd = all(
-            sp.diff(e, a, b) == 0 for e in self.Q if e.free_symbols & qddset
-            for a in (e.free_symbols & qddset) for b in (e.free_symbols & qddset))
+            sp.diff(e, a, b) == 0 for e, f in zip(self.Q, free) if f & qddset
+            for a in (f & qddset) for b in (f & qddset))
         args = self.args()
         allowed = set(args)
-        for i, e in enumerate(self.Q):
-            extra = e.free_symbols - allowed
+        for i, f in enumerate(free):
+            extra = f - allowed
             if extra:
                 from .._errors import ModelError
 
@@ -577,6 +602,7 @@ class FreeKernel:
     ``K.pattern``): banded LU after a reverse Cuthill-McKee ordering for chains.
     """
 
+    @gc_paused()
     def __init__(self, system, sparse: bool):
         dyn = system.dynamics
         n, m = system.n, system.m

@@ -27,7 +27,7 @@ import sympy as sp
 from .._errors import ModelError
 from .._symbols import T, acceleration_symbol, velocity_symbol
 from ..solvers._linalg import FixedPattern
-from ._backends import Compiled, compile_exprs, default_backend
+from ._backends import Compiled, compile_exprs, default_backend, gc_paused
 from ._dynamics import Dynamics, multiplier_symbols
 from ._options import Backend
 
@@ -107,6 +107,7 @@ class System:
     ``f_gamma`` -> ``gamma``; all of ``x = [t, q, qd, p]``.
     """
 
+    @gc_paused()
     def __init__(self, space, layout: Layout, phi, p_values, guess, backend: str | None = None,
                  version: int = 0, model=None, loads=()):
         self.space = space

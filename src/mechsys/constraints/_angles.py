@@ -198,7 +198,13 @@ class RotationLock1(ConstraintBase):
 
     def geometry(self):
         if self.b1 is not None:
-            return [self.b1.point(0)] + ([self.b2.point(0)] if self.b2 is not None else [])
+            # the bodies' origins, made once per pair of bodies (asked for several times as
+            # the constraint is added: its bodies, dimension and side checks)
+            g = self.__dict__.get("_origins")
+            if g is None or g[0] is not self.b1 or g[1] is not self.b2:
+                g = self._origins = (self.b1, self.b2, [self.b1.point(0)] + (
+                    [self.b2.point(0)] if self.b2 is not None else []))
+            return list(g[2])
         return [self.axis1, self.axis2]
 
     def _build(self, space):
@@ -215,6 +221,11 @@ class RotationLock1(ConstraintBase):
             th2 = 0
             if self.b2 is not None and not self.b2.is_ground:
                 th2 = space.angle(self.b2.q[space.dim:])
+            if th2 == 0 and type(self.angle) is sp.Float and float(self.angle) == 0.0 \
+                    and type(th1) is sp.Symbol:
+                # a lock at a zero Float angle: SymPy's th - 0 - 0.0 is th itself, after
+                # deducing the new zero coefficient's facts (~80 us a lock)
+                return [th1]
             return [th1 - th2 - self.angle]
         g1 = angle_frame(space, self.axis1)[0]
         return [angle_equation(angle_frame(space, self.axis2), g1, self.angle)]

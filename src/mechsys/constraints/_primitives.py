@@ -13,8 +13,10 @@ from ..geometry._points import Axis, Point, Vector
 
 def coincident(p1: Point, p2: Point, offset=None) -> list[sp.Expr]:
     """:math:`r_1 - r_2 - d = 0` componentwise (``d`` a global offset, default zero)."""
-    # entry by entry: a SymPy Matrix difference goes through its domain matrices (slow)
-    d = [a - b for a, b in zip(p1.location(), p2.location())]
+    # entry by entry, each a single Add of the terms of both locations: a SymPy Matrix
+    # difference goes through its domain matrices, and a difference of two sums builds three
+    # (the same canonical sum, decision 0079)
+    d = [sp.Add(*a, *(-t for t in b)) for a, b in zip(p1._location_terms(), p2._location_terms())]
     if offset is not None:
         d = [a - o for a, o in zip(d, offset)]
     return d

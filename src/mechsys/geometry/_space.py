@@ -26,6 +26,7 @@ import math
 import sympy as sp
 
 from .._errors import GeometryError, MechError, ModelError
+from ._points import _matrix
 from ._rotations import euler_parameters, matrix_elements
 
 
@@ -45,7 +46,7 @@ class Space:
 
     def split(self, q: list) -> tuple[sp.Matrix, list]:
         """Split body coordinates into position and rotation coordinates."""
-        return sp.Matrix(q[: self.dim]), list(q[self.dim :])
+        return _matrix(self.dim, 1, list(q[: self.dim])), list(q[self.dim :])
 
     def body_normalization(self, rot) -> list:
         """Extra equations a body's own coordinates must satisfy (none in 2D)."""
@@ -67,7 +68,7 @@ class Planar(Space):
         # expressions
         plain = isinstance(th, sp.Symbol)
         c, s = sp.cos(th, evaluate=not plain), sp.sin(th, evaluate=not plain)
-        return sp.Matrix([[c, -s], [s, c]])
+        return _matrix(2, 2, [c, -s, s, c])
 
     def cross(self, a, b):
         """Scalar cross product ``a_x b_y - a_y b_x`` (the z component)."""
