@@ -322,3 +322,59 @@ def test_adams_weights_refuse_repeated_nodes():
     """Two equal nodes (no interpolant): refused, not a weight of garbage."""
     _, ok = _adams([-1.0, 0.0, 0.0], 0.01)
     assert not ok
+
+
+def _scaled_case(rng, n):
+    """A mechanism-like Jacobian ``J``, column scales ``c`` (lengths and angles) and the row
+    scales ``r`` the loops take (the largest entry of each row of ``J D``)."""
+    J = _matrix(rng, n, "sparse")
+    columns = 10.0 ** rng.uniform(-2, 2, n)
+    r = np.abs(J * columns).max(axis=1)
+    return J, columns, r
+
+
+@pytest.mark.parametrize("n", [3, 16, 40, 160])
+def test_scaled_factor_and_solve(n):
+    """``_jit_linalg._factor``/``_solve``: the LU of :math:`R^{-1} J D` (the written-out
+    LAPACK below ``SMALL`` unknowns, LAPACK itself through its C address above) and the
+    solve :math:`x = D B^{-1} R^{-1} b`, against NumPy's solve of :math:`J x = b` and
+    LAPACK's dgecon of the scaled matrix; a guard returns ``RCOND_PENDING`` only for an
+    estimate proven above it; a singular matrix gives -1."""
+    from mechsys.solvers import _jit_linalg as jlin
+    from mechsys.solvers._jit_runtime import lapack
+    from mechsys.solvers._tolerances import RCOND_PENDING, RCOND_WARN
+
+    factor, solve = leaf(jlin, "_factor"), leaf(jlin, "_solve")
+    for seed in range(3):
+        rng = np.random.default_rng(seed)
+        J, columns, r = _scaled_case(rng, n)
+        jr, jc = (a.astype(np.int64) for a in np.nonzero(J))
+        work = interpreted(jlin._factor_work)(n, n, n)
+        S, W, seen = interpreted(jlin._structure)(jr, jc, n)
+        Jw, B, ipiv, nz, ibuf, cbuf, dbuf, wk, iwork, _ = work
+        Jw[:] = J
+        scaled = J * columns / r[:, None]
+        want = lapack_rcond(scaled)
+        for guard in (0.0, RCOND_WARN):
+            got = factor(lapack(), Jw, r, columns, B, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf,
+                         wk, iwork, guard)
+            if got == RCOND_PENDING:
+                assert guard > 0 and n <= 150 and want >= guard
+            else:
+                np.testing.assert_allclose(got, want, rtol=1e-12 + 1e-14 * n / want)
+            b = rng.standard_normal(n)
+            out = np.zeros(n)
+            solve(lapack(), B, ipiv, nz, r, columns, b, out, ibuf, cbuf)
+            x = np.linalg.solve(J, b)
+            np.testing.assert_allclose(out, x, rtol=0, atol=1e-13 * n * np.linalg.cond(scaled, 1)
+                                       * np.abs(x).max())
+        Jw[:, n // 2] = 0.0                   # a zero column: singular
+        assert factor(lapack(), Jw, r, columns, B, ipiv, nz, S, W, seen, ibuf, cbuf, dbuf, wk,
+                      iwork, 0.0) == -1.0
+
+
+def lapack_rcond(A):
+    """LAPACK's one-norm reciprocal condition estimate of ``A`` (dgetrf + dgecon)."""
+    lu, _, info = lapack.dgetrf(A)
+    assert info == 0
+    return lapack.dgecon(lu, np.abs(A).sum(axis=0).max(), norm="1")[0]
