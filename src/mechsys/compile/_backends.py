@@ -390,8 +390,11 @@ def _gather_routine() -> int:
     .. math:: \mathrm{out}_i = x_{c \gg 2},\ \sin x_{c \gg 2}\ \text{or}\ \cos x_{c \gg 2}
               \quad (c \mathbin{\&} 3 = 0, 1, 2)
 
-    ``sin`` and ``cos`` are LLVM's intrinsics, lowered to calls of the C library's ``sin`` and
-    ``cos``, as in SymEngine's LLVM kernels: the same values to the last bit."""
+    or, for ``c & 3 = 3``, :math:`\mathrm{out}_i = \mathrm{out}_{c \gg 2}` (a value computed
+    earlier in the table, copied: the inputs of a second stage compiled in parts,
+    :func:`_part_table`). ``sin`` and ``cos`` are LLVM's intrinsics, lowered to calls of the C
+    library's ``sin`` and ``cos``, as in SymEngine's LLVM kernels: the same values to the last
+    bit."""
     if "address" in _GATHER:
         return _GATHER["address"]
     import llvmlite.binding as llvm
@@ -408,8 +411,8 @@ def _gather_routine() -> int:
                      name="gather")
     sin = mod.declare_intrinsic("llvm.sin", [f64])
     cos = mod.declare_intrinsic("llvm.cos", [f64])
-    entry, loop, bsin, bcos, store, done = (fn.append_basic_block(n) for n in (
-        "entry", "loop", "sin", "cos", "store", "done"))
+    entry, loop, bx, bsin, bcos, bcopy, store, done = (fn.append_basic_block(n) for n in (
+        "entry", "loop", "x", "sin", "cos", "copy", "store", "done"))
     out, x, ctx = fn.args
     b = ir.IRBuilder(entry)
     table = b.bitcast(ctx, i64.as_pointer())
@@ -419,19 +422,27 @@ def _gather_routine() -> int:
     i = b.phi(i64)
     i.add_incoming(ir.Constant(i64, 0), entry)
     code = b.load(b.gep(table, [b.add(i, ir.Constant(i64, 1))]))
-    v = b.load(b.gep(x, [b.ashr(code, ir.Constant(i64, 2))]))
-    switch = b.switch(b.and_(code, ir.Constant(i64, 3)), store)
+    j = b.ashr(code, ir.Constant(i64, 2))
+    # (each branch reads its own source: for a copy, j indexes out, not x)
+    switch = b.switch(b.and_(code, ir.Constant(i64, 3)), bx)
     switch.add_case(ir.Constant(i64, 1), bsin)
     switch.add_case(ir.Constant(i64, 2), bcos)
+    switch.add_case(ir.Constant(i64, 3), bcopy)
+    b = ir.IRBuilder(bx)
+    v = b.load(b.gep(x, [j]))
+    b.branch(store)
     b = ir.IRBuilder(bsin)
-    vs = b.call(sin, [v])
+    vs = b.call(sin, [b.load(b.gep(x, [j]))])
     b.branch(store)
     b = ir.IRBuilder(bcos)
-    vc = b.call(cos, [v])
+    vc = b.call(cos, [b.load(b.gep(x, [j]))])
+    b.branch(store)
+    b = ir.IRBuilder(bcopy)
+    vo = b.load(b.gep(out, [j]))
     b.branch(store)
     b = ir.IRBuilder(store)
     r = b.phi(f64)
-    for val, block in ((v, loop), (vs, bsin), (vc, bcos)):
+    for val, block in ((v, bx), (vs, bsin), (vc, bcos), (vo, bcopy)):
         r.add_incoming(val, block)
     b.store(r, b.gep(out, [i]))
     nxt = b.add(i, ir.Constant(i64, 1))
@@ -531,6 +542,155 @@ class _GatherStage:
     def __setstate__(self, state):
         self.__dict__.update(state)
         self._bind()
+
+
+#: a gathered second stage (:func:`_gather_stage`) with more outputs than this is compiled
+#: in parts of this many outputs, each declaring only the arguments it reads (decision 0080)
+PART_OUTPUTS = 1024
+
+
+def _part_plan(main_args, exprs, size: int) -> list | None:
+    """``[(start, stop, used)]``: the outputs ``exprs[start:stop]`` of a second stage in parts
+    of ``size``, each with the indices into ``main_args`` of the arguments it reads (in the
+    order of ``main_args``; one argument when it reads none: SymEngine compiles no function
+    without arguments). None when an expression reads a symbol outside ``main_args`` (the
+    whole stage is then compiled as one, which reports it).
+
+    SymEngine's LLVM code generator finds each occurrence of a symbol by a linear search of
+    the declared arguments (about 5 ns a comparison): the position kernel of a 1024-link
+    chain, 10,236 outputs on 5,118 arguments, spends about 0.1 s of its 0.2-0.3 s compile
+    searching. A part of 1024 outputs of a chain reads some hundreds of arguments."""
+    pos = {a: i for i, a in enumerate(main_args)}
+    plan = []
+    for start in range(0, len(exprs), size):
+        part = exprs[start:start + size]
+        used = []
+        for a in _se.DenseMatrix(len(part), 1, part).free_symbols:
+            i = pos.get(a)
+            if i is None:
+                return None
+            used.append(i)
+        plan.append((start, start + len(part), sorted(used) or [0]))
+    return plan
+
+
+def _part_table(table: np.ndarray, plan: list) -> np.ndarray:
+    """The gather table (:func:`_gather_routine`) that writes, part after part, the inputs of
+    each part of ``plan`` (:func:`_part_plan`), from ``table``, the one writing each of the
+    second stage's arguments once: a value's first occurrence is computed as there, a
+    repeated one copied from it (code ``4 p + 3``): each ``sin`` and ``cos`` still once."""
+    base = table[1:].tolist()
+    codes: list = []
+    first: dict = {}
+    for _, _, used in plan:
+        for m in used:
+            p = first.get(m)
+            if p is None:
+                first[m] = len(codes)
+                codes.append(base[m])
+            else:
+                codes.append(4 * p + 3)
+    return np.array([len(codes), *codes], dtype=np.int64)
+
+
+def _compile_parts(main_args, exprs, plan, opt_level, mode):
+    """``(parts, backend)``: the second stage compiled part by part (:class:`_Parts`), each
+    part loaded from or stored in the kernel cache on its own."""
+    parts, off, backend = [], 0, "symengine-llvm"
+    for start, stop, used in plan:
+        f, b = _lambdify([main_args[m] for m in used], exprs[start:stop], opt_level, False, mode)
+        if b != "symengine-llvm":
+            backend = b
+        parts.append((f, off, len(used), start, stop - start))
+        off += len(used)
+    return _Parts(parts, len(exprs)), backend
+
+
+class _Parts:
+    r"""A second stage compiled in parts (:func:`_part_plan`): part ``k`` reads its ``n_k``
+    inputs at offset ``i_k`` of the values the gathered first stage writes
+    (:func:`_part_table`) and writes its ``m_k`` outputs at offset ``o_k``. It offers what
+    :class:`_SymengineCompiled` asks of a SymEngine ``Lambdify``: ``unsafe_real``, a call on
+    one or many rows, ``as_ctypes`` (one C function that calls every part, compiled with
+    llvmlite on first use, ~5 ms) and pickling. Every output is the expression it was,
+    compiled by the same code generator: the same values to the last bit.
+
+    Example::
+
+        parts = _compile_parts(args, exprs, _part_plan(args, exprs, 1024), 0, "llvm")[0]
+        parts(values)            # == Lambdify(args, exprs)(values) for the unsplit values
+    """
+
+    def __init__(self, parts: list, nout: int):
+        self.parts, self.nout = parts, nout
+        self.nin = sum(p[2] for p in parts)
+
+    def _bind(self):
+        """The C function ``void f(double *out, const double *v, void *)`` calling each part
+        ``k`` as ``part_k(out + o_k, v + i_k, context_k)``; kept with its owners."""
+        import ctypes
+
+        import llvmlite.binding as llvm
+        from llvmlite import ir
+
+        if "target" not in _TRAMPOLINE:
+            llvm.initialize_native_target()
+            llvm.initialize_native_asmprinter()
+            _TRAMPOLINE["target"] = llvm.Target.from_default_triple()
+        mod = ir.Module(name="mechsys_parts")
+        f64p, i8p, i64 = ir.DoubleType().as_pointer(), ir.IntType(8).as_pointer(), ir.IntType(64)
+        fty = ir.FunctionType(ir.VoidType(), [f64p, f64p, i8p])
+        fn = ir.Function(mod, fty, name="parts")
+        b = ir.IRBuilder(fn.append_basic_block())
+        out, v, _ = fn.args
+        owners = []
+        for f, i, _n, o, _k in self.parts:
+            cfun, ctx = f.as_ctypes()
+            owners.append((cfun, ctx))
+            target = b.inttoptr(ir.Constant(i64, ctypes.cast(cfun, ctypes.c_void_p).value),
+                                fty.as_pointer())
+            b.call(target, [b.gep(out, [ir.Constant(i64, o)]), b.gep(v, [ir.Constant(i64, i)]),
+                            b.inttoptr(ir.Constant(i64, ctx.value or 0), i8p)])
+        b.ret_void()
+        parsed = llvm.parse_assembly(str(mod))
+        parsed.verify()
+        engine = llvm.create_mcjit_compiler(parsed, _TRAMPOLINE["target"].create_target_machine())
+        engine.finalize_object()
+        proto = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
+        self._entry = (engine, owners, proto(engine.get_function_address("parts")))
+        return self._entry[2]
+
+    def unsafe_real(self, v: np.ndarray, out: np.ndarray) -> None:
+        """``out[:] = values(v)``; ``v`` and ``out`` contiguous float64 (not checked)."""
+        entry = self.__dict__.get("_entry")
+        fn = entry[2] if entry is not None else self._bind()
+        fn(out.ctypes.data, v.ctypes.data, None)
+
+    def __call__(self, V) -> np.ndarray:
+        V = np.ascontiguousarray(V, dtype=float)
+        if V.ndim == 1:
+            out = np.empty(self.nout)
+            for f, i, n, o, k in self.parts:
+                out[o:o + k] = np.asarray(f(V[i:i + n])).reshape(k)
+            return out
+        rows = V.shape[0]
+        out = np.empty((rows, self.nout))
+        for f, i, n, o, k in self.parts:
+            out[:, o:o + k] = np.asarray(f(np.ascontiguousarray(V[:, i:i + n]))).reshape(rows, k)
+        return out
+
+    def as_ctypes(self):
+        """``(function, context)`` as SymEngine's ``Lambdify.as_ctypes`` gives them."""
+        import ctypes
+
+        entry = self.__dict__.get("_entry")
+        return (entry[2] if entry is not None else self._bind()), ctypes.c_void_p(None)
+
+    def __getstate__(self):
+        return {"parts": self.parts, "nout": self.nout, "nin": self.nin}
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
 
 
 def _offset_entry(keep, main, offset: int):
@@ -712,19 +872,27 @@ class _SymengineCompiled(Compiled):
                 pre_args, pre_values, main_args = args, [], list(args)
         self._pre = None
         self._npieces = len(pre_values)
+        plan = None
         if pre_values:
             # a first stage of copies and sin/cos of arguments (a chain's): the shared
             # gather loop, no compile (decision 0079); anything else: SymEngine's
             table = _gather_table(pre_args, pre_values) if staged and mode != "lambda" \
                 else None
             if table is not None:
+                # a large second stage in parts, each on the arguments it reads, gathered
+                # part after part by the first stage (decision 0080)
+                plan = _part_plan(main_args, exprs, PART_OUTPUTS) \
+                    if len(exprs) > PART_OUTPUTS else None
+                if plan is not None:
+                    table = _part_table(table, plan)
+                    self._npieces = int(table[0])
                 self._pre, self._pre_backend = _GatherStage(len(pre_args), table), "gather"
             else:
                 self._pre, self._pre_backend = _lambdify(pre_args, pre_values, opt_level,
                                                          cse, mode)
             self._pre_nin = len(pre_args)   # the first stage reads x[:_pre_nin]
             self._nargs = nin
-            self._buf = np.empty(nin + len(pre_values))   # [x, first-stage values]
+            self._buf = np.empty(nin + self._npieces)   # [x, first-stage values]
         args = main_args
         self._expand = None
         if cse:
@@ -739,7 +907,10 @@ class _SymengineCompiled(Compiled):
                 self._plain_src = (list(args), list(exprs), opt_level)
                 exprs = distinct
         self._nf = len(exprs)
-        self._f, self.backend = _lambdify(args, exprs, opt_level, cse, mode)
+        if plan is not None:
+            self._f, self.backend = _compile_parts(args, exprs, plan, opt_level, mode)
+        else:
+            self._f, self.backend = _lambdify(args, exprs, opt_level, cse, mode)
         self._nin = nin
         # SymEngine's unchecked entry point costs ~0.8 us a call instead of ~4 us: the
         # checks it skips (length, dtype, contiguity) are done here, once per call
