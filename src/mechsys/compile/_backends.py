@@ -347,7 +347,7 @@ def _split_trig(exprs, avoid=(), atoms=None):
     return {v: k for k, v in names.items()}, xreplace_all(exprs, names)
 
 
-def _gather_stage(args, stage: dict, exprs) -> tuple[list, list, list]:
+def _gather_stage(args, stage: dict, exprs, free=None) -> tuple[list, list, list]:
     r"""``(pre_args, pre_values, main_args)`` of a two-stage kernel whose second stage reads
     only the first stage's values: the first stage, on the arguments ``pre_args`` (a prefix
     of ``args``: those up to the last it uses), writes ``pre_values`` = the arguments the
@@ -357,10 +357,12 @@ def _gather_stage(args, stage: dict, exprs) -> tuple[list, list, list]:
     SymEngine's LLVM code loads every declared argument at its entry and finds an argument
     by a linear search of the list (per occurrence of a symbol): a kernel declaring the
     11,265 arguments of a 1024-link chain's dynamics but using 1,024 of them and its 2,048
-    stage values compiles in 1.3-1.6 s, on the 3,072 it uses in 0.66 s (decision 0066)."""
+    stage values compiles in 1.3-1.6 s, on the 3,072 it uses in 0.66 s (decision 0066).
+    ``free``: the free symbols of ``exprs`` when found already (:func:`_part_symbols`)."""
     names = [_name(a) for a in args]
-    used = {_name(a): a for a in _se.DenseMatrix(len(exprs), 1, list(exprs)).free_symbols} \
-        if exprs else {}
+    if free is None:
+        free = _se.DenseMatrix(len(exprs), 1, list(exprs)).free_symbols if exprs else ()
+    used = {_name(a): a for a in free}
     # (by name: SymPy and SymEngine symbols of one name are one argument; the kept ones are
     # the SymEngine symbols found in the expressions, not converted again)
     copied = [used[nm] for nm in names if nm in used]
@@ -549,28 +551,49 @@ class _GatherStage:
 PART_OUTPUTS = 1024
 
 
-def _part_plan(main_args, exprs, size: int) -> list | None:
-    """``[(start, stop, used)]``: the outputs ``exprs[start:stop]`` of a second stage in parts
-    of ``size``, each with the indices into ``main_args`` of the arguments it reads (in the
-    order of ``main_args``; one argument when it reads none: SymEngine compiles no function
-    without arguments). None when an expression reads a symbol outside ``main_args`` (the
-    whole stage is then compiled as one, which reports it).
+def _spans(n: int, sections, size: int) -> list:
+    """``[(start, stop)]``: ``n`` outputs cut in parts of at most ``size``, a part never
+    straddling two of ``sections`` (the lengths of consecutive blocks of the outputs, such
+    as a position kernel's ``Phi`` and ``Phi_q``; None: one block). A block compiled in the
+    same parts in two kernels (the Jacobian of the position, velocity and free-motion
+    kernels) is then the same compile unit in each: compiled once, loaded from the kernel
+    cache by the others."""
+    spans, start = [], 0
+    for length in (sections if sections and sum(sections) == n else (n,)):
+        stop = start + length
+        spans += [(a, min(a + size, stop)) for a in range(start, stop, size)]
+        start = stop
+    return spans
+
+
+def _part_symbols(exprs, spans) -> list:
+    """The free symbols of each part ``exprs[start:stop]`` of ``spans`` (SymEngine's search,
+    one per part: together one walk of the expressions)."""
+    return [_se.DenseMatrix(b - a, 1, exprs[a:b]).free_symbols for a, b in spans]
+
+
+def _part_plan(main_args, spans, symbols) -> list | None:
+    """``[(start, stop, used)]``: the parts ``exprs[start:stop]`` of a second stage
+    (:func:`_spans`), each with the indices into ``main_args`` of the arguments it reads
+    (``symbols``: :func:`_part_symbols`; in the order of ``main_args``; one argument when
+    it reads none: SymEngine compiles no function without arguments). None when a part
+    reads a symbol outside ``main_args`` (the whole stage is then compiled as one, which
+    reports it).
 
     SymEngine's LLVM code generator finds each occurrence of a symbol by a linear search of
     the declared arguments (about 5 ns a comparison): the position kernel of a 1024-link
     chain, 10,236 outputs on 5,118 arguments, spends about 0.1 s of its 0.2-0.3 s compile
-    searching. A part of 1024 outputs of a chain reads some hundreds of arguments."""
+    searching (decision 0080). A part of 1024 outputs of a chain reads some hundreds."""
     pos = {a: i for i, a in enumerate(main_args)}
     plan = []
-    for start in range(0, len(exprs), size):
-        part = exprs[start:start + size]
+    for (start, stop), free in zip(spans, symbols):
         used = []
-        for a in _se.DenseMatrix(len(part), 1, part).free_symbols:
+        for a in free:
             i = pos.get(a)
             if i is None:
                 return None
             used.append(i)
-        plan.append((start, start + len(part), sorted(used) or [0]))
+        plan.append((start, stop, sorted(used) or [0]))
     return plan
 
 
@@ -617,8 +640,11 @@ class _Parts:
 
     Example::
 
-        parts = _compile_parts(args, exprs, _part_plan(args, exprs, 1024), 0, "llvm")[0]
-        parts(values)            # == Lambdify(args, exprs)(values) for the unsplit values
+        spans = _spans(len(exprs), None, 1024)
+        plan = _part_plan(args, spans, _part_symbols(exprs, spans))
+        parts = _compile_parts(args, exprs, plan, 0, "llvm")[0]
+        v = np.concatenate([x[used] for _, _, used in plan])   # what the first stage writes
+        parts(v)                                  # == Lambdify(args, exprs)(x), bit for bit
     """
 
     def __init__(self, parts: list, nout: int):
@@ -788,34 +814,62 @@ def _name(symbol) -> str:
     return str(symbol)
 
 
+#: fingerprints of the expression lists compiled in this process (:func:`_fingerprint`):
+#: a part two kernels share (decision 0080) is hashed once; bounded, as the derivatives
+_FINGERPRINTS: dict = {}
+_FINGERPRINTS_MAX = 512
+
+
 def _fingerprint(exprs) -> str:
     """An exact hash of SymEngine expressions. Their printed form is not enough: it rounds
     floating-point numbers to 15 digits, so two models differing in the 16th digit of a
-    length would share a kernel. Each node is hashed from its type, its exact data (the
-    hexadecimal form of a double) and its children's hashes (shared subexpressions once)."""
+    length would share a kernel (and it orders the terms of a sum canonically, where the
+    compiled code adds them in the order of the expression). Each distinct node is written
+    once, numbered, as its type and its exact data (the hexadecimal form of a double, a
+    symbol's name) or its children's numbers in their order; the hash is that of the whole
+    record (a serialisation of the expressions' graph: about twice as fast as hashing each
+    node, decision 0080). A list hashed before in this process is looked up."""
     import hashlib
 
-    memo: dict = {}
-
-    def node(e) -> str:
-        r = memo.get(e)
-        if r is not None:
-            return r
-        args = e.args
-        if isinstance(e, _se.RealDouble):
-            data = "f:" + float(e).hex()
-        elif args:
+    exprs = tuple(exprs)
+    got = _FINGERPRINTS.get(exprs)
+    if got is not None:
+        return got
+    ids: dict = {}          # node -> its number
+    lines: list = []        # node k's record
+    real, fsym = _se.RealDouble, _se.FunctionSymbol
+    for root in exprs:
+        if root in ids:
+            continue
+        stack = [(root, None)]
+        while stack:          # post-order without recursion (deep expressions)
+            e, args = stack.pop()
+            if args is None:
+                if e in ids:
+                    continue
+                args = e.args
+                if not args:
+                    t = type(e)
+                    ids[e] = len(lines)
+                    lines.append("f:" + float(e).hex() if t is real
+                                 else t.__name__ + ":" + str(e))
+                    continue
+                stack.append((e, args))
+                stack.extend([(a, None) for a in args if a not in ids])
+                continue
+            if e in ids:
+                continue
             name = type(e).__name__
-            if isinstance(e, _se.FunctionSymbol):
+            if isinstance(e, fsym):
                 name += ":" + e.get_name()
-            data = name + "(" + ",".join(node(a) for a in args) + ")"
-        else:
-            data = type(e).__name__ + ":" + str(e)
-        r = hashlib.blake2b(data.encode(), digest_size=16).hexdigest() if len(data) > 32 else data
-        memo[e] = r
-        return r
-
-    return hashlib.sha256("|".join(node(e) for e in exprs).encode()).hexdigest()
+            ids[e] = len(lines)
+            lines.append(name + "(" + ",".join([str(ids[a]) for a in args]) + ")")
+    lines.append("=" + ",".join([str(ids[e]) for e in exprs]))
+    got = hashlib.sha256("\n".join(lines).encode()).hexdigest()
+    if len(_FINGERPRINTS) >= _FINGERPRINTS_MAX:
+        _FINGERPRINTS.clear()
+    _FINGERPRINTS[exprs] = got
+    return got
 
 
 def _entry_point(f):
@@ -836,7 +890,7 @@ class _SymengineCompiled(Compiled):
     backend = "symengine"
 
     def __init__(self, args, exprs, opt_level: int = 3, cse: bool = False, atoms=None,
-                 mode: str = "llvm"):
+                 mode: str = "llvm", sections=None):
         self.nout = len(exprs)
         exprs = [_se.sympify(e) for e in exprs]
         if cse:
@@ -866,7 +920,16 @@ class _SymengineCompiled(Compiled):
             # already), and the second stage reads only what it uses, gathered by the first
             # (the trig functions searched again only in what the Piecewise split left)
             trig, exprs = _split_trig(exprs, avoid=pieces, atoms=None if pieces else atoms)
-            pre_args, pre_values, main_args = _gather_stage(args, {**pieces, **trig}, exprs)
+            # a large second stage in parts (decision 0080): their symbols found once, for
+            # the parts and the gathering both
+            if len(exprs) > PART_OUTPUTS and mode != "lambda":
+                spans = _spans(len(exprs), sections, PART_OUTPUTS)
+                part_syms = _part_symbols(exprs, spans)
+                free = set().union(*part_syms)
+            else:
+                spans = part_syms = free = None
+            pre_args, pre_values, main_args = _gather_stage(args, {**pieces, **trig}, exprs,
+                                                            free)
             self._gather = bool(pre_values)
             if not self._gather:
                 pre_args, pre_values, main_args = args, [], list(args)
@@ -881,8 +944,7 @@ class _SymengineCompiled(Compiled):
             if table is not None:
                 # a large second stage in parts, each on the arguments it reads, gathered
                 # part after part by the first stage (decision 0080)
-                plan = _part_plan(main_args, exprs, PART_OUTPUTS) \
-                    if len(exprs) > PART_OUTPUTS else None
+                plan = _part_plan(main_args, spans, part_syms) if spans else None
                 if plan is not None:
                     table = _part_table(table, plan)
                     self._npieces = int(table[0])
@@ -1136,7 +1198,7 @@ LARGE_KERNEL = 500
 @gc_paused()
 def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
                   backend: str | None = None, once: bool = False, cse: bool = False,
-                  first_use: bool = False) -> Compiled:
+                  first_use: bool = False, sections: Sequence[int] | None = None) -> Compiled:
     """Compile ``exprs`` as a function of the flat argument list ``args``.
 
     ``once``: the function is evaluated a few times only (``m.dof()``'s Jacobian): LLVM
@@ -1149,7 +1211,11 @@ def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
 
     ``first_use``: SymEngine evaluates the expressions without LLVM until the work pays for
     compiling them (:class:`_FirstUse`; the LLVM kernel at once when the on-disk cache has
-    it): the first result of a fresh process sooner, the same numbers to the last bits."""
+    it): the first result of a fresh process sooner, the same numbers to the last bits.
+
+    ``sections``: the lengths of consecutive blocks of ``exprs`` (``[len(phi), len(jac)]``):
+    a large kernel compiled in parts (decision 0080) never puts two blocks in one part, so a
+    block two kernels share is compiled once (then loaded from the kernel cache)."""
     if not exprs:
         return _Empty()
     # every expression that becomes numeric code passes here: complex constants refused,
@@ -1181,7 +1247,7 @@ def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
             if first_use and not once:
                 return _FirstUse(args, exprs, level, cse)
             return _SymengineCompiled(args, exprs, opt_level=0 if once else level, cse=cse,
-                                      atoms=atoms)
+                                      atoms=atoms, sections=sections)
         except (RuntimeError, TypeError, ValueError, NotImplementedError):
             # a function SymEngine cannot compile (e.g. Mod, Abs): SymPy can
             return _SympyCompiled(args, [sp.sympify(e) for e in exprs])
