@@ -23,6 +23,7 @@ import numpy as np
 import sympy as sp
 
 from .._symbols import T, restore_assumptions
+from ._backends import function_atoms
 
 try:  # optional
     import symengine as se
@@ -45,10 +46,11 @@ def symengine_safe(exprs) -> bool:
         return False
     for e in exprs:
         e = sp.sympify(e)
-        # one traversal: every function application and Max/Min (not Functions in SymPy);
-        # the refused ones (Mod, ceiling, sign, Abs, Heaviside, DiracDelta) are not _SAFE_ALL
-        for f in e.atoms(sp.Function, sp.Max, sp.Min):
-            if not isinstance(f, _SAFE_ALL):
+        # one traversal (shared with the other checks, decision 0080): every function
+        # application and Max/Min (not Functions in SymPy); the refused ones (Mod, ceiling,
+        # sign, Abs, Heaviside, DiracDelta) are not _SAFE_ALL
+        for f in function_atoms(e):
+            if isinstance(f, (sp.Function, sp.Max, sp.Min)) and not isinstance(f, _SAFE_ALL):
                 return False
     return True
 
@@ -60,7 +62,7 @@ def _freeze_steps(e):
     SymEngine would leave an uncompilable ``Derivative(floor(x), x)``. Cheaper than removing
     that from every derivative (a traversal of each: seconds for a spline cam's ``gamma``)."""
     E = se.sympify(e)
-    floors = e.atoms(sp.floor)
+    floors = {f for f in function_atoms(e) if isinstance(f, sp.floor)}
     if not floors:
         return E, {}
     frozen = {se.sympify(f): se.Symbol(f"_mechsys_floor_{k}")
