@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from .._symbols import T, restore_assumptions
+from .._symbols import T, free_symbols, restore_assumptions
 from ._backends import function_atoms
 
 try:  # optional
@@ -221,7 +221,7 @@ def derive_kinematics(phi, q, qd, T):
     n_phi, n_jac, n_pt, n_gm = [], [], [], []
     for i, e in enumerate(phi):
         e = sp.sympify(e)
-        mine = sorted((s for s in e.free_symbols if s in index), key=index.get)
+        mine = sorted((s for s in free_symbols(e) if s in index), key=index.get)
         key = (e, tuple((s, qd[index[s]]) for s in mine))
         hit = _DERIVED.get(key)
         if hit is None:
