@@ -366,3 +366,14 @@ def test_function_atoms_is_sympys_atoms_once():
     assert symengine_safe([sp.sin(x) + sp.floor(x)]) and not symengine_safe([sp.Mod(x, 2)])
     assert _backends._plainly_real(sp.sin(x) + sp.Max(x, 1))
     assert not _backends._plainly_real(sp.sqrt(-1) * x)
+
+
+def test_free_symbols_is_sympys_once():
+    """An expression's free symbols, found once per expression (decision 0080): SymPy's,
+    remembered; expressions SymPy tells apart (a Float and an Integer exponent) kept apart."""
+    from mechsys._symbols import T, free_symbols
+
+    x = sp.Symbol("x")
+    e = T * x + sp.cos(x) ** 2
+    assert free_symbols(e) == e.free_symbols and free_symbols(e) is free_symbols(e)
+    assert free_symbols(sp.floor(2.0 * x)) == {x} and free_symbols(sp.Integer(3)) == set()
