@@ -258,3 +258,122 @@ def test_rotation_lock_at_a_zero_float_angle_is_the_angle_itself():
         (eq,) = c.equations(m.space)
         want = th - 0 - sp.sympify(angle)
         assert eq == want and sp.srepr(eq) == sp.srepr(want)
+
+
+def test_spans_cut_parts_inside_each_section():
+    """Parts of at most ``size`` outputs that never straddle two sections (decision 0080);
+    sections that do not add up to the outputs are ignored (one block)."""
+    assert _backends._spans(10, [4, 6], 3) == [(0, 3), (3, 4), (4, 7), (7, 10)]
+    assert _backends._spans(10, None, 4) == [(0, 4), (4, 8), (8, 10)]
+    assert _backends._spans(10, [4, 5], 4) == [(0, 4), (4, 8), (8, 10)]
+    assert _backends._spans(6, [0, 6, 0], 6) == [(0, 6)]
+
+
+def test_second_stage_in_parts_equals_the_whole_to_the_last_bit(monkeypatch, tmp_path):
+    """A large gathered second stage compiled in parts, each declaring only the arguments
+    it reads (decision 0080), gives the bits of the same stage compiled whole: through
+    Python, batch, the C entry points the compiled loops call, and after pickling. The
+    first stage computes each ``sin``/``cos`` once and copies it into every part reading
+    it; a part reading no argument (constant outputs) still compiles; a part two kernels
+    share is compiled once (then loaded from the kernel cache)."""
+    if "symengine" not in _backends.available_backends():
+        pytest.skip("SymEngine not installed")
+    import ctypes
+    import pickle
+
+    q = sp.symbols("q0:12")
+    t = sp.Symbol("t")
+    jac = [sp.sin(q[i]) * (i + 1) * 0.5 + q[i + 1] * sp.cos(q[i]) for i in range(11)]
+    phi = [q[i] - q[i + 1] + 0.25 * sp.cos(q[i]) for i in range(11)]
+    zeros = [sp.S.Zero] * 5
+    args = [t, *q]
+    monkeypatch.setattr(_backends, "LARGE_KERNEL", 10)
+    monkeypatch.setattr(_backends, "STAGE_TRIG", 10)
+    monkeypatch.setattr(_backends, "PART_OUTPUTS", 4)
+    monkeypatch.setenv("MECHSYS_CACHE", str(tmp_path))      # an empty kernel cache
+    stored = []
+    real_store = _backends._cache.store
+    monkeypatch.setattr(_backends._cache, "store", lambda key, f: (stored.append(key),
+                                                                     real_store(key, f)))
+    exprs = phi + jac + zeros
+    big = _backends.compile_exprs(args, exprs, "symengine", sections=[11, 11, 5])
+    assert isinstance(big._f, _backends._Parts) and big._pre_backend == "gather"
+    assert [(o, k) for _, _, _, o, k in big._f.parts] == [
+        (0, 4), (4, 4), (8, 3), (11, 4), (15, 4), (19, 3), (22, 4), (26, 1)]
+    table = big._pre._table[1:]
+    # each sin/cos once (11 of each), the rest copies of arguments or of earlier values
+    ops = table & 3
+    assert int(np.sum(ops == 1)) == 11 and int(np.sum(ops == 2)) == 11
+    assert np.any(ops == 3)
+    with monkeypatch.context() as mp:                     # the same stages, the second whole
+        mp.setattr(_backends, "PART_OUTPUTS", 10**6)
+        whole = _backends.compile_exprs(args, exprs, "symengine")
+    assert not isinstance(whole._f, _backends._Parts)
+    again = pickle.loads(pickle.dumps(big))
+    proto = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
+    rng = np.random.default_rng(80)
+    for scale in (1.0, 1e3, 1e9):
+        v = rng.standard_normal(len(args)) * scale
+        want = whole(v)
+        for got in (big(v), big.batch(np.array([v, v]))[1], again(v), big._slow(v)):
+            assert np.array_equal(got.view(np.int64), want.view(np.int64))
+        for k in (big, again):
+            address, context, pre, pre_context, npieces = k.c_function()
+            xs = np.zeros(len(args) + npieces)
+            xs[:len(args)] = v
+            out = np.zeros(len(exprs))
+            proto(pre)(xs[len(args):].ctypes.data, xs.ctypes.data, pre_context)
+            proto(address)(out.ctypes.data, xs.ctypes.data, context)
+            assert np.array_equal(out.view(np.int64), want.view(np.int64))
+    # a kernel with the Jacobian's block first (the same sin/cos, so the same names): its
+    # three Jacobian parts are the position kernel's, loaded; its parts of zeros (on q1, the
+    # first argument it reads) are compiled, the second of four zeros loaded again
+    before = len(stored)
+    vel = _backends.compile_exprs(args, jac + zeros + zeros, "symengine", sections=[11, 10])
+    assert len(vel._f.parts) == 6 and len(stored) - before == 2
+    v = rng.standard_normal(len(args))
+    assert np.array_equal(vel(v)[:11].view(np.int64), whole(v)[11:22].view(np.int64))
+
+
+def test_fingerprint_is_exact_and_iterative():
+    """The kernel cache's key of expressions (decision 0080): a change in the last bit of a
+    number, the order of the outputs or of a product's factors as SymEngine keeps them gives
+    another key; equal lists the same; a deep expression needs no recursion."""
+    import symengine as se
+
+    x, y = se.symbols("x y")
+    fp = _backends._fingerprint
+    assert fp([x + se.RealDouble(0.1) * y]) != fp([x + se.RealDouble(0.1 + 2**-56) * y])
+    assert fp([x + y, x]) != fp([x, x + y])
+    assert fp([x * y + 2, se.sin(x)]) == fp([x * y + 2, se.sin(x)])
+    assert fp([x + 1]) != fp([x + se.RealDouble(1.0)])
+    deep = x
+    for k in range(3000):
+        deep = se.sin(deep) + k
+    assert len(fp([deep])) == 64
+
+
+def test_function_atoms_is_sympys_atoms_once():
+    """The SymPy atoms the checks before a compile look for, found once per expression:
+    equal to SymPy's ``atoms`` of those types, remembered."""
+    from mechsys.compile._derive import symengine_safe
+
+    x = sp.Symbol("x")
+    e = sp.sin(x) + x**2 + sp.Max(x, 1) + sp.floor(x) * sp.I
+    want = e.atoms(sp.Pow, sp.Function, sp.Max, sp.Min, type(sp.I), type(sp.zoo))
+    assert _backends.function_atoms(e) == want
+    assert _backends.function_atoms(e) is _backends.function_atoms(e)
+    assert symengine_safe([sp.sin(x) + sp.floor(x)]) and not symengine_safe([sp.Mod(x, 2)])
+    assert _backends._plainly_real(sp.sin(x) + sp.Max(x, 1))
+    assert not _backends._plainly_real(sp.sqrt(-1) * x)
+
+
+def test_free_symbols_is_sympys_once():
+    """An expression's free symbols, found once per expression (decision 0080): SymPy's,
+    remembered; expressions SymPy tells apart (a Float and an Integer exponent) kept apart."""
+    from mechsys._symbols import T, free_symbols
+
+    x = sp.Symbol("x")
+    e = T * x + sp.cos(x) ** 2
+    assert free_symbols(e) == e.free_symbols and free_symbols(e) is free_symbols(e)
+    assert free_symbols(sp.floor(2.0 * x)) == {x} and free_symbols(sp.Integer(3)) == set()

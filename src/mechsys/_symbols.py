@@ -38,6 +38,30 @@ def acceleration_symbol(name: str) -> sp.Symbol:
     return _real(name + "_dd")
 
 
+#: SymPy expression -> its free symbols (:func:`free_symbols`); bounded
+_FREE: dict = {}
+_FREE_MAX = 200_000
+
+
+def free_symbols(expr) -> frozenset:
+    """``expr.free_symbols`` of a SymPy expression, found once per expression in this process:
+    SymPy walks the expression at every ask, and a large model's equations are asked several
+    times in one build (the symbol check, the derivation, the velocity-constraint test, again
+    for ``free()``'s system of the same equations: decision 0080).
+
+    Example::
+
+        free_symbols(T * x + 1)          # frozenset({T, x})
+    """
+    got = _FREE.get(expr)
+    if got is None:
+        got = frozenset(expr.free_symbols)
+        if len(_FREE) >= _FREE_MAX:
+            _FREE.clear()
+        _FREE[expr] = got
+    return got
+
+
 def same_name_advice(extra, known) -> str:
     """What to say of the symbols of ``extra`` that share a name with a symbol of ``known``
     but not its assumptions (``sp.Symbol("T")``, a string such as ``"2*pi*T"``, a parameter

@@ -26,7 +26,7 @@ from ._errors import (
     parameter_value,
     unknown_options,
 )
-from ._symbols import T, acceleration_symbol, same_name_advice, velocity_symbol
+from ._symbols import T, acceleration_symbol, free_symbols, same_name_advice, velocity_symbol
 from .compile import System, make_layout, time_derivative
 from .compile._backends import gc_paused
 from .compile._options import _UNSET, CompileOptions, process_equation
@@ -813,7 +813,7 @@ class Model(OutputFunctions, LoadOutputs, VelocityViews, MomentumOutputs, Linkag
         rates = {velocity_symbol(q.name) for q in coords} | {acceleration_symbol(q.name)
                                                               for q in coords}
         for e, o in zip(eqs, owners):
-            extra = e.free_symbols - known
+            extra = free_symbols(e) - known
             if extra:
                 lab = o.label() if hasattr(o, "label") else str(o)
                 names = sorted(map(str, extra))

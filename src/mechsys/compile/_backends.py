@@ -148,11 +148,42 @@ def real_expression(expr, owner: str | None = None):
     return expr
 
 
+#: SymPy expression -> its atoms of :data:`_ATOM_TYPES` (:func:`function_atoms`)
+_ATOMS: dict = {}
+_ATOMS_MAX = 200_000
+#: what the checks before a compile look for in a SymPy expression: powers, functions,
+#: ``Max``/``Min``, ``I``, ``zoo``
+_ATOM_TYPES = (sp.Pow, sp.Function, sp.Max, sp.Min, type(sp.I), type(sp.zoo))
+
+
+def function_atoms(expr: sp.Basic) -> frozenset:
+    """``expr.atoms(Pow, Function, Max, Min, I, zoo)`` of a SymPy expression, found once per
+    expression in this process: :func:`real_expression` (at every equation's processing),
+    :func:`~mechsys.compile._derive.symengine_safe` and the ``floor`` search of the
+    derivation each asked SymPy for a traversal of every equation, again for ``free()``'s
+    system of the same equations (about 0.1 s of a 1024-link chain, decision 0080).
+
+    Example::
+
+        function_atoms(sp.sin(x) + x**2)     # frozenset({sin(x), x**2})
+    """
+    got = _ATOMS.get(expr)
+    if got is None:
+        got = frozenset(expr.atoms(*_ATOM_TYPES))
+        if len(_ATOMS) >= _ATOMS_MAX:
+            _ATOMS.clear()
+        _ATOMS[expr] = got
+    return got
+
+
 def _plainly_real(expr: sp.Basic) -> bool:
     """Whether the SymPy ``expr`` certainly holds nothing :func:`real_expression` acts on: one
     traversal for all it looks for (``I``, ``zoo``, number-valued functions and powers,
     powers with huge integer exponents) instead of four."""
-    for a in expr.atoms(sp.Pow, sp.Function, type(sp.I), type(sp.zoo)):
+    kinds = (sp.Pow, sp.Function, type(sp.I), type(sp.zoo))
+    for a in function_atoms(expr):
+        if not isinstance(a, kinds):
+            continue
         if not isinstance(a, (sp.Pow, sp.Function)) or a.is_number:
             return False
         if isinstance(a, sp.Pow) and a.args[1].is_Integer and abs(int(a.args[1])) >= BIG_EXPONENT:
@@ -198,13 +229,16 @@ def _search(exprs):
     from symengine.lib.symengine_wrapper import ComplexBase
 
     kinds = (ComplexBase, type(_se.zoo), _se.Pow, _se.Piecewise, _se.sin, _se.cos)
+    # (leaves of these types hold nothing searched for: not visited, a third of the nodes)
+    plain = {_se.Symbol, _se.Integer, _se.RealDouble, _se.Rational,
+             *(type(_se.Integer(k)) for k in (0, 1, -1))}
     # each distinct node once: SymEngine's own ``atoms`` walks the expression *tree*,
     # visiting a shared subexpression once per occurrence, which for a Gen joint's nested
     # pose and its derivatives (a DAG with much sharing) cost 0.2 to 0.4 s of a 7-joint
     # arm's first inverse dynamics (decision 0065)
     found: set = set()
     seen: set = set()
-    stack = list(exprs)
+    stack = [e for e in exprs if type(e) not in plain]
     while stack:
         e = stack.pop()
         if e in seen:
@@ -212,7 +246,7 @@ def _search(exprs):
         seen.add(e)
         if isinstance(e, kinds):
             found.add(e)
-        stack.extend(e.args)
+        stack.extend([a for a in e.args if type(a) not in plain])
     return found
 
 
@@ -347,7 +381,7 @@ def _split_trig(exprs, avoid=(), atoms=None):
     return {v: k for k, v in names.items()}, xreplace_all(exprs, names)
 
 
-def _gather_stage(args, stage: dict, exprs) -> tuple[list, list, list]:
+def _gather_stage(args, stage: dict, exprs, free=None) -> tuple[list, list, list]:
     r"""``(pre_args, pre_values, main_args)`` of a two-stage kernel whose second stage reads
     only the first stage's values: the first stage, on the arguments ``pre_args`` (a prefix
     of ``args``: those up to the last it uses), writes ``pre_values`` = the arguments the
@@ -357,10 +391,12 @@ def _gather_stage(args, stage: dict, exprs) -> tuple[list, list, list]:
     SymEngine's LLVM code loads every declared argument at its entry and finds an argument
     by a linear search of the list (per occurrence of a symbol): a kernel declaring the
     11,265 arguments of a 1024-link chain's dynamics but using 1,024 of them and its 2,048
-    stage values compiles in 1.3-1.6 s, on the 3,072 it uses in 0.66 s (decision 0066)."""
+    stage values compiles in 1.3-1.6 s, on the 3,072 it uses in 0.66 s (decision 0066).
+    ``free``: the free symbols of ``exprs`` when found already (:func:`_part_symbols`)."""
     names = [_name(a) for a in args]
-    used = {_name(a): a for a in _se.DenseMatrix(len(exprs), 1, list(exprs)).free_symbols} \
-        if exprs else {}
+    if free is None:
+        free = _se.DenseMatrix(len(exprs), 1, list(exprs)).free_symbols if exprs else ()
+    used = {_name(a): a for a in free}
     # (by name: SymPy and SymEngine symbols of one name are one argument; the kept ones are
     # the SymEngine symbols found in the expressions, not converted again)
     copied = [used[nm] for nm in names if nm in used]
@@ -390,8 +426,11 @@ def _gather_routine() -> int:
     .. math:: \mathrm{out}_i = x_{c \gg 2},\ \sin x_{c \gg 2}\ \text{or}\ \cos x_{c \gg 2}
               \quad (c \mathbin{\&} 3 = 0, 1, 2)
 
-    ``sin`` and ``cos`` are LLVM's intrinsics, lowered to calls of the C library's ``sin`` and
-    ``cos``, as in SymEngine's LLVM kernels: the same values to the last bit."""
+    or, for ``c & 3 = 3``, :math:`\mathrm{out}_i = \mathrm{out}_{c \gg 2}` (a value computed
+    earlier in the table, copied: the inputs of a second stage compiled in parts,
+    :func:`_part_table`). ``sin`` and ``cos`` are LLVM's intrinsics, lowered to calls of the C
+    library's ``sin`` and ``cos``, as in SymEngine's LLVM kernels: the same values to the last
+    bit."""
     if "address" in _GATHER:
         return _GATHER["address"]
     import llvmlite.binding as llvm
@@ -408,8 +447,8 @@ def _gather_routine() -> int:
                      name="gather")
     sin = mod.declare_intrinsic("llvm.sin", [f64])
     cos = mod.declare_intrinsic("llvm.cos", [f64])
-    entry, loop, bsin, bcos, store, done = (fn.append_basic_block(n) for n in (
-        "entry", "loop", "sin", "cos", "store", "done"))
+    entry, loop, bx, bsin, bcos, bcopy, store, done = (fn.append_basic_block(n) for n in (
+        "entry", "loop", "x", "sin", "cos", "copy", "store", "done"))
     out, x, ctx = fn.args
     b = ir.IRBuilder(entry)
     table = b.bitcast(ctx, i64.as_pointer())
@@ -419,19 +458,27 @@ def _gather_routine() -> int:
     i = b.phi(i64)
     i.add_incoming(ir.Constant(i64, 0), entry)
     code = b.load(b.gep(table, [b.add(i, ir.Constant(i64, 1))]))
-    v = b.load(b.gep(x, [b.ashr(code, ir.Constant(i64, 2))]))
-    switch = b.switch(b.and_(code, ir.Constant(i64, 3)), store)
+    j = b.ashr(code, ir.Constant(i64, 2))
+    # (each branch reads its own source: for a copy, j indexes out, not x)
+    switch = b.switch(b.and_(code, ir.Constant(i64, 3)), bx)
     switch.add_case(ir.Constant(i64, 1), bsin)
     switch.add_case(ir.Constant(i64, 2), bcos)
+    switch.add_case(ir.Constant(i64, 3), bcopy)
+    b = ir.IRBuilder(bx)
+    v = b.load(b.gep(x, [j]))
+    b.branch(store)
     b = ir.IRBuilder(bsin)
-    vs = b.call(sin, [v])
+    vs = b.call(sin, [b.load(b.gep(x, [j]))])
     b.branch(store)
     b = ir.IRBuilder(bcos)
-    vc = b.call(cos, [v])
+    vc = b.call(cos, [b.load(b.gep(x, [j]))])
+    b.branch(store)
+    b = ir.IRBuilder(bcopy)
+    vo = b.load(b.gep(out, [j]))
     b.branch(store)
     b = ir.IRBuilder(store)
     r = b.phi(f64)
-    for val, block in ((v, loop), (vs, bsin), (vc, bcos)):
+    for val, block in ((v, bx), (vs, bsin), (vc, bcos), (vo, bcopy)):
         r.add_incoming(val, block)
     b.store(r, b.gep(out, [i]))
     nxt = b.add(i, ir.Constant(i64, 1))
@@ -533,6 +580,179 @@ class _GatherStage:
         self._bind()
 
 
+#: a gathered second stage (:func:`_gather_stage`) with more outputs than this is compiled
+#: in parts of this many outputs, each declaring only the arguments it reads (decision 0080)
+PART_OUTPUTS = 1024
+
+
+def _spans(n: int, sections, size: int) -> list:
+    """``[(start, stop)]``: ``n`` outputs cut in parts of at most ``size``, a part never
+    straddling two of ``sections`` (the lengths of consecutive blocks of the outputs, such
+    as a position kernel's ``Phi`` and ``Phi_q``; None: one block). A block compiled in the
+    same parts in two kernels (the Jacobian of the position, velocity and free-motion
+    kernels) is then the same compile unit in each: compiled once, loaded from the kernel
+    cache by the others."""
+    spans, start = [], 0
+    for length in (sections if sections and sum(sections) == n else (n,)):
+        stop = start + length
+        spans += [(a, min(a + size, stop)) for a in range(start, stop, size)]
+        start = stop
+    return spans
+
+
+def _part_symbols(exprs, spans) -> list:
+    """The free symbols of each part ``exprs[start:stop]`` of ``spans`` (SymEngine's search,
+    one per part: together one walk of the expressions)."""
+    return [_se.DenseMatrix(b - a, 1, exprs[a:b]).free_symbols for a, b in spans]
+
+
+def _part_plan(main_args, spans, symbols) -> list | None:
+    """``[(start, stop, used)]``: the parts ``exprs[start:stop]`` of a second stage
+    (:func:`_spans`), each with the indices into ``main_args`` of the arguments it reads
+    (``symbols``: :func:`_part_symbols`; in the order of ``main_args``; one argument when
+    it reads none: SymEngine compiles no function without arguments). None when a part
+    reads a symbol outside ``main_args`` (the whole stage is then compiled as one, which
+    reports it).
+
+    SymEngine's LLVM code generator finds each occurrence of a symbol by a linear search of
+    the declared arguments (about 5 ns a comparison): the position kernel of a 1024-link
+    chain, 10,236 outputs on 5,118 arguments, spends about 0.1 s of its 0.2-0.3 s compile
+    searching (decision 0080). A part of 1024 outputs of a chain reads some hundreds."""
+    pos = {a: i for i, a in enumerate(main_args)}
+    plan = []
+    for (start, stop), free in zip(spans, symbols):
+        used = []
+        for a in free:
+            i = pos.get(a)
+            if i is None:
+                return None
+            used.append(i)
+        plan.append((start, stop, sorted(used) or [0]))
+    return plan
+
+
+def _part_table(table: np.ndarray, plan: list) -> np.ndarray:
+    """The gather table (:func:`_gather_routine`) that writes, part after part, the inputs of
+    each part of ``plan`` (:func:`_part_plan`), from ``table``, the one writing each of the
+    second stage's arguments once: a value's first occurrence is computed as there, a
+    repeated one copied from it (code ``4 p + 3``): each ``sin`` and ``cos`` still once."""
+    base = table[1:].tolist()
+    codes: list = []
+    first: dict = {}
+    for _, _, used in plan:
+        for m in used:
+            p = first.get(m)
+            if p is None:
+                first[m] = len(codes)
+                codes.append(base[m])
+            else:
+                codes.append(4 * p + 3)
+    return np.array([len(codes), *codes], dtype=np.int64)
+
+
+def _compile_parts(main_args, exprs, plan, opt_level, mode):
+    """``(parts, backend)``: the second stage compiled part by part (:class:`_Parts`), each
+    part loaded from or stored in the kernel cache on its own."""
+    parts, off, backend = [], 0, "symengine-llvm"
+    for start, stop, used in plan:
+        f, b = _lambdify([main_args[m] for m in used], exprs[start:stop], opt_level, False, mode)
+        if b != "symengine-llvm":
+            backend = b
+        parts.append((f, off, len(used), start, stop - start))
+        off += len(used)
+    return _Parts(parts, len(exprs)), backend
+
+
+class _Parts:
+    r"""A second stage compiled in parts (:func:`_part_plan`): part ``k`` reads its ``n_k``
+    inputs at offset ``i_k`` of the values the gathered first stage writes
+    (:func:`_part_table`) and writes its ``m_k`` outputs at offset ``o_k``. It offers what
+    :class:`_SymengineCompiled` asks of a SymEngine ``Lambdify``: ``unsafe_real``, a call on
+    one or many rows, ``as_ctypes`` (one C function that calls every part, compiled with
+    llvmlite on first use, ~5 ms) and pickling. Every output is the expression it was,
+    compiled by the same code generator: the same values to the last bit.
+
+    Example::
+
+        spans = _spans(len(exprs), None, 1024)
+        plan = _part_plan(args, spans, _part_symbols(exprs, spans))
+        parts = _compile_parts(args, exprs, plan, 0, "llvm")[0]
+        v = np.concatenate([x[used] for _, _, used in plan])   # what the first stage writes
+        parts(v)                                  # == Lambdify(args, exprs)(x), bit for bit
+    """
+
+    def __init__(self, parts: list, nout: int):
+        self.parts, self.nout = parts, nout
+        self.nin = sum(p[2] for p in parts)
+
+    def _bind(self):
+        """The C function ``void f(double *out, const double *v, void *)`` calling each part
+        ``k`` as ``part_k(out + o_k, v + i_k, context_k)``; kept with its owners."""
+        import ctypes
+
+        import llvmlite.binding as llvm
+        from llvmlite import ir
+
+        if "target" not in _TRAMPOLINE:
+            llvm.initialize_native_target()
+            llvm.initialize_native_asmprinter()
+            _TRAMPOLINE["target"] = llvm.Target.from_default_triple()
+        mod = ir.Module(name="mechsys_parts")
+        f64p, i8p, i64 = ir.DoubleType().as_pointer(), ir.IntType(8).as_pointer(), ir.IntType(64)
+        fty = ir.FunctionType(ir.VoidType(), [f64p, f64p, i8p])
+        fn = ir.Function(mod, fty, name="parts")
+        b = ir.IRBuilder(fn.append_basic_block())
+        out, v, _ = fn.args
+        owners = []
+        for f, i, _n, o, _k in self.parts:
+            cfun, ctx = f.as_ctypes()
+            owners.append((cfun, ctx))
+            target = b.inttoptr(ir.Constant(i64, ctypes.cast(cfun, ctypes.c_void_p).value),
+                                fty.as_pointer())
+            b.call(target, [b.gep(out, [ir.Constant(i64, o)]), b.gep(v, [ir.Constant(i64, i)]),
+                            b.inttoptr(ir.Constant(i64, ctx.value or 0), i8p)])
+        b.ret_void()
+        parsed = llvm.parse_assembly(str(mod))
+        parsed.verify()
+        engine = llvm.create_mcjit_compiler(parsed, _TRAMPOLINE["target"].create_target_machine())
+        engine.finalize_object()
+        proto = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
+        self._entry = (engine, owners, proto(engine.get_function_address("parts")))
+        return self._entry[2]
+
+    def unsafe_real(self, v: np.ndarray, out: np.ndarray) -> None:
+        """``out[:] = values(v)``; ``v`` and ``out`` contiguous float64 (not checked)."""
+        entry = self.__dict__.get("_entry")
+        fn = entry[2] if entry is not None else self._bind()
+        fn(out.ctypes.data, v.ctypes.data, None)
+
+    def __call__(self, V) -> np.ndarray:
+        V = np.ascontiguousarray(V, dtype=float)
+        if V.ndim == 1:
+            out = np.empty(self.nout)
+            for f, i, n, o, k in self.parts:
+                out[o:o + k] = np.asarray(f(V[i:i + n])).reshape(k)
+            return out
+        rows = V.shape[0]
+        out = np.empty((rows, self.nout))
+        for f, i, n, o, k in self.parts:
+            out[:, o:o + k] = np.asarray(f(np.ascontiguousarray(V[:, i:i + n]))).reshape(rows, k)
+        return out
+
+    def as_ctypes(self):
+        """``(function, context)`` as SymEngine's ``Lambdify.as_ctypes`` gives them."""
+        import ctypes
+
+        entry = self.__dict__.get("_entry")
+        return (entry[2] if entry is not None else self._bind()), ctypes.c_void_p(None)
+
+    def __getstate__(self):
+        return {"parts": self.parts, "nout": self.nout, "nin": self.nin}
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+
+
 def _offset_entry(keep, main, offset: int):
     """``(owners, (address, context))`` of a C function ``g(out, x, ctx) = f(out, x + offset,
     ctx)`` for the entry point ``main = (address of f, ctx)``: the compiled loops call every
@@ -628,34 +848,62 @@ def _name(symbol) -> str:
     return str(symbol)
 
 
+#: fingerprints of the expression lists compiled in this process (:func:`_fingerprint`):
+#: a part two kernels share (decision 0080) is hashed once; bounded, as the derivatives
+_FINGERPRINTS: dict = {}
+_FINGERPRINTS_MAX = 512
+
+
 def _fingerprint(exprs) -> str:
     """An exact hash of SymEngine expressions. Their printed form is not enough: it rounds
     floating-point numbers to 15 digits, so two models differing in the 16th digit of a
-    length would share a kernel. Each node is hashed from its type, its exact data (the
-    hexadecimal form of a double) and its children's hashes (shared subexpressions once)."""
+    length would share a kernel (and it orders the terms of a sum canonically, where the
+    compiled code adds them in the order of the expression). Each distinct node is written
+    once, numbered, as its type and its exact data (the hexadecimal form of a double, a
+    symbol's name) or its children's numbers in their order; the hash is that of the whole
+    record (a serialisation of the expressions' graph: about twice as fast as hashing each
+    node, decision 0080). A list hashed before in this process is looked up."""
     import hashlib
 
-    memo: dict = {}
-
-    def node(e) -> str:
-        r = memo.get(e)
-        if r is not None:
-            return r
-        args = e.args
-        if isinstance(e, _se.RealDouble):
-            data = "f:" + float(e).hex()
-        elif args:
+    exprs = tuple(exprs)
+    got = _FINGERPRINTS.get(exprs)
+    if got is not None:
+        return got
+    ids: dict = {}          # node -> its number
+    lines: list = []        # node k's record
+    real, fsym = _se.RealDouble, _se.FunctionSymbol
+    for root in exprs:
+        if root in ids:
+            continue
+        stack = [(root, None)]
+        while stack:          # post-order without recursion (deep expressions)
+            e, args = stack.pop()
+            if args is None:
+                if e in ids:
+                    continue
+                args = e.args
+                if not args:
+                    t = type(e)
+                    ids[e] = len(lines)
+                    lines.append("f:" + float(e).hex() if t is real
+                                 else t.__name__ + ":" + str(e))
+                    continue
+                stack.append((e, args))
+                stack.extend([(a, None) for a in args if a not in ids])
+                continue
+            if e in ids:
+                continue
             name = type(e).__name__
-            if isinstance(e, _se.FunctionSymbol):
+            if isinstance(e, fsym):
                 name += ":" + e.get_name()
-            data = name + "(" + ",".join(node(a) for a in args) + ")"
-        else:
-            data = type(e).__name__ + ":" + str(e)
-        r = hashlib.blake2b(data.encode(), digest_size=16).hexdigest() if len(data) > 32 else data
-        memo[e] = r
-        return r
-
-    return hashlib.sha256("|".join(node(e) for e in exprs).encode()).hexdigest()
+            ids[e] = len(lines)
+            lines.append(name + "(" + ",".join([str(ids[a]) for a in args]) + ")")
+    lines.append("=" + ",".join([str(ids[e]) for e in exprs]))
+    got = hashlib.sha256("\n".join(lines).encode()).hexdigest()
+    if len(_FINGERPRINTS) >= _FINGERPRINTS_MAX:
+        _FINGERPRINTS.clear()
+    _FINGERPRINTS[exprs] = got
+    return got
 
 
 def _entry_point(f):
@@ -676,7 +924,7 @@ class _SymengineCompiled(Compiled):
     backend = "symengine"
 
     def __init__(self, args, exprs, opt_level: int = 3, cse: bool = False, atoms=None,
-                 mode: str = "llvm"):
+                 mode: str = "llvm", sections=None):
         self.nout = len(exprs)
         exprs = [_se.sympify(e) for e in exprs]
         if cse:
@@ -706,25 +954,41 @@ class _SymengineCompiled(Compiled):
             # already), and the second stage reads only what it uses, gathered by the first
             # (the trig functions searched again only in what the Piecewise split left)
             trig, exprs = _split_trig(exprs, avoid=pieces, atoms=None if pieces else atoms)
-            pre_args, pre_values, main_args = _gather_stage(args, {**pieces, **trig}, exprs)
+            # a large second stage in parts (decision 0080): their symbols found once, for
+            # the parts and the gathering both
+            if len(exprs) > PART_OUTPUTS and mode != "lambda":
+                spans = _spans(len(exprs), sections, PART_OUTPUTS)
+                part_syms = _part_symbols(exprs, spans)
+                free = set().union(*part_syms)
+            else:
+                spans = part_syms = free = None
+            pre_args, pre_values, main_args = _gather_stage(args, {**pieces, **trig}, exprs,
+                                                            free)
             self._gather = bool(pre_values)
             if not self._gather:
                 pre_args, pre_values, main_args = args, [], list(args)
         self._pre = None
         self._npieces = len(pre_values)
+        plan = None
         if pre_values:
             # a first stage of copies and sin/cos of arguments (a chain's): the shared
             # gather loop, no compile (decision 0079); anything else: SymEngine's
             table = _gather_table(pre_args, pre_values) if staged and mode != "lambda" \
                 else None
             if table is not None:
+                # a large second stage in parts, each on the arguments it reads, gathered
+                # part after part by the first stage (decision 0080)
+                plan = _part_plan(main_args, spans, part_syms) if spans else None
+                if plan is not None:
+                    table = _part_table(table, plan)
+                    self._npieces = int(table[0])
                 self._pre, self._pre_backend = _GatherStage(len(pre_args), table), "gather"
             else:
                 self._pre, self._pre_backend = _lambdify(pre_args, pre_values, opt_level,
                                                          cse, mode)
             self._pre_nin = len(pre_args)   # the first stage reads x[:_pre_nin]
             self._nargs = nin
-            self._buf = np.empty(nin + len(pre_values))   # [x, first-stage values]
+            self._buf = np.empty(nin + self._npieces)   # [x, first-stage values]
         args = main_args
         self._expand = None
         if cse:
@@ -739,7 +1003,10 @@ class _SymengineCompiled(Compiled):
                 self._plain_src = (list(args), list(exprs), opt_level)
                 exprs = distinct
         self._nf = len(exprs)
-        self._f, self.backend = _lambdify(args, exprs, opt_level, cse, mode)
+        if plan is not None:
+            self._f, self.backend = _compile_parts(args, exprs, plan, opt_level, mode)
+        else:
+            self._f, self.backend = _lambdify(args, exprs, opt_level, cse, mode)
         self._nin = nin
         # SymEngine's unchecked entry point costs ~0.8 us a call instead of ~4 us: the
         # checks it skips (length, dtype, contiguity) are done here, once per call
@@ -965,7 +1232,7 @@ LARGE_KERNEL = 500
 @gc_paused()
 def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
                   backend: str | None = None, once: bool = False, cse: bool = False,
-                  first_use: bool = False) -> Compiled:
+                  first_use: bool = False, sections: Sequence[int] | None = None) -> Compiled:
     """Compile ``exprs`` as a function of the flat argument list ``args``.
 
     ``once``: the function is evaluated a few times only (``m.dof()``'s Jacobian): LLVM
@@ -978,7 +1245,11 @@ def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
 
     ``first_use``: SymEngine evaluates the expressions without LLVM until the work pays for
     compiling them (:class:`_FirstUse`; the LLVM kernel at once when the on-disk cache has
-    it): the first result of a fresh process sooner, the same numbers to the last bits."""
+    it): the first result of a fresh process sooner, the same numbers to the last bits.
+
+    ``sections``: the lengths of consecutive blocks of ``exprs`` (``[len(phi), len(jac)]``):
+    a large kernel compiled in parts (decision 0080) never puts two blocks in one part, so a
+    block two kernels share is compiled once (then loaded from the kernel cache)."""
     if not exprs:
         return _Empty()
     # every expression that becomes numeric code passes here: complex constants refused,
@@ -1010,7 +1281,7 @@ def compile_exprs(args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr],
             if first_use and not once:
                 return _FirstUse(args, exprs, level, cse)
             return _SymengineCompiled(args, exprs, opt_level=0 if once else level, cse=cse,
-                                      atoms=atoms)
+                                      atoms=atoms, sections=sections)
         except (RuntimeError, TypeError, ValueError, NotImplementedError):
             # a function SymEngine cannot compile (e.g. Mod, Abs): SymPy can
             return _SympyCompiled(args, [sp.sympify(e) for e in exprs])

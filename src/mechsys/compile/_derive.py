@@ -22,7 +22,8 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from .._symbols import T, restore_assumptions
+from .._symbols import T, free_symbols, restore_assumptions
+from ._backends import function_atoms
 
 try:  # optional
     import symengine as se
@@ -45,10 +46,11 @@ def symengine_safe(exprs) -> bool:
         return False
     for e in exprs:
         e = sp.sympify(e)
-        # one traversal: every function application and Max/Min (not Functions in SymPy);
-        # the refused ones (Mod, ceiling, sign, Abs, Heaviside, DiracDelta) are not _SAFE_ALL
-        for f in e.atoms(sp.Function, sp.Max, sp.Min):
-            if not isinstance(f, _SAFE_ALL):
+        # one traversal (shared with the other checks, decision 0080): every function
+        # application and Max/Min (not Functions in SymPy); the refused ones (Mod, ceiling,
+        # sign, Abs, Heaviside, DiracDelta) are not _SAFE_ALL
+        for f in function_atoms(e):
+            if isinstance(f, (sp.Function, sp.Max, sp.Min)) and not isinstance(f, _SAFE_ALL):
                 return False
     return True
 
@@ -60,7 +62,7 @@ def _freeze_steps(e):
     SymEngine would leave an uncompilable ``Derivative(floor(x), x)``. Cheaper than removing
     that from every derivative (a traversal of each: seconds for a spline cam's ``gamma``)."""
     E = se.sympify(e)
-    floors = e.atoms(sp.floor)
+    floors = {f for f in function_atoms(e) if isinstance(f, sp.floor)}
     if not floors:
         return E, {}
     frozen = {se.sympify(f): se.Symbol(f"_mechsys_floor_{k}")
@@ -219,7 +221,7 @@ def derive_kinematics(phi, q, qd, T):
     n_phi, n_jac, n_pt, n_gm = [], [], [], []
     for i, e in enumerate(phi):
         e = sp.sympify(e)
-        mine = sorted((s for s in e.free_symbols if s in index), key=index.get)
+        mine = sorted((s for s in free_symbols(e) if s in index), key=index.get)
         key = (e, tuple((s, qd[index[s]]) for s in mine))
         hit = _DERIVED.get(key)
         if hit is None:

@@ -611,10 +611,14 @@ class FreeKernel:
         self.dyn = dyn
         jac = system.kinematic_exprs("jac", for_compile=True)
         gamma = system.kinematic_exprs("gamma", for_compile=True)
-        exprs = dyn.for_compile("M") + list(jac) + dyn.for_compile("Q+Qv") + list(gamma)
+        M, forces = dyn.for_compile("M"), dyn.for_compile("Q+Qv")
+        exprs = M + list(jac) + forces + list(gamma)
         self.k_M, self.k_J = len(dyn.M_rows), len(jac)
         self._zeros = np.zeros(n)
-        self.f = compile_exprs(dyn.args(), exprs, system.backend, cse=system.cse)
+        # (the blocks as sections: the Jacobian's parts are those of the position kernel's,
+        # compiled once, decision 0080)
+        self.f = compile_exprs(dyn.args(), exprs, system.backend, cse=system.cse,
+                               sections=[len(M), len(jac), len(forces), len(gamma)])
         rows = np.concatenate((dyn.M_rows, system.jac_cols, n + system.jac_rows))
         cols = np.concatenate((dyn.M_cols, n + system.jac_rows, system.jac_cols))
         self._map = np.concatenate((np.arange(self.k_M), self.k_M + np.arange(self.k_J),

@@ -176,15 +176,19 @@ class System:
         position-only sweep no ``gamma``): the LLVM compile is most of a large model's cost."""
         k = self._kernels.get(name)
         if k is None:
-            parts = []
+            parts, sections = [], []
             for key in keys:
                 if key == "phi":
                     native = self._native is not None and self.backend == "symengine"
-                    parts += self._native["phi"] if native else self.phi
+                    block = self._native["phi"] if native else self.phi
                 else:
-                    parts += self.kinematic_exprs(key, for_compile=True)
+                    block = self.kinematic_exprs(key, for_compile=True)
+                parts += block
+                sections.append(len(block))
+            # (the blocks as sections: the Jacobian of the position and velocity kernels is
+            # then compiled once when they are compiled in parts, decision 0080)
             k = self._kernels[name] = compile_exprs(self.layout.args(), parts, self.backend,
-                                                    cse=self.cse)
+                                                    cse=self.cse, sections=sections)
         return k
 
     @property

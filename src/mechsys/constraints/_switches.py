@@ -29,7 +29,7 @@ from __future__ import annotations
 import sympy as sp
 
 from .._errors import ModelError
-from .._symbols import T, check_switch_times, switch_times
+from .._symbols import T, check_switch_times, free_symbols, switch_times
 from ._base import ConstraintBase, Variable
 
 
@@ -74,7 +74,7 @@ def is_velocity_constraint(c, space, rates) -> bool:
     expressions). A switch is not one (its stages may hold some)."""
     if isinstance(c, StageSwitch):
         return False
-    return getattr(c, "order", 0) == 1 or any(e.free_symbols & rates
+    return getattr(c, "order", 0) == 1 or any(free_symbols(e) & rates
                                               for e in c.equations(space))
 
 
