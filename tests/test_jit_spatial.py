@@ -71,13 +71,15 @@ def _kind(monkeypatch, kind):
 def test_out_of_plane_fall_compiled(monkeypatch, method, kind):
     """A zigzag chain falls out of any plane: every step compiled, loops closed, Euler
     parameters of unit norm, the energy kept and the model's accelerations and multipliers
-    at the loop's outputs; interpreted, the loop's first steps bit for bit."""
+    at the loop's outputs; interpreted, the loop's first steps bit for bit (DOP853)."""
     free = _free(zigzag=0.3)
     grid = np.linspace(0.0, 0.5, 6)
     opts = dict(rtol=1e-10, atol=1e-12) if method == "dop853" else dict(max_error=1e-10)
     _kind(monkeypatch, kind)
-    _both(monkeypatch, free, (0.0, 0.01 if method == "dop853" else 0.002), method=method,
-          **opts)
+    if method == "dop853":
+        # (Mech's Adams is compared bit for bit on the small systems: an interpreted step of
+        # this chain costs tenths of a second)
+        _both(monkeypatch, free, (0.0, 0.01), method=method, **opts)
     jit = free.simulate(grid, method=method, **opts)
     assert jit.extra["compiled_solver"] == kind
     assert jit.extra["compiled_steps"] == jit.extra["steps"] > 5
@@ -100,10 +102,11 @@ def test_out_of_plane_fall_compiled(monkeypatch, method, kind):
 def test_same_steps_solve_as_the_band_lu(monkeypatch, kind):
     """Every step accepted at ``max_step``: at each output the loop's solve (regularised
     blocks, or the sparse LU) gives the accelerations and multipliers of the Python path's
-    band LU (``free_acceleration``) to 1e-10; interpreted, the same numbers bit for bit."""
+    band LU (``free_acceleration``) to 1e-10 (the interpreted tier of these solves: the
+    out-of-plane fall)."""
     free = _free(zigzag=0.3)
     _kind(monkeypatch, kind)
-    _both(monkeypatch, free, np.linspace(0.0, 0.01, 3), rtol=1e6, atol=1e6, max_step=2e-3)
+    monkeypatch.setenv("MECHSYS_JIT", "1")
     jit = free.simulate(np.linspace(0.0, 0.2, 5), rtol=1e6, atol=1e6, max_step=2e-3)
     assert jit.extra["compiled_solver"] == kind
     assert jit.extra["compiled_steps"] == jit.extra["steps"] >= 100
