@@ -152,3 +152,31 @@ def test_jit_off_runs_the_loop_interpreted(monkeypatch, double_pendulum, kw):
     assert slow.extra["compiled_steps"] == 0
     for key in ("t", "q", "qd", "qdd", "lam"):
         assert np.array_equal(getattr(fast, key), getattr(slow, key)), key
+
+
+def test_jit_off_with_a_refused_cache_takes_the_python_path(monkeypatch, double_pendulum):
+    """``MECHSYS_JIT=0`` is the way around a Numba cache refused as unsafe (the
+    ``CacheError`` raised when the loops' module is imported says so): the stepper is then
+    not planned and the Python path takes the run, instead of the error."""
+    import importlib.abc
+    import sys
+
+    import mechsys.solvers as solvers
+    from mechsys import CacheError
+
+    name = "mechsys.solvers._jit_free_loop"
+
+    class Refuse(importlib.abc.MetaPathFinder):
+        def find_spec(self, fullname, path=None, target=None):
+            if fullname == name:
+                raise CacheError("the cache directory is writable by others (test)")
+            return None
+
+    monkeypatch.delitem(sys.modules, name)
+    monkeypatch.delattr(solvers, "_jit_free_loop")
+    monkeypatch.setattr(sys, "meta_path", [Refuse(), *sys.meta_path])
+    monkeypatch.setenv("MECHSYS_JIT", "0")
+    sol = double_pendulum.simulate((0.0, 0.3))
+    assert sol.extra["compiled_solver"] is None
+    assert sol.extra["interpreted_steps"] == sol.extra["compiled_steps"] == 0
+    assert sol.extra["steps"] > 0
