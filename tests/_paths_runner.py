@@ -1,12 +1,15 @@
-"""Run one example script and check that the compiled and the Python paths give the same
-numbers on every free motion and kinematic sweep it computes (used by
+"""Run one example script and check that the compiled loops and their other tier give the
+same numbers on every free motion and kinematic sweep it computes (used by
 ``tests/test_examples.py``; run as ``python tests/_paths_runner.py examples/x.py
 [--first-steps]``).
 
 The script runs once as written, with ``FreeSystem.simulate`` and the kinematic sweep
 (``solvers._kinematics.sweep``) recorded. Then each recorded computation is repeated with
-``MECHSYS_JIT=0`` (the Python loops) and ``MECHSYS_JIT=1`` (the compiled loops wherever they
-apply):
+``MECHSYS_JIT=0`` and ``MECHSYS_JIT=1`` (the compiled loops wherever they apply).
+``MECHSYS_JIT=0`` runs the sweeps' and multipliers' Python loops, and the free-motion and
+path stepper's own loop interpreted (decision 0082: the same code as the compiled one, so
+a free motion's two runs compare the tiers, not two implementations; each example's motion
+is checked against its own reference by its tests). Compared:
 
 * a sweep over all of its points;
 * a multistage sweep (a model with stage switches) over all of its points: the same
@@ -19,11 +22,8 @@ apply):
     steps, and a chaotic motion amplifies those, so two correct implementations of one
     method agree to the integration tolerance there, not to rounding;
   - with the same steps in both loops (kind ``"free steps"`` etc.): every step half the
-    adaptive run's mean step, all accepted (``_same_steps``), over the whole run. This is
-    the comparison of the arithmetic: the two loops agree to rounding. With
-    ``--first-steps`` (a run through singular configurations, where the constraint Jacobian
-    loses rank and the solution is not a smooth function of rounding) it covers the first
-    steps only.
+    adaptive run's mean step, all accepted (``_same_steps``), over its first steps (the
+    interpreted loop's step costs several times the Python path's: decision 0082).
 
 Printed on the last line, after ``paths-agree:``: a JSON list with, per computation, its kind, the largest
 difference (relative to ``max(1, |value|)``) and whether the compiled loop ran.
@@ -123,12 +123,12 @@ def _short_span(t, sol):
     return np.linspace(t0, t0 + frac * (t1 - t0), 11)
 
 
-def _same_steps_span(t, sol) -> tuple[np.ndarray, float]:
+def _same_steps_span(t, sol, first_steps: bool = False) -> tuple[np.ndarray, float]:
     """Output times and step size of the comparison with the same steps: 11 times over the
-    whole run (over its first ``FIRST_STEPS`` steps with ``--first-steps``), and half the
-    adaptive run's mean step."""
+    whole run (over its first ``FIRST_STEPS`` steps with ``--first-steps`` or
+    ``first_steps``), and half the adaptive run's mean step."""
     steps = max(int(sol.extra.get("steps", len(sol.t))), 1)
-    if FIRST_STEPS_ONLY:
+    if FIRST_STEPS_ONLY or first_steps:
         span = _short_span(t, sol)
         return span, float(span[-1] - span[0]) / (2 * min(steps, FIRST_STEPS))
     t0, t1 = (float(t[0]), float(t[-1])) if len(t) else (0.0, 0.0)
@@ -191,7 +191,7 @@ def check() -> list[dict]:
                             "rows": len(py.t),
                             "compiled": int(jit.extra.get("compiled_steps", 0)),
                             "python_compiled": int(py.extra.get("compiled_steps", 0))})
-            span, h = _same_steps_span(t, sol)
+            span, h = _same_steps_span(t, sol, first_steps=True)
             py, jit = _both(run, obj, span, *args, **_same_steps(h, kwargs))
             each = {k: _diff(getattr(py, k), getattr(jit, k))
                     for k in ("t", "q", "qd", "qdd", "lam") if getattr(py, k) is not None}

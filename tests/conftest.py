@@ -20,11 +20,41 @@ def load_example(name: str):
     return mod
 
 
+def same_bits(a, b, keys=("t", "q", "qd", "qdd", "lam")) -> None:
+    """Two solutions equal bit for bit (NaN where the other has NaN)."""
+    import numpy as np
+
+    for key in keys:
+        x, y = np.asarray(getattr(a, key)), np.asarray(getattr(b, key))
+        assert x.shape == y.shape and np.array_equal(x, y, equal_nan=True), key
+
+
 def simulate_both(monkeypatch, free, t, **options):
-    """``free.simulate(t, **options)`` with ``MECHSYS_JIT=0`` (the Python stepper), then
-    ``1`` (the compiled loop): ``(python, compiled)``."""
+    """``free.simulate(t, **options)`` with ``MECHSYS_JIT=0`` (the loop's own code
+    interpreted, never compiled: decision 0082), then ``1`` (the compiled loop):
+    ``(interpreted, compiled)``, checked equal bit for bit (the same code: ``t``, ``q``,
+    ``qd``, ``qdd``, ``lam``) with every step of the first the interpreted loop's or the
+    Python path's hand-overs. Being one code, the two are no reference for each other: each
+    test checks the motion against an independent one (a minimal-coordinate ODE, a closed
+    form, a conservation law)."""
     out = {}
     for mode in ("0", "1"):
         monkeypatch.setenv("MECHSYS_JIT", mode)
         out[mode] = free.simulate(t, **options)
-    return out["0"], out["1"]
+    slow, fast = out["0"], out["1"]
+    assert slow.extra["compiled_steps"] == 0
+    assert slow.extra["interpreted_steps"] == fast.extra["compiled_steps"]
+    same_bits(slow, fast)
+    return slow, fast
+
+
+def python_path(monkeypatch) -> None:
+    """Every free-motion and path run of the test takes the Python path whole: no stepper is
+    planned (``FreeStepper.plan`` and ``plan_path`` answer None), as for kernels without C
+    entry points (``Model(backend="sympy")``) and switched stages with velocity rows, the
+    cases the loop does not take at all (decision 0082). ``MECHSYS_JIT=0`` no longer selects
+    it: the loop runs interpreted then."""
+    from mechsys.solvers._jit_free import FreeStepper
+
+    monkeypatch.setattr(FreeStepper, "plan", classmethod(lambda cls, *a, **k: None))
+    monkeypatch.setattr(FreeStepper, "plan_path", classmethod(lambda cls, *a, **k: None))

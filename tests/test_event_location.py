@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from scipy.integrate import DOP853, RK45
 
+from conftest import python_path, same_bits
 from mechsys.analyses._free_switch import SwitchedFreeSystem, _Events
 from mechsys.compile._stages import stage_system
 from mechsys.solvers._jit_free import StepDense
@@ -103,14 +104,15 @@ def test_compiled_runs_take_the_event_steps_compiled_with_the_same_events(method
                                     atol=1e-12, method=method)
         finally:
             os.environ.pop("MECHSYS_JIT", None)
-    py, jit = out["0"], out["1"]
-    assert py.extra["compiled_steps"] == 0
-    # every step compiled, the steps with an event too (taken again with their dense output)
+    slow, jit = out["0"], out["1"]
+    # every step compiled, the steps with an event too (taken again with their dense output);
+    # interpreted (MECHSYS_JIT=0, decision 0082) the same steps, events and numbers
     assert jit.extra["compiled_steps"] == jit.extra["steps"] > 20
-    assert len(jit.extra["events"]) == len(py.extra["events"]) > 10
-    te_py = np.array([e["t"] for e in py.extra["events"]])
-    te_jit = np.array([e["t"] for e in jit.extra["events"]])
-    np.testing.assert_allclose(te_jit, te_py, rtol=0, atol=1e-9)
+    assert slow.extra["compiled_steps"] == 0
+    assert slow.extra["interpreted_steps"] == jit.extra["compiled_steps"]
+    assert len(jit.extra["events"]) == len(slow.extra["events"]) > 10
+    assert [e["t"] for e in slow.extra["events"]] == [e["t"] for e in jit.extra["events"]]
+    same_bits(slow, jit)
 
 
 def test_compiled_outputs_keep_the_loops_accelerations_and_multipliers(monkeypatch):
@@ -132,12 +134,15 @@ def test_compiled_outputs_keep_the_loops_accelerations_and_multipliers(monkeypat
     fs = m.free(drop=[("latch", 1)])
     t = np.linspace(0.0, 1.2, 241)
     out = {}
-    for mode in ("0", "1"):
-        monkeypatch.setenv("MECHSYS_JIT", mode)
+    for mode in ("1", "python"):
+        if mode == "python":
+            python_path(monkeypatch)       # (the Python stepper whole: it evaluates every row)
+        else:
+            monkeypatch.setenv("MECHSYS_JIT", mode)
         calls.clear()
         out[mode] = (fs.simulate(t, at_switch=("restitution", 0.5), rtol=1e-10, atol=1e-12),
                      len(calls))
-    (py, n_py), (jit, n_jit) = out["0"], out["1"]
+    (py, n_py), (jit, n_jit) = out["python"], out["1"]
     assert n_jit < 0.2 * len(t) < n_py
     np.testing.assert_allclose(jit.qdd, py.qdd, rtol=0, atol=1e-8 * np.abs(py.qdd).max())
     np.testing.assert_allclose(jit.lam, py.lam, rtol=0, atol=1e-8 * np.abs(py.lam).max())

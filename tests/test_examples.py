@@ -13,9 +13,13 @@ except that the Python path multiplies ``M qdd`` with BLAS: 1e-12 (measured: 5e-
 multistage sweep's runs are kinematic sweeps on the same schedule in both loops (decision
 0029): 1e-12 and the same stages (measured: identical).
 
-A free motion (or a path) is compared twice. With the same steps in both loops (every step
-accepted, of half the adaptive run's mean step; ``_paths_runner._same_steps``) over the whole
-run: 1e-12 (measured: at most 3.4e-13, the Gen serial arm's accelerations of 4e3; 1e-13 the
+A free motion (or a path) is compared twice; since decision 0082 ``MECHSYS_JIT=0`` runs
+the free stepper's own loop interpreted, so both comparisons are of the compiled loop with
+its interpreted tier (the same code: equal but for the start's projection, which is outside
+the loop), over the first steps (the bounds below were measured against the Python stepper
+and are kept as upper bounds). With the same steps in both loops (every step accepted, of
+half the adaptive run's mean step; ``_paths_runner._same_steps``): 1e-12 (measured against
+the Python stepper: at most 3.4e-13, the Gen serial arm's accelerations of 4e3; 1e-13 the
 gyroscope and the pendulum on a rope; 2.4e-15 the latching pendulum through its events). The
 n-four-bar passes through singular configurations (its constraint Jacobian loses N ranks for
 an instant), where the solution is not a smooth function of rounding: without error control the

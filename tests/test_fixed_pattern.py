@@ -9,6 +9,7 @@ import pytest
 import scipy.sparse as sps
 
 import mechsys as ms
+from conftest import python_path
 from mechsys import models
 from mechsys.solvers import _free, _linalg, _patterns, _tolerances
 from mechsys.solvers._linalg import FixedPattern
@@ -248,7 +249,7 @@ def test_wide_free_system_solves_through_the_sparse_lu(monkeypatch):
     np.testing.assert_allclose(sp_qdd, de_qdd, rtol=0, atol=1e-10 * np.abs(de_qdd).max())
     np.testing.assert_allclose(sp_lam, de_lam, rtol=0, atol=1e-10 * np.abs(de_lam).max())
     monkeypatch.undo()
-    monkeypatch.setenv("MECHSYS_JIT", "0")
+    python_path(monkeypatch)      # (the Python stepper whole: its pattern's LU every step)
     run = free.simulate((0.0, 0.3), initial_condition={"crank.th_d": 3.0}, method="DOP853",
                         rtol=1e-10, atol=1e-12)
     energy = run.body_energy() + run.potential_energy()

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import mechsys as ms
+from conftest import python_path, simulate_both
 
 pytest.importorskip("numba")
 
@@ -40,11 +41,23 @@ def added_mass_pendulum(L=1.2, m0=2.0, ma=0.5):
 
 
 def _both(monkeypatch, build, t, **kw):
-    out = {}
-    for jit in ("1", "0"):
-        monkeypatch.setenv("MECHSYS_JIT", jit)
-        out[jit] = build().simulate(t, **kw)
-    return out["1"], out["0"]
+    """``(compiled loop, Python stepper)``: the loop's Newton against the Python path's
+    (``free_acceleration``; the whole run by it, ``conftest.python_path``, as for kernels
+    without C entry points). ``MECHSYS_JIT=0`` runs the loop's own code interpreted, the
+    compiled numbers bit for bit (decision 0082; :func:`test_interpreted_newton_is_the_loops`)."""
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    fast = build().simulate(t, **kw)
+    with monkeypatch.context() as mp:
+        python_path(mp)
+        slow = build().simulate(t, **kw)
+    return fast, slow
+
+
+@pytest.mark.parametrize("name", ["friction", "added-mass", "friction-adams"])
+def test_interpreted_newton_is_the_loops(monkeypatch, name):
+    """``MECHSYS_JIT=0``: the loop's Newton interpreted, the compiled numbers bit for bit."""
+    build, kw = CASES[name]
+    simulate_both(monkeypatch, build(), np.linspace(0.0, 0.3, 4), **kw)
 
 
 CASES = {"friction": (sliding_block, {"rtol": 1e-10, "atol": 1e-12}),
@@ -174,12 +187,14 @@ def test_large_friction_chain_runs_compiled_through_the_band(monkeypatch, rtol):
         assert np.abs(a - b).max() <= 1e-7 * max(1.0, np.abs(b).max())
 
 
-@pytest.mark.parametrize("jit", ["1", "0"])
+@pytest.mark.parametrize("jit", ["1", "python"])
 def test_large_friction_chain_satisfies_the_equations_of_motion(monkeypatch, jit):
     """The banded loop's (and the Python path's pattern Newton's) accelerations and
     multipliers against the dense equations: ``M qdd + J^T lambda = Q + Qv`` with the
     friction evaluated at their multipliers, ``J qdd = gamma``."""
-    monkeypatch.setenv("MECHSYS_JIT", jit)
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    if jit == "python":
+        python_path(monkeypatch)
     free = friction_chain(32)
     sol = free.simulate(np.linspace(0.0, 0.1, 4), rtol=1e-8, atol=1e-10)
     assert sol.extra["compiled_steps"] == (sol.extra["steps"] if jit == "1" else 0)
@@ -254,8 +269,9 @@ def test_wide_friction_tree_runs_compiled_through_the_sparse_lu(monkeypatch):
     fast, slow = _both(monkeypatch, lambda: free, t, initial_condition=ic, rtol=1e-8,
                        atol=1e-10)
     assert fast.extra["compiled_steps"] == fast.extra["steps"] > 10
-    monkeypatch.setenv("MECHSYS_JIT", "0")
-    ref = free.simulate(t, initial_condition=ic, rtol=1e-11, atol=1e-13)
+    with monkeypatch.context() as mp:
+        python_path(mp)
+        ref = free.simulate(t, initial_condition=ic, rtol=1e-11, atol=1e-13)
     for run in (fast, slow):
         assert np.abs(run.q - ref.q).max() < 3e-6       # (measured: 1e-7 and 9e-7)
         assert max(np.abs(s.residual(tk, qk)).max() for tk, qk in zip(run.t, run.q)) < 1e-10

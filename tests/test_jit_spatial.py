@@ -8,9 +8,10 @@ that keeps ``J M^-1 J^T`` banded (the system lists the normalisation rows last).
 block path cannot run (here forced by ``BLOCK_WORK = 0``), the loop factorises the
 augmented matrix by the compiled sparse LU of its pattern's sparse twin, while the Python
 path keeps LAPACK's band LU. Checks: every step compiled, the 2D chain's motion when the
-spatial chain swings in a plane, energy and constraints kept out of the plane, the Python
-path's motion (same steps: to rounding; adaptive: to the tolerance) and the model's
-accelerations at the outputs (decision 0032)."""
+spatial chain swings in a plane, energy and constraints kept out of the plane, the model's
+accelerations at the outputs (decision 0032: the Python path's solve, to rounding) and the
+interpreted loop's numbers bit for bit over the first steps (``MECHSYS_JIT=0``, decision
+0082)."""
 
 import numpy as np
 import pytest
@@ -69,17 +70,19 @@ def _kind(monkeypatch, kind):
 @pytest.mark.parametrize("method", ["dop853", "adams"])
 def test_out_of_plane_fall_compiled(monkeypatch, method, kind):
     """A zigzag chain falls out of any plane: every step compiled, loops closed, Euler
-    parameters of unit norm, the energy kept, the Python path's motion within the tolerance
-    and the model's accelerations and multipliers at the loop's outputs."""
+    parameters of unit norm, the energy kept and the model's accelerations and multipliers
+    at the loop's outputs; interpreted, the loop's first steps bit for bit (DOP853)."""
     free = _free(zigzag=0.3)
     grid = np.linspace(0.0, 0.5, 6)
     opts = dict(rtol=1e-10, atol=1e-12) if method == "dop853" else dict(max_error=1e-10)
     _kind(monkeypatch, kind)
-    py, jit = _both(monkeypatch, free, grid, method=method, **opts)
-    assert jit.extra["compiled_solver"] == kind and py.extra["compiled_steps"] == 0
+    if method == "dop853":
+        # (Mech's Adams is compared bit for bit on the small systems: an interpreted step of
+        # this chain costs tenths of a second)
+        _both(monkeypatch, free, (0.0, 0.01), method=method, **opts)
+    jit = free.simulate(grid, method=method, **opts)
+    assert jit.extra["compiled_solver"] == kind
     assert jit.extra["compiled_steps"] == jit.extra["steps"] > 5
-    np.testing.assert_allclose(jit.q, py.q, rtol=0, atol=1e-9)
-    np.testing.assert_allclose(jit.qd, py.qd, rtol=0, atol=1e-7)
     assert _gap(free, jit) < 1e-10
     for k in range(LINKS):
         e = np.column_stack([jit[f"l{k}.e{i}"] for i in range(4)])
@@ -96,18 +99,22 @@ def test_out_of_plane_fall_compiled(monkeypatch, method, kind):
 
 
 @pytest.mark.parametrize("kind", ["block", "sparse"])
-def test_same_steps_agree_to_rounding(monkeypatch, kind):
-    """Every step accepted at ``max_step`` in both loops: the loop's solve (regularised
-    blocks, or the sparse LU) and the Python path's band LU give the same motion to 1e-12."""
+def test_same_steps_solve_as_the_band_lu(monkeypatch, kind):
+    """Every step accepted at ``max_step``: at each output the loop's solve (regularised
+    blocks, or the sparse LU) gives the accelerations and multipliers of the Python path's
+    band LU (``free_acceleration``) to 1e-10 (the interpreted tier of these solves: the
+    out-of-plane fall)."""
     free = _free(zigzag=0.3)
-    grid = np.linspace(0.0, 0.2, 3)
     _kind(monkeypatch, kind)
-    py, jit = _both(monkeypatch, free, grid, rtol=1e6, atol=1e6, max_step=2e-3)
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    jit = free.simulate(np.linspace(0.0, 0.2, 5), rtol=1e6, atol=1e6, max_step=2e-3)
     assert jit.extra["compiled_solver"] == kind
-    assert jit.extra["compiled_steps"] == jit.extra["steps"] == py.extra["steps"] >= 100
-    scale = np.abs(py.q).max(axis=0) + 1.0
-    assert (np.abs(jit.q - py.q) / scale).max() <= 1e-12
-    assert (np.abs(jit.qd - py.qd) / (np.abs(py.qd).max(axis=0) + 1.0)).max() <= 1e-12
+    assert jit.extra["compiled_steps"] == jit.extra["steps"] >= 100
+    s = free.system
+    for k in range(len(jit.t)):
+        qdd, lam, _ = free_acceleration(s, float(jit.t[k]), jit.q[k], jit.qd[k], s.p_values)
+        assert np.abs(jit.qdd[k] - qdd).max() <= 1e-10 * (np.abs(qdd).max() + 1.0)
+        assert np.abs(jit.lam[k] - lam).max() <= 1e-10 * (np.abs(lam).max() + 1.0)
 
 
 def test_euler_blocks_made_regular(monkeypatch):

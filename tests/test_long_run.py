@@ -10,6 +10,7 @@ import pytest
 
 import mechsys as ms
 import mechsys.analyses._free as free_module
+from conftest import python_path
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
@@ -35,7 +36,7 @@ def _interrupt_after(monkeypatch, calls: int):
 @pytest.mark.parametrize("method,t", [("dop853", (0.0, 4.0)), ("adams", (0.0, 4.0)),
                                       ("dop853", "grid"), ("adams", "grid")])
 def test_keyboard_interrupt_returns_the_solution_so_far(monkeypatch, method, t):
-    monkeypatch.setenv("MECHSYS_JIT", "0")      # the Python stepper (compiled: the next test)
+    python_path(monkeypatch)      # the Python stepper, whole (the loop's: the next test)
     _, free = long_run.pendulum()
     grid = np.linspace(0.0, 4.0, 81)
     tt = grid if isinstance(t, str) else t

@@ -9,6 +9,7 @@ import pytest
 import sympy as sp
 
 import mechsys as ms
+from conftest import python_path
 from mechsys import models
 from mechsys.solvers import solve_position
 from test_slider_crank import closed_form
@@ -273,12 +274,21 @@ def _friction_chain_at_scale(links, s):
     return m.free(drop=[f"lock{k}" for k in range(links)])
 
 
-@pytest.mark.parametrize("jit", ["0", "1"])
+def _stepper(monkeypatch, jit) -> None:
+    """``"python"``: the Python stepper whole (``conftest.python_path``: what kernels without
+    C entry points take); ``"1"``: the loop, compiled (``MECHSYS_JIT=0`` runs the same loop
+    interpreted, the same numbers: decision 0082)."""
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    if jit == "python":
+        python_path(monkeypatch)
+
+
+@pytest.mark.parametrize("jit", ["python", "1"])
 def test_large_friction_free_motion_is_the_same_in_any_unit(monkeypatch, jit):
     """The banded Newton of free motion with friction (160 unknowns, decision 0028) works on
     the unit-free Newton matrix and projections: the chain in millimetres, metres or
     kilometres swings through the same angles, in the Python and the compiled loop."""
-    monkeypatch.setenv("MECHSYS_JIT", jit)
+    _stepper(monkeypatch, jit)
     t = np.linspace(0.0, 0.2, 5)
     out = []
     for s in (1e-3, 1.0, 1e3):
@@ -292,13 +302,13 @@ def test_large_friction_free_motion_is_the_same_in_any_unit(monkeypatch, jit):
         np.testing.assert_allclose(ang, out[1], rtol=0, atol=1e-12)
 
 
-@pytest.mark.parametrize("jit", ["0", "1"])
+@pytest.mark.parametrize("jit", ["python", "1"])
 def test_wide_tree_free_motion_is_the_same_in_any_unit(monkeypatch, jit):
     """A coasting radial engine (245 unknowns, a star: the sparse LU of the augmented
     matrix's pattern, decision 0031) in millimetres, metres or kilometres (lengths, gravity
     and inertias scaled) turns through the same angles, in the Python and the compiled loop
     (its sparse kind)."""
-    monkeypatch.setenv("MECHSYS_JIT", jit)
+    _stepper(monkeypatch, jit)
     t = np.linspace(0.0, 0.3, 4)
     out = []
     for s in (1e-3, 1.0, 1e3):
@@ -313,13 +323,13 @@ def test_wide_tree_free_motion_is_the_same_in_any_unit(monkeypatch, jit):
         np.testing.assert_allclose(ang, out[1], rtol=0, atol=1e-10)
 
 
-@pytest.mark.parametrize("jit", ["0", "1"])
+@pytest.mark.parametrize("jit", ["python", "1"])
 def test_large_path_is_the_same_in_any_unit(monkeypatch, jit):
     """A tractor towing 60 trailers (183 coordinates: the sparse velocity system and
     projection, decision 0027) in millimetres, metres or kilometres (reach and speed scaled)
     steers every trailer through the same angles, and its blade along the same circle in
     units of the reach, in the Python and the compiled stepper."""
-    monkeypatch.setenv("MECHSYS_JIT", jit)
+    _stepper(monkeypatch, jit)
     t = np.linspace(0.0, 3.0, 4)
     out = []
     for s in (1e-3, 1.0, 1e3):

@@ -618,9 +618,9 @@ class SwitchedFreeSystem(FreeSystem):
 
     @staticmethod
     def _stepper(plans, combo, S, opt, p, sc, t_eval, t_now, y, kw, velocity_rows=0):
-        """The compiled stepper of stage combination ``combo`` (planned once per run), or
-        None where the compiled loop cannot run it (the ``MECHSYS_JIT`` rule, velocity
-        rows, ...)."""
+        """The stepper of stage combination ``combo`` (planned once per run; its loop
+        compiled, or interpreted with ``MECHSYS_JIT=0``: decision 0082), or None where the
+        loop cannot run it (velocity rows, a kernel without C entry points, ...)."""
         if combo not in plans:
             plans[combo] = FreeStepper.plan(S, opt.method, p, sc, None, False, True, t_eval,
                                             (t_now, y[:S.n]), newton=kw,

@@ -25,8 +25,7 @@ solver object, so nothing restarts) for :data:`PAUSE_STEPS` steps before the com
 resumes. It also returns every :data:`CHUNK_STEPS` steps so that progress is shown and
 Ctrl-C is honoured.
 
-When it runs (``MECHSYS_JIT``, as for the kinematic sweep): ``0`` never; ``1`` or unset
-whenever possible. Possible means: Numba installed (the ``fast`` extra); DOP853, RK45 or
+The loop can take a run when (whichever tier runs it): Numba installed (the ``fast`` extra); DOP853, RK45 or
 one of Mech's Adams methods; a dense augmented system (``n + m <= SPARSE_THRESHOLD``) or the block
 path (above it, while its band is narrow enough: :data:`BLOCK_WORK`; every body's mass
 block regular, :data:`BLOCK_PIVOT`, or made so by the rows on that body alone: Euler
@@ -48,12 +47,17 @@ Numba and the cached machine code costs about 0.7 s CPU once per process.
 
 While a missing loop is compiled in the background (``MECHSYS_COMPILE`` unset, decision
 0064) the Runge-Kutta loop, the derivative and a path's accelerations run their own code
-interpreted (:mod:`._jit_interp`, decision 0077) for systems of up to :data:`INTERP_MAX`
-unknowns, :data:`INTERP_STEPS` steps a call, and the compiled loop takes the next call once
-its compile is done: the same numbers bit for bit from the first step
-(``sol.extra["interpreted_steps"]`` counts those steps). Mech's Adams integrator and larger
-systems keep the Python path meanwhile (its interpreted steps cost too much: decision 0077).
-``MECHSYS_JIT=0`` still selects the Python path, as for the sweep.
+interpreted (:mod:`._jit_interp`, decisions 0077 and 0082) whatever the size of the system,
+each call bounded by about :data:`INTERP_SECONDS` of interpreted work (its steps scaled to
+the measured cost of a step), and the compiled loop takes the next call once its compile is
+done: the same numbers bit for bit from the first step (``sol.extra["interpreted_steps"]``
+counts those steps). Mech's Adams integrator keeps the Python path meanwhile (its
+interpreted steps cost too much for the cold start's budget: decisions 0077, 0082).
+
+When it runs (``MECHSYS_JIT``): ``0`` never compiled: the same loops run interpreted, every
+step (decision 0082; the Python path takes only the hand-overs at singular instants, as
+with the compiled loop, and the systems the loop cannot take at all: kernels without C
+entry points, Numba missing); ``1`` or unset: compiled whenever possible.
 
 Velocity constraints :math:`A(q, t) \dot q + b(q, t) = 0` (rolling; decisions 0053, 0062)
 run in the same loops (kind ``ROLLING``, reported as ``"augmented"``, :meth:`FreeStepper._plan_rows`)
@@ -127,22 +131,28 @@ _MODE_AT = {"loop": 14, "adams": 14, "derivative": 13}
 #: measured apart from the derivative it shares with the Runge-Kutta runs
 _COMPILE_SECONDS = {"loop": 35, "adams": None, "derivative": 15}
 
-#: while a loop is compiled in the background (decision 0064) its own code runs interpreted
-#: (:mod:`._jit_interp`, decision 0077) for systems of up to this many unknowns ``n + m``
-#: (and velocity rows). Its step costs 2.3 x the Python path's at 5 unknowns, 4.9 x at 10
-#: (the double pendulum: 4.0 s of CPU to the cold start's first result), 5.9 x at 15 and
-#: 12 x at 20 (the augmented system's LU, about as the cube of the size; decision 0077's
-#: table): larger systems keep the Python path meanwhile
-INTERP_MAX = 12
-#: interpreted steps per call of a loop: between two calls ``_jit_modes.entry`` is asked
-#: again, and the compiled loop takes the next step once its compile is done (about 0.1 s
-#: of interpreted work each on the double pendulum)
+#: while a loop is compiled in the background (decision 0064), and always with
+#: ``MECHSYS_JIT=0``, its own code runs interpreted (:mod:`._jit_interp`, decisions 0077,
+#: 0082) at any size: each call of the stepping loops takes the steps that fit in about this
+#: many seconds of interpreted work (measured on the stepper's own calls), so that the
+#: compiled loop, once compiled, takes over within that long. (Decision 0077 kept systems
+#: above 12 unknowns on the Python path instead: their interpreted step costs 5.9 x its step
+#: at 15 unknowns, 12 x at 20; bounded by time, a large first run costs at most about the
+#: compile, and the numbers are the compiled loop's from the first step)
+INTERP_SECONDS = 0.3
+#: interpreted steps of a stepper's first call of a loop for a system of up to 12 unknowns
+#: (about 0.1 s of interpreted work each on the double pendulum), fewer in proportion
+#: above (``INTERP_STEPS[name] * 12 // (n + m + k)``, at least one); the later calls take
+#: the number that fits in :data:`INTERP_SECONDS` at the measured rate
 INTERP_STEPS = {"loop": 32, "adams": 128}
-#: the loops that run interpreted meanwhile. Not Mech's Adams integrator: interpreted, its
-#: steps cost about 2.7 x the Python path's (0.85 ms a step of the double pendulum against
-#: 0.3 ms), and the cold start's 10 s Adams run took 6.0 s of CPU to its first result (the
-#: target: 5 s; decision 0077), so its Python path keeps the steps while it is compiled
+#: the loops that run interpreted while they are compiled in the background. Not Mech's
+#: Adams integrator: interpreted, its steps cost about 2.7 x the Python path's (0.85 ms a
+#: step of the double pendulum against 0.3 ms), and the cold start's 10 s Adams run took
+#: 6.0 s of CPU to its first result (the target: 5 s; decisions 0077, 0082), so its Python
+#: path keeps the steps while it is compiled. With ``MECHSYS_JIT=0`` every loop runs
+#: interpreted, Adams too (nothing is compiled then)
 INTERP_LOOPS = frozenset({"loop", "derivative", "path_acc"})
+
 
 def _steps_at(name: str) -> int:
     """The position of ``max_steps`` among the arguments of the loop ``_state[name]``."""
@@ -652,6 +662,25 @@ class StepDense:
         return w @ self.F + self.y_old
 
 
+def _loops_at_hand() -> bool:
+    """Whether the loops' code can run, compiled or interpreted: Numba importable and the
+    loops' module imported. Its import checks Numba's on-disk cache first (``_jit_cache``);
+    with ``MECHSYS_JIT=0`` (nothing compiled, the loops interpreted: decision 0082) a cache
+    refused as unsafe (:class:`~mechsys.CacheError`, whose message offers ``MECHSYS_JIT=0``
+    as the way around it) leaves the run to the Python path instead of raising."""
+    off = _jit_runtime.mode() == "off"     # (a misspelled MECHSYS_JIT raises here)
+    if not _jit_runtime.available():
+        return False
+    if off:
+        from .._errors import CacheError
+
+        try:
+            from . import _jit_free_loop  # noqa: F401
+        except CacheError:
+            return False
+    return True
+
+
 class FreeStepper:
     """The compiled stepper of one free-motion run (see the module docstring).
 
@@ -770,6 +799,10 @@ class FreeStepper:
         self.interpreted_steps = 0
         #: the tier of the last loop call: "compiled", "interpreted" or None (handed over)
         self.tier = None
+        #: ``MECHSYS_JIT=0``: the loops never compiled, always interpreted (decision 0082)
+        self.interpret_only = _jit_runtime.mode() == "off"
+        #: the steps of the next interpreted call of each stepping loop (``_interpret``)
+        self._interp_steps: dict = {}
         if _state["loop"] is None:
             from ._jit_free_loop import adams, derivative, runge_kutta, workspace
 
@@ -797,12 +830,12 @@ class FreeStepper:
         does not hand the rows themselves (the switched stepper): a positive number then
         gives None (the Python path, ``sol.extra["compiled_steps"] == 0``)."""
         spec = _methods.find(method)
-        if _jit_runtime.mode() == "off" or spec is None or spec.compiled is None or system.n == 0:
+        if spec is None or spec.compiled is None or system.n == 0:
             return None
         if not spec.runge_kutta:
             t_eval = None              # Adams output times are interpolated afterwards
         dyn = system.dynamics
-        if not _jit_runtime.available():
+        if not _loops_at_hand():
             return None
         if rows is not None:
             return cls._plan_rows(system, rows, p, scaling, correction, t_eval)
@@ -935,8 +968,7 @@ class FreeStepper:
         system = path.system
         n = system.n
         spec = _methods.find(method)
-        if _jit_runtime.mode() == "off" or spec is None or spec.compiled is None or n == 0 or \
-                not _jit_runtime.available():
+        if spec is None or spec.compiled is None or n == 0 or not _loops_at_hand():
             return None
         big = None
         if n > SMALL_LU:
@@ -1022,6 +1054,9 @@ class FreeStepper:
             if status == 0:
                 solver.status = "finished"
         self._count(steps)
+        if self.tier == "interpreted":
+            # (a short call: its rows alone are kept, not the chunk-sized arrays)
+            T, Y, H, QDD, LAM = (a[:steps].copy() for a in (T, Y, H, QDD, LAM))
         return (int(status), T[:steps], Y[:steps], H[:steps], QDD[:steps], LAM[:steps], int(ie),
                 int(rejected), int(projections))
 
@@ -1067,15 +1102,16 @@ class FreeStepper:
         per stepper. A compile from empty caches is announced first (``_jit_cache.notice``).
 
         While that machine code is compiled in the background (decision 0064) the same
-        loop runs interpreted (:mod:`._jit_interp`, decision 0077) when it is one of
-        :data:`INTERP_LOOPS` and the system is small enough (:meth:`interpretable`), with at
-        most :data:`INTERP_STEPS` steps (its ``max_steps`` argument) so that the caller asks
-        again soon: the interpreted
-        function is not kept, and the compiled loop takes the first call after its compile
-        is done. None: neither (the caller hands over to its Python path and asks again
-        after its pause). ``self.tier`` tells which ran."""
+        loop runs interpreted (:meth:`_interpret`, decisions 0077, 0082) when it is one of
+        :data:`INTERP_LOOPS`, at any size, a bounded amount of work a call so that the caller
+        asks again soon: the interpreted function is not kept, and the compiled loop takes
+        the first call after its compile is done. With ``MECHSYS_JIT=0`` every loop runs
+        interpreted and nothing is compiled. None: neither (the caller hands over to its
+        Python path and asks again after its pause). ``self.tier`` tells which ran."""
         fn = self._entries.get(name)
         if fn is None:
+            if self.interpret_only:
+                return self._interpret(name, args)
             from ._jit_modes import entry
 
             what = {"loop": "the free-motion stepper", "adams": "Mech's Adams integrator",
@@ -1086,27 +1122,46 @@ class FreeStepper:
                                               background=how == "background"))
             if fn is None:
                 # being compiled in the background (decision 0064)
-                if name not in INTERP_LOOPS or not self.interpretable():
+                if name not in INTERP_LOOPS:
                     self.tier = None
                     return None
-                from ._jit_interp import interpreted
-
-                if name in INTERP_STEPS:
-                    at = _steps_at(name)
-                    args = list(args)
-                    args[at] = min(int(args[at]), INTERP_STEPS[name])
-                self.tier = "interpreted"
-                return interpreted(_state[name])(*args)
+                return self._interpret(name, args)
             self._entries[name] = fn
         self.tier = "compiled"
         return fn(*args)
 
-    def interpretable(self) -> bool:
-        """Whether the loops may run interpreted while their machine code is compiled in the
-        background: at most :data:`INTERP_MAX` unknowns (coordinates, multipliers and
-        velocity rows; decision 0077) and every kernel with a C entry point (the stepper's
-        plan already requires them)."""
-        return self.n + self.nl <= INTERP_MAX
+    def _interpret(self, name: str, args):
+        r"""The loop ``_state[name]`` run interpreted (:mod:`._jit_interp`: its own code,
+        the compiled loop's numbers bit for bit). A stepping loop (``loop``, ``adams``)
+        takes at most ``k`` steps (its ``max_steps`` argument, made smaller): on the
+        stepper's first call of it :data:`INTERP_STEPS` scaled to the size
+        (:math:`k_0 = \max(1, \lfloor 12 k_s / \max(12, n + m + k_v) \rfloor)`), then the number
+        that fits in :data:`INTERP_SECONDS` at the rate the last call measured,
+        :math:`k = \min(\max(1, \lfloor T / (t_{call} / \mathit{steps}) \rfloor), 8 k_s)`, so
+        that each call is about that much work at any size (decision 0082) and the caller
+        asks for the compiled loop again that often."""
+        import time
+
+        from ._jit_interp import interpreted
+
+        self.tier = "interpreted"
+        fn = interpreted(_state[name])
+        if name not in INTERP_STEPS:
+            return fn(*args)
+        at = _steps_at(name)
+        cap = INTERP_STEPS[name]
+        k = self._interp_steps.get(name)
+        if k is None:
+            k = max(1, cap * 12 // max(12, self.n + self.nl))
+        args = list(args)
+        args[at] = min(int(args[at]), k)
+        began = time.perf_counter()
+        got = fn(*args)
+        spent = time.perf_counter() - began
+        steps = int(got[1])
+        if steps > 0 and spent > 0:
+            self._interp_steps[name] = min(max(1, int(INTERP_SECONDS * steps / spent)), 8 * cap)
+        return got
 
     def _count(self, steps) -> None:
         """Add ``steps`` to the count of the tier that took them."""
@@ -1122,7 +1177,7 @@ class FreeStepper:
         decide (its special handling: the loops hand over there too)."""
         n, m = self.n, self.m
         if self.tier is None and "loop" not in self._entries and "adams" not in self._entries \
-                and _background():
+                and not self.interpret_only and _background():
             # a speed-up of SciPy's set-up alone (two evaluations a run): compiled only once
             # a loop runs, so that a first run's background compile is the loop's (0064)
             return None
@@ -1177,6 +1232,9 @@ class FreeStepper:
             return 2, T[:0], Y[:0], H[:0], E[:0], QDD[:0], LAM[:0], 0, 0
         status, steps, evals, projections = got
         self._count(steps)
+        if self.tier == "interpreted":
+            # (a short call: its rows alone are kept, not the chunk-sized arrays)
+            T, Y, H, E, QDD, LAM = (a[:steps].copy() for a in (T, Y, H, E, QDD, LAM))
         return (int(status), T[:steps], Y[:steps], H[:steps], E[:steps], QDD[:steps],
                 LAM[:steps], int(evals), int(projections))
 
