@@ -1,5 +1,5 @@
 """The compiled loops' own code run by the interpreter (solvers/_jit_interp.py, decision 0075):
-the kinematic sweep's first tier while its compiled loop is compiled elsewhere. Checked
+the kinematic sweep's tier wherever its compiled loop is not loaded (decision 0081). Checked
 against closed forms (the slider-crank's positions, velocities and accelerations, the
 dead-centre crank's angle), against the compiled loop bit for bit (the same code: the same
 numbers), and the C calls it makes through ctypes against SciPy."""
@@ -106,15 +106,39 @@ def test_interpreted_loop_hands_over_like_the_compiled_one(monkeypatch):
                                     options={"max_iterations": 1, "ftol": 1e-15})
 
 
-def test_larger_systems_keep_the_python_loop_meanwhile(monkeypatch):
-    """Above ``INTERP_MAX`` unknowns the interpreted loop costs more than 10 x the Python loop
-    (decision 0078, measured): the Python loop takes the sweep while the compile runs."""
-    _first_tier(monkeypatch)
-    monkeypatch.setattr(_jit_sweep, "INTERP_MAX", 5)
+def test_never_compiled_is_the_loop_interpreted(monkeypatch):
+    """``MECHSYS_JIT=0`` (decision 0081): the loop interpreted, no Python point, the closed
+    form's numbers; an ``auto`` job too small to load the compiled loop likewise unless it
+    is loaded (then compiled): the same numbers bit for bit either way."""
+    from mechsys.solvers import _jit_runtime
+
+    t = np.linspace(0.0, 1.0, 40)       # (fine steps: no coarse-step check, decision 0035)
+    monkeypatch.setenv("MECHSYS_JIT", "0")
+    taken = _count_python_points(monkeypatch)
     m = models.slider_crank()
-    sol = m.solve(np.linspace(0.0, 1.0, 12))
-    x = _slider_crank_exact(np.linspace(0.0, 1.0, 12))[0]
-    np.testing.assert_allclose(sol.location(m.body("piston").point(0))[:, 0], x, atol=1e-12)
+    sol = m.solve(t)
+    assert sol.extra["compiled_points"] == 0 and taken == []
+    x, v, a = _slider_crank_exact(t)[:3]
+    piston = m.body("piston").point(0)
+    np.testing.assert_allclose(sol.location(piston)[:, 0], x, atol=1e-12)
+    np.testing.assert_allclose(sol.velocity(piston)[:, 0], v, atol=1e-10)
+    np.testing.assert_allclose(sol.acceleration(piston)[:, 0], a, atol=1e-8)
+    assert _jit_runtime.tier(12, 9) == "interpreted"
+    monkeypatch.setenv("MECHSYS_JIT", "auto")
+    assert _jit_runtime.tier(12, 9) == "loaded"
+    assert _jit_runtime.tier(_jit_runtime.AUTO_POINTS, 9) == "load"
+    assert _jit_runtime.tier(200, 63) == "load"        # (about 1 s interpreted)
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    assert _jit_runtime.tier(12, 9) == "load"
+    fast = m.solve(t)
+    assert fast.extra["compiled_points"] == 40
+    monkeypatch.setenv("MECHSYS_JIT", "auto")          # (loaded now: compiled)
+    again = m.solve(t)
+    assert again.extra["compiled_points"] == 40
+    for X, Y, Z in ((sol.q, fast.q, again.q), (sol.qd, fast.qd, again.qd),
+                    (sol.qdd, fast.qdd, again.qdd)):
+        np.testing.assert_array_equal(X, Y)
+        np.testing.assert_array_equal(X, Z)
 
 
 def test_the_interpreted_function_is_the_loops_code():
@@ -214,7 +238,7 @@ def test_interpreted_above_the_old_limit(monkeypatch):
     taken = _count_python_points(monkeypatch)
     m = models.four_bar_chain(10)
     slow = m.solve(t)
-    assert slow.q.shape[1] == 63 <= _jit_sweep.INTERP_MAX
+    assert slow.q.shape[1] == 63
     assert slow.extra["compiled_points"] == 0 and taken == []
     system = m.compile()
     for k in range(len(t)):
@@ -258,7 +282,7 @@ def test_interpreted_multipliers_above_the_old_limit(monkeypatch):
 
     monkeypatch.setattr(_statics, "solve_multipliers", python_path)
     slow = loaded().solve(t, solution="dynamic")
-    assert slow.q.shape[1] == 63 <= _jit_multipliers.INTERP_MAX
+    assert slow.q.shape[1] == 63
     np.testing.assert_array_equal(slow.lam[:12], fast.lam)
     energy = np.asarray(slow.body_energy(), dtype=float) + np.asarray(slow.potential_energy(),
                                                                       dtype=float)
