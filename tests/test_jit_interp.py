@@ -192,6 +192,42 @@ def test_ctypes_calls_match_scipy():
     assert out[0] == 0.0                  # (the offset: nothing written before it)
 
 
+def test_python_kernels_entry_point():
+    """``_jit_runtime.python_entry``: a Python kernel called through its C entry point
+    writes its outputs; an exception writes NaN (the loop then hands the point to the Python
+    code, which raises it), an interrupt is kept for ``raise_callback_error``."""
+    from mechsys.solvers import _jit_runtime
+
+    class Kernel:
+        nargs, nout = 3, 2
+
+        def __init__(self, fail=None):
+            self.fail = fail
+
+        def __call__(self, x):
+            if self.fail is not None:
+                raise self.fail
+            return np.array([x[0] * x[1], x[2] - x[0]])
+
+    x = np.array([2.0, 3.0, 7.0])
+    out = np.zeros(3)
+    good = Kernel()
+    row = _jit_runtime.python_entry(good)
+    assert row[1:] == (0, 0, 0, 0) and _jit_runtime.python_entry(good) == row
+    _jit_interp._kcall(row[0], out, 1, x, 0)
+    np.testing.assert_array_equal(out, [0.0, 6.0, 5.0])
+    for exc in (ValueError("domain"), KeyboardInterrupt()):
+        bad = Kernel(exc)
+        out[:] = 1.0
+        _jit_interp._kcall(_jit_runtime.python_entry(bad)[0], out, 0, x, 0)
+        assert np.isnan(out[:2]).all() and out[2] == 1.0
+        if isinstance(exc, KeyboardInterrupt):
+            with pytest.raises(KeyboardInterrupt):
+                _jit_runtime.raise_callback_error()
+        _jit_runtime.raise_callback_error()          # (nothing kept: no raise)
+    assert _jit_runtime.python_entry(object()) is None
+
+
 def test_interpreted_multipliers_against_the_power_balance(monkeypatch):
     """The multiplier solves' first tier (the same loop interpreted): the drive's power equals
     the rate of the kinetic plus potential energy (central differences), and the

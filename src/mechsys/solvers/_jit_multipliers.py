@@ -33,6 +33,7 @@ from ._jit_runtime import (
     lapack,
     loaded,
     patterned,
+    raise_callback_error,
     runnable,
     tier,
 )
@@ -52,8 +53,9 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
     """Fill ``LAM`` (N, m) with the multipliers of the solved sweep ``Q``, ``QD``, ``QDD``
     (N, n) by the loop ``_jit_multipliers_loop.multipliers`` from point 0 on; return the first
     point left to the Python code (a point needing care; ``len(times)`` when all are done, 0
-    when the loop cannot run: a dynamics without C entry points (SymPy fallbacks), a system
-    :func:`~._jit_runtime.runnable` refuses). The loop runs compiled or interpreted (the same
+    when the loop cannot run: a kernel without C entry points that none can be made for
+    (:func:`~._jit_runtime.python_entry`), a system :func:`~._jit_runtime.runnable`
+    refuses). The loop runs compiled or interpreted (the same
     code, the same numbers bit for bit) as :func:`~._jit_runtime.tier` chooses (decision
     0081): compiled when loaded in the process, loaded (or compiled) when the job repays it,
     interpreted otherwise, under ``MECHSYS_JIT=0`` and while a background compile runs (the
@@ -136,7 +138,9 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
         from ._jit_interp import interpreted
 
         fn = interpreted(_state["multipliers"])
-    return int(fn(*args))
+    done = int(fn(*args))
+    raise_callback_error()
+    return done
 
 
 def _recursive_loads(system, times, Q, QD, QDD, p, code, how="load"):

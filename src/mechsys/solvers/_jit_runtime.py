@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import ctypes
 import os
+import weakref
 
 import numpy as np
 
@@ -85,7 +86,7 @@ SMALL = SPARSE_THRESHOLD
 SPARSE = -2
 
 _PLANS: dict = {}    # table(): kernel ids -> (kernels, pointer table)
-_state: dict = {"failed": None, "lapack": None, "band_lapack": None}
+_state: dict = {"failed": None, "lapack": None, "band_lapack": None, "callback_error": None}
 
 
 def mode() -> str:
@@ -126,14 +127,15 @@ def pointer(kernel):
 def table(kernels):
     """The pointer table of ``kernels`` (one row each: address, context, first-stage address,
     its context, Piecewise values; rows of zeros up to three), or None when one has no C
-    entry point. Kept per kernel objects, which the entry holds (their entry points live
-    as long as they do; not on the system: a pickled copy must not carry another process's
-    addresses)."""
+    entry point and cannot be given one (:func:`python_entry`). Kept per kernel objects,
+    which the entry holds (their entry points live as long as they do; not on the system: a
+    pickled copy must not carry another process's addresses). For the sweep's and the
+    multiplier solves' loops only (the free-motion stepper reads :func:`pointer`)."""
     key = tuple(id(k) for k in kernels)
     got = _PLANS.get(key)
     if got is not None and all(a is b for a, b in zip(got[0], kernels)):
         return got[1]
-    ptrs = [pointer(k) for k in kernels]
+    ptrs = [pointer(k) or python_entry(k) for k in kernels]
     if any(p is None for p in ptrs):
         return None
     while len(ptrs) < 3:
@@ -143,6 +145,64 @@ def table(kernels):
         _PLANS.clear()
     _PLANS[key] = (tuple(kernels), rows)
     return rows
+
+
+#: the C entry points made for Python kernels: kernel -> (ctypes callback, row); an entry
+#: lives as long as its kernel (whoever holds a pointer table holds its kernels)
+_PY_ENTRIES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_KERNEL_PROTO = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
+_DOUBLE_P = ctypes.POINTER(ctypes.c_double)
+
+
+def python_entry(kernel):
+    r"""A C entry point ``void f(double *out, const double *x, void *ctx)`` for a kernel that
+    has none (the SymPy backend's: ``nargs`` arguments, ``nout`` outputs), as a pointer-table
+    row ``(address, 0, 0, 0, 0)``, or None when the kernel does not say its sizes. The entry
+    is a :mod:`ctypes` callback running the kernel's Python function (decision 0081): the
+    loops (compiled, or interpreted) call it as they call a SymEngine kernel, so the kernel's
+    numbers are the Python path's,
+
+    .. math:: \mathrm{out}[0:n_{out}] = f(x[0:n_{args}])
+
+    A Python exception cannot cross the C frames of a compiled loop: the entry catches it
+    and writes NaN, so that the loop hands that point to the Python code, which calls the
+    kernel itself and raises the error there; an interrupt (``KeyboardInterrupt``) is kept
+    and raised by :func:`raise_callback_error` when the loop returns. Example::
+
+        row = python_entry(system.f_position)      # (address, 0, 0, 0, 0)
+    """
+    nargs, nout = getattr(kernel, "nargs", None), getattr(kernel, "nout", None)
+    if nargs is None or nout is None:
+        return None
+    try:
+        got = _PY_ENTRIES.get(kernel)
+    except TypeError:                  # (not weakly referable: no entry)
+        return None
+    if got is not None:
+        return got[1]
+
+    def call(out, x, ctx):
+        o = np.ctypeslib.as_array(ctypes.cast(out, _DOUBLE_P), shape=(nout,))
+        try:
+            o[:] = kernel(np.ctypeslib.as_array(ctypes.cast(x, _DOUBLE_P), shape=(nargs,)).copy())
+        except BaseException as exc:     # noqa: BLE001 (nothing may cross the C frames)
+            o[:] = np.nan
+            if not isinstance(exc, Exception) and _state["callback_error"] is None:
+                _state["callback_error"] = exc
+
+    cb = _KERNEL_PROTO(call)
+    row = (ctypes.cast(cb, ctypes.c_void_p).value, 0, 0, 0, 0)
+    _PY_ENTRIES[kernel] = (cb, row)
+    return row
+
+
+def raise_callback_error() -> None:
+    """Raise the interrupt (``KeyboardInterrupt``, ``SystemExit``) a Python kernel's entry
+    point (:func:`python_entry`) caught while a loop ran, if any."""
+    exc = _state["callback_error"]
+    if exc is not None:
+        _state["callback_error"] = None
+        raise exc
 
 
 def runnable(system, large_ok: bool = False) -> bool:
@@ -320,5 +380,5 @@ class GenTree:
 
 __all__ = ["AUTO_POINTS", "AUTO_SECONDS", "INTERP_SECONDS", "INTERP_SECONDS_PER_UNKNOWN", "NO_BAND",
            "GenTree", "available", "band_args", "band_lapack", "capsule_address", "compile_policy",
-           "index", "kernel_entry", "lapack", "loaded", "mode", "patterned", "pointer", "runnable",
-           "table", "tier"]
+           "index", "kernel_entry", "lapack", "loaded", "mode", "patterned", "pointer",
+           "python_entry", "raise_callback_error", "runnable", "table", "tier"]

@@ -21,8 +21,9 @@ whole logic (retries, toggle handling, diagnostics), factorising the last solved
 Jacobian again with the row scales the loop returns, so that its first position solve starts
 with the same chord steps (decision 0020); then the loop resumes from the next point with
 that point's chord (decision 0075). Sweeps with hooks (``pre_solve``, ``post_iterate``:
-called inside Newton's iterations) and kernels without C entry points (the SymPy backend)
-run the Python code at every point.
+called inside Newton's iterations) run the Python code at every point. Kernels without C
+entry points (the SymPy backend's) get one that calls their Python function
+(:func:`~._jit_runtime.python_entry`, decision 0081).
 
 The loop runs compiled or interpreted (:mod:`._jit_interp`: its own code, the same numbers
 bit for bit), as :func:`~._jit_runtime.tier` chooses per job: compiled when its machine code
@@ -63,6 +64,7 @@ from ._jit_runtime import (
     index,
     lapack,
     loaded,
+    raise_callback_error,
     runnable,
     tier,
 )
@@ -189,6 +191,7 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
             end = min(N, k + size)
             clock = time.process_time()
             kk, e = loop(*args(end, k, chord))
+            raise_callback_error()
             evals += e
             if kk < end:
                 return int(kk), int(evals), _scaling(scaling, scale, columns), 0
@@ -203,6 +206,7 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
     done = k
     if k < N:
         k, e = fn(*args(N, k, chord))
+        raise_callback_error()
         evals += e
     return int(k), int(evals), _scaling(scaling, scale, columns), int(k) - done
 
@@ -240,6 +244,7 @@ def rcond_filler(system, pointers, times, Q, p, scaling, R):
 
             fn = interpreted(_state["fill"])
         bad = fn(*a)
+        raise_callback_error()
         if bad:
             raise MechError(f"mechsys internal error: {bad} condition estimate(s) of a compiled "
                             "sweep proven regular came out singular; please report it")

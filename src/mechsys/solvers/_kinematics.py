@@ -358,8 +358,9 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
     """The sweep's loops without the coarse-step checks of :func:`sweep`, which calls it:
     the loop of ``_jit_sweep`` (compiled, or its code interpreted: decision 0081) for the
     regular points of every sweep, the Python code for each point it leaves (after which the
-    loop resumes) and for every point when the loop cannot run (hooks, kernels without C
-    entry points, a system the loop does not take: more equations than coordinates).
+    loop resumes) and for every point when the loop cannot run (hooks; a system the loop
+    does not take: more equations than coordinates, or a kernel without C entry points that
+    none can be made for).
     Kinematic solution at each of ``times`` (1D, any order; continuation follows the given
     order). ``order`` 0 = location,
     1 = + velocity, 2 = + acceleration. ``scaling`` defaults to the one of ``guess`` at the
@@ -476,8 +477,8 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
         """The points the Python code takes: each point the loop leaves to it, after which
         the loop resumes from the next point with that point's chord (decisions 0075,
         0081: also after a stretch of points needing care, so that the Python code takes
-        no regular point); every point when the loop cannot run (hooks, kernels without C
-        entry points)."""
+        no regular point); every point when the loop cannot run (hooks, ...: see
+        :func:`_sweep_loop`)."""
         k = k0
         while k < N:
             yield k
