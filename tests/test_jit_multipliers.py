@@ -102,14 +102,21 @@ def spy_multipliers(monkeypatch) -> list:
     return taken
 
 
-def _solve_both(monkeypatch, build, t, mode):
+#: the interpreted run of a large model (183 unknowns: 10-25 ms a point) takes the first
+#: points only: the loop is causal, so they are the whole run's first points
+LARGE_PREFIX = 5
+
+
+def _solve_both(monkeypatch, build, t, mode, prefix=None):
     """The same solve with the loops compiled (``MECHSYS_JIT=1``) and interpreted (``0``,
-    decision 0081); also how many points the multiplier loop took in each."""
+    decision 0081; over ``t[:prefix]``); also how many points the multiplier loop took in
+    each: ``(compiled, interpreted, taken)``."""
     taken = spy_multipliers(monkeypatch)
     out = {}
     for jit in ("1", "0"):
         monkeypatch.setenv("MECHSYS_JIT", jit)
-        out[jit] = build().solve(t, solution=mode)
+        out[jit] = build().solve(t if jit == "1" or prefix is None else t[:prefix],
+                                 solution=mode)
     return out["1"], out["0"], taken
 
 
@@ -117,19 +124,20 @@ def _solve_both(monkeypatch, build, t, mode):
 @pytest.mark.parametrize("name", list(BUILDS))
 def test_compiled_and_interpreted_multipliers_agree_and_balance(monkeypatch, name, mode):
     t = np.linspace(0.0, 1.0, 41)
-    fast, slow, taken = _solve_both(monkeypatch, BUILDS[name], t, mode)
+    prefix = LARGE_PREFIX if name.endswith("183") else None
+    fast, slow, taken = _solve_both(monkeypatch, BUILDS[name], t, mode, prefix)
     assert taken[0] == len(t)                # the compiled loop took every point
     assert np.abs(slow.lam).max() > 0.1      # loads are there: not a comparison of zeros
     check_multipliers(fast, mode)
-    if name == "gen-arm-12":
-        # the recursive dynamics has no C entry points under MECHSYS_JIT=0 (its joint
-        # kernels stay plain Python then): the Python code solves every point
-        assert taken[1] == 0
+    if name == "gen-arm-12" and taken[1] == 0:
+        # the recursive dynamics' joint kernels are plain Python when the first solve of the
+        # process ran under MECHSYS_JIT=0 (no C entry points: decision 0081's "left"); the
+        # Python code solved every point then
         scale = np.maximum(1.0, np.abs(slow.lam).max(axis=0))
         assert (np.abs(fast.lam - slow.lam) / scale).max() <= 1e-13
         return
-    assert taken[1] == len(t)                # the interpreted loop took every point
-    np.testing.assert_array_equal(fast.lam, slow.lam)
+    assert taken[1] == len(slow.t)           # the interpreted loop took every point
+    np.testing.assert_array_equal(fast.lam[:len(slow.t)], slow.lam)
 
 
 @pytest.mark.parametrize("name", list(BUILDS))
@@ -323,11 +331,11 @@ def test_large_model_with_friction_runs_compiled_through_the_band(monkeypatch, m
     from mechsys.solvers._patterns import multiplier_newton_pattern
 
     t = np.linspace(0.1, 1.0, 12)
-    fast, slow, taken = _solve_both(monkeypatch, build, t, mode)
+    fast, slow, taken = _solve_both(monkeypatch, build, t, mode, LARGE_PREFIX)
     assert fast.system.n == 183 and taken[0] == len(t)
     assert multiplier_newton_pattern(fast.system)[2].banded == (build is _friction_chain)
-    assert taken[1] == len(t)
-    np.testing.assert_array_equal(fast.lam, slow.lam)
+    assert taken[1] == LARGE_PREFIX
+    np.testing.assert_array_equal(fast.lam[:LARGE_PREFIX], slow.lam)
     monkeypatch.setenv("MECHSYS_JIT", "1")
     plain = plain().solve(t, solution=mode)
     assert np.abs(plain.lam - fast.lam).max() > 1e-3 * np.abs(plain.lam).max()

@@ -139,16 +139,17 @@ def _jog(mass):
 
 
 @pytest.mark.parametrize("solution", ["static", "kinematic", "dynamic"])
-def test_compiled_and_python_multipliers_over_stages_agree(monkeypatch, solution):
+def test_compiled_and_interpreted_multipliers_over_stages_agree(monkeypatch, solution):
     taken = _spy(monkeypatch, _jit_multipliers, "multipliers")
     t = np.linspace(0, 8, 161)
     fast, slow, _ = _both(monkeypatch, lambda: _jog(2.0), t, solution=solution)
     np.testing.assert_array_equal(fast.stage("jog"), slow.stage("jog"))
     assert set(slow.stage("jog")) == {1, 2}
     compiled = [k for k in taken if k]
-    assert sum(compiled) == len(t)           # each stage's run of points, compiled
+    # each stage's run of points by the loop, compiled and then interpreted (decision 0081)
+    assert sum(compiled) == 2 * len(t)
     assert np.abs(slow.lam).max() > 1.0
-    assert _close(fast.lam, slow.lam)
+    np.testing.assert_array_equal(fast.lam, slow.lam)
     # the balance Phi_q^T lambda = Q + Qv - M qdd with each point's stage Jacobian
     if solution == "static":
         J, lam, Q = fast.jacobian(ms.All, ms.All), fast.generalized(ms.All), fast.loads(ms.All)

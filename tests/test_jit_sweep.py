@@ -19,14 +19,15 @@ pytest.importorskip("numba")
 pytestmark = pytest.mark.filterwarnings("ignore::mechsys.NearSingularWarning")
 
 
-def _both(monkeypatch, build, t, **solve):
+def _both(monkeypatch, build, t, prefix=None, **solve):
     """Solve the same sweep with the loop compiled (``MECHSYS_JIT=1``) and interpreted
-    (``0``, decision 0081)."""
+    (``0``, decision 0081; over ``t[:prefix]``: the loop is causal, so those are the whole
+    sweep's first points)."""
     out = {}
     for mode in ("1", "0"):
         monkeypatch.setenv("MECHSYS_JIT", mode)
         m = build()
-        out[mode] = m.solve(t, **solve)
+        out[mode] = m.solve(t if mode == "1" or prefix is None else t[:prefix], **solve)
     return out["1"], out["0"]
 
 
@@ -322,6 +323,7 @@ def test_when_it_does_not_run(monkeypatch):
     only (``0`` interpreted; ``auto`` loads the compiled loop for jobs that repay it, else
     uses it only when loaded); the SymPy backend's kernels have no C entry points."""
     s = models.slider_crank().compile()
+    monkeypatch.setitem(_jit_runtime._state, "interpreted", 0.0)   # (no small job before)
     monkeypatch.setenv("MECHSYS_JIT", "0")
     assert _jit_sweep.plan(s, 10_000, 2) is not None
     assert _jit_runtime.tier(10_000, s.n) == "interpreted"
@@ -329,6 +331,8 @@ def test_when_it_does_not_run(monkeypatch):
     assert _jit_sweep.plan(s, 5, 2) is not None and _jit_runtime.tier(5, s.n) == "load"
     monkeypatch.delenv("MECHSYS_JIT")
     assert _jit_runtime.tier(100, s.n) == "loaded"     # auto: too short to repay the load
+    # ... but many of them do: their predicted interpreted time adds up to AUTO_SECONDS
+    assert _jit_runtime.tier(600, s.n) == "load"
     assert _jit_runtime.tier(_jit_runtime.AUTO_POINTS, s.n) == "load"
     # (a large system's job repays the load sooner: its interpreted points cost more)
     assert _jit_runtime.tier(200, 63) == "load"
@@ -418,14 +422,13 @@ def test_large_banded_sweep_is_compiled_with_the_same_numbers(monkeypatch, loops
 
     runs = _runs(monkeypatch)
     t = np.linspace(0.0, 2 * np.pi, 41)
-    fast, slow = _both(monkeypatch, lambda: models.four_bar_chain(loops), t)
+    fast, slow = _both(monkeypatch, lambda: models.four_bar_chain(loops), t, prefix=6)
     assert fast.system.n > SPARSE_THRESHOLD
     assert runs and runs[0][0] == len(t)                   # every point compiled
     for x, y in ((fast.q, slow.q), (fast.qd, slow.qd), (fast.qdd, slow.qdd),
                  (fast.extra["rcond"], slow.extra["rcond"])):
-        np.testing.assert_array_equal(x, y)
-    np.testing.assert_array_equal(fast.iterations, slow.iterations)
-    assert fast.evaluations == slow.evaluations
+        np.testing.assert_array_equal(x[:6], y)
+    np.testing.assert_array_equal(fast.iterations[:6], slow.iterations)
     # the chain's exact motion: every crank turns with the driver
     assert np.isfinite(fast.extra["rcond"]).all() and (fast.extra["rcond"] > 1e-6).all()
     check_sweep(fast)
@@ -483,14 +486,13 @@ def test_wide_pattern_sweep_is_compiled_with_the_same_numbers(monkeypatch, cylin
 
     runs = _runs(monkeypatch)
     t = np.linspace(0.0, 0.5, 26)
-    fast, slow = _both(monkeypatch, lambda: models.radial_engine(cylinders), t)
+    fast, slow = _both(monkeypatch, lambda: models.radial_engine(cylinders), t, prefix=6)
     s = fast.system
     assert not s.jacobian_pattern().banded and runs and runs[0][0] == len(t)
     for x, y in ((fast.q, slow.q), (fast.qd, slow.qd), (fast.qdd, slow.qdd),
                  (fast.extra["rcond"], slow.extra["rcond"])):
-        np.testing.assert_array_equal(x, y)
-    np.testing.assert_array_equal(fast.iterations, slow.iterations)
-    assert fast.evaluations == slow.evaluations
+        np.testing.assert_array_equal(x[:6], y)
+    np.testing.assert_array_equal(fast.iterations[:6], slow.iterations)
     theta = 2 * np.pi * t
     for k in (0, cylinders // 3, cylinders - 1):
         a = 2 * np.pi * k / cylinders

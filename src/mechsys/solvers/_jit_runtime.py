@@ -19,9 +19,10 @@ the process's state without changing a number; :func:`tier` chooses it per job:
 * ``auto``: compiled when its machine code is already loaded in this process; else, when the
   job is big enough to repay loading Numba's cache (about 0.7 s CPU once per process) or
   compiling, as for ``1``; else interpreted. Big enough: at least :data:`AUTO_POINTS` points,
-  or a predicted interpreted time of at least :data:`AUTO_SECONDS`:
+  or a predicted interpreted time that reaches :data:`AUTO_SECONDS` together with that of the
+  small jobs run interpreted before in the process (:math:`T_{before}`):
 
-.. math:: \text{load} \iff N \ge N_{auto} \;\vee\; N\, n\, c_{int} \ge T_{auto}
+.. math:: \text{load} \iff N \ge N_{auto} \;\vee\; T_{before} + N\, n\, c_{int} \ge T_{auto}
 
 with :math:`c_{int}` = :data:`INTERP_SECONDS_PER_UNKNOWN` (the interpreted loop's cost per
 point and unknown, decisions 0078, 0081). Possible means: Numba importable (a core
@@ -86,7 +87,8 @@ SMALL = SPARSE_THRESHOLD
 SPARSE = -2
 
 _PLANS: dict = {}    # table(): kernel ids -> (kernels, pointer table)
-_state: dict = {"failed": None, "lapack": None, "band_lapack": None, "callback_error": None}
+_state: dict = {"failed": None, "lapack": None, "band_lapack": None, "callback_error": None,
+                "interpreted": 0.0}
 
 
 def mode() -> str:
@@ -224,12 +226,16 @@ def tier(points: int, n: int) -> str:
     ``"loaded"`` (compiled only when its machine code is already loaded in this process,
     else interpreted: an ``auto`` job too small to repay loading it) or ``"load"`` (load it,
     or compile it per ``MECHSYS_COMPILE``; interpreted meanwhile). Every tier gives the same
-    numbers, bit for bit: the choice changes the cost only."""
+    numbers, bit for bit: the choice changes the cost only. The predicted interpreted time of
+    the ``"loaded"`` jobs adds up per process: once it reaches :data:`AUTO_SECONDS`, the
+    next job loads the compiled loop (many small jobs repay the load together)."""
     m = mode()
     if m == "off":
         return "interpreted"
-    if m == "on" or points >= AUTO_POINTS or points * n * INTERP_SECONDS_PER_UNKNOWN >= AUTO_SECONDS:
+    cost = points * n * INTERP_SECONDS_PER_UNKNOWN
+    if m == "on" or points >= AUTO_POINTS or _state["interpreted"] + cost >= AUTO_SECONDS:
         return "load"
+    _state["interpreted"] += cost      # (many small jobs repay the load together)
     return "loaded"
 
 
