@@ -411,7 +411,7 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
     # every regular point, compiled or interpreted as the job's tier says (decision 0081)
     pointers = _jit_sweep.plan(system, N - P if points is None else points, order) \
         if N > P and hooks is None else None
-    how = _jit_runtime.tier(N - P if points is None else points, n)
+    how = None if pointers is None else _jit_runtime.tier(N - P if points is None else points, n)
     start = None    # the first point's equations at the guess, evaluated for the scaling
     if sc is None and N and pointers is None:
         F0, J0 = system.residual_and_jacobian(times[0], q0, p, sparse)
