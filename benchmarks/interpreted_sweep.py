@@ -1,6 +1,8 @@
 """The kinematic sweep's three ways to run (decision 0075): the compiled loop, the same loop's
-code run by the Python interpreter (``solvers/_jit_interp``: the first tier while the compiled
-one is compiled in the background), and the Python loop (``MECHSYS_JIT=0``), on mechanisms of
+code run by the Python interpreter (``solvers/_jit_interp``: the tier wherever the compiled
+one is not loaded, and ``MECHSYS_JIT=0``: decision 0081), and the Python code's per-point
+path (since decision 0081 only for sweeps with hooks: a ``pre_solve`` hook that does
+nothing makes it take every point), on mechanisms of
 9, 21 and 63 unknowns; and the cold start of the 1000-point slider-crank sweep with the
 interpreted first tier.
 
@@ -16,7 +18,7 @@ optimisation level (``NUMBA_OPT=0``) in a fresh process with an empty cache: the
 to its first result (its compile) and its cost per point.
 
 ``--sparse``: the same three ways on chains of 183 and 273 unknowns (the sparse kind,
-above ``SPARSE_THRESHOLD``; the interpreted one is not wired: decision 0078).
+above ``SPARSE_THRESHOLD``; interpreted since decision 0081).
 
 ``--cold``: ``benchmarks/cold_start.py``'s sweep row (a fresh process with empty caches, the
 background compile, a second session).
@@ -42,21 +44,18 @@ _CHILD = r"""
 import json, os, sys, time
 import numpy as np
 from mechsys import models
-from mechsys.solvers import _jit_modes, _jit_sweep
 
 way, size, N, out = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
-if way == "interpreted":
-    # the first tier as in a first session: no machine code at hand, the loop interpreted
-    _jit_modes.entry = lambda d, args, literal=(), say=None: None
-    _jit_sweep.INTERP_MAX = 10**9    # (every size: what the tier would cost)
-    _jit_sweep.INTERP_SPARSE = True  # (the sparse kind too: decision 0078)
-os.environ["MECHSYS_JIT"] = "0" if way == "python" else "1"
+# interpreted: never compiled (decision 0081); python: a hook keeps the Python code at every
+# point (it does nothing)
+os.environ["MECHSYS_JIT"] = "0" if way == "interpreted" else "1"
+kw = {"pre_solve": lambda t: None} if way == "python" else {}
 build = models.slider_crank if size == 0 else (lambda: models.four_bar_chain(size))
 m = build()
 t = np.linspace(0.0, 1.0, N)
-m.solve(t[:5])                       # the kernels (and the compiled loop) made before timing
+m.solve(t[:5], **kw)                 # the kernels (and the compiled loop) made before timing
 c0 = time.process_time()
-sol = m.solve(t)
+sol = m.solve(t, **kw)
 c1 = time.process_time()
 rc = np.asarray(sol.extra["rcond"])  # (the pending estimates: not in the time)
 np.savez(out, q=sol.q, qd=sol.qd, qdd=sol.qdd, rc=rc)

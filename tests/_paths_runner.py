@@ -6,15 +6,16 @@ same numbers on every free motion and kinematic sweep it computes (used by
 The script runs once as written, with ``FreeSystem.simulate`` and the kinematic sweep
 (``solvers._kinematics.sweep``) recorded. Then each recorded computation is repeated with
 ``MECHSYS_JIT=0`` and ``MECHSYS_JIT=1`` (the compiled loops wherever they apply).
-``MECHSYS_JIT=0`` runs the sweeps' and multipliers' Python loops, and the free-motion and
-path stepper's own loop interpreted (decision 0082: the same code as the compiled one, so
-a free motion's two runs compare the tiers, not two implementations; each example's motion
-is checked against its own reference by its tests). Compared:
+``MECHSYS_JIT=0`` runs every loop's own code interpreted (decisions 0081, 0082: the same
+code as the compiled one, so the two runs compare the tiers, not two implementations; each
+example's motion is checked against its own reference by its tests). Compared:
 
-* a sweep over all of its points;
+* a sweep over its first ``SWEEP_POINTS`` points (the loop is causal: they are the whole
+  sweep's first points; compiled against interpreted, bit for bit);
 * a multistage sweep (a model with stage switches) over all of its points: the same
   positions, rates and stages;
-* the multipliers of a static, kinematic or dynamic solve over all of its points;
+* the multipliers of a static, kinematic or dynamic solve over its first ``SWEEP_POINTS``
+  points;
 * a free motion (through stage changes too) or a nonholonomic path, twice:
 
   - as the script asked, over its first steps (about 20). Over a whole run the step-size
@@ -45,6 +46,9 @@ from mechsys.analyses import _free, _free_switch, _multistage, _path  # noqa: E4
 from mechsys.solvers import _kinematics, _statics  # noqa: E402
 
 FIRST_STEPS = 20
+#: sweeps and multiplier solves are compared over this many points at most (interpreted,
+#: a point of a large model costs milliseconds)
+SWEEP_POINTS = 200
 FIRST_STEPS_ONLY = False
 LOOSE = 1e6
 inf = float("inf")
@@ -204,6 +208,8 @@ def check() -> list[dict]:
         elif kind == "multipliers":
             ran = []
             _statics._jit_multipliers.multipliers = _counting_multipliers(ran)
+            cut = SWEEP_POINTS
+            args = (*(None if a is None else a[:cut] for a in args[:4]), *args[4:])
             try:
                 py, jit = _both(original_multipliers, obj, *args, **kwargs)
             finally:
@@ -215,6 +221,8 @@ def check() -> list[dict]:
             _kinematics._jit_sweep.run = _counting(ran)
             try:
                 fn = original_sweep if kind == "sweep" else original_stages
+                if kind == "sweep":
+                    t = t[:SWEEP_POINTS]
                 py, jit = _both(fn, obj, t, *args, **kwargs)
             finally:
                 _kinematics._jit_sweep.run = original_run

@@ -1,5 +1,5 @@
 """The compiled loops' own code run by the interpreter (solvers/_jit_interp.py, decision 0075):
-the kinematic sweep's first tier while its compiled loop is compiled elsewhere. Checked
+the kinematic sweep's tier wherever its compiled loop is not loaded (decision 0081). Checked
 against closed forms (the slider-crank's positions, velocities and accelerations, the
 dead-centre crank's angle), against the compiled loop bit for bit (the same code: the same
 numbers), and the C calls it makes through ctypes against SciPy."""
@@ -106,15 +106,40 @@ def test_interpreted_loop_hands_over_like_the_compiled_one(monkeypatch):
                                     options={"max_iterations": 1, "ftol": 1e-15})
 
 
-def test_larger_systems_keep_the_python_loop_meanwhile(monkeypatch):
-    """Above ``INTERP_MAX`` unknowns the interpreted loop costs more than 10 x the Python loop
-    (decision 0078, measured): the Python loop takes the sweep while the compile runs."""
-    _first_tier(monkeypatch)
-    monkeypatch.setattr(_jit_sweep, "INTERP_MAX", 5)
+def test_never_compiled_is_the_loop_interpreted(monkeypatch):
+    """``MECHSYS_JIT=0`` (decision 0081): the loop interpreted, no Python point, the closed
+    form's numbers; an ``auto`` job too small to load the compiled loop likewise unless it
+    is loaded (then compiled): the same numbers bit for bit either way."""
+    from mechsys.solvers import _jit_runtime
+
+    t = np.linspace(0.0, 1.0, 40)       # (fine steps: no coarse-step check, decision 0035)
+    monkeypatch.setenv("MECHSYS_JIT", "0")
+    taken = _count_python_points(monkeypatch)
     m = models.slider_crank()
-    sol = m.solve(np.linspace(0.0, 1.0, 12))
-    x = _slider_crank_exact(np.linspace(0.0, 1.0, 12))[0]
-    np.testing.assert_allclose(sol.location(m.body("piston").point(0))[:, 0], x, atol=1e-12)
+    sol = m.solve(t)
+    assert sol.extra["compiled_points"] == 0 and taken == []
+    x, v, a = _slider_crank_exact(t)[:3]
+    piston = m.body("piston").point(0)
+    np.testing.assert_allclose(sol.location(piston)[:, 0], x, atol=1e-12)
+    np.testing.assert_allclose(sol.velocity(piston)[:, 0], v, atol=1e-10)
+    np.testing.assert_allclose(sol.acceleration(piston)[:, 0], a, atol=1e-8)
+    assert _jit_runtime.tier(12, 9) == "interpreted"
+    monkeypatch.setenv("MECHSYS_JIT", "auto")
+    monkeypatch.setitem(_jit_runtime._state, "interpreted", 0.0)   # (no small job before)
+    assert _jit_runtime.tier(12, 9) == "loaded"
+    assert _jit_runtime.tier(_jit_runtime.AUTO_POINTS, 9) == "load"
+    assert _jit_runtime.tier(200, 63) == "load"        # (about 1 s interpreted)
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    assert _jit_runtime.tier(12, 9) == "load"
+    fast = m.solve(t)
+    assert fast.extra["compiled_points"] == 40
+    monkeypatch.setenv("MECHSYS_JIT", "auto")          # (loaded now: compiled)
+    again = m.solve(t)
+    assert again.extra["compiled_points"] == 40
+    for X, Y, Z in ((sol.q, fast.q, again.q), (sol.qd, fast.qd, again.qd),
+                    (sol.qdd, fast.qdd, again.qdd)):
+        np.testing.assert_array_equal(X, Y)
+        np.testing.assert_array_equal(X, Z)
 
 
 def test_the_interpreted_function_is_the_loops_code():
@@ -168,6 +193,42 @@ def test_ctypes_calls_match_scipy():
     assert out[0] == 0.0                  # (the offset: nothing written before it)
 
 
+def test_python_kernels_entry_point():
+    """``_jit_runtime.python_entry``: a Python kernel called through its C entry point
+    writes its outputs; an exception writes NaN (the loop then hands the point to the Python
+    code, which raises it), an interrupt is kept for ``raise_callback_error``."""
+    from mechsys.solvers import _jit_runtime
+
+    class Kernel:
+        nargs, nout = 3, 2
+
+        def __init__(self, fail=None):
+            self.fail = fail
+
+        def __call__(self, x):
+            if self.fail is not None:
+                raise self.fail
+            return np.array([x[0] * x[1], x[2] - x[0]])
+
+    x = np.array([2.0, 3.0, 7.0])
+    out = np.zeros(3)
+    good = Kernel()
+    row = _jit_runtime.python_entry(good)
+    assert row[1:] == (0, 0, 0, 0) and _jit_runtime.python_entry(good) == row
+    _jit_interp._kcall(row[0], out, 1, x, 0)
+    np.testing.assert_array_equal(out, [0.0, 6.0, 5.0])
+    for exc in (ValueError("domain"), KeyboardInterrupt()):
+        bad = Kernel(exc)
+        out[:] = 1.0
+        _jit_interp._kcall(_jit_runtime.python_entry(bad)[0], out, 0, x, 0)
+        assert np.isnan(out[:2]).all() and out[2] == 1.0
+        if isinstance(exc, KeyboardInterrupt):
+            with pytest.raises(KeyboardInterrupt):
+                _jit_runtime.raise_callback_error()
+        _jit_runtime.raise_callback_error()          # (nothing kept: no raise)
+    assert _jit_runtime.python_entry(object()) is None
+
+
 def test_interpreted_multipliers_against_the_power_balance(monkeypatch):
     """The multiplier solves' first tier (the same loop interpreted): the drive's power equals
     the rate of the kinetic plus potential energy (central differences), and the
@@ -214,7 +275,7 @@ def test_interpreted_above_the_old_limit(monkeypatch):
     taken = _count_python_points(monkeypatch)
     m = models.four_bar_chain(10)
     slow = m.solve(t)
-    assert slow.q.shape[1] == 63 <= _jit_sweep.INTERP_MAX
+    assert slow.q.shape[1] == 63
     assert slow.extra["compiled_points"] == 0 and taken == []
     system = m.compile()
     for k in range(len(t)):
@@ -258,7 +319,7 @@ def test_interpreted_multipliers_above_the_old_limit(monkeypatch):
 
     monkeypatch.setattr(_statics, "solve_multipliers", python_path)
     slow = loaded().solve(t, solution="dynamic")
-    assert slow.q.shape[1] == 63 <= _jit_multipliers.INTERP_MAX
+    assert slow.q.shape[1] == 63
     np.testing.assert_array_equal(slow.lam[:12], fast.lam)
     energy = np.asarray(slow.body_energy(), dtype=float) + np.asarray(slow.potential_energy(),
                                                                       dtype=float)

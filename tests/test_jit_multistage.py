@@ -45,18 +45,46 @@ def _close(a, b, tol=1e-12):
     return (np.abs(a - b) / scale).max() <= tol
 
 
+def _geneva_exact(sol, slots=4):
+    r"""The Geneva wheel's angle and its first two time derivatives by the closed form, from
+    the solved stages and crank angle (the crank turns at 1 rad/s): engaged,
+    :math:`w = -2\pi k/n - \varphi`, :math:`\varphi = \operatorname{atan2}(\sin r, c -
+    \cos r)` with :math:`r = \theta - 2\pi k`, :math:`c = 1/\sin(\pi/n)`, so
+    :math:`\dot w = -(c\cos r - 1)/D` and :math:`\ddot w = c \sin r\,(c^2 - 1)/D^2`,
+    :math:`D = c^2 + 1 - 2c\cos r`; locked in stage ``s``, :math:`\pi/n\,(2 - s)` at rest."""
+    st, th = sol.stage("geneva"), sol.angle("crank")
+    engaged = st % 2 == 0
+    k = st // 2 - 1
+    r = th - 2 * np.pi * k
+    c = 1 / np.sin(np.pi / slots)
+    D = c * c + 1 - 2 * c * np.cos(r)
+    w = np.where(engaged, -2 * np.pi * k / slots - np.arctan2(np.sin(r), c - np.cos(r)),
+                 np.pi / slots * (2 - st))
+    wd = np.where(engaged, -(c * np.cos(r) - 1) / D, 0.0)
+    wdd = np.where(engaged, c * np.sin(r) * (c * c - 1) / D**2, 0.0)
+    return w, wd, wdd
+
+
 @pytest.mark.parametrize("solution", ["location", "velocity", "acceleration"])
-def test_compiled_and_python_multistage_sweeps_agree(monkeypatch, solution):
+def test_compiled_and_interpreted_multistage_sweeps_agree(monkeypatch, solution):
+    """The Geneva drive's multistage sweep: the loop compiled and interpreted (decision
+    0081) bit for bit, and the wheel's angle, velocity and acceleration those of the closed
+    form (``_geneva_exact``) at every point."""
     t = np.linspace(0, 4 * np.pi, 401)
     fast, slow, runs = _both(monkeypatch, models.geneva_drive, t, solution=solution)
     assert runs and sum(done for _, done, _, _ in runs) > 0.8 * len(t)  # the compiled loop ran
     np.testing.assert_array_equal(fast.stage("geneva"), slow.stage("geneva"))
     assert sorted(set(slow.stage("geneva"))) == [1, 2, 3, 4, 5]
-    assert _close(fast.q, slow.q)
+    np.testing.assert_allclose(fast.angle("crank"), t - np.pi, rtol=0, atol=1e-12)
+    w, wd, wdd = _geneva_exact(fast)
+    np.testing.assert_allclose(fast.angle("wheel"), w, rtol=0, atol=1e-11)
+    np.testing.assert_array_equal(fast.q, slow.q)
     if solution != "location":
-        assert _close(fast.qd, slow.qd)
+        np.testing.assert_array_equal(fast.qd, slow.qd)
+        np.testing.assert_allclose(fast.omega("wheel"), wd, rtol=0, atol=1e-10)
     if solution == "acceleration":
-        assert _close(fast.qdd, slow.qdd)
+        np.testing.assert_array_equal(fast.qdd, slow.qdd)
+        np.testing.assert_allclose(fast.alpha("wheel"), wdd, rtol=0, atol=1e-9)
 
 
 @pytest.mark.parametrize("slots", [4, 6])
@@ -111,16 +139,17 @@ def _jog(mass):
 
 
 @pytest.mark.parametrize("solution", ["static", "kinematic", "dynamic"])
-def test_compiled_and_python_multipliers_over_stages_agree(monkeypatch, solution):
+def test_compiled_and_interpreted_multipliers_over_stages_agree(monkeypatch, solution):
     taken = _spy(monkeypatch, _jit_multipliers, "multipliers")
     t = np.linspace(0, 8, 161)
     fast, slow, _ = _both(monkeypatch, lambda: _jog(2.0), t, solution=solution)
     np.testing.assert_array_equal(fast.stage("jog"), slow.stage("jog"))
     assert set(slow.stage("jog")) == {1, 2}
     compiled = [k for k in taken if k]
-    assert sum(compiled) == len(t)           # each stage's run of points, compiled
+    # each stage's run of points by the loop, compiled and then interpreted (decision 0081)
+    assert sum(compiled) == 2 * len(t)
     assert np.abs(slow.lam).max() > 1.0
-    assert _close(fast.lam, slow.lam)
+    np.testing.assert_array_equal(fast.lam, slow.lam)
     # the balance Phi_q^T lambda = Q + Qv - M qdd with each point's stage Jacobian
     if solution == "static":
         J, lam, Q = fast.jacobian(ms.All, ms.All), fast.generalized(ms.All), fast.loads(ms.All)
@@ -128,14 +157,23 @@ def test_compiled_and_python_multipliers_over_stages_agree(monkeypatch, solution
 
 
 def test_multistage_sweep_follows_the_auto_rule(monkeypatch):
-    """``auto``: the whole multistage sweep's size decides, as for a plain sweep."""
+    """``auto``: the whole multistage sweep's size decides the tier, as for a plain sweep
+    (decision 0081): each run of a stage is given the whole job's size."""
     monkeypatch.delenv("MECHSYS_JIT", raising=False)
-    runs = _spy(monkeypatch, _jit_sweep, "run")
+    asked = []
+    real = _jit_runtime.tier
+
+    def tier(points, n):
+        asked.append(points)
+        return real(points, n)
+
+    monkeypatch.setattr(_jit_runtime, "tier", tier)
     m = models.geneva_drive()
     m.solve(np.linspace(0, 4 * np.pi, 201))
-    assert not runs
+    assert asked and set(asked) == {201}
+    asked.clear()
     m.solve(np.linspace(0, 4 * np.pi, _jit_runtime.AUTO_POINTS + 1))
-    assert runs
+    assert asked and set(asked) == {_jit_runtime.AUTO_POINTS + 1}
 
 
 @pytest.mark.parametrize("jit", ["1", "0"])

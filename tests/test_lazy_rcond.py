@@ -31,8 +31,8 @@ def _eager(monkeypatch):
     """Make the compiled loop compute every estimate itself (no row scales to defer with)."""
     real = _jit_sweep.run
 
-    def run(*args):
-        return real(*args[:15], None)
+    def run(*args, **kw):
+        return real(*args[:15], None, *args[16:], **kw)
 
     monkeypatch.setattr(_jit_sweep, "run", run)
 
@@ -54,12 +54,18 @@ def test_deferred_estimates_are_the_loops_own(monkeypatch, build):
     if build is _dead_centres:
         assert (got < RCOND_WARN).any() and (got >= RCOND_WARN).any()
     np.testing.assert_array_equal(lazy.q, eager.q)
-    # and the Python loop's estimates (LAPACK's dgecon) agree to rounding; at a dead centre
-    # (rcond ~ 1e-11) the two LU factorisations' last bits, which differ with the CPU's
-    # LAPACK kernels, are amplified by the condition number
-    monkeypatch.setenv("MECHSYS_JIT", "0")
-    rtol = 1e-8 if build is _dead_centres else 1e-12
-    np.testing.assert_allclose(got, build().solve(t).extra["rcond"], rtol=rtol)
+    # and LAPACK's estimates (dgecon on the unit-free Jacobian at each solved point, through
+    # the Python code's Scaling: not the loop) agree to rounding; at a dead centre (rcond ~
+    # 1e-11) the two LU factorisations' last bits are amplified by the condition number
+    from mechsys.solvers._kinematics import sweep
+
+    m = build()
+    s = m.compile()
+    res = sweep(s, t, m.guess())
+    np.testing.assert_array_equal(res.q, lazy.q)
+    ref = [res.scaling.factor(s.jacobian(tk, qk, s.p_values)).rcond for tk, qk in zip(t, res.q)]
+    rtol = 1e-6 if build is _dead_centres else 1e-12
+    np.testing.assert_allclose(got, ref, rtol=rtol)
 
 
 @pytest.mark.parametrize("read", [

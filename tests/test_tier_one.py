@@ -1,11 +1,13 @@
 """The first tier of decision 0064: while a compiled loop is being compiled in the background,
 ``_jit_modes.entry`` returns None and every analysis must take its first tier and give that
 tier's answer: the loop's own code interpreted where it runs (the sweep, the multiplier
-solves: decision 0075; the free-motion Runge-Kutta stepper of a small system: decision 0077;
-the compiled loop's numbers, which agree with the Python path's to rounding here), else the
-Python path. The suite runs with ``MECHSYS_COMPILE=wait`` (conftest), so that tier is never
-met there otherwise; here ``entry`` is made to answer "still compiling" for every loop, as a
-first session with empty caches does, and each analysis is compared with ``MECHSYS_JIT=0``.
+solves: decisions 0075 and 0081, which also run it under ``MECHSYS_JIT=0``; the free-motion
+Runge-Kutta stepper of a small system: decision 0077; the compiled loop's numbers, which
+agree with the Python path's to rounding here), else the Python path. The suite runs with
+``MECHSYS_COMPILE=wait`` (conftest), so that tier is never met there otherwise; here
+``entry`` is made to answer "still compiling" for every loop, as a
+first session with empty caches does, and each analysis is compared with
+``MECHSYS_JIT=0``.
 
 A switched free motion whose first stage holds velocity rows crashed on it: the compiled
 stepper handed back no steps and the event signs of zero states could not be shaped.
@@ -17,6 +19,7 @@ import numpy as np
 import pytest
 
 import mechsys as ms
+from _sweep_reference import check_multipliers, check_sweep
 from conftest import load_example
 from mechsys.solvers import _jit_modes
 
@@ -146,9 +149,11 @@ def test_sweep_and_reactions(compiling):
 
     (plain, rp), (tier, rt), asked = compiling(job)
     assert asked
-    _same(plain.q, tier.q)
-    _same(plain.qd, tier.qd)
-    _same(plain.qdd, tier.qdd)
-    _same(plain.lam, tier.lam)
-    for a, b in zip(rp, rt):            # (force, moment)
-        _same(a, b)
+    # the loop interpreted in both runs (decision 0081): bit for bit; and right by the
+    # independent references (loop closure, NumPy's dense solves of the velocity,
+    # acceleration and load-balance equations, central differences)
+    for x, y in ((plain.q, tier.q), (plain.qd, tier.qd), (plain.qdd, tier.qdd),
+                 (plain.lam, tier.lam), *zip(rp, rt)):
+        np.testing.assert_array_equal(x, y)
+    check_sweep(tier)
+    check_multipliers(tier)

@@ -282,6 +282,9 @@ class _SympyCompiled(Compiled):
 
     def __init__(self, args: Sequence[sp.Symbol], exprs: Sequence[sp.Expr]):
         self.nout = len(exprs)
+        #: the length of the argument vector (the sweep's and multiplier solves' loops call
+        #: the kernel through a C entry point made of it: ``solvers._jit_runtime.table``)
+        self.nargs = len(args)
         self._f = sp.lambdify([list(args)], list(exprs), modules="numpy", cse=True)
 
     def __call__(self, x):

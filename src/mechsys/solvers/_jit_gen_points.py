@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._jit_cache import notice
-from ._jit_runtime import GenTree, available, index, kernel_entry, lapack
+from ._jit_runtime import GenTree, available, index, kernel_entry, lapack, loaded
 
 #: the kinds (``_jit_free_loop``'s constants of the same names)
 STATIC_LOADS, KINEMATIC_LOADS, DYNAMIC_LOADS, FORWARD_FREE, FORWARD_AUGMENTED = 0, 1, 2, 3, 4
@@ -40,7 +40,7 @@ def _c(a) -> np.ndarray:
     return a if a.flags.writeable else a.copy()
 
 
-def points(system, times, Q, QD, X, mode: int, p=None):
+def points(system, times, Q, QD, X, mode: int, p=None, how: str = "load"):
     """``(R (N', n), N')``: ``gen_points``' values at the first ``N'`` points of the states
     ``Q``, ``QD`` (N, n) (``QD`` may be ``(1, n)`` for ``STATIC_LOADS``), ``X`` (N, n) the
     accelerations (``DYNAMIC_LOADS``; ``(1, n)`` below) or the forces on the coordinates
@@ -48,7 +48,11 @@ def points(system, times, Q, QD, X, mode: int, p=None):
     cannot run: not the recursive Gen dynamics, kernels without C entry points, Numba
     missing, or the loop being compiled in the background (decision 0064). The caller
     decides whether it should run (the ``MECHSYS_JIT`` rule). ``p``: the parameter values
-    (default the system's)."""
+    (default the system's). ``how``: the tier (:func:`~._jit_runtime.tier`; the multiplier
+    solves' job, decision 0081): ``"load"`` (the default) the compiled loop, loaded or compiled
+    (None while a background compile runs); ``"loaded"`` compiled when already loaded in the
+    process, else interpreted; ``"interpreted"`` the same code interpreted (the same numbers
+    bit for bit)."""
     dyn = system.dynamics
     if not getattr(dyn, "recursive", False) or not available():
         return None
@@ -72,10 +76,16 @@ def points(system, times, Q, QD, X, mode: int, p=None):
             index(system.jac_rows), index(system.jac_cols), int(mode), R)
     # (every compile of more than about a second is announced: decision 0044; None: being
     # compiled in the background, decision 0064, and the Python path computes the points)
-    fn = _entry(_state["gen_points"], args, say=lambda how: notice(
-        "the recursive dynamics over points", None, background=how == "background"))
+    fn = loaded(_state["gen_points"], args) if how == "loaded" else None
+    if how == "load":
+        fn = _entry(_state["gen_points"], args, say=lambda how: notice(
+            "the recursive dynamics over points", None, background=how == "background"))
+        if fn is None:
+            return None
     if fn is None:
-        return None
+        from ._jit_interp import interpreted
+
+        fn = interpreted(_state["gen_points"])
     k = int(fn(*args))
     return R[:k], k
 

@@ -25,16 +25,17 @@ import numpy as np
 
 from ._jit_cache import notice
 from ._jit_runtime import (
-    INTERP_MAX,
-    INTERP_MAX_DENSE,
     NO_BAND,
     SPARSE,
     band_args,
     band_lapack,
     index,
     lapack,
+    loaded,
     patterned,
-    wanted,
+    raise_callback_error,
+    runnable,
+    tier,
 )
 from ._jit_runtime import table as _table
 from ._linalg import _sparse_lu, pattern_slots
@@ -50,18 +51,25 @@ _MULTIPLIER_SECONDS = 8
 def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, tol=1e-10,
                 max_iterations=50, columns=None, points=None) -> int:
     """Fill ``LAM`` (N, m) with the multipliers of the solved sweep ``Q``, ``QD``, ``QDD``
-    (N, n) in compiled code (``_jit_multipliers_loop``) from point 0 on; return the first point
-    left to the Python path (``len(times)`` when all are done, 0 when the compiled loop
-    cannot run: a dynamics without C entry points (SymPy fallbacks), or the ``MECHSYS_JIT``
-    rule). The recursive Gen dynamics' right-hand sides come from :func:`_recursive_loads`
-    first (that dynamics never has loads that depend on the multipliers: a model with them
+    (N, n) by the loop ``_jit_multipliers_loop.multipliers`` from point 0 on; return the first
+    point left to the Python code (a point needing care; ``len(times)`` when all are done, 0
+    when the loop cannot run: a kernel without C entry points that none can be made for
+    (:func:`~._jit_runtime.python_entry`), a system :func:`~._jit_runtime.runnable`
+    refuses). The loop runs compiled or interpreted (the same
+    code, the same numbers bit for bit) as :func:`~._jit_runtime.tier` chooses (decision
+    0081): compiled when loaded in the process, loaded (or compiled) when the job repays it,
+    interpreted otherwise, under ``MECHSYS_JIT=0`` and while a background compile runs (the
+    points are independent: the job then runs interpreted whole). The recursive Gen
+    dynamics' right-hand sides come from :func:`_recursive_loads` first (that dynamics
+    never has loads that depend on the multipliers: a model with them
     gets the symbolic Gen dynamics, ``compile/_generalized.make_dynamics``).
     ``mode_name``: ``"static"``, ``"kinematic"`` or ``"dynamic"``. Loads that depend on the
     multipliers (friction): Newton from ``guess`` (scalar or (m,)) at the first point,
     with ``tol`` and ``max_iterations`` of :class:`~mechsys.solvers.MultiplierOptions`.
     ``columns`` (n,): the unit-free form's column scales (``Scaling.columns``; None: 0 is
     returned, the Python path scales itself).
-    ``points``: the size of the whole job, for the ``auto`` rule (default ``len(times)``)."""
+    ``points``: the size of the whole job, for :func:`~._jit_runtime.tier` (default
+    ``len(times)``)."""
     N = len(times)
     dyn = system.dynamics
     recursive = getattr(dyn, "recursive", False)
@@ -69,16 +77,16 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
     kband = _multiplier_band(system) if large and dyn.depends_on_lambda else _NO_KBAND
     # (the recursive dynamics of generalized coordinates has no f_terms kernel: its
     # right-hand sides come first, from the recursion in compiled code)
-    if not N or columns is None or not wanted(
-            system, N if points is None else points,
-            large_ok=not dyn.depends_on_lambda or kband is not None):
+    if not N or columns is None or not runnable(
+            system, large_ok=not dyn.depends_on_lambda or kband is not None):
         return 0
+    how = tier(N if points is None else points, system.n)
     code = {"static": 0, "kinematic": 1, "dynamic": 2}[mode_name]
     if (code >= 1 and QD is None) or (code == 2 and QDD is None):
         return 0
     Rpre = np.zeros((0, system.n))
     if recursive:
-        got = _recursive_loads(system, times, Q, QD, QDD, p, code)
+        got = _recursive_loads(system, times, Q, QD, QDD, p, code, how)
         if got is None:
             return 0
         Rpre, N = got
@@ -117,34 +125,40 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
         band, kband, Rpre, bool(bw[0] == SPARSE))
     # specialised on the last argument: only the dense or only the sparse solves compiled
     # (decision 0044)
-    fn = entry(_state["multipliers"], args, literal=(len(args) - 1,), say=lambda how: notice(
-        "the multiplier solves" + (" (sparse)" if args[-1] else ""), _MULTIPLIER_SECONDS,
-        background=how == "background"))
-    if fn is None and not args[-1] and system.n <= (
-            INTERP_MAX_DENSE if dyn.depends_on_lambda else INTERP_MAX):
-        # being compiled in the background (decision 0064): the same loop interpreted, the
-        # same numbers bit for bit (decision 0075; its factorisation visits the structure
-        # only, decision 0078)
+    literal = (len(args) - 1,)
+    fn = loaded(_state["multipliers"], args, literal) if how == "loaded" else None
+    if how == "load":
+        fn = entry(_state["multipliers"], args, literal=literal, say=lambda how: notice(
+            "the multiplier solves" + (" (sparse)" if args[-1] else ""), _MULTIPLIER_SECONDS,
+            background=how == "background"))
+    if fn is None:
+        # not loaded, or being compiled in the background (decision 0064): the same loop
+        # interpreted, the same numbers bit for bit (decisions 0075, 0081; its factorisation
+        # visits the structure only, decision 0078)
         from ._jit_interp import interpreted
 
         fn = interpreted(_state["multipliers"])
-    # (None: a large system, being compiled in the background; the Python loop takes every
-    # point)
-    return 0 if fn is None else int(fn(*args))
+    done = int(fn(*args))
+    raise_callback_error()
+    return done
 
 
-def _recursive_loads(system, times, Q, QD, QDD, p, code):
+def _recursive_loads(system, times, Q, QD, QDD, p, code, how="load"):
     """``(R (N', n), N')``: the right-hand sides of the multiplier solves of a system with
     recursive Gen dynamics at the first ``N'`` points (up to the first whose values are not
     finite, which the Python path reports), by ``_jit_free_loop.gen_points``
-    (``_jit_gen_points``); None when its kernels have no C entry points or the loop is being
-    compiled in the background."""
+    (``_jit_gen_points``; ``how``: the job's tier, :func:`~._jit_runtime.tier`); None when
+    its kernels have no C entry points."""
     from ._jit_gen_points import points
 
     n = system.n
     dummy = np.zeros((1, n))
-    return points(system, times, Q, dummy if code == 0 else QD, dummy if code < 2 else QDD,
-                  code, p)
+    QD, QDD = dummy if code == 0 else QD, dummy if code < 2 else QDD
+    got = points(system, times, Q, QD, QDD, code, p, how)
+    if got is None and how == "load":
+        # (being compiled in the background: the same loop interpreted meanwhile)
+        got = points(system, times, Q, QD, QDD, code, p, "interpreted")
+    return got
 
 
 #: the multiplier loop's (unused) Newton band arguments

@@ -6,30 +6,44 @@ The drivers of the loops (``_jit_sweep``, ``_jit_multipliers``, ``_jit_free``) i
 module; it imports no driver and no loop (decision 0058), and Numba only when
 :func:`available` is first asked.
 
-When a loop runs (``MECHSYS_JIT``): ``0`` never, ``1`` whenever possible, unset (``auto``) when
-the job has at least :data:`AUTO_POINTS` points: loading Numba and the cached machine code
-costs about 0.7 s CPU once per process, which a short sweep would not recover. (The choice
-depends on the job alone, never on what ran before in the process.) Possible means: Numba
-importable (a core dependency since decision 0041), the kernels' C entry points (the
-SymEngine LLVM backend), as many equations as coordinates, and a dense system
-(``n <= SPARSE_THRESHOLD``) or a larger one through its Jacobian's pattern:
+Which tier runs a loop (``MECHSYS_JIT``). The free-motion stepper (``_jit_free``): ``0``
+never compiled, ``1`` whenever possible, unset (``auto``) from :data:`AUTO_POINTS` points
+(its own rule, unchanged). The kinematic sweep and the multiplier solves (decision 0081):
+their loop takes the regular points of every job, compiled or interpreted
+(:mod:`._jit_interp`: the same code, the same numbers bit for bit), so the tier may depend on
+the process's state without changing a number; :func:`tier` chooses it per job:
 
-.. math:: \text{run} \iff \text{mode} \ne \text{off} \wedge m = n > 0 \wedge
-          (n \le N_s \vee \text{patterned}) \wedge (\text{mode} = \text{on} \vee
-          N \ge N_{auto}) \wedge \text{Numba}
+* ``0``: never compiled: the loop interpreted;
+* ``1``: compiled (loaded from Numba's cache, or compiled per ``MECHSYS_COMPILE``; the loop
+  interpreted while a background compile runs);
+* ``auto``: compiled when its machine code is already loaded in this process; else, when the
+  job is big enough to repay loading Numba's cache (about 0.7 s CPU once per process) or
+  compiling, as for ``1``; else interpreted. Big enough: at least :data:`AUTO_POINTS` points,
+  or a predicted interpreted time that reaches :data:`AUTO_SECONDS` together with that of the
+  small jobs run interpreted before in the process (:math:`T_{before}`):
+
+.. math:: \text{load} \iff N \ge N_{auto} \;\vee\; T_{before} + N\, n\, c_{int} \ge T_{auto}
+
+with :math:`c_{int}` = :data:`INTERP_SECONDS_PER_UNKNOWN` (the interpreted loop's cost per
+point and unknown, decisions 0078, 0081). Possible means: Numba importable (a core
+dependency since decision 0041: it holds the loops' code even when nothing is compiled), as
+many equations as coordinates, and a dense system (``n <= SPARSE_THRESHOLD``) or a larger
+one through its Jacobian's pattern (:func:`runnable`).
 
 Example::
 
     from mechsys.solvers import _jit_runtime
 
-    if _jit_runtime.wanted(system, points=5000, large_ok=True):
+    if _jit_runtime.runnable(system, large_ok=True):
         table = _jit_runtime.table([system.f_position, system.f_velocity])
+        how = _jit_runtime.tier(points=5000, n=system.n)    # "interpreted", "loaded", "load"
 """
 
 from __future__ import annotations
 
 import ctypes
 import os
+import weakref
 
 import numpy as np
 
@@ -38,22 +52,23 @@ from ._jit_cache import compile_policy
 from ._linalg import _sparse_lu
 from ._tolerances import SPARSE_THRESHOLD
 
-#: ``auto``: the compiled loop is used for sweeps of at least this many points
+#: ``auto``: a job of at least this many points loads (or compiles) its compiled loop
 AUTO_POINTS = 1000
 
-#: the interpreted loops (:mod:`._jit_interp`: a compiled loop's own code run by Python) are
-#: the first tier of systems up to this many unknowns while the compiled loop is being
-#: compiled in the background (decisions 0075, 0078): their LU visits the structure only
-#: (``_jit_lapack.getrf_lists``), so their cost per point grows about as the nonzeros, 45 to
-#: 90 µs an unknown (the sweep: 2-4 x the Python loop at 9 unknowns, 7-10 x at 21, 10-20 x
-#: at 63, about the ratio decision 0075 accepted at its limit of 24: 11-18 x at 21 then);
-#: larger systems keep the Python loop meanwhile
-INTERP_MAX = 64
+#: ``auto``: a sweep or multiplier job whose interpreted run is predicted to take at least
+#: this many CPU seconds loads (or compiles) its compiled loop (loading Numba and the cached
+#: machine code costs about 0.7 s once per process; decision 0081)
+AUTO_SECONDS = 0.5
 
-#: the multiplier solves with loads that depend on the multipliers (friction) run Newton on
-#: dense ``n x n`` matrices (the residual and its matrix are formed densely): interpreted up
-#: to decision 0075's limit only
-INTERP_MAX_DENSE = 24
+#: the interpreted sweep's cost per point and unknown (CPU s): 40-90 µs measured on 9 to 63
+#: unknowns (decisions 0078, 0081; the machine's load moves it), the multiplier solves'
+#: about half; the prediction of :func:`tier`
+INTERP_SECONDS_PER_UNKNOWN = 80e-6
+
+#: while the compiled loop is compiled in the background, the interpreted loop asks for it
+#: again after about this many CPU seconds of interpreted work (decision 0081): a large first
+#: job costs at most about the compile, then runs compiled from the next point
+INTERP_SECONDS = 0.3
 
 #: up to this many unknowns the LU and condition estimate are computed in the loop
 #: (``_jit_lapack``: LAPACK's algorithms, without the call overhead, skipping the zero
@@ -72,7 +87,8 @@ SMALL = SPARSE_THRESHOLD
 SPARSE = -2
 
 _PLANS: dict = {}    # table(): kernel ids -> (kernels, pointer table)
-_state: dict = {"failed": None, "lapack": None, "band_lapack": None}
+_state: dict = {"failed": None, "lapack": None, "band_lapack": None, "callback_error": None,
+                "interpreted": 0.0}
 
 
 def mode() -> str:
@@ -113,14 +129,15 @@ def pointer(kernel):
 def table(kernels):
     """The pointer table of ``kernels`` (one row each: address, context, first-stage address,
     its context, Piecewise values; rows of zeros up to three), or None when one has no C
-    entry point. Kept per kernel objects, which the entry holds (their entry points live
-    as long as they do; not on the system: a pickled copy must not carry another process's
-    addresses)."""
+    entry point and cannot be given one (:func:`python_entry`). Kept per kernel objects,
+    which the entry holds (their entry points live as long as they do; not on the system: a
+    pickled copy must not carry another process's addresses). For the sweep's and the
+    multiplier solves' loops only (the free-motion stepper reads :func:`pointer`)."""
     key = tuple(id(k) for k in kernels)
     got = _PLANS.get(key)
     if got is not None and all(a is b for a, b in zip(got[0], kernels)):
         return got[1]
-    ptrs = [pointer(k) for k in kernels]
+    ptrs = [pointer(k) or python_entry(k) for k in kernels]
     if any(p is None for p in ptrs):
         return None
     while len(ptrs) < 3:
@@ -132,20 +149,113 @@ def table(kernels):
     return rows
 
 
-def wanted(system, points: int, large_ok: bool = False) -> bool:
-    """Whether a compiled loop should run for ``points`` points of this system (the
-    ``MECHSYS_JIT`` rule of the module docstring; Numba importable). ``large_ok``: the loop
-    also takes systems above ``SPARSE_THRESHOLD`` unknowns through their Jacobian's
-    ``FixedPattern`` (the sweep, and the multiplier solves; with friction, when its Newton
-    matrix's pattern is banded)."""
-    m = mode()
-    if m == "off" or system.n == 0 or system.m != system.n:
+#: the C entry points made for Python kernels: kernel -> (ctypes callback, row); an entry
+#: lives as long as its kernel (whoever holds a pointer table holds its kernels)
+_PY_ENTRIES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_KERNEL_PROTO = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
+_DOUBLE_P = ctypes.POINTER(ctypes.c_double)
+
+
+def python_entry(kernel):
+    r"""A C entry point ``void f(double *out, const double *x, void *ctx)`` for a kernel that
+    has none (the SymPy backend's: ``nargs`` arguments, ``nout`` outputs), as a pointer-table
+    row ``(address, 0, 0, 0, 0)``, or None when the kernel does not say its sizes. The entry
+    is a :mod:`ctypes` callback running the kernel's Python function (decision 0081): the
+    loops (compiled, or interpreted) call it as they call a SymEngine kernel, so the kernel's
+    numbers are the Python path's,
+
+    .. math:: \mathrm{out}[0:n_{out}] = f(x[0:n_{args}])
+
+    A Python exception cannot cross the C frames of a compiled loop: the entry catches it
+    and writes NaN, so that the loop hands that point to the Python code, which calls the
+    kernel itself and raises the error there; an interrupt (``KeyboardInterrupt``) is kept
+    and raised by :func:`raise_callback_error` when the loop returns. Example::
+
+        row = python_entry(system.f_position)      # (address, 0, 0, 0, 0)
+    """
+    nargs, nout = getattr(kernel, "nargs", None), getattr(kernel, "nout", None)
+    if nargs is None or nout is None:
+        return None
+    try:
+        got = _PY_ENTRIES.get(kernel)
+    except TypeError:                  # (not weakly referable: no entry)
+        return None
+    if got is not None:
+        return got[1]
+
+    def call(out, x, ctx):
+        o = np.ctypeslib.as_array(ctypes.cast(out, _DOUBLE_P), shape=(nout,))
+        try:
+            o[:] = kernel(np.ctypeslib.as_array(ctypes.cast(x, _DOUBLE_P), shape=(nargs,)).copy())
+        except BaseException as exc:     # noqa: BLE001 (nothing may cross the C frames)
+            o[:] = np.nan
+            if not isinstance(exc, Exception) and _state["callback_error"] is None:
+                _state["callback_error"] = exc
+
+    cb = _KERNEL_PROTO(call)
+    row = (ctypes.cast(cb, ctypes.c_void_p).value, 0, 0, 0, 0)
+    _PY_ENTRIES[kernel] = (cb, row)
+    return row
+
+
+def raise_callback_error() -> None:
+    """Raise the interrupt (``KeyboardInterrupt``, ``SystemExit``) a Python kernel's entry
+    point (:func:`python_entry`) caught while a loop ran, if any."""
+    exc = _state["callback_error"]
+    if exc is not None:
+        _state["callback_error"] = None
+        raise exc
+
+
+def runnable(system, large_ok: bool = False) -> bool:
+    """Whether the sweep's or the multiplier solves' loop can take this system's points at
+    all (compiled or interpreted): Numba importable (the loops' code lives in its
+    dispatchers), as many equations as coordinates, and ``n <= SPARSE_THRESHOLD`` or, with
+    ``large_ok``, the Jacobian's ``FixedPattern`` (the sweep, and the multiplier solves; with
+    friction, when its Newton matrix's pattern is banded or sparse-factorisable)."""
+    if system.n == 0 or system.m != system.n:
         return False
     if system.n > SPARSE_THRESHOLD and not (large_ok and patterned(system)):
         return False
-    if m == "auto" and points < AUTO_POINTS:
-        return False
     return available()
+
+
+def tier(points: int, n: int) -> str:
+    """The tier of a sweep or multiplier job of ``points`` points and ``n`` unknowns (the rule
+    of the module docstring): ``"interpreted"`` (never compiled: ``MECHSYS_JIT=0``),
+    ``"loaded"`` (compiled only when its machine code is already loaded in this process,
+    else interpreted: an ``auto`` job too small to repay loading it) or ``"load"`` (load it,
+    or compile it per ``MECHSYS_COMPILE``; interpreted meanwhile). Every tier gives the same
+    numbers, bit for bit: the choice changes the cost only. The predicted interpreted time of
+    the ``"loaded"`` jobs adds up per process: once it reaches :data:`AUTO_SECONDS`, the
+    next job loads the compiled loop (many small jobs repay the load together)."""
+    m = mode()
+    if m == "off":
+        return "interpreted"
+    cost = points * n * INTERP_SECONDS_PER_UNKNOWN
+    if m == "on" or points >= AUTO_POINTS or _state["interpreted"] + cost >= AUTO_SECONDS:
+        return "load"
+    _state["interpreted"] += cost      # (many small jobs repay the load together)
+    return "loaded"
+
+
+def loaded(dispatcher, args, literal=()):
+    """The machine code of ``dispatcher`` specialised for ``args`` (as
+    ``_jit_modes.entry``) when it is already loaded in this process, else None: nothing is
+    read from the disk cache and nothing compiled (an ``auto`` job too small to repay that)."""
+    if not dispatcher.overloads:
+        return None          # (nothing of this loop loaded yet: no typing of the arguments)
+    from ._jit_modes import _ENTRIES, _fingerprint, signature
+
+    key = (dispatcher, tuple(args[i] for i in literal), tuple(map(_fingerprint, args)))
+    got = _ENTRIES.get(key)
+    if got is not None:
+        return got
+    cres = dispatcher.overloads.get(signature(args, literal))
+    if cres is None:
+        return None
+    _ENTRIES[key] = cres.entry_point
+    return cres.entry_point
 
 
 def index(a) -> np.ndarray:
@@ -274,6 +384,7 @@ class GenTree:
         return cls(arrays, dyn.tree_only)
 
 
-__all__ = ["AUTO_POINTS", "INTERP_MAX", "INTERP_MAX_DENSE", "NO_BAND", "GenTree", "available",
-           "compile_policy", "band_args", "band_lapack", "capsule_address", "index", "kernel_entry", "lapack",
-           "mode", "patterned", "pointer", "table", "wanted"]
+__all__ = ["AUTO_POINTS", "AUTO_SECONDS", "INTERP_SECONDS", "INTERP_SECONDS_PER_UNKNOWN", "NO_BAND",
+           "GenTree", "available", "band_args", "band_lapack", "capsule_address", "compile_policy",
+           "index", "kernel_entry", "lapack", "loaded", "mode", "patterned", "pointer",
+           "python_entry", "raise_callback_error", "runnable", "table", "tier"]

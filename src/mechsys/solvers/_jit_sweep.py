@@ -14,24 +14,24 @@ matching and minimum-degree ordering analysed once per system, then the sparse L
 ``_jit_sparse``, the same compiled function in both paths; decision 0031). Both paths give
 the same numbers to rounding.
 
-The compiled loop handles the regular points. At the first point that needs the Python
-path's care (Newton not converging, a singular Jacobian, a branch jump) it stops and
-returns that point's index; the Python code takes that point with its whole logic
-(retries, toggle handling, diagnostics), factorising the last solved point's Jacobian
-again with the row scales the loop returns, so that its first position solve starts with
-the same chord steps (decision 0020); then the loop resumes from the next point with that
-point's chord (decision 0075). Results never depend on which path ran.
+The loop handles the regular points of every sweep (decision 0081). At the first point
+that needs the Python code's care (Newton not converging, a singular Jacobian, a branch
+jump) it stops and returns that point's index; the Python code takes that point with its
+whole logic (retries, toggle handling, diagnostics), factorising the last solved point's
+Jacobian again with the row scales the loop returns, so that its first position solve starts
+with the same chord steps (decision 0020); then the loop resumes from the next point with
+that point's chord (decision 0075). Sweeps with hooks (``pre_solve``, ``post_iterate``:
+called inside Newton's iterations) run the Python code at every point. Kernels without C
+entry points (the SymPy backend's) get one that calls their Python function
+(:func:`~._jit_runtime.python_entry`, decision 0081).
 
-While the compiled loop is being compiled in the background (decision 0064) the same loop
-runs interpreted (:mod:`._jit_interp`: its own code, the same numbers bit for bit) for
-systems of up to :data:`INTERP_MAX` unknowns (dense kind), and hands over to the compiled
-loop when that is ready (decision 0075). Its factorisations visit the Jacobian's structure
-only (decision 0078), so its cost per point grows about as the nonzeros.
-
-When it runs: the ``MECHSYS_JIT`` rule of :mod:`~mechsys.solvers._jit_runtime` (``auto``:
-sweeps of at least ``AUTO_POINTS`` points), with the SymEngine LLVM backend's kernels
-(two-stage ``Piecewise`` kernels of spline profiles included), for any square system, dense
-or through its Jacobian's pattern (chains, trees, any branching). The Numba code is
+The loop runs compiled or interpreted (:mod:`._jit_interp`: its own code, the same numbers
+bit for bit), as :func:`~._jit_runtime.tier` chooses per job: compiled when its machine code
+is loaded in the process, loaded (or compiled) when the job repays it, interpreted otherwise
+and while a background compile runs (decision 0064), handing over to the compiled loop when
+that is ready. ``MECHSYS_JIT=0``: always interpreted. Its factorisations visit the
+Jacobian's structure only (decision 0078), so its cost per point grows about as the
+nonzeros; any size and the sparse kind are interpreted. The Numba code is
 ``_jit_sweep_loop``; this module is its Python driver (the multiplier solves' driver is
 ``_jit_multipliers``; decision 0058).
 
@@ -50,12 +50,24 @@ Measured (slider-crank, 1000 points with velocities and accelerations): see
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from .._errors import MechError
 from ._jit_cache import notice
-from ._jit_runtime import INTERP_MAX as _INTERP_MAX
-from ._jit_runtime import NO_BAND, SPARSE, band_args, index, lapack, wanted
+from ._jit_runtime import (
+    INTERP_SECONDS,
+    NO_BAND,
+    SPARSE,
+    band_args,
+    index,
+    lapack,
+    loaded,
+    raise_callback_error,
+    runnable,
+    tier,
+)
 from ._jit_runtime import table as _table
 from ._linalg import Scaling, _column_kinds, length_hint
 from ._tolerances import RCOND_WARN, SPARSE_THRESHOLD
@@ -64,8 +76,11 @@ _state: dict = {"loop": None, "fill": None}
 
 
 def plan(system, points: int, order: int):
-    """The kernels' C entry points when the compiled loop should run this sweep, else None."""
-    if not wanted(system, points, large_ok=True):
+    """The kernels' C entry points when the loop (compiled or interpreted) can take this
+    sweep's regular points, else None (kernels without C entry points, a system the loop
+    does not take: :func:`~._jit_runtime.runnable`). ``points``: the job's size (kept for
+    the callers; the tier is :func:`~._jit_runtime.tier`'s, asked by :func:`run`)."""
+    if not runnable(system, large_ok=True):
         return None
     kernels = [system.f_position]
     if order >= 1:
@@ -75,43 +90,41 @@ def plan(system, points: int, order: int):
     return _table(kernels)
 
 
-#: the interpreted loop is the first tier of systems up to this many unknowns while the
-#: compiled one is compiled in the background (``_jit_runtime.INTERP_MAX``, decisions 0075
-#: and 0078)
-INTERP_MAX = _INTERP_MAX
-#: the sparse kind (above ``SPARSE_THRESHOLD`` unknowns) is not interpreted: the Python loop
-#: takes its sweeps while the compiled loop is compiled (decision 0078 measured it
-#: interpreted; ``benchmarks/interpreted_sweep.py --sparse`` sets this to see it)
-INTERP_SPARSE = False
-#: the interpreted loop runs in chunks of this many points, asking between them whether the
-#: compiled loop is ready (it then takes the rest of the sweep: the same numbers)
-INTERP_CHUNK = 256
-
 #: CPU seconds of the kinematic sweep's compile from empty caches (the slider-crank's dense
 #: kind; ``benchmarks/cold_start.py``, decision 0044), for the notice
 _SWEEP_SECONDS = 30
 
+#: the first interpreted chunk of a job waiting for its compiled loop (points); the next ones
+#: are sized toward ``INTERP_SECONDS`` of CPU time each (at most 4 x the one before)
+_FIRST_CHUNK = 16
+#: a fixed size of those chunks (points) instead of the time rule (None): for tests, whose
+#: hand-over must fall on a known point
+INTERP_CHUNK = None
+
 
 def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD, its, rconds,
-        rprev, R=None, first=0, chord_start=False):
+        rprev, R=None, first=0, chord_start=False, how=None):
     """Fill ``Q``, ``QD``, ``QDD``, ``its``, ``rconds`` from point ``first`` on (the rows
     before it: the points solved before, which the predictor continues; ``scaling`` given
     then; ``chord_start``: point ``first - 1`` had the chord, of row scales ``rprev``);
-    return ``(k, evals, scaling, compiled)``: the first point left to the Python loop
-    (``len(times)`` when all are done), the number of kernel calls made, the
-    :class:`~mechsys.solvers._linalg.Scaling` used (the given one, possibly None, when the
-    loop did not run), and how many points the compiled loop solved.
+    return ``(k, evals, scaling, compiled)``: the first point left to the Python code (a
+    point needing care; ``len(times)`` when all are done), the number of kernel calls made,
+    the :class:`~mechsys.solvers._linalg.Scaling` used, and how many points the compiled
+    loop solved (the others: the same loop interpreted).
 
-    The loop runs compiled when its machine code is at hand; while it is being compiled in
-    the background (decision 0064) the same loop runs interpreted (:mod:`._jit_interp`,
-    decision 0075; up to :data:`INTERP_MAX` unknowns, else ``first`` is returned: every
-    point is left to the Python loop) in chunks of :data:`INTERP_CHUNK` points, and the
-    compiled loop takes over at the first chunk boundary after its compile is done. Both
-    tiers run the same code and give the same numbers, bit for bit.
+    The tier (decision 0081): ``how`` is :func:`~._jit_runtime.tier`'s (default: asked for
+    the ``len(times) - first`` points). The loop runs compiled when its machine code is
+    loaded in this process (never with ``"interpreted"``); with ``"load"`` it is loaded, or
+    compiled per ``MECHSYS_COMPILE``; while that compile runs in the background (decision
+    0064) the same loop runs interpreted (:mod:`._jit_interp`, decision 0075; any size, the
+    sparse kind and its chunks too) in chunks of about ``INTERP_SECONDS`` of CPU time, and
+    the compiled loop takes over at the first chunk boundary after its compile is done.
+    Otherwise the loop runs interpreted, whole. Every tier runs the same code and gives the
+    same numbers, bit for bit.
 
     ``scaling`` None: the loop takes ``Scaling.of`` the guess ``q0`` at the first time from
     its first evaluation (the same numbers). ``rprev`` (n,) receives the row scales of the
-    last solved point's velocity factorisation (the chord the Python loop continues with).
+    last solved point's velocity factorisation (the chord the Python code continues with).
     ``R`` (N, n): when given, a point whose condition estimate is proven to be at least
     ``RCOND_WARN`` gets ``RCOND_PENDING`` in ``rconds`` and its row scales in ``R``, for
     :func:`rcond_filler` (decision 0023); None: every estimate is computed in the loop."""
@@ -164,21 +177,27 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
 
     N = len(times)
     k, evals, chord = int(first), 0, bool(chord_start)
-    fn = compiled_loop(args(N, k, chord))
-    if fn is None and ((large and not INTERP_SPARSE) or n > INTERP_MAX):
-        # (the Python loop takes every point from ``first`` on, with the scaling it was
-        # given; None: the caller's own)
-        return k, 0, scaling, 0
+    how = tier(N - k, n) if how is None else how
+    a = args(N, k, chord)
+    # ("load": ``entry`` finds loaded machine code first, else loads or compiles it)
+    fn = compiled_loop(a) if how == "load" else (
+        loaded(_state["loop"], a, (len(a) - 1,)) if how == "loaded" else None)
     if fn is None:
         from ._jit_interp import interpreted
 
         loop = interpreted(_state["loop"])
+        size = N - k if how != "load" else (INTERP_CHUNK or _FIRST_CHUNK)
         while k < N:
-            end = min(N, k + INTERP_CHUNK)
+            end = min(N, k + size)
+            clock = time.process_time()
             kk, e = loop(*args(end, k, chord))
+            raise_callback_error()
             evals += e
             if kk < end:
                 return int(kk), int(evals), _scaling(scaling, scale, columns), 0
+            took = max(time.process_time() - clock, 1e-6)
+            size = INTERP_CHUNK or max(1, int((end - k) * min(4.0, max(0.25, INTERP_SECONDS
+                                                                          / took))))
             k = end
             chord = order >= 1 and bool(rc[k - 1] >= RCOND_WARN)
             fn = compiled_loop(args(N, k, chord)) if k < N else None
@@ -187,6 +206,7 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
     done = k
     if k < N:
         k, e = fn(*args(N, k, chord))
+        raise_callback_error()
         evals += e
     return int(k), int(evals), _scaling(scaling, scale, columns), int(k) - done
 
@@ -224,6 +244,7 @@ def rcond_filler(system, pointers, times, Q, p, scaling, R):
 
             fn = interpreted(_state["fill"])
         bad = fn(*a)
+        raise_callback_error()
         if bad:
             raise MechError(f"mechsys internal error: {bad} condition estimate(s) of a compiled "
                             "sweep proven regular came out singular; please report it")

@@ -44,7 +44,7 @@ import numpy as np
 import scipy.sparse as sps
 
 from .._errors import ConvergenceError, ModelError, SingularJacobianError
-from . import _jit_sweep
+from . import _jit_runtime, _jit_sweep
 from ._diagnostics import Stopped
 from ._linalg import Scaling, rotation_indices
 from ._position import PositionOptions, PositionResult, describe_singular, solve_position
@@ -134,11 +134,6 @@ class SweepResult:
     def rcond_pending(self) -> bool:
         """Whether reading ``rcond`` still has estimates to compute."""
         return self.fill is not None
-
-
-#: the Python code stops resuming the loop after a hand-over (and takes the rest of the
-#: sweep) once the loop has solved no point this many times in a row
-RESUME_MISSES = 4
 
 
 #: a step between two solved points that turns a rotational coordinate by more than this (rad)
@@ -361,11 +356,13 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
                 partial: bool = False, points: int | None = None,
                 progress: Callable[[int], None] | None = None) -> SweepResult:
     """The sweep's loops without the coarse-step checks of :func:`sweep`, which calls it:
-    the loop of ``_jit_sweep`` (compiled, or its code interpreted) for the regular points,
-    the Python code for each point it leaves (after which the loop resumes) and for every
-    point when the loop cannot run (hooks, kernels without C entry points, ``MECHSYS_JIT``,
-    a large system while its loop compiles; decision 0075). Kinematic solution at each of
-    ``times`` (1D, any order; continuation follows the given order). ``order`` 0 = location,
+    the loop of ``_jit_sweep`` (compiled, or its code interpreted: decision 0081) for the
+    regular points of every sweep, the Python code for each point it leaves (after which the
+    loop resumes) and for every point when the loop cannot run (hooks; a system the loop
+    does not take: more equations than coordinates, or a kernel without C entry points that
+    none can be made for).
+    Kinematic solution at each of ``times`` (1D, any order; continuation follows the given
+    order). ``order`` 0 = location,
     1 = + velocity, 2 = + acceleration. ``scaling`` defaults to the one of ``guess`` at the
     first time. ``hooks``
     (:class:`~mechsys.solvers._diagnostics.Hooks`): ``pre_solve(t)`` before each point's
@@ -375,9 +372,9 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
     ``prior``, ``partial`` and ``points`` as in :func:`sweep`.
 
     ``progress(done)``: called with the number of points of ``times`` solved so far, between
-    chunks of the compiled loop (about ``CHUNK_SECONDS`` each: the loop is resumed where it
+    chunks of the loop (about ``CHUNK_SECONDS`` each: the loop is resumed where it
     stopped, with the same chord, so the numbers are those of one call) and about as often
-    in the Python loop; unlike the hooks it keeps the compiled loop. A ``KeyboardInterrupt``
+    in the Python code; unlike the hooks it keeps the loop. A ``KeyboardInterrupt``
     (Ctrl-C, or raised by ``progress``) stops the sweep: ``Stopped("interrupted")`` carries
     the points solved before it (``partial``)."""
     times = np.atleast_1d(np.asarray(times, dtype=float))
@@ -410,9 +407,11 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
     rot = rotation_indices(system)  # indices of angles / Euler parameters
     k0 = P
     chord = None    # the previous point's velocity factorisation: Newton's first steps reuse it
-    # hooks (pre_solve, post_iterate) run in the Python loop only
+    # hooks (pre_solve, post_iterate) run in the Python loop only; otherwise the loop takes
+    # every regular point, compiled or interpreted as the job's tier says (decision 0081)
     pointers = _jit_sweep.plan(system, N - P if points is None else points, order) \
         if N > P and hooks is None else None
+    how = None if pointers is None else _jit_runtime.tier(N - P if points is None else points, n)
     start = None    # the first point's equations at the guess, evaluated for the scaling
     if sc is None and N and pointers is None:
         F0, J0 = system.residual_and_jacobian(times[0], q0, p, sparse)
@@ -433,13 +432,13 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
                 QD, QDD, its, rconds, rprev, R, first, chord_start)
         interrupted = False
         if progress is None:
-            k, done, sc, got = _jit_sweep.run(*args)
+            k, done, sc, got = _jit_sweep.run(*args, how=how)
         else:
-            k, done, sc, got, interrupted = _run_chunks(args, progress, P)
+            k, done, sc, got, interrupted = _run_chunks(args, progress, P, how)
         k = max(int(k), first)
         if sc is None and N:
-            # the loop did not run (compiled in the background meanwhile: decision 0064); the
-            # Python loop's scaling, as above
+            # the loop stopped before its first evaluation gave the scaling: the Python
+            # code's, as above
             F0, J0 = system.residual_and_jacobian(times[0], q0, p, sparse)
             sc, start = Scaling.of(system, q0, J0), (F0, J0)
         ran = k
@@ -476,20 +475,19 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
 
     def points():
         """The points the Python code takes: each point the loop leaves to it, after which
-        the loop resumes from the next point with that point's chord (decision 0075); the
-        rest of the sweep once the loop has solved nothing ``RESUME_MISSES`` times in a row
-        (not at hand, or a stretch of points needing care)."""
-        k, misses = k0, 0
+        the loop resumes from the next point with that point's chord (decisions 0075,
+        0081: also after a stretch of points needing care, so that the Python code takes
+        no regular point); every point when the loop cannot run (hooks, ...: see
+        :func:`_sweep_loop`)."""
+        k = k0
         while k < N:
             yield k
             k += 1
-            if pointers is None or k >= N or misses >= RESUME_MISSES:
+            if pointers is None or k >= N:
                 continue
             if order >= 1 and chord is not None:
                 rprev[:] = rows_last
-            kk = loop_from(k, order >= 1 and chord is not None)
-            misses = misses + 1 if kk == k else 0
-            k = kk
+            k = loop_from(k, order >= 1 and chord is not None)
 
     if k0 == P and prior_rows is not None:
         # the last prior point's chord, as the long sweep has it (also when the compiled
@@ -620,7 +618,7 @@ def _sweep_loop(system, times, guess, order: int = 2, options: PositionOptions |
                        rows_last, compiled)
 
 
-def _run_chunks(args, progress, base: int):
+def _run_chunks(args, progress, base: int, how: str | None = None):
     """``_jit_sweep.run(*args)`` in chunks of points, ``progress(done)`` between them; returns
     ``(k, evaluations, scaling, compiled, interrupted)`` (``compiled``: the points the
     compiled loop solved, the others the interpreted loop's). Each chunk resumes the loop at
@@ -629,7 +627,7 @@ def _run_chunks(args, progress, base: int):
     are those of one call. Chunks grow (or shrink) toward ``CHUNK_SECONDS`` each, at most 4x
     per chunk; a ``KeyboardInterrupt`` (Ctrl-C during a chunk, or from ``progress``) ends the
     run with the points of the chunks before it (``interrupted`` True). ``progress`` is told
-    the points solved since ``base``."""
+    the points solved since ``base``. ``how``: the job's tier (:func:`._jit_runtime.tier`)."""
     (system, pointers, times, q0, p, order, options, sc, rot, Q, QD, QDD, its, rconds, rprev,
      R, first, chord_start) = args
     N, k, evals, size, compiled = len(times), first, 0, FIRST_CHUNK, 0
@@ -639,7 +637,7 @@ def _run_chunks(args, progress, base: int):
         try:
             kk, done, sc, got = _jit_sweep.run(system, pointers, times[:end], q0, p, order,
                                                options, sc, rot, Q, QD, QDD, its, rconds, rprev,
-                                               R, k, chord_start)
+                                               R, k, chord_start, how=how)
         except KeyboardInterrupt:
             return k, evals, sc, compiled, True   # (the points of this chunk are not all known)
         evals += done

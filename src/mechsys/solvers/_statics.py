@@ -189,27 +189,49 @@ def _newton_values(system, dyn, J, t, q, qd, lam, p, qdd):
 def multipliers_over(system, times, Q, QD, QDD, p, mode: str = "dynamic", lambda_guess=1.0,
                      scaling=None, points: int | None = None):
     """Multipliers ``(N, m)`` at each point of a solved sweep (``Q``, ``QD``, ``QDD`` (N, n);
-    ``QD``/``QDD`` None where the sweep did not compute them): :func:`solve_multipliers`
-    point by point, each point's ``lambda_guess`` the previous point's multipliers (Newton,
-    loads that depend on the multipliers). The points the compiled loop can take go there
-    first (``_jit_multipliers.multipliers``: the same operations); the Python loop continues from the
-    first point it leaves. ``scaling``: the unit-free form's column scales for every point
-    (the sweep's; default ``Scaling.of`` at the first point). ``points``: the size of the
-    whole job (a multistage sweep's), for the compiled loop's ``auto`` rule."""
+    ``QD``/``QDD`` None where the sweep did not compute them). The loop
+    (``_jit_multipliers.multipliers``, compiled or interpreted: decision 0081) takes the
+    points; where it stops (a point needing care: a singular Jacobian, loads that are not
+    finite, friction's Newton not converging) :func:`solve_multipliers` takes that point,
+    with its diagnostics, and the loop resumes from the next one; each point's
+    ``lambda_guess`` (Newton, loads that depend on the multipliers) is the previous point's
+    multipliers. Where the loop solves nothing (a stretch of points needing care, or a job
+    it cannot take: see ``_jit_multipliers.multipliers``), the Python code takes the next
+    ``2^misses`` points (at most :data:`RESUME_SKIP`) before the loop is asked again.
+    ``scaling``: the unit-free form's column scales for every point (the sweep's; default
+    ``Scaling.of`` at the first point). ``points``: the size of the whole job (a multistage
+    sweep's), for the loop's tier (``_jit_runtime.tier``)."""
     N = len(times)
     lam = np.empty((N, system.m))
     if N and scaling is None:
         scaling = Scaling.of(system, Q[0], system.jacobian(times[0], Q[0], p))
     opt = MultiplierOptions()
-    k0 = _jit_multipliers.multipliers(system, times, Q, QD, QDD, p, mode, lam, lambda_guess, opt.tol,
-                          opt.max_iterations, None if scaling is None else scaling.columns,
-                          points)
     dyn = system.dynamics
-    guess = lambda_guess if k0 == 0 else lam[k0 - 1]
-    for k in range(k0, N):
+    columns = None if scaling is None else scaling.columns
+    job = N if points is None else points
+    k, misses, ask = 0, 0, 0
+    while k < N:
+        guess = lambda_guess if k == 0 else lam[k - 1]
+        if k >= ask:
+            done = _jit_multipliers.multipliers(
+                system, times[k:], Q[k:], None if QD is None else QD[k:],
+                None if QDD is None else QDD[k:], p, mode, lam[k:], guess, opt.tol,
+                opt.max_iterations, columns, job)
+            k += done
+            misses = 0 if done else misses + 1
+            if k >= N:
+                break
+            guess = lambda_guess if k == 0 else lam[k - 1]
         qd = None if QD is None else QD[k]
         qdd = None if QDD is None else QDD[k]
         lam[k], _ = solve_multipliers(system, dyn, times[k], Q[k], qd, qdd, p, mode,
                                       MultiplierOptions(lambda_guess=guess), scaling=scaling)
-        guess = lam[k]
+        k += 1
+        if misses and k >= ask:
+            ask = k + min(RESUME_SKIP, 2 ** (misses - 1)) - 1
     return lam
+
+
+#: where the multiplier loop solves nothing, the Python code takes up to this many points
+#: before the loop is asked again (:func:`multipliers_over`)
+RESUME_SKIP = 64
