@@ -110,11 +110,13 @@ def test_adams_keeps_the_python_path_and_its_loop_interprets_bit_for_bit(monkeyp
 
 
 def test_a_large_system_runs_interpreted_in_calls_bounded_by_work(monkeypatch):
-    """Above 12 unknowns (decision 0077's former limit) the loop runs interpreted too: the
-    first call takes ``INTERP_STEPS`` scaled to the size (3 links: 15 unknowns, 4 * 12 // 15 =
-    3 steps), the later ones the steps that fit in ``INTERP_SECONDS`` (here 0: one each), so
-    the compiled loop is asked for again after every bounded piece of work. The numbers are
-    the compiled loop's bit for bit, and the energy is kept (an independent check)."""
+    """Above ``INTERP_WAIT_MAX`` (12) unknowns a first session's run takes the Python path
+    while the loop compiles (decision 0083: cheaper there); with the limit raised the loop
+    runs interpreted (as ``MECHSYS_JIT=0`` does at any size): the first call takes
+    ``INTERP_STEPS`` scaled to the size (3 links: 15 unknowns, 4 * 12 // 15 = 3 steps), the
+    later ones the steps that fit in ``INTERP_SECONDS`` (here 0: one each), so the compiled
+    loop is asked for again after every bounded piece of work. The numbers are the compiled
+    loop's bit for bit, and the energy is kept (an independent check)."""
     from mechsys import models
 
     monkeypatch.setenv("MECHSYS_JIT", "1")
@@ -126,6 +128,11 @@ def test_a_large_system_runs_interpreted_in_calls_bounded_by_work(monkeypatch):
     fast = free.simulate((0.0, 0.5), **kw)
     assert fast.extra["compiled_steps"] == fast.extra["steps"]
     asked = _first_tier(monkeypatch)
+    python = free.simulate((0.0, 0.5), **kw)
+    assert python.extra["interpreted_steps"] == python.extra["compiled_steps"] == 0
+    assert np.abs(python.q[-1] - fast.q[-1]).max() < 1e-6
+    asked.clear()
+    monkeypatch.setattr(_jit_free, "INTERP_WAIT_MAX", 64)
     monkeypatch.setattr(_jit_free, "INTERP_SECONDS", 0.0)
     slow = free.simulate((0.0, 0.5), **kw)
     assert slow.extra["interpreted_steps"] == slow.extra["steps"] > 10

@@ -327,3 +327,30 @@ def test_interpreted_multipliers_above_the_old_limit(monkeypatch):
     power = np.asarray(slow.power("drive"), dtype=float)
     scale = np.abs(power).max()
     np.testing.assert_allclose(power[1:-1], rate[1:-1], rtol=0, atol=5e-4 * scale)
+
+
+def test_a_large_first_sweep_takes_the_python_code_while_compiling(monkeypatch):
+    """Above ``INTERP_WAIT_MAX`` (64) unknowns a first session's sweep takes the Python code
+    while its loop compiles in the background (decision 0083: 10-30 x cheaper a point there
+    than the interpreted loop), asking for the compiled loop again after each point; the loop
+    equations hold at every point. ``MECHSYS_JIT=0`` interprets it instead (the loop's own
+    code: no Python point)."""
+    from mechsys.solvers import _jit_runtime
+
+    t = np.linspace(0.0, 1.0, 6)
+    asked = _first_tier(monkeypatch)
+    taken = _count_python_points(monkeypatch)
+    m = models.four_bar_chain(11)
+    sol = m.solve(t)
+    assert sol.q.shape[1] == 69 > _jit_runtime.INTERP_WAIT_MAX
+    assert sol.extra["compiled_points"] == 0 and len(taken) == len(t)
+    assert len(asked) >= len(t)              # (asked again after each Python point)
+    system = m.compile()
+    for k in range(len(t)):
+        assert np.abs(system.residual_and_jacobian(t[k], sol.q[k], system.p_values,
+                                                   False)[0]).max() < 1e-10
+    taken.clear()
+    monkeypatch.setenv("MECHSYS_JIT", "0")
+    slow = models.four_bar_chain(11).solve(t)
+    assert taken == [] and slow.extra["compiled_points"] == 0
+    np.testing.assert_allclose(slow.q, sol.q, rtol=0, atol=1e-12)

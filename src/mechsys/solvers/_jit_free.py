@@ -47,7 +47,8 @@ Numba and the cached machine code costs about 0.7 s CPU once per process.
 
 While a missing loop is compiled in the background (``MECHSYS_COMPILE`` unset, decision
 0064) the Runge-Kutta loop, the derivative and a path's accelerations run their own code
-interpreted (:mod:`._jit_interp`, decisions 0077 and 0082) whatever the size of the system,
+interpreted (:mod:`._jit_interp`, decisions 0077 and 0082) for systems of up to
+:data:`INTERP_WAIT_MAX` unknowns (larger ones take the Python path meanwhile, decision 0083),
 each call bounded by about :data:`INTERP_SECONDS` of interpreted work (its steps scaled to
 the measured cost of a step), and the compiled loop takes the next call once its compile is
 done: the same numbers bit for bit from the first step (``sol.extra["interpreted_steps"]``
@@ -133,13 +134,17 @@ _COMPILE_SECONDS = {"loop": 35, "adams": None, "derivative": 15}
 
 #: while a loop is compiled in the background (decision 0064), and always with
 #: ``MECHSYS_JIT=0``, its own code runs interpreted (:mod:`._jit_interp`, decisions 0077,
-#: 0082) at any size: each call of the stepping loops takes the steps that fit in about this
+#: 0082; while compiling, up to :data:`INTERP_WAIT_MAX` unknowns): each call of the
+#: stepping loops takes the steps that fit in about this
 #: many seconds of interpreted work (measured on the stepper's own calls), so that the
-#: compiled loop, once compiled, takes over within that long. (Decision 0077 kept systems
-#: above 12 unknowns on the Python path instead: their interpreted step costs 5.9 x its step
-#: at 15 unknowns, 12 x at 20; bounded by time, a large first run costs at most about the
-#: compile, and the numbers are the compiled loop's from the first step)
+#: compiled loop, once compiled, takes over within that long
 INTERP_SECONDS = 0.3
+#: while a loop is compiled in the background, the interpreted loop is the first tier of
+#: systems of up to this many unknowns ``n + m`` (and velocity rows); larger ones take the
+#: Python path meanwhile (decision 0083: an 8-link chain's first 10 s run, 40 unknowns, took
+#: 17.8 s of CPU interpreted against 3.65 s on the Python path). ``MECHSYS_JIT=0`` interprets
+#: at any size
+INTERP_WAIT_MAX = 12
 #: interpreted steps of a stepper's first call of a loop for a system of up to 12 unknowns
 #: (about 0.1 s of interpreted work each on the double pendulum), fewer in proportion
 #: above (``INTERP_STEPS[name] * 12 // (n + m + k)``, at least one); the later calls take
@@ -1103,7 +1108,8 @@ class FreeStepper:
 
         While that machine code is compiled in the background (decision 0064) the same
         loop runs interpreted (:meth:`_interpret`, decisions 0077, 0082) when it is one of
-        :data:`INTERP_LOOPS`, at any size, a bounded amount of work a call so that the caller
+        :data:`INTERP_LOOPS` and the system is small enough (:meth:`interpretable`), a
+        bounded amount of work a call so that the caller
         asks again soon: the interpreted function is not kept, and the compiled loop takes
         the first call after its compile is done. With ``MECHSYS_JIT=0`` every loop runs
         interpreted and nothing is compiled. None: neither (the caller hands over to its
@@ -1122,13 +1128,20 @@ class FreeStepper:
                                               background=how == "background"))
             if fn is None:
                 # being compiled in the background (decision 0064)
-                if name not in INTERP_LOOPS:
+                if name not in INTERP_LOOPS or not self.interpretable():
                     self.tier = None
                     return None
                 return self._interpret(name, args)
             self._entries[name] = fn
         self.tier = "compiled"
         return fn(*args)
+
+    def interpretable(self) -> bool:
+        """Whether the loops run interpreted while their machine code is compiled in the
+        background: at most :data:`INTERP_WAIT_MAX` unknowns (coordinates, multipliers and
+        velocity rows). Larger systems take the Python path meanwhile, whose step costs 4 to
+        19 times less there (decision 0083). ``MECHSYS_JIT=0`` interprets at any size."""
+        return self.n + self.nl <= INTERP_WAIT_MAX
 
     def _interpret(self, name: str, args):
         r"""The loop ``_state[name]`` run interpreted (:mod:`._jit_interp`: its own code,

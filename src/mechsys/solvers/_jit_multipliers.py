@@ -25,6 +25,8 @@ import numpy as np
 
 from ._jit_cache import notice
 from ._jit_runtime import (
+    INTERP_WAIT_MAX,
+    INTERP_WAIT_MAX_DENSE,
     NO_BAND,
     SPARSE,
     band_args,
@@ -131,6 +133,11 @@ def multipliers(system, times, Q, QD, QDD, p, mode_name: str, LAM, guess=1.0, to
         fn = entry(_state["multipliers"], args, literal=literal, say=lambda how: notice(
             "the multiplier solves" + (" (sparse)" if args[-1] else ""), _MULTIPLIER_SECONDS,
             background=how == "background"))
+    if fn is None and how == "load" and (large or system.n > (
+            INTERP_WAIT_MAX_DENSE if dyn.depends_on_lambda else INTERP_WAIT_MAX)):
+        # being compiled in the background: a large system's points go to the Python code
+        # meanwhile (decision 0083)
+        return 0
     if fn is None:
         # not loaded, or being compiled in the background (decision 0064): the same loop
         # interpreted, the same numbers bit for bit (decisions 0075, 0081; its factorisation

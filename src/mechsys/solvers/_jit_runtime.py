@@ -65,6 +65,16 @@ AUTO_SECONDS = 0.5
 #: about half; the prediction of :func:`tier`
 INTERP_SECONDS_PER_UNKNOWN = 80e-6
 
+#: while the compiled loop of a ``"load"`` job is compiled in the background (decision 0064)
+#: the interpreted loop is the first tier of sweeps and multiplier solves of up to this many
+#: unknowns (the dense kind); larger systems and the sparse kind take the Python code
+#: meanwhile, whose point costs 10-30 x less there (decision 0083: 195 µs against 5.8 ms
+#: at 63 unknowns). ``MECHSYS_JIT=0`` and the small jobs of ``auto`` interpret at any size
+INTERP_WAIT_MAX = 64
+#: the same for the multiplier solves with loads that depend on the multipliers (friction:
+#: Newton on dense matrices)
+INTERP_WAIT_MAX_DENSE = 24
+
 #: while the compiled loop is compiled in the background, the interpreted loop asks for it
 #: again after about this many CPU seconds of interpreted work (decision 0081): a large first
 #: job costs at most about the compile, then runs compiled from the next point
@@ -384,7 +394,8 @@ class GenTree:
         return cls(arrays, dyn.tree_only)
 
 
-__all__ = ["AUTO_POINTS", "AUTO_SECONDS", "INTERP_SECONDS", "INTERP_SECONDS_PER_UNKNOWN", "NO_BAND",
+__all__ = ["AUTO_POINTS", "INTERP_WAIT_MAX", "INTERP_WAIT_MAX_DENSE",
+           "AUTO_SECONDS", "INTERP_SECONDS", "INTERP_SECONDS_PER_UNKNOWN", "NO_BAND",
            "GenTree", "available", "band_args", "band_lapack", "capsule_address", "compile_policy",
            "index", "kernel_entry", "lapack", "loaded", "mode", "patterned", "pointer",
            "python_entry", "raise_callback_error", "runnable", "table", "tier"]

@@ -58,6 +58,7 @@ from .._errors import MechError
 from ._jit_cache import notice
 from ._jit_runtime import (
     INTERP_SECONDS,
+    INTERP_WAIT_MAX,
     NO_BAND,
     SPARSE,
     band_args,
@@ -182,6 +183,10 @@ def run(system, pointers, times, q0, p, order, options, scaling, rot, Q, QD, QDD
     # ("load": ``entry`` finds loaded machine code first, else loads or compiles it)
     fn = compiled_loop(a) if how == "load" else (
         loaded(_state["loop"], a, (len(a) - 1,)) if how == "loaded" else None)
+    if fn is None and how == "load" and (large or n > INTERP_WAIT_MAX):
+        # being compiled in the background: a large system's points go to the Python code
+        # meanwhile (decision 0083), which asks for the compiled loop again after each point
+        return k, 0, scaling, 0
     if fn is None:
         from ._jit_interp import interpreted
 
