@@ -229,6 +229,17 @@ def test_python_kernels_entry_point():
     assert _jit_runtime.python_entry(object()) is None
 
 
+def _assert_power_balance(sol, t):
+    """The drive's power equals the rate of the kinetic plus potential energy (central
+    differences; an independent check of a dynamic solution's multipliers)."""
+    energy = np.asarray(sol.body_energy(), dtype=float) + np.asarray(sol.potential_energy(),
+                                                                     dtype=float)
+    rate = np.gradient(energy, t)
+    power = np.asarray(sol.power("drive"), dtype=float)
+    scale = np.abs(power).max()
+    np.testing.assert_allclose(power[1:-1], rate[1:-1], rtol=0, atol=5e-4 * scale)
+
+
 def test_interpreted_multipliers_against_the_power_balance(monkeypatch):
     """The multiplier solves' first tier (the same loop interpreted): the drive's power equals
     the rate of the kinetic plus potential energy (central differences), and the
@@ -239,12 +250,7 @@ def test_interpreted_multipliers_against_the_power_balance(monkeypatch):
     _first_tier(monkeypatch, chunk=256)
     slow = models.slider_crank_dynamic().solve(t, solution="dynamic")
     np.testing.assert_array_equal(slow.lam[:40], fast.lam)
-    energy = np.asarray(slow.body_energy(), dtype=float) + np.asarray(slow.potential_energy(),
-                                                                      dtype=float)
-    rate = np.gradient(energy, t)
-    power = np.asarray(slow.power("drive"), dtype=float)
-    scale = np.abs(power).max()
-    np.testing.assert_allclose(power[1:-1], rate[1:-1], rtol=0, atol=5e-4 * scale)
+    _assert_power_balance(slow, t)
 
 
 def _count_python_points(monkeypatch):
@@ -293,18 +299,11 @@ def test_interpreted_multipliers_above_the_old_limit(monkeypatch):
     the rate of the kinetic plus potential energy (central differences), and the
     multipliers are the compiled loop's bit for bit."""
     from mechsys.solvers import _jit_multipliers, _statics
-
-    def loaded():
-        m = models.four_bar_chain(10)
-        for b in m.bodies:
-            if not b.is_ground:
-                m.set_mass_properties(b.name, mass=1.0, centroid=(0.5, 0), inertia=0.1)
-        m.add_load(ms.Gravity((0, -1), 9.81))
-        return m
+    from test_jit_multipliers import loaded_chain
 
     t = np.linspace(0.0, 1.0, 201)
     monkeypatch.setenv("MECHSYS_JIT", "1")
-    fast = loaded().solve(t[:12], solution="dynamic")
+    fast = loaded_chain(10).solve(t[:12], solution="dynamic")
     real = _jit_modes.entry
 
     def entry(dispatcher, args, literal=(), say=None):
@@ -318,15 +317,10 @@ def test_interpreted_multipliers_above_the_old_limit(monkeypatch):
         raise AssertionError("the Python multiplier solve ran")
 
     monkeypatch.setattr(_statics, "solve_multipliers", python_path)
-    slow = loaded().solve(t, solution="dynamic")
+    slow = loaded_chain(10).solve(t, solution="dynamic")
     assert slow.q.shape[1] == 63
     np.testing.assert_array_equal(slow.lam[:12], fast.lam)
-    energy = np.asarray(slow.body_energy(), dtype=float) + np.asarray(slow.potential_energy(),
-                                                                      dtype=float)
-    rate = np.gradient(energy, t)
-    power = np.asarray(slow.power("drive"), dtype=float)
-    scale = np.abs(power).max()
-    np.testing.assert_allclose(power[1:-1], rate[1:-1], rtol=0, atol=5e-4 * scale)
+    _assert_power_balance(slow, t)
 
 
 def test_a_large_first_sweep_takes_the_python_code_while_compiling(monkeypatch):

@@ -55,10 +55,10 @@ def _loaded_spline_cam():
     return m
 
 
-def _loaded_chain():
-    """A chain of 30 four-bar loops (183 coordinates: above SPARSE_THRESHOLD, a banded
-    Jacobian) with masses and gravity."""
-    m = models.four_bar_chain(30)
+def loaded_chain(loops: int = 30):
+    """A chain of ``loops`` four-bar loops with masses and gravity (30 loops: 183
+    coordinates, above SPARSE_THRESHOLD, a banded Jacobian)."""
+    m = models.four_bar_chain(loops)
     for b in m.bodies:
         if not b.is_ground:
             m.set_mass_properties(b.name, mass=1.0, centroid=(0.5, 0), inertia=0.1)
@@ -83,7 +83,7 @@ def test_long_gen_arm_has_the_recursive_dynamics():
 
 BUILDS = {"gen-arm": _gen_arm, "gen-arm-12": lambda: _gen_arm(12), "slider-crank": _gas_crank,
           "n-four-bar": lambda: models.n_four_bar(3),
-          "rotor-3d": _rotor, "spline-cam": _loaded_spline_cam, "chain-183": _loaded_chain,
+          "rotor-3d": _rotor, "spline-cam": _loaded_spline_cam, "chain-183": loaded_chain,
           # a star: the sparse LU of a wide pattern
           "radial-183": lambda: models.radial_engine(30, g=9.81)}
 
@@ -196,7 +196,7 @@ def _friction_incline():
     return incline(0.3, 0.25)
 
 
-@pytest.mark.parametrize("build", [_gas_crank, _friction_incline, _loaded_chain],
+@pytest.mark.parametrize("build", [_gas_crank, _friction_incline, loaded_chain],
                          ids=["linear", "friction", "chain-183"])
 def test_hand_over_mid_sweep_gives_the_python_result(monkeypatch, build):
     """The compiled loop stopped after 7 points: the Python code continues (with friction,
@@ -298,9 +298,9 @@ def test_when_the_loop_runs(monkeypatch):
 
 
 def _friction_chain():
-    """The 183-coordinate chain of ``_loaded_chain`` with Coulomb friction in every ground
+    """The 183-coordinate chain of ``loaded_chain`` with Coulomb friction in every ground
     pivot, driven by the joint reactions."""
-    m = _loaded_chain()
+    m = loaded_chain()
     for k in range(31):
         m.add_load(ms.JointFriction(f"pivot{k}", mu=0.2, radius=0.05, v_eps=1e-3))
     return m
@@ -316,7 +316,7 @@ def _friction_radial():
 
 
 @pytest.mark.parametrize("mode", ["kinematic", "dynamic"])
-@pytest.mark.parametrize("build,plain", [(_friction_chain, _loaded_chain),
+@pytest.mark.parametrize("build,plain", [(_friction_chain, loaded_chain),
                                          (_friction_radial, lambda: models.radial_engine(
                                              30, g=9.81))], ids=["chain", "radial"])
 def test_large_model_with_friction_runs_compiled_through_the_band(monkeypatch, mode, build,

@@ -351,16 +351,9 @@ def test_sympy_backend_kernels_run_in_the_loop(monkeypatch):
     every point and every multiplier is the loop's, compiled and interpreted bit for bit,
     right by the references and equal to the SymEngine backend's to rounding."""
     from _sweep_reference import check_multipliers
-    from mechsys.solvers import _jit_multipliers, _statics
+    from test_jit_multipliers import spy_multipliers
 
-    taken = []
-    real = _jit_multipliers.multipliers
-
-    def spy(*a, **k):
-        taken.append(real(*a, **k))
-        return taken[-1]
-
-    monkeypatch.setattr(_statics._jit_multipliers, "multipliers", spy)
+    taken = spy_multipliers(monkeypatch)
     t = np.linspace(0.0, 1.0, 41)
     monkeypatch.setenv("MECHSYS_BACKEND", "sympy")
     out = {}
