@@ -39,21 +39,28 @@ def machine() -> str:
             f"SciPy {scipy.__version__}, SymPy {sympy.__version__}, SymEngine {se}")
 
 
-def both_loops(run, rounds: int, clock=None) -> dict:
-    """``{mode: (median CPU time, result)}`` of ``run()`` with ``MECHSYS_JIT=0`` (the Python
-    path) and ``1`` (the compiled loops), over interleaved rounds after a warm-up run of each
-    (it compiles and fills the caches)."""
+#: the first sentence of the tables that compare the two tiers (:func:`both_loops`)
+TIERS = ("`MECHSYS_JIT=0` (the loops' own code run by the interpreter, decisions 0081-0082: "
+         "one round) and `1` (compiled: the median of interleaved repetitions after a warm-up "
+         "run that compiles) side by side, CPU time with one BLAS thread.")
+
+
+def both_loops(run, rounds: int, clock=None, interpreted_rounds: int = 1) -> dict:
+    """``{mode: (median CPU time, result)}`` of ``run()`` with ``MECHSYS_JIT=0`` (the loops'
+    own code run by the Python interpreter: decisions 0081 and 0082) and ``1`` (the compiled
+    loops), interleaved, after a warm-up run of the compiled one (it compiles and fills the
+    caches). The interpreted tier compiles nothing and costs tens of times more, so it is
+    timed in the first ``interpreted_rounds`` rounds only."""
     import statistics
     import time
 
     clock = clock or time.process_time
     times = {"0": [], "1": []}
     out = {}
-    for mode in ("0", "1"):
-        os.environ["MECHSYS_JIT"] = mode
-        run()
-    for _ in range(rounds):
-        for mode in ("0", "1"):
+    os.environ["MECHSYS_JIT"] = "1"
+    run()
+    for k in range(rounds):
+        for mode in ("0", "1") if k < interpreted_rounds else ("1",):
             os.environ["MECHSYS_JIT"] = mode
             t0 = clock()
             out[mode] = run()
@@ -63,8 +70,8 @@ def both_loops(run, rounds: int, clock=None) -> dict:
 
 
 def per_evaluation(run, rounds: int):
-    """``(Python CPU s per evaluation, compiled CPU s per evaluation, Python result, compiled
-    result, compiled run's CPU s)`` of a simulation ``run()`` in both loops
+    """``(interpreted CPU s per evaluation, compiled CPU s per evaluation, interpreted result,
+    compiled result, compiled run's CPU s)`` of a simulation ``run()`` in both tiers
     (:func:`both_loops`); every step of the compiled run must have run compiled."""
     got = both_loops(run, rounds)
     (tp, py), (tc, jit) = got["0"], got["1"]
@@ -73,8 +80,8 @@ def per_evaluation(run, rounds: int):
 
 
 def per_point(model, t, rounds: int):
-    """``(Python CPU s per point, compiled CPU s per point, Python result, compiled result)``
-    of the inverse dynamics ``model.solve(t, solution="dynamic")`` in both loops."""
+    """``(interpreted CPU s per point, compiled CPU s per point, interpreted result, compiled
+    result)`` of the inverse dynamics ``model.solve(t, solution="dynamic")`` in both tiers."""
     got = both_loops(lambda: model.solve(t, solution="dynamic"), rounds)
     (tp, py), (tc, jit) = got["0"], got["1"]
     return tp / len(t), tc / len(t), py, jit

@@ -257,8 +257,9 @@ def fresh(name: str, env: dict | None = None) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def _python_stepper(simulate):
-    """``simulate`` with ``MECHSYS_JIT=0`` (the Python stepper), for the comparison."""
+def _interpreted(simulate):
+    """``simulate`` with ``MECHSYS_JIT=0`` (the stepper's own code run by the interpreter,
+    decision 0082), for the comparison."""
     def run(t):
         old = os.environ.get("MECHSYS_JIT")
         os.environ["MECHSYS_JIT"] = "0"
@@ -286,7 +287,7 @@ def measure(rounds: int = 5) -> dict:
     if sym["build"] == float("inf"):
         raise SystemExit(f"SymPy's build took more than {SYMPY_CAP_S:.0f} s of CPU: no comparison")
     sims = {"mechsys": mechsys_build(), "sympy": sympy_build()}
-    sims["python"] = _python_stepper(sims["mechsys"])
+    sims["python"] = _interpreted(sims["mechsys"])
     out = {k: f(TIMES) for k, f in sims.items()}          # warm-up, and the compared runs
     times = {k: [] for k in sims}
     for _ in range(rounds):
@@ -340,7 +341,8 @@ def table(r: dict) -> str:
         f"{min(r['warm_all']):.2f}-{max(r['warm_all']):.2f} s); the run compiles "
         f"{r['kernels']} small kernels into the cache and the compiled stepper's loop for the "
         "rolling rows (decision 0062): the cold build compiles it with Numba, the warm one "
-        f"loads it from the cache. The same run on the Python stepper (`MECHSYS_JIT=0`): "
+        "loads it from the cache. The same run interpreted (`MECHSYS_JIT=0`, the stepper's "
+        "own code, the same numbers): "
         f"{sec(run['python'])} ({r['steps']['python']} steps).",
     ]
     return "\n".join(lines)

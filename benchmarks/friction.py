@@ -1,4 +1,4 @@
-"""Friction at scale: loads that depend on the multipliers, Python and compiled loops.
+"""Friction at scale: loads that depend on the multipliers, interpreted and compiled loops.
 
 * Free motion: a chain of N uniform rods (``models.pendulum_chain``) with Coulomb friction
   in every joint (``JointFriction``, mu 0.1, radius 0.01, 1e-3 rad/s regularisation),
@@ -8,10 +8,7 @@
 * Free motion of a tree: a radial engine (``models.radial_engine(C, g=9.81)``, every rod
   on the crank pin) coasting from 3 rad/s with Coulomb friction in every rod's crank-pin
   bearing (mu 0.1, radius 0.05), 1 s at rtol 1e-8. Its Newton matrix is not banded: both
-  loops factorise it by the compiled sparse LU of its fixed pattern. The two loops'
-  Newtons stop at their tolerance on different sides of rounding, their step controllers
-  then reject different steps, so they agree to the integration tolerance, not to rounding
-  (``tests/test_jit_newton.py`` checks both against a tight reference).
+  tiers factorise it by the loop's sparse LU of its fixed pattern.
 * Inverse dynamics of trees: the radial engine driven at one revolution a second with the
   same bearings' friction (mu 0.2), 40 points; the multipliers' Newton matrix by the
   compiled sparse LU in both loops.
@@ -19,9 +16,11 @@
   coordinates) with unit masses, gravity and friction in its ``L + 1`` ground pivots, 40
   points; the multipliers' Newton at every point (decision 0030).
 
-Each row: CPU time (median of interleaved repetitions, after a warm-up run that compiles),
-per evaluation (free motion) or per point (sweep and multipliers), for ``MECHSYS_JIT=0``
-and ``1``, and the largest difference of the two results relative to their size.
+Each row: CPU time per evaluation (free motion) or per point (sweep and multipliers) of
+the loops' own code interpreted (``MECHSYS_JIT=0``, one round) and compiled (``1``, the
+median of interleaved repetitions after a warm-up run that compiles), and the largest
+difference of the two results relative to their size (0: the tiers compute the same
+numbers bit for bit).
 
 Run: ``.venv/bin/python benchmarks/friction.py`` prints the tables (about a minute);
 ``--write docs/performance-free.md`` also puts them in that page (its ``friction`` block).
@@ -38,7 +37,7 @@ import sys  # noqa: E402
 import warnings  # noqa: E402
 
 import numpy as np  # noqa: E402
-from _machine import per_evaluation, per_point, relative_difference, table_main  # noqa: E402  (sibling module)
+from _machine import TIERS, per_evaluation, per_point, relative_difference, table_main  # noqa: E402  (sibling module)
 
 import mechsys as ms  # noqa: E402
 from mechsys import models  # noqa: E402
@@ -78,7 +77,7 @@ def _engine(cylinders):
 def tables(rounds: int = 3) -> str:
     warnings.simplefilter("ignore")
     out = ["Free motion of a chain with friction in every joint, 0.1 s, rtol 1e-6:", "",
-           "| links | unknowns | Python / evaluation | compiled / evaluation | ratio | "
+           "| links | unknowns | interpreted / evaluation | compiled / evaluation | ratio | "
            "difference (q) |",
            "| ---: | ---: | ---: | ---: | ---: | ---: |"]
     for links in LINKS:
@@ -90,8 +89,8 @@ def tables(rounds: int = 3) -> str:
                    f"{relative_difference(jit.q[-1], py.q[-1]):.1e} |")
     out += ["", "Free motion of a radial engine with friction in every crank-pin bearing, 1 s, "
             "rtol 1e-8:", "",
-            "| cylinders | unknowns | Python / evaluation | compiled / evaluation | ratio | "
-            "steps (Python, compiled) | difference (q) |",
+            "| cylinders | unknowns | interpreted / evaluation | compiled / evaluation | ratio | "
+            "steps (interpreted, compiled) | difference (q) |",
             "| ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for c in CYLINDERS:
         free = _engine(c)
@@ -102,7 +101,7 @@ def tables(rounds: int = 3) -> str:
                    f"{jit.extra['steps']} | {relative_difference(jit.q[-1], py.q[-1]):.1e} |")
     out += ["", "Inverse dynamics of the four-bar chain with friction in its ground pivots, "
             "40 points (sweep included):", "",
-            "| loops | coordinates | Python / point | compiled / point | ratio | "
+            "| loops | coordinates | interpreted / point | compiled / point | ratio | "
             "difference (lambda) |",
             "| ---: | ---: | ---: | ---: | ---: | ---: |"]
     t = np.linspace(0.1, 1.0, 40)
@@ -115,7 +114,7 @@ def tables(rounds: int = 3) -> str:
     out += ["", "Inverse dynamics of the radial engine driven at one revolution a second, "
             "friction in every crank-pin bearing (a star: the sparse LU), 40 points (sweep "
             "included):", "",
-            "| cylinders | coordinates | Python / point | compiled / point | ratio | "
+            "| cylinders | coordinates | interpreted / point | compiled / point | ratio | "
             "difference (lambda) |",
             "| ---: | ---: | ---: | ---: | ---: | ---: |"]
     for c in CYLINDERS[1:]:
@@ -129,9 +128,7 @@ def tables(rounds: int = 3) -> str:
     return "\n".join(out)
 
 
-INTRO = ("`MECHSYS_JIT=0` (the Python path) and `1` (the compiled loops) side by side, CPU "
-         "time with one BLAS thread, the median of interleaved repetitions after a warm-up "
-         "run. Above 150 unknowns both go through the Newton matrix's fixed pattern: banded "
+INTRO = (TIERS + " Above 150 unknowns both go through the Newton matrix's fixed pattern: banded "
          "for chains, the compiled sparse LU for trees (decisions 0028 and 0030).")
 
 

@@ -1,4 +1,4 @@
-"""Kinematic sweeps and inverse dynamics of arms in generalized coordinates, Python and
+"""Kinematic sweeps and inverse dynamics of arms in generalized coordinates, interpreted and
 compiled loops.
 
 ``models.driven_gen_arm(L)``: a planar arm of ``L`` links (1 m, 1 kg, 1/12), each a
@@ -10,11 +10,12 @@ elimination; the sweep and multiplier loops read them through the entry points c
 once more without it (decision 0018, amended in the fourteenth session), and the recursive
 dynamics' right-hand sides come from the compiled recursion (``_jit_free_loop.gen_points``).
 
-Each row: CPU time per point (median of interleaved repetitions, after a warm-up run that
-compiles) of ``solve(t, solution="acceleration")`` (the sweep) and of ``solution="dynamic"``
-(sweep and multipliers), for ``MECHSYS_JIT=0`` (the Python path: with it the recursion
-itself runs in plain Python) and ``1``, and the largest difference of the two loops'
-multipliers relative to their size.
+Each row: CPU time per point of ``solve(t, solution="acceleration")`` (the sweep) and of
+``solution="dynamic"`` (sweep and multipliers), the loops' own code interpreted
+(``MECHSYS_JIT=0``, one round; the recursion interpreted too) and compiled (``1``, the
+median of interleaved repetitions after a warm-up run that compiles), and the largest
+difference of the two tiers' multipliers relative to their size (0: the same numbers bit
+for bit).
 
 Run: ``.venv/bin/python benchmarks/gen_inverse.py`` prints the table (about a minute);
 ``--write docs/performance-free.md`` also puts it in that page (its ``gen_inverse`` block).
@@ -31,7 +32,7 @@ import sys  # noqa: E402
 import warnings  # noqa: E402
 
 import numpy as np  # noqa: E402
-from _machine import both_loops, per_point, relative_difference, table_main  # noqa: E402  (sibling module)
+from _machine import TIERS, both_loops, per_point, relative_difference, table_main  # noqa: E402  (sibling module)
 
 from mechsys import models  # noqa: E402
 
@@ -42,7 +43,7 @@ def tables(rounds: int = 3) -> str:
     warnings.simplefilter("ignore")
     t = np.linspace(0.0, 2.0, 400)
     out = ["Driven arms in generalized coordinates, 400 points:", "",
-           "| links | dynamics | sweep, Python | sweep, compiled | inverse dynamics, Python | "
+           "| links | dynamics | sweep, interpreted | sweep, compiled | inverse dynamics, interpreted | "
            "inverse dynamics, compiled | ratio | difference (lambda) |",
            "| ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for links in LINKS:
@@ -57,9 +58,7 @@ def tables(rounds: int = 3) -> str:
     return "\n".join(out)
 
 
-INTRO = ("`MECHSYS_JIT=0` (the Python path) and `1` (the compiled loops) side by side, CPU "
-         "time with one BLAS thread, the median of interleaved repetitions after a warm-up "
-         "run. The compiled sweep reads the CSE kernels through entry points compiled "
+INTRO = (TIERS + " The compiled sweep reads the CSE kernels through entry points compiled "
          "without CSE; the recursive dynamics' loads come from the compiled recursion "
          "(decision 0018).")
 

@@ -1,12 +1,13 @@
 """Nonholonomic paths at scale: a tractor towing trailers (``models.trailer_train``), every
-blade rolling without side slip, Python and compiled steppers side by side.
+blade rolling without side slip, the stepper interpreted and compiled side by side.
 
-Each row: 3 s at rtol 1e-10 (DOP853), 31 outputs; CPU time per evaluation (median of
-interleaved repetitions, after a warm-up run that compiles) for ``MECHSYS_JIT=0`` and
-``1``, the run's time compiled, the largest difference of the two results relative to
-their size, and the compiled run's distance of the tractor's blade from its closed-form
+Each row: 3 s at rtol 1e-10 (DOP853), 31 outputs; CPU time per evaluation of the
+stepper's own code interpreted (``MECHSYS_JIT=0``, one round) and compiled (``1``, the
+median of interleaved repetitions after a warm-up run that compiles), the run's time
+compiled, the largest difference of the two results relative to their size (0: the same
+numbers bit for bit), and the compiled run's distance of the tractor's blade from its closed-form
 circle. Up to 150 coordinates the velocity system is dense (the written-out LU); above,
-both steppers gather it into its fixed pattern and factorise it by the same compiled sparse
+both tiers gather it into its fixed pattern and factorise it by the same compiled sparse
 LU, and project through ``[[I, J^T], [J^, 0]]`` (decision 0027).
 
 Run: ``.venv/bin/python benchmarks/paths.py`` prints the table (about a minute);
@@ -24,7 +25,7 @@ import sys  # noqa: E402
 import warnings  # noqa: E402
 
 import numpy as np  # noqa: E402
-from _machine import per_evaluation, relative_difference, table_main  # noqa: E402  (sibling module)
+from _machine import TIERS, per_evaluation, relative_difference, table_main  # noqa: E402  (sibling module)
 
 from mechsys import models  # noqa: E402
 
@@ -38,7 +39,7 @@ def tables(rounds: int = 3) -> str:
     R = SPEED / RATE
     circle = np.c_[R * np.sin(RATE * t), R * (1 - np.cos(RATE * t))]
     out = ["Tractor and trailers, 3 s, DOP853 rtol 1e-10:", "",
-           "| trailers | coordinates | Python / evaluation | compiled / evaluation | ratio | "
+           "| trailers | coordinates | interpreted / evaluation | compiled / evaluation | ratio | "
            "compiled run | difference (q) | blade off its circle |",
            "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for k in TRAILERS:
@@ -52,9 +53,7 @@ def tables(rounds: int = 3) -> str:
     return "\n".join(out)
 
 
-INTRO = ("`MECHSYS_JIT=0` (the Python stepper) and `1` (the compiled loop) side by side, CPU "
-         "time with one BLAS thread, the median of interleaved repetitions after a warm-up "
-         "run. Above 150 coordinates both solve the velocity system `[Phi_q; psi_qd]` through "
+INTRO = (TIERS + " Above 150 coordinates both solve the velocity system `[Phi_q; psi_qd]` through "
          "its fixed pattern by the same compiled sparse LU (decision 0027).")
 
 

@@ -1,4 +1,4 @@
-"""Spatial chains at scale (Euler parameters), Python and compiled loops.
+"""Spatial chains at scale (Euler parameters), interpreted and compiled loops.
 
 ``models.spatial_chain(L, zigzag=0.3)``: ``L`` rods joined by ball joints, turned
 alternately by +-0.3 rad about the vertical so that the chain falls out of any plane; 1 s
@@ -8,13 +8,12 @@ and its Euler parameters' norm), so ``11 L`` unknowns.
 The mass matrix of a rod in Euler parameters is singular (rank 6 of 7). The compiled
 loop's block path makes each block regular with the rows on that rod alone and reorders
 the rows to keep ``J M^-1 J^T`` banded (``compiled_solver == "block"``, decision 0032), in
-time linear in the rods. The Python path solves the augmented system: dense up to 150
-unknowns, then its banded pattern by LAPACK's band LU.
+time linear in the rods.
 
-Each row: CPU time (median of interleaved repetitions, after a warm-up run that compiles)
-per evaluation, for ``MECHSYS_JIT=0`` and ``1``, and the largest difference of the final
-coordinates of the two runs relative to their size (each run adaptive: the two loops'
-steps differ by rounding, so the difference is of the order of the tolerance).
+Each row: CPU time per evaluation of the loop's own code interpreted (``MECHSYS_JIT=0``,
+one round) and compiled (``1``, the median of interleaved repetitions after a warm-up run
+that compiles), and the largest difference of the final coordinates of the two runs
+relative to their size (0: the same numbers bit for bit).
 
 Run: ``.venv/bin/python benchmarks/spatial.py`` prints the table (about a minute);
 ``--write docs/performance-free.md`` also puts it in that page (its ``spatial`` block).
@@ -30,7 +29,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 import sys  # noqa: E402
 import warnings  # noqa: E402
 
-from _machine import per_evaluation, relative_difference, table_main  # noqa: E402  (sibling module)
+from _machine import TIERS, per_evaluation, relative_difference, table_main  # noqa: E402  (sibling module)
 
 from mechsys import models  # noqa: E402
 
@@ -46,7 +45,7 @@ def _falling(links):
 def tables(rounds: int = 3) -> str:
     warnings.simplefilter("ignore")
     out = ["Free fall of a zigzag spatial chain, 1 s, DOP853 rtol 1e-8:", "",
-           "| links | unknowns | Python / evaluation | compiled / evaluation | ratio | "
+           "| links | unknowns | interpreted / evaluation | compiled / evaluation | ratio | "
            "compiled run | difference (q) |",
            "| ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for links in LINKS:
@@ -60,12 +59,9 @@ def tables(rounds: int = 3) -> str:
     return "\n".join(out)
 
 
-INTRO = ("`MECHSYS_JIT=0` (the Python path) and `1` (the compiled loops) side by side, CPU "
-         "time with one BLAS thread, the median of interleaved repetitions after a warm-up "
-         "run. Euler-parameter bodies have singular mass blocks: the compiled block path "
+INTRO = (TIERS + " Euler-parameter bodies have singular mass blocks: the compiled block path "
          "makes them regular with each rod's own rows and reorders the rows to a narrow "
-         "band; the Python path solves the augmented system, dense up to 150 unknowns, then "
-         "by LAPACK's band LU (decision 0032).")
+         "band (decision 0032).")
 
 
 def main(argv=None) -> int:

@@ -1,16 +1,16 @@
 """Trees of many branches at scale: radial engines (every rod on the crank pin), whose
-Jacobian and augmented matrix have bands as wide as the engine, Python and compiled loops.
+Jacobian and augmented matrix have bands as wide as the engine, interpreted and compiled loops.
 
 * Free motion: ``models.radial_engine(C, g=9.81)`` with its driver dropped, coasting from
-  3 rad/s, 3 s at rtol 1e-8 (DOP853). Above 150 unknowns the Python path factorises the
-  augmented matrix by the compiled sparse LU of its fixed pattern, and the compiled loop
-  does the same in the loop (``compiled_solver == "sparse"``, decision 0031).
+  3 rad/s, 3 s at rtol 1e-8 (DOP853). Above 150 unknowns the loop factorises the
+  augmented matrix by the sparse LU of its fixed pattern (``compiled_solver == "sparse"``, decision 0031).
 * Inverse dynamics over a sweep: the same engines driven at one revolution a second, 200
   points, position, velocity, acceleration and multipliers at every point.
 
-Each row: CPU time (median of interleaved repetitions, after a warm-up run that compiles),
-per evaluation (free motion) or per point (sweep), for ``MECHSYS_JIT=0`` and ``1``, and the
-largest difference of the two results relative to their size.
+Each row: CPU time per evaluation (free motion) or per point (sweep) of the loops' own code
+interpreted (``MECHSYS_JIT=0``, one round) and compiled (``1``, the median of interleaved
+repetitions after a warm-up run that compiles), and the largest difference of the two
+results relative to their size (0: the same numbers bit for bit).
 
 Run: ``.venv/bin/python benchmarks/trees.py`` prints the tables (about a minute);
 ``--write docs/performance-free.md`` also puts them in that page (its ``trees`` block).
@@ -27,7 +27,7 @@ import sys  # noqa: E402
 import warnings  # noqa: E402
 
 import numpy as np  # noqa: E402
-from _machine import per_evaluation, per_point, relative_difference, table_main  # noqa: E402  (sibling module)
+from _machine import TIERS, per_evaluation, per_point, relative_difference, table_main  # noqa: E402  (sibling module)
 
 from mechsys import models  # noqa: E402
 
@@ -43,7 +43,7 @@ def _coasting(cylinders):
 def tables(rounds: int = 3) -> str:
     warnings.simplefilter("ignore")
     out = ["Free motion of a coasting radial engine, 3 s, DOP853 rtol 1e-8:", "",
-           "| cylinders | unknowns | Python / evaluation | compiled / evaluation | ratio | "
+           "| cylinders | unknowns | interpreted / evaluation | compiled / evaluation | ratio | "
            "compiled run | difference (q) |",
            "| ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for c in CYLINDERS:
@@ -56,7 +56,7 @@ def tables(rounds: int = 3) -> str:
                    f"{relative_difference(jit.q[-1], py.q[-1]):.1e} |")
     out += ["", "Inverse dynamics of the driven engine, one revolution at 200 points (sweep "
             "included):", "",
-            "| cylinders | coordinates | Python / point | compiled / point | ratio | "
+            "| cylinders | coordinates | interpreted / point | compiled / point | ratio | "
             "difference (lambda) |",
             "| ---: | ---: | ---: | ---: | ---: | ---: |"]
     t = np.linspace(0.0, 1.0, 200)
@@ -69,9 +69,7 @@ def tables(rounds: int = 3) -> str:
     return "\n".join(out)
 
 
-INTRO = ("`MECHSYS_JIT=0` (the Python path) and `1` (the compiled loops) side by side, CPU "
-         "time with one BLAS thread, the median of interleaved repetitions after a warm-up "
-         "run. Above 150 unknowns both factorise through the fixed pattern's sparse LU in a "
+INTRO = (TIERS + " Above 150 unknowns both factorise through the fixed pattern's sparse LU in a "
          "minimum-degree ordering, the same compiled function (decision 0031): linear in the "
          "cylinders, where the band LU of a star costs the square of its width.")
 
