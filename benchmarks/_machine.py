@@ -41,16 +41,20 @@ def machine() -> str:
 
 #: the first sentence of the tables that compare the two tiers (:func:`both_loops`)
 TIERS = ("`MECHSYS_JIT=0` (the loops' own code run by the interpreter, decisions 0081-0082: "
-         "one round) and `1` (compiled: the median of interleaved repetitions after a warm-up "
-         "run that compiles) side by side, CPU time with one BLAS thread.")
+         "once, on a shorter job of the same kind) and `1` (compiled: the median of "
+         "interleaved repetitions after a warm-up run that compiles) side by side, CPU time "
+         "with one BLAS thread; \"same numbers\": the interpreted job's numbers are the "
+         "compiled tier's on that job bit for bit.")
 
 
-def both_loops(run, rounds: int, clock=None, interpreted_rounds: int = 1) -> dict:
+def both_loops(run, rounds: int, clock=None, short=None) -> dict:
     """``{mode: (median CPU time, result)}`` of ``run()`` with ``MECHSYS_JIT=0`` (the loops'
     own code run by the Python interpreter: decisions 0081 and 0082) and ``1`` (the compiled
     loops), interleaved, after a warm-up run of the compiled one (it compiles and fills the
-    caches). The interpreted tier compiles nothing and costs tens of times more, so it is
-    timed in the first ``interpreted_rounds`` rounds only."""
+    caches). The interpreted tier compiles nothing and costs tens of times more: it is timed
+    once, on ``short()`` when given (a shorter job of the same kind, so that large systems
+    take seconds, not hours), and ``"same"`` tells whether the compiled tier gives that job's
+    numbers bit for bit (:func:`same_numbers`)."""
     import statistics
     import time
 
@@ -60,31 +64,55 @@ def both_loops(run, rounds: int, clock=None, interpreted_rounds: int = 1) -> dic
     os.environ["MECHSYS_JIT"] = "1"
     run()
     for k in range(rounds):
-        for mode in ("0", "1") if k < interpreted_rounds else ("1",):
+        for mode in ("0", "1") if k == 0 else ("1",):
             os.environ["MECHSYS_JIT"] = mode
+            job = short if mode == "0" and short is not None else run
             t0 = clock()
-            out[mode] = run()
+            out[mode] = job()
             times[mode].append(clock() - t0)
+    os.environ["MECHSYS_JIT"] = "1"
+    twin = out["1"] if short is None else short()
     os.environ.pop("MECHSYS_JIT", None)
-    return {mode: (statistics.median(times[mode]), out[mode]) for mode in times}
+    got = {mode: (statistics.median(times[mode]), out[mode]) for mode in times}
+    got["same"] = same_numbers(out["0"], twin)
+    return got
 
 
-def per_evaluation(run, rounds: int):
+def same_numbers(a, b) -> bool:
+    """Whether two solutions hold the same numbers bit for bit (every array attribute of
+    the two: ``t``, ``q``, ``qd``, ``qdd``, ``lam`` where present)."""
+    import numpy as np
+
+    for name in ("t", "q", "qd", "qdd", "lam"):
+        x, y = getattr(a, name, None), getattr(b, name, None)
+        if x is None and y is None:
+            continue
+        if x is None or y is None or not np.array_equal(np.asarray(x), np.asarray(y),
+                                                         equal_nan=True):
+            return False
+    return True
+
+
+def per_evaluation(run, rounds: int, short=None):
     """``(interpreted CPU s per evaluation, compiled CPU s per evaluation, interpreted result,
-    compiled result, compiled run's CPU s)`` of a simulation ``run()`` in both tiers
-    (:func:`both_loops`); every step of the compiled run must have run compiled."""
-    got = both_loops(run, rounds)
+    compiled result, compiled run's CPU s, same)`` of a simulation ``run()`` in both tiers
+    (:func:`both_loops`; ``short``: the interpreted tier's shorter run); every step of the
+    compiled run must have run compiled."""
+    got = both_loops(run, rounds, short=short)
     (tp, py), (tc, jit) = got["0"], got["1"]
     assert jit.extra["compiled_steps"] == jit.extra["steps"], "a step ran in Python"
-    return tp / py.extra["evaluations"], tc / jit.extra["evaluations"], py, jit, tc
+    return tp / py.extra["evaluations"], tc / jit.extra["evaluations"], py, jit, tc, got["same"]
 
 
-def per_point(model, t, rounds: int):
+def per_point(model, t, rounds: int, short: int | None = None):
     """``(interpreted CPU s per point, compiled CPU s per point, interpreted result, compiled
-    result)`` of the inverse dynamics ``model.solve(t, solution="dynamic")`` in both tiers."""
-    got = both_loops(lambda: model.solve(t, solution="dynamic"), rounds)
+    result, same)`` of the inverse dynamics ``model.solve(t, solution="dynamic")`` in both
+    tiers (the interpreted one on the first ``short`` points when given)."""
+    ts = t if short is None else t[:short]
+    got = both_loops(lambda: model.solve(t, solution="dynamic"), rounds,
+                     short=None if short is None else (lambda: model.solve(ts, solution="dynamic")))
     (tp, py), (tc, jit) = got["0"], got["1"]
-    return tp / len(t), tc / len(t), py, jit
+    return tp / len(ts), tc / len(t), py, jit, got["same"]
 
 
 def relative_difference(a, b) -> float:

@@ -17,10 +17,10 @@
   points; the multipliers' Newton at every point (decision 0030).
 
 Each row: CPU time per evaluation (free motion) or per point (sweep and multipliers) of
-the loops' own code interpreted (``MECHSYS_JIT=0``, one round) and compiled (``1``, the
-median of interleaved repetitions after a warm-up run that compiles), and the largest
-difference of the two results relative to their size (0: the tiers compute the same
-numbers bit for bit).
+the loops' own code interpreted (``MECHSYS_JIT=0``, once, on a fifth or a tenth of the span
+or the first 8 points) and compiled (``1``, the median of interleaved repetitions after a
+warm-up run that compiles), and whether the interpreted job's numbers (t, q, qd, qdd, multipliers) are the
+compiled tier's on that same job bit for bit ("same numbers").
 
 Run: ``.venv/bin/python benchmarks/friction.py`` prints the tables (about a minute);
 ``--write docs/performance-free.md`` also puts them in that page (its ``friction`` block).
@@ -37,7 +37,7 @@ import sys  # noqa: E402
 import warnings  # noqa: E402
 
 import numpy as np  # noqa: E402
-from _machine import TIERS, per_evaluation, per_point, relative_difference, table_main  # noqa: E402  (sibling module)
+from _machine import TIERS, per_evaluation, per_point, table_main  # noqa: E402  (sibling module)
 
 import mechsys as ms  # noqa: E402
 from mechsys import models  # noqa: E402
@@ -78,53 +78,52 @@ def tables(rounds: int = 3) -> str:
     warnings.simplefilter("ignore")
     out = ["Free motion of a chain with friction in every joint, 0.1 s, rtol 1e-6:", "",
            "| links | unknowns | interpreted / evaluation | compiled / evaluation | ratio | "
-           "difference (q) |",
+           "same numbers |",
            "| ---: | ---: | ---: | ---: | ---: | ---: |"]
     for links in LINKS:
         free = _chain(links)
-        ep, ec, py, jit, _ = per_evaluation(
-            lambda free=free: free.simulate((0.0, 0.1), rtol=1e-6, atol=1e-8), rounds)
+        ep, ec, py, jit, _, same = per_evaluation(
+            lambda free=free: free.simulate((0.0, 0.1), rtol=1e-6, atol=1e-8), rounds,
+            short=lambda free=free: free.simulate((0.0, 0.02), rtol=1e-6, atol=1e-8))
         out.append(f"| {links} | {free.system.n + free.system.m} | {ep * 1e6:.0f} µs | "
-                   f"{ec * 1e6:.0f} µs | {ep / ec:.1f} | "
-                   f"{relative_difference(jit.q[-1], py.q[-1]):.1e} |")
+                   f"{ec * 1e6:.0f} µs | {ep / ec:.1f} | {'yes' if same else 'no'} |")
     out += ["", "Free motion of a radial engine with friction in every crank-pin bearing, 1 s, "
             "rtol 1e-8:", "",
             "| cylinders | unknowns | interpreted / evaluation | compiled / evaluation | ratio | "
-            "steps (interpreted, compiled) | difference (q) |",
-            "| ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+            "same numbers |",
+            "| ---: | ---: | ---: | ---: | ---: | ---: |"]
     for c in CYLINDERS:
         free = _engine(c)
-        ep, ec, py, jit, _ = per_evaluation(lambda free=free: free.simulate(
-            (0.0, 1.0), initial_condition={"crank.th_d": 3.0}, rtol=1e-8), rounds)
+        ep, ec, py, jit, _, same = per_evaluation(lambda free=free: free.simulate(
+            (0.0, 1.0), initial_condition={"crank.th_d": 3.0}, rtol=1e-8), rounds,
+            short=lambda free=free: free.simulate(
+                (0.0, 0.1), initial_condition={"crank.th_d": 3.0}, rtol=1e-8))
         out.append(f"| {c} | {free.system.n + free.system.m} | {ep * 1e6:.0f} µs | "
-                   f"{ec * 1e6:.0f} µs | {ep / ec:.1f} | {py.extra['steps']}, "
-                   f"{jit.extra['steps']} | {relative_difference(jit.q[-1], py.q[-1]):.1e} |")
+                   f"{ec * 1e6:.0f} µs | {ep / ec:.1f} | {'yes' if same else 'no'} |")
     out += ["", "Inverse dynamics of the four-bar chain with friction in its ground pivots, "
             "40 points (sweep included):", "",
             "| loops | coordinates | interpreted / point | compiled / point | ratio | "
-            "difference (lambda) |",
+            "same numbers |",
             "| ---: | ---: | ---: | ---: | ---: | ---: |"]
     t = np.linspace(0.1, 1.0, 40)
     for loops in LOOPS:
         m = _loops(loops)
-        pp, pc, py, jit = per_point(m, t, rounds)
+        pp, pc, py, jit, same = per_point(m, t, rounds, short=8)
         out.append(f"| {loops} | {py.system.n} | {pp * 1e3:.2f} ms | "
-                   f"{pc * 1e3:.2f} ms | {pp / pc:.0f} | "
-                   f"{relative_difference(jit.lam, py.lam):.1e} |")
+                   f"{pc * 1e3:.2f} ms | {pp / pc:.0f} | {'yes' if same else 'no'} |")
     out += ["", "Inverse dynamics of the radial engine driven at one revolution a second, "
             "friction in every crank-pin bearing (a star: the sparse LU), 40 points (sweep "
             "included):", "",
             "| cylinders | coordinates | interpreted / point | compiled / point | ratio | "
-            "difference (lambda) |",
+            "same numbers |",
             "| ---: | ---: | ---: | ---: | ---: | ---: |"]
     for c in CYLINDERS[1:]:
         m = models.radial_engine(c, speed=2 * np.pi, g=9.81)
         for k in range(c):
             m.add_load(ms.JointFriction(f"pin{k}", mu=0.2, radius=0.05, v_eps=1e-3))
-        pp, pc, py, jit = per_point(m, t, rounds)
+        pp, pc, py, jit, same = per_point(m, t, rounds, short=8)
         out.append(f"| {c} | {py.system.n} | {pp * 1e3:.2f} ms | "
-                   f"{pc * 1e3:.2f} ms | {pp / pc:.0f} | "
-                   f"{relative_difference(jit.lam, py.lam):.1e} |")
+                   f"{pc * 1e3:.2f} ms | {pp / pc:.0f} | {'yes' if same else 'no'} |")
     return "\n".join(out)
 
 
