@@ -687,9 +687,9 @@ def reject_unknown(where: str, unknown: dict, known) -> None:
     unknown_options(where, unknown, known)
 
 
-#: the types of a time or step length that no unit conversion changes (exactly these: a
-#: subclass, e.g. ``bool`` or a quantity type, takes the general path)
-_PLAIN = (float, int)
+#: the types of a time or step length that no unit conversion changes (exactly these, with
+#: the defaults' marker type: any other subclass, e.g. ``bool``, takes the general path)
+_PLAIN = (float, int, _Default)
 
 
 def _plain(value) -> bool:
