@@ -12,12 +12,18 @@ Besides the free-motion problems: the slider-crank kinematic sweep against a vec
 NumPy closed form (D), model build + compile time against the number of links, and Mech's
 Adams integrator against the default one on the double pendulum.
 
+Every mechsys case runs once untimed before the rounds (its first run may compile a loop
+with Numba, tens of seconds); the peers' cases do not need it (their first runs compile
+nothing, and their single-round cases take up to a minute and a half).
+
 Run: ``make bench`` (``python benchmarks/peers/run.py --write docs/performance.md``), which
 needs the ``bench`` extra (``pip install -e .[bench]``: mujoco, exudyn). Peers that are not
 installed are skipped and said so. ``--quick``: problems A, B4, B16, C and D only, 3 rounds.
 ``--write PATH`` replaces the block between ``<!-- peers:begin -->`` and
 ``<!-- peers:end -->`` of that page (``benchmarks/kinematic_sweep.py`` keeps the block when it
-rewrites the page).
+rewrites the page). The columns "before" come from the block the page holds when it is
+written, or from ``--before PATH`` (e.g. an older commit's page, ``git show
+<commit>:docs/performance.md > old.md``), so that a change is read against a chosen run.
 """
 
 from __future__ import annotations
@@ -43,6 +49,7 @@ clock = time.process_time
 BEGIN, END = "<!-- peers:begin -->", "<!-- peers:end -->"
 TARGETS = {"A": (1e-4, 1e-6, 1e-8), "B": (1e-6,), "C": (1e-6,)}
 C_GAP = 1e-10      # the four-bar's loop-closure target for mechsys (exact constraints)
+WARM = {"mechsys"}  # packages whose cases run once untimed before the rounds (Numba)
 
 
 def build_cases(problems: set[str], sizes, full: bool) -> tuple[list, list[str]]:
@@ -62,6 +69,12 @@ def measure(cases, refs, max_rounds: int) -> list[dict]:
     """Interleaved rounds; a case leaves the rotation once it has its number of rounds."""
     times = {id(c): [] for c in cases}
     want = {}
+    for c in cases:
+        if c.package in WARM:
+            # (untimed: a setting's first run may compile its loop, tens of seconds, which
+            # would count as its only round; the peers' first runs compile nothing)
+            c.reset()
+            c.run()
     for c in cases:                          # first round: also the accuracy
         c.reset()
         t0 = clock()
@@ -345,6 +358,8 @@ def main(argv=None) -> int:
     ap.add_argument("--write", metavar="PATH", help="write the tables into this page")
     ap.add_argument("--quick", action="store_true", help="A, B4, B16, C, D; 3 rounds")
     ap.add_argument("--fresh-reference", action="store_true", help="recompute the references")
+    ap.add_argument("--before", metavar="PATH",
+                    help="read the 'before' columns from this page's block (default: --write's)")
     ap.add_argument("--problems", help="comma-separated subset of A,B4,B16,B64,B256,C,D,build")
     args = ap.parse_args(sys.argv[1:] if argv is None else argv)
 
@@ -363,7 +378,9 @@ def main(argv=None) -> int:
     sweep = sweep_row(3 if args.quick else 15) if "D" in wanted else None   # (rounds: cheap, noisy)
     builds = build_rows((4, 16) if args.quick else (4, 16, 64, 256, 1024)) if "build" in wanted else []
     command = "python benchmarks/peers/run.py " + " ".join(sys.argv[1:] if argv is None else argv)
-    before = previous(Path(args.write)) if args.write else ("", {})
+    # ("before": the block of --before, else the one the page holds now)
+    source = args.before or args.write
+    before = previous(Path(source)) if source else ("", {})
     text = page(rows, sweep, builds, sizes, notes, command.strip(), machine(), before)
     print()
     print(text)

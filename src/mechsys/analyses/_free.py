@@ -127,10 +127,14 @@ def accuracy_report(s, sc, t, Y, p, tol: float, what: str) -> dict:
     Q, QD = Y[:, :n], Y[:, n:]
     trans, _ = _column_kinds(s)
     L = sc.length
-    offset = float(np.abs(Q[:, trans]).max(initial=0.0)) / L if n else 0.0
-    rate = float(np.abs(QD / sc.columns).max(initial=0.0)) if n else 0.0
+    # (the columns' largest magnitudes first, then one division per column: the same
+    # numbers as dividing every row, since the column units are positive and a correctly
+    # rounded division keeps the order; one pass over the run's states instead of three)
+    top = np.abs(Y).max(axis=0, initial=0.0) if n else None
+    offset = float(top[:n][trans].max(initial=0.0)) / L if n else 0.0
+    rate = float((top[n:] / sc.columns).max(initial=0.0)) if n else 0.0
     pos = vel = 0.0
-    if s.m and len(t) and np.all(np.isfinite(Y[-1])):
+    if s.m and len(t) and np.isfinite(Y[-1]).all():
         q, qd = Q[-1], QD[-1]
         # (sparse above SPARSE_THRESHOLD coordinates: the same row maxima and products; a
         # dense Jacobian is O(n m) to build and scan, a tenth of a 1024-link chain's run)
@@ -169,13 +173,16 @@ def _flag(box, value):
     return value
 
 
-def _check_independent(system, t, q, p, scaling) -> None:
+def _check_independent(system, t, q, p, scaling, J=None) -> None:
     """Dependent kept constraints at the start raise :class:`SingularJacobianError` naming
-    them (the integration tolerates only singular instants on the way, not a redundancy)."""
+    them (the integration tolerates only singular instants on the way, not a redundancy).
+    ``J``: the Jacobian at ``(t, q)`` as ``system.jacobian(t, q, p, system.n >
+    SPARSE_THRESHOLD)`` returns it, when the caller has it (else it is evaluated here)."""
     if system.m:
         # (sparse above SPARSE_THRESHOLD coordinates: dependent_rows certifies full rank by a
         # sparse LU of J J^T there, and densifies only for its QR)
-        J = system.jacobian(t, q, p, system.n > SPARSE_THRESHOLD)
+        if J is None:
+            J = system.jacobian(t, q, p, system.n > SPARSE_THRESHOLD)
         if scaling.dependent_rows(J)[1]:
             raise describe_singular(system, system.jacobian(t, q, p), t, q, "free motion",
                                     scaling)
@@ -709,7 +716,8 @@ class FreeSystem:
         guard = None
         # (sparse above SPARSE_THRESHOLD coordinates: the same row maxima, without a dense
         # m x n Jacobian)
-        rows0 = sc.rows(s.jacobian(t0, q0, p, n > SPARSE_THRESHOLD)) if robust else None
+        J0 = s.jacobian(t0, q0, p, n > SPARSE_THRESHOLD) if robust else None
+        rows0 = sc.rows(J0) if robust else None
         if robust:
             inner = zone_guard(s, sc, rows0)
 
@@ -731,7 +739,7 @@ class FreeSystem:
                 lam_box[0] = lam
             return np.concatenate((qd, qdd))
 
-        _check_independent(s, t0, q0, p, sc)
+        _check_independent(s, t0, q0, p, sc, None if rows0 is None else J0)
 
         def proj(tt, y):
             if vrows is not None:

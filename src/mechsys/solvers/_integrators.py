@@ -43,6 +43,7 @@ for large ones.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from numbers import Integral, Real
 
@@ -611,6 +612,12 @@ def output_times(t) -> tuple[float, float, np.ndarray | None]:
     step, ``t_eval`` None) or an array of at least two output times. Times must be finite,
     and output times strictly monotonic (increasing, or decreasing to integrate backwards):
     unsorted times are rejected rather than sorted, so that ``sol.t`` is exactly ``t``."""
+    if type(t) is tuple and len(t) == 2 and all(type(v) in _PLAIN for v in t):
+        # (the common call, ``(t0, t1)`` in Python numbers: the checks below without NumPy,
+        # a tenth of their cost; anything unusual takes the general path and its messages)
+        t0, t1 = float(t[0]), float(t[1])
+        if math.isfinite(t0) and math.isfinite(t1) and t1 - t0 != 0:
+            return t0, t1, None
     if np.ndim(t) == 0:
         raise ModelError(f"simulate(t={t!r}): give the interval (t0, t1) or an array of output "
                          "times; for the state at one time use solve(t)")
@@ -643,6 +650,8 @@ def checked_steps(opt: IntegrationOptions, t0: float, t1: float) -> None:
     ``t0`` and ``t1`` (at least :func:`least_step`: a shorter one leaves ``t + h == t`` and
     the Adams fit through equal times is singular), and the first step must fit in the
     interval and within ``max_step``. Raises :class:`ModelError`."""
+    if opt.first_step is None and opt.step_size is None:
+        return                                 # (nothing given to check)
     least = least_step(max(abs(t0), abs(t1)))
     for name, h in (("starting_step_size", opt.first_step), ("step_size", opt.step_size)):
         if h is not None and h < least:
@@ -678,6 +687,19 @@ def reject_unknown(where: str, unknown: dict, known) -> None:
     unknown_options(where, unknown, known)
 
 
+#: the types of a time or step length that no unit conversion changes (exactly these, with
+#: the defaults' marker type: any other subclass, e.g. ``bool``, takes the general path)
+_PLAIN = (float, int, _Default)
+
+
+def _plain(value) -> bool:
+    """``value`` is None, a Python ``float`` or ``int``, or a tuple of them: nothing in it a
+    unit conversion (``plan_run``'s ``to_numbers``) would change."""
+    if value is None or type(value) in _PLAIN:
+        return True
+    return type(value) is tuple and all(v is None or type(v) in _PLAIN for v in value)
+
+
 def plan_run(where: str, t, unknown: dict, known, method="dop853", rtol=RTOL, atol=ATOL,
              max_step=MAX_STEP, fit_degree=FIT_DEGREE, max_error=MAX_ERROR, step_size=None,
              constraint_correction=True, starting_step_size=None,
@@ -694,7 +716,8 @@ def plan_run(where: str, t, unknown: dict, known, method="dop853", rtol=RTOL, at
     quantities into numbers in the model's time unit first (decision 0043; the caller's, since
     the units belong to a model), so that NumPy never strips their unit."""
     reject_unknown(where, unknown, known)
-    if to_numbers is not None:
+    if to_numbers is not None and not all(map(_plain, (t, max_step, step_size,
+                                                        starting_step_size))):
         t, max_step, step_size, starting_step_size = (
             to_numbers(v, f"{where}: {name}") for name, v in (
                 ("t", t), ("max_step", max_step), ("step_size", step_size),

@@ -127,7 +127,13 @@ def entry(dispatcher, args, literal=(), say=None):
         if fn is not None:
             status, steps, *rest = fn(*args)
     """
-    key = (dispatcher, tuple(args[i] for i in literal), tuple(map(_fingerprint, args)))
+    try:
+        # (the C function over all arguments at once: a Python frame per argument cost as
+        # much as the fingerprints themselves, some 70 of them per simulate)
+        prints = tuple(map(_compute_fingerprint, args))
+    except (TypeError, ValueError, NotImplementedError):
+        prints = tuple(map(_fingerprint, args))
+    key = (dispatcher, tuple(args[i] for i in literal), prints)
     got = _ENTRIES.get(key)
     if got is not None:
         return got
