@@ -25,7 +25,15 @@ from __future__ import annotations
 import numpy as np
 
 from ._jit_cache import notice
-from ._jit_runtime import GenTree, available, index, kernel_entry, lapack, loaded
+from ._jit_runtime import (
+    GenTree,
+    available,
+    index,
+    kernel_entry,
+    lapack,
+    loaded,
+    raise_callback_error,
+)
 
 #: the kinds (``_jit_free_loop``'s constants of the same names)
 STATIC_LOADS, KINEMATIC_LOADS, DYNAMIC_LOADS, FORWARD_FREE, FORWARD_AUGMENTED = 0, 1, 2, 3, 4
@@ -87,6 +95,8 @@ def points(system, times, Q, QD, X, mode: int, p=None, how: str = "load"):
 
         fn = interpreted(_state["gen_points"])
     k = int(fn(*args))
+    # (an interrupt a Python kernel's entry point caught: decision 0084)
+    raise_callback_error()
     return R[:k], k
 
 
