@@ -35,7 +35,10 @@ block band exceeds :data:`BLOCK_BAND`, with the Python path's pattern and LU; sy
 block path cannot take, with the banded pattern's sparse twin; its projections through the
 Python path's pattern of :math:`\begin{bmatrix} I & J^T \\ \hat J & 0 \end{bmatrix}`); every kernel
 SymEngine LLVM code (CSE kernels included: their repeated outputs are expanded in the
-loop). Loads that depend on the multipliers (friction) or accelerations
+loop) or a kernel's Python function behind a ``ctypes`` callback (the SymPy backend's:
+:func:`~._jit_runtime.python_entry`; an error inside it is NaN to the loop, which hands the
+step over, and the Python path raises it; an interrupt is raised when the loop returns:
+decision 0084). Loads that depend on the multipliers (friction) or accelerations
 (added mass) take ``free_acceleration``'s Newton in the loop (``"newton"``, decision 0028).
 Generalized coordinates with the recursive dynamics (decision 0018) run in the same loops:
 the joint kernels, the articulated-body recursion (a tree of Gen joints, no constraint
@@ -58,7 +61,7 @@ interpreted steps cost too much for the cold start's budget: decisions 0077, 008
 When it runs (``MECHSYS_JIT``): ``0`` never compiled: the same loops run interpreted, every
 step (decision 0082; the Python path takes only the hand-overs at singular instants, as
 with the compiled loop, and the systems the loop cannot take at all: kernels without C
-entry points, Numba missing); ``1`` or unset: compiled whenever possible.
+entry points that say no sizes, Numba missing); ``1`` or unset: compiled whenever possible.
 
 Velocity constraints :math:`A(q, t) \dot q + b(q, t) = 0` (rolling; decisions 0053, 0062)
 run in the same loops (kind ``ROLLING``, reported as ``"augmented"``, :meth:`FreeStepper._plan_rows`)
@@ -913,8 +916,8 @@ class FreeStepper:
         ``project_velocities``), or None (the Python path, the same answer): loads that
         depend on the multipliers or accelerations, recursive (Gen) dynamics, more than
         ``SPARSE_THRESHOLD`` holonomic unknowns (the sparse free kernel), or a kernel
-        without LLVM code. The run passes no singular instant (``robust`` off, as the
-        Python path with velocity constraints)."""
+        without C entry points that none can be made for. The run passes no singular
+        instant (``robust`` off, as the Python path with velocity constraints)."""
         dyn = system.dynamics
         n, m = system.n, system.m
         if dyn.depends_on_lambda or dyn.depends_on_qdd or getattr(dyn, "recursive", False) \

@@ -142,7 +142,8 @@ def table(kernels):
     entry point and cannot be given one (:func:`python_entry`). Kept per kernel objects,
     which the entry holds (their entry points live as long as they do; not on the system: a
     pickled copy must not carry another process's addresses). For the sweep's and the
-    multiplier solves' loops only (the free-motion stepper reads :func:`pointer`)."""
+    multiplier solves' loops (the free-motion stepper reads :func:`kernel_entry`, which
+    makes the same entries, decision 0084)."""
     key = tuple(id(k) for k in kernels)
     got = _PLANS.get(key)
     if got is not None and all(a is b for a, b in zip(got[0], kernels)):
