@@ -50,10 +50,10 @@ def simulate_both(monkeypatch, free, t, **options):
 
 def python_path(monkeypatch) -> None:
     """Every free-motion and path run of the test takes the Python path whole: no stepper is
-    planned (``FreeStepper.plan`` and ``plan_path`` answer None), as for kernels without C
-    entry points (``Model(backend="sympy")``) and switched stages with velocity rows, the
-    cases the loop does not take at all (decision 0082). ``MECHSYS_JIT=0`` no longer selects
-    it: the loop runs interpreted then."""
+    planned (``FreeStepper.plan`` and ``plan_path`` answer None), as for the cases the loop
+    does not take at all (decision 0082; since decision 0084 SymPy kernels and switched
+    stages with velocity rows run in the loop). ``MECHSYS_JIT=0`` no longer selects it: the
+    loop runs interpreted then."""
     from mechsys.solvers._jit_free import FreeStepper
 
     monkeypatch.setattr(FreeStepper, "plan", classmethod(lambda cls, *a, **k: None))

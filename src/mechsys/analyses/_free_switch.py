@@ -481,8 +481,7 @@ class SwitchedFreeSystem(FreeSystem):
                                                                   sc, kw)[0]))
 
             # the compiled stepper of this stage takes the steps between events where it can
-            fast = self._stepper(plans, combo, S, opt, p, sc, t_eval, t_now, y, kw,
-                                 0 if R is None else R.k)
+            fast = self._stepper(plans, combo, S, opt, p, sc, t_eval, t_now, y, kw, R)
             calls = None
             if opt.spec.implicit:       # its Jacobians' evaluations are not in nfev
                 rhs, calls = counting(rhs)
@@ -617,14 +616,17 @@ class SwitchedFreeSystem(FreeSystem):
         return sol
 
     @staticmethod
-    def _stepper(plans, combo, S, opt, p, sc, t_eval, t_now, y, kw, velocity_rows=0):
+    def _stepper(plans, combo, S, opt, p, sc, t_eval, t_now, y, kw, rows=None):
         """The stepper of stage combination ``combo`` (planned once per run; its loop
         compiled, or interpreted with ``MECHSYS_JIT=0``: decision 0082), or None where the
-        loop cannot run it (velocity rows, a kernel without C entry points, ...)."""
+        loop cannot run it (loads that depend on the multipliers beside velocity rows, ...).
+        ``rows``: the stage's velocity rows (:meth:`_rows`), which the loop holds as the
+        unswitched run does (kind ``ROLLING``: the acceleration of
+        :func:`~mechsys.analyses._nonholonomic.nonholonomic_acceleration`, the projection of
+        :func:`~mechsys.analyses._nonholonomic.project_state`; decision 0084)."""
         if combo not in plans:
             plans[combo] = FreeStepper.plan(S, opt.method, p, sc, None, False, True, t_eval,
-                                            (t_now, y[:S.n]), newton=kw,
-                                            velocity_rows=velocity_rows)
+                                            (t_now, y[:S.n]), newton=kw, rows=rows)
         fast = plans[combo]
         if fast is not None:
             fast.p[:] = p           # (the held values of the switches' variables change)

@@ -35,7 +35,10 @@ block band exceeds :data:`BLOCK_BAND`, with the Python path's pattern and LU; sy
 block path cannot take, with the banded pattern's sparse twin; its projections through the
 Python path's pattern of :math:`\begin{bmatrix} I & J^T \\ \hat J & 0 \end{bmatrix}`); every kernel
 SymEngine LLVM code (CSE kernels included: their repeated outputs are expanded in the
-loop). Loads that depend on the multipliers (friction) or accelerations
+loop) or a kernel's Python function behind a ``ctypes`` callback (the SymPy backend's:
+:func:`~._jit_runtime.python_entry`; an error inside it is NaN to the loop, which hands the
+step over, and the Python path raises it; an interrupt is raised when the loop returns:
+decision 0084). Loads that depend on the multipliers (friction) or accelerations
 (added mass) take ``free_acceleration``'s Newton in the loop (``"newton"``, decision 0028).
 Generalized coordinates with the recursive dynamics (decision 0018) run in the same loops:
 the joint kernels, the articulated-body recursion (a tree of Gen joints, no constraint
@@ -58,7 +61,7 @@ interpreted steps cost too much for the cold start's budget: decisions 0077, 008
 When it runs (``MECHSYS_JIT``): ``0`` never compiled: the same loops run interpreted, every
 step (decision 0082; the Python path takes only the hand-overs at singular instants, as
 with the compiled loop, and the systems the loop cannot take at all: kernels without C
-entry points, Numba missing); ``1`` or unset: compiled whenever possible.
+entry points that say no sizes, Numba missing); ``1`` or unset: compiled whenever possible.
 
 Velocity constraints :math:`A(q, t) \dot q + b(q, t) = 0` (rolling; decisions 0053, 0062)
 run in the same loops (kind ``ROLLING``, reported as ``"augmented"``, :meth:`FreeStepper._plan_rows`)
@@ -667,6 +670,15 @@ class StepDense:
         return w @ self.F + self.y_old
 
 
+def _holding(stepper, *kernels):
+    """``stepper``, holding the kernels whose entry points it calls (``stepper.kernels``): a
+    kernel without LLVM code is called through a :mod:`ctypes` callback
+    (:func:`~._jit_runtime.python_entry`, decision 0084) that lives as long as its kernel, so
+    the addresses in ``stepper.kp`` and its structure stay valid while the stepper lives."""
+    stepper.kernels = tuple(k for k in kernels if k is not None)
+    return stepper
+
+
 def _loops_at_hand() -> bool:
     """Whether the loops' code can run, compiled or interpreted: Numba importable and the
     loops' module imported. Its import checks Numba's on-disk cache first (``_jit_cache``);
@@ -825,15 +837,16 @@ class FreeStepper:
 
     @classmethod
     def plan(cls, system, method, p, scaling, rows0, robust, correction, t_eval, start,
-             newton=None, velocity_rows: int = 0, rows=None):
+             newton=None, rows=None):
         r"""The stepper when the compiled loop can run this simulation (``method``: DOP853 or
         one of Mech's Adams methods; ``start``: ``(t0, q0)``), else None.
 
         ``rows``: the free system's velocity constraints :math:`A \dot q + b = 0`
         (:class:`~mechsys.analyses._nonholonomic.VelocityRows`, decisions 0053, 0062): the
-        kind ``ROLLING`` (:meth:`_plan_rows`). ``velocity_rows``: their number when the caller
-        does not hand the rows themselves (the switched stepper): a positive number then
-        gives None (the Python path, ``sol.extra["compiled_steps"] == 0``)."""
+        kind ``ROLLING`` (:meth:`_plan_rows`; also a switched run's stage with velocity rows,
+        decision 0084). Kernels without LLVM code (``Model(backend="sympy")``) are called
+        through :func:`~._jit_runtime.python_entry` (decision 0084): the stepper holds them
+        (:attr:`kernels`) while it lives."""
         spec = _methods.find(method)
         if spec is None or spec.compiled is None or system.n == 0:
             return None
@@ -844,8 +857,6 @@ class FreeStepper:
             return None
         if rows is not None:
             return cls._plan_rows(system, rows, p, scaling, correction, t_eval)
-        if velocity_rows:
-            return None
         if dyn.depends_on_lambda or dyn.depends_on_qdd:
             return cls._plan_newton(system, p, scaling, correction, t_eval, newton)
         N = system.n + system.m
@@ -891,8 +902,10 @@ class FreeStepper:
             gen = GenTree.of(system, dyn, rows[0])
             if gen is None:
                 return None
-        return cls(system, p, scaling, rows0, robust, correction, t_eval, rows, fk, blocks,
-                   [e[1] for e in entries], gen, sparse=sparse)
+        return _holding(cls(system, p, scaling, rows0, robust, correction, t_eval, rows, fk,
+                            blocks, [e[1] for e in entries], gen, sparse=sparse),
+                        dyn._main if fk is None else fk.f, system.f_position,
+                        system.f_velocity, *getattr(dyn, "_kernels", ()))
 
     @classmethod
     def _plan_rows(cls, system, rows, p, scaling, correction, t_eval):
@@ -903,8 +916,8 @@ class FreeStepper:
         ``project_velocities``), or None (the Python path, the same answer): loads that
         depend on the multipliers or accelerations, recursive (Gen) dynamics, more than
         ``SPARSE_THRESHOLD`` holonomic unknowns (the sparse free kernel), or a kernel
-        without LLVM code. The run passes no singular instant (``robust`` off, as the
-        Python path with velocity constraints)."""
+        without C entry points that none can be made for. The run passes no singular
+        instant (``robust`` off, as the Python path with velocity constraints)."""
         dyn = system.dynamics
         n, m = system.n, system.m
         if dyn.depends_on_lambda or dyn.depends_on_qdd or getattr(dyn, "recursive", False) \
@@ -916,8 +929,10 @@ class FreeStepper:
         mine = kernel_entry(rows._f)
         if mine is None or any(e is None for e in entries):
             return None
-        return cls(system, p, scaling, None, False, correction, t_eval, [e[0] for e in entries],
-                   fk, expand=[e[1] for e in entries], rows=(rows.k, mine[0], mine[1]))
+        return _holding(cls(system, p, scaling, None, False, correction, t_eval,
+                            [e[0] for e in entries], fk, expand=[e[1] for e in entries],
+                            rows=(rows.k, mine[0], mine[1])),
+                        fk.f, system.f_position, system.f_velocity, rows._f)
 
     @classmethod
     def _plan_newton(cls, system, p, scaling, correction, t_eval, newton):
@@ -959,8 +974,12 @@ class FreeStepper:
         i64 = lambda a: np.ascontiguousarray(a, dtype=np.int64)   # noqa: E731
         blk = (np.array(info, dtype=np.int64), i64(dyn.M_rows), i64(dyn.M_cols), i64(dr),
                i64(dc), i64(ar), i64(ac), band, np.zeros((1, 5), dtype=np.int64))
-        return cls(system, p, scaling, None, False, correction, t_eval, [e[0] for e in main],
-                   None, expand=[e[1] for e in main], newton=blk, newton_tol=tol)
+        return _holding(cls(system, p, scaling, None, False, correction, t_eval,
+                            [e[0] for e in main], None, expand=[e[1] for e in main],
+                            newton=blk, newton_tol=tol),
+                        dyn.f_terms, system.f_position, system.f_velocity, system.f_gamma,
+                        dyn.f_dQ_dlam if dyn.depends_on_lambda else None,
+                        dyn.f_dQ_dqdd if dyn.depends_on_qdd else None)
 
     @classmethod
     def plan_path(cls, path, method, p, scaling, correction, t_eval):
@@ -988,9 +1007,10 @@ class FreeStepper:
                                                           system.f_velocity)
         if any(e is None for e in entries):
             return None
-        return cls(system, p, scaling, None, False, correction, t_eval, [e[0] for e in entries],
-                   None, expand=[e[1] for e in entries],
-                   path=(len(path.psi), path.linear, big))
+        return _holding(cls(system, p, scaling, None, False, correction, t_eval,
+                            [e[0] for e in entries], None, expand=[e[1] for e in entries],
+                            path=(len(path.psi), path.linear, big)),
+                        path._f, system.f_position, system.f_velocity)
 
     def path_accelerations(self, path, times, Q, QD, QDD) -> int:
         """A path's accelerations at the rows of ``times``, ``Q``, ``QD`` into ``QDD`` (N, n)
@@ -1117,7 +1137,9 @@ class FreeStepper:
         fn = self._entries.get(name)
         if fn is None:
             if self.interpret_only:
-                return self._interpret(name, args)
+                got = self._interpret(name, args)
+                _jit_runtime.raise_callback_error()
+                return got
             from ._jit_modes import entry
 
             what = {"loop": "the free-motion stepper", "adams": "Mech's Adams integrator",
@@ -1131,10 +1153,15 @@ class FreeStepper:
                 if name not in INTERP_LOOPS or not self.interpretable():
                     self.tier = None
                     return None
-                return self._interpret(name, args)
+                got = self._interpret(name, args)
+                _jit_runtime.raise_callback_error()
+                return got
             self._entries[name] = fn
         self.tier = "compiled"
-        return fn(*args)
+        got = fn(*args)
+        # (an interrupt a Python kernel's entry point caught: decision 0084)
+        _jit_runtime.raise_callback_error()
+        return got
 
     def interpretable(self) -> bool:
         """Whether the loops run interpreted while their machine code is compiled in the

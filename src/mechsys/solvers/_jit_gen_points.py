@@ -25,7 +25,15 @@ from __future__ import annotations
 import numpy as np
 
 from ._jit_cache import notice
-from ._jit_runtime import GenTree, available, index, kernel_entry, lapack, loaded
+from ._jit_runtime import (
+    GenTree,
+    available,
+    index,
+    kernel_entry,
+    lapack,
+    loaded,
+    raise_callback_error,
+)
 
 #: the kinds (``_jit_free_loop``'s constants of the same names)
 STATIC_LOADS, KINEMATIC_LOADS, DYNAMIC_LOADS, FORWARD_FREE, FORWARD_AUGMENTED = 0, 1, 2, 3, 4
@@ -45,9 +53,11 @@ def points(system, times, Q, QD, X, mode: int, p=None, how: str = "load"):
     ``Q``, ``QD`` (N, n) (``QD`` may be ``(1, n)`` for ``STATIC_LOADS``), ``X`` (N, n) the
     accelerations (``DYNAMIC_LOADS``; ``(1, n)`` below) or the forces on the coordinates
     (``FORWARD_*``); the points from ``N'`` on are the Python path's. None when the loop
-    cannot run: not the recursive Gen dynamics, kernels without C entry points, Numba
-    missing, or the loop being compiled in the background (decision 0064). The caller
-    decides whether it should run (the ``MECHSYS_JIT`` rule). ``p``: the parameter values
+    cannot run: not the recursive Gen dynamics, a kernel without C entry points that none
+    can be made for (:func:`~._jit_runtime.python_entry`: SymPy kernels get one, decision
+    0084; an interrupt inside one is raised when the loop returns), Numba missing, or the
+    loop being compiled in the background (decision 0064). The caller decides whether it
+    should run (the ``MECHSYS_JIT`` rule). ``p``: the parameter values
     (default the system's). ``how``: the tier (:func:`~._jit_runtime.tier`; the multiplier
     solves' job, decision 0081): ``"load"`` (the default) the compiled loop, loaded or compiled
     (None while a background compile runs); ``"loaded"`` compiled when already loaded in the
@@ -87,6 +97,8 @@ def points(system, times, Q, QD, X, mode: int, p=None, how: str = "load"):
 
         fn = interpreted(_state["gen_points"])
     k = int(fn(*args))
+    # (an interrupt a Python kernel's entry point caught: decision 0084)
+    raise_callback_error()
     return R[:k], k
 
 

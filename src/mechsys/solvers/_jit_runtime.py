@@ -142,7 +142,8 @@ def table(kernels):
     entry point and cannot be given one (:func:`python_entry`). Kept per kernel objects,
     which the entry holds (their entry points live as long as they do; not on the system: a
     pickled copy must not carry another process's addresses). For the sweep's and the
-    multiplier solves' loops only (the free-motion stepper reads :func:`pointer`)."""
+    multiplier solves' loops (the free-motion stepper reads :func:`kernel_entry`, which
+    makes the same entries, decision 0084)."""
     key = tuple(id(k) for k in kernels)
     got = _PLANS.get(key)
     if got is not None and all(a is b for a, b in zip(got[0], kernels)):
@@ -341,11 +342,14 @@ def lapack() -> np.ndarray:
 def kernel_entry(kernel):
     """``(row, expand)`` of a kernel's C entry points (``_SymengineCompiled.c_entry``: the
     pointer-table row and the map of its repeated outputs, an empty array when there are
-    none), or None when it has no LLVM code."""
+    none); for a kernel without LLVM code that says its sizes (the SymPy backend's), the
+    :func:`python_entry` made of its Python function (every output written: no map;
+    decision 0084); else None."""
     get = getattr(kernel, "c_entry", None)
     e = get() if get is not None else None
     if e is None:
-        return None
+        row = python_entry(kernel)
+        return None if row is None else (row, np.zeros(0, dtype=np.int64))
     row, expand = e
     return row, (np.zeros(0, dtype=np.int64) if expand is None
                  else np.asarray(expand, dtype=np.int64))
@@ -369,11 +373,13 @@ class GenTree:
 
     @classmethod
     def of(cls, system, dyn, main_row):
-        """The structure, or None when the joint kernels have no C entry points (then the
-        Python stepper runs)."""
-        # the joint kernels' C entry points (as RecursiveDynamics._engine, which may have
-        # settled on plain Python in an earlier MECHSYS_JIT=0 run)
-        ptrs = [pointer(k) for k in dyn._kernels]
+        """The structure, or None when a joint kernel has no C entry point and none can be
+        made (:func:`python_entry`: a kernel that does not say its sizes), or a two-stage
+        one (then the Python code runs). The entry points are the kernels' own, whatever
+        ``MECHSYS_JIT`` said when the dynamics first ran (``RecursiveDynamics._engine``
+        settles on its plain-Python recursion under ``0``; that choice is the Python
+        code's alone: decision 0084)."""
+        ptrs = [pointer(k) or python_entry(k) for k in dyn._kernels]
         if any(p is None or p[2] != 0 for p in ptrs):
             return None
         kid, par, root, nqm, goff, gcols, nq = dyn._tree
