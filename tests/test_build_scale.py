@@ -352,6 +352,10 @@ def test_shapes_name_the_expression_up_to_its_symbols():
     assert sh([se.RealDouble(2.5) * x + se.sin(y)])[0][1] == [x, y]   # first occurrence
     assert sh([x + y])[0][0] != sh([x + 1])[0][0]
     assert sh([se.Integer(1)])[0] == ("One:1", [])
+    # the short cuts for leaves and nodes of leaves write what the general walk writes
+    mixed = [x, se.RealDouble(-0.0), se.RealDouble(0.5) * y, x + y + 1, x * x, se.sin(x),
+             se.cos(x + y) * se.RealDouble(2.0) - x, se.Integer(-1) * u, u ** 3, se.Rational(1, 3)]
+    assert sh(mixed) == [_backends._shape_walk(e) for e in mixed]
 
 
 def test_shape_functions_give_the_bits_of_the_whole_stage(monkeypatch, tmp_path):

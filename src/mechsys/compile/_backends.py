@@ -630,40 +630,72 @@ def _shapes(exprs) -> list:
         _shapes([2.5 * x + y, 2.5 * u + v])   # the same shape: s0, s1 = x, y and u, v
     """
     real, fsym, sym = _se.RealDouble, _se.FunctionSymbol, _se.Symbol
+
+    def leaf(e, syms):
+        if isinstance(e, sym):
+            syms.append(e)
+            return "s" + str(len(syms) - 1)
+        t = type(e)
+        return "f:" + float(e).hex() if t is real else t.__name__ + ":" + str(e)
+
     out = []
     for root in exprs:
-        ids: dict = {}
-        lines: list = []
-        syms: list = []
-        stack = [(root, None)]
-        while stack:          # post-order without recursion (deep expressions)
-            e, args = stack.pop()
-            if args is None:
-                if e in ids:
-                    continue
-                args = e.args
-                if not args:
-                    ids[e] = len(lines)
-                    t = type(e)
-                    if isinstance(e, sym):
-                        lines.append("s" + str(len(syms)))
-                        syms.append(e)
-                    else:
-                        lines.append("f:" + float(e).hex() if t is real
-                                     else t.__name__ + ":" + str(e))
-                    continue
-                stack.append((e, args))
-                stack.extend([(a, None) for a in args if a not in ids])
-                continue
+        args = root.args
+        if not args:                  # (most outputs of a large kernel: a number, a symbol)
+            syms = []
+            out.append((leaf(root, syms), syms))
+            continue
+        if not isinstance(root, fsym) and not any([a.args for a in args]):
+            # a node of leaves (a coefficient times a symbol): the records the walk below
+            # writes, without its bookkeeping
+            syms, lines, ids = [], [], {}
+            for a in reversed(args):          # (the walk's order: the last child first)
+                if a not in ids:
+                    ids[a] = len(lines)
+                    lines.append(leaf(a, syms))
+            lines.append(type(root).__name__ + "(" + ",".join([str(ids[a]) for a in args])
+                         + ")")
+            out.append(("|".join(lines), syms))
+            continue
+        out.append(_shape_walk(root))
+    return out
+
+
+def _shape_walk(root) -> tuple:
+    """``(shape, symbols)`` of one SymEngine expression (:func:`_shapes`): each distinct node
+    once, in post-order (the last child first), without recursion (deep expressions)."""
+    real, fsym, sym = _se.RealDouble, _se.FunctionSymbol, _se.Symbol
+    ids: dict = {}
+    lines: list = []
+    syms: list = []
+    stack = [(root, None)]
+    while stack:          # post-order without recursion (deep expressions)
+        e, args = stack.pop()
+        if args is None:
             if e in ids:
                 continue
-            name = type(e).__name__
-            if isinstance(e, fsym):
-                name += ":" + e.get_name()
-            ids[e] = len(lines)
-            lines.append(name + "(" + ",".join([str(ids[a]) for a in args]) + ")")
-        out.append(("|".join(lines), syms))
-    return out
+            args = e.args
+            if not args:
+                ids[e] = len(lines)
+                t = type(e)
+                if isinstance(e, sym):
+                    lines.append("s" + str(len(syms)))
+                    syms.append(e)
+                else:
+                    lines.append("f:" + float(e).hex() if t is real
+                                 else t.__name__ + ":" + str(e))
+                continue
+            stack.append((e, args))
+            stack.extend([(a, None) for a in args if a not in ids])
+            continue
+        if e in ids:
+            continue
+        name = type(e).__name__
+        if isinstance(e, fsym):
+            name += ":" + e.get_name()
+        ids[e] = len(lines)
+        lines.append(name + "(" + ",".join([str(ids[a]) for a in args]) + ")")
+    return "|".join(lines), syms
 
 
 def _disjoint(members, shapes, size: int) -> list | None:
