@@ -605,11 +605,12 @@ def _spans(n: int, sections, size: int) -> list:
 
 #: outputs of one shape (:func:`_shapes`) that occur at least this many times in a gathered
 #: second stage are computed by functions compiled once per shape (decision 0086); the others
-#: in parts of at most :data:`PART_OUTPUTS`
-SHAPE_MIN = 16
+#: in parts of at most :data:`PART_OUTPUTS`. (A function costs ~1.5 ms to compile besides
+#: ~20 µs an output: one for 64 outputs pays when it serves three batches or more.)
+SHAPE_MIN = 192
 #: how many outputs of one shape a shape function computes, largest first (each class of
-#: outputs is cut into batches of these sizes: at most three functions a shape)
-SHAPE_BATCHES = (64, 8, 1)
+#: outputs is cut into batches of these sizes; what is left joins the parts)
+SHAPE_BATCHES = (64,)
 
 
 def _shapes(exprs) -> list:
@@ -726,7 +727,8 @@ def _shape_plan(main_args, shapes, sections, size: int):
       order of its shape (``used`` repeats a value two of them read), computed by the one
       function of that shape and size (compiled from the outputs ``models[spec]``, ``n`` of
       that shape sharing no symbol: :func:`_compile_parts`). A shape that occurs at least
-      :data:`SHAPE_MIN` times is cut in batches of :data:`SHAPE_BATCHES` outputs;
+      :data:`SHAPE_MIN` times is cut in batches of :data:`SHAPE_BATCHES` outputs (the rest
+      joins the other outputs);
     * ``spec = None``: up to ``size`` other outputs, in order, never from two of
       ``sections`` (as :func:`_spans`), compiled as they are on the symbols they read in
       their order of first occurrence.
@@ -734,7 +736,7 @@ def _shape_plan(main_args, shapes, sections, size: int):
     ``direct``: the units' outputs are the stage's outputs in order (no scatter needed).
 
     A chain of 1024 links has 10,236 position-kernel outputs of 7 shapes and 18,428
-    free-motion outputs of 16: some fifty small functions for the whole build instead of 57
+    free-motion outputs of 16: about thirty functions for the whole build instead of 57
     parts of up to 1024 outputs (decision 0086)."""
     pos = {a: i for i, a in enumerate(main_args)}
     for _, syms in shapes:
