@@ -335,6 +335,100 @@ def test_second_stage_in_parts_equals_the_whole_to_the_last_bit(monkeypatch, tmp
     assert np.array_equal(vel(v)[:11].view(np.int64), whole(v)[11:22].view(np.int64))
 
 
+def test_shapes_name_the_expression_up_to_its_symbols():
+    """An output's shape (decision 0086) is its exact graph with symbols numbered by first
+    occurrence: renamed symbols keep it; another number (one ulp), a symbol read twice
+    instead of two, another function or another order of a product's factors as SymEngine
+    keeps them change it."""
+    import symengine as se
+
+    x, y, u, v = se.symbols("x y u v")
+    sh = _backends._shapes
+    (a, sa), (b, sb) = sh([se.RealDouble(2.5) * x + se.sin(y), se.RealDouble(2.5) * u + se.sin(v)])
+    assert a == b and (len(sa), len(sb)) == (2, 2) and {*sa, *sb} == {x, y, u, v}
+    assert sh([se.RealDouble(2.5 + 2**-51) * x + se.sin(y)])[0][0] != a
+    assert sh([se.RealDouble(2.5) * x + se.sin(x)])[0][0] != a
+    assert sh([se.RealDouble(2.5) * x + se.cos(y)])[0][0] != a
+    assert sh([se.RealDouble(2.5) * x + se.sin(y)])[0][1] == [x, y]   # first occurrence
+    assert sh([x + y])[0][0] != sh([x + 1])[0][0]
+    assert sh([se.Integer(1)])[0] == ("One:1", [])
+    # the short cuts for leaves and nodes of leaves write what the general walk writes
+    mixed = [x, se.RealDouble(-0.0), se.RealDouble(0.5) * y, x + y + 1, x * x, se.sin(x),
+             se.cos(x + y) * se.RealDouble(2.0) - x, se.Integer(-1) * u, u ** 3, se.Rational(1, 3)]
+    assert sh(mixed) == [_backends._shape_walk(e) for e in mixed]
+
+
+def test_shape_functions_give_the_bits_of_the_whole_stage(monkeypatch, tmp_path):
+    """A large gathered second stage whose outputs repeat a few shapes is computed by one
+    compiled function per shape and batch size, called for every batch and scattered into
+    place (decision 0086): the bits of the same stage compiled whole, through Python, batch,
+    the C entry points the compiled loops call, ``_slow`` and after pickling; a second
+    kernel of those shapes on other symbols calls the functions compiled for the first."""
+    if "symengine" not in _backends.available_backends():
+        pytest.skip("SymEngine not installed")
+    import ctypes
+    import pickle
+
+    n = 40
+    q = sp.symbols(f"q0:{n + 1}")
+    t = sp.Symbol("t")
+    exprs = []
+    for i in range(n):          # interleaved shapes: the scatter puts them in place
+        exprs += [q[i] - q[i + 1] + 0.25 * sp.cos(q[i]), -0.5 * sp.sin(q[i]), sp.S.One,
+                  sp.cos(q[i]) * q[i + 1] ** 2]
+    exprs += [sp.exp(q[0]) + t, sp.S.Zero]                 # a few of their own shape
+    args = [t, *q]
+    monkeypatch.setattr(_backends, "LARGE_KERNEL", 10)
+    monkeypatch.setattr(_backends, "STAGE_TRIG", 10)
+    monkeypatch.setattr(_backends, "PART_OUTPUTS", 50)
+    monkeypatch.setattr(_backends, "SHAPE_MIN", 4)
+    monkeypatch.setattr(_backends, "SHAPE_BATCHES", (16, 4, 1))
+    monkeypatch.setattr(_backends, "_SHAPE_FUNCS", {})
+    monkeypatch.setenv("MECHSYS_CACHE", str(tmp_path))      # an empty kernel cache
+    compiled = []
+    real = _backends._lambdify
+    monkeypatch.setattr(_backends, "_lambdify", lambda *a, **k: (compiled.append(a[1]),
+                                                                 real(*a, **k))[1])
+    big = _backends.compile_exprs(args, exprs, "symengine")
+    parts = big._f
+    assert isinstance(parts, _backends._Parts) and big._pre_backend == "gather"
+    assert parts.scatter is not None and sorted(parts.scatter) == list(range(len(exprs)))
+    funcs = {id(f) for f, *_ in parts.parts}
+    assert len(funcs) < len(parts.parts)          # batches share their shape's function
+    assert big.c_function()[4] == big._pre.nout + len(exprs)   # values, then the scratch
+    n_compiled = len(compiled)
+    with monkeypatch.context() as mp:                     # the same stages, the second whole
+        mp.setattr(_backends, "PART_OUTPUTS", 10**6)
+        whole = _backends.compile_exprs(args, exprs, "symengine")
+    assert not isinstance(whole._f, _backends._Parts)
+    again = pickle.loads(pickle.dumps(big))
+    proto = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
+    rng = np.random.default_rng(86)
+    for scale in (1.0, 1e3, 1e9):
+        v = rng.standard_normal(len(args)) * scale
+        want = whole(v)
+        for got in (big(v), big.batch(np.array([v, v]))[1], again(v), big._slow(v)):
+            assert np.array_equal(got.view(np.int64), want.view(np.int64))
+        for k in (big, again):
+            address, context, pre, pre_context, npieces = k.c_function()
+            xs = np.zeros(len(args) + npieces)
+            xs[:len(args)] = v
+            out = np.zeros(len(exprs))
+            proto(pre)(xs[len(args):].ctypes.data, xs.ctypes.data, pre_context)
+            proto(address)(out.ctypes.data, xs.ctypes.data, context)
+            assert np.array_equal(out.view(np.int64), want.view(np.int64))
+    # the same shapes on other symbols: every shape function is the first kernel's
+    r = sp.symbols(f"r0:{n + 1}")
+    other = [e.xreplace(dict(zip(q, r))) for e in exprs[:4 * n]]
+    compiled.clear()
+    second = _backends.compile_exprs([t, *r], other, "symengine")
+    assert isinstance(second._f, _backends._Parts)
+    shared = {id(f) for f, *_ in second._f.parts} & funcs
+    assert shared and len(compiled) < n_compiled
+    v = rng.standard_normal(len(args))
+    assert np.array_equal(second(v).view(np.int64), whole(v)[:4 * n].view(np.int64))
+
+
 def test_fingerprint_is_exact_and_iterative():
     """The kernel cache's key of expressions (decision 0080): a change in the last bit of a
     number, the order of the outputs or of a product's factors as SymEngine keeps them gives

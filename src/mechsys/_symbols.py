@@ -38,6 +38,35 @@ def acceleration_symbol(name: str) -> sp.Symbol:
     return _real(name + "_dd")
 
 
+#: Python float (its exact hexadecimal form) -> its SymPy number (:func:`number`); bounded
+_NUMBERS: dict = {}
+_NUMBERS_MAX = 4096
+
+
+def number(value):
+    """``sympy.sympify(value)``, for a Python ``float`` the same SymPy object for the same bits
+    in this process: a new ``Float`` costs ~20 µs to make and as much again for each fact
+    asked of it the first time (``is_real``, ``is_zero``: SymPy's deduction runs per object),
+    and a large model gives thousands of bodies the same masses, inertias and point
+    coordinates (decision 0086). Numbers are immutable in SymPy: sharing one is as making
+    it again. Anything but a ``float`` is sympified as given.
+
+    Example::
+
+        number(0.5) is number(0.5)       # True; == sympy.Float(0.5)
+    """
+    if type(value) is not float:
+        return sp.sympify(value)
+    key = value.hex()           # (exact: 0.0 and -0.0 apart, unlike the floats as keys)
+    got = _NUMBERS.get(key)
+    if got is None:
+        got = sp.sympify(value)
+        if len(_NUMBERS) >= _NUMBERS_MAX:
+            _NUMBERS.clear()
+        _NUMBERS[key] = got
+    return got
+
+
 #: SymPy expression -> its free symbols (:func:`free_symbols`); bounded
 _FREE: dict = {}
 _FREE_MAX = 200_000

@@ -395,7 +395,7 @@ def _gather_stage(args, stage: dict, exprs, free=None) -> tuple[list, list, list
     by a linear search of the list (per occurrence of a symbol): a kernel declaring the
     11,265 arguments of a 1024-link chain's dynamics but using 1,024 of them and its 2,048
     stage values compiles in 1.3-1.6 s, on the 3,072 it uses in 0.66 s (decision 0066).
-    ``free``: the free symbols of ``exprs`` when found already (:func:`_part_symbols`)."""
+    ``free``: the free symbols of ``exprs`` when found already (:func:`_shapes`)."""
     names = [_name(a) for a in args]
     if free is None:
         free = _se.DenseMatrix(len(exprs), 1, list(exprs)).free_symbols if exprs else ()
@@ -603,46 +603,194 @@ def _spans(n: int, sections, size: int) -> list:
     return spans
 
 
-def _part_symbols(exprs, spans) -> list:
-    """The free symbols of each part ``exprs[start:stop]`` of ``spans`` (SymEngine's search,
-    one per part: together one walk of the expressions)."""
-    return [_se.DenseMatrix(b - a, 1, exprs[a:b]).free_symbols for a, b in spans]
+#: outputs of one shape (:func:`_shapes`) that occur at least this many times in a gathered
+#: second stage are computed by functions compiled once per shape (decision 0086); the others
+#: in parts of at most :data:`PART_OUTPUTS`. (A function costs ~1.5 ms to compile besides
+#: ~20 µs an output: one for 64 outputs pays when it serves three batches or more.)
+SHAPE_MIN = 192
+#: how many outputs of one shape a shape function computes, largest first (each class of
+#: outputs is cut into batches of these sizes; what is left joins the parts)
+SHAPE_BATCHES = (64,)
 
 
-def _part_plan(main_args, spans, symbols) -> list | None:
-    """``[(start, stop, used)]``: the parts ``exprs[start:stop]`` of a second stage
-    (:func:`_spans`), each with the indices into ``main_args`` of the arguments it reads
-    (``symbols``: :func:`_part_symbols`; in the order of ``main_args``; one argument when
-    it reads none: SymEngine compiles no function without arguments). None when a part
-    reads a symbol outside ``main_args`` (the whole stage is then compiled as one, which
-    reports it).
+def _shapes(exprs) -> list:
+    """``[(shape, symbols)]`` of each of the SymEngine ``exprs``: ``shape`` an exact record of
+    the expression's graph with each symbol written as its number of first occurrence
+    (``s0``, ``s1``, ... in the walk's order), ``symbols`` those symbols in that order.
 
-    SymEngine's LLVM code generator finds each occurrence of a symbol by a linear search of
-    the declared arguments (about 5 ns a comparison): the position kernel of a 1024-link
-    chain, 10,236 outputs on 5,118 arguments, spends about 0.1 s of its 0.2-0.3 s compile
-    searching (decision 0080). A part of 1024 outputs of a chain reads some hundreds."""
+    Two outputs of one shape are the same expression up to the names of their symbols, with
+    the terms of every sum and the factors of every product in the same order, each symbol
+    in the same place: SymEngine's code generator (which reads an argument by its position,
+    never by its name) emits the same instructions for both. Each distinct node of an
+    output is written once, numbered, as its type and exact data (the hexadecimal form of a
+    double) or its children's numbers in their order, as :func:`_fingerprint` writes it.
+
+    Example::
+
+        x, y, u, v = symengine.symbols("x y u v")
+        _shapes([2.5 * x + y, 2.5 * u + v])   # the same shape: s0, s1 = x, y and u, v
+    """
+    real, fsym, sym = _se.RealDouble, _se.FunctionSymbol, _se.Symbol
+
+    def leaf(e, syms):
+        if isinstance(e, sym):
+            syms.append(e)
+            return "s" + str(len(syms) - 1)
+        t = type(e)
+        return "f:" + float(e).hex() if t is real else t.__name__ + ":" + str(e)
+
+    out = []
+    for root in exprs:
+        args = root.args
+        if not args:                  # (most outputs of a large kernel: a number, a symbol)
+            syms = []
+            out.append((leaf(root, syms), syms))
+            continue
+        if not isinstance(root, fsym) and not any([a.args for a in args]):
+            # a node of leaves (a coefficient times a symbol): the records the walk below
+            # writes, without its bookkeeping
+            syms, lines, ids = [], [], {}
+            for a in reversed(args):          # (the walk's order: the last child first)
+                if a not in ids:
+                    ids[a] = len(lines)
+                    lines.append(leaf(a, syms))
+            lines.append(type(root).__name__ + "(" + ",".join([str(ids[a]) for a in args])
+                         + ")")
+            out.append(("|".join(lines), syms))
+            continue
+        out.append(_shape_walk(root))
+    return out
+
+
+def _shape_walk(root) -> tuple:
+    """``(shape, symbols)`` of one SymEngine expression (:func:`_shapes`): each distinct node
+    once, in post-order (the last child first), without recursion (deep expressions)."""
+    real, fsym, sym = _se.RealDouble, _se.FunctionSymbol, _se.Symbol
+    ids: dict = {}
+    lines: list = []
+    syms: list = []
+    stack = [(root, None)]
+    while stack:          # post-order without recursion (deep expressions)
+        e, args = stack.pop()
+        if args is None:
+            if e in ids:
+                continue
+            args = e.args
+            if not args:
+                ids[e] = len(lines)
+                t = type(e)
+                if isinstance(e, sym):
+                    lines.append("s" + str(len(syms)))
+                    syms.append(e)
+                else:
+                    lines.append("f:" + float(e).hex() if t is real
+                                 else t.__name__ + ":" + str(e))
+                continue
+            stack.append((e, args))
+            stack.extend([(a, None) for a in args if a not in ids])
+            continue
+        if e in ids:
+            continue
+        name = type(e).__name__
+        if isinstance(e, fsym):
+            name += ":" + e.get_name()
+        ids[e] = len(lines)
+        lines.append(name + "(" + ",".join([str(ids[a]) for a in args]) + ")")
+    return "|".join(lines), syms
+
+
+def _disjoint(members, shapes, size: int) -> list | None:
+    """``size`` of ``members`` (output numbers) no two of which share a symbol, the first
+    found in order, or None: the outputs a shape function is compiled from, each on its own
+    arguments (:func:`_shape_plan`)."""
+    chosen, taken = [], set()
+    for i in members:
+        syms = shapes[i][1]
+        if taken.isdisjoint(syms):
+            chosen.append(i)
+            taken.update(syms)
+            if len(chosen) == size:
+                return chosen
+    return None
+
+
+def _shape_plan(main_args, shapes, sections, size: int):
+    """``(units, models, direct)`` of a gathered second stage (:func:`_gather_stage`) on
+    ``main_args`` whose outputs have ``shapes`` (:func:`_shapes`), or None when an output
+    reads a symbol outside ``main_args`` (the stage is then compiled whole, which reports it).
+
+    ``units``: ``[(members, used, spec)]``, each computing the outputs ``members`` into
+    consecutive places of a scratch area, from the values ``main_args[m]`` for ``m`` in
+    ``used`` (written by the first stage in that order, :func:`_part_table`):
+
+    * ``spec = (shape, n)``: ``n`` outputs of one shape, each on its own symbols in the
+      order of its shape (``used`` repeats a value two of them read), computed by the one
+      function of that shape and size (compiled from the outputs ``models[spec]``, ``n`` of
+      that shape sharing no symbol: :func:`_compile_parts`). A shape that occurs at least
+      :data:`SHAPE_MIN` times is cut in batches of :data:`SHAPE_BATCHES` outputs (the rest
+      joins the other outputs);
+    * ``spec = None``: up to ``size`` other outputs, in order, never from two of
+      ``sections`` (as :func:`_spans`), compiled as they are on the symbols they read in
+      their order of first occurrence.
+
+    ``direct``: the units' outputs are the stage's outputs in order (no scatter needed).
+
+    A chain of 1024 links has 10,236 position-kernel outputs of 7 shapes and 18,428
+    free-motion outputs of 16: about thirty functions for the whole build instead of 57
+    parts of up to 1024 outputs (decision 0086)."""
     pos = {a: i for i, a in enumerate(main_args)}
-    plan = []
-    for (start, stop), free in zip(spans, symbols):
-        used = []
-        for a in free:
-            i = pos.get(a)
-            if i is None:
+    for _, syms in shapes:
+        for s in syms:
+            if s not in pos:
                 return None
-            used.append(i)
-        plan.append((start, stop, sorted(used) or [0]))
-    return plan
+    n = len(shapes)
+    classes: dict = {}
+    for i, (shape, _) in enumerate(shapes):
+        classes.setdefault(shape, []).append(i)
+    units, models = [], {}
+    batched = set()
+    for shape, members in classes.items():
+        if len(members) < SHAPE_MIN:
+            continue
+        rest = members
+        for k in SHAPE_BATCHES:
+            if len(rest) < k:
+                continue
+            model = models.get((shape, k)) or _disjoint(members, shapes, k)
+            if model is None:
+                continue
+            models[(shape, k)] = model
+            whole = len(rest) - len(rest) % k
+            for a in range(0, whole, k):
+                batch = rest[a:a + k]
+                used = [pos[s] for i in batch for s in shapes[i][1]] or [0]
+                units.append((batch, used, (shape, k)))
+            batched.update(rest[:whole])
+            rest = rest[whole:]
+    others = [i for i in range(n) if i not in batched] if batched else list(range(n))
+    for start, stop in _spans(n, sections, n):
+        block = [i for i in others if start <= i < stop] if batched else others[start:stop]
+        for a in range(0, len(block), size):
+            members = block[a:a + size]
+            seen: dict = {}
+            for i in members:
+                for s in shapes[i][1]:
+                    seen.setdefault(pos[s], None)
+            units.append((members, list(seen) or [0], None))
+    order = [i for members, _, _ in units for i in members]
+    direct = order == list(range(n))
+    return units, models, direct
 
 
 def _part_table(table: np.ndarray, plan: list) -> np.ndarray:
     """The gather table (:func:`_gather_routine`) that writes, part after part, the inputs of
-    each part of ``plan`` (:func:`_part_plan`), from ``table``, the one writing each of the
+    each unit of ``plan`` (:func:`_shape_plan`'s units), from ``table``, the one writing each of the
     second stage's arguments once: a value's first occurrence is computed as there, a
     repeated one copied from it (code ``4 p + 3``): each ``sin`` and ``cos`` still once."""
     base = table[1:].tolist()
     codes: list = []
     first: dict = {}
-    for _, _, used in plan:
+    for _, used, _ in plan:
         for m in used:
             p = first.get(m)
             if p is None:
@@ -653,81 +801,182 @@ def _part_table(table: np.ndarray, plan: list) -> np.ndarray:
     return np.array([len(codes), *codes], dtype=np.int64)
 
 
+#: the shape functions compiled in this process (:func:`_compile_parts`), by optimisation
+#: level, size and shape: every batch of that shape in every kernel calls the one function
+_SHAPE_FUNCS: dict = {}
+_SHAPE_FUNCS_MAX = 4096
+
+
 def _compile_parts(main_args, exprs, plan, opt_level, mode):
-    """``(parts, backend)``: the second stage compiled part by part (:class:`_Parts`), each
-    part loaded from or stored in the kernel cache on its own."""
-    parts, off, backend = [], 0, "symengine-llvm"
-    for start, stop, used in plan:
-        f, b = _lambdify([main_args[m] for m in used], exprs[start:stop], opt_level, False, mode)
+    """``(parts, backend)``: the units of ``plan`` (:func:`_shape_plan`) compiled
+    (:class:`_Parts`). A shape function is compiled once a process from its model outputs,
+    on their symbols in the order of their shapes, and kept in the kernel cache under its
+    shape, size and optimisation level (names play no part: SymEngine's code reads
+    arguments by position); the other units as parts, each on the symbols it reads."""
+    units, models, direct = plan
+    parts, off, o, backend = [], 0, 0, "symengine-llvm"
+    for members, used, spec in units:
+        if spec is None:
+            f, b = _lambdify([main_args[m] for m in used], [exprs[i] for i in members],
+                             opt_level, False, mode)
+        else:
+            shape, k = spec
+            memo = (opt_level, k, shape)
+            f = _SHAPE_FUNCS.get(memo)
+            b = "symengine-llvm"
+            if f is None:
+                model = models[spec]
+                args = [s for i in model for s in _shape_symbols(exprs[i])] or [main_args[0]]
+                key = None
+                if _cache.cache_dir() is not None:
+                    key = _cache.entry_key(("shape", str(opt_level), _host(), str(k), shape))
+                f, b = _lambdify(args, [exprs[i] for i in model], opt_level, False, mode,
+                                 key=key)
+                if b == "symengine-llvm":
+                    if len(_SHAPE_FUNCS) >= _SHAPE_FUNCS_MAX:
+                        _SHAPE_FUNCS.clear()
+                    _SHAPE_FUNCS[memo] = f
         if b != "symengine-llvm":
             backend = b
-        parts.append((f, off, len(used), start, stop - start))
+        parts.append((f, off, len(used), o, len(members)))
         off += len(used)
-    return _Parts(parts, len(exprs)), backend
+        o += len(members)
+    scatter = None
+    if not direct:
+        scatter = np.empty(len(exprs), dtype=np.int64)
+        at = 0
+        for members, _, _ in units:
+            scatter[members] = np.arange(at, at + len(members))
+            at += len(members)
+    return _Parts(parts, len(exprs), scatter), backend
+
+
+def _shape_symbols(e) -> list:
+    """The symbols of ``e`` in the order of its shape (:func:`_shapes`)."""
+    return _shapes([e])[0][1]
+
+
+#: the one machine-code routine every :class:`_Parts` calls (built once a process)
+_PARTS: dict = {}
+
+
+def _parts_routine() -> int:
+    r"""Address of ``void parts(double *out, const double *v, int64 *t)``, built with llvmlite
+    once per process (~10 ms). With :math:`n = t_0` units, :math:`n_s = t_1` values and
+    :math:`n_o = t_2` outputs to scatter, the destination :math:`d = v + n_s` (a scratch area
+    after the values) when :math:`n_o > 0`, else ``out``:
+
+    .. math:: f_u(d + o_u,\ v + i_u,\ c_u) \quad (u < n;\ f_u, c_u, i_u, o_u = t_{3 + 4u \ldots 6 + 4u}),
+              \qquad \mathrm{out}_j = d_{t_{3 + 4n + j}} \quad (j < n_o)
+
+    Each unit is a SymEngine function (a shape function called for one batch, or a part)."""
+    if "address" in _PARTS:
+        return _PARTS["address"]
+    import llvmlite.binding as llvm
+    from llvmlite import ir
+
+    if "target" not in _TRAMPOLINE:
+        llvm.initialize_native_target()
+        llvm.initialize_native_asmprinter()
+        _TRAMPOLINE["target"] = llvm.Target.from_default_triple()
+    f64, i64, i8p = ir.DoubleType(), ir.IntType(64), ir.IntType(8).as_pointer()
+    f64p = f64.as_pointer()
+    fty = ir.FunctionType(ir.VoidType(), [f64p, f64p, i8p])
+    mod = ir.Module(name="mechsys_parts")
+    fn = ir.Function(mod, fty, name="parts")
+    entry, uloop, ucheck, sloop, done = (fn.append_basic_block(n) for n in (
+        "entry", "units", "scatter_check", "scatter", "done"))
+    out, v, ctx = fn.args
+    b = ir.IRBuilder(entry)
+    t = b.bitcast(ctx, i64.as_pointer())
+    n = b.load(t)
+    ns = b.load(b.gep(t, [ir.Constant(i64, 1)]))
+    no = b.load(b.gep(t, [ir.Constant(i64, 2)]))
+    scratch = b.gep(v, [ns])
+    dst = b.select(b.icmp_signed(">", no, ir.Constant(i64, 0)), scratch, out)
+    b.cbranch(b.icmp_signed(">", n, ir.Constant(i64, 0)), uloop, ucheck)
+    b = ir.IRBuilder(uloop)
+    u = b.phi(i64)
+    u.add_incoming(ir.Constant(i64, 0), entry)
+    base = b.add(b.mul(u, ir.Constant(i64, 4)), ir.Constant(i64, 3))
+    f = b.inttoptr(b.load(b.gep(t, [base])), fty.as_pointer())
+    c = b.inttoptr(b.load(b.gep(t, [b.add(base, ir.Constant(i64, 1))])), i8p)
+    i = b.load(b.gep(t, [b.add(base, ir.Constant(i64, 2))]))
+    o = b.load(b.gep(t, [b.add(base, ir.Constant(i64, 3))]))
+    b.call(f, [b.gep(dst, [o]), b.gep(v, [i]), c])
+    un = b.add(u, ir.Constant(i64, 1))
+    u.add_incoming(un, uloop)
+    b.cbranch(b.icmp_signed("<", un, n), uloop, ucheck)
+    b = ir.IRBuilder(ucheck)
+    b.cbranch(b.icmp_signed(">", no, ir.Constant(i64, 0)), sloop, done)
+    b = ir.IRBuilder(sloop)
+    j = b.phi(i64)
+    j.add_incoming(ir.Constant(i64, 0), ucheck)
+    first = b.add(b.mul(n, ir.Constant(i64, 4)), ir.Constant(i64, 3))
+    src = b.load(b.gep(t, [b.add(first, j)]))
+    b.store(b.load(b.gep(scratch, [src])), b.gep(out, [j]))
+    jn = b.add(j, ir.Constant(i64, 1))
+    j.add_incoming(jn, sloop)
+    b.cbranch(b.icmp_signed("<", jn, no), sloop, done)
+    ir.IRBuilder(done).ret_void()
+    parsed = llvm.parse_assembly(str(mod))
+    parsed.verify()
+    engine = llvm.create_mcjit_compiler(parsed, _TRAMPOLINE["target"].create_target_machine())
+    engine.finalize_object()
+    _PARTS["engine"] = engine            # owns the code: kept for the process's life
+    _PARTS["address"] = engine.get_function_address("parts")
+    return _PARTS["address"]
 
 
 class _Parts:
-    r"""A second stage compiled in parts (:func:`_part_plan`): part ``k`` reads its ``n_k``
-    inputs at offset ``i_k`` of the values the gathered first stage writes
-    (:func:`_part_table`) and writes its ``m_k`` outputs at offset ``o_k``. It offers what
-    :class:`_SymengineCompiled` asks of a SymEngine ``Lambdify``: ``unsafe_real``, a call on
-    one or many rows, ``as_ctypes`` (one C function that calls every part, compiled with
-    llvmlite on first use, ~5 ms) and pickling. Every output is the expression it was,
-    compiled by the same code generator: the same values to the last bit.
+    r"""A gathered second stage computed by units (:func:`_shape_plan`): unit ``k`` reads its
+    ``n_k`` inputs at offset ``i_k`` of the values the first stage writes
+    (:func:`_part_table`) and writes its ``m_k`` outputs at offset ``o_k`` of a scratch area
+    (after those values), from which ``scatter`` puts each output in its place (None: the
+    units write the outputs in order, directly). It offers what :class:`_SymengineCompiled`
+    asks of a SymEngine ``Lambdify``: ``unsafe_real``, a call on one or many rows,
+    ``as_ctypes`` (the shared routine :func:`_parts_routine` with a table of the units as
+    context) and pickling. Every output is computed by the code SymEngine generates for
+    its expression: the same values to the last bit. ``nscratch``: the scratch values the
+    C entry point needs after the ``nin`` values.
 
     Example::
 
-        spans = _spans(len(exprs), None, 1024)
-        plan = _part_plan(args, spans, _part_symbols(exprs, spans))
+        shapes = _shapes(exprs)
+        plan = _shape_plan(args, shapes, None, 1024)
         parts = _compile_parts(args, exprs, plan, 0, "llvm")[0]
-        v = np.concatenate([x[used] for _, _, used in plan])   # what the first stage writes
+        v = np.concatenate([x[used] for _, used, _ in plan[0]])  # what the first stage writes
         parts(v)                                  # == Lambdify(args, exprs)(x), bit for bit
     """
 
-    def __init__(self, parts: list, nout: int):
-        self.parts, self.nout = parts, nout
+    def __init__(self, parts: list, nout: int, scatter: np.ndarray | None = None):
+        self.parts, self.nout, self.scatter = parts, nout, scatter
         self.nin = sum(p[2] for p in parts)
+        self.nscratch = 0 if scatter is None else nout
 
     def _bind(self):
-        """The C function ``void f(double *out, const double *v, void *)`` calling each part
-        ``k`` as ``part_k(out + o_k, v + i_k, context_k)``; kept with its owners."""
+        """The C entry point and its table (addresses of the units' functions: made in this
+        process, never pickled); kept with the functions' owners."""
         import ctypes
 
-        import llvmlite.binding as llvm
-        from llvmlite import ir
-
-        if "target" not in _TRAMPOLINE:
-            llvm.initialize_native_target()
-            llvm.initialize_native_asmprinter()
-            _TRAMPOLINE["target"] = llvm.Target.from_default_triple()
-        mod = ir.Module(name="mechsys_parts")
-        f64p, i8p, i64 = ir.DoubleType().as_pointer(), ir.IntType(8).as_pointer(), ir.IntType(64)
-        fty = ir.FunctionType(ir.VoidType(), [f64p, f64p, i8p])
-        fn = ir.Function(mod, fty, name="parts")
-        b = ir.IRBuilder(fn.append_basic_block())
-        out, v, _ = fn.args
-        owners = []
+        owners, rows = [], []
         for f, i, _n, o, _k in self.parts:
             cfun, ctx = f.as_ctypes()
             owners.append((cfun, ctx))
-            target = b.inttoptr(ir.Constant(i64, ctypes.cast(cfun, ctypes.c_void_p).value),
-                                fty.as_pointer())
-            b.call(target, [b.gep(out, [ir.Constant(i64, o)]), b.gep(v, [ir.Constant(i64, i)]),
-                            b.inttoptr(ir.Constant(i64, ctx.value or 0), i8p)])
-        b.ret_void()
-        parsed = llvm.parse_assembly(str(mod))
-        parsed.verify()
-        engine = llvm.create_mcjit_compiler(parsed, _TRAMPOLINE["target"].create_target_machine())
-        engine.finalize_object()
+            rows += [ctypes.cast(cfun, ctypes.c_void_p).value, ctx.value or 0, i, o]
+        scatter = [] if self.scatter is None else self.scatter.tolist()
+        table = np.array([len(self.parts), self.nin, len(scatter), *rows, *scatter],
+                         dtype=np.int64)
         proto = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
-        self._entry = (engine, owners, proto(engine.get_function_address("parts")))
-        return self._entry[2]
+        self._entry = (owners, table, proto(_parts_routine()),
+                       ctypes.c_void_p(table.ctypes.data))
+        return self._entry
 
     def unsafe_real(self, v: np.ndarray, out: np.ndarray) -> None:
-        """``out[:] = values(v)``; ``v`` and ``out`` contiguous float64 (not checked)."""
-        entry = self.__dict__.get("_entry")
-        fn = entry[2] if entry is not None else self._bind()
-        fn(out.ctypes.data, v.ctypes.data, None)
+        """``out[:] = values(v)``; ``v`` contiguous float64 with ``nscratch`` more places
+        after its ``nin`` values, ``out`` contiguous (not checked)."""
+        entry = self.__dict__.get("_entry") or self._bind()
+        entry[2](out.ctypes.data, v.ctypes.data, entry[3])
 
     def __call__(self, V) -> np.ndarray:
         V = np.ascontiguousarray(V, dtype=float)
@@ -735,26 +984,24 @@ class _Parts:
             out = np.empty(self.nout)
             for f, i, n, o, k in self.parts:
                 out[o:o + k] = np.asarray(f(V[i:i + n])).reshape(k)
-            return out
+            return out if self.scatter is None else out[self.scatter]
         rows = V.shape[0]
         out = np.empty((rows, self.nout))
         for f, i, n, o, k in self.parts:
             out[:, o:o + k] = np.asarray(f(np.ascontiguousarray(V[:, i:i + n]))).reshape(rows, k)
-        return out
+        return out if self.scatter is None else out[:, self.scatter]
 
     def as_ctypes(self):
         """``(function, context)`` as SymEngine's ``Lambdify.as_ctypes`` gives them."""
-        import ctypes
-
-        entry = self.__dict__.get("_entry")
-        return (entry[2] if entry is not None else self._bind()), ctypes.c_void_p(None)
+        entry = self.__dict__.get("_entry") or self._bind()
+        return entry[2], entry[3]
 
     def __getstate__(self):
-        return {"parts": self.parts, "nout": self.nout, "nin": self.nin}
+        return {"parts": self.parts, "nout": self.nout, "nin": self.nin,
+                "scatter": self.scatter, "nscratch": self.nscratch}
 
     def __setstate__(self, state):
         self.__dict__.update(state)
-
 
 def _offset_entry(keep, main, offset: int):
     """``(owners, (address, context))`` of a C function ``g(out, x, ctx) = f(out, x + offset,
@@ -790,16 +1037,19 @@ class _NotCached(Exception):
     """A kernel asked for from the on-disk cache only (``mode="cached"``) is not there."""
 
 
-def _lambdify(args, exprs, opt_level, cse=False, mode="llvm"):
+def _lambdify(args, exprs, opt_level, cse=False, mode="llvm", key=False):
     """``(SymEngine Lambdify, backend name)``. ``mode``: ``"llvm"`` loads the LLVM kernel
     from the on-disk cache or compiles (and stores) it; ``"cached"`` only loads it, raising
     :class:`_NotCached` when it is not there; ``"lambda"`` builds SymEngine's interpreted
-    kernel (no LLVM: cheap to build, for a few evaluations, see :class:`_FirstUse`)."""
+    kernel (no LLVM: cheap to build, for a few evaluations, see :class:`_FirstUse`).
+    ``key``: the kernel's cache key when the caller made it (a shape function's,
+    :func:`_compile_parts`; None: not cached), else :func:`_cache_key`."""
     if mode == "lambda":
         # (named: SymEngine's default backend is LLVM when it was built with it)
         return (_se.Lambdify(list(args), list(exprs), backend="lambda", cse=cse),
                 "symengine-lambda")
-    key = _cache_key(args, exprs, opt_level, cse)
+    if key is False:
+        key = _cache_key(args, exprs, opt_level, cse)
     if key is not None:
         f = _cache.load(key)
         if f is not None:
@@ -959,12 +1209,13 @@ class _SymengineCompiled(Compiled):
             trig, exprs = _split_trig(exprs, avoid=pieces, atoms=None if pieces else atoms)
             # a large second stage in parts (decision 0080): their symbols found once, for
             # the parts and the gathering both
+            # its outputs' shapes (decision 0086): their symbols found once, for the units
+            # and the gathering both
             if len(exprs) > PART_OUTPUTS and mode != "lambda":
-                spans = _spans(len(exprs), sections, PART_OUTPUTS)
-                part_syms = _part_symbols(exprs, spans)
-                free = set().union(*part_syms)
+                shapes = _shapes(exprs)
+                free = {s for _, syms in shapes for s in syms}
             else:
-                spans = part_syms = free = None
+                shapes = free = None
             pre_args, pre_values, main_args = _gather_stage(args, {**pieces, **trig}, exprs,
                                                             free)
             self._gather = bool(pre_values)
@@ -981,10 +1232,12 @@ class _SymengineCompiled(Compiled):
             if table is not None:
                 # a large second stage in parts, each on the arguments it reads, gathered
                 # part after part by the first stage (decision 0080)
-                plan = _part_plan(main_args, spans, part_syms) if spans else None
+                plan = _shape_plan(main_args, shapes, sections, PART_OUTPUTS) \
+                    if shapes else None
                 if plan is not None:
-                    table = _part_table(table, plan)
-                    self._npieces = int(table[0])
+                    table = _part_table(table, plan[0])
+                    # (the values the units read, then the scratch area of their outputs)
+                    self._npieces = int(table[0]) + (0 if plan[2] else len(exprs))
                 self._pre, self._pre_backend = _GatherStage(len(pre_args), table), "gather"
             else:
                 self._pre, self._pre_backend = _lambdify(pre_args, pre_values, opt_level,
@@ -1094,7 +1347,8 @@ class _SymengineCompiled(Compiled):
         if self._pre is not None:
             buf = self._buf
             buf[:self._nargs] = x
-            buf[self._nargs:] = self._pre(x[:self._pre_nin])
+            values = self._pre(x[:self._pre_nin])
+            buf[self._nargs:self._nargs + len(values)] = values
             x = buf[self._nargs:] if self._gather else buf
         out = self._f(x).reshape(self._nf)
         return out if self._expand is None else out[self._expand]

@@ -21,6 +21,7 @@ import sympy as sp
 
 from .._errors import GeometryError, ModelError
 from .._signature import InitSignature
+from .._symbols import number
 from ..geometry._points import Axis, Geometry, Point, Vector, as_vector
 from ..geometry._units import is_quantity, placeholder
 
@@ -171,7 +172,8 @@ def as_expr(value, what: str) -> sp.Expr:
     if is_quantity(value):  # converted to the model's units when the constraint is added
         return placeholder(value, what)
     try:
-        return sp.sympify(value)
+        # (a float: the same SymPy number for the same bits, decision 0086)
+        return number(value) if type(value) is float else sp.sympify(value)
     except (sp.SympifyError, TypeError, ValueError, AttributeError, SyntaxError, NameError) as exc:
         raise GeometryError(f"{what}: {value!r} is not a number or expression") from exc
 

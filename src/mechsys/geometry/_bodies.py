@@ -8,7 +8,7 @@ import numpy as np
 import sympy as sp
 
 from .._errors import GeometryError, ModelError, UnknownPointError
-from .._symbols import coord_symbol
+from .._symbols import coord_symbol, number
 from ._points import Axis, BodyRef, Line, Point, Vector, _as_matrix
 from ._space import Space
 from ._units import LENGTH, convert, has_quantity
@@ -60,8 +60,9 @@ class Body(BodyRef):
             self.A = space.rotation_matrix(rot)
         self.guess = self._parse_guess(guess)
         self.mass = mass
-        self.centroid = sp.zeros(space.dim, 1)
-        if centroid is not None:
+        if centroid is None:
+            self.centroid = sp.zeros(space.dim, 1)
+        else:
             self.centroid = _as_matrix(centroid, f"centroid of body {name!r}")
             if len(self.centroid) != space.dim:
                 raise GeometryError(f"centroid of body {name!r} has {len(self.centroid)} "
@@ -121,17 +122,18 @@ class Body(BodyRef):
                 raise UnknownPointError(
                     f"body {self.name!r} has no point {spec!r}; its points are {self._order}"
                 )
-            return Point(self, self._points[spec], label=spec)
+            # (stored points were checked when added: a copy, as Point() would make)
+            return Point._checked(self, self._points[spec].copy(), spec)
         if isinstance(spec, (int, np.integer)) and not isinstance(spec, bool):
             if spec == 0:
-                return Point(self, sp.zeros(self.space.dim, 1), label="origin")
+                return Point._checked(self, sp.zeros(self.space.dim, 1), "origin")
             if not 1 <= spec <= len(self._order):
                 raise UnknownPointError(
                     f"body {self.name!r} has no point number {spec}; it has "
                     f"{len(self._order)} point(s), numbered 1..{len(self._order)} (0 is the origin)"
                 )
             key = self._order[spec - 1]
-            return Point(self, self._points[key], label=key)
+            return Point._checked(self, self._points[key].copy(), key)
         if has_quantity(spec):  # coordinates in the model's units (decision 0043)
             spec = convert(spec, self._units(), f"point of body {self.name!r}", LENGTH)
         p = Point(self, spec)
@@ -215,7 +217,8 @@ def _scalar(value, what: str) -> sp.Expr:
         raise ModelError(f"{what} must be a number or an expression of parameters, got the "
                          f"string {value!r} (use the symbol m.parameter(...) returns)")
     try:
-        v = sp.sympify(value, strict=True)
+        # (a float: the same SymPy number for the same bits, decision 0086)
+        v = number(value) if type(value) is float else sp.sympify(value, strict=True)
     except (sp.SympifyError, TypeError, ValueError, AttributeError, SyntaxError, NameError):
         v = None  # (a dict of strings is parsed as code: AttributeError, SyntaxError ...)
     if not isinstance(v, sp.Expr):

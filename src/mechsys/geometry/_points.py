@@ -15,12 +15,14 @@ vector is expected, a vector in ground (global) coordinates.
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Sequence
 
 import numpy as np
 import sympy as sp
 
 from .._errors import GeometryError, ModelError, close_match
+from .._symbols import number
 
 
 class BodyRef:
@@ -48,13 +50,46 @@ def _matrix(rows: int, cols: int, flat: list) -> sp.Matrix:
         x, y = sp.symbols("x y")
         _matrix(2, 1, [x, y]) == sp.Matrix([x, y])      # True
     """
+    # (SymPy's ``_flat_list_to_DomainMatrix`` keeps the entries ``!= 0``; for an entry whose
+    # type compares as ``Basic`` does, ``e != 0`` is True unless ``e`` is 0 itself, and SymPy
+    # finds that only after looking for a converter of ``int``: ~2 µs an entry, a tenth of
+    # the chain's model build (decision 0086). Numbers compare as SymPy compares them.)
     cls = sp.MutableDenseMatrix
-    return cls._fromrep(cls._flat_list_to_DomainMatrix(rows, cols, flat))
+    if _EXTERNAL.get(int) is not None or _EXTERNAL.get(object) is not None:
+        # (someone taught sympify about ints: SymPy's own test, which asks that converter)
+        return cls._fromrep(cls._flat_list_to_DomainMatrix(rows, cols, flat))
+    basic_eq = sp.Basic.__eq__
+    dod: dict = {}
+    for n, e in enumerate(flat):
+        if (type(e).__eq__ is basic_eq and e is not _ZERO) or (
+                type(e).__eq__ is not basic_eq and e != 0):
+            i, j = divmod(n, cols)
+            dod.setdefault(i, {})[j] = e
+    return cls._fromrep(cls._dod_to_DomainMatrix(rows, cols, dod, set(map(type, flat))))
+
+
+_ZERO = sp.S.Zero
+#: converters of other types registered with SymPy by third parties (SymPy's own dictionary)
+_EXTERNAL = importlib.import_module("sympy.core.sympify")._external_converter
+
+
+#: checked columns of plain Python numbers (:func:`_as_matrix`), by their exact values; bounded
+_COLUMNS: dict = {}
+_COLUMNS_MAX = 4096
 
 
 def _as_matrix(coords, what: str) -> sp.Matrix:
     if isinstance(coords, np.ndarray):
         coords = coords.tolist()
+    plain = type(coords) is tuple and all(type(c) is int or type(c) is float for c in coords)
+    if plain:
+        # a tuple of Python ints and floats (a point's or a centroid's coordinates): checked
+        # once, then copied (a large model repeats them in every body: decision 0086); the
+        # key keeps each number's type and exact value (0.0 and -0.0, 1 and 1.0 apart)
+        key = tuple((c.hex() if type(c) is float else c, type(c) is float) for c in coords)
+        got = _COLUMNS.get(key)
+        if got is not None:
+            return got.copy()
     if isinstance(coords, sp.MatrixBase):
         # a column already (a body's stored point): a copy of its entries, not a new Matrix
         # built element by element (~0.5 ms: a fifth of a large chain's build)
@@ -62,7 +97,8 @@ def _as_matrix(coords, what: str) -> sp.Matrix:
              else sp.Matrix(coords).reshape(len(coords), 1))
     elif isinstance(coords, Sequence) and not isinstance(coords, str):
         try:
-            entries = [sp.sympify(c) for c in coords]
+            # (a float: the same SymPy number for the same bits, decision 0086)
+            entries = [number(c) if type(c) is float else sp.sympify(c) for c in coords]
             m = _matrix(len(entries), 1, entries)
         except (sp.SympifyError, TypeError) as exc:
             raise GeometryError(f"{what}: coordinates {coords!r} are not numbers or expressions") from exc
@@ -72,6 +108,10 @@ def _as_matrix(coords, what: str) -> sp.Matrix:
         if not isinstance(c, sp.Expr) or (c.is_number and not (c.is_real and c.is_finite)):
             raise GeometryError(f"{what}: coordinates {coords!r} must be finite real numbers "
                                 "or expressions")
+    if plain:
+        if len(_COLUMNS) >= _COLUMNS_MAX:
+            _COLUMNS.clear()
+        _COLUMNS[key] = m.copy()
     return m
 
 
@@ -110,6 +150,16 @@ class Point(Geometry):
         self.body = body
         self.local = _as_matrix(local, "Point")
         self.label = label
+
+    @classmethod
+    def _checked(cls, body: BodyRef, local: sp.Matrix, label: str | None) -> Point:
+        """A point of ``body`` at ``local``, a new column the caller owns whose entries were
+        checked already (a copy of a body's stored point): what ``Point(body, local, label)``
+        gives, without copying and checking the entries again (~35 µs, 3 points a link of a
+        chain: decision 0086)."""
+        p = cls.__new__(cls)
+        p.body, p.local, p.label = body, local, label
+        return p
 
     def check_dim(self, dim: int) -> None:
         if len(self.local) != dim:
