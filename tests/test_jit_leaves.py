@@ -108,81 +108,56 @@ def test_getrf_structure_lists_the_nonzeros(n):
             np.testing.assert_array_equal(above, np.flatnonzero(LU[:j, j]))
 
 
-def test_planned_lu_is_getrf_and_dgetrf():
-    """``lu_planned`` (the free-motion stepper's LU of its augmented and projection matrices:
-    ``getrf`` along the plan of the last pivot sequence, decision 0087) against the dense
-    ``getrf`` (the same pivots, ``info`` and factors: equal as numbers, so a zero's sign
-    aside, bit for bit) and against LAPACK's ``dgetrf`` (pivots, factors to rounding). Each
-    matrix is factorised three times with the plan carried over, as the stepper does: with
-    no plan, with its own plan, and after a change of values that moves a pivot (the first
-    divergent pivot hands over to ``getrf``'s loops, and the plan is made anew); plus ties,
-    a structural entry that is zero now, a zero pivot (``info``), non-finite and subnormal
-    entries. ``nz`` is ``symbolic_pattern``'s for the pivots taken."""
+def _textbook_getrf(A):
+    """Gaussian elimination with partial pivoting (first largest pivot), every row of every
+    column visited, written out plainly: the reference of ``getrf``'s skips."""
+    A = A.copy()
+    n = A.shape[0]
+    piv = np.zeros(n, dtype=np.int32)
+    info = 0
+    for j in range(n):
+        p = j
+        for i in range(j + 1, n):
+            if abs(A[i, j]) > abs(A[p, j]):
+                p = i
+        piv[j] = p
+        if A[p, j] != 0.0:
+            A[[j, p]] = A[[p, j]]
+            A[j + 1:, j] *= 1.0 / A[j, j]
+        elif info == 0:
+            info = j + 1
+        for c in range(j + 1, n):
+            if A[j, c] != 0.0:
+                A[j + 1:, c] -= A[j + 1:, j] * A[j, c]
+    return A, piv, info
+
+
+def test_getrf_skips_only_exact_no_ops():
+    """``getrf`` scales and updates each column's rows from its first to its last nonzero
+    below the diagonal only (decision 0087): against the elimination that visits every row,
+    the same pivots, ``info`` and factors as numbers (NaN where it has NaN; a zero's sign
+    may differ), on sparse matrices (mechanism-like: a few nonzeros a row), some with an
+    infinity, a NaN, a subnormal pivot (whose reciprocal is infinite: ``0 inv`` is NaN
+    there) or a zero column (``info``)."""
     rng = np.random.default_rng(87)
-    planned, plan_of = leaf(jl, "lu_planned"), leaf(jl, "lu_plan")
-    for trial in range(120):
-        n = int(rng.integers(1, 14))
+    getrf = leaf(jl, "getrf")
+    for trial in range(240):
+        n = int(rng.integers(1, 13))
         A = _matrix(rng, n, "sparse")
-        if trial % 7 == 0:
-            A[A != 0] = np.sign(A[A != 0])              # ties everywhere
-        structural = A != 0
-        if trial % 4 == 0:
-            structural[rng.integers(n), rng.integers(n)] = True
-        F0 = np.ascontiguousarray(structural.T.astype(np.int32))
-        F = np.zeros((n, n), np.int32)
-        plan = np.zeros(jl.plan_size.py_func(n), np.int32)
-        seen = np.full(n, -1, np.int32)
-        nz = np.zeros(jl.pattern_size.py_func(n), np.int32)
-        for round_ in range(3):
-            B = A.copy()
-            if round_ == 2:                             # other values, same structure
-                B[structural] *= rng.uniform(0.2, 5.0, structural.sum())
-                if trial % 9 == 0:
-                    B[rng.integers(n), rng.integers(n)] *= 0.0      # (structural: stays)
-                if trial % 11 == 0:
-                    i, c = np.argwhere(structural)[rng.integers(structural.sum())]
-                    B[i, c] = (np.inf, np.nan, 1e-310, -np.inf)[trial % 4]
-            B[~structural] = 0.0
-            DT, PT = np.ascontiguousarray(B.T), np.ascontiguousarray(B.T)
-            dpiv, ppiv = np.empty(n, np.int32), np.empty(n, np.int32)
-            with np.errstate(all="ignore"):
-                info = jl.getrf.py_func(DT, n, dpiv)
-                assert planned(PT, n, ppiv, F0, F, plan, seen, nz, trial % 5 == 4) == info
-            np.testing.assert_array_equal(ppiv, dpiv)
-            np.testing.assert_array_equal(PT, DT)          # (NaN == NaN here; -0.0 == 0.0)
-            if info or not np.isfinite(B).all():
-                continue
-            np.testing.assert_array_equal(seen, dpiv)
-            theirs = np.empty_like(nz)
-            jl.symbolic_pattern.py_func(np.ascontiguousarray(structural.T.astype(float)), n,
-                                        dpiv, theirs, np.empty((n, n)))
-            assert _ranges(nz, n) == _ranges(theirs, n)
-            if trial % 7 == 0:
-                continue                # (exact ties: LAPACK's own rounding may break them)
-            lu, ipiv, linfo = lapack.dgetrf(B)
-            assert linfo == 0
-            np.testing.assert_array_equal(ppiv, ipiv)
-            scale = np.abs(lu).max(axis=1, keepdims=True)
-            assert np.all(np.abs(PT.T - lu) <= 1e-13 * n * scale)
-    # a zero pivot under a plan: getrf's info, and the plan is kept for the next matrix
-    A = np.array([[2.0, 1.0, 0.0], [1.0, 3.0, 1.0], [0.0, 1.0, 4.0]])
-    F0 = np.ascontiguousarray((A != 0).T.astype(np.int32))
-    F, seen = np.zeros((3, 3), np.int32), np.full(3, -1, np.int32)
-    plan, nz = np.zeros(jl.plan_size.py_func(3), np.int32), np.zeros(14, np.int32)
-    piv = np.empty(3, np.int32)
-    assert planned(np.ascontiguousarray(A.T), 3, piv, F0, F, plan, seen, nz, False) == 0
-    plan_of(F0, F, 3, piv, plan, nz)                    # (idempotent for the same pivots)
-    Z = A.copy()
-    Z[:, 0] = 0.0
-    ZT = np.ascontiguousarray(Z.T)
-    assert planned(ZT, 3, piv, F0, F, plan, seen, nz, False) == lapack.dgetrf(Z)[2] == 1
-    np.testing.assert_array_equal(seen, [0, 1, 2])
-
-
-def _ranges(nz, n):
-    """The lists of an ``nz`` array as sets, column by column (below, then above)."""
-    return [set(nz[nz[j]:nz[j + 1]]) for j in range(n)] + [
-        set(nz[nz[n + 1 + j]:nz[n + 2 + j]]) for j in range(n)]
+        if trial % 6 == 1:
+            A[rng.integers(n), rng.integers(n)] = (np.inf, np.nan, -np.inf)[trial % 3]
+        if trial % 6 == 3:
+            A[:, rng.integers(n)] *= 1e-310               # (subnormal pivots)
+        if trial % 6 == 5:
+            A[:, rng.integers(n)] = 0.0                    # (info)
+        AT = np.ascontiguousarray(A.T)
+        piv = np.zeros(n, dtype=np.int32)
+        with np.errstate(all="ignore"):
+            want, wpiv, winfo = _textbook_getrf(A)
+            info = getrf(AT, n, piv)
+        assert info == winfo
+        np.testing.assert_array_equal(piv, wpiv)
+        np.testing.assert_array_equal(AT.T, want)          # (NaN == NaN here; -0.0 == 0.0)
 
 
 @pytest.mark.parametrize("structure", [False, True])

@@ -461,8 +461,7 @@ def _workspace(stepper, system):
         ws = got[2]
     else:
         ws = _state["workspace"](stepper.kp, stepper.n, stepper.m, stepper.p.size, stepper.kk,
-                                 stepper.jr.size, stepper.mode, stepper.blk_i, stepper.bw,
-                                 stepper.jr, stepper.jc, stepper.flat_t)
+                                 stepper.jr.size, stepper.mode, stepper.blk_i, stepper.bw)
     if len(_WORKSPACES) >= 32 and key not in _WORKSPACES:
         _WORKSPACES.clear()
     _WORKSPACES[key] = (system, weakref.ref(stepper), ws)

@@ -51,17 +51,7 @@ import numpy as np
 from ._jit_borrow import borrow
 from ._jit_cache import check as _check_cache
 from ._jit_calls import _ccall, _eval
-from ._jit_lapack import (
-    GUARD_MARGIN,
-    gecon1,
-    getrf,
-    getrs,
-    inv_norm_bound,
-    leaf,
-    lu_planned,
-    pattern_size,
-    plan_size,
-)
+from ._jit_lapack import GUARD_MARGIN, gecon1, getrf, getrs, inv_norm_bound, leaf, pattern_size
 from ._jit_linalg import _assemble, _norm1, _rows, _rows_nz
 from ._jit_linalg import _band_factor as _gb_factor
 from ._jit_linalg import _band_solve as _gb_solve
@@ -106,13 +96,6 @@ ROLLING = 7
 #: augmented systems up to this size are solved by the loop's own elimination (``_lu_solve``);
 #: larger ones by LAPACK ``dgesv``, whose call overhead no longer matters there
 SMALL = 24
-#: from this many unknowns the augmented system (up to ``SMALL``) and the projection's
-#: ``J^ J^T`` are factorised along the plan of their fixed structure
-#: (``_jit_lapack.lu_planned``, decision 0087); below, ``getrf``'s dense loops cost less
-#: (interpreted, a listed entry costs about twice a dense one: the double pendulum's 10 x 10
-#: 165 against 109 µs; the 4-link chain's 20 x 20 250 against 530 µs), and the plan only
-#: gives the factors' structure for the solves and the condition bound
-PLAN_MIN = 13
 
 # SciPy's step-size control constants (scipy.integrate._ivp.rk)
 SAFETY = 0.9
@@ -148,7 +131,7 @@ def _evalx(ptr, x, nin, out, ex, ph):
 
 @leaf
 def _accel(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, columns,
-           robust, ipiv, ibuf, rhs, b, qdd, lam, force, ex, ph, ls):
+           robust, ipiv, ibuf, rhs, b, qdd, lam, force, ex, ph):
     """Free acceleration at ``x = [t, q, qd, 0, p, 0]``: ``qdd`` (n,), ``lam`` (m,);
     False where the Python path would need its special handling."""
     _evalx(kp, x, nin, out, ex, ph)
@@ -156,7 +139,7 @@ def _accel(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0
     for k in range(flat_t.size):
         KTf[flat_t[k]] = out[mp[k]]
     return _solve_augmented(lapack, KT, out, kk, out, kk - jr.size, n, m, jr, jc, rows0,
-                            columns, robust, ipiv, ibuf, rhs, b, qdd, lam, force, ls)
+                            columns, robust, ipiv, ibuf, rhs, b, qdd, lam, force)
 
 
 @nb.njit(cache=True, inline='always')
@@ -181,8 +164,8 @@ def _finite(KT, N):
 @nb.njit(cache=True, inline='always')
 def _all_finite(x, count):
     r"""Whether ``x[:count]`` is finite: the sum first, one reduction (as :func:`_finite`:
-    one call in the interpreted tier instead of ``count`` scalar tests, about 1 µs each),
-    entry by entry only when the sum is not finite."""
+    one call in the interpreted tier instead of ``count`` scalar tests of about 1 µs each,
+    decision 0087), entry by entry only when the sum is not finite."""
     if np.isfinite(np.sum(x[:count])):
         return True
     for i in range(count):
@@ -193,11 +176,10 @@ def _all_finite(x, count):
 
 @nb.njit(cache=True, inline='always')
 def _solve_augmented(lapack, KT, rv, r0, jv, j0, n, m, jr, jc, rows0, columns, robust, ipiv,
-                     ibuf, rhs, b, qdd, lam, force, ls):
+                     ibuf, rhs, b, qdd, lam, force):
     """Solve the augmented system (``KT`` its matrix transposed, ``rv[r0:r0 + n + m]`` its
     right-hand side, ``jv[j0:]`` the Jacobian's values) with the checks of the Python path:
-    ``qdd`` (n,), ``lam`` (m,); False: hand over. ``ls``: the structure of ``KT``
-    (:func:`_lu_structure`; empty: none), from ``PLAN_MIN`` unknowns its planned LU."""
+    ``qdd`` (n,), ``lam`` (m,); False: hand over."""
     N = n + m
     if not _finite(KT, N):
         return False
@@ -208,11 +190,7 @@ def _solve_augmented(lapack, KT, rv, r0, jv, j0, n, m, jr, jc, rows0, columns, r
         v = abs(rhs[i])
         if v > big_rhs:
             big_rhs = v
-    if N <= SMALL and N >= PLAN_MIN and ls[3].size == N:
-        if lu_planned(KT, N, ipiv, ls[0], ls[1], ls[2], ls[3], ls[4], False) > 0:
-            return False
-        getrs(KT, N, ipiv, b, ls[4])
-    elif N <= SMALL:
+    if N <= SMALL:
         if not _lu_solve(KT, b, N, ipiv):
             return False
     else:
@@ -325,7 +303,7 @@ def _accel_rows(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, ipiv, ib
 
 @leaf
 def _project_rows(pv, lapack, xk, nin_k, out_vel, jr, jc, columns, n, m, y, ibuf, cbuf, dbuf,
-                  ex_vel, ph_vel, ri, rw, ls):
+                  ex_vel, ph_vel, ri, rw):
     r"""The velocity projection with velocity constraints (``ROLLING``; the Python path's
     ``analyses._nonholonomic.project_velocities``): the smallest scaled change of
     :math:`\dot q` (``y[n:]``) onto
@@ -359,7 +337,7 @@ def _project_rows(pv, lapack, xk, nin_k, out_vel, jr, jc, columns, n, m, y, ibuf
         g = -out_vel[nnz + i] if i < m else -outr[k * n + i - m]
         FsG[i] = (s - g) / rG[i]
     if not _min_norm(lapack, G, rG, columns, FsG, dqG, Gs, AG, ipivG, ibuf, cbuf, dbuf, workG,
-                     iworkG, ybufG, False, ls):
+                     iworkG, ybufG, False):
         return False
     for j in range(n):
         y[n + j] = y[n + j] - dqG[j]
@@ -431,11 +409,11 @@ def _rhs(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0, 
     elif blocks >= GEN_TREE:
         if not within(blocks, GEN_TREE, GEN_AUGMENTED, _accel_gen, kp, lapack, x, nin, n, m,
                       jr, jc, rows0, columns, robust, ipiv, ibuf, rhs, b, qdd, lam, force,
-                      blk_i[1], blk_w[1], ex[0], ph[0], blocks == GEN_TREE, y, blk_w[4][2]):
+                      blk_i[1], blk_w[1], ex[0], ph[0], blocks == GEN_TREE, y):
             return False
     elif not within(blocks, AUGMENTED, AUGMENTED, _accel, kp, lapack, x, nin, out, KT, KTf,
                     flat_t, mp, kk, n, m, jr, jc, rows0, columns, robust, ipiv, ibuf, rhs, b,
-                    qdd, lam, force, ex[0], ph[0], blk_w[4][0]):
+                    qdd, lam, force, ex[0], ph[0]):
         return False
     for j in range(n):
         f[j] = y[n + j]
@@ -1328,16 +1306,23 @@ def path_accelerations(kp, ex, times, Q, QD, p, jr, jc, k, bi, bw, QDD):
 
 @leaf
 def _min_norm(lapack, J, r, columns, bvec, out, Js, A, ipiv, ibuf, cbuf, dbuf, work, iwork,
-              ybuf, robust, ls):
-    """``out = D J^T (J^ J^T)^-1 bvec``; False at a singular (or, ``robust``, nearly singular:
+              ybuf, robust):
+    r"""``out = D J^T (J^ J^T)^-1 bvec``; False at a singular (or, ``robust``, nearly singular:
     reciprocal condition below ``ZONE^2``) ``J^ J^T``.
 
-    With the structure ``ls`` of ``J^ J^T`` (:func:`_lu_structure`; empty: none, the dense
-    loops and the estimate), the LU is planned from ``PLAN_MIN`` rows
-    (``_jit_lapack.lu_planned``), the solves and the estimate visit the factors' nonzeros,
-    and the estimate is skipped where ``inv_norm_bound`` proves it above the threshold (only
-    "below it or not" is read here): the same decision and the same numbers (decision 0087).
-    """
+    Up to ``SMALL_LU`` rows, ``getrf`` records the factors' nonzeros (in ``iwork``:
+    ``pattern_size(m)`` entries), the solves and the condition estimate visit only those, and
+    the estimate is not made where ``inv_norm_bound`` proves it at least twice the
+    threshold :math:`\tau` (``ZONE^2`` robust, else ``RCOND_MIN``):
+
+    .. math:: \lVert A \rVert_1 \, \beta \le \frac{1}{2 \tau} \implies
+              \mathrm{rcond} \ge \frac{1}{\lVert A \rVert_1 \, \mathrm{est}} > \tau,
+              \qquad \mathrm{est} \le \beta \, (1 + 10^{-10})
+
+    (``beta`` the bound, which exceeds any estimate ``gecon1`` computes from these factors:
+    ``_jit_lapack.inv_norm_bound``). Only "below the threshold or not" is read here, so the
+    decision and the numbers are the dense loops' (a zero's sign aside; decision 0087); the
+    interpreted tier saves the estimate's ten triangular solves."""
     m, n = J.shape
     # (rows through views, ``Jsi = Js[i]``: the same operations; the interpreted tier indexes
     # a view by one integer, faster than ``Js[i, j]``: decision 0077)
@@ -1358,20 +1343,14 @@ def _min_norm(lapack, J, r, columns, bvec, out, Js, A, ipiv, ibuf, cbuf, dbuf, w
             A[k, i] = s
     anorm = _norm1(A, m)             # (A symmetric: the same sums in the same order)
     small = m <= SMALL_LU
-    planned = small and m > 0 and ls[3].size == m
-    nz = ls[4]
-    if planned:
-        if lu_planned(A, m, ipiv, ls[0], ls[1], ls[2], ls[3], nz, m < PLAN_MIN) > 0 \
-                or anorm == 0:
+    nz = iwork
+    if small:
+        if getrf(A, m, ipiv, nz) > 0 or anorm == 0:
             return False
         guard = ZONE * ZONE if robust else RCOND_MIN
         rcond = np.inf
         if anorm * inv_norm_bound(A, m, nz, work) > GUARD_MARGIN / guard:
             rcond = gecon1(A, m, anorm, work, work[m:], nz)
-    elif small:
-        if getrf(A, m, ipiv) > 0 or anorm == 0:
-            return False
-        rcond = gecon1(A, m, anorm, work, work[m:])
     else:
         ibuf[0] = m
         ibuf[1] = m
@@ -1390,10 +1369,8 @@ def _min_norm(lapack, J, r, columns, bvec, out, Js, A, ipiv, ibuf, cbuf, dbuf, w
         return False
     for i in range(m):
         ybuf[i] = bvec[i]
-    if planned:
+    if small:
         getrs(A, m, ipiv, ybuf, nz)
-    elif small:
-        getrs(A, m, ipiv, ybuf)
     else:
         cbuf[1] = 78         # 'N'
         ibuf[4] = 1
@@ -1458,7 +1435,7 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
                           jr, jc, out_pos[m:m + nnz], blk_i[0], blk_w[0], robust):
                 return False
         elif not _min_norm(lapack, J, r, columns, Fs, dq, Js, A, ipiv, ibuf, cbuf, dbuf, work,
-                           iwork, ybuf, robust, blk_w[4][1]):
+                           iwork, ybuf, robust):
             return False
         for j in range(n):
             y[j] -= dq[j]
@@ -1469,7 +1446,7 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
     if blocks == ROLLING:
         return within(blocks, ROLLING, ROLLING, _project_rows, pv, lapack, xk, nin_k, out_vel,
                       jr, jc, columns, n, m, y, ibuf, cbuf, dbuf, ex[2], ph[2], blk_i[3],
-                      blk_w[3], blk_w[4][2])
+                      blk_w[3])
     _evalx(pv, xk, nin_k, out_vel, ex[2], ph[2])
     if sparse:
         _rows_nz(out_vel[:nnz], jr, jc, columns, r)
@@ -1506,7 +1483,7 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
                 s += J[i, j] * y[n + j]
             Fs[i] = (s - (-out_vel[nnz + i])) / r[i]
         if not _min_norm(lapack, J, r, columns, Fs, dq, Js, A, ipiv, ibuf, cbuf, dbuf, work,
-                         iwork, ybuf, robust, blk_w[4][1]):
+                         iwork, ybuf, robust):
             return False
     for j in range(n):
         y[n + j] = y[n + j] - dq[j]
@@ -2027,16 +2004,14 @@ def derivative(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, robu
     return True
 
 
-def workspace(kp, n, m, npar, kk, nnz, blocks, blk_i, bw, jr=None, jc=None, flat_t=None):
+def workspace(kp, n, m, npar, kk, nnz, blocks, blk_i, bw):
     """The work arrays of ``runge_kutta`` and ``adams`` (their ``ws`` argument), allocated once per
     stepper by the Python caller: it owns them for the loops' whole run, which is what lets
     the loops borrow them (``_jit_borrow``: no reference counting in the inner calls).
     Plain NumPy, not compiled: it runs once per stepper, and compiling it (every kind's
     arrays) cost a tenth of the stepper's first compile (decision 0044).
     ``kp`` (3, 5) the kernels' rows, ``kk`` the kernel's outputs before the right-hand side,
-    ``nnz`` the Jacobian's nonzeros, ``bw`` the block path's bandwidth; ``jr``, ``jc`` the
-    Jacobian's positions and ``flat_t`` the augmented matrix's (its transposed storage, flat)
-    give the structures of the planned LUs (:func:`_lu_structure`; None: none)."""
+    ``nnz`` the Jacobian's nonzeros, ``bw`` the block path's bandwidth."""
     nin = 1 + 2 * n + m + npar + n                   # [t, q, qd, lambda, p, qdd]
     nin_k = 1 + 2 * n + npar                         # [t, q, qd, p]
     # (ROLLING: the augmented system bordered by the k velocity rows)
@@ -2056,50 +2031,12 @@ def workspace(kp, n, m, npar, kk, nnz, blocks, blk_i, bw, jr=None, jc=None, flat
             KTf.reshape((side, side)), KTf,
             np.empty(max(NN, 1), dtype=np.int32), np.zeros(8, dtype=np.int32),
             np.zeros(2, dtype=np.uint8), np.zeros(2), np.empty(NN), np.empty(NN), np.zeros(n),
-            np.empty(m), np.empty(n),
-            (*_block_work(blocks, blk_i, n, m, bw, nnz),
-             _structures(blocks, banded, n, m, NN, jr, jc, flat_t)),
+            np.empty(m), np.empty(n), _block_work(blocks, blk_i, n, m, bw, nnz),
             np.empty((1, 1) if banded else (m, n)),
             np.empty(m), np.empty(m), np.empty(n), np.empty((1, 1) if banded else (m, n)),
             np.empty((1, 1) if banded else (m, m)),
-            np.empty(4 * max(m, 1)), np.empty(max(m, 1), dtype=np.int32), np.empty(m))
-
-
-def _lu_structure(n, flags=None):
-    """The structure of an ``n x n`` matrix for ``_jit_lapack.lu_planned`` (the
-    loops' ``ls``): ``(F0, F, plan, seen, nz)``, ``F0`` (int32 (n, n), transposed storage)
-    one where the matrix may be nonzero (``flags``, boolean, already transposed), ``F`` its
-    work, ``plan`` (``plan_size``), ``seen`` the pivots of the plan (none yet: -1) and
-    ``nz`` the factors' structure (``pattern_size``). ``flags`` None: an empty structure
-    (the dense loops: ``seen`` of size 0)."""
-    if flags is None:
-        z = np.zeros(0, dtype=np.int32)
-        return (np.zeros((1, 1), dtype=np.int32), np.zeros((1, 1), dtype=np.int32), z, z, z)
-    return (np.ascontiguousarray(flags, dtype=np.int32), np.zeros((n, n), dtype=np.int32),
-            np.zeros(plan_size.py_func(n), dtype=np.int32), np.full(n, -1, dtype=np.int32),
-            np.zeros(pattern_size.py_func(n), dtype=np.int32))
-
-
-def _structures(blocks, banded, n, m, NN, jr, jc, flat_t):
-    """``blk_w[4]``: the structures (:func:`_lu_structure`) of the augmented matrix (the
-    kind ``AUGMENTED`` up to ``SMALL`` unknowns: the positions ``flat_t`` of its transposed
-    storage), of the projection's ``J^ J^T`` (the kinds whose projection is ``_min_norm`` on
-    the Jacobian: ``(i, k)`` where rows ``i`` and ``k`` share a column; symmetric) and an
-    empty one (the other matrices: the velocity rows' projection, Gen's augmented system)."""
-    none = _lu_structure(0)
-    if jr is None:
-        return none, none, none
-    K = none
-    if blocks == AUGMENTED and NN <= SMALL and flat_t is not None and flat_t.size:
-        f = np.zeros(NN * NN, dtype=np.bool_)
-        f[np.asarray(flat_t, dtype=np.int64)] = True
-        K = _lu_structure(NN, f.reshape((NN, NN)))
-    A = none
-    if m > 0 and not banded and blocks not in (BLOCK, SPARSE):
-        Jb = np.zeros((m, n), dtype=np.int64)
-        Jb[np.asarray(jr, dtype=np.int64), np.asarray(jc, dtype=np.int64)] = 1
-        A = _lu_structure(m, (Jb @ Jb.T) > 0)
-    return K, A, none
+            np.empty(4 * max(m, 1)), np.empty(pattern_size.py_func(m), dtype=np.int32),
+            np.empty(m))
 
 
 def _block_work(blocks, blk_i, n, m, bw, nnz):
@@ -2172,7 +2109,7 @@ def _rows_work(blocks, blk_i, n, m):
             np.zeros(ex.max() + 1 if ex.size else 1), np.zeros((g, n)), np.zeros((g, n)),
             np.zeros((g, g)), np.zeros(g), np.zeros(g), np.zeros(n), np.zeros(g),
             np.zeros(4 * max(g, 1)), np.zeros(max(g, 1), dtype=np.int32),
-            np.zeros(max(g, 1), dtype=np.int32), np.zeros(k))
+            np.zeros(pattern_size.py_func(g), dtype=np.int32), np.zeros(k))
 
 
 @nb.njit(cache=True)
@@ -2278,7 +2215,7 @@ def _gen_augmented(gi, gw, n, m, jr, jc):
 
 @leaf
 def _accel_gen(kp, lapack, x, nin, n, m, jr, jc, rows0, columns, robust, ipiv, ibuf, rhs, b,
-               qdd, lam, force, gi, gw, ex, ph, tree, y, ls):
+               qdd, lam, force, gi, gw, ex, ph, tree, y):
     """Free acceleration of a system with recursive Gen dynamics
     (``compile._generalized.RecursiveDynamics``, decision 0016) at ``x = [t, q, qd, 0, p,
     0]``, ``y = (q, qd)``: :func:`_gen_forward_main`; ``tree``: ``qdd`` by the
@@ -2304,7 +2241,7 @@ def _accel_gen(kp, lapack, x, nin, n, m, jr, jc, rows0, columns, robust, ipiv, i
         return True
     _gen_augmented(gi, gw, n, m, jr, jc)
     return _solve_augmented(lapack, KT, og, o, og, kM, n, m, jr, jc, rows0, columns, robust,
-                            ipiv, ibuf, rhs, b, qdd, lam, force, ls)
+                            ipiv, ibuf, rhs, b, qdd, lam, force)
 
 
 @nb.njit(cache=True, inline='always')

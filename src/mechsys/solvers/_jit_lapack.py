@@ -84,16 +84,6 @@ def getrf(AT, n, piv, nz=None):
     """LU of ``A`` (n, n) in place; ``piv[j]``: the row swapped with row ``j`` (0-based).
     Returns LAPACK's ``info``: 0, or ``j + 1`` for the first exactly zero pivot. With ``nz``
     (see the module docstring) ``nz`` receives the factors' nonzero structure."""
-    info = _eliminate(AT, n, piv, 0)
-    if nz is not None:
-        _pattern(AT, n, nz)
-    return info
-
-
-@leaf
-def _eliminate(AT, n, piv, j0):
-    """:func:`getrf`'s elimination from step ``j0`` on (the steps before it taken, none at
-    a zero pivot: :func:`getrf_planned` hands over here). Returns ``info``."""
     # (each column of the transposed storage through a row view, ``lj = AT[j]``: the same
     # operations; the interpreted tier (decision 0075) indexes a view by one integer, about
     # 1.5 x faster than ``AT[j, i]``; compiled, the same code: decision 0077)
@@ -103,7 +93,7 @@ def _eliminate(AT, n, piv, j0):
     # where either is not finite: the same numbers, and the interpreted tier, which pays
     # per statement, visits a sparse column's nonzero span only: decision 0087)
     info = 0
-    for j in range(j0, n):
+    for j in range(n):
         lj = AT[j]
         p = j
         big = abs(lj[j])
@@ -141,6 +131,8 @@ def _eliminate(AT, n, piv, j0):
                 else:                    # (0 a is NaN)
                     for i in range(j + 1, n):
                         ac[i] -= lj[i] * a
+    if nz is not None:
+        _pattern(AT, n, nz)
     return info
 
 
@@ -409,165 +401,6 @@ def lists_pattern(n, W, P, nz):
                 pu += 1
     nz[n] = pl
     nz[2 * n + 1] = pu
-
-
-@nb.njit(cache=True)
-def plan_size(n):
-    """Length of the ``plan`` array of :func:`lu_plan` for ``n`` unknowns: the offsets of
-    the ``n`` steps and, per step, four counted lists of at most ``n`` entries."""
-    return 5 * n + 2 + n * n + (3 * n * (n - 1)) // 2
-
-
-@leaf
-def lu_plan(F0, F, n, piv, plan, nz):
-    r"""The plan of :func:`getrf_planned` for the pivots ``piv``: :func:`getrf`'s elimination
-    done on the structure (flags) instead of the numbers, recording at each step ``j`` the
-    positions that step can touch. ``F0`` (int32 (n, n), transposed storage: ``F0[c, i]``
-    nonzero where ``A(i, c)`` may be), ``F`` (n, n): work (the structure with its fill; at
-    the end the factors' structure, written to ``nz`` as :func:`symbolic_pattern` does).
-
-    ``plan[j]`` is where step ``j``'s four lists start, each a count and its entries:
-    the rows ``i > j`` that may hold a nonzero of column ``j`` before the interchange (the
-    pivot's candidates); the columns where row ``j`` or row ``piv[j]`` may hold a nonzero
-    (the interchange); after it, the rows ``i > j`` of ``L``'s column ``j`` and the
-    columns ``c > j`` of ``U``'s row ``j``, whose products are the fill. All ascending.
-
-    Example::
-
-        lu_plan(F0, F, n, piv, plan, nz)     # once per pivot sequence
-        info = getrf_planned(AT, n, piv, plan, seen)
-    """
-    for c in range(n):
-        for i in range(n):
-            F[c, i] = F0[c, i]
-    o = n + 1
-    for j in range(n):
-        plan[j] = o
-        o = _flagged_below(F, j, n, plan, o)
-        p = piv[j]
-        k = o
-        o += 1
-        if p != j:
-            for c in range(n):
-                if F[c, j] != 0 or F[c, p] != 0:
-                    plan[o] = c
-                    o += 1
-                    F[c, j], F[c, p] = F[c, p], F[c, j]
-        plan[k] = o - k - 1
-        lo = o
-        o = _flagged_below(F, j, n, plan, o)
-        k = o
-        o += 1
-        for c in range(j + 1, n):
-            if F[c, j] != 0:
-                plan[o] = c
-                o += 1
-                for i in plan[lo + 1:lo + 1 + plan[lo]]:
-                    F[c, i] = 1
-        plan[k] = o - k - 1
-    plan[n] = o
-    _pattern(F, n, nz)
-
-
-@leaf
-def _flagged_below(F, j, n, plan, o):
-    """Appends to ``plan`` at ``o`` the count and the rows ``i > j`` flagged in ``F[j]``;
-    returns the next free position."""
-    k = o
-    o += 1
-    Fj = F[j]
-    for i in range(j + 1, n):
-        if Fj[i] != 0:
-            plan[o] = i
-            o += 1
-    plan[k] = o - k - 1
-    return o
-
-
-@leaf
-def getrf_planned(AT, n, piv, plan, seen):
-    r""":func:`getrf` following the plan that :func:`lu_plan` made for the pivots ``seen``
-    (``seen[0] < 0``: none yet): the same pivots, ``info`` and factors (up to the sign of
-    a zero), visiting at each step only the positions the plan lists (the free-motion
-    stepper's augmented and projection matrices, decision 0087: their structure is fixed,
-    their pivots change seldom).
-
-    Why the numbers are :func:`getrf`'s, while the pivots taken so far are the plan's: an
-    entry the plan does not list is an exact zero (zero in ``A``, and each update of it is
-    ``x - l a`` with ``l`` or ``a`` unlisted, hence zero). So the pivot search over the
-    listed rows finds the first largest entry (a zero never beats it), the interchange over
-    the listed columns moves every nonzero, and the updates skipped are those with ``a = 0``
-    (which :func:`getrf` skips too) or ``l = 0``: ``x - 0 a = x`` for a finite ``a``.
-
-    Where that reasoning ends, :func:`getrf`'s own loops (``_eliminate``) take the rest of
-    the elimination on the same matrix, whose numbers are then its exactly: at the first
-    pivot other than the plan's (a new pivot sequence: the caller makes its plan), at a zero
-    or NaN pivot (``info``), at a pivot whose reciprocal is not finite (below about
-    ``5.6e-309``: ``0 * inv`` is NaN), and after a step that met a non-finite ``a`` (that
-    column is updated whole, as :func:`getrf` does: its zeros may be NaN now). Returns
-    LAPACK's ``info``. (Written for the interpreter too, which runs it as the first tier
-    and pays per statement: a few statements an entry listed.)
-    """
-    j = 0
-    if n == 0 or seen[0] < 0:
-        return _eliminate(AT, n, piv, 0)
-    while j < n:
-        o = plan[j]
-        lj = AT[j]
-        p = j
-        big = abs(lj[j])
-        for i in plan[o + 1:o + 1 + plan[o]]:
-            v = abs(lj[i])
-            if v > big:
-                big = v
-                p = i
-        if p != seen[j] or not big > 0.0 or not 1.0 / big < np.inf:
-            break
-        piv[j] = p
-        o += 1 + plan[o]
-        if p != j:
-            for c in plan[o + 1:o + 1 + plan[o]]:
-                AT[c, j], AT[c, p] = AT[c, p], AT[c, j]
-        o += 1 + plan[o]
-        rows = plan[o + 1:o + 1 + plan[o]]
-        o += 1 + plan[o]
-        inv = 1.0 / lj[j]
-        for i in rows:
-            lj[i] *= inv
-        spoilt = False
-        for c in plan[o + 1:o + 1 + plan[o]]:
-            a = AT[c, j]
-            if a != 0.0:
-                ac = AT[c]
-                if abs(a) < np.inf:
-                    for i in rows:
-                        ac[i] -= lj[i] * a
-                else:
-                    spoilt = True
-                    for i in range(j + 1, n):
-                        ac[i] -= lj[i] * a
-        j += 1
-        if spoilt:
-            break
-    return _eliminate(AT, n, piv, j)
-
-
-@leaf
-def lu_planned(AT, n, piv, F0, F, plan, seen, nz, dense):
-    """:func:`getrf_planned` (``dense``: :func:`getrf`'s loops, the same numbers), then,
-    when the pivots were not ``seen``'s, the plan and the factors' structure ``nz`` for the
-    new ones (:func:`lu_plan`; ``seen`` becomes them). Returns ``info``; at 0, ``nz`` lists
-    the factors' nonzeros for :func:`getrs`, :func:`gecon1` and :func:`inv_norm_bound`."""
-    info = _eliminate(AT, n, piv, 0) if dense else getrf_planned(AT, n, piv, plan, seen)
-    if info > 0:
-        return info
-    for j in range(n):
-        if piv[j] != seen[j]:
-            lu_plan(F0, F, n, piv, plan, nz)
-            for i in range(n):
-                seen[i] = piv[i]
-            break
-    return info
 
 
 @leaf
