@@ -108,6 +108,58 @@ def test_getrf_structure_lists_the_nonzeros(n):
             np.testing.assert_array_equal(above, np.flatnonzero(LU[:j, j]))
 
 
+def _textbook_getrf(A):
+    """Gaussian elimination with partial pivoting (first largest pivot), every row of every
+    column visited, written out plainly: the reference of ``getrf``'s skips."""
+    A = A.copy()
+    n = A.shape[0]
+    piv = np.zeros(n, dtype=np.int32)
+    info = 0
+    for j in range(n):
+        p = j
+        for i in range(j + 1, n):
+            if abs(A[i, j]) > abs(A[p, j]):
+                p = i
+        piv[j] = p
+        if A[p, j] != 0.0:
+            A[[j, p]] = A[[p, j]]
+            A[j + 1:, j] *= 1.0 / A[j, j]
+        elif info == 0:
+            info = j + 1
+        for c in range(j + 1, n):
+            if A[j, c] != 0.0:
+                A[j + 1:, c] -= A[j + 1:, j] * A[j, c]
+    return A, piv, info
+
+
+def test_getrf_skips_only_exact_no_ops():
+    """``getrf`` scales and updates each column's rows from its first to its last nonzero
+    below the diagonal only (decision 0087): against the elimination that visits every row,
+    the same pivots, ``info`` and factors as numbers (NaN where it has NaN; a zero's sign
+    may differ), on sparse matrices (mechanism-like: a few nonzeros a row), some with an
+    infinity, a NaN, a subnormal pivot (whose reciprocal is infinite: ``0 inv`` is NaN
+    there) or a zero column (``info``)."""
+    rng = np.random.default_rng(87)
+    getrf = leaf(jl, "getrf")
+    for trial in range(240):
+        n = int(rng.integers(1, 13))
+        A = _matrix(rng, n, "sparse")
+        if trial % 6 == 1:
+            A[rng.integers(n), rng.integers(n)] = (np.inf, np.nan, -np.inf)[trial % 3]
+        if trial % 6 == 3:
+            A[:, rng.integers(n)] *= 1e-310               # (subnormal pivots)
+        if trial % 6 == 5:
+            A[:, rng.integers(n)] = 0.0                    # (info)
+        AT = np.ascontiguousarray(A.T)
+        piv = np.zeros(n, dtype=np.int32)
+        with np.errstate(all="ignore"):
+            want, wpiv, winfo = _textbook_getrf(A)
+            info = getrf(AT, n, piv)
+        assert info == winfo
+        np.testing.assert_array_equal(piv, wpiv)
+        np.testing.assert_array_equal(AT.T, want)          # (NaN == NaN here; -0.0 == 0.0)
+
+
 @pytest.mark.parametrize("structure", [False, True])
 @pytest.mark.parametrize("n", SIZES)
 def test_getrs_is_dgetrs(n, structure):

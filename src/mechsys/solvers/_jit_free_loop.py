@@ -51,7 +51,7 @@ import numpy as np
 from ._jit_borrow import borrow
 from ._jit_cache import check as _check_cache
 from ._jit_calls import _ccall, _eval
-from ._jit_lapack import gecon1, getrf, getrs, leaf
+from ._jit_lapack import GUARD_MARGIN, gecon1, getrf, getrs, inv_norm_bound, leaf, pattern_size
 from ._jit_linalg import _assemble, _norm1, _rows, _rows_nz
 from ._jit_linalg import _band_factor as _gb_factor
 from ._jit_linalg import _band_solve as _gb_solve
@@ -158,6 +158,19 @@ def _finite(KT, N):
         for j in range(N):
             if not np.isfinite(KT[i, j]):
                 return False
+    return True
+
+
+@nb.njit(cache=True, inline='always')
+def _all_finite(x, count):
+    r"""Whether ``x[:count]`` is finite: the sum first, one reduction (as :func:`_finite`:
+    one call in the interpreted tier instead of ``count`` scalar tests of about 1 µs each,
+    decision 0087), entry by entry only when the sum is not finite."""
+    if np.isfinite(np.sum(x[:count])):
+        return True
+    for i in range(count):
+        if not np.isfinite(x[i]):
+            return False
     return True
 
 
@@ -328,10 +341,7 @@ def _project_rows(pv, lapack, xk, nin_k, out_vel, jr, jc, columns, n, m, y, ibuf
         return False
     for j in range(n):
         y[n + j] = y[n + j] - dqG[j]
-    for j in range(2 * n):
-        if not np.isfinite(y[j]):
-            return False
-    return True
+    return _all_finite(y, 2 * n)
 
 
 @leaf
@@ -1297,8 +1307,22 @@ def path_accelerations(kp, ex, times, Q, QD, p, jr, jc, k, bi, bw, QDD):
 @leaf
 def _min_norm(lapack, J, r, columns, bvec, out, Js, A, ipiv, ibuf, cbuf, dbuf, work, iwork,
               ybuf, robust):
-    """``out = D J^T (J^ J^T)^-1 bvec``; False at a singular (or, ``robust``, nearly singular:
-    reciprocal condition below ``ZONE^2``) ``J^ J^T``."""
+    r"""``out = D J^T (J^ J^T)^-1 bvec``; False at a singular (or, ``robust``, nearly singular:
+    reciprocal condition below ``ZONE^2``) ``J^ J^T``.
+
+    Up to ``SMALL_LU`` rows, ``getrf`` records the factors' nonzeros (in ``iwork``:
+    ``pattern_size(m)`` entries), the solves and the condition estimate visit only those, and
+    the estimate is not made where ``inv_norm_bound`` proves it at least twice the
+    threshold :math:`\tau` (``ZONE^2`` robust, else ``RCOND_MIN``):
+
+    .. math:: \lVert A \rVert_1 \, \beta \le \frac{1}{2 \tau} \implies
+              \mathrm{rcond} \ge \frac{1}{\lVert A \rVert_1 \, \mathrm{est}} > \tau,
+              \qquad \mathrm{est} \le \beta \, (1 + 10^{-10})
+
+    (``beta`` the bound, which exceeds any estimate ``gecon1`` computes from these factors:
+    ``_jit_lapack.inv_norm_bound``). Only "below the threshold or not" is read here, so the
+    decision and the numbers are the dense loops' (a zero's sign aside; decision 0087); the
+    interpreted tier saves the estimate's ten triangular solves."""
     m, n = J.shape
     # (rows through views, ``Jsi = Js[i]``: the same operations; the interpreted tier indexes
     # a view by one integer, faster than ``Js[i, j]``: decision 0077)
@@ -1319,10 +1343,14 @@ def _min_norm(lapack, J, r, columns, bvec, out, Js, A, ipiv, ibuf, cbuf, dbuf, w
             A[k, i] = s
     anorm = _norm1(A, m)             # (A symmetric: the same sums in the same order)
     small = m <= SMALL_LU
+    nz = iwork
     if small:
-        if getrf(A, m, ipiv) > 0 or anorm == 0:
+        if getrf(A, m, ipiv, nz) > 0 or anorm == 0:
             return False
-        rcond = gecon1(A, m, anorm, work, work[m:])
+        guard = ZONE * ZONE if robust else RCOND_MIN
+        rcond = np.inf
+        if anorm * inv_norm_bound(A, m, nz, work) > GUARD_MARGIN / guard:
+            rcond = gecon1(A, m, anorm, work, work[m:], nz)
     else:
         ibuf[0] = m
         ibuf[1] = m
@@ -1342,7 +1370,7 @@ def _min_norm(lapack, J, r, columns, bvec, out, Js, A, ipiv, ibuf, cbuf, dbuf, w
     for i in range(m):
         ybuf[i] = bvec[i]
     if small:
-        getrs(A, m, ipiv, ybuf)
+        getrs(A, m, ipiv, ybuf, nz)
     else:
         cbuf[1] = 78         # 'N'
         ibuf[4] = 1
@@ -1412,10 +1440,7 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
         for j in range(n):
             y[j] -= dq[j]
     if blocks == PATH:                   # a path's state is q alone
-        for j in range(n):
-            if not np.isfinite(y[j]):
-                return False
-        return True
+        return _all_finite(y, n)
     for j in range(n):
         xk[1 + j] = y[j]
     if blocks == ROLLING:
@@ -1462,10 +1487,7 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
             return False
     for j in range(n):
         y[n + j] = y[n + j] - dq[j]
-    for j in range(2 * n):
-        if not np.isfinite(y[j]):
-            return False
-    return True
+    return _all_finite(y, 2 * n)
 
 
 @leaf
@@ -2013,7 +2035,8 @@ def workspace(kp, n, m, npar, kk, nnz, blocks, blk_i, bw):
             np.empty((1, 1) if banded else (m, n)),
             np.empty(m), np.empty(m), np.empty(n), np.empty((1, 1) if banded else (m, n)),
             np.empty((1, 1) if banded else (m, m)),
-            np.empty(4 * max(m, 1)), np.empty(max(m, 1), dtype=np.int32), np.empty(m))
+            np.empty(4 * max(m, 1)), np.empty(pattern_size.py_func(m), dtype=np.int32),
+            np.empty(m))
 
 
 def _block_work(blocks, blk_i, n, m, bw, nnz):
@@ -2086,7 +2109,7 @@ def _rows_work(blocks, blk_i, n, m):
             np.zeros(ex.max() + 1 if ex.size else 1), np.zeros((g, n)), np.zeros((g, n)),
             np.zeros((g, g)), np.zeros(g), np.zeros(g), np.zeros(n), np.zeros(g),
             np.zeros(4 * max(g, 1)), np.zeros(max(g, 1), dtype=np.int32),
-            np.zeros(max(g, 1), dtype=np.int32), np.zeros(k))
+            np.zeros(pattern_size.py_func(g), dtype=np.int32), np.zeros(k))
 
 
 @nb.njit(cache=True)
@@ -2623,9 +2646,8 @@ def _accel_blocks(kp, x, nin, out, kk, kM, n, m, jr, jc, rows0, columns, robust,
     nblk = bsize.size
     bw = Sb.shape[1] - 1
     _evalx(kp, x, nin, out, ex, ph)
-    for k in range(kk + n + m):
-        if not np.isfinite(out[k]):
-            return False
+    if not _all_finite(out, kk + n + m):
+        return False
     Mst[:] = 0.0
     for k in range(kM):
         Mst[mpos[k]] = out[k]
@@ -2753,7 +2775,4 @@ def _project_blocks(pp, pv, xk, nin_k, out_pos, out_vel, jr, jc, columns, offset
         return False
     for j in range(n):
         y[n + j] = y[n + j] - dq[j]
-    for j in range(2 * n):
-        if not np.isfinite(y[j]):
-            return False
-    return True
+    return _all_finite(y, 2 * n)

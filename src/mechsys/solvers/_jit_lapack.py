@@ -87,25 +87,37 @@ def getrf(AT, n, piv, nz=None):
     # (each column of the transposed storage through a row view, ``lj = AT[j]``: the same
     # operations; the interpreted tier (decision 0075) indexes a view by one integer, about
     # 1.5 x faster than ``AT[j, i]``; compiled, the same code: decision 0077)
+    # (the column's rows below the diagonal that are not zero lie in lo .. hi, found by the
+    # pivot search; the scaling and the updates skip the zeros outside, ``x - 0 a = x`` and
+    # ``0 inv = 0`` for finite ``a`` and ``inv`` (a zero's sign aside), and take every row
+    # where either is not finite: the same numbers, and the interpreted tier, which pays
+    # per statement, visits a sparse column's nonzero span only: decision 0087)
     info = 0
     for j in range(n):
         lj = AT[j]
         p = j
         big = abs(lj[j])
+        lo = n
+        hi = j
         for i in range(j + 1, n):
             v = abs(lj[i])
-            if v > big:
-                big = v
-                p = i
+            if v != 0.0:                 # (NaN too)
+                hi = i
+                if lo == n:
+                    lo = i
+                if v > big:
+                    big = v
+                    p = i
         piv[j] = p
         if lj[p] != 0.0:
-            if p != j:
+            if p != j:                   # (p in lo .. hi: the span holds the old diagonal)
                 for c in range(n):
-                    tmp = AT[c, j]
-                    AT[c, j] = AT[c, p]
-                    AT[c, p] = tmp
+                    AT[c, j], AT[c, p] = AT[c, p], AT[c, j]
             inv = 1.0 / lj[j]
-            for i in range(j + 1, n):
+            if not abs(inv) < np.inf:    # (a subnormal pivot: 0 inv is NaN)
+                lo = j + 1
+                hi = n - 1
+            for i in range(lo, hi + 1):
                 lj[i] *= inv
         elif info == 0:
             info = j + 1
@@ -113,8 +125,12 @@ def getrf(AT, n, piv, nz=None):
             a = AT[c, j]
             if a != 0.0:
                 ac = AT[c]
-                for i in range(j + 1, n):
-                    ac[i] -= lj[i] * a
+                if abs(a) < np.inf:
+                    for i in range(lo, hi + 1):
+                        ac[i] -= lj[i] * a
+                else:                    # (0 a is NaN)
+                    for i in range(j + 1, n):
+                        ac[i] -= lj[i] * a
     if nz is not None:
         _pattern(AT, n, nz)
     return info
