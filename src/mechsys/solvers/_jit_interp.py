@@ -2,7 +2,7 @@ r"""The compiled loops' own code, run by the Python interpreter: the first tier 
 that is not compiled yet (the sweep and the multiplier solves: decision 0075, and since
 decision 0081 every sweep and multiplier job whose compiled loop is not loaded, and
 ``MECHSYS_JIT=0``'s; the free-motion Runge-Kutta stepper, its derivative and a path's
-accelerations: decision 0077, where ``MECHSYS_JIT=0`` still selects the Python stepper).
+accelerations: decision 0077, and since decision 0082 ``MECHSYS_JIT=0``'s too).
 
 A Numba dispatcher keeps the Python function it compiles (``dispatcher.py_func``); its code
 object is the loop. :func:`interpreted` makes a plain Python function of that same code
