@@ -235,7 +235,12 @@ def _joint_exprs(space, body, p_syms, conv):
     h = [sum((v.diff(x) * xd for x, xd in zip(X, Xd)), zero) + v.diff(t) for v in pd]
     rates = tuple(velocity_symbol(s.name) for s in body.q)
     _, Mb, Qvb = body_terms(space, tuple(body.q), rates, *_mass_key(space, body))
-    bsub = {conv(a): b for a, b in [*zip(body.q, F), *zip(rates, pd)]}
+    pairs = [*zip(body.q, F), *zip(rates, pd)]
+    bsub = {conv(a): b for a, b in pairs}
+    if conv is sp.sympify:
+        # (body_terms' expressions hold plain symbols, the model's coordinates are real ones:
+        # SymPy tells them apart, so they are matched by name as SymEngine matches them)
+        bsub.update({sp.Symbol(str(a)): b for a, b in pairs})
     Mb = [conv(e).xreplace(bsub) for row in Mb for e in row]
     Qvb = [conv(e).xreplace(bsub) for e in Qvb]
     exprs = [*F, *pd, *(FX[i][j] for i in range(nq) for j in range(nm)),
