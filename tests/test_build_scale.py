@@ -200,10 +200,47 @@ def test_small_matrices_from_entries_equal_sympys():
     c, s = sp.cos(th, evaluate=False), sp.sin(th, evaluate=False)
     for flat, shape in (([c, -s, s, c], (2, 2)), ([x, sp.S.Zero], (2, 1)),
                         ([sp.Integer(1), sp.Integer(0)], (2, 1)),
-                        ([sp.Rational(1, 2), sp.Float(0.5)], (2, 1))):
+                        ([sp.Rational(1, 2), sp.Float(0.5)], (2, 1)),
+                        ([sp.Float(0.0), sp.Float(-0.0), x, sp.S.Zero], (2, 2)),
+                        ([sp.S.Zero, sp.S.Zero], (2, 1))):
         a, b = _matrix(*shape, flat), sp.Matrix(*shape, flat)
         assert a == b and type(a) is type(b) and a._rep.domain == b._rep.domain
+        # (the same entries stored: a Float zero is kept, SymPy's zero left out)
+        assert a._rep.to_sdm() == b._rep.to_sdm()
         assert a.T * a == b.T * b
+
+
+def test_numbers_and_coordinate_tuples_made_once_are_sympys():
+    """A float's SymPy number made once per exact value (decision 0086) is what sympify
+    makes (``0.0`` and ``-0.0`` apart); a plain coordinate tuple's column, checked once, is
+    the column ``sp.Matrix`` makes, a new copy each time (1 and 1.0 apart); a body's stored
+    point comes back as ``Point`` would make it."""
+    from mechsys._symbols import number
+    from mechsys.geometry._points import Point, _as_matrix
+
+    for v in (0.5, 0.0, -0.0, 1 / 12, 1e300, float("inf")):
+        got = number(v)
+        assert got is number(v) and sp.srepr(got) == sp.srepr(sp.sympify(v))
+    assert number(0.0) is not number(-0.0)
+    assert number(3) == 3 and number(sp.Symbol("a")) == sp.Symbol("a")
+    for coords in ((1, 0), (1.0, 0), (0.5, -0.0), (0.5, 0.0)):
+        a, b = _as_matrix(coords, "p"), _as_matrix(coords, "p")
+        want = sp.Matrix([sp.sympify(c) for c in coords])
+        assert a is not b and a == want and a._rep.domain == want._rep.domain
+        assert [sp.srepr(e) for e in a] == [sp.srepr(e) for e in want]
+        a[0] = 7                                       # a copy: the next one is as made
+        assert _as_matrix(coords, "p") == want
+    with pytest.raises(ms.GeometryError):
+        _as_matrix((float("nan"), 0.0), "p")
+    with pytest.raises(ms.GeometryError):             # checked again, not remembered
+        _as_matrix((float("nan"), 0.0), "p")
+    m = ms.Model2D()
+    b = m.add_body("b", points={"tip": (1, 0.5)})
+    for spec in ("tip", 1, 0):
+        p, q = b.point(spec), Point(b, b._points["tip"] if spec != 0 else sp.zeros(2, 1),
+                                    label="tip" if spec != 0 else "origin")
+        assert (p.body, p.label, p.local) == (q.body, q.label, q.local)
+        assert p.local is not b._points.get("tip") and type(p.local) is type(q.local)
 
 
 def test_gc_paused_nests_and_restores_the_collector():
