@@ -51,4 +51,5 @@ def test_block_renders_from_a_result():
     text = bench.table(r)
     assert "| mechsys | 56 | 1.5 s | 900 ms | 500 ms | 217 | 3564 | 140 µs |" in text
     assert "lean within 1.3e-09 rad" in text and "124 steps instead of 75" in text
-    assert "Python stepper (`MECHSYS_JIT=0`): 900 ms (217 steps)" in text
+    assert ("interpreted (`MECHSYS_JIT=0`, the stepper's own code, the same numbers): 900 ms "
+            "(217 steps)") in text
