@@ -294,3 +294,37 @@ def test_recursive_gen_dynamics_with_the_sympy_backend(monkeypatch):
     check_multipliers(sol)
     scale = np.maximum(1.0, np.abs(ref.lam).max())
     assert np.abs(sol.lam - ref.lam).max() / scale <= 1e-12
+
+
+def test_friction_whose_load_derivatives_have_a_first_stage_runs_in_the_loop(monkeypatch, tmp_path):
+    """Joint friction (loads that depend on the multipliers) whose ``dQ/dlambda`` kernel is
+    large enough to compile in two stages (above ``STAGE_TRIG`` outputs: a 128-link chain's;
+    here the threshold is lowered so that a 4-link chain's are): the Newton kind runs in the
+    loop (it once refused any first stage of those kernels and sent the run to the Python
+    stepper whole), interpreted and compiled give the same bits, and the motion is the
+    one-stage build's to the integration tolerance."""
+    from mechsys.compile import _backends
+    from mechsys.solvers import _jit_free
+
+    def chain():
+        m = models.pendulum_chain(4)
+        for k in range(4):
+            m.add_load(ms.JointFriction(f"j{k}", mu=0.1, radius=0.01, v_eps=1e-3))
+        m.solve(0.0)
+        return m.free(drop=[f"lock{k}" for k in range(4)])
+
+    span = dict(rtol=1e-9, atol=1e-11)
+    monkeypatch.setenv("MECHSYS_JIT", "1")
+    ref = chain().simulate((0.0, 0.3), **span)
+    monkeypatch.setenv("MECHSYS_CACHE", str(tmp_path))
+    monkeypatch.setattr(_backends, "LARGE_KERNEL", 10)
+    monkeypatch.setattr(_backends, "STAGE_TRIG", 10)
+    free = chain()
+    entry = _jit_free.kernel_entry(free.system.dynamics.f_dQ_dlam)
+    assert entry is not None and entry[0][2] != 0        # a first stage
+    slow, fast = simulate_both(monkeypatch, free, (0.0, 0.3), **span)
+    assert fast.extra["compiled_solver"] == "newton"
+    assert fast.extra["compiled_steps"] == fast.extra["steps"]
+    assert slow.extra["interpreted_steps"] == slow.extra["steps"]
+    np.testing.assert_allclose(fast.q[-1], ref.q[-1], rtol=0, atol=1e-7)
+    np.testing.assert_allclose(fast.qd[-1], ref.qd[-1], rtol=0, atol=1e-6)

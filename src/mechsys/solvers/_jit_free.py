@@ -937,9 +937,12 @@ class FreeStepper:
     @classmethod
     def _plan_newton(cls, system, p, scaling, correction, t_eval, newton):
         """The stepper for loads that depend on the multipliers or accelerations (kind
-        ``NEWTON``: ``free_acceleration``'s Newton in the loop), or None: at most
-        ``SMALL_LU`` unknowns, a ``Dynamics`` (not the recursive one), LLVM kernels whose
-        outputs are all distinct and whose derivatives of the loads have no Piecewise stage.
+        ``NEWTON``: ``free_acceleration``'s Newton in the loop), or None: a ``Dynamics``
+        (not the recursive one) and kernels with C entry points whose loads' derivatives have
+        all their outputs distinct. A first stage of those derivatives (``Piecewise`` values,
+        or a large kernel's gathered values: a 128-link chain's ``dQ/dlambda``) gets its room
+        in the loop's work array (``workspace``); before, such a run went to the Python
+        stepper whole.
         ``newton``: ``free_acceleration``'s keyword options (``tol``, ``max_iterations``).
         Above ``SMALL_LU`` unknowns the Newton matrix goes by the Python path's fixed pattern
         (``_newton_band``): banded (chains) by LAPACK's band LU, else (trees of many
@@ -964,8 +967,6 @@ class FreeStepper:
             extra.append(kernel_entry(getattr(dyn, kern)) if flag else ((0, 0, 0, 0, 0), _NO_EXPAND))
         if any(e is None for e in main + extra) or any(len(e[1]) for e in extra):
             return None
-        if any(e[0][2] != 0 for e in extra[2:]):
-            return None                     # (their Piecewise values would need more room)
         dr, dc = ((dyn.dQ_rows, dyn.dQ_cols) if dyn.depends_on_lambda else (z, z))
         ar, ac = ((dyn.dA_rows, dyn.dA_cols) if dyn.depends_on_qdd else (z, z))
         info = [len(dyn.M_rows), int(dyn.depends_on_lambda), maxit, len(dr), len(ar), len(p)]

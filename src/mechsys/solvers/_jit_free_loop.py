@@ -2026,6 +2026,11 @@ def workspace(kp, n, m, npar, kk, nnz, blocks, blk_i, bw):
     KTf = np.empty(side * side)
     # (a path evaluates its two kernels at [t, q, qd, p] in the first array)
     first = max(nin + max(kp[0, 4], 0), nin_k + max(kp[0, 4], kp[2, 4], 0))
+    if blocks == NEWTON:
+        # (the loads' derivatives are evaluated at [t, q, qd, lambda, p, qdd] in the first
+        # array: room for a first stage of theirs, a large kernel's gathered values)
+        info = blk_i[0][0]
+        first = max(first, nin + max(info[20], info[25], 0))
     return (np.zeros(first), np.zeros(nin_k + max(kp[1, 4], kp[2, 4])),
             np.empty(kk + n + m), np.empty(m + nnz), np.empty(nnz + m),
             KTf.reshape((side, side)), KTf,
