@@ -33,8 +33,12 @@ def machine() -> str:
                 break
     except OSError:
         pass
+    try:
+        load = f"load average {os.getloadavg()[0]:.1f} at the start"
+    except OSError:  # pragma: no cover
+        load = "load average unknown"
     return (f"{_dt.date.today().isoformat()}; {cpu}, {os.cpu_count()} cores "
-            f"(shared with other jobs); {platform.system()} {platform.release()}; "
+            f"(shared with other jobs; {load}); {platform.system()} {platform.release()}; "
             f"Python {platform.python_version()}, NumPy {numpy.__version__}, "
             f"SciPy {scipy.__version__}, SymPy {sympy.__version__}, SymEngine {se}")
 
