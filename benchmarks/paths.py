@@ -54,7 +54,8 @@ def tables(rounds: int = 3) -> str:
     return "\n".join(out)
 
 
-INTRO = (TIERS + " Above 150 coordinates both solve the velocity system `[Phi_q; psi_qd]` through "
+INTRO = (TIERS + " Above 150 coordinates both solve the velocity system "
+         "$\\begin{bmatrix} \\Phi_q \\\\ \\psi_{\\dot q} \\end{bmatrix}$ through "
          "its fixed pattern by the same compiled sparse LU (decision 0027).")
 
 
