@@ -14,7 +14,6 @@ NumPy; ``MECHSYS_JIT=0`` (the loop interpreted) and ``1`` (compiled) bit for bit
 
 from __future__ import annotations
 
-import functools
 import os
 import pathlib
 import subprocess
@@ -29,29 +28,11 @@ from conftest import python_path, simulate_both
 from mechsys import models
 from mechsys.solvers import _jit_runtime
 from mechsys.solvers._jit_free import FreeStepper
+from test_jit_free import _minimal_ode
 
 pytest.importorskip("numba")
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-
-
-def _lagrange(_t, y, g=9.81):
-    r"""The double pendulum (two uniform rods, 1 m, 1 kg, :math:`I = 1/12`) in its absolute
-    link angles: :math:`\begin{bmatrix} 4/3 & c/2 \\ c/2 & 1/3 \end{bmatrix} \ddot\theta =
-    \begin{bmatrix} -\tfrac{s}{2}\omega_2^2 - \tfrac32 g\cos\theta_1 \\ \tfrac{s}{2}
-    \omega_1^2 - \tfrac12 g \cos\theta_2 \end{bmatrix}`, :math:`c, s = \cos, \sin(\theta_1
-    - \theta_2)`."""
-    th1, th2, w1, w2 = y
-    c, s = np.cos(th1 - th2), np.sin(th1 - th2)
-    M = np.array([[4.0 / 3.0, c / 2], [c / 2, 1.0 / 3.0]])
-    rhs = np.array([-s / 2 * w2**2 - 1.5 * g * np.cos(th1), s / 2 * w1**2 - 0.5 * g * np.cos(th2)])
-    return [w1, w2, *np.linalg.solve(M, rhs)]
-
-
-@functools.lru_cache(maxsize=1)
-def _minimal():
-    return solve_ivp(_lagrange, (0.0, 1.0), [0.0, 0.0, 0.0, 0.0], method="DOP853",
-                     rtol=1e-13, atol=1e-14, dense_output=True).sol
 
 
 def _sympy_pendulum(monkeypatch):
@@ -76,7 +57,7 @@ def test_sympy_backend_free_motion_runs_in_the_loop(monkeypatch):
     slow, fast = simulate_both(monkeypatch, free, GRID, rtol=1e-10, atol=1e-12)
     assert fast.extra["compiled_steps"] == fast.extra["steps"] > 20
     assert slow.extra["interpreted_steps"] == slow.extra["steps"]
-    ref = _minimal()(fast.t)
+    ref = _minimal_ode()(fast.t)   # (the hand-written Lagrange equations, test_jit_free)
     for k, name in enumerate(("l0.th", "l1.th")):
         np.testing.assert_allclose(fast[name], ref[k], rtol=0, atol=1e-8)
         np.testing.assert_allclose(fast.coordinate(name, 1), ref[2 + k], rtol=0, atol=1e-7)
