@@ -630,15 +630,7 @@ def _shapes(exprs) -> list:
         x, y, u, v = symengine.symbols("x y u v")
         _shapes([2.5 * x + y, 2.5 * u + v])   # the same shape: s0, s1 = x, y and u, v
     """
-    real, fsym, sym = _se.RealDouble, _se.FunctionSymbol, _se.Symbol
-
-    def leaf(e, syms):
-        if isinstance(e, sym):
-            syms.append(e)
-            return "s" + str(len(syms) - 1)
-        t = type(e)
-        return "f:" + float(e).hex() if t is real else t.__name__ + ":" + str(e)
-
+    fsym, leaf = _se.FunctionSymbol, _shape_leaf
     out = []
     for root in exprs:
         args = root.args
@@ -665,12 +657,38 @@ def _shapes(exprs) -> list:
 def _shape_walk(root) -> tuple:
     """``(shape, symbols)`` of one SymEngine expression (:func:`_shapes`): each distinct node
     once, in post-order (the last child first), without recursion (deep expressions)."""
-    real, fsym, sym = _se.RealDouble, _se.FunctionSymbol, _se.Symbol
-    ids: dict = {}
-    lines: list = []
     syms: list = []
+    lines: list = []
+    _records(root, {}, lines, lambda e: _shape_leaf(e, syms))
+    return "|".join(lines), syms
+
+
+def _shape_leaf(e, syms) -> str:
+    """The record of leaf ``e`` in a shape (:func:`_shapes`): a symbol as its number of first
+    occurrence (appended to ``syms``), anything else as :func:`_leaf_record`."""
+    if isinstance(e, _se.Symbol):
+        syms.append(e)
+        return "s" + str(len(syms) - 1)
+    return _leaf_record(e)
+
+
+def _leaf_record(e) -> str:
+    """The exact record of a leaf: a double's hexadecimal form, else its type and printed
+    form (a symbol's name, an integer, a rational)."""
+    t = type(e)
+    return "f:" + float(e).hex() if t is _se.RealDouble else t.__name__ + ":" + str(e)
+
+
+def _records(root, ids: dict, lines: list, leaf) -> None:
+    """Append to ``lines`` the records of ``root``'s distinct nodes not yet in ``ids``
+    (node -> its number, updated), in post-order (the last child first), without recursion
+    (deep expressions): a leaf as ``leaf(e)``, any other node as its type (a function
+    symbol's with its name) and its children's numbers in their order. The one walk behind
+    :func:`_fingerprint` (its leaves :func:`_leaf_record`) and :func:`_shapes` (its symbols
+    numbered)."""
+    fsym = _se.FunctionSymbol
     stack = [(root, None)]
-    while stack:          # post-order without recursion (deep expressions)
+    while stack:
         e, args = stack.pop()
         if args is None:
             if e in ids:
@@ -678,13 +696,7 @@ def _shape_walk(root) -> tuple:
             args = e.args
             if not args:
                 ids[e] = len(lines)
-                t = type(e)
-                if isinstance(e, sym):
-                    lines.append("s" + str(len(syms)))
-                    syms.append(e)
-                else:
-                    lines.append("f:" + float(e).hex() if t is real
-                                 else t.__name__ + ":" + str(e))
+                lines.append(leaf(e))
                 continue
             stack.append((e, args))
             stack.extend([(a, None) for a in args if a not in ids])
@@ -696,7 +708,6 @@ def _shape_walk(root) -> tuple:
             name += ":" + e.get_name()
         ids[e] = len(lines)
         lines.append(name + "(" + ",".join([str(ids[a]) for a in args]) + ")")
-    return "|".join(lines), syms
 
 
 def _disjoint(members, shapes, size: int) -> list | None:
@@ -1124,33 +1135,8 @@ def _fingerprint(exprs) -> str:
         return got
     ids: dict = {}          # node -> its number
     lines: list = []        # node k's record
-    real, fsym = _se.RealDouble, _se.FunctionSymbol
     for root in exprs:
-        if root in ids:
-            continue
-        stack = [(root, None)]
-        while stack:          # post-order without recursion (deep expressions)
-            e, args = stack.pop()
-            if args is None:
-                if e in ids:
-                    continue
-                args = e.args
-                if not args:
-                    t = type(e)
-                    ids[e] = len(lines)
-                    lines.append("f:" + float(e).hex() if t is real
-                                 else t.__name__ + ":" + str(e))
-                    continue
-                stack.append((e, args))
-                stack.extend([(a, None) for a in args if a not in ids])
-                continue
-            if e in ids:
-                continue
-            name = type(e).__name__
-            if isinstance(e, fsym):
-                name += ":" + e.get_name()
-            ids[e] = len(lines)
-            lines.append(name + "(" + ",".join([str(ids[a]) for a in args]) + ")")
+        _records(root, ids, lines, _leaf_record)
     lines.append("=" + ",".join([str(ids[e]) for e in exprs]))
     got = hashlib.sha256("\n".join(lines).encode()).hexdigest()
     if len(_FINGERPRINTS) >= _FINGERPRINTS_MAX:
