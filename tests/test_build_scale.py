@@ -1,6 +1,9 @@
 """Build time at scale (issue 11): the closed-form virtual work of point forces and the
 unoptimised compilation of large kernels give the same numbers as the general paths."""
 
+import ctypes
+import pickle
+
 import numpy as np
 import pytest
 import sympy as sp
@@ -158,8 +161,6 @@ def test_gathered_first_stage_equals_symengines_to_the_last_bit(monkeypatch):
     holding anything else (``sin`` of a sum) stays SymEngine's."""
     if "symengine" not in _backends.available_backends():
         pytest.skip("SymEngine not installed")
-    import ctypes
-    import pickle
 
     t, x, y, th = sp.symbols("t x y th")
     exprs = [sp.sin(th) * k + sp.cos(x) * y ** k + x * sp.cos(th) for k in range(1, 30)]
@@ -315,8 +316,6 @@ def test_second_stage_in_parts_equals_the_whole_to_the_last_bit(monkeypatch, tmp
     share is compiled once (then loaded from the kernel cache)."""
     if "symengine" not in _backends.available_backends():
         pytest.skip("SymEngine not installed")
-    import ctypes
-    import pickle
 
     q = sp.symbols("q0:12")
     t = sp.Symbol("t")
@@ -342,26 +341,7 @@ def test_second_stage_in_parts_equals_the_whole_to_the_last_bit(monkeypatch, tmp
     ops = table & 3
     assert int(np.sum(ops == 1)) == 11 and int(np.sum(ops == 2)) == 11
     assert np.any(ops == 3)
-    with monkeypatch.context() as mp:                     # the same stages, the second whole
-        mp.setattr(_backends, "PART_OUTPUTS", 10**6)
-        whole = _backends.compile_exprs(args, exprs, "symengine")
-    assert not isinstance(whole._f, _backends._Parts)
-    again = pickle.loads(pickle.dumps(big))
-    proto = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
-    rng = np.random.default_rng(80)
-    for scale in (1.0, 1e3, 1e9):
-        v = rng.standard_normal(len(args)) * scale
-        want = whole(v)
-        for got in (big(v), big.batch(np.array([v, v]))[1], again(v), big._slow(v)):
-            assert np.array_equal(got.view(np.int64), want.view(np.int64))
-        for k in (big, again):
-            address, context, pre, pre_context, npieces = k.c_function()
-            xs = np.zeros(len(args) + npieces)
-            xs[:len(args)] = v
-            out = np.zeros(len(exprs))
-            proto(pre)(xs[len(args):].ctypes.data, xs.ctypes.data, pre_context)
-            proto(address)(out.ctypes.data, xs.ctypes.data, context)
-            assert np.array_equal(out.view(np.int64), want.view(np.int64))
+    whole, rng = _same_bits_as_whole(monkeypatch, big, args, exprs, seed=80)
     # a kernel with the Jacobian's block first (the same sin/cos, so the same names): its
     # three Jacobian parts are the position kernel's, loaded; its parts of zeros (on q1, the
     # first argument it reads) are compiled, the second of four zeros loaded again
@@ -403,8 +383,6 @@ def test_shape_functions_give_the_bits_of_the_whole_stage(monkeypatch, tmp_path)
     kernel of those shapes on other symbols calls the functions compiled for the first."""
     if "symengine" not in _backends.available_backends():
         pytest.skip("SymEngine not installed")
-    import ctypes
-    import pickle
 
     n = 40
     q = sp.symbols(f"q0:{n + 1}")
@@ -434,26 +412,7 @@ def test_shape_functions_give_the_bits_of_the_whole_stage(monkeypatch, tmp_path)
     assert len(funcs) < len(parts.parts)          # batches share their shape's function
     assert big.c_function()[4] == big._pre.nout + len(exprs)   # values, then the scratch
     n_compiled = len(compiled)
-    with monkeypatch.context() as mp:                     # the same stages, the second whole
-        mp.setattr(_backends, "PART_OUTPUTS", 10**6)
-        whole = _backends.compile_exprs(args, exprs, "symengine")
-    assert not isinstance(whole._f, _backends._Parts)
-    again = pickle.loads(pickle.dumps(big))
-    proto = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
-    rng = np.random.default_rng(86)
-    for scale in (1.0, 1e3, 1e9):
-        v = rng.standard_normal(len(args)) * scale
-        want = whole(v)
-        for got in (big(v), big.batch(np.array([v, v]))[1], again(v), big._slow(v)):
-            assert np.array_equal(got.view(np.int64), want.view(np.int64))
-        for k in (big, again):
-            address, context, pre, pre_context, npieces = k.c_function()
-            xs = np.zeros(len(args) + npieces)
-            xs[:len(args)] = v
-            out = np.zeros(len(exprs))
-            proto(pre)(xs[len(args):].ctypes.data, xs.ctypes.data, pre_context)
-            proto(address)(out.ctypes.data, xs.ctypes.data, context)
-            assert np.array_equal(out.view(np.int64), want.view(np.int64))
+    whole, rng = _same_bits_as_whole(monkeypatch, big, args, exprs, seed=86)
     # the same shapes on other symbols: every shape function is the first kernel's
     r = sp.symbols(f"r0:{n + 1}")
     other = [e.xreplace(dict(zip(q, r))) for e in exprs[:4 * n]]
@@ -508,3 +467,31 @@ def test_free_symbols_is_sympys_once():
     e = T * x + sp.cos(x) ** 2
     assert free_symbols(e) == e.free_symbols and free_symbols(e) is free_symbols(e)
     assert free_symbols(sp.floor(2.0 * x)) == {x} and free_symbols(sp.Integer(3)) == set()
+
+
+def _same_bits_as_whole(monkeypatch, big, args, exprs, seed: int):
+    """``big`` (a kernel compiled in parts) gives the bits of the same kernel compiled whole
+    through every path: its call, batch, pickled copy and Python stages, and its C entry
+    points as the compiled loops call them (first stage, then second), at random arguments
+    of three scales. Returns ``(whole kernel, the random generator after the draws)``."""
+    with monkeypatch.context() as mp:                     # the same stages, the second whole
+        mp.setattr(_backends, "PART_OUTPUTS", 10**6)
+        whole = _backends.compile_exprs(args, exprs, "symengine")
+    assert not isinstance(whole._f, _backends._Parts)
+    again = pickle.loads(pickle.dumps(big))
+    proto = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
+    rng = np.random.default_rng(seed)
+    for scale in (1.0, 1e3, 1e9):
+        v = rng.standard_normal(len(args)) * scale
+        want = whole(v)
+        for got in (big(v), big.batch(np.array([v, v]))[1], again(v), big._slow(v)):
+            assert np.array_equal(got.view(np.int64), want.view(np.int64))
+        for k in (big, again):
+            address, context, pre, pre_context, npieces = k.c_function()
+            xs = np.zeros(len(args) + npieces)
+            xs[:len(args)] = v
+            out = np.zeros(len(exprs))
+            proto(pre)(xs[len(args):].ctypes.data, xs.ctypes.data, pre_context)
+            proto(address)(out.ctypes.data, xs.ctypes.data, context)
+            assert np.array_equal(out.view(np.int64), want.view(np.int64))
+    return whole, rng
