@@ -11,7 +11,7 @@ import pytest
 
 import mechsys as ms
 from mechsys.analyses._free import FreeSystem
-from mechsys.solvers._integrators import _adams_weights, integrate_adams, integrate_rk
+from mechsys.solvers._integrators import integrate_adams, integrate_rk
 
 
 def _oscillator():
@@ -52,22 +52,6 @@ def test_adams_evaluations_count_each_derivative_call_once():
     res = integrate_adams(fun, lambda t, y: y, 0.0, 3.0, [1.0, 0.0], "cubic", 1e-8,
                           correction=True)
     assert res.evaluations == len(calls)
-
-
-def test_adams_weights_are_the_classical_coefficients_and_scale_with_h():
-    # Adams-Bashforth 4 (nodes t-3h .. t) and Adams-Moulton 4 (t-2h .. t+h)
-    for h in (1.0, 1e-3, 0.37):
-        t = 5.0
-        ab = _adams_weights([t - 3 * h, t - 2 * h, t - h, t], t, h)
-        np.testing.assert_allclose(ab, h * np.array([-9, 37, -59, 55]) / 24, rtol=1e-12)
-        am = _adams_weights([t - 2 * h, t - h, t, t + h], t, h)
-        np.testing.assert_allclose(am, h * np.array([1, -5, 19, 9]) / 24, rtol=1e-12)
-    # irregular nodes (after a halving): integrates a cubic exactly
-    nodes, t, h = [0.0, 0.5, 0.75, 1.0], 1.0, 0.25
-    w = _adams_weights(nodes, t, h)
-    f = lambda s: 1 + s - 2 * s**2 + 3 * s**3                        # noqa: E731
-    exact = (lambda s: s + s**2 / 2 - 2 * s**3 / 3 + 3 * s**4 / 4)   # noqa: E731
-    assert abs(w @ f(np.array(nodes)) - (exact(t + h) - exact(t))) < 1e-14
 
 
 def _pendulum():

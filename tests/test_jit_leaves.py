@@ -19,6 +19,7 @@ from scipy.linalg import lapack
 
 pytest.importorskip("numba")
 
+from mechsys.solvers import _jit_adams as jit_adams  # noqa: E402
 from mechsys.solvers import _jit_free_loop as free_loop  # noqa: E402
 from mechsys.solvers import _jit_lapack as jl  # noqa: E402
 from mechsys.solvers._jit_interp import interpreted  # noqa: E402
@@ -329,13 +330,13 @@ def test_stage_sums_are_the_weighted_rows():
 
 
 def _adams(nodes, h):
-    """``_adams_weights`` of the scaled nodes ``nodes`` (a fresh cache): the weights and
+    """``_jit_adams.weights`` of the scaled nodes ``nodes`` (a fresh cache): the weights and
     whether it succeeded."""
     cnt = len(nodes)
     times = np.asarray(nodes, dtype=float) * h + 2.5       # t_from = 2.5
     w = np.zeros(6)
-    ok = leaf(free_loop, "_adams_weights")(times, 0, cnt, 2.5, h, np.zeros((6, 6)), w,
-                                           np.full(13, np.nan), np.zeros(6, dtype=np.int32))
+    ok = leaf(jit_adams, "weights")(times, 0, cnt, 2.5, h, np.zeros((6, 6)), w,
+                                    np.full(13, np.nan), np.zeros(6, dtype=np.int32))
     return w[:cnt], ok
 
 
@@ -374,6 +375,86 @@ def test_adams_weights_refuse_repeated_nodes():
     """Two equal nodes (no interpolant): refused, not a weight of garbage."""
     _, ok = _adams([-1.0, 0.0, 0.0], 0.01)
     assert not ok
+
+
+def _adams_history(N=2, nh=4, t=1.0, h=0.1):
+    """The history arrays of an Adams run: ``nh`` stored derivative values at times
+    ``t - (nh - 1) h .. t``, and the work arrays."""
+    hist_t = np.zeros(6)
+    hist_t[:nh] = t - h * np.arange(nh - 1, -1, -1)
+    hist_f = np.zeros((6, N))
+    work = (np.zeros((6, 6)), np.zeros(6), np.full(13, np.nan), np.zeros(6, dtype=np.int32))
+    return hist_t, hist_f, work
+
+
+def test_adams_predict_integrates_the_fit_and_ends_on_the_final_time():
+    """A derivative linear in time is integrated exactly by the predictor; the step to try is
+    the next one, or the rest of the interval where that is shorter."""
+    predict = leaf(jit_adams, "predict")
+    hist_t, hist_f, (V, w, cache, piv) = _adams_history(nh=3)
+    hist_f[:3] = np.c_[2.0 * hist_t[:3], np.full(3, -1.0)]     # f = (2 t, -1)
+    y, y_pred = np.array([1.0, 3.0]), np.zeros(2)
+    code, h = predict(1.0, 0.1, 3, 5.0, 1.0, 3, y, hist_t, hist_f, V, w, cache, piv, y_pred)
+    assert code == jit_adams.OK
+    assert h == (1.0 + 0.1) - 1.0             # the step the stored time takes
+    np.testing.assert_allclose(y_pred, [1.0 + (1.0 + h)**2 - 1.0, 3.0 - h], rtol=1e-13)
+    code, h = predict(1.0, 0.1, 3, 1.04, 1.0, 3, y, hist_t, hist_f, V, w, cache, piv, y_pred)
+    assert code == jit_adams.OK and h == pytest.approx(0.04, rel=1e-12)
+    # a step the stored time does not take
+    assert predict(1.0, 1e-17, 3, 5.0, 1.0, 3, y, hist_t, hist_f, V, w, cache, piv,
+                   y_pred)[0] == jit_adams.SHORT
+
+
+def _judged(err, a=1e-4, method=0, fixed=False, t=1.0, h=0.1):
+    """``correct``'s code and error for a step whose corrector moves the prediction by
+    ``err`` (one component), with the corrected value and derivative."""
+    correct = leaf(jit_adams, "correct")
+    hist_t, hist_f, (V, w, cache, piv) = _adams_history(N=1, nh=1, t=t, h=h)
+    y = np.zeros(1)
+    # one stored value f = 0 at t: the trapezoid y_c = h/2 (0 + f_pred); y_pred = 0
+    f_pred = np.array([2.0 * err / h])
+    y_pred, y_corr, f_new = np.zeros(1), np.zeros(1), np.zeros(1)
+    code, e = correct(t, h, 1, 3, a, a / 10, fixed, method, y, hist_t, hist_f, y_pred, f_pred,
+                      np.ones(1), V, w, np.zeros(6), cache, piv, y_corr, f_new)
+    return code, e, y_corr, f_new
+
+
+def test_adams_correct_judges_the_error_as_mech():
+    """Mech's ``MaxError -> {a, b, c}``: above ``a`` the step is rejected; between ``b`` and
+    ``a`` the corrected value; at most ``b`` the predicted one (automatic mode); the
+    corrector mode always corrects; a constant step never rejects; an error that is not
+    finite, or a rejection below the time's resolution, is not the loop's to take."""
+    code, e, _, _ = _judged(3e-4)
+    assert code == jit_adams.REJECTED and e == pytest.approx(3e-4, rel=1e-12)
+    code, _, y_corr, _ = _judged(5e-5)
+    assert code == jit_adams.CORRECTED and y_corr[0] == pytest.approx(5e-5, rel=1e-12)
+    code, _, y_corr, f_new = _judged(5e-6)
+    assert code == jit_adams.OK and y_corr[0] == 0.0 and f_new[0] == pytest.approx(1e-4)
+    assert _judged(5e-6, method=2)[0] == jit_adams.CORRECTED
+    assert _judged(5e-6, method=1)[0] == jit_adams.OK
+    assert _judged(3e-4, fixed=True)[0] == jit_adams.CORRECTED
+    assert _judged(np.inf)[0] == jit_adams.NONFINITE
+    assert _judged(3e-4, t=1e12, h=1e-3)[0] == jit_adams.TOO_SMALL
+
+
+def test_adams_commit_keeps_six_values_and_doubles_after_2k_small_errors():
+    """The history keeps the last six derivative values; the step doubles once the last
+    ``2k`` errors are all below ``c`` (and the count starts again), never with a constant
+    step."""
+    commit = leaf(jit_adams, "commit")
+    for fixed in (False, True):
+        hist_t, hist_f, _ = _adams_history(N=1, nh=1, t=0.0)
+        y, recent = np.zeros(1), np.zeros(8)
+        t, h, nh, nrec, hs = 0.0, 0.1, 1, 0, []
+        for i in range(8):
+            t += h
+            nh, nrec, h = commit(t, h, 1e-7, nh, nrec, 2, 1e-6, fixed, y, hist_t, hist_f,
+                                 np.array([i + 1.0]), np.array([10.0 * (i + 1)]), recent)
+            hs.append(h)
+        assert nh == 6 and y[0] == 8.0
+        np.testing.assert_array_equal(hist_f[:, 0], 10.0 * np.arange(3, 9))
+        assert hist_t[5] == pytest.approx(t)
+        assert hs == ([0.1] * 8 if fixed else [0.1, 0.2, 0.2, 0.4, 0.4, 0.8, 0.8, 1.6])
 
 
 def _scaled_case(rng, n):

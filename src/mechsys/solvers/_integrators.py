@@ -271,32 +271,10 @@ def _restarted(cls, fun, t0, y0, rtol, atol, max_step):
     return at
 
 
-def _adams_weights(times, t_from, h):
-    """Weights w_i with  int_{t_from}^{t_from+h} P(s) ds = sum w_i f_i  for the polynomial
-    P interpolating values at ``times`` (scaled by h for conditioning).
-
-    The weights are ``h`` times those of the scaled nodes ``x = (times - t_from) / h``, which
-    repeat while the step is constant (e.g. -3, -2, -1, 0): cached on ``x`` rounded to 1e-9
-    (exact for the rounded nodes; a node moved by 1e-9 h changes the step by ~1e-9 h^2 f',
-    far below any error budget, and constants stay exact)."""
-    key = tuple(round((ti - t_from) / h, 9) for ti in times)
-    w = _WEIGHTS.get(key)
-    if w is None:
-        k = len(key)
-        V = np.vander(np.array(key), k, increasing=True)   # P = sum c_j ((s - t_from)/h)^j
-        # c = V^-1 f  ->  integral = (1/(j+1)) . V^-1 f  ->  weights = V^-T (1/(j+1))
-        w = np.linalg.solve(V.T, 1.0 / np.arange(1, k + 1))
-        if len(_WEIGHTS) < 4096:
-            _WEIGHTS[key] = w
-    return h * w
-
-
-_WEIGHTS: dict = {}
-
-
 def least_step(t: float) -> float:
     """The shortest step Mech's Adams integrator takes at time ``t``: ten units of the last
-    place of ``max(|t|, 1)`` (SciPy's least step, with a floor near t = 0). Both loops use it."""
+    place of ``max(|t|, 1)`` (SciPy's least step, with a floor near t = 0); the rule of
+    ``_jit_adams.correct``."""
     m = max(abs(t), 1.0)
     return 10.0 * (np.nextafter(m, np.inf) - m)
 
@@ -305,12 +283,17 @@ def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4
                     method="automatic", step_size=None, correction=False,
                     first_step=None, max_steps=2_000_000, scale=None,
                     monitor=None, fast=None) -> IntegrationResult:
-    """Mech's adaptive Adams-Bashforth / Adams-Moulton integrator (see module doc).
-    ``scale`` (len(y0),): the unit of each component; the error estimate is
-    ``max_i |y_corr_i - y_pred_i| / scale_i``. ``fast``: a compiled stepper
-    (:meth:`._jit_free.FreeStepper.advance_adams`) that takes the regular steps from this
-    loop's state, as in :func:`integrate_rk`."""
-    inv_scale = 1.0 if scale is None else 1.0 / np.asarray(scale, dtype=float)
+    """Mech's adaptive Adams-Bashforth / Adams-Moulton integrator (see module doc): the
+    steps of :mod:`._jit_adams` (written once; the compiled loop calls them too), here
+    interpreted with the Python derivative ``fun``. ``scale`` (len(y0),): the unit of each
+    component; the error estimate is ``max_i |y_corr_i - y_pred_i| / scale_i``. ``fast``:
+    a compiled stepper (:meth:`._jit_free.FreeStepper.advance_adams`) that takes the regular
+    steps from this loop's state, as in :func:`integrate_rk`: the two share the history
+    arrays, so that each hands the run to the other as it is."""
+    from . import _jit_adams as A
+    from ._jit_interp import interpreted
+
+    predict, correct, commit = (interpreted(f) for f in (A.predict, A.correct, A.commit))
     k = FIT_DEGREES[fit_degree] if isinstance(fit_degree, str) else int(fit_degree)
     if not 1 <= k <= 4:
         raise MechError("fit_degree must be Linear/Quadratic/Cubic/Quartic (1..4)")
@@ -321,41 +304,39 @@ def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4
         a, b, c = (float(v) for v in max_error)
     if method not in ("automatic", "predictor", "corrector"):
         raise MechError("method must be 'automatic', 'predictor' or 'corrector'")
+    code = {"automatic": 0, "predictor": 1, "corrector": 2}[method]
+    fixed = step_size is not None
     window = 2 * k           # Mech: the step doubles after 2n steps below c (n: the degree)
     span = t1 - t0
     h = step_size or first_step or min(abs(span) / 100, 1e-3)
     h = float(np.copysign(h, span))
-    t, y = float(t0), np.array(y0, dtype=float)
-    f = fun(t, y)
+    y = np.array(y0, dtype=float)
+    N = len(y)
+    inv = np.ascontiguousarray(np.broadcast_to(
+        1.0 if scale is None else 1.0 / np.asarray(scale, dtype=float), (N,)), dtype=float)
+    t, nh, nrec, rejected = float(t0), 1, 0, 0
+    hist_t, hist_f, recent = np.zeros(6), np.zeros((6, N)), np.zeros(8)
+    hist_t[0] = t
+    hist_f[0] = fun(t, y.copy())
     nfev = 1
-    hist_t, hist_f = [t], [f]
-    ts, ys, steps_h, steps_e = _Rows(t), _Rows(y), _Rows(), _Rows()
-    recent: list[float] = []
-    rejected = 0
+    V, w, nodes, piv = np.empty((6, 6)), np.empty(6), np.empty(6), np.empty(6, dtype=np.int32)
+    cache_p, cache_c = np.full(13, -1.0), np.full(13, -1.0)
+    y_pred, f_pred, y_corr, f_new = (np.empty(N) for _ in range(4))
+    sign = 1.0 if span >= 0 else -1.0
+    end = 1e-14 * max(1.0, abs(t1))
+    ts, ys, steps_h, steps_e = _Rows(t0), _Rows(y), _Rows(), _Rows()
     message = "finished"
     known = []        # blocks (first row, qdd, lam) from the compiled stepper
     pause = 0
-    if fast is not None:
-        fixed = step_size is not None
-        code = {"automatic": 0, "predictor": 1, "corrector": 2}[method]
-        inv = np.broadcast_to(inv_scale, (len(y),)).astype(float)
-        options = (k, (a, b, c), code, fixed, inv, t1)
+    options = (k, (a, b, c), code, fixed, inv, t1)
     try:
-        while (t1 - t) * np.sign(span) > 1e-14 * max(1.0, abs(t1)):
+        while (t1 - t) * sign > end:
             if len(ts) > max_steps:
                 raise MechError(f"adams: more than {max_steps} steps; loosen max_error")
             if fast is not None and pause == 0:
-                last = recent[-window:]
-                state = np.array([t, h, len(hist_t), len(last), rejected], dtype=float)
-                ht = np.zeros(6)
-                ht[:len(hist_t)] = hist_t
-                hf = np.zeros((6, len(y)))
-                hf[:len(hist_f)] = hist_f
-                rec = np.zeros(8)
-                rec[:len(last)] = last
-                yy = y.copy()
+                state = np.array([t, h, nh, nrec, rejected], dtype=float)
                 status, T, Yc, H, E, QDD, LAM, ev, proj = fast.advance_adams(
-                    state, yy, ht, hf, rec, options)
+                    state, y, hist_t, hist_f, recent, options)
                 nfev += ev
                 if len(T):
                     known.append((len(ts), QDD, LAM))
@@ -363,75 +344,61 @@ def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4
                     ys.extend(Yc)
                     steps_h.extend(H)
                     steps_e.extend(E)
-                    t, h, y = float(state[0]), float(state[1]), yy
-                    nh, nrec = int(state[2]), int(state[3])
-                    hist_t, hist_f = ht[:nh].tolist(), list(hf[:nh].copy())
-                    recent = rec[:nrec].tolist()
-                    rejected = int(state[4])
+                    t, h, nh, nrec, rejected = (float(state[0]), float(state[1]),
+                                                int(state[2]), int(state[3]), int(state[4]))
                     if monitor is not None:
                         monitor(t)
                 if status == 2:        # handover: this loop takes the next steps
                     pause = PAUSE_STEPS
                 continue
             pause = max(pause - 1, 0)
-            h_try = h if (t + h - t1) * np.sign(span) <= 0 else t1 - t
-            # the step the stored time takes: far from t = 0 the sum t + h rounds, and the
-            # fits must integrate over the interval the new time closes (as SciPy's steppers)
-            h_try = (t + h_try) - t
-            if h_try == 0:
+            got, h_try = predict(t, h, nh, t1, sign, k, y, hist_t, hist_f, V, w, cache_p, piv,
+                                 y_pred)
+            if got == A.SHORT:
                 raise ModelError(f"adams: at t = {t:g} a step of {h:g} does not advance the "
                                  "time; give a larger starting_step_size or step_size, or "
                                  "measure time from a nearer origin")
-            deg = min(k, len(hist_t) - 1)
-            # predictor: fit through the last deg+1 derivative values
-            pt, pf = hist_t[-(deg + 1):], hist_f[-(deg + 1):]
-            w = _adams_weights(pt, t, h_try)
-            y_pred = y + sum(wi * fi for wi, fi in zip(w, pf))
-            f_pred = fun(t + h_try, y_pred)
+            if got != A.OK:
+                raise MechError(f"adams: at t = {t:.10g} the fit through the last derivative "
+                                "values is singular (their times coincide)")
+            t_new = t + h_try
+            f_pred[:] = fun(t_new, y_pred.copy())
             nfev += 1
-            # corrector: fit through the new point and the last deg values (degree deg)
-            ct = hist_t[-deg:] + [t + h_try] if deg > 0 else [t, t + h_try]
-            cf = hist_f[-deg:] + [f_pred] if deg > 0 else [f, f_pred]
-            wc = _adams_weights(ct, t, h_try)
-            y_corr = y + sum(wi * fi for wi, fi in zip(wc, cf))
-            err = float((np.abs(y_corr - y_pred) * inv_scale).max())
-            if step_size is None and err > a:
-                least = least_step(t)
-                if abs(h_try) / 2 >= least:
-                    h = h_try / 2
-                    rejected += 1
-                    continue
+            got, err = correct(t, h_try, nh, k, a, b, fixed, code, y, hist_t, hist_f, y_pred,
+                               f_pred, inv, V, w, nodes, cache_c, piv, y_corr, f_new)
+            if got == A.REJECTED:
+                h = h_try / 2
+                rejected += 1
+                continue
+            if got == A.TOO_SMALL:
                 # (the step cannot shrink further: accepting it would break max_error silently)
                 raise MechError(f"adams: at t = {t:.10g} the error {err:.3g} of a step of "
                                 f"{abs(h_try):.3g} exceeds max_error {a:g}, and half that step "
-                                f"would be below the time's resolution there ({least:.3g}); "
-                                "loosen max_error, or measure time from a nearer origin")
-            if method == "corrector" or (method == "automatic" and err > b):
-                y_new = y_corr
-                f_new = fun(t + h_try, y_new)
+                                f"would be below the time's resolution there "
+                                f"({least_step(t):.3g}); loosen max_error, or measure time "
+                                "from a nearer origin")
+            if got == A.NONFINITE:
+                raise MechError(f"adams: at t = {t:.10g} the error of a step of "
+                                f"{abs(h_try):.3g} is not finite: the derivative is NaN or "
+                                "infinite there (check the loads and the model's singular "
+                                "positions)")
+            if got == A.SINGULAR:
+                raise MechError(f"adams: at t = {t:.10g} the corrector's fit is singular "
+                                "(the step is below the times' resolution)")
+            if got == A.CORRECTED:
+                f_new[:] = fun(t_new, y_corr.copy())
                 nfev += 1
-            else:
-                y_new, f_new = y_pred, f_pred
-            t = t + h_try
             if correction:
-                y_new = project(t, y_new)
-                f_new = fun(t, y_new)
+                y_corr[:] = project(t_new, y_corr.copy())
+                f_new[:] = fun(t_new, y_corr.copy())
                 nfev += 1
-            y = y_new
-            hist_t.append(t)
-            hist_f.append(f_new)
-            if len(hist_t) > 6:
-                hist_t, hist_f = hist_t[-6:], hist_f[-6:]
+            t = t_new
+            nh, nrec, h = commit(t, h, err, nh, nrec, window, c, fixed, y, hist_t, hist_f, y_corr,
+                                 f_new, recent)
             ts.append(t)
             ys.append(y)
             steps_h.append(h_try)
             steps_e.append(err)
-            recent.append(err)
-            if step_size is None and len(recent) >= window and max(recent[-window:]) < c:
-                h = 2 * h
-                recent.clear()
-            elif len(recent) > window:
-                del recent[0]
             if monitor is not None:
                 monitor(t)
     except KeyboardInterrupt:
@@ -443,8 +410,7 @@ def integrate_adams(fun, project, t0, t1, y0, fit_degree="cubic", max_error=1e-4
     diag = {"step_size": steps_h.array(), "max_error": steps_e.array()}
     if fast is not None:
         _compiled_derivatives(diag, fast, known, len(ts))
-    return IntegrationResult(ts.array(), ys.array(len(y0)), nfev, len(ts) - 1, rejected, message,
-                             diag)
+    return IntegrationResult(ts.array(), ys.array(N), nfev, len(ts) - 1, rejected, message, diag)
 
 
 #: the spellings of each family (from the registry, ``_methods``)

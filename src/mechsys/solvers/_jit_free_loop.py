@@ -48,6 +48,12 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+from ._jit_adams import CORRECTED as ADAMS_CORRECTED
+from ._jit_adams import OK as ADAMS_OK
+from ._jit_adams import REJECTED as ADAMS_REJECTED
+from ._jit_adams import commit as adams_commit
+from ._jit_adams import correct as adams_correct
+from ._jit_adams import predict as adams_predict
 from ._jit_borrow import borrow
 from ._jit_cache import check as _check_cache
 from ._jit_calls import _ccall, _eval
@@ -1772,52 +1778,17 @@ def runge_kutta(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, off
     return CHUNK, steps, ie, evals, rejected, projections
 
 
-@leaf
-def _adams_weights(times, off, cnt, t_from, h, V, w, cache, piv):
-    """``w[:cnt]``: ``solvers._integrators._adams_weights`` of the nodes ``times[off:off +
-    cnt]`` (rounded to 1e-9 as there, so that constant steps give the same weights; an
-    offset rather than a slice: a view per call cost a sixth of the step). ``cache`` (13,):
-    the last call's node count, nodes and unscaled weights (``cache[0]`` count, nodes at
-    1..6, weights at 7..12): while the step is constant the nodes repeat."""
-    same = cache[0] == cnt
-    for i in range(cnt):
-        # np.round(v, 9) as Numba computes it (v * 1e9, rint, / 1e9), without its pow call
-        x = np.rint((times[off + i] - t_from) / h * 1e9) / 1e9
-        if x != cache[1 + i]:
-            same = False
-            cache[1 + i] = x
-    if same:
-        for j in range(cnt):
-            w[j] = cache[7 + j] * h
-        return True
-    cache[0] = cnt
-    for i in range(cnt):
-        x = cache[1 + i]
-        p = 1.0
-        for j in range(cnt):
-            V[i, j] = p            # V[i, j] = x_i^j; V holds (V^T) transposed
-            p *= x
-    for j in range(cnt):
-        w[j] = 1.0 / (j + 1)
-    if not _lu_solve(V[:cnt, :cnt], w, cnt, piv):
-        cache[0] = -1.0
-        return False
-    for j in range(cnt):
-        cache[7 + j] = w[j]
-        w[j] *= h
-    return True
-
-
 @nb.njit(cache=True)
 def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, robust,
           blocks, blk_i, ws, correction, ptol, pmaxit, k, a, b, c, method, fixed, inv_scale, t1, state, y,
           hist_t, hist_f, recent, max_steps, T, Y, H, E, QDD, LAM):
-    """Accepted steps of Mech's Adams integrator (``solvers._integrators.integrate_adams``,
-    operation for operation) from ``state = [t, h, history length, recent count,
-    rejected]``, ``y``, the derivative history ``hist_t`` (6,), ``hist_f`` (6, 2n) and the
-    last errors ``recent`` (8,): up to ``2 k`` of them. ``method``: 0 automatic, 1 predictor, 2 corrector.
+    """Accepted steps of Mech's Adams integrator: the steps of ``_jit_adams`` (written once,
+    the Python driver ``solvers._integrators.integrate_adams`` calls them too) with the
+    compiled derivative, from the run's state ``state`` (``_jit_adams.STATE``), ``y``, the
+    derivative history ``hist_t`` (6,), ``hist_f`` (6, 2n) and the last errors ``recent``
+    (8,): up to ``2 k`` of them. ``method``: 0 automatic, 1 predictor, 2 corrector.
     Returns ``(status, steps, evaluations, projections)``; the state arrays hold the last
-    accepted state."""
+    accepted state (and the step to try next)."""
     N2 = n if blocks == PATH else 2 * n
     npar = p.size
     nin = 1 + 2 * n + m + npar + n
@@ -1836,8 +1807,7 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
     vpiv = np.empty(6, dtype=np.int32)
     cache_c = np.full(13, -1.0)
     w = np.empty(6)
-    wc = np.empty(6)
-    ct = np.empty(6)
+    nodes = np.empty(6)
     y_pred = np.empty(N2)
     f_pred = np.empty(N2)
     y_corr = np.empty(N2)
@@ -1846,8 +1816,8 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
     h = state[1]
     nh = int(state[2])
     nrec = int(state[3])
-    window = 2 * k                   # Mech's doubling rule: the last 2n errors below c
     rejected = int(state[4])
+    window = 2 * k                   # Mech's doubling rule: the last 2n errors below c
     sign = 1.0 if t1 - t >= 0 else -1.0
     evals = 0
     projections = 0
@@ -1855,68 +1825,32 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
     while (t1 - t) * sign > 1e-14 * max(1.0, abs(t1)):
         if steps >= max_steps:
             break
-        h_try = h if (t + h - t1) * sign <= 0 else t1 - t
-        h_try = (t + h_try) - t          # the step the stored time takes (the Python loop's)
-        if h_try == 0:
+        # (every code but OK, CORRECTED and REJECTED: the Python driver takes the step)
+        code, h_try = adams_predict(t, h, nh, t1, sign, k, y, hist_t, hist_f, V, w, cache_p,
+                                    vpiv, y_pred)
+        if code != ADAMS_OK:
             return HANDOVER, steps, evals, projections
-        deg = min(k, nh - 1)
-        # predictor: the last deg + 1 derivative values
-        p0 = nh - (deg + 1)
-        if not _adams_weights(hist_t, p0, deg + 1, t, h_try, V, w, cache_p, vpiv):
-            return HANDOVER, steps, evals, projections
-        for j in range(N2):
-            acc = 0.0
-            for i in range(deg + 1):
-                acc += w[i] * hist_f[p0 + i, j]
-            y_pred[j] = y[j] + acc
+        t_new = t + h_try
         evals += 1
         if not _rhs(kp[0], lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0,
                     columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force,
-                    blocks, blk_i, blk_w, t + h_try, y_pred,
-                    f_pred):
+                    blocks, blk_i, blk_w, t_new, y_pred, f_pred):
             return HANDOVER, steps, evals, projections
-        # corrector: the new point and the last deg values (two points at the start): the
-        # history rows from c0 on, then the prediction's derivative (summed in that order)
-        nc = deg + 1 if deg > 0 else 2
-        c0 = nh - (nc - 1)
-        for i in range(nc - 1):
-            ct[i] = hist_t[c0 + i]
-        ct[nc - 1] = t + h_try
-        if not _adams_weights(ct, 0, nc, t, h_try, V, wc, cache_c, vpiv):
-            return HANDOVER, steps, evals, projections
-        err = 0.0
-        for j in range(N2):
-            acc = 0.0
-            for i in range(nc - 1):
-                acc += wc[i] * hist_f[c0 + i, j]
-            acc += wc[nc - 1] * f_pred[j]
-            y_corr[j] = y[j] + acc
-            v = abs(y_corr[j] - y_pred[j]) * inv_scale[j]
-            if not v <= err:
-                err = v
-        if not np.isfinite(err):
-            return HANDOVER, steps, evals, projections
-        if not fixed and err > a:
-            # (_integrators.least_step: halve while the step stays above the time's
-            # resolution, else the Python loop takes the step and raises)
-            big = max(abs(t), 1.0)
-            if abs(h_try) / 2 < 10.0 * (np.nextafter(big, np.inf) - big):
-                return HANDOVER, steps, evals, projections
+        code, err = adams_correct(t, h_try, nh, k, a, b, fixed, method, y, hist_t, hist_f,
+                                  y_pred, f_pred, inv_scale, V, w, nodes, cache_c, vpiv, y_corr,
+                                  f_new)
+        if code == ADAMS_REJECTED:
             h = h_try / 2
             rejected += 1
             continue
-        if method == 2 or (method == 0 and err > b):
+        if code == ADAMS_CORRECTED:
             evals += 1
             if not _rhs(kp[0], lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0,
                         columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force,
-                        blocks, blk_i, blk_w, t + h_try,
-                        y_corr, f_new):
+                        blocks, blk_i, blk_w, t_new, y_corr, f_new):
                 return HANDOVER, steps, evals, projections
-        else:
-            for j in range(N2):
-                y_corr[j] = y_pred[j]
-                f_new[j] = f_pred[j]
-        t_new = t + h_try
+        elif code != ADAMS_OK:
+            return HANDOVER, steps, evals, projections
         if correction:
             if not _project(kp[1], kp[2], lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns,
                             offset, ptol, pmaxit, robust, n, m, t_new, y_corr, J, r, Fs, dq, Js,
@@ -1926,23 +1860,11 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
             evals += 1
             if not _rhs(kp[0], lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, jr, jc, rows0,
                         columns, robust, ipiv, ibuf, rhsb, bb, qdd, lam, force,
-                        blocks, blk_i, blk_w, t_new, y_corr,
-                        f_new):
+                        blocks, blk_i, blk_w, t_new, y_corr, f_new):
                 return HANDOVER, steps, evals, projections
-        # -- commit --
         t = t_new
-        for j in range(N2):
-            y[j] = y_corr[j]
-        if nh == 6:
-            for i in range(5):
-                hist_t[i] = hist_t[i + 1]
-                for j in range(N2):
-                    hist_f[i, j] = hist_f[i + 1, j]
-            nh = 5
-        hist_t[nh] = t
-        for j in range(N2):
-            hist_f[nh, j] = f_new[j]
-        nh += 1
+        nh, nrec, h = adams_commit(t, h, err, nh, nrec, window, c, fixed, y, hist_t, hist_f,
+                                   y_corr, f_new, recent)
         T[steps] = t
         H[steps] = h_try
         E[steps] = err
@@ -1955,20 +1877,6 @@ def adams(kp, lapack, p, flat_t, mp, kk, n, m, jr, jc, rows0, columns, offset, r
         for i in range(mu.size):
             LAM[steps, m + i] = mu[i]
         steps += 1
-        if nrec == window:
-            for i in range(window - 1):
-                recent[i] = recent[i + 1]
-            nrec = window - 1
-        recent[nrec] = err
-        nrec += 1
-        if not fixed and nrec >= window:
-            big = 0.0
-            for i in range(window):
-                if recent[i] > big:
-                    big = recent[i]
-            if big < c:
-                h = 2 * h
-                nrec = 0
         state[0] = t
         state[1] = h
         state[2] = nh
