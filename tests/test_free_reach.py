@@ -309,3 +309,33 @@ def test_friction_whose_load_derivatives_have_a_first_stage_runs_in_the_loop(mon
     assert slow.extra["interpreted_steps"] == slow.extra["steps"]
     np.testing.assert_allclose(fast.q[-1], ref.q[-1], rtol=0, atol=1e-7)
     np.testing.assert_allclose(fast.qd[-1], ref.qd[-1], rtol=0, atol=1e-6)
+
+
+def test_a_first_use_kernel_llvm_refuses_is_called_through_its_python_entry(monkeypatch,
+                                                                             tmp_path):
+    """A first-use kernel (the Gen joints' kernels) whose LLVM compile is refused keeps its
+    interpreted SymEngine function; the compiled loops then call it through a C entry point
+    made of that function (``python_entry``), as a SymPy-backend kernel, instead of leaving
+    the whole run to the Python code."""
+    import sympy as sp
+
+    from mechsys.compile import _backends
+    from mechsys.solvers._jit_interp import _kcall
+
+    monkeypatch.setenv("MECHSYS_CACHE", str(tmp_path))
+    a, b = sp.symbols("a b")
+    k = _backends.compile_exprs([a, b], [sp.sin(a) * b, a + b**2], first_use=True)
+    real = _backends._SymengineCompiled
+
+    def refusing(*args, mode=None, **kw):
+        if mode is None:
+            raise RuntimeError("LLVM refused this kernel (test)")
+        return real(*args, mode=mode, **kw)
+
+    monkeypatch.setattr(_backends, "_SymengineCompiled", refusing)
+    assert k.c_entry() is None                     # LLVM refused: no machine code
+    row, expand = _jit_runtime.kernel_entry(k)
+    assert len(expand) == 0
+    out, x = np.full(2, np.nan), np.array([0.3, 2.0])
+    _kcall(int(row[0]), out, 0, x, 0)
+    np.testing.assert_allclose(out, [np.sin(0.3) * 2.0, 0.3 + 4.0], rtol=1e-15)

@@ -1387,6 +1387,10 @@ class _FirstUse(Compiled):
         import threading
 
         self.nout = len(exprs)
+        #: the length of the argument vector: where LLVM refuses the kernel, the compiled
+        #: loops call it through a C entry point made of its Python call
+        #: (``solvers._jit_runtime.python_entry``) rather than leave it to the Python code
+        self.nargs = len(args)
         self._src = (list(args), list(exprs), opt_level, cse)
         self._calls = 0
         self._lock = threading.Lock()
