@@ -148,8 +148,9 @@ def main(argv=None) -> int:
         "low-priority background process (its CPU time, imports included, in the next column; "
         "it outlives the session and fills the cache) while the run takes its first tier "
         "(decision 0064): the loop's own code interpreted, the same numbers bit for bit (the "
-        "sweep and the multipliers: decision 0075; the DOP853 stepper: decision 0077), or the "
-        "Python path (Adams). Then a second fresh process with the caches it filled (it compiles "
+        "sweep and the multipliers: decision 0075; the DOP853 stepper: decision 0077), or, for "
+        "Adams, its step's one code interpreted with the Python derivative (decision 0088). "
+        "Then a second fresh process with the caches it filled (it compiles "
         "in the background what only it asks for: the free-motion derivative). The last column "
         "is a fresh process with empty caches that compiles in its own process and waits "
         "(`MECHSYS_COMPILE=wait`, the behaviour before decision 0064; decisions 0039 and 0044)."),
