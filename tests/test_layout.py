@@ -48,6 +48,8 @@ SOLVERS_TIER = {
     "_linalg": 2, "_patterns": 2, "_jit_linalg": 2, "_jit_runtime": 2,
     # (runs a compiled loop's code interpreted: imports only the intrinsics it replaces)
     "_jit_interp": 2,
+    # (Mech's Adams step, the compiled loop's and the Python driver's: decision 0088)
+    "_jit_adams": 2,
     # 3 the compiled loops
     "_jit_sweep_loop": 3, "_jit_multipliers_loop": 3, "_jit_free_loop": 3,
     # 4 the Python solvers and the drivers of the compiled loops
