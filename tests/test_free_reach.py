@@ -339,3 +339,53 @@ def test_a_first_use_kernel_llvm_refuses_is_called_through_its_python_entry(monk
     out, x = np.full(2, np.nan), np.array([0.3, 2.0])
     _kcall(int(row[0]), out, 0, x, 0)
     np.testing.assert_allclose(out, [np.sin(0.3) * 2.0, 0.3 + 4.0], rtol=1e-15)
+
+
+def test_compiled_calls_are_sized_by_their_time():
+    """A compiled call of a stepping loop takes about ``CALL_SECONDS`` of work: the first
+    call of a large system a few steps (not 2000 steps of 16 ms: half a minute without
+    progress or Ctrl-C), a small system's the full chunk; the later calls the steps that fit
+    at the measured rate, within the chunk."""
+    import types
+
+    from mechsys.solvers import _jit_free
+
+    budget, rate = _jit_free.FreeStepper.budget, _jit_free.FreeStepper._rate
+    big = types.SimpleNamespace(_call_steps={}, n=3072, nl=2048)      # the 1024-link chain
+    small = types.SimpleNamespace(_call_steps={}, n=6, nl=4)          # the double pendulum
+    assert budget(big, "loop", 2000) == _jit_free.CALL_MIN_STEPS
+    assert budget(small, "loop", 2000) == 2000
+    rate(big, "loop", 16, 0.08)                     # 5 ms a step
+    assert budget(big, "loop", 2000) == int(_jit_free.CALL_SECONDS * 16 / 0.08)
+    rate(big, "loop", 0, 0.01)                      # (a hand-over before any step: no rate)
+    assert budget(big, "loop", 2000) == int(_jit_free.CALL_SECONDS * 16 / 0.08)
+    rate(small, "adams", 20000, 0.02)
+    assert budget(small, "adams", 20000) == 20000   # (at most the chunk)
+    rate(big, "loop", 1, 10.0)                      # a very slow step: still a few steps
+    assert budget(big, "loop", 2000) == _jit_free.CALL_MIN_STEPS
+
+
+@pytest.mark.parametrize("options", [{"rtol": 1e-8, "atol": 1e-8},
+                                     {"method": "adams", "max_error": 1e-6}])
+def test_a_run_cut_into_many_compiled_calls_is_the_run_in_one(monkeypatch, options):
+    """Each compiled call resumes the run from the state the last one left (the solver's
+    time, step, state and derivative; Adams' history), so the chunks change no number: a run
+    cut into calls of 7 steps is the run of whole chunks, bit for bit."""
+    from mechsys.solvers import _jit_free
+
+    m = models.pendulum_chain(2)
+    m.solve(0.0)
+    free = m.free(drop=["lock0", "lock1"])
+    whole = free.simulate((0.0, 3.0), **options)
+    calls = []
+
+    def seven(self, name, cap):
+        calls.append(name)
+        return 7
+
+    monkeypatch.setattr(_jit_free.FreeStepper, "budget", seven)
+    cut = free.simulate((0.0, 3.0), **options)
+    assert whole.extra["compiled_steps"] == whole.extra["steps"] == cut.extra["compiled_steps"]
+    assert len(calls) >= whole.extra["steps"] // 7
+    for name in ("t", "q", "qd", "qdd", "lam"):
+        np.testing.assert_array_equal(getattr(cut, name), getattr(whole, name), err_msg=name)

@@ -84,6 +84,8 @@ projection through :math:`\begin{bmatrix} I & J^T \\ \hat J & 0 \end{bmatrix}`
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from . import _jit_runtime, _methods, _tableaus
@@ -118,8 +120,16 @@ BLOCK_PIVOT = 1e-8
 
 #: Python steps after a handover before the compiled loop resumes
 PAUSE_STEPS = 8
-#: compiled steps per call (progress and Ctrl-C are handled between calls)
+#: compiled steps per call at most (progress and Ctrl-C are handled between calls)
 CHUNK_STEPS = 2000
+#: ... and about this many seconds of work at most: a large system's steps take
+#: milliseconds (16 ms for the 1024-link chain), and 2000 of them would leave the progress
+#: bar still and Ctrl-C unanswered for half a minute. A stepper's first call takes
+#: ``CHUNK_STEPS * 12 // (n + m + k)`` steps (at least :data:`CALL_MIN_STEPS`; all of them
+#: up to 12 unknowns), the later ones the steps that fit in this time at the rate the last
+#: call measured; the small systems' calls keep their 2000 steps (a few milliseconds)
+CALL_SECONDS = 0.25
+CALL_MIN_STEPS = 16
 #: Mech's Adams steps cost about a tenth of a DOP853 step: their runs return every ten times
 #: as many steps (the Python between two runs was a tenth of the double pendulum's time),
 #: up to about 16 MB of state rows a run
@@ -157,7 +167,8 @@ INTERP_STEPS = {"loop": 32, "adams": 128}
 #: Adams integrator: interpreted, its steps cost about 2.7 x the Python path's (0.85 ms a
 #: step of the double pendulum against 0.3 ms), and the cold start's 10 s Adams run took
 #: 6.0 s of CPU to its first result (the target: 5 s; decisions 0077, 0082), so its Python
-#: path keeps the steps while it is compiled. With ``MECHSYS_JIT=0`` every loop runs
+#: driver keeps the steps while it is compiled (the same step code, interpreted, with the
+#: Python derivative: decision 0088). With ``MECHSYS_JIT=0`` every loop runs
 #: interpreted, Adams too (nothing is compiled then)
 INTERP_LOOPS = frozenset({"loop", "derivative", "path_acc"})
 
@@ -820,6 +831,8 @@ class FreeStepper:
         self.interpret_only = _jit_runtime.mode() == "off"
         #: the steps of the next interpreted call of each stepping loop (``_interpret``)
         self._interp_steps: dict = {}
+        #: ... and of the next compiled call (:meth:`budget`)
+        self._call_steps: dict = {}
         if _state["loop"] is None:
             from ._jit_free_loop import adams, derivative, runge_kutta, workspace
 
@@ -1050,7 +1063,7 @@ class FreeStepper:
         T, Y, H, QDD, LAM, ie)``: the accepted steps' times, states, step sizes, accelerations
         and multipliers (NaN rows: not known), and the next output index."""
         n, m = self.n, self.m
-        max_steps = CHUNK_STEPS if max_steps is None else max_steps
+        max_steps = self.budget("loop", CHUNK_STEPS) if max_steps is None else max_steps
         method, A, B, C, E3, E5, D = _coefficients(solver)
         T, H = np.empty(max_steps), np.empty(max_steps)
         Y = np.empty((max_steps, self.ny))
@@ -1159,10 +1172,33 @@ class FreeStepper:
                 return got
             self._entries[name] = fn
         self.tier = "compiled"
-        got = fn(*args)
+        if name not in INTERP_STEPS:
+            got = fn(*args)
+        else:
+            began = time.perf_counter()
+            got = fn(*args)
+            self._rate(name, int(got[1]), time.perf_counter() - began)
         # (an interrupt a Python kernel's entry point caught: decision 0084)
         _jit_runtime.raise_callback_error()
         return got
+
+    def budget(self, name: str, cap: int) -> int:
+        r"""The steps the next compiled call of the stepping loop ``name`` may take, at most
+        ``cap``: about :data:`CALL_SECONDS` of work at the rate the last call measured, or on
+        the first call :math:`\max(k_{min}, \lfloor 12\,\mathit{cap} / \max(12, n + m +
+        k_v) \rfloor)`, so that a call of a large system returns to the caller (progress,
+        Ctrl-C) about that often. The chunks change no number: each call resumes the run
+        from the state the last one left (``tests/test_free_reach.py``)."""
+        k = self._call_steps.get(name)
+        if k is None:
+            k = max(CALL_MIN_STEPS, cap * 12 // max(12, self.n + self.nl))
+        return int(min(k, cap))
+
+    def _rate(self, name: str, steps: int, spent: float) -> None:
+        """Size the next compiled call of ``name`` from this one's ``steps`` in ``spent``
+        seconds (:meth:`budget`)."""
+        if steps > 0 and spent > 0:
+            self._call_steps[name] = max(CALL_MIN_STEPS, int(CALL_SECONDS * steps / spent))
 
     def interpretable(self) -> bool:
         """Whether the loops run interpreted while their machine code is compiled in the
@@ -1181,7 +1217,6 @@ class FreeStepper:
         :math:`k = \min(\max(1, \lfloor T / (t_{call} / \mathit{steps}) \rfloor), 8 k_s)`, so
         that each call is about that much work at any size (decision 0082) and the caller
         asks for the compiled loop again that often."""
-        import time
 
         from ._jit_interp import interpreted
 
@@ -1258,7 +1293,8 @@ class FreeStepper:
         ``(status, T, Y, H, E, QDD, LAM, evaluations, projections)``."""
         n, m = self.n, self.m
         if max_steps is None:
-            max_steps = max(CHUNK_STEPS, min(10 * CHUNK_STEPS, ADAMS_CHUNK_VALUES // self.ny))
+            max_steps = self.budget("adams", max(CHUNK_STEPS, min(10 * CHUNK_STEPS,
+                                                                  ADAMS_CHUNK_VALUES // self.ny)))
         T, H, E = np.empty(max_steps), np.empty(max_steps), np.empty(max_steps)
         Y = np.empty((max_steps, self.ny))
         QDD, LAM = np.empty((max_steps, n)), np.empty((max_steps, self.nl))
