@@ -120,16 +120,20 @@ def _predict(Q, QD, QDD, rconds, times, k, rot, order, g, sec):
 
 
 @leaf
-def _trial(ptrs, x, nin, out_pos, qn, r, m):
-    r"""A Newton or chord step's trial point ``qn`` (the position kernel's ``q`` in ``x``):
-    the kernel there (its residual and Jacobian values in ``out_pos``) and the residual's
-    scaled max-norm, the measure the steps compare,
+def _trial(ptrs, x, nin, out_pos, q, a, dq, qn, r, m):
+    r"""The trial point of a step of :func:`sweep_dense`'s position solve, ``qn = q + a dq``
+    (also the position kernel's ``q`` in ``x``), the kernel there (its residual and
+    Jacobian values in ``out_pos``) and the residual's scaled max-norm, the measure the
+    steps compare (``_jit_linalg._scaled_norm``):
 
-    .. math::  \lVert R^{-1} \Phi(q_n) \rVert_\infty = \max_i |\Phi_i(q_n) / r_i|
+    .. math::  q_n = q + a\,\delta q, \qquad
+               \lVert R^{-1} \Phi(q_n) \rVert_\infty = \max_i |\Phi_i(q_n) / r_i|
 
-    (``_jit_linalg._scaled_norm``; the polish, chord and damped Newton steps of
-    :func:`sweep_dense`, each forming ``qn`` its own way)."""
-    for j in range(qn.size):
+    ``dq`` solves ``B dq = F``: the chord and polish steps take ``a = -1`` (``-1 * dq`` is
+    ``-dq`` exactly), the damped Newton step ``dq`` negated and ``a`` its damping (1, 1/2,
+    ...)."""
+    for j in range(q.size):
+        qn[j] = q[j] + a * dq[j]
         x[1 + j] = qn[j]
     _eval_row(ptrs, 0, x, nin, out_pos)
     return _scaled_norm(out_pos, r, m)
@@ -343,10 +347,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                         _solve(lapack, B, ipiv, nz, rprev, columns, F, dq, ibuf, cbuf)
                     else:
                         _solve(lapack, B, ipiv, nz, r, columns, F, dq, ibuf, cbuf)
-                    for j in range(n):
-                        dq[j] = -dq[j]
-                        qn[j] = q[j] + dq[j]
-                    nn = _trial(ptrs, x, nin, out_pos, qn, r, m)
+                    nn = _trial(ptrs, x, nin, out_pos, q, -1.0, dq, qn, r, m)
                     e += 1
                     if nn <= tol:
                         for j in range(n):
@@ -366,10 +367,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                            rprev, columns, F, dq, tmp, False)
                 else:
                     _solve(lapack, B, ipiv, nz, rprev, columns, F, dq, ibuf, cbuf)
-                for j in range(n):
-                    dq[j] = -dq[j]
-                    qn[j] = q[j] + dq[j]
-                nn = _trial(ptrs, x, nin, out_pos, qn, r, m)
+                nn = _trial(ptrs, x, nin, out_pos, q, -1.0, dq, qn, r, m)
                 e += 1
                 if nn <= CHORD_RATE * norm:
                     for j in range(n):
@@ -413,9 +411,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                 dq[j] = -dq[j]
             a = 1.0
             while True:
-                for j in range(n):
-                    qn[j] = q[j] + a * dq[j]
-                nn = _trial(ptrs, x, nin, out_pos, qn, r, m)
+                nn = _trial(ptrs, x, nin, out_pos, q, a, dq, qn, r, m)
                 e += 1
                 if not damping or nn <= (1 - 1e-4 * a) * norm or a < 1e-3 or norm <= tol:
                     break
