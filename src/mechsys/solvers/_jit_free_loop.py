@@ -180,6 +180,19 @@ def _all_finite(x, count):
     return True
 
 
+@leaf
+def _dgesv(lapack, KT, b, N, ipiv, ibuf):
+    """LAPACK ``dgesv`` (``lapack[3]``) on ``K x = b``, ``KT`` (N, N) holding ``K``
+    transposed (C order: LAPACK's column order of ``K``), ``x`` over ``b``; whether it
+    succeeded (no exactly zero pivot). The routine the Python path calls."""
+    ibuf[0] = N          # n, nrhs, lda = ldb, info
+    ibuf[1] = 1
+    ibuf[2] = N
+    ibuf[3] = 0
+    _ccall(lapack[3], (ibuf[0:1], ibuf[1:2], KT, ibuf[2:3], ipiv, b, ibuf[2:3], ibuf[3:4]))
+    return ibuf[3] == 0
+
+
 @nb.njit(cache=True, inline='always')
 def _solve_augmented(lapack, KT, rv, r0, jv, j0, n, m, jr, jc, rows0, columns, robust, ipiv,
                      ibuf, rhs, b, qdd, lam, force):
@@ -199,14 +212,8 @@ def _solve_augmented(lapack, KT, rv, r0, jv, j0, n, m, jr, jc, rows0, columns, r
     if N <= SMALL:
         if not _lu_solve(KT, b, N, ipiv):
             return False
-    else:
-        ibuf[0] = N          # n, nrhs, lda = ldb, info
-        ibuf[1] = 1
-        ibuf[2] = N
-        ibuf[3] = 0
-        _ccall(lapack[3], (ibuf[0:1], ibuf[1:2], KT, ibuf[2:3], ipiv, b, ibuf[2:3], ibuf[3:4]))
-        if ibuf[3] != 0:
-            return False
+    elif not _dgesv(lapack, KT, b, N, ipiv, ibuf):
+        return False
     return _accepted(b, big_rhs, n, m, qdd, lam, robust, rows0, jv, j0, jr, jc, columns, force)
 
 
@@ -289,12 +296,7 @@ def _accel_rows(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, ipiv, ib
     # LAPACK dgesv at every size, the routine the Python path calls: the same accelerations
     # bit for bit (the loop's own LU of small systems rounds differently, and a wobbling
     # coin amplified that to 1.4e-12 over 1200 steps)
-    ibuf[0] = Nk             # n, nrhs, lda = ldb, info
-    ibuf[1] = 1
-    ibuf[2] = Nk
-    ibuf[3] = 0
-    _ccall(lapack[3], (ibuf[0:1], ibuf[1:2], KT, ibuf[2:3], ipiv, b, ibuf[2:3], ibuf[3:4]))
-    if ibuf[3] != 0:
+    if not _dgesv(lapack, KT, b, Nk, ipiv, ibuf):
         return False
     if not _bounded(b, Nk, big_rhs):
         return False
@@ -305,6 +307,30 @@ def _accel_rows(kp, lapack, x, nin, out, KT, KTf, flat_t, mp, kk, n, m, ipiv, ib
     for i in range(k):
         mu[i] = b[N + i]
     return True
+
+
+@leaf
+def _velocity_residual(G, y, n, lo, hi, v, off, r, Fs):
+    r"""Rows ``lo`` to ``hi`` of the velocity projection's scaled residual (the dense
+    ``G``, row scales ``r``) at the velocities ``y[n:]``, the constraints' right sides
+    :math:`g_i = -v_{\mathrm{off} + i - \mathrm{lo}}` (``-Phi_t`` from the velocity kernel,
+    ``-b`` from the velocity constraints' rows):
+
+    .. math::  F_i = \Big(\sum_j G_{ij} \dot q_j - g_i\Big) / r_i"""
+    for i in range(lo, hi):
+        s = 0.0
+        for j in range(n):
+            s += G[i, j] * y[n + j]
+        Fs[i] = (s - (-v[off + i - lo])) / r[i]
+
+
+@leaf
+def _velocity_corrected(y, dq, n):
+    """The velocities ``y[n:]`` less the minimum-norm correction ``dq``; whether ``y`` is
+    then finite (else hand over)."""
+    for j in range(n):
+        y[n + j] = y[n + j] - dq[j]
+    return _all_finite(y, 2 * n)
 
 
 @leaf
@@ -336,18 +362,12 @@ def _project_rows(pv, lapack, xk, nin_k, out_vel, jr, jc, columns, n, m, y, ibuf
         for j in range(n):
             G[m + i, j] = outr[i * n + j]
     _rows(G, columns, rG)
-    for i in range(m + k):
-        s = 0.0
-        for j in range(n):
-            s += G[i, j] * y[n + j]
-        g = -out_vel[nnz + i] if i < m else -outr[k * n + i - m]
-        FsG[i] = (s - g) / rG[i]
+    _velocity_residual(G, y, n, 0, m, out_vel, nnz, rG, FsG)          # -Phi_t
+    _velocity_residual(G, y, n, m, m + k, outr, k * n, rG, FsG)       # -b
     if not _min_norm(lapack, G, rG, columns, FsG, dqG, Gs, AG, ipivG, ibuf, cbuf, dbuf, workG,
                      iworkG, ybufG, False):
         return False
-    for j in range(n):
-        y[n + j] = y[n + j] - dqG[j]
-    return _all_finite(y, 2 * n)
+    return _velocity_corrected(y, dqG, n)
 
 
 @leaf
@@ -467,10 +487,12 @@ def _factor_checked(AT, n, ipiv, w1, w2):
 
 
 @leaf
-def _newton_args(x, xk, t, y, n, m, npar):
-    """The arguments of the Newton's kernels at ``(t, y = (q, qd))``: ``x = [t, q, qd, ...]``
-    (the multipliers, parameters and accelerations left), ``xk = [t, q, 0, p]`` (the
-    constraint kernels; the parameters from ``x``)."""
+def _newton_args(x, xk, t, y, n, m, npar, lam, qdd, chain):
+    """The arguments of the Newton's kernels at ``(t, y = (q, qd))`` and its start (both
+    Newton loops): ``x = [t, q, qd, lambda, p, qdd = 0]`` (the parameters left) with
+    ``lambda`` ones, or ``chain`` (the loads depend on the multipliers) the previous
+    evaluation's ``lam``; ``qdd = 0``; ``xk = [t, q, 0, p]`` (the constraint kernels; the
+    parameters from ``x``)."""
     x[0] = t
     for j in range(2 * n):
         x[1 + j] = y[j]
@@ -480,6 +502,13 @@ def _newton_args(x, xk, t, y, n, m, npar):
         xk[1 + n + j] = 0.0
     for j in range(npar):
         xk[1 + 2 * n + j] = x[1 + 2 * n + m + j]
+    for i in range(m):
+        if chain == 0:
+            lam[i] = 1.0
+        x[1 + 2 * n + i] = lam[i]
+    for j in range(n):
+        qdd[j] = 0.0
+        x[1 + 2 * n + m + npar + j] = 0.0
 
 
 @leaf
@@ -521,6 +550,17 @@ def _newton_check(res, tmp, mag, out, kM, n, m, g, tolv, qdd, it, y, f):
 
 
 @leaf
+def _load_derivatives(info, x, nin, od, oa, nD, nA):
+    """The loads' derivatives of a Newton step (both Newton loops) at ``x``: ``dQ/dlambda``'s
+    values (``nD``) in ``od`` and ``dQ/dqdd``'s (``nA``) in ``oa``, each kernel only where
+    it has entries (``info``'s rows of them: see :func:`_newton_accel`)."""
+    if nD > 0:
+        _eval(info[16:21], x, nin, od)
+    if nA > 0:
+        _eval(info[21:26], x, nin, oa)
+
+
+@leaf
 def _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, w1, w2, qdd, lam, info, Mr, Mc, Dr,
                   Dc, Ar, Ac, nw, ex, ph, t, y, f):
     """Free acceleration when the loads depend on the multipliers or accelerations:
@@ -547,20 +587,13 @@ def _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, w1, w2, qdd, lam, inf
     kM, chain, maxit, nD, nA, npar = info[0], info[1], info[2], info[3], info[4], info[5]
     N = n + m
     nin_k = 1 + 2 * n + npar
-    _newton_args(x, xk, t, y, n, m, npar)
+    _newton_args(x, xk, t, y, n, m, npar, lam, qdd, chain)
     if m > 0:
         _eval(info[6:11], xk, nin_k, out_pos)
         _assemble(out_pos, m, jr, jc, J)
         for j in range(n):
             xk[1 + n + j] = y[n + j]
         _eval(info[11:16], xk, nin_k, g)
-    for i in range(m):
-        if chain == 0:
-            lam[i] = 1.0
-        x[1 + 2 * n + i] = lam[i]
-    for j in range(n):
-        qdd[j] = 0.0
-        x[1 + 2 * n + m + npar + j] = 0.0
     _evalx(kp, x, nin, out, ex, ph)
     for it in range(1, maxit + 1):
         # the residuals' sums and the sizes of their terms (w1: Phi_q^T lambda), then
@@ -590,10 +623,7 @@ def _newton_accel(kp, x, nin, out, KT, n, m, jr, jc, ipiv, w1, w2, qdd, lam, inf
         done = _newton_check(res, w1, mag, out, kM, n, m, g, tolv, qdd, it, y, f)
         if done != 0:
             return done > 0
-        if nD > 0:
-            _eval(info[16:21], x, nin, od)
-        if nA > 0:
-            _eval(info[21:26], x, nin, oa)
+        _load_derivatives(info, x, nin, od, oa, nD, nA)
         KT[:, :] = 0.0                   # K = [[M - A, J^T - D], [J, 0]], stored transposed
         for e in range(kM):
             KT[Mc[e], Mr[e]] += out[e]
@@ -790,7 +820,7 @@ def _newton_accel_band(kp, lapack, bi, x, nin, out, n, m, jr, jc, ipiv, qdd, lam
     ones, tmp, sol = w[o2:o2 + N], w[o2 + N:o2 + 2 * N], w[o2 + 2 * N:o2 + 3 * N]
     blapack = lapack[4:6]
     cbuf = bi[7:8].view(np.uint8)        # (dgbtrs's character argument, in bi's last entry)
-    _newton_args(x, xk, t, y, n, m, npar)
+    _newton_args(x, xk, t, y, n, m, npar, lam, qdd, chain)
     for u in range(U):
         Jv[u] = 0.0
     if m > 0:
@@ -802,13 +832,6 @@ def _newton_accel_band(kp, lapack, bi, x, nin, out, n, m, jr, jc, ipiv, qdd, lam
         _eval(info[11:16], xk, nin_k, g)
     for i in range(N):
         ones[i] = 1.0
-    for i in range(m):
-        if chain == 0:
-            lam[i] = 1.0
-        x[1 + 2 * n + i] = lam[i]
-    for j in range(n):
-        qdd[j] = 0.0
-        x[1 + 2 * n + m + npar + j] = 0.0
     # the rows' scales rho_i = max_j |Phi_ij| c_j (the constraint rows' test and scaling)
     for i in range(m):
         tolv[1 + n + i] = 0.0
@@ -838,10 +861,7 @@ def _newton_accel_band(kp, lapack, bi, x, nin, out, n, m, jr, jc, ipiv, qdd, lam
         done = _newton_check(res, tmp, mag, out, kM, n, m, g, tolv, qdd, it, y, f)
         if done != 0:
             return done > 0
-        if nD > 0:
-            _eval(info[16:21], x, nin, od)
-        if nA > 0:
-            _eval(info[21:26], x, nin, oa)
+        _load_derivatives(info, x, nin, od, oa, nD, nA)
         # K = [[M - A, J^T - D], [J, 0]] at its pattern's entries
         for k in range(P):
             data[k] = 0.0
@@ -1424,13 +1444,7 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
         else:
             _assemble(out_pos, m, jr, jc, J)
             _rows(J, columns, r)
-        big = 0.0
-        for i in range(m):
-            Fs[i] = out_pos[i] / r[i]
-            v = abs(Fs[i])
-            if not v <= big:
-                big = v
-        if big <= lim:
+        if _position_residual(out_pos, r, Fs, m) <= lim:
             break
         if band:
             if not within(blocks, NEWTON, NEWTON, _min_norm_band, lapack, ibuf, ipiv, r,
@@ -1483,17 +1497,27 @@ def _project(pp, pv, lapack, xk, nin_k, out_pos, out_vel, jr, jc, columns, offse
     else:
         _assemble(out_vel, 0, jr, jc, J)
         _rows(J, columns, r)
-        for i in range(m):
-            s = 0.0
-            for j in range(n):
-                s += J[i, j] * y[n + j]
-            Fs[i] = (s - (-out_vel[nnz + i])) / r[i]
+        _velocity_residual(J, y, n, 0, m, out_vel, nnz, r, Fs)
         if not _min_norm(lapack, J, r, columns, Fs, dq, Js, A, ipiv, ibuf, cbuf, dbuf, work,
                          iwork, ybuf, robust):
             return False
-    for j in range(n):
-        y[n + j] = y[n + j] - dq[j]
-    return _all_finite(y, 2 * n)
+    return _velocity_corrected(y, dq, n)
+
+
+@leaf
+def _position_residual(out_pos, r, Fs, m):
+    r"""The position projection's scaled residual ``Fs`` (m,) from the constraint values
+    ``out_pos[:m]`` and the row scales ``r``, and its max-norm (NaN where an entry is NaN:
+    never within the limit),
+
+    .. math::  F_i = \Phi_i / r_i, \qquad \lVert F \rVert_\infty"""
+    big = 0.0
+    for i in range(m):
+        Fs[i] = out_pos[i] / r[i]
+        v = abs(Fs[i])
+        if not v <= big:
+            big = v
+    return big
 
 
 @leaf
@@ -2659,13 +2683,7 @@ def _project_blocks(pp, pv, xk, nin_k, out_pos, out_vel, jr, jc, columns, offset
             xk[1 + j] = y[j]
         _evalx(pp, xk, nin_k, out_pos, ex[1], ph[1])
         _rows_nz(out_pos[m:], jr, jc, columns, r)
-        big = 0.0
-        for i in range(m):
-            Fs[i] = out_pos[i] / r[i]
-            v = abs(Fs[i])
-            if not v <= big:
-                big = v
-        if big <= lim:
+        if _position_residual(out_pos, r, Fs, m) <= lim:
             break
         if not _min_norm_blocks(out_pos, m, jr, jc, columns, m, n, Fs, r, blk_i, Pst, Sb,
                                 robust, dq):

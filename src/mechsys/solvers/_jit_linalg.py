@@ -427,6 +427,21 @@ def big_sizes(bw, n):
     return 1, 1
 
 
+@nb.njit(cache=True)
+def _big_work(bw, n, head, nvals):
+    """The work arrays of :func:`_sparse_factor` and :func:`_sparse_solve_scaled` for the
+    sparse LU that ``bw`` describes (a dense loop's: of size 1, :func:`big_sizes`): the
+    factors' float store ``AB``, the integer store ``SI`` starting with ``B``'s CSC
+    structure ``head``, the nonzero values ``data`` (``nvals``,) and a solve's ``tmp``
+    (n,)."""
+    fsize, isize = big_sizes(bw, n)
+    AB = np.zeros(fsize)
+    SI = np.zeros(isize, dtype=np.int64)
+    for i in range(head.size):
+        SI[i] = head[i]
+    return AB, SI, np.empty(nvals), np.empty(n)
+
+
 @leaf
 def _sparse_factor(data, cr, cc, pos, r, columns, AB, bw, SI):
     """:func:`_band_factor` through the sparse LU (``_linalg._SparseFactor``, the Python

@@ -50,6 +50,7 @@ from ._jit_linalg import (
     _band_rows,
     _band_solve,
     _band_values,
+    _big_work,
     _factor_filled,
     _factor_work,
     _fill_nz_t,
@@ -177,13 +178,7 @@ def multipliers(ptrs, lapack, times, Q, QD, QDD, p, jr, jc, mr, mc, kM, mode, LA
         # (of Phi_q^T - dQ/dlambda)
         S2, W2, seen2 = _structure(np.concatenate((jc, dr)), np.concatenate((jr, dc)), n)
         unique = _unique(jr, jc, m, n)
-    fsize, isize = big_sizes(bw, n)
-    AB = np.zeros(fsize)
-    SI = np.zeros(isize, dtype=np.int64)
-    for i in range(si0.size):
-        SI[i] = si0[i]
-    data = np.empty(cr.size)
-    tmp = np.empty(n)
+    AB, SI, data, tmp = _big_work(bw, n, si0, cr.size)
     bi = np.zeros(8, dtype=np.int32)
     ones = np.ones(n)
     Mq = np.empty(n)

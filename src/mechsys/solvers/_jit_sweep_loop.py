@@ -25,6 +25,7 @@ from ._jit_linalg import (
     _assemble,
     _band_rows,
     _band_values,
+    _big_work,
     _factor,
     _factor_filled,
     _factor_work,
@@ -39,7 +40,6 @@ from ._jit_linalg import (
     _sparse_solve_scaled,
     _structure,
     _unique,
-    big_sizes,
 )
 from ._jit_modes import within
 from ._tolerances import (
@@ -117,6 +117,26 @@ def _predict(Q, QD, QDD, rconds, times, k, rot, order, g, sec):
         if a > ROTATION_SLACK + 4 * b:
             for j in range(n):
                 g[j] = sec[j]
+
+
+@leaf
+def _trial(ptrs, x, nin, out_pos, q, a, dq, qn, r, m):
+    r"""The trial point of a step of :func:`sweep_dense`'s position solve, ``qn = q + a dq``
+    (also the position kernel's ``q`` in ``x``), the kernel there (its residual and
+    Jacobian values in ``out_pos``) and the residual's scaled max-norm, the measure the
+    steps compare (``_jit_linalg._scaled_norm``):
+
+    .. math::  q_n = q + a\,\delta q, \qquad
+               \lVert R^{-1} \Phi(q_n) \rVert_\infty = \max_i |\Phi_i(q_n) / r_i|
+
+    ``dq`` solves ``B dq = F``: the chord and polish steps take ``a = -1`` (``-1 * dq`` is
+    ``-dq`` exactly), the damped Newton step ``dq`` negated and ``a`` its damping (1, 1/2,
+    ...)."""
+    for j in range(q.size):
+        qn[j] = q[j] + a * dq[j]
+        x[1 + j] = qn[j]
+    _eval_row(ptrs, 0, x, nin, out_pos)
+    return _scaled_norm(out_pos, r, m)
 
 
 @nb.njit(cache=True)
@@ -220,13 +240,7 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
         S, W, seen = _no_structure()
     else:
         S, W, seen = _structure(jr, jc, n)
-    fsize, isize = big_sizes(bw, n)
-    AB = np.zeros(fsize)
-    SI = np.zeros(isize, dtype=np.int64)
-    for i in range(si0.size):
-        SI[i] = si0[i]
-    data = np.empty(cr.size)
-    tmp = np.empty(n)
+    AB, SI, data, tmp = _big_work(bw, n, si0, cr.size)
     F = np.empty(m)
     q = np.empty(n)
     g = np.empty(n)
@@ -320,8 +334,9 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
             if norm <= tol and it > 0:
                 if polish and prev > tol and it < maxit:
                     # one more step with the last factorisation, kept while within tol
-                    # (the step is the chord step's below, written twice on purpose: a shared
-                    # helper, inlined by Numba, made the sweep 7-9 % slower, measured)
+                    # (its solve is the chord step's below, written twice on purpose: a
+                    # shared helper for the solve, inlined by Numba, made the sweep 7-9 %
+                    # slower, measured; the trial point's evaluation is _trial)
                     if large and last_chord:
                         within(large, 1, 1, _sparse_solve_scaled, AB, bw, SI, row_perm, perm,
                                rprev, columns, F, dq, tmp, False)
@@ -332,17 +347,8 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                         _solve(lapack, B, ipiv, nz, rprev, columns, F, dq, ibuf, cbuf)
                     else:
                         _solve(lapack, B, ipiv, nz, r, columns, F, dq, ibuf, cbuf)
-                    for j in range(n):
-                        dq[j] = -dq[j]
-                        qn[j] = q[j] + dq[j]
-                        x[1 + j] = qn[j]
-                    _eval_row(ptrs, 0, x, nin, out_pos)
+                    nn = _trial(ptrs, x, nin, out_pos, q, -1.0, dq, qn, r, m)
                     e += 1
-                    nn = 0.0
-                    for i in range(m):
-                        v = abs(out_pos[i] / r[i])
-                        if v > nn:
-                            nn = v
                     if nn <= tol:
                         for j in range(n):
                             q[j] = qn[j]
@@ -361,17 +367,8 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                            rprev, columns, F, dq, tmp, False)
                 else:
                     _solve(lapack, B, ipiv, nz, rprev, columns, F, dq, ibuf, cbuf)
-                for j in range(n):
-                    dq[j] = -dq[j]
-                    qn[j] = q[j] + dq[j]
-                    x[1 + j] = qn[j]
-                _eval_row(ptrs, 0, x, nin, out_pos)
+                nn = _trial(ptrs, x, nin, out_pos, q, -1.0, dq, qn, r, m)
                 e += 1
-                nn = 0.0
-                for i in range(m):
-                    v = abs(out_pos[i] / r[i])
-                    if v > nn:
-                        nn = v
                 if nn <= CHORD_RATE * norm:
                     for j in range(n):
                         q[j] = qn[j]
@@ -414,16 +411,8 @@ def sweep_dense(ptrs, lapack, times, q0, p, jr, jc, columns, scale, ftol, maxit,
                 dq[j] = -dq[j]
             a = 1.0
             while True:
-                for j in range(n):
-                    qn[j] = q[j] + a * dq[j]
-                    x[1 + j] = qn[j]
-                _eval_row(ptrs, 0, x, nin, out_pos)
+                nn = _trial(ptrs, x, nin, out_pos, q, a, dq, qn, r, m)
                 e += 1
-                nn = 0.0
-                for i in range(m):
-                    v = abs(out_pos[i] / r[i])
-                    if v > nn:
-                        nn = v
                 if not damping or nn <= (1 - 1e-4 * a) * norm or a < 1e-3 or norm <= tol:
                     break
                 a *= 0.5
