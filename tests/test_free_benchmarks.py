@@ -54,6 +54,17 @@ def test_adams_evaluations_count_each_derivative_call_once():
     assert res.evaluations == len(calls)
 
 
+def test_adams_refuses_a_step_whose_error_is_not_finite():
+    """A derivative that turns NaN mid-run: the Python driver of Adams' step stops with an
+    error naming the time (the step's error is NaN, and ``NaN > max_error`` is false: the
+    step was once accepted, and the run went on with NaN states)."""
+    def fun(t, y):
+        return np.array([y[1], -y[0] if t < 0.5 else np.nan])
+
+    with pytest.raises(ms.MechError, match=r"adams: at t = 0\.4.* not finite"):
+        integrate_adams(fun, lambda t, y: y, 0.0, 1.0, [1.0, 0.0], "cubic", 1e-8)
+
+
 def _pendulum():
     m = ms.Model2D()
     b = m.add_body("bar", mass=1.0, centroid=(1.0, 0), inertia=0.0, guess=((0, 0), 0.0))
