@@ -173,6 +173,24 @@ INTERP_STEPS = {"loop": 32, "adams": 128}
 INTERP_LOOPS = frozenset({"loop", "derivative", "path_acc"})
 
 
+def _call_size(store: dict, name: str, cap: int, least: int, unknowns: int) -> int:
+    r"""The steps of the next call of the stepping loop ``name`` in one tier: the number the
+    tier's last call measured (``store``, by :func:`_record_rate`), or on the first call
+    ``cap`` scaled to the size, :math:`\max(k_{min}, \lfloor 12\,\mathit{cap} / \max(12,
+    n + m + k_v) \rfloor)` (the whole ``cap`` up to 12 unknowns)."""
+    k = store.get(name)
+    return max(least, cap * 12 // max(12, unknowns)) if k is None else k
+
+
+def _record_rate(store: dict, name: str, steps: int, spent: float, seconds: float,
+                 least: int, most: float = float("inf")) -> None:
+    """Store in ``store`` the steps that fit in ``seconds`` at the rate of a call that took
+    ``steps`` in ``spent`` seconds, within ``[least, most]``; a call that took no step (a
+    hand-over) sets no rate."""
+    if steps > 0 and spent > 0:
+        store[name] = int(min(max(least, int(seconds * steps / spent)), most))
+
+
 def _steps_at(name: str) -> int:
     """The position of ``max_steps`` among the arguments of the loop ``_state[name]``."""
     import inspect
@@ -1189,16 +1207,13 @@ class FreeStepper:
         k_v) \rfloor)`, so that a call of a large system returns to the caller (progress,
         Ctrl-C) about that often. The chunks change no number: each call resumes the run
         from the state the last one left (``tests/test_free_reach.py``)."""
-        k = self._call_steps.get(name)
-        if k is None:
-            k = max(CALL_MIN_STEPS, cap * 12 // max(12, self.n + self.nl))
-        return int(min(k, cap))
+        return int(min(_call_size(self._call_steps, name, cap, CALL_MIN_STEPS,
+                                  self.n + self.nl), cap))
 
     def _rate(self, name: str, steps: int, spent: float) -> None:
         """Size the next compiled call of ``name`` from this one's ``steps`` in ``spent``
         seconds (:meth:`budget`)."""
-        if steps > 0 and spent > 0:
-            self._call_steps[name] = max(CALL_MIN_STEPS, int(CALL_SECONDS * steps / spent))
+        _record_rate(self._call_steps, name, steps, spent, CALL_SECONDS, CALL_MIN_STEPS)
 
     def interpretable(self) -> bool:
         """Whether the loops run interpreted while their machine code is compiled in the
@@ -1226,17 +1241,13 @@ class FreeStepper:
             return fn(*args)
         at = _steps_at(name)
         cap = INTERP_STEPS[name]
-        k = self._interp_steps.get(name)
-        if k is None:
-            k = max(1, cap * 12 // max(12, self.n + self.nl))
         args = list(args)
-        args[at] = min(int(args[at]), k)
+        args[at] = min(int(args[at]),
+                       _call_size(self._interp_steps, name, cap, 1, self.n + self.nl))
         began = time.perf_counter()
         got = fn(*args)
-        spent = time.perf_counter() - began
-        steps = int(got[1])
-        if steps > 0 and spent > 0:
-            self._interp_steps[name] = min(max(1, int(INTERP_SECONDS * steps / spent)), 8 * cap)
+        _record_rate(self._interp_steps, name, int(got[1]), time.perf_counter() - began,
+                     INTERP_SECONDS, 1, 8 * cap)
         return got
 
     def _count(self, steps) -> None:
