@@ -41,6 +41,8 @@ def test_block_has_both_sides_and_their_agreement():
 def test_block_renders_from_a_result():
     # the table function the script writes with (the keys measure() returns)
     r = {"cold": 1.5, "warm": 0.9, "cold_all": [1.4, 1.6], "warm_all": [0.8, 1.0],
+         "first": 2.5, "first_all": [2.3, 2.7], "first_compiled_steps": [0, 0],
+         "background": 50.0, "background_all": [48.0, 52.0],
          "kernels": 4, "sympy_build": 23.0,
          "sympy_phases": {"derivation": 10.0, "lambdify": 13.0},
          "run": {"mechsys": 0.5, "sympy": 0.35, "python": 0.9},
@@ -49,7 +51,12 @@ def test_block_renders_from_a_result():
          "lean": 1.3e-9, "steer": 4.8e-9, "lean_peak": 0.116, "steer_peak": 0.134,
          "lean_end": 2e-3}
     text = bench.table(r)
-    assert "| mechsys | 56 | 1.5 s | 900 ms | 500 ms | 217 | 3564 | 140 µs |" in text
+    assert ("| mechsys | 56 | 2.5 s (+ 50.0 s on the other core, once) | 1.5 s | 900 ms | "
+            "500 ms | 217 | 3564 | 140 µs |") in text
+    # SymPy has no cache: its first build and run is its build plus its run
+    assert "| SymPy `KanesMethod` + SciPy | 10 | 23.4 s | 23.0 s | (no cache) |" in text
+    # the first run's path is stated from what it measured, not assumed
+    assert "(0 compiled steps)" in text and "2.30-2.70 s) does not wait" in text
     assert "lean within 1.3e-09 rad" in text and "124 steps instead of 75" in text
     assert ("interpreted (`MECHSYS_JIT=0`, the stepper's own code, the same numbers): 900 ms "
             "(217 steps)") in text
