@@ -225,3 +225,32 @@ def test_held_angular_velocity_follows_the_attitude_the_start_projection_gives()
         np.testing.assert_allclose(s.q[0, :3] + A @ [1.3, 0, 1.0], 0, atol=1e-12)
         v_pivot = s.qd[0, :3] + np.cross(A @ w if kind == "omega_local" else w, A @ [1.3, 0, 1.0])
         np.testing.assert_allclose(v_pivot, 0, atol=1e-12)
+
+
+@pytest.mark.parametrize("w, says", [
+    ((0.3, float("nan"), 2.0), "finite"),
+    ((0.3, -0.4), "three numbers"),
+    ("fast", "three numbers"),
+    (2.0, "three numbers"),
+])
+def test_a_bad_angular_velocity_in_an_initial_condition_names_its_key(w, says):
+    """``("omega", body)`` must be three finite numbers in space (one in the plane): NaN, a
+    wrong length or a string is refused with the key named, not passed to SciPy (which said
+    only that ``y0`` must be finite) or to NumPy's shape error."""
+    m = ms.Model3D()
+    b = m.add_body("bob", mass=2.0, centroid=(0, 0, -1.0), inertia=(0.05, 0.08, 0.04, 0, 0, 0),
+                   guess=((0, 0, 0), (0.5, (1, 0, 0))))
+    m.add(ms.Spherical3(b.point(0), m.ground.point((0, 0, 0))), name="ball")
+    m.add(ms.RotationLock3(b, (0.5, (1, 0, 0))), name="hold")
+    m.add_load(ms.Gravity((0, 0, -1), 9.81))
+    free = m.free(drop=["hold"])
+    with pytest.raises(ms.ModelError, match=rf"\('omega', 'bob'\).*{says}"):
+        free.simulate((0.0, 0.1), initial_condition={("omega", "bob"): w})
+
+
+def test_a_nan_planar_angular_velocity_is_refused_by_name():
+    _, free = pendulum(0.25, 9.81, -0.5)
+    with pytest.raises(ms.ModelError, match=r"\('omega', 'bar'\).*finite"):
+        free.simulate((0.0, 0.1), initial_condition={("omega", "bar"): float("nan")})
+    with pytest.raises(ms.ModelError, match=r"\('omega', 'bar'\).*a number"):
+        free.simulate((0.0, 0.1), initial_condition={("omega", "bar"): (1.0, 2.0)})

@@ -403,7 +403,7 @@ class FreeSystem:
                 if is_quantity(v):      # an angular velocity: 1/time (rad/s, rpm, deg/s)
                     v = _in_model_units(v, self.model.units, f"initial_condition {k!r}",
                                         (0, 0, -1))
-                angular.append((k[0], k[1], v))
+                angular.append((k[0], k[1], self._angular_value(k, v)))
                 continue
             name = k.name if hasattr(k, "name") else str(k)
             if is_quantity(v):
@@ -436,6 +436,23 @@ class FreeSystem:
             # projection gives (a changed length parameter turns the body a little)
             held.setdefault("omega", []).append((kind, body, w))
         return q, qd, given
+
+    def _angular_value(self, key: tuple, v):
+        """An angular velocity of an initial condition checked: a finite number in the
+        plane, three finite numbers in space; :class:`ModelError` naming ``key`` else."""
+        dim = self.model.space.dim
+        want = "a number" if dim == 2 else "three numbers (wx, wy, wz)"
+        try:
+            w = np.asarray(v, dtype=float)
+        except (TypeError, ValueError):
+            w = None
+        if w is None or w.shape != (() if dim == 2 else (3,)):
+            raise ModelError(f"initial_condition {key!r}: an angular velocity in "
+                             f"{'the plane' if dim == 2 else 'space'} is {want}, got {v!r}")
+        if not np.all(np.isfinite(w)):
+            raise ModelError(f"initial_condition {key!r}: the angular velocity is {v!r}; give "
+                             f"{want}, finite")
+        return float(w) if dim == 2 else w
 
     def _condition_dims(self, name: str, pnames: list) -> tuple | None:
         """The dimension ``(length, mass, time)`` a quantity given for ``name`` in an initial
