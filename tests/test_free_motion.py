@@ -18,6 +18,19 @@ def pendulum(L=1.0, g=9.81, angle0=0.0):
     return m, m.free(drop=["hold"])
 
 
+def ball_bob():
+    """A rigid body on a ball joint at the origin under gravity (3D, Euler parameters),
+    assembled, and its free system (the attitude lock ``hold`` dropped)."""
+    m = ms.Model3D()
+    b = m.add_body("bob", mass=2.0, centroid=(0, 0, -1.0), inertia=(0.05, 0.08, 0.04, 0.01, 0, 0),
+                   guess=((0, 0, 0), (0.5, (1, 0, 0))))
+    m.add(ms.Spherical3(b.point(0), m.ground.point((0, 0, 0))), name="ball")
+    m.add(ms.RotationLock3(b, (0.5, (1, 0, 0))), name="hold")
+    m.add_load(ms.Gravity((0, 0, -1), 9.81))
+    m.solve(0.0)
+    return m, m.free(drop=["hold"])
+
+
 def _crossing(sol, key, level):
     """First time after t0 where coordinate `key` crosses `level`, by cubic Hermite root."""
     from scipy.interpolate import CubicHermiteSpline
@@ -145,14 +158,7 @@ def test_constraint_drift_over_1000_periods():
 def test_spherical_pendulum_conserves_energy_and_vertical_momentum():
     """A rigid body on a ball joint under gravity (3D, Euler parameters): energy and the
     angular momentum about the vertical through the pivot are conserved."""
-    m = ms.Model3D()
-    b = m.add_body("bob", mass=2.0, centroid=(0, 0, -1.0), inertia=(0.05, 0.08, 0.04, 0.01, 0, 0),
-                   guess=((0, 0, 0), (0.5, (1, 0, 0))))
-    m.add(ms.Spherical3(b.point(0), m.ground.point((0, 0, 0))), name="ball")
-    m.add(ms.RotationLock3(b, (0.5, (1, 0, 0))), name="hold")
-    m.add_load(ms.Gravity((0, 0, -1), 9.81))
-    m.solve(0.0)
-    free = m.free(drop=["hold"])
+    m, free = ball_bob()
     sol = free.simulate((0.0, 3.0), initial_condition={("omega", "bob"): (0.3, -0.4, 2.0)},
                         rtol=1e-10, atol=1e-12)
     E = sol.body_energy() + sol.potential_energy()
@@ -237,13 +243,7 @@ def test_a_bad_angular_velocity_in_an_initial_condition_names_its_key(w, says):
     """``("omega", body)`` must be three finite numbers in space (one in the plane): NaN, a
     wrong length or a string is refused with the key named, not passed to SciPy (which said
     only that ``y0`` must be finite) or to NumPy's shape error."""
-    m = ms.Model3D()
-    b = m.add_body("bob", mass=2.0, centroid=(0, 0, -1.0), inertia=(0.05, 0.08, 0.04, 0, 0, 0),
-                   guess=((0, 0, 0), (0.5, (1, 0, 0))))
-    m.add(ms.Spherical3(b.point(0), m.ground.point((0, 0, 0))), name="ball")
-    m.add(ms.RotationLock3(b, (0.5, (1, 0, 0))), name="hold")
-    m.add_load(ms.Gravity((0, 0, -1), 9.81))
-    free = m.free(drop=["hold"])
+    _, free = ball_bob()
     with pytest.raises(ms.ModelError, match=rf"\('omega', 'bob'\).*{says}"):
         free.simulate((0.0, 0.1), initial_condition={("omega", "bob"): w})
 
